@@ -1,0 +1,183 @@
+"""Base attitude: quaternions, ZYX Euler angles, geodesic error and propagation.
+
+Quaternions are unit 4-vectors in Pinocchio's order ``[x, y, z, w]``. The base angular velocity
+``omega`` (rad/s) is expressed in the base frame, so the attitude obeys
+``d/dt quat = 1/2 quat (x) (omega, 0)`` (method.md section 3). ZYX Euler angles are
+``(yaw, pitch, roll)`` in rad: yaw about z, then pitch about the new y, then roll about the new x.
+
+Propagation uses a sixth-order Magnus integrator on three Gauss-Legendre nodes per step
+(Blanes, Casas and Ros). Along a rotation about a fixed axis (the planar case) it reduces
+exactly to three-point Gauss-Legendre quadrature of the yaw rate, a plain integral.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+__all__ = [
+    "GAUSS3_NODES",
+    "GAUSS3_WEIGHTS",
+    "IDENTITY",
+    "geodesic_angle",
+    "magnus_increments",
+    "propagate",
+    "quat_conjugate",
+    "quat_exp",
+    "quat_from_zyx",
+    "quat_log",
+    "quat_multiply",
+    "quat_to_matrix",
+    "step_nodes",
+    "zyx_from_quat",
+]
+
+#: Identity quaternion ``[x, y, z, w]``.
+IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
+
+#: Three-point Gauss-Legendre nodes and weights on [0, 1].
+GAUSS3_NODES = np.array([0.5 - math.sqrt(15.0) / 10.0, 0.5, 0.5 + math.sqrt(15.0) / 10.0])
+GAUSS3_WEIGHTS = np.array([5.0, 8.0, 5.0]) / 18.0
+
+
+def quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product ``a (x) b`` of ``[x, y, z, w]`` quaternions (broadcasts over rows)."""
+    av, aw = a[..., :3], a[..., 3:]
+    bv, bw = b[..., :3], b[..., 3:]
+    vec = aw * bv + bw * av + np.cross(av, bv)
+    w = aw * bw - np.sum(av * bv, axis=-1, keepdims=True)
+    return np.concatenate([vec, w], axis=-1)
+
+
+def quat_conjugate(q: np.ndarray) -> np.ndarray:
+    """Conjugate (inverse of a unit quaternion) ``[-x, -y, -z, w]``."""
+    return np.concatenate([-q[..., :3], q[..., 3:]], axis=-1)
+
+
+def quat_exp(rotvec: np.ndarray) -> np.ndarray:
+    """Unit quaternion of a rotation vector (rad; broadcasts over rows)."""
+    rotvec = np.asarray(rotvec, dtype=float)
+    angle = np.linalg.norm(rotvec, axis=-1, keepdims=True)
+    half = 0.5 * angle
+    # sin(x/2)/x, with its series near 0 to keep full precision.
+    small = angle < 1e-4
+    safe = np.where(small, 1.0, angle)
+    factor = np.where(small, 0.5 - angle**2 / 48.0, np.sin(half) / safe)
+    return np.concatenate([factor * rotvec, np.cos(half)], axis=-1)
+
+
+def quat_log(q: np.ndarray) -> np.ndarray:
+    """Rotation vector (rad, angle in [0, pi]) of a unit quaternion."""
+    q = np.asarray(q, dtype=float)
+    q = np.where(q[..., 3:] < 0.0, -q, q)
+    vec, w = q[..., :3], q[..., 3:]
+    norm = np.linalg.norm(vec, axis=-1, keepdims=True)
+    angle = 2.0 * np.arctan2(norm, w)
+    small = norm < 1e-12
+    factor = np.where(small, 2.0 / np.where(w == 0.0, 1.0, w), angle / np.where(small, 1.0, norm))
+    return factor * vec
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """3 x 3 rotation matrix (base frame to inertial frame) of a unit quaternion."""
+    x, y, z, w = q
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def quat_from_zyx(yaw: float, pitch: float = 0.0, roll: float = 0.0) -> np.ndarray:
+    """Unit quaternion of ZYX Euler angles (rad): ``Rz(yaw) Ry(pitch) Rx(roll)``."""
+    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
+    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
+    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
+    return np.array(
+        [
+            sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy,
+            cr * cp * cy + sr * sp * sy,
+        ]
+    )
+
+
+def zyx_from_quat(q: Sequence[float] | np.ndarray) -> np.ndarray:
+    """ZYX Euler angles ``[yaw, pitch, roll]`` (rad) of a unit quaternion.
+
+    Yaw and roll lie in (-pi, pi], pitch in [-pi/2, pi/2]. At pitch = +-pi/2 the split between
+    yaw and roll is not unique (gimbal lock): roll is then reported as 0.
+    """
+    x, y, z, w = (float(c) for c in q)
+    sin_pitch = 2.0 * (w * y - x * z)
+    if abs(sin_pitch) >= 1.0 - 1e-12:
+        pitch = math.copysign(math.pi / 2, sin_pitch)
+        yaw = -2.0 * math.copysign(1.0, sin_pitch) * math.atan2(x, w)
+        yaw = math.atan2(math.sin(yaw), math.cos(yaw))
+        return np.array([yaw, pitch, 0.0])
+    pitch = math.asin(sin_pitch)
+    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    return np.array([yaw, pitch, roll])
+
+
+def geodesic_angle(a: np.ndarray, b: np.ndarray) -> float:
+    """Angle (rad, in [0, pi]) of the rotation taking attitude ``a`` to attitude ``b``."""
+    rel = quat_multiply(quat_conjugate(np.asarray(a, float)), np.asarray(b, float))
+    return float(2.0 * math.atan2(np.linalg.norm(rel[:3]), abs(rel[3])))
+
+
+def step_nodes(edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss nodes of each integration step.
+
+    Args:
+        edges: ascending step boundaries (any unit of time), M + 1 values.
+
+    Returns:
+        ``(nodes, h)``: the 3M node times, step by step, and the M step lengths.
+    """
+    h = np.diff(edges)
+    nodes = (edges[:-1, None] + h[:, None] * GAUSS3_NODES[None, :]).ravel()
+    return nodes, h
+
+
+def magnus_increments(omega: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Sixth-order Magnus rotation vector of each step (rad).
+
+    Args:
+        omega: angular velocity at the step nodes, shape (M, 3 nodes, 3), base frame, rad per
+            unit of the step variable.
+        h: the M step lengths.
+
+    Returns:
+        (M, 3) rotation vectors ``W`` with ``quat_end = quat_start (x) exp(W)``.
+    """
+    a = omega * h[:, None, None]
+    a1, a2, a3 = a[:, 0], a[:, 1], a[:, 2]
+    alpha1 = a2
+    alpha2 = math.sqrt(15.0) / 3.0 * (a3 - a1)
+    alpha3 = 10.0 / 3.0 * (a3 - 2.0 * a2 + a1)
+
+    def bracket(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        # Lie bracket of the generators for a body-frame rate (quat' = quat (x) omega / 2).
+        return np.cross(v, u)
+
+    c1 = bracket(alpha1, alpha2)
+    c2 = -bracket(alpha1, 2.0 * alpha3 + c1) / 60.0
+    return alpha1 + alpha3 / 12.0 + bracket(-20.0 * alpha1 - alpha3 + c1, alpha2 + c2) / 240.0
+
+
+def propagate(quat0: np.ndarray, increments: np.ndarray) -> np.ndarray:
+    """Chain step rotations: returns the M + 1 attitudes ``[x, y, z, w]`` from ``quat0``."""
+    steps = quat_exp(increments)
+    out = np.empty((len(steps) + 1, 4))
+    out[0] = quat0
+    for i, step in enumerate(steps):
+        out[i + 1] = quat_multiply(out[i], step)
+    out /= np.linalg.norm(out, axis=1, keepdims=True)
+    return out

@@ -1,0 +1,182 @@
+"""The ``freefloat`` command line.
+
+Angles are printed in degrees. Every expected failure (a :class:`FreeFloatError`) is printed
+as one line ``freefloat: error: ...`` and exits with code 2, with no traceback and no file
+written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from . import __version__
+from .errors import FreeFloatError, InputError
+from .plan import Plan, plan
+from .problem import build_problem
+from .scenario import Scenario, default_scenario_path
+from .solve import DEFAULT_TOLERANCE, SolveOptions
+
+__all__ = ["main"]
+
+DEFAULT_OUT_DIR = Path("freefloat-out")
+
+
+def _load_scenario(path: str | None) -> Scenario:
+    return Scenario.from_toml(path if path else default_scenario_path())
+
+
+def _attitude_table(p: Plan) -> list[str]:
+    rows = [f"  {'base attitude':<16}{'yaw [deg]':>14}{'pitch [deg]':>14}{'roll [deg]':>14}"]
+    for label, angles in (
+        ("start", p.base.start_zyx_deg),
+        ("target", p.base.target_zyx_deg),
+        ("achieved", p.base.achieved_zyx_deg),
+    ):
+        rows.append(f"  {label:<16}" + "".join(f"{a:>14.6f}" for a in angles))
+    return rows
+
+
+def summary(p: Plan, output: Path | None = None) -> str:
+    """The short text summary ``freefloat plan`` prints (angles in degrees)."""
+    lines = [f"freefloat plan: {Path(p.robot.urdf).name}, T = {p.duration:g} s"]
+    lines += _attitude_table(p)
+    lines.append(f"  attitude error  {p.base.attitude_error_rad:.3e} rad")
+    free = [
+        f"{name}: " + ", ".join(f"t^{6 + k} {c:.9e}" for k, c in enumerate(values))
+        for name, values in p.free_parameters.items()
+        if values
+    ]
+    lines.append("  free parameters " + ("; ".join(free) if free else "(none)"))
+    if p.feasibility.planar and p.feasibility.yaw_change_bounds_deg is not None:
+        lo, hi = p.feasibility.yaw_change_bounds_deg
+        lines.append(
+            f"  planar bounds   yaw change {p.feasibility.requested_yaw_change_deg:.3f} deg in "
+            f"({lo:.3f}, {hi:.3f}) deg"
+        )
+    s = p.solver
+    lines.append(
+        f"  solver          {s.method}; {len(s.solutions)} solution(s); {s.evaluations} "
+        f"evaluations; {s.wall_time_s:.3f} s"
+    )
+    if output is not None:
+        lines.append(f"  plan            {output}")
+    return "\n".join(lines)
+
+
+def _cmd_plan(args: argparse.Namespace) -> int:
+    scenario = _load_scenario(args.scenario)
+    if not (args.tolerance > 0 and math.isfinite(args.tolerance)):
+        raise InputError(f"--tolerance must be a positive number of rad, got {args.tolerance}")
+    if args.samples < 2:
+        raise InputError(f"--samples must be at least 2, got {args.samples}")
+    result = plan(scenario, SolveOptions(tolerance=args.tolerance), samples=args.samples)
+    if args.output:
+        output = Path(args.output)
+    elif args.scenario:
+        output = Path(f"{Path(args.scenario).stem}.plan.json")
+    else:
+        output = DEFAULT_OUT_DIR / "plan.json"
+    written = result.save(output)
+    print(summary(result, written))
+    return 0
+
+
+def _cmd_bounds(args: argparse.Namespace) -> int:
+    scenario = _load_scenario(args.scenario)
+    problem = build_problem(
+        scenario.robot,
+        scenario.start,
+        scenario.goal,
+        scenario.start_attitude,
+        scenario.goal_attitude,
+        scenario.duration,
+        extra=scenario.extra,
+        check_bounds=False,
+    )
+    if problem.bounds is None or problem.yaw_change is None:
+        raise InputError(
+            f"{scenario.robot.name} is not planar (its base can turn about more than its z "
+            "axis); planar bounds apply to planar robots only"
+        )
+    bounds = problem.bounds
+    delta = problem.family.goal - problem.family.start
+    print(f"freefloat bounds: {scenario.robot.name} (planar), simple point-to-point motion")
+    print(
+        f"  {'joint':<12}{'g_min':>12}{'g_max':>12}{'move':>14}{'yaw from [deg]':>17}"
+        f"{'to [deg]':>12}"
+    )
+    for i, joint in enumerate(scenario.robot.joints):
+        lo, hi = sorted((bounds.g_min[i] * delta[i], bounds.g_max[i] * delta[i]))
+        move = f"{math.degrees(delta[i]):.3f} deg" if joint.angular else f"{delta[i]:.4f} m"
+        print(
+            f"  {joint.name:<12}{bounds.g_min[i]:>12.6f}{bounds.g_max[i]:>12.6f}{move:>14}"
+            f"{math.degrees(lo):>17.3f}{math.degrees(hi):>12.3f}"
+        )
+    lo, hi = bounds.interval(delta)
+    requested = math.degrees(problem.yaw_change)
+    inside = [
+        requested + 360.0 * k for k in range(-3, 4)
+        if math.degrees(lo) < requested + 360.0 * k < math.degrees(hi)
+    ]
+    print(f"  reachable yaw change: ({math.degrees(lo):.3f}, {math.degrees(hi):.3f}) deg")
+    verdict = "feasible" if inside else "outside the bounds: no simple path"
+    shown = min(inside, key=abs) if inside else requested
+    print(f"  requested yaw change: {shown:.3f} deg -> {verdict}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``freefloat`` command."""
+    parser = argparse.ArgumentParser(
+        prog="freefloat",
+        description="Point-to-point motion planning for free-floating space manipulators. "
+        "Angles on the command line and in scenario files are in degrees.",
+    )
+    parser.add_argument("--version", action="version", version=f"freefloat {__version__}")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p_plan = commands.add_parser(
+        "plan",
+        help="plan a scenario and write the plan file",
+        description="Plan joint paths that bring the base to its goal attitude; print a "
+        "summary and write the plan (JSON). Without SCENARIO, plan the shipped worked example "
+        "into ./freefloat-out/.",
+    )
+    p_plan.add_argument("scenario", nargs="?", help="scenario TOML file (default: worked example)")
+    p_plan.add_argument("-o", "--output", help="plan file to write (default: SCENARIO.plan.json,"
+                        " or freefloat-out/plan.json for the worked example)")
+    p_plan.add_argument("--samples", type=int, default=201, help="samples in [0, T] (default 201)")
+    p_plan.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
+                        help=f"attitude tolerance in rad (default {DEFAULT_TOLERANCE:g})")
+    p_plan.set_defaults(func=_cmd_plan)
+
+    p_bounds = commands.add_parser(
+        "bounds",
+        help="print the reachable yaw-change interval of a planar scenario",
+        description="Planar bounds (method.md section 6): per joint the extremes of dyaw/dq "
+        "and the interval of yaw changes a simple motion can reach, in degrees.",
+    )
+    p_bounds.add_argument("scenario", nargs="?", help="scenario TOML file (default: worked example)")
+    p_bounds.set_defaults(func=_cmd_bounds)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return the exit code (0 success, 2 bad input or no plan)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args))
+    except FreeFloatError as exc:
+        print(f"freefloat: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:  # pragma: no cover - interactive
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

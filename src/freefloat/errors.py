@@ -1,0 +1,87 @@
+"""The exceptions freefloat raises: one root, :class:`FreeFloatError`, and subclasses with data.
+
+Every message is a single line that names the problem and says what would be valid, so that
+the command line can print it as it is (exit code 2) and a caller can test it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+
+class FreeFloatError(Exception):
+    """Root of every error freefloat raises on purpose."""
+
+
+class ModelError(FreeFloatError):
+    """A URDF that cannot describe a free-floating space manipulator."""
+
+    def __init__(self, message: str, urdf: str | None = None) -> None:
+        self.urdf = urdf
+        super().__init__(message if urdf is None else f"{urdf}: {message}")
+
+
+class UnknownNameError(FreeFloatError):
+    """A joint, frame, robot or key name that does not exist; carries the valid names."""
+
+    def __init__(self, kind: str, name: str, valid: Iterable[str]) -> None:
+        self.kind = kind
+        self.name = name
+        self.valid = tuple(valid)
+        shown = ", ".join(self.valid) if self.valid else "(none)"
+        super().__init__(f"unknown {kind} {name!r}; valid: {shown}")
+
+
+class ScenarioError(FreeFloatError):
+    """A scenario file that cannot be read or holds a bad value."""
+
+
+class InputError(FreeFloatError):
+    """A numerical input that is not usable (NaN, infinite, non-positive duration...)."""
+
+
+class JointLimitError(FreeFloatError):
+    """A joint position outside its URDF limits; carries the joint and its interval."""
+
+    def __init__(self, joint: str, value: float, lower: float, upper: float, where: str,
+                 unit: str = "deg", scale: float = 1.0) -> None:
+        self.joint = joint
+        self.value = value
+        self.lower = lower
+        self.upper = upper
+        self.where = where
+        super().__init__(
+            f"{where}: joint {joint!r} = {value * scale:.6g} {unit} is outside its limits "
+            f"[{lower * scale:.6g}, {upper * scale:.6g}] {unit}"
+        )
+
+
+class InfeasibleError(FreeFloatError):
+    """A requested attitude change outside the reachable interval (planar bounds)."""
+
+    def __init__(
+        self, requested_deg: float, bounds_deg: Sequence[float], message: str | None = None
+    ) -> None:
+        self.requested_deg = float(requested_deg)
+        self.bounds_deg = (float(bounds_deg[0]), float(bounds_deg[1]))
+        lo, hi = self.bounds_deg
+        super().__init__(
+            message
+            or f"requested yaw change {self.requested_deg:.3f} deg is outside the reachable "
+            f"interval ({lo:.3f}, {hi:.3f}) deg for this joint motion (planar bounds); no "
+            "point-to-point path exists"
+        )
+
+
+class SolverError(FreeFloatError):
+    """No path reaching the goal attitude was found; carries the best residual and what was tried."""
+
+    def __init__(self, message: str, best_residual: float, tried: Sequence[str] = ()) -> None:
+        self.best_residual = float(best_residual)
+        self.tried = tuple(tried)
+        detail = f"; tried: {'; '.join(self.tried)}" if self.tried else ""
+        super().__init__(f"{message} (best residual {self.best_residual:.3g} rad){detail}")
+
+
+class PlanFileError(FreeFloatError):
+    """A plan file that is unreadable, corrupt or of another format version."""

@@ -1,0 +1,112 @@
+"""The zero-momentum map: base motion implied by joint motion (method.md section 2).
+
+With zero total momentum ``h = A_g(q) v = 0`` and ``A_g = [A_b | A_q]`` (Pinocchio's
+centroidal map, 6 x (6+N)), the base twist in the base frame is
+
+    v_base = -A_b^-1 A_q qdot        (rows 0:3 linear m/s, rows 3:6 angular rad/s)
+
+Rows 3:6 are ``F1(q)``, so that ``omega_base = F1(q) qdot``. The map depends on the joint
+values only (not on the base pose), so it is evaluated with the base at the origin and
+identity attitude. The system centre of mass (CM) is the inertial origin.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from .model import Robot
+
+__all__ = ["MomentumMap", "is_planar"]
+
+
+class MomentumMap:
+    """Evaluate the momentum map and related kinematics for one robot.
+
+    Reuses one Pinocchio ``Data`` and one configuration buffer across calls, so an instance is
+    not thread-safe; make one per thread.
+    """
+
+    def __init__(self, robot: Robot) -> None:
+        self.robot = robot
+        self.model = robot.model
+        self.data = robot.model.createData()
+        self._q = robot.configuration(np.zeros(robot.n))
+        self.evaluations = 0
+
+    def base_twist_map(self, joints: np.ndarray) -> np.ndarray:
+        """The 6 x N map from joint rates to the base twist (base frame).
+
+        Args:
+            joints: N joint values (rad or m).
+
+        Returns:
+            ``J`` with ``v_base = J qdot``: rows 0:3 give the base-origin velocity (m/s per
+            unit rate), rows 3:6 give ``F1`` (rad/s per unit rate).
+        """
+        self.robot.write_joints(self._q, joints)
+        ag = pin.computeCentroidalMap(self.model, self.data, self._q)
+        self.evaluations += 1
+        return -np.linalg.solve(ag[:, :6], ag[:, 6:])
+
+    def f1(self, joints: np.ndarray) -> np.ndarray:
+        """``F1(q)``: 3 x N map from joint rates to the base angular velocity (base frame)."""
+        return self.base_twist_map(joints)[3:]
+
+    def base_position(self, joints: np.ndarray, quaternion_xyzw: np.ndarray) -> np.ndarray:
+        """Base origin in the inertial frame (m) that keeps the system CM at the origin."""
+        q = self.robot.configuration(joints, None, quaternion_xyzw)
+        return -np.asarray(pin.centerOfMass(self.model, self.data, q))
+
+    def configuration(self, joints: np.ndarray, quaternion_xyzw: np.ndarray) -> np.ndarray:
+        """Full Pinocchio configuration with the base placed so that the CM is at the origin."""
+        q = self.robot.configuration(joints, None, quaternion_xyzw)
+        q[0:3] = -np.asarray(pin.centerOfMass(self.model, self.data, q))
+        return q
+
+    def velocity(self, joints: np.ndarray, rates: np.ndarray) -> np.ndarray:
+        """Full Pinocchio velocity ``[v_base; qdot]`` with the zero-momentum base twist."""
+        return np.concatenate([self.base_twist_map(joints) @ rates, rates])
+
+    def end_effector_pose(self, joints: np.ndarray, quaternion_xyzw: np.ndarray) -> pin.SE3:
+        """End-effector placement in the inertial frame (CM at the origin; m, rotation)."""
+        q = self.configuration(joints, quaternion_xyzw)
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return self.data.oMf[self.robot.end_effector_frame].copy()
+
+    def momentum(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Total momentum ``[linear (kg m/s); angular about the CM (kg m^2/s)]``, inertial frame."""
+        return np.asarray(pin.computeCentroidalMomentum(self.model, self.data, q, v).vector)
+
+
+def is_planar(robot: Robot, samples: int = 16, seed: int = 0) -> bool:
+    """True when the base can only turn about its z axis (method.md section 3).
+
+    That is the case when every revolute axis is parallel to the base z axis, every prismatic
+    axis lies in the base xy plane, and the map's x and y rows vanish; the last condition is
+    checked at ``samples`` random configurations (relative tolerance 1e-12).
+    """
+    model, data = robot.model, robot.model.createData()
+    q = robot.configuration(np.zeros(robot.n))
+    pin.computeJointJacobians(model, data, q)
+    z = np.array([0.0, 0.0, 1.0])
+    for joint in robot.joints:
+        column = pin.getJointJacobian(model, data, joint.index, pin.LOCAL_WORLD_ALIGNED)[
+            :, joint.idx_v
+        ]
+        linear, angular = column[:3], column[3:]
+        if joint.angular and np.linalg.norm(np.cross(angular, z)) > 1e-12:
+            return False
+        if not joint.angular and abs(linear @ z) > 1e-12:
+            return False
+    mmap = MomentumMap(robot)
+    rng = np.random.default_rng(seed)
+    for _ in range(samples):
+        values = rng.uniform(-np.pi, np.pi, robot.n)
+        for i, joint in enumerate(robot.joints):
+            if not joint.angular or np.isfinite(joint.lower):
+                values[i] = rng.uniform(max(joint.lower, -1.0), min(joint.upper, 1.0))
+        f1 = mmap.f1(values)
+        if np.abs(f1[:2]).max() > 1e-12 * max(1.0, np.abs(f1[2]).max()):
+            return False
+    return True

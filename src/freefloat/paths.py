@@ -1,0 +1,193 @@
+"""Polynomial joint paths with free coefficients (method.md section 4).
+
+Joint i follows a polynomial of degree ``k_i >= 5`` in time on ``[0, T]`` with zero rate and
+acceleration at both ends. Internally time is normalised, ``s = t / T`` in [0, 1]:
+
+    q_i(s) = q_i0 + dq_i (10 s^3 - 15 s^4 + 6 s^5) + sum_{j=6..k_i} beta_ij phi_j(s)
+
+where ``phi_j(s) = s^j - (a3 s^3 + a4 s^4 + a5 s^5)`` keeps the six boundary conditions, so
+that each ``beta_ij`` is exactly the coefficient of ``s^j``; in time it is the coefficient of
+``t^j`` times ``T^j``. The free parameters ``beta`` (rad, or m for prismatic joints) are
+duration independent: the path shape, and so the attitude reached, does not depend on T.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from .errors import InputError
+
+__all__ = ["PathFamily", "PathSamples", "basis_coefficients"]
+
+_QUINTIC = np.array([0.0, 0.0, 0.0, 10.0, -15.0, 6.0])
+
+
+def basis_coefficients(power: int) -> np.ndarray:
+    """Ascending coefficients of ``phi_power(s)``: ``s^power`` with the six end conditions zero."""
+    if power < 6:
+        raise ValueError("free coefficients start at s^6")
+    lhs = np.array([[1.0, 1.0, 1.0], [3.0, 4.0, 5.0], [6.0, 12.0, 20.0]])
+    rhs = np.array([1.0, power, power * (power - 1.0)])
+    a3, a4, a5 = np.linalg.solve(lhs, rhs)
+    coeffs = np.zeros(power + 1)
+    coeffs[3:6] = [-a3, -a4, -a5]
+    coeffs[power] = 1.0
+    return coeffs
+
+
+@dataclass(frozen=True)
+class PathSamples:
+    """Joint positions and their first two derivatives at given instants.
+
+    Each array is (len(s), N). Derivatives are with respect to normalised time ``s`` unless
+    the samples were taken in seconds (see :meth:`PathFamily.at_times`).
+    """
+
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+
+
+@dataclass(frozen=True)
+class PathFamily:
+    """The family of polynomial joint paths between two joint configurations.
+
+    Attributes:
+        start: N start joint values (rad or m).
+        goal: N goal joint values (rad or m).
+        degrees: polynomial degree of each joint (>= 5).
+    """
+
+    start: np.ndarray
+    goal: np.ndarray
+    degrees: tuple[int, ...]
+    _index: tuple[tuple[int, int], ...] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        start = np.asarray(self.start, dtype=float)
+        goal = np.asarray(self.goal, dtype=float)
+        if start.shape != goal.shape or start.ndim != 1:
+            raise InputError("start and goal need one value per joint")
+        if len(self.degrees) != len(start):
+            raise InputError(f"{len(self.degrees)} degrees given for {len(start)} joints")
+        for degree in self.degrees:
+            if int(degree) != degree or degree < 5:
+                raise InputError(f"polynomial degree {degree} is invalid; each must be >= 5")
+        object.__setattr__(self, "start", start)
+        object.__setattr__(self, "goal", goal)
+        object.__setattr__(self, "degrees", tuple(int(d) for d in self.degrees))
+        index = tuple((i, p) for i, d in enumerate(self.degrees) for p in range(6, d + 1))
+        object.__setattr__(self, "_index", index)
+
+    @classmethod
+    def with_extra(
+        cls, start: np.ndarray, goal: np.ndarray, extra: Sequence[int]
+    ) -> PathFamily:
+        """Family with ``extra[i]`` free coefficients (degree ``5 + extra[i]``) on joint i."""
+        return cls(start, goal, tuple(5 + int(e) for e in extra))
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joints N."""
+        return len(self.degrees)
+
+    @property
+    def n_free(self) -> int:
+        """Number of free coefficients (the length of ``beta``)."""
+        return len(self._index)
+
+    @property
+    def free_index(self) -> tuple[tuple[int, int], ...]:
+        """``(joint, power)`` of each entry of ``beta``."""
+        return self._index
+
+    @cached_property
+    def _basis(self) -> np.ndarray:
+        """(n_free, max degree + 1) ascending coefficients of each free basis polynomial."""
+        width = max(self.degrees) + 1
+        out = np.zeros((self.n_free, width))
+        for k, (_, power) in enumerate(self._index):
+            out[k, : power + 1] = basis_coefficients(power)
+        return out
+
+    def coefficients(self, beta: np.ndarray) -> list[np.ndarray]:
+        """Ascending coefficients in ``s`` of each joint's polynomial (rad or m)."""
+        beta = self._check(beta)
+        out = []
+        delta = self.goal - self.start
+        for i, degree in enumerate(self.degrees):
+            c = np.zeros(degree + 1)
+            c[:6] = delta[i] * _QUINTIC
+            c[0] = self.start[i]
+            out.append(c)
+        for k, (i, power) in enumerate(self._index):
+            out[i] += beta[k] * self._basis[k, : self.degrees[i] + 1]
+        return out
+
+    def time_coefficients(self, beta: np.ndarray, duration: float) -> list[np.ndarray]:
+        """Ascending coefficients in ``t`` (seconds) of each joint's polynomial."""
+        return [c / duration ** np.arange(len(c)) for c in self.coefficients(beta)]
+
+    def free_time_coefficients(self, beta: np.ndarray, duration: float) -> list[list[float]]:
+        """Per joint, the coefficients of ``t^6`` and up (rad/s^j or m/s^j)."""
+        beta = self._check(beta)
+        out: list[list[float]] = [[] for _ in self.degrees]
+        for k, (i, power) in enumerate(self._index):
+            out[i].append(float(beta[k] / duration**power))
+        return out
+
+    def beta_from_time_coefficients(self, free: Sequence[Sequence[float]], duration: float) -> np.ndarray:
+        """Inverse of :meth:`free_time_coefficients`."""
+        beta = np.zeros(self.n_free)
+        counters = [0] * self.n_joints
+        for k, (i, power) in enumerate(self._index):
+            beta[k] = free[i][counters[i]] * duration**power
+            counters[i] += 1
+        return beta
+
+    def linear_map(self, s: np.ndarray) -> tuple[PathSamples, np.ndarray, np.ndarray]:
+        """The path at instants ``s`` as an affine function of ``beta``.
+
+        Returns:
+            ``(base, dq, dqs)``: the quintic path (``beta = 0``) with its s-derivatives, and the
+            (len(s), N, n_free) arrays with ``q = base.q + dq @ beta`` and
+            ``q_s = base.qd + dqs @ beta``.
+        """
+        s = np.asarray(s, dtype=float)
+        base = self.evaluate(np.zeros(self.n_free), s)
+        dq = np.zeros((len(s), self.n_joints, self.n_free))
+        dqs = np.zeros_like(dq)
+        for k, (i, _) in enumerate(self._index):
+            coeffs = self._basis[k]
+            dq[:, i, k] = np.polynomial.polynomial.polyval(s, coeffs)
+            dqs[:, i, k] = np.polynomial.polynomial.polyval(
+                s, np.polynomial.polynomial.polyder(coeffs)
+            )
+        return base, dq, dqs
+
+    def evaluate(self, beta: np.ndarray, s: np.ndarray) -> PathSamples:
+        """Positions and s-derivatives (per unit s, per unit s^2) at normalised instants ``s``."""
+        s = np.asarray(s, dtype=float)
+        poly = np.polynomial.polynomial
+        cols = [[], [], []]
+        for c in self.coefficients(beta):
+            d1 = poly.polyder(c)
+            cols[0].append(poly.polyval(s, c))
+            cols[1].append(poly.polyval(s, d1))
+            cols[2].append(poly.polyval(s, poly.polyder(d1)))
+        return PathSamples(*(np.stack(col, axis=-1) for col in cols))
+
+    def at_times(self, beta: np.ndarray, t: np.ndarray, duration: float) -> PathSamples:
+        """Positions (rad or m), rates (per s) and accelerations (per s^2) at times ``t`` (s)."""
+        n = self.evaluate(beta, np.asarray(t, dtype=float) / duration)
+        return PathSamples(n.q, n.qd / duration, n.qdd / duration**2)
+
+    def _check(self, beta: np.ndarray) -> np.ndarray:
+        beta = np.asarray(beta, dtype=float).reshape(-1)
+        if beta.shape != (self.n_free,):
+            raise InputError(f"expected {self.n_free} free coefficients, got {beta.size}")
+        return beta

@@ -1,0 +1,308 @@
+"""The planning problem, built apart from its solution (method.md section 5).
+
+A :class:`Problem` holds the robot, the start and goal, the path family and the integration
+grid, and evaluates the residual ``h(beta)``: the attitude reached at the end of the path minus
+the attitude wanted (rad). Planar systems have one equation (yaw, not wrapped, against the
+requested yaw change); others have three (the rotation vector from the goal attitude to the
+reached one, in the goal frame).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .attitude import (
+    GAUSS3_WEIGHTS,
+    magnus_increments,
+    propagate,
+    quat_conjugate,
+    quat_exp,
+    quat_log,
+    quat_multiply,
+    step_nodes,
+)
+from .bounds import PlanarBounds, planar_bounds
+from .errors import InfeasibleError, InputError, JointLimitError
+from .model import Robot
+from .momentum import MomentumMap, is_planar
+from .paths import PathFamily
+
+__all__ = ["Problem", "build_problem", "wrap_angle"]
+
+#: Target of the integration error estimate (rad) when choosing the number of steps.
+INTEGRATION_TOLERANCE = 1e-13
+_MIN_STEPS, _MAX_STEPS = 16, 4096
+
+
+def wrap_angle(angle: float) -> float:
+    """Angle wrapped to (-pi, pi] (rad)."""
+    wrapped = math.remainder(angle, 2.0 * math.pi)
+    return math.pi if wrapped == -math.pi else wrapped
+
+
+@dataclass(eq=False)
+class Problem:
+    """A point-to-point planning problem for a free floater.
+
+    Attributes:
+        robot: the robot.
+        mmap: its momentum map evaluator.
+        family: joint path family (start, goal, degrees).
+        duration: motion time T (s).
+        start_quaternion: base attitude at t = 0, ``[x, y, z, w]``.
+        goal_quaternion: wanted base attitude at t = T, ``[x, y, z, w]``.
+        planar: whether the base only turns about its z axis.
+        bounds: planar gain extremes (planar problems only).
+        yaw_change: requested yaw change (rad), on the branch inside the bounds (planar only).
+        steps: number of integration steps on the normalised interval [0, 1].
+    """
+
+    robot: Robot
+    mmap: MomentumMap
+    family: PathFamily
+    duration: float
+    start_quaternion: np.ndarray
+    goal_quaternion: np.ndarray
+    planar: bool
+    bounds: PlanarBounds | None = None
+    yaw_change: float | None = None
+    steps: int = 64
+    evaluations: int = 0
+    _grid: tuple[np.ndarray, ...] = field(default=(), repr=False)
+
+    def __post_init__(self) -> None:
+        self.set_steps(self.steps)
+
+    @property
+    def n_equations(self) -> int:
+        """Number of attitude equations: 1 (planar yaw) or 3."""
+        return 1 if self.planar else 3
+
+    @property
+    def n_free(self) -> int:
+        """Number of free path coefficients."""
+        return self.family.n_free
+
+    @property
+    def bounds_interval(self) -> tuple[float, float] | None:
+        """Reachable yaw-change interval (rad) for this joint motion, planar problems only."""
+        if self.bounds is None:
+            return None
+        return self.bounds.interval(self.family.goal - self.family.start)
+
+    def set_steps(self, steps: int) -> None:
+        """Use ``steps`` uniform integration steps (three Gauss nodes each) on [0, 1]."""
+        self.steps = int(steps)
+        nodes, h = step_nodes(np.linspace(0.0, 1.0, self.steps + 1))
+        base, dq, dqs = self.family.linear_map(nodes)
+        self._grid = (h, base.q, base.qd, dq, dqs)
+
+    def rates(self, beta: np.ndarray) -> np.ndarray:
+        """Base angular velocity at the integration nodes, (steps, 3, 3), rad per unit s."""
+        h, q0, qs0, dq, dqs = self._grid
+        beta = np.asarray(beta, dtype=float)
+        q = q0 + dq @ beta
+        qs = qs0 + dqs @ beta
+        omega = np.empty((len(q), 3))
+        if self.planar:
+            omega[:, :2] = 0.0
+            for k in range(len(q)):
+                omega[k, 2] = self.mmap.f1(q[k])[2] @ qs[k]
+        else:
+            for k in range(len(q)):
+                omega[k] = self.mmap.f1(q[k]) @ qs[k]
+        self.evaluations += 1
+        return omega.reshape(self.steps, 3, 3)
+
+    def yaw_change_of(self, beta: np.ndarray) -> float:
+        """Planar problems: yaw change over the path (rad), a plain Gauss-Legendre integral."""
+        omega = self.rates(beta)
+        h = self._grid[0]
+        return float(np.sum(h[:, None] * GAUSS3_WEIGHTS[None, :] * omega[:, :, 2]))
+
+    def achieved(self, beta: np.ndarray) -> np.ndarray:
+        """Base attitude reached at t = T, ``[x, y, z, w]``."""
+        if self.planar:
+            step = quat_exp(np.array([0.0, 0.0, self.yaw_change_of(beta)]))
+            return quat_multiply(self.start_quaternion, step)
+        increments = magnus_increments(self.rates(beta), self._grid[0])
+        return propagate(self.start_quaternion, increments)[-1]
+
+    def residual(self, beta: np.ndarray) -> np.ndarray:
+        """``h(beta)`` (rad): 1 equation (planar) or 3 (rotation vector in the goal frame)."""
+        if self.planar:
+            assert self.yaw_change is not None
+            return np.array([self.yaw_change_of(beta) - self.yaw_change])
+        reached = self.achieved(beta)
+        return quat_log(quat_multiply(quat_conjugate(self.goal_quaternion), reached))
+
+    def attitudes(self, beta: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """Base attitude ``[x, y, z, w]`` at normalised instants ``s`` (ascending, from 0).
+
+        Each interval between instants is split so that the steps are no longer than those of
+        the solver's grid, so the last attitude agrees with :meth:`achieved` to within the
+        integration error.
+        """
+        s = np.asarray(s, dtype=float)
+        sub = max(1, math.ceil(self.steps * float(np.max(np.diff(s))) - 1e-9))
+        edges = np.concatenate(
+            [np.linspace(a, b, sub + 1)[:-1] for a, b in zip(s[:-1], s[1:], strict=True)]
+            + [s[-1:]]
+        )
+        nodes, h = step_nodes(edges)
+        path = self.family.evaluate(beta, nodes)
+        omega = np.array([self.mmap.f1(q) @ qs for q, qs in zip(path.q, path.qd, strict=True)])
+        if self.planar:
+            omega[:, :2] = 0.0
+        quats = propagate(self.start_quaternion, magnus_increments(omega.reshape(-1, 3, 3), h))
+        return quats[::sub]
+
+    def integration_error(self, beta: np.ndarray) -> float:
+        """Estimated integration error (rad) of the attitude at T with the current steps."""
+        coarse = self.residual(beta)
+        steps = self.steps
+        self.set_steps(2 * steps)
+        fine = self.residual(beta)
+        self.set_steps(steps)
+        # Sixth order: the error of the coarse result is 64/63 of the difference.
+        return float(np.linalg.norm(coarse - fine) * 64.0 / 63.0)
+
+    def choose_steps(self, beta: np.ndarray | None = None) -> int:
+        """Double the step count until the integration error estimate is tiny; return it."""
+        beta = np.zeros(self.n_free) if beta is None else beta
+        steps = max(_MIN_STEPS, self.steps // 2)
+        self.set_steps(steps)
+        while self.integration_error(beta) > INTEGRATION_TOLERANCE and self.steps < _MAX_STEPS:
+            self.set_steps(2 * self.steps)
+        return self.steps
+
+
+def _check_finite(name: str, values: np.ndarray) -> None:
+    if not np.all(np.isfinite(values)):
+        raise InputError(f"{name} contains NaN or infinite values; give finite numbers")
+
+
+def _check_limits(robot: Robot, values: np.ndarray, where: str) -> None:
+    for joint, value in zip(robot.joints, values, strict=True):
+        if joint.kind == "continuous":
+            continue
+        if not joint.lower - 1e-12 <= value <= joint.upper + 1e-12:
+            scale = 180.0 / math.pi if joint.angular else 1.0
+            raise JointLimitError(
+                joint.name, value, joint.lower, joint.upper, where, "deg" if joint.angular else "m", scale
+            )
+
+
+def build_problem(
+    robot: Robot,
+    start: np.ndarray,
+    goal: np.ndarray,
+    start_quaternion: np.ndarray,
+    goal_quaternion: np.ndarray,
+    duration: float,
+    extra: Sequence[int] | Mapping[str, int] | None = None,
+    mmap: MomentumMap | None = None,
+    check_bounds: bool = True,
+) -> Problem:
+    """Build and check a planning problem.
+
+    Args:
+        robot: the free-floating robot.
+        start: N start joint values (rad or m).
+        goal: N goal joint values (rad or m).
+        start_quaternion: base attitude at t = 0, ``[x, y, z, w]``.
+        goal_quaternion: wanted base attitude at t = T, ``[x, y, z, w]``.
+        duration: motion time T (s), > 0.
+        extra: free coefficients beyond the quintic per joint (a sequence of N counts or a
+            ``{joint: count}`` mapping); default one on the joint nearest the base for planar
+            systems and one on each of the first three joints otherwise.
+        mmap: momentum-map evaluator to reuse.
+        check_bounds: refuse planar requests outside the planar bounds (method.md section 6).
+
+    Raises:
+        InputError: non-finite numbers, a non-positive duration, a bad quaternion.
+        JointLimitError: start or goal outside the joint limits.
+        InfeasibleError: planar request outside the reachable interval, or a goal attitude a
+            planar system cannot reach (it only turns about its z axis).
+    """
+    start = np.asarray(start, dtype=float)
+    goal = np.asarray(goal, dtype=float)
+    for name, arr in (("start joints", start), ("goal joints", goal)):
+        _check_finite(name, arr)
+    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0.0):
+        raise InputError(f"duration must be a finite number of seconds > 0, got {duration!r}")
+    quats = []
+    for name, quat in (("start attitude", start_quaternion), ("goal attitude", goal_quaternion)):
+        quat = np.asarray(quat, dtype=float)
+        _check_finite(name, quat)
+        norm = float(np.linalg.norm(quat))
+        if quat.shape != (4,) or norm < 1e-9:
+            raise InputError(f"{name} must be a non-zero quaternion [x, y, z, w]")
+        quats.append(quat / norm)
+    _check_limits(robot, start, "start")
+    _check_limits(robot, goal, "goal")
+
+    mmap = mmap or MomentumMap(robot)
+    planar = is_planar(robot)
+    if extra is None:
+        counts = [0] * robot.n
+        for i in range(1 if planar else 3):
+            counts[i % robot.n] += 1
+    elif isinstance(extra, Mapping):
+        counts = [0] * robot.n
+        for name, count in extra.items():
+            index = robot.joint_names.index(robot.joint(name).name)
+            counts[index] = int(count)
+    else:
+        counts = [int(c) for c in extra]
+    if any(c < 0 for c in counts):
+        raise InputError(f"free coefficient counts must be >= 0, got {counts}")
+    family = PathFamily.with_extra(start, goal, counts)
+
+    bounds = yaw_change = None
+    if planar:
+        relative = quat_log(quat_multiply(quat_conjugate(quats[0]), quats[1]))
+        off_axis = float(np.linalg.norm(relative[:2]))
+        if off_axis > 1e-9:
+            raise InfeasibleError(
+                math.degrees(off_axis),
+                (0.0, 0.0),
+                message=(
+                    f"this robot is planar: its base turns only about its z axis, but the goal "
+                    f"attitude is {math.degrees(off_axis):.6g} deg away from the start about "
+                    "other axes; give the goal the start's pitch and roll"
+                ),
+            )
+        yaw_change = wrap_angle(float(relative[2]))
+        bounds = planar_bounds(mmap)
+        lo, hi = bounds.interval(goal - start)
+        if check_bounds:
+            branches = [yaw_change + 2.0 * math.pi * k for k in range(-3, 4)]
+            inside = [b for b in branches if lo < b < hi]
+            if not inside:
+                raise InfeasibleError(math.degrees(yaw_change), (math.degrees(lo), math.degrees(hi)))
+            yaw_change = min(inside, key=abs)
+    problem = Problem(
+        robot=robot,
+        mmap=mmap,
+        family=family,
+        duration=float(duration),
+        start_quaternion=quats[0],
+        goal_quaternion=quats[1],
+        planar=planar,
+        bounds=bounds,
+        yaw_change=yaw_change,
+    )
+    if family.n_free < problem.n_equations:
+        raise InputError(
+            f"{family.n_free} free path coefficient(s) for {problem.n_equations} attitude "
+            f"equation(s); add at least {problem.n_equations - family.n_free} more with "
+            "[path] extra"
+        )
+    problem.choose_steps()
+    return problem
+

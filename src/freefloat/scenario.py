@@ -1,0 +1,221 @@
+"""Scenarios: what to plan, read from a TOML file.
+
+The file speaks degrees (joint angles, Euler angles) and metres (prismatic joints); a
+:class:`Scenario` holds radians and metres. Format::
+
+    robot = "planar_2dof"          # a shipped robot name, or a URDF path relative to this file
+    duration = 10.0                # [s]
+    end_effector = "ee"            # optional frame name; default: the tip of the chain
+    [start]
+    joints = { q1 = 80.0, q2 = 30.0 }      # deg (m for prismatic joints)
+    base_zyx_deg = [-50.0, 0.0, 0.0]       # yaw, pitch, roll [deg]; optional, default zeros
+    [goal]
+    joints = { q1 = -60.0, q2 = 90.0 }
+    base_zyx_deg = [0.0, 0.0, 0.0]         # or base_quaternion_xyzw = [x, y, z, w]
+    [path]
+    extra = { q2 = 1 }             # optional: free coefficients per joint beyond the quintic
+    max_deviation_deg = 458.4      # optional: one-unknown root bracket, as path deviation [deg]
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .attitude import quat_from_zyx
+from .errors import FreeFloatError, ScenarioError, UnknownNameError
+from .model import Robot, load_robot, resolve_robot, robots_dir
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["Scenario", "default_scenario_path"]
+
+_TOP_KEYS = ("robot", "duration", "end_effector", "start", "goal", "path")
+_STATE_KEYS = ("joints", "base_zyx_deg", "base_quaternion_xyzw")
+_PATH_KEYS = ("extra", "max_deviation_deg")
+
+
+def default_scenario_path() -> Path:
+    """The shipped worked example of method.md section 8."""
+    return robots_dir() / "scenarios" / "worked_example.toml"
+
+
+def _check_keys(table: Mapping[str, Any], valid: tuple[str, ...], where: str) -> None:
+    for key in table:
+        if key not in valid:
+            raise UnknownNameError(f"key in {where}", key, valid)
+
+
+def _number(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ScenarioError(f"{where} must be a number, got {value!r}")
+    if not math.isfinite(value):
+        raise ScenarioError(f"{where} must be finite, got {value!r}")
+    return float(value)
+
+
+def _numbers(value: Any, count: int, where: str) -> np.ndarray:
+    if not isinstance(value, list) or len(value) != count:
+        raise ScenarioError(f"{where} must be a list of {count} numbers, got {value!r}")
+    return np.array([_number(v, f"{where}[{i}]") for i, v in enumerate(value)])
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A planning request, in radians and metres.
+
+    Attributes:
+        robot: the loaded free-floating robot.
+        duration: motion time T (s).
+        start_joints: ``{joint: value}`` at t = 0 (rad, or m for prismatic joints).
+        goal_joints: ``{joint: value}`` at t = T (rad or m).
+        start_attitude: base attitude at t = 0, quaternion ``[x, y, z, w]``.
+        goal_attitude: wanted base attitude at t = T, quaternion ``[x, y, z, w]``.
+        extra: free coefficients per joint beyond the quintic; None lets the planner choose.
+        max_deviation: one-unknown root bracket as largest path deviation (rad); None: default.
+        source: the TOML file it came from, if any.
+    """
+
+    robot: Robot
+    duration: float
+    start_joints: Mapping[str, float]
+    goal_joints: Mapping[str, float]
+    start_attitude: np.ndarray = field(default_factory=lambda: quat_from_zyx(0.0))
+    goal_attitude: np.ndarray = field(default_factory=lambda: quat_from_zyx(0.0))
+    extra: Mapping[str, int] | None = None
+    max_deviation: float | None = None
+    source: Path | None = None
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> Scenario:
+        """Read a scenario file (degrees at this edge; see the module docstring).
+
+        Raises:
+            ScenarioError: unreadable file, bad TOML, or a bad value.
+            UnknownNameError: an unknown key, joint or frame name (lists the valid ones).
+            ModelError: the robot's URDF cannot be loaded.
+        """
+        path = Path(path).expanduser().resolve()
+        try:
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise ScenarioError(f"scenario file not found: {path}") from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ScenarioError(f"cannot read scenario {path}: {exc}") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise ScenarioError(f"{path}: invalid TOML ({exc})") from None
+        try:
+            return cls.from_dict(data, relative_to=path.parent, source=path)
+        except FreeFloatError as exc:
+            if str(path) in str(exc):
+                raise
+            raise _prefixed(exc, path) from None
+
+    @classmethod
+    def from_dict(
+        cls, data: Mapping[str, Any], relative_to: Path | None = None, source: Path | None = None
+    ) -> Scenario:
+        """Build a scenario from the parsed TOML tables (degrees; see the module docstring)."""
+        _check_keys(data, _TOP_KEYS, "the scenario")
+        for key in ("robot", "duration", "start", "goal"):
+            if key not in data:
+                raise ScenarioError(f"missing required key {key!r} (required: robot, duration, "
+                                    "[start], [goal])")
+        if not isinstance(data["robot"], str):
+            raise ScenarioError(f"robot must be a shipped robot name or a URDF path, got "
+                                f"{data['robot']!r}")
+        duration = _number(data["duration"], "duration")
+        if duration <= 0.0:
+            raise ScenarioError(f"duration must be > 0 s, got {duration:g}")
+        end_effector = data.get("end_effector")
+        if end_effector is not None and not isinstance(end_effector, str):
+            raise ScenarioError(f"end_effector must be a frame name, got {end_effector!r}")
+        robot = load_robot(resolve_robot(data["robot"], relative_to), end_effector)
+
+        states = []
+        for name in ("start", "goal"):
+            table = data[name]
+            if not isinstance(table, Mapping):
+                raise ScenarioError(f"[{name}] must be a table")
+            _check_keys(table, _STATE_KEYS, f"[{name}]")
+            if "joints" not in table or not isinstance(table["joints"], Mapping):
+                raise ScenarioError(f"[{name}] needs joints = {{ name = value, ... }} "
+                                    f"(joints: {', '.join(robot.joint_names)})")
+            joints: dict[str, float] = {}
+            for joint_name, value in table["joints"].items():
+                joint = robot.joint(joint_name)
+                number = _number(value, f"[{name}] joint {joint_name!r}")
+                joints[joint_name] = math.radians(number) if joint.angular else number
+            robot.vector(joints, f"[{name}] joints")  # every joint given
+            if "base_zyx_deg" in table and "base_quaternion_xyzw" in table:
+                raise ScenarioError(f"[{name}] gives both base_zyx_deg and base_quaternion_xyzw; "
+                                    "give one")
+            if "base_quaternion_xyzw" in table:
+                quat = _numbers(table["base_quaternion_xyzw"], 4, f"[{name}] base_quaternion_xyzw")
+                if np.linalg.norm(quat) < 1e-9:
+                    raise ScenarioError(f"[{name}] base_quaternion_xyzw must be non-zero")
+                quat = quat / np.linalg.norm(quat)
+            else:
+                zyx = _numbers(table.get("base_zyx_deg", [0.0, 0.0, 0.0]), 3,
+                               f"[{name}] base_zyx_deg")
+                quat = quat_from_zyx(*np.radians(zyx))
+            states.append((joints, quat))
+
+        path_table = data.get("path", {})
+        if not isinstance(path_table, Mapping):
+            raise ScenarioError("[path] must be a table")
+        _check_keys(path_table, _PATH_KEYS, "[path]")
+        extra = None
+        if "extra" in path_table:
+            if not isinstance(path_table["extra"], Mapping):
+                raise ScenarioError("[path] extra must be a table { joint = count, ... }")
+            extra = {}
+            for joint_name, count in path_table["extra"].items():
+                robot.joint(joint_name)
+                if isinstance(count, bool) or not isinstance(count, int) or count < 0:
+                    raise ScenarioError(f"[path] extra for {joint_name!r} must be an integer >= 0,"
+                                        f" got {count!r}")
+                extra[joint_name] = count
+        max_deviation = None
+        if "max_deviation_deg" in path_table:
+            value = _number(path_table["max_deviation_deg"], "[path] max_deviation_deg")
+            if value <= 0.0:
+                raise ScenarioError(f"[path] max_deviation_deg must be > 0, got {value:g}")
+            max_deviation = math.radians(value)
+
+        return cls(
+            robot=robot,
+            duration=duration,
+            start_joints=states[0][0],
+            goal_joints=states[1][0],
+            start_attitude=states[0][1],
+            goal_attitude=states[1][1],
+            extra=extra,
+            max_deviation=max_deviation,
+            source=source,
+        )
+
+    @property
+    def start(self) -> np.ndarray:
+        """Start joint values as an N-vector in joint order (rad or m)."""
+        return self.robot.vector(self.start_joints, "start joints")
+
+    @property
+    def goal(self) -> np.ndarray:
+        """Goal joint values as an N-vector in joint order (rad or m)."""
+        return self.robot.vector(self.goal_joints, "goal joints")
+
+
+def _prefixed(exc: FreeFloatError, path: Path) -> FreeFloatError:
+    """The same error with the scenario file named in front of its message."""
+    exc.args = (f"{path}: {exc}",)
+    return exc

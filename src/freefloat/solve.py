@@ -1,0 +1,263 @@
+"""Solve ``h(beta) = 0`` for the free path coefficients (method.md section 5).
+
+- One unknown and one equation (planar, one free coefficient): scan a bracket, refine every
+  sign change with Brent's safeguarded secant method, and return the minimum-norm root with
+  the others listed.
+- As many unknowns as equations: Broyden's quasi-Newton method with a backtracking line search
+  (the Jacobian is refreshed by central differences when the line search stalls).
+- More unknowns than equations: minimum-norm ``beta`` subject to ``h(beta) = 0`` by SQP
+  (SciPy's SLSQP), then minimum-norm Gauss-Newton corrections.
+
+A solution is returned only when the residual is below the tolerance; otherwise
+:class:`~freefloat.errors.SolverError` reports the best residual reached and what was tried.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq, minimize
+
+from .errors import SolverError
+from .paths import basis_coefficients
+from .problem import Problem
+
+__all__ = ["DEFAULT_TOLERANCE", "Root", "Solution", "SolveOptions", "solve"]
+
+#: Default attitude tolerance (rad).
+DEFAULT_TOLERANCE = 1e-9
+
+
+@dataclass(frozen=True)
+class SolveOptions:
+    """Solver settings.
+
+    Attributes:
+        tolerance: largest accepted attitude error at T (rad).
+        max_deviation: half-width of the one-unknown bracket, as the largest deviation of the
+            joint from its quintic path (rad; or m for a prismatic joint).
+        scan_points: number of residual samples across the bracket.
+        max_iterations: iteration cap of the quasi-Newton and SQP solvers.
+    """
+
+    tolerance: float = DEFAULT_TOLERANCE
+    max_deviation: float = 8.0
+    scan_points: int = 161
+    max_iterations: int = 100
+
+
+@dataclass(frozen=True)
+class Root:
+    """One solution of ``h(beta) = 0``.
+
+    Attributes:
+        beta: free coefficients (normalised-time coefficients, rad or m).
+        residual: norm of ``h`` there (rad).
+        path_length: summed joint travel along the path (rad, plus m for prismatic joints).
+    """
+
+    beta: np.ndarray
+    residual: float
+    path_length: float
+
+
+@dataclass(frozen=True)
+class Solution:
+    """The chosen solution and how it was found.
+
+    Attributes:
+        beta: chosen free coefficients (rad or m).
+        residual: norm of ``h(beta)`` (rad).
+        method: solver used.
+        iterations: iterations of the solver that produced ``beta``.
+        evaluations: residual evaluations (each integrates the attitude along a path).
+        wall_time: seconds spent solving.
+        roots: every root found, the chosen one first.
+        integration_error: estimated error of the attitude integration at ``beta`` (rad).
+    """
+
+    beta: np.ndarray
+    residual: float
+    method: str
+    iterations: int
+    evaluations: int
+    wall_time: float
+    roots: tuple[Root, ...] = field(default_factory=tuple)
+    integration_error: float = 0.0
+
+
+def _path_length(problem: Problem, beta: np.ndarray) -> float:
+    q = problem.family.evaluate(beta, np.linspace(0.0, 1.0, 401)).q
+    return float(np.abs(np.diff(q, axis=0)).sum())
+
+
+def _jacobian(fun: Callable[[np.ndarray], np.ndarray], beta: np.ndarray) -> np.ndarray:
+    """Central-difference Jacobian of ``fun`` at ``beta``."""
+    step = 1e-5 * max(1.0, float(np.linalg.norm(beta)))
+    columns = []
+    for k in range(len(beta)):
+        e = np.zeros_like(beta)
+        e[k] = step
+        columns.append((fun(beta + e) - fun(beta - e)) / (2.0 * step))
+    return np.stack(columns, axis=1)
+
+
+def _polish(problem: Problem, beta: np.ndarray, tol: float, iterations: int = 8) -> np.ndarray:
+    """Minimum-norm Gauss-Newton corrections until the residual is well below ``tol``."""
+    r = problem.residual(beta)
+    for _ in range(iterations):
+        if np.linalg.norm(r) < 0.01 * tol:
+            break
+        jac = _jacobian(problem.residual, beta)
+        trial = beta - np.linalg.lstsq(jac, r, rcond=None)[0]
+        r_trial = problem.residual(trial)
+        if np.linalg.norm(r_trial) >= np.linalg.norm(r):
+            break
+        beta, r = trial, r_trial
+    return beta
+
+
+def _scan(problem: Problem, options: SolveOptions) -> tuple[list[np.ndarray], int]:
+    """All roots of the scalar residual in the bracket; returns them and Brent iterations."""
+    power = problem.family.free_index[0][1]
+    shape = np.polynomial.polynomial.polyval(np.linspace(0.0, 1.0, 201), basis_coefficients(power))
+    half_width = options.max_deviation / np.abs(shape).max()
+    grid = np.linspace(-half_width, half_width, options.scan_points)
+    fine_steps = problem.steps
+    problem.set_steps(max(16, fine_steps // 4))  # locating sign changes needs less accuracy
+    values = np.array([problem.residual(np.array([b]))[0] for b in grid])
+    problem.set_steps(fine_steps)
+
+    def scalar(b: float) -> float:
+        return float(problem.residual(np.array([b]))[0])
+
+    roots, iterations = [], 0
+    for i in np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:])):
+        lo, hi = grid[i], grid[i + 1]
+        f_lo, f_hi = scalar(lo), scalar(hi)
+        if np.sign(f_lo) == np.sign(f_hi):  # the coarse scan saw a change the fine one does not
+            continue
+        root, info = brentq(scalar, lo, hi, xtol=1e-13, rtol=4 * np.finfo(float).eps,
+                            full_output=True)
+        iterations += info.iterations
+        roots.append(np.array([root]))
+    return roots, iterations
+
+
+def _broyden(problem: Problem, beta: np.ndarray, options: SolveOptions) -> tuple[np.ndarray, int]:
+    r = problem.residual(beta)
+    jac = _jacobian(problem.residual, beta)
+    refreshed = True
+    for iteration in range(1, options.max_iterations + 1):
+        if np.linalg.norm(r) < 0.01 * options.tolerance:
+            return beta, iteration
+        step = -np.linalg.lstsq(jac, r, rcond=None)[0]
+        t = 1.0
+        while t > 1e-4:
+            trial = beta + t * step
+            r_trial = problem.residual(trial)
+            if np.linalg.norm(r_trial) < (1.0 - 1e-4 * t) * np.linalg.norm(r):
+                break
+            t *= 0.5
+        else:
+            if refreshed:
+                return beta, iteration
+            jac, refreshed = _jacobian(problem.residual, beta), True
+            continue
+        s = trial - beta
+        jac = jac + np.outer(r_trial - r - jac @ s, s) / (s @ s)
+        beta, r, refreshed = trial, r_trial, False
+    return beta, options.max_iterations
+
+
+def _sqp(problem: Problem, beta: np.ndarray, options: SolveOptions) -> tuple[np.ndarray, int]:
+    result = minimize(
+        lambda b: 0.5 * float(b @ b),
+        beta,
+        jac=lambda b: b,
+        method="SLSQP",
+        constraints=[
+            {
+                "type": "eq",
+                "fun": problem.residual,
+                "jac": lambda b: _jacobian(problem.residual, b),
+            }
+        ],
+        options={"ftol": 1e-14, "maxiter": options.max_iterations},
+    )
+    return np.asarray(result.x, dtype=float), int(result.nit)
+
+
+def solve(problem: Problem, options: SolveOptions | None = None) -> Solution:
+    """Find the free coefficients that bring the base to its goal attitude.
+
+    Raises:
+        SolverError: no ``beta`` with a residual below the tolerance was found.
+    """
+    options = options or SolveOptions()
+    tol = options.tolerance
+    start_time = time.perf_counter()
+    start_evaluations = problem.evaluations
+    zero = np.zeros(problem.n_free)
+    tried: list[str] = []
+    candidates: list[np.ndarray] = []
+    iterations = 0
+
+    if np.linalg.norm(problem.residual(zero)) < 0.01 * tol:
+        method, candidates = "none (the quintic path already reaches the goal)", [zero]
+    elif problem.n_free == 1 and problem.n_equations == 1:
+        method = "bracket scan + Brent secant"
+        candidates, iterations = _scan(problem, options)
+        tried.append(
+            f"{options.scan_points}-point scan of a bracket of +-{options.max_deviation:g} rad "
+            "path deviation"
+        )
+    else:
+        if problem.n_free == problem.n_equations:
+            method = "Broyden quasi-Newton"
+            beta, iterations = _broyden(problem, zero, options)
+            tried.append("Broyden from the quintic path")
+            candidates = [beta]
+        if problem.n_free > problem.n_equations or (
+            np.linalg.norm(problem.residual(candidates[0])) > tol
+        ):
+            method = "SQP minimum norm (SLSQP)"
+            beta, iterations = _sqp(problem, zero, options)
+            tried.append("minimum-norm SQP from the quintic path")
+            candidates.append(beta)
+
+    roots = []
+    for beta in candidates:
+        beta = _polish(problem, beta, tol)
+        residual = float(np.linalg.norm(problem.residual(beta)))
+        roots.append(Root(beta=beta, residual=residual, path_length=_path_length(problem, beta)))
+    good = sorted((r for r in roots if r.residual < tol), key=lambda r: float(r.beta @ r.beta))
+    if not good:
+        best = min((r.residual for r in roots), default=math.nan)
+        if not roots:
+            best = float(np.linalg.norm(problem.residual(zero)))
+            tried.append("no sign change of h in the bracket")
+        raise SolverError("no path reaches the goal attitude", best, tried)
+
+    chosen = good[0]
+    error = problem.integration_error(chosen.beta)
+    if error > 0.1 * tol:  # pragma: no cover - the step count is chosen far below this
+        raise SolverError(
+            f"attitude integration error {error:.3g} rad is too large to certify the plan",
+            chosen.residual,
+            tried,
+        )
+    return Solution(
+        beta=chosen.beta,
+        residual=chosen.residual,
+        method=method,
+        iterations=iterations,
+        evaluations=problem.evaluations - start_evaluations,
+        wall_time=time.perf_counter() - start_time,
+        roots=tuple(good),
+        integration_error=error,
+    )
