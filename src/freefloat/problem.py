@@ -282,7 +282,8 @@ def build_problem(
         lo, hi = bounds.interval(goal - start)
         if check_bounds:
             branches = [yaw_change + 2.0 * math.pi * k for k in range(-3, 4)]
-            inside = [b for b in branches if lo < b < hi]
+            # Open interval; when no joint moves it shrinks to the single point 0.
+            inside = [b for b in branches if lo < b < hi or (lo == hi == 0.0 and b == 0.0)]
             if not inside:
                 raise InfeasibleError(math.degrees(yaw_change), (math.degrees(lo), math.degrees(hi)))
             yaw_change = min(inside, key=abs)

@@ -3,8 +3,10 @@
 - One unknown and one equation (planar, one free coefficient): scan a bracket, refine every
   sign change with Brent's safeguarded secant method, and return the minimum-norm root with
   the others listed.
+- Otherwise the search runs from several deterministic starts and keeps the minimum-norm root.
 - As many unknowns as equations: Broyden's quasi-Newton method with a backtracking line search
-  (the Jacobian is refreshed by central differences when the line search stalls).
+  (the Jacobian is refreshed by central differences when the line search stalls); where it
+  fails (dh/dbeta nearly singular), Levenberg-Marquardt from the same start.
 - More unknowns than equations: minimum-norm ``beta`` subject to ``h(beta) = 0`` by SQP
   (SciPy's SLSQP), then minimum-norm Gauss-Newton corrections.
 
@@ -20,7 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import brentq, minimize
+from scipy.optimize import brentq, least_squares, minimize
 
 from .errors import SolverError
 from .paths import basis_coefficients
@@ -42,12 +44,19 @@ class SolveOptions:
             joint from its quintic path (rad; or m for a prismatic joint).
         scan_points: number of residual samples across the bracket.
         max_iterations: iteration cap of the quasi-Newton and SQP solvers.
+        starts: number of starting points tried (the quintic path first, then deterministic
+            pseudo-random ones); several are needed because ``dh/dbeta`` is singular at the
+            quintic path whenever free coefficients of one power move several joints (moving
+            along the straight joint-space line only re-times it).
+        keep_solutions: stop after this many solutions; the minimum-norm one is returned.
     """
 
     tolerance: float = DEFAULT_TOLERANCE
     max_deviation: float = 8.0
     scan_points: int = 161
     max_iterations: int = 100
+    starts: int = 13
+    keep_solutions: int = 3
 
 
 @dataclass(frozen=True)
@@ -174,6 +183,34 @@ def _broyden(problem: Problem, beta: np.ndarray, options: SolveOptions) -> tuple
     return beta, options.max_iterations
 
 
+def _starts(n: int, count: int) -> list[tuple[str, np.ndarray]]:
+    """The quintic path, then ``count - 1`` deterministic pseudo-random starts (rad)."""
+    rng = np.random.default_rng(20070101)
+    out = [("the quintic path", np.zeros(n))]
+    for k in range(1, count):
+        scale = (1.0, 3.0, 10.0)[(k - 1) // 4 % 3]
+        direction = rng.normal(size=n)
+        out.append((f"start {k} (|beta| = {scale:g})", scale * direction / np.linalg.norm(direction)))
+    return out
+
+
+def _levenberg_marquardt(
+    problem: Problem, beta: np.ndarray, options: SolveOptions
+) -> tuple[np.ndarray, int]:
+    """Damped Gauss-Newton (MINPACK's LM): robust where dh/dbeta is nearly singular."""
+    result = least_squares(
+        problem.residual,
+        beta,
+        jac=lambda b: _jacobian(problem.residual, b),
+        method="lm",
+        xtol=1e-15,
+        ftol=1e-15,
+        gtol=1e-15,
+        max_nfev=options.max_iterations,
+    )
+    return np.asarray(result.x, dtype=float), int(result.nfev)
+
+
 def _sqp(problem: Problem, beta: np.ndarray, options: SolveOptions) -> tuple[np.ndarray, int]:
     result = minimize(
         lambda b: 0.5 * float(b @ b),
@@ -217,18 +254,29 @@ def solve(problem: Problem, options: SolveOptions | None = None) -> Solution:
             "path deviation"
         )
     else:
-        if problem.n_free == problem.n_equations:
-            method = "Broyden quasi-Newton"
-            beta, iterations = _broyden(problem, zero, options)
-            tried.append("Broyden from the quintic path")
-            candidates = [beta]
-        if problem.n_free > problem.n_equations or (
-            np.linalg.norm(problem.residual(candidates[0])) > tol
-        ):
-            method = "SQP minimum norm (SLSQP)"
-            beta, iterations = _sqp(problem, zero, options)
-            tried.append("minimum-norm SQP from the quintic path")
+        square = problem.n_free == problem.n_equations
+        method = "Broyden quasi-Newton" if square else "SQP minimum norm (SLSQP)"
+        found = 0
+        for label, start in _starts(problem.n_free, options.starts):
+            if square:
+                beta, its = _broyden(problem, start, options)
+                name = "Broyden"
+                if np.linalg.norm(problem.residual(beta)) > tol:
+                    beta, its = _levenberg_marquardt(problem, start, options)
+                    name = "Broyden, then Levenberg-Marquardt"
+            else:
+                beta, its = _sqp(problem, start, options)
+                name = "minimum-norm SQP"
+            tried.append(f"{name} from {label}")
             candidates.append(beta)
+            if np.linalg.norm(problem.residual(beta)) < tol:
+                if found == 0:
+                    iterations = its
+                    if name != "Broyden" and square:
+                        method = "Levenberg-Marquardt"
+                found += 1
+                if found >= options.keep_solutions:
+                    break
 
     roots = []
     for beta in candidates:

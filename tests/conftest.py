@@ -1,0 +1,32 @@
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+import freefloat as ff  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="session")
+def planar_robot() -> ff.Robot:
+    return ff.load_robot(ROOT / "robots" / "planar_2dof.urdf")
+
+
+@pytest.fixture(scope="session")
+def worked_scenario() -> ff.Scenario:
+    return ff.Scenario.from_toml(ff.default_scenario_path())
+
+
+@pytest.fixture(scope="session")
+def worked_plan(worked_scenario: ff.Scenario) -> ff.Plan:
+    return ff.plan(worked_scenario)
+
+
+def deg(x: float) -> float:
+    return math.radians(x)

@@ -1,0 +1,78 @@
+"""Independent truth for the tests: method.md section 7's closed form of the planar system.
+
+Nothing here uses freefloat: the formulas are typed from method.md, and the yaw integral uses
+SciPy's adaptive quadrature on the polynomials as printed there.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.integrate import quad
+
+M0, M1, M2 = 400.0, 40.0, 30.0
+I0, I1, I2 = 66.67, 3.33, 2.50
+R0 = 0.5
+L1 = R1 = 0.5
+L2 = R2 = 0.5
+M = M0 + M1 + M2
+
+D1 = I0 + M0 * (M1 + M2) * R0**2 / M
+D2 = D5 = M0 * R0 * ((M1 + M2) * L1 + M2 * R1) / M
+D3 = D9 = M0 * R0 * M2 * L2 / M
+D4 = I1 + (M0 * M1 * L1**2 + M1 * M2 * R1**2 + M0 * M2 * (L1 + R1) ** 2) / M
+D6 = D8 = M2 * L2 * (M0 * (L1 + R1) + M1 * R1) / M
+D7 = I2 + M2 * (M0 + M1) * L2**2 / M
+
+A = R0 * M0 / M
+B = (R1 * (M0 + M1) + L1 * M0) / M
+C = L2 * (M0 + M1) / M + R2
+
+
+def gains(q1: float, q2: float) -> tuple[float, float]:
+    """g1, g2 with dyaw = g1 dq1 + g2 dq2."""
+    d0 = D1 + D2 * math.cos(q1) + D3 * math.cos(q1 + q2)
+    d1 = D4 + D5 * math.cos(q1) + D6 * math.cos(q2)
+    d2 = D7 + D8 * math.cos(q2) + D9 * math.cos(q1 + q2)
+    total = d0 + d1 + d2
+    return -(d1 + d2) / total, -d2 / total
+
+
+def end_effector(yaw: float, q1: float, q2: float) -> tuple[float, float]:
+    """End-effector (x, y) in m, origin at the system CM."""
+    t1, t2 = yaw + q1, yaw + q1 + q2
+    return (
+        A * math.cos(yaw) + B * math.cos(t1) + C * math.cos(t2),
+        A * math.sin(yaw) + B * math.sin(t1) + C * math.sin(t2),
+    )
+
+
+def worked_example_coefficients(b26: float) -> tuple[np.ndarray, np.ndarray]:
+    """q1, q2 coefficients (highest power of t first) as printed in method.md section 8."""
+    pi = math.pi
+    q1 = np.array([-7 * pi / 150000, 7 * pi / 6000, -7 * pi / 900, 0.0, 0.0, 4 * pi / 9])
+    q2 = np.array(
+        [
+            b26,
+            (-1500000 * b26 + pi) / 50000,
+            (600000 * b26 - pi) / 2000,
+            (-300000 * b26 + pi) / 300,
+            0.0,
+            0.0,
+            pi / 6,
+        ]
+    )
+    return q1, q2
+
+
+def yaw_change(c1: np.ndarray, c2: np.ndarray, duration: float) -> float:
+    """Yaw change (rad) along polynomial joint paths (highest power first), adaptive quadrature."""
+    p1, p2 = np.poly1d(c1), np.poly1d(c2)
+    v1, v2 = p1.deriv(), p2.deriv()
+
+    def rate(t: float) -> float:
+        g1, g2 = gains(p1(t), p2(t))
+        return g1 * v1(t) + g2 * v2(t)
+
+    return quad(rate, 0.0, duration, epsabs=1e-13, epsrel=1e-13, limit=500)[0]

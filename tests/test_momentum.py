@@ -1,0 +1,98 @@
+"""The momentum map against the closed form, finite differences and conservation laws."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+import reference as ref
+import urdfs
+
+import freefloat as ff
+
+
+def test_map_equals_closed_form(planar_robot):
+    mmap = ff.MomentumMap(planar_robot)
+    rng = np.random.default_rng(1)
+    for q in rng.uniform(-4.0, 4.0, size=(50, 2)):
+        f1 = mmap.f1(q)
+        assert f1[:2] == pytest.approx(np.zeros((2, 2)), abs=1e-14)
+        assert f1[2] == pytest.approx(ref.gains(*q), abs=1e-10)
+
+
+def test_base_linear_velocity_keeps_cm_fixed(planar_robot):
+    """Rows 0:3 of the map move the base so that the CM velocity is zero (finite differences)."""
+    mmap = ff.MomentumMap(planar_robot)
+    model, data = planar_robot.model, planar_robot.model.createData()
+    rng = np.random.default_rng(2)
+    for _ in range(10):
+        joints, rates = rng.uniform(-3, 3, 2), rng.uniform(-1, 1, 2)
+        quat = ff.quat_from_zyx(*rng.uniform(-1, 1, 3))
+        q = mmap.configuration(joints, quat)
+        v = mmap.velocity(joints, rates)
+        dt = 1e-6
+        c_plus = pin.centerOfMass(model, data, pin.integrate(model, q, v * dt))
+        c_minus = pin.centerOfMass(model, data, pin.integrate(model, q, -v * dt))
+        assert np.linalg.norm((c_plus - c_minus) / (2 * dt)) < 1e-8
+        assert np.linalg.norm(mmap.momentum(q, v)) < 1e-10
+
+
+def test_cm_at_origin_and_end_effector_closed_form(planar_robot):
+    mmap = ff.MomentumMap(planar_robot)
+    model, data = planar_robot.model, planar_robot.model.createData()
+    rng = np.random.default_rng(3)
+    for yaw, q1, q2 in rng.uniform(-3, 3, size=(20, 3)):
+        quat = ff.quat_from_zyx(yaw)
+        q = mmap.configuration(np.array([q1, q2]), quat)
+        assert np.linalg.norm(pin.centerOfMass(model, data, q)) < 1e-14
+        ee = mmap.end_effector_pose(np.array([q1, q2]), quat).translation
+        assert ee[:2] == pytest.approx(ref.end_effector(yaw, q1, q2), abs=1e-12)
+        assert ee[2] == pytest.approx(0.0, abs=1e-14)
+
+
+def test_momentum_stays_zero_along_the_plan(worked_plan, planar_robot):
+    mmap = ff.MomentumMap(planar_robot)
+    s = worked_plan.samples
+    worst = 0.0
+    for q, qd, quat in zip(s.q, s.qd, s.base_quaternion_xyzw, strict=True):
+        config = mmap.configuration(np.array(q), np.array(quat))
+        worst = max(worst, np.linalg.norm(mmap.momentum(config, mmap.velocity(q, np.array(qd)))))
+    assert worst < 1e-9
+
+
+def test_sampled_base_motion_is_consistent_with_the_map(worked_plan, planar_robot):
+    """The sampled base position's time derivative equals the mapped base velocity."""
+    mmap = ff.MomentumMap(planar_robot)
+    s = worked_plan.samples
+    t = np.array(s.t)
+    pos = np.array(s.base_position)
+    k = 100
+    fd = (pos[k + 1] - pos[k - 1]) / (t[k + 1] - t[k - 1])
+    twist = mmap.base_twist_map(np.array(s.q[k])) @ np.array(s.qd[k])
+    rot = ff.attitude.quat_to_matrix(np.array(s.base_quaternion_xyzw[k]))
+    assert fd == pytest.approx(rot @ twist[:3], abs=1e-4)
+
+
+def test_spatial_robot_map_is_not_planar(tmp_path):
+    path = tmp_path / "arm.urdf"
+    path.write_text(urdfs.spatial_arm())
+    robot = ff.load_robot(path)
+    assert not ff.is_planar(robot)
+    f1 = ff.MomentumMap(robot).f1(np.array([0.3, -0.4, 0.5]))
+    assert np.abs(f1[:2]).max() > 1e-3
+
+
+def test_prismatic_planar_robot_is_planar(tmp_path):
+    body = urdfs.BASE.format(mass=50.0, i=8.0)
+    body += urdfs.joint("slide", "base", "l1", "prismatic", (1, 0, 0), limits=(-0.2, 0.4))
+    body += urdfs.link("l1", mass=4.0)
+    body += urdfs.joint("turn", "l1", "l2", "revolute", (0, 0, 1))
+    body += urdfs.link("l2", mass=3.0)
+    path = tmp_path / "p.urdf"
+    path.write_text(urdfs.robot(body))
+    robot = ff.load_robot(path)
+    assert [j.kind for j in robot.joints] == ["prismatic", "revolute"]
+    assert ff.is_planar(robot)
+    assert math.isclose(robot.total_mass, 57.0)

@@ -1,0 +1,136 @@
+"""The worked example of method.md section 8, against the closed form of section 7."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import reference as ref
+from conftest import deg
+
+import freefloat as ff
+
+
+def test_virtual_manipulator_lengths():
+    # method.md: a = 0.43 m, b = 0.89 m, c = 0.97 m; workspace 2.29 m, inner ring 1.44 m.
+    assert ref.A == pytest.approx(0.43, abs=5e-3)
+    assert ref.B == pytest.approx(0.89, abs=5e-3)
+    assert ref.C == pytest.approx(0.97, abs=5e-3)
+    assert ref.A + ref.B + ref.C == pytest.approx(2.29, abs=5e-3)
+    assert ref.B + ref.C - ref.A == pytest.approx(1.44, abs=5e-3)
+
+
+def test_end_effector_at_start_and_goal(worked_plan):
+    start = worked_plan.samples.end_effector_position[0]
+    goal = worked_plan.samples.end_effector_position[-1]
+    assert start[:2] == pytest.approx(ref.end_effector(deg(-50), deg(80), deg(30)), abs=1e-12)
+    assert goal[:2] == pytest.approx(ref.end_effector(0.0, deg(-60), deg(90)), abs=1e-12)
+    assert start[:2] == pytest.approx([1.53, 0.96], abs=5e-3)
+    assert goal[:2] == pytest.approx([1.71, -0.29], abs=5e-3)
+
+
+def test_bounds_match_method(worked_plan):
+    lo, hi = worked_plan.feasibility.yaw_change_bounds_deg
+    assert lo == pytest.approx(1.4, abs=0.1)
+    assert hi == pytest.approx(72.2, abs=0.1)
+    assert worked_plan.feasibility.requested_yaw_change_deg == pytest.approx(50.0, abs=1e-12)
+
+
+def test_bounds_gains_are_extremes_of_the_closed_form(planar_robot):
+    bounds = ff.planar_bounds(ff.MomentumMap(planar_robot))
+    grid = np.linspace(-math.pi, math.pi, 241)
+    values = np.array([ref.gains(a, b) for a in grid for b in grid])
+    # The refined extremes are at least as extreme as a dense grid, and not beyond it by more
+    # than the grid's resolution can hide.
+    assert np.all(bounds.g_min <= values.min(axis=0) + 1e-12)
+    assert np.all(bounds.g_max >= values.max(axis=0) - 1e-12)
+    assert bounds.g_min == pytest.approx(values.min(axis=0), abs=1e-5)
+    assert bounds.g_max == pytest.approx(values.max(axis=0), abs=1e-5)
+
+
+def test_minimum_norm_root_b26(worked_plan):
+    (b26,) = worked_plan.free_parameters["q2"]
+    assert worked_plan.free_parameters["q1"] == []
+    assert b26 == pytest.approx(-0.552e-4, rel=0.01)
+    # Independent truth: the closed-form yaw integral with method.md's printed coefficients.
+    c1, c2 = ref.worked_example_coefficients(b26)
+    assert ref.yaw_change(c1, c2, 10.0) == pytest.approx(math.radians(50.0), abs=1e-9)
+
+
+def test_all_roots_listed_and_minimum_norm_is_shortest(worked_plan):
+    solutions = worked_plan.solver.solutions
+    b26s = [s["free_parameters"]["q2"][0] for s in solutions]
+    # method.md: five roots between -5e-4 and 5e-4.
+    assert len([b for b in b26s if abs(b) < 5e-4]) == 5
+    assert abs(b26s[0]) == min(abs(b) for b in b26s)
+    lengths = [s["path_length"] for s in solutions]
+    assert lengths[0] == min(lengths)
+    for b in b26s:
+        c1, c2 = ref.worked_example_coefficients(b)
+        assert ref.yaw_change(c1, c2, 10.0) == pytest.approx(math.radians(50.0), abs=1e-8)
+
+
+def test_coefficients_equal_the_printed_polynomials(worked_plan):
+    (b26,) = worked_plan.free_parameters["q2"]
+    c1, c2 = ref.worked_example_coefficients(b26)
+    coeffs = worked_plan.coefficients
+    np.testing.assert_allclose(coeffs["q1"][::-1], c1, rtol=1e-12, atol=1e-18)
+    np.testing.assert_allclose(coeffs["q2"][::-1], c2, rtol=1e-10, atol=1e-18)
+
+
+def test_achieved_yaw_within_1e9(worked_plan):
+    assert worked_plan.base.attitude_error_rad < 1e-9
+    # Independent: adaptive quadrature of the closed form along the planned polynomials.
+    c1 = np.array(worked_plan.coefficients["q1"][::-1])
+    c2 = np.array(worked_plan.coefficients["q2"][::-1])
+    yaw = math.radians(-50.0) + ref.yaw_change(c1, c2, 10.0)
+    assert abs(yaw) < 1e-9
+    assert worked_plan.base.achieved_zyx_deg[0] == pytest.approx(0.0, abs=1e-7)
+
+
+def test_joint_boundary_conditions_exact(worked_plan):
+    poly = np.polynomial.polynomial
+    start, goal = (deg(80), deg(30)), (deg(-60), deg(90))
+    for i, name in enumerate(["q1", "q2"]):
+        c = worked_plan.coefficients[name]
+        assert poly.polyval(0.0, c) == pytest.approx(start[i], abs=1e-15)
+        assert poly.polyval(10.0, c) == pytest.approx(goal[i], abs=1e-12)
+        for order in (1, 2):
+            d = poly.polyder(c, order)
+            assert abs(poly.polyval(0.0, d)) < 1e-15
+            assert abs(poly.polyval(10.0, d)) < 1e-12
+    q = np.array(worked_plan.samples.q)
+    assert q[0] == pytest.approx(start, abs=1e-15)
+    assert q[-1] == pytest.approx(goal, abs=1e-12)
+
+
+def test_arm_turns_clockwise_base_counterclockwise(worked_plan):
+    yaw = np.array(worked_plan.samples.base_zyx_deg)[:, 0]
+    q1 = np.array(worked_plan.samples.q)[:, 0]
+    assert q1[-1] < q1[0]
+    assert yaw[-1] > yaw[0]
+
+
+@pytest.mark.parametrize("duration", [2.5, 40.0])
+def test_duration_does_not_change_the_path(worked_scenario, worked_plan, duration):
+    scenario = ff.Scenario(**{**worked_scenario.__dict__, "duration": duration})
+    other = ff.plan(scenario)
+    (b_ref,), (b_new,) = worked_plan.free_parameters["q2"], other.free_parameters["q2"]
+    # Same path: b26 scales as T^-6, the attitude reached is the same.
+    assert b_new * duration**6 == pytest.approx(b_ref * 10.0**6, rel=1e-9)
+    assert other.base.achieved_quaternion_xyzw == pytest.approx(
+        worked_plan.base.achieved_quaternion_xyzw, abs=1e-12
+    )
+    np.testing.assert_allclose(
+        np.array(other.samples.q), np.array(worked_plan.samples.q), atol=1e-12
+    )
+    # Rates scale as 1/T, accelerations as 1/T^2.
+    np.testing.assert_allclose(
+        np.array(other.samples.qd) * duration, np.array(worked_plan.samples.qd) * 10.0, atol=1e-12
+    )
+    np.testing.assert_allclose(
+        np.array(other.samples.qdd) * duration**2,
+        np.array(worked_plan.samples.qdd) * 100.0,
+        atol=1e-12,
+    )
