@@ -8,7 +8,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-import freefloat as ff  # noqa: E402
+import freefloat as ff
 
 ROOT = Path(__file__).resolve().parents[1]
 

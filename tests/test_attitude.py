@@ -38,8 +38,7 @@ def test_geodesic_angle_and_log_exp():
     assert att.geodesic_angle(a, b) == pytest.approx(np.linalg.norm(rotvec), abs=1e-15)
     assert att.geodesic_angle(a, -a) == pytest.approx(0.0, abs=1e-15)  # double cover
     np.testing.assert_allclose(att.quat_log(att.quat_exp(rotvec)), rotvec, atol=1e-15)
-    np.testing.assert_allclose(att.quat_log(att.quat_exp(1e-9 * rotvec)), 1e-9 * rotvec,
-                               atol=1e-24)
+    np.testing.assert_allclose(att.quat_log(att.quat_exp(1e-9 * rotvec)), 1e-9 * rotvec, atol=1e-24)
 
 
 def _omega(t: np.ndarray) -> np.ndarray:

@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
-import reference as ref
-import urdfs
 
 import freefloat as ff
+import reference as ref
+import urdfs
 
 
 def test_map_equals_closed_form(planar_robot):

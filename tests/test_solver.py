@@ -6,11 +6,11 @@ import math
 
 import numpy as np
 import pytest
-import urdfs
-from conftest import deg
 from scipy.integrate import solve_ivp
 
 import freefloat as ff
+import urdfs
+from conftest import deg
 from freefloat import attitude as att
 
 
@@ -23,15 +23,23 @@ def _independent_final_attitude(problem: ff.Problem, beta: np.ndarray) -> np.nda
         omega = mmap.f1(at.q[0]) @ at.qd[0]
         return 0.5 * att.quat_multiply(y, np.concatenate([omega, [0.0]]))
 
-    sol = solve_ivp(rhs, (0.0, T), problem.start_quaternion, method="DOP853", rtol=1e-12,
-                    atol=1e-13)
+    sol = solve_ivp(
+        rhs, (0.0, T), problem.start_quaternion, method="DOP853", rtol=1e-12, atol=1e-13
+    )
     end = sol.y[:, -1]
     return end / np.linalg.norm(end)
 
 
 def _worked_problem(robot, extra):
-    return ff.build_problem(robot, [deg(80), deg(30)], [deg(-60), deg(90)],
-                            ff.quat_from_zyx(deg(-50)), ff.quat_from_zyx(0.0), 10.0, extra=extra)
+    return ff.build_problem(
+        robot,
+        [deg(80), deg(30)],
+        [deg(-60), deg(90)],
+        ff.quat_from_zyx(deg(-50)),
+        ff.quat_from_zyx(0.0),
+        10.0,
+        extra=extra,
+    )
 
 
 @pytest.mark.parametrize("extra", [{"q1": 1, "q2": 1}, {"q1": 2, "q2": 1}])
@@ -42,18 +50,21 @@ def test_sqp_gives_a_minimum_norm_solution(planar_robot, extra):
     beta = solution.beta
     # First-order optimality of min |beta| s.t. h = 0: beta lies in the row space of dh/dbeta.
     eps = 1e-5
-    jac = np.array([
-        (problem.residual(beta + eps * e) - problem.residual(beta - eps * e)) / (2 * eps)
-        for e in np.eye(len(beta))
-    ]).T
+    jac = np.array(
+        [
+            (problem.residual(beta + eps * e) - problem.residual(beta - eps * e)) / (2 * eps)
+            for e in np.eye(len(beta))
+        ]
+    ).T
     projected = beta - jac.T @ np.linalg.solve(jac @ jac.T, jac @ beta)
     assert np.linalg.norm(projected) < 1e-5 * np.linalg.norm(beta)
 
 
 def test_met_goal_needs_no_motion(planar_robot):
     q = [deg(20), deg(-35)]
-    problem = ff.build_problem(planar_robot, q, q, ff.quat_from_zyx(0.4), ff.quat_from_zyx(0.4),
-                               5.0, extra={"q2": 1})
+    problem = ff.build_problem(
+        planar_robot, q, q, ff.quat_from_zyx(0.4), ff.quat_from_zyx(0.4), 5.0, extra={"q2": 1}
+    )
     solution = ff.solve(problem)
     assert np.all(solution.beta == 0.0)
     assert solution.residual == 0.0
@@ -64,8 +75,14 @@ def test_met_goal_needs_no_motion(planar_robot):
 
 def test_planar_request_outside_bounds_is_refused_before_searching(planar_robot):
     with pytest.raises(ff.InfeasibleError) as info:
-        ff.build_problem(planar_robot, [deg(80), deg(30)], [deg(-60), deg(90)],
-                         ff.quat_from_zyx(deg(-50)), ff.quat_from_zyx(deg(40)), 10.0)
+        ff.build_problem(
+            planar_robot,
+            [deg(80), deg(30)],
+            [deg(-60), deg(90)],
+            ff.quat_from_zyx(deg(-50)),
+            ff.quat_from_zyx(deg(40)),
+            10.0,
+        )
     err = info.value
     assert err.requested_deg == pytest.approx(90.0)
     assert err.bounds_deg[0] == pytest.approx(1.358, abs=1e-3)
@@ -75,8 +92,14 @@ def test_planar_request_outside_bounds_is_refused_before_searching(planar_robot)
 
 def test_planar_goal_tilted_off_the_plane_is_refused(planar_robot):
     with pytest.raises(ff.InfeasibleError, match="only about its z axis"):
-        ff.build_problem(planar_robot, [0.0, 0.0], [0.1, 0.1], ff.quat_from_zyx(0.0),
-                         ff.quat_from_zyx(0.0, 0.2, 0.0), 10.0)
+        ff.build_problem(
+            planar_robot,
+            [0.0, 0.0],
+            [0.1, 0.1],
+            ff.quat_from_zyx(0.0),
+            ff.quat_from_zyx(0.0, 0.2, 0.0),
+            10.0,
+        )
 
 
 def test_no_root_in_bracket_raises_with_best_residual(planar_robot):
@@ -84,7 +107,8 @@ def test_no_root_in_bracket_raises_with_best_residual(planar_robot):
     with pytest.raises(ff.SolverError) as info:
         ff.solve(problem, ff.SolveOptions(max_deviation=0.05))
     assert info.value.best_residual == pytest.approx(
-        abs(problem.residual(np.zeros(1))[0]), rel=1e-12)
+        abs(problem.residual(np.zeros(1))[0]), rel=1e-12
+    )
     assert "no path reaches the goal attitude" in str(info.value)
     assert "no sign change" in str(info.value)
 
@@ -128,9 +152,15 @@ def test_duration_leaves_the_attitude_reached_unchanged(spatial_robot):
     beta = np.array([0.3, -0.2, 0.5])
     reached = []
     for duration in (1.0, 8.0, 60.0):
-        problem = ff.build_problem(spatial_robot, [0.2, -0.3, 0.1], [1.1, 0.4, -0.6],
-                                   ff.quat_from_zyx(0.0), ff.quat_from_zyx(0.0), duration,
-                                   extra=[1, 1, 1])
+        problem = ff.build_problem(
+            spatial_robot,
+            [0.2, -0.3, 0.1],
+            [1.1, 0.4, -0.6],
+            ff.quat_from_zyx(0.0),
+            ff.quat_from_zyx(0.0),
+            duration,
+            extra=[1, 1, 1],
+        )
         reached.append(problem.achieved(beta))
     assert att.geodesic_angle(reached[0], reached[1]) < 1e-14
     assert att.geodesic_angle(reached[0], reached[2]) < 1e-14

@@ -6,10 +6,10 @@ import math
 
 import numpy as np
 import pytest
-import reference as ref
-from conftest import deg
 
 import freefloat as ff
+import reference as ref
+from conftest import deg
 
 
 def test_virtual_manipulator_lengths():

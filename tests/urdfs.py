@@ -12,8 +12,12 @@ BASE = """
   </link>"""
 
 
-def link(name: str, mass: float = 5.0, inertia: Sequence[float] = (0.1, 0.1, 0.1),
-         com: Sequence[float] = (0.25, 0.0, 0.0)) -> str:
+def link(
+    name: str,
+    mass: float = 5.0,
+    inertia: Sequence[float] = (0.1, 0.1, 0.1),
+    com: Sequence[float] = (0.25, 0.0, 0.0),
+) -> str:
     ixx, iyy, izz = inertia
     return f"""
   <link name="{name}">
@@ -22,9 +26,15 @@ def link(name: str, mass: float = 5.0, inertia: Sequence[float] = (0.1, 0.1, 0.1
   </link>"""
 
 
-def joint(name: str, parent: str, child: str, kind: str = "revolute",
-          axis: Sequence[float] = (0, 0, 1), xyz: Sequence[float] = (0.5, 0, 0),
-          limits: tuple[float, float] = (-3.0, 3.0)) -> str:
+def joint(
+    name: str,
+    parent: str,
+    child: str,
+    kind: str = "revolute",
+    axis: Sequence[float] = (0, 0, 1),
+    xyz: Sequence[float] = (0.5, 0, 0),
+    limits: tuple[float, float] = (-3.0, 3.0),
+) -> str:
     limit = ""
     if kind in ("revolute", "prismatic"):
         limit = f'<limit lower="{limits[0]}" upper="{limits[1]}" effort="50" velocity="2"/>'
@@ -42,16 +52,19 @@ def robot(body: str, name: str = "test") -> str:
     return f'<?xml version="1.0"?>\n<robot name="{name}">{body}\n</robot>\n'
 
 
-def spatial_arm(kinds: Sequence[str] = ("revolute", "revolute", "revolute"),
-                axes: Sequence[Sequence[float]] = ((0, 0, 1), (0, 1, 0), (0, 0.6, 0.8)),
-                base_mass: float = 100.0) -> str:
+def spatial_arm(
+    kinds: Sequence[str] = ("revolute", "revolute", "revolute"),
+    axes: Sequence[Sequence[float]] = ((0, 0, 1), (0, 1, 0), (0, 0.6, 0.8)),
+    base_mass: float = 100.0,
+) -> str:
     """A base with a serial arm; joint i moves link i; link i is 0.5 m long."""
     body = BASE.format(mass=base_mass, i=base_mass / 6.0)
     parent = "base"
     for i, (kind, axis) in enumerate(zip(kinds, axes, strict=True), start=1):
         body += joint(f"j{i}", parent, f"l{i}", kind, axis, (0.5, 0.1 * i, 0.05))
-        body += link(f"l{i}", mass=6.0 - i, inertia=(0.05, 0.12, 0.1 + 0.01 * i),
-                     com=(0.25, 0.06, 0.03))
+        body += link(
+            f"l{i}", mass=6.0 - i, inertia=(0.05, 0.12, 0.1 + 0.01 * i), com=(0.25, 0.06, 0.03)
+        )
         parent = f"l{i}"
     body += joint("tip_joint", parent, "tip", "fixed")
     body += '\n  <link name="tip"/>'

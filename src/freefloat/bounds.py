@@ -65,7 +65,7 @@ def planar_bounds(mmap: MomentumMap, samples: int = 4096, seed: int = 0) -> Plan
     """
     ranges = joint_ranges(mmap)
     n = len(ranges)
-    per_axis = int(round(samples ** (1.0 / n)))
+    per_axis = round(samples ** (1.0 / n))
     if n <= 2:
         axes = [np.linspace(lo, hi, per_axis) for lo, hi in ranges]
         points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, n)

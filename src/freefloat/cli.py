@@ -119,7 +119,8 @@ def _cmd_bounds(args: argparse.Namespace) -> int:
     lo, hi = bounds.interval(delta)
     requested = math.degrees(problem.yaw_change)
     inside = [
-        requested + 360.0 * k for k in range(-3, 4)
+        requested + 360.0 * k
+        for k in range(-3, 4)
         if math.degrees(lo) < requested + 360.0 * k < math.degrees(hi)
     ]
     print(f"  reachable yaw change: ({math.degrees(lo):.3f}, {math.degrees(hi):.3f}) deg")
@@ -147,11 +148,19 @@ def build_parser() -> argparse.ArgumentParser:
         "into ./freefloat-out/.",
     )
     p_plan.add_argument("scenario", nargs="?", help="scenario TOML file (default: worked example)")
-    p_plan.add_argument("-o", "--output", help="plan file to write (default: SCENARIO.plan.json,"
-                        " or freefloat-out/plan.json for the worked example)")
+    p_plan.add_argument(
+        "-o",
+        "--output",
+        help="plan file to write (default: SCENARIO.plan.json,"
+        " or freefloat-out/plan.json for the worked example)",
+    )
     p_plan.add_argument("--samples", type=int, default=201, help="samples in [0, T] (default 201)")
-    p_plan.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
-                        help=f"attitude tolerance in rad (default {DEFAULT_TOLERANCE:g})")
+    p_plan.add_argument(
+        "--tolerance",
+        type=float,
+        default=DEFAULT_TOLERANCE,
+        help=f"attitude tolerance in rad (default {DEFAULT_TOLERANCE:g})",
+    )
     p_plan.set_defaults(func=_cmd_plan)
 
     p_bounds = commands.add_parser(
@@ -160,7 +169,9 @@ def build_parser() -> argparse.ArgumentParser:
         description="Planar bounds (method.md section 6): per joint the extremes of dyaw/dq "
         "and the interval of yaw changes a simple motion can reach, in degrees.",
     )
-    p_bounds.add_argument("scenario", nargs="?", help="scenario TOML file (default: worked example)")
+    p_bounds.add_argument(
+        "scenario", nargs="?", help="scenario TOML file (default: worked example)"
+    )
     p_bounds.set_defaults(func=_cmd_bounds)
     return parser
 

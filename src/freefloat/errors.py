@@ -43,8 +43,16 @@ class InputError(FreeFloatError):
 class JointLimitError(FreeFloatError):
     """A joint position outside its URDF limits; carries the joint and its interval."""
 
-    def __init__(self, joint: str, value: float, lower: float, upper: float, where: str,
-                 unit: str = "deg", scale: float = 1.0) -> None:
+    def __init__(
+        self,
+        joint: str,
+        value: float,
+        lower: float,
+        upper: float,
+        where: str,
+        unit: str = "deg",
+        scale: float = 1.0,
+    ) -> None:
         self.joint = joint
         self.value = value
         self.lower = lower
@@ -74,7 +82,7 @@ class InfeasibleError(FreeFloatError):
 
 
 class SolverError(FreeFloatError):
-    """No path reaching the goal attitude was found; carries the best residual and what was tried."""
+    """No path reaches the goal attitude; carries the best residual and what was tried."""
 
     def __init__(self, message: str, best_residual: float, tried: Sequence[str] = ()) -> None:
         self.best_residual = float(best_residual)

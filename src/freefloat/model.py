@@ -23,7 +23,7 @@ import pinocchio as pin
 
 from .errors import ModelError, UnknownNameError
 
-__all__ = ["Joint", "Robot", "load_robot", "robots_dir", "shipped_robots", "resolve_robot"]
+__all__ = ["Joint", "Robot", "load_robot", "resolve_robot", "robots_dir", "shipped_robots"]
 
 #: Pinocchio joint model short names, by the kind of joint freefloat exposes.
 _KINDS = {
@@ -124,7 +124,7 @@ class Robot:
         return int(self.model.getFrameId(self.end_effector))
 
     def joint(self, name: str) -> Joint:
-        """Return the joint called ``name``; raise :class:`UnknownNameError` listing the valid ones."""
+        """The joint called ``name``; :class:`UnknownNameError` (listing the valid ones) if none."""
         for joint in self.joints:
             if joint.name == name:
                 return joint
@@ -312,13 +312,13 @@ def _check_urdf_xml(text: str) -> tuple[str, list[str]]:
         )
     # A cycle that leaves the root reachable is impossible once each link has one parent and
     # there is one root, except for a detached cycle: check every link reaches the root.
-    for link in links:
+    for name in links:
         seen = set()
-        while link in parent_of:
-            if link in seen:
-                raise ModelError(f"closed loop through link {link!r}; the URDF must be a tree")
-            seen.add(link)
-            link = parent_of[link]
+        while name in parent_of:
+            if name in seen:
+                raise ModelError(f"closed loop through link {name!r}; the URDF must be a tree")
+            seen.add(name)
+            name = parent_of[name]
     return roots[0], links
 
 

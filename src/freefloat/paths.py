@@ -84,9 +84,7 @@ class PathFamily:
         object.__setattr__(self, "_index", index)
 
     @classmethod
-    def with_extra(
-        cls, start: np.ndarray, goal: np.ndarray, extra: Sequence[int]
-    ) -> PathFamily:
+    def with_extra(cls, start: np.ndarray, goal: np.ndarray, extra: Sequence[int]) -> PathFamily:
         """Family with ``extra[i]`` free coefficients (degree ``5 + extra[i]``) on joint i."""
         return cls(start, goal, tuple(5 + int(e) for e in extra))
 
@@ -124,7 +122,7 @@ class PathFamily:
             c[:6] = delta[i] * _QUINTIC
             c[0] = self.start[i]
             out.append(c)
-        for k, (i, power) in enumerate(self._index):
+        for k, (i, _) in enumerate(self._index):
             out[i] += beta[k] * self._basis[k, : self.degrees[i] + 1]
         return out
 
@@ -140,7 +138,9 @@ class PathFamily:
             out[i].append(float(beta[k] / duration**power))
         return out
 
-    def beta_from_time_coefficients(self, free: Sequence[Sequence[float]], duration: float) -> np.ndarray:
+    def beta_from_time_coefficients(
+        self, free: Sequence[Sequence[float]], duration: float
+    ) -> np.ndarray:
         """Inverse of :meth:`free_time_coefficients`."""
         beta = np.zeros(self.n_free)
         counters = [0] * self.n_joints
@@ -173,7 +173,7 @@ class PathFamily:
         """Positions and s-derivatives (per unit s, per unit s^2) at normalised instants ``s``."""
         s = np.asarray(s, dtype=float)
         poly = np.polynomial.polynomial
-        cols = [[], [], []]
+        cols: list[list[np.ndarray]] = [[], [], []]
         for c in self.coefficients(beta):
             d1 = poly.polyder(c)
             cols[0].append(poly.polyval(s, c))

@@ -239,9 +239,7 @@ def _check_boundary(problem: Problem, solution: Solution) -> float:
     return worst
 
 
-def plan(
-    scenario: Scenario, options: SolveOptions | None = None, samples: int = 201
-) -> Plan:
+def plan(scenario: Scenario, options: SolveOptions | None = None, samples: int = 201) -> Plan:
     """Plan the scenario's motion and sample it.
 
     Args:

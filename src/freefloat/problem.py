@@ -9,6 +9,7 @@ reached one, in the goal frame).
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -103,7 +104,7 @@ class Problem:
 
     def rates(self, beta: np.ndarray) -> np.ndarray:
         """Base angular velocity at the integration nodes, (steps, 3, 3), rad per unit s."""
-        h, q0, qs0, dq, dqs = self._grid
+        _, q0, qs0, dq, dqs = self._grid
         beta = np.asarray(beta, dtype=float)
         q = q0 + dq @ beta
         qs = qs0 + dqs @ beta
@@ -150,8 +151,7 @@ class Problem:
         s = np.asarray(s, dtype=float)
         sub = max(1, math.ceil(self.steps * float(np.max(np.diff(s))) - 1e-9))
         edges = np.concatenate(
-            [np.linspace(a, b, sub + 1)[:-1] for a, b in zip(s[:-1], s[1:], strict=True)]
-            + [s[-1:]]
+            [np.linspace(a, b, sub + 1)[:-1] for a, b in itertools.pairwise(s)] + [s[-1:]]
         )
         nodes, h = step_nodes(edges)
         path = self.family.evaluate(beta, nodes)
@@ -192,9 +192,8 @@ def _check_limits(robot: Robot, values: np.ndarray, where: str) -> None:
             continue
         if not joint.lower - 1e-12 <= value <= joint.upper + 1e-12:
             scale = 180.0 / math.pi if joint.angular else 1.0
-            raise JointLimitError(
-                joint.name, value, joint.lower, joint.upper, where, "deg" if joint.angular else "m", scale
-            )
+            unit = "deg" if joint.angular else "m"
+            raise JointLimitError(joint.name, value, joint.lower, joint.upper, where, unit, scale)
 
 
 def build_problem(
@@ -285,7 +284,8 @@ def build_problem(
             # Open interval; when no joint moves it shrinks to the single point 0.
             inside = [b for b in branches if lo < b < hi or (lo == hi == 0.0 and b == 0.0)]
             if not inside:
-                raise InfeasibleError(math.degrees(yaw_change), (math.degrees(lo), math.degrees(hi)))
+                interval = (math.degrees(lo), math.degrees(hi))
+                raise InfeasibleError(math.degrees(yaw_change), interval)
             yaw_change = min(inside, key=abs)
     problem = Problem(
         robot=robot,
@@ -306,4 +306,3 @@ def build_problem(
         )
     problem.choose_steps()
     return problem
-

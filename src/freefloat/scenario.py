@@ -128,11 +128,13 @@ class Scenario:
         _check_keys(data, _TOP_KEYS, "the scenario")
         for key in ("robot", "duration", "start", "goal"):
             if key not in data:
-                raise ScenarioError(f"missing required key {key!r} (required: robot, duration, "
-                                    "[start], [goal])")
+                raise ScenarioError(
+                    f"missing required key {key!r} (required: robot, duration, [start], [goal])"
+                )
         if not isinstance(data["robot"], str):
-            raise ScenarioError(f"robot must be a shipped robot name or a URDF path, got "
-                                f"{data['robot']!r}")
+            raise ScenarioError(
+                f"robot must be a shipped robot name or a URDF path, got {data['robot']!r}"
+            )
         duration = _number(data["duration"], "duration")
         if duration <= 0.0:
             raise ScenarioError(f"duration must be > 0 s, got {duration:g}")
@@ -148,8 +150,10 @@ class Scenario:
                 raise ScenarioError(f"[{name}] must be a table")
             _check_keys(table, _STATE_KEYS, f"[{name}]")
             if "joints" not in table or not isinstance(table["joints"], Mapping):
-                raise ScenarioError(f"[{name}] needs joints = {{ name = value, ... }} "
-                                    f"(joints: {', '.join(robot.joint_names)})")
+                raise ScenarioError(
+                    f"[{name}] needs joints = {{ name = value, ... }} "
+                    f"(joints: {', '.join(robot.joint_names)})"
+                )
             joints: dict[str, float] = {}
             for joint_name, value in table["joints"].items():
                 joint = robot.joint(joint_name)
@@ -157,16 +161,18 @@ class Scenario:
                 joints[joint_name] = math.radians(number) if joint.angular else number
             robot.vector(joints, f"[{name}] joints")  # every joint given
             if "base_zyx_deg" in table and "base_quaternion_xyzw" in table:
-                raise ScenarioError(f"[{name}] gives both base_zyx_deg and base_quaternion_xyzw; "
-                                    "give one")
+                raise ScenarioError(
+                    f"[{name}] gives both base_zyx_deg and base_quaternion_xyzw; give one"
+                )
             if "base_quaternion_xyzw" in table:
                 quat = _numbers(table["base_quaternion_xyzw"], 4, f"[{name}] base_quaternion_xyzw")
                 if np.linalg.norm(quat) < 1e-9:
                     raise ScenarioError(f"[{name}] base_quaternion_xyzw must be non-zero")
                 quat = quat / np.linalg.norm(quat)
             else:
-                zyx = _numbers(table.get("base_zyx_deg", [0.0, 0.0, 0.0]), 3,
-                               f"[{name}] base_zyx_deg")
+                zyx = _numbers(
+                    table.get("base_zyx_deg", [0.0, 0.0, 0.0]), 3, f"[{name}] base_zyx_deg"
+                )
                 quat = quat_from_zyx(*np.radians(zyx))
             states.append((joints, quat))
 
@@ -182,8 +188,9 @@ class Scenario:
             for joint_name, count in path_table["extra"].items():
                 robot.joint(joint_name)
                 if isinstance(count, bool) or not isinstance(count, int) or count < 0:
-                    raise ScenarioError(f"[path] extra for {joint_name!r} must be an integer >= 0,"
-                                        f" got {count!r}")
+                    raise ScenarioError(
+                        f"[path] extra for {joint_name!r} must be an integer >= 0, got {count!r}"
+                    )
                 extra[joint_name] = count
         max_deviation = None
         if "max_deviation_deg" in path_table:

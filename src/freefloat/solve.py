@@ -150,8 +150,9 @@ def _scan(problem: Problem, options: SolveOptions) -> tuple[list[np.ndarray], in
         f_lo, f_hi = scalar(lo), scalar(hi)
         if np.sign(f_lo) == np.sign(f_hi):  # the coarse scan saw a change the fine one does not
             continue
-        root, info = brentq(scalar, lo, hi, xtol=1e-13, rtol=4 * np.finfo(float).eps,
-                            full_output=True)
+        root, info = brentq(
+            scalar, lo, hi, xtol=1e-13, rtol=4 * np.finfo(float).eps, full_output=True
+        )
         iterations += info.iterations
         roots.append(np.array([root]))
     return roots, iterations
@@ -190,7 +191,8 @@ def _starts(n: int, count: int) -> list[tuple[str, np.ndarray]]:
     for k in range(1, count):
         scale = (1.0, 3.0, 10.0)[(k - 1) // 4 % 3]
         direction = rng.normal(size=n)
-        out.append((f"start {k} (|beta| = {scale:g})", scale * direction / np.linalg.norm(direction)))
+        beta = scale * direction / np.linalg.norm(direction)
+        out.append((f"start {k} (|beta| = {scale:g})", beta))
     return out
 
 

@@ -1,0 +1,284 @@
+"""Bad input: each gets a one-line FreeFloatError naming the problem and what is valid."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+import freefloat as ff
+import urdfs
+from conftest import ROOT
+
+
+def _write(tmp_path, text, name="r.urdf"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def _load_error(tmp_path, text, cls=ff.ModelError):
+    with pytest.raises(cls) as info:
+        ff.load_robot(_write(tmp_path, text))
+    message = str(info.value)
+    assert "\n" not in message
+    return message
+
+
+def _two_link(**kw):
+    body = urdfs.BASE.format(mass=kw.get("base_mass", 100.0), i=10.0)
+    body += urdfs.joint("j1", "base", "l1", kw.get("kind", "revolute"))
+    body += kw.get("l1", urdfs.link("l1"))
+    return urdfs.robot(body)
+
+
+def test_missing_urdf(tmp_path):
+    with pytest.raises(ff.ModelError, match="URDF file not found"):
+        ff.load_robot(tmp_path / "nope.urdf")
+
+
+def test_malformed_urdf(tmp_path):
+    assert "malformed URDF XML" in _load_error(tmp_path, "<robot name='x'><link></robot>")
+
+
+def test_not_a_robot(tmp_path):
+    assert "expected <robot>" in _load_error(tmp_path, "<sdf/>")
+
+
+def test_link_without_mass(tmp_path):
+    msg = _load_error(tmp_path, _two_link(l1='<link name="l1"/>'))
+    assert "the body moved by joint 'j1' has no mass" in msg
+
+
+def test_negative_mass(tmp_path):
+    msg = _load_error(tmp_path, _two_link(l1=urdfs.link("l1", mass=-1.0)))
+    assert "link 'l1' has negative mass -1.0 kg" in msg
+
+
+def test_zero_base_mass(tmp_path):
+    msg = _load_error(tmp_path, _two_link(base_mass=0.0))
+    assert "base 'base'" in msg and "no mass" in msg
+
+
+def test_non_positive_definite_inertia(tmp_path):
+    msg = _load_error(tmp_path, _two_link(l1=urdfs.link("l1", inertia=(0.1, -0.2, 0.1))))
+    assert "link 'l1' inertia is not positive definite" in msg
+
+
+def test_no_movable_joint(tmp_path):
+    body = urdfs.BASE.format(mass=10.0, i=1.0) + urdfs.joint("f", "base", "l1", "fixed")
+    body += urdfs.link("l1")
+    msg = _load_error(tmp_path, urdfs.robot(body))
+    assert "no movable joint" in msg
+
+
+def test_closed_loop(tmp_path):
+    body = urdfs.BASE.format(mass=10.0, i=1.0)
+    body += urdfs.joint("j1", "base", "l1") + urdfs.link("l1")
+    body += urdfs.joint("j2", "base", "l2") + urdfs.link("l2")
+    body += urdfs.joint("j3", "l2", "l1")
+    msg = _load_error(tmp_path, urdfs.robot(body))
+    assert "closed loop: link 'l1' is the child of two joints" in msg
+
+
+def test_unsupported_joint_type(tmp_path):
+    msg = _load_error(tmp_path, _two_link(kind="floating"))
+    assert "type 'floating'; supported: revolute, continuous, prismatic, fixed" in msg
+
+
+def test_joint_with_unknown_link(tmp_path):
+    body = urdfs.BASE.format(mass=10.0, i=1.0) + urdfs.joint("j1", "base", "ghost")
+    with pytest.raises(ff.UnknownNameError) as info:
+        ff.load_robot(_write(tmp_path, urdfs.robot(body)))
+    assert info.value.name == "ghost" and "base" in info.value.valid
+
+
+def test_unknown_end_effector(planar_robot):
+    with pytest.raises(ff.UnknownNameError) as info:
+        ff.load_robot(planar_robot.urdf, end_effector="gripper")
+    assert str(info.value) == (
+        "unknown end-effector frame 'gripper'; valid: base, link1, link2, ee"
+    )
+
+
+def test_unknown_joint_name(planar_robot):
+    with pytest.raises(ff.UnknownNameError, match=r"unknown joint 'q3'; valid: q1, q2"):
+        planar_robot.joint("q3")
+
+
+SCENARIO = """
+robot = "{robot}"
+duration = {duration}
+[start]
+joints = {{ q1 = 80.0, q2 = 30.0 }}
+base_zyx_deg = [-50.0, 0.0, 0.0]
+[goal]
+joints = {{ {goal} }}
+base_zyx_deg = [{yaw}, 0.0, 0.0]
+{path}
+"""
+
+
+def scenario_text(
+    robot=str(ROOT / "robots" / "planar_2dof.urdf"),
+    duration="10.0",
+    goal="q1 = -60.0, q2 = 90.0",
+    yaw="0.0",
+    path="[path]\nextra = { q2 = 1 }",
+):
+    return SCENARIO.format(robot=robot, duration=duration, goal=goal, yaw=yaw, path=path)
+
+
+def _scenario_error(tmp_path, text, cls=ff.FreeFloatError):
+    path = tmp_path / "s.toml"
+    path.write_text(text)
+    with pytest.raises(cls) as info:
+        ff.Scenario.from_toml(path)
+    message = str(info.value)
+    assert "\n" not in message
+    return message
+
+
+def test_scenario_round_trip(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(scenario_text())
+    scenario = ff.Scenario.from_toml(path)
+    assert scenario.goal == pytest.approx([-1.0471975511965976, 1.5707963267948966])
+
+
+def test_unknown_top_level_key(tmp_path):
+    msg = _scenario_error(tmp_path, "colour = 'red'\n" + scenario_text(), ff.UnknownNameError)
+    assert "unknown key in the scenario 'colour'; valid: robot, duration, end_effector" in msg
+
+
+def test_unknown_key_in_goal(tmp_path):
+    text = scenario_text().replace("base_zyx_deg = [0.0", "base_xyz = [0.0")
+    msg = _scenario_error(tmp_path, text, ff.UnknownNameError)
+    assert (
+        "unknown key in [goal] 'base_xyz'; valid: joints, base_zyx_deg, base_quaternion_xyzw" in msg
+    )
+
+
+def test_unknown_joint_in_scenario(tmp_path):
+    msg = _scenario_error(
+        tmp_path, scenario_text(goal="q1 = 1.0, elbow = 2.0"), ff.UnknownNameError
+    )
+    assert "unknown joint 'elbow'; valid: q1, q2" in msg
+
+
+def test_missing_joint_in_scenario(tmp_path):
+    msg = _scenario_error(tmp_path, scenario_text(goal="q1 = 1.0"))
+    assert "no value for joint(s) q2" in msg
+
+
+def test_unknown_robot_name(tmp_path):
+    msg = _scenario_error(tmp_path, scenario_text(robot="hubble"), ff.UnknownNameError)
+    assert "unknown robot 'hubble'; valid: planar_2dof" in msg
+
+
+def test_nan_in_scenario(tmp_path):
+    msg = _scenario_error(tmp_path, scenario_text(yaw="nan"), ff.ScenarioError)
+    assert "[goal] base_zyx_deg[0] must be finite, got nan" in msg
+
+
+def test_infinite_joint_value(tmp_path):
+    msg = _scenario_error(tmp_path, scenario_text(goal="q1 = inf, q2 = 0.0"), ff.ScenarioError)
+    assert "[goal] joint 'q1' must be finite" in msg
+
+
+@pytest.mark.parametrize("duration", ["0.0", "-3.0"])
+def test_non_positive_duration(tmp_path, duration):
+    msg = _scenario_error(tmp_path, scenario_text(duration=duration), ff.ScenarioError)
+    assert f"duration must be > 0 s, got {float(duration):g}" in msg
+
+
+def test_invalid_toml(tmp_path):
+    msg = _scenario_error(tmp_path, "robot = [unclosed", ff.ScenarioError)
+    assert "invalid TOML" in msg
+
+
+def test_missing_scenario_file(tmp_path):
+    with pytest.raises(ff.ScenarioError, match="scenario file not found"):
+        ff.Scenario.from_toml(tmp_path / "none.toml")
+
+
+def test_bad_extra(tmp_path):
+    msg = _scenario_error(
+        tmp_path, scenario_text(path="[path]\nextra = { q2 = -1 }"), ff.ScenarioError
+    )
+    assert "[path] extra for 'q2' must be an integer >= 0, got -1" in msg
+
+
+def test_start_outside_joint_limits(tmp_path):
+    body = urdfs.BASE.format(mass=100.0, i=10.0)
+    body += urdfs.joint("q1", "base", "l1", limits=(-1.0, 1.0)) + urdfs.link("l1")
+    body += urdfs.joint("q2", "l1", "l2", limits=(-2.0, 2.0)) + urdfs.link("l2")
+    urdf = _write(tmp_path, urdfs.robot(body), "limited.urdf")
+    path = tmp_path / "s.toml"
+    path.write_text(scenario_text(robot=str(urdf), goal="q1 = 10.0, q2 = 20.0"))
+    scenario = ff.Scenario.from_toml(path)
+    with pytest.raises(ff.JointLimitError) as info:
+        ff.plan(scenario)
+    assert info.value.joint == "q1"
+    assert str(info.value) == (
+        "start: joint 'q1' = 80 deg is outside its limits [-57.2958, 57.2958] deg"
+    )
+
+
+def test_infinite_duration_in_api(planar_robot):
+    with pytest.raises(ff.InputError, match="duration must be a finite number of seconds > 0"):
+        ff.build_problem(planar_robot, [0, 0], [1, 1], [0, 0, 0, 1], [0, 0, 0, 1], float("inf"))
+
+
+def test_nan_joint_in_api(planar_robot):
+    with pytest.raises(ff.InputError, match="goal joints contains NaN or infinite values"):
+        ff.build_problem(planar_robot, [0, 0], [float("nan"), 1], [0, 0, 0, 1], [0, 0, 0, 1], 1.0)
+
+
+def test_corrupt_plan_file(tmp_path):
+    path = tmp_path / "p.json"
+    path.write_text('{"format": "freefloat.plan/1", "robot": ')
+    with pytest.raises(ff.PlanFileError, match="corrupt JSON"):
+        ff.Plan.load(path)
+
+
+def test_plan_file_of_another_version(tmp_path, worked_plan):
+    data = worked_plan.to_dict()
+    data["format"] = "freefloat.plan/2"
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ff.PlanFileError) as info:
+        ff.Plan.load(path)
+    assert (
+        "plan format 'freefloat.plan/2' is not supported; this freefloat reads "
+        "'freefloat.plan/1'" in str(info.value)
+    )
+
+
+def test_plan_file_missing_key(tmp_path, worked_plan):
+    data = worked_plan.to_dict()
+    del data["samples"]
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ff.PlanFileError, match="corrupt plan file"):
+        ff.Plan.load(path)
+
+
+def test_plan_round_trip(tmp_path, worked_plan):
+    path = worked_plan.save(tmp_path / "sub" / "plan.json")
+    assert ff.Plan.load(path) == worked_plan
+    assert [p.name for p in path.parent.iterdir()] == ["plan.json"]  # no temporary left
+
+
+def test_errors_share_one_root():
+    for cls in (
+        ff.ModelError,
+        ff.UnknownNameError,
+        ff.ScenarioError,
+        ff.InputError,
+        ff.JointLimitError,
+        ff.InfeasibleError,
+        ff.SolverError,
+        ff.PlanFileError,
+    ):
+        assert issubclass(cls, ff.FreeFloatError)
