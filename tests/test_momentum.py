@@ -96,3 +96,34 @@ def test_prismatic_planar_robot_is_planar(tmp_path):
     assert [j.kind for j in robot.joints] == ["prismatic", "revolute"]
     assert ff.is_planar(robot)
     assert math.isclose(robot.total_mass, 57.0)
+
+
+def test_planar_bounds_contain_every_monotone_motion(tmp_path):
+    """Three-joint planar arm with offsets: yaw changes of monotone paths lie in the interval."""
+    body = urdfs.BASE.format(mass=80.0, i=12.0)
+    parent = "base"
+    for i in range(1, 4):
+        body += urdfs.joint(f"j{i}", parent, f"l{i}", "continuous", (0, 0, 1), (0.6, 0.1, 0))
+        body += urdfs.link(f"l{i}", mass=9.0 - 2 * i, com=(0.3, 0.04 * i, 0.0))
+        parent = f"l{i}"
+    path = tmp_path / "planar3.urdf"
+    path.write_text(urdfs.robot(body))
+    robot = ff.load_robot(path)
+    assert ff.is_planar(robot)
+    mmap = ff.MomentumMap(robot)
+    bounds = ff.planar_bounds(mmap)
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        start, goal = rng.uniform(-3, 3, 3), rng.uniform(-3, 3, 3)
+        lo, hi = bounds.interval(goal - start)
+        problem = ff.build_problem(
+            robot,
+            start,
+            goal,
+            ff.quat_from_zyx(0.0),
+            ff.quat_from_zyx(0.0),
+            1.0,
+            extra=[1, 0, 0],
+            check_bounds=False,
+        )
+        assert lo < problem.yaw_change_of(np.zeros(1)) < hi

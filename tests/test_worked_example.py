@@ -134,3 +134,20 @@ def test_duration_does_not_change_the_path(worked_scenario, worked_plan, duratio
         np.array(worked_plan.samples.qdd) * 100.0,
         atol=1e-12,
     )
+
+
+@pytest.mark.parametrize("b26", [-5.5e-5, 2.4e-4, -4.4e-4])
+def test_attitude_integral_accurate_to_1e10(worked_scenario, b26):
+    problem = ff.build_problem(
+        worked_scenario.robot,
+        worked_scenario.start,
+        worked_scenario.goal,
+        worked_scenario.start_attitude,
+        worked_scenario.goal_attitude,
+        10.0,
+        extra={"q2": 1},
+    )
+    c1, c2 = ref.worked_example_coefficients(b26)
+    assert problem.yaw_change_of(np.array([b26 * 10.0**6])) == pytest.approx(
+        ref.yaw_change(c1, c2, 10.0), abs=1e-10
+    )
