@@ -282,3 +282,9 @@ def test_errors_share_one_root():
         ff.PlanFileError,
     ):
         assert issubclass(cls, ff.FreeFloatError)
+
+
+def test_to_dict_is_a_copy(worked_plan):
+    data = worked_plan.to_dict()
+    data["path"]["coefficients"]["q2"][0] = 123.0
+    assert worked_plan.coefficients["q2"][0] != 123.0

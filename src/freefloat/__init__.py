@@ -8,6 +8,7 @@ tables and the ``_deg`` fields of a plan).
 
 from .attitude import geodesic_angle, quat_from_zyx, zyx_from_quat
 from .bounds import PlanarBounds, planar_bounds
+from .dynamics import InverseDynamics, ReplayResult, inverse_dynamics, replay
 from .errors import (
     FreeFloatError,
     InfeasibleError,
@@ -18,6 +19,7 @@ from .errors import (
     ScenarioError,
     SolverError,
     UnknownNameError,
+    VerificationError,
 )
 from .model import Joint, Robot, load_robot, shipped_robots
 from .momentum import MomentumMap, is_planar
@@ -26,6 +28,7 @@ from .plan import Plan, plan, plan_from_solution
 from .problem import Problem, build_problem
 from .scenario import Scenario, default_scenario_path
 from .solve import Solution, SolveOptions, solve
+from .verify import Verification, verify_plan
 
 __version__ = "0.1.0"
 
@@ -33,6 +36,7 @@ __all__ = [
     "FreeFloatError",
     "InfeasibleError",
     "InputError",
+    "InverseDynamics",
     "Joint",
     "JointLimitError",
     "ModelError",
@@ -42,6 +46,7 @@ __all__ = [
     "PlanFileError",
     "PlanarBounds",
     "Problem",
+    "ReplayResult",
     "Robot",
     "Scenario",
     "ScenarioError",
@@ -49,17 +54,22 @@ __all__ = [
     "SolveOptions",
     "SolverError",
     "UnknownNameError",
+    "Verification",
+    "VerificationError",
     "__version__",
     "build_problem",
     "default_scenario_path",
     "geodesic_angle",
+    "inverse_dynamics",
     "is_planar",
     "load_robot",
     "plan",
     "plan_from_solution",
     "planar_bounds",
     "quat_from_zyx",
+    "replay",
     "shipped_robots",
     "solve",
+    "verify_plan",
     "zyx_from_quat",
 ]

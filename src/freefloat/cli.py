@@ -19,6 +19,7 @@ from .plan import Plan, plan
 from .problem import build_problem
 from .scenario import Scenario, default_scenario_path
 from .solve import DEFAULT_TOLERANCE, SolveOptions
+from .verify import verify_plan
 
 __all__ = ["main"]
 
@@ -45,6 +46,13 @@ def summary(p: Plan, output: Path | None = None) -> str:
     lines = [f"freefloat plan: {Path(p.robot.urdf).name}, T = {p.duration:g} s"]
     lines += _attitude_table(p)
     lines.append(f"  attitude error  {p.base.attitude_error_rad:.3e} rad")
+    v = p.verification
+    if v:
+        lines.append(
+            f"  verification    {'passed' if v['passed'] else 'FAILED'}: independent attitude "
+            f"{v['attitude_error_independent_rad']:.1e} rad, replay "
+            f"{v['replay']['attitude_error_rad']:.1e} rad, momentum {v['momentum_max']:.1e}"
+        )
     free = [
         f"{name}: " + ", ".join(f"t^{6 + k} {c:.9e}" for k, c in enumerate(values))
         for name, values in p.free_parameters.items()
@@ -130,6 +138,19 @@ def _cmd_bounds(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_verify(args: argparse.Namespace) -> int:
+    loaded = Plan.load(args.plan)
+    result = verify_plan(loaded, replay_steps=args.replay_steps)
+    print(
+        f"freefloat verify: {args.plan} ({Path(loaded.robot.urdf).name}, T = {loaded.duration:g} s)"
+    )
+    print(f"  {'check':<34}{'value':>12}{'tolerance':>12}  result")
+    for name, value, tol, ok in result.rows():
+        print(f"  {name:<34}{value:>12.3e}{tol:>12.1e}  {'ok' if ok else 'FAILED'}")
+    print(f"  {'verification':<34}{'passed' if result.passed else 'FAILED':>12}")
+    return 0 if result.passed else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``freefloat`` command."""
     parser = argparse.ArgumentParser(
@@ -173,11 +194,28 @@ def build_parser() -> argparse.ArgumentParser:
         "scenario", nargs="?", help="scenario TOML file (default: worked example)"
     )
     p_bounds.set_defaults(func=_cmd_bounds)
+
+    p_verify = commands.add_parser(
+        "verify",
+        help="re-run the independent checks of a plan file",
+        description="Re-run a plan's checks from the file alone (and its URDF): momentum along "
+        "the samples, independent attitude integration, forward-dynamics replay under the "
+        "planned torques, boundary conditions. Exit code 0 if all pass, 1 if any fails, 2 for "
+        "an unreadable plan.",
+    )
+    p_verify.add_argument("plan", help="plan JSON file")
+    p_verify.add_argument(
+        "--replay-steps", type=int, default=500, help="RK4 steps of the replay (default 500)"
+    )
+    p_verify.set_defaults(func=_cmd_verify)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; return the exit code (0 success, 2 bad input or no plan)."""
+    """Run the command line; return the exit code.
+
+    0: success; 1: ``verify`` found a failing check; 2: bad input, infeasible request or no plan.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

@@ -93,3 +93,15 @@ class SolverError(FreeFloatError):
 
 class PlanFileError(FreeFloatError):
     """A plan file that is unreadable, corrupt or of another format version."""
+
+
+class VerificationError(FreeFloatError):
+    """A plan that fails its independent verification; carries the failed checks."""
+
+    def __init__(self, failures: Sequence[str]) -> None:
+        self.failures = tuple(failures)
+        super().__init__(
+            "the plan fails verification ("
+            + ", ".join(self.failures)
+            + "); it is not returned or written"
+        )

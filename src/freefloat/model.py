@@ -1,8 +1,9 @@
 """Load a spacecraft-plus-arm URDF as a free-floating multibody system.
 
-The URDF's root link is the spacecraft (the *base*); Pinocchio adds a free-flyer joint above
-it, so the configuration is ``[base position (m), base quaternion xyzw, joint entries]`` and
-the velocity ``[base linear (m/s), base angular (rad/s), both in the base frame; joint rates]``.
+The URDF's root link is the spacecraft (the *base*); gravity is zero (free flight). Pinocchio
+adds a free-flyer joint above it, so the configuration is ``[base position (m), base
+quaternion xyzw, joint entries]`` and the velocity ``[base linear (m/s), base angular (rad/s),
+both in the base frame; joint rates]``.
 Fixed joints are merged into their parent body by Pinocchio's URDF parser.
 
 The public API speaks of one number per movable joint: an angle in rad for ``revolute`` and
@@ -367,6 +368,7 @@ def load_robot(
     except (RuntimeError, ValueError) as exc:
         raise ModelError(f"Pinocchio cannot parse it ({exc})", urdf=str(path)) from None
 
+    model.gravity = pin.Motion.Zero()  # free flight: no gravity acts on the system
     joints = []
     for index in range(2, model.njoints):
         jm = model.joints[index]

@@ -8,22 +8,25 @@ the inertial frame whose origin is the system centre of mass.
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 import os
 import tempfile
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .attitude import geodesic_angle, zyx_from_quat
-from .errors import PlanFileError, SolverError
+from .dynamics import inverse_dynamics
+from .errors import PlanFileError, SolverError, VerificationError
 from .problem import Problem, build_problem
 from .scenario import Scenario
 from .solve import DEFAULT_TOLERANCE, Solution, SolveOptions, solve
+from .verify import as_dict, verify_plan
 
 __all__ = [
     "FORMAT",
@@ -82,7 +85,8 @@ class Samples:
 
     ``t`` (s); ``q`` (rad or m), ``qd`` (per s), ``qdd`` (per s^2), one value per joint;
     ``base_position`` (m), ``base_quaternion_xyzw``, ``base_zyx_deg`` (deg),
-    ``base_angular_velocity`` (rad/s, base frame), ``end_effector_position`` (m).
+    ``base_angular_velocity`` (rad/s, base frame), ``end_effector_position`` (m), ``tau`` joint
+    torques (N m, or N for prismatic joints).
     """
 
     t: list[float]
@@ -94,6 +98,7 @@ class Samples:
     base_zyx_deg: list[list[float]]
     end_effector_position: list[list[float]]
     base_angular_velocity: list[list[float]] = field(default_factory=list)
+    tau: list[list[float]] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -126,6 +131,8 @@ class Plan:
     feasibility: Feasibility
     samples: Samples
     solver: SolverReport
+    request: dict[str, list[float]] = field(default_factory=dict)
+    verification: dict[str, Any] = field(default_factory=dict)
     format: str = FORMAT
 
     # -- evaluation -------------------------------------------------------------------------
@@ -141,18 +148,22 @@ class Plan:
     # -- file -------------------------------------------------------------------------------
 
     def to_dict(self) -> dict[str, Any]:
-        """The plan as the JSON-ready dictionary of the file format."""
-        return {
-            "format": self.format,
-            "robot": asdict(self.robot),
-            "duration": self.duration,
-            "path": {"family": "polynomial", "coefficients": self.coefficients},
-            "free_parameters": self.free_parameters,
-            "base": asdict(self.base),
-            "feasibility": asdict(self.feasibility),
-            "samples": asdict(self.samples),
-            "solver": asdict(self.solver),
-        }
+        """The plan as the JSON-ready dictionary of the file format (a deep copy)."""
+        return copy.deepcopy(
+            {
+                "format": self.format,
+                "robot": asdict(self.robot),
+                "duration": self.duration,
+                "path": {"family": "polynomial", "coefficients": self.coefficients},
+                "free_parameters": self.free_parameters,
+                "base": asdict(self.base),
+                "feasibility": asdict(self.feasibility),
+                "samples": asdict(self.samples),
+                "solver": asdict(self.solver),
+                "request": self.request,
+                "verification": self.verification,
+            }
+        )
 
     def save(self, path: str | Path) -> Path:
         """Write the plan to ``path`` atomically; return the absolute path."""
@@ -209,6 +220,8 @@ class Plan:
                 feasibility=Feasibility(**data["feasibility"]),
                 samples=Samples(**data["samples"]),
                 solver=SolverReport(**data["solver"]),
+                request={k: list(v) for k, v in data["request"].items()},
+                verification=dict(data["verification"]),
             )
         except (KeyError, TypeError, AttributeError, ValueError) as exc:
             raise PlanFileError(f"{where}: corrupt plan file (bad or missing {exc})") from None
@@ -269,13 +282,26 @@ def plan(scenario: Scenario, options: SolveOptions | None = None, samples: int =
 
 
 def plan_from_solution(
-    problem: Problem, solution: Solution, samples: int = 201, tolerance: float = DEFAULT_TOLERANCE
+    problem: Problem,
+    solution: Solution,
+    samples: int = 201,
+    tolerance: float = DEFAULT_TOLERANCE,
+    verify: bool = True,
 ) -> Plan:
-    """Sample a solved problem into a :class:`Plan`; check it reaches its target.
+    """Sample a solved problem into a verified :class:`Plan`.
+
+    Args:
+        problem: the solved problem.
+        solution: its solution.
+        samples: number of equally spaced samples in [0, T].
+        tolerance: attitude tolerance (rad).
+        verify: run the independent checks of :mod:`freefloat.verify` (a plan from
+            :func:`plan` always is).
 
     Raises:
         SolverError: the attitude reached (by the solver's grid or by the sampling grid) is
             farther than ``tolerance`` (rad) from the goal, or a boundary condition fails.
+        VerificationError: an independent check fails.
     """
     robot, family, T = problem.robot, problem.family, problem.duration
     names = robot.joint_names
@@ -284,11 +310,12 @@ def plan_from_solution(
     path = family.at_times(solution.beta, t, T)
     quats = problem.attitudes(solution.beta, s)
     mmap = problem.mmap
-    base_position, ee_position, omega = [], [], []
-    for q, qd, quat in zip(path.q, path.qd, quats, strict=True):
+    base_position, ee_position, omega, tau = [], [], [], []
+    for q, qd, qdd, quat in zip(path.q, path.qd, path.qdd, quats, strict=True):
         base_position.append(mmap.base_position(q, quat).tolist())
         ee_position.append(mmap.end_effector_pose(q, quat).translation.tolist())
         omega.append((mmap.f1(q) @ qd).tolist())
+        tau.append(inverse_dynamics(mmap, q, qd, qdd).tau.tolist())
 
     achieved = problem.achieved(solution.beta)
     error = geodesic_angle(achieved, problem.goal_quaternion)
@@ -313,7 +340,7 @@ def plan_from_solution(
         for root in solution.roots
     ]
     bounds = problem.bounds_interval
-    return Plan(
+    unverified = Plan(
         robot=RobotRef(
             urdf=str(robot.urdf),
             joints=names,
@@ -352,6 +379,7 @@ def plan_from_solution(
             base_zyx_deg=[_deg(zyx_from_quat(qt)) for qt in quats],
             end_effector_position=ee_position,
             base_angular_velocity=omega,
+            tau=tau,
         ),
         solver=SolverReport(
             method=solution.method,
@@ -363,4 +391,11 @@ def plan_from_solution(
             integration_steps=problem.steps,
             integration_error_rad=solution.integration_error,
         ),
+        request={"start_joints": family.start.tolist(), "goal_joints": family.goal.tolist()},
     )
+    if not verify:
+        return unverified
+    verification = verify_plan(unverified, robot)
+    if not verification.passed:
+        raise VerificationError(verification.failures)
+    return replace(unverified, verification=as_dict(verification))

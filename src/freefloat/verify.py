@@ -1,0 +1,248 @@
+"""Independent verification of a plan, from the plan file alone.
+
+Checks, each with a documented tolerance (:data:`TOLERANCES`):
+
+- ``momentum_max``: largest total momentum (Pinocchio's centroidal momentum) along the samples,
+  using the sampled joints, joint rates, base attitude and base angular rate; relative to the
+  arm's own momentum scale. ``cm_offset_max``: the sampled base positions keep the system CM
+  at the origin (m).
+- ``base_wrench_max``: the base entries of the inverse dynamics behind ``samples.tau`` (N, N m),
+  relative to the torque scale.
+- ``attitude_error_independent_rad``: the final attitude from an adaptive DOP853 integration of
+  the quaternion ODE in seconds along the plan's polynomials (not the planner's Magnus scheme).
+- ``replay``: forward dynamics of the free system (ABA, RK4) driven only by the planned joint
+  torques from the start at rest: final attitude error (rad) and joint error (rad or m).
+- ``boundary``: position, rate and acceleration errors of the polynomials at both ends (rad,
+  rad/s, rad/s^2), against the requested start and goal, relative to the joint travel.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pinocchio as pin
+from scipy.integrate import solve_ivp
+
+from .attitude import geodesic_angle, quat_multiply
+from .dynamics import inverse_dynamics, replay
+from .errors import PlanFileError
+from .model import Robot, load_robot
+from .momentum import MomentumMap
+
+if TYPE_CHECKING:
+    from .plan import Plan
+
+__all__ = ["TOLERANCES", "Verification", "as_dict", "joint_torque_function", "verify_plan"]
+
+#: Pass thresholds of the checks (see the module docstring for units).
+TOLERANCES: dict[str, float] = {
+    "momentum_relative": 1e-9,
+    "cm_offset_m": 1e-9,
+    "base_wrench_relative": 1e-8,
+    "attitude_independent_rad": 1e-7,
+    "replay_attitude_rad": 1e-4,
+    "replay_joint": 1e-4,
+    "boundary_relative": 1e-9,
+    "samples_relative": 1e-9,
+}
+
+
+@dataclass(frozen=True)
+class Verification:
+    """Results of the independent checks of a plan; ``passed`` only if all hold."""
+
+    momentum_max: float
+    momentum_scale: float
+    cm_offset_max: float
+    base_wrench_max: float
+    torque_scale: float
+    attitude_error_independent_rad: float
+    replay: dict[str, float]
+    boundary: dict[str, float]
+    samples_error: float
+    passed: bool
+    failures: list[str] = field(default_factory=list)
+    tolerances: dict[str, float] = field(default_factory=lambda: dict(TOLERANCES))
+
+    def rows(self) -> list[tuple[str, float, float, bool]]:
+        """``(check, value, tolerance, ok)`` rows for a printed table."""
+        scale_m = max(1.0, self.momentum_scale)
+        t = self.tolerances
+        rows = [
+            ("momentum_max [kg m^2/s]", self.momentum_max, t["momentum_relative"] * scale_m),
+            ("cm_offset_max [m]", self.cm_offset_max, t["cm_offset_m"]),
+            (
+                "base_wrench_max [N, N m]",
+                self.base_wrench_max,
+                t["base_wrench_relative"] * max(1.0, self.torque_scale),
+            ),
+            (
+                "attitude_error_independent [rad]",
+                self.attitude_error_independent_rad,
+                t["attitude_independent_rad"],
+            ),
+            (
+                "replay attitude error [rad]",
+                self.replay["attitude_error_rad"],
+                t["replay_attitude_rad"],
+            ),
+            ("replay joint error [rad|m]", self.replay["joint_error"], t["replay_joint"]),
+            ("boundary (relative)", self.boundary["relative_max"], t["boundary_relative"]),
+            ("samples vs polynomials (rel.)", self.samples_error, t["samples_relative"]),
+        ]
+        return [(name, value, tol, value <= tol) for name, value, tol in rows]
+
+
+def _polys(plan: Plan) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
+    poly = np.polynomial.polynomial
+    c = [np.asarray(plan.coefficients[name], dtype=float) for name in plan.robot.joints]
+    return c, [poly.polyder(x) for x in c], [poly.polyder(x, 2) for x in c]
+
+
+def _state(coeffs: tuple[list[np.ndarray], ...], t: float) -> tuple[np.ndarray, ...]:
+    poly = np.polynomial.polynomial
+    return tuple(np.array([poly.polyval(t, c) for c in group]) for group in coeffs)
+
+
+def joint_torque_function(plan: Plan, mmap: MomentumMap) -> Callable[[float], np.ndarray]:
+    """``tau(t)``: joint torques (N m or N) of the plan at any time t (s), from its polynomials."""
+    coeffs = _polys(plan)
+
+    def tau(t: float) -> np.ndarray:
+        q, qd, qdd = _state(coeffs, t)
+        return inverse_dynamics(mmap, q, qd, qdd).tau
+
+    return tau
+
+
+def _robot_for(plan: Plan) -> Robot:
+    robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+    if robot.joint_names != list(plan.robot.joints):
+        raise PlanFileError(
+            f"the plan's joints {plan.robot.joints} do not match the URDF's {robot.joint_names}"
+        )
+    return robot
+
+
+def verify_plan(plan: Plan, robot: Robot | None = None, replay_steps: int = 500) -> Verification:
+    """Run every check on ``plan``; needs only the plan and its URDF.
+
+    Args:
+        plan: the plan (for example from :meth:`Plan.load`).
+        robot: the loaded robot, to skip reloading the URDF.
+        replay_steps: RK4 steps of the forward-dynamics replay.
+    """
+    robot = robot or _robot_for(plan)
+    mmap = MomentumMap(robot)
+    model, data = robot.model, robot.model.createData()
+    samples = plan.samples
+    duration = plan.duration
+    coeffs = _polys(plan)
+
+    # Momentum and CM along the samples.
+    momentum_max = momentum_scale = cm_max = 0.0
+    for q, qd, pos, quat, omega in zip(
+        samples.q,
+        samples.qd,
+        samples.base_position,
+        samples.base_quaternion_xyzw,
+        samples.base_angular_velocity,
+        strict=True,
+    ):
+        joints, rates = np.array(q), np.array(qd)
+        config = robot.configuration(joints, pos, quat)
+        cm_max = max(cm_max, float(np.linalg.norm(pin.centerOfMass(model, data, config))))
+        linear = mmap.base_twist_map(joints)[:3] @ rates
+        v = np.concatenate([linear, omega, rates])
+        ag = pin.computeCentroidalMap(model, data, config)
+        momentum_max = max(momentum_max, float(np.linalg.norm(ag @ v)))
+        momentum_scale = max(momentum_scale, float(np.linalg.norm(ag[:, 6:] @ rates)))
+
+    # Torques' base wrench, recomputed.
+    wrench_max = torque_scale = 0.0
+    for q, qd, qdd in zip(samples.q, samples.qd, samples.qdd, strict=True):
+        dyn = inverse_dynamics(mmap, np.array(q), np.array(qd), np.array(qdd))
+        wrench_max = max(wrench_max, float(np.abs(dyn.base_wrench).max()))
+        torque_scale = max(torque_scale, float(np.abs(dyn.tau).max()))
+
+    # Independent attitude integration (adaptive, in seconds).
+    def rhs(t: float, y: np.ndarray) -> np.ndarray:
+        q, qd, _ = _state(coeffs, t)
+        omega = mmap.f1(q) @ qd
+        return 0.5 * quat_multiply(y, np.concatenate([omega, [0.0]]))
+
+    start_quat = np.asarray(plan.base.start_quaternion_xyzw, dtype=float)
+    target = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
+    sol = solve_ivp(rhs, (0.0, duration), start_quat, method="DOP853", rtol=1e-12, atol=1e-13)
+    end = sol.y[:, -1] / np.linalg.norm(sol.y[:, -1])
+    attitude_independent = geodesic_angle(end, target)
+
+    # Forward-dynamics replay from the start at rest.
+    start = np.asarray(plan.request["start_joints"], dtype=float)
+    goal = np.asarray(plan.request["goal_joints"], dtype=float)
+    result = replay(
+        mmap, start, start_quat, joint_torque_function(plan, mmap), duration, replay_steps
+    )
+    replay_report = {
+        "attitude_error_rad": geodesic_angle(result.quaternion_xyzw, target),
+        "joint_error": float(np.abs(_wrap_joints(robot, result.joints - goal)).max()),
+        "final_rate_max": float(np.abs(result.rates).max()),
+        "momentum_drift": result.momentum_max,
+        "steps": float(result.steps),
+    }
+
+    # Boundary conditions of the polynomials.
+    q0, qd0, qdd0 = _state(coeffs, 0.0)
+    q1, qd1, qdd1 = _state(coeffs, duration)
+    travel = np.maximum(1.0, np.abs(goal - start))
+    position = np.maximum(np.abs(q0 - start), np.abs(q1 - goal))
+    rate = np.maximum(np.abs(qd0), np.abs(qd1))
+    accel = np.maximum(np.abs(qdd0), np.abs(qdd1))
+    relative = np.maximum.reduce([position, rate * duration, accel * duration**2]) / travel
+    boundary = {
+        "position": float(position.max()),
+        "rate": float(rate.max()),
+        "acceleration": float(accel.max()),
+        "relative_max": float(relative.max()),
+    }
+
+    # The samples are the polynomials, sampled.
+    worst = 0.0
+    for t, q, qd, qdd in zip(samples.t, samples.q, samples.qd, samples.qdd, strict=True):
+        exact = _state(coeffs, t)
+        for got, want, power in ((q, exact[0], 0), (qd, exact[1], 1), (qdd, exact[2], 2)):
+            error = np.abs(np.asarray(got) - want) * duration**power / travel
+            worst = max(worst, float(error.max()))
+
+    verification = Verification(
+        momentum_max=momentum_max,
+        momentum_scale=momentum_scale,
+        cm_offset_max=cm_max,
+        base_wrench_max=wrench_max,
+        torque_scale=torque_scale,
+        attitude_error_independent_rad=attitude_independent,
+        replay=replay_report,
+        boundary=boundary,
+        samples_error=worst,
+        passed=False,
+    )
+    failures = [name for name, value, tol, ok in verification.rows() if not ok or math.isnan(value)]
+    return Verification(**{**verification.__dict__, "passed": not failures, "failures": failures})
+
+
+def _wrap_joints(robot: Robot, delta: np.ndarray) -> np.ndarray:
+    """Joint differences, continuous joints wrapped to (-pi, pi] (rad or m)."""
+    out = np.array(delta, dtype=float)
+    for i, joint in enumerate(robot.joints):
+        if joint.kind == "continuous":
+            out[i] = math.remainder(out[i], 2.0 * math.pi)
+    return out
+
+
+def as_dict(verification: Verification) -> dict[str, Any]:
+    """The plan-file ``verification`` section."""
+    return dict(verification.__dict__)

@@ -1,0 +1,124 @@
+"""Torques, replay and verification."""
+
+from __future__ import annotations
+
+import importlib
+import json
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import freefloat as ff
+from freefloat.cli import main
+from freefloat.verify import joint_torque_function
+
+
+def test_torques_balance_kinetic_energy(worked_plan, planar_robot):
+    """Independent truth: with no external force, dE/dt = tau . qdot (E from Pinocchio's M)."""
+    mmap = ff.MomentumMap(planar_robot)
+    model, data = planar_robot.model, planar_robot.model.createData()
+    tau = joint_torque_function(worked_plan, mmap)
+    coeffs = [np.array(worked_plan.coefficients[n]) for n in worked_plan.robot.joints]
+    poly = np.polynomial.polynomial
+
+    def energy(t):
+        q = np.array([poly.polyval(t, c) for c in coeffs])
+        qd = np.array([poly.polyval(t, poly.polyder(c)) for c in coeffs])
+        v = mmap.velocity(q, qd)
+        config = mmap.configuration(q, np.array([0.0, 0.0, 0.0, 1.0]))
+        return 0.5 * v @ pin.crba(model, data, config) @ v, qd
+
+    for t in (1.3, 4.0, 7.7):
+        h = 1e-4
+        power = (energy(t + h)[0] - energy(t - h)[0]) / (2 * h)
+        assert power == pytest.approx(tau(t) @ energy(t)[1], rel=1e-6, abs=1e-9)
+
+
+def test_torques_scale_with_inverse_square_duration(worked_scenario, worked_plan):
+    other = ff.plan(ff.Scenario(**{**worked_scenario.__dict__, "duration": 5.0}))
+    np.testing.assert_allclose(
+        np.array(other.samples.tau),
+        4.0 * np.array(worked_plan.samples.tau),
+        rtol=1e-9,
+        atol=1e-12,
+    )
+    assert other.verification["base_wrench_max"] < 1e-12
+    assert worked_plan.verification["base_wrench_max"] < 1e-12
+
+
+def test_replay_of_the_worked_example_reaches_the_goal(worked_plan):
+    v = worked_plan.verification
+    assert v["passed"] and v["failures"] == []
+    assert v["replay"]["attitude_error_rad"] < 1e-4
+    assert v["replay"]["joint_error"] < 1e-4
+    assert v["attitude_error_independent_rad"] < 1e-9
+    assert v["momentum_max"] < 1e-9
+
+
+def test_replay_without_torque_stays_still(planar_robot):
+    mmap = ff.MomentumMap(planar_robot)
+    start = np.array([0.3, -0.2])
+    result = ff.replay(mmap, start, ff.quat_from_zyx(0.5), lambda t: np.zeros(2), 3.0, 50)
+    np.testing.assert_allclose(result.joints, start, atol=1e-15)
+    assert ff.geodesic_angle(result.quaternion_xyzw, ff.quat_from_zyx(0.5)) < 1e-15
+
+
+def _tampered(tmp_path, plan, edit):
+    data = plan.to_dict()
+    edit(data)
+    path = tmp_path / "tampered.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+def test_verify_cli_passes_a_good_plan(tmp_path, worked_plan, capsys):
+    path = worked_plan.save(tmp_path / "p.json")
+    assert main(["verify", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "verification                            passed" in out
+
+
+def test_verify_cli_fails_a_tampered_free_parameter(tmp_path, worked_plan, capsys):
+    def edit(data):
+        data["path"]["coefficients"]["q2"][6] *= 1.001
+
+    assert main(["verify", str(_tampered(tmp_path, worked_plan, edit))]) == 1
+    out = capsys.readouterr().out
+    assert "attitude_error_independent [rad]" in out and "FAILED" in out
+    assert "boundary (relative)" in out
+
+
+def test_verify_cli_fails_tampered_samples(tmp_path, worked_plan, capsys):
+    def edit(data):
+        data["samples"]["base_angular_velocity"][50][2] += 1e-3
+
+    assert main(["verify", str(_tampered(tmp_path, worked_plan, edit))]) == 1
+    out = capsys.readouterr().out
+    assert next(line for line in out.splitlines() if "momentum_max" in line).endswith("FAILED")
+
+
+def test_verify_cli_corrupt_file_exits_2(tmp_path, capsys):
+    path = tmp_path / "bad.json"
+    path.write_text("{")
+    assert main(["verify", str(path)]) == 2
+    assert "corrupt JSON" in capsys.readouterr().err
+
+
+def test_a_plan_failing_verification_is_never_written(tmp_path, monkeypatch, capsys):
+    plan_module = importlib.import_module("freefloat.plan")
+
+    real = plan_module.verify_plan
+
+    def failing(plan, robot=None):
+        result = real(plan, robot)
+        return ff.Verification(
+            **{**result.__dict__, "passed": False, "failures": ["replay attitude error [rad]"]}
+        )
+
+    monkeypatch.setattr(plan_module, "verify_plan", failing)
+    out = tmp_path / "p.json"
+    assert main(["plan", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "the plan fails verification (replay attitude error [rad])" in err
+    assert not out.exists()
