@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import math
+import subprocess
 import sys
 from pathlib import Path
 
@@ -11,6 +12,16 @@ sys.path.insert(0, str(Path(__file__).parent))
 import freefloat as ff
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="session", autouse=True)
+def no_stray_meshcat_servers():
+    """After the whole run, no meshcat server subprocess may be left."""
+    yield
+    out = subprocess.run(
+        ["pgrep", "-f", "meshcat.servers.zmqserver"], capture_output=True, text=True, check=False
+    )
+    assert out.stdout.split() == [], "meshcat servers left running"
 
 
 @pytest.fixture(scope="session")

@@ -11,6 +11,7 @@ import pytest
 
 import freefloat as ff
 from freefloat.cli import main
+
 from test_errors import scenario_text
 
 
@@ -30,6 +31,10 @@ def test_plan_without_arguments_plans_the_worked_example(tmp_path, monkeypatch, 
     assert data["free_parameters"]["q2"][0] == pytest.approx(-0.552e-4, rel=0.01)
     assert "achieved" in out and "attitude error" in out and "t^6 -5.518" in out
     assert str(plan_path) in out
+    html = tmp_path / "freefloat-out" / "plan.html"
+    assert html.stat().st_size > 100_000 and str(html) in out
+    plots = sorted(p.name for p in (tmp_path / "freefloat-out" / "plots").glob("*.png"))
+    assert "overview.png" in plots and len(plots) == 8
 
 
 def test_plan_file_has_the_documented_keys(tmp_path, capsys):

@@ -7,6 +7,7 @@ import json
 import pytest
 
 import freefloat as ff
+
 import urdfs
 from conftest import ROOT
 

@@ -9,6 +9,7 @@ import pinocchio as pin
 import pytest
 
 import freefloat as ff
+
 import reference as ref
 import urdfs
 

@@ -11,6 +11,7 @@ import zipfile
 import pytest
 
 import freefloat as ff
+
 from conftest import ROOT
 
 

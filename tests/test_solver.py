@@ -9,9 +9,10 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import freefloat as ff
+from freefloat import attitude as att
+
 import urdfs
 from conftest import deg
-from freefloat import attitude as att
 
 
 def _independent_final_attitude(problem: ff.Problem, beta: np.ndarray) -> np.ndarray:

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import freefloat as ff
+
 import reference as ref
 from conftest import deg
 

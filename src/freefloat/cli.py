@@ -90,6 +90,40 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         output = DEFAULT_OUT_DIR / "plan.json"
     written = result.save(output)
     print(summary(result, written))
+    if not args.scenario and not args.output:
+        # The main job: the worked example with its playback page and plots.
+        from .playback import write_html
+        from .plots import save_figures
+
+        html = write_html(result, DEFAULT_OUT_DIR / "plan.html")
+        print(f"  playback        {html}")
+        figures = save_figures(result, DEFAULT_OUT_DIR / "plots")
+        print(
+            f"  plots           {figures[0].parent} ({len(figures)} files: "
+            f"{', '.join(p.name for p in figures)})"
+        )
+    return 0
+
+
+def _cmd_show(args: argparse.Namespace) -> int:
+    from .playback import serve, write_html
+
+    loaded = Plan.load(args.plan)
+    if args.html:
+        print(f"freefloat show: wrote {write_html(loaded, args.html, args.speed)}")
+    else:
+        serve(loaded, args.speed)
+    return 0
+
+
+def _cmd_plot(args: argparse.Namespace) -> int:
+    from .plots import save_figures
+
+    loaded = Plan.load(args.plan)
+    written = save_figures(loaded, args.output, svg=args.svg)
+    print(f"freefloat plot: {len(written)} files in {Path(args.output).resolve()}")
+    for path in written:
+        print(f"  {path.name}")
     return 0
 
 
@@ -166,7 +200,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="plan a scenario and write the plan file",
         description="Plan joint paths that bring the base to its goal attitude; print a "
         "summary and write the plan (JSON). Without SCENARIO, plan the shipped worked example "
-        "into ./freefloat-out/.",
+        "into ./freefloat-out/ with its playback page (plan.html) and plots (plots/).",
     )
     p_plan.add_argument("scenario", nargs="?", help="scenario TOML file (default: worked example)")
     p_plan.add_argument(
@@ -208,6 +242,30 @@ def build_parser() -> argparse.ArgumentParser:
         "--replay-steps", type=int, default=500, help="RK4 steps of the replay (default 500)"
     )
     p_verify.set_defaults(func=_cmd_verify)
+
+    p_show = commands.add_parser(
+        "show",
+        help="watch a plan in the browser (MeshCat)",
+        description="Serve the animated plan in MeshCat and print its URL (Ctrl-C stops it), or "
+        "with --html write one self-contained HTML file that plays offline.",
+    )
+    p_show.add_argument("plan", help="plan JSON file")
+    p_show.add_argument("--html", metavar="FILE", help="write a standalone HTML file instead")
+    p_show.add_argument(
+        "--speed", type=float, default=1.0, help="playback speed, 1 = real time (default)"
+    )
+    p_show.set_defaults(func=_cmd_show)
+
+    p_plot = commands.add_parser(
+        "plot",
+        help="write figures of a plan (PNG, optionally SVG)",
+        description="Write one figure per topic (end effector, base attitude and rate, joint "
+        "positions, rates and torques) and an overview sheet.",
+    )
+    p_plot.add_argument("plan", help="plan JSON file")
+    p_plot.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
+    p_plot.add_argument("--svg", action="store_true", help="also write SVG files")
+    p_plot.set_defaults(func=_cmd_plot)
     return parser
 
 

@@ -105,3 +105,7 @@ class VerificationError(FreeFloatError):
             + ", ".join(self.failures)
             + "); it is not returned or written"
         )
+
+
+class ViewerError(FreeFloatError):
+    """The 3D viewer or the plotting stack is missing, broken, or cannot draw the robot."""

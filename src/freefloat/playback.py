@@ -1,0 +1,235 @@
+"""Browser 3D playback of a plan in MeshCat (a visualisation leaf: it only reads a plan).
+
+The robot's visual geometry (URDF primitives or meshes) is drawn by Pinocchio's
+``MeshcatVisualizer``; each sample of the plan becomes one animation frame that places every
+visual (base and arm together), so meshcat's animation controls play, pause and scrub it.
+Also drawn: the end-effector trail, the system centre of mass (a fixed point at the origin),
+the inertial axes and the base frame's axes.
+
+meshcat 0.3.2 quirks handled here: the scene can only be exported (``static_html``) while its
+server subprocess runs, and ``Visualizer.close()`` raises; :class:`Playback` stops the server
+itself (:meth:`Playback.close`, also on exit from a ``with`` block).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import FreeFloatError, ViewerError
+from .model import Robot, load_robot
+from .plan import Plan
+
+__all__ = ["Playback", "build_playback", "serve", "write_html"]
+
+ROOT_NODE = "freefloat"
+EXTRAS = "freefloat_extras"
+#: Repetitions of the animation loop in the viewer (meshcat has no "forever").
+LOOPS = 10000
+
+
+def _import_viewer() -> tuple[Any, Any]:
+    try:
+        import meshcat
+        import meshcat.animation
+        import meshcat.geometry
+        from pinocchio.visualize import MeshcatVisualizer
+    except Exception as exc:
+        raise ViewerError(
+            f"the 3D viewer needs meshcat, which failed to import ({type(exc).__name__}: {exc});"
+            " reinstall it with: pip install 'meshcat>=0.3.2'"
+        ) from None
+    return meshcat, MeshcatVisualizer
+
+
+@dataclass(eq=False)
+class Playback:
+    """An animated plan inside a running meshcat server.
+
+    Attributes:
+        viewer: the ``meshcat.Visualizer`` (its server is a subprocess of this one).
+        animation: the ``meshcat.animation.Animation`` sent to the viewer.
+        url: web address of the viewer.
+        frames: per animation frame, the 4 x 4 pose (inertial frame) of every animated node,
+            keyed by meshcat path; the base frame is ``freefloat_extras/base_frame``.
+        fps: animation frames per second of animation time (samples per second x speed).
+    """
+
+    viewer: Any
+    url: str
+    frames: list[dict[str, np.ndarray]] = field(default_factory=list)
+    fps: float = 30.0
+    animation: Any = None
+
+    def html(self) -> str:
+        """Self-contained HTML of the scene and its animation (the server must be running)."""
+        return str(self.viewer.static_html())
+
+    def close(self) -> None:
+        """Stop the meshcat server subprocess (``Visualizer.close()`` raises in meshcat 0.3.2)."""
+        proc = getattr(self.viewer.window, "server_proc", None)
+        if proc is not None and proc.poll() is None:
+            proc.kill()
+            proc.wait(timeout=10)
+        socket = getattr(self.viewer.window, "zmq_socket", None)
+        if socket is not None:
+            socket.close(linger=0)
+
+    def __enter__(self) -> Playback:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _visual_model(robot: Robot) -> pin.GeometryModel:
+    try:
+        return pin.buildGeomFromUrdf(
+            robot.model,
+            str(robot.urdf),
+            pin.GeometryType.VISUAL,
+            package_dirs=[str(d) for d in robot.package_dirs],
+        )
+    except (RuntimeError, ValueError) as exc:
+        raise ViewerError(f"cannot load the visual geometry of {robot.urdf}: {exc}") from None
+
+
+def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -> Playback:
+    """Start a meshcat server and load the plan's animation into it.
+
+    Args:
+        plan: the plan to show.
+        speed: playback speed (1.0 = real time).
+        robot: the loaded robot, to skip reloading the URDF.
+
+    Raises:
+        ViewerError: meshcat is missing or broken, or the visual geometry cannot be loaded.
+        InputError: ``speed`` is not a positive finite number.
+    """
+    from .errors import InputError
+
+    if not (np.isfinite(speed) and speed > 0):
+        raise InputError(f"--speed must be a positive number, got {speed}")
+    meshcat, meshcat_visualizer = _import_viewer()
+    import meshcat.geometry as g
+    from meshcat.animation import Animation
+
+    robot = robot or load_robot(plan.robot.urdf, plan.robot.end_effector)
+    visual = _visual_model(robot)
+    samples = plan.samples
+    n = len(samples.t)
+    fps = (n - 1) / plan.duration * speed if n > 1 else 30.0
+
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL; we report it
+            viewer = meshcat.Visualizer()
+    except Exception as exc:
+        raise ViewerError(f"the meshcat server failed to start: {exc}") from None
+    playback = Playback(viewer=viewer, url=str(viewer.url()), fps=fps)
+    try:
+        viz = meshcat_visualizer(robot.model, visual, visual)
+        viz.initViewer(viewer=viewer)
+        viz.loadViewerModel(rootNodeName=ROOT_NODE)
+
+        ee = np.asarray(samples.end_effector_position, dtype=float)
+        extent = float(max(np.linalg.norm(ee, axis=1).max(), 0.5))
+        viewer[f"{EXTRAS}/trail"].set_object(
+            g.Line(
+                g.PointsGeometry(ee.T.astype(np.float32)),
+                g.LineBasicMaterial(color=0x1F77B4, linewidth=2),
+            )
+        )
+        viewer[f"{EXTRAS}/cm"].set_object(
+            g.Sphere(0.03 * extent), g.MeshLambertMaterial(color=0xD62728)
+        )
+        viewer[f"{EXTRAS}/inertial_axes"].set_object(g.triad(0.5 * extent))
+        viewer[f"{EXTRAS}/base_frame"].set_object(g.triad(0.25 * extent))
+        viewer[f"{EXTRAS}/end_effector"].set_object(
+            g.Sphere(0.02 * extent), g.MeshLambertMaterial(color=0x2CA02C)
+        )
+        # Camera: meshcat 0.3.2 API (Pinocchio's helpers need a newer meshcat). Inside the
+        # y-up "rotated" node, a world point (x, y, z) is (x, z, -y); it looks at the origin.
+        eye = np.array([0.5, -1.0, 1.1]) * 1.5 * extent
+        viewer["/Grid"].set_property("visible", False)  # no floor in orbit
+        viewer["/Cameras/default/rotated/<object>"].set_property(
+            "position", [float(eye[0]), float(eye[2]), float(-eye[1])]
+        )
+
+        animation = Animation(default_framerate=fps)
+        data, gdata = robot.model.createData(), visual.createData()
+        ee_frame = robot.end_effector_frame
+        for k in range(n):
+            q = robot.configuration(
+                samples.q[k], samples.base_position[k], samples.base_quaternion_xyzw[k]
+            )
+            pin.forwardKinematics(robot.model, data, q)
+            pin.updateFramePlacements(robot.model, data)
+            pin.updateGeometryPlacements(robot.model, data, visual, gdata)
+            poses: dict[str, np.ndarray] = {}
+            for index, obj in enumerate(visual.geometryObjects):
+                name = viz.getViewerNodeName(obj, pin.GeometryType.VISUAL)
+                poses[name] = gdata.oMg[index].homogeneous.copy()
+            base = np.eye(4)
+            base[:3, :3] = pin.Quaternion(np.asarray(samples.base_quaternion_xyzw[k])).matrix()
+            base[:3, 3] = samples.base_position[k]
+            poses[f"{EXTRAS}/base_frame"] = base
+            tip = np.eye(4)
+            tip[:3, 3] = data.oMf[ee_frame].translation
+            poses[f"{EXTRAS}/end_effector"] = tip
+            playback.frames.append(poses)
+            with animation.at_frame(viewer, k) as frame:
+                for name, pose in poses.items():
+                    frame[name].set_transform(pose)
+            if k == 0:  # static placement too (keeps mesh scales; animation sets pose only)
+                viz.display(q)
+                for name in (f"{EXTRAS}/base_frame", f"{EXTRAS}/end_effector"):
+                    viewer[name].set_transform(poses[name])
+        viewer.set_animation(animation, play=True, repetitions=LOOPS)
+        playback.animation = animation
+    except FreeFloatError:
+        playback.close()
+        raise
+    except Exception as exc:
+        playback.close()
+        raise ViewerError(f"the 3D viewer failed: {type(exc).__name__}: {exc}") from None
+    return playback
+
+
+def write_html(plan: Plan, path: str | Path, speed: float = 1.0) -> Path:
+    """Write one self-contained HTML file that plays the plan offline; no server is left.
+
+    The file is written atomically: a failure leaves nothing behind.
+    """
+    target = Path(path).expanduser().resolve()
+    with build_playback(plan, speed) as playback:
+        html = playback.html()
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            handle.write(html)
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return target
+
+
+def serve(plan: Plan, speed: float = 1.0, announce: Any = print) -> None:
+    """Serve the animated plan until interrupted (Ctrl-C), then stop the server."""
+    with build_playback(plan, speed) as playback:
+        announce(f"freefloat show: open {playback.url} (Ctrl-C to stop)")
+        try:
+            while True:
+                time.sleep(3600)
+        except KeyboardInterrupt:
+            pass

@@ -1,0 +1,58 @@
+"""Headless Chromium screenshots for the playback tests."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--hide-scrollbars",
+    "--window-size=800,600",
+]
+
+
+def chromium() -> str:
+    exe = shutil.which("chromium") or shutil.which("chromium-browser")
+    if exe is None:
+        if os.environ.get("CI") or os.environ.get("FREEFLOAT_REQUIRE_BROWSER"):
+            pytest.fail("chromium is required for the browser tests (apt-get install chromium)")
+        pytest.skip("chromium not installed (apt-get install chromium)")
+    return exe
+
+
+def screenshot(page: Path, virtual_ms: int) -> np.ndarray:
+    """RGB pixels of ``page`` after ``virtual_ms`` of virtual (page) time."""
+    from PIL import Image
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "shot.png"
+        subprocess.run(
+            [
+                chromium(),
+                *FLAGS,
+                f"--user-data-dir={tmp}/profile",
+                f"--virtual-time-budget={virtual_ms}",
+                f"--screenshot={out}",
+                page.as_uri(),
+            ],
+            check=True,
+            capture_output=True,
+            timeout=120,
+        )
+        return np.asarray(Image.open(out).convert("RGB")).astype(int)

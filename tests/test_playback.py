@@ -1,0 +1,126 @@
+"""Browser playback: recorded poses, standalone HTML in a real browser, no stray servers."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import freefloat as ff
+from freefloat.cli import main
+from freefloat.playback import EXTRAS, build_playback, write_html
+
+from browser import screenshot
+
+
+def _servers() -> int:
+    out = subprocess.run(
+        ["pgrep", "-f", "meshcat.servers.zmqserver"], capture_output=True, text=True, check=False
+    )
+    return len(out.stdout.split())
+
+
+@pytest.fixture(scope="module")
+def playback(worked_plan):
+    with build_playback(worked_plan) as pb:
+        yield pb
+
+
+def _track(playback, node, prop):
+    clip = next(c for path, c in playback.animation.clips.items() if path.lower().endswith(node))
+    track = clip.tracks[prop]
+    return track.frames, np.array(track.values)
+
+
+def test_animation_base_pose_equals_samples(playback, worked_plan):
+    s = worked_plan.samples
+    frames, positions = _track(playback, f"{EXTRAS}/base_frame", "position")
+    assert frames == list(range(len(s.t)))
+    np.testing.assert_allclose(positions, np.array(s.base_position), atol=1e-12)
+    _, quats = _track(playback, f"{EXTRAS}/base_frame", "quaternion")
+    expected = np.array(s.base_quaternion_xyzw)
+    signs = np.sign(np.sum(quats * expected, axis=1))[:, None]
+    np.testing.assert_allclose(quats * signs, expected, atol=1e-12)
+    assert playback.fps == pytest.approx((len(s.t) - 1) / worked_plan.duration)
+
+
+def test_animation_link_poses_carry_the_joint_angles(playback, worked_plan):
+    """Joint angles recovered from the recorded link poses equal the sampled joints."""
+    s = worked_plan.samples
+    r_off = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])  # URDF rpy 0 pi/2 0
+
+    def rotations(name):
+        _, quats = _track(playback, name, "quaternion")
+        return [ff.attitude.quat_to_matrix(q) for q in quats]
+
+    base = [ff.attitude.quat_to_matrix(np.array(q)) for q in s.base_quaternion_xyzw]
+    link1, link2 = rotations("link1_0"), rotations("link2_0")
+    for k in range(0, len(s.t), 20):
+        rz1 = base[k].T @ link1[k] @ r_off.T
+        rz2 = r_off @ link1[k].T @ link2[k] @ r_off.T
+        assert np.arctan2(rz1[1, 0], rz1[0, 0]) == pytest.approx(
+            np.arctan2(np.sin(s.q[k][0]), np.cos(s.q[k][0])), abs=1e-6
+        )
+        assert np.arctan2(rz2[1, 0], rz2[0, 0]) == pytest.approx(
+            np.arctan2(np.sin(s.q[k][1]), np.cos(s.q[k][1])), abs=1e-6
+        )
+    _, tips = _track(playback, f"{EXTRAS}/end_effector", "position")
+    np.testing.assert_allclose(tips, np.array(s.end_effector_position), atol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def html_page(worked_plan, tmp_path_factory):
+    before = _servers()
+    path = write_html(worked_plan, tmp_path_factory.mktemp("html") / "plan.html")
+    assert _servers() == before  # no server left after writing
+    return path
+
+
+def test_standalone_html_is_self_contained(html_page):
+    text = html_page.read_text()
+    assert "MeshCat.Viewer" in text and "set_animation" in text
+    assert "http://" not in text.split("<script>")[0]  # nothing to fetch before the viewer
+
+
+def test_browser_renders_and_animates(html_page):
+    early, late = screenshot(html_page, 1500), screenshot(html_page, 6500)
+    assert early.shape == (600, 800, 3)
+    for shot in (early, late):  # not blank: the background gradient plus a lit robot
+        assert shot.std() > 20.0
+        assert len(np.unique(shot.reshape(-1, 3), axis=0)) > 200
+    changed = np.abs(early - late).sum(axis=2) > 30
+    assert changed.mean() > 0.002  # the robot moved between the two instants
+
+
+def test_show_html_cli_leaves_no_server(tmp_path, worked_plan, capsys):
+    plan_path = worked_plan.save(tmp_path / "p.json")
+    before = _servers()
+    assert main(["show", str(plan_path), "--html", str(tmp_path / "x.html"), "--speed", "2"]) == 0
+    assert (tmp_path / "x.html").stat().st_size > 100_000
+    assert _servers() == before
+    assert "wrote" in capsys.readouterr().out
+
+
+def test_bad_speed_is_refused(tmp_path, worked_plan, capsys):
+    plan_path = worked_plan.save(tmp_path / "p.json")
+    assert main(["show", str(plan_path), "--html", str(tmp_path / "x.html"), "--speed", "0"]) == 2
+    assert "--speed must be a positive number" in capsys.readouterr().err
+    assert not (tmp_path / "x.html").exists()
+
+
+def test_broken_meshcat_gives_a_clear_error(tmp_path, worked_plan):
+    plan_path = worked_plan.save(tmp_path / "p.json")
+    code = (
+        "import sys; sys.modules['meshcat'] = None\n"
+        "from freefloat.cli import main\n"
+        f"sys.exit(main(['show', {str(plan_path)!r}, '--html', {str(tmp_path / 'y.html')!r}]))"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=False
+    )
+    assert result.returncode == 2
+    assert "the 3D viewer needs meshcat, which failed to import" in result.stderr
+    assert "Traceback" not in result.stderr
+    assert not (tmp_path / "y.html").exists()

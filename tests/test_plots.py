@@ -1,0 +1,89 @@
+"""Plots: files exist, are sensible images, and carry the plan's samples."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from freefloat.cli import main
+from freefloat.plots import TOPICS, figures
+
+
+@pytest.fixture(scope="module")
+def figs(worked_plan):
+    return figures(worked_plan)
+
+
+def _line(fig, label):
+    ax = fig.axes[0]
+    return next(line for line in ax.lines if line.get_label() == label)
+
+
+def test_plotted_data_equals_the_samples(figs, worked_plan):
+    s = worked_plan.samples
+    t = np.array(s.t)
+    q = np.degrees(np.array(s.q))
+    qd = np.degrees(np.array(s.qd))
+    for i, name in enumerate(worked_plan.robot.joints):
+        np.testing.assert_array_equal(_line(figs["joint_positions"], name).get_xdata(), t)
+        np.testing.assert_allclose(_line(figs["joint_positions"], name).get_ydata(), q[:, i])
+        np.testing.assert_allclose(_line(figs["joint_rates"], name).get_ydata(), qd[:, i])
+        np.testing.assert_allclose(
+            _line(figs["joint_torques"], name).get_ydata(), np.array(s.tau)[:, i]
+        )
+    zyx = np.array(s.base_zyx_deg)
+    for i, label in enumerate(("yaw", "pitch", "roll")):
+        np.testing.assert_allclose(_line(figs["base_attitude"], label).get_ydata(), zyx[:, i])
+    omega = np.degrees(np.array(s.base_angular_velocity))
+    np.testing.assert_allclose(_line(figs["base_rate"], "$\\omega_z$").get_ydata(), omega[:, 2])
+    ee = np.array(s.end_effector_position)
+    np.testing.assert_allclose(_line(figs["end_effector"], "$x_E$").get_ydata(), ee[:, 0])
+    np.testing.assert_allclose(_line(figs["end_effector"], "$y_E$").get_ydata(), ee[:, 1])
+    path = _line(figs["end_effector_path"], "path")
+    np.testing.assert_allclose(path.get_xdata(), ee[:, 0])
+    np.testing.assert_allclose(path.get_ydata(), ee[:, 1])
+
+
+def test_axis_labels_have_units(figs):
+    for name in TOPICS:
+        ax = figs[name].axes[0]
+        assert "[" in ax.get_xlabel() and "[" in ax.get_ylabel(), name
+    assert len(figs["overview"].axes) == 8
+
+
+def test_plot_cli_writes_valid_images(tmp_path, worked_plan, capsys):
+    plan_path = worked_plan.save(tmp_path / "p.json")
+    out = tmp_path / "figs"
+    assert main(["plot", str(plan_path), "-o", str(out), "--svg"]) == 0
+    pngs = sorted(out.glob("*.png"))
+    assert {p.stem for p in pngs} == {*TOPICS, "overview"}
+    for png in pngs:
+        with Image.open(png) as img:
+            img.verify()
+        with Image.open(png) as img:
+            width, height = img.size
+            assert 500 <= width <= 2000 and 300 <= height <= 2000
+            assert np.asarray(img.convert("L")).std() > 5  # not blank
+    svgs = sorted(out.glob("*.svg"))
+    assert len(svgs) == len(pngs)
+    assert all(p.read_text().lstrip().startswith("<?xml") for p in svgs)
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporaries left
+    assert "16 files" in capsys.readouterr().out
+
+
+def test_broken_matplotlib_gives_a_clear_error(tmp_path, worked_plan):
+    plan_path = worked_plan.save(tmp_path / "p.json")
+    code = (
+        "import sys; sys.modules['matplotlib'] = None\n"
+        "from freefloat.cli import main\n"
+        f"sys.exit(main(['plot', {str(plan_path)!r}, '-o', {str(tmp_path / 'f')!r}]))"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=False
+    )
+    assert result.returncode == 2
+    assert "plots need matplotlib, which failed to import" in result.stderr
