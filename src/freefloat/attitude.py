@@ -22,6 +22,7 @@ __all__ = [
     "GAUSS3_WEIGHTS",
     "IDENTITY",
     "geodesic_angle",
+    "magnus_increment_jacobian",
     "magnus_increments",
     "propagate",
     "quat_conjugate",
@@ -30,6 +31,8 @@ __all__ = [
     "quat_log",
     "quat_multiply",
     "quat_to_matrix",
+    "rotation_matrices",
+    "so3_right_jacobian",
     "step_nodes",
     "zyx_from_quat",
 ]
@@ -144,6 +147,46 @@ def step_nodes(edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     h = np.diff(edges)
     nodes = (edges[:-1, None] + h[:, None] * GAUSS3_NODES[None, :]).ravel()
     return nodes, h
+
+
+def so3_right_jacobian(phi: np.ndarray) -> np.ndarray:
+    """Right Jacobians of SO(3), (M, 3, 3).
+
+    To first order, ``exp(phi + d) = exp(phi) exp(Jr(phi) d)`` (rotation vectors in rad).
+    """
+    phi = np.atleast_2d(phi)
+    theta = np.linalg.norm(phi, axis=1)
+    small = theta < 1e-5
+    t = np.where(small, 1.0, theta)
+    a = np.where(small, 0.5 - theta**2 / 24.0, (1.0 - np.cos(t)) / t**2)
+    b = np.where(small, 1.0 / 6.0 - theta**2 / 120.0, (t - np.sin(t)) / t**3)
+    skew = np.zeros((len(phi), 3, 3))
+    skew[:, 0, 1], skew[:, 0, 2], skew[:, 1, 2] = -phi[:, 2], phi[:, 1], -phi[:, 0]
+    skew[:, 1, 0], skew[:, 2, 0], skew[:, 2, 1] = phi[:, 2], -phi[:, 1], phi[:, 0]
+    return np.eye(3) - a[:, None, None] * skew + b[:, None, None] * (skew @ skew)
+
+
+def rotation_matrices(rotvec: np.ndarray) -> np.ndarray:
+    """(M, 3, 3) rotation matrices of rotation vectors (rad)."""
+    quats = quat_exp(np.atleast_2d(rotvec))
+    return np.stack([quat_to_matrix(q) for q in quats])
+
+
+def magnus_increment_jacobian(omega: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Exact derivative of each step's Magnus vector with respect to its node rates.
+
+    Returns (M, 3, 9): ``dW_m / d omega_m[node, axis]`` with columns ordered node-major. The
+    Magnus vector is a polynomial of the node rates, so complex-step differentiation is exact
+    to rounding.
+    """
+    eps = 1e-30
+    out = np.empty((len(h), 3, 9))
+    for node in range(3):
+        for axis in range(3):
+            shifted = omega.astype(complex)
+            shifted[:, node, axis] += 1j * eps
+            out[:, :, 3 * node + axis] = magnus_increments(shifted, h).imag / eps
+    return out
 
 
 def magnus_increments(omega: np.ndarray, h: np.ndarray) -> np.ndarray:

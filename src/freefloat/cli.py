@@ -185,6 +185,30 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     return 0 if result.passed else 1
 
 
+def _cmd_compose(args: argparse.Namespace) -> int:
+    from .compose import ServicerSpec, compose_servicer
+    from .model import load_robot
+
+    spec = ServicerSpec(
+        arm=args.arm,
+        base_mass=args.base_mass,
+        base_size=tuple(args.base_size),
+        base_inertia=tuple(args.base_inertia) if args.base_inertia else None,
+        mount=tuple(args.mount),
+        mount_rpy=tuple(math.radians(a) for a in args.mount_rpy),
+        lock=tuple(args.lock or ()),
+        keep_gripper=args.keep_gripper,
+    )
+    path = compose_servicer(spec, args.output)
+    robot = load_robot(path)
+    print(f"freefloat compose: wrote {path}")
+    print(
+        f"  {robot.n} joints ({', '.join(robot.joint_names)}), total mass "
+        f"{robot.total_mass:.3f} kg, end effector {robot.end_effector!r}"
+    )
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``freefloat`` command."""
     parser = argparse.ArgumentParser(
@@ -242,6 +266,53 @@ def build_parser() -> argparse.ArgumentParser:
         "--replay-steps", type=int, default=500, help="RK4 steps of the replay (default 500)"
     )
     p_verify.set_defaults(func=_cmd_verify)
+
+    p_compose = commands.add_parser(
+        "compose",
+        help="mount an arm on a box spacecraft and write one validated URDF",
+        description="Compose a servicer: an example-robot-data arm (panda, ur5, kinova, "
+        "xarm7, z1) or a URDF file, mounted on a uniform box spacecraft. Gripper and finger "
+        "joints are locked unless --keep-gripper. Angles in degrees.",
+    )
+    p_compose.add_argument("--arm", required=True, help="arm name or URDF path")
+    p_compose.add_argument("--base-mass", type=float, required=True, metavar="KG")
+    p_compose.add_argument(
+        "--base-size",
+        type=float,
+        nargs=3,
+        required=True,
+        metavar=("X", "Y", "Z"),
+        help="box edges [m]",
+    )
+    p_compose.add_argument(
+        "--base-inertia",
+        type=float,
+        nargs=3,
+        metavar=("IXX", "IYY", "IZZ"),
+        help="principal moments [kg m^2] (default: uniform box)",
+    )
+    p_compose.add_argument(
+        "--mount",
+        type=float,
+        nargs=3,
+        required=True,
+        metavar=("X", "Y", "Z"),
+        help="arm root in the spacecraft frame [m]",
+    )
+    p_compose.add_argument(
+        "--mount-rpy",
+        type=float,
+        nargs=3,
+        default=[0.0, 0.0, 0.0],
+        metavar=("R", "P", "Y"),
+        help="arm root roll, pitch, yaw [deg]",
+    )
+    p_compose.add_argument("--lock", nargs="*", metavar="JOINT", help="more joints to lock at zero")
+    p_compose.add_argument(
+        "--keep-gripper", action="store_true", help="keep gripper and finger joints movable"
+    )
+    p_compose.add_argument("-o", "--output", required=True, help="URDF file to write")
+    p_compose.set_defaults(func=_cmd_compose)
 
     p_show = commands.add_parser(
         "show",

@@ -84,11 +84,21 @@ class InfeasibleError(FreeFloatError):
 class SolverError(FreeFloatError):
     """No path reaches the goal attitude; carries the best residual and what was tried."""
 
-    def __init__(self, message: str, best_residual: float, tried: Sequence[str] = ()) -> None:
+    def __init__(
+        self,
+        message: str,
+        best_residual: float,
+        tried: Sequence[str] = (),
+        per_axis: Sequence[float] | None = None,
+    ) -> None:
         self.best_residual = float(best_residual)
         self.tried = tuple(tried)
+        self.per_axis = None if per_axis is None else tuple(float(x) for x in per_axis)
+        axes = ""
+        if self.per_axis is not None and len(self.per_axis) == 3:
+            axes = "; per axis x, y, z: " + ", ".join(f"{x:.3g}" for x in self.per_axis)
         detail = f"; tried: {'; '.join(self.tried)}" if self.tried else ""
-        super().__init__(f"{message} (best residual {self.best_residual:.3g} rad){detail}")
+        super().__init__(f"{message} (best residual {self.best_residual:.3g} rad{axes}){detail}")
 
 
 class PlanFileError(FreeFloatError):

@@ -13,7 +13,9 @@ in m for ``prismatic`` joints.
 
 from __future__ import annotations
 
+import importlib.metadata
 import math
+import re
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -24,7 +26,15 @@ import pinocchio as pin
 
 from .errors import ModelError, UnknownNameError
 
-__all__ = ["Joint", "Robot", "load_robot", "resolve_robot", "robots_dir", "shipped_robots"]
+__all__ = [
+    "Joint",
+    "Robot",
+    "example_robot_data_dir",
+    "load_robot",
+    "resolve_robot",
+    "robots_dir",
+    "shipped_robots",
+]
 
 #: Pinocchio joint model short names, by the kind of joint freefloat exposes.
 _KINDS = {
@@ -190,6 +200,16 @@ class Robot:
         return out
 
 
+def example_robot_data_dir() -> Path | None:
+    """The ``share`` folder holding ``example-robot-data`` (its package dir), if installed."""
+    try:
+        dist = importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        return None
+    share = Path(str(dist.locate_file("cmeel.prefix/share")))
+    return share if (share / "example-robot-data").is_dir() else None
+
+
 def robots_dir() -> Path:
     """Folder of the shipped robots and scenarios (installed package data or the checkout)."""
     installed = Path(__file__).resolve().parent / "robots"
@@ -323,14 +343,26 @@ def _check_urdf_xml(text: str) -> tuple[str, list[str]]:
     return roots[0], links
 
 
+_TOOL_NAME = re.compile(r"tcp|end_?effector|eef|tool|(^|_)ee($|_)", re.IGNORECASE)
+
+
 def _default_end_effector(model: pin.Model) -> str:
-    """Name the body frame at the tip of the longest chain of joints (latest in tree order)."""
+    """Name the body frame at the tip of the longest chain of movable joints.
+
+    Among the bodies carried by the deepest joint, a frame named like a tool (``tcp``,
+    ``end_effector``, ``eef``, ``tool``, ``ee``) wins; otherwise the latest in tree order.
+    """
     bodies = [
-        (len(model.supports[frame.parentJoint]), index, frame.name)
+        (
+            len(model.supports[frame.parentJoint]),
+            bool(_TOOL_NAME.search(frame.name)),
+            index,
+            frame.name,
+        )
         for index, frame in enumerate(model.frames)
         if frame.type == pin.FrameType.BODY
     ]
-    return max(bodies)[2]
+    return max(bodies)[3]
 
 
 def load_robot(
@@ -344,8 +376,8 @@ def load_robot(
         urdf: path of the URDF file; its root link is the spacecraft.
         end_effector: name of the end-effector frame (a link name); default: the tip of the
             longest chain of movable joints.
-        package_dirs: folders for ``package://`` mesh references (the URDF's own folder is
-            always searched).
+        package_dirs: folders for ``package://`` mesh references (the URDF's own folder and
+            example-robot-data's share folder are always searched).
 
     Raises:
         ModelError: unreadable or malformed file, closed loop, unsupported joint type, bad
@@ -428,7 +460,8 @@ def load_robot(
     elif end_effector not in frames:
         raise UnknownNameError("end-effector frame", end_effector, frames)
 
-    dirs = (path.parent, *(Path(d).resolve() for d in package_dirs))
+    share = example_robot_data_dir()
+    dirs = (path.parent, *(Path(d).resolve() for d in package_dirs), *([share] if share else []))
     return Robot(
         urdf=path,
         name=ET.fromstring(text).get("name", path.stem),

@@ -12,12 +12,30 @@ identity attitude. The system centre of mass (CM) is the inertial origin.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pinocchio as pin
 
 from .model import Robot
 
-__all__ = ["MomentumMap", "is_planar"]
+__all__ = ["MomentumMap", "NodeRates", "is_planar"]
+
+
+@dataclass(frozen=True)
+class NodeRates:
+    """Base angular velocity at K instants, and its sensitivities.
+
+    Attributes:
+        omega: (K, 3) base angular velocity, base frame (rad per unit time of ``rates``).
+        f1: (K, 3, N) the map ``F1`` at each instant.
+        domega_dq: (K, 3, N) derivative of ``omega`` with respect to the joint values at fixed
+            joint rates, from Pinocchio's analytic centroidal derivatives; None unless asked.
+    """
+
+    omega: np.ndarray
+    f1: np.ndarray
+    domega_dq: np.ndarray | None = None
 
 
 class MomentumMap:
@@ -48,6 +66,49 @@ class MomentumMap:
         ag = pin.computeCentroidalMap(self.model, self.data, self._q)
         self.evaluations += 1
         return -np.linalg.solve(ag[:, :6], ag[:, 6:])
+
+    def configurations(self, joints: np.ndarray) -> np.ndarray:
+        """(K, nq) Pinocchio configurations, base at the origin with identity attitude."""
+        joints = np.atleast_2d(np.asarray(joints, dtype=float))
+        out = np.repeat(self._q[None, :], len(joints), axis=0)
+        for i, joint in enumerate(self.robot.joints):
+            if joint.kind == "continuous":
+                out[:, joint.idx_q] = np.cos(joints[:, i])
+                out[:, joint.idx_q + 1] = np.sin(joints[:, i])
+            else:
+                out[:, joint.idx_q] = joints[:, i]
+        return out
+
+    def base_rates(
+        self, joints: np.ndarray, rates: np.ndarray, derivatives: bool = False
+    ) -> NodeRates:
+        """Base angular velocity at K instants (batched; one Pinocchio call per instant).
+
+        Args:
+            joints: (K, N) joint values (rad or m).
+            rates: (K, N) joint rates (per unit of any time variable).
+            derivatives: also return ``d omega / d q`` (analytic, Pinocchio).
+        """
+        configs = self.configurations(joints)
+        k_count = len(configs)
+        ag = np.empty((k_count, 6, self.model.nv))
+        for k in range(k_count):
+            ag[k] = pin.computeCentroidalMap(self.model, self.data, configs[k])
+        self.evaluations += k_count
+        twist_map = -np.linalg.solve(ag[:, :, :6], ag[:, :, 6:])
+        f1 = twist_map[:, 3:]
+        omega = np.einsum("kij,kj->ki", f1, rates)
+        domega = None
+        if derivatives:
+            v = np.concatenate([np.einsum("kij,kj->ki", twist_map, rates), rates], axis=1)
+            zero = np.zeros(self.model.nv)
+            dh = np.empty((k_count, 6, self.robot.n))
+            for k in range(k_count):
+                dh[k] = pin.computeCentroidalDynamicsDerivatives(
+                    self.model, self.data, configs[k], v[k], zero
+                )[0][:, 6:]
+            domega = -np.linalg.solve(ag[:, :, :6], dh)[:, 3:]
+        return NodeRates(omega=omega, f1=f1, domega_dq=domega)
 
     def f1(self, joints: np.ndarray) -> np.ndarray:
         """``F1(q)``: 3 x N map from joint rates to the base angular velocity (base frame)."""

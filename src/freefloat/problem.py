@@ -15,21 +15,26 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+import pinocchio as pin
 
 from .attitude import (
     GAUSS3_WEIGHTS,
+    magnus_increment_jacobian,
     magnus_increments,
     propagate,
     quat_conjugate,
     quat_exp,
     quat_log,
     quat_multiply,
+    quat_to_matrix,
+    rotation_matrices,
+    so3_right_jacobian,
     step_nodes,
 )
 from .bounds import PlanarBounds, planar_bounds
 from .errors import InfeasibleError, InputError, JointLimitError
 from .model import Robot
-from .momentum import MomentumMap, is_planar
+from .momentum import MomentumMap, NodeRates, is_planar
 from .paths import PathFamily
 
 __all__ = ["Problem", "build_problem", "wrap_angle"]
@@ -102,21 +107,20 @@ class Problem:
         base, dq, dqs = self.family.linear_map(nodes)
         self._grid = (h, base.q, base.qd, dq, dqs)
 
-    def rates(self, beta: np.ndarray) -> np.ndarray:
-        """Base angular velocity at the integration nodes, (steps, 3, 3), rad per unit s."""
+    def _nodes(self, beta: np.ndarray, derivatives: bool = False) -> tuple[NodeRates, np.ndarray]:
+        """Base rates at the integration nodes and the joint rates there (per unit s)."""
         _, q0, qs0, dq, dqs = self._grid
         beta = np.asarray(beta, dtype=float)
         q = q0 + dq @ beta
         qs = qs0 + dqs @ beta
-        omega = np.empty((len(q), 3))
+        self.evaluations += 1
+        return self.mmap.base_rates(q, qs, derivatives), qs
+
+    def rates(self, beta: np.ndarray) -> np.ndarray:
+        """Base angular velocity at the integration nodes, (steps, 3, 3), rad per unit s."""
+        omega = self._nodes(beta)[0].omega
         if self.planar:
             omega[:, :2] = 0.0
-            for k in range(len(q)):
-                omega[k, 2] = self.mmap.f1(q[k])[2] @ qs[k]
-        else:
-            for k in range(len(q)):
-                omega[k] = self.mmap.f1(q[k]) @ qs[k]
-        self.evaluations += 1
         return omega.reshape(self.steps, 3, 3)
 
     def yaw_change_of(self, beta: np.ndarray) -> float:
@@ -140,6 +144,80 @@ class Problem:
             return np.array([self.yaw_change_of(beta) - self.yaw_change])
         reached = self.achieved(beta)
         return quat_log(quat_multiply(quat_conjugate(self.goal_quaternion), reached))
+
+    def residual_and_jacobian(self, beta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``h(beta)`` and its exact Jacobian ``dh/dbeta`` (rad per unit of beta).
+
+        The Jacobian differentiates the discrete scheme itself: node rates through Pinocchio's
+        analytic centroidal derivatives and the path's linear dependence on ``beta``; each
+        step's Magnus vector by complex steps; the chain of step rotations with SO(3) right
+        Jacobians; the residual's logarithm with ``pin.Jlog3``.
+        """
+        h, _, _, dq, dqs = self._grid
+        nodes, _qs = self._nodes(beta, derivatives=True)
+        assert nodes.domega_dq is not None
+        # d omega / d beta at each node: (K, 3, n_free).
+        domega = np.einsum("kij,kjf->kif", nodes.domega_dq, dq) + np.einsum(
+            "kij,kjf->kif", nodes.f1, dqs
+        )
+        omega = nodes.omega.reshape(self.steps, 3, 3)
+        domega = domega.reshape(self.steps, 3, 3, self.n_free)
+        if self.planar:
+            assert self.yaw_change is not None
+            weights = h[:, None] * GAUSS3_WEIGHTS[None, :]
+            yaw = float(np.sum(weights * omega[:, :, 2])) - self.yaw_change
+            gradient = np.einsum("mn,mnf->f", weights, domega[:, :, 2, :])
+            return np.array([yaw]), gradient[None, :]
+        increments = magnus_increments(omega, h)
+        dw_domega = magnus_increment_jacobian(omega, h)  # (M, 3, 9)
+        dw = np.einsum("mck,mkf->mcf", dw_domega, domega.reshape(self.steps, 9, self.n_free))
+        rotations = rotation_matrices(increments)
+        # after[m] = E_{m+1} ... E_{M}: the rotation that follows step m.
+        after = np.empty_like(rotations)
+        after[-1] = np.eye(3)
+        for m in range(self.steps - 1, 0, -1):
+            after[m - 1] = rotations[m] @ after[m]
+        right = so3_right_jacobian(increments)
+        dtheta = np.einsum("mji,mjk,mkf->if", after, right, dw)  # body frame at the end
+        reached = propagate(self.start_quaternion, increments)[-1]
+        relative = quat_multiply(quat_conjugate(self.goal_quaternion), reached)
+        value = quat_log(relative)
+        jac = np.asarray(pin.Jlog3(quat_to_matrix(relative))) @ dtheta
+        return value, jac
+
+    def jacobian(self, beta: np.ndarray) -> np.ndarray:
+        """Exact ``dh/dbeta`` (see :meth:`residual_and_jacobian`)."""
+        return self.residual_and_jacobian(beta)[1]
+
+    def limit_constraints(self, points: int = 97) -> tuple[np.ndarray, np.ndarray]:
+        """Joint position limits as linear inequalities ``G beta <= g`` at ``points`` instants.
+
+        The joint values are affine in ``beta``, so the limits along the path are linear
+        constraints; only joints with finite limits contribute rows.
+        """
+        s = np.linspace(0.0, 1.0, points)
+        base, dq, _ = self.family.linear_map(s)
+        rows, bounds = [], []
+        for i, joint in enumerate(self.robot.joints):
+            if np.isfinite(joint.upper):
+                rows.append(dq[:, i, :])
+                bounds.append(joint.upper - base.q[:, i])
+            if np.isfinite(joint.lower):
+                rows.append(-dq[:, i, :])
+                bounds.append(base.q[:, i] - joint.lower)
+        if not rows:
+            return np.zeros((0, self.n_free)), np.zeros(0)
+        return np.concatenate(rows), np.concatenate(bounds)
+
+    def limit_violation(self, beta: np.ndarray, points: int = 801) -> tuple[float, str]:
+        """Largest excursion beyond a joint limit along the path (rad or m) and the joint."""
+        q = self.family.evaluate(beta, np.linspace(0.0, 1.0, points)).q
+        worst, name = 0.0, ""
+        for i, joint in enumerate(self.robot.joints):
+            over = max(float(q[:, i].max() - joint.upper), float(joint.lower - q[:, i].min()))
+            if over > worst:
+                worst, name = over, joint.name
+        return worst, name
 
     def attitudes(self, beta: np.ndarray, s: np.ndarray) -> np.ndarray:
         """Base attitude ``[x, y, z, w]`` at normalised instants ``s`` (ascending, from 0).

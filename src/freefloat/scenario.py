@@ -3,7 +3,8 @@
 The file speaks degrees (joint angles, Euler angles) and metres (prismatic joints); a
 :class:`Scenario` holds radians and metres. Format::
 
-    robot = "planar_2dof"          # a shipped robot name, or a URDF path relative to this file
+    robot = "planar_2dof"          # a shipped robot name, a URDF path relative to this file,
+                                   # or a [robot] table composing a servicer (see below)
     duration = 10.0                # [s]
     end_effector = "ee"            # optional frame name; default: the tip of the chain
     [start]
@@ -15,11 +16,21 @@ The file speaks degrees (joint angles, Euler angles) and metres (prismatic joint
     [path]
     extra = { q2 = 1 }             # optional: free coefficients per joint beyond the quintic
     max_deviation_deg = 458.4      # optional: one-unknown root bracket, as path deviation [deg]
+
+An inline servicer replaces ``robot = "..."`` with a table (composed once, cached)::
+
+    [robot]
+    arm = "panda"                  # example-robot-data arm or URDF path
+    base_mass = 100.0              # [kg]
+    base_size = [0.6, 0.6, 0.6]    # [m]
+    mount = [0.3, 0.0, 0.0]        # [m], in the spacecraft frame
+    mount_rpy_deg = [0.0, 90.0, 0.0]   # optional [deg]; also base_inertia, lock, keep_gripper
 """
 
 from __future__ import annotations
 
 import math
+import os
 import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -37,7 +48,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["Scenario", "default_scenario_path"]
+__all__ = ["Scenario", "default_scenario_path", "servicer_cache_dir"]
 
 _TOP_KEYS = ("robot", "duration", "end_effector", "start", "goal", "path")
 _STATE_KEYS = ("joints", "base_zyx_deg", "base_quaternion_xyzw")
@@ -131,9 +142,14 @@ class Scenario:
                 raise ScenarioError(
                     f"missing required key {key!r} (required: robot, duration, [start], [goal])"
                 )
-        if not isinstance(data["robot"], str):
+        if isinstance(data["robot"], Mapping):
+            urdf = _inline_servicer(data["robot"])
+        elif isinstance(data["robot"], str):
+            urdf = resolve_robot(data["robot"], relative_to)
+        else:
             raise ScenarioError(
-                f"robot must be a shipped robot name or a URDF path, got {data['robot']!r}"
+                "robot must be a shipped robot name, a URDF path or a [robot] table, got "
+                f"{data['robot']!r}"
             )
         duration = _number(data["duration"], "duration")
         if duration <= 0.0:
@@ -141,7 +157,7 @@ class Scenario:
         end_effector = data.get("end_effector")
         if end_effector is not None and not isinstance(end_effector, str):
             raise ScenarioError(f"end_effector must be a frame name, got {end_effector!r}")
-        robot = load_robot(resolve_robot(data["robot"], relative_to), end_effector)
+        robot = load_robot(urdf, end_effector)
 
         states = []
         for name in ("start", "goal"):
@@ -220,6 +236,63 @@ class Scenario:
     def goal(self) -> np.ndarray:
         """Goal joint values as an N-vector in joint order (rad or m)."""
         return self.robot.vector(self.goal_joints, "goal joints")
+
+
+_ROBOT_KEYS = (
+    "arm",
+    "base_mass",
+    "base_size",
+    "base_inertia",
+    "mount",
+    "mount_rpy_deg",
+    "lock",
+    "keep_gripper",
+)
+
+
+def servicer_cache_dir() -> Path:
+    """Folder of servicers composed from inline ``[robot]`` tables.
+
+    ``$FREEFLOAT_CACHE`` if set, else ``$XDG_CACHE_HOME/freefloat/servicers`` (default
+    ``~/.cache``).
+    """
+    if os.environ.get("FREEFLOAT_CACHE"):
+        return Path(os.environ["FREEFLOAT_CACHE"])
+    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return base / "freefloat" / "servicers"
+
+
+def _triple(table: Mapping[str, Any], key: str, default: list[float] | None = None) -> Any:
+    return tuple(float(x) for x in _numbers(table.get(key, default), 3, f"[robot] {key}"))
+
+
+def _inline_servicer(table: Mapping[str, Any]) -> Path:
+    """Compose (once, cached by content) the servicer an inline ``[robot]`` table describes."""
+    from .compose import ServicerSpec, compose_servicer
+
+    _check_keys(table, _ROBOT_KEYS, "[robot]")
+    for key in ("arm", "base_mass", "base_size"):
+        if key not in table:
+            raise ScenarioError(f"[robot] needs {key!r} (required: arm, base_mass, base_size)")
+    if not isinstance(table["arm"], str):
+        raise ScenarioError(f"[robot] arm must be an arm name or a URDF path, got {table['arm']!r}")
+    lock = table.get("lock", [])
+    if not isinstance(lock, list) or not all(isinstance(x, str) for x in lock):
+        raise ScenarioError("[robot] lock must be a list of joint names")
+    spec = ServicerSpec(
+        arm=table["arm"],
+        base_mass=_number(table["base_mass"], "[robot] base_mass"),
+        base_size=_triple(table, "base_size"),
+        base_inertia=_triple(table, "base_inertia") if "base_inertia" in table else None,
+        mount=_triple(table, "mount", [0.0, 0.0, 0.0]),
+        mount_rpy=tuple(math.radians(a) for a in _triple(table, "mount_rpy_deg", [0.0] * 3)),
+        lock=tuple(lock),
+        keep_gripper=bool(table.get("keep_gripper", False)),
+    )
+    path = servicer_cache_dir() / f"{spec.key()}.urdf"
+    if not path.is_file():
+        compose_servicer(spec, path)
+    return path
 
 
 def _prefixed(exc: FreeFloatError, path: Path) -> FreeFloatError:

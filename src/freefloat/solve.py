@@ -16,9 +16,7 @@ A solution is returned only when the residual is below the tolerance; otherwise
 
 from __future__ import annotations
 
-import math
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -49,14 +47,16 @@ class SolveOptions:
             quintic path whenever free coefficients of one power move several joints (moving
             along the straight joint-space line only re-times it).
         keep_solutions: stop after this many solutions; the minimum-norm one is returned.
+        time_budget: no new start is tried after this many seconds (s).
     """
 
     tolerance: float = DEFAULT_TOLERANCE
     max_deviation: float = 8.0
     scan_points: int = 161
     max_iterations: int = 100
-    starts: int = 13
-    keep_solutions: int = 3
+    starts: int = 7
+    keep_solutions: int = 2
+    time_budget: float = 20.0
 
 
 @dataclass(frozen=True)
@@ -104,29 +104,18 @@ def _path_length(problem: Problem, beta: np.ndarray) -> float:
     return float(np.abs(np.diff(q, axis=0)).sum())
 
 
-def _jacobian(fun: Callable[[np.ndarray], np.ndarray], beta: np.ndarray) -> np.ndarray:
-    """Central-difference Jacobian of ``fun`` at ``beta``."""
-    step = 1e-5 * max(1.0, float(np.linalg.norm(beta)))
-    columns = []
-    for k in range(len(beta)):
-        e = np.zeros_like(beta)
-        e[k] = step
-        columns.append((fun(beta + e) - fun(beta - e)) / (2.0 * step))
-    return np.stack(columns, axis=1)
-
-
 def _polish(problem: Problem, beta: np.ndarray, tol: float, iterations: int = 8) -> np.ndarray:
     """Minimum-norm Gauss-Newton corrections until the residual is well below ``tol``."""
-    r = problem.residual(beta)
+    r, jac = problem.residual_and_jacobian(beta)
     for _ in range(iterations):
         if np.linalg.norm(r) < 0.01 * tol:
             break
-        jac = _jacobian(problem.residual, beta)
         trial = beta - np.linalg.lstsq(jac, r, rcond=None)[0]
         r_trial = problem.residual(trial)
         if np.linalg.norm(r_trial) >= np.linalg.norm(r):
             break
-        beta, r = trial, r_trial
+        beta = trial
+        r, jac = problem.residual_and_jacobian(beta)
     return beta
 
 
@@ -159,8 +148,7 @@ def _scan(problem: Problem, options: SolveOptions) -> tuple[list[np.ndarray], in
 
 
 def _broyden(problem: Problem, beta: np.ndarray, options: SolveOptions) -> tuple[np.ndarray, int]:
-    r = problem.residual(beta)
-    jac = _jacobian(problem.residual, beta)
+    r, jac = problem.residual_and_jacobian(beta)
     refreshed = True
     for iteration in range(1, options.max_iterations + 1):
         if np.linalg.norm(r) < 0.01 * options.tolerance:
@@ -176,7 +164,7 @@ def _broyden(problem: Problem, beta: np.ndarray, options: SolveOptions) -> tuple
         else:
             if refreshed:
                 return beta, iteration
-            jac, refreshed = _jacobian(problem.residual, beta), True
+            jac, refreshed = problem.jacobian(beta), True
             continue
         s = trial - beta
         jac = jac + np.outer(r_trial - r - jac @ s, s) / (s @ s)
@@ -203,7 +191,7 @@ def _levenberg_marquardt(
     result = least_squares(
         problem.residual,
         beta,
-        jac=lambda b: _jacobian(problem.residual, b),
+        jac=problem.jacobian,
         method="lm",
         xtol=1e-15,
         ftol=1e-15,
@@ -214,19 +202,31 @@ def _levenberg_marquardt(
 
 
 def _sqp(problem: Problem, beta: np.ndarray, options: SolveOptions) -> tuple[np.ndarray, int]:
+    """Minimum-norm ``beta`` with ``h(beta) = 0`` and the joint limits along the path."""
+    cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+    def evaluate(b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        key = np.asarray(b, dtype=float).tobytes()
+        if key not in cache:
+            cache.clear()
+            cache[key] = problem.residual_and_jacobian(b)
+        return cache[key]
+
+    constraints: list[dict[str, object]] = [
+        {"type": "eq", "fun": lambda b: evaluate(b)[0], "jac": lambda b: evaluate(b)[1]}
+    ]
+    g_mat, g_vec = problem.limit_constraints()
+    if len(g_vec):
+        constraints.append(
+            {"type": "ineq", "fun": lambda b: g_vec - g_mat @ b, "jac": lambda b: -g_mat}
+        )
     result = minimize(
         lambda b: 0.5 * float(b @ b),
         beta,
         jac=lambda b: b,
         method="SLSQP",
-        constraints=[
-            {
-                "type": "eq",
-                "fun": problem.residual,
-                "jac": lambda b: _jacobian(problem.residual, b),
-            }
-        ],
-        options={"ftol": 1e-14, "maxiter": options.max_iterations},
+        constraints=constraints,
+        options={"ftol": 1e-16, "maxiter": options.max_iterations},
     )
     return np.asarray(result.x, dtype=float), int(result.nit)
 
@@ -246,7 +246,14 @@ def solve(problem: Problem, options: SolveOptions | None = None) -> Solution:
     candidates: list[np.ndarray] = []
     iterations = 0
 
-    if np.linalg.norm(problem.residual(zero)) < 0.01 * tol:
+    def within_limits(beta: np.ndarray) -> bool:
+        over, name = problem.limit_violation(beta)
+        if over > 1e-9:
+            tried.append(f"a root breaks the limit of joint {name!r}")
+            return False
+        return True
+
+    if np.linalg.norm(problem.residual(zero)) < 0.01 * tol and within_limits(zero):
         method, candidates = "none (the quintic path already reaches the goal)", [zero]
     elif problem.n_free == 1 and problem.n_equations == 1:
         method = "bracket scan + Brent secant"
@@ -255,51 +262,79 @@ def solve(problem: Problem, options: SolveOptions | None = None) -> Solution:
             f"{options.scan_points}-point scan of a bracket of +-{options.max_deviation:g} rad "
             "path deviation"
         )
+        if not candidates:
+            tried.append("no sign change of h in the bracket")
     else:
         square = problem.n_free == problem.n_equations
         method = "Broyden quasi-Newton" if square else "SQP minimum norm (SLSQP)"
         found = 0
         for label, start in _starts(problem.n_free, options.starts):
+            if time.perf_counter() - start_time > options.time_budget:
+                tried.append(f"stopped: time budget of {options.time_budget:g} s spent")
+                break
+            name = "minimum-norm SQP with joint limits"
+            beta = None
             if square:
                 beta, its = _broyden(problem, start, options)
                 name = "Broyden"
                 if np.linalg.norm(problem.residual(beta)) > tol:
                     beta, its = _levenberg_marquardt(problem, start, options)
                     name = "Broyden, then Levenberg-Marquardt"
-            else:
+                if np.linalg.norm(problem.residual(beta)) > tol or not within_limits(beta):
+                    tried.append(f"{name} from {label}")
+                    beta = None
+                    name = "SQP with joint limits"
+            if beta is None:
                 beta, its = _sqp(problem, start, options)
-                name = "minimum-norm SQP"
             tried.append(f"{name} from {label}")
             candidates.append(beta)
             if np.linalg.norm(problem.residual(beta)) < tol:
                 if found == 0:
                     iterations = its
-                    if name != "Broyden" and square:
-                        method = "Levenberg-Marquardt"
+                    method = {
+                        "Broyden": "Broyden quasi-Newton",
+                        "Broyden, then Levenberg-Marquardt": "Levenberg-Marquardt",
+                    }.get(name, "SQP minimum norm (SLSQP) with joint limits")
                 found += 1
                 if found >= options.keep_solutions:
                     break
 
     roots = []
+    best_vector = problem.residual(zero)  # the quintic path always respects the limits
     for beta in candidates:
         beta = _polish(problem, beta, tol)
-        residual = float(np.linalg.norm(problem.residual(beta)))
-        roots.append(Root(beta=beta, residual=residual, path_length=_path_length(problem, beta)))
-    good = sorted((r for r in roots if r.residual < tol), key=lambda r: float(r.beta @ r.beta))
-    if not good:
-        best = min((r.residual for r in roots), default=math.nan)
-        if not roots:
-            best = float(np.linalg.norm(problem.residual(zero)))
-            tried.append("no sign change of h in the bracket")
-        raise SolverError("no path reaches the goal attitude", best, tried)
+        vector = problem.residual(beta)
+        residual = float(np.linalg.norm(vector))
+        if not within_limits(beta):
+            continue
+        if residual < np.linalg.norm(best_vector):
+            best_vector = vector
+        if residual < tol:
+            roots.append(Root(beta, residual, _path_length(problem, beta)))
+    roots.sort(key=lambda r: float(r.beta @ r.beta))
+    if not roots:
+        raise SolverError(
+            "no path within the joint limits reaches the goal attitude",
+            float(np.linalg.norm(best_vector)),
+            _dedupe(tried),
+            per_axis=best_vector.tolist(),
+        )
 
-    chosen = good[0]
+    # Certify the integration at the chosen root; refine the grid and polish when needed.
+    chosen = roots[0]
     error = problem.integration_error(chosen.beta)
-    if error > 0.1 * tol:  # pragma: no cover - the step count is chosen far below this
+    for _ in range(3):
+        if error <= 0.1 * tol:
+            break
+        problem.choose_steps(chosen.beta)
+        beta = _polish(problem, chosen.beta, tol)
+        chosen = Root(beta, float(np.linalg.norm(problem.residual(beta))), chosen.path_length)
+        error = problem.integration_error(chosen.beta)
+    if error > 0.1 * tol or chosen.residual >= tol:
         raise SolverError(
             f"attitude integration error {error:.3g} rad is too large to certify the plan",
             chosen.residual,
-            tried,
+            _dedupe(tried),
         )
     return Solution(
         beta=chosen.beta,
@@ -308,6 +343,14 @@ def solve(problem: Problem, options: SolveOptions | None = None) -> Solution:
         iterations=iterations,
         evaluations=problem.evaluations - start_evaluations,
         wall_time=time.perf_counter() - start_time,
-        roots=tuple(good),
+        roots=(chosen, *roots[1:]),
         integration_error=error,
     )
+
+
+def _dedupe(items: list[str]) -> list[str]:
+    """Items in order, repeated ones counted (keeps error messages short)."""
+    counts: dict[str, int] = {}
+    for item in items:
+        counts[item] = counts.get(item, 0) + 1
+    return [item if n == 1 else f"{item} (x{n})" for item, n in counts.items()]

@@ -1,0 +1,234 @@
+"""Composed servicers: composition, validation and three-axis plans on real arms."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import yourdfpy
+
+import freefloat as ff
+from freefloat.cli import main
+from freefloat.compose import ARMS, ServicerSpec, compose_servicer, resolve_mesh
+
+from conftest import ROOT
+
+EXPECTED_JOINTS = {"panda": 7, "ur5": 6, "kinova": 6, "xarm7": 7, "z1": 6}
+
+
+@pytest.mark.parametrize("arm", sorted(ARMS))
+def test_every_arm_composes_and_validates(arm, tmp_path):
+    spec = ServicerSpec(
+        arm, 150.0, (0.8, 0.7, 0.6), mount=(0.4, 0.0, 0.1), mount_rpy=(0.0, math.pi / 2, 0.0)
+    )
+    path = compose_servicer(spec, tmp_path / f"{arm}.urdf")
+    robot = ff.load_robot(path)
+    assert robot.n == EXPECTED_JOINTS[arm]
+    assert not any("finger" in n.lower() or "gripper" in n.lower() for n in robot.joint_names)
+    arm_only = ff.load_robot(path)  # total mass = spacecraft + every arm link
+    import xml.etree.ElementTree as ET
+
+    masses = [float(m.get("value")) for m in ET.parse(path).getroot().iter("mass")]
+    assert arm_only.total_mass == pytest.approx(sum(masses), rel=1e-12)
+    assert robot.model.inertias[1].mass >= 150.0  # the base body carries the spacecraft
+    urdf = yourdfpy.URDF.load(
+        str(path),
+        build_scene_graph=False,
+        load_meshes=False,
+        filename_handler=yourdfpy.filename_handler_null,
+    )
+    assert urdf.validate()
+    meshes = [
+        el.geometry.mesh.filename
+        for link in urdf.robot.links
+        for el in link.visuals
+        if el.geometry.mesh is not None
+    ]
+    assert meshes and all(resolve_mesh(m) is not None for m in meshes)
+
+
+def test_spacecraft_inertia_is_the_box_unless_given(tmp_path):
+    path = compose_servicer(ServicerSpec("ur5", 120.0, (1.0, 0.5, 0.25)), tmp_path / "a.urdf")
+    base = ff.load_robot(path).model.inertias[1]
+    assert base.mass > 120.0
+    given = compose_servicer(
+        ServicerSpec("ur5", 120.0, (1.0, 0.5, 0.25), base_inertia=(10.0, 12.0, 15.0)),
+        tmp_path / "b.urdf",
+    )
+    text = given.read_text()
+    assert 'ixx="10.0"' in text and 'izz="15.0"' in text
+
+
+def test_compose_cli_and_its_errors(tmp_path, capsys):
+    out = tmp_path / "s.urdf"
+    assert (
+        main(
+            [
+                "compose",
+                "--arm",
+                "z1",
+                "--base-mass",
+                "80",
+                "--base-size",
+                "0.5",
+                "0.5",
+                "0.5",
+                "--mount",
+                "0.25",
+                "0",
+                "0",
+                "--mount-rpy",
+                "0",
+                "90",
+                "0",
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
+    assert "6 joints" in capsys.readouterr().out
+    assert (
+        main(
+            [
+                "compose",
+                "--arm",
+                "nope",
+                "--base-mass",
+                "80",
+                "--base-size",
+                "1",
+                "1",
+                "1",
+                "--mount",
+                "0",
+                "0",
+                "0",
+                "-o",
+                str(tmp_path / "x.urdf"),
+            ]
+        )
+        == 2
+    )
+    assert "unknown arm 'nope'; valid: panda, ur5" in capsys.readouterr().err
+    assert (
+        main(
+            [
+                "compose",
+                "--arm",
+                "z1",
+                "--base-mass",
+                "80",
+                "--base-size",
+                "1",
+                "0",
+                "1",
+                "--mount",
+                "0",
+                "0",
+                "0",
+                "-o",
+                str(tmp_path / "y.urdf"),
+            ]
+        )
+        == 2
+    )
+    assert "base size must be > 0 m" in capsys.readouterr().err
+    assert (
+        main(
+            [
+                "compose",
+                "--arm",
+                "panda",
+                "--base-mass",
+                "80",
+                "--base-size",
+                "1",
+                "1",
+                "1",
+                "--mount",
+                "0",
+                "0",
+                "0",
+                "--lock",
+                "elbow",
+                "-o",
+                str(tmp_path / "z.urdf"),
+            ]
+        )
+        == 2
+    )
+    assert "unknown joint to lock 'elbow'" in capsys.readouterr().err
+    assert not (tmp_path / "x.urdf").exists() and not (tmp_path / "y.urdf").exists()
+
+
+def test_inline_servicer_in_a_scenario(tmp_path, monkeypatch):
+    monkeypatch.setenv("FREEFLOAT_CACHE", str(tmp_path / "cache"))
+    scenario = tmp_path / "s.toml"
+    joints = ", ".join(f"joint{i} = {v}" for i, v in enumerate([0, 20, -30, 10, 5, 0], 1))
+    scenario.write_text(f"""
+duration = 10.0
+[robot]
+arm = "z1"
+base_mass = 60.0
+base_size = [0.5, 0.5, 0.5]
+mount = [0.25, 0.0, 0.0]
+mount_rpy_deg = [0.0, 90.0, 0.0]
+[start]
+joints = {{ {joints} }}
+[goal]
+joints = {{ {joints} }}
+""")
+    loaded = ff.Scenario.from_toml(scenario)
+    assert loaded.robot.n == 6
+    assert loaded.robot.urdf.parent == tmp_path / "cache"
+    assert ff.Scenario.from_toml(scenario).robot.urdf == loaded.robot.urdf  # cached
+
+
+@pytest.fixture(scope="module", params=["panda_servicer", "ur5_servicer"])
+def servicer_plan(request):
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / f"{request.param}.toml")
+    return scenario, ff.plan(scenario)
+
+
+def test_servicer_three_axis_plan(servicer_plan):
+    scenario, plan = servicer_plan
+    assert not plan.feasibility.planar
+    assert plan.base.attitude_error_rad < 1e-9
+    v = plan.verification
+    assert v["passed"]
+    assert v["attitude_error_independent_rad"] < 1e-7  # adaptive DOP853 re-integration
+    assert v["momentum_max"] < 1e-9
+    assert v["boundary"]["relative_max"] < 1e-9
+    target = np.degrees(ff.zyx_from_quat(scenario.goal_attitude))
+    np.testing.assert_allclose(plan.base.achieved_zyx_deg, target, atol=1e-7)
+    q = np.array(plan.samples.q)
+    np.testing.assert_allclose(q[0], scenario.start, atol=1e-14)
+    np.testing.assert_allclose(q[-1], scenario.goal, atol=1e-12)
+    for i, joint in enumerate(scenario.robot.joints):  # the whole path within the limits
+        assert joint.lower <= q[:, i].min() and q[:, i].max() <= joint.upper
+
+
+def test_exact_jacobian_on_a_servicer(servicer_plan):
+    scenario, _ = servicer_plan
+    problem = ff.build_problem(
+        scenario.robot,
+        scenario.start,
+        scenario.goal,
+        scenario.start_attitude,
+        scenario.goal_attitude,
+        20.0,
+        extra=[1] * scenario.robot.n,
+    )
+    beta = np.linspace(-2.0, 2.0, problem.n_free)
+    jac = problem.jacobian(beta)
+    eps = 1e-5
+    fd = np.stack(
+        [
+            (problem.residual(beta + eps * e) - problem.residual(beta - eps * e)) / (2 * eps)
+            for e in np.eye(problem.n_free)
+        ],
+        axis=1,
+    )
+    assert np.abs(jac - fd).max() <= 1e-6 * np.abs(fd).max()
