@@ -19,6 +19,7 @@ from .errors import (
     ScenarioError,
     SolverError,
     UnknownNameError,
+    VelocityLimitError,
     VerificationError,
 )
 from .model import Joint, Robot, load_robot, shipped_robots
@@ -54,6 +55,7 @@ __all__ = [
     "SolveOptions",
     "SolverError",
     "UnknownNameError",
+    "VelocityLimitError",
     "Verification",
     "VerificationError",
     "__version__",

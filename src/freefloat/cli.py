@@ -8,6 +8,7 @@ written.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import sys
 from collections.abc import Sequence
@@ -70,6 +71,9 @@ def summary(p: Plan, output: Path | None = None) -> str:
         f"  solver          {s.method}; {len(s.solutions)} solution(s); {s.evaluations} "
         f"evaluations; {s.wall_time_s:.3f} s"
     )
+    turns = {k: v for k, v in s.full_turns.items() if v}
+    if turns:
+        lines.append("  full turns      " + ", ".join(f"{k} {v:+d}" for k, v in turns.items()))
     if output is not None:
         lines.append(f"  plan            {output}")
     return "\n".join(lines)
@@ -77,6 +81,8 @@ def summary(p: Plan, output: Path | None = None) -> str:
 
 def _cmd_plan(args: argparse.Namespace) -> int:
     scenario = _load_scenario(args.scenario)
+    if args.allow_full_turns:
+        scenario = dataclasses.replace(scenario, allow_full_turns=True)
     if not (args.tolerance > 0 and math.isfinite(args.tolerance)):
         raise InputError(f"--tolerance must be a positive number of rad, got {args.tolerance}")
     if args.samples < 2:
@@ -232,6 +238,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--output",
         help="plan file to write (default: SCENARIO.plan.json,"
         " or freefloat-out/plan.json for the worked example)",
+    )
+    p_plan.add_argument(
+        "--allow-full-turns",
+        action="store_true",
+        help="continuous joints may reach their goal the other way round",
     )
     p_plan.add_argument("--samples", type=int, default=201, help="samples in [0, T] (default 201)")
     p_plan.add_argument(

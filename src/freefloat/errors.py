@@ -90,6 +90,7 @@ class SolverError(FreeFloatError):
         best_residual: float,
         tried: Sequence[str] = (),
         per_axis: Sequence[float] | None = None,
+        hint: str = "",
     ) -> None:
         self.best_residual = float(best_residual)
         self.tried = tuple(tried)
@@ -98,7 +99,10 @@ class SolverError(FreeFloatError):
         if self.per_axis is not None and len(self.per_axis) == 3:
             axes = "; per axis x, y, z: " + ", ".join(f"{x:.3g}" for x in self.per_axis)
         detail = f"; tried: {'; '.join(self.tried)}" if self.tried else ""
-        super().__init__(f"{message} (best residual {self.best_residual:.3g} rad{axes}){detail}")
+        hint = f"; {hint}" if hint else ""
+        super().__init__(
+            f"{message} (best residual {self.best_residual:.3g} rad{axes}){detail}{hint}"
+        )
 
 
 class PlanFileError(FreeFloatError):
@@ -119,3 +123,20 @@ class VerificationError(FreeFloatError):
 
 class ViewerError(FreeFloatError):
     """The 3D viewer or the plotting stack is missing, broken, or cannot draw the robot."""
+
+
+class VelocityLimitError(FreeFloatError):
+    """Joint rates above a URDF velocity limit; carries the shortest admissible duration."""
+
+    def __init__(
+        self, joint: str, peak: float, limit: float, shortest_duration: float, unit: str = "rad"
+    ) -> None:
+        self.joint = joint
+        self.peak = float(peak)
+        self.limit = float(limit)
+        self.shortest_duration = float(shortest_duration)
+        super().__init__(
+            f"joint {joint!r} reaches {peak:.4g} {unit}/s, above its velocity limit "
+            f"{limit:.4g} {unit}/s; the shortest duration that respects every velocity limit "
+            f"is {shortest_duration:.4g} s"
+        )

@@ -23,9 +23,10 @@ import numpy as np
 from .attitude import geodesic_angle, zyx_from_quat
 from .dynamics import inverse_dynamics
 from .errors import PlanFileError, SolverError, VerificationError
-from .problem import Problem, build_problem
+from .problem import Problem
 from .scenario import Scenario
-from .solve import DEFAULT_TOLERANCE, Solution, SolveOptions, solve
+from .search import search, velocity_check
+from .solve import DEFAULT_TOLERANCE, Solution, SolveOptions
 from .verify import as_dict, verify_plan
 
 __all__ = [
@@ -106,7 +107,9 @@ class SolverReport:
     """How the free coefficients were found.
 
     ``solutions`` lists every root found (the chosen one first) with its free parameters
-    (``t^6`` and up, per joint), residual (rad) and summed joint travel (rad or m).
+    (``t^6`` and up, per joint), residual (rad) and summed joint travel (rad or m);
+    ``freedom`` the free coefficients per joint the planner used; ``full_turns`` the whole turns
+    added to continuous joints' goals; ``tried`` every attempt in order.
     """
 
     method: str
@@ -117,6 +120,9 @@ class SolverReport:
     solutions: list[dict[str, Any]]
     integration_steps: int = 0
     integration_error_rad: float = 0.0
+    freedom: dict[str, int] = field(default_factory=dict)
+    full_turns: dict[str, int] = field(default_factory=dict)
+    tried: list[str] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -267,18 +273,13 @@ def plan(scenario: Scenario, options: SolveOptions | None = None, samples: int =
     options = options or SolveOptions()
     if scenario.max_deviation is not None:
         options = SolveOptions(**{**asdict(options), "max_deviation": scenario.max_deviation})
-    robot = scenario.robot
-    problem = build_problem(
-        robot,
-        scenario.start,
-        scenario.goal,
-        scenario.start_attitude,
-        scenario.goal_attitude,
-        scenario.duration,
-        extra=scenario.extra,
+    found = search(scenario, options)
+    velocity_check(found.problem, found.solution)
+    result = plan_from_solution(found.problem, found.solution, samples, options.tolerance)
+    report = replace(
+        result.solver, freedom=found.freedom, full_turns=found.full_turns, tried=found.tried
     )
-    solution = solve(problem, options)
-    return plan_from_solution(problem, solution, samples, options.tolerance)
+    return replace(result, solver=report)
 
 
 def plan_from_solution(

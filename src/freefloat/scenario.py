@@ -16,6 +16,7 @@ The file speaks degrees (joint angles, Euler angles) and metres (prismatic joint
     [path]
     extra = { q2 = 1 }             # optional: free coefficients per joint beyond the quintic
     max_deviation_deg = 458.4      # optional: one-unknown root bracket, as path deviation [deg]
+    allow_full_turns = false       # optional: continuous joints may go the other way round
 
 An inline servicer replaces ``robot = "..."`` with a table (composed once, cached)::
 
@@ -52,7 +53,7 @@ __all__ = ["Scenario", "default_scenario_path", "servicer_cache_dir"]
 
 _TOP_KEYS = ("robot", "duration", "end_effector", "start", "goal", "path")
 _STATE_KEYS = ("joints", "base_zyx_deg", "base_quaternion_xyzw")
-_PATH_KEYS = ("extra", "max_deviation_deg")
+_PATH_KEYS = ("extra", "max_deviation_deg", "allow_full_turns")
 
 
 def default_scenario_path() -> Path:
@@ -93,6 +94,7 @@ class Scenario:
         goal_attitude: wanted base attitude at t = T, quaternion ``[x, y, z, w]``.
         extra: free coefficients per joint beyond the quintic; None lets the planner choose.
         max_deviation: one-unknown root bracket as largest path deviation (rad); None: default.
+        allow_full_turns: a continuous joint may reach its goal the other way round.
         source: the TOML file it came from, if any.
     """
 
@@ -104,6 +106,7 @@ class Scenario:
     goal_attitude: np.ndarray = field(default_factory=lambda: quat_from_zyx(0.0))
     extra: Mapping[str, int] | None = None
     max_deviation: float | None = None
+    allow_full_turns: bool = False
     source: Path | None = None
 
     @classmethod
@@ -215,8 +218,14 @@ class Scenario:
                 raise ScenarioError(f"[path] max_deviation_deg must be > 0, got {value:g}")
             max_deviation = math.radians(value)
 
+        allow_full_turns = path_table.get("allow_full_turns", False)
+        if not isinstance(allow_full_turns, bool):
+            raise ScenarioError(
+                f"[path] allow_full_turns must be true or false, got {allow_full_turns!r}"
+            )
         return cls(
             robot=robot,
+            allow_full_turns=allow_full_turns,
             duration=duration,
             start_joints=states[0][0],
             goal_joints=states[1][0],

@@ -1,0 +1,212 @@
+"""Which problems to try for a scenario: freedom distributions and full turns.
+
+When a scenario fixes no ``[path] extra``, the planner chooses where the free coefficients
+go: first on the joints nearest the base (they move the most inertia per radian), then spread
+over more joints, then raised in degree; the first distribution that yields a verified
+solution wins. With ``allow_full_turns``, a continuous joint may also reach its goal the other
+way round (goal + 2 pi k, k = +-1, +-2), which changes the attitude a motion produces. Every
+attempt is recorded, so that a failure says what was tried.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import (
+    FreeFloatError,
+    InfeasibleError,
+    InputError,
+    SolverError,
+    VelocityLimitError,
+)
+from .momentum import is_planar
+from .problem import Problem, build_problem
+from .scenario import Scenario
+from .solve import Solution, SolveOptions, solve
+
+__all__ = ["SearchResult", "freedom_candidates", "search", "turn_candidates", "velocity_check"]
+
+
+@dataclass
+class SearchResult:
+    """The solved problem and how it was found.
+
+    Attributes:
+        problem: the problem that was solved.
+        solution: its solution.
+        freedom: free coefficients per joint that were used.
+        full_turns: per continuous joint, the whole turns added to its goal (0 if none).
+        tried: every attempt, in order.
+    """
+
+    problem: Problem
+    solution: Solution
+    freedom: dict[str, int]
+    full_turns: dict[str, int]
+    tried: list[str] = field(default_factory=list)
+
+
+def freedom_candidates(n_joints: int, equations: int) -> list[list[int]]:
+    """Free-coefficient distributions to try, nearest-to-base joints first.
+
+    Planar (one equation): one coefficient on each joint in turn, then one on the first two,
+    then two on the first and one on the second. Spatial (three): one on each of the first
+    three joints (square), then one on every joint, then two on each of the first three.
+    """
+    out: list[list[int]] = []
+
+    def add(counts: list[int]) -> None:
+        counts = (counts + [0] * n_joints)[:n_joints]
+        while sum(counts) < equations:  # short arms: raise the degree of the first joint
+            counts[0] += 1
+        if counts not in out:
+            out.append(counts)
+
+    if equations == 1:
+        for i in range(n_joints):
+            add([0] * i + [1])
+        add([1, 1])
+        add([2, 1])
+    else:
+        add([1, 1, 1])
+        add([1] * n_joints)
+        add([2, 2, 2])
+    return out
+
+
+def turn_candidates(scenario: Scenario) -> list[np.ndarray]:
+    """Goal offsets (rad) of whole turns of one continuous joint: k = +1, -1, +2, -2."""
+    robot = scenario.robot
+    out = []
+    for k in (1, -1, 2, -2):
+        for i, joint in enumerate(robot.joints):
+            if joint.kind == "continuous":
+                offset = np.zeros(robot.n)
+                offset[i] = 2.0 * math.pi * k
+                out.append(offset)
+    return out
+
+
+def _describe(counts: list[int], names: list[str]) -> str:
+    return ", ".join(f"{n}+{c}" for n, c in zip(names, counts, strict=True) if c) or "none"
+
+
+def search(scenario: Scenario, options: SolveOptions) -> SearchResult:
+    """Solve the scenario, trying freedom distributions and (if allowed) full turns.
+
+    Raises:
+        InfeasibleError: a planar request outside the bounds (for every turn tried).
+        SolverError: no attempt reached the goal attitude; lists every attempt.
+        FreeFloatError: bad input found while building a problem.
+    """
+    robot = scenario.robot
+    names = robot.joint_names
+    continuous = any(j.kind == "continuous" for j in robot.joints)
+    offsets = [np.zeros(robot.n)]
+    if scenario.allow_full_turns:
+        offsets += turn_candidates(scenario)
+    planar = is_planar(robot)
+    tried: list[str] = []
+    first_error: FreeFloatError | None = None
+    best = math.inf
+
+    for offset in offsets:
+        goal = scenario.goal + offset
+        turns = {n: round(o / (2 * math.pi)) for n, o in zip(names, offset, strict=True) if o}
+        label = (
+            "goal as stated"
+            if not turns
+            else "goal " + ", ".join(f"{n} {k:+d} turn(s)" for n, k in turns.items())
+        )
+        if scenario.extra is not None:
+            distributions: list[list[int] | None] = [None]
+        else:
+            distributions = list(freedom_candidates(robot.n, 1 if planar else 3))
+        for counts in distributions:
+            extra = scenario.extra if counts is None else counts
+            try:
+                problem = build_problem(
+                    robot,
+                    scenario.start,
+                    goal,
+                    scenario.start_attitude,
+                    scenario.goal_attitude,
+                    scenario.duration,
+                    extra=extra,
+                )
+            except InfeasibleError as exc:
+                tried.append(f"{label}: {exc}")
+                first_error = first_error or exc
+                break  # the planar bounds do not depend on the freedom
+            except InputError as exc:
+                tried.append(f"{label}: {exc}")
+                first_error = first_error or exc
+                continue
+            used = [sum(1 for i, _ in problem.family.free_index if i == j) for j in range(robot.n)]
+            try:
+                solution = solve(problem, options)
+            except SolverError as exc:
+                tried.append(
+                    f"{label}, freedom {_describe(used, names)}: best residual "
+                    f"{exc.best_residual:.3g} rad"
+                )
+                best = min(best, exc.best_residual)
+                first_error = first_error or exc
+                continue
+            tried.append(f"{label}, freedom {_describe(used, names)}: solved")
+            return SearchResult(
+                problem=problem,
+                solution=solution,
+                freedom=dict(zip(names, used, strict=True)),
+                full_turns={
+                    n: turns.get(n, 0)
+                    for n, j in zip(names, robot.joints, strict=True)
+                    if j.kind == "continuous"
+                },
+                tried=tried,
+            )
+
+    hint = ""
+    if continuous and not scenario.allow_full_turns:
+        hint = (
+            "a continuous joint could reach its goal the other way round: try "
+            "[path] allow_full_turns = true (or --allow-full-turns)"
+        )
+    if isinstance(first_error, InfeasibleError) and len(offsets) == 1:
+        message = f"{first_error}; {hint}" if hint else str(first_error)
+        raise InfeasibleError(first_error.requested_deg, first_error.bounds_deg, message=message)
+    if isinstance(first_error, InputError) and best == math.inf:
+        raise first_error
+    raise SolverError(
+        "no path reaches the goal attitude",
+        best if math.isfinite(best) else math.nan,
+        tried,
+        hint=hint,
+    )
+
+
+def velocity_check(problem: Problem, solution: Solution, points: int = 2001) -> None:
+    """Refuse a plan whose joint rates exceed the URDF velocity limits.
+
+    The path does not depend on the duration, so the shortest duration that respects every
+    limit is exact: ``T_min = T * max_i(max |qdot_i| / limit_i)``.
+
+    Raises:
+        VelocityLimitError: with the worst joint and the shortest admissible duration (s).
+    """
+    duration = problem.duration
+    rates = problem.family.at_times(solution.beta, np.linspace(0.0, duration, points), duration).qd
+    worst_ratio, worst = 0.0, None
+    for i, joint in enumerate(problem.robot.joints):
+        if math.isfinite(joint.velocity_limit):
+            ratio = float(np.abs(rates[:, i]).max()) / joint.velocity_limit
+            if ratio > worst_ratio:
+                worst_ratio, worst = ratio, (joint, float(np.abs(rates[:, i]).max()))
+    if worst is not None and worst_ratio > 1.0:
+        joint, peak = worst
+        raise VelocityLimitError(
+            joint.name, peak, joint.velocity_limit, duration * worst_ratio, joint.unit
+        )

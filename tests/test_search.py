@@ -1,0 +1,94 @@
+"""Automatic freedom, full turns of continuous joints, velocity limits."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import freefloat as ff
+from freefloat.search import freedom_candidates
+
+import urdfs
+from conftest import ROOT
+
+WORKED = (ROOT / "robots" / "scenarios" / "worked_example.toml").read_text()
+
+
+def _scenario(tmp_path, text):
+    path = tmp_path / "s.toml"
+    path.write_text(
+        text.replace('robot = "planar_2dof"', f'robot = "{ROOT / "robots" / "planar_2dof.urdf"}"')
+    )
+    return ff.Scenario.from_toml(path)
+
+
+def test_freedom_candidates_start_near_the_base():
+    assert freedom_candidates(2, 1) == [[1, 0], [0, 1], [1, 1], [2, 1]]
+    assert freedom_candidates(7, 3)[0] == [1, 1, 1, 0, 0, 0, 0]
+    assert freedom_candidates(7, 3)[1] == [1] * 7
+    assert freedom_candidates(2, 3)[0] == [2, 1]  # short arm: degree raised
+
+
+def test_automatic_freedom_is_chosen_and_recorded(tmp_path):
+    scenario = _scenario(tmp_path, WORKED.replace("extra = { q2 = 1 }", ""))
+    plan = ff.plan(scenario)
+    assert plan.solver.freedom == {"q1": 1, "q2": 0}  # nearest the base first
+    assert plan.solver.tried[-1].endswith("freedom q1+1: solved")
+    assert plan.base.attitude_error_rad < 1e-9 and plan.verification["passed"]
+
+
+TURNS = WORKED.replace("extra = { q2 = 1 }", "").replace(
+    "[goal]\njoints = { q1 = -60.0, q2 = 90.0 }   # [deg]; end effector at (1.71, -0.29) m "
+    "from the CM\nbase_zyx_deg = [0.0, 0.0, 0.0]",
+    "[goal]\njoints = { q1 = -60.0, q2 = 90.0 }\nbase_zyx_deg = [-90.0, 0.0, 0.0]",
+)
+
+
+def test_full_turns_are_not_used_unless_asked(tmp_path):
+    assert "base_zyx_deg = [-90.0" in TURNS
+    with pytest.raises(ff.InfeasibleError) as info:
+        ff.plan(_scenario(tmp_path, TURNS))
+    assert "outside the reachable interval (1.358, 72.270) deg" in str(info.value)
+    assert "allow_full_turns = true (or --allow-full-turns)" in str(info.value)
+
+
+def test_full_turns_make_an_unreachable_request_a_verified_plan(tmp_path):
+    scenario = _scenario(tmp_path, TURNS.replace("[path]", "[path]\nallow_full_turns = true"))
+    plan = ff.plan(scenario)
+    assert plan.solver.full_turns == {"q1": 1, "q2": 0}
+    assert plan.verification["passed"]
+    assert plan.base.achieved_zyx_deg[0] == pytest.approx(-90.0, abs=1e-7)
+    q1 = np.array(plan.samples.q)[:, 0]
+    assert q1[-1] == pytest.approx(math.radians(-60.0) + 2 * math.pi, abs=1e-12)
+    lo, hi = plan.feasibility.yaw_change_bounds_deg
+    assert lo < -40.0 < hi
+
+
+def test_velocity_limit_reports_the_shortest_duration(tmp_path):
+    body = urdfs.BASE.format(mass=100.0, i=10.0)
+    body += urdfs.joint("q1", "base", "l1", "continuous") + urdfs.link("l1")
+    body += urdfs.joint("q2", "l1", "l2", "continuous") + urdfs.link("l2")
+    urdf = tmp_path / "v.urdf"
+    urdf.write_text(urdfs.robot(body))  # velocity limits 2 rad/s
+    robot = ff.load_robot(urdf)
+    start = {"q1": 0.0, "q2": 0.0}
+    goal = {"q1": 3.0, "q2": -1.0}
+    fast = ff.Scenario(robot, 1.0, start, goal, extra={"q1": 1})
+    problem = ff.build_problem(
+        robot, [0, 0], [3, -1], fast.start_attitude, fast.goal_attitude, 1.0, extra={"q1": 1}
+    )
+    reached = problem.achieved(np.zeros(1))
+    fast = ff.Scenario(robot, 1.0, start, goal, goal_attitude=reached, extra={"q1": 1})
+    with pytest.raises(ff.VelocityLimitError) as info:
+        ff.plan(fast)
+    err = info.value
+    assert err.joint == "q1" and err.limit == 2.0
+    assert err.peak == pytest.approx(3.0 * 15 / 8, rel=1e-6)  # quintic peak rate 15/8 dq/T
+    assert err.shortest_duration == pytest.approx(3.0 * 15 / 8 / 2.0, rel=1e-6)
+    assert "the shortest duration that respects every velocity limit is 2.812 s" in str(err)
+    slow = ff.Scenario(
+        robot, err.shortest_duration * 1.001, start, goal, goal_attitude=reached, extra={"q1": 1}
+    )
+    assert ff.plan(slow).verification["passed"]
