@@ -10,7 +10,7 @@ import pytest
 import freefloat as ff
 
 import reference as ref
-from conftest import deg
+from conftest import ROOT, deg
 
 
 def test_virtual_manipulator_lengths():
@@ -152,3 +152,58 @@ def test_attitude_integral_accurate_to_1e10(worked_scenario, b26):
     assert problem.yaw_change_of(np.array([b26 * 10.0**6])) == pytest.approx(
         ref.yaw_change(c1, c2, 10.0), abs=1e-10
     )
+
+
+def test_planar_robot_described_in_another_plane_gives_the_same_plan(tmp_path, worked_plan):
+    """Joint axes along base y: the reference system rotated by Rx(-90 deg), same plan."""
+    text = (
+        (ROOT / "robots" / "planar_2dof.urdf")
+        .read_text()
+        .replace('<axis xyz="0 0 1"/>', '<axis xyz="0 1 0"/>')
+    )
+    urdf = tmp_path / "planar_y.urdf"
+    urdf.write_text(text)
+    robot = ff.load_robot(urdf)
+    np.testing.assert_allclose(ff.planar_axis(robot), [0.0, 1.0, 0.0])
+    scenario = ff.Scenario(
+        robot=robot,
+        duration=10.0,
+        start_joints={"q1": deg(80), "q2": deg(30)},
+        goal_joints={"q1": deg(-60), "q2": deg(90)},
+        start_attitude=ff.quat_from_zyx(0.0, deg(-50), 0.0),  # -50 deg about base y
+        goal_attitude=ff.quat_from_zyx(0.0),
+        extra={"q2": 1},
+    )
+    other = ff.plan(scenario)
+    assert other.feasibility.planar
+    assert other.free_parameters["q2"][0] == pytest.approx(
+        worked_plan.free_parameters["q2"][0], rel=1e-9
+    )
+    assert other.feasibility.yaw_change_bounds_deg == pytest.approx(
+        worked_plan.feasibility.yaw_change_bounds_deg, abs=1e-6
+    )
+    ee, ee_ref = (
+        np.array(other.samples.end_effector_position),
+        np.array(worked_plan.samples.end_effector_position),
+    )
+    np.testing.assert_allclose(ee[:, 0], ee_ref[:, 0], atol=1e-9)
+    np.testing.assert_allclose(ee[:, 2], -ee_ref[:, 1], atol=1e-9)  # Rx(-90): y -> -z
+    assert other.verification["passed"]
+
+
+def test_spatial_integrator_agrees_with_the_planar_integral(worked_scenario, worked_plan):
+    import dataclasses
+
+    problem = ff.build_problem(
+        worked_scenario.robot,
+        worked_scenario.start,
+        worked_scenario.goal,
+        worked_scenario.start_attitude,
+        worked_scenario.goal_attitude,
+        10.0,
+        extra={"q2": 1},
+    )
+    beta = np.array([worked_plan.free_parameters["q2"][0] * 10.0**6])
+    spatial = dataclasses.replace(problem, planar=False)
+    assert ff.geodesic_angle(spatial.achieved(beta), problem.achieved(beta)) < 1e-12
+    assert ff.geodesic_angle(spatial.achieved(beta), problem.goal_quaternion) < 1e-9

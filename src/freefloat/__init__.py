@@ -19,11 +19,12 @@ from .errors import (
     ScenarioError,
     SolverError,
     UnknownNameError,
+    UnreachableGoalError,
     VelocityLimitError,
     VerificationError,
 )
 from .model import Joint, Robot, load_robot, shipped_robots
-from .momentum import MomentumMap, is_planar
+from .momentum import MomentumMap, is_planar, planar_axis
 from .paths import PathFamily
 from .plan import Plan, plan, plan_from_solution
 from .problem import Problem, build_problem
@@ -55,6 +56,7 @@ __all__ = [
     "SolveOptions",
     "SolverError",
     "UnknownNameError",
+    "UnreachableGoalError",
     "VelocityLimitError",
     "Verification",
     "VerificationError",
@@ -67,6 +69,7 @@ __all__ = [
     "load_robot",
     "plan",
     "plan_from_solution",
+    "planar_axis",
     "planar_bounds",
     "quat_from_zyx",
     "replay",

@@ -18,7 +18,7 @@ from scipy.stats import qmc
 
 from .momentum import MomentumMap
 
-__all__ = ["PlanarBounds", "joint_ranges", "planar_bounds"]
+__all__ = ["PlanarBounds", "SpatialEstimate", "joint_ranges", "planar_bounds", "spatial_estimate"]
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,9 @@ def joint_ranges(mmap: MomentumMap) -> np.ndarray:
     return np.array(ranges)
 
 
-def planar_bounds(mmap: MomentumMap, samples: int = 4096, seed: int = 0) -> PlanarBounds:
+def planar_bounds(
+    mmap: MomentumMap, samples: int = 4096, seed: int = 0, axis: np.ndarray | None = None
+) -> PlanarBounds:
     """Extremes of each gain ``g_i(q)`` for a planar robot.
 
     The gains are sampled on a grid (up to two joints) or a scrambled Sobol set, and the best
@@ -62,6 +64,7 @@ def planar_bounds(mmap: MomentumMap, samples: int = 4096, seed: int = 0) -> Plan
         mmap: momentum map of a planar robot.
         samples: number of configurations sampled before refinement.
         seed: seed of the Sobol scrambling (the result is deterministic for a seed).
+        axis: the planar axis (base frame); default base z.
     """
     ranges = joint_ranges(mmap)
     n = len(ranges)
@@ -72,7 +75,12 @@ def planar_bounds(mmap: MomentumMap, samples: int = 4096, seed: int = 0) -> Plan
     else:
         unit = qmc.Sobol(n, scramble=True, seed=seed).random(samples)
         points = ranges[:, 0] + unit * (ranges[:, 1] - ranges[:, 0])
-    gains = np.array([mmap.f1(p)[2] for p in points])
+    n_axis = np.array([0.0, 0.0, 1.0]) if axis is None else np.asarray(axis, dtype=float)
+
+    def gain(q: np.ndarray) -> np.ndarray:
+        return np.asarray(n_axis @ mmap.f1(q))
+
+    gains = np.array([gain(p) for p in points])
     # Continuous joints are periodic: let the refinement cross +-pi.
     limits = [
         (None, None) if joint.kind == "continuous" else (float(lo), float(hi))
@@ -82,7 +90,7 @@ def planar_bounds(mmap: MomentumMap, samples: int = 4096, seed: int = 0) -> Plan
     def refine(i: int, sign: float) -> float:
         start = points[np.argmin(sign * gains[:, i])]
         result = minimize(
-            lambda q: sign * mmap.f1(q)[2, i],
+            lambda q: sign * gain(q)[i],
             start,
             method="L-BFGS-B",
             bounds=limits,
@@ -93,3 +101,38 @@ def planar_bounds(mmap: MomentumMap, samples: int = 4096, seed: int = 0) -> Plan
     g_min = np.array([refine(i, 1.0) for i in range(n)])
     g_max = np.array([refine(i, -1.0) for i in range(n)])
     return PlanarBounds(g_min=g_min, g_max=g_max)
+
+
+@dataclass(frozen=True)
+class SpatialEstimate:
+    """Sampled extremes of ``F1`` for a spatial robot: an estimate, not a bound.
+
+    Attributes:
+        f1_min: (3, N) smallest sampled entries of ``F1`` (rad of base rotation per unit joint
+            motion, base frame axes x, y, z).
+        f1_max: (3, N) largest sampled entries.
+        samples: number of configurations sampled.
+    """
+
+    f1_min: np.ndarray
+    f1_max: np.ndarray
+    samples: int
+
+    def intervals(self, delta_q: np.ndarray) -> np.ndarray:
+        """(3, 2) estimated range of the base rotation about each axis (rad) for ``delta_q``.
+
+        Each joint moving monotonically contributes between ``min F1 dq`` and ``max F1 dq``
+        per axis; the axes are treated separately, as if rotations added (small angles).
+        """
+        lo = np.minimum(self.f1_min * delta_q, self.f1_max * delta_q).sum(axis=1)
+        hi = np.maximum(self.f1_min * delta_q, self.f1_max * delta_q).sum(axis=1)
+        return np.stack([lo, hi], axis=1)
+
+
+def spatial_estimate(mmap: MomentumMap, samples: int = 2048, seed: int = 0) -> SpatialEstimate:
+    """Sample ``F1`` over the joint ranges (a scrambled Sobol set) and keep its extremes."""
+    ranges = joint_ranges(mmap)
+    unit = qmc.Sobol(len(ranges), scramble=True, seed=seed).random(samples)
+    points = ranges[:, 0] + unit * (ranges[:, 1] - ranges[:, 0])
+    values = np.array([mmap.f1(p) for p in points])
+    return SpatialEstimate(values.min(axis=0), values.max(axis=0), samples)

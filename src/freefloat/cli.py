@@ -14,10 +14,13 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 from . import __version__
+from .attitude import quat_conjugate, quat_log, quat_multiply
 from .errors import FreeFloatError, InputError
 from .plan import Plan, plan
-from .problem import build_problem
+from .problem import Problem, build_problem
 from .scenario import Scenario, default_scenario_path
 from .solve import DEFAULT_TOLERANCE, SolveOptions
 from .verify import verify_plan
@@ -146,10 +149,7 @@ def _cmd_bounds(args: argparse.Namespace) -> int:
         check_bounds=False,
     )
     if problem.bounds is None or problem.yaw_change is None:
-        raise InputError(
-            f"{scenario.robot.name} is not planar (its base can turn about more than its z "
-            "axis); planar bounds apply to planar robots only"
-        )
+        return _spatial_bounds(scenario, problem)
     bounds = problem.bounds
     delta = problem.family.goal - problem.family.start
     print(f"freefloat bounds: {scenario.robot.name} (planar), simple point-to-point motion")
@@ -215,6 +215,26 @@ def _cmd_compose(args: argparse.Namespace) -> int:
     return 0
 
 
+def _spatial_bounds(scenario: Scenario, problem: Problem) -> int:
+    from .bounds import spatial_estimate
+    from .momentum import MomentumMap
+
+    estimate = spatial_estimate(MomentumMap(scenario.robot))
+    delta = problem.family.goal - problem.family.start
+    ranges = np.degrees(estimate.intervals(delta))
+    wanted = np.degrees(
+        quat_log(quat_multiply(quat_conjugate(problem.start_quaternion), problem.goal_quaternion))
+    )
+    print(f"freefloat bounds: {scenario.robot.name} (spatial) -- ESTIMATE, not a bound")
+    print(f"  sampled extremes of F1 over {estimate.samples} configurations; per base axis, the")
+    print("  rotation a monotone motion of the stated joint change might produce [deg]:")
+    print(f"  {'axis':<6}{'from':>12}{'to':>12}{'requested':>12}")
+    for k, axis in enumerate("xyz"):
+        print(f"  {axis:<6}{ranges[k, 0]:>12.3f}{ranges[k, 1]:>12.3f}{wanted[k]:>12.3f}")
+    print("  (requested: rotation vector from the start to the goal attitude, base frame)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``freefloat`` command."""
     parser = argparse.ArgumentParser(
@@ -255,9 +275,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     p_bounds = commands.add_parser(
         "bounds",
-        help="print the reachable yaw-change interval of a planar scenario",
+        help="print the reachable yaw-change interval (planar) or an estimate (spatial)",
         description="Planar bounds (method.md section 6): per joint the extremes of dyaw/dq "
-        "and the interval of yaw changes a simple motion can reach, in degrees.",
+        "and the interval of yaw changes a simple motion can reach, in degrees. For a spatial "
+        "robot: an estimate per base axis from sampled extremes of F1, labelled as such.",
     )
     p_bounds.add_argument(
         "scenario", nargs="?", help="scenario TOML file (default: worked example)"

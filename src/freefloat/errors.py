@@ -140,3 +140,12 @@ class VelocityLimitError(FreeFloatError):
             f"{limit:.4g} {unit}/s; the shortest duration that respects every velocity limit "
             f"is {shortest_duration:.4g} s"
         )
+
+
+class UnreachableGoalError(FreeFloatError):
+    """A Cartesian goal no configuration reaches; carries the miss and the workspace radius."""
+
+    def __init__(self, message: str, distance: float, radius: float) -> None:
+        self.distance = float(distance)
+        self.radius = float(radius)
+        super().__init__(message)

@@ -19,7 +19,7 @@ import pinocchio as pin
 
 from .model import Robot
 
-__all__ = ["MomentumMap", "NodeRates", "is_planar"]
+__all__ = ["MomentumMap", "NodeRates", "is_planar", "planar_axis"]
 
 
 @dataclass(frozen=True)
@@ -140,34 +140,47 @@ class MomentumMap:
         return np.asarray(pin.computeCentroidalMomentum(self.model, self.data, q, v).vector)
 
 
-def is_planar(robot: Robot, samples: int = 16, seed: int = 0) -> bool:
-    """True when the base can only turn about its z axis (method.md section 3).
+def planar_axis(robot: Robot, samples: int = 16, seed: int = 0) -> np.ndarray | None:
+    """The axis (unit vector, base frame) the base alone can turn about, if there is one.
 
-    That is the case when every revolute axis is parallel to the base z axis, every prismatic
-    axis lies in the base xy plane, and the map's x and y rows vanish; the last condition is
-    checked at ``samples`` random configurations (relative tolerance 1e-12).
+    A robot is planar (method.md section 3) when every revolute axis is parallel to one axis
+    ``n`` of the base, every prismatic axis is orthogonal to it, and the part of ``F1``
+    orthogonal to ``n`` vanishes; the last condition is checked at ``samples`` random
+    configurations (relative tolerance 1e-12). The usual planar arm has ``n`` = base z; a
+    planar arm described in another plane of the base gets its own ``n``.
     """
     model, data = robot.model, robot.model.createData()
     q = robot.configuration(np.zeros(robot.n))
     pin.computeJointJacobians(model, data, q)
-    z = np.array([0.0, 0.0, 1.0])
-    for joint in robot.joints:
-        column = pin.getJointJacobian(model, data, joint.index, pin.LOCAL_WORLD_ALIGNED)[
-            :, joint.idx_v
-        ]
-        linear, angular = column[:3], column[3:]
-        if joint.angular and np.linalg.norm(np.cross(angular, z)) > 1e-12:
-            return False
-        if not joint.angular and abs(linear @ z) > 1e-12:
-            return False
+    columns = [
+        pin.getJointJacobian(model, data, j.index, pin.LOCAL_WORLD_ALIGNED)[:, j.idx_v]
+        for j in robot.joints
+    ]
+    axes = [c[3:] for c, j in zip(columns, robot.joints, strict=True) if j.angular]
+    if not axes:
+        return None
+    n = axes[0] / np.linalg.norm(axes[0])
+    if n @ np.array([0.0, 0.0, 1.0]) < -1e-12 or (abs(n[2]) < 1e-12 and n.sum() < 0):
+        n = -n  # a canonical sign: +z for the usual planar arm
+    for column, joint in zip(columns, robot.joints, strict=True):
+        if joint.angular and np.linalg.norm(np.cross(column[3:], n)) > 1e-12:
+            return None
+        if not joint.angular and abs(column[:3] @ n) > 1e-12:
+            return None
     mmap = MomentumMap(robot)
     rng = np.random.default_rng(seed)
+    across = np.eye(3) - np.outer(n, n)
     for _ in range(samples):
         values = rng.uniform(-np.pi, np.pi, robot.n)
         for i, joint in enumerate(robot.joints):
             if not joint.angular or np.isfinite(joint.lower):
                 values[i] = rng.uniform(max(joint.lower, -1.0), min(joint.upper, 1.0))
         f1 = mmap.f1(values)
-        if np.abs(f1[:2]).max() > 1e-12 * max(1.0, np.abs(f1[2]).max()):
-            return False
-    return True
+        if np.abs(across @ f1).max() > 1e-12 * max(1.0, np.abs(n @ f1).max()):
+            return None
+    return n
+
+
+def is_planar(robot: Robot, samples: int = 16, seed: int = 0) -> bool:
+    """True when the base can only turn about one fixed axis (see :func:`planar_axis`)."""
+    return planar_axis(robot, samples, seed) is not None

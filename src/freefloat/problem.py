@@ -34,7 +34,7 @@ from .attitude import (
 from .bounds import PlanarBounds, planar_bounds
 from .errors import InfeasibleError, InputError, JointLimitError
 from .model import Robot
-from .momentum import MomentumMap, NodeRates, is_planar
+from .momentum import MomentumMap, NodeRates, planar_axis
 from .paths import PathFamily
 
 __all__ = ["Problem", "build_problem", "wrap_angle"]
@@ -61,9 +61,11 @@ class Problem:
         duration: motion time T (s).
         start_quaternion: base attitude at t = 0, ``[x, y, z, w]``.
         goal_quaternion: wanted base attitude at t = T, ``[x, y, z, w]``.
-        planar: whether the base only turns about its z axis.
+        planar: whether the base only turns about one axis (``axis``).
         bounds: planar gain extremes (planar problems only).
         yaw_change: requested yaw change (rad), on the branch inside the bounds (planar only).
+        axis: the axis a planar base turns about (unit vector, base frame); "yaw" is the
+            rotation about it.
         steps: number of integration steps on the normalised interval [0, 1].
     """
 
@@ -76,6 +78,7 @@ class Problem:
     planar: bool
     bounds: PlanarBounds | None = None
     yaw_change: float | None = None
+    axis: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     steps: int = 64
     evaluations: int = 0
     _grid: tuple[np.ndarray, ...] = field(default=(), repr=False)
@@ -120,19 +123,19 @@ class Problem:
         """Base angular velocity at the integration nodes, (steps, 3, 3), rad per unit s."""
         omega = self._nodes(beta)[0].omega
         if self.planar:
-            omega[:, :2] = 0.0
+            omega = np.outer(omega @ self.axis, self.axis)
         return omega.reshape(self.steps, 3, 3)
 
     def yaw_change_of(self, beta: np.ndarray) -> float:
         """Planar problems: yaw change over the path (rad), a plain Gauss-Legendre integral."""
         omega = self.rates(beta)
         h = self._grid[0]
-        return float(np.sum(h[:, None] * GAUSS3_WEIGHTS[None, :] * omega[:, :, 2]))
+        return float(np.sum(h[:, None] * GAUSS3_WEIGHTS[None, :] * (omega @ self.axis)))
 
     def achieved(self, beta: np.ndarray) -> np.ndarray:
         """Base attitude reached at t = T, ``[x, y, z, w]``."""
         if self.planar:
-            step = quat_exp(np.array([0.0, 0.0, self.yaw_change_of(beta)]))
+            step = quat_exp(self.yaw_change_of(beta) * self.axis)
             return quat_multiply(self.start_quaternion, step)
         increments = magnus_increments(self.rates(beta), self._grid[0])
         return propagate(self.start_quaternion, increments)[-1]
@@ -165,8 +168,8 @@ class Problem:
         if self.planar:
             assert self.yaw_change is not None
             weights = h[:, None] * GAUSS3_WEIGHTS[None, :]
-            yaw = float(np.sum(weights * omega[:, :, 2])) - self.yaw_change
-            gradient = np.einsum("mn,mnf->f", weights, domega[:, :, 2, :])
+            yaw = float(np.sum(weights * (omega @ self.axis))) - self.yaw_change
+            gradient = np.einsum("mn,mnif,i->f", weights, domega, self.axis)
             return np.array([yaw]), gradient[None, :]
         increments = magnus_increments(omega, h)
         dw_domega = magnus_increment_jacobian(omega, h)  # (M, 3, 9)
@@ -235,7 +238,7 @@ class Problem:
         path = self.family.evaluate(beta, nodes)
         omega = np.array([self.mmap.f1(q) @ qs for q, qs in zip(path.q, path.qd, strict=True)])
         if self.planar:
-            omega[:, :2] = 0.0
+            omega = np.outer(omega @ self.axis, self.axis)
         quats = propagate(self.start_quaternion, magnus_increments(omega.reshape(-1, 3, 3), h))
         return quats[::sub]
 
@@ -257,6 +260,13 @@ class Problem:
         while self.integration_error(beta) > INTEGRATION_TOLERANCE and self.steps < _MAX_STEPS:
             self.set_steps(2 * self.steps)
         return self.steps
+
+
+def _axis_name(axis: np.ndarray) -> str:
+    for name, unit in (("z", (0, 0, 1)), ("y", (0, 1, 0)), ("x", (1, 0, 0))):
+        if np.allclose(np.abs(axis), unit, atol=1e-12):
+            return f"its {name} axis"
+    return f"the axis {np.round(axis, 6).tolist()} of its frame"
 
 
 def _check_finite(name: str, values: np.ndarray) -> None:
@@ -324,7 +334,8 @@ def build_problem(
     _check_limits(robot, goal, "goal")
 
     mmap = mmap or MomentumMap(robot)
-    planar = is_planar(robot)
+    axis = planar_axis(robot)
+    planar = axis is not None
     if extra is None:
         counts = [0] * robot.n
         for i in range(1 if planar else 3):
@@ -343,19 +354,21 @@ def build_problem(
     bounds = yaw_change = None
     if planar:
         relative = quat_log(quat_multiply(quat_conjugate(quats[0]), quats[1]))
-        off_axis = float(np.linalg.norm(relative[:2]))
+        assert axis is not None
+        off_axis = float(np.linalg.norm(relative - (relative @ axis) * axis))
         if off_axis > 1e-9:
             raise InfeasibleError(
                 math.degrees(off_axis),
                 (0.0, 0.0),
                 message=(
-                    f"this robot is planar: its base turns only about its z axis, but the goal "
+                    f"this robot is planar: its base turns only about {_axis_name(axis)}, but the "
+                    "goal "
                     f"attitude is {math.degrees(off_axis):.6g} deg away from the start about "
                     "other axes; give the goal the start's pitch and roll"
                 ),
             )
-        yaw_change = wrap_angle(float(relative[2]))
-        bounds = planar_bounds(mmap)
+        yaw_change = wrap_angle(float(relative @ axis))
+        bounds = planar_bounds(mmap, axis=axis)
         lo, hi = bounds.interval(goal - start)
         if check_bounds:
             branches = [yaw_change + 2.0 * math.pi * k for k in range(-3, 4)]
@@ -373,6 +386,7 @@ def build_problem(
         start_quaternion=quats[0],
         goal_quaternion=quats[1],
         planar=planar,
+        axis=np.array([0.0, 0.0, 1.0]) if axis is None else axis,
         bounds=bounds,
         yaw_change=yaw_change,
     )

@@ -11,7 +11,8 @@ The file speaks degrees (joint angles, Euler angles) and metres (prismatic joint
     joints = { q1 = 80.0, q2 = 30.0 }      # deg (m for prismatic joints)
     base_zyx_deg = [-50.0, 0.0, 0.0]       # yaw, pitch, roll [deg]; optional, default zeros
     [goal]
-    joints = { q1 = -60.0, q2 = 90.0 }
+    joints = { q1 = -60.0, q2 = 90.0 }     # or end_effector_xyz = [x, y, z] [m, from the CM]
+                                           # (+ optional end_effector_rpy_deg = [r, p, y])
     base_zyx_deg = [0.0, 0.0, 0.0]         # or base_quaternion_xyzw = [x, y, z, w]
     [path]
     extra = { q2 = 1 }             # optional: free coefficients per joint beyond the quintic
@@ -40,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from .attitude import quat_from_zyx
+from .attitude import quat_from_zyx, quat_to_matrix
 from .errors import FreeFloatError, ScenarioError, UnknownNameError
 from .model import Robot, load_robot, resolve_robot, robots_dir
 
@@ -53,6 +54,7 @@ __all__ = ["Scenario", "default_scenario_path", "servicer_cache_dir"]
 
 _TOP_KEYS = ("robot", "duration", "end_effector", "start", "goal", "path")
 _STATE_KEYS = ("joints", "base_zyx_deg", "base_quaternion_xyzw")
+_GOAL_KEYS = (*_STATE_KEYS, "end_effector_xyz", "end_effector_rpy_deg")
 _PATH_KEYS = ("extra", "max_deviation_deg", "allow_full_turns")
 
 
@@ -162,23 +164,12 @@ class Scenario:
             raise ScenarioError(f"end_effector must be a frame name, got {end_effector!r}")
         robot = load_robot(urdf, end_effector)
 
-        states = []
+        states: list[tuple[dict[str, float], np.ndarray]] = []
         for name in ("start", "goal"):
             table = data[name]
             if not isinstance(table, Mapping):
                 raise ScenarioError(f"[{name}] must be a table")
-            _check_keys(table, _STATE_KEYS, f"[{name}]")
-            if "joints" not in table or not isinstance(table["joints"], Mapping):
-                raise ScenarioError(
-                    f"[{name}] needs joints = {{ name = value, ... }} "
-                    f"(joints: {', '.join(robot.joint_names)})"
-                )
-            joints: dict[str, float] = {}
-            for joint_name, value in table["joints"].items():
-                joint = robot.joint(joint_name)
-                number = _number(value, f"[{name}] joint {joint_name!r}")
-                joints[joint_name] = math.radians(number) if joint.angular else number
-            robot.vector(joints, f"[{name}] joints")  # every joint given
+            _check_keys(table, _GOAL_KEYS if name == "goal" else _STATE_KEYS, f"[{name}]")
             if "base_zyx_deg" in table and "base_quaternion_xyzw" in table:
                 raise ScenarioError(
                     f"[{name}] gives both base_zyx_deg and base_quaternion_xyzw; give one"
@@ -193,6 +184,12 @@ class Scenario:
                     table.get("base_zyx_deg", [0.0, 0.0, 0.0]), 3, f"[{name}] base_zyx_deg"
                 )
                 quat = quat_from_zyx(*np.radians(zyx))
+            if name == "goal" and "end_effector_xyz" in table:
+                if "joints" in table:
+                    raise ScenarioError("[goal] gives both joints and end_effector_xyz; give one")
+                joints = _cartesian_goal(robot, table, quat, states[0][0])
+            else:
+                joints = _joint_table(robot, table, name)
             states.append((joints, quat))
 
         path_table = data.get("path", {})
@@ -302,6 +299,41 @@ def _inline_servicer(table: Mapping[str, Any]) -> Path:
     if not path.is_file():
         compose_servicer(spec, path)
     return path
+
+
+def _joint_table(robot: Robot, table: Mapping[str, Any], name: str) -> dict[str, float]:
+    """``{joint: value}`` in rad or m from a ``joints`` table in degrees (m for prismatic)."""
+    if "joints" not in table or not isinstance(table["joints"], Mapping):
+        extra = " (or end_effector_xyz = [x, y, z])" if name == "goal" else ""
+        raise ScenarioError(
+            f"[{name}] needs joints = {{ name = value, ... }}{extra} "
+            f"(joints: {', '.join(robot.joint_names)})"
+        )
+    joints: dict[str, float] = {}
+    for joint_name, value in table["joints"].items():
+        joint = robot.joint(joint_name)
+        number = _number(value, f"[{name}] joint {joint_name!r}")
+        joints[joint_name] = math.radians(number) if joint.angular else number
+    robot.vector(joints, f"[{name}] joints")  # every joint given
+    return joints
+
+
+def _cartesian_goal(
+    robot: Robot, table: Mapping[str, Any], quat: np.ndarray, start: Mapping[str, float]
+) -> dict[str, float]:
+    """Goal joints from ``end_effector_xyz`` (m) and optional ``end_effector_rpy_deg``."""
+    from .cartesian import solve_cartesian_goal
+    from .momentum import MomentumMap
+
+    xyz = _numbers(table["end_effector_xyz"], 3, "[goal] end_effector_xyz")
+    rotation = None
+    if "end_effector_rpy_deg" in table:
+        rpy = np.radians(_numbers(table["end_effector_rpy_deg"], 3, "[goal] end_effector_rpy_deg"))
+        rotation = quat_to_matrix(quat_from_zyx(rpy[2], rpy[1], rpy[0]))
+    values = solve_cartesian_goal(
+        MomentumMap(robot), xyz, quat, robot.vector(start, "[start] joints"), rotation
+    )
+    return dict(zip(robot.joint_names, values.tolist(), strict=True))
 
 
 def _prefixed(exc: FreeFloatError, path: Path) -> FreeFloatError:
