@@ -17,6 +17,7 @@ from scipy.optimize import minimize
 from scipy.stats import qmc
 
 from .momentum import MomentumMap
+from .planar import PlanarMap
 
 __all__ = ["PlanarBounds", "SpatialEstimate", "joint_ranges", "planar_bounds", "spatial_estimate"]
 
@@ -40,6 +41,17 @@ class PlanarBounds:
         return float(lo.sum()), float(hi.sum())
 
 
+def cached_planar_bounds(
+    mmap: MomentumMap, axis: np.ndarray, planar_map: PlanarMap | None
+) -> PlanarBounds:
+    """:func:`planar_bounds` computed once per robot (they depend on the robot alone)."""
+    key = "planar_bounds"
+    if key not in mmap.robot.cache:
+        mmap.robot.cache[key] = planar_bounds(mmap, axis=axis, planar_map=planar_map)
+    bounds: PlanarBounds = mmap.robot.cache[key]
+    return bounds
+
+
 def joint_ranges(mmap: MomentumMap) -> np.ndarray:
     """(N, 2) ranges to explore per joint: limits, or one full turn for continuous joints."""
     ranges = []
@@ -52,7 +64,11 @@ def joint_ranges(mmap: MomentumMap) -> np.ndarray:
 
 
 def planar_bounds(
-    mmap: MomentumMap, samples: int = 4096, seed: int = 0, axis: np.ndarray | None = None
+    mmap: MomentumMap,
+    samples: int = 4096,
+    seed: int = 0,
+    axis: np.ndarray | None = None,
+    planar_map: PlanarMap | None = None,
 ) -> PlanarBounds:
     """Extremes of each gain ``g_i(q)`` for a planar robot.
 
@@ -65,6 +81,7 @@ def planar_bounds(
         samples: number of configurations sampled before refinement.
         seed: seed of the Sobol scrambling (the result is deterministic for a seed).
         axis: the planar axis (base frame); default base z.
+        planar_map: the robot's cosine-polynomial gains, to evaluate them vectorised.
     """
     ranges = joint_ranges(mmap)
     n = len(ranges)
@@ -78,9 +95,14 @@ def planar_bounds(
     n_axis = np.array([0.0, 0.0, 1.0]) if axis is None else np.asarray(axis, dtype=float)
 
     def gain(q: np.ndarray) -> np.ndarray:
+        if planar_map is not None:
+            return planar_map.gains(q)
         return np.asarray(n_axis @ mmap.f1(q))
 
-    gains = np.array([gain(p) for p in points])
+    if planar_map is not None:
+        gains = planar_map.gains(points)
+    else:
+        gains = np.array([gain(p) for p in points])
     # Continuous joints are periodic: let the refinement cross +-pi.
     limits = [
         (None, None) if joint.kind == "continuous" else (float(lo), float(hi))

@@ -20,6 +20,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -103,6 +104,8 @@ class Robot:
         base_link: name of the URDF root link (the spacecraft body).
         end_effector: name of the end-effector frame.
         package_dirs: folders searched for ``package://`` mesh references.
+        cache: quantities derived from the model alone (planar axis, planar bounds...),
+            computed once per robot.
     """
 
     urdf: Path
@@ -113,6 +116,7 @@ class Robot:
     end_effector: str
     package_dirs: tuple[Path, ...] = ()
     link_names: tuple[str, ...] = field(default_factory=tuple)
+    cache: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
     def n(self) -> int:

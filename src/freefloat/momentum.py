@@ -184,3 +184,11 @@ def planar_axis(robot: Robot, samples: int = 16, seed: int = 0) -> np.ndarray | 
 def is_planar(robot: Robot, samples: int = 16, seed: int = 0) -> bool:
     """True when the base can only turn about one fixed axis (see :func:`planar_axis`)."""
     return planar_axis(robot, samples, seed) is not None
+
+
+def cached_planar_axis(robot: Robot) -> np.ndarray | None:
+    """:func:`planar_axis`, computed once per robot."""
+    if "planar_axis" not in robot.cache:
+        robot.cache["planar_axis"] = planar_axis(robot)
+    axis: np.ndarray | None = robot.cache["planar_axis"]
+    return axis

@@ -31,16 +31,17 @@ from .attitude import (
     so3_right_jacobian,
     step_nodes,
 )
-from .bounds import PlanarBounds, planar_bounds
+from .bounds import PlanarBounds, cached_planar_bounds
 from .errors import InfeasibleError, InputError, JointLimitError
 from .model import Robot
-from .momentum import MomentumMap, NodeRates, planar_axis
+from .momentum import MomentumMap, NodeRates, cached_planar_axis
 from .paths import PathFamily
+from .planar import PlanarMap, identify
 
 __all__ = ["Problem", "build_problem", "wrap_angle"]
 
 #: Target of the integration error estimate (rad) when choosing the number of steps.
-INTEGRATION_TOLERANCE = 1e-13
+INTEGRATION_TOLERANCE = 1e-12
 _MIN_STEPS, _MAX_STEPS = 16, 4096
 
 
@@ -66,6 +67,8 @@ class Problem:
         yaw_change: requested yaw change (rad), on the branch inside the bounds (planar only).
         axis: the axis a planar base turns about (unit vector, base frame); "yaw" is the
             rotation about it.
+        planar_map: cosine-polynomial gains of a planar all-revolute robot (vectorised fast
+            path, identified from and checked against Pinocchio); None otherwise.
         steps: number of integration steps on the normalised interval [0, 1].
     """
 
@@ -79,9 +82,11 @@ class Problem:
     bounds: PlanarBounds | None = None
     yaw_change: float | None = None
     axis: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
+    planar_map: PlanarMap | None = None
     steps: int = 64
     evaluations: int = 0
     _grid: tuple[np.ndarray, ...] = field(default=(), repr=False)
+    _grids: dict[int | str, tuple[np.ndarray, ...]] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         self.set_steps(self.steps)
@@ -106,9 +111,11 @@ class Problem:
     def set_steps(self, steps: int) -> None:
         """Use ``steps`` uniform integration steps (three Gauss nodes each) on [0, 1]."""
         self.steps = int(steps)
-        nodes, h = step_nodes(np.linspace(0.0, 1.0, self.steps + 1))
-        base, dq, dqs = self.family.linear_map(nodes)
-        self._grid = (h, base.q, base.qd, dq, dqs)
+        if self.steps not in self._grids:
+            nodes, h = step_nodes(np.linspace(0.0, 1.0, self.steps + 1))
+            base, dq, dqs = self.family.linear_map(nodes)
+            self._grids[self.steps] = (h, base.q, base.qd, dq, dqs)
+        self._grid = self._grids[self.steps]
 
     def _nodes(self, beta: np.ndarray, derivatives: bool = False) -> tuple[NodeRates, np.ndarray]:
         """Base rates at the integration nodes and the joint rates there (per unit s)."""
@@ -119,8 +126,43 @@ class Problem:
         self.evaluations += 1
         return self.mmap.base_rates(q, qs, derivatives), qs
 
+    def planar_rates(self, betas: np.ndarray) -> np.ndarray:
+        """Planar problems: yaw rate at the nodes for several ``beta`` at once, (G, K)."""
+        _, q0, qs0, dq, dqs = self._grid
+        betas = np.atleast_2d(np.asarray(betas, dtype=float))
+        q = q0[None] + np.einsum("knf,gf->gkn", dq, betas)
+        qs = qs0[None] + np.einsum("knf,gf->gkn", dqs, betas)
+        self.evaluations += len(betas)
+        if self.planar_map is not None:
+            return np.sum(self.planar_map.gains(q) * qs, axis=-1)
+        return np.stack([self._nodes(b)[0].omega @ self.axis for b in betas])
+
+    def yaw_changes_and_slopes(self, betas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """One-unknown planar problems with a planar map: yaw changes and d/dbeta, (G,) each."""
+        assert self.planar_map is not None and self.n_free == 1
+        h, q0, qs0, dq, dqs = self._grid
+        betas = np.asarray(betas, dtype=float).reshape(-1)
+        q = q0[None] + dq[None, :, :, 0] * betas[:, None, None]
+        qs = qs0[None] + dqs[None, :, :, 0] * betas[:, None, None]
+        gains, dgains = self.planar_map.gains_and_derivatives(q)
+        self.evaluations += len(betas)
+        weights = (h[:, None] * GAUSS3_WEIGHTS[None, :]).ravel()
+        rate = np.sum(gains * qs, axis=-1)
+        dgains_dbeta = (dgains @ dq[None, :, :, :])[..., 0]  # (G, K, N)
+        slope = np.sum(dgains_dbeta * qs + gains * dqs[None, :, :, 0], axis=-1)
+        return rate @ weights, slope @ weights
+
+    def yaw_changes(self, betas: np.ndarray) -> np.ndarray:
+        """Planar problems: yaw change (rad) for each row of ``betas`` (vectorised)."""
+        h = self._grid[0]
+        weights = (h[:, None] * GAUSS3_WEIGHTS[None, :]).ravel()
+        return self.planar_rates(betas) @ weights
+
     def rates(self, beta: np.ndarray) -> np.ndarray:
         """Base angular velocity at the integration nodes, (steps, 3, 3), rad per unit s."""
+        if self.planar and self.planar_map is not None:
+            rate = self.planar_rates(beta)[0]
+            return np.outer(rate, self.axis).reshape(self.steps, 3, 3)
         omega = self._nodes(beta)[0].omega
         if self.planar:
             omega = np.outer(omega @ self.axis, self.axis)
@@ -128,9 +170,7 @@ class Problem:
 
     def yaw_change_of(self, beta: np.ndarray) -> float:
         """Planar problems: yaw change over the path (rad), a plain Gauss-Legendre integral."""
-        omega = self.rates(beta)
-        h = self._grid[0]
-        return float(np.sum(h[:, None] * GAUSS3_WEIGHTS[None, :] * (omega @ self.axis)))
+        return float(self.yaw_changes(beta)[0])
 
     def achieved(self, beta: np.ndarray) -> np.ndarray:
         """Base attitude reached at t = T, ``[x, y, z, w]``."""
@@ -156,7 +196,17 @@ class Problem:
         step's Magnus vector by complex steps; the chain of step rotations with SO(3) right
         Jacobians; the residual's logarithm with ``pin.Jlog3``.
         """
-        h, _, _, dq, dqs = self._grid
+        h, q0, qs0, dq, dqs = self._grid
+        if self.planar and self.planar_map is not None:
+            assert self.yaw_change is not None
+            beta = np.asarray(beta, dtype=float)
+            q, qs = q0 + dq @ beta, qs0 + dqs @ beta
+            gains, dgains = self.planar_map.gains_and_derivatives(q)
+            self.evaluations += 1
+            weights = (h[:, None] * GAUSS3_WEIGHTS[None, :]).ravel()
+            rate = np.sum(gains * qs, axis=1)
+            drate = np.einsum("kif,ki->kf", dgains @ dq, qs) + np.einsum("ki,kif->kf", gains, dqs)
+            return np.array([rate @ weights - self.yaw_change]), (weights @ drate)[None, :]
         nodes, _qs = self._nodes(beta, derivatives=True)
         assert nodes.domega_dq is not None
         # d omega / d beta at each node: (K, 3, n_free).
@@ -192,6 +242,15 @@ class Problem:
         """Exact ``dh/dbeta`` (see :meth:`residual_and_jacobian`)."""
         return self.residual_and_jacobian(beta)[1]
 
+    def path_length(self, beta: np.ndarray) -> float:
+        """Summed joint travel along the path (rad, plus m for prismatic joints)."""
+        if "length" not in self._grids:
+            base, dq, _ = self.family.linear_map(np.linspace(0.0, 1.0, 401))
+            self._grids["length"] = (base.q, dq)
+        q0, dq = self._grids["length"]
+        q = q0 + dq @ np.asarray(beta, dtype=float)
+        return float(np.abs(np.diff(q, axis=0)).sum())
+
     def limit_constraints(self, points: int = 97) -> tuple[np.ndarray, np.ndarray]:
         """Joint position limits as linear inequalities ``G beta <= g`` at ``points`` instants.
 
@@ -214,6 +273,13 @@ class Problem:
 
     def limit_violation(self, beta: np.ndarray, points: int = 801) -> tuple[float, str]:
         """Largest excursion beyond a joint limit along the path (rad or m) and the joint."""
+        limited = [
+            i
+            for i, j in enumerate(self.robot.joints)
+            if np.isfinite(j.lower) or np.isfinite(j.upper)
+        ]
+        if not limited:
+            return 0.0, ""
         q = self.family.evaluate(beta, np.linspace(0.0, 1.0, points)).q
         worst, name = 0.0, ""
         for i, joint in enumerate(self.robot.joints):
@@ -236,7 +302,7 @@ class Problem:
         )
         nodes, h = step_nodes(edges)
         path = self.family.evaluate(beta, nodes)
-        omega = np.array([self.mmap.f1(q) @ qs for q, qs in zip(path.q, path.qd, strict=True)])
+        omega = self.mmap.base_rates(path.q, path.qd).omega
         if self.planar:
             omega = np.outer(omega @ self.axis, self.axis)
         quats = propagate(self.start_quaternion, magnus_increments(omega.reshape(-1, 3, 3), h))
@@ -334,8 +400,13 @@ def build_problem(
     _check_limits(robot, goal, "goal")
 
     mmap = mmap or MomentumMap(robot)
-    axis = planar_axis(robot)
+    axis = cached_planar_axis(robot)
     planar = axis is not None
+    planar_map = None
+    if axis is not None:
+        if "planar_map" not in robot.cache:
+            robot.cache["planar_map"] = identify(robot, axis)
+        planar_map = robot.cache["planar_map"]
     if extra is None:
         counts = [0] * robot.n
         for i in range(1 if planar else 3):
@@ -368,7 +439,7 @@ def build_problem(
                 ),
             )
         yaw_change = wrap_angle(float(relative @ axis))
-        bounds = planar_bounds(mmap, axis=axis)
+        bounds = cached_planar_bounds(mmap, axis, planar_map)
         lo, hi = bounds.interval(goal - start)
         if check_bounds:
             branches = [yaw_change + 2.0 * math.pi * k for k in range(-3, 4)]
@@ -387,6 +458,7 @@ def build_problem(
         goal_quaternion=quats[1],
         planar=planar,
         axis=np.array([0.0, 0.0, 1.0]) if axis is None else axis,
+        planar_map=planar_map,
         bounds=bounds,
         yaw_change=yaw_change,
     )

@@ -22,7 +22,7 @@ from .errors import (
     SolverError,
     VelocityLimitError,
 )
-from .momentum import is_planar
+from .momentum import cached_planar_axis
 from .problem import Problem, build_problem
 from .scenario import Scenario
 from .solve import Solution, SolveOptions, solve
@@ -108,7 +108,7 @@ def search(scenario: Scenario, options: SolveOptions) -> SearchResult:
     offsets = [np.zeros(robot.n)]
     if scenario.allow_full_turns:
         offsets += turn_candidates(scenario)
-    planar = is_planar(robot)
+    planar = cached_planar_axis(robot) is not None
     tried: list[str] = []
     first_error: FreeFloatError | None = None
     best = math.inf

@@ -100,13 +100,20 @@ class Solution:
 
 
 def _path_length(problem: Problem, beta: np.ndarray) -> float:
-    q = problem.family.evaluate(beta, np.linspace(0.0, 1.0, 401)).q
-    return float(np.abs(np.diff(q, axis=0)).sum())
+    return problem.path_length(beta)
 
 
-def _polish(problem: Problem, beta: np.ndarray, tol: float, iterations: int = 8) -> np.ndarray:
-    """Minimum-norm Gauss-Newton corrections until the residual is well below ``tol``."""
-    r, jac = problem.residual_and_jacobian(beta)
+def _polish(
+    problem: Problem, beta: np.ndarray, tol: float, iterations: int = 8
+) -> tuple[np.ndarray, np.ndarray]:
+    """Minimum-norm Gauss-Newton corrections until the residual is well below ``tol``.
+
+    Returns the corrected ``beta`` and its residual vector.
+    """
+    r = problem.residual(beta)
+    if np.linalg.norm(r) < 0.01 * tol:
+        return beta, r
+    jac = problem.jacobian(beta)
     for _ in range(iterations):
         if np.linalg.norm(r) < 0.01 * tol:
             break
@@ -116,25 +123,36 @@ def _polish(problem: Problem, beta: np.ndarray, tol: float, iterations: int = 8)
             break
         beta = trial
         r, jac = problem.residual_and_jacobian(beta)
-    return beta
+    return beta, r
 
 
 def _scan(problem: Problem, options: SolveOptions) -> tuple[list[np.ndarray], int]:
-    """All roots of the scalar residual in the bracket; returns them and Brent iterations."""
+    """All roots of the scalar residual in the bracket; returns them and the iterations.
+
+    Sign changes on a coarse grid are refined with Brent's method, or, with a planar map,
+    all at once by safeguarded Newton steps with the exact slope.
+    """
     power = problem.family.free_index[0][1]
     shape = np.polynomial.polynomial.polyval(np.linspace(0.0, 1.0, 201), basis_coefficients(power))
     half_width = options.max_deviation / np.abs(shape).max()
     grid = np.linspace(-half_width, half_width, options.scan_points)
     fine_steps = problem.steps
     problem.set_steps(max(16, fine_steps // 4))  # locating sign changes needs less accuracy
-    values = np.array([problem.residual(np.array([b]))[0] for b in grid])
+    assert problem.yaw_change is not None
+    values = problem.yaw_changes(grid[:, None]) - problem.yaw_change
     problem.set_steps(fine_steps)
+
+    changes = np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:]))
+    if problem.planar_map is not None:
+        lo, hi = grid[changes], grid[changes + 1]
+        seed = lo - values[changes] * (hi - lo) / (values[changes + 1] - values[changes])
+        return _newton_brackets(problem, lo, hi, seed)
 
     def scalar(b: float) -> float:
         return float(problem.residual(np.array([b]))[0])
 
     roots, iterations = [], 0
-    for i in np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:])):
+    for i in changes:
         lo, hi = grid[i], grid[i + 1]
         f_lo, f_hi = scalar(lo), scalar(hi)
         if np.sign(f_lo) == np.sign(f_hi):  # the coarse scan saw a change the fine one does not
@@ -145,6 +163,39 @@ def _scan(problem: Problem, options: SolveOptions) -> tuple[list[np.ndarray], in
         iterations += info.iterations
         roots.append(np.array([root]))
     return roots, iterations
+
+
+def _newton_brackets(
+    problem: Problem, lo: np.ndarray, hi: np.ndarray, seed: np.ndarray, iterations: int = 60
+) -> tuple[list[np.ndarray], int]:
+    """Refine every bracketed root at once (vectorised over the brackets).
+
+    Newton steps with the exact slope, kept inside each bracket by bisection.
+    """
+    assert problem.yaw_change is not None
+    target = problem.yaw_change
+    if len(lo) == 0:
+        return [], 0
+    values, _ = problem.yaw_changes_and_slopes(np.concatenate([lo, hi]))
+    f_lo, f_hi = values[: len(lo)] - target, values[len(lo) :] - target
+    keep = np.sign(f_lo) != np.sign(f_hi)  # the coarse scan saw a change the fine one does not
+    lo, hi, f_lo = lo[keep], hi[keep], f_lo[keep]
+    x = np.clip(seed[keep], lo, hi)  # the secant point of the coarse scan
+    done = iterations
+    for iteration in range(1, iterations + 1):
+        f, slope = problem.yaw_changes_and_slopes(x)
+        f = f - target
+        if np.all(np.abs(f) < 1e-14):
+            done = iteration
+            break
+        left = np.sign(f) == np.sign(f_lo)
+        lo, f_lo = np.where(left, x, lo), np.where(left, f, f_lo)
+        hi = np.where(left, hi, x)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            newton = x - f / slope
+        inside = np.isfinite(newton) & (newton > lo) & (newton < hi)
+        x = np.where(np.abs(f) < 1e-14, x, np.where(inside, newton, 0.5 * (lo + hi)))
+    return [np.array([root]) for root in x], done
 
 
 def _broyden(problem: Problem, beta: np.ndarray, options: SolveOptions) -> tuple[np.ndarray, int]:
@@ -302,8 +353,7 @@ def solve(problem: Problem, options: SolveOptions | None = None) -> Solution:
     roots = []
     best_vector = problem.residual(zero)  # the quintic path always respects the limits
     for beta in candidates:
-        beta = _polish(problem, beta, tol)
-        vector = problem.residual(beta)
+        beta, vector = _polish(problem, beta, tol)
         residual = float(np.linalg.norm(vector))
         if not within_limits(beta):
             continue
@@ -327,8 +377,8 @@ def solve(problem: Problem, options: SolveOptions | None = None) -> Solution:
         if error <= 0.1 * tol:
             break
         problem.choose_steps(chosen.beta)
-        beta = _polish(problem, chosen.beta, tol)
-        chosen = Root(beta, float(np.linalg.norm(problem.residual(beta))), chosen.path_length)
+        beta, vector = _polish(problem, chosen.beta, tol)
+        chosen = Root(beta, float(np.linalg.norm(vector)), chosen.path_length)
         error = problem.integration_error(chosen.beta)
     if error > 0.1 * tol or chosen.residual >= tol:
         raise SolverError(

@@ -1,0 +1,148 @@
+"""The planar momentum map as cosine polynomials, for fast vectorised evaluation.
+
+For a planar chain of revolute joints turning about the axis ``n`` (method.md sections 3 and
+7), the base rate is ``omega_n = -(n . A_q qdot) / (n . A_w n)``, where ``A_w`` and ``A_q`` are
+the angular-momentum rows of Pinocchio's centroidal map for the base rotation and the joint
+rates. Each of these entries is a trigonometric polynomial of the joint angles: a constant plus
+cosines and sines of the sums of contiguous joint angles ``q_a + ... + q_b`` (the relative
+angle between bodies a-1 and b). Method.md section 7 shows the two-joint case
+(``D0 + D1 + D2`` and ``D1 + D2``, ``D2``).
+
+:func:`identify` finds those coefficients from Pinocchio by least squares on random
+configurations and accepts them only if they reproduce Pinocchio on fresh configurations to
+1e-12 (relative); then the gains ``g_i = d yaw / d q_i`` and their derivatives are evaluated for
+many configurations at once in a few array operations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .model import Robot
+
+__all__ = ["PlanarMap", "identify"]
+
+#: Relative accuracy the identified polynomials must reach against Pinocchio.
+IDENTIFICATION_TOLERANCE = 1e-12
+
+
+def _spans(n: int) -> list[tuple[int, int]]:
+    return [(a, b) for a in range(n) for b in range(a, n)]
+
+
+@dataclass(frozen=True)
+class PlanarMap:
+    """Cosine-polynomial form of a planar robot's gains ``g(q)`` (rad of yaw per rad).
+
+    Attributes:
+        axis: the planar axis (unit vector, base frame).
+        den: coefficients of ``n . A_w n`` (kg m^2) on the features.
+        num: (features, N) coefficients of ``n . A_q`` (kg m^2) on the features.
+        error: largest relative mismatch against Pinocchio found when checking.
+    """
+
+    axis: np.ndarray
+    den: np.ndarray
+    num: np.ndarray
+    error: float
+
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return int(self.num.shape[1])
+
+    @property
+    def member(self) -> np.ndarray:
+        """(spans, N) membership of each joint in each contiguous span of joints."""
+        spans = _spans(self.n)
+        member = np.zeros((len(spans), self.n))
+        for k, (a, b) in enumerate(spans):
+            member[k, a : b + 1] = 1.0
+        return member
+
+    def _features(self, q: np.ndarray, derivatives: bool) -> tuple[np.ndarray, np.ndarray | None]:
+        """Features (..., F) and, optionally, their derivatives (..., F, N)."""
+        member = self.__dict__.get("_member")
+        if member is None:
+            member = self.member
+            object.__setattr__(self, "_member", member)
+        sums = q @ member.T
+        cos, sin = np.cos(sums), np.sin(sums)
+        ones = np.ones((*q.shape[:-1], 1))
+        feats = np.concatenate([ones, cos, sin], axis=-1)
+        if not derivatives:
+            return feats, None
+        n = self.n
+        dfeats = np.concatenate(
+            [
+                np.zeros((*q.shape[:-1], 1, n)),
+                -sin[..., :, None] * member,
+                cos[..., :, None] * member,
+            ],
+            axis=-2,
+        )
+        return feats, dfeats
+
+    def gains(self, q: np.ndarray) -> np.ndarray:
+        """Gains ``g(q)`` (..., N) for joint values ``q`` (..., N) in rad."""
+        feats, _ = self._features(np.asarray(q, dtype=float), False)
+        return -(feats @ self.num) / (feats @ self.den)[..., None]
+
+    def gains_and_derivatives(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Gains (..., N) and their derivatives ``dg_i/dq_j`` (..., N, N)."""
+        q = np.asarray(q, dtype=float)
+        feats, _ = self._features(q, False)
+        member = self.__dict__["_member"]
+        spans = member.shape[0]
+        cos, sin = feats[..., 1 : 1 + spans], feats[..., 1 + spans :]
+        num = feats @ self.num  # (..., N)
+        den = feats @ self.den  # (...)
+        num_c, num_s = self.num[1 : 1 + spans], self.num[1 + spans :]  # (S, N)
+        den_c, den_s = self.den[1 : 1 + spans], self.den[1 + spans :]  # (S,)
+        # d/dq_j of a span's cos is -sin when joint j is in the span (and cos for its sin).
+        weights = -sin[..., :, None] * num_c + cos[..., :, None] * num_s  # (..., S, N)
+        dnum = np.swapaxes(weights, -1, -2) @ member  # (..., N, N): [i, j]
+        dden = (-sin * den_c + cos * den_s) @ member  # (..., N)
+        gains = -num / den[..., None]
+        dgains = -dnum / den[..., None, None] + num[..., :, None] * dden[..., None, :] / (
+            den[..., None, None] ** 2
+        )
+        return gains, dgains
+
+
+def _angular_rows(robot: Robot, data: pin.Data, q: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    config = robot.configuration(q)
+    ag = pin.computeCentroidalMap(robot.model, data, config)
+    rows = axis @ ag[3:6]
+    return np.concatenate([[rows[3:6] @ axis], rows[6:]])
+
+
+def identify(robot: Robot, axis: np.ndarray, seed: int = 0) -> PlanarMap | None:
+    """Identify the cosine polynomials of a planar all-revolute robot; None if not exact.
+
+    Args:
+        robot: the robot (planar about ``axis``).
+        axis: its planar axis (unit vector, base frame).
+        seed: seed of the random configurations.
+    """
+    if any(not joint.angular for joint in robot.joints):
+        return None
+    n = robot.n
+    data = robot.model.createData()
+    rng = np.random.default_rng(seed)
+    features = 1 + 2 * len(_spans(n))
+    probe = PlanarMap(axis, np.zeros(features), np.zeros((features, n)), 0.0)
+    fit_q = rng.uniform(-np.pi, np.pi, (4 * features, n))
+    check_q = rng.uniform(-np.pi, np.pi, (64, n))
+    values = np.array([_angular_rows(robot, data, q, axis) for q in fit_q])
+    coeffs = np.linalg.lstsq(probe._features(fit_q, False)[0], values, rcond=None)[0]
+    candidate = PlanarMap(axis, coeffs[:, 0], coeffs[:, 1:], 0.0)
+    truth = np.array([_angular_rows(robot, data, q, axis) for q in check_q])
+    predicted = candidate._features(check_q, False)[0] @ coeffs
+    error = float(np.abs(predicted - truth).max() / np.abs(truth).max())
+    if not error <= IDENTIFICATION_TOLERANCE:
+        return None
+    return PlanarMap(axis, coeffs[:, 0], coeffs[:, 1:], error)
