@@ -217,10 +217,17 @@ def magnus_increments(omega: np.ndarray, h: np.ndarray) -> np.ndarray:
 
 def propagate(quat0: np.ndarray, increments: np.ndarray) -> np.ndarray:
     """Chain step rotations: returns the M + 1 attitudes ``[x, y, z, w]`` from ``quat0``."""
-    steps = quat_exp(increments)
-    out = np.empty((len(steps) + 1, 4))
-    out[0] = quat0
-    for i, step in enumerate(steps):
-        out[i + 1] = quat_multiply(out[i], step)
-    out /= np.linalg.norm(out, axis=1, keepdims=True)
-    return out
+    steps = quat_exp(increments).tolist()
+    out = [list(map(float, quat0))]
+    x, y, z, w = out[0]
+    for bx, by, bz, bw in steps:  # Hamilton products on plain floats: cheap for 4-vectors
+        x, y, z, w = (
+            w * bx + bw * x + y * bz - z * by,
+            w * by + bw * y + z * bx - x * bz,
+            w * bz + bw * z + x * by - y * bx,
+            w * bw - x * bx - y * by - z * bz,
+        )
+        out.append([x, y, z, w])
+    result = np.array(out)
+    result /= np.linalg.norm(result, axis=1, keepdims=True)
+    return result

@@ -70,6 +70,8 @@ class Problem:
         planar_map: cosine-polynomial gains of a planar all-revolute robot (vectorised fast
             path, identified from and checked against Pinocchio); None otherwise.
         steps: number of integration steps on the normalised interval [0, 1].
+        evaluations: residual evaluations so far (each integrates the attitude along a path).
+        map_evaluations: momentum-map evaluations so far (one per node and path).
     """
 
     robot: Robot
@@ -85,6 +87,7 @@ class Problem:
     planar_map: PlanarMap | None = None
     steps: int = 64
     evaluations: int = 0
+    map_evaluations: int = 0
     _grid: tuple[np.ndarray, ...] = field(default=(), repr=False)
     _grids: dict[int | str, tuple[np.ndarray, ...]] = field(default_factory=dict, repr=False)
 
@@ -124,6 +127,7 @@ class Problem:
         q = q0 + dq @ beta
         qs = qs0 + dqs @ beta
         self.evaluations += 1
+        self.map_evaluations += len(q)
         return self.mmap.base_rates(q, qs, derivatives), qs
 
     def planar_rates(self, betas: np.ndarray) -> np.ndarray:
@@ -132,8 +136,9 @@ class Problem:
         betas = np.atleast_2d(np.asarray(betas, dtype=float))
         q = q0[None] + np.einsum("knf,gf->gkn", dq, betas)
         qs = qs0[None] + np.einsum("knf,gf->gkn", dqs, betas)
-        self.evaluations += len(betas)
         if self.planar_map is not None:
+            self.evaluations += len(betas)
+            self.map_evaluations += q.shape[0] * q.shape[1]
             return np.sum(self.planar_map.gains(q) * qs, axis=-1)
         return np.stack([self._nodes(b)[0].omega @ self.axis for b in betas])
 
@@ -146,6 +151,7 @@ class Problem:
         qs = qs0[None] + dqs[None, :, :, 0] * betas[:, None, None]
         gains, dgains = self.planar_map.gains_and_derivatives(q)
         self.evaluations += len(betas)
+        self.map_evaluations += q.shape[0] * q.shape[1]
         weights = (h[:, None] * GAUSS3_WEIGHTS[None, :]).ravel()
         rate = np.sum(gains * qs, axis=-1)
         dgains_dbeta = (dgains @ dq[None, :, :, :])[..., 0]  # (G, K, N)
@@ -203,6 +209,7 @@ class Problem:
             q, qs = q0 + dq @ beta, qs0 + dqs @ beta
             gains, dgains = self.planar_map.gains_and_derivatives(q)
             self.evaluations += 1
+            self.map_evaluations += len(q)
             weights = (h[:, None] * GAUSS3_WEIGHTS[None, :]).ravel()
             rate = np.sum(gains * qs, axis=1)
             drate = np.einsum("kif,ki->kf", dgains @ dq, qs) + np.einsum("ki,kif->kf", gains, dqs)

@@ -55,7 +55,7 @@ class SolveOptions:
     scan_points: int = 161
     max_iterations: int = 100
     starts: int = 7
-    keep_solutions: int = 2
+    keep_solutions: int = 1
     time_budget: float = 20.0
 
 
