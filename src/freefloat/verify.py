@@ -14,6 +14,7 @@ Checks, each with a documented tolerance (:data:`TOLERANCES`):
   torques from the start at rest: final attitude error (rad) and joint error (rad or m).
 - ``boundary``: position, rate and acceleration errors of the polynomials at both ends (rad,
   rad/s, rad/s^2), against the requested start and goal, relative to the joint travel.
+- ``joint_limit_excess``: how far the sampled joints go beyond their URDF limits (rad or m).
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ TOLERANCES: dict[str, float] = {
     "replay_joint": 1e-4,
     "boundary_relative": 1e-9,
     "samples_relative": 1e-9,
+    "joint_limit": 1e-9,
 }
 
 
@@ -65,6 +67,7 @@ class Verification:
     boundary: dict[str, float]
     samples_error: float
     passed: bool
+    joint_limit_excess: float = 0.0
     failures: list[str] = field(default_factory=list)
     tolerances: dict[str, float] = field(default_factory=lambda: dict(TOLERANCES))
 
@@ -93,6 +96,7 @@ class Verification:
             ("replay joint error [rad|m]", self.replay["joint_error"], t["replay_joint"]),
             ("boundary (relative)", self.boundary["relative_max"], t["boundary_relative"]),
             ("samples vs polynomials (rel.)", self.samples_error, t["samples_relative"]),
+            ("joint limit excess [rad|m]", self.joint_limit_excess, t["joint_limit"]),
         ]
         return [(name, value, tol, value <= tol) for name, value, tol in rows]
 
@@ -218,7 +222,13 @@ def verify_plan(plan: Plan, robot: Robot | None = None, replay_steps: int = 500)
             error = np.abs(np.asarray(got) - want) * duration**power / travel
             worst = max(worst, float(error.max()))
 
+    q_samples = np.asarray(samples.q, dtype=float)
+    lower = np.array([j.lower for j in robot.joints])
+    upper = np.array([j.upper for j in robot.joints])
+    excess = float(max(0.0, (q_samples - upper).max(), (lower - q_samples).max()))
+
     verification = Verification(
+        joint_limit_excess=excess,
         momentum_max=momentum_max,
         momentum_scale=momentum_scale,
         cm_offset_max=cm_max,
