@@ -1,0 +1,81 @@
+"""The fast paths agree with independent references."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import freefloat as ff
+from freefloat import attitude as att
+from freefloat.planar import identify
+
+import reference as ref
+import urdfs
+from conftest import ROOT
+
+
+def test_planar_map_equals_the_closed_form(planar_robot):
+    pm = identify(planar_robot, np.array([0.0, 0.0, 1.0]))
+    assert pm is not None and pm.error < 1e-12
+    q = np.random.default_rng(3).uniform(-6, 6, (200, 2))
+    np.testing.assert_allclose(pm.gains(q), [ref.gains(*x) for x in q], atol=1e-13)
+    gains, dgains = pm.gains_and_derivatives(q[:5])
+    np.testing.assert_allclose(gains, pm.gains(q[:5]), atol=1e-15)
+    eps = 1e-6
+    fd = np.stack(
+        [(pm.gains(q[:5] + eps * e) - pm.gains(q[:5] - eps * e)) / (2 * eps) for e in np.eye(2)],
+        axis=-1,
+    )
+    np.testing.assert_allclose(dgains, fd, atol=1e-8)
+
+
+def test_planar_map_is_refused_for_prismatic_joints(tmp_path):
+    body = urdfs.BASE.format(mass=50.0, i=8.0)
+    body += urdfs.joint("slide", "base", "l1", "prismatic", (1, 0, 0), limits=(-0.2, 0.4))
+    body += urdfs.link("l1", mass=4.0)
+    body += urdfs.joint("turn", "l1", "l2", "revolute", (0, 0, 1))
+    body += urdfs.link("l2", mass=3.0)
+    path = tmp_path / "p.urdf"
+    path.write_text(urdfs.robot(body))
+    assert identify(ff.load_robot(path), np.array([0.0, 0.0, 1.0])) is None
+
+
+def test_fast_planar_path_equals_the_pinocchio_path(worked_scenario):
+    s = worked_scenario
+    problem = ff.build_problem(
+        s.robot, s.start, s.goal, s.start_attitude, s.goal_attitude, 10.0, extra={"q1": 1, "q2": 1}
+    )
+    assert problem.planar_map is not None
+    slow = dataclasses.replace(problem, planar_map=None)
+    beta = np.array([12.0, -30.0])
+    assert problem.residual(beta) == pytest.approx(slow.residual(beta), abs=1e-13)
+    np.testing.assert_allclose(problem.jacobian(beta), slow.jacobian(beta), rtol=1e-10)
+
+
+@pytest.mark.parametrize("name", ["panda_servicer", "ur5_servicer"])
+def test_magnus_integration_agrees_with_a_tight_adaptive_reference(name):
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / f"{name}.toml")
+    problem = ff.build_problem(
+        scenario.robot,
+        scenario.start,
+        scenario.goal,
+        scenario.start_attitude,
+        scenario.goal_attitude,
+        20.0,
+    )
+    beta = np.array([2.0, -3.0, 1.5])
+    mmap = ff.MomentumMap(scenario.robot)
+
+    def rhs(t, y):
+        path = problem.family.at_times(beta, np.array([t]), 20.0)
+        omega = mmap.f1(path.q[0]) @ path.qd[0]
+        return 0.5 * att.quat_multiply(y, np.concatenate([omega, [0.0]]))
+
+    sol = solve_ivp(
+        rhs, (0.0, 20.0), problem.start_quaternion, method="DOP853", rtol=1e-13, atol=1e-14
+    )
+    reference = sol.y[:, -1] / np.linalg.norm(sol.y[:, -1])
+    assert att.geodesic_angle(problem.achieved(beta), reference) < 1e-10
