@@ -145,3 +145,34 @@ def test_browser_plays_a_composed_servicer_with_meshes(tmp_path):
         assert shot.std() > 20.0
         assert len(np.unique(shot.reshape(-1, 3), axis=0)) > 200
     assert (np.abs(early - late).sum(axis=2) > 30).mean() > 0.002
+
+
+def test_show_serves_until_interrupted(tmp_path, worked_plan):
+    import re
+    import signal
+    import time
+    import urllib.request
+
+    plan_path = worked_plan.save(tmp_path / "p.json")
+    before = _servers()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "freefloat.cli", "show", str(plan_path)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        line = proc.stdout.readline()
+        match = re.search(r"open (http://127\.0\.0\.1:\d+/static/)", line)
+        assert match, line
+        page = urllib.request.urlopen(match.group(1), timeout=30).read().decode()
+        assert "meshcat" in page.lower()
+        assert _servers() == before + 1
+    finally:
+        time.sleep(0.5)
+        proc.send_signal(signal.SIGINT)
+        code = proc.wait(timeout=30)
+    assert code == 0
+    assert "Traceback" not in proc.stderr.read()
+    time.sleep(0.5)
+    assert _servers() == before
