@@ -76,3 +76,10 @@ def yaw_change(c1: np.ndarray, c2: np.ndarray, duration: float) -> float:
         return g1 * v1(t) + g2 * v2(t)
 
     return quad(rate, 0.0, duration, epsabs=1e-13, epsrel=1e-13, limit=500)[0]
+
+
+def central_jacobian(fun, x: np.ndarray, eps: float) -> np.ndarray:
+    """Central finite differences of ``fun`` at ``x``; columns are the derivatives (last axis)."""
+    x = np.asarray(x, dtype=float)
+    columns = [(fun(x + eps * e) - fun(x - eps * e)) / (2 * eps) for e in np.eye(x.shape[-1])]
+    return np.stack(columns, axis=-1)

@@ -14,9 +14,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
 import re
-import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -25,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError, ModelError, UnknownNameError
+from .files import atomic_write
 from .model import example_robot_data_dir
 
 __all__ = ["ARMS", "ServicerSpec", "arm_urdf", "compose_servicer", "resolve_mesh"]
@@ -237,17 +236,7 @@ def compose_servicer(spec: ServicerSpec, output: str | Path) -> Path:
         errors = "; ".join(str(e) for e in getattr(urdf, "errors", []))
         raise ModelError(f"the composed URDF does not validate: {errors or 'unknown error'}")
 
-    target = Path(output).expanduser().resolve()
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".urdf", dir=target.parent)
-    os.close(fd)
-    try:
-        urdf.write_xml_file(tmp)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return target
+    return atomic_write(output, lambda tmp: urdf.write_xml_file(str(tmp)), suffix=".urdf")
 
 
 def _mesh_names(robot: Any) -> list[str]:

@@ -11,8 +11,6 @@ from __future__ import annotations
 import copy
 import json
 import math
-import os
-import tempfile
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -23,6 +21,7 @@ import numpy as np
 from .attitude import geodesic_angle, zyx_from_quat
 from .dynamics import inverse_dynamics
 from .errors import PlanFileError, SolverError, VerificationError
+from .files import atomic_write_text
 from .problem import Problem
 from .scenario import Scenario
 from .search import search, velocity_check
@@ -173,20 +172,7 @@ class Plan:
 
     def save(self, path: str | Path) -> Path:
         """Write the plan to ``path`` atomically; return the absolute path."""
-        target = Path(path).expanduser().resolve()
-        text = json.dumps(self.to_dict(), indent=1, allow_nan=False)
-        target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent)
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8") as handle:
-                handle.write(text)
-                handle.flush()
-                os.fsync(handle.fileno())
-            os.replace(tmp, target)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
-        return target
+        return atomic_write_text(path, json.dumps(self.to_dict(), indent=1, allow_nan=False))
 
     @classmethod
     def load(cls, path: str | Path) -> Plan:

@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import os
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,6 +24,7 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import FreeFloatError, ViewerError
+from .files import atomic_write_text
 from .model import Robot, load_robot
 from .plan import Plan
 
@@ -209,19 +208,9 @@ def write_html(plan: Plan, path: str | Path, speed: float = 1.0) -> Path:
 
     The file is written atomically: a failure leaves nothing behind.
     """
-    target = Path(path).expanduser().resolve()
     with build_playback(plan, speed) as playback:
         html = playback.html()
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(html)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return target
+    return atomic_write_text(path, html)
 
 
 def serve(plan: Plan, speed: float = 1.0, announce: Any = print) -> None:

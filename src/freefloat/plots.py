@@ -11,8 +11,6 @@ plan's samples unchanged apart from the unit conversion named in its axis label.
 from __future__ import annotations
 
 import math
-import os
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -20,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError, ViewerError
+from .files import atomic_write
 from .plan import Plan
 
 __all__ = ["TOPICS", "figures", "save_figures"]
@@ -146,16 +145,12 @@ def save_figures(plan: Plan, directory: str | Path, svg: bool = False) -> list[P
     folder.mkdir(parents=True, exist_ok=True)
     written = []
     for name, fig in figures(plan).items():
+        dpi = 80 if name == "overview" else 110
         for ext in ("png", "svg") if svg else ("png",):
-            target = folder / f"{name}.{ext}"
-            fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".{ext}", dir=folder)
-            os.close(fd)
-            try:
-                fig.savefig(tmp, dpi=110 if name != "overview" else 80, format=ext)
-                os.replace(tmp, target)
-            except BaseException:
-                Path(tmp).unlink(missing_ok=True)
-                raise
-            written.append(target)
+
+            def save(tmp: Path, fig: Any = fig, ext: str = ext, dpi: int = dpi) -> None:
+                fig.savefig(tmp, dpi=dpi, format=ext)
+
+            written.append(atomic_write(folder / f"{name}.{ext}", save, suffix=f".{ext}"))
         plt.close(fig)
     return written
