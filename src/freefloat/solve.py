@@ -310,7 +310,9 @@ def solve(problem: Problem, options: SolveOptions | None = None) -> Solution:
     if np.linalg.norm(problem.residual(zero)) < 0.01 * tol and within_limits(zero):
         method, candidates = "none (the quintic path already reaches the goal)", [zero]
     elif problem.n_free == 1 and problem.n_equations == 1:
-        method = "bracket scan + Brent secant"
+        method = "bracket scan + " + (
+            "safeguarded Newton" if problem.planar_map is not None else "Brent secant"
+        )
         candidates, iterations = _scan(problem, options)
         tried.append(
             f"{options.scan_points}-point scan of a bracket of +-{options.max_deviation:g} rad "
