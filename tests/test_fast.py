@@ -76,3 +76,14 @@ def test_magnus_integration_agrees_with_a_tight_adaptive_reference(name):
     )
     reference = sol.y[:, -1] / np.linalg.norm(sol.y[:, -1])
     assert att.geodesic_angle(problem.achieved(beta), reference) < 1e-10
+
+
+def test_replaced_problems_share_no_cached_values(worked_scenario):
+    s = worked_scenario
+    problem = ff.build_problem(
+        s.robot, s.start, s.goal, s.start_attitude, s.goal_attitude, 10.0, extra={"q2": 1}
+    )
+    beta = np.array([-40.0])
+    problem.residual(beta)
+    other = dataclasses.replace(problem, yaw_change=problem.yaw_change + 0.5)
+    assert other.residual(beta) == pytest.approx(problem.residual(beta) - 0.5, abs=1e-14)

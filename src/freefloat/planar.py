@@ -86,26 +86,35 @@ class PlanarMap:
         )
         return feats, dfeats
 
+    def _parts(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Membership matrix and the constant, cosine and sine coefficients of [den | num]."""
+        parts = self.__dict__.get("_parts_cache")
+        if parts is None:
+            member = self.member
+            spans = member.shape[0]
+            both = np.concatenate([self.den[:, None], self.num], axis=1)  # (F, 1 + N)
+            parts = (member, both[0], both[1 : 1 + spans], both[1 + spans :])
+            object.__setattr__(self, "_parts_cache", parts)
+        return parts
+
     def gains(self, q: np.ndarray) -> np.ndarray:
         """Gains ``g(q)`` (..., N) for joint values ``q`` (..., N) in rad."""
-        feats, _ = self._features(np.asarray(q, dtype=float), False)
-        return -(feats @ self.num) / (feats @ self.den)[..., None]
+        member, const, cos_c, sin_c = self._parts()
+        sums = np.asarray(q, dtype=float) @ member.T
+        both = const + np.cos(sums) @ cos_c + np.sin(sums) @ sin_c  # (..., 1 + N)
+        return -both[..., 1:] / both[..., :1]
 
     def gains_and_derivatives(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Gains (..., N) and their derivatives ``dg_i/dq_j`` (..., N, N)."""
-        q = np.asarray(q, dtype=float)
-        feats, _ = self._features(q, False)
-        member = self.__dict__["_member"]
-        spans = member.shape[0]
-        cos, sin = feats[..., 1 : 1 + spans], feats[..., 1 + spans :]
-        num = feats @ self.num  # (..., N)
-        den = feats @ self.den  # (...)
-        num_c, num_s = self.num[1 : 1 + spans], self.num[1 + spans :]  # (S, N)
-        den_c, den_s = self.den[1 : 1 + spans], self.den[1 + spans :]  # (S,)
+        member, const, cos_c, sin_c = self._parts()
+        sums = np.asarray(q, dtype=float) @ member.T
+        cos, sin = np.cos(sums), np.sin(sums)
+        both = const + cos @ cos_c + sin @ sin_c  # (..., 1 + N): [den | num]
+        den, num = both[..., 0], both[..., 1:]
         # d/dq_j of a span's cos is -sin when joint j is in the span (and cos for its sin).
-        weights = -sin[..., :, None] * num_c + cos[..., :, None] * num_s  # (..., S, N)
-        dnum = np.swapaxes(weights, -1, -2) @ member  # (..., N, N): [i, j]
-        dden = (-sin * den_c + cos * den_s) @ member  # (..., N)
+        weights = -sin[..., :, None] * cos_c + cos[..., :, None] * sin_c  # (..., S, 1 + N)
+        dboth = np.swapaxes(weights, -1, -2) @ member  # (..., 1 + N, N): [i, j]
+        dden, dnum = dboth[..., 0, :], dboth[..., 1:, :]
         gains = -num / den[..., None]
         dgains = -dnum / den[..., None, None] + num[..., :, None] * dden[..., None, :] / (
             den[..., None, None] ** 2

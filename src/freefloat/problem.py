@@ -88,8 +88,11 @@ class Problem:
     steps: int = 64
     evaluations: int = 0
     map_evaluations: int = 0
-    _grid: tuple[np.ndarray, ...] = field(default=(), repr=False)
-    _grids: dict[int | str, tuple[np.ndarray, ...]] = field(default_factory=dict, repr=False)
+    _grid: tuple[np.ndarray, ...] = field(default=(), init=False, repr=False)
+    _grids: dict[int | str, tuple[np.ndarray, ...]] = field(
+        default_factory=dict, init=False, repr=False
+    )
+    _memo: dict[tuple[int, bytes], np.ndarray] = field(default_factory=dict, init=False, repr=False)
 
     def __post_init__(self) -> None:
         self.set_steps(self.steps)
@@ -187,7 +190,19 @@ class Problem:
         return propagate(self.start_quaternion, increments)[-1]
 
     def residual(self, beta: np.ndarray) -> np.ndarray:
-        """``h(beta)`` (rad): 1 equation (planar) or 3 (rotation vector in the goal frame)."""
+        """``h(beta)`` (rad): 1 equation (planar) or 3 (rotation vector in the goal frame).
+
+        The last few values are remembered (by step count and ``beta``), since the solver asks
+        again for some of them (the quintic path's, the chosen root's).
+        """
+        key = (self.steps, np.asarray(beta, dtype=float).tobytes())
+        if key not in self._memo:
+            if len(self._memo) >= 8:
+                self._memo.pop(next(iter(self._memo)))
+            self._memo[key] = self._residual(beta)
+        return self._memo[key].copy()
+
+    def _residual(self, beta: np.ndarray) -> np.ndarray:
         if self.planar:
             assert self.yaw_change is not None
             return np.array([self.yaw_change_of(beta) - self.yaw_change])
@@ -328,8 +343,7 @@ class Problem:
     def choose_steps(self, beta: np.ndarray | None = None) -> int:
         """Double the step count until the integration error estimate is tiny; return it."""
         beta = np.zeros(self.n_free) if beta is None else beta
-        steps = max(_MIN_STEPS, self.steps // 2)
-        self.set_steps(steps)
+        self.set_steps(max(_MIN_STEPS, self.steps))
         while self.integration_error(beta) > INTEGRATION_TOLERANCE and self.steps < _MAX_STEPS:
             self.set_steps(2 * self.steps)
         return self.steps

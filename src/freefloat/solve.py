@@ -129,8 +129,12 @@ def _polish(
     return beta, r
 
 
-def _scan(problem: Problem, options: SolveOptions) -> tuple[list[np.ndarray], int]:
-    """All roots of the scalar residual in the bracket; returns them and the iterations.
+def _scan(
+    problem: Problem, options: SolveOptions
+) -> tuple[list[np.ndarray], int, list[np.ndarray]]:
+    """All roots of the scalar residual in the bracket.
+
+    Returns the roots, the iterations, and the residuals of the roots when known.
 
     Sign changes on a coarse grid are refined with Brent's method, or, with a planar map,
     all at once by safeguarded Newton steps with the exact slope.
@@ -165,12 +169,12 @@ def _scan(problem: Problem, options: SolveOptions) -> tuple[list[np.ndarray], in
         )
         iterations += info.iterations
         roots.append(np.array([root]))
-    return roots, iterations
+    return roots, iterations, []
 
 
 def _newton_brackets(
     problem: Problem, lo: np.ndarray, hi: np.ndarray, seed: np.ndarray, iterations: int = 60
-) -> tuple[list[np.ndarray], int]:
+) -> tuple[list[np.ndarray], int, list[np.ndarray]]:
     """Refine every bracketed root at once (vectorised over the brackets).
 
     Newton steps with the exact slope, kept inside each bracket by bisection.
@@ -178,19 +182,20 @@ def _newton_brackets(
     assert problem.yaw_change is not None
     target = problem.yaw_change
     if len(lo) == 0:
-        return [], 0
+        return [], 0, []
     values, _ = problem.yaw_changes_and_slopes(np.concatenate([lo, hi]))
     f_lo, f_hi = values[: len(lo)] - target, values[len(lo) :] - target
     keep = np.sign(f_lo) != np.sign(f_hi)  # the coarse scan saw a change the fine one does not
     lo, hi, f_lo = lo[keep], hi[keep], f_lo[keep]
     x = np.clip(seed[keep], lo, hi)  # the secant point of the coarse scan
     done = iterations
+    f = np.full(len(x), np.inf)
     for iteration in range(1, iterations + 1):
         f, slope = problem.yaw_changes_and_slopes(x)
         f = f - target
         if np.all(np.abs(f) < 1e-14):
             done = iteration
-            break
+            return [np.array([r]) for r in x], done, [np.array([v]) for v in f]
         left = np.sign(f) == np.sign(f_lo)
         lo, f_lo = np.where(left, x, lo), np.where(left, f, f_lo)
         hi = np.where(left, hi, x)
@@ -198,7 +203,7 @@ def _newton_brackets(
             newton = x - f / slope
         inside = np.isfinite(newton) & (newton > lo) & (newton < hi)
         x = np.where(np.abs(f) < 1e-14, x, np.where(inside, newton, 0.5 * (lo + hi)))
-    return [np.array([root]) for root in x], done
+    return [np.array([root]) for root in x], done, []
 
 
 def _broyden(problem: Problem, beta: np.ndarray, options: SolveOptions) -> tuple[np.ndarray, int]:
@@ -298,6 +303,7 @@ def solve(problem: Problem, options: SolveOptions | None = None) -> Solution:
     zero = np.zeros(problem.n_free)
     tried: list[str] = []
     candidates: list[np.ndarray] = []
+    known: dict[int, np.ndarray] = {}  # residuals already computed at converged candidates
     iterations = 0
 
     def within_limits(beta: np.ndarray) -> bool:
@@ -313,7 +319,8 @@ def solve(problem: Problem, options: SolveOptions | None = None) -> Solution:
         method = "bracket scan + " + (
             "safeguarded Newton" if problem.planar_map is not None else "Brent secant"
         )
-        candidates, iterations = _scan(problem, options)
+        candidates, iterations, residuals = _scan(problem, options)
+        known = dict(enumerate(residuals))
         tried.append(
             f"{options.scan_points}-point scan of a bracket of +-{options.max_deviation:g} rad "
             "path deviation"
@@ -357,8 +364,11 @@ def solve(problem: Problem, options: SolveOptions | None = None) -> Solution:
 
     roots = []
     best_vector = problem.residual(zero)  # the quintic path always respects the limits
-    for beta in candidates:
-        beta, vector = _polish(problem, beta, tol)
+    for index, beta in enumerate(candidates):
+        if index in known:  # refined to 1e-14 rad by the vectorised Newton: no polishing
+            vector = known[index]
+        else:
+            beta, vector = _polish(problem, beta, tol)
         residual = float(np.linalg.norm(vector))
         if not within_limits(beta):
             continue
