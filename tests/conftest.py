@@ -39,5 +39,18 @@ def worked_plan(worked_scenario: ff.Scenario) -> ff.Plan:
     return ff.plan(worked_scenario)
 
 
+def worked_problem(scenario: ff.Scenario, extra: dict[str, int]) -> ff.Problem:
+    """The worked example's problem (T = 10 s) with the given free coefficients."""
+    return ff.build_problem(
+        scenario.robot,
+        scenario.start,
+        scenario.goal,
+        scenario.start_attitude,
+        scenario.goal_attitude,
+        10.0,
+        extra=extra,
+    )
+
+
 def deg(x: float) -> float:
     return math.radians(x)

@@ -30,13 +30,8 @@ def test_planar_map_equals_the_closed_form(planar_robot):
 
 
 def test_planar_map_is_refused_for_prismatic_joints(tmp_path):
-    body = urdfs.BASE.format(mass=50.0, i=8.0)
-    body += urdfs.joint("slide", "base", "l1", "prismatic", (1, 0, 0), limits=(-0.2, 0.4))
-    body += urdfs.link("l1", mass=4.0)
-    body += urdfs.joint("turn", "l1", "l2", "revolute", (0, 0, 1))
-    body += urdfs.link("l2", mass=3.0)
     path = tmp_path / "p.urdf"
-    path.write_text(urdfs.robot(body))
+    path.write_text(urdfs.slider_arm())
     assert identify(ff.load_robot(path), np.array([0.0, 0.0, 1.0])) is None
 
 

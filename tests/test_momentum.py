@@ -86,13 +86,8 @@ def test_spatial_robot_map_is_not_planar(tmp_path):
 
 
 def test_prismatic_planar_robot_is_planar(tmp_path):
-    body = urdfs.BASE.format(mass=50.0, i=8.0)
-    body += urdfs.joint("slide", "base", "l1", "prismatic", (1, 0, 0), limits=(-0.2, 0.4))
-    body += urdfs.link("l1", mass=4.0)
-    body += urdfs.joint("turn", "l1", "l2", "revolute", (0, 0, 1))
-    body += urdfs.link("l2", mass=3.0)
     path = tmp_path / "p.urdf"
-    path.write_text(urdfs.robot(body))
+    path.write_text(urdfs.slider_arm())
     robot = ff.load_robot(path)
     assert [j.kind for j in robot.joints] == ["prismatic", "revolute"]
     assert ff.is_planar(robot)

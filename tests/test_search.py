@@ -92,3 +92,19 @@ def test_velocity_limit_reports_the_shortest_duration(tmp_path):
         robot, err.shortest_duration * 1.001, start, goal, goal_attitude=reached, extra={"q1": 1}
     )
     assert ff.plan(slow).verification["passed"]
+
+
+def test_spatial_failure_reports_the_residual_per_axis_and_what_was_tried():
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "panda_servicer.toml")
+    far = ff.quat_from_zyx(math.radians(40.0), 0.0, 0.0)  # beyond the Panda within its limits
+    quick = ff.SolveOptions(starts=2, time_budget=2.0)
+    impossible = ff.Scenario(**{**scenario.__dict__, "goal_attitude": far})
+    with pytest.raises(ff.SolverError) as info:
+        ff.plan(impossible, quick)
+    err = info.value
+    assert err.per_axis is not None and len(err.per_axis) == 3
+    message = str(err)
+    assert "per axis x, y, z:" in message
+    assert "freedom panda_joint1+1, panda_joint2+1, panda_joint3+1: best residual" in message
+    assert "freedom panda_joint1+2, panda_joint2+2, panda_joint3+2" in message
+    assert "\n" not in message

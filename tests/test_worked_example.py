@@ -10,7 +10,7 @@ import pytest
 import freefloat as ff
 
 import reference as ref
-from conftest import ROOT, deg
+from conftest import ROOT, deg, worked_problem
 
 
 def test_virtual_manipulator_lengths():
@@ -139,15 +139,7 @@ def test_duration_does_not_change_the_path(worked_scenario, worked_plan, duratio
 
 @pytest.mark.parametrize("b26", [-5.5e-5, 2.4e-4, -4.4e-4])
 def test_attitude_integral_accurate_to_1e10(worked_scenario, b26):
-    problem = ff.build_problem(
-        worked_scenario.robot,
-        worked_scenario.start,
-        worked_scenario.goal,
-        worked_scenario.start_attitude,
-        worked_scenario.goal_attitude,
-        10.0,
-        extra={"q2": 1},
-    )
+    problem = worked_problem(worked_scenario, {"q2": 1})
     c1, c2 = ref.worked_example_coefficients(b26)
     assert problem.yaw_change_of(np.array([b26 * 10.0**6])) == pytest.approx(
         ref.yaw_change(c1, c2, 10.0), abs=1e-10
@@ -194,15 +186,7 @@ def test_planar_robot_described_in_another_plane_gives_the_same_plan(tmp_path, w
 def test_spatial_integrator_agrees_with_the_planar_integral(worked_scenario, worked_plan):
     import dataclasses
 
-    problem = ff.build_problem(
-        worked_scenario.robot,
-        worked_scenario.start,
-        worked_scenario.goal,
-        worked_scenario.start_attitude,
-        worked_scenario.goal_attitude,
-        10.0,
-        extra={"q2": 1},
-    )
+    problem = worked_problem(worked_scenario, {"q2": 1})
     beta = np.array([worked_plan.free_parameters["q2"][0] * 10.0**6])
     spatial = dataclasses.replace(problem, planar=False)
     assert ff.geodesic_angle(spatial.achieved(beta), problem.achieved(beta)) < 1e-12

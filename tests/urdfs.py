@@ -69,3 +69,13 @@ def spatial_arm(
     body += joint("tip_joint", parent, "tip", "fixed")
     body += '\n  <link name="tip"/>'
     return robot(body, "spatial")
+
+
+def slider_arm() -> str:
+    """A planar arm with a prismatic joint (along base x) and a revolute one (about base z)."""
+    body = BASE.format(mass=50.0, i=8.0)
+    body += joint("slide", "base", "l1", "prismatic", (1, 0, 0), limits=(-0.2, 0.4))
+    body += link("l1", mass=4.0)
+    body += joint("turn", "l1", "l2", "revolute", (0, 0, 1))
+    body += link("l2", mass=3.0)
+    return robot(body)

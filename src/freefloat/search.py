@@ -112,6 +112,7 @@ def search(scenario: Scenario, options: SolveOptions) -> SearchResult:
     tried: list[str] = []
     first_error: FreeFloatError | None = None
     best = math.inf
+    best_axes: tuple[float, ...] | None = None
 
     for offset in offsets:
         goal = scenario.goal + offset
@@ -153,7 +154,8 @@ def search(scenario: Scenario, options: SolveOptions) -> SearchResult:
                     f"{label}, freedom {_describe(used, names)}: best residual "
                     f"{exc.best_residual:.3g} rad"
                 )
-                best = min(best, exc.best_residual)
+                if exc.best_residual < best:
+                    best, best_axes = exc.best_residual, exc.per_axis
                 first_error = first_error or exc
                 continue
             tried.append(f"{label}, freedom {_describe(used, names)}: solved")
@@ -184,6 +186,7 @@ def search(scenario: Scenario, options: SolveOptions) -> SearchResult:
         "no path reaches the goal attitude",
         best if math.isfinite(best) else math.nan,
         tried,
+        per_axis=best_axes,
         hint=hint,
     )
 
