@@ -289,3 +289,45 @@ def test_to_dict_is_a_copy(worked_plan):
     data = worked_plan.to_dict()
     data["path"]["coefficients"]["q2"][0] = 123.0
     assert worked_plan.coefficients["q2"][0] != 123.0
+
+
+def test_bad_polynomial_degree():
+    with pytest.raises(ff.InputError, match="polynomial degree 4 is invalid; each must be >= 5"):
+        ff.PathFamily([0.0, 0.0], [1.0, 1.0], (5, 4))
+
+
+def test_zero_quaternion_in_api(planar_robot):
+    with pytest.raises(ff.InputError, match="start attitude must be a non-zero quaternion"):
+        ff.build_problem(planar_robot, [0, 0], [1, 1], [0, 0, 0, 0], [0, 0, 0, 1], 1.0)
+
+
+def test_both_attitude_forms_in_a_scenario(tmp_path):
+    text = scenario_text().replace(
+        "base_zyx_deg = [-50.0, 0.0, 0.0]",
+        "base_zyx_deg = [-50.0, 0.0, 0.0]\nbase_quaternion_xyzw = [0.0, 0.0, 0.0, 1.0]",
+    )
+    msg = _scenario_error(tmp_path, text, ff.ScenarioError)
+    assert "[start] gives both base_zyx_deg and base_quaternion_xyzw; give one" in msg
+
+
+def test_goal_with_joints_and_cartesian_position(tmp_path):
+    text = scenario_text().replace("[goal]\n", "[goal]\nend_effector_xyz = [1.0, 0.0, 0.0]\n")
+    msg = _scenario_error(tmp_path, text, ff.ScenarioError)
+    assert "[goal] gives both joints and end_effector_xyz; give one" in msg
+
+
+def test_zero_quaternion_in_a_scenario(tmp_path):
+    text = scenario_text().replace(
+        "base_zyx_deg = [0.0, 0.0, 0.0]", "base_quaternion_xyzw = [0.0, 0.0, 0.0, 0.0]"
+    )
+    assert "base_quaternion_xyzw" in text
+    msg = _scenario_error(tmp_path, text, ff.ScenarioError)
+    assert "[goal] base_quaternion_xyzw must be non-zero" in msg
+
+
+def test_cli_rejects_too_few_samples(capsys, tmp_path):
+    from freefloat.cli import main
+
+    assert main(["plan", "--samples", "1", "-o", str(tmp_path / "p.json")]) == 2
+    assert "--samples must be at least 2, got 1" in capsys.readouterr().err
+    assert not (tmp_path / "p.json").exists()
