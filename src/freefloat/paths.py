@@ -149,6 +149,23 @@ class PathFamily:
             counters[i] += 1
         return beta
 
+    @cached_property
+    def _coefficient_matrix(self) -> np.ndarray:
+        """(max degree + 1, N) coefficients of the quintic paths (beta = 0), zero-padded."""
+        out = np.zeros((max(self.degrees) + 1, self.n_joints))
+        for i, c in enumerate(self.coefficients(np.zeros(self.n_free))):
+            out[: len(c), i] = c
+        return out
+
+    def _powers(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Powers of ``s`` and their first two derivatives, each (len(s), max degree + 1)."""
+        j = np.arange(max(self.degrees) + 1)
+        s = np.asarray(s, dtype=float)[:, None]
+        powers = s**j
+        first = j * s ** np.maximum(j - 1, 0)
+        second = j * (j - 1) * s ** np.maximum(j - 2, 0)
+        return powers, first, second
+
     def linear_map(self, s: np.ndarray) -> tuple[PathSamples, np.ndarray, np.ndarray]:
         """The path at instants ``s`` as an affine function of ``beta``.
 
@@ -157,29 +174,24 @@ class PathFamily:
             (len(s), N, n_free) arrays with ``q = base.q + dq @ beta`` and
             ``q_s = base.qd + dqs @ beta``.
         """
-        s = np.asarray(s, dtype=float)
-        base = self.evaluate(np.zeros(self.n_free), s)
-        dq = np.zeros((len(s), self.n_joints, self.n_free))
+        powers, first, second = self._powers(np.asarray(s, dtype=float))
+        c = self._coefficient_matrix
+        base = PathSamples(powers @ c, first @ c, second @ c)
+        dq = np.zeros((len(powers), self.n_joints, self.n_free))
         dqs = np.zeros_like(dq)
-        for k, (i, _) in enumerate(self._index):
-            coeffs = self._basis[k]
-            dq[:, i, k] = np.polynomial.polynomial.polyval(s, coeffs)
-            dqs[:, i, k] = np.polynomial.polynomial.polyval(
-                s, np.polynomial.polynomial.polyder(coeffs)
-            )
+        joints = [i for i, _ in self._index]
+        dq[:, joints, np.arange(self.n_free)] = powers @ self._basis.T
+        dqs[:, joints, np.arange(self.n_free)] = first @ self._basis.T
         return base, dq, dqs
 
     def evaluate(self, beta: np.ndarray, s: np.ndarray) -> PathSamples:
         """Positions and s-derivatives (per unit s, per unit s^2) at normalised instants ``s``."""
-        s = np.asarray(s, dtype=float)
-        poly = np.polynomial.polynomial
-        cols: list[list[np.ndarray]] = [[], [], []]
-        for c in self.coefficients(beta):
-            d1 = poly.polyder(c)
-            cols[0].append(poly.polyval(s, c))
-            cols[1].append(poly.polyval(s, d1))
-            cols[2].append(poly.polyval(s, poly.polyder(d1)))
-        return PathSamples(*(np.stack(col, axis=-1) for col in cols))
+        beta = self._check(beta)
+        c = self._coefficient_matrix.copy()
+        for k, (i, _) in enumerate(self._index):
+            c[:, i] += beta[k] * self._basis[k]
+        powers, first, second = self._powers(np.asarray(s, dtype=float))
+        return PathSamples(powers @ c, first @ c, second @ c)
 
     def at_times(self, beta: np.ndarray, t: np.ndarray, duration: float) -> PathSamples:
         """Positions (rad or m), rates (per s) and accelerations (per s^2) at times ``t`` (s)."""

@@ -183,7 +183,7 @@ def _newton_brackets(
     target = problem.yaw_change
     if len(lo) == 0:
         return [], 0, []
-    values, _ = problem.yaw_changes_and_slopes(np.concatenate([lo, hi]))
+    values = problem.yaw_changes(np.concatenate([lo, hi])[:, None])
     f_lo, f_hi = values[: len(lo)] - target, values[len(lo) :] - target
     keep = np.sign(f_lo) != np.sign(f_hi)  # the coarse scan saw a change the fine one does not
     lo, hi, f_lo = lo[keep], hi[keep], f_lo[keep]
