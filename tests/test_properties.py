@@ -109,3 +109,32 @@ def test_random_arms_plan_verified_or_raise(tmp_path, urdf, data):
     assert math.isfinite(again.momentum_max) and again.momentum_max < 1e-9 * max(
         1.0, again.momentum_scale
     )
+
+
+def test_regression_diverging_sqp_is_a_failed_attempt_not_a_crash():
+    """Found by the property test: SLSQP wandered to non-finite coefficients on this arm."""
+    from conftest import ROOT
+
+    robot = ff.load_robot(ROOT / "tests" / "data" / "prismatic_tilted_arm.urdf")
+    rng = np.random.default_rng(164)
+    lower = np.array([max(j.lower, -1.5) for j in robot.joints])
+    upper = np.array([min(j.upper, 1.5) for j in robot.joints])
+    outcomes = []
+    for _ in range(2):
+        start, goal = rng.uniform(lower, upper), rng.uniform(lower, upper)
+        quat = ff.quat_from_zyx(*rng.uniform(-1, 1, 3))
+        probe = ff.build_problem(robot, start, goal, quat, quat, 4.0, check_bounds=False)
+        scenario = ff.Scenario(
+            robot,
+            4.0,
+            dict(zip(robot.joint_names, start, strict=True)),
+            dict(zip(robot.joint_names, goal, strict=True)),
+            start_attitude=quat,
+            goal_attitude=probe.achieved(rng.normal(size=probe.n_free)),
+        )
+        try:
+            outcomes.append(ff.plan(scenario, samples=41).verification["passed"])
+        except ff.FreeFloatError as exc:  # anything else would fail the test
+            outcomes.append(type(exc).__name__)
+    assert outcomes[0] is True
+    assert outcomes[1] in (True, "SolverError")

@@ -127,6 +127,8 @@ class Problem:
         """Base rates at the integration nodes and the joint rates there (per unit s)."""
         _, q0, qs0, dq, dqs = self._grid
         beta = np.asarray(beta, dtype=float)
+        if not np.all(np.isfinite(beta)):
+            raise FloatingPointError("non-finite free path coefficients")
         q = q0 + dq @ beta
         qs = qs0 + dqs @ beta
         self.evaluations += 1

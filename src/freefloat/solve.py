@@ -336,19 +336,24 @@ def solve(problem: Problem, options: SolveOptions | None = None) -> Solution:
                 tried.append(f"stopped: time budget of {options.time_budget:g} s spent")
                 break
             name = "minimum-norm SQP with joint limits"
-            beta = None
-            if square:
-                beta, its = _broyden(problem, start, options)
-                name = "Broyden"
-                if np.linalg.norm(problem.residual(beta)) > tol:
-                    beta, its = _levenberg_marquardt(problem, start, options)
-                    name = "Broyden, then Levenberg-Marquardt"
-                if np.linalg.norm(problem.residual(beta)) > tol or not within_limits(beta):
-                    tried.append(f"{name} from {label}")
-                    beta = None
-                    name = "SQP with joint limits"
-            if beta is None:
-                beta, its = _sqp(problem, start, options)
+            try:
+                beta = None
+                if square:
+                    beta, its = _broyden(problem, start, options)
+                    name = "Broyden"
+                    if np.linalg.norm(problem.residual(beta)) > tol:
+                        beta, its = _levenberg_marquardt(problem, start, options)
+                        name = "Broyden, then Levenberg-Marquardt"
+                    if np.linalg.norm(problem.residual(beta)) > tol or not within_limits(beta):
+                        tried.append(f"{name} from {label}")
+                        beta = None
+                        name = "SQP with joint limits"
+                if beta is None:
+                    beta, its = _sqp(problem, start, options)
+            except (np.linalg.LinAlgError, FloatingPointError, ValueError) as exc:
+                # An optimiser that diverges is a failed attempt, not a crash.
+                tried.append(f"{name} from {label}: diverged ({type(exc).__name__})")
+                continue
             tried.append(f"{name} from {label}")
             candidates.append(beta)
             if np.linalg.norm(problem.residual(beta)) < tol:
