@@ -26,7 +26,7 @@ from .problem import Problem
 from .scenario import Scenario
 from .search import search, velocity_check
 from .solve import DEFAULT_TOLERANCE, Solution, SolveOptions
-from .verify import as_dict, verify_plan
+from .verify import as_dict, boundary_errors, verify_plan
 
 __all__ = [
     "FORMAT",
@@ -223,27 +223,6 @@ def _deg(values: np.ndarray) -> list[float]:
     return [math.degrees(float(v)) for v in values]
 
 
-def _check_boundary(problem: Problem, solution: Solution) -> float:
-    """Largest boundary-condition error of the planned polynomials (rad, rad/s, rad/s^2)."""
-    family, T = problem.family, problem.duration
-    coeffs = family.time_coefficients(solution.beta, T)
-    poly = np.polynomial.polynomial
-    worst = 0.0
-    for i, c in enumerate(coeffs):
-        d1, d2 = poly.polyder(c), poly.polyder(c, 2)
-        scale = max(1.0, abs(family.goal[i] - family.start[i]))
-        errors = [
-            poly.polyval(0.0, c) - family.start[i],
-            poly.polyval(T, c) - family.goal[i],
-            poly.polyval(0.0, d1) * T,
-            poly.polyval(T, d1) * T,
-            poly.polyval(0.0, d2) * T * T,
-            poly.polyval(T, d2) * T * T,
-        ]
-        worst = max(worst, max(abs(e) for e in errors) / scale)
-    return worst
-
-
 def plan(scenario: Scenario, options: SolveOptions | None = None, samples: int = 201) -> Plan:
     """Plan the scenario's motion and sample it.
 
@@ -307,7 +286,9 @@ def plan_from_solution(
     achieved = problem.achieved(solution.beta)
     error = geodesic_angle(achieved, problem.goal_quaternion)
     sampled_error = geodesic_angle(quats[-1], problem.goal_quaternion)
-    boundary = _check_boundary(problem, solution)
+    boundary = boundary_errors(
+        family.time_coefficients(solution.beta, T), family.start, family.goal, T
+    )["relative_max"]
     if max(error, sampled_error) > tolerance or boundary > BOUNDARY_TOLERANCE:
         raise SolverError(
             "the planned path misses its target (attitude error "

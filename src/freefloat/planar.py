@@ -33,6 +33,21 @@ def _spans(n: int) -> list[tuple[int, int]]:
     return [(a, b) for a in range(n) for b in range(a, n)]
 
 
+def _membership(n: int) -> np.ndarray:
+    """(spans, N) membership of each joint in each contiguous span of joints."""
+    spans = _spans(n)
+    member = np.zeros((len(spans), n))
+    for k, (a, b) in enumerate(spans):
+        member[k, a : b + 1] = 1.0
+    return member
+
+
+def _features(q: np.ndarray, member: np.ndarray) -> np.ndarray:
+    """Features (..., F): 1, then the cosines and the sines of every span's angle sum."""
+    sums = q @ member.T
+    return np.concatenate([np.ones((*q.shape[:-1], 1)), np.cos(sums), np.sin(sums)], axis=-1)
+
+
 @dataclass(frozen=True)
 class PlanarMap:
     """Cosine-polynomial form of a planar robot's gains ``g(q)`` (rad of yaw per rad).
@@ -54,43 +69,11 @@ class PlanarMap:
         """Number of joints."""
         return int(self.num.shape[1])
 
-    @property
-    def member(self) -> np.ndarray:
-        """(spans, N) membership of each joint in each contiguous span of joints."""
-        spans = _spans(self.n)
-        member = np.zeros((len(spans), self.n))
-        for k, (a, b) in enumerate(spans):
-            member[k, a : b + 1] = 1.0
-        return member
-
-    def _features(self, q: np.ndarray, derivatives: bool) -> tuple[np.ndarray, np.ndarray | None]:
-        """Features (..., F) and, optionally, their derivatives (..., F, N)."""
-        member = self.__dict__.get("_member")
-        if member is None:
-            member = self.member
-            object.__setattr__(self, "_member", member)
-        sums = q @ member.T
-        cos, sin = np.cos(sums), np.sin(sums)
-        ones = np.ones((*q.shape[:-1], 1))
-        feats = np.concatenate([ones, cos, sin], axis=-1)
-        if not derivatives:
-            return feats, None
-        n = self.n
-        dfeats = np.concatenate(
-            [
-                np.zeros((*q.shape[:-1], 1, n)),
-                -sin[..., :, None] * member,
-                cos[..., :, None] * member,
-            ],
-            axis=-2,
-        )
-        return feats, dfeats
-
     def _parts(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Membership matrix and the constant, cosine and sine coefficients of [den | num]."""
         parts = self.__dict__.get("_parts_cache")
         if parts is None:
-            member = self.member
+            member = _membership(self.n)
             spans = member.shape[0]
             both = np.concatenate([self.den[:, None], self.num], axis=1)  # (F, 1 + N)
             parts = (member, both[0], both[1 : 1 + spans], both[1 + spans :])
@@ -142,15 +125,14 @@ def identify(robot: Robot, axis: np.ndarray, seed: int = 0) -> PlanarMap | None:
     n = robot.n
     data = robot.model.createData()
     rng = np.random.default_rng(seed)
-    features = 1 + 2 * len(_spans(n))
-    probe = PlanarMap(axis, np.zeros(features), np.zeros((features, n)), 0.0)
+    member = _membership(n)
+    features = 1 + 2 * len(member)
     fit_q = rng.uniform(-np.pi, np.pi, (4 * features, n))
     check_q = rng.uniform(-np.pi, np.pi, (64, n))
     values = np.array([_angular_rows(robot, data, q, axis) for q in fit_q])
-    coeffs = np.linalg.lstsq(probe._features(fit_q, False)[0], values, rcond=None)[0]
-    candidate = PlanarMap(axis, coeffs[:, 0], coeffs[:, 1:], 0.0)
+    coeffs = np.linalg.lstsq(_features(fit_q, member), values, rcond=None)[0]
     truth = np.array([_angular_rows(robot, data, q, axis) for q in check_q])
-    predicted = candidate._features(check_q, False)[0] @ coeffs
+    predicted = _features(check_q, member) @ coeffs
     error = float(np.abs(predicted - truth).max() / np.abs(truth).max())
     if not error <= IDENTIFICATION_TOLERANCE:
         return None

@@ -102,10 +102,6 @@ class Solution:
     integration_error: float = 0.0
 
 
-def _path_length(problem: Problem, beta: np.ndarray) -> float:
-    return problem.path_length(beta)
-
-
 def _polish(
     problem: Problem, beta: np.ndarray, tol: float, iterations: int = 8
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -380,7 +376,7 @@ def solve(problem: Problem, options: SolveOptions | None = None) -> Solution:
         if residual < np.linalg.norm(best_vector):
             best_vector = vector
         if residual < tol:
-            roots.append(Root(beta, residual, _path_length(problem, beta)))
+            roots.append(Root(beta, residual, problem.path_length(beta)))
     roots.sort(key=lambda r: float(r.beta @ r.beta))
     if not roots:
         raise SolverError(

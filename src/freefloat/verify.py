@@ -37,7 +37,14 @@ from .momentum import MomentumMap
 if TYPE_CHECKING:
     from .plan import Plan
 
-__all__ = ["TOLERANCES", "Verification", "as_dict", "joint_torque_function", "verify_plan"]
+__all__ = [
+    "TOLERANCES",
+    "Verification",
+    "as_dict",
+    "boundary_errors",
+    "joint_torque_function",
+    "verify_plan",
+]
 
 #: Pass thresholds of the checks (see the module docstring for units).
 TOLERANCES: dict[str, float] = {
@@ -110,6 +117,36 @@ def _polys(plan: Plan) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndar
 def _state(coeffs: tuple[list[np.ndarray], ...], t: float) -> tuple[np.ndarray, ...]:
     poly = np.polynomial.polynomial
     return tuple(np.array([poly.polyval(t, c) for c in group]) for group in coeffs)
+
+
+def boundary_errors(
+    coefficients: list[np.ndarray], start: np.ndarray, goal: np.ndarray, duration: float
+) -> dict[str, float]:
+    """Boundary-condition errors of joint polynomials (ascending powers of t in s).
+
+    Returns the largest position error against ``start`` and ``goal`` (rad or m), the largest
+    end rate (per s) and acceleration (per s^2), and ``relative_max``: the largest of these
+    made dimensionless by the duration and the joint travel (at least 1).
+    """
+    poly = np.polynomial.polynomial
+    groups = (
+        coefficients,
+        [poly.polyder(c) for c in coefficients],
+        [poly.polyder(c, 2) for c in coefficients],
+    )
+    q0, qd0, qdd0 = _state(groups, 0.0)
+    q1, qd1, qdd1 = _state(groups, duration)
+    travel = np.maximum(1.0, np.abs(goal - start))
+    position = np.maximum(np.abs(q0 - start), np.abs(q1 - goal))
+    rate = np.maximum(np.abs(qd0), np.abs(qd1))
+    accel = np.maximum(np.abs(qdd0), np.abs(qdd1))
+    relative = np.maximum.reduce([position, rate * duration, accel * duration**2]) / travel
+    return {
+        "position": float(position.max()),
+        "rate": float(rate.max()),
+        "acceleration": float(accel.max()),
+        "relative_max": float(relative.max()),
+    }
 
 
 def joint_torque_function(plan: Plan, mmap: MomentumMap) -> Callable[[float], np.ndarray]:
@@ -199,20 +236,8 @@ def verify_plan(plan: Plan, robot: Robot | None = None, replay_steps: int = 500)
         "steps": float(result.steps),
     }
 
-    # Boundary conditions of the polynomials.
-    q0, qd0, qdd0 = _state(coeffs, 0.0)
-    q1, qd1, qdd1 = _state(coeffs, duration)
+    boundary = boundary_errors(coeffs[0], start, goal, duration)
     travel = np.maximum(1.0, np.abs(goal - start))
-    position = np.maximum(np.abs(q0 - start), np.abs(q1 - goal))
-    rate = np.maximum(np.abs(qd0), np.abs(qd1))
-    accel = np.maximum(np.abs(qdd0), np.abs(qdd1))
-    relative = np.maximum.reduce([position, rate * duration, accel * duration**2]) / travel
-    boundary = {
-        "position": float(position.max()),
-        "rate": float(rate.max()),
-        "acceleration": float(accel.max()),
-        "relative_max": float(relative.max()),
-    }
 
     # The samples are the polynomials, sampled.
     worst = 0.0
