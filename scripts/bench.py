@@ -36,7 +36,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import minimize, newton, root
 
 import freefloat as ff
-from freefloat import attitude as att
+from freefloat.physics import attitude as att
 
 ROBOTS = Path(ff.default_scenario_path()).parent
 

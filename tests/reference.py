@@ -1,6 +1,6 @@
-"""Independent truth for the tests: method.md section 7's closed form of the planar system.
+"""Independent truth for the tests: docs/method.md section 7's closed form of the planar system.
 
-Nothing here uses freefloat: the formulas are typed from method.md, and the yaw integral uses
+Nothing here uses freefloat: the formulas are typed from docs/method.md, and the yaw integral uses
 SciPy's adaptive quadrature on the polynomials as printed there.
 """
 
@@ -49,7 +49,7 @@ def end_effector(yaw: float, q1: float, q2: float) -> tuple[float, float]:
 
 
 def worked_example_coefficients(b26: float) -> tuple[np.ndarray, np.ndarray]:
-    """q1, q2 coefficients (highest power of t first) as printed in method.md section 8."""
+    """q1, q2 coefficients (highest power of t first) as printed in docs/method.md section 8."""
     pi = math.pi
     q1 = np.array([-7 * pi / 150000, 7 * pi / 6000, -7 * pi / 900, 0.0, 0.0, 4 * pi / 9])
     q2 = np.array(

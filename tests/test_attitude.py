@@ -9,7 +9,7 @@ import pinocchio as pin
 import pytest
 from scipy.integrate import solve_ivp
 
-from freefloat import attitude as att
+from freefloat.physics import attitude as att
 
 
 @pytest.mark.parametrize("seed", range(5))

@@ -9,8 +9,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import freefloat as ff
-from freefloat import attitude as att
-from freefloat.planar import identify
+from freefloat.physics import attitude as att
+from freefloat.physics.planar_map import identify
 
 import reference as ref
 import urdfs

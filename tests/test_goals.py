@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import freefloat as ff
-from freefloat import attitude as att
 from freefloat.cli import main
+from freefloat.physics import attitude as att
 
 import reference as ref
 import urdfs
@@ -61,7 +61,7 @@ def test_cartesian_pose_goal_on_a_servicer(tmp_path):
     known = np.array([0.4, -1.2, 1.4, -1.0, -1.3, 0.2])
     quat = ff.quat_from_zyx(0.1, -0.05, 0.02)
     pose = mmap.end_effector_pose(known, quat)
-    from freefloat.cartesian import solve_cartesian_goal
+    from freefloat.problem.cartesian import solve_cartesian_goal
 
     start = np.array([0.0, -1.57, 1.57, -1.57, -1.57, 0.0])
     found = solve_cartesian_goal(mmap, pose.translation, quat, start, pose.rotation)
@@ -105,7 +105,7 @@ def test_goal_at_pitch_90_degrees(tmp_path):
     )
     plan = ff.plan(scenario)
     assert plan.base.attitude_error_rad < 1e-9
-    assert plan.verification["passed"]
+    assert plan.verification.passed
     assert plan.base.achieved_zyx_deg[1] == pytest.approx(90.0, abs=1e-4)
     assert ff.geodesic_angle(np.array(plan.base.achieved_quaternion_xyzw), target) < 1e-9
 

@@ -72,7 +72,7 @@ def test_sampled_base_motion_is_consistent_with_the_map(worked_plan, planar_robo
     k = 100
     fd = (pos[k + 1] - pos[k - 1]) / (t[k + 1] - t[k - 1])
     twist = mmap.base_twist_map(np.array(s.q[k])) @ np.array(s.qd[k])
-    rot = ff.attitude.quat_to_matrix(np.array(s.base_quaternion_xyzw[k]))
+    rot = ff.physics.attitude.quat_to_matrix(np.array(s.base_quaternion_xyzw[k]))
     assert fd == pytest.approx(rot @ twist[:3], abs=1e-4)
 
 

@@ -84,3 +84,12 @@ def test_installed_copy_plans_the_shipped_example(wheel, tmp_path):
     )
     lines = out.stdout.split()
     assert all(line.startswith(str(tmp_path / "site")) for line in lines)
+
+
+def test_plan_format_module_is_strictly_typed():
+    """The plan file format passes ``mypy --strict`` (typed records, no bare dicts of Any)."""
+    mypy = pytest.importorskip("mypy.api")
+    out, err, status = mypy.run(
+        ["--strict", str(ROOT / "src" / "freefloat" / "plans" / "format.py")]
+    )
+    assert status == 0, out + err

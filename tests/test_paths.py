@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from freefloat.paths import PathFamily, basis_coefficients
+from freefloat.problem.paths import PathFamily, basis_coefficients
 
 
 @pytest.mark.parametrize("power", [6, 7, 9, 12])

@@ -10,7 +10,7 @@ import pytest
 
 import freefloat as ff
 from freefloat.cli import main
-from freefloat.playback import EXTRAS, build_playback, write_html
+from freefloat.viz.playback import EXTRAS, build_playback, write_html
 
 from browser import screenshot
 
@@ -53,9 +53,9 @@ def test_animation_link_poses_carry_the_joint_angles(playback, worked_plan):
 
     def rotations(name):
         _, quats = _track(playback, name, "quaternion")
-        return [ff.attitude.quat_to_matrix(q) for q in quats]
+        return [ff.physics.attitude.quat_to_matrix(q) for q in quats]
 
-    base = [ff.attitude.quat_to_matrix(np.array(q)) for q in s.base_quaternion_xyzw]
+    base = [ff.physics.attitude.quat_to_matrix(np.array(q)) for q in s.base_quaternion_xyzw]
     link1, link2 = rotations("link1_0"), rotations("link2_0")
     for k in range(0, len(s.t), 20):
         rz1 = base[k].T @ link1[k] @ r_off.T

@@ -10,7 +10,7 @@ import pytest
 from PIL import Image
 
 from freefloat.cli import main
-from freefloat.plots import TOPICS, figures
+from freefloat.viz.plots import TOPICS, figures
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import freefloat as ff
-from freefloat import attitude as att
+from freefloat.physics import attitude as att
 
 import reference as ref
 import urdfs

@@ -1,4 +1,4 @@
-"""The worked example of method.md section 8, against the closed form of section 7."""
+"""The worked example of docs/method.md section 8, against the closed form of section 7."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from conftest import ROOT, deg, worked_problem
 
 
 def test_virtual_manipulator_lengths():
-    # method.md: a = 0.43 m, b = 0.89 m, c = 0.97 m; workspace 2.29 m, inner ring 1.44 m.
+    # docs/method.md: a = 0.43 m, b = 0.89 m, c = 0.97 m; workspace 2.29 m, inner ring 1.44 m.
     assert ref.A == pytest.approx(0.43, abs=5e-3)
     assert ref.B == pytest.approx(0.89, abs=5e-3)
     assert ref.C == pytest.approx(0.97, abs=5e-3)
@@ -54,18 +54,18 @@ def test_minimum_norm_root_b26(worked_plan):
     (b26,) = worked_plan.free_parameters["q2"]
     assert worked_plan.free_parameters["q1"] == []
     assert b26 == pytest.approx(-0.552e-4, rel=0.01)
-    # Independent truth: the closed-form yaw integral with method.md's printed coefficients.
+    # Independent truth: the closed-form yaw integral with docs/method.md's printed coefficients.
     c1, c2 = ref.worked_example_coefficients(b26)
     assert ref.yaw_change(c1, c2, 10.0) == pytest.approx(math.radians(50.0), abs=1e-9)
 
 
 def test_all_roots_listed_and_minimum_norm_is_shortest(worked_plan):
     solutions = worked_plan.solver.solutions
-    b26s = [s["free_parameters"]["q2"][0] for s in solutions]
-    # method.md: five roots between -5e-4 and 5e-4.
+    b26s = [s.free_parameters["q2"][0] for s in solutions]
+    # docs/method.md: five roots between -5e-4 and 5e-4.
     assert len([b for b in b26s if abs(b) < 5e-4]) == 5
     assert abs(b26s[0]) == min(abs(b) for b in b26s)
-    lengths = [s["path_length"] for s in solutions]
+    lengths = [s.path_length for s in solutions]
     assert lengths[0] == min(lengths)
     for b in b26s:
         c1, c2 = ref.worked_example_coefficients(b)
@@ -180,7 +180,7 @@ def test_planar_robot_described_in_another_plane_gives_the_same_plan(tmp_path, w
     )
     np.testing.assert_allclose(ee[:, 0], ee_ref[:, 0], atol=1e-9)
     np.testing.assert_allclose(ee[:, 2], -ee_ref[:, 1], atol=1e-9)  # Rx(-90): y -> -z
-    assert other.verification["passed"]
+    assert other.verification.passed
 
 
 def test_spatial_integrator_agrees_with_the_planar_integral(worked_scenario, worked_plan):

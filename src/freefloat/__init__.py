@@ -6,9 +6,6 @@ Units: s, rad, m, kg, kg m^2 inside; degrees only at the edges (scenario files, 
 tables and the ``_deg`` fields of a plan).
 """
 
-from .attitude import geodesic_angle, quat_from_zyx, zyx_from_quat
-from .bounds import PlanarBounds, planar_bounds
-from .dynamics import InverseDynamics, ReplayResult, inverse_dynamics, replay
 from .errors import (
     FreeFloatError,
     InfeasibleError,
@@ -23,24 +20,44 @@ from .errors import (
     VelocityLimitError,
     VerificationError,
 )
-from .model import Joint, Robot, load_robot, shipped_robots
-from .momentum import MomentumMap, is_planar, planar_axis
-from .paths import PathFamily
-from .plan import Plan, plan, plan_from_solution
-from .problem import Problem, build_problem
-from .scenario import Scenario, default_scenario_path
-from .solve import Solution, SolveOptions, solve
-from .verify import Verification, verify_plan
+from .physics.attitude import geodesic_angle, quat_from_zyx, zyx_from_quat
+from .physics.dynamics import InverseDynamics, ReplayResult, inverse_dynamics, replay
+from .physics.momentum import MomentumMap, is_planar, planar_axis
+from .pipeline import plan, plan_from_solution
+from .plans.format import Check, Plan, Verification
+from .problem.bounds import PlanarBounds, planar_bounds
+from .problem.build import build_problem, problem_from_scenario
+from .problem.constraints import (
+    Constraint,
+    ConstraintRows,
+    Excess,
+    JointPositionLimits,
+    JointVelocityLimits,
+    default_constraints,
+)
+from .problem.paths import JointPolynomials, PathFamily
+from .problem.residual import Problem
+from .problem.scenario import Scenario, default_scenario_path
+from .robot.model import Joint, Robot, load_robot, shipped_robots
+from .solvers import Solution, SolveOptions, Strategy, solve
+from .verify.checks import verify_plan
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "Check",
+    "Constraint",
+    "ConstraintRows",
+    "Excess",
     "FreeFloatError",
     "InfeasibleError",
     "InputError",
     "InverseDynamics",
     "Joint",
     "JointLimitError",
+    "JointPolynomials",
+    "JointPositionLimits",
+    "JointVelocityLimits",
     "ModelError",
     "MomentumMap",
     "PathFamily",
@@ -55,6 +72,7 @@ __all__ = [
     "Solution",
     "SolveOptions",
     "SolverError",
+    "Strategy",
     "UnknownNameError",
     "UnreachableGoalError",
     "VelocityLimitError",
@@ -62,6 +80,7 @@ __all__ = [
     "VerificationError",
     "__version__",
     "build_problem",
+    "default_constraints",
     "default_scenario_path",
     "geodesic_angle",
     "inverse_dynamics",
@@ -71,6 +90,7 @@ __all__ = [
     "plan_from_solution",
     "planar_axis",
     "planar_bounds",
+    "problem_from_scenario",
     "quat_from_zyx",
     "replay",
     "shipped_robots",

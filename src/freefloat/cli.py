@@ -17,13 +17,15 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
-from .attitude import quat_conjugate, quat_log, quat_multiply
 from .errors import FreeFloatError, InputError
-from .plan import Plan, plan
-from .problem import Problem, build_problem
-from .scenario import Scenario, default_scenario_path
-from .solve import DEFAULT_TOLERANCE, SolveOptions
-from .verify import verify_plan
+from .physics.attitude import quat_conjugate, quat_log, quat_multiply
+from .pipeline import plan
+from .plans.format import Plan
+from .problem.build import planar_yaw_branch, problem_from_scenario
+from .problem.residual import Problem
+from .problem.scenario import Scenario, default_scenario_path
+from .solvers.options import DEFAULT_TOLERANCE, SolveOptions
+from .verify.checks import verify_plan
 
 __all__ = ["main"]
 
@@ -51,11 +53,11 @@ def summary(p: Plan, output: Path | None = None) -> str:
     lines += _attitude_table(p)
     lines.append(f"  attitude error  {p.base.attitude_error_rad:.3e} rad")
     v = p.verification
-    if v:
+    if v.checks:
         lines.append(
-            f"  verification    {'passed' if v['passed'] else 'FAILED'}: independent attitude "
-            f"{v['attitude_error_independent_rad']:.1e} rad, replay "
-            f"{v['replay']['attitude_error_rad']:.1e} rad, momentum {v['momentum_max']:.1e}"
+            f"  verification    {'passed' if v.passed else 'FAILED'}: independent attitude "
+            f"{v['attitude_independent'].value:.1e} rad, replay "
+            f"{v['replay_attitude'].value:.1e} rad, momentum {v['momentum'].value:.1e} kg m^2/s"
         )
     free = [
         f"{name}: " + ", ".join(f"t^{6 + k} {c:.9e}" for k, c in enumerate(values))
@@ -101,8 +103,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     print(summary(result, written))
     if not args.scenario and not args.output:
         # The main job: the worked example with its playback page and plots.
-        from .playback import write_html
-        from .plots import save_figures
+        from .viz.playback import write_html
+        from .viz.plots import save_figures
 
         html = write_html(result, DEFAULT_OUT_DIR / "plan.html")
         print(f"  playback        {html}")
@@ -115,7 +117,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
 
 def _cmd_show(args: argparse.Namespace) -> int:
-    from .playback import serve, write_html
+    from .viz.playback import serve, write_html
 
     loaded = Plan.load(args.plan)
     if args.html:
@@ -126,7 +128,7 @@ def _cmd_show(args: argparse.Namespace) -> int:
 
 
 def _cmd_plot(args: argparse.Namespace) -> int:
-    from .plots import save_figures
+    from .viz.plots import save_figures
 
     loaded = Plan.load(args.plan)
     written = save_figures(loaded, args.output, svg=args.svg)
@@ -138,16 +140,7 @@ def _cmd_plot(args: argparse.Namespace) -> int:
 
 def _cmd_bounds(args: argparse.Namespace) -> int:
     scenario = _load_scenario(args.scenario)
-    problem = build_problem(
-        scenario.robot,
-        scenario.start,
-        scenario.goal,
-        scenario.start_attitude,
-        scenario.goal_attitude,
-        scenario.duration,
-        extra=scenario.extra,
-        check_bounds=False,
-    )
+    problem = problem_from_scenario(scenario.resolved(), check_bounds=False)
     if problem.bounds is None or problem.yaw_change is None:
         return _spatial_bounds(scenario, problem)
     bounds = problem.bounds
@@ -165,15 +158,10 @@ def _cmd_bounds(args: argparse.Namespace) -> int:
             f"{math.degrees(lo):>17.3f}{math.degrees(hi):>12.3f}"
         )
     lo, hi = bounds.interval(delta)
-    requested = math.degrees(problem.yaw_change)
-    inside = [
-        requested + 360.0 * k
-        for k in range(-3, 4)
-        if math.degrees(lo) < requested + 360.0 * k < math.degrees(hi)
-    ]
+    branch = planar_yaw_branch(problem.yaw_change, lo, hi)
     print(f"  reachable yaw change: ({math.degrees(lo):.3f}, {math.degrees(hi):.3f}) deg")
-    verdict = "feasible" if inside else "outside the bounds: no simple path"
-    shown = min(inside, key=abs) if inside else requested
+    verdict = "feasible" if branch is not None else "outside the bounds: no simple path"
+    shown = math.degrees(problem.yaw_change if branch is None else branch)
     print(f"  requested yaw change: {shown:.3f} deg -> {verdict}")
     return 0
 
@@ -184,16 +172,20 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     print(
         f"freefloat verify: {args.plan} ({Path(loaded.robot.urdf).name}, T = {loaded.duration:g} s)"
     )
-    print(f"  {'check':<34}{'value':>12}{'tolerance':>12}  result")
-    for name, value, tol, ok in result.rows():
-        print(f"  {name:<34}{value:>12.3e}{tol:>12.1e}  {'ok' if ok else 'FAILED'}")
+    print(f"  {'check':<34}{'value':>12}{'tolerance':>12}{'estimate':>12}  result")
+    for check in result.checks:
+        label = f"{check.name} [{check.unit}]"
+        print(
+            f"  {label:<34}{check.value:>12.3e}{check.tolerance:>12.1e}"
+            f"{check.error_estimate:>12.1e}  {'ok' if check.passed else 'FAILED'}"
+        )
     print(f"  {'verification':<34}{'passed' if result.passed else 'FAILED':>12}")
     return 0 if result.passed else 1
 
 
 def _cmd_compose(args: argparse.Namespace) -> int:
-    from .compose import ServicerSpec, compose_servicer
-    from .model import load_robot
+    from .robot.compose import ServicerSpec, compose_servicer
+    from .robot.model import load_robot
 
     spec = ServicerSpec(
         arm=args.arm,
@@ -216,8 +208,8 @@ def _cmd_compose(args: argparse.Namespace) -> int:
 
 
 def _spatial_bounds(scenario: Scenario, problem: Problem) -> int:
-    from .bounds import spatial_estimate
-    from .momentum import MomentumMap
+    from .physics.momentum import MomentumMap
+    from .problem.bounds import spatial_estimate
 
     estimate = spatial_estimate(MomentumMap(scenario.robot))
     delta = problem.family.goal - problem.family.start
@@ -276,7 +268,7 @@ def build_parser() -> argparse.ArgumentParser:
     p_bounds = commands.add_parser(
         "bounds",
         help="print the reachable yaw-change interval (planar) or an estimate (spatial)",
-        description="Planar bounds (method.md section 6): per joint the extremes of dyaw/dq "
+        description="Planar bounds (docs/method.md section 6): per joint the extremes of dyaw/dq "
         "and the interval of yaw changes a simple motion can reach, in degrees. For a spatial "
         "robot: an estimate per base axis from sampled extremes of F1, labelled as such.",
     )

@@ -82,7 +82,17 @@ class InfeasibleError(FreeFloatError):
 
 
 class SolverError(FreeFloatError):
-    """No path reaches the goal attitude; carries the best residual and what was tried."""
+    """No path reaches the goal attitude; carries the best residual and what was tried.
+
+    Attributes:
+        best_residual: the smallest attitude residual norm reached (rad).
+        tried: every attempt, in order.
+        per_axis: the residual vector at the best point (rad), when known.
+        stopped_by: why the search stopped short (a joint's limit, a singular map, freedom
+            exhausted, the evaluation budget), when known.
+        reached_fraction: how far along the way from the quintic attitude to the goal the
+            planner got (0-1; continuation only, else 0).
+    """
 
     def __init__(
         self,
@@ -91,7 +101,11 @@ class SolverError(FreeFloatError):
         tried: Sequence[str] = (),
         per_axis: Sequence[float] | None = None,
         hint: str = "",
+        stopped_by: str = "",
+        reached_fraction: float = 0.0,
     ) -> None:
+        self.stopped_by = stopped_by
+        self.reached_fraction = float(reached_fraction)
         self.best_residual = float(best_residual)
         self.tried = tuple(tried)
         self.per_axis = None if per_axis is None else tuple(float(x) for x in per_axis)

@@ -11,23 +11,26 @@ attempt is recorded, so that a failure says what was tried.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import (
+from ..errors import (
     FreeFloatError,
     InfeasibleError,
     InputError,
     SolverError,
-    VelocityLimitError,
 )
-from .momentum import cached_planar_axis
-from .problem import Problem, build_problem
-from .scenario import Scenario
-from .solve import Solution, SolveOptions, solve
+from ..physics.momentum import cached_planar_axis
+from ..problem.build import problem_from_scenario
+from ..problem.constraints import Constraint
+from ..problem.residual import Problem
+from ..problem.scenario import Scenario
+from .dispatch import solve
+from .options import Solution, SolveOptions
 
-__all__ = ["SearchResult", "freedom_candidates", "search", "turn_candidates", "velocity_check"]
+__all__ = ["SearchResult", "freedom_candidates", "search", "turn_candidates"]
 
 
 @dataclass
@@ -94,7 +97,11 @@ def _describe(counts: list[int], names: list[str]) -> str:
     return ", ".join(f"{n}+{c}" for n, c in zip(names, counts, strict=True) if c) or "none"
 
 
-def search(scenario: Scenario, options: SolveOptions) -> SearchResult:
+def search(
+    scenario: Scenario,
+    options: SolveOptions,
+    constraints: Sequence[Constraint] | None = None,
+) -> SearchResult:
     """Solve the scenario, trying freedom distributions and (if allowed) full turns.
 
     Raises:
@@ -113,9 +120,9 @@ def search(scenario: Scenario, options: SolveOptions) -> SearchResult:
     first_error: FreeFloatError | None = None
     best = math.inf
     best_axes: tuple[float, ...] | None = None
+    best_error: SolverError | None = None
 
     for offset in offsets:
-        goal = scenario.goal + offset
         turns = {n: round(o / (2 * math.pi)) for n, o in zip(names, offset, strict=True) if o}
         label = (
             "goal as stated"
@@ -129,15 +136,7 @@ def search(scenario: Scenario, options: SolveOptions) -> SearchResult:
         for counts in distributions:
             extra = scenario.extra if counts is None else counts
             try:
-                problem = build_problem(
-                    robot,
-                    scenario.start,
-                    goal,
-                    scenario.start_attitude,
-                    scenario.goal_attitude,
-                    scenario.duration,
-                    extra=extra,
-                )
+                problem = problem_from_scenario(scenario, extra=extra, goal_offset=offset)
             except InfeasibleError as exc:
                 tried.append(f"{label}: {exc}")
                 first_error = first_error or exc
@@ -148,14 +147,15 @@ def search(scenario: Scenario, options: SolveOptions) -> SearchResult:
                 continue
             used = [sum(1 for i, _ in problem.family.free_index if i == j) for j in range(robot.n)]
             try:
-                solution = solve(problem, options)
+                solution = solve(problem, options, constraints)
             except SolverError as exc:
+                breaks = [item for item in exc.tried if item.startswith("a root breaks")]
                 tried.append(
                     f"{label}, freedom {_describe(used, names)}: best residual "
-                    f"{exc.best_residual:.3g} rad"
+                    f"{exc.best_residual:.3g} rad" + (f" ({breaks[0]})" if breaks else "")
                 )
                 if exc.best_residual < best:
-                    best, best_axes = exc.best_residual, exc.per_axis
+                    best, best_axes, best_error = exc.best_residual, exc.per_axis, exc
                 first_error = first_error or exc
                 continue
             tried.append(f"{label}, freedom {_describe(used, names)}: solved")
@@ -188,28 +188,6 @@ def search(scenario: Scenario, options: SolveOptions) -> SearchResult:
         tried,
         per_axis=best_axes,
         hint=hint,
+        stopped_by=best_error.stopped_by if best_error else "",
+        reached_fraction=best_error.reached_fraction if best_error else 0.0,
     )
-
-
-def velocity_check(problem: Problem, solution: Solution, points: int = 2001) -> None:
-    """Refuse a plan whose joint rates exceed the URDF velocity limits.
-
-    The path does not depend on the duration, so the shortest duration that respects every
-    limit is exact: ``T_min = T * max_i(max |qdot_i| / limit_i)``.
-
-    Raises:
-        VelocityLimitError: with the worst joint and the shortest admissible duration (s).
-    """
-    duration = problem.duration
-    rates = problem.family.at_times(solution.beta, np.linspace(0.0, duration, points), duration).qd
-    worst_ratio, worst = 0.0, None
-    for i, joint in enumerate(problem.robot.joints):
-        if math.isfinite(joint.velocity_limit):
-            ratio = float(np.abs(rates[:, i]).max()) / joint.velocity_limit
-            if ratio > worst_ratio:
-                worst_ratio, worst = ratio, (joint, float(np.abs(rates[:, i]).max()))
-    if worst is not None and worst_ratio > 1.0:
-        joint, peak = worst
-        raise VelocityLimitError(
-            joint.name, peak, joint.velocity_limit, duration * worst_ratio, joint.unit
-        )

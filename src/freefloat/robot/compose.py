@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from .errors import InputError, ModelError, UnknownNameError
-from .files import atomic_write
+from ..errors import InputError, ModelError, UnknownNameError
+from ..files import atomic_write_text
 from .model import example_robot_data_dir
 
 __all__ = ["ARMS", "ServicerSpec", "arm_urdf", "compose_servicer", "resolve_mesh"]
@@ -145,6 +145,18 @@ def compose_servicer(spec: ServicerSpec, output: str | Path) -> Path:
         UnknownNameError: a joint to lock is not in the arm (lists the arm's joints).
         InputError: bad numbers in ``spec``.
     """
+    text = compose_servicer_text(spec)
+    return atomic_write_text(output, text)
+
+
+def compose_servicer_text(spec: ServicerSpec) -> str:
+    """Compose the servicer and validate it with yourdfpy; return the URDF text (no file).
+
+    Raises:
+        ModelError: the arm URDF cannot be read, or the result does not validate.
+        UnknownNameError: a joint to lock is not in the arm (lists the arm's joints).
+        InputError: bad numbers in ``spec``.
+    """
     import yourdfpy
 
     source = arm_urdf(spec.arm)
@@ -236,7 +248,10 @@ def compose_servicer(spec: ServicerSpec, output: str | Path) -> Path:
         errors = "; ".join(str(e) for e in getattr(urdf, "errors", []))
         raise ModelError(f"the composed URDF does not validate: {errors or 'unknown error'}")
 
-    return atomic_write(output, lambda tmp: urdf.write_xml_file(str(tmp)), suffix=".urdf")
+    from lxml import etree  # yourdfpy's own XML library
+
+    body = etree.tostring(urdf.write_xml(), pretty_print=True, encoding="unicode")
+    return "<?xml version='1.0' encoding='UTF-8'?>\n" + body
 
 
 def _mesh_names(robot: Any) -> list[str]:

@@ -2,7 +2,7 @@
 
 Quaternions are unit 4-vectors in Pinocchio's order ``[x, y, z, w]``. The base angular velocity
 ``omega`` (rad/s) is expressed in the base frame, so the attitude obeys
-``d/dt quat = 1/2 quat (x) (omega, 0)`` (method.md section 3). ZYX Euler angles are
+``d/dt quat = 1/2 quat (x) (omega, 0)`` (docs/method.md section 3). ZYX Euler angles are
 ``(yaw, pitch, roll)`` in rad: yaw about z, then pitch about the new y, then roll about the new x.
 
 Propagation uses a sixth-order Magnus integrator on three Gauss-Legendre nodes per step

@@ -1,6 +1,6 @@
 """The planar momentum map as cosine polynomials, for fast vectorised evaluation.
 
-For a planar chain of revolute joints turning about the axis ``n`` (method.md sections 3 and
+For a planar chain of revolute joints turning about the axis ``n`` (docs/method.md sections 3 and
 7), the base rate is ``omega_n = -(n . A_q qdot) / (n . A_w n)``, where ``A_w`` and ``A_q`` are
 the angular-momentum rows of Pinocchio's centroidal map for the base rotation and the joint
 rates. Each of these entries is a trigonometric polynomial of the joint angles: a constant plus
@@ -16,14 +16,15 @@ many configurations at once in a few array operations.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from .model import Robot
+from ..robot.model import Robot
 
-__all__ = ["PlanarMap", "identify"]
+__all__ = ["PlanarMap", "cached_identify", "identify"]
 
 #: Relative accuracy the identified polynomials must reach against Pinocchio.
 IDENTIFICATION_TOLERANCE = 1e-12
@@ -137,3 +138,14 @@ def identify(robot: Robot, axis: np.ndarray, seed: int = 0) -> PlanarMap | None:
     if not error <= IDENTIFICATION_TOLERANCE:
         return None
     return PlanarMap(axis, coeffs[:, 0], coeffs[:, 1:], error)
+
+
+#: Identified planar maps per robot (None: not identifiable), computed once.
+_MAPS: weakref.WeakKeyDictionary[Robot, tuple[PlanarMap | None]] = weakref.WeakKeyDictionary()
+
+
+def cached_identify(robot: Robot, axis: np.ndarray) -> PlanarMap | None:
+    """:func:`identify`, computed once per robot."""
+    if robot not in _MAPS:
+        _MAPS[robot] = (identify(robot, axis),)
+    return _MAPS[robot][0]

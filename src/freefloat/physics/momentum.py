@@ -1,4 +1,4 @@
-"""The zero-momentum map: base motion implied by joint motion (method.md section 2).
+"""The zero-momentum map: base motion implied by joint motion (docs/method.md section 2).
 
 With zero total momentum ``h = A_g(q) v = 0`` and ``A_g = [A_b | A_q]`` (Pinocchio's
 centroidal map, 6 x (6+N)), the base twist in the base frame is
@@ -12,12 +12,13 @@ identity attitude. The system centre of mass (CM) is the inertial origin.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from .model import Robot
+from ..robot.model import Robot
 
 __all__ = ["MomentumMap", "NodeRates", "is_planar", "planar_axis"]
 
@@ -143,7 +144,7 @@ class MomentumMap:
 def planar_axis(robot: Robot, samples: int = 16, seed: int = 0) -> np.ndarray | None:
     """The axis (unit vector, base frame) the base alone can turn about, if there is one.
 
-    A robot is planar (method.md section 3) when every revolute axis is parallel to one axis
+    A robot is planar (docs/method.md section 3) when every revolute axis is parallel to one axis
     ``n`` of the base, every prismatic axis is orthogonal to it, and the part of ``F1``
     orthogonal to ``n`` vanishes; the last condition is checked at ``samples`` random
     configurations (relative tolerance 1e-12). The usual planar arm has ``n`` = base z; a
@@ -186,9 +187,14 @@ def is_planar(robot: Robot, samples: int = 16, seed: int = 0) -> bool:
     return planar_axis(robot, samples, seed) is not None
 
 
+#: Planar axis per robot (None: not planar), computed once; entries go with the robot.
+_PLANAR_AXES: weakref.WeakKeyDictionary[Robot, tuple[np.ndarray | None]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
 def cached_planar_axis(robot: Robot) -> np.ndarray | None:
     """:func:`planar_axis`, computed once per robot."""
-    if "planar_axis" not in robot.cache:
-        robot.cache["planar_axis"] = planar_axis(robot)
-    axis: np.ndarray | None = robot.cache["planar_axis"]
-    return axis
+    if robot not in _PLANAR_AXES:
+        _PLANAR_AXES[robot] = (planar_axis(robot),)
+    return _PLANAR_AXES[robot][0]

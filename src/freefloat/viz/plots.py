@@ -17,9 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from .errors import InputError, ViewerError
-from .files import atomic_write
-from .plan import Plan
+from ..errors import InputError, ViewerError
+from ..files import atomic_write
+from ..plans.format import Plan
 
 __all__ = ["TOPICS", "figures", "save_figures"]
 

@@ -16,9 +16,9 @@ import pinocchio as pin
 from scipy.optimize import least_squares, minimize
 from scipy.stats import qmc
 
+from ..errors import UnreachableGoalError
+from ..physics.momentum import MomentumMap
 from .bounds import joint_ranges
-from .errors import UnreachableGoalError
-from .momentum import MomentumMap
 
 __all__ = ["solve_cartesian_goal", "workspace_radius"]
 

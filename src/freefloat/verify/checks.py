@@ -21,30 +21,21 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
 from scipy.integrate import solve_ivp
 
-from .attitude import geodesic_angle, quat_multiply
-from .dynamics import inverse_dynamics, replay
-from .errors import PlanFileError
-from .model import Robot, load_robot
-from .momentum import MomentumMap
+from ..errors import PlanFileError
+from ..physics.attitude import geodesic_angle, quat_multiply
+from ..physics.dynamics import inverse_dynamics, replay
+from ..physics.momentum import MomentumMap
+from ..plans.format import Check, Plan, Verification
+from ..problem.constraints import Constraint, default_constraints
+from ..problem.paths import JointPolynomials
+from ..robot.model import Robot, load_robot
 
-if TYPE_CHECKING:
-    from .plan import Plan
-
-__all__ = [
-    "TOLERANCES",
-    "Verification",
-    "as_dict",
-    "boundary_errors",
-    "joint_torque_function",
-    "verify_plan",
-]
+__all__ = ["TOLERANCES", "boundary_errors", "joint_torque_function", "verify_plan"]
 
 #: Pass thresholds of the checks (see the module docstring for units).
 TOLERANCES: dict[str, float] = {
@@ -56,56 +47,7 @@ TOLERANCES: dict[str, float] = {
     "replay_joint": 1e-4,
     "boundary_relative": 1e-9,
     "samples_relative": 1e-9,
-    "joint_limit": 1e-9,
 }
-
-
-@dataclass(frozen=True)
-class Verification:
-    """Results of the independent checks of a plan; ``passed`` only if all hold."""
-
-    momentum_max: float
-    momentum_scale: float
-    cm_offset_max: float
-    base_wrench_max: float
-    torque_scale: float
-    attitude_error_independent_rad: float
-    replay: dict[str, float]
-    boundary: dict[str, float]
-    samples_error: float
-    passed: bool
-    joint_limit_excess: float = 0.0
-    failures: list[str] = field(default_factory=list)
-    tolerances: dict[str, float] = field(default_factory=lambda: dict(TOLERANCES))
-
-    def rows(self) -> list[tuple[str, float, float, bool]]:
-        """``(check, value, tolerance, ok)`` rows for a printed table."""
-        scale_m = max(1.0, self.momentum_scale)
-        t = self.tolerances
-        rows = [
-            ("momentum_max [kg m^2/s]", self.momentum_max, t["momentum_relative"] * scale_m),
-            ("cm_offset_max [m]", self.cm_offset_max, t["cm_offset_m"]),
-            (
-                "base_wrench_max [N, N m]",
-                self.base_wrench_max,
-                t["base_wrench_relative"] * max(1.0, self.torque_scale),
-            ),
-            (
-                "attitude_error_independent [rad]",
-                self.attitude_error_independent_rad,
-                t["attitude_independent_rad"],
-            ),
-            (
-                "replay attitude error [rad]",
-                self.replay["attitude_error_rad"],
-                t["replay_attitude_rad"],
-            ),
-            ("replay joint error [rad|m]", self.replay["joint_error"], t["replay_joint"]),
-            ("boundary (relative)", self.boundary["relative_max"], t["boundary_relative"]),
-            ("samples vs polynomials (rel.)", self.samples_error, t["samples_relative"]),
-            ("joint limit excess [rad|m]", self.joint_limit_excess, t["joint_limit"]),
-        ]
-        return [(name, value, tol, value <= tol) for name, value, tol in rows]
 
 
 def _polys(plan: Plan) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
@@ -169,14 +111,22 @@ def _robot_for(plan: Plan) -> Robot:
     return robot
 
 
-def verify_plan(plan: Plan, robot: Robot | None = None, replay_steps: int = 500) -> Verification:
+def verify_plan(
+    plan: Plan,
+    robot: Robot | None = None,
+    replay_steps: int = 500,
+    constraints: list[Constraint] | None = None,
+) -> Verification:
     """Run every check on ``plan``; needs only the plan and its URDF.
 
     Args:
         plan: the plan (for example from :meth:`Plan.load`).
         robot: the loaded robot, to skip reloading the URDF.
         replay_steps: RK4 steps of the forward-dynamics replay.
+        constraints: path constraints to check densely; default joint position and velocity
+            limits.
     """
+    constraints = default_constraints() if constraints is None else constraints
     robot = robot or _robot_for(plan)
     mmap = MomentumMap(robot)
     model, data = robot.model, robot.model.createData()
@@ -223,8 +173,8 @@ def verify_plan(plan: Plan, robot: Robot | None = None, replay_steps: int = 500)
     attitude_independent = geodesic_angle(end, target)
 
     # Forward-dynamics replay from the start at rest.
-    start = np.asarray(plan.request["start_joints"], dtype=float)
-    goal = np.asarray(plan.request["goal_joints"], dtype=float)
+    start = np.asarray(plan.request.start_joints, dtype=float)
+    goal = np.asarray(plan.request.goal_joints, dtype=float)
     result = replay(
         mmap, start, start_quat, joint_torque_function(plan, mmap), duration, replay_steps
     )
@@ -247,26 +197,47 @@ def verify_plan(plan: Plan, robot: Robot | None = None, replay_steps: int = 500)
             error = np.abs(np.asarray(got) - want) * duration**power / travel
             worst = max(worst, float(error.max()))
 
-    q_samples = np.asarray(samples.q, dtype=float)
-    lower = np.array([j.lower for j in robot.joints])
-    upper = np.array([j.upper for j in robot.joints])
-    excess = float(max(0.0, (q_samples - upper).max(), (lower - q_samples).max()))
-
-    verification = Verification(
-        joint_limit_excess=excess,
-        momentum_max=momentum_max,
-        momentum_scale=momentum_scale,
-        cm_offset_max=cm_max,
-        base_wrench_max=wrench_max,
-        torque_scale=torque_scale,
-        attitude_error_independent_rad=attitude_independent,
-        replay=replay_report,
-        boundary=boundary,
-        samples_error=worst,
-        passed=False,
-    )
-    failures = [name for name, value, tol, ok in verification.rows() if not ok or math.isnan(value)]
-    return Verification(**{**verification.__dict__, "passed": not failures, "failures": failures})
+    tol = TOLERANCES
+    checks = [
+        Check(
+            "momentum",
+            momentum_max,
+            tol["momentum_relative"] * max(1.0, momentum_scale),
+            "kg m^2/s",
+        ),
+        Check("cm_offset", cm_max, tol["cm_offset_m"], "m"),
+        Check(
+            "base_wrench",
+            wrench_max,
+            tol["base_wrench_relative"] * max(1.0, torque_scale),
+            "N, N m",
+        ),
+        Check("attitude_independent", attitude_independent, tol["attitude_independent_rad"], "rad"),
+        Check(
+            "replay_attitude",
+            replay_report["attitude_error_rad"],
+            tol["replay_attitude_rad"],
+            "rad",
+        ),
+        Check("replay_joints", replay_report["joint_error"], tol["replay_joint"], "rad|m"),
+        Check("boundary", boundary["relative_max"], tol["boundary_relative"], "1"),
+        Check("samples", worst, tol["samples_relative"], "1"),
+    ]
+    path = JointPolynomials.from_lists([c.tolist() for c in coeffs[0]], duration)
+    for constraint in constraints:
+        if constraint.applies_to(robot):
+            excess = constraint.excess(robot, path)
+            checks.append(
+                Check(
+                    constraint.name,
+                    excess.value,
+                    constraint.tolerance,
+                    constraint.unit,
+                    excess.error_estimate,
+                    excess.detail,
+                )
+            )
+    return Verification(tuple(checks))
 
 
 def _wrap_joints(robot: Robot, delta: np.ndarray) -> np.ndarray:
@@ -276,8 +247,3 @@ def _wrap_joints(robot: Robot, delta: np.ndarray) -> np.ndarray:
         if joint.kind == "continuous":
             out[i] = math.remainder(out[i], 2.0 * math.pi)
     return out
-
-
-def as_dict(verification: Verification) -> dict[str, Any]:
-    """The plan-file ``verification`` section."""
-    return dict(verification.__dict__)

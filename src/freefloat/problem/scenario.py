@@ -1,5 +1,8 @@
 """Scenarios: what to plan, read from a TOML file.
 
+This module is long because it checks every key and value of the scenario format with its
+own one-line message (the file is the user's first contact with freefloat).
+
 The file speaks degrees (joint angles, Euler angles) and metres (prismatic joints); a
 :class:`Scenario` holds radians and metres. Format::
 
@@ -19,7 +22,8 @@ The file speaks degrees (joint angles, Euler angles) and metres (prismatic joint
     max_deviation_deg = 458.4      # optional: one-unknown root bracket, as path deviation [deg]
     allow_full_turns = false       # optional: continuous joints may go the other way round
 
-An inline servicer replaces ``robot = "..."`` with a table (composed once, cached)::
+An inline servicer replaces ``robot = "..."`` with a table (composed in memory when read;
+written to its content-addressed cache file when a plan is made, see :meth:`Scenario.write_robot`)::
 
     [robot]
     arm = "panda"                  # example-robot-data arm or URDF path
@@ -35,22 +39,23 @@ import math
 import os
 import sys
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .attitude import quat_from_zyx, quat_to_matrix
-from .errors import FreeFloatError, ScenarioError, UnknownNameError
-from .model import Robot, load_robot, resolve_robot, robots_dir
+from ..errors import FreeFloatError, ScenarioError, UnknownNameError
+from ..files import atomic_write_text
+from ..physics.attitude import quat_from_zyx, quat_to_matrix
+from ..robot.model import Robot, load_robot, resolve_robot, robots_dir
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["Scenario", "default_scenario_path", "servicer_cache_dir"]
+__all__ = ["CartesianGoal", "Scenario", "default_scenario_path", "servicer_cache_dir"]
 
 _TOP_KEYS = ("robot", "duration", "end_effector", "start", "goal", "path")
 _STATE_KEYS = ("joints", "base_zyx_deg", "base_quaternion_xyzw")
@@ -59,7 +64,7 @@ _PATH_KEYS = ("extra", "max_deviation_deg", "allow_full_turns")
 
 
 def default_scenario_path() -> Path:
-    """The shipped worked example of method.md section 8."""
+    """The shipped worked example of docs/method.md section 8."""
     return robots_dir() / "scenarios" / "worked_example.toml"
 
 
@@ -98,6 +103,13 @@ class Scenario:
         max_deviation: one-unknown root bracket as largest path deviation (rad); None: default.
         allow_full_turns: a continuous joint may reach its goal the other way round.
         source: the TOML file it came from, if any.
+        goal_pose: a Cartesian end-effector goal still to be solved for goal joints (by
+            :meth:`resolved`); None when the goal joints are given.
+        robot_text: the URDF of an inline servicer not yet written to ``robot.urdf`` (by
+            :meth:`write_robot`); None otherwise.
+
+    Reading a scenario is pure: no file is written and no inverse kinematics runs until
+    :meth:`resolved` and :meth:`write_robot` are called (planning calls both).
     """
 
     robot: Robot
@@ -110,6 +122,8 @@ class Scenario:
     max_deviation: float | None = None
     allow_full_turns: bool = False
     source: Path | None = None
+    goal_pose: CartesianGoal | None = None
+    robot_text: str | None = None
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Scenario:
@@ -147,8 +161,9 @@ class Scenario:
                 raise ScenarioError(
                     f"missing required key {key!r} (required: robot, duration, [start], [goal])"
                 )
+        robot_text = None
         if isinstance(data["robot"], Mapping):
-            urdf = _inline_servicer(data["robot"])
+            urdf, robot_text = _inline_servicer(data["robot"])
         elif isinstance(data["robot"], str):
             urdf = resolve_robot(data["robot"], relative_to)
         else:
@@ -162,9 +177,10 @@ class Scenario:
         end_effector = data.get("end_effector")
         if end_effector is not None and not isinstance(end_effector, str):
             raise ScenarioError(f"end_effector must be a frame name, got {end_effector!r}")
-        robot = load_robot(urdf, end_effector)
+        robot = load_robot(urdf, end_effector, text=robot_text)
 
         states: list[tuple[dict[str, float], np.ndarray]] = []
+        goal_pose = None
         for name in ("start", "goal"):
             table = data[name]
             if not isinstance(table, Mapping):
@@ -187,7 +203,8 @@ class Scenario:
             if name == "goal" and "end_effector_xyz" in table:
                 if "joints" in table:
                     raise ScenarioError("[goal] gives both joints and end_effector_xyz; give one")
-                joints = _cartesian_goal(robot, table, quat, states[0][0])
+                goal_pose = _cartesian_goal(table)
+                joints = {}
             else:
                 joints = _joint_table(robot, table, name)
             states.append((joints, quat))
@@ -231,7 +248,37 @@ class Scenario:
             extra=extra,
             max_deviation=max_deviation,
             source=source,
+            goal_pose=goal_pose,
+            robot_text=robot_text,
         )
+
+    def resolved(self) -> Scenario:
+        """This scenario with its Cartesian goal solved into goal joints (a copy; or itself).
+
+        Raises:
+            UnreachableGoalError: no configuration reaches the end-effector goal.
+        """
+        if self.goal_pose is None:
+            return self
+        from ..physics.momentum import MomentumMap
+        from .cartesian import solve_cartesian_goal
+
+        values = solve_cartesian_goal(
+            MomentumMap(self.robot),
+            self.goal_pose.position,
+            self.goal_attitude,
+            self.start,
+            self.goal_pose.rotation,
+        )
+        joints = dict(zip(self.robot.joint_names, values.tolist(), strict=True))
+        return replace(self, goal_joints=joints, goal_pose=None)
+
+    def write_robot(self) -> Path:
+        """Write an inline servicer's URDF to its cache file if it is not there; return it."""
+        path = self.robot.urdf
+        if self.robot_text is not None and not path.is_file():
+            atomic_write_text(path, self.robot_text)
+        return path
 
     @property
     def start(self) -> np.ndarray:
@@ -240,7 +287,13 @@ class Scenario:
 
     @property
     def goal(self) -> np.ndarray:
-        """Goal joint values as an N-vector in joint order (rad or m)."""
+        """Goal joint values as an N-vector in joint order (rad or m).
+
+        A Cartesian goal is solved here each time it is asked for; :meth:`resolved` solves it
+        once.
+        """
+        if self.goal_pose is not None:
+            return self.resolved().goal
         return self.robot.vector(self.goal_joints, "goal joints")
 
 
@@ -272,9 +325,13 @@ def _triple(table: Mapping[str, Any], key: str, default: list[float] | None = No
     return tuple(float(x) for x in _numbers(table.get(key, default), 3, f"[robot] {key}"))
 
 
-def _inline_servicer(table: Mapping[str, Any]) -> Path:
-    """Compose (once, cached by content) the servicer an inline ``[robot]`` table describes."""
-    from .compose import ServicerSpec, compose_servicer
+def _inline_servicer(table: Mapping[str, Any]) -> tuple[Path, str | None]:
+    """The cache path of the servicer an inline ``[robot]`` table describes, and its URDF.
+
+    The URDF text is None when the cache file exists (it is read from there); otherwise the
+    servicer is composed in memory and written only by :meth:`Scenario.write_robot`.
+    """
+    from ..robot.compose import ServicerSpec, compose_servicer_text
 
     _check_keys(table, _ROBOT_KEYS, "[robot]")
     for key in ("arm", "base_mass", "base_size"):
@@ -296,9 +353,9 @@ def _inline_servicer(table: Mapping[str, Any]) -> Path:
         keep_gripper=bool(table.get("keep_gripper", False)),
     )
     path = servicer_cache_dir() / f"{spec.key()}.urdf"
-    if not path.is_file():
-        compose_servicer(spec, path)
-    return path
+    if path.is_file():
+        return path, None
+    return path, compose_servicer_text(spec)
 
 
 def _joint_table(robot: Robot, table: Mapping[str, Any], name: str) -> dict[str, float]:
@@ -318,22 +375,27 @@ def _joint_table(robot: Robot, table: Mapping[str, Any], name: str) -> dict[str,
     return joints
 
 
-def _cartesian_goal(
-    robot: Robot, table: Mapping[str, Any], quat: np.ndarray, start: Mapping[str, float]
-) -> dict[str, float]:
-    """Goal joints from ``end_effector_xyz`` (m) and optional ``end_effector_rpy_deg``."""
-    from .cartesian import solve_cartesian_goal
-    from .momentum import MomentumMap
+@dataclass(frozen=True)
+class CartesianGoal:
+    """An end-effector goal, from the system CM in the inertial frame.
 
+    Attributes:
+        position: wanted end-effector position (m).
+        rotation: wanted end-effector orientation (3 x 3), or None for position only.
+    """
+
+    position: np.ndarray
+    rotation: np.ndarray | None = None
+
+
+def _cartesian_goal(table: Mapping[str, Any]) -> CartesianGoal:
+    """The Cartesian goal of ``end_effector_xyz`` (m) and optional ``end_effector_rpy_deg``."""
     xyz = _numbers(table["end_effector_xyz"], 3, "[goal] end_effector_xyz")
     rotation = None
     if "end_effector_rpy_deg" in table:
         rpy = np.radians(_numbers(table["end_effector_rpy_deg"], 3, "[goal] end_effector_rpy_deg"))
         rotation = quat_to_matrix(quat_from_zyx(rpy[2], rpy[1], rpy[0]))
-    values = solve_cartesian_goal(
-        MomentumMap(robot), xyz, quat, robot.vector(start, "[start] joints"), rotation
-    )
-    return dict(zip(robot.joint_names, values.tolist(), strict=True))
+    return CartesianGoal(xyz, rotation)
 
 
 def _prefixed(exc: FreeFloatError, path: Path) -> FreeFloatError:

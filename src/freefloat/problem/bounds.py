@@ -1,4 +1,4 @@
-"""Reachable yaw change of a planar free floater (method.md section 6).
+"""Reachable yaw change of a planar free floater (docs/method.md section 6).
 
 For a planar system ``dyaw = sum_i g_i(q) dq_i`` with ``g_i`` the z row of ``F1``. Each
 ``g_i`` is bounded over the configurations the joints can take (their limits; a full turn for
@@ -10,14 +10,16 @@ intervals is the (open) interval of yaw changes a simple point-to-point motion c
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import minimize
 from scipy.stats import qmc
 
-from .momentum import MomentumMap
-from .planar import PlanarMap
+from ..physics.momentum import MomentumMap
+from ..physics.planar_map import PlanarMap
+from ..robot.model import Robot
 
 __all__ = ["PlanarBounds", "SpatialEstimate", "joint_ranges", "planar_bounds", "spatial_estimate"]
 
@@ -45,11 +47,13 @@ def cached_planar_bounds(
     mmap: MomentumMap, axis: np.ndarray, planar_map: PlanarMap | None
 ) -> PlanarBounds:
     """:func:`planar_bounds` computed once per robot (they depend on the robot alone)."""
-    key = "planar_bounds"
-    if key not in mmap.robot.cache:
-        mmap.robot.cache[key] = planar_bounds(mmap, axis=axis, planar_map=planar_map)
-    bounds: PlanarBounds = mmap.robot.cache[key]
-    return bounds
+    if mmap.robot not in _BOUNDS:
+        _BOUNDS[mmap.robot] = planar_bounds(mmap, axis=axis, planar_map=planar_map)
+    return _BOUNDS[mmap.robot]
+
+
+#: Planar bounds per robot, computed once; entries go with the robot.
+_BOUNDS: weakref.WeakKeyDictionary[Robot, PlanarBounds] = weakref.WeakKeyDictionary()
 
 
 def joint_ranges(mmap: MomentumMap) -> np.ndarray:

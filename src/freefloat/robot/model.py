@@ -20,12 +20,12 @@ import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
-from .errors import ModelError, UnknownNameError
+from ..errors import ModelError, UnknownNameError
+from .urdf_checks import check_urdf_xml
 
 __all__ = [
     "Joint",
@@ -52,7 +52,6 @@ _KINDS = {
     "JointModelPZ": "prismatic",
     "JointModelPrismaticUnaligned": "prismatic",
 }
-_URDF_JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
 
 
 @dataclass(frozen=True)
@@ -104,8 +103,6 @@ class Robot:
         base_link: name of the URDF root link (the spacecraft body).
         end_effector: name of the end-effector frame.
         package_dirs: folders searched for ``package://`` mesh references.
-        cache: quantities derived from the model alone (planar axis, planar bounds...),
-            computed once per robot.
     """
 
     urdf: Path
@@ -116,7 +113,6 @@ class Robot:
     end_effector: str
     package_dirs: tuple[Path, ...] = ()
     link_names: tuple[str, ...] = field(default_factory=tuple)
-    cache: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
     def n(self) -> int:
@@ -216,10 +212,10 @@ def example_robot_data_dir() -> Path | None:
 
 def robots_dir() -> Path:
     """Folder of the shipped robots and scenarios (installed package data or the checkout)."""
-    installed = Path(__file__).resolve().parent / "robots"
+    installed = Path(__file__).resolve().parents[1] / "robots"
     if installed.is_dir():
         return installed
-    checkout = Path(__file__).resolve().parents[2] / "robots"
+    checkout = Path(__file__).resolve().parents[3] / "robots"
     if checkout.is_dir():
         return checkout
     raise ModelError("the shipped robots folder is missing from this installation")
@@ -248,105 +244,6 @@ def resolve_robot(name_or_path: str | Path, relative_to: Path | None = None) -> 
     return path.resolve()
 
 
-def _float_attr(element: ET.Element, attr: str, what: str, default: float | None = None) -> float:
-    raw = element.get(attr)
-    if raw is None:
-        if default is None:
-            raise ModelError(f"{what} has no {attr!r} attribute")
-        return default
-    try:
-        value = float(raw)
-    except ValueError:
-        raise ModelError(f"{what} {attr}={raw!r} is not a number") from None
-    if not math.isfinite(value):
-        raise ModelError(f"{what} {attr}={raw!r} is not a finite number")
-    return value
-
-
-def _check_urdf_xml(text: str) -> tuple[str, list[str]]:
-    """Check the URDF's structure and inertials; return the root link and the link names."""
-    try:
-        root = ET.fromstring(text)
-    except ET.ParseError as exc:
-        raise ModelError(f"malformed URDF XML ({exc})") from None
-    if root.tag != "robot":
-        raise ModelError(f"root element is <{root.tag}>, expected <robot>")
-    links = [link.get("name") or "" for link in root.findall("link")]
-    if not links:
-        raise ModelError("the URDF has no <link>")
-    if "" in links:
-        raise ModelError("a <link> has no name")
-    duplicates = sorted({n for n in links if links.count(n) > 1})
-    if duplicates:
-        raise ModelError(f"duplicate link name(s) {', '.join(duplicates)}")
-
-    for link in root.findall("link"):
-        name = link.get("name")
-        inertial = link.find("inertial")
-        if inertial is None:
-            continue
-        mass_el = inertial.find("mass")
-        if mass_el is None:
-            raise ModelError(f"link {name!r} has an <inertial> without <mass>")
-        mass = _float_attr(mass_el, "value", f"link {name!r} mass")
-        if mass < 0.0:
-            raise ModelError(f"link {name!r} has negative mass {mass} kg; masses must be >= 0")
-        inertia_el = inertial.find("inertia")
-        if inertia_el is None:
-            if mass > 0.0:
-                raise ModelError(f"link {name!r} has mass but no <inertia>")
-            continue
-        keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-        ixx, ixy, ixz, iyy, iyz, izz = (
-            _float_attr(inertia_el, k, f"link {name!r} inertia", 0.0) for k in keys
-        )
-        inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-        if mass > 0.0 and np.linalg.eigvalsh(inertia).min() <= 0.0:
-            raise ModelError(
-                f"link {name!r} inertia is not positive definite (eigenvalues "
-                f"{np.round(np.linalg.eigvalsh(inertia), 9).tolist()} kg m^2); it must be"
-            )
-
-    parent_of: dict[str, str] = {}
-    for joint in root.findall("joint"):
-        jname = joint.get("name") or "?"
-        jtype = joint.get("type")
-        if jtype not in _URDF_JOINT_TYPES:
-            raise ModelError(
-                f"joint {jname!r} has type {jtype!r}; supported: {', '.join(_URDF_JOINT_TYPES)}"
-            )
-        parent_el, child_el = joint.find("parent"), joint.find("child")
-        if parent_el is None or child_el is None:
-            raise ModelError(f"joint {jname!r} needs a <parent> and a <child>")
-        parent, child = parent_el.get("link", ""), child_el.get("link", "")
-        for end in (parent, child):
-            if end not in links:
-                raise UnknownNameError(f"link (in joint {jname!r})", end, links)
-        if child in parent_of:
-            raise ModelError(
-                f"closed loop: link {child!r} is the child of two joints; a free floater must "
-                "be a tree (open chains)"
-            )
-        parent_of[child] = parent
-    roots = [n for n in links if n not in parent_of]
-    if len(roots) != 1:
-        raise ModelError(
-            "closed loop: every link has a parent joint; a tree needs exactly one root link"
-            if not roots
-            else f"several root links ({', '.join(roots)}); the URDF must be one tree"
-        )
-    # A cycle that leaves the root reachable is impossible once each link has one parent and
-    # there is one root, except for a detached cycle: check every link reaches the root.
-    for name in links:
-        seen = set()
-        while name in parent_of:
-            if name in seen:
-                raise ModelError(f"closed loop through link {name!r}; the URDF must be a tree")
-            seen.add(name)
-            name = parent_of[name]
-    return roots[0], links
-
-
 _TOOL_NAME = re.compile(r"tcp|end_?effector|eef|tool|(^|_)ee($|_)", re.IGNORECASE)
 
 
@@ -373,15 +270,18 @@ def load_robot(
     urdf: str | Path,
     end_effector: str | None = None,
     package_dirs: Sequence[str | Path] = (),
+    text: str | None = None,
 ) -> Robot:
     """Load a URDF as a free-floating system with a free-flyer root joint.
 
     Args:
-        urdf: path of the URDF file; its root link is the spacecraft.
+        urdf: path of the URDF file; its root link is the spacecraft. With ``text`` the
+            path names the robot (and its mesh folder) but is not read; it need not exist.
         end_effector: name of the end-effector frame (a link name); default: the tip of the
             longest chain of movable joints.
         package_dirs: folders for ``package://`` mesh references (the URDF's own folder and
             example-robot-data's share folder are always searched).
+        text: the URDF's content, when it is not (yet) in a file.
 
     Raises:
         ModelError: unreadable or malformed file, closed loop, unsupported joint type, bad
@@ -389,14 +289,15 @@ def load_robot(
         UnknownNameError: ``end_effector`` is not a frame of the robot.
     """
     path = Path(urdf).expanduser().resolve()
-    if not path.is_file():
-        raise ModelError(f"URDF file not found: {path}")
+    if text is None:
+        if not path.is_file():
+            raise ModelError(f"URDF file not found: {path}")
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ModelError(f"cannot read URDF {path}: {exc}") from None
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ModelError(f"cannot read URDF {path}: {exc}") from None
-    try:
-        root_link, links = _check_urdf_xml(text)
+        root_link, links = check_urdf_xml(text)
     except ModelError as exc:
         raise ModelError(str(exc), urdf=str(path)) from None
     try:

@@ -1,4 +1,4 @@
-"""The planning problem, built apart from its solution (method.md section 5).
+"""The planning problem, built apart from its solution (docs/method.md section 5).
 
 A :class:`Problem` holds the robot, the start and goal, the path family and the integration
 grid, and evaluates the residual ``h(beta)``: the attitude reached at the end of the path minus
@@ -9,15 +9,15 @@ reached one, in the goal frame).
 
 from __future__ import annotations
 
+import copy
 import itertools
 import math
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
-from .attitude import (
+from ..physics.attitude import (
     GAUSS3_WEIGHTS,
     magnus_increment_jacobian,
     magnus_increments,
@@ -31,14 +31,13 @@ from .attitude import (
     so3_right_jacobian,
     step_nodes,
 )
-from .bounds import PlanarBounds, cached_planar_bounds
-from .errors import InfeasibleError, InputError, JointLimitError
-from .model import Robot
-from .momentum import MomentumMap, NodeRates, cached_planar_axis
-from .paths import PathFamily
-from .planar import PlanarMap, identify
+from ..physics.momentum import MomentumMap, NodeRates
+from ..physics.planar_map import PlanarMap
+from ..robot.model import Robot
+from .bounds import PlanarBounds
+from .paths import JointPolynomials, PathFamily
 
-__all__ = ["Problem", "build_problem", "wrap_angle"]
+__all__ = ["EvaluationCounter", "Problem", "wrap_angle"]
 
 #: Target of the integration error estimate (rad) when choosing the number of steps.
 INTEGRATION_TOLERANCE = 1e-12
@@ -70,8 +69,7 @@ class Problem:
         planar_map: cosine-polynomial gains of a planar all-revolute robot (vectorised fast
             path, identified from and checked against Pinocchio); None otherwise.
         steps: number of integration steps on the normalised interval [0, 1].
-        evaluations: residual evaluations so far (each integrates the attitude along a path).
-        map_evaluations: momentum-map evaluations so far (one per node and path).
+        counter: evaluations so far, shared with copies at other step counts.
     """
 
     robot: Robot
@@ -86,8 +84,7 @@ class Problem:
     axis: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     planar_map: PlanarMap | None = None
     steps: int = 64
-    evaluations: int = 0
-    map_evaluations: int = 0
+    counter: EvaluationCounter = field(default_factory=lambda: EvaluationCounter())
     _grid: tuple[np.ndarray, ...] = field(default=(), init=False, repr=False)
     _grids: dict[int | str, tuple[np.ndarray, ...]] = field(
         default_factory=dict, init=False, repr=False
@@ -95,7 +92,29 @@ class Problem:
     _memo: dict[tuple[int, bytes], np.ndarray] = field(default_factory=dict, init=False, repr=False)
 
     def __post_init__(self) -> None:
-        self.set_steps(self.steps)
+        self._use_steps(self.steps)
+
+    @property
+    def evaluations(self) -> int:
+        """Residual evaluations so far, by this problem and its copies at other step counts."""
+        return self.counter.evaluations
+
+    @property
+    def map_evaluations(self) -> int:
+        """Momentum-map evaluations so far (one per node and path), shared with copies."""
+        return self.counter.map_evaluations
+
+    def with_steps(self, steps: int) -> Problem:
+        """The same problem on ``steps`` integration steps (a copy; this one is unchanged).
+
+        The copy shares the immutable integration grids and the evaluation counter.
+        """
+        if int(steps) == self.steps:
+            return self
+        other = copy.copy(self)
+        other._memo = {}
+        other._use_steps(int(steps))
+        return other
 
     @property
     def n_equations(self) -> int:
@@ -114,7 +133,7 @@ class Problem:
             return None
         return self.bounds.interval(self.family.goal - self.family.start)
 
-    def set_steps(self, steps: int) -> None:
+    def _use_steps(self, steps: int) -> None:
         """Use ``steps`` uniform integration steps (three Gauss nodes each) on [0, 1]."""
         self.steps = int(steps)
         if self.steps not in self._grids:
@@ -131,8 +150,8 @@ class Problem:
             raise FloatingPointError("non-finite free path coefficients")
         q = q0 + dq @ beta
         qs = qs0 + dqs @ beta
-        self.evaluations += 1
-        self.map_evaluations += len(q)
+        self.counter.evaluations += 1
+        self.counter.map_evaluations += len(q)
         return self.mmap.base_rates(q, qs, derivatives), qs
 
     def planar_rates(self, betas: np.ndarray) -> np.ndarray:
@@ -142,8 +161,8 @@ class Problem:
         q = q0[None] + np.einsum("knf,gf->gkn", dq, betas)
         qs = qs0[None] + np.einsum("knf,gf->gkn", dqs, betas)
         if self.planar_map is not None:
-            self.evaluations += len(betas)
-            self.map_evaluations += q.shape[0] * q.shape[1]
+            self.counter.evaluations += len(betas)
+            self.counter.map_evaluations += q.shape[0] * q.shape[1]
             return np.sum(self.planar_map.gains(q) * qs, axis=-1)
         return np.stack([self._nodes(b)[0].omega @ self.axis for b in betas])
 
@@ -155,8 +174,8 @@ class Problem:
         q = q0[None] + dq[None, :, :, 0] * betas[:, None, None]
         qs = qs0[None] + dqs[None, :, :, 0] * betas[:, None, None]
         gains, dgains = self.planar_map.gains_and_derivatives(q)
-        self.evaluations += len(betas)
-        self.map_evaluations += q.shape[0] * q.shape[1]
+        self.counter.evaluations += len(betas)
+        self.counter.map_evaluations += q.shape[0] * q.shape[1]
         weights = (h[:, None] * GAUSS3_WEIGHTS[None, :]).ravel()
         rate = np.sum(gains * qs, axis=-1)
         dgains_dbeta = (dgains @ dq[None, :, :, :])[..., 0]  # (G, K, N)
@@ -225,8 +244,8 @@ class Problem:
             beta = np.asarray(beta, dtype=float)
             q, qs = q0 + dq @ beta, qs0 + dqs @ beta
             gains, dgains = self.planar_map.gains_and_derivatives(q)
-            self.evaluations += 1
-            self.map_evaluations += len(q)
+            self.counter.evaluations += 1
+            self.counter.map_evaluations += len(q)
             weights = (h[:, None] * GAUSS3_WEIGHTS[None, :]).ravel()
             rate = np.sum(gains * qs, axis=1)
             drate = np.einsum("kif,ki->kf", dgains @ dq, qs) + np.einsum("ki,kif->kf", gains, dqs)
@@ -275,42 +294,9 @@ class Problem:
         q = q0 + dq @ np.asarray(beta, dtype=float)
         return float(np.abs(np.diff(q, axis=0)).sum())
 
-    def limit_constraints(self, points: int = 97) -> tuple[np.ndarray, np.ndarray]:
-        """Joint position limits as linear inequalities ``G beta <= g`` at ``points`` instants.
-
-        The joint values are affine in ``beta``, so the limits along the path are linear
-        constraints; only joints with finite limits contribute rows.
-        """
-        s = np.linspace(0.0, 1.0, points)
-        base, dq, _ = self.family.linear_map(s)
-        rows, bounds = [], []
-        for i, joint in enumerate(self.robot.joints):
-            if np.isfinite(joint.upper):
-                rows.append(dq[:, i, :])
-                bounds.append(joint.upper - base.q[:, i])
-            if np.isfinite(joint.lower):
-                rows.append(-dq[:, i, :])
-                bounds.append(base.q[:, i] - joint.lower)
-        if not rows:
-            return np.zeros((0, self.n_free)), np.zeros(0)
-        return np.concatenate(rows), np.concatenate(bounds)
-
-    def limit_violation(self, beta: np.ndarray, points: int = 801) -> tuple[float, str]:
-        """Largest excursion beyond a joint limit along the path (rad or m) and the joint."""
-        limited = [
-            i
-            for i, j in enumerate(self.robot.joints)
-            if np.isfinite(j.lower) or np.isfinite(j.upper)
-        ]
-        if not limited:
-            return 0.0, ""
-        q = self.family.evaluate(beta, np.linspace(0.0, 1.0, points)).q
-        worst, name = 0.0, ""
-        for i, joint in enumerate(self.robot.joints):
-            over = max(float(q[:, i].max() - joint.upper), float(joint.lower - q[:, i].min()))
-            if over > worst:
-                worst, name = over, joint.name
-        return worst, name
+    def polynomials(self, beta: np.ndarray) -> JointPolynomials:
+        """The path at ``beta`` as polynomials in time on [0, T] (s)."""
+        return self.family.polynomials(beta, self.duration)
 
     def attitudes(self, beta: np.ndarray, s: np.ndarray) -> np.ndarray:
         """Base attitude ``[x, y, z, w]`` at normalised instants ``s`` (ascending, from 0).
@@ -333,163 +319,36 @@ class Problem:
         return quats[::sub]
 
     def integration_error(self, beta: np.ndarray) -> float:
-        """Estimated integration error (rad) of the attitude at T with the current steps."""
+        """Estimated integration error (rad) of the attitude at T with the current steps.
+
+        Step doubling: sixth order, so the error of the coarse result is 64/63 of the
+        difference to the result on twice the steps.
+        """
         coarse = self.residual(beta)
-        steps = self.steps
-        self.set_steps(2 * steps)
-        fine = self.residual(beta)
-        self.set_steps(steps)
-        # Sixth order: the error of the coarse result is 64/63 of the difference.
+        fine = self.with_steps(2 * self.steps).residual(beta)
         return float(np.linalg.norm(coarse - fine) * 64.0 / 63.0)
 
-    def choose_steps(self, beta: np.ndarray | None = None) -> int:
-        """Double the step count until the integration error estimate is tiny; return it."""
+    def steps_for(self, beta: np.ndarray | None = None) -> int:
+        """Smallest doubling of the step count whose error estimate at ``beta`` is tiny.
+
+        Starts from the current count (at least 16) and doubles until the estimate is below
+        :data:`INTEGRATION_TOLERANCE` or the cap of 4096 steps is met; nothing is changed.
+        """
         beta = np.zeros(self.n_free) if beta is None else beta
-        self.set_steps(max(_MIN_STEPS, self.steps))
-        while self.integration_error(beta) > INTEGRATION_TOLERANCE and self.steps < _MAX_STEPS:
-            self.set_steps(2 * self.steps)
-        return self.steps
+        trial = self.with_steps(max(_MIN_STEPS, self.steps))
+        while trial.integration_error(beta) > INTEGRATION_TOLERANCE and trial.steps < _MAX_STEPS:
+            trial = trial.with_steps(2 * trial.steps)
+        return trial.steps
 
 
-def _axis_name(axis: np.ndarray) -> str:
-    for name, unit in (("z", (0, 0, 1)), ("y", (0, 1, 0)), ("x", (1, 0, 0))):
-        if np.allclose(np.abs(axis), unit, atol=1e-12):
-            return f"its {name} axis"
-    return f"the axis {np.round(axis, 6).tolist()} of its frame"
+@dataclass
+class EvaluationCounter:
+    """How much work a problem (and its copies at other step counts) has done.
 
-
-def _check_finite(name: str, values: np.ndarray) -> None:
-    if not np.all(np.isfinite(values)):
-        raise InputError(f"{name} contains NaN or infinite values; give finite numbers")
-
-
-def _check_limits(robot: Robot, values: np.ndarray, where: str) -> None:
-    for joint, value in zip(robot.joints, values, strict=True):
-        if joint.kind == "continuous":
-            continue
-        if not joint.lower - 1e-12 <= value <= joint.upper + 1e-12:
-            scale = 180.0 / math.pi if joint.angular else 1.0
-            unit = "deg" if joint.angular else "m"
-            raise JointLimitError(joint.name, value, joint.lower, joint.upper, where, unit, scale)
-
-
-def build_problem(
-    robot: Robot,
-    start: np.ndarray,
-    goal: np.ndarray,
-    start_quaternion: np.ndarray,
-    goal_quaternion: np.ndarray,
-    duration: float,
-    extra: Sequence[int] | Mapping[str, int] | None = None,
-    mmap: MomentumMap | None = None,
-    check_bounds: bool = True,
-) -> Problem:
-    """Build and check a planning problem.
-
-    Args:
-        robot: the free-floating robot.
-        start: N start joint values (rad or m).
-        goal: N goal joint values (rad or m).
-        start_quaternion: base attitude at t = 0, ``[x, y, z, w]``.
-        goal_quaternion: wanted base attitude at t = T, ``[x, y, z, w]``.
-        duration: motion time T (s), > 0.
-        extra: free coefficients beyond the quintic per joint (a sequence of N counts or a
-            ``{joint: count}`` mapping); default one on the joint nearest the base for planar
-            systems and one on each of the first three joints otherwise.
-        mmap: momentum-map evaluator to reuse.
-        check_bounds: refuse planar requests outside the planar bounds (method.md section 6).
-
-    Raises:
-        InputError: non-finite numbers, a non-positive duration, a bad quaternion.
-        JointLimitError: start or goal outside the joint limits.
-        InfeasibleError: planar request outside the reachable interval, or a goal attitude a
-            planar system cannot reach (it only turns about its z axis).
+    Attributes:
+        evaluations: residual evaluations (each integrates the attitude along a path).
+        map_evaluations: momentum-map evaluations (one per node and path).
     """
-    start = np.asarray(start, dtype=float)
-    goal = np.asarray(goal, dtype=float)
-    for name, arr in (("start joints", start), ("goal joints", goal)):
-        _check_finite(name, arr)
-    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0.0):
-        raise InputError(f"duration must be a finite number of seconds > 0, got {duration!r}")
-    quats = []
-    for name, quat in (("start attitude", start_quaternion), ("goal attitude", goal_quaternion)):
-        quat = np.asarray(quat, dtype=float)
-        _check_finite(name, quat)
-        norm = float(np.linalg.norm(quat))
-        if quat.shape != (4,) or norm < 1e-9:
-            raise InputError(f"{name} must be a non-zero quaternion [x, y, z, w]")
-        quats.append(quat / norm)
-    _check_limits(robot, start, "start")
-    _check_limits(robot, goal, "goal")
 
-    mmap = mmap or MomentumMap(robot)
-    axis = cached_planar_axis(robot)
-    planar = axis is not None
-    planar_map = None
-    if axis is not None:
-        if "planar_map" not in robot.cache:
-            robot.cache["planar_map"] = identify(robot, axis)
-        planar_map = robot.cache["planar_map"]
-    if extra is None:
-        counts = [0] * robot.n
-        for i in range(1 if planar else 3):
-            counts[i % robot.n] += 1
-    elif isinstance(extra, Mapping):
-        counts = [0] * robot.n
-        for name, count in extra.items():
-            index = robot.joint_names.index(robot.joint(name).name)
-            counts[index] = int(count)
-    else:
-        counts = [int(c) for c in extra]
-    if any(c < 0 for c in counts):
-        raise InputError(f"free coefficient counts must be >= 0, got {counts}")
-    family = PathFamily.with_extra(start, goal, counts)
-
-    bounds = yaw_change = None
-    if planar:
-        relative = quat_log(quat_multiply(quat_conjugate(quats[0]), quats[1]))
-        assert axis is not None
-        off_axis = float(np.linalg.norm(relative - (relative @ axis) * axis))
-        if off_axis > 1e-9:
-            raise InfeasibleError(
-                math.degrees(off_axis),
-                (0.0, 0.0),
-                message=(
-                    f"this robot is planar: its base turns only about {_axis_name(axis)}, but the "
-                    "goal "
-                    f"attitude is {math.degrees(off_axis):.6g} deg away from the start about "
-                    "other axes; give the goal the start's pitch and roll"
-                ),
-            )
-        yaw_change = wrap_angle(float(relative @ axis))
-        bounds = cached_planar_bounds(mmap, axis, planar_map)
-        lo, hi = bounds.interval(goal - start)
-        if check_bounds:
-            branches = [yaw_change + 2.0 * math.pi * k for k in range(-3, 4)]
-            # Open interval; when no joint moves it shrinks to the single point 0.
-            inside = [b for b in branches if lo < b < hi or (lo == hi == 0.0 and b == 0.0)]
-            if not inside:
-                interval = (math.degrees(lo), math.degrees(hi))
-                raise InfeasibleError(math.degrees(yaw_change), interval)
-            yaw_change = min(inside, key=abs)
-    problem = Problem(
-        robot=robot,
-        mmap=mmap,
-        family=family,
-        duration=float(duration),
-        start_quaternion=quats[0],
-        goal_quaternion=quats[1],
-        planar=planar,
-        axis=np.array([0.0, 0.0, 1.0]) if axis is None else axis,
-        planar_map=planar_map,
-        bounds=bounds,
-        yaw_change=yaw_change,
-    )
-    if family.n_free < problem.n_equations:
-        raise InputError(
-            f"{family.n_free} free path coefficient(s) for {problem.n_equations} attitude "
-            f"equation(s); add at least {problem.n_equations - family.n_free} more with "
-            "[path] extra"
-        )
-    problem.choose_steps()
-    return problem
+    evaluations: int = 0
+    map_evaluations: int = 0

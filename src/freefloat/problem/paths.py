@@ -1,4 +1,4 @@
-"""Polynomial joint paths with free coefficients (method.md section 4).
+"""Polynomial joint paths with free coefficients (docs/method.md section 4).
 
 Joint i follows a polynomial of degree ``k_i >= 5`` in time on ``[0, T]`` with zero rate and
 acceleration at both ends. Internally time is normalised, ``s = t / T`` in [0, 1]:
@@ -19,9 +19,9 @@ from functools import cached_property
 
 import numpy as np
 
-from .errors import InputError
+from ..errors import InputError
 
-__all__ = ["PathFamily", "PathSamples", "basis_coefficients"]
+__all__ = ["JointPolynomials", "PathFamily", "PathSamples", "basis_coefficients"]
 
 _QUINTIC = np.array([0.0, 0.0, 0.0, 10.0, -15.0, 6.0])
 
@@ -50,6 +50,73 @@ class PathSamples:
     q: np.ndarray
     qd: np.ndarray
     qdd: np.ndarray
+
+
+@dataclass(frozen=True)
+class JointPolynomials:
+    """Finished joint paths as polynomials in time, as a plan file stores them.
+
+    Attributes:
+        coefficients: (N, K) ascending coefficients of each joint's polynomial in t (s);
+            values in rad (or m), so row i, column k is in rad/s^k.
+        duration: T (s); the paths are defined on [0, T].
+    """
+
+    coefficients: np.ndarray
+    duration: float
+
+    @classmethod
+    def from_lists(
+        cls, coefficients: Sequence[Sequence[float]], duration: float
+    ) -> JointPolynomials:
+        """From per-joint coefficient lists of any lengths (padded with zeros)."""
+        width = max(len(c) for c in coefficients)
+        matrix = np.zeros((len(coefficients), width))
+        for i, c in enumerate(coefficients):
+            matrix[i, : len(c)] = c
+        return cls(matrix, float(duration))
+
+    def derivative(self, order: int) -> np.ndarray:
+        """(N, K - order) coefficients of the ``order``-th time derivative (per s^order)."""
+        c = self.coefficients
+        for _ in range(order):
+            c = c[:, 1:] * np.arange(1, c.shape[1])[None, :]
+        return c if c.shape[1] else np.zeros((len(self.coefficients), 1))
+
+    def evaluate(self, t: np.ndarray) -> PathSamples:
+        """Positions (rad or m), rates (per s) and accelerations (per s^2) at times ``t`` (s)."""
+        t = np.asarray(t, dtype=float)
+        out = []
+        for order in range(3):
+            c = self.derivative(order)
+            powers = t[:, None] ** np.arange(c.shape[1])[None, :]
+            out.append(powers @ c.T)
+        return PathSamples(*out)
+
+    def extremes(
+        self, joint: int, order: int = 0
+    ) -> tuple[tuple[float, float], tuple[float, float]]:
+        """Exact ``((min, t_min), (max, t_max))`` of a joint's ``order``-th derivative on [0, T].
+
+        Extremes of a polynomial on an interval are at its ends or at real roots of its
+        derivative inside (found by numpy's companion-matrix roots, then evaluated).
+        """
+        poly = np.polynomial.polynomial
+        c = self.derivative(order)[joint]
+        dc = poly.polyder(c) if len(c) > 1 else np.zeros(1)
+        candidates = [0.0, self.duration]
+        if np.any(dc != 0.0):
+            trimmed = np.trim_zeros(dc, "b")
+            if len(trimmed) > 1:
+                for root in poly.polyroots(trimmed):
+                    if abs(root.imag) <= 1e-9 * max(1.0, abs(root.real)):
+                        r = float(root.real)
+                        if 0.0 < r < self.duration:
+                            candidates.append(r)
+        times = np.array(candidates)
+        values = poly.polyval(times, c)
+        lo, hi = int(np.argmin(values)), int(np.argmax(values))
+        return (float(values[lo]), float(times[lo])), (float(values[hi]), float(times[hi]))
 
 
 @dataclass(frozen=True)
@@ -197,6 +264,12 @@ class PathFamily:
         """Positions (rad or m), rates (per s) and accelerations (per s^2) at times ``t`` (s)."""
         n = self.evaluate(beta, np.asarray(t, dtype=float) / duration)
         return PathSamples(n.q, n.qd / duration, n.qdd / duration**2)
+
+    def polynomials(self, beta: np.ndarray, duration: float) -> JointPolynomials:
+        """The path at ``beta`` as polynomials in time on [0, ``duration``] (s)."""
+        return JointPolynomials.from_lists(
+            [c.tolist() for c in self.time_coefficients(beta, duration)], duration
+        )
 
     def _check(self, beta: np.ndarray) -> np.ndarray:
         beta = np.asarray(beta, dtype=float).reshape(-1)

@@ -23,10 +23,10 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from .errors import FreeFloatError, ViewerError
-from .files import atomic_write_text
-from .model import Robot, load_robot
-from .plan import Plan
+from ..errors import FreeFloatError, ViewerError
+from ..files import atomic_write_text
+from ..plans.format import Plan
+from ..robot.model import Robot, load_robot
 
 __all__ = ["Playback", "build_playback", "serve", "write_html"]
 
@@ -114,7 +114,7 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
         ViewerError: meshcat is missing or broken, or the visual geometry cannot be loaded.
         InputError: ``speed`` is not a positive finite number.
     """
-    from .errors import InputError
+    from ..errors import InputError
 
     if not (np.isfinite(speed) and speed > 0):
         raise InputError(f"--speed must be a positive number, got {speed}")

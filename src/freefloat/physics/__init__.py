@@ -1,0 +1,18 @@
+"""Physics of the free floater: momentum map, attitude propagation, torques and replay."""
+
+from .attitude import geodesic_angle, quat_from_zyx, zyx_from_quat
+from .dynamics import InverseDynamics, ReplayResult, inverse_dynamics, replay
+from .momentum import MomentumMap, is_planar, planar_axis
+
+__all__ = [
+    "InverseDynamics",
+    "MomentumMap",
+    "ReplayResult",
+    "geodesic_angle",
+    "inverse_dynamics",
+    "is_planar",
+    "planar_axis",
+    "quat_from_zyx",
+    "replay",
+    "zyx_from_quat",
+]

@@ -1,0 +1,252 @@
+"""The planning pipeline: scenario -> problem -> solution -> sampled, verified plan.
+
+:func:`plan` is the whole call: resolve the scenario (compose an inline servicer's URDF into
+its cache, solve a Cartesian goal), search for a solution within the constraints, sample it,
+compute the torques and verify the result independently. :func:`plan_from_solution` samples and
+verifies a solution found elsewhere. The file format lives in :mod:`freefloat.plans`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, replace
+
+import numpy as np
+
+from .errors import SolverError, VelocityLimitError, VerificationError
+from .physics.attitude import geodesic_angle, zyx_from_quat
+from .physics.dynamics import inverse_dynamics
+from .plans.format import (
+    BaseReport,
+    Feasibility,
+    Plan,
+    Request,
+    RobotRef,
+    Samples,
+    SolutionRecord,
+    SolverReport,
+)
+from .problem.constraints import Constraint, JointVelocityLimits, default_constraints
+from .problem.residual import Problem
+from .problem.scenario import Scenario
+from .solvers.options import DEFAULT_TOLERANCE, Solution, SolveOptions
+from .solvers.search import search
+from .verify.checks import boundary_errors, verify_plan
+
+__all__ = ["BOUNDARY_TOLERANCE", "plan", "plan_from_solution"]
+
+#: Boundary conditions must hold to this (rad, rad/s, rad/s^2; relative to the joint travel).
+BOUNDARY_TOLERANCE = 1e-9
+
+
+def _deg(values: np.ndarray) -> list[float]:
+    return [math.degrees(float(v)) for v in values]
+
+
+def plan(
+    scenario: Scenario,
+    options: SolveOptions | None = None,
+    samples: int = 201,
+    constraints: Sequence[Constraint] | None = None,
+) -> Plan:
+    """Plan the scenario's motion and sample it.
+
+    Args:
+        scenario: what to plan.
+        options: solver settings; the scenario's ``max_deviation`` overrides the default
+            bracket.
+        samples: number of equally spaced samples in [0, T] (>= 2).
+        constraints: path constraints to honour (solvers and verification); default joint
+            position and velocity limits.
+
+    Raises:
+        FreeFloatError: any subclass: bad input, infeasible request, no solution.
+        VelocityLimitError: no path within the velocity limits at this duration; carries the
+            shortest duration at which the path found without them respects them.
+    """
+    options = options or SolveOptions()
+    if scenario.max_deviation is not None:
+        options = SolveOptions(**{**asdict(options), "max_deviation": scenario.max_deviation})
+    constraints = default_constraints() if constraints is None else list(constraints)
+    scenario = scenario.resolved()
+    try:
+        found = search(scenario, options, constraints)
+    except SolverError as exc:
+        _explain_velocity_limits(scenario, options, constraints, exc)
+        raise
+    scenario.write_robot()
+    problem = found.problem.with_steps(found.solution.steps)
+    result = plan_from_solution(
+        problem, found.solution, samples, options.tolerance, constraints=constraints
+    )
+    report = replace(
+        result.solver, freedom=found.freedom, full_turns=found.full_turns, tried=found.tried
+    )
+    return replace(result, solver=report)
+
+
+def _explain_velocity_limits(
+    scenario: Scenario,
+    options: SolveOptions,
+    constraints: list[Constraint],
+    error: SolverError,
+) -> None:
+    """Raise :class:`VelocityLimitError` when only the velocity limits stood in the way.
+
+    Rates scale as 1/T and the path shape does not depend on T, so the shortest duration at
+    which the path found without velocity limits respects them is exact.
+    """
+    relaxed = [c for c in constraints if not isinstance(c, JointVelocityLimits)]
+    if len(relaxed) == len(constraints):
+        return
+    try:
+        found = search(scenario, options, relaxed)
+    except SolverError:
+        return
+    robot = scenario.robot
+    path = found.problem.polynomials(found.solution.beta)
+    worst, worst_ratio, peak = None, 0.0, 0.0
+    for i, joint in enumerate(robot.joints):
+        if math.isfinite(joint.velocity_limit):
+            (lo, _), (hi, _) = path.extremes(i, 1)
+            rate = max(abs(lo), abs(hi))
+            if rate / joint.velocity_limit > worst_ratio:
+                worst, worst_ratio, peak = joint, rate / joint.velocity_limit, rate
+    if worst is None or worst_ratio <= 1.0:
+        return
+    raise VelocityLimitError(
+        worst.name,
+        peak,
+        worst.velocity_limit,
+        JointVelocityLimits.shortest_duration(robot, path),
+        worst.unit,
+    ) from error
+
+
+def plan_from_solution(
+    problem: Problem,
+    solution: Solution,
+    samples: int = 201,
+    tolerance: float = DEFAULT_TOLERANCE,
+    verify: bool = True,
+    constraints: Sequence[Constraint] | None = None,
+) -> Plan:
+    """Sample a solved problem into a verified :class:`Plan`.
+
+    Args:
+        problem: the solved problem.
+        solution: its solution.
+        samples: number of equally spaced samples in [0, T].
+        tolerance: attitude tolerance (rad).
+        verify: run the independent checks of :mod:`freefloat.verify` (a plan from
+            :func:`plan` always is).
+        constraints: path constraints verification checks; default joint position and
+            velocity limits.
+
+    Raises:
+        SolverError: the attitude reached (by the solver's grid or by the sampling grid) is
+            farther than ``tolerance`` (rad) from the goal, or a boundary condition fails.
+        VerificationError: an independent check fails.
+    """
+    robot, family, T = problem.robot, problem.family, problem.duration
+    names = robot.joint_names
+    s = np.linspace(0.0, 1.0, max(2, int(samples)))
+    t = s * T
+    path = family.at_times(solution.beta, t, T)
+    quats = problem.attitudes(solution.beta, s)
+    mmap = problem.mmap
+    base_position, ee_position, omega, tau = [], [], [], []
+    for q, qd, qdd, quat in zip(path.q, path.qd, path.qdd, quats, strict=True):
+        base_position.append(mmap.base_position(q, quat).tolist())
+        ee_position.append(mmap.end_effector_pose(q, quat).translation.tolist())
+        omega.append((mmap.f1(q) @ qd).tolist())
+        tau.append(inverse_dynamics(mmap, q, qd, qdd).tau.tolist())
+
+    achieved = problem.achieved(solution.beta)
+    error = geodesic_angle(achieved, problem.goal_quaternion)
+    sampled_error = geodesic_angle(quats[-1], problem.goal_quaternion)
+    boundary = boundary_errors(
+        family.time_coefficients(solution.beta, T), family.start, family.goal, T
+    )["relative_max"]
+    if max(error, sampled_error) > tolerance or boundary > BOUNDARY_TOLERANCE:
+        raise SolverError(
+            "the planned path misses its target (attitude error "
+            f"{max(error, sampled_error):.3g} rad, boundary error {boundary:.3g})",
+            max(error, sampled_error),
+        )
+
+    free = family.free_time_coefficients(solution.beta, T)
+    solutions = [
+        SolutionRecord(
+            free_parameters=dict(
+                zip(names, family.free_time_coefficients(root.beta, T), strict=True)
+            ),
+            residual_rad=root.residual,
+            path_length=root.path_length,
+        )
+        for root in solution.roots
+    ]
+    bounds = problem.bounds_interval
+    unverified = Plan(
+        robot=RobotRef(
+            urdf=str(robot.urdf),
+            joints=names,
+            end_effector=robot.end_effector,
+            joint_kinds=[j.kind for j in robot.joints],
+        ),
+        duration=T,
+        coefficients={
+            name: c.tolist()
+            for name, c in zip(names, family.time_coefficients(solution.beta, T), strict=True)
+        },
+        free_parameters=dict(zip(names, free, strict=True)),
+        base=BaseReport(
+            start_quaternion_xyzw=problem.start_quaternion.tolist(),
+            target_quaternion_xyzw=problem.goal_quaternion.tolist(),
+            achieved_quaternion_xyzw=achieved.tolist(),
+            start_zyx_deg=_deg(zyx_from_quat(problem.start_quaternion)),
+            target_zyx_deg=_deg(zyx_from_quat(problem.goal_quaternion)),
+            achieved_zyx_deg=_deg(zyx_from_quat(achieved)),
+            attitude_error_rad=error,
+        ),
+        feasibility=Feasibility(
+            planar=problem.planar,
+            yaw_change_bounds_deg=None if bounds is None else _deg(np.array(bounds)),
+            requested_yaw_change_deg=(
+                None if problem.yaw_change is None else math.degrees(problem.yaw_change)
+            ),
+        ),
+        samples=Samples(
+            t=t.tolist(),
+            q=path.q.tolist(),
+            qd=path.qd.tolist(),
+            qdd=path.qdd.tolist(),
+            base_position=base_position,
+            base_quaternion_xyzw=quats.tolist(),
+            base_zyx_deg=[_deg(zyx_from_quat(qt)) for qt in quats],
+            end_effector_position=ee_position,
+            base_angular_velocity=omega,
+            tau=tau,
+        ),
+        solver=SolverReport(
+            method=solution.method,
+            iterations=solution.iterations,
+            evaluations=solution.evaluations,
+            residual_rad=solution.residual,
+            wall_time_s=solution.wall_time,
+            solutions=solutions,
+            integration_steps=problem.steps,
+            integration_error_rad=solution.integration_error,
+            strategy=solution.strategy.value,
+        ),
+        request=Request(start_joints=family.start.tolist(), goal_joints=family.goal.tolist()),
+    )
+    if not verify:
+        return unverified
+    verification = verify_plan(
+        unverified, robot, constraints=None if constraints is None else list(constraints)
+    )
+    if not verification.passed:
+        raise VerificationError(verification.failures)
+    return replace(unverified, verification=verification)

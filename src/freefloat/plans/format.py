@@ -1,0 +1,346 @@
+"""The plan file: typed records and their JSON form (``freefloat.plan/2``).
+
+This module is the format only: dataclasses for every section of a plan, reading and writing
+them, and the schema version. Planning a scenario into a plan lives in
+:mod:`freefloat.pipeline`; checking a plan lives in :mod:`freefloat.verify`.
+
+A plan file is written atomically (a temporary file renamed over the target), so a reader never
+sees half a plan and a failure leaves nothing behind. Units: seconds, radians (metres for
+prismatic joints and positions); Euler angles, marked ``_deg``, in degrees. Positions are in
+the inertial frame whose origin is the system centre of mass (docs/method.md section 10).
+
+Schema versions: ``freefloat.plan/2`` (this one) stores the verification as a list of typed
+checks, each with its value, tolerance, unit and the check's own numerical error estimate.
+``freefloat.plan/1`` files (freefloat 0.1) still load: their path, samples and solver report
+are read as they are and their verification is dropped (``Verification.checks`` empty, not
+passed), so ``freefloat verify`` recomputes it.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import PlanFileError
+from ..files import atomic_write_text
+
+__all__ = [
+    "FORMAT",
+    "READABLE_FORMATS",
+    "BaseReport",
+    "Check",
+    "Feasibility",
+    "Plan",
+    "Request",
+    "RobotRef",
+    "Samples",
+    "SolutionRecord",
+    "SolverReport",
+    "Verification",
+]
+
+#: Format tag of plan files written by this version.
+FORMAT = "freefloat.plan/2"
+
+#: Format tags this version reads (older ones are converted on load).
+READABLE_FORMATS = ("freefloat.plan/1", FORMAT)
+
+
+@dataclass(frozen=True)
+class RobotRef:
+    """The robot a plan is for: URDF path, joint names in order, end-effector frame."""
+
+    urdf: str
+    joints: list[str]
+    end_effector: str
+    joint_kinds: list[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class BaseReport:
+    """Base attitude at start, wanted and reached (quaternions xyzw; ZYX Euler in deg)."""
+
+    start_quaternion_xyzw: list[float]
+    target_quaternion_xyzw: list[float]
+    achieved_quaternion_xyzw: list[float]
+    start_zyx_deg: list[float]
+    target_zyx_deg: list[float]
+    achieved_zyx_deg: list[float]
+    attitude_error_rad: float
+
+
+@dataclass(frozen=True)
+class Feasibility:
+    """Planar bounds check: the reachable yaw-change interval and the request (deg)."""
+
+    planar: bool
+    yaw_change_bounds_deg: list[float] | None
+    requested_yaw_change_deg: float | None
+
+
+@dataclass(frozen=True)
+class Samples:
+    """The plan sampled in time; each field is a list with one entry per sample.
+
+    ``t`` (s); ``q`` (rad or m), ``qd`` (per s), ``qdd`` (per s^2), one value per joint;
+    ``base_position`` (m), ``base_quaternion_xyzw``, ``base_zyx_deg`` (deg),
+    ``base_angular_velocity`` (rad/s, base frame), ``end_effector_position`` (m), ``tau`` joint
+    torques (N m, or N for prismatic joints).
+    """
+
+    t: list[float]
+    q: list[list[float]]
+    qd: list[list[float]]
+    qdd: list[list[float]]
+    base_position: list[list[float]]
+    base_quaternion_xyzw: list[list[float]]
+    base_zyx_deg: list[list[float]]
+    end_effector_position: list[list[float]]
+    base_angular_velocity: list[list[float]] = field(default_factory=list)
+    tau: list[list[float]] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class SolutionRecord:
+    """One root of the attitude equations found by the solver.
+
+    Attributes:
+        free_parameters: per joint, the coefficients of ``t^6`` and up (rad/s^k or m/s^k).
+        residual_rad: norm of the attitude residual there (rad).
+        path_length: summed joint travel along the path (rad, plus m for prismatic joints).
+    """
+
+    free_parameters: dict[str, list[float]]
+    residual_rad: float
+    path_length: float
+
+
+@dataclass(frozen=True)
+class SolverReport:
+    """How the free coefficients were found.
+
+    ``solutions`` lists every root found (the chosen one first) with its free parameters
+    (``t^6`` and up, per joint), residual (rad) and summed joint travel (rad or m);
+    ``freedom`` the free coefficients per joint the planner used; ``full_turns`` the whole turns
+    added to continuous joints' goals; ``tried`` every attempt in order.
+    """
+
+    method: str
+    iterations: int
+    evaluations: int
+    residual_rad: float
+    wall_time_s: float
+    solutions: list[SolutionRecord]
+    integration_steps: int = 0
+    integration_error_rad: float = 0.0
+    strategy: str = ""
+    freedom: dict[str, int] = field(default_factory=dict)
+    full_turns: dict[str, int] = field(default_factory=dict)
+    tried: list[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Check:
+    """One independent check of a plan.
+
+    Attributes:
+        name: the check's name (``momentum``, ``replay_attitude``, ``joint_position_limits``...).
+        value: what was measured (in ``unit``).
+        tolerance: the largest value the physics allows (in ``unit``).
+        unit: unit of ``value``, ``tolerance`` and ``error_estimate`` (``rad``, ``m``,
+            ``kg m^2/s``, ``1`` for relative figures...).
+        error_estimate: the check's own numerical error (same unit): a plan is judged against
+            ``tolerance + error_estimate``, so a coarse checker never refuses a valid plan.
+        detail: where the worst value occurs (a joint, a time), for the reader.
+    """
+
+    name: str
+    value: float
+    tolerance: float
+    unit: str
+    error_estimate: float = 0.0
+    detail: str = ""
+
+    @property
+    def passed(self) -> bool:
+        """Whether ``value <= tolerance + error_estimate`` (NaN never passes)."""
+        return math.isfinite(self.value) and self.value <= self.tolerance + self.error_estimate
+
+
+@dataclass(frozen=True)
+class Verification:
+    """Results of the independent checks of a plan; ``passed`` only if every check holds."""
+
+    checks: tuple[Check, ...] = ()
+
+    @property
+    def passed(self) -> bool:
+        """True when there are checks and every one passed."""
+        return bool(self.checks) and all(c.passed for c in self.checks)
+
+    @property
+    def failures(self) -> list[str]:
+        """Names of the checks that failed."""
+        return [c.name for c in self.checks if not c.passed]
+
+    def __getitem__(self, name: str) -> Check:
+        for check in self.checks:
+            if check.name == name:
+                return check
+        raise KeyError(f"no check {name!r}; checks: {', '.join(c.name for c in self.checks)}")
+
+    def __contains__(self, name: object) -> bool:
+        return any(c.name == name for c in self.checks)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The plan-file ``verification`` section."""
+        return {
+            "passed": self.passed,
+            "checks": [{**asdict(c), "passed": c.passed} for c in self.checks],
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Verification:
+        """Read the plan-file ``verification`` section (the ``passed`` flags are recomputed)."""
+        checks = []
+        for item in data.get("checks", []):
+            fields = {k: v for k, v in item.items() if k != "passed"}
+            checks.append(
+                Check(
+                    name=str(fields["name"]),
+                    value=float(fields["value"]),
+                    tolerance=float(fields["tolerance"]),
+                    unit=str(fields["unit"]),
+                    error_estimate=float(fields.get("error_estimate", 0.0)),
+                    detail=str(fields.get("detail", "")),
+                )
+            )
+        return cls(tuple(checks))
+
+
+@dataclass(frozen=True)
+class Request:
+    """What was asked: joint values at start and goal (rad or m), in joint order."""
+
+    start_joints: list[float]
+    goal_joints: list[float]
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A verified point-to-point motion of a free-floating space manipulator."""
+
+    robot: RobotRef
+    duration: float
+    coefficients: dict[str, list[float]]
+    free_parameters: dict[str, list[float]]
+    base: BaseReport
+    feasibility: Feasibility
+    samples: Samples
+    solver: SolverReport
+    request: Request
+    verification: Verification = field(default_factory=Verification)
+    format: str = FORMAT
+
+    # -- evaluation -------------------------------------------------------------------------
+
+    def joint_positions(self, t: float | np.ndarray) -> np.ndarray:
+        """Joint values (rad or m) at times ``t`` (s) from the plan's polynomials."""
+        t = np.asarray(t, dtype=float)
+        poly = np.polynomial.polynomial
+        return np.stack(
+            [poly.polyval(t, self.coefficients[name]) for name in self.robot.joints], axis=-1
+        )
+
+    # -- file -------------------------------------------------------------------------------
+
+    def to_dict(self) -> dict[str, Any]:
+        """The plan as the JSON-ready dictionary of the file format (a deep copy)."""
+        return copy.deepcopy(
+            {
+                "format": self.format,
+                "robot": asdict(self.robot),
+                "duration": self.duration,
+                "path": {"family": "polynomial", "coefficients": self.coefficients},
+                "free_parameters": self.free_parameters,
+                "base": asdict(self.base),
+                "feasibility": asdict(self.feasibility),
+                "samples": asdict(self.samples),
+                "solver": asdict(self.solver),
+                "request": asdict(self.request),
+                "verification": self.verification.to_dict(),
+            }
+        )
+
+    def to_json(self) -> str:
+        """The plan file's text (JSON, no NaN)."""
+        return json.dumps(self.to_dict(), indent=1, allow_nan=False)
+
+    def save(self, path: str | Path) -> Path:
+        """Write the plan to ``path`` atomically; return the absolute path."""
+        return atomic_write_text(path, self.to_json())
+
+    @classmethod
+    def load(cls, path: str | Path) -> Plan:
+        """Read a plan file.
+
+        Raises:
+            PlanFileError: unreadable, not JSON, another format version, or missing keys.
+        """
+        path = Path(path).expanduser()
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise PlanFileError(f"plan file not found: {path}") from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise PlanFileError(f"cannot read plan file {path}: {exc}") from None
+        except json.JSONDecodeError as exc:
+            raise PlanFileError(f"{path}: not a plan file, corrupt JSON ({exc})") from None
+        return cls.from_dict(data, str(path))
+
+    @classmethod
+    def from_dict(cls, data: Any, where: str = "plan") -> Plan:
+        """Build a plan from its file dictionary, checking the format and the keys."""
+        if not isinstance(data, Mapping):
+            raise PlanFileError(f"{where}: not a plan file (top level is not an object)")
+        fmt = data.get("format")
+        if fmt not in READABLE_FORMATS:
+            raise PlanFileError(
+                f"{where}: plan format {fmt!r} is not supported; this freefloat reads "
+                + " and ".join(repr(f) for f in READABLE_FORMATS)
+            )
+        try:
+            verification = (
+                Verification()  # format 1: its untyped checks are recomputed by verify
+                if fmt == "freefloat.plan/1"
+                else Verification.from_dict(data["verification"])
+            )
+            return cls(
+                robot=RobotRef(**data["robot"]),
+                duration=float(data["duration"]),
+                coefficients={k: list(v) for k, v in data["path"]["coefficients"].items()},
+                free_parameters={k: list(v) for k, v in data["free_parameters"].items()},
+                base=BaseReport(**data["base"]),
+                feasibility=Feasibility(**data["feasibility"]),
+                samples=Samples(**data["samples"]),
+                solver=SolverReport(
+                    **{
+                        **data["solver"],
+                        "solutions": [SolutionRecord(**s) for s in data["solver"]["solutions"]],
+                    }
+                ),
+                request=Request(
+                    start_joints=list(data["request"]["start_joints"]),
+                    goal_joints=list(data["request"]["goal_joints"]),
+                ),
+                verification=verification,
+            )
+        except (KeyError, TypeError, AttributeError, ValueError) as exc:
+            raise PlanFileError(f"{where}: corrupt plan file (bad or missing {exc})") from None

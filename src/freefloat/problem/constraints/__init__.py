@@ -1,0 +1,17 @@
+"""Path constraints: one interface (:class:`Constraint`), one module per constraint."""
+
+from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
+from .joint_position import JointPositionLimits
+from .joint_velocity import JointVelocityLimits
+from .registry import CONSTRAINTS, default_constraints
+
+__all__ = [
+    "CONSTRAINTS",
+    "DEFAULT_INSTANTS",
+    "Constraint",
+    "ConstraintRows",
+    "Excess",
+    "JointPositionLimits",
+    "JointVelocityLimits",
+    "default_constraints",
+]

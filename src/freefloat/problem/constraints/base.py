@@ -1,0 +1,95 @@
+"""The constraint interface: what every path constraint tells the solvers and the checker.
+
+A constraint is a small object with a name, a unit and a tolerance. It gives the solvers its
+values ``g`` (``g <= 0`` is feasible, in its unit) and their exact Jacobian with respect to
+the free path coefficients ``beta`` at a set of normalised instants; and it gives verification
+a dense, independent measure of how far a finished path goes beyond it, computed from the
+path's time polynomials alone (no solver data). Solvers receive constraints as a list; adding
+one means one new module with a subclass, plus its name in :mod:`.registry`.
+"""
+
+from __future__ import annotations
+
+import abc
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...robot.model import Robot
+from ..paths import JointPolynomials
+from ..residual import Problem
+
+__all__ = ["DEFAULT_INSTANTS", "Constraint", "ConstraintRows", "Excess"]
+
+#: Normalised instants at which solvers impose constraints by default (s = t / T in [0, 1]).
+DEFAULT_INSTANTS = np.linspace(0.0, 1.0, 97)
+
+
+@dataclass(frozen=True)
+class ConstraintRows:
+    """Constraint values ``g(beta) <= 0`` and their Jacobian at a set of instants.
+
+    Attributes:
+        values: (M,) values in the constraint's unit; feasible where ``<= 0``.
+        jacobian: (M, n_free) exact ``dg/dbeta``.
+    """
+
+    values: np.ndarray
+    jacobian: np.ndarray
+
+    @property
+    def count(self) -> int:
+        """Number of rows M."""
+        return len(self.values)
+
+
+@dataclass(frozen=True)
+class Excess:
+    """How far a path goes beyond a constraint, and where.
+
+    Attributes:
+        value: the largest excess (in the constraint's unit; <= 0 when inside everywhere).
+        error_estimate: numerical error of ``value`` (same unit); 0 when exact.
+        detail: where the worst value occurs (joint and time), for the reader.
+    """
+
+    value: float
+    error_estimate: float = 0.0
+    detail: str = ""
+
+
+class Constraint(abc.ABC):
+    """One path constraint (see the module docstring).
+
+    Attributes:
+        name: identifier, also the name of its check in a plan's verification.
+        unit: unit of the values, the tolerance and the excess.
+        tolerance: the largest excess verification accepts (unit), beyond rounding.
+        affine: whether ``g`` is affine in ``beta`` (then its Jacobian is constant).
+    """
+
+    name: str = "constraint"
+    unit: str = "1"
+    tolerance: float = 1e-9
+    affine: bool = False
+
+    @abc.abstractmethod
+    def rows(
+        self, problem: Problem, beta: np.ndarray, instants: np.ndarray = DEFAULT_INSTANTS
+    ) -> ConstraintRows:
+        """Values ``g(beta)`` (feasible ``<= 0``) and exact Jacobian at normalised instants."""
+
+    @abc.abstractmethod
+    def excess(self, robot: Robot, path: JointPolynomials) -> Excess:
+        """Dense, independent measure of the largest excess along a finished path."""
+
+    def violation(self, problem: Problem, beta: np.ndarray) -> Excess:
+        """:meth:`excess` of the problem's path at ``beta`` (for solvers filtering roots)."""
+        return self.excess(problem.robot, problem.polynomials(beta))
+
+    def applies_to(self, robot: Robot) -> bool:
+        """Whether the constraint has anything to check on this robot (default: yes)."""
+        return True
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"

@@ -1,0 +1,77 @@
+"""Joint velocity limits from the URDF along the whole path.
+
+Joint rates are ``dq/dt = (dq/ds) / T``: affine in the free coefficients, so the limits are
+linear inequalities in ``beta`` at any instant. The dense check is exact: the extremes of the
+rate polynomial are at the ends or at real roots of the acceleration (rad/s, or m/s).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...robot.model import Robot
+from ..paths import JointPolynomials
+from ..residual import Problem
+from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
+
+__all__ = ["JointVelocityLimits"]
+
+
+class JointVelocityLimits(Constraint):
+    """Every joint's rate stays within ``+-velocity_limit`` of its URDF (rad/s or m/s)."""
+
+    name = "joint_velocity_limits"
+    unit = "rad/s|m/s"
+    tolerance = 1e-9
+    affine = True
+
+    def applies_to(self, robot: Robot) -> bool:
+        """True when some joint has a finite velocity limit."""
+        return any(math.isfinite(j.velocity_limit) for j in robot.joints)
+
+    def rows(
+        self, problem: Problem, beta: np.ndarray, instants: np.ndarray = DEFAULT_INSTANTS
+    ) -> ConstraintRows:
+        """``+-qdot_i(t) - limit_i`` at the instants (rad/s or m/s)."""
+        base, _, dqs = problem.family.linear_map(np.asarray(instants, dtype=float))
+        scale = 1.0 / problem.duration
+        rate = (base.qd + dqs @ np.asarray(beta, dtype=float)) * scale
+        values, rows = [], []
+        for i, joint in enumerate(problem.robot.joints):
+            if math.isfinite(joint.velocity_limit):
+                values += [rate[:, i] - joint.velocity_limit, -rate[:, i] - joint.velocity_limit]
+                rows += [dqs[:, i, :] * scale, -dqs[:, i, :] * scale]
+        if not values:
+            return ConstraintRows(np.zeros(0), np.zeros((0, problem.n_free)))
+        return ConstraintRows(np.concatenate(values), np.concatenate(rows))
+
+    def excess(self, robot: Robot, path: JointPolynomials) -> Excess:
+        """Exact largest rate beyond a limit (rad/s or m/s), from the rate's extremes."""
+        worst, detail = -math.inf, ""
+        for i, joint in enumerate(robot.joints):
+            if not math.isfinite(joint.velocity_limit):
+                continue
+            (lo, t_lo), (hi, t_hi) = path.extremes(i, 1)
+            peak, t = (hi, t_hi) if abs(hi) >= abs(lo) else (lo, t_lo)
+            over = abs(peak) - joint.velocity_limit
+            if over > worst:
+                worst, detail = over, f"joint {joint.name!r} at t = {t:.4g} s"
+        if worst == -math.inf:
+            return Excess(0.0, 0.0, "no joint has a velocity limit")
+        return Excess(worst, 0.0, detail)
+
+    @staticmethod
+    def shortest_duration(robot: Robot, path: JointPolynomials) -> float:
+        """The shortest duration (s) at which this path shape respects every velocity limit.
+
+        Rates scale as 1/T and the shape does not depend on T, so this is exact:
+        ``T_min = T * max_i(max |qdot_i| / limit_i)``.
+        """
+        ratio = 0.0
+        for i, joint in enumerate(robot.joints):
+            if math.isfinite(joint.velocity_limit):
+                (lo, _), (hi, _) = path.extremes(i, 1)
+                ratio = max(ratio, max(abs(lo), abs(hi)) / joint.velocity_limit)
+        return path.duration * ratio

@@ -1,0 +1,166 @@
+"""Solve ``h(beta) = 0`` for the free path coefficients (docs/method.md section 5).
+
+One dispatcher, one signature per strategy: ``strategy(problem, constraints, options) ->
+Attempt``. The dispatcher picks the strategy from the problem's shape (or the one asked for),
+then polishes the candidates with minimum-norm Gauss-Newton steps, keeps those whose path
+honours every constraint, chooses the minimum-norm root, and certifies the attitude
+integration at it (doubling the steps of a copy of the problem when needed). The problem it is
+given is never changed.
+
+A solution is returned only when the residual is below the tolerance; otherwise
+:class:`~freefloat.errors.SolverError` reports the best residual reached and what was tried.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from ..errors import SolverError
+from ..problem.constraints import Constraint, default_constraints
+from ..problem.residual import Problem
+from .multistart import multistart
+from .newton import polish
+from .options import Attempt, Root, Solution, SolveOptions, Strategy
+from .scan import scan
+
+__all__ = ["STRATEGIES", "choose_strategy", "solve"]
+
+StrategyFunction = Callable[[Problem, Sequence[Constraint], SolveOptions], Attempt]
+
+#: The strategy functions by name.
+STRATEGIES: dict[Strategy, StrategyFunction] = {
+    Strategy.SCAN: scan,
+    Strategy.MULTISTART: multistart,
+}
+
+
+def choose_strategy(problem: Problem, options: SolveOptions) -> Strategy:
+    """The strategy for this problem: the one asked for, else by the problem's shape.
+
+    One unknown and one equation: ``scan``. Spatial problems: ``continuation`` when it is
+    registered, else ``multistart``; planar problems with several unknowns: ``multistart``.
+    """
+    if options.strategy is not None:
+        return options.strategy
+    if problem.n_free == 1 and problem.n_equations == 1:
+        return Strategy.SCAN
+    if not problem.planar and Strategy.CONTINUATION in STRATEGIES:
+        return Strategy.CONTINUATION
+    return Strategy.MULTISTART
+
+
+def _broken(problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray) -> str:
+    for constraint in constraints:
+        if constraint.applies_to(problem.robot):
+            excess = constraint.violation(problem, beta)
+            if excess.value > constraint.tolerance:
+                return f"a root breaks {constraint.name} ({excess.detail})"
+    return ""
+
+
+def solve(
+    problem: Problem,
+    options: SolveOptions | None = None,
+    constraints: Sequence[Constraint] | None = None,
+) -> Solution:
+    """Find the free coefficients that bring the base to its goal attitude.
+
+    Args:
+        problem: the problem (not changed).
+        options: solver settings.
+        constraints: path constraints to honour; default joint position and velocity limits.
+
+    Raises:
+        SolverError: no ``beta`` with a residual below the tolerance was found within the
+            constraints.
+    """
+    options = options or SolveOptions()
+    constraints = default_constraints() if constraints is None else list(constraints)
+    tol = options.tolerance
+    start_time = time.perf_counter()
+    start_evaluations = problem.evaluations
+    zero = np.zeros(problem.n_free)
+
+    quintic_breaks = _broken(problem, constraints, zero)
+    if np.linalg.norm(problem.residual(zero)) < 0.01 * tol and not quintic_breaks:
+        strategy = Strategy.NONE
+        attempt = Attempt(candidates=[zero], method="none (the quintic path already reaches it)")
+    else:
+        strategy = choose_strategy(problem, options)
+        if strategy not in STRATEGIES:
+            raise SolverError(
+                f"strategy {strategy.value!r} is not available; available: "
+                + ", ".join(s.value for s in STRATEGIES),
+                float(np.linalg.norm(problem.residual(zero))),
+            )
+        attempt = STRATEGIES[strategy](problem, constraints, options)
+    tried = list(attempt.tried)
+
+    roots = []
+    best_vector = problem.residual(zero)
+    for index, beta in enumerate(attempt.candidates):
+        if index in attempt.residuals:  # refined to 1e-14 rad already: no polishing
+            vector = attempt.residuals[index]
+        else:
+            beta, vector = polish(problem, beta, tol)
+        residual = float(np.linalg.norm(vector))
+        broken = _broken(problem, constraints, beta)
+        if broken:
+            tried.append(broken)
+            continue
+        if residual < np.linalg.norm(best_vector):
+            best_vector = vector
+        if residual < tol:
+            roots.append(Root(beta, residual, problem.path_length(beta)))
+    roots.sort(key=lambda r: float(r.beta @ r.beta))
+    if not roots:
+        raise SolverError(
+            "no path within the constraints reaches the goal attitude",
+            float(np.linalg.norm(best_vector)),
+            _dedupe(tried),
+            per_axis=best_vector.tolist(),
+            stopped_by=attempt.stopped_by,
+            reached_fraction=attempt.reached_fraction,
+        )
+
+    # Certify the integration at the chosen root; refine the grid and polish when needed.
+    chosen = roots[0]
+    certified = problem
+    error = certified.integration_error(chosen.beta)
+    for _ in range(3):
+        if error <= 0.1 * tol:
+            break
+        certified = certified.with_steps(certified.steps_for(chosen.beta))
+        beta, vector = polish(certified, chosen.beta, tol)
+        chosen = Root(beta, float(np.linalg.norm(vector)), chosen.path_length)
+        error = certified.integration_error(chosen.beta)
+    if error > 0.1 * tol or chosen.residual >= tol:
+        raise SolverError(
+            f"attitude integration error {error:.3g} rad is too large to certify the plan",
+            chosen.residual,
+            _dedupe(tried),
+        )
+    return Solution(
+        beta=chosen.beta,
+        residual=chosen.residual,
+        method=attempt.method,
+        iterations=attempt.iterations,
+        evaluations=problem.evaluations - start_evaluations,
+        wall_time=time.perf_counter() - start_time,
+        roots=(chosen, *roots[1:]),
+        integration_error=error,
+        steps=certified.steps,
+        strategy=strategy,
+        tried=tuple(_dedupe(tried)),
+    )
+
+
+def _dedupe(items: list[str]) -> list[str]:
+    """Items in order, repeated ones counted (keeps error messages short)."""
+    counts: dict[str, int] = {}
+    for item in items:
+        counts[item] = counts.get(item, 0) + 1
+    return [item if n == 1 else f"{item} (x{n})" for item, n in counts.items()]

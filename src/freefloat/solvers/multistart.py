@@ -1,0 +1,85 @@
+"""The ``multistart`` strategy: Newton-type searches from several deterministic starts.
+
+As many unknowns as equations: Broyden's quasi-Newton method with a backtracking line search,
+then Levenberg-Marquardt from the same start where it fails (dh/dbeta nearly singular).
+More unknowns, or a square root that breaks a constraint: minimum-norm SQP with every
+constraint. Several starts are needed because dh/dbeta is singular at the quintic path when
+free coefficients of one power move several joints. The budget is a count of residual
+evaluations, never a time.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..problem.constraints import Constraint
+from ..problem.residual import Problem
+from .newton import broyden, levenberg_marquardt, starts
+from .options import Attempt, SolveOptions
+from .sqp import minimum_norm_sqp
+
+__all__ = ["multistart"]
+
+
+def _within(problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray) -> str:
+    """The name of the first constraint ``beta``'s path breaks, or "" when none."""
+    for constraint in constraints:
+        if constraint.applies_to(problem.robot):
+            excess = constraint.violation(problem, beta)
+            if excess.value > constraint.tolerance:
+                return f"{constraint.name} ({excess.detail})"
+    return ""
+
+
+def multistart(
+    problem: Problem, constraints: Sequence[Constraint], options: SolveOptions
+) -> Attempt:
+    """Search from the quintic path and deterministic pseudo-random starts."""
+    tol = options.tolerance
+    square = problem.n_free == problem.n_equations
+    attempt = Attempt(method="Broyden quasi-Newton" if square else "SQP minimum norm (SLSQP)")
+    first_evaluation = problem.evaluations
+    found = 0
+    for label, start in starts(problem.n_free, options.starts):
+        if problem.evaluations - first_evaluation > options.max_evaluations:
+            attempt.tried.append(
+                f"stopped: budget of {options.max_evaluations} residual evaluations spent"
+            )
+            attempt.stopped_by = "evaluation budget"
+            break
+        name = "minimum-norm SQP with constraints"
+        try:
+            beta = None
+            if square:
+                beta, its = broyden(problem, start, options)
+                name = "Broyden"
+                if np.linalg.norm(problem.residual(beta)) > tol:
+                    beta, its = levenberg_marquardt(problem, start, options)
+                    name = "Broyden, then Levenberg-Marquardt"
+                broken = _within(problem, constraints, beta)
+                if np.linalg.norm(problem.residual(beta)) > tol or broken:
+                    note = f" (a root breaks {broken})" if broken else ""
+                    attempt.tried.append(f"{name} from {label}{note}")
+                    beta = None
+                    name = "SQP with constraints"
+            if beta is None:
+                beta, its = minimum_norm_sqp(problem, start, constraints, options)
+        except (np.linalg.LinAlgError, FloatingPointError, ValueError) as exc:
+            # An optimiser that diverges is a failed attempt, not a crash.
+            attempt.tried.append(f"{name} from {label}: diverged ({type(exc).__name__})")
+            continue
+        attempt.tried.append(f"{name} from {label}")
+        attempt.candidates.append(beta)
+        if np.linalg.norm(problem.residual(beta)) < tol:
+            if found == 0:
+                attempt.iterations = its
+                if name == "Broyden, then Levenberg-Marquardt":
+                    attempt.method = "Levenberg-Marquardt"
+                elif name != "Broyden":
+                    attempt.method = "SQP minimum norm (SLSQP) with constraints"
+            found += 1
+            if found >= options.keep_solutions:
+                break
+    return attempt

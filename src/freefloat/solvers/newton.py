@@ -1,0 +1,89 @@
+"""Newton-type building blocks: minimum-norm polishing, Broyden, Levenberg-Marquardt, starts."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ..problem.residual import Problem
+from .options import POLISH, SolveOptions
+
+__all__ = ["broyden", "levenberg_marquardt", "polish", "starts"]
+
+
+def polish(
+    problem: Problem, beta: np.ndarray, tol: float, iterations: int = 8
+) -> tuple[np.ndarray, np.ndarray]:
+    """Minimum-norm Gauss-Newton corrections until the residual is well below ``tol``.
+
+    Returns the corrected ``beta`` and its residual vector.
+    """
+    r = problem.residual(beta)
+    if np.linalg.norm(r) < POLISH * tol:
+        return beta, r
+    jac = problem.jacobian(beta)
+    for _ in range(iterations):
+        if np.linalg.norm(r) < POLISH * tol:
+            break
+        trial = beta - np.linalg.lstsq(jac, r, rcond=None)[0]
+        r_trial = problem.residual(trial)
+        if np.linalg.norm(r_trial) >= np.linalg.norm(r):
+            break
+        beta = trial
+        r, jac = problem.residual_and_jacobian(beta)
+    return beta, r
+
+
+def broyden(problem: Problem, beta: np.ndarray, options: SolveOptions) -> tuple[np.ndarray, int]:
+    """Broyden quasi-Newton with a backtracking line search from ``beta``; (beta, iterations)."""
+    r, jac = problem.residual_and_jacobian(beta)
+    refreshed = True
+    for iteration in range(1, options.max_iterations + 1):
+        if np.linalg.norm(r) < POLISH * options.tolerance:
+            return beta, iteration
+        step = -np.linalg.lstsq(jac, r, rcond=None)[0]
+        t = 1.0
+        while t > 1e-4:
+            trial = beta + t * step
+            r_trial = problem.residual(trial)
+            if np.linalg.norm(r_trial) < (1.0 - 1e-4 * t) * np.linalg.norm(r):
+                break
+            t *= 0.5
+        else:
+            if refreshed:
+                return beta, iteration
+            jac, refreshed = problem.jacobian(beta), True
+            continue
+        s = trial - beta
+        jac = jac + np.outer(r_trial - r - jac @ s, s) / (s @ s)
+        beta, r, refreshed = trial, r_trial, False
+    return beta, options.max_iterations
+
+
+def starts(n: int, count: int) -> list[tuple[str, np.ndarray]]:
+    """The quintic path, then ``count - 1`` deterministic pseudo-random starts (rad)."""
+    rng = np.random.default_rng(20070101)
+    out = [("the quintic path", np.zeros(n))]
+    for k in range(1, count):
+        scale = (1.0, 3.0, 10.0)[(k - 1) // 4 % 3]
+        direction = rng.normal(size=n)
+        beta = scale * direction / np.linalg.norm(direction)
+        out.append((f"start {k} (|beta| = {scale:g})", beta))
+    return out
+
+
+def levenberg_marquardt(
+    problem: Problem, beta: np.ndarray, options: SolveOptions
+) -> tuple[np.ndarray, int]:
+    """Damped Gauss-Newton (MINPACK's LM): robust where dh/dbeta is nearly singular."""
+    result = least_squares(
+        problem.residual,
+        beta,
+        jac=problem.jacobian,
+        method="lm",
+        xtol=1e-15,
+        ftol=1e-15,
+        gtol=1e-15,
+        max_nfev=options.max_iterations,
+    )
+    return np.asarray(result.x, dtype=float), int(result.nfev)

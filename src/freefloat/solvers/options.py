@@ -1,0 +1,140 @@
+"""Solver settings, the strategy names and the typed results of a solve."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = [
+    "DEFAULT_TOLERANCE",
+    "POLISH",
+    "Attempt",
+    "Root",
+    "Solution",
+    "SolveOptions",
+    "Strategy",
+]
+
+
+class Strategy(str, enum.Enum):
+    """How ``h(beta) = 0`` is solved; recorded in the plan by value.
+
+    - ``none``: the quintic path (``beta = 0``) already reaches the goal.
+    - ``scan``: one unknown, one equation: scan a bracket, refine every sign change.
+    - ``multistart``: Newton-type searches (Broyden, Levenberg-Marquardt, minimum-norm SQP)
+      from several deterministic starts.
+    - ``continuation``: track the solution from the quintic path's own attitude to the goal.
+    """
+
+    NONE = "none"
+    SCAN = "scan"
+    MULTISTART = "multistart"
+    CONTINUATION = "continuation"
+
+
+#: Default attitude tolerance (rad).
+DEFAULT_TOLERANCE = 1e-9
+#: Iterations continue until the residual is this fraction of the tolerance (1e-13 rad by
+#: default): with exact Jacobians the last step costs one evaluation and buys three digits.
+POLISH = 1e-4
+
+
+@dataclass(frozen=True)
+class SolveOptions:
+    """Solver settings.
+
+    Attributes:
+        tolerance: largest accepted attitude error at T (rad).
+        max_deviation: half-width of the one-unknown bracket, as the largest deviation of the
+            joint from its quintic path (rad; or m for a prismatic joint).
+        scan_points: number of residual samples across the bracket.
+        max_iterations: iteration cap of the quasi-Newton and SQP solvers.
+        starts: number of starting points tried (the quintic path first, then deterministic
+            pseudo-random ones); several are needed because ``dh/dbeta`` is singular at the
+            quintic path whenever free coefficients of one power move several joints (moving
+            along the straight joint-space line only re-times it).
+        keep_solutions: stop after this many solutions; the minimum-norm one is returned.
+        max_evaluations: no new start or step is begun after this many residual evaluations
+            (a count, so the same input gives the same plan on any machine).
+        strategy: force a strategy; default: chosen from the problem's shape.
+    """
+
+    tolerance: float = DEFAULT_TOLERANCE
+    max_deviation: float = 8.0
+    scan_points: int = 161
+    max_iterations: int = 100
+    starts: int = 7
+    keep_solutions: int = 1
+    max_evaluations: int = 4000
+    strategy: Strategy | None = None
+
+
+@dataclass(frozen=True)
+class Root:
+    """One solution of ``h(beta) = 0``.
+
+    Attributes:
+        beta: free coefficients (normalised-time coefficients, rad or m).
+        residual: norm of ``h`` there (rad).
+        path_length: summed joint travel along the path (rad, plus m for prismatic joints).
+    """
+
+    beta: np.ndarray
+    residual: float
+    path_length: float
+
+
+@dataclass(frozen=True)
+class Solution:
+    """The chosen solution and how it was found.
+
+    Attributes:
+        beta: chosen free coefficients (rad or m).
+        residual: norm of ``h(beta)`` (rad).
+        method: solver used.
+        iterations: iterations of the solver that produced ``beta``.
+        evaluations: residual evaluations (each integrates the attitude along a path).
+        wall_time: seconds spent solving.
+        roots: every root found, the chosen one first.
+        integration_error: estimated error of the attitude integration at ``beta`` (rad).
+        steps: integration steps on which ``beta`` was certified.
+        strategy: the strategy that found ``beta``.
+        tried: what was attempted, in order.
+    """
+
+    beta: np.ndarray
+    residual: float
+    method: str
+    iterations: int
+    evaluations: int
+    wall_time: float
+    roots: tuple[Root, ...] = field(default_factory=tuple)
+    integration_error: float = 0.0
+    steps: int = 0
+    strategy: Strategy = Strategy.NONE
+    tried: tuple[str, ...] = ()
+
+
+@dataclass
+class Attempt:
+    """What one strategy produced, before polishing, filtering and certification.
+
+    Attributes:
+        candidates: free-coefficient vectors that may be roots.
+        method: the method that produced the first good candidate (a label for people).
+        iterations: iterations of that method.
+        residuals: per candidate index, its residual vector when already known exactly.
+        tried: what was attempted, in order.
+        stopped_by: why the strategy stopped short, when it did (for error messages).
+        reached_fraction: for continuation, how far along the way to the goal it got (0-1).
+    """
+
+    candidates: list[np.ndarray] = field(default_factory=list)
+    method: str = ""
+    iterations: int = 0
+    residuals: dict[int, np.ndarray] = field(default_factory=dict)
+    tried: list[str] = field(default_factory=list)
+    stopped_by: str = ""
+    reached_fraction: float = 0.0
