@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from freefloat.compose import ServicerSpec, compose_servicer
+from freefloat.robot.compose import ServicerSpec, compose_servicer
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 

@@ -83,3 +83,32 @@ def central_jacobian(fun, x: np.ndarray, eps: float) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     columns = [(fun(x + eps * e) - fun(x - eps * e)) / (2 * eps) for e in np.eye(x.shape[-1])]
     return np.stack(columns, axis=-1)
+
+
+def planar_gains(
+    q1: float,
+    q2: float,
+    masses: tuple[float, float, float] = (M0, M1, M2),
+    inertias: tuple[float, float, float] = (I0, I1, I2),
+    lengths: tuple[float, float, float, float, float] = (R0, L1, R1, L2, R2),
+) -> tuple[float, float]:
+    """g1, g2 of docs/method.md section 7 for any masses (kg), inertias (kg m^2), lengths (m).
+
+    ``lengths`` are r0 (base CM to joint 1), l1 (joint 1 to body 1's CM), r1 (body 1's CM to
+    joint 2), l2 (joint 2 to body 2's CM), r2 (body 2's CM to the tip).
+    """
+    m0, m1, m2 = masses
+    i0, i1, i2 = inertias
+    r0, l1, r1, l2, _ = lengths
+    m = m0 + m1 + m2
+    d1 = i0 + m0 * (m1 + m2) * r0**2 / m
+    d2 = m0 * r0 * ((m1 + m2) * l1 + m2 * r1) / m
+    d3 = m0 * r0 * m2 * l2 / m
+    d4 = i1 + (m0 * m1 * l1**2 + m1 * m2 * r1**2 + m0 * m2 * (l1 + r1) ** 2) / m
+    d6 = m2 * l2 * (m0 * (l1 + r1) + m1 * r1) / m
+    d7 = i2 + m2 * (m0 + m1) * l2**2 / m
+    c0 = d1 + d2 * math.cos(q1) + d3 * math.cos(q1 + q2)
+    c1 = d4 + d2 * math.cos(q1) + d6 * math.cos(q2)
+    c2 = d7 + d6 * math.cos(q2) + d3 * math.cos(q1 + q2)
+    total = c0 + c1 + c2
+    return -(c1 + c2) / total, -c2 / total

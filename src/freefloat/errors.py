@@ -163,3 +163,26 @@ class UnreachableGoalError(FreeFloatError):
         self.distance = float(distance)
         self.radius = float(radius)
         super().__init__(message)
+
+
+class CollisionError(FreeFloatError):
+    """A start or goal configuration closer than the clearance margin; carries the pair.
+
+    Attributes:
+        where: ``"start"`` or ``"goal"``.
+        pair: the two bodies, ``"a / b"``.
+        clearance: their signed distance (m; negative when they overlap).
+        margin: the required clearance (m).
+    """
+
+    def __init__(self, where: str, pair: str, clearance: float, margin: float) -> None:
+        self.where = where
+        self.pair = pair
+        self.clearance = float(clearance)
+        self.margin = float(margin)
+        state = "overlap by" if clearance < 0 else "are"
+        amount = f"{abs(clearance):.4g} m" + ("" if clearance < 0 else " apart")
+        super().__init__(
+            f"{where} configuration: {pair} {state} {amount}, below the clearance margin "
+            f"{margin:g} m; move the {where} joints or lower [safety] margin_m"
+        )

@@ -14,20 +14,23 @@ from dataclasses import asdict, replace
 
 import numpy as np
 
-from .errors import SolverError, VelocityLimitError, VerificationError
+from .errors import CollisionError, SolverError, VelocityLimitError, VerificationError
 from .physics.attitude import geodesic_angle, zyx_from_quat
 from .physics.dynamics import inverse_dynamics
 from .plans.format import (
     BaseReport,
     Feasibility,
+    ObstacleRecord,
     Plan,
     Request,
     RobotRef,
+    SafetyReport,
     Samples,
     SolutionRecord,
     SolverReport,
 )
-from .problem.constraints import Constraint, JointVelocityLimits, default_constraints
+from .problem.constraints import Clearance, Constraint, JointVelocityLimits, scenario_constraints
+from .problem.constraints.clearance import clearance_at
 from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .solvers.options import DEFAULT_TOLERANCE, Solution, SolveOptions
@@ -68,22 +71,55 @@ def plan(
     options = options or SolveOptions()
     if scenario.max_deviation is not None:
         options = SolveOptions(**{**asdict(options), "max_deviation": scenario.max_deviation})
-    constraints = default_constraints() if constraints is None else list(constraints)
     scenario = scenario.resolved()
+    scenario.write_robot()  # an inline servicer or a payload: its URDF, into the cache
+    constraints = scenario_constraints(scenario) if constraints is None else list(constraints)
+    _check_endpoints(scenario, constraints)
     try:
         found = search(scenario, options, constraints)
     except SolverError as exc:
         _explain_velocity_limits(scenario, options, constraints, exc)
         raise
-    scenario.write_robot()
     problem = found.problem.with_steps(found.solution.steps)
     result = plan_from_solution(
-        problem, found.solution, samples, options.tolerance, constraints=constraints
+        problem,
+        found.solution,
+        samples,
+        options.tolerance,
+        constraints=constraints,
+        safety=_safety_report(scenario, constraints),
     )
     report = replace(
         result.solver, freedom=found.freedom, full_turns=found.full_turns, tried=found.tried
     )
     return replace(result, solver=report)
+
+
+def _check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> None:
+    """Refuse a start or goal configuration closer than a clearance margin, naming the pair."""
+    for constraint in constraints:
+        if isinstance(constraint, Clearance) and constraint.applies_to(scenario.robot):
+            for where, joints in (("start", scenario.start), ("goal", scenario.goal)):
+                clearance, pair = clearance_at(constraint.model, joints)
+                if clearance < constraint.margin:
+                    raise CollisionError(where, pair, clearance, constraint.margin)
+
+
+def _safety_report(scenario: Scenario, constraints: Sequence[Constraint]) -> SafetyReport:
+    """The plan's record of what it was kept clear of."""
+    clearance = next((c for c in constraints if isinstance(c, Clearance)), None)
+    if clearance is None or not clearance.applies_to(scenario.robot):
+        return SafetyReport(checked=False, margin_m=scenario.safety.margin)
+    srdf = clearance.model.srdf
+    return SafetyReport(
+        checked=True,
+        margin_m=clearance.margin,
+        srdf=None if srdf is None else str(srdf),
+        obstacles=[
+            ObstacleRecord(o.name, o.shape, list(o.size), list(o.xyz), list(o.rpy))
+            for o in clearance.model.obstacles
+        ],
+    )
 
 
 def _explain_velocity_limits(
@@ -131,6 +167,7 @@ def plan_from_solution(
     tolerance: float = DEFAULT_TOLERANCE,
     verify: bool = True,
     constraints: Sequence[Constraint] | None = None,
+    safety: SafetyReport | None = None,
 ) -> Plan:
     """Sample a solved problem into a verified :class:`Plan`.
 
@@ -143,6 +180,7 @@ def plan_from_solution(
             :func:`plan` always is).
         constraints: path constraints verification checks; default joint position and
             velocity limits.
+        safety: the plan's record of its clearance constraint (default: none checked).
 
     Raises:
         SolverError: the attitude reached (by the solver's grid or by the sampling grid) is
@@ -241,6 +279,7 @@ def plan_from_solution(
             strategy=solution.strategy.value,
         ),
         request=Request(start_joints=family.start.tolist(), goal_joints=family.goal.tolist()),
+        safety=safety or SafetyReport(),
     )
     if not verify:
         return unverified

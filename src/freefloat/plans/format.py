@@ -37,9 +37,11 @@ __all__ = [
     "BaseReport",
     "Check",
     "Feasibility",
+    "ObstacleRecord",
     "Plan",
     "Request",
     "RobotRef",
+    "SafetyReport",
     "Samples",
     "SolutionRecord",
     "SolverReport",
@@ -234,6 +236,34 @@ class Request:
 
 
 @dataclass(frozen=True)
+class ObstacleRecord:
+    """A keep-out object fixed to the spacecraft (shape sizes and position in m, rpy in rad)."""
+
+    name: str
+    shape: str
+    size: list[float]
+    xyz: list[float]
+    rpy: list[float]
+
+
+@dataclass(frozen=True)
+class SafetyReport:
+    """What the plan was kept clear of.
+
+    Attributes:
+        checked: whether clearance was a constraint (and so a verification check).
+        margin_m: required clearance between checked bodies (m).
+        srdf: the SRDF whose disabled pairs were not checked, if any.
+        obstacles: keep-out objects fixed to the spacecraft.
+    """
+
+    checked: bool = False
+    margin_m: float = 0.01
+    srdf: str | None = None
+    obstacles: list[ObstacleRecord] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
 class Plan:
     """A verified point-to-point motion of a free-floating space manipulator."""
 
@@ -247,6 +277,7 @@ class Plan:
     solver: SolverReport
     request: Request
     verification: Verification = field(default_factory=Verification)
+    safety: SafetyReport = field(default_factory=SafetyReport)
     format: str = FORMAT
 
     # -- evaluation -------------------------------------------------------------------------
@@ -276,6 +307,7 @@ class Plan:
                 "solver": asdict(self.solver),
                 "request": asdict(self.request),
                 "verification": self.verification.to_dict(),
+                "safety": asdict(self.safety),
             }
         )
 
@@ -341,6 +373,19 @@ class Plan:
                     goal_joints=list(data["request"]["goal_joints"]),
                 ),
                 verification=verification,
+                safety=_safety(data.get("safety")),
             )
         except (KeyError, TypeError, AttributeError, ValueError) as exc:
             raise PlanFileError(f"{where}: corrupt plan file (bad or missing {exc})") from None
+
+
+def _safety(data: Any) -> SafetyReport:
+    """The ``safety`` section (absent in files written before it existed: not checked)."""
+    if data is None:
+        return SafetyReport()
+    return SafetyReport(
+        checked=bool(data["checked"]),
+        margin_m=float(data["margin_m"]),
+        srdf=None if data.get("srdf") is None else str(data["srdf"]),
+        obstacles=[ObstacleRecord(**o) for o in data.get("obstacles", [])],
+    )

@@ -22,6 +22,23 @@ The file speaks degrees (joint angles, Euler angles) and metres (prismatic joint
     max_deviation_deg = 458.4      # optional: one-unknown root bracket, as path deviation [deg]
     allow_full_turns = false       # optional: continuous joints may go the other way round
 
+Safety, keep-out objects and a captured payload (all optional)::
+
+    [safety]
+    margin_m = 0.01                # required clearance [m] between checked bodies
+    srdf = "ur5.srdf"              # pairs never checked; composed arms use example-robot-data's
+    check = true                   # false: no clearance constraint at all
+    [[obstacles]]                  # fixed to the spacecraft, in its frame
+    name = "solar_panel"
+    box = [0.02, 2.0, 0.8]         # or sphere = r, or capsule = [r, length]  [m]
+    xyz = [0.0, 1.4, 0.0]          # [m]
+    rpy_deg = [0.0, 0.0, 0.0]      # [deg]
+    [payload]                      # rigidly held by the end effector
+    mass = 300.0                   # [kg]
+    com_xyz = [0.0, 0.0, 0.4]      # its CM in the end-effector frame [m]
+    inertia = [20.0, 20.0, 20.0, 0.0, 0.0, 0.0]   # about that CM [kg m^2]
+    box = [0.6, 0.6, 0.6]          # optional collision shape centred on the CM [m]
+
 An inline servicer replaces ``robot = "..."`` with a table (composed in memory when read;
 written to its content-addressed cache file when a plan is made, see :meth:`Scenario.write_robot`)::
 
@@ -35,9 +52,11 @@ written to its content-addressed cache file when a plan is made, see :meth:`Scen
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 import sys
+import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -45,19 +64,40 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import FreeFloatError, ScenarioError, UnknownNameError
+from ..errors import FreeFloatError, InputError, ScenarioError, UnknownNameError
 from ..files import atomic_write_text
 from ..physics.attitude import quat_from_zyx, quat_to_matrix
+from ..robot.collision import Obstacle
 from ..robot.model import Robot, load_robot, resolve_robot, robots_dir
+from ..robot.payload import PAYLOAD_LINK, Payload, attach_payload
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["CartesianGoal", "Scenario", "default_scenario_path", "servicer_cache_dir"]
+__all__ = [
+    "CartesianGoal",
+    "Safety",
+    "Scenario",
+    "default_scenario_path",
+    "servicer_cache_dir",
+]
 
-_TOP_KEYS = ("robot", "duration", "end_effector", "start", "goal", "path")
+_TOP_KEYS = (
+    "robot",
+    "duration",
+    "end_effector",
+    "start",
+    "goal",
+    "path",
+    "safety",
+    "obstacles",
+    "payload",
+)
+_SAFETY_KEYS = ("margin_m", "srdf", "check")
+_OBSTACLE_KEYS = ("name", "box", "sphere", "capsule", "xyz", "rpy_deg")
+_PAYLOAD_KEYS = ("mass", "com_xyz", "inertia", "box")
 _STATE_KEYS = ("joints", "base_zyx_deg", "base_quaternion_xyzw")
 _GOAL_KEYS = (*_STATE_KEYS, "end_effector_xyz", "end_effector_rpy_deg")
 _PATH_KEYS = ("extra", "max_deviation_deg", "allow_full_turns")
@@ -124,6 +164,8 @@ class Scenario:
     source: Path | None = None
     goal_pose: CartesianGoal | None = None
     robot_text: str | None = None
+    safety: Safety = field(default_factory=lambda: Safety())
+    payload: Payload | None = None
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Scenario:
@@ -177,7 +219,14 @@ class Scenario:
         end_effector = data.get("end_effector")
         if end_effector is not None and not isinstance(end_effector, str):
             raise ScenarioError(f"end_effector must be a frame name, got {end_effector!r}")
+        payload = _payload(data.get("payload"))
+        if payload is not None:
+            urdf, robot_text = _with_payload(urdf, robot_text, end_effector, payload)
         robot = load_robot(urdf, end_effector, text=robot_text)
+        if payload is not None and end_effector is None and robot.end_effector == PAYLOAD_LINK:
+            # The payload link must not become the default end effector.
+            robot = load_robot(urdf, _payload_parent(robot_text), text=robot_text)
+        safety = _safety(data.get("safety"), data.get("obstacles"), relative_to)
 
         states: list[tuple[dict[str, float], np.ndarray]] = []
         goal_pose = None
@@ -250,6 +299,8 @@ class Scenario:
             source=source,
             goal_pose=goal_pose,
             robot_text=robot_text,
+            safety=safety,
+            payload=payload,
         )
 
     def resolved(self) -> Scenario:
@@ -321,8 +372,13 @@ def servicer_cache_dir() -> Path:
     return base / "freefloat" / "servicers"
 
 
-def _triple(table: Mapping[str, Any], key: str, default: list[float] | None = None) -> Any:
-    return tuple(float(x) for x in _numbers(table.get(key, default), 3, f"[robot] {key}"))
+def _triple(
+    table: Mapping[str, Any],
+    key: str,
+    default: list[float] | None = None,
+    where: str = "[robot]",
+) -> Any:
+    return tuple(float(x) for x in _numbers(table.get(key, default), 3, f"{where} {key}"))
 
 
 def _inline_servicer(table: Mapping[str, Any]) -> tuple[Path, str | None]:
@@ -396,6 +452,138 @@ def _cartesian_goal(table: Mapping[str, Any]) -> CartesianGoal:
         rpy = np.radians(_numbers(table["end_effector_rpy_deg"], 3, "[goal] end_effector_rpy_deg"))
         rotation = quat_to_matrix(quat_from_zyx(rpy[2], rpy[1], rpy[0]))
     return CartesianGoal(xyz, rotation)
+
+
+@dataclass(frozen=True)
+class Safety:
+    """What the plan must keep clear of.
+
+    Attributes:
+        margin: required clearance between checked bodies (m).
+        srdf: SRDF whose disabled pairs are not checked; None: the known SRDF of a composed
+            example-robot-data arm, or none.
+        obstacles: keep-out objects fixed to the spacecraft.
+        check: whether clearance is a constraint at all (``[safety] check = false`` turns it
+            off; verification then reports no clearance check).
+    """
+
+    margin: float = 0.01
+    srdf: Path | None = None
+    obstacles: tuple[Obstacle, ...] = ()
+    check: bool = True
+
+
+def _safety(table: Any, obstacles: Any, relative_to: Path | None) -> Safety:
+    """``[safety]`` and ``[[obstacles]]`` (metres, degrees) as a :class:`Safety`."""
+    table = {} if table is None else table
+    if not isinstance(table, Mapping):
+        raise ScenarioError("[safety] must be a table")
+    _check_keys(table, _SAFETY_KEYS, "[safety]")
+    margin = _number(table.get("margin_m", 0.01), "[safety] margin_m")
+    if margin < 0.0:
+        raise ScenarioError(f"[safety] margin_m must be >= 0 m, got {margin:g}")
+    srdf = None
+    if "srdf" in table:
+        if not isinstance(table["srdf"], str):
+            raise ScenarioError(f"[safety] srdf must be a file path, got {table['srdf']!r}")
+        srdf = Path(table["srdf"]).expanduser()
+        if not srdf.is_absolute() and relative_to is not None:
+            srdf = relative_to / srdf
+        if not srdf.is_file():
+            raise ScenarioError(f"[safety] srdf file not found: {srdf}")
+    check = table.get("check", True)
+    if not isinstance(check, bool):
+        raise ScenarioError(f"[safety] check must be true or false, got {check!r}")
+    items = [] if obstacles is None else obstacles
+    if not isinstance(items, list) or not all(isinstance(o, Mapping) for o in items):
+        raise ScenarioError("[[obstacles]] must be a list of tables")
+    parsed = []
+    for index, item in enumerate(items):
+        where = f"[[obstacles]] #{index + 1}"
+        _check_keys(item, _OBSTACLE_KEYS, where)
+        name = item.get("name", f"obstacle_{index + 1}")
+        if not isinstance(name, str) or not name:
+            raise ScenarioError(f"{where}: name must be a non-empty string")
+        shapes = [s for s in ("box", "sphere", "capsule") if s in item]
+        if len(shapes) != 1:
+            raise ScenarioError(
+                f"{where} ({name}): give exactly one shape: box = [x, y, z], sphere = r or "
+                "capsule = [r, length] (m)"
+            )
+        shape = shapes[0]
+        raw = item[shape]
+        if shape == "sphere":
+            size = (_number(raw, f"{where} sphere"),)
+        else:
+            size = tuple(_numbers(raw, 3 if shape == "box" else 2, f"{where} {shape}"))
+        try:
+            parsed.append(
+                Obstacle(
+                    name,
+                    shape,
+                    tuple(float(s) for s in size),
+                    _triple(item, "xyz", [0.0, 0.0, 0.0], where),
+                    _radians3(_triple(item, "rpy_deg", [0.0] * 3, where)),
+                )
+            )
+        except InputError as exc:
+            raise ScenarioError(str(exc)) from None
+    names = [o.name for o in parsed]
+    if len(set(names)) != len(names):
+        raise ScenarioError(f"[[obstacles]] names must be unique, got {names}")
+    return Safety(margin, srdf, tuple(parsed), check)
+
+
+def _radians3(degrees: tuple[float, float, float]) -> tuple[float, float, float]:
+    return (math.radians(degrees[0]), math.radians(degrees[1]), math.radians(degrees[2]))
+
+
+def _payload(table: Any) -> Payload | None:
+    """``[payload]`` (kg, m, kg m^2) as a :class:`Payload`, or None."""
+    if table is None:
+        return None
+    if not isinstance(table, Mapping):
+        raise ScenarioError("[payload] must be a table")
+    _check_keys(table, _PAYLOAD_KEYS, "[payload]")
+    if "mass" not in table or "inertia" not in table:
+        raise ScenarioError(
+            "[payload] needs mass [kg] and inertia = [ixx, iyy, izz, ixy, ixz, iyz]"
+        )
+    try:
+        return Payload(
+            mass=_number(table["mass"], "[payload] mass"),
+            com_xyz=_triple(table, "com_xyz", [0.0, 0.0, 0.0], "[payload]"),
+            inertia=tuple(float(v) for v in _numbers(table["inertia"], 6, "[payload] inertia")),  # type: ignore[arg-type]
+            box=_triple(table, "box", None, "[payload]") if "box" in table else None,
+        )
+    except InputError as exc:
+        raise ScenarioError(str(exc)) from None
+
+
+def _with_payload(
+    urdf: Path, text: str | None, end_effector: str | None, payload: Payload
+) -> tuple[Path, str]:
+    """The cache path and text of the robot's URDF with the payload attached."""
+    if text is None:
+        try:
+            text = Path(urdf).read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ScenarioError(f"cannot read URDF {urdf}: {exc}") from None
+    link = end_effector or load_robot(urdf, None, text=text).end_effector
+    decorated = attach_payload(text, link, payload, Path(urdf).resolve().parent)
+    digest = hashlib.sha256(decorated.encode()).hexdigest()[:16]
+    return servicer_cache_dir() / f"{Path(urdf).stem}-payload-{digest}.urdf", decorated
+
+
+def _payload_parent(text: str | None) -> str:
+    assert text is not None
+    root = ET.fromstring(text)
+    for joint in root.findall("joint"):
+        child = joint.find("child")
+        parent = joint.find("parent")
+        if child is not None and parent is not None and child.get("link") == PAYLOAD_LINK:
+            return str(parent.get("link"))
+    raise ScenarioError("the payload link has no parent")  # pragma: no cover
 
 
 def _prefixed(exc: FreeFloatError, path: Path) -> FreeFloatError:

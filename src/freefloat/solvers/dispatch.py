@@ -24,11 +24,12 @@ from ..problem.residual import Problem
 from .multistart import multistart
 from .newton import polish
 from .options import Attempt, Root, Solution, SolveOptions, Strategy
+from .restore import broken_constraint, feasible_start
 from .scan import scan
 
 __all__ = ["STRATEGIES", "choose_strategy", "solve"]
 
-StrategyFunction = Callable[[Problem, Sequence[Constraint], SolveOptions], Attempt]
+StrategyFunction = Callable[[Problem, Sequence[Constraint], SolveOptions, np.ndarray], Attempt]
 
 #: The strategy functions by name.
 STRATEGIES: dict[Strategy, StrategyFunction] = {
@@ -50,15 +51,6 @@ def choose_strategy(problem: Problem, options: SolveOptions) -> Strategy:
     if not problem.planar and Strategy.CONTINUATION in STRATEGIES:
         return Strategy.CONTINUATION
     return Strategy.MULTISTART
-
-
-def _broken(problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray) -> str:
-    for constraint in constraints:
-        if constraint.applies_to(problem.robot):
-            excess = constraint.violation(problem, beta)
-            if excess.value > constraint.tolerance:
-                return f"a root breaks {constraint.name} ({excess.detail})"
-    return ""
 
 
 def solve(
@@ -84,7 +76,19 @@ def solve(
     start_evaluations = problem.evaluations
     zero = np.zeros(problem.n_free)
 
-    quintic_breaks = _broken(problem, constraints, zero)
+    quintic_breaks = broken_constraint(problem, constraints, zero)
+    start, restored = zero, []
+    if quintic_breaks:
+        found = feasible_start(problem, constraints, options)
+        restored.append(
+            f"the quintic path breaks {quintic_breaks}: "
+            + (
+                "started from the nearest path within the constraints"
+                if found is not None
+                else "no path within the constraints found to start from"
+            )
+        )
+        start = zero if found is None else found
     if np.linalg.norm(problem.residual(zero)) < 0.01 * tol and not quintic_breaks:
         strategy = Strategy.NONE
         attempt = Attempt(candidates=[zero], method="none (the quintic path already reaches it)")
@@ -96,8 +100,8 @@ def solve(
                 + ", ".join(s.value for s in STRATEGIES),
                 float(np.linalg.norm(problem.residual(zero))),
             )
-        attempt = STRATEGIES[strategy](problem, constraints, options)
-    tried = list(attempt.tried)
+        attempt = STRATEGIES[strategy](problem, constraints, options, start)
+    tried = restored + list(attempt.tried)
 
     roots = []
     best_vector = problem.residual(zero)
@@ -107,9 +111,9 @@ def solve(
         else:
             beta, vector = polish(problem, beta, tol)
         residual = float(np.linalg.norm(vector))
-        broken = _broken(problem, constraints, beta)
+        broken = broken_constraint(problem, constraints, beta)
         if broken:
-            tried.append(broken)
+            tried.append(f"a root breaks {broken}")
             continue
         if residual < np.linalg.norm(best_vector):
             best_vector = vector

@@ -18,31 +18,29 @@ from ..problem.constraints import Constraint
 from ..problem.residual import Problem
 from .newton import broyden, levenberg_marquardt, starts
 from .options import Attempt, SolveOptions
+from .restore import broken_constraint
 from .sqp import minimum_norm_sqp
 
 __all__ = ["multistart"]
 
 
-def _within(problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray) -> str:
-    """The name of the first constraint ``beta``'s path breaks, or "" when none."""
-    for constraint in constraints:
-        if constraint.applies_to(problem.robot):
-            excess = constraint.violation(problem, beta)
-            if excess.value > constraint.tolerance:
-                return f"{constraint.name} ({excess.detail})"
-    return ""
-
-
 def multistart(
-    problem: Problem, constraints: Sequence[Constraint], options: SolveOptions
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    options: SolveOptions,
+    start: np.ndarray | None = None,
 ) -> Attempt:
-    """Search from the quintic path and deterministic pseudo-random starts."""
+    """Search from ``start`` (the quintic path, or a feasible one) and deterministic offsets."""
+    origin = np.zeros(problem.n_free) if start is None else np.asarray(start, dtype=float)
     tol = options.tolerance
     square = problem.n_free == problem.n_equations
     attempt = Attempt(method="Broyden quasi-Newton" if square else "SQP minimum norm (SLSQP)")
     first_evaluation = problem.evaluations
     found = 0
-    for label, start in starts(problem.n_free, options.starts):
+    for label, offset in starts(problem.n_free, options.starts):
+        begin = origin + offset
+        if np.any(origin) and label == "the quintic path":
+            label = "the nearest path within the constraints"
         if problem.evaluations - first_evaluation > options.max_evaluations:
             attempt.tried.append(
                 f"stopped: budget of {options.max_evaluations} residual evaluations spent"
@@ -53,19 +51,19 @@ def multistart(
         try:
             beta = None
             if square:
-                beta, its = broyden(problem, start, options)
+                beta, its = broyden(problem, begin, options)
                 name = "Broyden"
                 if np.linalg.norm(problem.residual(beta)) > tol:
-                    beta, its = levenberg_marquardt(problem, start, options)
+                    beta, its = levenberg_marquardt(problem, begin, options)
                     name = "Broyden, then Levenberg-Marquardt"
-                broken = _within(problem, constraints, beta)
+                broken = broken_constraint(problem, constraints, beta)
                 if np.linalg.norm(problem.residual(beta)) > tol or broken:
                     note = f" (a root breaks {broken})" if broken else ""
                     attempt.tried.append(f"{name} from {label}{note}")
                     beta = None
                     name = "SQP with constraints"
             if beta is None:
-                beta, its = minimum_norm_sqp(problem, start, constraints, options)
+                beta, its = minimum_norm_sqp(problem, begin, constraints, options)
         except (np.linalg.LinAlgError, FloatingPointError, ValueError) as exc:
             # An optimiser that diverges is a failed attempt, not a crash.
             attempt.tried.append(f"{name} from {label}: diverged ({type(exc).__name__})")

@@ -20,8 +20,17 @@ from .options import Attempt, SolveOptions
 __all__ = ["bracket_roots", "scan"]
 
 
-def scan(problem: Problem, constraints: Sequence[Constraint], options: SolveOptions) -> Attempt:
-    """The ``scan`` strategy: all roots of the scalar residual in the bracket."""
+def scan(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    options: SolveOptions,
+    start: np.ndarray | None = None,
+) -> Attempt:
+    """The ``scan`` strategy: all roots of the scalar residual in the bracket.
+
+    The bracket is scanned whole, so ``start`` is not used; the dispatcher keeps the roots
+    whose paths honour the constraints.
+    """
     candidates, iterations, residuals = bracket_roots(problem, options)
     label = "safeguarded Newton" if problem.planar_map is not None else "Brent secant"
     tried = [

@@ -31,11 +31,18 @@ from ..physics.attitude import geodesic_angle, quat_multiply
 from ..physics.dynamics import inverse_dynamics, replay
 from ..physics.momentum import MomentumMap
 from ..plans.format import Check, Plan, Verification
-from ..problem.constraints import Constraint, default_constraints
+from ..problem.constraints import Clearance, Constraint, default_constraints
 from ..problem.paths import JointPolynomials
+from ..robot.collision import Obstacle, collision_model
 from ..robot.model import Robot, load_robot
 
-__all__ = ["TOLERANCES", "boundary_errors", "joint_torque_function", "verify_plan"]
+__all__ = [
+    "TOLERANCES",
+    "boundary_errors",
+    "joint_torque_function",
+    "plan_constraints",
+    "verify_plan",
+]
 
 #: Pass thresholds of the checks (see the module docstring for units).
 TOLERANCES: dict[str, float] = {
@@ -111,6 +118,19 @@ def _robot_for(plan: Plan) -> Robot:
     return robot
 
 
+def plan_constraints(plan: Plan, robot: Robot) -> list[Constraint]:
+    """The constraints a plan states it honours: joint limits, and clearance when checked."""
+    constraints = default_constraints()
+    if plan.safety.checked:
+        obstacles = [
+            Obstacle(o.name, o.shape, tuple(o.size), tuple(o.xyz), tuple(o.rpy))  # type: ignore[arg-type]
+            for o in plan.safety.obstacles
+        ]
+        model = collision_model(robot, plan.safety.srdf, obstacles)
+        constraints.append(Clearance(model, plan.safety.margin_m))
+    return constraints
+
+
 def verify_plan(
     plan: Plan,
     robot: Robot | None = None,
@@ -126,8 +146,8 @@ def verify_plan(
         constraints: path constraints to check densely; default joint position and velocity
             limits.
     """
-    constraints = default_constraints() if constraints is None else constraints
     robot = robot or _robot_for(plan)
+    constraints = plan_constraints(plan, robot) if constraints is None else constraints
     mmap = MomentumMap(robot)
     model, data = robot.model, robot.model.createData()
     samples = plan.samples

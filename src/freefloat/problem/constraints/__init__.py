@@ -1,17 +1,20 @@
 """Path constraints: one interface (:class:`Constraint`), one module per constraint."""
 
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
+from .clearance import Clearance
 from .joint_position import JointPositionLimits
 from .joint_velocity import JointVelocityLimits
-from .registry import CONSTRAINTS, default_constraints
+from .registry import CONSTRAINTS, default_constraints, scenario_constraints
 
 __all__ = [
     "CONSTRAINTS",
     "DEFAULT_INSTANTS",
+    "Clearance",
     "Constraint",
     "ConstraintRows",
     "Excess",
     "JointPositionLimits",
     "JointVelocityLimits",
     "default_constraints",
+    "scenario_constraints",
 ]

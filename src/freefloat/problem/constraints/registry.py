@@ -6,19 +6,39 @@ here; solvers, verification and the plan file pick it up from the list.
 
 from __future__ import annotations
 
+from ...robot.collision import collision_model, known_srdf
+from ..scenario import Scenario
 from .base import Constraint
+from .clearance import Clearance
 from .joint_position import JointPositionLimits
 from .joint_velocity import JointVelocityLimits
 
-__all__ = ["CONSTRAINTS", "default_constraints"]
+__all__ = ["CONSTRAINTS", "default_constraints", "scenario_constraints"]
 
 #: Constraint classes by name.
 CONSTRAINTS: dict[str, type[Constraint]] = {
     JointPositionLimits.name: JointPositionLimits,
     JointVelocityLimits.name: JointVelocityLimits,
+    Clearance.name: Clearance,
 }
 
 
 def default_constraints() -> list[Constraint]:
     """The constraints every plan honours: joint position limits and joint velocity limits."""
     return [JointPositionLimits(), JointVelocityLimits()]
+
+
+def scenario_constraints(scenario: Scenario) -> list[Constraint]:
+    """The constraints a scenario's plan honours: the defaults, and clearance when checked.
+
+    Clearance is added when ``[safety] check`` is on (the default) and the robot's collision
+    geometry (with the scenario's obstacles and payload) has pairs to check.
+    """
+    constraints = default_constraints()
+    safety = scenario.safety
+    if safety.check:
+        srdf = safety.srdf or known_srdf(scenario.robot)
+        model = collision_model(scenario.robot, srdf, safety.obstacles)
+        if model.n_pairs:
+            constraints.append(Clearance(model, safety.margin))
+    return constraints

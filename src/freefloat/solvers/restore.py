@@ -1,0 +1,62 @@
+"""Feasibility restoration: a path that honours every constraint, before the attitude.
+
+When the quintic path (``beta = 0``) breaks a constraint (it sweeps the arm through the hull,
+say), the strategies start instead from the minimum-norm ``beta`` whose path honours every
+constraint, attitude ignored (SciPy's SLSQP). They then bring the attitude to its goal from
+that feasible path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from scipy.optimize import minimize
+
+from ..problem.constraints import Constraint
+from ..problem.residual import Problem
+from .options import SolveOptions
+
+__all__ = ["broken_constraint", "feasible_start"]
+
+
+def broken_constraint(problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray) -> str:
+    """``"name (where)"`` of the first constraint the path at ``beta`` breaks, or ``""``."""
+    for constraint in constraints:
+        if constraint.applies_to(problem.robot):
+            excess = constraint.violation(problem, beta)
+            if excess.value > constraint.tolerance + excess.error_estimate:
+                return f"{constraint.name} ({excess.detail})"
+    return ""
+
+
+def feasible_start(
+    problem: Problem, constraints: Sequence[Constraint], options: SolveOptions
+) -> np.ndarray | None:
+    """Minimum-norm ``beta`` whose path honours every constraint, or None if none is found."""
+    active = [c for c in constraints if c.applies_to(problem.robot)]
+    rows = [
+        {
+            "type": "ineq",
+            "fun": lambda b, c=c: -c.rows(problem, b).values,
+            "jac": lambda b, c=c: -c.rows(problem, b).jacobian,
+        }
+        for c in active
+    ]
+    if not rows:
+        return np.zeros(problem.n_free)
+    try:
+        result = minimize(
+            lambda b: 0.5 * float(b @ b),
+            np.zeros(problem.n_free),
+            jac=lambda b: b,
+            method="SLSQP",
+            constraints=rows,
+            options={"ftol": 1e-12, "maxiter": options.max_iterations},
+        )
+    except (ValueError, np.linalg.LinAlgError, FloatingPointError):
+        return None
+    beta = np.asarray(result.x, dtype=float)
+    if not np.all(np.isfinite(beta)) or broken_constraint(problem, active, beta):
+        return None
+    return beta

@@ -1,0 +1,275 @@
+"""Collision model, clearance constraint, keep-out objects and captured payloads."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import freefloat as ff
+from freefloat.cli import main
+from freefloat.problem.constraints.clearance import Clearance
+from freefloat.robot.collision import CollisionModel, Obstacle, known_srdf
+from freefloat.robot.payload import Payload
+
+import reference as ref
+from conftest import ROOT
+
+#: A box spacecraft (1 m cube) with a two-link planar arm whose second link carries a sphere.
+SPHERE_ARM = """<?xml version="1.0"?>
+<robot name="sphere_arm">
+  <link name="base">
+    <inertial><mass value="100.0"/><inertia ixx="16.7" iyy="16.7" izz="16.7" ixy="0" ixz="0"
+      iyz="0"/></inertial>
+    <collision><geometry><box size="1.0 1.0 1.0"/></geometry></collision>
+  </link>
+  <joint name="q1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0.5 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3.1" upper="3.1" effort="10" velocity="2"/></joint>
+  <link name="l1"><inertial><origin xyz="0.5 0 0"/><mass value="5.0"/>
+    <inertia ixx="0.01" iyy="0.4" izz="0.4" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="q2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="1.0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3.1" upper="3.1" effort="10" velocity="2"/></joint>
+  <link name="l2"><inertial><origin xyz="0.3 0 0"/><mass value="3.0"/>
+    <inertia ixx="0.01" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0.6 0 0"/><geometry><sphere radius="0.1"/></geometry></collision>
+  </link>
+</robot>
+"""
+OBSTACLE = Obstacle("post", "sphere", (0.3,), (0.0, 2.0, 0.0))
+
+
+@pytest.fixture(scope="module")
+def sphere_arm(tmp_path_factory):
+    path = tmp_path_factory.mktemp("arm") / "sphere_arm.urdf"
+    path.write_text(SPHERE_ARM)
+    return ff.load_robot(path)
+
+
+def _sphere_centre(q1: float, q2: float) -> np.ndarray:
+    """Closed form: the sphere's centre in the spacecraft frame (m)."""
+    return np.array(
+        [
+            0.5 + math.cos(q1) + 0.6 * math.cos(q1 + q2),
+            math.sin(q1) + 0.6 * math.sin(q1 + q2),
+            0.0,
+        ]
+    )
+
+
+def _closed_form(q1: float, q2: float) -> dict[str, float]:
+    p = _sphere_centre(q1, q2)
+    outside = p - np.clip(p, -0.5, 0.5)
+    return {
+        "base_0 / l2_0": float(np.linalg.norm(outside)) - 0.1,
+        "l2_0 / obstacle:post": float(np.linalg.norm(p - np.array(OBSTACLE.xyz))) - 0.4,
+    }
+
+
+@pytest.mark.parametrize("q", [(0.3, 2.0), (1.2, -0.5), (2.5, 1.0), (-1.0, 2.6)])
+def test_distances_equal_the_closed_form(sphere_arm, q):
+    model = CollisionModel(sphere_arm, obstacles=[OBSTACLE])
+    assert sorted(model.names) == sorted(_closed_form(*q))
+    got = dict(zip(model.names, model.distances(np.array(q)).values, strict=True))
+    for name, want in _closed_form(*q).items():
+        assert got[name] == pytest.approx(want, abs=1e-8), name
+
+
+def test_distance_gradients_against_finite_differences(sphere_arm):
+    model = CollisionModel(sphere_arm, obstacles=[OBSTACLE])
+    for q in ([0.3, 2.0], [1.2, -0.5], [-1.0, 2.6]):
+        q = np.array(q)
+        grads = model.distances(q, gradients=True).gradients
+        fd = ref.central_jacobian(lambda x: model.distances(x).values, q, 1e-6)
+        np.testing.assert_allclose(grads, fd, atol=1e-7)
+
+
+def test_servicer_clearance_against_coal_directly():
+    """The model's distances equal coal's own distance queries on the placed shapes."""
+    import coal
+    import pinocchio as pin
+
+    robot = ff.load_robot(ROOT / "robots" / "ur5_servicer.urdf")
+    model = CollisionModel(robot, known_srdf(robot))
+    rng = np.random.default_rng(3)
+    data = robot.model.createData()
+    geometry_data = pin.GeometryData(model.geometry)
+    for _ in range(3):
+        q = rng.uniform(-2.0, 2.0, robot.n)
+        ours = model.distances(q).values
+        config = robot.configuration(q)
+        pin.updateGeometryPlacements(robot.model, data, model.geometry, geometry_data, config)
+        objects = model.geometry.geometryObjects
+        for k, (a, b) in enumerate(model.pairs):
+            request, result = coal.DistanceRequest(), coal.DistanceResult()
+            request.gjk_tolerance = 1e-9
+            request.enable_signed_distance = True
+            distance = coal.distance(
+                objects[a].geometry,
+                coal.Transform3s(geometry_data.oMg[a].rotation, geometry_data.oMg[a].translation),
+                objects[b].geometry,
+                coal.Transform3s(geometry_data.oMg[b].rotation, geometry_data.oMg[b].translation),
+                request,
+                result,
+            )
+            assert ours[k] == pytest.approx(distance, abs=1e-7), model.names[k]
+
+
+def test_srdf_removes_pairs_and_adjacent_bodies_are_not_checked():
+    robot = ff.load_robot(ROOT / "robots" / "ur5_servicer.urdf")
+    everything = CollisionModel(robot)
+    trimmed = CollisionModel(robot, known_srdf(robot))
+    assert trimmed.n_pairs < everything.n_pairs
+    assert "spacecraft_0 / shoulder_link_0" not in everything.names  # mounted on it
+    assert any(name.startswith("spacecraft_0 / upper_arm") for name in everything.names)
+
+
+@pytest.mark.parametrize(
+    "shape, size, message",
+    [
+        ("box", (0.1, -0.2, 0.3), "sizes must be finite and > 0 m"),
+        ("cone", (0.1,), "unknown shape 'cone'; valid: box, sphere, capsule"),
+        ("capsule", (0.1,), "a capsule takes 2 size(s) [m], got 1"),
+    ],
+)
+def test_bad_obstacles_are_refused(shape, size, message):
+    with pytest.raises(ff.InputError) as info:
+        Obstacle("panel", shape, size)
+    assert message in str(info.value)
+
+
+def test_payload_must_be_physical():
+    with pytest.raises(ff.InputError, match="payload mass must be a finite number > 0 kg"):
+        Payload(0.0, inertia=(1.0, 1.0, 1.0, 0.0, 0.0, 0.0))
+    with pytest.raises(ff.InputError, match="triangle inequality"):
+        Payload(10.0, inertia=(1.0, 1.0, 5.0, 0.0, 0.0, 0.0))
+    with pytest.raises(ff.InputError, match="not positive definite"):
+        Payload(10.0, inertia=(1.0, 1.0, 1.0, 2.0, 0.0, 0.0))
+
+
+def _scenario(tmp_path, body: str, robot: str = "ur5_servicer"):
+    path = tmp_path / "s.toml"
+    path.write_text(f'robot = "{robot}"\nduration = 10.0\n{body}')
+    return path
+
+
+UR5_START = (
+    "shoulder_pan_joint = {pan}, shoulder_lift_joint = -45.0, elbow_joint = 120.0, "
+    "wrist_1_joint = -90.0, wrist_2_joint = 0.0, wrist_3_joint = 0.0"
+)
+
+
+def test_start_in_collision_is_refused_naming_the_pair(tmp_path, capsys, monkeypatch):
+    import pinocchio as pin
+
+    monkeypatch.setenv("FREEFLOAT_CACHE", str(tmp_path / "cache"))
+    robot = ff.load_robot(ROOT / "robots" / "ur5_servicer.urdf")
+    start = np.radians([-90.0, -45.0, 120.0, -90.0, 0.0, 0.0])
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, robot.configuration(start))
+    tip = data.oMf[robot.end_effector_frame].translation  # spacecraft frame: base at identity
+    body = f"""
+[start]
+joints = {{ {UR5_START.format(pan=-90.0)} }}
+[goal]
+joints = {{ {UR5_START.format(pan=-80.0)} }}
+[[obstacles]]
+name = "panel"
+sphere = 0.05
+xyz = [{tip[0]}, {tip[1]}, {tip[2]}]
+"""
+    out = tmp_path / "p.json"
+    assert main(["plan", str(_scenario(tmp_path, body)), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("freefloat: error: ") and "\n" not in err
+    assert "start configuration: " in err and "obstacle:panel" in err
+    assert "below the clearance margin 0.01 m" in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        ('[[obstacles]]\nname = "a"\nbox = [0.1, 0.1]\n', "box must be a list of 3 numbers"),
+        ('[[obstacles]]\nname = "a"\nsphere = -0.1\n', "sizes must be finite and > 0 m"),
+        ('[[obstacles]]\nname = "a"\n', "give exactly one shape"),
+        ("[safety]\nmargin_m = -1.0\n", "margin_m must be >= 0 m"),
+        ("[safety]\nspeed = 1.0\n", "unknown key in [safety] 'speed'"),
+        ("[payload]\nmass = -3.0\ninertia = [1, 1, 1, 0, 0, 0]\n", "payload mass must be"),
+        ("[payload]\nmass = 3.0\ninertia = [1, 1, 3, 0, 0, 0]\n", "triangle inequality"),
+    ],
+)
+def test_bad_safety_tables_are_refused(tmp_path, body, message):
+    text = f"""
+[start]
+joints = {{ {UR5_START.format(pan=0.0)} }}
+[goal]
+joints = {{ {UR5_START.format(pan=10.0)} }}
+{body}"""
+    with pytest.raises(ff.FreeFloatError) as info:
+        ff.Scenario.from_toml(_scenario(tmp_path, text))
+    assert message in str(info.value)
+
+
+def test_payload_point_mass_on_the_planar_arm_equals_the_closed_form(tmp_path, monkeypatch):
+    monkeypatch.setenv("FREEFLOAT_CACHE", str(tmp_path / "cache"))
+    mp, tiny = 20.0, 1e-4
+    text = (ROOT / "robots" / "scenarios" / "worked_example.toml").read_text()
+    text = text.replace(
+        'robot = "planar_2dof"', f'robot = "{ROOT / "robots" / "planar_2dof.urdf"}"'
+    )
+    text += f"\n[payload]\nmass = {mp}\ninertia = [{tiny}, {tiny}, {tiny}, 0.0, 0.0, 0.0]\n"
+    path = tmp_path / "w.toml"
+    path.write_text(text)
+    scenario = ff.Scenario.from_toml(path)
+    assert scenario.robot.end_effector == "ee"
+    mmap = ff.MomentumMap(scenario.robot)
+    # Body 2 with the point mass at its tip (1 m from joint 2): new mass, CM and inertia.
+    m2 = ref.M2 + mp
+    l2 = (ref.M2 * ref.L2 + mp * 1.0) / m2
+    i2 = ref.I2 + ref.M2 * (ref.L2 - l2) ** 2 + mp * (1.0 - l2) ** 2 + tiny
+    for q in ([0.3, 1.1], [-1.4, 2.0], [2.2, -0.7]):
+        want = ref.planar_gains(
+            *q,
+            masses=(ref.M0, ref.M1, m2),
+            inertias=(ref.I0, ref.I1, i2),
+            lengths=(ref.R0, ref.L1, ref.R1, l2, 1.0 - l2),
+        )
+        assert mmap.f1(np.array(q))[2] == pytest.approx(want, abs=1e-10)
+    # Planned with the payload: momentum stays zero, every check passes.
+    plan = ff.plan(scenario)
+    assert plan.verification.passed and plan.verification["momentum"].value < 1e-9
+    assert (
+        "captured_payload" in (tmp_path / "cache").joinpath(Path(plan.robot.urdf).name).read_text()
+    )
+
+
+def test_clearance_check_of_a_plan_and_a_colliding_tamper(tmp_path):
+    """A servicer plan records its clearance; a path pushed into the hull fails verify."""
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
+    plan = ff.plan(scenario)
+    check = plan.verification["clearance"]
+    assert plan.safety.checked and check.passed and check.unit == "m"
+    assert "min clearance" in check.detail and check.value < 0.0  # clear by more than 1 cm
+    robot = scenario.robot
+    constraint = Clearance(CollisionModel(robot, known_srdf(robot)), 0.01)
+    pan = ff.problem_from_scenario(
+        ff.Scenario.from_toml(
+            _scenario(
+                tmp_path,
+                f"""
+[start]
+joints = {{ {UR5_START.format(pan=-90.0)} }}
+[goal]
+joints = {{ {UR5_START.format(pan=90.0)} }}
+""",
+            )
+        ),
+        extra=[1, 1, 1, 0, 0, 0],
+    )
+    excess = constraint.violation(pan, np.zeros(3))
+    assert excess.value > 0.02  # the plain quintic pan sweeps the arm 2-3 cm into the hull
+    assert "spacecraft_0" in excess.detail
