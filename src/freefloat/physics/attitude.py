@@ -95,6 +95,16 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     )
 
 
+def quat_rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Vectors ``v`` (base frame) rotated into the inertial frame by unit quaternions ``q``.
+
+    Broadcasts over rows: ``q`` (..., 4) ``[x, y, z, w]`` and ``v`` (..., 3), same unit out.
+    """
+    u, w = q[..., :3], q[..., 3:]
+    uv = np.cross(u, v)
+    return v + 2.0 * w * uv + 2.0 * np.cross(u, uv)
+
+
 def quat_from_zyx(yaw: float, pitch: float = 0.0, roll: float = 0.0) -> np.ndarray:
     """Unit quaternion of ZYX Euler angles (rad): ``Rz(yaw) Ry(pitch) Rx(roll)``."""
     cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
