@@ -178,6 +178,7 @@ def replay(
     duration: float,
     steps: int = 2000,
     track_momentum: bool = True,
+    nodes: np.ndarray | None = None,
 ) -> ReplayResult:
     """Simulate the free-floating system from rest under the joint torques ``torque(t)``.
 
@@ -187,20 +188,27 @@ def replay(
             at the origin.
         start_quaternion_xyzw: base attitude at t = 0.
         torque: joint torques (N m or N): a function of time (s), or a (2 steps + 1, N) table
-            at the instants ``k duration / (2 steps)``.
+            at the step ends and midpoints (``k duration / (2 steps)`` for uniform steps).
         duration: simulated time (s).
-        steps: number of fixed RK4 steps (>= 1).
+        steps: number of RK4 steps (>= 1).
         track_momentum: record the largest total momentum along the replay.
+        nodes: the steps' ends, ``steps + 1`` ascending instants from 0 to ``duration`` (s);
+            default uniform.
     """
     if steps < 1:
         raise ValueError(f"the replay needs at least one step, got {steps}")
     model, data = mmap.model, mmap.model.createData()
     q = mmap.configuration(np.asarray(start_joints, float), np.asarray(start_quaternion_xyzw))
     v = np.zeros(model.nv)
-    dt = duration / steps
+    ends = np.linspace(0.0, duration, steps + 1) if nodes is None else np.asarray(nodes, float)
+    if ends.shape != (steps + 1,):
+        raise ValueError(f"{len(ends)} step ends for {steps} steps")
+    times = np.empty(2 * steps + 1)
+    times[0::2], times[1::2] = ends, 0.5 * (ends[:-1] + ends[1:])
+    widths = np.diff(ends)
     n = mmap.robot.n
     if callable(torque):
-        table = np.array([torque(duration * k / (2 * steps)) for k in range(2 * steps + 1)])
+        table = np.array([torque(float(t)) for t in times])
     else:
         table = np.asarray(torque, dtype=float)
         if table.shape != (2 * steps + 1, n):
@@ -210,8 +218,9 @@ def replay(
     aba, integrate = pin.aba, pin.integrate
 
     momentum_max = 0.0 if track_momentum else math.nan
-    half = 0.5 * dt
     for k in range(steps):
+        dt = float(widths[k])
+        half = 0.5 * dt
         f0, fh, f1 = forces[2 * k], forces[2 * k + 1], forces[2 * k + 2]
         a1 = aba(model, data, q, v, f0)
         v2 = v + half * a1
