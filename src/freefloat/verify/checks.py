@@ -141,7 +141,8 @@ def _decided(value: float, estimate: float, previous: float, tolerance: float, t
     verdict is trusted only once the steps resolve the motion (``turn``, the largest rotation
     in one step, rad, at most :data:`_MAX_TURN`) and the difference has shrunk at least 8-fold
     (or is already below rounding); then the check is decided when the estimate is small
-    against the tolerance or the value is clear of the tolerance by more than the estimate.
+    against the tolerance or the value is clear of the tolerance by more than the estimate
+    (and, to refuse, the estimate is also small against the value).
     """
     converging = estimate <= previous / 8.0 or estimate <= 1e-3 * CONVERGED_FRACTION * tolerance
     if turn > _MAX_TURN or not converging:
@@ -149,7 +150,7 @@ def _decided(value: float, estimate: float, previous: float, tolerance: float, t
     return (
         estimate <= CONVERGED_FRACTION * tolerance
         or value + estimate <= tolerance
-        or value - estimate > tolerance
+        or (value - estimate > tolerance and estimate <= CONVERGED_FRACTION * value)
     )
 
 
