@@ -9,7 +9,10 @@ would need: zero up to rounding, a consistency check of its own. Gravity is zero
 
 The replay runs Pinocchio's articulated-body algorithm (ABA) on the full system, base free,
 driven only by the joint torques, with a fixed-step fourth-order Runge-Kutta scheme whose
-configuration updates use ``pin.integrate`` on the configuration manifold. The torques come
+configuration is integrated as a vector in R^nq: the base position, the base quaternion (its
+rate ``q (x) [omega, 0] / 2``) and the (cos, sin) pairs of continuous joints, renormalised after
+every stage. Classical RK4 keeps its fourth order that way; chaining ``pin.integrate`` over the
+stages' velocities would drop the base attitude to second order. The torques come
 either from a function of time or from a table at the half-step instants ``k dt / 2``, which
 lets a caller compute them in one batch (:func:`inverse_dynamics_batch`) and reuse them when it
 doubles the steps to estimate the replay's own error.
@@ -150,6 +153,51 @@ def inverse_dynamics_batch(
     )
 
 
+def _configuration_rate(
+    mmap: MomentumMap,
+) -> tuple[Callable[[np.ndarray, np.ndarray], np.ndarray], Callable[[np.ndarray], np.ndarray]]:
+    """``dq/dt`` of the embedded configuration from the velocity, and the projection back.
+
+    The root joint is Pinocchio's free flyer: position (m) with rate ``R v_linear``, quaternion
+    ``[x, y, z, w]`` with rate ``q (x) [omega, 0] / 2`` (``v`` in the base frame). A continuous
+    joint's ``(cos, sin)`` turns at its rate; other joints' values move at their rates.
+    """
+    joints = mmap.robot.joints
+    plain_q = np.array([j.idx_q for j in joints if j.kind != "continuous"], dtype=int)
+    plain_v = np.array([j.idx_v for j in joints if j.kind != "continuous"], dtype=int)
+    cos_q = np.array([j.idx_q for j in joints if j.kind == "continuous"], dtype=int)
+    turn_v = np.array([j.idx_v for j in joints if j.kind == "continuous"], dtype=int)
+    nq = mmap.model.nq
+
+    def rate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        out = np.empty(nq)
+        x, y, z, w = q[3:7]
+        vx, vy, vz, wx, wy, wz = v[:6]
+        # R v_linear, with R of the quaternion
+        tx, ty, tz = 2.0 * (y * vz - z * vy), 2.0 * (z * vx - x * vz), 2.0 * (x * vy - y * vx)
+        out[0] = vx + w * tx + y * tz - z * ty
+        out[1] = vy + w * ty + z * tx - x * tz
+        out[2] = vz + w * tz + x * ty - y * tx
+        out[3] = 0.5 * (w * wx + y * wz - z * wy)
+        out[4] = 0.5 * (w * wy + z * wx - x * wz)
+        out[5] = 0.5 * (w * wz + x * wy - y * wx)
+        out[6] = -0.5 * (x * wx + y * wy + z * wz)
+        out[plain_q] = v[plain_v]
+        out[cos_q] = -q[cos_q + 1] * v[turn_v]
+        out[cos_q + 1] = q[cos_q] * v[turn_v]
+        return out
+
+    def project(q: np.ndarray) -> np.ndarray:
+        q[3:7] /= math.sqrt(float(q[3:7] @ q[3:7]))
+        if len(cos_q):
+            norm = np.hypot(q[cos_q], q[cos_q + 1])
+            q[cos_q] /= norm
+            q[cos_q + 1] /= norm
+        return q
+
+    return rate, project
+
+
 @dataclass(frozen=True)
 class ReplayResult:
     """Final state of a forward-dynamics replay.
@@ -215,21 +263,22 @@ def replay(
             raise ValueError(f"torque table of shape {table.shape}, need {(2 * steps + 1, n)}")
     forces = np.zeros((len(table), model.nv))
     forces[:, [j.idx_v for j in mmap.robot.joints]] = table
-    aba, integrate = pin.aba, pin.integrate
+    aba = pin.aba
 
+    rate, project = _configuration_rate(mmap)
     momentum_max = 0.0 if track_momentum else math.nan
     for k in range(steps):
         dt = float(widths[k])
         half = 0.5 * dt
         f0, fh, f1 = forces[2 * k], forces[2 * k + 1], forces[2 * k + 2]
-        a1 = aba(model, data, q, v, f0)
-        v2 = v + half * a1
-        a2 = aba(model, data, integrate(model, q, half * v), v2, fh)
-        v3 = v + half * a2
-        a3 = aba(model, data, integrate(model, q, half * v2), v3, fh)
-        v4 = v + dt * a3
-        a4 = aba(model, data, integrate(model, q, dt * v3), v4, f1)
-        q = integrate(model, q, dt / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4))
+        a1, r1 = aba(model, data, q, v, f0), rate(q, v)
+        q2, v2 = project(q + half * r1), v + half * a1
+        a2, r2 = aba(model, data, q2, v2, fh), rate(q2, v2)
+        q3, v3 = project(q + half * r2), v + half * a2
+        a3, r3 = aba(model, data, q3, v3, fh), rate(q3, v3)
+        q4, v4 = project(q + dt * r3), v + dt * a3
+        a4, r4 = aba(model, data, q4, v4, f1), rate(q4, v4)
+        q = project(q + dt / 6.0 * (r1 + 2.0 * r2 + 2.0 * r3 + r4))
         v = v + dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
         if track_momentum:
             momentum_max = max(momentum_max, float(np.linalg.norm(mmap.momentum(q, v))))
