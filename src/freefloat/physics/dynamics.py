@@ -267,21 +267,23 @@ def replay(
 
     rate, project = _configuration_rate(mmap)
     momentum_max = 0.0 if track_momentum else math.nan
-    for k in range(steps):
-        dt = float(widths[k])
-        half = 0.5 * dt
-        f0, fh, f1 = forces[2 * k], forces[2 * k + 1], forces[2 * k + 2]
-        a1, r1 = aba(model, data, q, v, f0), rate(q, v)
-        q2, v2 = project(q + half * r1), v + half * a1
-        a2, r2 = aba(model, data, q2, v2, fh), rate(q2, v2)
-        q3, v3 = project(q + half * r2), v + half * a2
-        a3, r3 = aba(model, data, q3, v3, fh), rate(q3, v3)
-        q4, v4 = project(q + dt * r3), v + dt * a3
-        a4, r4 = aba(model, data, q4, v4, f1), rate(q4, v4)
-        q = project(q + dt / 6.0 * (r1 + 2.0 * r2 + 2.0 * r3 + r4))
-        v = v + dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-        if track_momentum:
-            momentum_max = max(momentum_max, float(np.linalg.norm(mmap.momentum(q, v))))
+    # A step too long for the motion can blow up; the caller sees non-finite results.
+    with np.errstate(over="ignore", invalid="ignore"):
+        for k in range(steps):
+            dt = float(widths[k])
+            half = 0.5 * dt
+            f0, fh, f1 = forces[2 * k], forces[2 * k + 1], forces[2 * k + 2]
+            a1, r1 = aba(model, data, q, v, f0), rate(q, v)
+            q2, v2 = project(q + half * r1), v + half * a1
+            a2, r2 = aba(model, data, q2, v2, fh), rate(q2, v2)
+            q3, v3 = project(q + half * r2), v + half * a2
+            a3, r3 = aba(model, data, q3, v3, fh), rate(q3, v3)
+            q4, v4 = project(q + dt * r3), v + dt * a3
+            a4, r4 = aba(model, data, q4, v4, f1), rate(q4, v4)
+            q = project(q + dt / 6.0 * (r1 + 2.0 * r2 + 2.0 * r3 + r4))
+            v = v + dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+            if track_momentum:
+                momentum_max = max(momentum_max, float(np.linalg.norm(mmap.momentum(q, v))))
     joints = mmap.robot.joint_values(q)
     rates = np.array([v[j.idx_v] for j in mmap.robot.joints])
     return ReplayResult(

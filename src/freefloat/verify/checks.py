@@ -154,6 +154,11 @@ def _decided(value: float, estimate: float, previous: float, tolerance: float, t
     )
 
 
+def _finite(x: float) -> float:
+    """``x``, or infinity for NaN (a blown-up coarse level differs from anything by inf)."""
+    return x if not math.isnan(x) else math.inf
+
+
 def _with_midpoints(ends: np.ndarray) -> np.ndarray:
     """Ascending instants with the midpoint of every interval inserted (2 K - 1 values)."""
     out = np.empty(2 * len(ends) - 1)
@@ -348,8 +353,8 @@ def verify_plan(
         fine_q, fine_j = run(ends, torques)
         replay_att = geodesic_angle(fine_q, target)
         replay_joint = float(np.abs(_wrap_joints(robot, fine_j - goal)).max())
-        att_estimate = geodesic_angle(coarse_q, fine_q)
-        joint_estimate = float(np.abs(_wrap_joints(robot, fine_j - coarse_j)).max())
+        att_estimate = _finite(geodesic_angle(coarse_q, fine_q))
+        joint_estimate = _finite(float(np.abs(_wrap_joints(robot, fine_j - coarse_j)).max()))
         turn = speed * duration / steps
         if _decided(
             replay_att, att_estimate, previous[0], tol["replay_attitude_rad"], turn
