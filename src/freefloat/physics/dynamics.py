@@ -171,24 +171,27 @@ def _configuration_rate(
 
     def rate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
         out = np.empty(nq)
-        x, y, z, w = q[3:7]
-        vx, vy, vz, wx, wy, wz = v[:6]
+        x, y, z, w = q[3:7].tolist()  # plain floats: cheaper than numpy scalars
+        vx, vy, vz, wx, wy, wz = v[:6].tolist()
         # R v_linear, with R of the quaternion
         tx, ty, tz = 2.0 * (y * vz - z * vy), 2.0 * (z * vx - x * vz), 2.0 * (x * vy - y * vx)
-        out[0] = vx + w * tx + y * tz - z * ty
-        out[1] = vy + w * ty + z * tx - x * tz
-        out[2] = vz + w * tz + x * ty - y * tx
-        out[3] = 0.5 * (w * wx + y * wz - z * wy)
-        out[4] = 0.5 * (w * wy + z * wx - x * wz)
-        out[5] = 0.5 * (w * wz + x * wy - y * wx)
-        out[6] = -0.5 * (x * wx + y * wy + z * wz)
+        out[:7] = (
+            vx + w * tx + y * tz - z * ty,
+            vy + w * ty + z * tx - x * tz,
+            vz + w * tz + x * ty - y * tx,
+            0.5 * (w * wx + y * wz - z * wy),
+            0.5 * (w * wy + z * wx - x * wz),
+            0.5 * (w * wz + x * wy - y * wx),
+            -0.5 * (x * wx + y * wy + z * wz),
+        )
         out[plain_q] = v[plain_v]
         out[cos_q] = -q[cos_q + 1] * v[turn_v]
         out[cos_q + 1] = q[cos_q] * v[turn_v]
         return out
 
     def project(q: np.ndarray) -> np.ndarray:
-        q[3:7] /= math.sqrt(float(q[3:7] @ q[3:7]))
+        x, y, z, w = q[3:7].tolist()
+        q[3:7] /= math.sqrt(x * x + y * y + z * z + w * w)
         if len(cos_q):
             norm = np.hypot(q[cos_q], q[cos_q + 1])
             q[cos_q] /= norm

@@ -8,10 +8,14 @@ Checks, each with a documented tolerance (:data:`TOLERANCES`):
   at the origin (m).
 - ``base_wrench_max``: the base entries of the inverse dynamics behind ``samples.tau`` (N, N m),
   relative to the torque scale.
-- ``attitude_error_independent_rad``: the final attitude from an adaptive DOP853 integration of
+- ``attitude_error_independent_rad``: the final attitude from a classical RK4 integration of
   the quaternion ODE in seconds along the plan's polynomials (not the planner's Magnus scheme).
 - ``replay``: forward dynamics of the free system (ABA, RK4) driven only by the planned joint
   torques from the start at rest: final attitude error (rad) and joint error (rad or m).
+
+Both integrating checks double their steps and report the difference between the last two
+results as their ``error_estimate`` (see :func:`verify_plan` and :func:`_decided`); the other
+checks are exact up to rounding.
 - ``boundary``: position, rate and acceleration errors of the polynomials at both ends (rad,
   rad/s, rad/s^2), against the requested start and goal, relative to the joint travel.
 - ``joint_limit_excess``: how far the sampled joints go beyond their URDF limits (rad or m).
