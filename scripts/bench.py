@@ -13,8 +13,11 @@ solved two ways:
 
 Both use the same free parameters (normalised-time coefficients). Each solution's final attitude
 error is then measured by one independent check (DOP853, rtol 1e-13). Times are medians over
-several runs after model loading and a warm-up run. Also reported: the cost of one momentum-map
-evaluation for serial chains of 2 to 12 joints.
+several runs after model loading and a warm-up run. Also reported: the whole verified
+``ff.plan()`` of each shipped scenario as it stands (automatic freedom where the scenario leaves
+it open) with its stage times (solve, sample, verify, from the plan's solver report) against
+the baseline's solve of the same motion, and the cost of one momentum-map evaluation for serial
+chains of 2 to 12 joints.
 
 Run: python scripts/bench.py [--runs N] [--json FILE]
 """
@@ -199,6 +202,41 @@ def bench_cases(runs: int, baseline_runs: int) -> list[dict[str, object]]:
     return rows
 
 
+def bench_whole(runs: int, baseline_ms: dict[str, float]) -> list[dict[str, object]]:
+    """Whole verified ``plan()`` per shipped scenario, with its stage times (ms, medians)."""
+    rows = []
+    for name, case in (
+        ("worked example", "worked example (planar, 1 free)"),
+        ("panda servicer", "panda servicer 3-axis (3 free)"),
+        ("ur5 servicer", "ur5 servicer 3-axis (3 free)"),
+    ):
+        scenario = ff.Scenario.from_toml(ROBOTS / f"{name.replace(' ', '_')}.toml")
+        ff.plan(scenario)  # warm-up
+        whole, stages = [], []
+        for _ in range(runs):
+            start = time.perf_counter()
+            p = ff.plan(scenario)
+            whole.append(time.perf_counter() - start)
+            r = p.solver
+            stages.append((r.solve_time_s, r.sample_time_s, r.verify_time_s))
+        solve, sample, verify = (statistics.median(c) * 1e3 for c in zip(*stages, strict=True))
+        plan_ms = statistics.median(whole) * 1e3
+        rows.append(
+            {
+                "scenario": name,
+                "plan_ms": plan_ms,
+                "solve_ms": solve,
+                "sample_ms": sample,
+                "verify_ms": verify,
+                "plan_over_solve": plan_ms / solve,
+                "baseline_solve_ms": baseline_ms[case],
+                "baseline_over_plan": baseline_ms[case] / plan_ms,
+            }
+        )
+        print(f"  done: whole plan, {name}", flush=True)
+    return rows
+
+
 def chain_urdf(n: int) -> str:
     rng = np.random.default_rng(n)
     parts = [
@@ -260,6 +298,7 @@ def main() -> None:
     args = parser.parse_args()
     print(f"machine: {machine()}")
     rows = bench_cases(args.runs, args.baseline_runs)
+    whole = bench_whole(args.runs, {str(r["problem"]): float(r["baseline_ms"]) for r in rows})  # type: ignore[arg-type]
     import tempfile
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -279,13 +318,34 @@ def main() -> None:
             f"{r['baseline_error_rad']:.1e} |"
         )
     print()
+    print("whole verified plan vs solve (ms, medians):")
+    print(
+        "| scenario | whole plan() | solve | sample | verify | plan/solve | baseline solve "
+        "| baseline solve / whole plan |"
+    )
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    for r in whole:
+        print(
+            f"| {r['scenario']} | {r['plan_ms']:.1f} | {r['solve_ms']:.1f} | "
+            f"{r['sample_ms']:.1f} | {r['verify_ms']:.1f} | {r['plan_over_solve']:.2f}x | "
+            f"{r['baseline_solve_ms']:.0f} | {r['baseline_over_plan']:.1f}x |"
+        )
+    print()
     print("| joints | map [us/eval] | map + derivative [us/eval] |")
     print("|---:|---:|---:|")
     for r in scaling:
         print(f"| {r['joints']} | {r['map_us']:.2f} | {r['map_and_derivative_us']:.2f} |")
     if args.json:
         args.json.write_text(
-            json.dumps({"machine": machine(), "problems": rows, "map_scaling": scaling}, indent=1)
+            json.dumps(
+                {
+                    "machine": machine(),
+                    "problems": rows,
+                    "whole_plan": whole,
+                    "map_scaling": scaling,
+                },
+                indent=1,
+            )
         )
         print(f"\nwrote {args.json}")
 

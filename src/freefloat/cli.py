@@ -25,7 +25,7 @@ from .problem.build import planar_yaw_branch, problem_from_scenario
 from .problem.residual import Problem
 from .problem.scenario import Scenario, default_scenario_path
 from .solvers.options import DEFAULT_TOLERANCE, SolveOptions
-from .verify.checks import verify_plan
+from .verify.checks import MAX_REPLAY_STEPS, verify_plan
 
 __all__ = ["main"]
 
@@ -76,6 +76,11 @@ def summary(p: Plan, output: Path | None = None) -> str:
         f"  solver          {s.method}; {len(s.solutions)} solution(s); {s.evaluations} "
         f"evaluations; {s.wall_time_s:.3f} s"
     )
+    if s.solve_time_s or s.sample_time_s or s.verify_time_s:
+        lines.append(
+            f"  stage times     solve {1e3 * s.solve_time_s:.1f} ms, sample "
+            f"{1e3 * s.sample_time_s:.1f} ms, verify {1e3 * s.verify_time_s:.1f} ms"
+        )
     turns = {k: v for k, v in s.full_turns.items() if v}
     if turns:
         lines.append("  full turns      " + ", ".join(f"{k} {v:+d}" for k, v in turns.items()))
@@ -167,6 +172,8 @@ def _cmd_bounds(args: argparse.Namespace) -> int:
 
 
 def _cmd_verify(args: argparse.Namespace) -> int:
+    if args.replay_steps < 1:
+        raise InputError(f"--replay-steps must be at least 1, got {args.replay_steps}")
     loaded = Plan.load(args.plan)
     result = verify_plan(loaded, replay_steps=args.replay_steps)
     print(
@@ -287,7 +294,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p_verify.add_argument("plan", help="plan JSON file")
     p_verify.add_argument(
-        "--replay-steps", type=int, default=500, help="RK4 steps of the replay (default 500)"
+        "--replay-steps",
+        type=int,
+        default=MAX_REPLAY_STEPS,
+        help="most RK4 steps the replay may take; it doubles its steps from 16 until its own "
+        f"error estimate settles the verdict (default {MAX_REPLAY_STEPS})",
     )
     p_verify.set_defaults(func=_cmd_verify)
 

@@ -9,14 +9,15 @@ verifies a solution found elsewhere. The file format lives in :mod:`freefloat.pl
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Sequence
 from dataclasses import asdict, replace
 
 import numpy as np
 
 from .errors import CollisionError, SolverError, VelocityLimitError, VerificationError
-from .physics.attitude import geodesic_angle, zyx_from_quat
-from .physics.dynamics import inverse_dynamics
+from .physics.attitude import geodesic_angle, quat_rotate, zyx_from_quat
+from .physics.dynamics import inverse_dynamics_batch
 from .plans.format import (
     BaseReport,
     Feasibility,
@@ -75,11 +76,13 @@ def plan(
     scenario.write_robot()  # an inline servicer or a payload: its URDF, into the cache
     constraints = scenario_constraints(scenario) if constraints is None else list(constraints)
     _check_endpoints(scenario, constraints)
+    clock = time.perf_counter()
     try:
         found = search(scenario, options, constraints)
     except SolverError as exc:
         _explain_velocity_limits(scenario, options, constraints, exc)
         raise
+    solve_time = time.perf_counter() - clock
     problem = found.problem.with_steps(found.solution.steps)
     result = plan_from_solution(
         problem,
@@ -90,7 +93,11 @@ def plan(
         safety=_safety_report(scenario, constraints),
     )
     report = replace(
-        result.solver, freedom=found.freedom, full_turns=found.full_turns, tried=found.tried
+        result.solver,
+        freedom=found.freedom,
+        full_turns=found.full_turns,
+        tried=found.tried,
+        solve_time_s=solve_time,
     )
     return replace(result, solver=report)
 
@@ -189,17 +196,17 @@ def plan_from_solution(
     """
     robot, family, T = problem.robot, problem.family, problem.duration
     names = robot.joint_names
+    clock = time.perf_counter()
     s = np.linspace(0.0, 1.0, max(2, int(samples)))
     t = s * T
     path = family.at_times(solution.beta, t, T)
     quats = problem.attitudes(solution.beta, s)
-    mmap = problem.mmap
-    base_position, ee_position, omega, tau = [], [], [], []
-    for q, qd, qdd, quat in zip(path.q, path.qd, path.qdd, quats, strict=True):
-        base_position.append(mmap.base_position(q, quat).tolist())
-        ee_position.append(mmap.end_effector_pose(q, quat).translation.tolist())
-        omega.append((mmap.f1(q) @ qd).tolist())
-        tau.append(inverse_dynamics(mmap, q, qd, qdd).tau.tolist())
+    dyn = inverse_dynamics_batch(problem.mmap, path.q, path.qd, path.qdd)
+    base_position = quat_rotate(quats, -dyn.com)
+    ee_position = quat_rotate(quats, dyn.end_effector - dyn.com)
+    omega = dyn.base_twist[:, 3:]
+    tau = dyn.tau
+    sample_time = time.perf_counter() - clock
 
     achieved = problem.achieved(solution.beta)
     error = geodesic_angle(achieved, problem.goal_quaternion)
@@ -260,12 +267,12 @@ def plan_from_solution(
             q=path.q.tolist(),
             qd=path.qd.tolist(),
             qdd=path.qdd.tolist(),
-            base_position=base_position,
+            base_position=base_position.tolist(),
             base_quaternion_xyzw=quats.tolist(),
             base_zyx_deg=[_deg(zyx_from_quat(qt)) for qt in quats],
-            end_effector_position=ee_position,
-            base_angular_velocity=omega,
-            tau=tau,
+            end_effector_position=ee_position.tolist(),
+            base_angular_velocity=omega.tolist(),
+            tau=tau.tolist(),
         ),
         solver=SolverReport(
             method=solution.method,
@@ -277,15 +284,19 @@ def plan_from_solution(
             integration_steps=problem.steps,
             integration_error_rad=solution.integration_error,
             strategy=solution.strategy.value,
+            solve_time_s=solution.wall_time,
+            sample_time_s=sample_time,
         ),
         request=Request(start_joints=family.start.tolist(), goal_joints=family.goal.tolist()),
         safety=safety or SafetyReport(),
     )
     if not verify:
         return unverified
+    clock = time.perf_counter()
     verification = verify_plan(
         unverified, robot, constraints=None if constraints is None else list(constraints)
     )
     if not verification.passed:
         raise VerificationError(verification.failures)
-    return replace(unverified, verification=verification)
+    report = replace(unverified.solver, verify_time_s=time.perf_counter() - clock)
+    return replace(unverified, verification=verification, solver=report)

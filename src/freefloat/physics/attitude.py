@@ -45,11 +45,18 @@ GAUSS3_NODES = np.array([0.5 - math.sqrt(15.0) / 10.0, 0.5, 0.5 + math.sqrt(15.0
 GAUSS3_WEIGHTS = np.array([5.0, 8.0, 5.0]) / 18.0
 
 
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product of 3-vectors along the last axis (broadcasts; cheaper than ``np.cross``)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
 def quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Hamilton product ``a (x) b`` of ``[x, y, z, w]`` quaternions (broadcasts over rows)."""
     av, aw = a[..., :3], a[..., 3:]
     bv, bw = b[..., :3], b[..., 3:]
-    vec = aw * bv + bw * av + np.cross(av, bv)
+    vec = aw * bv + bw * av + cross3(av, bv)
     w = aw * bw - np.sum(av * bv, axis=-1, keepdims=True)
     return np.concatenate([vec, w], axis=-1)
 
@@ -93,6 +100,16 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
             [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
         ]
     )
+
+
+def quat_rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Vectors ``v`` (base frame) rotated into the inertial frame by unit quaternions ``q``.
+
+    Broadcasts over rows: ``q`` (..., 4) ``[x, y, z, w]`` and ``v`` (..., 3), same unit out.
+    """
+    u, w = q[..., :3], q[..., 3:]
+    uv = cross3(u, v)
+    return v + 2.0 * w * uv + 2.0 * cross3(u, uv)
 
 
 def quat_from_zyx(yaw: float, pitch: float = 0.0, roll: float = 0.0) -> np.ndarray:
@@ -208,7 +225,7 @@ def magnus_increments(omega: np.ndarray, h: np.ndarray) -> np.ndarray:
 
     def bracket(u: np.ndarray, v: np.ndarray) -> np.ndarray:
         # Lie bracket of the generators for a body-frame rate (quat' = quat (x) omega / 2).
-        return np.cross(v, u)
+        return cross3(v, u)
 
     c1 = bracket(alpha1, alpha2)
     c2 = -bracket(alpha1, 2.0 * alpha3 + c1) / 60.0

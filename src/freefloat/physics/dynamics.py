@@ -9,11 +9,18 @@ would need: zero up to rounding, a consistency check of its own. Gravity is zero
 
 The replay runs Pinocchio's articulated-body algorithm (ABA) on the full system, base free,
 driven only by the joint torques, with a fixed-step fourth-order Runge-Kutta scheme whose
-configuration updates use ``pin.integrate`` on the configuration manifold.
+configuration is integrated as a vector in R^nq: the base position, the base quaternion (its
+rate ``q (x) [omega, 0] / 2``) and the (cos, sin) pairs of continuous joints, renormalised after
+every stage. Classical RK4 keeps its fourth order that way; chaining ``pin.integrate`` over the
+stages' velocities would drop the base attitude to second order. The torques come
+either from a function of time or from a table at the half-step instants ``k dt / 2``, which
+lets a caller compute them in one batch (:func:`inverse_dynamics_batch`) and reuse them when it
+doubles the steps to estimate the replay's own error.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -22,7 +29,14 @@ import pinocchio as pin
 
 from .momentum import MomentumMap
 
-__all__ = ["InverseDynamics", "ReplayResult", "inverse_dynamics", "replay"]
+__all__ = [
+    "InverseDynamics",
+    "InverseDynamicsBatch",
+    "ReplayResult",
+    "inverse_dynamics",
+    "inverse_dynamics_batch",
+    "replay",
+]
 
 
 @dataclass(frozen=True)
@@ -73,6 +87,121 @@ def inverse_dynamics(
 
 
 @dataclass(frozen=True)
+class InverseDynamicsBatch:
+    """Inverse dynamics at K instants (see :func:`inverse_dynamics_batch`).
+
+    Attributes:
+        tau: (K, N) joint torques (N m, or N for prismatic joints).
+        base_wrench: (K, 6) base entries of the RNEA result (N, N m): ~0 for a consistent motion.
+        base_twist: (K, 6) zero-momentum base twist (m/s, rad/s; base frame).
+        com: (K, 3) system CM in the base frame, base at the origin (m).
+        end_effector: (K, 3) end-effector position in the base frame, base at the origin (m).
+    """
+
+    tau: np.ndarray
+    base_wrench: np.ndarray
+    base_twist: np.ndarray
+    com: np.ndarray
+    end_effector: np.ndarray
+
+
+def inverse_dynamics_batch(
+    mmap: MomentumMap, joints: np.ndarray, rates: np.ndarray, accelerations: np.ndarray
+) -> InverseDynamicsBatch:
+    """Joint torques of a zero-momentum motion at K instants, with the kinematics they need.
+
+    The motion is evaluated with the base at the origin and identity attitude: without gravity
+    the torques do not depend on the base pose, and the CM and end effector of any other base
+    pose follow by one rotation and translation. Three Pinocchio calls per instant, no other
+    per-instant Python work.
+
+    Args:
+        mmap: momentum map of the robot.
+        joints: (K, N) joint values (rad or m).
+        rates: (K, N) joint rates (rad/s or m/s).
+        accelerations: (K, N) joint accelerations (rad/s^2 or m/s^2).
+    """
+    model, data = mmap.model, mmap.data
+    joints = np.atleast_2d(np.asarray(joints, dtype=float))
+    rates = np.atleast_2d(np.asarray(rates, dtype=float))
+    accelerations = np.atleast_2d(np.asarray(accelerations, dtype=float))
+    configs = mmap.configurations(joints)
+    k_count, nv = len(configs), model.nv
+    ag = np.empty((k_count, 6, nv))
+    com = np.empty((k_count, 3))
+    for k in range(k_count):
+        ag[k] = pin.computeCentroidalMap(model, data, configs[k])
+        com[k] = data.com[0]
+    twist = -np.linalg.solve(ag[:, :, :6], np.einsum("kij,kj->ki", ag[:, :, 6:], rates)[..., None])
+    twist = twist[..., 0]
+    v = np.concatenate([twist, rates], axis=1)
+    d_ag = np.empty((k_count, 6, nv))
+    frame = mmap.robot.end_effector_frame
+    ee = np.empty((k_count, 3))
+    for k in range(k_count):
+        d_ag[k] = pin.computeCentroidalMapTimeVariation(model, data, configs[k], v[k])
+        ee[k] = pin.updateFramePlacement(model, data, frame).translation
+    rhs = np.einsum("kij,kj->ki", ag[:, :, 6:], accelerations) + np.einsum("kij,kj->ki", d_ag, v)
+    a_base = -np.linalg.solve(ag[:, :, :6], rhs[..., None])[..., 0]
+    a = np.concatenate([a_base, accelerations], axis=1)
+    full = np.empty((k_count, nv))
+    for k in range(k_count):
+        full[k] = pin.rnea(model, data, configs[k], v[k], a[k])
+    mmap.evaluations += k_count
+    return InverseDynamicsBatch(
+        tau=full[:, 6:], base_wrench=full[:, :6], base_twist=twist, com=com, end_effector=ee
+    )
+
+
+def _configuration_rate(
+    mmap: MomentumMap,
+) -> tuple[Callable[[np.ndarray, np.ndarray], np.ndarray], Callable[[np.ndarray], np.ndarray]]:
+    """``dq/dt`` of the embedded configuration from the velocity, and the projection back.
+
+    The root joint is Pinocchio's free flyer: position (m) with rate ``R v_linear``, quaternion
+    ``[x, y, z, w]`` with rate ``q (x) [omega, 0] / 2`` (``v`` in the base frame). A continuous
+    joint's ``(cos, sin)`` turns at its rate; other joints' values move at their rates.
+    """
+    joints = mmap.robot.joints
+    plain_q = np.array([j.idx_q for j in joints if j.kind != "continuous"], dtype=int)
+    plain_v = np.array([j.idx_v for j in joints if j.kind != "continuous"], dtype=int)
+    cos_q = np.array([j.idx_q for j in joints if j.kind == "continuous"], dtype=int)
+    turn_v = np.array([j.idx_v for j in joints if j.kind == "continuous"], dtype=int)
+    nq = mmap.model.nq
+
+    def rate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        out = np.empty(nq)
+        x, y, z, w = q[3:7].tolist()  # plain floats: cheaper than numpy scalars
+        vx, vy, vz, wx, wy, wz = v[:6].tolist()
+        # R v_linear, with R of the quaternion
+        tx, ty, tz = 2.0 * (y * vz - z * vy), 2.0 * (z * vx - x * vz), 2.0 * (x * vy - y * vx)
+        out[:7] = (
+            vx + w * tx + y * tz - z * ty,
+            vy + w * ty + z * tx - x * tz,
+            vz + w * tz + x * ty - y * tx,
+            0.5 * (w * wx + y * wz - z * wy),
+            0.5 * (w * wy + z * wx - x * wz),
+            0.5 * (w * wz + x * wy - y * wx),
+            -0.5 * (x * wx + y * wy + z * wz),
+        )
+        out[plain_q] = v[plain_v]
+        out[cos_q] = -q[cos_q + 1] * v[turn_v]
+        out[cos_q + 1] = q[cos_q] * v[turn_v]
+        return out
+
+    def project(q: np.ndarray) -> np.ndarray:
+        x, y, z, w = q[3:7].tolist()
+        q[3:7] /= math.sqrt(x * x + y * y + z * z + w * w)
+        if len(cos_q):
+            norm = np.hypot(q[cos_q], q[cos_q + 1])
+            q[cos_q] /= norm
+            q[cos_q + 1] /= norm
+        return q
+
+    return rate, project
+
+
+@dataclass(frozen=True)
 class ReplayResult:
     """Final state of a forward-dynamics replay.
 
@@ -80,7 +209,8 @@ class ReplayResult:
         joints: N final joint values (rad or m).
         rates: N final joint rates (rad/s or m/s).
         quaternion_xyzw: final base attitude.
-        momentum_max: largest total momentum norm met along the replay (kg m/s, kg m^2/s).
+        momentum_max: largest total momentum norm met along the replay (kg m/s, kg m^2/s);
+            NaN unless asked for.
         steps: number of RK4 steps taken.
     """
 
@@ -95,9 +225,11 @@ def replay(
     mmap: MomentumMap,
     start_joints: np.ndarray,
     start_quaternion_xyzw: np.ndarray,
-    torque: Callable[[float], np.ndarray],
+    torque: Callable[[float], np.ndarray] | np.ndarray,
     duration: float,
     steps: int = 2000,
+    track_momentum: bool = True,
+    nodes: np.ndarray | None = None,
 ) -> ReplayResult:
     """Simulate the free-floating system from rest under the joint torques ``torque(t)``.
 
@@ -106,33 +238,55 @@ def replay(
         start_joints: N joint values at t = 0 (rad or m); the system starts at rest with its CM
             at the origin.
         start_quaternion_xyzw: base attitude at t = 0.
-        torque: joint torques (N m or N) as a function of time (s).
+        torque: joint torques (N m or N): a function of time (s), or a (2 steps + 1, N) table
+            at the step ends and midpoints (``k duration / (2 steps)`` for uniform steps).
         duration: simulated time (s).
-        steps: number of fixed RK4 steps.
+        steps: number of RK4 steps (>= 1).
+        track_momentum: record the largest total momentum along the replay.
+        nodes: the steps' ends, ``steps + 1`` ascending instants from 0 to ``duration`` (s);
+            default uniform.
     """
+    if steps < 1:
+        raise ValueError(f"the replay needs at least one step, got {steps}")
     model, data = mmap.model, mmap.model.createData()
     q = mmap.configuration(np.asarray(start_joints, float), np.asarray(start_quaternion_xyzw))
     v = np.zeros(model.nv)
-    dt = duration / steps
-    base = np.zeros(6)
+    ends = np.linspace(0.0, duration, steps + 1) if nodes is None else np.asarray(nodes, float)
+    if ends.shape != (steps + 1,):
+        raise ValueError(f"{len(ends)} step ends for {steps} steps")
+    times = np.empty(2 * steps + 1)
+    times[0::2], times[1::2] = ends, 0.5 * (ends[:-1] + ends[1:])
+    widths = np.diff(ends)
+    n = mmap.robot.n
+    if callable(torque):
+        table = np.array([torque(float(t)) for t in times])
+    else:
+        table = np.asarray(torque, dtype=float)
+        if table.shape != (2 * steps + 1, n):
+            raise ValueError(f"torque table of shape {table.shape}, need {(2 * steps + 1, n)}")
+    forces = np.zeros((len(table), model.nv))
+    forces[:, [j.idx_v for j in mmap.robot.joints]] = table
+    aba = pin.aba
 
-    def accel(q_: np.ndarray, v_: np.ndarray, t: float) -> np.ndarray:
-        return pin.aba(model, data, q_, v_, np.concatenate([base, torque(t)]))
-
-    momentum_max = 0.0
-    t = 0.0
-    for _ in range(steps):
-        a1 = accel(q, v, t)
-        v2 = v + 0.5 * dt * a1
-        a2 = accel(pin.integrate(model, q, 0.5 * dt * v), v2, t + 0.5 * dt)
-        v3 = v + 0.5 * dt * a2
-        a3 = accel(pin.integrate(model, q, 0.5 * dt * v2), v3, t + 0.5 * dt)
-        v4 = v + dt * a3
-        a4 = accel(pin.integrate(model, q, dt * v3), v4, t + dt)
-        q = pin.integrate(model, q, dt / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4))
-        v = v + dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-        t += dt
-        momentum_max = max(momentum_max, float(np.linalg.norm(mmap.momentum(q, v))))
+    rate, project = _configuration_rate(mmap)
+    momentum_max = 0.0 if track_momentum else math.nan
+    # A step too long for the motion can blow up; the caller sees non-finite results.
+    with np.errstate(over="ignore", invalid="ignore"):
+        for k in range(steps):
+            dt = float(widths[k])
+            half = 0.5 * dt
+            f0, fh, f1 = forces[2 * k], forces[2 * k + 1], forces[2 * k + 2]
+            a1, r1 = aba(model, data, q, v, f0), rate(q, v)
+            q2, v2 = project(q + half * r1), v + half * a1
+            a2, r2 = aba(model, data, q2, v2, fh), rate(q2, v2)
+            q3, v3 = project(q + half * r2), v + half * a2
+            a3, r3 = aba(model, data, q3, v3, fh), rate(q3, v3)
+            q4, v4 = project(q + dt * r3), v + dt * a3
+            a4, r4 = aba(model, data, q4, v4, f1), rate(q4, v4)
+            q = project(q + dt / 6.0 * (r1 + 2.0 * r2 + 2.0 * r3 + r4))
+            v = v + dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+            if track_momentum:
+                momentum_max = max(momentum_max, float(np.linalg.norm(mmap.momentum(q, v))))
     joints = mmap.robot.joint_values(q)
     rates = np.array([v[j.idx_v] for j in mmap.robot.joints])
     return ReplayResult(

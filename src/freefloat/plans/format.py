@@ -131,7 +131,10 @@ class SolverReport:
     ``solutions`` lists every root found (the chosen one first) with its free parameters
     (``t^6`` and up, per joint), residual (rad) and summed joint travel (rad or m);
     ``freedom`` the free coefficients per joint the planner used; ``full_turns`` the whole turns
-    added to continuous joints' goals; ``tried`` every attempt in order.
+    added to continuous joints' goals; ``tried`` every attempt in order. Stage times (s, wall
+    clock; 0 when not measured, as in files written before they were recorded): ``solve_time_s``
+    the whole search, ``sample_time_s`` sampling the solution with its torques,
+    ``verify_time_s`` the independent checks.
     """
 
     method: str
@@ -146,6 +149,9 @@ class SolverReport:
     freedom: dict[str, int] = field(default_factory=dict)
     full_turns: dict[str, int] = field(default_factory=dict)
     tried: list[str] = field(default_factory=list)
+    solve_time_s: float = 0.0
+    sample_time_s: float = 0.0
+    verify_time_s: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -14,8 +14,6 @@ import weakref
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize
-from scipy.stats import qmc
 
 from ..physics.momentum import MomentumMap
 from ..physics.planar_map import PlanarMap
@@ -94,6 +92,8 @@ def planar_bounds(
         axes = [np.linspace(lo, hi, per_axis) for lo, hi in ranges]
         points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, n)
     else:
+        from scipy.stats import qmc  # slow to import: only for three joints and more
+
         unit = qmc.Sobol(n, scramble=True, seed=seed).random(samples)
         points = ranges[:, 0] + unit * (ranges[:, 1] - ranges[:, 0])
     n_axis = np.array([0.0, 0.0, 1.0]) if axis is None else np.asarray(axis, dtype=float)
@@ -113,9 +113,11 @@ def planar_bounds(
         for joint, (lo, hi) in zip(mmap.robot.joints, ranges, strict=True)
     ]
 
+    from scipy import optimize  # imported when first used
+
     def refine(i: int, sign: float) -> float:
         start = points[np.argmin(sign * gains[:, i])]
-        result = minimize(
+        result = optimize.minimize(
             lambda q: sign * gain(q)[i],
             start,
             method="L-BFGS-B",
@@ -158,6 +160,8 @@ class SpatialEstimate:
 def spatial_estimate(mmap: MomentumMap, samples: int = 2048, seed: int = 0) -> SpatialEstimate:
     """Sample ``F1`` over the joint ranges (a scrambled Sobol set) and keep its extremes."""
     ranges = joint_ranges(mmap)
+    from scipy.stats import qmc  # slow to import: only when sampling is asked for
+
     unit = qmc.Sobol(len(ranges), scramble=True, seed=seed).random(samples)
     points = ranges[:, 0] + unit * (ranges[:, 1] - ranges[:, 0])
     values = np.array([mmap.f1(p) for p in points])

@@ -10,7 +10,6 @@ reached one, in the goal frame).
 from __future__ import annotations
 
 import copy
-import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -307,9 +306,8 @@ class Problem:
         """
         s = np.asarray(s, dtype=float)
         sub = max(1, math.ceil(self.steps * float(np.max(np.diff(s))) - 1e-9))
-        edges = np.concatenate(
-            [np.linspace(a, b, sub + 1)[:-1] for a, b in itertools.pairwise(s)] + [s[-1:]]
-        )
+        fractions = np.arange(sub) / sub
+        edges = np.concatenate([(s[:-1, None] + np.diff(s)[:, None] * fractions).ravel(), s[-1:]])
         nodes, h = step_nodes(edges)
         path = self.family.evaluate(beta, nodes)
         omega = self.mmap.base_rates(path.q, path.qd).omega

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from ..problem.residual import Problem
 from .options import POLISH, SolveOptions
@@ -76,6 +75,8 @@ def levenberg_marquardt(
     problem: Problem, beta: np.ndarray, options: SolveOptions
 ) -> tuple[np.ndarray, int]:
     """Damped Gauss-Newton (MINPACK's LM): robust where dh/dbeta is nearly singular."""
+    from scipy.optimize import least_squares  # imported when first used
+
     result = least_squares(
         problem.residual,
         beta,

@@ -10,7 +10,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..problem.constraints import Constraint
 from ..problem.paths import basis_coefficients
@@ -81,6 +80,8 @@ def bracket_roots(
         f_lo, f_hi = scalar(lo), scalar(hi)
         if np.sign(f_lo) == np.sign(f_hi):  # the coarse scan saw a change the fine one does not
             continue
+        from scipy.optimize import brentq  # imported when first used
+
         root, info = brentq(
             scalar, lo, hi, xtol=1e-13, rtol=4 * np.finfo(float).eps, full_output=True
         )

@@ -5,7 +5,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from scipy.optimize import minimize
 
 from ..problem.constraints import Constraint
 from ..problem.residual import Problem
@@ -55,6 +54,8 @@ def minimum_norm_sqp(
                     "jac": lambda b, c=constraint: -c.rows(problem, b).jacobian,
                 }
             )
+    from scipy.optimize import minimize  # imported when first used
+
     result = minimize(
         lambda b: 0.5 * float(b @ b),
         beta,

@@ -1,0 +1,117 @@
+"""Step doubling for the integrating checks of :mod:`freefloat.verify.checks`.
+
+A check integrates on M and 2 M steps and takes the difference of the two results as the
+error estimate of the finer one; :func:`_decided` says when that estimate can be trusted and
+the verdict stands. :func:`_rk4_attitude` is the attitude check's integrator (classical RK4,
+batched, independent of the planner's Magnus scheme).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+__all__ = ["CONVERGED_FRACTION", "MAX_REPLAY_STEPS"]
+
+#: A numerical check refines (doubles its steps) until its verdict no longer depends on its own
+#: error, or until its error estimate is below this fraction of its tolerance.
+CONVERGED_FRACTION = 0.1
+
+#: Default cap on the replay's RK4 steps (see :func:`verify_plan`).
+MAX_REPLAY_STEPS = 8192
+
+#: Steps of the first, coarsest level of the step-doubling checks.
+_FIRST_REPLAY_STEPS = 16
+_FIRST_ATTITUDE_STEPS = 16
+_MAX_ATTITUDE_STEPS = 1 << 14
+#: Largest rotation (rad) of a joint or the base in one step before a check trusts its steps.
+_MAX_TURN = 0.25
+
+
+def _decided(value: float, estimate: float, previous: float, tolerance: float, turn: float) -> bool:
+    """Whether a step-doubling check's verdict stands whatever its numerical error.
+
+    ``estimate`` is the difference between the results on M and 2 M steps, ``previous`` the
+    one between M / 2 and M. It bounds the error of the finer result only once the scheme
+    converges at its order (RK4: the difference shrinks about 16-fold per doubling), so the
+    verdict is trusted only once the steps resolve the motion (``turn``, the largest rotation
+    in one step, rad, at most :data:`_MAX_TURN`) and the difference has shrunk at least 8-fold
+    (or is already below rounding); then the check is decided when the estimate is small
+    against the tolerance or the value is clear of the tolerance by more than the estimate
+    (and, to refuse, the estimate is also small against the value).
+    """
+    converging = estimate <= previous / 8.0 or estimate <= 1e-3 * CONVERGED_FRACTION * tolerance
+    if turn > _MAX_TURN or not converging:
+        return False
+    return (
+        estimate <= CONVERGED_FRACTION * tolerance
+        or value + estimate <= tolerance
+        or (value - estimate > tolerance and estimate <= CONVERGED_FRACTION * value)
+    )
+
+
+def _finite(x: float) -> float:
+    """``x``, or infinity for NaN (a blown-up coarse level differs from anything by inf)."""
+    return x if not math.isnan(x) else math.inf
+
+
+def _with_midpoints(ends: np.ndarray) -> np.ndarray:
+    """Ascending instants with the midpoint of every interval inserted (2 K - 1 values)."""
+    out = np.empty(2 * len(ends) - 1)
+    out[0::2], out[1::2] = ends, 0.5 * (ends[:-1] + ends[1:])
+    return out
+
+
+def _quaternion_rate_matrices(omega: np.ndarray) -> np.ndarray:
+    """(K, 4, 4) matrices ``A`` with ``A y = 0.5 y (x) [omega, 0]`` for ``[x, y, z, w]`` y."""
+    a = np.zeros((len(omega), 4, 4))
+    x, y, z = omega[:, 0], omega[:, 1], omega[:, 2]
+    # vector part: w omega - omega x v ; scalar part: -omega . v
+    a[:, 0, 1], a[:, 0, 2], a[:, 0, 3] = z, -y, x
+    a[:, 1, 0], a[:, 1, 2], a[:, 1, 3] = -z, x, y
+    a[:, 2, 0], a[:, 2, 1], a[:, 2, 3] = y, -x, z
+    a[:, 3, 0], a[:, 3, 1], a[:, 3, 2] = -x, -y, -z
+    return 0.5 * a
+
+
+def _rk4_attitude(start: np.ndarray, omega: np.ndarray, duration: float) -> np.ndarray:
+    """Final attitude of ``y' = 0.5 y (x) omega(t)`` by classical RK4 on a uniform grid.
+
+    The equation is linear in ``y`` and ``omega(t)`` is known beforehand, so every step is a
+    4 x 4 matrix (built in one batch) and their product is taken by pairwise reduction.
+
+    Args:
+        start: attitude ``[x, y, z, w]`` at t = 0.
+        omega: (2 M + 1, 3) base angular velocity (rad/s) at ``k duration / (2 M)``.
+        duration: time span (s).
+    """
+    steps = (len(omega) - 1) // 2
+    h = duration / steps
+    a = _quaternion_rate_matrices(omega)
+    a1, a2, a3 = a[0:-1:2], a[1::2], a[2::2]
+    eye = np.eye(4)
+    k2 = a2 @ (eye + 0.5 * h * a1)
+    k3 = a2 @ (eye + 0.5 * h * k2)
+    k4 = a3 @ (eye + h * k3)
+    phi = eye + h / 6.0 * (a1 + 2.0 * k2 + 2.0 * k3 + k4)
+    while len(phi) > 1:
+        if len(phi) % 2:
+            phi = np.concatenate([phi, eye[None]])
+        phi = phi[1::2] @ phi[0::2]
+    end = phi[0] @ start
+    return end / np.linalg.norm(end)
+
+
+def _refine(
+    table: np.ndarray | None, steps: int, duration: float, fill: Callable[[np.ndarray], np.ndarray]
+) -> np.ndarray:
+    """Values at ``k duration / (2 steps)``, k = 0..2 steps, reusing a table of half as many."""
+    t = np.linspace(0.0, duration, 2 * steps + 1)
+    if table is None:
+        return fill(t)
+    out = np.empty((len(t), table.shape[1]))
+    out[0::2] = table
+    out[1::2] = fill(t[1::2])
+    return out

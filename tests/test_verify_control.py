@@ -1,0 +1,166 @@
+"""Verification with error control (issue 12): no false refusals, honest estimates."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import freefloat as ff
+from freefloat.cli import main
+from freefloat.physics.attitude import quat_multiply
+from freefloat.physics.dynamics import inverse_dynamics_batch
+from freefloat.verify.checks import _path_at, _polys, _wrap_joints
+
+from urdfs import BASE, joint, link, robot
+
+
+def _yaw_scenario(worked: ff.Scenario, change_deg: float) -> ff.Scenario:
+    start_yaw = ff.zyx_from_quat(worked.start_attitude)[0]
+    goal = ff.quat_from_zyx(start_yaw + math.radians(change_deg))
+    return dataclasses.replace(worked, extra=None, goal_attitude=goal)
+
+
+def test_yaw_sweep_is_planned_inside_the_bounds_and_infeasible_outside(worked_scenario):
+    """-5..75 deg in 1 deg steps, automatic freedom: planned or infeasible, never unverified."""
+    lo = hi = None
+    outcome = {}
+    for change in range(-5, 76):
+        try:
+            p = ff.plan(_yaw_scenario(worked_scenario, change), samples=41)
+        except ff.InfeasibleError:
+            outcome[change] = "infeasible"
+            continue
+        assert p.verification.passed
+        lo, hi = p.feasibility.yaw_change_bounds_deg
+        outcome[change] = "planned"
+    assert lo == pytest.approx(1.358, abs=1e-3) and hi == pytest.approx(72.270, abs=1e-3)
+    for change, verdict in outcome.items():
+        assert verdict == ("planned" if lo < change < hi else "infeasible"), change
+    assert all(outcome[c] == "planned" for c in (3, 5, 7))
+
+
+def light_wrist_urdf() -> str:
+    """Three 5 kg links, then three 0.2 kg wrist links with 1e-7 kg m^2 inertia."""
+    body = BASE.format(mass=100.0, i=100.0 / 6.0)
+    axes = [(0, 0, 1), (0, 1, 0), (0, 1, 0), (1, 0, 0), (0, 1, 0), (1, 0, 0)]
+    parent = "base"
+    for i, axis in enumerate(axes, start=1):
+        heavy = i <= 3
+        origin = (0.5 if heavy else 0.1, 0.0, 0.05 if i == 1 else 0.0)
+        body += joint(f"j{i}", parent, f"l{i}", "revolute", axis, origin)
+        body += link(
+            f"l{i}",
+            mass=5.0 if heavy else 0.2,
+            inertia=(0.05, 0.1, 0.1) if heavy else (1e-7, 1e-7, 1e-7),
+            com=(0.25, 0.0, 0.0) if heavy else (0.03, 0.01, 0.01),
+        )
+        parent = f"l{i}"
+    body += joint("tip_joint", parent, "tip", "fixed", xyz=(0.05, 0, 0))
+    body += '\n  <link name="tip"/>'
+    return robot(body, "light_wrist")
+
+
+@pytest.fixture(scope="module")
+def light_wrist(tmp_path_factory) -> tuple[ff.Robot, ff.Plan]:
+    path = tmp_path_factory.mktemp("wrist") / "light_wrist.urdf"
+    path.write_text(light_wrist_urdf())
+    arm = ff.load_robot(path)
+    extra = {"j1": 2, "j2": 2, "j3": 2}
+    start = dict(zip(arm.joint_names, [0.2, -0.3, 0.5, 0.1, 0.4, -0.2], strict=True))
+    goal = dict(zip(arm.joint_names, [0.8, 0.2, -0.1, 1.2, -0.5, 0.9], strict=True))
+    scenario = ff.Scenario(robot=arm, duration=10.0, start_joints=start, goal_joints=goal)
+    probe = ff.build_problem(
+        arm,
+        scenario.start,
+        scenario.goal,
+        scenario.start_attitude,
+        scenario.start_attitude,
+        10.0,
+        extra=[extra.get(n, 0) for n in arm.joint_names],
+    )
+    # A three-axis goal the path family reaches: the attitude of one of its members.
+    scenario = dataclasses.replace(
+        scenario, extra=extra, goal_attitude=probe.achieved(np.full(probe.n_free, 0.5))
+    )
+    return arm, ff.plan(scenario, samples=41)
+
+
+def test_light_wrist_plan_refused_by_the_fixed_step_replay_now_passes(light_wrist):
+    arm, p = light_wrist
+    mmap = ff.MomentumMap(arm)
+    start, goal = np.array(p.request.start_joints), np.array(p.request.goal_joints)
+    t = np.linspace(0.0, p.duration, 1001)
+    table = inverse_dynamics_batch(mmap, *_path_at(_polys(p), t)).tau
+    coarse = ff.replay(mmap, start, np.array(p.base.start_quaternion_xyzw), table, p.duration, 500)
+    assert np.abs(coarse.joints - goal).max() > 1e-2  # what the old fixed 500 steps judged
+    v = p.verification
+    assert v.passed
+    joints = v["replay_joints"]
+    assert "not converged" not in joints.detail
+    assert joints.value < joints.tolerance and joints.error_estimate < joints.tolerance
+
+
+def test_corrupted_plan_is_refused(worked_plan, light_wrist):
+    for p, robot_ in ((worked_plan, None), (light_wrist[1], light_wrist[0])):
+        name = p.robot.joints[-1]
+        coefficients = {k: list(v) for k, v in p.coefficients.items()}
+        coefficients[name][-1] += 1e-6
+        bad = dataclasses.replace(p, coefficients=coefficients)
+        verdict = ff.verify_plan(bad, robot_)
+        assert not verdict.passed
+
+
+def _tight_attitude(p: ff.Plan, mmap: ff.MomentumMap) -> float:
+    coeffs = _polys(p)
+
+    def rhs(t: float, y: np.ndarray) -> np.ndarray:
+        q, qd, _ = _path_at(coeffs, np.array([t]))
+        omega = mmap.f1(q[0]) @ qd[0]
+        return 0.5 * quat_multiply(y, np.concatenate([omega, [0.0]]))
+
+    start = np.array(p.base.start_quaternion_xyzw)
+    sol = solve_ivp(rhs, (0.0, p.duration), start, method="DOP853", rtol=1e-13, atol=1e-14)
+    return ff.geodesic_angle(
+        sol.y[:, -1] / np.linalg.norm(sol.y[:, -1]), p.base.target_quaternion_xyzw
+    )
+
+
+@pytest.mark.parametrize("change", [2, 7, 40])
+def test_error_estimates_bound_the_difference_to_a_tighter_integration(worked_scenario, change):
+    p = ff.plan(_yaw_scenario(worked_scenario, change), samples=41)
+    arm = ff.load_robot(p.robot.urdf)
+    mmap = ff.MomentumMap(arm)
+    v = p.verification
+    att = v["attitude_independent"]
+    assert abs(att.value - _tight_attitude(p, mmap)) <= att.error_estimate + 1e-12
+    # The replay on 4 times the steps it settled on.
+    steps = 4 * int(v["replay_joints"].detail.split()[1])
+    t = np.linspace(0.0, p.duration, 2 * steps + 1)
+    table = inverse_dynamics_batch(mmap, *_path_at(_polys(p), t)).tau
+    tight = ff.replay(
+        mmap,
+        np.array(p.request.start_joints),
+        np.array(p.base.start_quaternion_xyzw),
+        table,
+        p.duration,
+        steps,
+        track_momentum=False,
+    )
+    goal = np.array(p.request.goal_joints)
+    joint_error = float(np.abs(_wrap_joints(arm, tight.joints - goal)).max())
+    att_error = ff.geodesic_angle(tight.quaternion_xyzw, p.base.target_quaternion_xyzw)
+    assert abs(v["replay_joints"].value - joint_error) <= v["replay_joints"].error_estimate
+    assert abs(v["replay_attitude"].value - att_error) <= v["replay_attitude"].error_estimate
+
+
+def test_verify_rejects_a_replay_cap_below_one(worked_plan, tmp_path, capsys):
+    path = worked_plan.save(tmp_path / "p.json")
+    assert main(["verify", str(path), "--replay-steps", "0"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "freefloat: error: --replay-steps must be at least 1, got 0"
+    with pytest.raises(ValueError, match="at least one step"):
+        ff.verify_plan(worked_plan, replay_steps=0)
