@@ -28,6 +28,7 @@ import quadprog
 from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
 from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.residual import Problem
+from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
 
 __all__ = ["ContinuationResult", "continuation", "track"]
@@ -324,6 +325,15 @@ def continuation(
     if result.reached:
         attempt.candidates.append(result.beta)  # the dispatcher recomputes its residual
         return attempt
+    if problem.n_free == problem.n_equations:
+        # A square system leaves the corrector no room to slide along a limit: the Newton-type
+        # searches of the multistart strategy (counted budget) get their turn.
+        fallback = multistart(problem, constraints, options)
+        attempt.tried += [f"continuation stopped at {result.fraction:.3g} of the way"]
+        attempt.tried += fallback.tried
+        if fallback.candidates:
+            fallback.tried = attempt.tried
+            return fallback
     attempt.stopped_by = result.stopped_by
     axis = ", ".join(f"{x:.3f}" for x in result.axis)
     attempt.message = (

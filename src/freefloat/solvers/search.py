@@ -167,7 +167,10 @@ def search(
                     f"{label}, freedom {_describe(used, names)}: best residual "
                     f"{exc.best_residual:.3g} rad" + (f" ({breaks[0]})" if breaks else "")
                 )
-                if exc.best_residual < best:
+                further = best_error is not None and exc.reached_fraction > max(
+                    best_error.reached_fraction, 0.0
+                )
+                if exc.best_residual < best or further:
                     best, best_axes, best_error = exc.best_residual, exc.per_axis, exc
                 first_error = first_error or exc
                 continue
