@@ -191,11 +191,12 @@ def _correct(
 
 
 def _dense_ok(problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray) -> bool:
-    for constraint in constraints:
-        if constraint.applies_to(problem.robot):
-            if constraint.violation(problem, beta).value > constraint.tolerance:
-                return False
-    return True
+    """Whether ``beta``'s path honours every constraint everywhere (exact dense check)."""
+    return all(
+        c.violation(problem, beta).value <= c.tolerance
+        for c in constraints
+        if c.applies_to(problem.robot)
+    )
 
 
 def _with_critical(
