@@ -303,7 +303,7 @@ def bench_reach(
                     case, ff.SolveOptions(strategy=ff.Strategy.MULTISTART)
                 )
             rows.append(row)
-            print(f"  done: {name} {label}", flush=True)
+            print(f"  done: {name} {label}: {row}", flush=True)
     return rows
 
 

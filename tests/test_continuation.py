@@ -109,8 +109,9 @@ def test_failure_reports_reach_and_a_goal_at_95_percent_of_it_plans(
 ) -> None:
     axis = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
     angle = math.radians(60.0)
+    budget = ff.SolveOptions(max_evaluations=400)
     with pytest.raises(ff.SolverError) as info:
-        ff.solve(_turned(panda_problem, angle * axis))
+        ff.solve(_turned(panda_problem, angle * axis), budget)
     err = info.value
     assert 0.0 < err.reached_fraction < 1.0
     assert err.stopped_by

@@ -142,7 +142,7 @@ def _cmd_bounds(args: argparse.Namespace) -> int:
     scenario = _load_scenario(args.scenario)
     problem = problem_from_scenario(scenario.resolved(), check_bounds=False)
     if problem.bounds is None or problem.yaw_change is None:
-        return _spatial_bounds(scenario, problem)
+        return _spatial_bounds(scenario, args)
     bounds = problem.bounds
     delta = problem.family.goal - problem.family.start
     print(f"freefloat bounds: {scenario.robot.name} (planar), simple point-to-point motion")
@@ -207,23 +207,37 @@ def _cmd_compose(args: argparse.Namespace) -> int:
     return 0
 
 
-def _spatial_bounds(scenario: Scenario, problem: Problem) -> int:
-    from .physics.momentum import MomentumMap
-    from .problem.bounds import spatial_estimate
+def _spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
+    from .solvers.reach import reach_set
 
-    estimate = spatial_estimate(MomentumMap(scenario.robot))
-    delta = problem.family.goal - problem.family.start
-    ranges = np.degrees(estimate.intervals(delta))
-    wanted = np.degrees(
-        quat_log(quat_multiply(quat_conjugate(problem.start_quaternion), problem.goal_quaternion))
+    extra = scenario.extra if scenario.extra is not None else [2] * scenario.robot.n
+    problem = problem_from_scenario(scenario.resolved(), extra=extra, check_bounds=False)
+    budget = SolveOptions(max_evaluations=args.budget)
+    estimate = reach_set(problem, max_angle=math.radians(args.max_angle), options=budget)
+    freedom = ", ".join(
+        f"{j.name}+{k}" for j, k in zip(scenario.robot.joints, estimate.freedom, strict=True) if k
     )
-    print(f"freefloat bounds: {scenario.robot.name} (spatial) -- ESTIMATE, not a bound")
-    print(f"  sampled extremes of F1 over {estimate.samples} configurations; per base axis, the")
-    print("  rotation a monotone motion of the stated joint change might produce [deg]:")
-    print(f"  {'axis':<6}{'from':>12}{'to':>12}{'requested':>12}")
-    for k, axis in enumerate("xyz"):
-        print(f"  {axis:<6}{ranges[k, 0]:>12.3f}{ranges[k, 1]:>12.3f}{wanted[k]:>12.3f}")
-    print("  (requested: rotation vector from the start to the goal attitude, base frame)")
+    print(f"freefloat bounds: {scenario.robot.name} (spatial) -- INNER ESTIMATE")
+    print("  from the attitude the quintic path reaches, continuation heads up to")
+    print(
+        f"  {args.max_angle:g} deg about each direction within the joint limits, with the freedom"
+    )
+    print(f"  {freedom}; every rotation up to 'reached' is planned by a solved path.")
+    print("  More freedom, or paths continuation does not find, may reach further.")
+    print(f"  {'axis (base frame)':<24}{'reached [deg]':>14}  stopped by")
+    for d in estimate.directions:
+        axis = " ".join(f"{x:+.2f}" for x in d.axis)
+        print(f"  {axis:<24}{math.degrees(d.reached):>14.2f}  {d.stopped_by or '-'}")
+    reached = problem.achieved(np.zeros(problem.n_free))
+    wanted = quat_log(quat_multiply(quat_conjugate(reached), problem.goal_quaternion))
+    angle = math.degrees(float(np.linalg.norm(wanted)))
+    axis = " ".join(f"{x:+.2f}" for x in wanted / max(float(np.linalg.norm(wanted)), 1e-300))
+    print(f"  requested: {angle:.2f} deg about {axis} from the quintic path's attitude")
+    if args.plot:
+        from .viz.reach_plot import save_reach_figure
+
+        written = save_reach_figure(estimate, args.plot, title=scenario.robot.name)
+        print(f"  figure: {written.resolve()}")
     return 0
 
 
@@ -267,10 +281,27 @@ def build_parser() -> argparse.ArgumentParser:
 
     p_bounds = commands.add_parser(
         "bounds",
-        help="print the reachable yaw-change interval (planar) or an estimate (spatial)",
+        help="print the reachable yaw-change interval (planar) or an inner estimate (spatial)",
         description="Planar bounds (docs/method.md section 6): per joint the extremes of dyaw/dq "
         "and the interval of yaw changes a simple motion can reach, in degrees. For a spatial "
-        "robot: an estimate per base axis from sampled extremes of F1, labelled as such.",
+        "robot: a constructive inner estimate; from the quintic path's attitude, continuation "
+        "goes as far as it can about six axis directions and eight diagonals within the joint "
+        "limits, with the scenario's freedom (default two free coefficients per joint).",
+    )
+    p_bounds.add_argument(
+        "--plot", metavar="FILE", help="spatial: also draw the estimate (PNG, SVG or PDF)"
+    )
+    p_bounds.add_argument(
+        "--max-angle",
+        type=float,
+        default=30.0,
+        help="spatial: the rotation to head for in each direction, deg (default 30)",
+    )
+    p_bounds.add_argument(
+        "--budget",
+        type=int,
+        default=300,
+        help="spatial: residual evaluations per direction (default 300)",
     )
     p_bounds.add_argument(
         "scenario", nargs="?", help="scenario TOML file (default: worked example)"

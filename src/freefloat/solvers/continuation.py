@@ -35,8 +35,8 @@ __all__ = ["ContinuationResult", "continuation", "track"]
 
 #: First step as an angle of the target's travel (rad).
 FIRST_STEP = math.radians(3.0)
-#: Smallest step, as a fraction of the way to the goal.
-MIN_STEP = 1e-3
+#: Smallest step, as an angle of the target's travel (rad; about 0.01 deg).
+MIN_STEP = 1.7e-4
 #: Largest number of continuation steps (accepted or not).
 MAX_STEPS = 400
 #: Residual (rad) an intermediate corrector must reach.
@@ -301,7 +301,7 @@ def track(
             iterations += more
         if solved is None:
             dl = 0.5 * step
-            if dl < MIN_STEP:
+            if dl * angle < MIN_STEP:
                 stopped_by = _why(problem, constraints, beta, tangent, jac)
                 break
             continue
