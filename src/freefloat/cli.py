@@ -22,7 +22,6 @@ from .physics.attitude import quat_conjugate, quat_log, quat_multiply
 from .pipeline import plan
 from .plans.format import Plan
 from .problem.build import planar_yaw_branch, problem_from_scenario
-from .problem.residual import Problem
 from .problem.scenario import Scenario, default_scenario_path
 from .solvers.options import DEFAULT_TOLERANCE, SolveOptions
 from .verify.checks import verify_plan
