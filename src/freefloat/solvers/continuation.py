@@ -39,8 +39,9 @@ FIRST_STEP = math.radians(3.0)
 MIN_STEP = 1.7e-4
 #: Largest number of continuation steps (accepted or not).
 MAX_STEPS = 400
-#: Residual (rad) an intermediate corrector must reach.
-INTERMEDIATE_TOLERANCE = 1e-7
+#: Residual (rad) an intermediate corrector must reach (about 0.006 deg: the next step corrects
+#: it anyway; only the goal itself is solved to the tolerance).
+INTERMEDIATE_TOLERANCE = 1e-4
 #: Newton iterations per corrector.
 CORRECTOR_ITERATIONS = 8
 #: Constraints are imposed at the instants this far inside (their unit: rad, rad/s, m...),
