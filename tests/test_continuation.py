@@ -78,8 +78,8 @@ def test_ten_degrees_about_each_axis_within_the_limits_along_the_dense_path(
 
 
 def test_a_limit_met_on_the_way_is_kept_along_the_dense_path(panda_problem: ff.Problem) -> None:
-    """3 deg about x drives panda_joint6 onto its limit: the path must touch, never cross."""
-    problem = _turned(panda_problem, [math.radians(3.0), 0.0, 0.0])
+    """3 deg about y drives panda_joint4 onto its limit: the path must touch, never cross."""
+    problem = _turned(panda_problem, [0.0, math.radians(3.0), 0.0])
     solution = ff.solve(problem)
     limits = default_constraints()[0]
     excess = limits.excess(problem.robot, problem.polynomials(solution.beta))

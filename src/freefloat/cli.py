@@ -14,11 +14,8 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-import numpy as np
-
 from . import __version__
 from .errors import FreeFloatError, InputError
-from .physics.attitude import quat_conjugate, quat_log, quat_multiply
 from .pipeline import plan
 from .plans.format import Plan
 from .problem.build import planar_yaw_branch, problem_from_scenario
@@ -207,31 +204,15 @@ def _cmd_compose(args: argparse.Namespace) -> int:
 
 
 def _spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
-    from .solvers.reach import reach_set
+    from .solvers.reach import describe, reach_set
 
     extra = scenario.extra if scenario.extra is not None else [2] * scenario.robot.n
     problem = problem_from_scenario(scenario.resolved(), extra=extra, check_bounds=False)
-    budget = SolveOptions(max_evaluations=args.budget)
-    estimate = reach_set(problem, max_angle=math.radians(args.max_angle), options=budget)
-    freedom = ", ".join(
-        f"{j.name}+{k}" for j, k in zip(scenario.robot.joints, estimate.freedom, strict=True) if k
-    )
+    angle = math.radians(args.max_angle)
+    estimate = reach_set(problem, None, angle, None, SolveOptions(max_evaluations=args.budget))
     print(f"freefloat bounds: {scenario.robot.name} (spatial) -- INNER ESTIMATE")
-    print("  from the attitude the quintic path reaches, continuation heads up to")
-    print(
-        f"  {args.max_angle:g} deg about each direction within the joint limits, with the freedom"
-    )
-    print(f"  {freedom}; every rotation up to 'reached' is planned by a solved path.")
-    print("  More freedom, or paths continuation does not find, may reach further.")
-    print(f"  {'axis (base frame)':<24}{'reached [deg]':>14}  stopped by")
-    for d in estimate.directions:
-        axis = " ".join(f"{x:+.2f}" for x in d.axis)
-        print(f"  {axis:<24}{math.degrees(d.reached):>14.2f}  {d.stopped_by or '-'}")
-    reached = problem.achieved(np.zeros(problem.n_free))
-    wanted = quat_log(quat_multiply(quat_conjugate(reached), problem.goal_quaternion))
-    angle = math.degrees(float(np.linalg.norm(wanted)))
-    axis = " ".join(f"{x:+.2f}" for x in wanted / max(float(np.linalg.norm(wanted)), 1e-300))
-    print(f"  requested: {angle:.2f} deg about {axis} from the quintic path's attitude")
+    for line in describe(estimate, scenario.robot.joint_names, angle, problem.goal_quaternion):
+        print(f"  {line}")
     if args.plot:
         from .viz.reach_plot import save_reach_figure
 

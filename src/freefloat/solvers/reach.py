@@ -16,13 +16,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.attitude import quat_exp, quat_multiply
+from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
 from .continuation import track
 from .options import SolveOptions
 
-__all__ = ["DirectionReach", "ReachEstimate", "default_directions", "reach_set"]
+__all__ = ["DirectionReach", "ReachEstimate", "default_directions", "describe", "reach_set"]
 
 
 @dataclass(frozen=True)
@@ -107,3 +107,36 @@ def reach_set(
         )
     freedom = tuple(d - 5 for d in problem.family.degrees)
     return ReachEstimate(quintic, tuple(out), freedom)
+
+
+def describe(
+    estimate: ReachEstimate,
+    joint_names: Sequence[str],
+    max_angle: float,
+    goal: np.ndarray | None = None,
+) -> list[str]:
+    """The estimate as lines for people (degrees), saying plainly that it is an inner one.
+
+    With ``goal`` (``[x, y, z, w]``), a last line gives the rotation it asks for from the
+    quintic path's attitude.
+    """
+    freedom = ", ".join(f"{n}+{k}" for n, k in zip(joint_names, estimate.freedom, strict=True) if k)
+    lines = [
+        "from the attitude the quintic path reaches, continuation heads up to",
+        f"{math.degrees(max_angle):g} deg about each direction within the joint limits, with the "
+        "freedom",
+        f"{freedom}; every rotation up to 'reached' is planned by a solved path.",
+        "More freedom, or paths continuation does not find, may reach further.",
+        f"{'axis (base frame)':<24}{'reached [deg]':>14}  stopped by",
+    ]
+    for d in estimate.directions:
+        axis = " ".join(f"{x:+.2f}" for x in d.axis)
+        lines.append(f"{axis:<24}{math.degrees(d.reached):>14.2f}  {d.stopped_by or '-'}")
+    if goal is not None:
+        wanted = quat_log(quat_multiply(quat_conjugate(estimate.quintic_quaternion), goal))
+        angle = float(np.linalg.norm(wanted))
+        axis = " ".join(f"{x:+.2f}" for x in wanted / max(angle, 1e-300))
+        lines.append(
+            f"requested: {math.degrees(angle):.2f} deg about {axis} from the quintic attitude"
+        )
+    return lines
