@@ -19,12 +19,21 @@ it open) with its stage times (solve, sample, verify, from the plan's solver rep
 the baseline's solve of the same motion, and the cost of one momentum-map evaluation for serial
 chains of 2 to 12 joints.
 
-Run: python scripts/bench.py [--runs N] [--json FILE]
+Reach table (issue 11): for each shipped servicer, goals at the attitude the plain quintic path
+reaches turned by 1, 3 and 10 deg about each base axis, and seeded random directions (1-10
+deg); each planned by the multistart search (the old default) and by continuation (the new
+one), side by side: solved and verified, time of the search over every freedom distribution
+tried (s, one run), residual evaluations of the distribution that solved (or the last
+tried). Budgets are counts, so the solved column is the same on any machine; only the times
+change.
+
+Run: python scripts/bench.py [--runs N] [--json FILE] [--reach-only] [--random N]
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import platform
@@ -275,6 +284,100 @@ def bench_scaling(tmp: Path) -> list[dict[str, float]]:
     return rows
 
 
+def reach_goals(scenario: ff.Scenario, random_directions: int) -> list[tuple[str, np.ndarray]]:
+    """(label, goal quaternion): the quintic attitude turned about axes and random directions."""
+    problem = problem_of(Case("", scenario, [1, 1, 1] + [0] * (scenario.robot.n - 3)))
+    quintic = problem.achieved(np.zeros(problem.n_free))
+    goals = []
+    for degrees in (1.0, 3.0, 10.0):
+        for k, axis in enumerate("xyz"):
+            rotvec = np.zeros(3)
+            rotvec[k] = np.radians(degrees)
+            goals.append(
+                (f"{degrees:g} deg {axis}", att.quat_multiply(quintic, att.quat_exp(rotvec)))
+            )
+    rng = np.random.default_rng(11)
+    for i in range(random_directions):
+        axis = rng.normal(size=3)
+        axis /= np.linalg.norm(axis)
+        degrees = float(rng.uniform(1.0, 10.0))
+        rotvec = np.radians(degrees) * axis
+        goals.append(
+            (f"random {i + 1}: {degrees:.1f} deg", att.quat_multiply(quintic, att.quat_exp(rotvec)))
+        )
+    return goals
+
+
+def plan_once(scenario: ff.Scenario, options: ff.SolveOptions) -> dict[str, object]:
+    """Search, then sample and verify; the search's time and evaluations."""
+    from freefloat.solvers.search import search
+
+    start = time.perf_counter()
+    try:
+        found = search(scenario, options)
+    except ff.FreeFloatError as exc:
+        return {"solved": False, "time_s": time.perf_counter() - start, "note": str(exc)[:120]}
+    elapsed = time.perf_counter() - start
+    evaluations = found.problem.evaluations
+    try:
+        plan = ff.plan_from_solution(found.problem, found.solution)
+        verified = plan.verification.passed
+    except ff.FreeFloatError:
+        verified = False
+    return {"solved": verified, "time_s": elapsed, "evaluations": evaluations, "note": ""}
+
+
+def bench_reach(
+    random_directions: int, multistart: bool, random_multistart: bool = False
+) -> list[dict[str, object]]:
+    rows = []
+    for name in ("panda_servicer", "ur5_servicer"):
+        scenario = ff.Scenario.from_toml(ROBOTS / f"{name}.toml")
+        for label, goal in reach_goals(scenario, random_directions):
+            case = dataclasses.replace(scenario, goal_attitude=goal)
+            row: dict[str, object] = {"robot": name, "goal": label}
+            row["continuation"] = plan_once(case, ff.SolveOptions())
+            if multistart and (random_multistart or not label.startswith("random")):
+                row["multistart"] = plan_once(
+                    case, ff.SolveOptions(strategy=ff.Strategy.MULTISTART)
+                )
+            rows.append(row)
+            print(f"  done: {name} {label}: {row}", flush=True)
+    return rows
+
+
+def print_reach(rows: list[dict[str, object]]) -> None:
+    def cell(result: object) -> str:
+        if not isinstance(result, dict):
+            return "- | - | -"
+        solved = "yes" if result["solved"] else "no"
+        evaluations = result.get("evaluations", "-")
+        return f"{solved} | {result['time_s']:.2f} | {evaluations}"
+
+    print()
+    print(
+        "| robot | goal (from the quintic attitude) | multistart solved | time [s] | evals* "
+        "| continuation solved | time [s] | evals* |"
+    )
+    print("|---|---|---|---:|---:|---|---:|---:|")
+    for r in rows:
+        print(
+            f"| {r['robot']} | {r['goal']} | {cell(r.get('multistart'))} "
+            f"| {cell(r['continuation'])} |"
+        )
+    print("* residual evaluations of the freedom distribution that solved (or the last tried)")
+    for key in ("multistart", "continuation"):
+        results = [r[key] for r in rows if isinstance(r.get(key), dict)]
+        if not results:
+            continue
+        times = [float(x["time_s"]) for x in results]  # type: ignore[index]
+        solved = sum(1 for x in results if x["solved"])  # type: ignore[index]
+        print(
+            f"{key}: {solved}/{len(results)} planned and verified; time median "
+            f"{statistics.median(times):.2f} s, slowest {max(times):.2f} s"
+        )
+
+
 def machine() -> str:
     cpu = "unknown CPU"
     try:
@@ -295,8 +398,31 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=9, help="freefloat runs per problem")
     parser.add_argument("--baseline-runs", type=int, default=3, help="baseline runs per problem")
     parser.add_argument("--json", type=Path, help="also write the tables as JSON")
+    parser.add_argument("--reach-only", action="store_true", help="only the reach table")
+    parser.add_argument("--no-reach", action="store_true", help="skip the reach table")
+    parser.add_argument(
+        "--random", type=int, default=20, help="seeded random directions per servicer (reach)"
+    )
+    parser.add_argument(
+        "--no-multistart", action="store_true", help="reach table: continuation only"
+    )
+    parser.add_argument(
+        "--random-multistart",
+        action="store_true",
+        help="reach table: also the multistart search on the random directions (slow)",
+    )
     args = parser.parse_args()
     print(f"machine: {machine()}")
+    reach = (
+        []
+        if args.no_reach
+        else bench_reach(args.random, not args.no_multistart, args.random_multistart)
+    )
+    if args.reach_only:
+        print_reach(reach)
+        if args.json:
+            args.json.write_text(json.dumps({"machine": machine(), "reach": reach}, indent=1))
+        return
     rows = bench_cases(args.runs, args.baseline_runs)
     whole = bench_whole(args.runs, {str(r["problem"]): float(r["baseline_ms"]) for r in rows})  # type: ignore[arg-type]
     import tempfile
@@ -335,6 +461,8 @@ def main() -> None:
     print("|---:|---:|---:|")
     for r in scaling:
         print(f"| {r['joints']} | {r['map_us']:.2f} | {r['map_and_derivative_us']:.2f} |")
+    if reach:
+        print_reach(reach)
     if args.json:
         args.json.write_text(
             json.dumps(
@@ -343,6 +471,7 @@ def main() -> None:
                     "problems": rows,
                     "whole_plan": whole,
                     "map_scaling": scaling,
+                    "reach": reach,
                 },
                 indent=1,
             )

@@ -110,12 +110,17 @@ def test_goal_at_pitch_90_degrees(tmp_path):
     assert ff.geodesic_angle(np.array(plan.base.achieved_quaternion_xyzw), target) < 1e-9
 
 
-def test_spatial_bounds_estimate(capsys):
-    code = main(["bounds", str(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")])
+def test_spatial_bounds_inner_estimate(tmp_path, capsys):
+    figure = tmp_path / "reach.png"
+    scenario = ROOT / "robots" / "scenarios" / "ur5_servicer.toml"
+    code = main(
+        ["bounds", str(scenario), "--max-angle", "5", "--budget", "60", "--plot", str(figure)]
+    )
     out = capsys.readouterr().out
     assert code == 0
-    assert "ESTIMATE, not a bound" in out
-    rows = [line.split() for line in out.splitlines() if line.strip()[:2] in ("x ", "y ", "z ")]
-    assert [r[0] for r in rows] == ["x", "y", "z"]
-    for _, lo, hi, requested in rows:
-        assert float(lo) <= float(requested) <= float(hi)
+    assert "INNER ESTIMATE" in out and "may reach further" in out
+    rows = [line.split() for line in out.splitlines() if line.strip()[:1] in ("+", "-")]
+    assert len(rows) == 14  # six axis directions and eight diagonals
+    for row in rows:
+        assert 0.0 <= float(row[3]) <= 5.0 + 1e-9
+    assert figure.stat().st_size > 0

@@ -105,6 +105,10 @@ def test_spatial_failure_reports_the_residual_per_axis_and_what_was_tried():
     assert err.per_axis is not None and len(err.per_axis) == 3
     message = str(err)
     assert "per axis x, y, z:" in message
-    assert "freedom panda_joint1+1, panda_joint2+1, panda_joint3+1: best residual" in message
-    assert "freedom panda_joint1+2, panda_joint2+2, panda_joint3+2" in message
+    every = ", ".join(f"panda_joint{i}+2" for i in range(1, 8))
+    assert f"freedom {every}: best residual" in message
+    assert "freedom " + every.replace("+2", "+3") in message
     assert "\n" not in message
+    # Continuation says how far it got along the way and why it stopped.
+    assert 0.0 < err.reached_fraction < 1.0 and err.stopped_by
+    assert message.startswith("reachable up to ")

@@ -131,7 +131,7 @@ def _spatial_problem(robot, extra):
     return ff.build_problem(robot, *args, goal, 8.0, extra=extra)
 
 
-@pytest.mark.parametrize("extra,method", [([1, 1, 1], "Broyden"), ([2, 1, 1], "SQP")])
+@pytest.mark.parametrize("extra,method", [([1, 1, 1], "Broyden"), ([2, 1, 1], "continuation")])
 def test_spatial_three_axis_goal(spatial_robot, extra, method):
     problem = _spatial_problem(spatial_robot, extra)
     assert problem.n_equations == 3

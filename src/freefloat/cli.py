@@ -14,15 +14,11 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-import numpy as np
-
 from . import __version__
 from .errors import FreeFloatError, InputError
-from .physics.attitude import quat_conjugate, quat_log, quat_multiply
 from .pipeline import plan
 from .plans.format import Plan
 from .problem.build import planar_yaw_branch, problem_from_scenario
-from .problem.residual import Problem
 from .problem.scenario import Scenario, default_scenario_path
 from .solvers.options import DEFAULT_TOLERANCE, SolveOptions
 from .verify.checks import MAX_REPLAY_STEPS, verify_plan
@@ -147,7 +143,7 @@ def _cmd_bounds(args: argparse.Namespace) -> int:
     scenario = _load_scenario(args.scenario)
     problem = problem_from_scenario(scenario.resolved(), check_bounds=False)
     if problem.bounds is None or problem.yaw_change is None:
-        return _spatial_bounds(scenario, problem)
+        return _spatial_bounds(scenario, args)
     bounds = problem.bounds
     delta = problem.family.goal - problem.family.start
     print(f"freefloat bounds: {scenario.robot.name} (planar), simple point-to-point motion")
@@ -214,23 +210,21 @@ def _cmd_compose(args: argparse.Namespace) -> int:
     return 0
 
 
-def _spatial_bounds(scenario: Scenario, problem: Problem) -> int:
-    from .physics.momentum import MomentumMap
-    from .problem.bounds import spatial_estimate
+def _spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
+    from .solvers.reach import describe, reach_set
 
-    estimate = spatial_estimate(MomentumMap(scenario.robot))
-    delta = problem.family.goal - problem.family.start
-    ranges = np.degrees(estimate.intervals(delta))
-    wanted = np.degrees(
-        quat_log(quat_multiply(quat_conjugate(problem.start_quaternion), problem.goal_quaternion))
-    )
-    print(f"freefloat bounds: {scenario.robot.name} (spatial) -- ESTIMATE, not a bound")
-    print(f"  sampled extremes of F1 over {estimate.samples} configurations; per base axis, the")
-    print("  rotation a monotone motion of the stated joint change might produce [deg]:")
-    print(f"  {'axis':<6}{'from':>12}{'to':>12}{'requested':>12}")
-    for k, axis in enumerate("xyz"):
-        print(f"  {axis:<6}{ranges[k, 0]:>12.3f}{ranges[k, 1]:>12.3f}{wanted[k]:>12.3f}")
-    print("  (requested: rotation vector from the start to the goal attitude, base frame)")
+    extra = scenario.extra if scenario.extra is not None else [2] * scenario.robot.n
+    problem = problem_from_scenario(scenario.resolved(), extra=extra, check_bounds=False)
+    angle = math.radians(args.max_angle)
+    estimate = reach_set(problem, None, angle, None, SolveOptions(max_evaluations=args.budget))
+    print(f"freefloat bounds: {scenario.robot.name} (spatial) -- INNER ESTIMATE")
+    for line in describe(estimate, scenario.robot.joint_names, angle, problem.goal_quaternion):
+        print(f"  {line}")
+    if args.plot:
+        from .viz.reach_plot import save_reach_figure
+
+        written = save_reach_figure(estimate, args.plot, title=scenario.robot.name)
+        print(f"  figure: {written.resolve()}")
     return 0
 
 
@@ -274,10 +268,27 @@ def build_parser() -> argparse.ArgumentParser:
 
     p_bounds = commands.add_parser(
         "bounds",
-        help="print the reachable yaw-change interval (planar) or an estimate (spatial)",
+        help="print the reachable yaw-change interval (planar) or an inner estimate (spatial)",
         description="Planar bounds (docs/method.md section 6): per joint the extremes of dyaw/dq "
         "and the interval of yaw changes a simple motion can reach, in degrees. For a spatial "
-        "robot: an estimate per base axis from sampled extremes of F1, labelled as such.",
+        "robot: a constructive inner estimate; from the quintic path's attitude, continuation "
+        "goes as far as it can about six axis directions and eight diagonals within the joint "
+        "limits, with the scenario's freedom (default two free coefficients per joint).",
+    )
+    p_bounds.add_argument(
+        "--plot", metavar="FILE", help="spatial: also draw the estimate (PNG, SVG or PDF)"
+    )
+    p_bounds.add_argument(
+        "--max-angle",
+        type=float,
+        default=30.0,
+        help="spatial: the rotation to head for in each direction, deg (default 30)",
+    )
+    p_bounds.add_argument(
+        "--budget",
+        type=int,
+        default=300,
+        help="spatial: residual evaluations per direction (default 300)",
     )
     p_bounds.add_argument(
         "scenario", nargs="?", help="scenario TOML file (default: worked example)"

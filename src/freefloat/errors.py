@@ -104,6 +104,7 @@ class SolverError(FreeFloatError):
         stopped_by: str = "",
         reached_fraction: float = 0.0,
     ) -> None:
+        self.headline = message
         self.stopped_by = stopped_by
         self.reached_fraction = float(reached_fraction)
         self.best_residual = float(best_residual)

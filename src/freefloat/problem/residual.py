@@ -115,6 +115,20 @@ class Problem:
         other._use_steps(int(steps))
         return other
 
+    def with_goal(self, goal_quaternion: np.ndarray) -> Problem:
+        """The same problem with another goal attitude ``[x, y, z, w]`` (a copy).
+
+        Spatial problems only (a planar goal is a yaw change). The copy shares the integration
+        grids and the evaluation counter; this problem is unchanged.
+        """
+        if self.planar:
+            raise ValueError("with_goal is for spatial problems; a planar goal is a yaw change")
+        goal = np.asarray(goal_quaternion, dtype=float)
+        other = copy.copy(self)
+        other.goal_quaternion = goal / np.linalg.norm(goal)
+        other._memo = {}
+        return other
+
     @property
     def n_equations(self) -> int:
         """Number of attitude equations: 1 (planar yaw) or 3."""

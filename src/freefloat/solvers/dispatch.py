@@ -21,6 +21,7 @@ import numpy as np
 from ..errors import SolverError
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
+from .continuation import continuation
 from .multistart import multistart
 from .newton import polish
 from .options import Attempt, Root, Solution, SolveOptions, Strategy
@@ -35,6 +36,7 @@ StrategyFunction = Callable[[Problem, Sequence[Constraint], SolveOptions, np.nda
 STRATEGIES: dict[Strategy, StrategyFunction] = {
     Strategy.SCAN: scan,
     Strategy.MULTISTART: multistart,
+    Strategy.CONTINUATION: continuation,
 }
 
 
@@ -122,7 +124,7 @@ def solve(
     roots.sort(key=lambda r: float(r.beta @ r.beta))
     if not roots:
         raise SolverError(
-            "no path within the constraints reaches the goal attitude",
+            attempt.message or "no path within the constraints reaches the goal attitude",
             float(np.linalg.norm(best_vector)),
             _dedupe(tried),
             per_axis=best_vector.tolist(),

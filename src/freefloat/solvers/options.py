@@ -129,6 +129,7 @@ class Attempt:
         tried: what was attempted, in order.
         stopped_by: why the strategy stopped short, when it did (for error messages).
         reached_fraction: for continuation, how far along the way to the goal it got (0-1).
+        message: a one-line account of a failure for the error message ("" for the default).
     """
 
     candidates: list[np.ndarray] = field(default_factory=list)
@@ -138,3 +139,4 @@ class Attempt:
     tried: list[str] = field(default_factory=list)
     stopped_by: str = ""
     reached_fraction: float = 0.0
+    message: str = ""

@@ -28,7 +28,7 @@ from ..problem.constraints import Constraint
 from ..problem.residual import Problem
 from ..problem.scenario import Scenario
 from .dispatch import solve
-from .options import Solution, SolveOptions
+from .options import Solution, SolveOptions, Strategy
 
 __all__ = ["SearchResult", "freedom_candidates", "search", "turn_candidates"]
 
@@ -52,12 +52,16 @@ class SearchResult:
     tried: list[str] = field(default_factory=list)
 
 
-def freedom_candidates(n_joints: int, equations: int) -> list[list[int]]:
+def freedom_candidates(
+    n_joints: int, equations: int, continuation: bool = False
+) -> list[list[int]]:
     """Free-coefficient distributions to try, nearest-to-base joints first.
 
     Planar (one equation): one coefficient on each joint in turn, then one on the first two,
-    then two on the first and one on the second. Spatial (three): one on each of the first
-    three joints (square), then one on every joint, then two on each of the first three.
+    then two on the first and one on the second. Spatial (three) with the multistart search:
+    one on each of the first three joints (square), then one on every joint, then two on each
+    of the first three. Spatial with continuation: two on every joint, then three on every
+    joint (more freedom when the branch meets a limit or a singular map).
     """
     out: list[list[int]] = []
 
@@ -73,6 +77,9 @@ def freedom_candidates(n_joints: int, equations: int) -> list[list[int]]:
             add([0] * i + [1])
         add([1, 1])
         add([2, 1])
+    elif continuation:
+        add([2] * n_joints)
+        add([3] * n_joints)
     else:
         add([1, 1, 1])
         add([1] * n_joints)
@@ -132,7 +139,13 @@ def search(
         if scenario.extra is not None:
             distributions: list[list[int] | None] = [None]
         else:
-            distributions = list(freedom_candidates(robot.n, 1 if planar else 3))
+            spatial_continuation = not planar and options.strategy in (
+                None,
+                Strategy.CONTINUATION,
+            )
+            distributions = list(
+                freedom_candidates(robot.n, 1 if planar else 3, spatial_continuation)
+            )
         for counts in distributions:
             extra = scenario.extra if counts is None else counts
             try:
@@ -149,12 +162,15 @@ def search(
             try:
                 solution = solve(problem, options, constraints)
             except SolverError as exc:
-                breaks = [item for item in exc.tried if item.startswith("a root breaks")]
+                breaks = [item for item in exc.tried if " breaks " in item]
                 tried.append(
                     f"{label}, freedom {_describe(used, names)}: best residual "
                     f"{exc.best_residual:.3g} rad" + (f" ({breaks[0]})" if breaks else "")
                 )
-                if exc.best_residual < best:
+                further = best_error is not None and exc.reached_fraction > max(
+                    best_error.reached_fraction, 0.0
+                )
+                if exc.best_residual < best or further:
                     best, best_axes, best_error = exc.best_residual, exc.per_axis, exc
                 first_error = first_error or exc
                 continue
@@ -182,8 +198,11 @@ def search(
         raise InfeasibleError(first_error.requested_deg, first_error.bounds_deg, message=message)
     if isinstance(first_error, InputError) and best == math.inf:
         raise first_error
+    headline = "no path reaches the goal attitude"
+    if best_error is not None and best_error.stopped_by:
+        headline = best_error.headline
     raise SolverError(
-        "no path reaches the goal attitude",
+        headline,
         best if math.isfinite(best) else math.nan,
         tried,
         per_axis=best_axes,

@@ -83,6 +83,14 @@ class Constraint(abc.ABC):
     def excess(self, robot: Robot, path: JointPolynomials) -> Excess:
         """Dense, independent measure of the largest excess along a finished path."""
 
+    def critical_times(self, robot: Robot, path: JointPolynomials) -> np.ndarray:
+        """Times (s) where the constraint is tightest along a finished path.
+
+        Solvers that impose the constraint at instants add these, so that a path inside at the
+        instants is inside everywhere. Default: none.
+        """
+        return np.zeros(0)
+
     def violation(self, problem: Problem, beta: np.ndarray) -> Excess:
         """:meth:`excess` of the problem's path at ``beta`` (for solvers filtering roots)."""
         return self.excess(problem.robot, problem.polynomials(beta))

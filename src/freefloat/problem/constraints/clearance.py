@@ -83,6 +83,12 @@ class Clearance(Constraint):
         self._memo = (problem, key, rows)  # solvers ask for values, then Jacobian, at one beta
         return rows
 
+    def critical_times(self, robot: Robot, path: JointPolynomials) -> np.ndarray:
+        """The times (s) of the smallest clearance along ``path``, refined between samples."""
+        if self.model.n_pairs == 0:
+            return np.zeros(0)
+        return np.array([self.smallest(path, 201)[1]])
+
     def smallest(self, path: JointPolynomials, samples: int) -> tuple[float, float, int]:
         """Smallest clearance along ``path`` (m), its time (s) and pair, from ``samples``.
 
@@ -135,8 +141,18 @@ class Clearance(Constraint):
         return Excess(self.margin - clearance, estimate, detail)
 
     def violation(self, problem: Problem, beta: np.ndarray) -> Excess:
-        """The dense excess of the problem's path at ``beta`` (solvers filtering roots)."""
-        return self.excess(problem.robot, problem.polynomials(beta))
+        """The excess of the problem's path at ``beta`` for solvers (201 samples, refined).
+
+        Verification uses :meth:`excess` (twice as dense, with its error estimate).
+        """
+        if self.model.n_pairs == 0:
+            return Excess(-math.inf, 0.0, "no pairs to check")
+        clearance, when, pair = self.smallest(problem.polynomials(beta), 201)
+        detail = (
+            f"min clearance {clearance:.6g} m ({self.model.names[pair]}) at t = {when:.4g} s, "
+            f"margin {self.margin:g} m"
+        )
+        return Excess(self.margin - clearance, 0.0, detail)
 
 
 def clearance_at(model: CollisionModel, joints: Sequence[float] | np.ndarray) -> tuple[float, str]:

@@ -49,6 +49,15 @@ class JointPositionLimits(Constraint):
             return ConstraintRows(np.zeros(0), np.zeros((0, problem.n_free)))
         return ConstraintRows(np.concatenate(values), np.concatenate(rows))
 
+    def critical_times(self, robot: Robot, path: JointPolynomials) -> np.ndarray:
+        """Times (s) of each limited joint's extremes along the path."""
+        times = []
+        for i, joint in enumerate(robot.joints):
+            if math.isfinite(joint.lower) or math.isfinite(joint.upper):
+                (_, t_lo), (_, t_hi) = path.extremes(i, 0)
+                times += [t_lo, t_hi]
+        return np.array(times)
+
     def excess(self, robot: Robot, path: JointPolynomials) -> Excess:
         """Exact largest excursion beyond a limit (rad or m), from the polynomials' extremes."""
         worst, detail = -math.inf, ""

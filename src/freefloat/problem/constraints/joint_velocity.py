@@ -47,6 +47,15 @@ class JointVelocityLimits(Constraint):
             return ConstraintRows(np.zeros(0), np.zeros((0, problem.n_free)))
         return ConstraintRows(np.concatenate(values), np.concatenate(rows))
 
+    def critical_times(self, robot: Robot, path: JointPolynomials) -> np.ndarray:
+        """Times (s) of each limited joint's extremes along the path."""
+        times = []
+        for i, joint in enumerate(robot.joints):
+            if math.isfinite(joint.velocity_limit):
+                (_, t_lo), (_, t_hi) = path.extremes(i, 1)
+                times += [t_lo, t_hi]
+        return np.array(times)
+
     def excess(self, robot: Robot, path: JointPolynomials) -> Excess:
         """Exact largest rate beyond a limit (rad/s or m/s), from the rate's extremes."""
         worst, detail = -math.inf, ""

@@ -1,0 +1,352 @@
+"""The ``continuation`` strategy: track the solution from the quintic attitude to the goal.
+
+The quintic path (``beta = 0``) reaches its own attitude ``q_0`` exactly. The target slides
+along the geodesic from ``q_0`` to the goal, ``q(lam) = q_0 exp(lam delta)`` with ``lam`` from
+0 to 1 (``delta``: rotation vector, rad), and the solution ``beta(lam)`` is tracked:
+
+- predictor: the tangent ``dbeta/dlam = J^+ delta`` (minimum norm; at a solution the residual
+  moves by ``-delta`` per unit ``lam``);
+- corrector: Newton steps with the exact Jacobian, each the minimum-norm correction ``d`` with
+  ``J d = -h`` and every constraint linearised, ``g + G d <= 0`` (a small QP, quadprog);
+- step size: doubled after an easy correction, halved after a failed one.
+
+Every budget is a count (steps, residual evaluations), never a time, so the same problem gives
+the same answer on any machine. When the step size falls below its floor, the strategy stops
+and says how far it got (``reached_fraction``) and why (a constraint of a named joint, a
+singular map, or the freedom of the path family exhausted).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import quadprog
+
+from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
+from ..problem.constraints import DEFAULT_INSTANTS, Constraint
+from ..problem.residual import Problem
+from .multistart import multistart
+from .options import POLISH, Attempt, SolveOptions
+
+__all__ = ["ContinuationResult", "continuation", "track"]
+
+#: First step as an angle of the target's travel (rad).
+FIRST_STEP = math.radians(3.0)
+#: Smallest step, as an angle of the target's travel (rad; about 0.01 deg).
+MIN_STEP = 1.7e-4
+#: Largest number of continuation steps (accepted or not).
+MAX_STEPS = 400
+#: Residual (rad) an intermediate corrector must reach (about 0.006 deg: the next step corrects
+#: it anyway; only the goal itself is solved to the tolerance).
+INTERMEDIATE_TOLERANCE = 1e-4
+#: Newton iterations per corrector.
+CORRECTOR_ITERATIONS = 8
+#: Constraints are imposed at the instants this far inside (their unit: rad, rad/s, m...),
+#: so that the path between instants stays inside too.
+MARGIN = 1e-7
+#: Most instants kept besides the default ones (the tightest instants found on the way).
+MAX_ADDED_INSTANTS = 256
+#: Singular-value ratio below which dh/dbeta counts as singular.
+SINGULAR = 1e-9
+
+
+@dataclass(frozen=True)
+class ContinuationResult:
+    """How far the continuation got.
+
+    Attributes:
+        beta: free coefficients at the last solved point (rad or m).
+        fraction: how far along the geodesic to the goal that point is (0-1).
+        angle: the whole angle from the quintic attitude to the goal (rad).
+        axis: unit rotation axis of that geodesic (base frame at the quintic attitude).
+        residual: residual vector at ``beta`` for the target at ``fraction`` (rad).
+        steps: continuation steps taken.
+        iterations: Newton iterations in all correctors.
+        stopped_by: why it stopped short ("" when it reached the goal).
+    """
+
+    beta: np.ndarray
+    fraction: float
+    angle: float
+    axis: np.ndarray
+    residual: np.ndarray
+    steps: int
+    iterations: int
+    stopped_by: str = ""
+
+    @property
+    def reached(self) -> bool:
+        """Whether the goal itself was reached."""
+        return not self.stopped_by
+
+
+#: Affine constraint rows at beta = 0 by (constraint index, instants), for one path family.
+RowCache = dict[tuple[int, bytes], tuple[np.ndarray, np.ndarray]]
+
+
+def _linear_rows(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    beta: np.ndarray,
+    instants: np.ndarray,
+    cache: RowCache,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Stacked constraint values ``g`` and Jacobian ``G`` at ``beta`` (g <= 0 feasible).
+
+    Affine constraints are evaluated once per instants (``cache``, one path family), then
+    ``g = g0 + G beta``.
+    """
+    values, rows = [np.zeros(0)], [np.zeros((0, problem.n_free))]
+    for index, constraint in enumerate(constraints):
+        if not constraint.applies_to(problem.robot):
+            continue
+        if constraint.affine:
+            key = (index, instants.tobytes())
+            cached = cache.get(key)
+            if cached is None:
+                at_zero = constraint.rows(problem, np.zeros(problem.n_free), instants)
+                cached = (at_zero.values, at_zero.jacobian)
+                if len(cache) > 64:
+                    cache.clear()
+                cache[key] = cached
+            values.append(cached[0] + cached[1] @ beta)
+            rows.append(cached[1])
+        else:
+            r = constraint.rows(problem, beta, instants)
+            values.append(r.values)
+            rows.append(r.jacobian)
+    return np.concatenate(values), np.concatenate(rows)
+
+
+def _correction(
+    jac: np.ndarray, r: np.ndarray, g: np.ndarray, g_mat: np.ndarray
+) -> np.ndarray | None:
+    """Minimum-norm ``d`` with ``J d = -r`` and ``g + G d <= 0``; None when infeasible."""
+    n = jac.shape[1]
+    near = g > -0.5  # rows far inside cannot become active in one Newton step of a few rad
+    c_mat = np.vstack([jac, -g_mat[near]]).T
+    b = np.concatenate([-r, g[near] + MARGIN])
+    try:
+        return np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, len(r))[0])
+    except ValueError:
+        return None
+
+
+def _tangent(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    beta: np.ndarray,
+    jac: np.ndarray,
+    delta: np.ndarray,
+    instants: np.ndarray,
+    cache: RowCache,
+) -> np.ndarray:
+    """Minimum-norm ``dbeta/dlam`` with ``J t = delta`` that slides along active constraints."""
+    g, g_mat = _linear_rows(problem, constraints, beta, instants, cache)
+    active = g > -10.0 * MARGIN
+    n = jac.shape[1]
+    if np.any(active):
+        c_mat = np.vstack([jac, -g_mat[active]]).T
+        b = np.concatenate([delta, np.zeros(int(active.sum()))])
+        try:
+            return np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, 3)[0])
+        except ValueError:
+            pass  # no tangent keeps every active row: predict freely, the corrector decides
+    return np.asarray(np.linalg.lstsq(jac, delta, rcond=None)[0])
+
+
+def _target(problem: Problem, start: np.ndarray, delta: np.ndarray, lam: float) -> Problem:
+    return problem.with_goal(quat_multiply(start, quat_exp(lam * delta)))
+
+
+def _correct(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    beta: np.ndarray,
+    tol: float,
+    instants: np.ndarray,
+    cache: RowCache,
+) -> tuple[np.ndarray | None, np.ndarray, np.ndarray, int]:
+    """Newton corrector from ``beta``: (solved beta or None, residual, Jacobian, iterations)."""
+    r, jac = problem.residual_and_jacobian(beta)
+    previous = math.inf
+    for iteration in range(1, CORRECTOR_ITERATIONS + 1):
+        norm = float(np.linalg.norm(r))
+        g, g_mat = _linear_rows(problem, constraints, beta, instants, cache)
+        if norm < tol and (len(g) == 0 or float(np.max(g)) <= 0.0):
+            return beta, r, jac, iteration
+        if iteration > 2 and norm > 0.5 * previous and norm > 1e3 * tol:
+            break  # not contracting: the step was too long
+        d = _correction(jac, r, g, g_mat)
+        if d is None:
+            break
+        beta, previous = beta + d, norm
+        r, jac = problem.residual_and_jacobian(beta)
+    g = _linear_rows(problem, constraints, beta, instants, cache)[0]
+    if float(np.linalg.norm(r)) < tol and (len(g) == 0 or float(np.max(g)) <= 0.0):
+        return beta, r, jac, CORRECTOR_ITERATIONS
+    return None, r, jac, CORRECTOR_ITERATIONS
+
+
+def _dense_ok(problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray) -> bool:
+    """Whether ``beta``'s path honours every constraint everywhere (exact dense check)."""
+    return all(
+        c.violation(problem, beta).value <= c.tolerance
+        for c in constraints
+        if c.applies_to(problem.robot)
+    )
+
+
+def _with_critical(
+    problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray, instants: np.ndarray
+) -> np.ndarray:
+    """``instants`` and the normalised times where each constraint is tightest at ``beta``."""
+    path = problem.polynomials(beta)
+    extra = [c.critical_times(problem.robot, path) / problem.duration for c in constraints]
+    added = np.setdiff1d(instants, DEFAULT_INSTANTS)[-MAX_ADDED_INSTANTS:]
+    return np.unique(np.concatenate([DEFAULT_INSTANTS, added, *extra]).clip(0.0, 1.0))
+
+
+def _why(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    beta: np.ndarray,
+    tangent: np.ndarray,
+    jac: np.ndarray,
+) -> str:
+    """Why the branch cannot go on from ``beta``: a constraint, a singular map, or freedom."""
+    ahead = beta + tangent * 0.05
+    for constraint in constraints:
+        if constraint.applies_to(problem.robot):
+            excess = constraint.violation(problem, ahead)
+            if excess.value > 0.0:
+                return f"{constraint.name}: {excess.detail}"
+    sigma = np.linalg.svd(jac, compute_uv=False)
+    if sigma[-1] < SINGULAR * max(sigma[0], 1e-300) or sigma[-1] < 1e-9:
+        return "a singular map (dh/dbeta loses rank)"
+    return "freedom exhausted (the corrector does not converge with this path family)"
+
+
+def track(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    options: SolveOptions,
+    origin: np.ndarray | None = None,
+) -> ContinuationResult:
+    """Continue from ``origin`` (default ``beta = 0``) at its own attitude towards the goal.
+
+    ``origin`` is the quintic path, or a path within the constraints when the quintic path
+    breaks one (the dispatcher's feasibility restoration). The problem is not changed (targets
+    on the way are copies, :meth:`Problem.with_goal`).
+    """
+    zero = np.zeros(problem.n_free) if origin is None else np.asarray(origin, dtype=float)
+    start = problem.achieved(zero)
+    delta = quat_log(quat_multiply(quat_conjugate(start), problem.goal_quaternion))
+    angle = float(np.linalg.norm(delta))
+    axis = delta / angle if angle > 0 else np.array([0.0, 0.0, 1.0])
+    final_tol = POLISH * options.tolerance
+    first_evaluation = problem.evaluations
+    instants = DEFAULT_INSTANTS
+    cache: RowCache = {}
+
+    beta, lam, iterations, steps = zero, 0.0, 0, 0
+    here = _target(problem, start, delta, 0.0)
+    r, jac = here.residual_and_jacobian(beta)
+    # The quintic may break a constraint: bring it inside at lam = 0 first.
+    if not _dense_ok(problem, constraints, beta):
+        solved, r, jac, its = _correct(
+            here, constraints, beta, INTERMEDIATE_TOLERANCE, instants, cache
+        )
+        iterations += its
+        if solved is None:
+            return ContinuationResult(
+                beta,
+                0.0,
+                angle,
+                axis,
+                r,
+                0,
+                iterations,
+                "no path within the constraints reaches even the quintic path's own attitude",
+            )
+        beta = solved
+    dl = min(1.0, FIRST_STEP / angle) if angle > 0 else 1.0
+    stopped_by = ""
+    while lam < 1.0:
+        if steps >= MAX_STEPS:
+            stopped_by = f"step budget ({MAX_STEPS} continuation steps)"
+            break
+        if problem.evaluations - first_evaluation > options.max_evaluations:
+            stopped_by = f"evaluation budget ({options.max_evaluations} residual evaluations)"
+            break
+        steps += 1
+        tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache)
+        step = min(dl, 1.0 - lam)
+        last = lam + step >= 1.0
+        target = _target(problem, start, delta, 1.0 if last else lam + step)
+        tol = final_tol if last else INTERMEDIATE_TOLERANCE
+        predicted = beta + step * tangent
+        solved, r_new, jac_new, its = _correct(target, constraints, predicted, tol, instants, cache)
+        iterations += its
+        refine = 0
+        while solved is not None and not _dense_ok(problem, constraints, solved):
+            # Inside at the instants, not everywhere: add the tightest instants and correct.
+            refine += 1
+            if refine > 3:
+                solved = None
+                break
+            instants = _with_critical(problem, constraints, solved, instants)
+            solved, r_new, jac_new, more = _correct(
+                target, constraints, solved, tol, instants, cache
+            )
+            iterations += more
+        if solved is None:
+            dl = 0.5 * step
+            if dl * angle < MIN_STEP:
+                stopped_by = _why(problem, constraints, beta, tangent, jac)
+                break
+            continue
+        beta, lam, r, jac = solved, 1.0 if last else lam + step, r_new, jac_new
+        dl = step * (2.0 if its <= 4 else 1.0 if its <= 5 else 0.5)
+    return ContinuationResult(beta, lam, angle, axis, r, steps, iterations, stopped_by)
+
+
+def continuation(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    options: SolveOptions,
+    start: np.ndarray | None = None,
+) -> Attempt:
+    """The strategy: :func:`track` from ``start``, then the goal's solution or how far it got."""
+    result = track(problem, constraints, options, start)
+    attempt = Attempt(
+        method="continuation (tangent predictor, minimum-norm Newton corrector with constraints)",
+        iterations=result.iterations,
+        reached_fraction=result.fraction,
+    )
+    attempt.tried.append(
+        f"continuation over {math.degrees(result.angle):.4g} deg in {result.steps} steps"
+    )
+    if result.reached:
+        attempt.candidates.append(result.beta)  # the dispatcher recomputes its residual
+        return attempt
+    if problem.n_free == problem.n_equations:
+        # A square system leaves the corrector no room to slide along a limit: the Newton-type
+        # searches of the multistart strategy (counted budget) get their turn.
+        fallback = multistart(problem, constraints, options, start)
+        attempt.tried += [f"continuation stopped at {result.fraction:.3g} of the way"]
+        attempt.tried += fallback.tried
+        if fallback.candidates:
+            fallback.tried = attempt.tried
+            return fallback
+    attempt.stopped_by = result.stopped_by
+    axis = ", ".join(f"{x:.3f}" for x in result.axis)
+    attempt.message = (
+        f"reachable up to {math.degrees(result.fraction * result.angle):.3g} deg of the "
+        f"{math.degrees(result.angle):.3g} deg asked about this direction (axis {axis} from "
+        f"the quintic path's attitude); stopped by {result.stopped_by}"
+    )
+    return attempt

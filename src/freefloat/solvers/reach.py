@@ -1,0 +1,142 @@
+"""Reachable attitude set of a spatial problem, estimated from inside by continuation.
+
+From the attitude the quintic path reaches, continuation (:func:`.continuation.track`) heads
+towards a far goal in each of a set of directions and stops where it cannot go on (a joint's
+limit, a singular map, the freedom of the path family). Every attitude up to that angle along
+the direction is reached by a solved path within the constraints, so the set of these segments
+is an *inner* estimate of the reachable set with the given freedom: more freedom (or paths
+the continuation does not find) may reach further.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
+from ..problem.constraints import Constraint, default_constraints
+from ..problem.residual import Problem
+from .continuation import track
+from .options import SolveOptions
+
+__all__ = ["DirectionReach", "ReachEstimate", "default_directions", "describe", "reach_set"]
+
+
+@dataclass(frozen=True)
+class DirectionReach:
+    """How far continuation got in one direction.
+
+    Attributes:
+        axis: unit rotation axis (base frame at the quintic path's attitude).
+        reached: largest rotation about ``axis`` reached by a solved path (rad).
+        asked: the rotation continuation headed for (rad).
+        stopped_by: why it stopped ("" when it reached ``asked``).
+        evaluations: residual evaluations spent on this direction.
+    """
+
+    axis: np.ndarray
+    reached: float
+    asked: float
+    stopped_by: str
+    evaluations: int
+
+
+@dataclass(frozen=True)
+class ReachEstimate:
+    """Inner estimate of the reachable attitude set around the quintic path's attitude.
+
+    Attributes:
+        quintic_quaternion: attitude reached by the plain quintic path, ``[x, y, z, w]``.
+        directions: per direction, how far continuation got.
+        freedom: free coefficients per joint of the path family used.
+    """
+
+    quintic_quaternion: np.ndarray
+    directions: tuple[DirectionReach, ...]
+    freedom: tuple[int, ...]
+
+
+def default_directions() -> np.ndarray:
+    """The six axis directions, then the eight cube diagonals (unit rows, (14, 3))."""
+    axes = np.vstack([np.eye(3), -np.eye(3)])
+    corners = np.array(
+        [[x, y, z] for x in (1.0, -1.0) for y in (1.0, -1.0) for z in (1.0, -1.0)]
+    ) / math.sqrt(3.0)
+    return np.vstack([axes, corners])
+
+
+def reach_set(
+    problem: Problem,
+    directions: np.ndarray | None = None,
+    max_angle: float = math.radians(60.0),
+    constraints: Sequence[Constraint] | None = None,
+    options: SolveOptions | None = None,
+) -> ReachEstimate:
+    """Continue as far as possible from the quintic attitude in each direction.
+
+    Args:
+        problem: a spatial problem (its goal is ignored; not changed).
+        directions: rotation axes (rows, base frame); default :func:`default_directions`.
+        max_angle: the rotation to head for in each direction (rad, below pi).
+        constraints: path constraints; default joint position and velocity limits.
+        options: solver settings (the evaluation budget applies per direction).
+    """
+    if problem.planar:
+        raise ValueError("reach_set is for spatial problems; planar ones have exact bounds")
+    options = options or SolveOptions()
+    constraints = default_constraints() if constraints is None else list(constraints)
+    directions = default_directions() if directions is None else np.atleast_2d(directions)
+    quintic = problem.achieved(np.zeros(problem.n_free))
+    out = []
+    for axis in directions:
+        axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+        goal = quat_multiply(quintic, quat_exp(max_angle * axis))
+        before = problem.evaluations
+        result = track(problem.with_goal(goal), constraints, options)
+        out.append(
+            DirectionReach(
+                axis=axis,
+                reached=result.fraction * result.angle,
+                asked=result.angle,
+                stopped_by=result.stopped_by,
+                evaluations=problem.evaluations - before,
+            )
+        )
+    freedom = tuple(d - 5 for d in problem.family.degrees)
+    return ReachEstimate(quintic, tuple(out), freedom)
+
+
+def describe(
+    estimate: ReachEstimate,
+    joint_names: Sequence[str],
+    max_angle: float,
+    goal: np.ndarray | None = None,
+) -> list[str]:
+    """The estimate as lines for people (degrees), saying plainly that it is an inner one.
+
+    With ``goal`` (``[x, y, z, w]``), a last line gives the rotation it asks for from the
+    quintic path's attitude.
+    """
+    freedom = ", ".join(f"{n}+{k}" for n, k in zip(joint_names, estimate.freedom, strict=True) if k)
+    lines = [
+        "from the attitude the quintic path reaches, continuation heads up to",
+        f"{math.degrees(max_angle):g} deg about each direction within the joint limits, with the "
+        "freedom",
+        f"{freedom}; every rotation up to 'reached' is planned by a solved path.",
+        "More freedom, or paths continuation does not find, may reach further.",
+        f"{'axis (base frame)':<24}{'reached [deg]':>14}  stopped by",
+    ]
+    for d in estimate.directions:
+        axis = " ".join(f"{x:+.2f}" for x in d.axis)
+        lines.append(f"{axis:<24}{math.degrees(d.reached):>14.2f}  {d.stopped_by or '-'}")
+    if goal is not None:
+        wanted = quat_log(quat_multiply(quat_conjugate(estimate.quintic_quaternion), goal))
+        angle = float(np.linalg.norm(wanted))
+        axis = " ".join(f"{x:+.2f}" for x in wanted / max(angle, 1e-300))
+        lines.append(
+            f"requested: {math.degrees(angle):.2f} deg about {axis} from the quintic attitude"
+        )
+    return lines

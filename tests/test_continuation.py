@@ -1,0 +1,123 @@
+"""The continuation strategy (issue 11): reach, constraints along the dense path, determinism."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import freefloat as ff
+from freefloat.physics import attitude as att
+from freefloat.problem.build import problem_from_scenario
+from freefloat.problem.constraints import default_constraints
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIOS = ROOT / "robots" / "scenarios"
+
+
+@pytest.fixture(scope="module")
+def panda() -> ff.Scenario:
+    return ff.Scenario.from_toml(SCENARIOS / "panda_servicer.toml")
+
+
+@pytest.fixture(scope="module")
+def panda_problem(panda: ff.Scenario) -> ff.Problem:
+    """Panda servicer with two free coefficients per joint (the continuation default)."""
+    return problem_from_scenario(panda, extra=[2] * panda.robot.n)
+
+
+def _turned(problem: ff.Problem, rotvec: np.ndarray) -> ff.Problem:
+    """The problem with its goal at the quintic path's attitude turned by ``rotvec`` (rad)."""
+    reached = problem.achieved(np.zeros(problem.n_free))
+    return problem.with_goal(att.quat_multiply(reached, att.quat_exp(np.asarray(rotvec))))
+
+
+def _independent_residual(problem: ff.Problem, beta: np.ndarray) -> float:
+    """Geodesic error (rad) at T, on a twice finer grid than the solver's."""
+    fine = problem.with_steps(2 * problem.steps)
+    return att.geodesic_angle(fine.achieved(beta), problem.goal_quaternion)
+
+
+def test_with_goal_is_a_copy(panda_problem: ff.Problem) -> None:
+    goal = panda_problem.goal_quaternion.copy()
+    other = _turned(panda_problem, [0.0, 0.0, 0.1])
+    assert np.array_equal(panda_problem.goal_quaternion, goal)
+    assert other.family is panda_problem.family
+    assert att.geodesic_angle(other.goal_quaternion, goal) > 0.01
+
+
+def test_regression_panda_goal_yaw_plus_5_deg(panda: ff.Scenario) -> None:
+    """The issue's case: the multistart search refused it after ~55 s; continuation plans it."""
+    yaw, pitch, roll = ff.zyx_from_quat(panda.goal_attitude)
+    goal = ff.quat_from_zyx(yaw + math.radians(5.0), pitch, roll)
+    plan = ff.plan(dataclasses.replace(panda, goal_attitude=goal))
+    assert plan.verification.passed
+    assert plan.solver.strategy == "continuation"
+    assert plan.base.attitude_error_rad < 1e-9
+    assert ff.geodesic_angle(np.array(plan.base.achieved_quaternion_xyzw), goal) < 1e-9
+
+
+@pytest.mark.parametrize("axis", [0, 1, 2])
+def test_ten_degrees_about_each_axis_within_the_limits_along_the_dense_path(
+    panda_problem: ff.Problem, axis: int
+) -> None:
+    rotvec = np.zeros(3)
+    rotvec[axis] = math.radians(10.0)
+    problem = _turned(panda_problem, rotvec)
+    solution = ff.solve(problem, ff.SolveOptions(strategy=ff.Strategy.CONTINUATION))
+    assert solution.strategy == ff.Strategy.CONTINUATION
+    assert _independent_residual(problem, solution.beta) < 1e-9
+    path = problem.polynomials(solution.beta)
+    for constraint in default_constraints():
+        excess = constraint.excess(problem.robot, path)
+        assert excess.value <= constraint.tolerance, (constraint.name, excess)
+
+
+def test_a_limit_met_on_the_way_is_kept_along_the_dense_path(panda_problem: ff.Problem) -> None:
+    """3 deg about y drives panda_joint4 onto its limit: the path must touch, never cross."""
+    problem = _turned(panda_problem, [0.0, math.radians(3.0), 0.0])
+    solution = ff.solve(problem)
+    limits = default_constraints()[0]
+    excess = limits.excess(problem.robot, problem.polynomials(solution.beta))
+    assert -1e-6 < excess.value <= limits.tolerance  # active, and not beyond
+    # The unconstrained minimum-norm Newton continuation would cross it: the limit is real.
+    unconstrained = ff.solve(problem, constraints=[])
+    crossed = limits.excess(problem.robot, problem.polynomials(unconstrained.beta))
+    assert crossed.value > 1e-4
+
+
+def test_two_runs_give_byte_identical_plans(panda: ff.Scenario) -> None:
+    yaw, pitch, roll = ff.zyx_from_quat(panda.goal_attitude)
+    scenario = dataclasses.replace(
+        panda, goal_attitude=ff.quat_from_zyx(yaw + math.radians(2.0), pitch, roll)
+    )
+
+    def untimed() -> str:
+        data = json.loads(ff.plan(scenario).to_json())
+        for timing in ("wall_time_s", "solve_time_s", "sample_time_s", "verify_time_s"):
+            data["solver"].pop(timing)
+        return json.dumps(data, sort_keys=True)
+
+    assert untimed() == untimed()
+
+
+def test_failure_reports_reach_and_a_goal_at_95_percent_of_it_plans(
+    panda_problem: ff.Problem,
+) -> None:
+    axis = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+    angle = math.radians(60.0)
+    budget = ff.SolveOptions(max_evaluations=400)
+    with pytest.raises(ff.SolverError) as info:
+        ff.solve(_turned(panda_problem, angle * axis), budget)
+    err = info.value
+    assert 0.0 < err.reached_fraction < 1.0
+    assert err.stopped_by
+    reach_deg = math.degrees(err.reached_fraction * angle)
+    assert str(err).startswith(f"reachable up to {reach_deg:.3g} deg of the 60 deg asked")
+    inside = _turned(panda_problem, 0.95 * err.reached_fraction * angle * axis)
+    solution = ff.solve(inside)
+    assert _independent_residual(inside, solution.beta) < 1e-9
