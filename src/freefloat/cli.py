@@ -138,6 +138,26 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_export(args: argparse.Namespace) -> int:
+    from .export import FORMATS, export
+
+    if args.format not in FORMATS:
+        raise InputError(f"unknown --format {args.format!r}; valid: {', '.join(FORMATS)}")
+    rate = None
+    if args.rate is not None:
+        try:
+            rate = float(args.rate)
+        except ValueError:
+            raise InputError(f"--rate must be a positive number of Hz, got {args.rate!r}") from None
+        if not (math.isfinite(rate) and rate > 0):
+            raise InputError(f"--rate must be a positive number of Hz, got {args.rate}")
+    loaded = Plan.load(args.plan)
+    written = export(loaded, args.output, args.format, rate)
+    source = "the plan's samples" if rate is None else f"resampled at {rate:g} Hz"
+    print(f"freefloat export: wrote {written} ({args.format}, {source})")
+    return 0
+
+
 def _cmd_bounds(args: argparse.Namespace) -> int:
     scenario = _load_scenario(args.scenario)
     problem = problem_from_scenario(scenario.resolved(), check_bounds=False)
@@ -350,6 +370,23 @@ def build_parser() -> argparse.ArgumentParser:
         "--speed", type=float, default=1.0, help="playback speed, 1 = real time (default)"
     )
     p_show.set_defaults(func=_cmd_show)
+
+    p_export = commands.add_parser(
+        "export",
+        help="write a plan as CSV, MCAP (Foxglove) or a ROS 2 bag",
+        description="Export a plan: csv (one row per instant, units in the header), mcap "
+        "(ROS 2 messages for Foxglove) or ros2-bag (a rosbag2 folder): the joint trajectory, "
+        "joint states over time, the base pose on /tf and the end effector. Without --rate "
+        "the plan's samples are written; with --rate every quantity is recomputed at that "
+        "rate from the plan's polynomials and robot. No ROS installation is needed.",
+    )
+    p_export.add_argument("plan", help="plan JSON file")
+    p_export.add_argument("--format", required=True, metavar="FORMAT", help="csv, mcap or ros2-bag")
+    p_export.add_argument("--rate", metavar="HZ", help="resample at HZ samples per second")
+    p_export.add_argument(
+        "-o", "--output", required=True, metavar="FILE", help="file (folder for ros2-bag)"
+    )
+    p_export.set_defaults(func=_cmd_export)
 
     p_plot = commands.add_parser(
         "plot",
