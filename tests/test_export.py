@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from freefloat.cli import main
-from freefloat.export import export, from_samples, resample
+from freefloat.export import from_samples, resample
 
 
 @pytest.fixture(scope="module")
