@@ -187,6 +187,9 @@ def _cmd_bounds(args: argparse.Namespace) -> int:
 
 
 def _cmd_verify(args: argparse.Namespace) -> int:
+    from .plans.schema import check_plan_file
+
+    check_plan_file(args.plan)  # names the bad field before anything else reads the file
     loaded = Plan.load(args.plan)
     result = verify_plan(loaded, replay_steps=args.replay_steps)
     print(
