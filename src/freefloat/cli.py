@@ -24,6 +24,7 @@ from .plans.format import Plan
 from .problem.build import planar_yaw_branch, problem_from_scenario
 from .problem.residual import Problem
 from .problem.scenario import Scenario, default_scenario_path
+from .progress import configure, stage
 from .solvers.options import DEFAULT_TOLERANCE, SolveOptions
 from .verify.checks import verify_plan
 
@@ -33,7 +34,8 @@ DEFAULT_OUT_DIR = Path("freefloat-out")
 
 
 def _load_scenario(path: str | None) -> Scenario:
-    return Scenario.from_toml(path if path else default_scenario_path())
+    with stage("read scenario"):
+        return Scenario.from_toml(path if path else default_scenario_path())
 
 
 def _attitude_table(p: Plan) -> list[str]:
@@ -106,9 +108,11 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         from .viz.playback import write_html
         from .viz.plots import save_figures
 
-        html = write_html(result, DEFAULT_OUT_DIR / "plan.html")
+        with stage("write playback page"):
+            html = write_html(result, DEFAULT_OUT_DIR / "plan.html")
         print(f"  playback        {html}")
-        figures = save_figures(result, DEFAULT_OUT_DIR / "plots")
+        with stage("write plots"):
+            figures = save_figures(result, DEFAULT_OUT_DIR / "plots")
         print(
             f"  plots           {figures[0].parent} ({len(figures)} files: "
             f"{', '.join(p.name for p in figures)})"
@@ -152,7 +156,8 @@ def _cmd_export(args: argparse.Namespace) -> int:
         if not (math.isfinite(rate) and rate > 0):
             raise InputError(f"--rate must be a positive number of Hz, got {args.rate}")
     loaded = Plan.load(args.plan)
-    written = export(loaded, args.output, args.format, rate)
+    with stage(f"export {args.format}"):
+        written = export(loaded, args.output, args.format, rate)
     source = "the plan's samples" if rate is None else f"resampled at {rate:g} Hz"
     print(f"freefloat export: wrote {written} ({args.format}, {source})")
     return 0
@@ -401,7 +406,27 @@ def build_parser() -> argparse.ArgumentParser:
     p_plot.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
     p_plot.add_argument("--svg", action="store_true", help="also write SVG files")
     p_plot.set_defaults(func=_cmd_plot)
+    for sub in [parser, *commands.choices.values()]:
+        _add_common_flags(sub)
     return parser
+
+
+def _add_common_flags(parser: argparse.ArgumentParser) -> None:
+    """-v/--verbose and -q/--quiet, before or after the command name."""
+    parser.add_argument(
+        "-v",
+        "--verbose",
+        action="count",
+        default=argparse.SUPPRESS,
+        help="log stage timings (-v) and details (-vv) on stderr",
+    )
+    parser.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        default=argparse.SUPPRESS,
+        help="no progress display and no warnings; errors and results only",
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -411,6 +436,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     parser = build_parser()
     args = parser.parse_args(argv)
+    configure(getattr(args, "verbose", 0), getattr(args, "quiet", False))
     try:
         return int(args.func(args))
     except FreeFloatError as exc:

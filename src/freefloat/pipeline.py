@@ -30,6 +30,7 @@ from .plans.format import (
 from .problem.constraints import Constraint, JointVelocityLimits, default_constraints
 from .problem.residual import Problem
 from .problem.scenario import Scenario
+from .progress import stage
 from .solvers.options import DEFAULT_TOLERANCE, Solution, SolveOptions
 from .solvers.search import search
 from .verify.checks import boundary_errors, verify_plan
@@ -71,15 +72,17 @@ def plan(
     constraints = default_constraints() if constraints is None else list(constraints)
     scenario = scenario.resolved()
     try:
-        found = search(scenario, options, constraints)
+        with stage("solve"):
+            found = search(scenario, options, constraints)
     except SolverError as exc:
         _explain_velocity_limits(scenario, options, constraints, exc)
         raise
     scenario.write_robot()
     problem = found.problem.with_steps(found.solution.steps)
-    result = plan_from_solution(
-        problem, found.solution, samples, options.tolerance, constraints=constraints
-    )
+    with stage("sample and verify"):
+        result = plan_from_solution(
+            problem, found.solution, samples, options.tolerance, constraints=constraints
+        )
     report = replace(
         result.solver, freedom=found.freedom, full_turns=found.full_turns, tried=found.tried
     )
