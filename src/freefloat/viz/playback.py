@@ -206,11 +206,16 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
 def write_html(plan: Plan, path: str | Path, speed: float = 1.0) -> Path:
     """Write one self-contained HTML file that plays the plan offline; no server is left.
 
+    The page carries visible controls (:mod:`freefloat.viz.controls`): title, play / pause /
+    restart, a time slider with a readout in seconds, speed and a legend.
+
     The file is written atomically: a failure leaves nothing behind.
     """
+    from .controls import inject_controls
+
     with build_playback(plan, speed) as playback:
         html = playback.html()
-    return atomic_write_text(path, html)
+    return atomic_write_text(path, inject_controls(html, plan, speed))
 
 
 def serve(plan: Plan, speed: float = 1.0, announce: Any = print) -> None:
