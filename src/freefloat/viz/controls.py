@@ -71,7 +71,9 @@ _SCRIPT = """
   $("ff-play").onclick = () => { const a = ready(); if (a && !a.playing) a.play(); };
   $("ff-pause").onclick = () => { const a = ready(); if (a) a.pause(); };
   $("ff-restart").onclick = () => { const a = ready(); if (a) { a.reset(); a.play(); } };
-  $("ff-speed").onchange = (e) => { const a = ready(); if (a) a.mixer.timeScale = +e.target.value; };
+  $("ff-speed").onchange = (e) => {
+    const a = ready(); if (a) a.mixer.timeScale = +e.target.value;
+  };
   slider.oninput = () => {
     dragging = true; const a = ready();
     if (a) { a.seek(+slider.value / cfg.speed); a.display_progress(+slider.value / cfg.speed); }
