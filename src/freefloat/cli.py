@@ -3,6 +3,10 @@
 Angles are printed in degrees. Every expected failure (a :class:`FreeFloatError`) is printed
 as one line ``freefloat: error: ...`` and exits with code 2, with no traceback and no file
 written.
+
+This module is long because it holds every subcommand's parser and printed report (the plan
+summary with its timings, Cartesian-goal and full-turn lines); the work itself lives in the
+layers it calls.
 """
 
 from __future__ import annotations
