@@ -110,3 +110,39 @@ def test_clicking_play_advances_the_time_readout(page):
     assert out["playing"] > out["paused_b"] + 0.5  # play advances it (1.5 s of page time)
     assert out["restarted"] < 0.2  # restart goes back to 0
     assert re.fullmatch(r"t = \d+\.\d\d s / 10\.00 s", out["readout"])
+
+
+def test_compact_page_keeps_every_scene_command(worked_plan):
+    import base64
+    import gzip
+
+    from freefloat.viz.compact import compact_page
+    from freefloat.viz.playback import build_playback
+
+    with build_playback(worked_plan) as playback:
+        original = playback.html()
+    found = re.findall(r"base64,([A-Za-z0-9+/=]+)\"\)", original)
+    compact = compact_page(original)
+    packed = json.loads(re.search(r"const commands = (\[.*?\]);", compact).group(1))
+    unpacked = [gzip.decompress(base64.b64decode(c)) for c in packed]
+    assert sorted(unpacked) == sorted(base64.b64decode(c) for c in found)
+    assert b"set_animation" in unpacked[-1][:32]  # the animation binds to the final objects
+    assert compact_page("<html>not meshcat</html>") == "<html>not meshcat</html>"
+
+
+def test_panda_page_is_a_few_megabytes(tmp_path):
+    import base64
+    import gzip
+
+    import freefloat as ff
+
+    from conftest import ROOT
+
+    plan = ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "panda_servicer.toml"))
+    page = write_html(plan, tmp_path / "panda.html")
+    size = page.stat().st_size
+    assert size < 8e6, f"{size / 1e6:.1f} MB"
+    packed = json.loads(re.search(r"const commands = (\[.*?\]);", page.read_text()).group(1))
+    commands = [gzip.decompress(base64.b64decode(c)) for c in packed]
+    assert any(b"/visuals/" in c for c in commands)
+    assert not any(b"/collisions/" in c for c in commands)  # no second copy of the meshes

@@ -195,7 +195,8 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
         raise ViewerError(f"the meshcat server failed to start: {exc}") from None
     playback = Playback(viewer=viewer, url=str(viewer.url()), fps=fps)
     try:
-        viz = meshcat_visualizer(robot.model, visual, visual)
+        # No collision group: the page would carry every mesh twice.
+        viz = meshcat_visualizer(robot.model, pin.GeometryModel(), visual)
         viz.initViewer(viewer=viewer)
         viz.loadViewerModel(rootNodeName=ROOT_NODE)
 
@@ -271,11 +272,12 @@ def write_html(plan: Plan, path: str | Path, speed: float = 1.0) -> Path:
 
     The file is written atomically: a failure leaves nothing behind.
     """
+    from .compact import compact_page
     from .controls import inject_controls
 
     with build_playback(plan, speed) as playback:
         html = playback.html()
-    return atomic_write_text(path, inject_controls(html, plan, speed))
+    return atomic_write_text(path, inject_controls(compact_page(html), plan, speed))
 
 
 def serve(plan: Plan, speed: float = 1.0, announce: Any = print) -> None:
