@@ -239,7 +239,9 @@ def _cmd_show(args: argparse.Namespace) -> int:
 
     loaded = Plan.load(args.plan)
     if args.html:
-        print(f"freefloat show: wrote {write_html(loaded, args.html, args.speed)}")
+        with stage("write playback page"):
+            written = write_html(loaded, args.html, args.speed)
+        print(f"freefloat show: wrote {written}")
     else:
         serve(loaded, args.speed)
     return 0
@@ -249,7 +251,8 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     from .viz.plots import save_figures
 
     loaded = Plan.load(args.plan)
-    written = save_figures(loaded, args.output, svg=args.svg)
+    with stage("write plots"):
+        written = save_figures(loaded, args.output, svg=args.svg)
     print(f"freefloat plot: {len(written)} files in {Path(args.output).resolve()}")
     for path in written:
         print(f"  {path.name}")

@@ -49,9 +49,11 @@ def configure(verbosity: int = 0, quiet: bool = False, stream: TextIO | None = N
     """
     _settings.update(quiet=quiet, stream=stream)
     TIMINGS.clear()
-    level = logging.ERROR if quiet else (logging.WARNING, logging.INFO, logging.DEBUG)[
-        min(max(verbosity, 0), 2)
-    ]
+    level = (
+        logging.ERROR
+        if quiet
+        else (logging.WARNING, logging.INFO, logging.DEBUG)[min(max(verbosity, 0), 2)]
+    )
     for handler in list(LOGGER.handlers):
         if getattr(handler, "_freefloat_cli", False):
             LOGGER.removeHandler(handler)

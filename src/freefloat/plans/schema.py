@@ -88,7 +88,9 @@ def schema_errors(document: Any, name: str = "plan") -> list[str]:
         import jsonschema
         from jsonschema.exceptions import relevance
     except ImportError as exc:  # pragma: no cover - a dependency
-        raise ViewerError(f"schema checks need jsonschema ({exc}): pip install jsonschema") from None
+        raise ViewerError(
+            f"schema checks need jsonschema ({exc}): pip install jsonschema"
+        ) from None
     validator = jsonschema.Draft202012Validator(schema(name))
     errors = sorted(validator.iter_errors(document), key=relevance)
     return [_describe(_deepest(e)) for e in errors]
