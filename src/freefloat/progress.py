@@ -7,9 +7,9 @@ DEBUG with ``-vv``, errors only with ``-q``.
 
 :func:`stage` wraps a step that can take more than a second (solving, sampling and verifying,
 writing the page, the plots, an export). On a terminal (stderr is a TTY and ``-q`` not given)
-it shows a live spinner with the elapsed time, then one line ``done <stage> (<s> s)``; when
-stderr is not a terminal it draws nothing (no control characters). Every stage's wall time
-(s) is kept in :data:`TIMINGS` for the summaries.
+it shows a live spinner with the elapsed time (h:mm:ss), then one line
+``done <stage> (<s> s)``; when stderr is not a terminal it draws nothing (no control
+characters). Every stage's wall time (s) is kept in :data:`TIMINGS` for the summaries.
 """
 
 from __future__ import annotations
@@ -95,9 +95,13 @@ def stage(name: str) -> Iterator[None]:
     LOGGER.debug("%s ...", name)
     if progress_enabled():
         from rich.console import Console
+        from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
         console = Console(file=_stream(), highlight=False)
-        with console.status(f"{name} ...", spinner="dots"):
+        columns = (SpinnerColumn(), TextColumn(f"{name} ..."), TimeElapsedColumn())
+        live = Progress(*columns, console=console, transient=True)
+        live.add_task(name, total=None)  # before the first frame is drawn
+        with live:
             yield
         elapsed = time.perf_counter() - start
         console.print(f"[green]done[/green] {name} ({elapsed:.2f} s)")
