@@ -342,8 +342,9 @@ def _cmd_compose(args: argparse.Namespace) -> int:
         lock=tuple(args.lock or ()),
         keep_gripper=args.keep_gripper,
     )
-    path = compose_servicer(spec, args.output)
-    robot = load_robot(path)
+    with stage("compose servicer"):
+        path = compose_servicer(spec, args.output)
+        robot = load_robot(path)
     print(f"freefloat compose: wrote {path}")
     print(
         f"  {robot.n} joints ({', '.join(robot.joint_names)}), total mass "
