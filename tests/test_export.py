@@ -149,6 +149,7 @@ def test_ros2_bag_round_trip_resampled(worked_plan, plan_file, tmp_path):
     args = ["export", str(plan_file), "--format", "ros2-bag", "--rate", "4", "-o", str(out)]
     assert main(args) == 0
     assert main(args) == 0  # an existing bag is replaced
+    assert "version: 8" in (out / "metadata.yaml").read_text()  # rosbag2 metadata format
     truth = resample(worked_plan, 4.0)
     ts = get_typestore(Stores.ROS2_HUMBLE)
     got: dict[str, list] = {}

@@ -40,7 +40,7 @@ def write_bag(traj: Trajectory, path: str | Path, urdf: str) -> Path:
     holder = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
     try:
         bag = holder / target.name
-        with Writer(bag, version=9) as writer:
+        with Writer(bag, version=8) as writer:  # rosbag2 metadata 8: Iron and newer
             connections: dict[str, Any] = {}
             for msg in messages(traj, child):
                 if msg.topic not in connections:
