@@ -273,3 +273,29 @@ joints = {{ {UR5_START.format(pan=90.0)} }}
     excess = constraint.violation(pan, np.zeros(3))
     assert excess.value > 0.02  # the plain quintic pan sweeps the arm 2-3 cm into the hull
     assert "spacecraft_0" in excess.detail
+
+
+def test_the_ur5_pan_through_the_hull_plans_clear_of_it(tmp_path):
+    """Issue 13's case: the plain quintic pan sweeps the arm into the hull; the plan does not."""
+    body = f"""
+[start]
+joints = {{ {UR5_START.format(pan=-90.0)} }}
+[goal]
+joints = {{ {UR5_START.format(pan=90.0)} }}
+base_zyx_deg = [-17.29, 1.5255, -33.449]
+"""
+    scenario = ff.Scenario.from_toml(_scenario(tmp_path, body))
+    quintic = ff.problem_from_scenario(scenario, extra=[2] * 6)
+    # The goal is a few tenths of a degree from the attitude the plain quintic pan reaches.
+    offset = ff.geodesic_angle(quintic.achieved(np.zeros(12)), scenario.goal_attitude)
+    assert 0.1 < math.degrees(offset) < 0.5
+    plan = ff.plan(scenario)
+    assert plan.base.attitude_error_rad < 1e-9
+    check = plan.verification["clearance"]
+    assert check.passed and plan.safety.margin_m == 0.01
+    # Independent: coal along the planned path, densely, at least 1 cm everywhere.
+    robot = scenario.robot
+    model = CollisionModel(robot, known_srdf(robot))
+    t = np.linspace(0.0, plan.duration, 801)
+    q = plan.joint_positions(t)
+    assert min(model.distances(x).values.min() for x in q) >= 0.01 - 1e-6

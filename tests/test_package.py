@@ -65,6 +65,8 @@ def test_wheel_ships_robots_scenarios_and_types(wheel):
     assert "freefloat/robots/planar_2dof.urdf" in names
     assert "freefloat/robots/scenarios/worked_example.toml" in names
     assert "freefloat/py.typed" in names
+    assert "freefloat/schemas/plan.schema.json" in names
+    assert "freefloat/schemas/scenario.schema.json" in names
 
 
 def test_installed_copy_plans_the_shipped_example(wheel, tmp_path):

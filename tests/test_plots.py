@@ -87,3 +87,50 @@ def test_broken_matplotlib_gives_a_clear_error(tmp_path, worked_plan):
     )
     assert result.returncode == 2
     assert "plots need matplotlib, which failed to import" in result.stderr
+
+
+def test_legends_sit_outside_the_data(figs):
+    for name in TOPICS:
+        fig = figs[name]
+        fig.canvas.draw()
+        ax = fig.axes[0]
+        legend = ax.get_legend().get_window_extent()
+        assert legend.x0 >= ax.get_window_extent().x1, name
+
+
+def test_goal_values_and_projection_are_marked(figs, worked_plan):
+    ax = figs["joint_positions"].axes[0]
+    goals = [line for line in ax.lines if line.get_label() == "_goal"]
+    np.testing.assert_allclose(
+        [line.get_ydata()[0] for line in goals], np.degrees(worked_plan.request.goal_joints)
+    )
+    assert all(line.get_xdata()[0] == worked_plan.duration for line in goals)
+    ax = figs["base_attitude"].axes[0]
+    targets = [line.get_ydata()[0] for line in ax.lines if line.get_label() == "_goal"]
+    np.testing.assert_allclose(targets, worked_plan.base.target_zyx_deg)
+    assert "inertial x-y plane" in figs["end_effector_path"].axes[0].get_xlabel()
+
+
+def test_joint_limits_are_drawn_from_the_urdf():
+    import freefloat as ff
+
+    from conftest import ROOT
+
+    plan = ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml"))
+    robot = ff.load_robot(plan.robot.urdf)
+    figs = figures(plan, ("joint_positions", "joint_rates"))
+    drawn = sorted(
+        round(line.get_ydata()[0], 9)
+        for line in figs["joint_positions"].axes[0].lines
+        if line.get_label() == "_limit"
+    )
+    expected = sorted(
+        round(float(np.degrees(v)), 9) for j in robot.joints for v in (j.lower, j.upper)
+    )
+    assert drawn == expected
+    rates = [
+        line.get_ydata()[0]
+        for line in figs["joint_rates"].axes[0].lines
+        if line.get_label() == "_limit"
+    ]
+    assert max(rates) == pytest.approx(np.degrees(max(j.velocity_limit for j in robot.joints)))

@@ -147,10 +147,11 @@ def _imports(path: Path) -> set[str]:
 
 
 def test_layers_flow_one_way_and_no_circle():
-    """robot -> physics -> problem -> solvers -> plans -> verify -> pipeline -> viz, cli."""
+    """robot -> physics -> problem -> solvers -> plans -> verify -> pipeline -> viz, export, cli."""
     order = [
         "errors",
         "files",
+        "progress",
         "robot",
         "physics",
         "problem",
@@ -159,6 +160,7 @@ def test_layers_flow_one_way_and_no_circle():
         "verify",
         "pipeline",
         "viz",
+        "export",
         "cli",
     ]
     for path in SRC.rglob("*.py"):

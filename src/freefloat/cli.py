@@ -3,6 +3,10 @@
 Angles are printed in degrees. Every expected failure (a :class:`FreeFloatError`) is printed
 as one line ``freefloat: error: ...`` and exits with code 2, with no traceback and no file
 written.
+
+This module is long because it holds every subcommand's parser and printed report (the plan
+summary with its timings, Cartesian-goal and full-turn lines); the work itself lives in the
+layers it calls.
 """
 
 from __future__ import annotations
@@ -11,15 +15,24 @@ import argparse
 import dataclasses
 import math
 import sys
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
 from . import __version__
-from .errors import FreeFloatError, InputError
+from .errors import FreeFloatError, InputError, VelocityLimitError
 from .pipeline import plan
 from .plans.format import Plan
 from .problem.build import planar_yaw_branch, problem_from_scenario
 from .problem.scenario import Scenario, default_scenario_path
+from .progress import TIMINGS, configure, stage
 from .solvers.options import DEFAULT_TOLERANCE, SolveOptions
 from .verify.checks import MAX_REPLAY_STEPS, verify_plan
 
@@ -29,7 +42,8 @@ DEFAULT_OUT_DIR = Path("freefloat-out")
 
 
 def _load_scenario(path: str | None) -> Scenario:
-    return Scenario.from_toml(path if path else default_scenario_path())
+    with stage("read scenario"):
+        return Scenario.from_toml(path if path else default_scenario_path())
 
 
 def _attitude_table(p: Plan) -> list[str]:
@@ -43,11 +57,38 @@ def _attitude_table(p: Plan) -> list[str]:
     return rows
 
 
-def summary(p: Plan, output: Path | None = None) -> str:
-    """The short text summary ``freefloat plan`` prints (angles in degrees)."""
-    lines = [f"freefloat plan: {Path(p.robot.urdf).name}, T = {p.duration:g} s"]
+def _joint_value(value: float, kind: str) -> str:
+    return f"{value:.4f} m" if kind == "prismatic" else f"{math.degrees(value):.3f} deg"
+
+
+def _kinds(p: Plan) -> list[str]:
+    kinds = list(p.robot.joint_kinds)
+    return kinds if len(kinds) == len(p.robot.joints) else ["revolute"] * len(p.robot.joints)
+
+
+def summary(
+    p: Plan,
+    output: Path | None = None,
+    *,
+    robot_label: str | None = None,
+    wall_time_s: float | None = None,
+    timings: dict[str, float] | None = None,
+    extra_lines: Sequence[str] = (),
+) -> str:
+    """The text summary ``freefloat plan`` prints (angles in degrees, units on every figure).
+
+    Args:
+        p: the plan.
+        output: the plan file written.
+        robot_label: how to name the robot (default: the URDF file name).
+        wall_time_s: the whole command's wall time (s).
+        timings: wall time (s) per stage (``solve``, ``sample and verify``...).
+        extra_lines: more lines (a Cartesian goal's report), printed after the attitude.
+    """
+    lines = [f"freefloat plan: {robot_label or Path(p.robot.urdf).name}, T = {p.duration:g} s"]
     lines += _attitude_table(p)
     lines.append(f"  attitude error  {p.base.attitude_error_rad:.3e} rad")
+    lines += list(extra_lines)
     v = p.verification
     if v.checks:
         lines.append(
@@ -55,8 +96,13 @@ def summary(p: Plan, output: Path | None = None) -> str:
             f"{v['attitude_independent'].value:.1e} rad, replay "
             f"{v['replay_attitude'].value:.1e} rad, momentum {v['momentum'].value:.1e} kg m^2/s"
         )
+    kinds = dict(zip(p.robot.joints, _kinds(p), strict=True))
     free = [
-        f"{name}: " + ", ".join(f"t^{6 + k} {c:.9e}" for k, c in enumerate(values))
+        f"{name}: "
+        + ", ".join(
+            f"t^{6 + k} {c:.9e} {'m' if kinds.get(name) == 'prismatic' else 'rad'}/s^{6 + k}"
+            for k, c in enumerate(values)
+        )
         for name, values in p.free_parameters.items()
         if values
     ]
@@ -70,19 +116,81 @@ def summary(p: Plan, output: Path | None = None) -> str:
     s = p.solver
     lines.append(
         f"  solver          {s.method}; {len(s.solutions)} solution(s); {s.evaluations} "
-        f"evaluations; {s.wall_time_s:.3f} s"
+        f"evaluations; final solver call {s.wall_time_s:.3f} s"
     )
     if s.solve_time_s or s.sample_time_s or s.verify_time_s:
         lines.append(
             f"  stage times     solve {1e3 * s.solve_time_s:.1f} ms, sample "
             f"{1e3 * s.sample_time_s:.1f} ms, verify {1e3 * s.verify_time_s:.1f} ms"
         )
-    turns = {k: v for k, v in s.full_turns.items() if v}
-    if turns:
-        lines.append("  full turns      " + ", ".join(f"{k} {v:+d}" for k, v in turns.items()))
+    turns = {k: t for k, t in s.full_turns.items() if t}
+    for name, count in turns.items():
+        j = p.robot.joints.index(name)
+        start, goal = p.request.start_joints[j], p.request.goal_joints[j]
+        lines.append(
+            f"  full turns      {name}: start {math.degrees(start):.3f} deg, goal "
+            f"{math.degrees(goal):.3f} deg ({math.degrees(goal - count * 2 * math.pi):.3f} deg "
+            f"{count:+d} turn(s)), travels {math.degrees(goal - start):.3f} deg"
+        )
+    if wall_time_s is not None:
+        parts = []
+        for name, seconds in (timings or {}).items():
+            share = 100.0 * seconds / wall_time_s if wall_time_s > 0 else 0.0
+            parts.append(f"{name} {seconds:.3f} s ({share:.0f} %)")
+        lines.append(
+            f"  wall time       {wall_time_s:.3f} s total"
+            + (": " + ", ".join(parts) if parts else "")
+        )
     if output is not None:
         lines.append(f"  plan            {output}")
     return "\n".join(lines)
+
+
+def _robot_label(scenario: Scenario) -> str:
+    """The robot's name; for an inline servicer, its arm and base (not its cache hash)."""
+    table = None
+    if scenario.source is not None:
+        try:
+            table = tomllib.loads(scenario.source.read_text(encoding="utf-8")).get("robot")
+        except (OSError, tomllib.TOMLDecodeError):
+            table = None
+    if isinstance(table, dict):
+        size = table.get("base_size", [])
+        edges = " x ".join(f"{float(x):g}" for x in size) if isinstance(size, list) else "?"
+        arm = Path(str(table.get("arm", "?"))).stem
+        return (
+            f"servicer: {arm} arm on a {float(table.get('base_mass', 0.0)):g} kg, {edges} m base "
+            f"({scenario.robot.n} joints)"
+        )
+    return f"{scenario.robot.name} ({Path(scenario.robot.urdf).name}, {scenario.robot.n} joints)"
+
+
+def _cartesian_report(scenario: Scenario, p: Plan) -> list[str]:
+    """Goal joints chosen by inverse kinematics and the end-effector error at the goal."""
+    goal = scenario.goal_pose
+    if goal is None:
+        return []
+    from .physics.momentum import MomentumMap
+
+    kinds = _kinds(p)
+    chosen = ", ".join(
+        f"{name} {_joint_value(value, kind)}"
+        for name, value, kind in zip(p.robot.joints, p.request.goal_joints, kinds, strict=True)
+    )
+    pose = MomentumMap(scenario.robot).end_effector_pose(
+        np.asarray(p.request.goal_joints), np.asarray(p.base.achieved_quaternion_xyzw)
+    )
+    miss = float(np.linalg.norm(pose.translation - goal.position))
+    lines = [
+        f"  goal joints     (inverse kinematics) {chosen}",
+        "  end effector    goal (" + ", ".join(f"{x:.4f}" for x in goal.position) + ") m, "
+        f"position error {miss:.3e} m",
+    ]
+    if goal.rotation is not None:
+        cos = (np.trace(goal.rotation.T @ pose.rotation) - 1.0) / 2.0
+        angle = math.degrees(math.acos(min(1.0, max(-1.0, cos))))
+        lines[-1] += f", orientation error {angle:.3e} deg"
+    return lines
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
@@ -94,6 +202,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     if args.samples < 2:
         raise InputError(f"--samples must be at least 2, got {args.samples}")
     result = plan(scenario, SolveOptions(tolerance=args.tolerance), samples=args.samples)
+    cartesian = _cartesian_report(scenario, result)
     if args.output:
         output = Path(args.output)
     elif args.scenario:
@@ -101,19 +210,30 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     else:
         output = DEFAULT_OUT_DIR / "plan.json"
     written = result.save(output)
-    print(summary(result, written))
+    after: list[str] = []
     if not args.scenario and not args.output:
         # The main job: the worked example with its playback page and plots.
         from .viz.playback import write_html
         from .viz.plots import save_figures
 
-        html = write_html(result, DEFAULT_OUT_DIR / "plan.html")
-        print(f"  playback        {html}")
-        figures = save_figures(result, DEFAULT_OUT_DIR / "plots")
-        print(
+        with stage("write playback page"):
+            html = write_html(result, DEFAULT_OUT_DIR / "plan.html")
+        after.append(f"  playback        {html}")
+        with stage("write plots"):
+            figures = save_figures(result, DEFAULT_OUT_DIR / "plots")
+        after.append(
             f"  plots           {figures[0].parent} ({len(figures)} files: "
             f"{', '.join(p.name for p in figures)})"
         )
+    text = summary(
+        result,
+        written,
+        robot_label=_robot_label(scenario),
+        wall_time_s=time.perf_counter() - args.started,
+        timings=dict(TIMINGS),
+        extra_lines=cartesian,
+    )
+    print("\n".join([text, *after]))
     return 0
 
 
@@ -122,7 +242,9 @@ def _cmd_show(args: argparse.Namespace) -> int:
 
     loaded = Plan.load(args.plan)
     if args.html:
-        print(f"freefloat show: wrote {write_html(loaded, args.html, args.speed)}")
+        with stage("write playback page"):
+            written = write_html(loaded, args.html, args.speed)
+        print(f"freefloat show: wrote {written}")
     else:
         serve(loaded, args.speed)
     return 0
@@ -132,10 +254,32 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     from .viz.plots import save_figures
 
     loaded = Plan.load(args.plan)
-    written = save_figures(loaded, args.output, svg=args.svg)
+    with stage("write plots"):
+        written = save_figures(loaded, args.output, svg=args.svg)
     print(f"freefloat plot: {len(written)} files in {Path(args.output).resolve()}")
     for path in written:
         print(f"  {path.name}")
+    return 0
+
+
+def _cmd_export(args: argparse.Namespace) -> int:
+    from .export import FORMATS, export
+
+    if args.format not in FORMATS:
+        raise InputError(f"unknown --format {args.format!r}; valid: {', '.join(FORMATS)}")
+    rate = None
+    if args.rate is not None:
+        try:
+            rate = float(args.rate)
+        except ValueError:
+            raise InputError(f"--rate must be a positive number of Hz, got {args.rate!r}") from None
+        if not (math.isfinite(rate) and rate > 0):
+            raise InputError(f"--rate must be a positive number of Hz, got {args.rate}")
+    loaded = Plan.load(args.plan)
+    with stage(f"export {args.format}"):
+        written = export(loaded, args.output, args.format, rate)
+    source = "the plan's samples" if rate is None else f"resampled at {rate:g} Hz"
+    print(f"freefloat export: wrote {written} ({args.format}, {source})")
     return 0
 
 
@@ -170,6 +314,9 @@ def _cmd_bounds(args: argparse.Namespace) -> int:
 def _cmd_verify(args: argparse.Namespace) -> int:
     if args.replay_steps < 1:
         raise InputError(f"--replay-steps must be at least 1, got {args.replay_steps}")
+    from .plans.schema import check_plan_file
+
+    check_plan_file(args.plan)  # names the bad field before anything else reads the file
     loaded = Plan.load(args.plan)
     result = verify_plan(loaded, replay_steps=args.replay_steps)
     print(
@@ -200,8 +347,9 @@ def _cmd_compose(args: argparse.Namespace) -> int:
         lock=tuple(args.lock or ()),
         keep_gripper=args.keep_gripper,
     )
-    path = compose_servicer(spec, args.output)
-    robot = load_robot(path)
+    with stage("compose servicer"):
+        path = compose_servicer(spec, args.output)
+        robot = load_robot(path)
     print(f"freefloat compose: wrote {path}")
     print(
         f"  {robot.n} joints ({', '.join(robot.joint_names)}), total mass "
@@ -373,6 +521,23 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p_show.set_defaults(func=_cmd_show)
 
+    p_export = commands.add_parser(
+        "export",
+        help="write a plan as CSV, MCAP (Foxglove) or a ROS 2 bag",
+        description="Export a plan: csv (one row per instant, units in the header), mcap "
+        "(ROS 2 messages for Foxglove) or ros2-bag (a rosbag2 folder): the joint trajectory, "
+        "joint states over time, the base pose on /tf and the end effector. Without --rate "
+        "the plan's samples are written; with --rate every quantity is recomputed at that "
+        "rate from the plan's polynomials and robot. No ROS installation is needed.",
+    )
+    p_export.add_argument("plan", help="plan JSON file")
+    p_export.add_argument("--format", required=True, metavar="FORMAT", help="csv, mcap or ros2-bag")
+    p_export.add_argument("--rate", metavar="HZ", help="resample at HZ samples per second")
+    p_export.add_argument(
+        "-o", "--output", required=True, metavar="FILE", help="file (folder for ros2-bag)"
+    )
+    p_export.set_defaults(func=_cmd_export)
+
     p_plot = commands.add_parser(
         "plot",
         help="write figures of a plan (PNG, optionally SVG)",
@@ -383,7 +548,38 @@ def build_parser() -> argparse.ArgumentParser:
     p_plot.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
     p_plot.add_argument("--svg", action="store_true", help="also write SVG files")
     p_plot.set_defaults(func=_cmd_plot)
+    for sub in [parser, *commands.choices.values()]:
+        _add_common_flags(sub)
     return parser
+
+
+def _add_common_flags(parser: argparse.ArgumentParser) -> None:
+    """-v/--verbose and -q/--quiet, before or after the command name."""
+    parser.add_argument(
+        "-v",
+        "--verbose",
+        action="count",
+        default=argparse.SUPPRESS,
+        help="log stage timings (-v) and details (-vv) on stderr",
+    )
+    parser.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        default=argparse.SUPPRESS,
+        help="no progress display and no warnings; errors and results only",
+    )
+
+
+def _in_degrees(exc: FreeFloatError) -> str:
+    """The error's message, with angular rates in deg/s where the library speaks rad/s."""
+    if isinstance(exc, VelocityLimitError) and "rad/s" in str(exc):
+        return (
+            f"joint {exc.joint!r} reaches {math.degrees(exc.peak):.4g} deg/s, above its "
+            f"velocity limit {math.degrees(exc.limit):.4g} deg/s; the shortest duration that "
+            f"respects every velocity limit is {exc.shortest_duration:.4g} s"
+        )
+    return str(exc)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -393,10 +589,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     parser = build_parser()
     args = parser.parse_args(argv)
+    configure(getattr(args, "verbose", 0), getattr(args, "quiet", False))
+    args.started = time.perf_counter()
     try:
         return int(args.func(args))
     except FreeFloatError as exc:
-        print(f"freefloat: error: {exc}", file=sys.stderr)
+        print(f"freefloat: error: {_in_degrees(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:  # pragma: no cover - interactive
         return 130

@@ -1,4 +1,8 @@
-"""Atomic file writes: a reader never sees half a file, and a failure leaves nothing behind."""
+"""Atomic file writes: a reader never sees half a file, and a failure leaves nothing behind.
+
+Files are created with the permissions of an ordinary ``open()``: ``0666`` less the process
+umask (``0644`` under the usual umask 022), not the ``0600`` of a temporary file.
+"""
 
 from __future__ import annotations
 
@@ -7,7 +11,14 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
-__all__ = ["atomic_write", "atomic_write_text"]
+__all__ = ["atomic_write", "atomic_write_text", "default_file_mode"]
+
+
+def default_file_mode() -> int:
+    """``0o666`` less the current umask: the mode ``open()`` gives a new file."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
 
 
 def atomic_write(path: str | Path, write: Callable[[Path], None], suffix: str = "") -> Path:
@@ -27,6 +38,8 @@ def atomic_write(path: str | Path, write: Callable[[Path], None], suffix: str = 
     os.close(fd)
     try:
         write(Path(tmp))
+        if Path(tmp).is_file():
+            os.chmod(tmp, default_file_mode())
         os.replace(tmp, target)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

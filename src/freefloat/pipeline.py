@@ -34,6 +34,7 @@ from .problem.constraints import Clearance, Constraint, JointVelocityLimits, sce
 from .problem.constraints.clearance import clearance_at
 from .problem.residual import Problem
 from .problem.scenario import Scenario
+from .progress import stage
 from .solvers.options import DEFAULT_TOLERANCE, Solution, SolveOptions
 from .solvers.search import search
 from .verify.checks import boundary_errors, verify_plan
@@ -78,20 +79,22 @@ def plan(
     _check_endpoints(scenario, constraints)
     clock = time.perf_counter()
     try:
-        found = search(scenario, options, constraints)
+        with stage("solve"):
+            found = search(scenario, options, constraints)
     except SolverError as exc:
         _explain_velocity_limits(scenario, options, constraints, exc)
         raise
     solve_time = time.perf_counter() - clock
     problem = found.problem.with_steps(found.solution.steps)
-    result = plan_from_solution(
-        problem,
-        found.solution,
-        samples,
-        options.tolerance,
-        constraints=constraints,
-        safety=_safety_report(scenario, constraints),
-    )
+    with stage("sample and verify"):
+        result = plan_from_solution(
+            problem,
+            found.solution,
+            samples,
+            options.tolerance,
+            constraints=constraints,
+            safety=_safety_report(scenario, constraints),
+        )
     report = replace(
         result.solver,
         freedom=found.freedom,

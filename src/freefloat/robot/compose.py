@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import math
 import re
 from collections.abc import Sequence
@@ -25,6 +26,8 @@ import numpy as np
 from ..errors import InputError, ModelError, UnknownNameError
 from ..files import atomic_write_text
 from .model import example_robot_data_dir
+
+LOGGER = logging.getLogger(__name__)
 
 __all__ = ["ARMS", "ServicerSpec", "arm_urdf", "compose_servicer", "resolve_mesh"]
 
@@ -239,10 +242,13 @@ def compose_servicer_text(spec: ServicerSpec) -> str:
         load_meshes=False,
         filename_handler=yourdfpy.filename_handler_null,
     )
-    missing = [name for name in _mesh_names(composed) if resolve_mesh(name) is None]
-    if missing:
-        raise ModelError(
-            f"{len(missing)} mesh file(s) of the arm cannot be found, e.g. {missing[0]}"
+    missing = sorted({name for name in _mesh_names(composed) if resolve_mesh(name) is None})
+    if missing:  # the dynamics do not need them; playback draws such links as simple shapes
+        LOGGER.warning(
+            "%d mesh file(s) of the arm cannot be found (e.g. %s); the servicer is composed "
+            "and plans, and playback draws those links as simple shapes",
+            len(missing),
+            missing[0],
         )
     if not urdf.validate():
         errors = "; ".join(str(e) for e in getattr(urdf, "errors", []))

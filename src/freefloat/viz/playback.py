@@ -4,7 +4,8 @@ The robot's visual geometry (URDF primitives or meshes) is drawn by Pinocchio's
 ``MeshcatVisualizer``; each sample of the plan becomes one animation frame that places every
 visual (base and arm together), so meshcat's animation controls play, pause and scrub it.
 Also drawn: the end-effector trail, the system centre of mass (a fixed point at the origin),
-the inertial axes and the base frame's axes.
+the inertial axes and the base frame's axes. A link whose mesh file cannot be found is drawn
+as a small sphere, with a warning (the dynamics never need the meshes).
 
 meshcat 0.3.2 quirks handled here: the scene can only be exported (``static_html``) while its
 server subprocess runs, and ``Visualizer.close()`` raises; :class:`Playback` stops the server
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import logging
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,9 +28,11 @@ import pinocchio as pin
 from ..errors import FreeFloatError, ViewerError
 from ..files import atomic_write_text
 from ..plans.format import Plan
-from ..robot.model import Robot, load_robot
+from ..robot.model import Robot, example_robot_data_dir, load_robot
 
 __all__ = ["Playback", "build_playback", "serve", "write_html"]
+
+LOGGER = logging.getLogger(__name__)
 
 ROOT_NODE = "freefloat"
 EXTRAS = "freefloat_extras"
@@ -90,8 +94,64 @@ class Playback:
         self.close()
 
 
-def _visual_model(robot: Robot) -> pin.GeometryModel:
+#: Radius (m) of the sphere drawn for a link whose mesh file cannot be found.
+MISSING_MESH_RADIUS = 0.04
+
+
+def _mesh_found(name: str, robot: Robot) -> bool:
+    """Whether a URDF mesh reference resolves to a file (as Pinocchio would look it up)."""
+    if name.startswith("package://"):
+        rest = name[len("package://") :]
+        folders = [*robot.package_dirs, example_robot_data_dir()]
+        return any(d is not None and (Path(d) / rest).is_file() for d in folders)
+    path = Path(name[len("file://") :] if name.startswith("file://") else name)
+    return (path if path.is_absolute() else Path(robot.urdf).parent / path).is_file()
+
+
+def _with_simple_shapes(robot: Robot) -> tuple[str | None, list[str]]:
+    """The URDF text with every missing visual mesh replaced by a small sphere, and the names.
+
+    Returns ``(None, [])`` when every mesh is found (the file is used as it is).
+    """
+    import xml.etree.ElementTree as ET
+
     try:
+        root = ET.fromstring(Path(robot.urdf).read_text(encoding="utf-8"))
+    except (OSError, ET.ParseError):
+        return None, []
+    missing = []
+    for visual in root.iter("visual"):
+        geometry = visual.find("geometry")
+        mesh = geometry.find("mesh") if geometry is not None else None
+        if geometry is None or mesh is None or _mesh_found(mesh.get("filename", ""), robot):
+            continue
+        missing.append(mesh.get("filename", ""))
+        geometry.remove(mesh)
+        ET.SubElement(geometry, "sphere", radius=repr(MISSING_MESH_RADIUS))
+    if not missing:
+        return None, []
+    return ET.tostring(root, encoding="unicode"), missing
+
+
+def _visual_model(robot: Robot) -> pin.GeometryModel:
+    text, missing = _with_simple_shapes(robot)
+    if missing:
+        LOGGER.warning(
+            "%d mesh file(s) of %s cannot be found (e.g. %s); those links are drawn as "
+            "spheres of %g m",
+            len(missing),
+            Path(robot.urdf).name,
+            missing[0],
+            MISSING_MESH_RADIUS,
+        )
+    try:
+        if text is not None:
+            return pin.buildGeomFromUrdfString(
+                robot.model,
+                text,
+                pin.GeometryType.VISUAL,
+                package_dirs=[str(d) for d in robot.package_dirs],
+            )
         return pin.buildGeomFromUrdf(
             robot.model,
             str(robot.urdf),
@@ -135,7 +195,8 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
         raise ViewerError(f"the meshcat server failed to start: {exc}") from None
     playback = Playback(viewer=viewer, url=str(viewer.url()), fps=fps)
     try:
-        viz = meshcat_visualizer(robot.model, visual, visual)
+        # No collision group: the page would carry every mesh twice.
+        viz = meshcat_visualizer(robot.model, pin.GeometryModel(), visual)
         viz.initViewer(viewer=viewer)
         viz.loadViewerModel(rootNodeName=ROOT_NODE)
 
@@ -206,11 +267,17 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
 def write_html(plan: Plan, path: str | Path, speed: float = 1.0) -> Path:
     """Write one self-contained HTML file that plays the plan offline; no server is left.
 
+    The page carries visible controls (:mod:`freefloat.viz.controls`): title, play / pause /
+    restart, a time slider with a readout in seconds, speed and a legend.
+
     The file is written atomically: a failure leaves nothing behind.
     """
+    from .compact import compact_page
+    from .controls import inject_controls
+
     with build_playback(plan, speed) as playback:
         html = playback.html()
-    return atomic_write_text(path, html)
+    return atomic_write_text(path, inject_controls(compact_page(html), plan, speed))
 
 
 def serve(plan: Plan, speed: float = 1.0, announce: Any = print) -> None:

@@ -4,8 +4,12 @@ One figure per topic and one overview sheet, all against time in seconds:
 ``end_effector`` (x, y, z in m), ``base_attitude`` (ZYX Euler angles in deg),
 ``base_rate`` (base angular velocity in the base frame, deg/s), ``joint_positions`` (deg, or m
 for prismatic joints), ``joint_rates`` (deg/s or m/s), ``joint_torques`` (N m or N), and
-``end_effector_path`` (the path in the inertial x-y plane, m). Every plotted line carries the
-plan's samples unchanged apart from the unit conversion named in its axis label.
+``end_effector_path`` (the path projected onto the inertial x-y plane, m; the projection is
+named in the axis label). Every plotted line carries the plan's samples unchanged apart from
+the unit conversion named in its axis label. Legends sit outside the data, to the right.
+Marked: the goal values (joint goals at t = T, the target base attitude; dotted) and the
+URDF's finite joint position and velocity limits (dashed, in the joint's colour; read from the
+plan's URDF when it loads, else left out).
 """
 
 from __future__ import annotations
@@ -55,7 +59,22 @@ def _joint_scale(plan: Plan) -> tuple[np.ndarray, list[str]]:
     return scale, kinds
 
 
-def _draw(plan: Plan, topic: str, ax: Any) -> None:
+def _limits(plan: Plan) -> dict[str, tuple[float, float, float]]:
+    """Per joint ``(lower, upper, velocity)`` limits (rad, rad/s or m, m/s); {} if no URDF."""
+    from ..errors import FreeFloatError
+    from ..robot.model import load_robot
+
+    try:
+        robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+    except (FreeFloatError, OSError):
+        return {}
+    return {j.name: (j.lower, j.upper, j.velocity_limit) for j in robot.joints}
+
+
+def _draw(
+    plan: Plan, topic: str, ax: Any, limits: dict[str, tuple[float, float, float]] | None = None
+) -> None:
+    limits = limits or {}
     s = plan.samples
     t = np.asarray(s.t)
     scale, kinds = _joint_scale(plan)
@@ -74,12 +93,22 @@ def _draw(plan: Plan, topic: str, ax: Any) -> None:
         ax.plot(ee[-1:, 0], ee[-1:, 1], "s", label="goal")
         ax.plot([0.0], [0.0], "+", color="k", label="system CM")
         ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("x [m]")
+        flat = np.ptp(ee[:, 2]) <= 1e-9
+        plane = "inertial x-y plane" if flat else "projection onto the inertial x-y plane"
+        ax.set_xlabel(f"x [m] ({plane})")
         ax.set_ylabel("y [m]")
     elif topic == "base_attitude":
         zyx = np.asarray(s.base_zyx_deg)
         for i, label in enumerate(("yaw", "pitch", "roll")):
-            ax.plot(t, zyx[:, i], label=label)
+            (line,) = ax.plot(t, zyx[:, i], label=label)
+            ax.axhline(
+                plan.base.target_zyx_deg[i],
+                color=line.get_color(),
+                linestyle=":",
+                linewidth=1,
+                label="_goal",
+            )
+        ax.plot([], [], ":", color="0.3", label="goal")
         ax.set_ylabel("base attitude [deg]")
     elif topic == "base_rate":
         omega = np.degrees(np.asarray(s.base_angular_velocity))
@@ -92,7 +121,27 @@ def _draw(plan: Plan, topic: str, ax: Any) -> None:
         if topic != "joint_torques":
             values = values * scale
         for i, name in enumerate(names):
-            ax.plot(t, values[:, i], label=name)
+            (line,) = ax.plot(t, values[:, i], label=name)
+            colour = line.get_color()
+            if topic == "joint_positions" and i < len(plan.request.goal_joints):
+                goal = plan.request.goal_joints[i] * scale[i]
+                ax.plot([t[-1]], [goal], "o", mfc="none", color=colour, label="_goal")
+            lower, upper, rate = limits.get(name, (-math.inf, math.inf, math.inf))
+            marks = (lower, upper) if topic == "joint_positions" else (-rate, rate)
+            if topic != "joint_torques":
+                for mark in marks:
+                    if math.isfinite(mark):
+                        ax.axhline(
+                            mark * scale[i],
+                            color=colour,
+                            linestyle="--",
+                            linewidth=0.8,
+                            label="_limit",
+                        )
+        if topic == "joint_positions":
+            ax.plot([], [], "o", mfc="none", color="0.3", label="goal at T")
+        if any(line.get_label() == "_limit" for line in ax.lines):
+            ax.plot([], [], "--", color="0.3", label="limit (URDF)")
         ax.set_ylabel(
             {
                 "joint_positions": f"joint position [{unit}]",
@@ -108,7 +157,7 @@ def _draw(plan: Plan, topic: str, ax: Any) -> None:
         ax.set_xlabel("t [s]")
         ax.set_xlim(0.0, plan.duration)
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="best", fontsize="small")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize="small")
 
 
 def figures(plan: Plan, topics: Sequence[str] = TOPICS) -> dict[str, Any]:
@@ -118,15 +167,16 @@ def figures(plan: Plan, topics: Sequence[str] = TOPICS) -> dict[str, Any]:
         if topic not in TOPICS:
             raise InputError(f"unknown figure {topic!r}; valid: {', '.join(TOPICS)}")
     title = f"{Path(plan.robot.urdf).stem}, T = {plan.duration:g} s"
+    limits = _limits(plan)
     out: dict[str, Any] = {}
     for topic in topics:
-        fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
-        _draw(plan, topic, ax)
+        fig, ax = plt.subplots(figsize=(7.6, 4.0), layout="constrained")
+        _draw(plan, topic, ax, limits)
         ax.set_title(f"{topic.replace('_', ' ')} ({title})", fontsize="medium")
         out[topic] = fig
     fig, axes = plt.subplots(4, 2, figsize=(12, 14), layout="constrained")
     for topic, ax in zip(topics, axes.flat, strict=False):
-        _draw(plan, topic, ax)
+        _draw(plan, topic, ax, limits)
         ax.set_title(topic.replace("_", " "), fontsize="medium")
     for ax in list(axes.flat)[len(topics) :]:
         ax.axis("off")

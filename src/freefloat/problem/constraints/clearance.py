@@ -6,8 +6,9 @@ so clearance is a function of the joints alone.
 
 For the solvers, each instant contributes one row: the margin minus the smallest distance over
 the pairs there (m), with its gradient from the witness points of that pair and the joint
-Jacobians, chained with the path's linear dependence on ``beta``. The rows ask for a little
-more than the margin (:data:`SOLVER_SLACK`) so that the dips between instants stay outside it.
+Jacobians, chained with the path's linear dependence on ``beta``. The instants are a uniform
+grid refined around the minima of clearance, and the rows ask for a little more than the
+margin (:data:`SOLVER_SLACK`) so that the dips between instants stay outside it.
 
 The dense check samples the whole path, refines every near-minimum by a bounded scalar search
 in time, and estimates its own error by step doubling (the same search on half the samples).
@@ -25,14 +26,14 @@ from ...robot.collision import CollisionModel
 from ...robot.model import Robot
 from ..paths import JointPolynomials
 from ..residual import Problem
-from .base import Constraint, ConstraintRows, Excess
+from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 
-__all__ = ["SOLVER_SLACK", "Clearance"]
+__all__ = ["REFINE", "SOLVER_SLACK", "Clearance", "clearance_at"]
 
 #: Extra clearance the solvers ask for beyond the margin, between constraint instants (m).
 SOLVER_SLACK = 2e-3
-#: Instants at which the solvers impose clearance (normalised time s = t / T).
-SOLVER_INSTANTS = np.linspace(0.0, 1.0, 241)
+#: Extra instants per grid interval next to a local minimum of clearance.
+REFINE = 3
 
 
 class Clearance(Constraint):
@@ -53,7 +54,7 @@ class Clearance(Constraint):
             raise ValueError(f"clearance margin must be a finite number >= 0 m, got {margin!r}")
         self.model = model
         self.margin = float(margin)
-        self._memo: tuple[Problem, tuple[bytes, bytes], ConstraintRows] | None = None
+        self._memo: tuple[Problem, bytes, ConstraintRows] | None = None
 
     def __repr__(self) -> str:
         return f"Clearance(margin={self.margin:g} m, {self.model.n_pairs} pairs)"
@@ -63,18 +64,29 @@ class Clearance(Constraint):
         return self.model.n_pairs > 0
 
     def rows(
-        self, problem: Problem, beta: np.ndarray, instants: np.ndarray = SOLVER_INSTANTS
+        self, problem: Problem, beta: np.ndarray, instants: np.ndarray = DEFAULT_INSTANTS
     ) -> ConstraintRows:
-        """``margin + slack - min_pair d(q(s))`` at each instant (m) and its exact gradient."""
-        instants = np.asarray(instants, dtype=float)
+        """``margin + slack - min_pair d(q(s))`` (m) and its exact gradient, one row an instant.
+
+        Clearance picks its own instants: the uniform grid :data:`DEFAULT_INSTANTS` (the
+        ``instants`` asked for are thinned to it, since other constraints' tightest instants
+        say nothing of clearance), plus :data:`REFINE` instants in each grid interval next to
+        each of the two lowest local minima of clearance on that grid: a fixed number of rows,
+        as SLSQP needs.
+        """
         beta = np.asarray(beta, dtype=float)
-        key = (instants.tobytes(), beta.tobytes())
+        key = beta.tobytes()
         if self._memo is not None and self._memo[0] is problem and self._memo[1] == key:
             return self._memo[2]
-        base, dq, _ = problem.family.linear_map(instants)
+        grid = DEFAULT_INSTANTS
+        base, dq, _ = problem.family.linear_map(grid)
         q = base.q + dq @ beta
-        values = np.empty(len(instants))
-        jacobian = np.zeros((len(instants), problem.n_free))
+        coarse = np.array([self.model.closest_value(x)[0] for x in q])
+        chosen = np.concatenate([grid, *(self._refinement(grid, k) for k in _lowest(coarse))])
+        base, dq, _ = problem.family.linear_map(chosen)
+        q = base.q + dq @ beta
+        values = np.empty(len(chosen))
+        jacobian = np.zeros((len(chosen), problem.n_free))
         for k, joints in enumerate(q):
             distance, gradient, _ = self.model.closest(joints)
             values[k] = self.margin + SOLVER_SLACK - distance
@@ -82,6 +94,12 @@ class Clearance(Constraint):
         rows = ConstraintRows(values, jacobian)
         self._memo = (problem, key, rows)  # solvers ask for values, then Jacobian, at one beta
         return rows
+
+    @staticmethod
+    def _refinement(grid: np.ndarray, k: int) -> np.ndarray:
+        """:data:`REFINE` instants on each side of grid point ``k``, none on the grid."""
+        lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+        return np.linspace(lo, hi, 2 * REFINE + 2)[1:-1]
 
     def critical_times(self, robot: Robot, path: JointPolynomials) -> np.ndarray:
         """The times (s) of the smallest clearance along ``path``, refined between samples."""
@@ -99,9 +117,7 @@ class Clearance(Constraint):
         q = path.evaluate(t).q
 
         def lowest(joints: np.ndarray) -> tuple[float, int]:
-            values = self.model.distances(joints).values
-            k = int(np.argmin(values))
-            return float(values[k]), k
+            return self.model.closest_value(joints)
 
         sampled = np.array([lowest(x)[0] for x in q])
         best = float(sampled.min())
@@ -153,6 +169,19 @@ class Clearance(Constraint):
             f"margin {self.margin:g} m"
         )
         return Excess(self.margin - clearance, 0.0, detail)
+
+
+def _lowest(values: np.ndarray) -> list[int]:
+    """Indices of the two lowest local minima of ``values`` (or the two lowest apart)."""
+    n = len(values)
+    left = np.concatenate([[np.inf], values[:-1]])
+    right = np.concatenate([values[1:], [np.inf]])
+    minima = np.flatnonzero((values <= left) & (values <= right))
+    order = [int(k) for k in minima[np.argsort(values[minima], kind="stable")]]
+    if len(order) < 2:
+        far = [int(k) for k in np.argsort(values, kind="stable") if abs(int(k) - order[0]) > 2]
+        order.append(far[0] if far else (order[0] + n // 2) % n)
+    return order[:2]
 
 
 def clearance_at(model: CollisionModel, joints: Sequence[float] | np.ndarray) -> tuple[float, str]:

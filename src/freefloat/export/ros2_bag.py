@@ -1,0 +1,69 @@
+"""ROS 2 bag export (``rosbag2``, SQLite storage) with the pure-Python ``rosbags`` writer.
+
+A ROS 2 bag is a folder (``metadata.yaml`` and one ``.db3`` file); ``ros2 bag play`` and
+``rosbags``' reader open it. Topics and frames: :mod:`freefloat.export.messages`. Message
+times are nanoseconds from the plan's start. The folder is written next to the target under
+a temporary name and renamed into place, so a failure leaves nothing behind; an existing
+bag folder at the target is replaced.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from ..errors import InputError
+from ..files import default_file_mode
+from .messages import messages, root_link, typestore
+from .trajectory import Trajectory
+
+__all__ = ["write_bag"]
+
+
+def write_bag(traj: Trajectory, path: str | Path, urdf: str) -> Path:
+    """Write the trajectory as a ROS 2 bag folder; return its absolute path.
+
+    Raises:
+        InputError: the target exists and is a file, or a folder that is not a bag.
+    """
+    from rosbags.rosbag2 import Writer
+
+    target = Path(path).expanduser().resolve()
+    if target.exists() and not (target.is_dir() and (target / "metadata.yaml").is_file()):
+        raise InputError(f"{target} exists and is not a ROS 2 bag folder; choose another -o")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    ts = typestore()
+    child = root_link(urdf)
+    holder = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
+    try:
+        bag = holder / target.name
+        with Writer(bag, version=8) as writer:  # rosbag2 metadata 8: Iron and newer
+            connections: dict[str, Any] = {}
+            for msg in messages(traj, child):
+                if msg.topic not in connections:
+                    connections[msg.topic] = writer.add_connection(
+                        msg.topic, msg.msgtype, typestore=ts
+                    )
+                writer.write(
+                    connections[msg.topic],
+                    msg.time_ns,
+                    ts.serialize_cdr(msg.message, msg.msgtype),
+                )
+        os.chmod(bag, 0o777 & ~_umask())
+        for item in bag.iterdir():
+            os.chmod(item, default_file_mode())
+        if target.exists():
+            shutil.rmtree(target)
+        os.replace(bag, target)
+    finally:
+        shutil.rmtree(holder, ignore_errors=True)
+    return target
+
+
+def _umask() -> int:
+    current = os.umask(0)
+    os.umask(current)
+    return current

@@ -1,0 +1,172 @@
+"""The time series every export writes, taken from a plan's samples or resampled.
+
+Without a rate, the series is the plan's own samples, unchanged. With a rate (Hz), the time
+grid is ``0, 1/rate, 2/rate, ...`` plus the final instant ``T``, and every quantity is
+recomputed consistently from the plan's polynomials and its robot (nothing is interpolated):
+
+- joint positions, rates and accelerations: the plan's polynomials and their derivatives;
+- base attitude: the base angular velocity ``F1(q) qdot`` (Pinocchio's centroidal map)
+  integrated from the plan's start attitude by sixth-order Magnus steps of at most
+  ``T / 2000``, as the planner does;
+- base position and end-effector position: kinematics with the system CM at the origin;
+- joint torques: inverse dynamics of the zero-momentum motion (Pinocchio's RNEA).
+
+At the plan's own sample instants the resampled values equal the plan's samples to the
+planner's integration accuracy (tested).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..plans.format import Plan
+
+__all__ = ["MAX_SAMPLES", "Trajectory", "from_samples", "resample", "trajectory"]
+
+#: Largest number of instants a resampled export may hold.
+MAX_SAMPLES = 2_000_000
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """A plan as arrays over time.
+
+    Attributes:
+        joints: joint names, in order.
+        kinds: per joint its URDF kind (``revolute``, ``continuous``, ``prismatic``).
+        t: (K,) time (s).
+        q: (K, N) joint positions (rad, or m for prismatic joints).
+        qd: (K, N) joint rates (rad/s or m/s).
+        qdd: (K, N) joint accelerations (rad/s^2 or m/s^2).
+        tau: (K, N) joint torques (N m, or N for prismatic joints).
+        base_quaternion_xyzw: (K, 4) base attitude in the inertial frame.
+        base_position: (K, 3) base origin (m) in the inertial frame (origin: system CM).
+        end_effector_position: (K, 3) end-effector position (m), same frame.
+        resampled: whether the series was recomputed at a rate (else the plan's samples).
+    """
+
+    joints: list[str]
+    kinds: list[str]
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    tau: np.ndarray
+    base_quaternion_xyzw: np.ndarray
+    base_position: np.ndarray
+    end_effector_position: np.ndarray
+    resampled: bool = False
+
+
+def from_samples(plan: Plan) -> Trajectory:
+    """The plan's own samples as arrays (torques must be present)."""
+    s = plan.samples
+    n = len(plan.robot.joints)
+    tau = np.asarray(s.tau, dtype=float) if s.tau else np.full((len(s.t), n), np.nan)
+    return Trajectory(
+        joints=list(plan.robot.joints),
+        kinds=_kinds(plan),
+        t=np.asarray(s.t, dtype=float),
+        q=np.asarray(s.q, dtype=float),
+        qd=np.asarray(s.qd, dtype=float),
+        qdd=np.asarray(s.qdd, dtype=float),
+        tau=tau,
+        base_quaternion_xyzw=np.asarray(s.base_quaternion_xyzw, dtype=float),
+        base_position=np.asarray(s.base_position, dtype=float),
+        end_effector_position=np.asarray(s.end_effector_position, dtype=float),
+    )
+
+
+def _kinds(plan: Plan) -> list[str]:
+    kinds = list(plan.robot.joint_kinds)
+    return kinds if len(kinds) == len(plan.robot.joints) else ["revolute"] * len(kinds or [])
+
+
+def _check_rate(rate: float, duration: float) -> int:
+    if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
+        raise InputError(f"--rate must be a positive number of Hz, got {rate}")
+    count = math.floor(duration * rate * (1 + 1e-12)) + 2
+    if count > MAX_SAMPLES:
+        raise InputError(
+            f"--rate {rate:g} Hz gives {count} samples over {duration:g} s; at most "
+            f"{MAX_SAMPLES} (use a rate up to {MAX_SAMPLES / duration:.4g} Hz)"
+        )
+    return count
+
+
+def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajectory:
+    """Recompute the plan at ``rate`` (Hz) from its polynomials and robot (see module doc).
+
+    Args:
+        plan: the plan.
+        rate: samples per second (Hz), positive.
+        times: explicit instants (s) in [0, T] instead of the rate's grid (tests).
+
+    Raises:
+        InputError: ``rate`` is not a positive finite number, or gives too many samples.
+        ModelError: the plan's URDF cannot be loaded.
+    """
+    from ..physics.attitude import magnus_increments, propagate, step_nodes
+    from ..physics.dynamics import inverse_dynamics
+    from ..physics.momentum import MomentumMap
+    from ..robot.model import load_robot
+
+    T = plan.duration
+    _check_rate(rate, T)
+    if times is None:
+        grid = np.arange(0.0, T, 1.0 / rate)
+        grid = grid[grid < T - 1e-9 * max(1.0, T)]
+        times = np.append(grid, T)
+    t = np.asarray(times, dtype=float)
+    robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+    mmap = MomentumMap(robot)
+    poly = np.polynomial.polynomial
+    coefficients = [np.asarray(plan.coefficients[name], float) for name in plan.robot.joints]
+
+    def evaluate(at: np.ndarray, order: int) -> np.ndarray:
+        return np.stack([poly.polyval(at, poly.polyder(c, order)) for c in coefficients], -1)
+
+    q, qd, qdd = evaluate(t, 0), evaluate(t, 1), evaluate(t, 2)
+
+    # Attitude: Magnus steps on a fine grid that contains every output instant.
+    edges = [0.0]
+    for a, b in zip(np.concatenate([[0.0], t[:-1]]), t, strict=True):
+        if b > a:
+            steps = max(1, math.ceil((b - a) / (T / 2000.0)))
+            edges.extend(np.linspace(a, b, steps + 1)[1:].tolist())
+    fine = np.asarray(edges)
+    nodes, h = step_nodes(fine)
+    omega = mmap.base_rates(evaluate(nodes, 0), evaluate(nodes, 1)).omega.reshape(-1, 3, 3)
+    attitudes = propagate(
+        np.asarray(plan.base.start_quaternion_xyzw, float), magnus_increments(omega, h)
+    )
+    index = np.searchsorted(fine, t)
+    quats = attitudes[np.clip(index, 0, len(fine) - 1)]
+
+    base, ee, tau = [], [], []
+    for qk, qdk, qddk, quat in zip(q, qd, qdd, quats, strict=True):
+        base.append(mmap.base_position(qk, quat))
+        ee.append(mmap.end_effector_pose(qk, quat).translation.copy())
+        tau.append(inverse_dynamics(mmap, qk, qdk, qddk).tau)
+    return Trajectory(
+        joints=list(plan.robot.joints),
+        kinds=_kinds(plan),
+        t=t,
+        q=q,
+        qd=qd,
+        qdd=qdd,
+        tau=np.asarray(tau),
+        base_quaternion_xyzw=quats,
+        base_position=np.asarray(base),
+        end_effector_position=np.asarray(ee),
+        resampled=True,
+    )
+
+
+def trajectory(plan: Plan, rate: float | None = None) -> Trajectory:
+    """The plan's samples (``rate`` None) or the plan resampled at ``rate`` Hz."""
+    return from_samples(plan) if rate is None else resample(plan, rate)

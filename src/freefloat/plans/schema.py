@@ -1,0 +1,130 @@
+"""JSON Schemas of the plan file and the scenario file, shipped in ``freefloat/schemas/``.
+
+:func:`schema` returns one (``"plan"`` or ``"scenario"``); :func:`schema_errors` lists what is
+wrong with a document as one line per problem, naming the field by its path (for example
+``samples.tau[3][1]: expected a number, got 'x'``); :func:`check_plan_file` reads a plan file
+and raises :class:`~freefloat.errors.PlanFileError` naming the first bad field. The schema
+describes ``freefloat.plan/2``; files of older formats are left to :meth:`Plan.load`.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable
+from functools import cache
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from ..errors import PlanFileError, ViewerError
+from .format import FORMAT
+
+__all__ = ["SCHEMAS", "check_plan_file", "field_path", "schema", "schema_errors"]
+
+#: The shipped schemas by name.
+SCHEMAS = ("plan", "scenario")
+
+_TYPES = {
+    "number": "a number",
+    "integer": "an integer",
+    "string": "a string",
+    "boolean": "true or false",
+    "array": "a list",
+    "object": "an object",
+    "null": "null",
+}
+
+
+@cache
+def schema(name: str) -> dict[str, Any]:
+    """The JSON Schema (draft 2020-12) ``name``: ``"plan"`` or ``"scenario"``."""
+    if name not in SCHEMAS:
+        raise ValueError(f"unknown schema {name!r}; valid: {', '.join(SCHEMAS)}")
+    text = (resources.files("freefloat") / "schemas" / f"{name}.schema.json").read_text("utf-8")
+    loaded: dict[str, Any] = json.loads(text)
+    return loaded
+
+
+def field_path(parts: Iterable[str | int]) -> str:
+    """``['samples', 'tau', 3]`` -> ``samples.tau[3]`` (``(top level)`` when empty)."""
+    out = ""
+    for part in parts:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out or "(top level)"
+
+
+def _describe(error: Any) -> str:
+    where = field_path(error.absolute_path)
+    got = repr(error.instance)
+    if len(got) > 40:
+        got = got[:37] + "..."
+    kind = error.validator
+    if kind == "type":
+        wanted = error.validator_value
+        wanted = [wanted] if isinstance(wanted, str) else wanted
+        return f"{where}: expected {' or '.join(_TYPES.get(w, w) for w in wanted)}, got {got}"
+    if kind == "required":
+        missing = next((k for k in error.validator_value if k not in error.instance), "?")
+        return f"{field_path([*error.absolute_path, missing])}: missing"
+    if kind == "additionalProperties":
+        allowed = error.schema.get("properties", {})
+        extra = sorted(k for k in error.instance if k not in allowed)
+        return f"{where}: unknown key {', '.join(map(repr, extra))}; valid: {', '.join(allowed)}"
+    if kind in ("const", "enum"):
+        valid = [error.validator_value] if kind == "const" else error.validator_value
+        return f"{where}: expected {' or '.join(map(repr, valid))}, got {got}"
+    if kind in ("minItems", "maxItems"):
+        return f"{where}: expected {error.validator_value} entries or {kind[:3]}, got {got}"
+    return f"{where}: {error.message}"
+
+
+def schema_errors(document: Any, name: str = "plan") -> list[str]:
+    """Every schema violation of ``document``, one line each, most relevant first.
+
+    Raises:
+        ViewerError: jsonschema is missing.
+    """
+    try:
+        import jsonschema
+        from jsonschema.exceptions import relevance
+    except ImportError as exc:  # pragma: no cover - a dependency
+        raise ViewerError(
+            f"schema checks need jsonschema ({exc}): pip install jsonschema"
+        ) from None
+    validator = jsonschema.Draft202012Validator(schema(name))
+    errors = sorted(validator.iter_errors(document), key=relevance)
+    return [_describe(_deepest(e)) for e in errors]
+
+
+def _deepest(error: Any) -> Any:
+    """For oneOf/anyOf failures, the sub-error that went deepest (the likely intent)."""
+    if error.context:
+        best = max(error.context, key=lambda e: len(e.absolute_path))
+        if len(best.absolute_path) > len(error.absolute_path):
+            return _deepest(best)
+    return error
+
+
+def check_plan_file(path: str | Path) -> None:
+    """Check a plan file against the plan schema before it is read.
+
+    Files of other formats are not checked here (:meth:`Plan.load` converts or refuses them).
+
+    Raises:
+        PlanFileError: missing, not JSON, or a field that breaks the schema (named).
+    """
+    path = Path(path).expanduser()
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise PlanFileError(f"plan file not found: {path}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise PlanFileError(f"cannot read plan file {path}: {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise PlanFileError(f"{path}: not a plan file, corrupt JSON ({exc})") from None
+    if isinstance(data, dict) and data.get("format") != FORMAT:
+        return
+    errors = schema_errors(data, "plan")
+    if errors:
+        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+        raise PlanFileError(f"{path}: does not match the plan schema: {errors[0]}{more}")

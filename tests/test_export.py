@@ -1,0 +1,198 @@
+"""Exports read back with the libraries that read them elsewhere, compared with the plan."""
+
+from __future__ import annotations
+
+import csv
+import os
+import stat
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from freefloat.cli import main
+from freefloat.export import from_samples, resample
+
+
+@pytest.fixture(scope="module")
+def plan_file(worked_plan, tmp_path_factory):
+    return worked_plan.save(tmp_path_factory.mktemp("plan") / "plan.json")
+
+
+def _plan_arrays(plan):
+    s = plan.samples
+    return {
+        k: np.asarray(getattr(s, k), dtype=float)
+        for k in (
+            "t",
+            "q",
+            "qd",
+            "qdd",
+            "tau",
+            "base_quaternion_xyzw",
+            "base_position",
+            "end_effector_position",
+        )
+    }
+
+
+def test_csv_round_trip(worked_plan, plan_file, tmp_path):
+    out = tmp_path / "plan.csv"
+    assert main(["export", str(plan_file), "--format", "csv", "-o", str(out)]) == 0
+    with open(out, newline="") as handle:
+        rows = list(csv.reader(handle))
+    header, values = rows[0], np.array(rows[1:], dtype=float)
+    assert header[0] == "t [s]"
+    assert "q_q1 [rad]" in header and "tau_q2 [N m]" in header and "qdd_q1 [rad/s^2]" in header
+    assert "base_qw [1]" in header and "ee_y [m]" in header and "base_x [m]" in header
+    col = {name: values[:, i] for i, name in enumerate(header)}
+    a = _plan_arrays(worked_plan)
+    np.testing.assert_array_equal(col["t [s]"], a["t"])
+    for j, joint in enumerate(worked_plan.robot.joints):
+        np.testing.assert_array_equal(col[f"q_{joint} [rad]"], a["q"][:, j])
+        np.testing.assert_array_equal(col[f"qd_{joint} [rad/s]"], a["qd"][:, j])
+        np.testing.assert_array_equal(col[f"qdd_{joint} [rad/s^2]"], a["qdd"][:, j])
+        np.testing.assert_array_equal(col[f"tau_{joint} [N m]"], a["tau"][:, j])
+    for k, c in enumerate("xyzw"):
+        np.testing.assert_array_equal(col[f"base_q{c} [1]"], a["base_quaternion_xyzw"][:, k])
+    for k, c in enumerate("xyz"):
+        np.testing.assert_array_equal(col[f"base_{c} [m]"], a["base_position"][:, k])
+        np.testing.assert_array_equal(col[f"ee_{c} [m]"], a["end_effector_position"][:, k])
+    assert stat.S_IMODE(os.stat(out).st_mode) == 0o666 & ~_umask()
+
+
+def _umask():
+    current = os.umask(0)
+    os.umask(current)
+    return current
+
+
+def test_resampling_reproduces_the_samples_at_their_instants(worked_plan):
+    """Recomputed from the polynomials and the robot, the samples come back to ~1e-12."""
+    own = from_samples(worked_plan)
+    again = resample(worked_plan, 20.0, times=own.t)
+    for name in (
+        "q",
+        "qd",
+        "qdd",
+        "tau",
+        "base_quaternion_xyzw",
+        "base_position",
+        "end_effector_position",
+    ):
+        np.testing.assert_allclose(getattr(again, name), getattr(own, name), atol=1e-10)
+
+
+def test_resampled_grid(worked_plan):
+    traj = resample(worked_plan, 7.0)
+    T = worked_plan.duration
+    assert traj.t[0] == 0.0 and traj.t[-1] == T
+    np.testing.assert_allclose(np.diff(traj.t[:-1]), 1 / 7.0, rtol=1e-9)
+    assert len(traj.t) == int(np.floor(T * 7.0)) + 2 - (1 if (T * 7.0).is_integer() else 0)
+    np.testing.assert_allclose(traj.q, worked_plan.joint_positions(traj.t), atol=1e-14)
+
+
+def test_mcap_round_trip(worked_plan, plan_file, tmp_path):
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    out = tmp_path / "plan.mcap"
+    assert main(["export", str(plan_file), "--format", "mcap", "-o", str(out)]) == 0
+    a = _plan_arrays(worked_plan)
+    by_topic: dict[str, list] = {}
+    with open(out, "rb") as handle:
+        reader = make_reader(handle, decoder_factories=[DecoderFactory()])
+        for schema, channel, message, decoded in reader.iter_decoded_messages():
+            assert channel.message_encoding == "cdr" and schema.encoding == "ros2msg"
+            by_topic.setdefault(channel.topic, []).append((schema.name, message, decoded))
+    assert set(by_topic) == {"/joint_trajectory", "/joint_states", "/tf", "/end_effector"}
+    ((name, _, traj),) = by_topic["/joint_trajectory"]
+    assert name == "trajectory_msgs/msg/JointTrajectory"
+    assert list(traj.joint_names) == worked_plan.robot.joints
+    assert len(traj.points) == len(a["t"])
+    for k in (0, 57, len(a["t"]) - 1):
+        p = traj.points[k]
+        np.testing.assert_array_equal(p.positions, a["q"][k])
+        np.testing.assert_array_equal(p.velocities, a["qd"][k])
+        np.testing.assert_array_equal(p.accelerations, a["qdd"][k])
+        np.testing.assert_array_equal(p.effort, a["tau"][k])
+        assert p.time_from_start.sec + p.time_from_start.nanosec * 1e-9 == pytest.approx(
+            a["t"][k], abs=1e-9
+        )
+    states = by_topic["/joint_states"]
+    assert len(states) == len(a["t"])
+    for k, (name, message, js) in enumerate(states):
+        assert name == "sensor_msgs/msg/JointState"
+        assert message.log_time == round(a["t"][k] * 1e9)
+        np.testing.assert_array_equal(js.position, a["q"][k])
+        np.testing.assert_array_equal(js.velocity, a["qd"][k])
+        np.testing.assert_array_equal(js.effort, a["tau"][k])
+    for k, (name, _, tf) in enumerate(by_topic["/tf"]):
+        assert name == "tf2_msgs/msg/TFMessage"
+        (tr,) = tf.transforms
+        assert tr.header.frame_id == "world" and tr.child_frame_id == "base"
+        r, p = tr.transform.rotation, tr.transform.translation
+        np.testing.assert_array_equal([r.x, r.y, r.z, r.w], a["base_quaternion_xyzw"][k])
+        np.testing.assert_array_equal([p.x, p.y, p.z], a["base_position"][k])
+    for k, (_, _, ee) in enumerate(by_topic["/end_effector"]):
+        np.testing.assert_array_equal(
+            [ee.point.x, ee.point.y, ee.point.z], a["end_effector_position"][k]
+        )
+
+
+def test_ros2_bag_round_trip_resampled(worked_plan, plan_file, tmp_path):
+    from rosbags.rosbag2 import Reader
+    from rosbags.typesys import Stores, get_typestore
+
+    out = tmp_path / "bag"
+    args = ["export", str(plan_file), "--format", "ros2-bag", "--rate", "4", "-o", str(out)]
+    assert main(args) == 0
+    assert main(args) == 0  # an existing bag is replaced
+    assert "version: 8" in (out / "metadata.yaml").read_text()  # rosbag2 metadata format
+    truth = resample(worked_plan, 4.0)
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    got: dict[str, list] = {}
+    with Reader(out) as reader:
+        for connection, timestamp, raw in reader.messages():
+            got.setdefault(connection.topic, []).append(
+                (connection.msgtype, timestamp, ts.deserialize_cdr(raw, connection.msgtype))
+            )
+    ((msgtype, _, traj),) = got["/joint_trajectory"]
+    assert msgtype == "trajectory_msgs/msg/JointTrajectory"
+    np.testing.assert_array_equal([p.positions for p in traj.points], truth.q)
+    assert [m[0] for m in got["/tf"]] == ["tf2_msgs/msg/TFMessage"] * len(truth.t)
+    states = got["/joint_states"]
+    assert [m[1] for m in states] == [round(t * 1e9) for t in truth.t]
+    np.testing.assert_array_equal([m[2].position for m in states], truth.q)
+    np.testing.assert_array_equal([m[2].effort for m in states], truth.tau)
+    quats = [m[2].transforms[0].transform.rotation for m in got["/tf"]]
+    np.testing.assert_array_equal([[r.x, r.y, r.z, r.w] for r in quats], truth.base_quaternion_xyzw)
+    # The final attitude recomputed at 4 Hz is the plan's achieved attitude.
+    np.testing.assert_allclose(
+        truth.base_quaternion_xyzw[-1], worked_plan.base.achieved_quaternion_xyzw, atol=1e-9
+    )
+
+
+@pytest.mark.parametrize(
+    ("extra", "needle"),
+    [
+        (["--format", "xml"], "unknown --format 'xml'; valid: csv, mcap, ros2-bag"),
+        (["--format", "csv", "--rate", "0"], "--rate must be a positive number of Hz"),
+        (["--format", "csv", "--rate", "fast"], "--rate must be a positive number of Hz"),
+        (["--format", "mcap", "--rate", "nan"], "--rate must be a positive number of Hz"),
+        (["--format", "csv", "--rate", "1e12"], "at most"),
+    ],
+)
+def test_bad_format_or_rate_is_one_line_and_writes_nothing(plan_file, tmp_path, extra, needle):
+    out = tmp_path / "out.file"
+    proc = subprocess.run(
+        [sys.executable, "-m", "freefloat.cli", "export", str(plan_file), *extra, "-o", str(out)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("freefloat: error: ") and needle in lines[0]
+    assert list(tmp_path.iterdir()) == []

@@ -1,0 +1,56 @@
+"""An arm whose mesh files are missing composes, plans and plays (simple shapes), with a warning."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+import freefloat as ff
+from freefloat.robot.compose import ServicerSpec, compose_servicer
+from freefloat.viz.playback import MISSING_MESH_RADIUS, _visual_model, build_playback, write_html
+
+from conftest import ROOT
+
+CYLINDER = '<geometry><cylinder radius="0.05" length="1.0"/></geometry>'
+
+
+def _meshless_urdf(tmp_path):
+    text = (ROOT / "robots" / "planar_2dof.urdf").read_text()
+    assert text.count(CYLINDER) >= 1
+    text = text.replace(CYLINDER, '<geometry><mesh filename="meshes/link.stl"/></geometry>', 1)
+    path = tmp_path / "meshless.urdf"
+    path.write_text(text)
+    return path
+
+
+def test_compose_warns_instead_of_refusing(tmp_path, caplog):
+    arm = _meshless_urdf(tmp_path)
+    spec = ServicerSpec(arm=str(arm), base_mass=500.0, base_size=(1.0, 1.0, 1.0))
+    with caplog.at_level(logging.WARNING, logger="freefloat"):
+        path = compose_servicer(spec, tmp_path / "servicer.urdf")
+    assert path.is_file() and ff.load_robot(path).n == 2
+    assert any("mesh file(s) of the arm cannot be found" in r.getMessage() for r in caplog.records)
+
+
+def test_plan_and_playback_draw_a_sphere_for_the_missing_mesh(tmp_path, caplog, worked_plan):
+    urdf = _meshless_urdf(tmp_path)
+    scenario = (ROOT / "robots" / "scenarios" / "worked_example.toml").read_text()
+    path = tmp_path / "meshless.toml"
+    path.write_text(scenario.replace('robot = "planar_2dof"', f'robot = "{urdf}"'))
+    plan = ff.plan(ff.Scenario.from_toml(path))
+    np.testing.assert_allclose(plan.samples.q, worked_plan.samples.q, atol=1e-12)
+    with caplog.at_level(logging.WARNING, logger="freefloat"):
+        visual = _visual_model(ff.load_robot(urdf))
+        with build_playback(plan) as playback:
+            nodes = set(playback.frames[0])
+        page = write_html(plan, tmp_path / "page.html")
+    link1 = next(g for g in visual.geometryObjects if g.name.startswith("link1"))
+    assert type(link1.geometry).__name__ == "Sphere"
+    assert link1.geometry.radius == MISSING_MESH_RADIUS
+    assert any(name.lower().endswith("link1_0") for name in nodes)  # the link is still drawn
+    assert page.is_file() and page.stat().st_size > 0
+    messages = [r.getMessage() for r in caplog.records]
+    assert any(
+        "meshes/link.stl" in m and f"spheres of {MISSING_MESH_RADIUS:g} m" in m for m in messages
+    )

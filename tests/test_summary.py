@@ -1,0 +1,105 @@
+"""What `freefloat plan` prints: wall time and shares, Cartesian goals, full turns, units."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import freefloat as ff
+from freefloat.cli import _in_degrees, _robot_label, main
+
+import reference as ref
+from conftest import ROOT
+
+SCENARIO = """
+robot = "{urdf}"
+duration = 10.0
+[start]
+joints = {{ q1 = 80.0, q2 = 30.0 }}
+base_zyx_deg = [-50.0, 0.0, 0.0]
+[goal]
+{goal}
+[path]
+{path}
+"""
+
+
+def _write(tmp_path, goal, path="extra = { q2 = 1 }"):
+    out = tmp_path / "s.toml"
+    urdf = ROOT / "robots" / "planar_2dof.urdf"
+    out.write_text(SCENARIO.format(urdf=urdf, goal=goal, path=path))
+    return out
+
+
+def _plan(tmp_path, capsys, scenario, *flags):
+    assert main(["plan", str(scenario), "-o", str(tmp_path / "p.json"), *flags]) == 0
+    return capsys.readouterr().out
+
+
+def test_cartesian_goal_shows_the_chosen_joints_and_the_end_effector_error(tmp_path, capsys):
+    x, y = ref.end_effector(0.0, math.radians(-60), math.radians(90))  # closed form
+    goal = f"end_effector_xyz = [{x!r}, {y!r}, 0.0]\nbase_zyx_deg = [0.0, 0.0, 0.0]"
+    out = _plan(tmp_path, capsys, _write(tmp_path, goal))
+    assert "goal joints     (inverse kinematics) q1 -60.000 deg, q2 90.000 deg" in out
+    error = float(re.search(r"position error (\S+) m", out).group(1))
+    assert error < 1e-9
+    assert f"goal ({x:.4f}, {y:.4f}, 0.0000) m" in out
+
+
+def test_wall_time_and_the_solve_share(tmp_path, capsys):
+    goal = "joints = { q1 = -60.0, q2 = 90.0 }\nbase_zyx_deg = [0.0, 0.0, 0.0]"
+    out = _plan(tmp_path, capsys, _write(tmp_path, goal))
+    match = re.search(
+        r"wall time +(\d+\.\d+) s total: .*solve (\d+\.\d+) s \((\d+) %\), "
+        r"sample and verify (\d+\.\d+) s \((\d+) %\)",
+        out,
+    )
+    assert match, out
+    total, solve, share = float(match.group(1)), float(match.group(2)), int(match.group(3))
+    assert 0 < solve < total and abs(share - 100 * solve / total) <= 1
+    assert "final solver call" in out and "free parameters q2: t^6" in out
+    assert re.search(r"t\^6 \S+ rad/s\^6", out)
+    assert "planar_2dof (planar_2dof.urdf, 2 joints)" in out
+
+
+def test_full_turns_show_start_goal_and_travel(tmp_path, capsys):
+    goal = "joints = { q1 = -60.0, q2 = 90.0 }\nbase_zyx_deg = [-90.0, 0.0, 0.0]"
+    scenario = _write(tmp_path, goal, path="")
+    out = _plan(tmp_path, capsys, scenario, "--allow-full-turns")
+    assert (
+        "full turns      q1: start 80.000 deg, goal 300.000 deg (-60.000 deg +1 turn(s)), "
+        "travels 220.000 deg" in out
+    )
+
+
+def test_inline_servicer_is_named_by_arm_and_base(tmp_path, monkeypatch):
+    monkeypatch.setenv("FREEFLOAT_CACHE", str(tmp_path / "cache"))
+    path = tmp_path / "s.toml"
+    path.write_text(
+        """
+duration = 10.0
+[robot]
+arm = "ur5"
+base_mass = 120.0
+base_size = [0.6, 0.5, 0.4]
+mount = [0.3, 0.0, 0.0]
+[start]
+joints = { shoulder_pan_joint = 0.0, shoulder_lift_joint = -60.0, elbow_joint = 90.0, \
+wrist_1_joint = 0.0, wrist_2_joint = 0.0, wrist_3_joint = 0.0 }
+[goal]
+joints = { shoulder_pan_joint = 10.0, shoulder_lift_joint = -60.0, elbow_joint = 90.0, \
+wrist_1_joint = 0.0, wrist_2_joint = 0.0, wrist_3_joint = 0.0 }
+"""
+    )
+    label = _robot_label(ff.Scenario.from_toml(path))
+    assert label == "servicer: ur5 arm on a 120 kg, 0.6 x 0.5 x 0.4 m base (6 joints)"
+
+
+def test_velocity_limit_error_is_printed_in_degrees_per_second():
+    err = ff.VelocityLimitError("q1", 5.625, 2.0, 2.8125, "rad")
+    text = _in_degrees(err)
+    assert f"reaches {math.degrees(5.625):.4g} deg/s" in text
+    assert f"velocity limit {math.degrees(2.0):.4g} deg/s" in text
+    assert "rad" not in text and "2.812 s" in text
+    metres = ff.VelocityLimitError("slide", 0.5, 0.2, 3.0, "m")
+    assert _in_degrees(metres) == str(metres)
