@@ -147,7 +147,7 @@ def _imports(path: Path) -> set[str]:
 
 
 def test_layers_flow_one_way_and_no_circle():
-    """robot -> physics -> problem -> solvers -> plans -> verify -> pipeline -> viz, cli."""
+    """robot -> physics -> problem -> solvers -> plans -> verify -> pipeline -> viz -> sweep, cli."""
     order = [
         "errors",
         "files",
@@ -159,6 +159,7 @@ def test_layers_flow_one_way_and_no_circle():
         "verify",
         "pipeline",
         "viz",
+        "sweep",
         "cli",
     ]
     for path in SRC.rglob("*.py"):
