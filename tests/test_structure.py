@@ -147,7 +147,8 @@ def _imports(path: Path) -> set[str]:
 
 
 def test_layers_flow_one_way_and_no_circle():
-    """robot -> physics -> problem -> solvers -> plans -> verify -> pipeline -> viz -> sweep, cli."""
+    """robot -> physics -> problem -> solvers -> plans -> verify -> pipeline -> viz -> sweep,
+    cli."""
     order = [
         "errors",
         "files",

@@ -100,7 +100,7 @@ def test_unknown_key_is_refused_naming_the_valid_keys(tmp_path):
 @pytest.mark.parametrize(
     ("axis", "match"),
     [
-        ('key = "duration"\nvalues = [10.0, -1.0]', r"axis 'duration' = -1\.0: duration must be > 0"),
+        ('key = "duration"\nvalues = [10.0, -1.0]', r"'duration' = -1\.0: duration must be > 0"),
         ('key = "goal.joints.q1"\nvalues = ["ninety"]', r"goal\.joints\.q1.*must be of the"),
         ('key = "duration"\nvalues = { start = 1.0, stop = 2.0 }', r"needs start, stop and num"),
         ('key = "duration"\nvalues = { start = 1.0, stop = 2.0, num = 0 }', r"num must be"),

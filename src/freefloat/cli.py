@@ -399,9 +399,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p_sweep.add_argument("sweep", help="sweep TOML file")
     p_sweep.add_argument("-o", "--output", required=True, metavar="CSV", help="results file")
-    p_sweep.add_argument(
-        "--workers", type=int, help="local worker processes (default: all cores)"
-    )
+    p_sweep.add_argument("--workers", type=int, help="local worker processes (default: all cores)")
     p_sweep.add_argument(
         "--scheduler",
         metavar="ADDRESS",

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -66,26 +67,31 @@ def _error(row: SweepRow) -> float:
     return max(row.attitude_error_rad, 1e-17)
 
 
-def _line_map(plt: object, spec: SweepSpec, rows: Sequence[SweepRow]) -> object:
+def _or_nan(value: float | None) -> float:
+    return math.nan if value is None else value
+
+
+def _line_map(plt: Any, spec: SweepSpec, rows: Sequence[SweepRow]) -> Any:
     key = spec.axes[0].key
     x = np.array([float(r.values[0]) for r in rows])
     planar = any(r.yaw_change_min_deg is not None for r in rows)
-    fig, axes = plt.subplots(3 if planar else 2, 1, sharex=True, figsize=(8, 7))  # type: ignore[attr-defined]
+    fig, axes = plt.subplots(3 if planar else 2, 1, sharex=True, figsize=(8, 7))
     ax = axes[0]
     for level, status in enumerate(STATUSES):
         mask = np.array([r.status == status for r in rows])
         ax.scatter(x[mask], np.full(mask.sum(), level), color=_COLOURS[status], s=12)
     ax.set_yticks(range(len(STATUSES)), STATUSES)
     ax.set_ylim(-0.5, len(STATUSES) - 0.5)
-    ax.set_title(f"sweep over {key}: {sum(r.status == 'planned' for r in rows)}/{len(rows)} planned")
+    planned = sum(r.status == "planned" for r in rows)
+    ax.set_title(f"sweep over {key}: {planned}/{len(rows)} planned")
     ax = axes[1]
     ax.semilogy(x, [_error(r) for r in rows], "o", ms=3, color=_COLOURS["planned"])
     ax.set_ylabel("attitude error [rad]")
     if planar:
         ax = axes[2]
-        req = [np.nan if r.requested_yaw_change_deg is None else r.requested_yaw_change_deg for r in rows]
-        lo = [np.nan if r.yaw_change_min_deg is None else r.yaw_change_min_deg for r in rows]
-        hi = [np.nan if r.yaw_change_max_deg is None else r.yaw_change_max_deg for r in rows]
+        req = [_or_nan(r.requested_yaw_change_deg) for r in rows]
+        lo = [_or_nan(r.yaw_change_min_deg) for r in rows]
+        hi = [_or_nan(r.yaw_change_max_deg) for r in rows]
         ax.fill_between(x, lo, hi, color="0.85", label="planar bounds (reachable)")
         for status in STATUSES:
             pts = [(xi, yi) for xi, yi, r in zip(x, req, rows, strict=True) if r.status == status]
@@ -99,7 +105,7 @@ def _line_map(plt: object, spec: SweepSpec, rows: Sequence[SweepRow]) -> object:
     return fig
 
 
-def _heat_map(plt: object, spec: SweepSpec, rows: Sequence[SweepRow]) -> object:
+def _heat_map(plt: Any, spec: SweepSpec, rows: Sequence[SweepRow]) -> Any:
     from matplotlib.colors import ListedColormap
 
     first, second = spec.axes
@@ -110,11 +116,13 @@ def _heat_map(plt: object, spec: SweepSpec, rows: Sequence[SweepRow]) -> object:
         i, j = divmod(row.index, shape[1])
         status[i, j] = STATUSES.index(row.status)
         error[i, j] = np.log10(_error(row))
-    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 5))  # type: ignore[attr-defined]
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 5))
     extent_x = [float(v) for v in second.values]
     extent_y = [float(v) for v in first.values]
     cmap = ListedColormap([_COLOURS[s] for s in STATUSES])
-    image = left.pcolormesh(extent_x, extent_y, status, cmap=cmap, vmin=-0.5, vmax=2.5, shading="nearest")
+    image = left.pcolormesh(
+        extent_x, extent_y, status, cmap=cmap, vmin=-0.5, vmax=2.5, shading="nearest"
+    )
     bar = fig.colorbar(image, ax=left, ticks=range(len(STATUSES)))
     bar.ax.set_yticklabels(STATUSES)
     left.set_title("status")

@@ -28,7 +28,7 @@ import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Union
+from typing import Any
 
 import numpy as np
 
@@ -44,7 +44,7 @@ else:  # pragma: no cover
 __all__ = ["Axis", "Job", "SweepSpec", "Value"]
 
 #: A value an axis can take: what the scenario's TOML holds at that key.
-Value = Union[float, int, str, bool]
+Value = float | int | str | bool
 
 _SWEEP_KEYS = ("scenario", "samples", "axis")
 _AXIS_KEYS = ("key", "values")
@@ -137,7 +137,7 @@ class SweepSpec:
                 raise UnknownNameError("key in the sweep file", key, _SWEEP_KEYS)
         if not isinstance(data.get("scenario"), str):
             raise ScenarioError(
-                "the sweep file needs scenario = \"FILE.toml\" (relative to the sweep file, or "
+                'the sweep file needs scenario = "FILE.toml" (relative to the sweep file, or '
                 "a shipped scenario name)"
             )
         folder = (relative_to or Path.cwd()).resolve()
@@ -236,7 +236,7 @@ def _scenario_path(name: str, folder: Path) -> Path:
 def _split(key: str, base: Mapping[str, Any]) -> tuple[str | int, ...]:
     """Resolve a dotted key against the base scenario; refuse it naming the valid keys."""
     if not key:
-        raise ScenarioError("axis key must be a dotted key such as \"goal.joints.q2\"")
+        raise ScenarioError('axis key must be a dotted key such as "goal.joints.q2"')
     path: list[str | int] = []
     node: Any = base
     for part in key.split("."):
@@ -249,9 +249,7 @@ def _split(key: str, base: Mapping[str, Any]) -> tuple[str | int, ...]:
             node = node[part]
         elif isinstance(node, list):
             if not part.isdigit() or int(part) >= len(node):
-                raise UnknownNameError(
-                    "sweep key", key, [f"{where}{i}" for i in range(len(node))]
-                )
+                raise UnknownNameError("sweep key", key, [f"{where}{i}" for i in range(len(node))])
             path.append(int(part))
             node = node[int(part)]
         else:
@@ -289,7 +287,7 @@ def _axis(table: Any, position: int, base: Mapping[str, Any]) -> Axis:
             raise UnknownNameError(f"key in {where}", name, _AXIS_KEYS)
     key = table.get("key")
     if not isinstance(key, str):
-        raise ScenarioError(f"{where} needs key = \"dotted.key\" (e.g. \"goal.joints.q2\")")
+        raise ScenarioError(f'{where} needs key = "dotted.key" (e.g. "goal.joints.q2")')
     path = _split(key, base)
     current = _leaf(base, path)
     if "values" not in table:
@@ -308,7 +306,7 @@ def _axis(table: Any, position: int, base: Mapping[str, Any]) -> Axis:
     for value in values:
         if numeric:
             ok = isinstance(value, (int, float)) and not isinstance(value, bool)
-            if ok and not math.isfinite(value):
+            if isinstance(value, float) and not math.isfinite(value):
                 raise ScenarioError(f"axis {key!r} values must be finite, got {value!r}")
             if isinstance(current, int) and isinstance(value, float):
                 ok = False
