@@ -14,20 +14,23 @@ solved two ways:
 Both use the same free parameters (normalised-time coefficients). Each solution's final attitude
 error is then measured by one independent check (DOP853, rtol 1e-13). Times are medians over
 several runs after model loading and a warm-up run. Also reported: the cost of one momentum-map
-evaluation for serial chains of 2 to 12 joints.
+evaluation for serial chains of 2 to 12 joints, and the sweep runner: the 81-job yaw sweep of
+the worked example (automatic freedom, 201 samples) on 1 and 2 local worker processes, and the
+runner's overhead per job against planning the same jobs one by one in this process.
 
-Run: python scripts/bench.py [--runs N] [--json FILE]
+Run: python scripts/bench.py [--runs N] [--json FILE] [--sweep-only]
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import platform
 import statistics
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -237,6 +240,63 @@ def bench_scaling(tmp: Path) -> list[dict[str, float]]:
     return rows
 
 
+def bench_sweep() -> dict[str, float]:
+    """Wall time of the 81-job yaw sweep on 1 and 2 workers; runner overhead per job."""
+    data = Path(__file__).resolve().parents[1] / "tests" / "data"
+    spec = ff.SweepSpec.from_dict(
+        {
+            "scenario": "worked_example_auto.toml",
+            "axis": [
+                {"key": "goal.base_zyx_deg.0", "values": {"start": -55.0, "stop": 25.0, "num": 81}}
+            ],
+        },
+        relative_to=data,
+    )
+    walls = {}
+    for workers in (1, 2):
+        start = time.perf_counter()
+        rows = ff.sweep(spec, workers=workers, progress=False)
+        walls[workers] = time.perf_counter() - start
+    # the same jobs planned one by one here, with the robot loaded once (the runner's ideal)
+    robot = ff.Scenario.from_toml(data / "worked_example_auto.toml").robot
+    scenarios = [
+        replace(ff.Scenario.from_dict(job.data, relative_to=data), robot=robot)
+        for job in spec.jobs()
+    ]
+    for scenario in scenarios[:3]:  # warm-up
+        try_plan(scenario)
+    start = time.perf_counter()
+    for scenario in scenarios:
+        try_plan(scenario)
+    direct = time.perf_counter() - start
+    worked = ff.Scenario.from_toml(ff.default_scenario_path())
+    one_plan = statistics.median(timed_once(lambda: ff.plan(worked)) for _ in range(7))
+    n = len(rows)
+    overhead = (walls[1] - direct) / n
+    return {
+        "jobs": n,
+        "planned": sum(r.status == "planned" for r in rows),
+        "wall_1_worker_s": walls[1],
+        "wall_2_workers_s": walls[2],
+        "speed_up_2_over_1": walls[1] / walls[2],
+        "direct_s": direct,
+        "overhead_per_job_ms": 1e3 * overhead,
+        "worked_example_plan_ms": 1e3 * one_plan,
+        "overhead_per_plan_percent": 100.0 * overhead / one_plan,
+    }
+
+
+def try_plan(scenario: ff.Scenario) -> None:
+    with contextlib.suppress(ff.FreeFloatError):
+        ff.plan(scenario)
+
+
+def timed_once(fn) -> float:  # type: ignore[no-untyped-def]
+    start = time.perf_counter()
+    fn()
+    return time.perf_counter() - start
+
+
 def machine() -> str:
     cpu = "unknown CPU"
     try:
@@ -257,8 +317,20 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=9, help="freefloat runs per problem")
     parser.add_argument("--baseline-runs", type=int, default=3, help="baseline runs per problem")
     parser.add_argument("--json", type=Path, help="also write the tables as JSON")
+    parser.add_argument("--sweep-only", action="store_true", help="only the sweep section")
     args = parser.parse_args()
     print(f"machine: {machine()}")
+    sweep = bench_sweep()
+    print(
+        f"sweep: {sweep['jobs']} jobs ({sweep['planned']} planned); 1 worker "
+        f"{sweep['wall_1_worker_s']:.1f} s, 2 workers {sweep['wall_2_workers_s']:.1f} s "
+        f"({sweep['speed_up_2_over_1']:.2f}x); the same jobs planned one by one in this process "
+        f"{sweep['direct_s']:.1f} s; runner overhead {sweep['overhead_per_job_ms']:.1f} ms/job "
+        f"= {sweep['overhead_per_plan_percent']:.1f} % of a worked example plan "
+        f"({sweep['worked_example_plan_ms']:.1f} ms)"
+    )
+    if args.sweep_only:
+        return
     rows = bench_cases(args.runs, args.baseline_runs)
     import tempfile
 
@@ -285,7 +357,10 @@ def main() -> None:
         print(f"| {r['joints']} | {r['map_us']:.2f} | {r['map_and_derivative_us']:.2f} |")
     if args.json:
         args.json.write_text(
-            json.dumps({"machine": machine(), "problems": rows, "map_scaling": scaling}, indent=1)
+            json.dumps(
+                {"machine": machine(), "problems": rows, "map_scaling": scaling, "sweep": sweep},
+                indent=1,
+            )
         )
         print(f"\nwrote {args.json}")
 
