@@ -3,6 +3,9 @@
 Angles are printed in degrees. Every expected failure (a :class:`FreeFloatError`) is printed
 as one line ``freefloat: error: ...`` and exits with code 2, with no traceback and no file
 written.
+
+This module is long because it holds the parser and the handler of every subcommand (plan,
+bounds, verify, compose, show, plot, sweep); the work itself lives in the layers below.
 """
 
 from __future__ import annotations
