@@ -27,19 +27,26 @@ tried (s, one run), residual evaluations of the distribution that solved (or the
 tried). Budgets are counts, so the solved column is the same on any machine; only the times
 change.
 
-Run: python scripts/bench.py [--runs N] [--json FILE] [--reach-only] [--random N]
+
+Sweep (issue 17, with --sweep or --sweep-only): the 81-job yaw sweep of the worked example
+(automatic freedom, 201 samples) on 1 and 2 local worker processes, and the runner's overhead
+per job against planning the same jobs one by one in this process.
+
+Run: python scripts/bench.py [--runs N] [--json FILE] [--reach-only] [--random N] [--sweep]
+     [--sweep-only]
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import os
 import platform
 import statistics
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -378,6 +385,63 @@ def print_reach(rows: list[dict[str, object]]) -> None:
         )
 
 
+def bench_sweep() -> dict[str, float]:
+    """Wall time of the 81-job yaw sweep on 1 and 2 workers; runner overhead per job."""
+    data = Path(__file__).resolve().parents[1] / "tests" / "data"
+    spec = ff.SweepSpec.from_dict(
+        {
+            "scenario": "worked_example_auto.toml",
+            "axis": [
+                {"key": "goal.base_zyx_deg.0", "values": {"start": -55.0, "stop": 25.0, "num": 81}}
+            ],
+        },
+        relative_to=data,
+    )
+    walls = {}
+    for workers in (1, 2):
+        start = time.perf_counter()
+        rows = ff.sweep(spec, workers=workers, progress=False)
+        walls[workers] = time.perf_counter() - start
+    # the same jobs planned one by one here, with the robot loaded once (the runner's ideal)
+    robot = ff.Scenario.from_toml(data / "worked_example_auto.toml").robot
+    scenarios = [
+        replace(ff.Scenario.from_dict(job.data, relative_to=data), robot=robot)
+        for job in spec.jobs()
+    ]
+    for scenario in scenarios[:3]:  # warm-up
+        try_plan(scenario)
+    start = time.perf_counter()
+    for scenario in scenarios:
+        try_plan(scenario)
+    direct = time.perf_counter() - start
+    worked = ff.Scenario.from_toml(ff.default_scenario_path())
+    one_plan = statistics.median(timed_once(lambda: ff.plan(worked)) for _ in range(7))
+    n = len(rows)
+    overhead = (walls[1] - direct) / n
+    return {
+        "jobs": n,
+        "planned": sum(r.status == "planned" for r in rows),
+        "wall_1_worker_s": walls[1],
+        "wall_2_workers_s": walls[2],
+        "speed_up_2_over_1": walls[1] / walls[2],
+        "direct_s": direct,
+        "overhead_per_job_ms": 1e3 * overhead,
+        "worked_example_plan_ms": 1e3 * one_plan,
+        "overhead_per_plan_percent": 100.0 * overhead / one_plan,
+    }
+
+
+def try_plan(scenario: ff.Scenario) -> None:
+    with contextlib.suppress(ff.FreeFloatError):
+        ff.plan(scenario)
+
+
+def timed_once(fn) -> float:  # type: ignore[no-untyped-def]
+    start = time.perf_counter()
+    fn()
+    return time.perf_counter() - start
+
+
 def machine() -> str:
     cpu = "unknown CPU"
     try:
@@ -411,8 +475,25 @@ def main() -> None:
         action="store_true",
         help="reach table: also the multistart search on the random directions (slow)",
     )
+    parser.add_argument("--sweep", action="store_true", help="also the sweep section")
+    parser.add_argument("--sweep-only", action="store_true", help="only the sweep section")
     args = parser.parse_args()
     print(f"machine: {machine()}")
+    sweep = bench_sweep() if args.sweep or args.sweep_only else {}
+    if sweep:
+        print(
+            f"sweep: {sweep['jobs']} jobs ({sweep['planned']} planned); 1 worker "
+            f"{sweep['wall_1_worker_s']:.1f} s, 2 workers {sweep['wall_2_workers_s']:.1f} s "
+            f"({sweep['speed_up_2_over_1']:.2f}x); the same jobs planned one by one in this "
+            f"process {sweep['direct_s']:.1f} s; runner overhead "
+            f"{sweep['overhead_per_job_ms']:.1f} ms/job = "
+            f"{sweep['overhead_per_plan_percent']:.1f} % of a worked example plan "
+            f"({sweep['worked_example_plan_ms']:.1f} ms)"
+        )
+    if args.sweep_only:
+        if args.json:
+            args.json.write_text(json.dumps({"machine": machine(), "sweep": sweep}, indent=1))
+        return
     reach = (
         []
         if args.no_reach
@@ -472,6 +553,7 @@ def main() -> None:
                     "whole_plan": whole,
                     "map_scaling": scaling,
                     "reach": reach,
+                    "sweep": sweep,
                 },
                 indent=1,
             )

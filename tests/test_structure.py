@@ -147,7 +147,8 @@ def _imports(path: Path) -> set[str]:
 
 
 def test_layers_flow_one_way_and_no_circle():
-    """robot -> physics -> problem -> solvers -> plans -> verify -> pipeline -> viz, export, cli."""
+    """robot -> physics -> problem -> solvers -> plans -> verify -> pipeline -> viz, export,
+    sweep -> cli."""
     order = [
         "errors",
         "files",
@@ -161,6 +162,7 @@ def test_layers_flow_one_way_and_no_circle():
         "pipeline",
         "viz",
         "export",
+        "sweep",
         "cli",
     ]
     for path in SRC.rglob("*.py"):

@@ -40,6 +40,7 @@ from .problem.residual import Problem
 from .problem.scenario import Scenario, default_scenario_path
 from .robot.model import Joint, Robot, load_robot, shipped_robots
 from .solvers import Solution, SolveOptions, Strategy, solve
+from .sweep import SweepRow, SweepSpec, sweep
 from .verify.checks import verify_plan
 
 __version__ = "0.1.0"
@@ -73,6 +74,8 @@ __all__ = [
     "SolveOptions",
     "SolverError",
     "Strategy",
+    "SweepRow",
+    "SweepSpec",
     "UnknownNameError",
     "UnreachableGoalError",
     "VelocityLimitError",
@@ -95,6 +98,7 @@ __all__ = [
     "replay",
     "shipped_robots",
     "solve",
+    "sweep",
     "verify_plan",
     "zyx_from_quat",
 ]

@@ -4,9 +4,9 @@ Angles are printed in degrees. Every expected failure (a :class:`FreeFloatError`
 as one line ``freefloat: error: ...`` and exits with code 2, with no traceback and no file
 written.
 
-This module is long because it holds every subcommand's parser and printed report (the plan
-summary with its timings, Cartesian-goal and full-turn lines); the work itself lives in the
-layers it calls.
+This module is long because it holds the parser and the printed report of every subcommand
+(plan, bounds, verify, compose, show, plot, export, sweep; the plan summary with its timings,
+Cartesian-goal and full-turn lines); the work itself lives in the layers it calls.
 """
 
 from __future__ import annotations
@@ -376,6 +376,33 @@ def _spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from .sweep import SweepSpec, connect, plot_sweep, sweep
+    from .sweep.plots import check_plottable
+
+    spec = SweepSpec.from_toml(args.sweep)
+    if args.workers is not None and args.workers < 1:
+        raise InputError(f"--workers must be at least 1, got {args.workers}")
+    if args.plots:
+        check_plottable(spec)
+    client = connect(args.scheduler) if args.scheduler else None
+    try:
+        rows = sweep(spec, workers=args.workers, client=client, output=args.output)
+    finally:
+        if client is not None:
+            client.close()
+    counts = {s: sum(r.status == s for r in rows) for s in ("planned", "infeasible", "failed")}
+    print(
+        f"freefloat sweep: {len(rows)} jobs over {', '.join(spec.keys)}: "
+        + ", ".join(f"{n} {s}" for s, n in counts.items())
+    )
+    print(f"  results         {Path(args.output).resolve()}")
+    if args.plots:
+        written = plot_sweep(spec, rows, args.plots)
+        print(f"  plots           {', '.join(str(p) for p in written)}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``freefloat`` command."""
     parser = argparse.ArgumentParser(
@@ -548,6 +575,27 @@ def build_parser() -> argparse.ArgumentParser:
     p_plot.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
     p_plot.add_argument("--svg", action="store_true", help="also write SVG files")
     p_plot.set_defaults(func=_cmd_plot)
+
+    p_sweep = commands.add_parser(
+        "sweep",
+        help="plan every combination of scenario values and write one CSV row per job",
+        description="Run a sweep file (a base scenario and axes of dotted keys into it, in the "
+        "scenario's units: degrees) on local processes or a Dask cluster. Rows are written as "
+        "jobs finish; re-running with the same output resumes. A failed job is a row, not an "
+        "error.",
+    )
+    p_sweep.add_argument("sweep", help="sweep TOML file")
+    p_sweep.add_argument("-o", "--output", required=True, metavar="CSV", help="results file")
+    p_sweep.add_argument("--workers", type=int, help="local worker processes (default: all cores)")
+    p_sweep.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run on a Dask distributed cluster, e.g. tcp://host:8786 "
+        "(pip install 'freefloat[cluster]')",
+    )
+    p_sweep.add_argument("--plots", metavar="DIR", help="draw the feasibility map into DIR")
+    p_sweep.set_defaults(func=_cmd_sweep)
+
     for sub in [parser, *commands.choices.values()]:
         _add_common_flags(sub)
     return parser

@@ -102,7 +102,12 @@ def solve(
                 + ", ".join(s.value for s in STRATEGIES),
                 float(np.linalg.norm(problem.residual(zero))),
             )
-        attempt = STRATEGIES[strategy](problem, constraints, options, start)
+        try:
+            attempt = STRATEGIES[strategy](problem, constraints, options, start)
+        except (np.linalg.LinAlgError, FloatingPointError, ValueError) as exc:
+            # A numerical breakdown (an SVD that does not converge on non-finite values) is a
+            # failed attempt with a reason, never a crash.
+            attempt = Attempt(tried=[f"{strategy.value}: numerical failure ({exc})"])
     tried = restored + list(attempt.tried)
 
     roots = []
@@ -111,7 +116,11 @@ def solve(
         if index in attempt.residuals:  # refined to 1e-14 rad already: no polishing
             vector = attempt.residuals[index]
         else:
-            beta, vector = polish(problem, beta, tol)
+            try:
+                beta, vector = polish(problem, beta, tol)
+            except (np.linalg.LinAlgError, FloatingPointError, ValueError):
+                tried.append("a candidate could not be polished (numerical failure)")
+                continue
         residual = float(np.linalg.norm(vector))
         broken = broken_constraint(problem, constraints, beta)
         if broken:

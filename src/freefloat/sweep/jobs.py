@@ -1,0 +1,184 @@
+"""One sweep job: plan one scenario of the sweep and reduce the outcome to a :class:`SweepRow`.
+
+:func:`run_job` never raises: a refused or failed plan is a row with its status and the
+one-line message. Each process keeps the robots it has loaded (:data:`_ROBOTS`), so that the
+per-robot work (model, planar bounds, identified planar map) is done once per worker.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass, fields, replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import FreeFloatError, InfeasibleError
+from ..pipeline import plan
+from ..plans.format import Plan
+from ..problem.scenario import Scenario
+from ..robot.model import Robot
+from .spec import Job, Value
+
+__all__ = ["STATUSES", "TIMING_COLUMNS", "SweepRow", "run_job"]
+
+#: The outcomes of a job.
+STATUSES = ("planned", "infeasible", "failed")
+
+#: Columns that measure time: they change from run to run and are not part of a sweep's result
+#: (:meth:`SweepRow.without_timings` clears them).
+TIMING_COLUMNS = ("solve_time_s", "total_time_s")
+
+#: Robots loaded by this process, by their scenario definition (robot, end effector, folder).
+_ROBOTS: dict[str, Robot] = {}
+
+
+@dataclass(frozen=True)
+class SweepRow:
+    """The outcome of one job (one CSV row).
+
+    Attributes:
+        index: the job's position in the product of the axes.
+        values: one value per axis, in the scenario file's units (degrees for angles).
+        status: ``planned``, ``infeasible`` (outside the planar bounds) or ``failed``.
+        attitude_error_rad: angle between achieved and goal attitude (rad); planned only.
+        free_parameter_norm: Euclidean norm of all free coefficients (rad/s^k, m/s^k).
+        path_length: summed joint travel of the chosen path (rad, plus m for prismatic).
+        peak_torque: largest joint torque magnitude along the samples (N m, or N).
+        requested_yaw_change_deg: planar robots: the requested base yaw change (deg).
+        yaw_change_min_deg: planar robots: lower end of the reachable interval (deg).
+        yaw_change_max_deg: planar robots: upper end of the reachable interval (deg).
+        solve_time_s: solver wall time (s); a timing, not part of the result.
+        total_time_s: wall time of the whole job (s); a timing, not part of the result.
+        message: the one-line message of a refusal or failure; empty when planned.
+    """
+
+    index: int
+    values: tuple[Value, ...]
+    status: str
+    attitude_error_rad: float | None = None
+    free_parameter_norm: float | None = None
+    path_length: float | None = None
+    peak_torque: float | None = None
+    requested_yaw_change_deg: float | None = None
+    yaw_change_min_deg: float | None = None
+    yaw_change_max_deg: float | None = None
+    solve_time_s: float | None = None
+    total_time_s: float | None = None
+    message: str = ""
+
+    @staticmethod
+    def result_columns() -> tuple[str, ...]:
+        """The CSV columns after the axis values, in order."""
+        return tuple(f.name for f in fields(SweepRow) if f.name not in ("index", "values"))
+
+    def without_timings(self) -> SweepRow:
+        """This row with its timing columns cleared (for comparing runs)."""
+        return replace(self, solve_time_s=None, total_time_s=None)
+
+
+def _one_line(text: str) -> str:
+    return " ".join(text.split())
+
+
+def _robot_key(data: Mapping[str, Any], job: Job) -> str:
+    return json.dumps(
+        [data.get("robot"), data.get("end_effector"), str(job.relative_to)], sort_keys=True
+    )
+
+
+def _scenario(job: Job) -> Scenario:
+    """The job's scenario, on this process's copy of its robot."""
+    scenario = Scenario.from_dict(job.data, relative_to=job.relative_to, source=job.source)
+    key = _robot_key(job.data, job)
+    robot = _ROBOTS.setdefault(key, scenario.robot)
+    return scenario if robot is scenario.robot else replace(scenario, robot=robot)
+
+
+def _planned(job: Job, result: Plan, started: float) -> SweepRow:
+    free = [c for values in result.free_parameters.values() for c in values]
+    chosen = [
+        s.path_length
+        for s in result.solver.solutions
+        if s.free_parameters == result.free_parameters
+    ]
+    lengths = chosen or [s.path_length for s in result.solver.solutions]
+    tau = np.asarray(result.samples.tau, dtype=float)
+    feasibility = result.feasibility
+    bounds = feasibility.yaw_change_bounds_deg
+    return SweepRow(
+        index=job.index,
+        values=job.values,
+        status="planned",
+        attitude_error_rad=float(result.base.attitude_error_rad),
+        free_parameter_norm=float(math.sqrt(sum(c * c for c in free))),
+        path_length=float(lengths[0]) if lengths else None,
+        peak_torque=float(np.max(np.abs(tau))) if tau.size else None,
+        requested_yaw_change_deg=feasibility.requested_yaw_change_deg,
+        yaw_change_min_deg=None if bounds is None else float(bounds[0]),
+        yaw_change_max_deg=None if bounds is None else float(bounds[1]),
+        solve_time_s=float(result.solver.wall_time_s),
+        total_time_s=time.perf_counter() - started,
+    )
+
+
+def _planar_feasibility(scenario: Scenario) -> dict[str, float]:
+    """Requested yaw change and planar bounds (deg) of a planar scenario; empty otherwise."""
+    from ..problem.build import problem_from_scenario
+
+    try:
+        problem = problem_from_scenario(scenario.resolved(), check_bounds=False)
+    except FreeFloatError:
+        return {}
+    if problem.bounds is None or problem.yaw_change is None:
+        return {}
+    lo, hi = problem.bounds.interval(problem.family.goal - problem.family.start)
+    return {
+        "requested_yaw_change_deg": math.degrees(problem.yaw_change),
+        "yaw_change_min_deg": math.degrees(lo),
+        "yaw_change_max_deg": math.degrees(hi),
+    }
+
+
+def run_job(job: Job) -> SweepRow:
+    """Plan one job; return its row. Never raises (a failure is a row with its message)."""
+    started = time.perf_counter()
+    with warnings.catch_warnings():
+        # a diverging solver attempt may overflow; its outcome is in the row, not a warning
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return _run(job, started)
+
+
+def _run(job: Job, started: float) -> SweepRow:
+    scenario: Scenario | None = None
+    try:
+        scenario = _scenario(job)
+        return _planned(job, plan(scenario, samples=job.samples), started)
+    except InfeasibleError as exc:
+        lo, hi = exc.bounds_deg
+        return SweepRow(
+            job.index,
+            job.values,
+            "infeasible",
+            requested_yaw_change_deg=exc.requested_deg,
+            yaw_change_min_deg=lo,
+            yaw_change_max_deg=hi,
+            total_time_s=time.perf_counter() - started,
+            message=_one_line(str(exc)),
+        )
+    except Exception as exc:  # a bad job must not stop the sweep
+        known = isinstance(exc, FreeFloatError)
+        message = str(exc) if known else f"internal error: {type(exc).__name__}: {exc}"
+        extra = _planar_feasibility(scenario) if scenario is not None else {}
+        return SweepRow(
+            job.index,
+            job.values,
+            "failed",
+            total_time_s=time.perf_counter() - started,
+            message=_one_line(message),
+            **extra,
+        )

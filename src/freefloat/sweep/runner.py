@@ -1,0 +1,290 @@
+"""Running a sweep: local processes or a Dask cluster; CSV output written as jobs finish.
+
+The output is one CSV row per job: ``index``, one column per axis (the axis key), then the
+columns of :class:`SweepRow`. Rows are appended as jobs finish, one whole line per write, so
+an interrupted run leaves complete rows (a torn last line is dropped on the next run). A
+re-run with the same output skips the jobs whose rows are there (same index and axis values)
+and, when every job has a row, rewrites the file sorted by index (atomically). The file is
+then the same whatever the number of workers or the backend, except the timing columns
+:data:`~freefloat.sweep.jobs.TIMING_COLUMNS`.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import multiprocessing as mp
+import os
+import sys
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from contextlib import contextmanager
+from dataclasses import fields
+from pathlib import Path
+from typing import Any
+
+from ..errors import InputError, ScenarioError
+from ..files import atomic_write_text
+from .jobs import _ROBOTS, SweepRow, run_job
+from .spec import Job, SweepSpec
+
+__all__ = ["connect", "read_rows", "sweep"]
+
+
+def _cell(value: Any) -> str:
+    """CSV text of a value: floats round-trip exactly (shortest repr); None is empty."""
+    if value is None:
+        return ""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return repr(value)
+    return str(value)
+
+
+def _header(spec: SweepSpec) -> list[str]:
+    return ["index", *spec.keys, *SweepRow.result_columns()]
+
+
+def _line(cells: Sequence[str]) -> str:
+    buffer = io.StringIO()
+    csv.writer(buffer, lineterminator="\n").writerow(cells)
+    return buffer.getvalue()
+
+
+def _row_cells(row: SweepRow) -> list[str]:
+    return [
+        str(row.index),
+        *(_cell(v) for v in row.values),
+        *(_cell(getattr(row, name)) for name in SweepRow.result_columns()),
+    ]
+
+
+def _parse_row(cells: Sequence[str], job: Job) -> SweepRow:
+    values: dict[str, Any] = {}
+    for f, text in zip(fields(SweepRow)[2:], cells, strict=True):
+        if f.name == "status" or f.name == "message":
+            values[f.name] = text
+        else:
+            values[f.name] = float(text) if text else None
+    return SweepRow(index=job.index, values=job.values, **values)
+
+
+def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, SweepRow]:
+    """The rows of an existing output file, by job index (resume); empty if there is none.
+
+    Raises:
+        ScenarioError: the file holds another sweep (other columns or job values).
+    """
+    path = Path(output)
+    if not path.is_file():
+        return {}
+    text = path.read_text(encoding="utf-8")
+    if text and not text.endswith("\n"):  # a torn last line of an interrupted run
+        text = text[: text.rfind("\n") + 1]
+    lines = list(csv.reader(io.StringIO(text)))
+    if not lines:
+        return {}
+    header = _header(spec)
+    if lines[0] != header:
+        raise ScenarioError(
+            f"{path} holds another sweep (columns {', '.join(lines[0][:6])}...); choose another "
+            "output file or delete it"
+        )
+    jobs = spec.jobs()
+    rows: dict[int, SweepRow] = {}
+    n_axes = len(spec.axes)
+    for number, cells in enumerate(lines[1:], start=2):
+        if len(cells) != len(header) or not cells[0].isdigit() or int(cells[0]) >= len(jobs):
+            raise ScenarioError(f"{path} line {number} is not a row of this sweep")
+        job = jobs[int(cells[0])]
+        if cells[1 : 1 + n_axes] != [_cell(v) for v in job.values]:
+            raise ScenarioError(
+                f"{path} line {number} has other axis values than job {job.index}; choose "
+                "another output file or delete it"
+            )
+        rows[job.index] = _parse_row(cells[1 + n_axes :], job)
+    return rows
+
+
+def write_rows(spec: SweepSpec, output: str | Path, rows: Sequence[SweepRow]) -> Path:
+    """Write the whole output file atomically, rows sorted by index."""
+    text = _line(_header(spec)) + "".join(
+        _line(_row_cells(r)) for r in sorted(rows, key=lambda r: r.index)
+    )
+    return atomic_write_text(output, text)
+
+
+class _Appender:
+    """Appends whole rows to the output file (one ``write`` per row, ``O_APPEND``)."""
+
+    def __init__(self, spec: SweepSpec, path: Path, rows: dict[int, SweepRow]) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if not path.is_file() or not rows:
+            write_rows(spec, path, [])
+        else:  # drop a torn last line before appending
+            write_rows(spec, path, list(rows.values()))
+        self._fd = os.open(path, os.O_WRONLY | os.O_APPEND)
+
+    def add(self, row: SweepRow) -> None:
+        os.write(self._fd, _line(_row_cells(row)).encode("utf-8"))
+
+    def close(self) -> None:
+        os.close(self._fd)
+
+
+#: One BLAS thread per worker: the solvers' floating-point results depend on the number of
+#: BLAS threads, so every worker (local or Dask, whose nanny sets the same) uses one; with one
+#: process per core this is also the fastest.
+BLAS_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+
+def _init_worker() -> None:
+    """Start a local worker process with an empty robot cache."""
+    _ROBOTS.clear()
+
+
+@contextmanager
+def _blas_env() -> Iterator[None]:
+    """Set :data:`BLAS_ENV` while worker processes start (they read it when numpy loads)."""
+    saved = {k: os.environ.get(k) for k in BLAS_ENV}
+    os.environ.update(BLAS_ENV)
+    try:
+        yield
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+
+
+def _local(jobs: Sequence[Job], workers: int) -> Iterator[SweepRow]:
+    """Run the jobs on fresh worker processes (forkserver, else spawn); rows as they finish.
+
+    Even one worker is a separate process, so that no state of the caller (its BLAS threads,
+    loaded robots) changes a result.
+    """
+    if not jobs:
+        return
+    method = "forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn"
+    context = mp.get_context(method)
+    if method == "forkserver":
+        context.set_forkserver_preload(["freefloat.sweep.jobs"])
+    with _blas_env():
+        pool = ProcessPoolExecutor(
+            max_workers=min(workers, len(jobs)), mp_context=context, initializer=_init_worker
+        )
+        futures = [pool.submit(run_job, job) for job in jobs]
+    try:
+        for future in as_completed(futures):
+            yield future.result()
+    finally:
+        for future in futures:
+            future.cancel()
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _worker_env() -> dict[str, str | None]:
+    return {k: os.environ.get(k) for k in BLAS_ENV}
+
+
+def _check_dask(client: Any) -> None:
+    """Refuse Dask workers that do not run with :data:`BLAS_ENV`."""
+    for address, env in client.run(_worker_env).items():
+        if env != BLAS_ENV:
+            raise InputError(
+                f"Dask worker {address} does not run with one BLAS thread ({env}); start "
+                "workers with their nanny (the default of `dask worker`) or with "
+                + " ".join(f"{k}=1" for k in BLAS_ENV)
+            )
+
+
+def _dask(jobs: Sequence[Job], client: Any) -> Iterator[SweepRow]:
+    from distributed import as_completed as dask_completed
+
+    futures = client.map(run_job, list(jobs), pure=False)
+    try:
+        for future in dask_completed(futures):
+            yield future.result()
+    finally:
+        client.cancel(futures)
+
+
+def connect(address: str, timeout: float = 10.0) -> Any:
+    """A Dask ``distributed.Client`` connected to the scheduler at ``address``.
+
+    Raises:
+        InputError: Dask is not installed (``pip install 'freefloat[cluster]'``) or the
+            scheduler does not answer within ``timeout`` (s).
+    """
+    try:
+        from distributed import Client
+    except ImportError:
+        raise InputError(
+            "--scheduler needs Dask distributed: pip install 'freefloat[cluster]'"
+        ) from None
+    try:
+        return Client(address, timeout=timeout)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise InputError(f"cannot connect to the Dask scheduler {address!r}: {exc}") from None
+
+
+def sweep(
+    spec: SweepSpec | str | Path,
+    workers: int | None = None,
+    client: Any = None,
+    output: str | Path | None = None,
+    progress: bool | None = None,
+    on_row: Callable[[SweepRow], None] | None = None,
+) -> list[SweepRow]:
+    """Run every job of a sweep; return the rows sorted by job index.
+
+    Args:
+        spec: a :class:`SweepSpec` or the path of a sweep file.
+        workers: local worker processes (default: all cores), each with one BLAS thread.
+            Ignored with ``client``.
+        client: a Dask ``distributed.Client``; the jobs run on its cluster.
+        output: CSV file written as jobs finish; rows already there are kept (resume).
+        progress: a progress bar on stderr; default: only when stderr is a terminal.
+        on_row: called with each new row as it finishes.
+
+    Raises:
+        FreeFloatError: a bad sweep or output file (before any job runs). Jobs never raise:
+            a failed job is a row with status ``failed``.
+    """
+    if not isinstance(spec, SweepSpec):
+        spec = SweepSpec.from_toml(spec)
+    if workers is None:
+        workers = os.cpu_count() or 1
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise InputError(f"workers must be an integer >= 1, got {workers!r}")
+    if client is not None:
+        _check_dask(client)
+    done = read_rows(spec, output) if output is not None else {}
+    todo = [job for job in spec.jobs() if job.index not in done]
+    rows = dict(done)
+    appender = _Appender(spec, Path(output), done) if output is not None else None
+    show = sys.stderr.isatty() if progress is None else progress
+    from tqdm import tqdm
+
+    bar = tqdm(
+        total=spec.size, initial=len(done), disable=not show, unit="job", desc="sweep", leave=True
+    )
+    try:
+        stream = _dask(todo, client) if client is not None else _local(todo, workers)
+        for row in stream:
+            rows[row.index] = row
+            if appender is not None:
+                appender.add(row)
+            if on_row is not None:
+                on_row(row)
+            bar.update(1)
+    finally:
+        bar.close()
+        if appender is not None:
+            appender.close()
+    ordered = [rows[i] for i in sorted(rows)]
+    if output is not None:
+        write_rows(spec, output, ordered)
+    return ordered
