@@ -56,6 +56,7 @@ from scipy.optimize import minimize, newton, root
 
 import freefloat as ff
 from freefloat.physics import attitude as att
+from freefloat.robot.collision import CollisionModel, known_srdf
 
 ROBOTS = Path(ff.default_scenario_path()).parent
 
@@ -251,6 +252,79 @@ def bench_whole(runs: int, baseline_ms: dict[str, float]) -> list[dict[str, obje
         )
         print(f"  done: whole plan, {name}", flush=True)
     return rows
+
+
+UR5_PAN = """robot = "ur5_servicer"
+duration = 10.0
+[start]
+joints = { shoulder_pan_joint = -90.0, shoulder_lift_joint = -45.0, elbow_joint = 120.0, \
+wrist_1_joint = -90.0, wrist_2_joint = 0.0, wrist_3_joint = 0.0 }
+[goal]
+joints = { shoulder_pan_joint = 90.0, shoulder_lift_joint = -45.0, elbow_joint = 120.0, \
+wrist_1_joint = -90.0, wrist_2_joint = 0.0, wrist_3_joint = 0.0 }
+base_zyx_deg = [-17.29, 1.5255, -33.449]
+"""
+
+
+def bench_collision(runs: int) -> list[dict[str, object]]:
+    """Whole verified plan with clearance (the default) and without it (ms, medians)."""
+    import tempfile
+
+    from freefloat.problem.constraints import scenario_constraints
+
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        pan = Path(tmp) / "ur5_pan.toml"
+        pan.write_text(UR5_PAN)
+        cases = [
+            ("panda servicer (shipped)", ROBOTS / "panda_servicer.toml"),
+            ("ur5 servicer (shipped)", ROBOTS / "ur5_servicer.toml"),
+            ("ur5 pan past the hull (issue 13)", pan),
+        ]
+        for label, path in cases:
+            scenario = ff.Scenario.from_toml(path)
+            aware = scenario_constraints(scenario)
+            plain = ff.default_constraints()
+            results = {}
+            for key, constraints in (("with", aware), ("without", plain)):
+                ff.plan(scenario, constraints=constraints)  # warm-up
+                times = []
+                for _ in range(runs):
+                    start = time.perf_counter()
+                    p = ff.plan(scenario, constraints=constraints)
+                    times.append(time.perf_counter() - start)
+                results[key] = (statistics.median(times) * 1e3, p)
+            robot = scenario.robot
+            model = CollisionModel(robot, known_srdf(robot))
+            q = results["without"][1].joint_positions(np.linspace(0.0, scenario.duration, 801))
+            unchecked = min(float(model.distances(x).values.min()) for x in q)
+            clearance = results["with"][1].verification["clearance"].detail
+            rows.append(
+                {
+                    "case": label,
+                    "with_ms": results["with"][0],
+                    "without_ms": results["without"][0],
+                    "ratio": results["with"][0] / results["without"][0],
+                    "clearance_with": clearance,
+                    "min_clearance_without_m": unchecked,
+                }
+            )
+            print(f"  done: collision, {label}", flush=True)
+    return rows
+
+
+def print_collision(rows: list[dict[str, object]]) -> None:
+    print()
+    print(
+        "| case | plan with clearance [ms] | without [ms] | with/without "
+        "| min clearance without [m] | clearance check with |"
+    )
+    print("|---|---:|---:|---:|---:|---|")
+    for r in rows:
+        print(
+            f"| {r['case']} | {r['with_ms']:.0f} | {r['without_ms']:.0f} | {r['ratio']:.2f}x "
+            f"| {r['min_clearance_without_m']:.4f} | {r['clearance_with']} |"
+        )
 
 
 def chain_urdf(n: int) -> str:
@@ -476,9 +550,15 @@ def main() -> None:
         help="reach table: also the multistart search on the random directions (slow)",
     )
     parser.add_argument("--sweep", action="store_true", help="also the sweep section")
+    parser.add_argument(
+        "--collision-only", action="store_true", help="only the clearance cost table"
+    )
     parser.add_argument("--sweep-only", action="store_true", help="only the sweep section")
     args = parser.parse_args()
     print(f"machine: {machine()}")
+    if args.collision_only:
+        print_collision(bench_collision(args.runs))
+        return
     sweep = bench_sweep() if args.sweep or args.sweep_only else {}
     if sweep:
         print(
@@ -505,6 +585,7 @@ def main() -> None:
             args.json.write_text(json.dumps({"machine": machine(), "reach": reach}, indent=1))
         return
     rows = bench_cases(args.runs, args.baseline_runs)
+    collision = bench_collision(max(3, args.runs // 3))
     whole = bench_whole(args.runs, {str(r["problem"]): float(r["baseline_ms"]) for r in rows})  # type: ignore[arg-type]
     import tempfile
 
@@ -544,6 +625,7 @@ def main() -> None:
         print(f"| {r['joints']} | {r['map_us']:.2f} | {r['map_and_derivative_us']:.2f} |")
     if reach:
         print_reach(reach)
+    print_collision(collision)
     if args.json:
         args.json.write_text(
             json.dumps(
@@ -554,6 +636,7 @@ def main() -> None:
                     "map_scaling": scaling,
                     "reach": reach,
                     "sweep": sweep,
+                    "collision": collision,
                 },
                 indent=1,
             )

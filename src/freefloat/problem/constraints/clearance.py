@@ -10,8 +10,9 @@ Jacobians, chained with the path's linear dependence on ``beta``. The instants a
 grid refined around the minima of clearance, and the rows ask for a little more than the
 margin (:data:`SOLVER_SLACK`) so that the dips between instants stay outside it.
 
-The dense check samples the whole path, refines every near-minimum by a bounded scalar search
-in time, and estimates its own error by step doubling (the same search on half the samples).
+The dense check samples the whole path (:data:`VERIFY_SAMPLES`), refines every near-minimum by
+a bounded scalar search in time, and estimates its own error by step doubling (the same search
+on every other sample).
 """
 
 from __future__ import annotations
@@ -32,6 +33,8 @@ __all__ = ["REFINE", "SOLVER_SLACK", "Clearance", "clearance_at"]
 
 #: Extra clearance the solvers ask for beyond the margin, between constraint instants (m).
 SOLVER_SLACK = 2e-3
+#: Samples of the dense verification check (every near-minimum is then refined in time).
+VERIFY_SAMPLES = 401
 #: Extra instants per grid interval next to a local minimum of clearance.
 REFINE = 3
 
@@ -55,6 +58,8 @@ class Clearance(Constraint):
         self.model = model
         self.margin = float(margin)
         self._memo: tuple[Problem, bytes, ConstraintRows] | None = None
+        self._smallest_memo: dict[tuple[bytes, float, int, int], tuple[float, float, int]] = {}
+        self._sampled_memo: tuple[tuple[bytes, float, int], np.ndarray] | None = None
 
     def __repr__(self) -> str:
         return f"Clearance(margin={self.margin:g} m, {self.model.n_pairs} pairs)"
@@ -79,21 +84,29 @@ class Clearance(Constraint):
         if self._memo is not None and self._memo[0] is problem and self._memo[1] == key:
             return self._memo[2]
         grid = DEFAULT_INSTANTS
-        base, dq, _ = problem.family.linear_map(grid)
+        values_grid, jacobian_grid = self._rows_at(problem, beta, grid)
+        coarse = self.margin + SOLVER_SLACK - values_grid  # the smallest distance there
+        extra = np.concatenate([self._refinement(grid, k) for k in _lowest(coarse)])
+        values_extra, jacobian_extra = self._rows_at(problem, beta, extra)
+        values = np.concatenate([values_grid, values_extra])
+        jacobian = np.concatenate([jacobian_grid, jacobian_extra])
+        rows = ConstraintRows(values, jacobian)
+        self._memo = (problem, key, rows)  # solvers ask for values, then Jacobian, at one beta
+        return rows
+
+    def _rows_at(
+        self, problem: Problem, beta: np.ndarray, instants: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Row values (m) and Jacobian at normalised ``instants`` (one closest pair each)."""
+        base, dq, _ = problem.family.linear_map(instants)
         q = base.q + dq @ beta
-        coarse = np.array([self.model.closest_value(x)[0] for x in q])
-        chosen = np.concatenate([grid, *(self._refinement(grid, k) for k in _lowest(coarse))])
-        base, dq, _ = problem.family.linear_map(chosen)
-        q = base.q + dq @ beta
-        values = np.empty(len(chosen))
-        jacobian = np.zeros((len(chosen), problem.n_free))
+        values = np.empty(len(instants))
+        jacobian = np.zeros((len(instants), problem.n_free))
         for k, joints in enumerate(q):
             distance, gradient, _ = self.model.closest(joints)
             values[k] = self.margin + SOLVER_SLACK - distance
             jacobian[k] = -gradient @ dq[k]
-        rows = ConstraintRows(values, jacobian)
-        self._memo = (problem, key, rows)  # solvers ask for values, then Jacobian, at one beta
-        return rows
+        return values, jacobian
 
     @staticmethod
     def _refinement(grid: np.ndarray, k: int) -> np.ndarray:
@@ -107,30 +120,38 @@ class Clearance(Constraint):
             return np.zeros(0)
         return np.array([self.smallest(path, 201)[1]])
 
-    def smallest(self, path: JointPolynomials, samples: int) -> tuple[float, float, int]:
+    def smallest(
+        self, path: JointPolynomials, samples: int, every: int = 1
+    ) -> tuple[float, float, int]:
         """Smallest clearance along ``path`` (m), its time (s) and pair, from ``samples``.
 
-        Every sampled local minimum within 1 cm of the smallest is refined by a bounded
-        scalar search between its neighbouring samples.
+        Only every ``every``-th of the samples is used (so that a coarser search can reuse a
+        finer one's distances). Every sampled local minimum within 1 cm of the smallest is
+        refined by a bounded scalar search between its neighbouring samples. The last few
+        answers are remembered (solvers ask several times about one path).
         """
-        t = np.linspace(0.0, path.duration, samples)
-        q = path.evaluate(t).q
+        key = (path.coefficients.tobytes(), path.duration, samples, every)
+        if key in self._smallest_memo:
+            return self._smallest_memo[key]
+        t_all = np.linspace(0.0, path.duration, samples)
+        sampled_all = self._sampled(path, t_all)
+        t, sampled = t_all[::every], sampled_all[::every]
 
         def lowest(joints: np.ndarray) -> tuple[float, int]:
             return self.model.closest_value(joints)
 
-        sampled = np.array([lowest(x)[0] for x in q])
+        count = len(t)
         best = float(sampled.min())
-        best_t = float(t[int(np.argmin(sampled))])
-        best_pair = lowest(q[int(np.argmin(sampled))])[1]
-        interior = np.flatnonzero(
-            (sampled <= np.roll(sampled, 1)) & (sampled <= np.roll(sampled, -1))
-        )
-        candidates = set(interior.tolist()) | {0, samples - 1}
-        for k in sorted(candidates):
+        k_best = int(np.argmin(sampled))
+        best_t = float(t[k_best])
+        best_pair = lowest(path.evaluate(np.array([best_t])).q[0])[1]
+        left = np.concatenate([[np.inf], sampled[:-1]])
+        right = np.concatenate([sampled[1:], [np.inf]])
+        for index in np.flatnonzero((sampled <= left) & (sampled <= right)):
+            k = int(index)
             if sampled[k] > best + 0.01:
                 continue
-            lo, hi = t[max(k - 1, 0)], t[min(k + 1, samples - 1)]
+            lo, hi = float(t[max(k - 1, 0)]), float(t[min(k + 1, count - 1)])
             result = minimize_scalar(
                 lambda s: lowest(path.evaluate(np.array([s])).q[0])[0],
                 bounds=(lo, hi),
@@ -140,14 +161,26 @@ class Clearance(Constraint):
             if float(result.fun) < best:
                 best, best_t = float(result.fun), float(result.x)
                 best_pair = lowest(path.evaluate(np.array([best_t])).q[0])[1]
-        return best, best_t, best_pair
+        answer = (best, best_t, best_pair)
+        if len(self._smallest_memo) >= 16:
+            self._smallest_memo.pop(next(iter(self._smallest_memo)))
+        self._smallest_memo[key] = answer
+        return answer
+
+    def _sampled(self, path: JointPolynomials, t: np.ndarray) -> np.ndarray:
+        """Smallest distance over the pairs at each time of ``t`` (m), remembered per path."""
+        key = (path.coefficients.tobytes(), path.duration, len(t))
+        if self._sampled_memo is None or self._sampled_memo[0] != key:
+            q = path.evaluate(t).q
+            self._sampled_memo = (key, np.array([self.model.closest_value(x)[0] for x in q]))
+        return self._sampled_memo[1]
 
     def excess(self, robot: Robot, path: JointPolynomials) -> Excess:
         """``margin - smallest clearance`` along the path (m), with its own error estimate."""
         if self.model.n_pairs == 0:
             return Excess(-math.inf, 0.0, "no pairs to check")
-        fine = self.smallest(path, 1001)
-        coarse = self.smallest(path, 501)
+        fine = self.smallest(path, VERIFY_SAMPLES)
+        coarse = self.smallest(path, VERIFY_SAMPLES, every=2)  # the same distances, halved
         clearance, when, pair = fine
         estimate = abs(coarse[0] - fine[0])
         detail = (
@@ -177,7 +210,7 @@ def _lowest(values: np.ndarray) -> list[int]:
     left = np.concatenate([[np.inf], values[:-1]])
     right = np.concatenate([values[1:], [np.inf]])
     minima = np.flatnonzero((values <= left) & (values <= right))
-    order = [int(k) for k in minima[np.argsort(values[minima], kind="stable")]]
+    order = [int(k) for k in minima[np.argsort(np.asarray(values)[minima], kind="stable")]]
     if len(order) < 2:
         far = [int(k) for k in np.argsort(values, kind="stable") if abs(int(k) - order[0]) > 2]
         order.append(far[0] if far else (order[0] + n // 2) % n)
