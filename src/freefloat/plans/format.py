@@ -46,6 +46,7 @@ __all__ = [
     "SolutionRecord",
     "SolverReport",
     "Verification",
+    "read_plan_json",
 ]
 
 #: Format tag of plan files written by this version.
@@ -333,15 +334,7 @@ class Plan:
             PlanFileError: unreadable, not JSON, another format version, or missing keys.
         """
         path = Path(path).expanduser()
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise PlanFileError(f"plan file not found: {path}") from None
-        except (OSError, UnicodeDecodeError) as exc:
-            raise PlanFileError(f"cannot read plan file {path}: {exc}") from None
-        except json.JSONDecodeError as exc:
-            raise PlanFileError(f"{path}: not a plan file, corrupt JSON ({exc})") from None
-        return cls.from_dict(data, str(path))
+        return cls.from_dict(read_plan_json(path), str(path))
 
     @classmethod
     def from_dict(cls, data: Any, where: str = "plan") -> Plan:
@@ -395,3 +388,20 @@ def _safety(data: Any) -> SafetyReport:
         srdf=None if data.get("srdf") is None else str(data["srdf"]),
         obstacles=[ObstacleRecord(**o) for o in data.get("obstacles", [])],
     )
+
+
+def read_plan_json(path: str | Path) -> Any:
+    """The parsed JSON of a plan file.
+
+    Raises:
+        PlanFileError: missing, unreadable or not JSON.
+    """
+    path = Path(path).expanduser()
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise PlanFileError(f"plan file not found: {path}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise PlanFileError(f"cannot read plan file {path}: {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise PlanFileError(f"{path}: not a plan file, corrupt JSON ({exc})") from None

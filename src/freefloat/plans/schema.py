@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import PlanFileError, ViewerError
-from .format import FORMAT
+from .format import FORMAT, read_plan_json
 
 __all__ = ["SCHEMAS", "check_plan_file", "field_path", "schema", "schema_errors"]
 
@@ -114,14 +114,7 @@ def check_plan_file(path: str | Path) -> None:
         PlanFileError: missing, not JSON, or a field that breaks the schema (named).
     """
     path = Path(path).expanduser()
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise PlanFileError(f"plan file not found: {path}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise PlanFileError(f"cannot read plan file {path}: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise PlanFileError(f"{path}: not a plan file, corrupt JSON ({exc})") from None
+    data = read_plan_json(path)
     if isinstance(data, dict) and data.get("format") != FORMAT:
         return
     errors = schema_errors(data, "plan")

@@ -81,6 +81,7 @@ __all__ = [
     "Safety",
     "Scenario",
     "default_scenario_path",
+    "read_toml",
     "servicer_cache_dir",
 ]
 
@@ -177,14 +178,7 @@ class Scenario:
             ModelError: the robot's URDF cannot be loaded.
         """
         path = Path(path).expanduser().resolve()
-        try:
-            data = tomllib.loads(path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise ScenarioError(f"scenario file not found: {path}") from None
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ScenarioError(f"cannot read scenario {path}: {exc}") from None
-        except tomllib.TOMLDecodeError as exc:
-            raise ScenarioError(f"{path}: invalid TOML ({exc})") from None
+        data = read_toml(path, "scenario")
         try:
             return cls.from_dict(data, relative_to=path.parent, source=path)
         except FreeFloatError as exc:
@@ -358,6 +352,22 @@ _ROBOT_KEYS = (
     "lock",
     "keep_gripper",
 )
+
+
+def read_toml(path: Path, what: str) -> dict[str, Any]:
+    """The parsed tables of a TOML file; ``what`` names it in messages ("scenario"...).
+
+    Raises:
+        ScenarioError: missing, unreadable or not TOML.
+    """
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ScenarioError(f"{what} file not found: {path}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ScenarioError(f"cannot read {what} {path}: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{path}: invalid TOML ({exc})") from None
 
 
 def servicer_cache_dir() -> Path:

@@ -33,13 +33,13 @@ from typing import Any
 import numpy as np
 
 from ..errors import FreeFloatError, ScenarioError, UnknownNameError
-from ..problem.scenario import Scenario
+from ..problem.scenario import Scenario, read_toml
 from ..robot.model import robots_dir
 
 if sys.version_info >= (3, 11):
-    import tomllib
+    pass
 else:  # pragma: no cover
-    import tomli as tomllib
+    pass
 
 __all__ = ["Axis", "Job", "SweepSpec", "Value"]
 
@@ -115,7 +115,7 @@ class SweepSpec:
                 valid ones).
         """
         path = Path(path).expanduser().resolve()
-        data = _read_toml(path, "sweep file")
+        data = read_toml(path, "sweep")
         try:
             return cls.from_dict(data, relative_to=path.parent, source=path)
         except FreeFloatError as exc:
@@ -142,7 +142,7 @@ class SweepSpec:
             )
         folder = (relative_to or Path.cwd()).resolve()
         scenario_path = _scenario_path(data["scenario"], folder)
-        base = _read_toml(scenario_path, "scenario")
+        base = read_toml(scenario_path, "scenario")
         samples = data.get("samples", 201)
         if isinstance(samples, bool) or not isinstance(samples, int) or samples < 2:
             raise ScenarioError(f"samples must be an integer >= 2, got {samples!r}")
@@ -204,17 +204,6 @@ class SweepSpec:
                     )
                 except FreeFloatError as exc:
                     raise ScenarioError(f"axis {axis.key!r} = {value!r}: {exc}") from None
-
-
-def _read_toml(path: Path, what: str) -> dict[str, Any]:
-    try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ScenarioError(f"{what} not found: {path}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(f"cannot read {what} {path}: {exc}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: invalid TOML ({exc})") from None
 
 
 def _scenario_path(name: str, folder: Path) -> Path:
