@@ -16,15 +16,8 @@ from freefloat.sweep import TIMING_COLUMNS, SweepSpec
 
 DATA = Path(__file__).parent / "data"
 
-#: EXPECTED TO CHANGE. Yaw changes (deg) just above the lower planar bound whose plan the
-#: independent verification refuses (replay_attitude, replay_joints) although the solver found
-#: one: a known false refusal of the replay check, being fixed separately. Which of them fail
-#: depends on the BLAS thread count (sweep workers use one): 2, 3, 6, 7 deg with one thread;
-#: 3, 5, 7 deg with two. Until the fix such a job may be ``failed`` with a verification
-#: message; every other change inside the bounds must be planned.
-KNOWN_FALSE_REFUSALS = {2.0, 3.0, 4.0, 5.0, 6.0, 7.0}
 
-#: A 9-job subset of the yaw sweep that plans or refuses cleanly (no known false refusal).
+#: A 9-job subset of the yaw sweep (plans and infeasible refusals) for the quicker tests.
 SUBSET = [-55.0, -50.0, -40.0, -30.0, -20.0, 0.0, 22.0, 23.0, 25.0]
 
 
@@ -62,11 +55,6 @@ def test_worked_example_yaw_sweep_planned_inside_infeasible_outside(yaw_sweep):
     for row in rows:
         change = round(row.values[0] + 50.0, 9)
         if lo < change < hi:
-            if change in KNOWN_FALSE_REFUSALS and row.status == "failed":
-                # known false refusal (see above); at 6 deg with one BLAS thread the solver
-                # also lets a LinAlgError escape (reported as an internal error, one line)
-                assert "fails verification" in row.message or "LinAlgError" in row.message
-                continue
             assert row.status == "planned", (change, row.message)
             assert row.attitude_error_rad < 1e-9
             assert row.peak_torque > 0 and row.path_length > 0
