@@ -334,8 +334,38 @@ def _cmd_verify(args: argparse.Namespace) -> int:
 
 
 def _cmd_compose(args: argparse.Namespace) -> int:
-    from .robot.compose import ServicerSpec, compose_servicer
+    from .robot.compose import ServicerSpec, compose_servicer, payload_parent
     from .robot.model import load_robot
+    from .robot.payload import Payload
+
+    def _compose_payload(args: argparse.Namespace) -> Payload | None:
+        """The ``--payload-*`` options as a validated ``Payload``, or None without a mass."""
+        from .errors import InputError
+
+        extra = [args.payload_com, args.payload_inertia, args.payload_box]
+        if args.payload_mass is None:
+            if any(v is not None for v in extra):
+                raise InputError(
+                    "--payload-com, --payload-inertia and --payload-box need --payload-mass"
+                )
+            return None
+        inertia = args.payload_inertia
+        if inertia is None:
+            if args.payload_box is None:
+                raise InputError(
+                    "--payload-mass needs --payload-inertia IXX IYY IZZ IXY IXZ IYZ [kg m^2] "
+                    "(or --payload-box X Y Z [m] for a uniform box)"
+                )
+            x, y, z = args.payload_box
+            m = args.payload_mass / 12.0
+            inertia = [m * (y * y + z * z), m * (x * x + z * z), m * (x * x + y * y), 0, 0, 0]
+        ixx, iyy, izz, ixy, ixz, iyz = (float(v) for v in inertia)
+        return Payload(
+            mass=args.payload_mass,
+            com_xyz=tuple(args.payload_com or (0.0, 0.0, 0.0)),
+            inertia=(ixx, iyy, izz, ixy, ixz, iyz),
+            box=tuple(args.payload_box) if args.payload_box is not None else None,
+        )
 
     spec = ServicerSpec(
         arm=args.arm,
@@ -346,15 +376,21 @@ def _cmd_compose(args: argparse.Namespace) -> int:
         mount_rpy=tuple(math.radians(a) for a in args.mount_rpy),
         lock=tuple(args.lock or ()),
         keep_gripper=args.keep_gripper,
+        payload=_compose_payload(args),
     )
     with stage("compose servicer"):
         path = compose_servicer(spec, args.output)
-        robot = load_robot(path)
+        robot = load_robot(path, payload_parent(path.read_text(encoding="utf-8")))
     print(f"freefloat compose: wrote {path}")
     print(
         f"  {robot.n} joints ({', '.join(robot.joint_names)}), total mass "
         f"{robot.total_mass:.3f} kg, end effector {robot.end_effector!r}"
     )
+    if spec.payload is not None:
+        print(
+            f"  captured payload {spec.payload.mass:g} kg fixed to {robot.end_effector!r} "
+            "(link 'captured_payload')"
+        )
     return 0
 
 
@@ -531,6 +567,34 @@ def build_parser() -> argparse.ArgumentParser:
     p_compose.add_argument("--lock", nargs="*", metavar="JOINT", help="more joints to lock at zero")
     p_compose.add_argument(
         "--keep-gripper", action="store_true", help="keep gripper and finger joints movable"
+    )
+    p_compose.add_argument(
+        "--payload-mass",
+        type=float,
+        metavar="KG",
+        help="captured payload fixed to the end effector",
+    )
+    p_compose.add_argument(
+        "--payload-com",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "Z"),
+        help="payload centre of mass in the end-effector frame [m] (default: 0 0 0)",
+    )
+    p_compose.add_argument(
+        "--payload-inertia",
+        type=float,
+        nargs=6,
+        metavar=("IXX", "IYY", "IZZ", "IXY", "IXZ", "IYZ"),
+        help="payload inertia about its centre of mass [kg m^2] "
+        "(default: the uniform --payload-box's)",
+    )
+    p_compose.add_argument(
+        "--payload-box",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "Z"),
+        help="payload box (visual and collision), centred on its centre of mass [m]",
     )
     p_compose.add_argument("-o", "--output", required=True, help="URDF file to write")
     p_compose.set_defaults(func=_cmd_compose)

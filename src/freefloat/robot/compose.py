@@ -6,7 +6,10 @@ unless given); a fixed joint ``mount`` places the arm's root link at ``mount`` (
 roll-pitch-yaw ``mount_rpy`` (rad) in the spacecraft frame. Gripper and finger joints are locked
 (made fixed at their zero position) by default. Mesh references stay ``package://`` (resolved
 at load time against ``example-robot-data``'s share folder) or become absolute paths for a URDF
-given by path. yourdfpy builds, validates and writes the result.
+given by path. yourdfpy builds, validates and writes the result. An optional captured payload
+(:class:`~freefloat.robot.payload.Payload`) is then fixed to the composed robot's default end
+effector (link ``captured_payload``); :func:`payload_parent` names that link, so the payload
+link never becomes the end effector (``load_robot(path, payload_parent(text))``).
 """
 
 from __future__ import annotations
@@ -26,10 +29,19 @@ import numpy as np
 from ..errors import InputError, ModelError, UnknownNameError
 from ..files import atomic_write_text
 from .model import example_robot_data_dir
+from .payload import PAYLOAD_LINK, Payload
 
 LOGGER = logging.getLogger(__name__)
 
-__all__ = ["ARMS", "ServicerSpec", "arm_urdf", "compose_servicer", "resolve_mesh"]
+__all__ = [
+    "ARMS",
+    "ServicerSpec",
+    "arm_urdf",
+    "compose_servicer",
+    "compose_servicer_text",
+    "payload_parent",
+    "resolve_mesh",
+]
 
 #: example-robot-data arms by name: path of the URDF below ``example-robot-data/robots``.
 ARMS = {
@@ -75,6 +87,7 @@ class ServicerSpec:
         base_inertia: principal moments Ixx, Iyy, Izz (kg m^2); default: the uniform box's.
         lock: extra joints to lock (make fixed at zero).
         keep_gripper: keep gripper and finger joints movable.
+        payload: a captured payload fixed to the end effector (validated by ``Payload``).
     """
 
     arm: str
@@ -85,6 +98,7 @@ class ServicerSpec:
     base_inertia: tuple[float, ...] | None = None
     lock: tuple[str, ...] = field(default_factory=tuple)
     keep_gripper: bool = False
+    payload: Payload | None = None
 
     def __post_init__(self) -> None:
         numbers = [self.base_mass, *self.base_size, *self.mount, *self.mount_rpy]
@@ -257,7 +271,30 @@ def compose_servicer_text(spec: ServicerSpec) -> str:
     from lxml import etree  # yourdfpy's own XML library
 
     body = etree.tostring(urdf.write_xml(), pretty_print=True, encoding="unicode")
-    return "<?xml version='1.0' encoding='UTF-8'?>\n" + body
+    text = "<?xml version='1.0' encoding='UTF-8'?>\n" + body
+    if spec.payload is None:
+        return text
+    from .model import load_robot
+    from .payload import attach_payload
+
+    # The default end effector of the servicer without the payload holds it.
+    end_effector = load_robot(source.parent / f"{arm_name}_servicer.urdf", text=text).end_effector
+    return attach_payload(text, end_effector, spec.payload)
+
+
+def payload_parent(text: str) -> str | None:
+    """The link a URDF's captured payload is fixed to (its end effector), or None if none."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError:
+        return None
+    for joint in root.findall("joint"):
+        child, parent = joint.find("child"), joint.find("parent")
+        if child is not None and parent is not None and child.get("link") == PAYLOAD_LINK:
+            return parent.get("link")
+    return None
 
 
 def _mesh_names(robot: Any) -> list[str]:

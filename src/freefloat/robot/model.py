@@ -251,7 +251,9 @@ def _default_end_effector(model: pin.Model) -> str:
     """Name the body frame at the tip of the longest chain of movable joints.
 
     Among the bodies carried by the deepest joint, a frame named like a tool (``tcp``,
-    ``end_effector``, ``eef``, ``tool``, ``ee``) wins; otherwise the latest in tree order.
+    ``end_effector``, ``eef``, ``tool``, ``ee``) wins; otherwise the latest in tree order. A
+    captured payload's link (``captured_payload``) is what the end effector holds, never the
+    end effector itself.
     """
     bodies = [
         (
@@ -261,7 +263,7 @@ def _default_end_effector(model: pin.Model) -> str:
             frame.name,
         )
         for index, frame in enumerate(model.frames)
-        if frame.type == pin.FrameType.BODY
+        if frame.type == pin.FrameType.BODY and frame.name != "captured_payload"
     ]
     return max(bodies)[3]
 

@@ -11,7 +11,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from scipy.optimize import minimize
 
 from ..problem.constraints import Constraint
 from ..problem.residual import Problem
@@ -34,6 +33,7 @@ def feasible_start(
     problem: Problem, constraints: Sequence[Constraint], options: SolveOptions
 ) -> np.ndarray | None:
     """Minimum-norm ``beta`` whose path honours every constraint, or None if none is found."""
+    from scipy.optimize import minimize  # imported when needed: it costs start-up time
     active = [c for c in constraints if c.applies_to(problem.robot)]
     rows = [
         {

@@ -98,7 +98,10 @@ def inject_controls(page: str, plan: Plan, speed: float = 1.0) -> str:
     title = html.escape(plan_title(plan))
     legend = "".join(
         f'<li><span style="background:{colour}"></span>{html.escape(text)}</li>'
-        for colour, text in LEGEND
+        for colour, text in (
+            *LEGEND,
+            *([("rgba(224,32,32,.45)", "keep-out objects")] if plan.safety.obstacles else []),
+        )
     )
     speeds = "".join(
         f'<option value="{s}"{" selected" if s == 1 else ""}>{s:g}x</option>'

@@ -5,7 +5,11 @@ The robot's visual geometry (URDF primitives or meshes) is drawn by Pinocchio's
 visual (base and arm together), so meshcat's animation controls play, pause and scrub it.
 Also drawn: the end-effector trail, the system centre of mass (a fixed point at the origin),
 the inertial axes and the base frame's axes. A link whose mesh file cannot be found is drawn
-as a small sphere, with a warning (the dynamics never need the meshes).
+as a small sphere, with a warning (the dynamics never need the meshes). The plan's keep-out
+objects (``plan.safety.obstacles``) are drawn semi-transparent red, fixed to the spacecraft
+(each one's node ``freefloat_extras/obstacles/NAME`` is animated with the base pose; a capsule
+is a cylinder and two spheres). A captured payload is a link of the plan's URDF, drawn when it
+has a box.
 
 meshcat 0.3.2 quirks handled here: the scene can only be exported (``static_html``) while its
 server subprocess runs, and ``Visualizer.close()`` raises; :class:`Playback` stops the server
@@ -28,7 +32,9 @@ import pinocchio as pin
 from ..errors import FreeFloatError, ViewerError
 from ..files import atomic_write_text
 from ..plans.format import Plan
+from ..robot.collision import Obstacle
 from ..robot.model import Robot, example_robot_data_dir, load_robot
+from .plots import plan_obstacles
 
 __all__ = ["Playback", "build_playback", "serve", "write_html"]
 
@@ -38,6 +44,9 @@ ROOT_NODE = "freefloat"
 EXTRAS = "freefloat_extras"
 #: Repetitions of the animation loop in the viewer (meshcat has no "forever").
 LOOPS = 10000
+#: Colour (hex RGB) and opacity of the keep-out objects.
+OBSTACLE_COLOR = 0xE02020
+OBSTACLE_OPACITY = 0.35
 
 
 def _import_viewer() -> tuple[Any, Any]:
@@ -162,6 +171,35 @@ def _visual_model(robot: Robot) -> pin.GeometryModel:
         raise ViewerError(f"cannot load the visual geometry of {robot.urdf}: {exc}") from None
 
 
+def obstacle_node(name: str) -> str:
+    """Meshcat path of a keep-out object's node (animated with the spacecraft)."""
+    safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in name) or "obstacle"
+    return f"{EXTRAS}/obstacles/{safe}"
+
+
+def _draw_obstacle(viewer: Any, g: Any, node: str, obstacle: Obstacle) -> None:
+    """Set the meshcat objects of one keep-out object below ``node`` (in its own frame)."""
+    material = g.MeshLambertMaterial(
+        color=OBSTACLE_COLOR, transparent=True, opacity=OBSTACLE_OPACITY
+    )
+    size = obstacle.size
+    if obstacle.shape == "box":
+        viewer[node].set_object(g.Box(list(size)), material)
+    elif obstacle.shape == "sphere":
+        viewer[node].set_object(g.Sphere(size[0]), material)
+    else:  # capsule: radius, cylinder length; its axis is local z (meshcat's cylinder: y)
+        radius, length = size
+        viewer[f"{node}/cylinder"].set_object(g.Cylinder(length, radius), material)
+        turn = np.eye(4)
+        turn[:3, :3] = [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]  # y -> z
+        viewer[f"{node}/cylinder"].set_transform(turn)
+        for end, sign in (("top", 1.0), ("bottom", -1.0)):
+            cap = np.eye(4)
+            cap[2, 3] = sign * length / 2.0
+            viewer[f"{node}/{end}"].set_object(g.Sphere(radius), material)
+            viewer[f"{node}/{end}"].set_transform(cap)
+
+
 def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -> Playback:
     """Start a meshcat server and load the plan's animation into it.
 
@@ -216,6 +254,10 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
         viewer[f"{EXTRAS}/end_effector"].set_object(
             g.Sphere(0.02 * extent), g.MeshLambertMaterial(color=0x2CA02C)
         )
+        obstacles = {obstacle_node(o.name): o for o in plan_obstacles(plan)}
+        for node, obstacle in obstacles.items():
+            _draw_obstacle(viewer, g, node, obstacle)
+        base_link = robot.model.getFrameId(robot.base_link)
         # Camera: meshcat 0.3.2 API (Pinocchio's helpers need a newer meshcat). Inside the
         # y-up "rotated" node, a world point (x, y, z) is (x, z, -y); it looks at the origin.
         eye = np.array([0.5, -1.0, 1.1]) * 1.5 * extent
@@ -245,13 +287,15 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
             tip = np.eye(4)
             tip[:3, 3] = data.oMf[ee_frame].translation
             poses[f"{EXTRAS}/end_effector"] = tip
+            for node, obstacle in obstacles.items():  # as the collision model places them
+                poses[node] = (data.oMf[base_link] * obstacle.placement()).homogeneous.copy()
             playback.frames.append(poses)
             with animation.at_frame(viewer, k) as frame:
                 for name, pose in poses.items():
                     frame[name].set_transform(pose)
             if k == 0:  # static placement too (keeps mesh scales; animation sets pose only)
                 viz.display(q)
-                for name in (f"{EXTRAS}/base_frame", f"{EXTRAS}/end_effector"):
+                for name in (f"{EXTRAS}/base_frame", f"{EXTRAS}/end_effector", *obstacles):
                     viewer[name].set_transform(poses[name])
         viewer.set_animation(animation, play=True, repetitions=LOOPS)
         playback.animation = animation

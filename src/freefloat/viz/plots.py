@@ -10,14 +10,22 @@ the unit conversion named in its axis label. Legends sit outside the data, to th
 Marked: the goal values (joint goals at t = T, the target base attitude; dotted) and the
 URDF's finite joint position and velocity limits (dashed, in the joint's colour; read from the
 plan's URDF when it loads, else left out).
+
+``clearance`` (only when the plan was kept clear, ``plan.safety.checked``): the smallest
+signed distance (m) over the checked pairs, recomputed with the plan's collision model (its
+SRDF and keep-out objects) on :data:`CLEARANCE_SAMPLES` instants of the plan's polynomials, the
+margin dashed, and the closest pair named in the legend. Skipped when not checked, or when the
+collision model cannot be built (with a warning).
 """
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,7 +33,25 @@ from ..errors import InputError, ViewerError
 from ..files import atomic_write
 from ..plans.format import Plan
 
-__all__ = ["TOPICS", "figures", "save_figures"]
+if TYPE_CHECKING:
+    from ..robot.collision import Obstacle
+    from ..robot.model import Robot
+
+__all__ = [
+    "CLEARANCE_SAMPLES",
+    "OPTIONAL_TOPICS",
+    "TOPICS",
+    "ClearanceCurve",
+    "clearance_curve",
+    "figures",
+    "plan_obstacles",
+    "save_figures",
+]
+
+LOGGER = logging.getLogger(__name__)
+
+#: Instants (evenly spaced over [0, T]) at which the clearance figure recomputes distances.
+CLEARANCE_SAMPLES = 400
 
 #: Figure names, in order (the overview sheet is ``overview``).
 TOPICS = (
@@ -37,6 +63,80 @@ TOPICS = (
     "joint_rates",
     "joint_torques",
 )
+#: Figures drawn only when the plan has what they show (``clearance``: ``safety.checked``).
+OPTIONAL_TOPICS = ("clearance",)
+
+
+def plan_obstacles(plan: Plan) -> list[Obstacle]:
+    """The plan's keep-out objects (``plan.safety.obstacles``) as collision-model obstacles."""
+    from ..robot.collision import Obstacle
+
+    return [
+        Obstacle(
+            o.name,
+            o.shape,
+            tuple(float(v) for v in o.size),
+            (float(o.xyz[0]), float(o.xyz[1]), float(o.xyz[2])),
+            (float(o.rpy[0]), float(o.rpy[1]), float(o.rpy[2])),
+        )
+        for o in plan.safety.obstacles
+    ]
+
+
+@dataclass(frozen=True)
+class ClearanceCurve:
+    """The smallest clearance along a plan.
+
+    Attributes:
+        t: instants (s).
+        smallest: per instant, the smallest signed distance over the checked pairs (m).
+        pair: per instant, the index (into ``names``) of the pair at that distance.
+        names: the checked pairs, ``"a / b"``.
+        margin: the plan's clearance margin (m).
+    """
+
+    t: np.ndarray
+    smallest: np.ndarray
+    pair: np.ndarray
+    names: list[str]
+    margin: float
+
+    @property
+    def closest(self) -> tuple[float, float, str]:
+        """``(distance m, time s, pair name)`` of the smallest clearance along the plan."""
+        k = int(np.argmin(self.smallest))
+        return float(self.smallest[k]), float(self.t[k]), self.names[int(self.pair[k])]
+
+
+def clearance_curve(
+    plan: Plan, samples: int = CLEARANCE_SAMPLES, robot: Robot | None = None
+) -> ClearanceCurve | None:
+    """The smallest clearance on ``samples`` instants of the plan's joint polynomials.
+
+    None when the plan was not kept clear (``plan.safety.checked`` false) or has no pairs.
+
+    Raises:
+        FreeFloatError: the robot or its collision model cannot be loaded.
+    """
+    if not plan.safety.checked:
+        return None
+    from ..robot.collision import CollisionModel
+    from ..robot.model import load_robot
+
+    robot = robot or load_robot(plan.robot.urdf, plan.robot.end_effector)
+    model = CollisionModel(robot, plan.safety.srdf, plan_obstacles(plan))
+    if model.n_pairs == 0:
+        return None
+    t = np.linspace(0.0, plan.duration, max(2, int(samples)))
+    joints = plan.joint_positions(t)
+    values = [model.closest_value(q) for q in joints]
+    return ClearanceCurve(
+        t=t,
+        smallest=np.array([v for v, _ in values]),
+        pair=np.array([k for _, k in values], dtype=int),
+        names=list(model.names),
+        margin=float(plan.safety.margin_m),
+    )
 
 
 def _pyplot() -> Any:
@@ -72,7 +172,11 @@ def _limits(plan: Plan) -> dict[str, tuple[float, float, float]]:
 
 
 def _draw(
-    plan: Plan, topic: str, ax: Any, limits: dict[str, tuple[float, float, float]] | None = None
+    plan: Plan,
+    topic: str,
+    ax: Any,
+    limits: dict[str, tuple[float, float, float]] | None = None,
+    clearance: ClearanceCurve | None = None,
 ) -> None:
     limits = limits or {}
     s = plan.samples
@@ -151,6 +255,18 @@ def _draw(
                 else "joint torque [N m]",
             }[topic]
         )
+    elif topic == "clearance" and clearance is not None:
+        value, when, pair = clearance.closest
+        ax.plot(clearance.t, clearance.smallest, label="smallest clearance")
+        ax.plot(
+            [when],
+            [value],
+            "o",
+            mfc="none",
+            label=f"closest: {pair}\n{value:.4g} m at {when:.3g} s",
+        )
+        ax.axhline(clearance.margin, color="C3", linestyle="--", linewidth=1, label="margin")
+        ax.set_ylabel("clearance [m]")
     else:  # pragma: no cover - guarded by the callers
         raise InputError(f"unknown figure {topic!r}; valid: {', '.join(TOPICS)}")
     if topic != "end_effector_path":
@@ -160,23 +276,40 @@ def _draw(
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize="small")
 
 
-def figures(plan: Plan, topics: Sequence[str] = TOPICS) -> dict[str, Any]:
-    """Matplotlib figures of the plan, by topic, plus ``overview`` (all topics on one sheet)."""
+def _clearance(plan: Plan) -> ClearanceCurve | None:
+    from ..errors import FreeFloatError
+
+    try:
+        return clearance_curve(plan)
+    except (FreeFloatError, OSError) as exc:
+        LOGGER.warning("no clearance figure: %s", exc)
+        return None
+
+
+def figures(plan: Plan, topics: Sequence[str] = (*TOPICS, *OPTIONAL_TOPICS)) -> dict[str, Any]:
+    """Matplotlib figures of the plan, by topic, plus ``overview`` (all topics on one sheet).
+
+    ``clearance`` is left out when the plan was not kept clear (see the module).
+    """
     plt = _pyplot()
+    valid = (*TOPICS, *OPTIONAL_TOPICS)
     for topic in topics:
-        if topic not in TOPICS:
-            raise InputError(f"unknown figure {topic!r}; valid: {', '.join(TOPICS)}")
+        if topic not in valid:
+            raise InputError(f"unknown figure {topic!r}; valid: {', '.join(valid)}")
     title = f"{Path(plan.robot.urdf).stem}, T = {plan.duration:g} s"
     limits = _limits(plan)
+    clearance = _clearance(plan) if "clearance" in topics else None
+    if clearance is None:  # not checked (or no model): no clearance figure
+        topics = [topic for topic in topics if topic != "clearance"]
     out: dict[str, Any] = {}
     for topic in topics:
         fig, ax = plt.subplots(figsize=(7.6, 4.0), layout="constrained")
-        _draw(plan, topic, ax, limits)
+        _draw(plan, topic, ax, limits, clearance)
         ax.set_title(f"{topic.replace('_', ' ')} ({title})", fontsize="medium")
         out[topic] = fig
     fig, axes = plt.subplots(4, 2, figsize=(12, 14), layout="constrained")
     for topic, ax in zip(topics, axes.flat, strict=False):
-        _draw(plan, topic, ax, limits)
+        _draw(plan, topic, ax, limits, clearance)
         ax.set_title(topic.replace("_", " "), fontsize="medium")
     for ax in list(axes.flat)[len(topics) :]:
         ax.axis("off")

@@ -21,7 +21,6 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from ...robot.collision import CollisionModel
 from ...robot.model import Robot
@@ -130,6 +129,8 @@ class Clearance(Constraint):
         refined by a bounded scalar search between its neighbouring samples. The last few
         answers are remembered (solvers ask several times about one path).
         """
+        from scipy.optimize import minimize_scalar  # when needed: it costs start-up time
+
         key = (path.coefficients.tobytes(), path.duration, samples, every)
         if key in self._smallest_memo:
             return self._smallest_memo[key]
