@@ -391,17 +391,21 @@ def reach_goals(scenario: ff.Scenario, random_directions: int) -> list[tuple[str
 
 def plan_once(scenario: ff.Scenario, options: ff.SolveOptions) -> dict[str, object]:
     """Search, then sample and verify; the search's time and evaluations."""
+    from freefloat.problem.constraints import scenario_constraints
     from freefloat.solvers.search import search
 
+    constraints = scenario_constraints(scenario)  # limits and clearance, as ff.plan does
     start = time.perf_counter()
     try:
-        found = search(scenario, options)
+        found = search(scenario, options, constraints)
     except ff.FreeFloatError as exc:
         return {"solved": False, "time_s": time.perf_counter() - start, "note": str(exc)[:120]}
     elapsed = time.perf_counter() - start
     evaluations = found.problem.evaluations
     try:
-        plan = ff.plan_from_solution(found.problem, found.solution)
+        plan = ff.plan_from_solution(
+            found.problem.with_steps(found.solution.steps), found.solution, constraints=constraints
+        )
         verified = plan.verification.passed
     except ff.FreeFloatError:
         verified = False

@@ -121,3 +121,26 @@ def test_failure_reports_reach_and_a_goal_at_95_percent_of_it_plans(
     inside = _turned(panda_problem, 0.95 * err.reached_fraction * angle * axis)
     solution = ff.solve(inside)
     assert _independent_residual(inside, solution.beta) < 1e-9
+
+
+def test_more_freedom_continues_from_where_less_stopped() -> None:
+    """The new free coefficients start at zero, so the carried path is exactly the old one."""
+    start, goal = np.array([0.1, -0.4, 0.9]), np.array([1.2, 0.3, -0.5])
+    small = ff.PathFamily.with_extra(start, goal, [2, 2, 2])
+    large = ff.PathFamily.with_extra(start, goal, [3, 3, 3])
+    beta = np.array([0.3, -0.2, 0.5, 0.1, -0.7, 0.25])
+    carried = large.embed(small, beta)
+    assert carried is not None and len(carried) == 9
+    s = np.linspace(0.0, 1.0, 57)
+    np.testing.assert_allclose(large.evaluate(carried, s).q, small.evaluate(beta, s).q, atol=1e-14)
+    assert small.embed(large, carried) is None  # fewer coefficients cannot hold it
+    other = ff.PathFamily.with_extra(start, goal + 0.1, [3, 3, 3])
+    assert other.embed(small, beta) is None  # another motion
+
+
+def test_a_stopped_search_is_continued_with_more_freedom(panda: ff.Scenario) -> None:
+    far = ff.quat_from_zyx(math.radians(40.0), 0.0, 0.0)
+    with pytest.raises(ff.SolverError) as info:
+        ff.plan(dataclasses.replace(panda, goal_attitude=far))
+    assert "(continued): best residual" in str(info.value)
+    assert info.value.stopped_by  # the reach reported is the first attempt's, from the quintic

@@ -92,6 +92,7 @@ class SolverError(FreeFloatError):
             exhausted, the evaluation budget), when known.
         reached_fraction: how far along the way from the quintic attitude to the goal the
             planner got (0-1; continuation only, else 0).
+        last_beta: the free coefficients where continuation stopped (rad or m), if it did.
     """
 
     def __init__(
@@ -103,9 +104,11 @@ class SolverError(FreeFloatError):
         hint: str = "",
         stopped_by: str = "",
         reached_fraction: float = 0.0,
+        last_beta: Sequence[float] | None = None,
     ) -> None:
         self.headline = message
         self.stopped_by = stopped_by
+        self.last_beta = None if last_beta is None else tuple(float(b) for b in last_beta)
         self.reached_fraction = float(reached_fraction)
         self.best_residual = float(best_residual)
         self.tried = tuple(tried)

@@ -265,6 +265,23 @@ class PathFamily:
         n = self.evaluate(beta, np.asarray(t, dtype=float) / duration)
         return PathSamples(n.q, n.qd / duration, n.qdd / duration**2)
 
+    def embed(self, other: PathFamily, beta: np.ndarray) -> np.ndarray | None:
+        """``beta`` of ``other`` as free coefficients of this family (new ones zero).
+
+        The path is unchanged: each free coefficient multiplies the same basis polynomial in
+        both families. None when this family lacks one of ``other``'s coefficients or the two
+        join different configurations.
+        """
+        if not (np.array_equal(self.start, other.start) and np.array_equal(self.goal, other.goal)):
+            return None
+        position = {key: k for k, key in enumerate(self.free_index)}
+        out = np.zeros(self.n_free)
+        for value, key in zip(np.asarray(beta, dtype=float), other.free_index, strict=True):
+            if key not in position:
+                return None
+            out[position[key]] = value
+        return out
+
     def polynomials(self, beta: np.ndarray, duration: float) -> JointPolynomials:
         """The path at ``beta`` as polynomials in time on [0, ``duration``] (s)."""
         return JointPolynomials.from_lists(

@@ -343,10 +343,12 @@ def continuation(
             fallback.tried = attempt.tried
             return fallback
     attempt.stopped_by = result.stopped_by
+    attempt.last_beta = result.beta if result.fraction > 0.0 else None
     axis = ", ".join(f"{x:.3f}" for x in result.axis)
     attempt.message = (
         f"reachable up to {math.degrees(result.fraction * result.angle):.3g} deg of the "
         f"{math.degrees(result.angle):.3g} deg asked about this direction (axis {axis} from "
-        f"the quintic path's attitude); stopped by {result.stopped_by}"
+        f"the {'starting' if start is not None and np.any(start) else 'quintic'} path's "
+        f"attitude); stopped by {result.stopped_by}"
     )
     return attempt

@@ -59,6 +59,7 @@ def solve(
     problem: Problem,
     options: SolveOptions | None = None,
     constraints: Sequence[Constraint] | None = None,
+    start: np.ndarray | None = None,
 ) -> Solution:
     """Find the free coefficients that bring the base to its goal attitude.
 
@@ -66,6 +67,8 @@ def solve(
         problem: the problem (not changed).
         options: solver settings.
         constraints: path constraints to honour; default joint position and velocity limits.
+        start: a path (within the constraints) to start from instead of the quintic path,
+            e.g. where a search with less freedom stopped; ignored when it breaks one.
 
     Raises:
         SolverError: no ``beta`` with a residual below the tolerance was found within the
@@ -79,8 +82,11 @@ def solve(
     zero = np.zeros(problem.n_free)
 
     quintic_breaks = broken_constraint(problem, constraints, zero)
-    start, restored = zero, []
-    if quintic_breaks:
+    given, start, restored = start, zero, []
+    if given is not None and np.any(given) and not broken_constraint(problem, constraints, given):
+        start = np.asarray(given, dtype=float)
+        restored.append("continued from where the search with less freedom stopped")
+    elif quintic_breaks:
         found = feasible_start(problem, constraints, options)
         restored.append(
             f"the quintic path breaks {quintic_breaks}: "
@@ -139,6 +145,7 @@ def solve(
             per_axis=best_vector.tolist(),
             stopped_by=attempt.stopped_by,
             reached_fraction=attempt.reached_fraction,
+            last_beta=None if attempt.last_beta is None else attempt.last_beta.tolist(),
         )
 
     # Certify the integration at the chosen root; refine the grid and polish when needed.

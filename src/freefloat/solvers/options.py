@@ -130,6 +130,8 @@ class Attempt:
         stopped_by: why the strategy stopped short, when it did (for error messages).
         reached_fraction: for continuation, how far along the way to the goal it got (0-1).
         message: a one-line account of a failure for the error message ("" for the default).
+        last_beta: where a strategy that stopped short got to (continuation), so that a
+            search with more freedom can continue from there.
     """
 
     candidates: list[np.ndarray] = field(default_factory=list)
@@ -140,3 +142,4 @@ class Attempt:
     stopped_by: str = ""
     reached_fraction: float = 0.0
     message: str = ""
+    last_beta: np.ndarray | None = None

@@ -34,6 +34,7 @@ def feasible_start(
 ) -> np.ndarray | None:
     """Minimum-norm ``beta`` whose path honours every constraint, or None if none is found."""
     from scipy.optimize import minimize  # imported when needed: it costs start-up time
+
     active = [c for c in constraints if c.applies_to(problem.robot)]
     rows = [
         {

@@ -25,6 +25,7 @@ from ..errors import (
 from ..physics.momentum import cached_planar_axis
 from ..problem.build import problem_from_scenario
 from ..problem.constraints import Constraint
+from ..problem.paths import PathFamily
 from ..problem.residual import Problem
 from ..problem.scenario import Scenario
 from .dispatch import solve
@@ -146,6 +147,7 @@ def search(
             distributions = list(
                 freedom_candidates(robot.n, 1 if planar else 3, spatial_continuation)
             )
+        carry: tuple[PathFamily, tuple[float, ...]] | None = None
         for counts in distributions:
             extra = scenario.extra if counts is None else counts
             try:
@@ -159,9 +161,21 @@ def search(
                 first_error = first_error or exc
                 continue
             used = [sum(1 for i, _ in problem.family.free_index if i == j) for j in range(robot.n)]
+            start = None
+            if carry is not None:  # continue where less freedom stopped (new ones start at 0)
+                start = problem.family.embed(carry[0], np.asarray(carry[1]))
             try:
-                solution = solve(problem, options, constraints)
+                solution = solve(problem, options, constraints, start)
             except SolverError as exc:
+                if exc.last_beta is not None:
+                    carry = (problem.family, exc.last_beta)
+                if start is not None:  # its reach counts from a later point: keep the first
+                    tried.append(
+                        f"{label}, freedom {_describe(used, names)} (continued): best residual "
+                        f"{exc.best_residual:.3g} rad"
+                    )
+                    first_error = first_error or exc
+                    continue
                 breaks = [item for item in exc.tried if " breaks " in item]
                 tried.append(
                     f"{label}, freedom {_describe(used, names)}: best residual "
@@ -174,7 +188,8 @@ def search(
                     best, best_axes, best_error = exc.best_residual, exc.per_axis, exc
                 first_error = first_error or exc
                 continue
-            tried.append(f"{label}, freedom {_describe(used, names)}: solved")
+            how = " (continued from where less freedom stopped)" if start is not None else ""
+            tried.append(f"{label}, freedom {_describe(used, names)}: solved{how}")
             return SearchResult(
                 problem=problem,
                 solution=solution,
