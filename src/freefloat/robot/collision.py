@@ -214,6 +214,7 @@ class CollisionModel:
             centres.append(np.asarray(obj.geometry.aabb_center, dtype=float))
             radii.append(float(obj.geometry.aabb_radius))
         self._centres, self._radii = np.array(centres), np.array(radii)
+        self._shapes = [obj.geometry for obj in geometry.geometryObjects]
         pairs = np.array(self.pairs, dtype=int).reshape(-1, 2)
         self._first, self._second = pairs[:, 0], pairs[:, 1]
         self._columns = np.array([j.idx_v for j in robot.joints])
@@ -254,51 +255,64 @@ class CollisionModel:
         grads = np.stack([self._gradient(k) for k in range(len(self.pairs))])
         return Distances(values, grads)
 
-    def closest_value(self, joints: np.ndarray) -> tuple[float, int]:
+    def closest_value(self, joints: np.ndarray, cap: float = math.inf) -> tuple[float, int]:
         """The smallest signed distance over the pairs (m) and its pair index.
 
         Exact, and cheaper than :meth:`distances`: pairs are visited in the order of a lower
         bound (bounding spheres) and the search stops once that bound exceeds the best exact
-        distance found.
+        distance found. With a finite ``cap`` (m) it also stops once the bound exceeds the cap:
+        the answer is then a lower bound of the distance, larger than the cap (solvers only
+        need exact values near their margin).
         """
         model, data, gdata = self.robot.model, self._data, self._geometry_data
         q = self.robot.configuration(np.asarray(joints, dtype=float))
         pin.forwardKinematics(model, data, q)
         pin.updateGeometryPlacements(model, data, self.geometry, gdata)
-        rotations = np.array([m.rotation for m in gdata.oMg])
-        translations = np.array([m.translation for m in gdata.oMg])
-        centres = translations + np.einsum("gij,gj->gi", rotations, self._centres)
+        placements = list(gdata.oMg)
+        centres = np.array([m.act(c) for m, c in zip(placements, self._centres, strict=True)])
         bound = (
             np.linalg.norm(centres[self._first] - centres[self._second], axis=1)
             - self._radii[self._first]
             - self._radii[self._second]
         )
-        objects = self.geometry.geometryObjects
+        transforms: dict[int, coal.Transform3s] = {}
+
+        def transform(index: int) -> coal.Transform3s:
+            if index not in transforms:
+                m = placements[index]
+                transforms[index] = coal.Transform3s(m.rotation, m.translation)
+            return transforms[index]
+
         best, best_k = math.inf, -1
         self._results = {}
-        for k in np.argsort(bound):
-            k = int(k)
+        for index in np.argsort(bound):
+            k = int(index)
             if bound[k] > best:
                 break
+            if bound[k] > cap:
+                if bound[k] < best:
+                    best, best_k = float(bound[k]), k
+                break
             a, b = self.pairs[k]
+            result = coal.DistanceResult()
             value = coal.distance(
-                objects[a].geometry,
-                coal.Transform3s(rotations[a], translations[a]),
-                objects[b].geometry,
-                coal.Transform3s(rotations[b], translations[b]),
-                self._request,
-                self._results.setdefault(k, coal.DistanceResult()),
+                self._shapes[a], transform(a), self._shapes[b], transform(b), self._request, result
             )
+            self._results[k] = result
             if value < best:
                 best, best_k = float(value), k
         return best, best_k
 
-    def closest(self, joints: np.ndarray) -> tuple[float, np.ndarray, int]:
+    def closest(self, joints: np.ndarray, cap: float = math.inf) -> tuple[float, np.ndarray, int]:
         """The smallest signed distance (m), its gradient over the joints, and its pair index.
 
-        Cheaper than :meth:`distances` with gradients: culled pairs, one gradient.
+        Cheaper than :meth:`distances` with gradients: culled pairs, one gradient. Beyond a
+        finite ``cap`` (see :meth:`closest_value`) the value is a lower bound and the gradient
+        is zero.
         """
-        value, k = self.closest_value(joints)
+        value, k = self.closest_value(joints, cap)
+        if k not in self._results:
+            return value, np.zeros(self.robot.n), k
         pin.computeJointJacobians(self.robot.model, self._data)  # at closest_value's pose
         return value, self._gradient(k), k
 
