@@ -308,28 +308,60 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
     return playback
 
 
-def write_html(plan: Plan, path: str | Path, speed: float = 1.0) -> Path:
-    """Write one self-contained HTML file that plays the plan offline; no server is left.
+def page_html(plan: Plan, speed: float = 1.0) -> str:
+    """The self-contained playback page of ``plan`` (no server is left running).
 
     The page carries visible controls (:mod:`freefloat.viz.controls`): title, play / pause /
     restart, a time slider with a readout in seconds, speed and a legend.
-
-    The file is written atomically: a failure leaves nothing behind.
     """
     from .compact import compact_page
     from .controls import inject_controls
 
     with build_playback(plan, speed) as playback:
         html = playback.html()
-    return atomic_write_text(path, inject_controls(compact_page(html), plan, speed))
+    return inject_controls(compact_page(html), plan, speed)
+
+
+def write_html(plan: Plan, path: str | Path, speed: float = 1.0) -> Path:
+    """Write one self-contained HTML file that plays the plan offline; no server is left.
+
+    The file is written atomically: a failure leaves nothing behind.
+    """
+    return atomic_write_text(path, page_html(plan, speed))
 
 
 def serve(plan: Plan, speed: float = 1.0, announce: Any = print) -> None:
-    """Serve the animated plan until interrupted (Ctrl-C), then stop the server."""
-    with build_playback(plan, speed) as playback:
-        announce(f"freefloat show: open {playback.url} (Ctrl-C to stop)")
-        try:
-            while True:
-                time.sleep(3600)
-        except KeyboardInterrupt:
-            pass
+    """Serve the playback page (with its controls) on 127.0.0.1 until Ctrl-C, then stop.
+
+    The page is the same self-contained page :func:`write_html` writes, so the served and the
+    written playback look and behave alike; a plain HTTP server on loopback serves it, and
+    nothing is left running afterwards.
+    """
+    import http.server
+    import threading
+
+    body = page_html(plan, speed).encode("utf-8")
+
+    class Handler(http.server.BaseHTTPRequestHandler):
+        def do_GET(self) -> None:
+            self.send_response(200)
+            self.send_header("Content-Type", "text/html; charset=utf-8")
+            self.send_header("Content-Length", str(len(body)))
+            self.end_headers()
+            self.wfile.write(body)
+
+        def log_message(self, format: str, *args: Any) -> None:
+            return  # quiet: the terminal shows the URL only
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    try:
+        announce(f"freefloat show: open http://127.0.0.1:{server.server_port}/ (Ctrl-C to stop)")
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.shutdown()
+        server.server_close()
