@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import weakref
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -113,10 +114,24 @@ def planar_bounds(
         for joint, (lo, hi) in zip(mmap.robot.joints, ranges, strict=True)
     ]
 
-    from scipy import optimize  # imported when first used
+    lower = np.array([-np.inf if lim[0] is None else lim[0] for lim in limits])
+    upper = np.array([np.inf if lim[1] is None else lim[1] for lim in limits])
 
     def refine(i: int, sign: float) -> float:
         start = points[np.argmin(sign * gains[:, i])]
+        if planar_map is not None:
+            # Exact gradients of the cosine-polynomial gains: a projected gradient search
+            # (no SciPy: it is slow to import, and the gains are smooth and cheap).
+            value = _projected_descent(
+                lambda q: sign * planar_map.gains_and_derivatives(q)[0][i],
+                lambda q: sign * planar_map.gains_and_derivatives(q)[1][i],
+                start,
+                lower,
+                upper,
+            )
+            return float(min(sign * gains[:, i].min(), value) * sign)
+        from scipy import optimize  # imported when first used
+
         result = optimize.minimize(
             lambda q: sign * gain(q)[i],
             start,
@@ -129,6 +144,43 @@ def planar_bounds(
     g_min = np.array([refine(i, 1.0) for i in range(n)])
     g_max = np.array([refine(i, -1.0) for i in range(n)])
     return PlanarBounds(g_min=g_min, g_max=g_max)
+
+
+def _projected_descent(
+    value: Callable[[np.ndarray], float],
+    gradient: Callable[[np.ndarray], np.ndarray],
+    start: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    iterations: int = 500,
+) -> float:
+    """Smallest value of a smooth function in a box, from ``start``.
+
+    Projected gradient steps with Barzilai-Borwein lengths and backtracking; stops when a step
+    changes the value by less than 1e-15 (a fixed count of iterations at most, so the answer is
+    deterministic).
+    """
+    x = np.clip(np.asarray(start, dtype=float), lower, upper)
+    f, g = value(x), gradient(x)
+    step = 1e-2
+    for _ in range(iterations):
+        while True:
+            trial = np.clip(x - step * g, lower, upper)
+            f_trial = value(trial)
+            if f_trial <= f - 1e-4 * float(g @ (x - trial)) or step < 1e-14:
+                break
+            step *= 0.5
+        if step < 1e-14:
+            break
+        g_trial = gradient(trial)
+        s, y = trial - x, g_trial - g
+        done = abs(f - f_trial) < 1e-15 and float(np.abs(s).max()) < 1e-9
+        x, f, g = trial, f_trial, g_trial
+        if done:
+            break
+        curvature = float(s @ y)
+        step = float(s @ s) / curvature if curvature > 1e-300 else 2.0 * step
+    return float(f)
 
 
 @dataclass(frozen=True)
