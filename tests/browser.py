@@ -53,6 +53,6 @@ def screenshot(page: Path, virtual_ms: int) -> np.ndarray:
             ],
             check=True,
             capture_output=True,
-            timeout=120,
+            timeout=300,  # a loaded 2-core machine renders a meshed page slowly
         )
         return np.asarray(Image.open(out).convert("RGB")).astype(int)
