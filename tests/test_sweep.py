@@ -197,3 +197,25 @@ def test_dask_local_cluster_gives_the_local_rows(tmp_path, yaw_sweep):
     assert [r.status for r in remote] == ["infeasible"] * 2 + ["planned"] * 5 + ["infeasible"] * 2
     ff.sweep(path, workers=1, output=tmp_path / "local.csv", progress=False)
     assert _without_timings(tmp_path / "dask.csv") == _without_timings(tmp_path / "local.csv")
+
+
+def test_a_payload_mass_axis_plans_each_mass_on_its_own_robot(tmp_path, monkeypatch):
+    """Each payload mass is a different robot: a worker must not reuse the first one's."""
+    monkeypatch.setenv("FREEFLOAT_CACHE", str(tmp_path / "cache"))
+    base = (DATA / "worked_example_auto.toml").read_text()
+    base += "\n[payload]\nmass = 5.0\ninertia = [0.01, 0.01, 0.01, 0.0, 0.0, 0.0]\n"
+    (tmp_path / "held.toml").write_text(base)
+    sweep = tmp_path / "mass.toml"
+    sweep.write_text(
+        'scenario = "held.toml"\nsamples = 21\n[[axis]]\nkey = "payload.mass"\n'
+        "values = [5.0, 40.0]\n"
+    )
+    rows = ff.sweep(SweepSpec.from_toml(sweep), workers=1, progress=False)
+    assert [r.status for r in rows] == ["planned", "planned"], [r.message for r in rows]
+    # Independent: each mass planned on its own, in this process.
+    for row, mass in zip(rows, (5.0, 40.0), strict=True):
+        (tmp_path / "one.toml").write_text(base.replace("mass = 5.0", f"mass = {mass}"))
+        alone = ff.plan(ff.Scenario.from_toml(tmp_path / "one.toml"), samples=21)
+        peak = max(abs(x) for sample in alone.samples.tau for x in sample)
+        assert row.peak_torque == pytest.approx(peak, rel=1e-9)
+    assert rows[0].peak_torque != pytest.approx(rows[1].peak_torque, rel=1e-3)

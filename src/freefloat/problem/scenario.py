@@ -188,9 +188,18 @@ class Scenario:
 
     @classmethod
     def from_dict(
-        cls, data: Mapping[str, Any], relative_to: Path | None = None, source: Path | None = None
+        cls,
+        data: Mapping[str, Any],
+        relative_to: Path | None = None,
+        source: Path | None = None,
+        known: Robot | None = None,
     ) -> Scenario:
-        """Build a scenario from the parsed TOML tables (degrees; see the module docstring)."""
+        """Build a scenario from the parsed TOML tables (degrees; see the module docstring).
+
+        ``known`` is a robot already loaded (a sweep's worker keeps one): it is used when it
+        is the robot the tables name (the same URDF path, composed servicer or payload) and
+        its end effector is the one asked for, instead of loading it again.
+        """
         _check_keys(data, _TOP_KEYS, "the scenario")
         for key in ("robot", "duration", "start", "goal"):
             if key not in data:
@@ -216,7 +225,11 @@ class Scenario:
         payload = _payload(data.get("payload"))
         if payload is not None:
             urdf, robot_text = _with_payload(urdf, robot_text, end_effector, payload)
-        robot = load_robot(urdf, end_effector, text=robot_text)
+        same = known is not None and known.urdf == Path(urdf).expanduser().resolve()
+        if same and known is not None and end_effector in (None, known.end_effector):
+            robot = known
+        else:
+            robot = load_robot(urdf, end_effector, text=robot_text)
         if payload is not None and end_effector is None and robot.end_effector == PAYLOAD_LINK:
             # The payload link must not become the default end effector.
             robot = load_robot(urdf, _payload_parent(robot_text), text=robot_text)

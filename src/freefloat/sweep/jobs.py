@@ -87,14 +87,17 @@ def _one_line(text: str) -> str:
 
 def _robot_key(data: Mapping[str, Any], job: Job) -> str:
     return json.dumps(
-        [data.get("robot"), data.get("end_effector"), str(job.relative_to)], sort_keys=True
+        [data.get("robot"), data.get("end_effector"), data.get("payload"), str(job.relative_to)],
+        sort_keys=True,
     )
 
 
 def _scenario(job: Job) -> Scenario:
     """The job's scenario, on this process's copy of its robot."""
-    scenario = Scenario.from_dict(job.data, relative_to=job.relative_to, source=job.source)
     key = _robot_key(job.data, job)
+    scenario = Scenario.from_dict(
+        job.data, relative_to=job.relative_to, source=job.source, known=_ROBOTS.get(key)
+    )
     robot = _ROBOTS.setdefault(key, scenario.robot)
     return scenario if robot is scenario.robot else replace(scenario, robot=robot)
 

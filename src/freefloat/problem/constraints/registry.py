@@ -6,7 +6,10 @@ here; solvers, verification and the plan file pick it up from the list.
 
 from __future__ import annotations
 
-from ...robot.collision import collision_model, known_srdf
+import weakref
+
+from ...robot.collision import CollisionModel, Obstacle, collision_model, known_srdf
+from ...robot.model import Robot
 from ..scenario import Scenario
 from .base import Constraint
 from .clearance import Clearance
@@ -38,7 +41,16 @@ def scenario_constraints(scenario: Scenario) -> list[Constraint]:
     safety = scenario.safety
     if safety.check:
         srdf = safety.srdf or known_srdf(scenario.robot)
-        model = collision_model(scenario.robot, srdf, safety.obstacles)
-        if model.n_pairs:
-            constraints.append(Clearance(model, safety.margin))
+        models = _MODELS.setdefault(scenario.robot, {})
+        key = (None if srdf is None else str(srdf), safety.obstacles)
+        if key not in models:
+            models[key] = collision_model(scenario.robot, srdf, safety.obstacles)
+        if models[key].n_pairs:
+            constraints.append(Clearance(models[key], safety.margin))
     return constraints
+
+
+#: Collision models per robot (by SRDF and obstacles), built once; entries go with the robot.
+_MODELS: weakref.WeakKeyDictionary[
+    Robot, dict[tuple[str | None, tuple[Obstacle, ...]], CollisionModel]
+] = weakref.WeakKeyDictionary()
