@@ -186,3 +186,19 @@ def test_spatial_exact_jacobian(spatial_robot):
     eps = 1e-5
     fd = ref.central_jacobian(problem.residual, beta, eps)
     assert np.abs(jac - fd).max() <= 1e-6 * np.abs(fd).max()
+
+
+def test_polishing_a_diverged_candidate_never_reaches_least_squares():
+    """Found by a sweep: a diverged SQP candidate sent NaN into LAPACK (which printed noise)."""
+    from freefloat.solvers.newton import polish
+
+    class Diverged:
+        def residual(self, beta):
+            return np.array([np.nan, 1.0, 0.0])
+
+        def jacobian(self, beta):
+            raise AssertionError("the Jacobian of a non-finite residual must not be asked for")
+
+    beta = np.array([1e200, -3.0, 2.0])
+    out, r = polish(Diverged(), beta, 1e-9)
+    assert out is beta and np.isnan(r[0])

@@ -15,14 +15,16 @@ def polish(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Minimum-norm Gauss-Newton corrections until the residual is well below ``tol``.
 
-    Returns the corrected ``beta`` and its residual vector.
+    Returns the corrected ``beta`` and its residual vector. A candidate whose residual or
+    Jacobian is not finite (a diverged search) is returned as it is, to be rejected; it never
+    reaches the least-squares solver.
     """
     r = problem.residual(beta)
-    if np.linalg.norm(r) < POLISH * tol:
+    if np.linalg.norm(r) < POLISH * tol or not np.all(np.isfinite(r)):
         return beta, r
     jac = problem.jacobian(beta)
     for _ in range(iterations):
-        if np.linalg.norm(r) < POLISH * tol:
+        if np.linalg.norm(r) < POLISH * tol or not np.all(np.isfinite(jac)):
             break
         trial = beta - np.linalg.lstsq(jac, r, rcond=None)[0]
         r_trial = problem.residual(trial)
