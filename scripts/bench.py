@@ -46,7 +46,7 @@ import os
 import platform
 import statistics
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -463,13 +463,35 @@ def print_reach(rows: list[dict[str, object]]) -> None:
         )
 
 
-def bench_sweep() -> dict[str, float]:
-    """Wall time of the 81-job yaw sweep on 1 and 2 workers; runner overhead per job.
+SWEEP_JOBS_IN_ONE_PROCESS = """
+import sys, time
+from pathlib import Path
+import freefloat as ff
+from freefloat.sweep.jobs import run_job
+data = Path(sys.argv[1])
+spec = ff.SweepSpec.from_dict({"scenario": "worked_example_auto.toml", "axis": [{"key":
+    "goal.base_zyx_deg.0", "values": {"start": -55.0, "stop": 25.0, "num": 81}}]},
+    relative_to=data)
+for job in spec.jobs():
+    run_job(job)
+"""
 
-    The overhead per job is the one-worker sweep's wall time less its fixed start-up (measured
-    as a one-job sweep less that job's plan) less the same jobs planned one by one in this
-    process, divided by the jobs.
+
+def bench_sweep(rounds: int = 3) -> dict[str, float]:
+    """The 81-job yaw sweep: 1 and 2 workers, and the runner's overhead per job.
+
+    The overhead is measured against the same jobs run one by one by ``run_job`` in a fresh
+    process with the workers' settings (one BLAS thread), both as whole processes seen from
+    here (start-up, imports and robot loading included on both sides), paired and repeated
+    ``rounds`` times (medians): (one-worker sweep - one process) / jobs. The cost of the one
+    BLAS thread itself is reported apart (the same process with the default threads).
     """
+    import os
+    import subprocess
+    import sys
+
+    from freefloat.sweep.runner import BLAS_ENV
+
     data = Path(__file__).resolve().parents[1] / "tests" / "data"
     spec = ff.SweepSpec.from_dict(
         {
@@ -480,49 +502,44 @@ def bench_sweep() -> dict[str, float]:
         },
         relative_to=data,
     )
-    walls = {}
-    for workers in (1, 2):
+
+    def one_process(env: dict[str, str]) -> float:
         start = time.perf_counter()
-        rows = ff.sweep(spec, workers=workers, progress=False)
-        walls[workers] = time.perf_counter() - start
-    # The fixed cost of a sweep (start the worker process, import, load the robot, write the
-    # file): a one-job sweep on one worker, less that job's own plan.
-    single = ff.SweepSpec.from_dict(
-        {
-            "scenario": "worked_example_auto.toml",
-            "axis": [{"key": "goal.base_zyx_deg.0", "values": [-30.0]}],
-        },
-        relative_to=data,
-    )
-    start = time.perf_counter()
-    ff.sweep(single, workers=1, progress=False)
-    one_job_wall = time.perf_counter() - start
-    # the same jobs planned one by one here, with the robot loaded once (the runner's ideal)
-    robot = ff.Scenario.from_toml(data / "worked_example_auto.toml").robot
-    scenarios = [
-        replace(ff.Scenario.from_dict(job.data, relative_to=data), robot=robot)
-        for job in spec.jobs()
-    ]
-    for scenario in scenarios[:3]:  # warm-up
-        try_plan(scenario)
-    start = time.perf_counter()
-    for scenario in scenarios:
-        try_plan(scenario)
-    direct = time.perf_counter() - start
+        subprocess.run(
+            [sys.executable, "-c", SWEEP_JOBS_IN_ONE_PROCESS, str(data)],
+            check=True,
+            env={**os.environ, **env},
+            capture_output=True,
+        )
+        return time.perf_counter() - start
+
+    def swept(workers: int) -> float:
+        start = time.perf_counter()
+        ff.sweep(spec, workers=workers, progress=False)
+        return time.perf_counter() - start
+
+    runs: dict[str, list[float]] = {"w1": [], "w2": [], "one": [], "threads": []}
+    rows = ff.sweep(spec, workers=1, progress=False)
+    for _ in range(rounds):
+        runs["w1"].append(swept(1))
+        runs["one"].append(one_process(BLAS_ENV))
+        runs["w2"].append(swept(2))
+        runs["threads"].append(one_process({}))
+    med = {k: statistics.median(v) for k, v in runs.items()}
     worked = ff.Scenario.from_toml(ff.default_scenario_path())
     one_plan = statistics.median(timed_once(lambda: ff.plan(worked)) for _ in range(7))
     n = len(rows)
-    fixed = max(0.0, one_job_wall - direct / n)
-    overhead = (walls[1] - fixed - direct) / n
+    overhead = (med["w1"] - med["one"]) / n
     return {
         "jobs": n,
         "planned": sum(r.status == "planned" for r in rows),
-        "wall_1_worker_s": walls[1],
-        "wall_2_workers_s": walls[2],
-        "speed_up_2_over_1": walls[1] / walls[2],
-        "direct_s": direct,
-        "fixed_start_s": fixed,
+        "wall_1_worker_s": med["w1"],
+        "wall_2_workers_s": med["w2"],
+        "speed_up_2_over_1": med["w1"] / med["w2"],
+        "one_process_s": med["one"],
+        "one_process_default_threads_s": med["threads"],
         "overhead_per_job_ms": 1e3 * overhead,
+        "one_blas_thread_per_job_ms": 1e3 * (med["one"] - med["threads"]) / n,
         "worked_example_plan_ms": 1e3 * one_plan,
         "overhead_per_plan_percent": 100.0 * overhead / one_plan,
     }
@@ -585,14 +602,15 @@ def main() -> None:
     sweep = bench_sweep() if args.sweep or args.sweep_only else {}
     if sweep:
         print(
-            f"sweep: {sweep['jobs']} jobs ({sweep['planned']} planned); 1 worker "
-            f"{sweep['wall_1_worker_s']:.1f} s, 2 workers {sweep['wall_2_workers_s']:.1f} s "
-            f"({sweep['speed_up_2_over_1']:.2f}x); the same jobs planned one by one in this "
-            f"process {sweep['direct_s']:.1f} s; fixed start-up {sweep['fixed_start_s']:.2f} s; "
-            f"runner overhead "
-            f"{sweep['overhead_per_job_ms']:.1f} ms/job = "
+            f"sweep: {sweep['jobs']} jobs ({sweep['planned']} planned); medians of paired "
+            f"runs: 1 worker {sweep['wall_1_worker_s']:.2f} s, 2 workers "
+            f"{sweep['wall_2_workers_s']:.2f} s ({sweep['speed_up_2_over_1']:.2f}x); the same "
+            f"jobs in one process with one BLAS thread {sweep['one_process_s']:.2f} s "
+            f"(default threads {sweep['one_process_default_threads_s']:.2f} s); runner "
+            f"overhead {sweep['overhead_per_job_ms']:.1f} ms/job = "
             f"{sweep['overhead_per_plan_percent']:.1f} % of a worked example plan "
-            f"({sweep['worked_example_plan_ms']:.1f} ms)"
+            f"({sweep['worked_example_plan_ms']:.1f} ms); one BLAS thread costs "
+            f"{sweep['one_blas_thread_per_job_ms']:.1f} ms/job"
         )
     if args.sweep_only:
         if args.json:
