@@ -152,21 +152,11 @@ def _explain_velocity_limits(
         return
     robot = scenario.robot
     path = found.problem.polynomials(found.solution.beta)
-    worst, worst_ratio, peak = None, 0.0, 0.0
-    for i, joint in enumerate(robot.joints):
-        if math.isfinite(joint.velocity_limit):
-            (lo, _), (hi, _) = path.extremes(i, 1)
-            rate = max(abs(lo), abs(hi))
-            if rate / joint.velocity_limit > worst_ratio:
-                worst, worst_ratio, peak = joint, rate / joint.velocity_limit, rate
-    if worst is None or worst_ratio <= 1.0:
+    worst, peak, ratio = JointVelocityLimits.worst(robot, path)
+    if worst is None or ratio <= 1.0:
         return
     raise VelocityLimitError(
-        worst.name,
-        peak,
-        worst.velocity_limit,
-        JointVelocityLimits.shortest_duration(robot, path),
-        worst.unit,
+        worst.name, peak, worst.velocity_limit, path.duration * ratio, worst.unit
     ) from error
 
 

@@ -56,11 +56,10 @@ import hashlib
 import math
 import os
 import sys
-import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -69,7 +68,10 @@ from ..files import atomic_write_text
 from ..physics.attitude import quat_from_zyx, quat_to_matrix
 from ..robot.collision import Obstacle
 from ..robot.model import Robot, load_robot, resolve_robot, robots_dir
-from ..robot.payload import PAYLOAD_LINK, Payload, attach_payload
+from ..robot.payload import Payload, attach_payload
+
+if TYPE_CHECKING:
+    from ..robot.compose import ServicerSpec
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -148,6 +150,9 @@ class Scenario:
             :meth:`resolved`); None when the goal joints are given.
         robot_text: the URDF of an inline servicer not yet written to ``robot.urdf`` (by
             :meth:`write_robot`); None otherwise.
+        safety: what the plan must keep clear of (``[safety]``, ``[[obstacles]]``).
+        payload: a captured payload held by the end effector (``[payload]``), if any.
+        servicer: the description of an inline ``[robot]`` servicer, if the robot is one.
 
     Reading a scenario is pure: no file is written and no inverse kinematics runs until
     :meth:`resolved` and :meth:`write_robot` are called (planning calls both).
@@ -167,6 +172,7 @@ class Scenario:
     robot_text: str | None = None
     safety: Safety = field(default_factory=lambda: Safety())
     payload: Payload | None = None
+    servicer: ServicerSpec | None = None
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Scenario:
@@ -206,9 +212,9 @@ class Scenario:
                 raise ScenarioError(
                     f"missing required key {key!r} (required: robot, duration, [start], [goal])"
                 )
-        robot_text = None
+        robot_text, servicer = None, None
         if isinstance(data["robot"], Mapping):
-            urdf, robot_text = _inline_servicer(data["robot"])
+            urdf, robot_text, servicer = _inline_servicer(data["robot"])
         elif isinstance(data["robot"], str):
             urdf = resolve_robot(data["robot"], relative_to)
         else:
@@ -230,9 +236,6 @@ class Scenario:
             robot = known
         else:
             robot = load_robot(urdf, end_effector, text=robot_text)
-        if payload is not None and end_effector is None and robot.end_effector == PAYLOAD_LINK:
-            # The payload link must not become the default end effector.
-            robot = load_robot(urdf, _payload_parent(robot_text), text=robot_text)
         safety = _safety(data.get("safety"), data.get("obstacles"), relative_to)
 
         states: list[tuple[dict[str, float], np.ndarray]] = []
@@ -308,6 +311,7 @@ class Scenario:
             robot_text=robot_text,
             safety=safety,
             payload=payload,
+            servicer=servicer,
         )
 
     def resolved(self) -> Scenario:
@@ -404,7 +408,7 @@ def _triple(
     return tuple(float(x) for x in _numbers(table.get(key, default), 3, f"{where} {key}"))
 
 
-def _inline_servicer(table: Mapping[str, Any]) -> tuple[Path, str | None]:
+def _inline_servicer(table: Mapping[str, Any]) -> tuple[Path, str | None, ServicerSpec]:
     """The cache path of the servicer an inline ``[robot]`` table describes, and its URDF.
 
     The URDF text is None when the cache file exists (it is read from there); otherwise the
@@ -433,8 +437,8 @@ def _inline_servicer(table: Mapping[str, Any]) -> tuple[Path, str | None]:
     )
     path = servicer_cache_dir() / f"{spec.key()}.urdf"
     if path.is_file():
-        return path, None
-    return path, compose_servicer_text(spec)
+        return path, None, spec
+    return path, compose_servicer_text(spec), spec
 
 
 def _joint_table(robot: Robot, table: Mapping[str, Any], name: str) -> dict[str, float]:
@@ -596,17 +600,6 @@ def _with_payload(
     decorated = attach_payload(text, link, payload, Path(urdf).resolve().parent)
     digest = hashlib.sha256(decorated.encode()).hexdigest()[:16]
     return servicer_cache_dir() / f"{Path(urdf).stem}-payload-{digest}.urdf", decorated
-
-
-def _payload_parent(text: str | None) -> str:
-    assert text is not None
-    root = ET.fromstring(text)
-    for joint in root.findall("joint"):
-        child = joint.find("child")
-        parent = joint.find("parent")
-        if child is not None and parent is not None and child.get("link") == PAYLOAD_LINK:
-            return str(parent.get("link"))
-    raise ScenarioError("the payload link has no parent")  # pragma: no cover
 
 
 def _prefixed(exc: FreeFloatError, path: Path) -> FreeFloatError:

@@ -30,6 +30,7 @@ from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.residual import Problem
 from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
+from .restore import broken_constraint
 
 __all__ = ["ContinuationResult", "continuation", "track"]
 
@@ -193,11 +194,7 @@ def _correct(
 
 def _dense_ok(problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray) -> bool:
     """Whether ``beta``'s path honours every constraint everywhere (exact dense check)."""
-    return all(
-        c.violation(problem, beta).value <= c.tolerance
-        for c in constraints
-        if c.applies_to(problem.robot)
-    )
+    return not broken_constraint(problem, constraints, beta)
 
 
 def _with_critical(

@@ -34,9 +34,10 @@ from ..physics.attitude import geodesic_angle
 from ..physics.dynamics import inverse_dynamics, inverse_dynamics_batch, replay
 from ..physics.momentum import MomentumMap
 from ..plans.format import Check, Plan, Verification
-from ..problem.constraints import Clearance, Constraint, default_constraints
+from ..problem.constraints import Constraint, default_constraints
+from ..problem.constraints.registry import clearance_constraint
 from ..problem.paths import JointPolynomials
-from ..robot.collision import Obstacle, collision_model
+from ..robot.collision import Obstacle
 from ..robot.model import Robot, load_robot
 from .stepping import (
     _FIRST_ATTITUDE_STEPS,
@@ -143,8 +144,9 @@ def plan_constraints(plan: Plan, robot: Robot) -> list[Constraint]:
             Obstacle(o.name, o.shape, tuple(o.size), tuple(o.xyz), tuple(o.rpy))  # type: ignore[arg-type]
             for o in plan.safety.obstacles
         ]
-        model = collision_model(robot, plan.safety.srdf, obstacles)
-        constraints.append(Clearance(model, plan.safety.margin_m))
+        clearance = clearance_constraint(robot, plan.safety.srdf, obstacles, plan.safety.margin_m)
+        if clearance is not None:
+            constraints.append(clearance)
     return constraints
 
 

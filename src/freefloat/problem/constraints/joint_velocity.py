@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from ...robot.model import Robot
+from ...robot.model import Joint, Robot
 from ..paths import JointPolynomials
 from ..residual import Problem
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
@@ -72,15 +72,26 @@ class JointVelocityLimits(Constraint):
         return Excess(worst, 0.0, detail)
 
     @staticmethod
+    def worst(robot: Robot, path: JointPolynomials) -> tuple[Joint | None, float, float]:
+        """The joint whose peak rate is the largest fraction of its limit.
+
+        Returns the joint (None when no joint has a velocity limit), its exact peak rate
+        (rad/s or m/s) and that fraction of its limit.
+        """
+        worst, peak, ratio = None, 0.0, 0.0
+        for i, joint in enumerate(robot.joints):
+            if math.isfinite(joint.velocity_limit):
+                (lo, _), (hi, _) = path.extremes(i, 1)
+                rate = max(abs(lo), abs(hi))
+                if worst is None or rate / joint.velocity_limit > ratio:
+                    worst, peak, ratio = joint, rate, rate / joint.velocity_limit
+        return worst, peak, ratio
+
+    @staticmethod
     def shortest_duration(robot: Robot, path: JointPolynomials) -> float:
         """The shortest duration (s) at which this path shape respects every velocity limit.
 
         Rates scale as 1/T and the shape does not depend on T, so this is exact:
         ``T_min = T * max_i(max |qdot_i| / limit_i)``.
         """
-        ratio = 0.0
-        for i, joint in enumerate(robot.joints):
-            if math.isfinite(joint.velocity_limit):
-                (lo, _), (hi, _) = path.extremes(i, 1)
-                ratio = max(ratio, max(abs(lo), abs(hi)) / joint.velocity_limit)
-        return path.duration * ratio
+        return path.duration * JointVelocityLimits.worst(robot, path)[2]

@@ -7,6 +7,8 @@ here; solvers, verification and the plan file pick it up from the list.
 from __future__ import annotations
 
 import weakref
+from collections.abc import Sequence
+from pathlib import Path
 
 from ...robot.collision import CollisionModel, Obstacle, collision_model, known_srdf
 from ...robot.model import Robot
@@ -16,7 +18,7 @@ from .clearance import Clearance
 from .joint_position import JointPositionLimits
 from .joint_velocity import JointVelocityLimits
 
-__all__ = ["CONSTRAINTS", "default_constraints", "scenario_constraints"]
+__all__ = ["CONSTRAINTS", "clearance_constraint", "default_constraints", "scenario_constraints"]
 
 #: Constraint classes by name.
 CONSTRAINTS: dict[str, type[Constraint]] = {
@@ -41,13 +43,24 @@ def scenario_constraints(scenario: Scenario) -> list[Constraint]:
     safety = scenario.safety
     if safety.check:
         srdf = safety.srdf or known_srdf(scenario.robot)
-        models = _MODELS.setdefault(scenario.robot, {})
-        key = (None if srdf is None else str(srdf), safety.obstacles)
-        if key not in models:
-            models[key] = collision_model(scenario.robot, srdf, safety.obstacles)
-        if models[key].n_pairs:
-            constraints.append(Clearance(models[key], safety.margin))
+        clearance = clearance_constraint(scenario.robot, srdf, safety.obstacles, safety.margin)
+        if clearance is not None:
+            constraints.append(clearance)
     return constraints
+
+
+def clearance_constraint(
+    robot: Robot, srdf: str | Path | None, obstacles: Sequence[Obstacle], margin: float
+) -> Clearance | None:
+    """Clearance of ``margin`` (m) on the robot's collision model; None when it has no pairs.
+
+    The collision model (SRDF pairs removed, obstacles added) is built once per robot.
+    """
+    models = _MODELS.setdefault(robot, {})
+    key = (None if srdf is None else str(srdf), tuple(obstacles))
+    if key not in models:
+        models[key] = collision_model(robot, srdf, obstacles)
+    return Clearance(models[key], margin) if models[key].n_pairs else None
 
 
 #: Collision models per robot (by SRDF and obstacles), built once; entries go with the robot.

@@ -1,0 +1,159 @@
+"""The text summary of a plan that ``freefloat plan`` prints (angles in degrees).
+
+A leaf that reads a plan (and the scenario it came from, for the robot's name and a Cartesian
+goal); it computes nothing the plan does not already hold, except the end-effector pose at the
+goal for a Cartesian goal's error.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ..plans.format import Plan
+from ..problem.scenario import Scenario
+
+__all__ = ["cartesian_report", "robot_label", "summary"]
+
+
+def _attitude_table(p: Plan) -> list[str]:
+    rows = [f"  {'base attitude':<16}{'yaw [deg]':>14}{'pitch [deg]':>14}{'roll [deg]':>14}"]
+    for label, angles in (
+        ("start", p.base.start_zyx_deg),
+        ("target", p.base.target_zyx_deg),
+        ("achieved", p.base.achieved_zyx_deg),
+    ):
+        rows.append(f"  {label:<16}" + "".join(f"{a:>14.6f}" for a in angles))
+    return rows
+
+
+def _joint_value(value: float, kind: str) -> str:
+    return f"{value:.4f} m" if kind == "prismatic" else f"{math.degrees(value):.3f} deg"
+
+
+def _kinds(p: Plan) -> list[str]:
+    kinds = list(p.robot.joint_kinds)
+    return kinds if len(kinds) == len(p.robot.joints) else ["revolute"] * len(p.robot.joints)
+
+
+def summary(
+    p: Plan,
+    output: Path | None = None,
+    *,
+    robot_label: str | None = None,
+    wall_time_s: float | None = None,
+    timings: dict[str, float] | None = None,
+    extra_lines: Sequence[str] = (),
+) -> str:
+    """The text summary ``freefloat plan`` prints (angles in degrees, units on every figure).
+
+    Args:
+        p: the plan.
+        output: the plan file written.
+        robot_label: how to name the robot (default: the URDF file name).
+        wall_time_s: the whole command's wall time (s).
+        timings: wall time (s) per stage (``solve``, ``sample and verify``...).
+        extra_lines: more lines (a Cartesian goal's report), printed after the attitude.
+    """
+    lines = [f"freefloat plan: {robot_label or Path(p.robot.urdf).name}, T = {p.duration:g} s"]
+    lines += _attitude_table(p)
+    lines.append(f"  attitude error  {p.base.attitude_error_rad:.3e} rad")
+    lines += list(extra_lines)
+    v = p.verification
+    if v.checks:
+        lines.append(
+            f"  verification    {'passed' if v.passed else 'FAILED'}: independent attitude "
+            f"{v['attitude_independent'].value:.1e} rad, replay "
+            f"{v['replay_attitude'].value:.1e} rad, momentum {v['momentum'].value:.1e} kg m^2/s"
+        )
+    kinds = dict(zip(p.robot.joints, _kinds(p), strict=True))
+    free = [
+        f"{name}: "
+        + ", ".join(
+            f"t^{6 + k} {c:.9e} {'m' if kinds.get(name) == 'prismatic' else 'rad'}/s^{6 + k}"
+            for k, c in enumerate(values)
+        )
+        for name, values in p.free_parameters.items()
+        if values
+    ]
+    lines.append("  free parameters " + ("; ".join(free) if free else "(none)"))
+    if p.feasibility.planar and p.feasibility.yaw_change_bounds_deg is not None:
+        lo, hi = p.feasibility.yaw_change_bounds_deg
+        lines.append(
+            f"  planar bounds   yaw change {p.feasibility.requested_yaw_change_deg:.3f} deg in "
+            f"({lo:.3f}, {hi:.3f}) deg"
+        )
+    s = p.solver
+    lines.append(
+        f"  solver          {s.method}; {len(s.solutions)} solution(s); {s.evaluations} "
+        f"evaluations; final solver call {s.wall_time_s:.3f} s"
+    )
+    if s.solve_time_s or s.sample_time_s or s.verify_time_s:
+        lines.append(
+            f"  stage times     solve {1e3 * s.solve_time_s:.1f} ms, sample "
+            f"{1e3 * s.sample_time_s:.1f} ms, verify {1e3 * s.verify_time_s:.1f} ms"
+        )
+    turns = {k: t for k, t in s.full_turns.items() if t}
+    for name, count in turns.items():
+        j = p.robot.joints.index(name)
+        start, goal = p.request.start_joints[j], p.request.goal_joints[j]
+        lines.append(
+            f"  full turns      {name}: start {math.degrees(start):.3f} deg, goal "
+            f"{math.degrees(goal):.3f} deg ({math.degrees(goal - count * 2 * math.pi):.3f} deg "
+            f"{count:+d} turn(s)), travels {math.degrees(goal - start):.3f} deg"
+        )
+    if wall_time_s is not None:
+        parts = []
+        for name, seconds in (timings or {}).items():
+            share = 100.0 * seconds / wall_time_s if wall_time_s > 0 else 0.0
+            parts.append(f"{name} {seconds:.3f} s ({share:.0f} %)")
+        lines.append(
+            f"  wall time       {wall_time_s:.3f} s total"
+            + (": " + ", ".join(parts) if parts else "")
+        )
+    if output is not None:
+        lines.append(f"  plan            {output}")
+    return "\n".join(lines)
+
+
+def robot_label(scenario: Scenario) -> str:
+    """The robot's name; for an inline servicer, its arm and base (not its cache hash)."""
+    spec, robot = scenario.servicer, scenario.robot
+    if spec is not None:
+        edges = " x ".join(f"{float(x):g}" for x in spec.base_size)
+        return (
+            f"servicer: {Path(str(spec.arm)).stem} arm on a {spec.base_mass:g} kg, {edges} m base "
+            f"({robot.n} joints)"
+        )
+    return f"{robot.name} ({Path(robot.urdf).name}, {robot.n} joints)"
+
+
+def cartesian_report(scenario: Scenario, p: Plan) -> list[str]:
+    """Goal joints chosen by inverse kinematics and the end-effector error at the goal."""
+    goal = scenario.goal_pose
+    if goal is None:
+        return []
+    from ..physics.momentum import MomentumMap
+
+    kinds = _kinds(p)
+    chosen = ", ".join(
+        f"{name} {_joint_value(value, kind)}"
+        for name, value, kind in zip(p.robot.joints, p.request.goal_joints, kinds, strict=True)
+    )
+    pose = MomentumMap(scenario.robot).end_effector_pose(
+        np.asarray(p.request.goal_joints), np.asarray(p.base.achieved_quaternion_xyzw)
+    )
+    miss = float(np.linalg.norm(pose.translation - goal.position))
+    lines = [
+        f"  goal joints     (inverse kinematics) {chosen}",
+        "  end effector    goal (" + ", ".join(f"{x:.4f}" for x in goal.position) + ") m, "
+        f"position error {miss:.3e} m",
+    ]
+    if goal.rotation is not None:
+        cos = (np.trace(goal.rotation.T @ pose.rotation) - 1.0) / 2.0
+        angle = math.degrees(math.acos(min(1.0, max(-1.0, cos))))
+        lines[-1] += f", orientation error {angle:.3e} deg"
+    return lines
