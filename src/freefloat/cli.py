@@ -29,6 +29,7 @@ from .errors import FreeFloatError, InputError, VelocityLimitError
 from .pipeline import plan
 from .plans.format import Plan
 from .problem.build import planar_yaw_branch, problem_from_scenario
+from .problem.objectives import OBJECTIVES
 from .problem.scenario import Scenario, default_scenario_path
 from .progress import TIMINGS, configure, stage
 from .solvers.options import DEFAULT_TOLERANCE, SolveOptions
@@ -55,7 +56,12 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         raise InputError(f"--tolerance must be a positive number of rad, got {args.tolerance}")
     if args.samples < 2:
         raise InputError(f"--samples must be at least 2, got {args.samples}")
-    result = plan(scenario, SolveOptions(tolerance=args.tolerance), samples=args.samples)
+    result = plan(
+        scenario,
+        SolveOptions(tolerance=args.tolerance),
+        samples=args.samples,
+        objective=args.objective,
+    )
     cartesian = cartesian_report(scenario, result)
     if args.output:
         output = Path(args.output)
@@ -321,6 +327,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--allow-full-turns",
         action="store_true",
         help="continuous joints may reach their goal the other way round",
+    )
+    p_plan.add_argument(
+        "--objective",
+        choices=list(OBJECTIVES),
+        default=None,
+        help="which path is best among those that reach the goal (default: the scenario's "
+        "[path] objective, else min_norm); min_effort: least integral of squared torques",
     )
     p_plan.add_argument("--samples", type=int, default=201, help="samples in [0, T] (default 201)")
     p_plan.add_argument(

@@ -21,6 +21,8 @@ from .physics.dynamics import inverse_dynamics_batch
 from .plans.format import (
     BaseReport,
     Feasibility,
+    ObjectiveLevel,
+    ObjectiveReport,
     ObstacleRecord,
     Plan,
     Request,
@@ -32,9 +34,11 @@ from .plans.format import (
 )
 from .problem.constraints import Clearance, Constraint, JointVelocityLimits, scenario_constraints
 from .problem.constraints.clearance import clearance_at
+from .problem.objectives import DEFAULT_OBJECTIVE, objective_named
 from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .progress import stage
+from .solvers.minimise import minimise
 from .solvers.options import DEFAULT_TOLERANCE, Solution, SolveOptions
 from .solvers.search import search
 from .verify.checks import boundary_errors, verify_plan
@@ -54,6 +58,7 @@ def plan(
     options: SolveOptions | None = None,
     samples: int = 201,
     constraints: Sequence[Constraint] | None = None,
+    objective: str | None = None,
 ) -> Plan:
     """Plan the scenario's motion and sample it.
 
@@ -64,6 +69,9 @@ def plan(
         samples: number of equally spaced samples in [0, T] (>= 2).
         constraints: path constraints to honour (solvers and verification); default joint
             position and velocity limits.
+        objective: which path is best among those that reach the goal (a name of
+            :data:`~freefloat.problem.objectives.OBJECTIVES`); default the scenario's
+            ``[path] objective``.
 
     Raises:
         FreeFloatError: any subclass: bad input, infeasible request, no solution.
@@ -84,6 +92,29 @@ def plan(
     except SolverError as exc:
         _explain_velocity_limits(scenario, options, constraints, exc)
         raise
+    chosen = objective_named(objective or scenario.objective)
+    if chosen.name != DEFAULT_OBJECTIVE:
+        with stage(f"minimise {chosen.name}"):
+            minimised = minimise(scenario, found, chosen, options, constraints)
+        found = minimised.found
+        report = ObjectiveReport(
+            name=chosen.name,
+            unit=chosen.unit,
+            value=minimised.value,
+            error_estimate=minimised.error_estimate,
+            quadrature_nodes=minimised.objective.nodes_used,
+            duration_power=chosen.duration_power,
+            start_value=minimised.start_value,
+            levels=[
+                ObjectiveLevel(level.freedom, level.value, level.iterations, level.note)
+                for level in minimised.levels
+            ],
+        )
+    else:
+        value = chosen.evaluate(found.problem, found.solution.beta).value
+        report = ObjectiveReport(
+            name=chosen.name, unit=chosen.unit, value=value, start_value=value
+        )
     solve_time = time.perf_counter() - clock
     problem = found.problem.with_steps(found.solution.steps)
     with stage("sample and verify"):
@@ -95,14 +126,14 @@ def plan(
             constraints=constraints,
             safety=_safety_report(scenario, constraints),
         )
-    report = replace(
+    solver = replace(
         result.solver,
         freedom=found.freedom,
         full_turns=found.full_turns,
         tried=found.tried,
         solve_time_s=solve_time,
     )
-    return replace(result, solver=report)
+    return replace(result, solver=solver, objective=report)
 
 
 def _check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> None:

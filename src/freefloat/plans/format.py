@@ -274,6 +274,49 @@ class SafetyReport:
 
 
 @dataclass(frozen=True)
+class ObjectiveLevel:
+    """One freedom level the objective was minimised with.
+
+    Attributes:
+        freedom: free coefficients per joint.
+        value: the objective at that level's best root (the objective's unit).
+        iterations: SLSQP iterations spent.
+        note: why the level kept its starting path, when it did.
+    """
+
+    freedom: dict[str, int]
+    value: float
+    iterations: int
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class ObjectiveReport:
+    """Which of the paths that reach the goal the plan is, and how good it is.
+
+    Attributes:
+        name: the objective (``min_norm``, ``min_effort``, ``min_acceleration``, ``min_length``).
+        unit: unit of the values.
+        value: the objective along the plan, at its duration.
+        error_estimate: numerical error of ``value`` (0 when exact).
+        quadrature_nodes: Gauss-Legendre nodes of ``value`` (0 when exact).
+        duration_power: ``p`` in ``value(T) = value(1 s) T^-p``: the value at another
+            duration of the same path.
+        start_value: the objective along the minimum-norm path the search found first.
+        levels: the freedom levels tried, in order.
+    """
+
+    name: str = "min_norm"
+    unit: str = "rad^2"
+    value: float | None = None
+    error_estimate: float = 0.0
+    quadrature_nodes: int = 0
+    duration_power: int = 0
+    start_value: float | None = None
+    levels: list[ObjectiveLevel] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
 class Plan:
     """A verified point-to-point motion of a free-floating space manipulator."""
 
@@ -288,6 +331,7 @@ class Plan:
     request: Request
     verification: Verification = field(default_factory=Verification)
     safety: SafetyReport = field(default_factory=SafetyReport)
+    objective: ObjectiveReport = field(default_factory=ObjectiveReport)
     format: str = FORMAT
 
     # -- evaluation -------------------------------------------------------------------------
@@ -318,6 +362,7 @@ class Plan:
                 "request": asdict(self.request),
                 "verification": self.verification.to_dict(),
                 "safety": asdict(self.safety),
+                "objective": asdict(self.objective),
             }
         )
 
@@ -376,6 +421,7 @@ class Plan:
                 ),
                 verification=verification,
                 safety=_safety(data.get("safety")),
+                objective=_objective(data.get("objective")),
             )
         except (KeyError, TypeError, AttributeError, ValueError) as exc:
             raise PlanFileError(f"{where}: corrupt plan file (bad or missing {exc})") from None
@@ -390,6 +436,18 @@ def _safety(data: Any) -> SafetyReport:
         margin_m=float(data["margin_m"]),
         srdf=None if data.get("srdf") is None else str(data["srdf"]),
         obstacles=[ObstacleRecord(**o) for o in data.get("obstacles", [])],
+    )
+
+
+def _objective(data: Any) -> ObjectiveReport:
+    """The ``objective`` section (absent in files written before it existed: minimum norm)."""
+    if data is None:
+        return ObjectiveReport()
+    return ObjectiveReport(
+        **{
+            **data,
+            "levels": [ObjectiveLevel(**level) for level in data.get("levels", [])],
+        }
     )
 
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["JointPolynomials", "PathFamily", "PathSamples", "basis_coefficients"]
+__all__ = ["AffineSamples", "JointPolynomials", "PathFamily", "PathSamples", "basis_coefficients"]
 
 _QUINTIC = np.array([0.0, 0.0, 0.0, 10.0, -15.0, 6.0])
 
@@ -50,6 +50,29 @@ class PathSamples:
     q: np.ndarray
     qd: np.ndarray
     qdd: np.ndarray
+
+
+@dataclass(frozen=True)
+class AffineSamples:
+    """The path at instants as an affine function of the free coefficients ``beta``.
+
+    ``q = base.q + dq @ beta``, ``q_s = base.qd + dqs @ beta``, ``q_ss = base.qdd + dqss @ beta``
+    (s-derivatives); each map is (len(s), N, n_free).
+    """
+
+    base: PathSamples
+    dq: np.ndarray
+    dqs: np.ndarray
+    dqss: np.ndarray
+
+    def at(self, beta: np.ndarray) -> PathSamples:
+        """Positions and s-derivatives at ``beta``."""
+        beta = np.asarray(beta, dtype=float)
+        return PathSamples(
+            self.base.q + self.dq @ beta,
+            self.base.qd + self.dqs @ beta,
+            self.base.qdd + self.dqss @ beta,
+        )
 
 
 @dataclass(frozen=True)
@@ -133,6 +156,9 @@ class PathFamily:
     goal: np.ndarray
     degrees: tuple[int, ...]
     _index: tuple[tuple[int, int], ...] = field(init=False, repr=False)
+    _affine: dict[bytes, AffineSamples] = field(
+        default_factory=dict, init=False, repr=False, compare=False
+    )
 
     def __post_init__(self) -> None:
         start = np.asarray(self.start, dtype=float)
@@ -241,15 +267,36 @@ class PathFamily:
             (len(s), N, n_free) arrays with ``q = base.q + dq @ beta`` and
             ``q_s = base.qd + dqs @ beta``.
         """
+        full = self.affine_samples(s)
+        return full.base, full.dq, full.dqs
+
+    def affine_samples(self, s: np.ndarray) -> AffineSamples:
+        """The path and both its s-derivatives at instants ``s`` as affine functions of beta.
+
+        Kept for the last few instant sets asked for (objectives ask for the same nodes often).
+        """
+        s = np.asarray(s, dtype=float)
+        key = s.tobytes()
+        if key in self._affine:
+            return self._affine[key]
+        if len(self._affine) >= 8:
+            self._affine.clear()
+        self._affine[key] = self._affine_samples(s)
+        return self._affine[key]
+
+    def _affine_samples(self, s: np.ndarray) -> AffineSamples:
         powers, first, second = self._powers(np.asarray(s, dtype=float))
         c = self._coefficient_matrix
         base = PathSamples(powers @ c, first @ c, second @ c)
         dq = np.zeros((len(powers), self.n_joints, self.n_free))
         dqs = np.zeros_like(dq)
+        dqss = np.zeros_like(dq)
         joints = [i for i, _ in self._index]
-        dq[:, joints, np.arange(self.n_free)] = powers @ self._basis.T
-        dqs[:, joints, np.arange(self.n_free)] = first @ self._basis.T
-        return base, dq, dqs
+        columns = np.arange(self.n_free)
+        dq[:, joints, columns] = powers @ self._basis.T
+        dqs[:, joints, columns] = first @ self._basis.T
+        dqss[:, joints, columns] = second @ self._basis.T
+        return AffineSamples(base, dq, dqs, dqss)
 
     def evaluate(self, beta: np.ndarray, s: np.ndarray) -> PathSamples:
         """Positions and s-derivatives (per unit s, per unit s^2) at normalised instants ``s``."""
@@ -281,6 +328,22 @@ class PathFamily:
                 return None
             out[position[key]] = value
         return out
+
+    def rounding_bound(self, beta: np.ndarray) -> float:
+        """Bound on the rounding error of the end conditions, relative to the joint travel.
+
+        Evaluating ``sum_j c_j s^j`` and its two derivatives at ``s = 1`` in floating point
+        errs by at most about ``eps * j^2 * sum_j |c_j|``; large coefficients of alternating
+        sign (a high-degree path in the monomial basis) make that bound grow. Dimensionless
+        (the joint travel, at least 1 rad or m, is the unit).
+        """
+        travel = np.maximum(1.0, np.abs(self.goal - self.start))
+        worst = 0.0
+        for i, c in enumerate(self.coefficients(beta)):
+            powers = np.arange(len(c), dtype=float)
+            size = float(np.abs(c) @ np.maximum(1.0, powers**2))
+            worst = max(worst, size / travel[i])
+        return float(np.finfo(float).eps) * worst
 
     def polynomials(self, beta: np.ndarray, duration: float) -> JointPolynomials:
         """The path at ``beta`` as polynomials in time on [0, ``duration``] (s)."""

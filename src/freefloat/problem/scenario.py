@@ -21,6 +21,8 @@ The file speaks degrees (joint angles, Euler angles) and metres (prismatic joint
     extra = { q2 = 1 }             # optional: free coefficients per joint beyond the quintic
     max_deviation_deg = 458.4      # optional: one-unknown root bracket, as path deviation [deg]
     allow_full_turns = false       # optional: continuous joints may go the other way round
+    objective = "min_norm"         # optional: min_norm | min_effort | min_acceleration | min_length
+    raise_freedom = true           # optional: an objective may raise the freedom beyond extra
 
 Safety, keep-out objects and a captured payload (all optional)::
 
@@ -69,6 +71,7 @@ from ..physics.attitude import quat_from_zyx, quat_to_matrix
 from ..robot.collision import Obstacle
 from ..robot.model import Robot, load_robot, resolve_robot, robots_dir
 from ..robot.payload import Payload, attach_payload
+from .objectives.registry import DEFAULT_OBJECTIVE, OBJECTIVES
 
 if TYPE_CHECKING:
     from ..robot.compose import ServicerSpec
@@ -103,7 +106,7 @@ _OBSTACLE_KEYS = ("name", "box", "sphere", "capsule", "xyz", "rpy_deg")
 _PAYLOAD_KEYS = ("mass", "com_xyz", "inertia", "box")
 _STATE_KEYS = ("joints", "base_zyx_deg", "base_quaternion_xyzw")
 _GOAL_KEYS = (*_STATE_KEYS, "end_effector_xyz", "end_effector_rpy_deg")
-_PATH_KEYS = ("extra", "max_deviation_deg", "allow_full_turns")
+_PATH_KEYS = ("extra", "max_deviation_deg", "allow_full_turns", "objective", "raise_freedom")
 
 
 def default_scenario_path() -> Path:
@@ -145,6 +148,10 @@ class Scenario:
         extra: free coefficients per joint beyond the quintic; None lets the planner choose.
         max_deviation: one-unknown root bracket as largest path deviation (rad); None: default.
         allow_full_turns: a continuous joint may reach its goal the other way round.
+        objective: which path is best among those that reach the goal (a name of
+            :data:`~freefloat.problem.objectives.OBJECTIVES`); default the paper's minimum norm.
+        raise_freedom: an objective other than ``min_norm`` may add free coefficients beyond
+            ``extra`` while it keeps falling (docs/method.md section 13).
         source: the TOML file it came from, if any.
         goal_pose: a Cartesian end-effector goal still to be solved for goal joints (by
             :meth:`resolved`); None when the goal joints are given.
@@ -167,6 +174,8 @@ class Scenario:
     extra: Mapping[str, int] | None = None
     max_deviation: float | None = None
     allow_full_turns: bool = False
+    objective: str = DEFAULT_OBJECTIVE
+    raise_freedom: bool = True
     source: Path | None = None
     goal_pose: CartesianGoal | None = None
     robot_text: str | None = None
@@ -296,9 +305,23 @@ class Scenario:
             raise ScenarioError(
                 f"[path] allow_full_turns must be true or false, got {allow_full_turns!r}"
             )
+        objective = path_table.get("objective", DEFAULT_OBJECTIVE)
+        if not isinstance(objective, str) or objective not in OBJECTIVES:
+            shown = repr(objective)
+            shown = shown if len(shown) <= 40 else shown[:40] + "..."
+            raise ScenarioError(
+                f"[path] objective must be one of {', '.join(OBJECTIVES)}, got {shown}"
+            )
+        raise_freedom = path_table.get("raise_freedom", True)
+        if not isinstance(raise_freedom, bool):
+            raise ScenarioError(
+                f"[path] raise_freedom must be true or false, got {raise_freedom!r}"
+            )
         return cls(
             robot=robot,
             allow_full_turns=allow_full_turns,
+            objective=objective,
+            raise_freedom=raise_freedom,
             duration=duration,
             start_joints=states[0][0],
             goal_joints=states[1][0],

@@ -21,6 +21,7 @@ import numpy as np
 from ..errors import SolverError
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
+from .certify import certify
 from .continuation import continuation
 from .multistart import multistart
 from .newton import polish
@@ -150,16 +151,10 @@ def solve(
 
     # Certify the integration at the chosen root; refine the grid and polish when needed.
     chosen = roots[0]
-    certified = problem
-    error = certified.integration_error(chosen.beta)
-    for _ in range(3):
-        if error <= 0.1 * tol:
-            break
-        certified = certified.with_steps(certified.steps_for(chosen.beta))
-        beta, vector = polish(certified, chosen.beta, tol)
-        chosen = Root(beta, float(np.linalg.norm(vector)), chosen.path_length)
-        error = certified.integration_error(chosen.beta)
-    if error > 0.1 * tol or chosen.residual >= tol:
+    found = certify(problem, chosen.beta, chosen.residual, tol)
+    chosen = Root(found.beta, found.residual, chosen.path_length)
+    error = found.integration_error
+    if not found.passed:
         raise SolverError(
             f"attitude integration error {error:.3g} rad is too large to certify the plan",
             chosen.residual,
@@ -174,7 +169,7 @@ def solve(
         wall_time=time.perf_counter() - start_time,
         roots=(chosen, *roots[1:]),
         integration_error=error,
-        steps=certified.steps,
+        steps=found.problem.steps,
         strategy=strategy,
         tried=tuple(_dedupe(tried)),
     )

@@ -1,8 +1,13 @@
-"""Minimum-norm sequential quadratic programming with every constraint (SciPy's SLSQP)."""
+"""Sequential quadratic programming with every constraint (SciPy's SLSQP).
+
+:func:`constraint_functions` turns the path constraints into SLSQP's inequality functions of
+``beta`` (affine ones evaluated once); :func:`minimum_norm_sqp` finds the minimum-norm root
+with them, and :mod:`.optimise` the root that minimises another objective.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -10,7 +15,37 @@ from ..problem.constraints import Constraint
 from ..problem.residual import Problem
 from .options import SolveOptions
 
-__all__ = ["minimum_norm_sqp"]
+__all__ = ["constraint_functions", "minimum_norm_sqp"]
+
+Function = Callable[[np.ndarray], np.ndarray]
+
+
+def constraint_functions(
+    problem: Problem, constraints: Sequence[Constraint]
+) -> list[tuple[Function, Function]]:
+    """``(g, dg/dbeta)`` pairs with ``g(beta) >= 0`` feasible (SLSQP's sign), one per constraint.
+
+    Affine constraints (``g = g0 + G beta``) are evaluated once.
+    """
+    out: list[tuple[Function, Function]] = []
+    for constraint in constraints:
+        if not constraint.applies_to(problem.robot):
+            continue
+        if constraint.affine:
+            rows = constraint.rows(problem, np.zeros(problem.n_free))
+            if rows.count:
+                g0, g_mat = rows.values, rows.jacobian
+                out.append(
+                    (lambda b, g0=g0, g=g_mat: -(g0 + g @ b), lambda b, g=g_mat: -g)
+                )
+        else:
+            out.append(
+                (
+                    lambda b, c=constraint: -c.rows(problem, b).values,
+                    lambda b, c=constraint: -c.rows(problem, b).jacobian,
+                )
+            )
+    return out
 
 
 def minimum_norm_sqp(
@@ -32,28 +67,10 @@ def minimum_norm_sqp(
     eqs: list[dict[str, object]] = [
         {"type": "eq", "fun": lambda b: evaluate(b)[0], "jac": lambda b: evaluate(b)[1]}
     ]
-    for constraint in constraints:
-        if not constraint.applies_to(problem.robot):
-            continue
-        if constraint.affine:  # g(b) = g(0) + G b: evaluate once
-            rows = constraint.rows(problem, np.zeros(problem.n_free))
-            if rows.count:
-                g0, g_mat = rows.values, rows.jacobian
-                eqs.append(
-                    {
-                        "type": "ineq",
-                        "fun": lambda b, g0=g0, g=g_mat: -(g0 + g @ b),
-                        "jac": lambda b, g=g_mat: -g,
-                    }
-                )
-        else:
-            eqs.append(
-                {
-                    "type": "ineq",
-                    "fun": lambda b, c=constraint: -c.rows(problem, b).values,
-                    "jac": lambda b, c=constraint: -c.rows(problem, b).jacobian,
-                }
-            )
+    eqs += [
+        {"type": "ineq", "fun": fun, "jac": jac}
+        for fun, jac in constraint_functions(problem, constraints)
+    ]
     from scipy.optimize import minimize  # imported when first used
 
     result = minimize(

@@ -86,6 +86,7 @@ def summary(
             f"  planar bounds   yaw change {p.feasibility.requested_yaw_change_deg:.3f} deg in "
             f"({lo:.3f}, {hi:.3f}) deg"
         )
+    lines.append(objective_line(p))
     s = p.solver
     lines.append(
         f"  solver          {s.method}; {len(s.solutions)} solution(s); {s.evaluations} "
@@ -117,6 +118,21 @@ def summary(
     if output is not None:
         lines.append(f"  plan            {output}")
     return "\n".join(lines)
+
+
+def objective_line(p: Plan) -> str:
+    """The objective, its value and what the freedom bought, in one line."""
+    o = p.objective
+    if o.value is None:
+        return f"  objective       {o.name}"
+    line = f"  objective       {o.name} = {o.value:.6g} {o.unit}"
+    if o.error_estimate:
+        line += f" (+- {o.error_estimate:.1g}, {o.quadrature_nodes} Gauss nodes)"
+    if o.start_value and o.name != "min_norm":
+        change = 100.0 * (o.value - o.start_value) / abs(o.start_value)
+        used = ", ".join(f"{k}+{v}" for k, v in p.solver.freedom.items() if v) or "none"
+        line += f"; {change:+.1f} % against the minimum-norm path; freedom {used}"
+    return line
 
 
 def robot_label(scenario: Scenario) -> str:

@@ -1,0 +1,38 @@
+"""The objectives freefloat knows by name.
+
+A new objective is one module with an :class:`~.base.Objective` subclass plus one entry here;
+scenarios (``[path] objective``), the command line (``--objective``) and plans name it.
+"""
+
+from __future__ import annotations
+
+from ...errors import InputError
+from .base import Objective
+from .min_acceleration import MinAcceleration
+from .min_effort import MinEffort
+from .min_length import MinLength
+from .min_norm import MinNorm
+
+__all__ = ["DEFAULT_OBJECTIVE", "OBJECTIVES", "objective_named"]
+
+#: Objective classes by name.
+OBJECTIVES: dict[str, type[Objective]] = {
+    cls.name: cls for cls in (MinNorm, MinEffort, MinAcceleration, MinLength)
+}
+
+#: The objective when none is named: the paper's minimum norm.
+DEFAULT_OBJECTIVE = MinNorm.name
+
+
+def objective_named(name: str) -> Objective:
+    """A new objective of that name.
+
+    Raises:
+        InputError: the name is not one of :data:`OBJECTIVES`.
+    """
+    if name not in OBJECTIVES:
+        shown = name if len(name) <= 40 else name[:40] + "..."
+        raise InputError(
+            f"unknown objective {shown!r}; valid objectives: " + ", ".join(OBJECTIVES)
+        )
+    return OBJECTIVES[name]()

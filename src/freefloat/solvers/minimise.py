@@ -1,0 +1,181 @@
+"""Automatic freedom for an objective: raise the degree while the objective keeps falling.
+
+After the search has found a root (the paper's minimum-norm path, with the least freedom that
+reaches the goal), an objective other than ``min_norm`` is minimised over the roots
+(:func:`.optimise.optimise`) with the same freedom, then with ``k`` free coefficients on every
+joint for ``k`` in :data:`LEVELS`, each level starting from the previous best (the same path,
+embedded in the larger family). It stops when a level lowers the objective by less than
+:data:`MIN_GAIN` of its value, or at the last level. A scenario's ``[path] extra`` is the
+starting freedom; ``[path] raise_freedom = false`` keeps exactly that freedom. Every level is recorded. Budgets are counts (SLSQP iterations), so the
+result is the same on every machine.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..problem.build import problem_from_scenario
+from ..problem.constraints import Constraint
+from ..problem.objectives import Objective
+from ..problem.scenario import Scenario
+from .certify import certify
+from .optimise import optimise
+from .options import Root, SolveOptions
+from .restore import broken_constraint
+from .search import SearchResult
+
+__all__ = ["LEVELS", "MIN_GAIN", "Level", "Minimised", "minimise"]
+
+#: Free coefficients per joint tried in turn by automatic freedom.
+LEVELS = (2, 4, 6, 8)
+#: A level must lower the objective by this fraction of its value to try the next one.
+MIN_GAIN = 0.005
+#: Largest rounding bound of a level's end conditions (relative to the joint travel): beyond
+#: it the monomial coefficients are too large to represent the path accurately.
+MAX_ROUNDING = 1e-10
+#: SLSQP iterations per level.
+ITERATIONS_PER_LEVEL = 200
+
+
+@dataclass(frozen=True)
+class Level:
+    """One freedom level tried.
+
+    Attributes:
+        freedom: free coefficients per joint.
+        value: the objective at the best root of that level (objective's unit).
+        iterations: SLSQP iterations spent.
+        note: why the level kept its starting path, when it did.
+    """
+
+    freedom: dict[str, int]
+    value: float
+    iterations: int
+    note: str = ""
+
+
+@dataclass
+class Minimised:
+    """The search result with the objective minimised.
+
+    Attributes:
+        found: the solved problem and solution (the best level's).
+        objective: the objective, with the quadrature it converged on.
+        value: its value at the solution (unit).
+        error_estimate: numerical error of ``value`` (unit).
+        start_value: its value at the minimum-norm root the search found.
+        levels: every level tried, in order.
+    """
+
+    found: SearchResult
+    objective: Objective
+    value: float
+    error_estimate: float
+    start_value: float
+    levels: list[Level] = field(default_factory=list)
+
+
+def minimise(
+    scenario: Scenario,
+    found: SearchResult,
+    objective: Objective,
+    options: SolveOptions,
+    constraints: Sequence[Constraint],
+) -> Minimised:
+    """Minimise ``objective`` from the search's root, raising the freedom automatically.
+
+    Args:
+        scenario: the resolved scenario that was searched.
+        found: the search's result (its root honours every constraint).
+        objective: what to minimise.
+        options: solver settings (attitude tolerance, rad).
+        constraints: the path constraints to keep.
+    """
+    robot = scenario.robot
+    names = robot.joint_names
+    problem, beta = found.problem, found.solution.beta
+    objective = objective.converged(problem, beta)
+    start_value = objective.evaluate(problem, beta).value
+    offset = np.array(
+        [2.0 * np.pi * found.full_turns.get(n, 0) for n in names], dtype=float
+    )
+    base = [found.freedom[n] for n in names]
+    plans: list[list[int]] = [base]
+    if scenario.raise_freedom:
+        plans += [[max(b, k) for b in base] for k in LEVELS if k > min(base)]
+    levels: list[Level] = []
+    best_problem, best_beta, best_value, best_freedom = problem, beta, start_value, base
+    for counts in plans:
+        if counts == best_freedom and levels:
+            continue
+        if counts == base:
+            level_problem, start = problem, beta
+        else:
+            level_problem = problem_from_scenario(
+                scenario, extra=counts, goal_offset=offset, mmap=problem.mmap, check_bounds=False
+            )
+            start = level_problem.family.embed(best_problem.family, best_beta)
+            if start is None:
+                break
+        result = optimise(
+            level_problem, start, objective, constraints, options, ITERATIONS_PER_LEVEL
+        )
+        freedom = dict(zip(names, counts, strict=True))
+        rounding = level_problem.family.rounding_bound(result.beta)
+        if result.improved and rounding > MAX_ROUNDING:
+            note = f"coefficients too large to keep the end conditions (rounding {rounding:.1g})"
+            levels.append(Level(freedom, result.value, result.iterations, note))
+            break
+        levels.append(Level(freedom, result.value, result.iterations, result.note))
+        gain = best_value - result.value
+        if result.improved and result.value < best_value:
+            best_problem, best_beta, best_value, best_freedom = (
+                level_problem,
+                result.beta,
+                result.value,
+                counts,
+            )
+        if levels and len(levels) > 1 and gain < MIN_GAIN * abs(best_value):
+            break
+    if best_beta is beta:
+        return Minimised(
+            found, objective, start_value, objective.error_estimate(problem, beta), start_value,
+            levels,
+        )
+    residual = float(np.linalg.norm(best_problem.residual(best_beta)))
+    checked = certify(best_problem, best_beta, residual, options.tolerance)
+    if not checked.passed or broken_constraint(checked.problem, constraints, checked.beta):
+        # keep the search's root: it was certified
+        levels.append(Level(dict(zip(names, best_freedom, strict=True)), best_value, 0,
+                            "integration could not be certified"))
+        return Minimised(
+            found, objective, start_value, objective.error_estimate(problem, beta), start_value,
+            levels,
+        )
+    value = objective.evaluate(checked.problem, checked.beta).value
+    solution = replace(
+        found.solution,
+        beta=checked.beta,
+        residual=checked.residual,
+        roots=(Root(checked.beta, checked.residual, checked.problem.path_length(checked.beta)),),
+        integration_error=checked.integration_error,
+        steps=checked.problem.steps,
+        method=f"{found.solution.method}, then SLSQP on {objective.name}",
+    )
+    result_found = replace(
+        found,
+        problem=checked.problem,
+        solution=solution,
+        freedom=dict(zip(names, best_freedom, strict=True)),
+    )
+    return Minimised(
+        result_found,
+        objective,
+        value,
+        objective.error_estimate(checked.problem, checked.beta),
+        start_value,
+        levels,
+    )
