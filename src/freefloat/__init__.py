@@ -35,6 +35,16 @@ from .problem.constraints import (
     JointVelocityLimits,
     default_constraints,
 )
+from .problem.objectives import (
+    OBJECTIVES,
+    MinAcceleration,
+    MinEffort,
+    MinLength,
+    MinNorm,
+    Objective,
+    ObjectiveValue,
+    objective_named,
+)
 from .problem.paths import JointPolynomials, PathFamily
 from .problem.residual import Problem
 from .problem.scenario import Scenario, default_scenario_path
@@ -46,6 +56,7 @@ from .verify.checks import verify_plan
 __version__ = "0.1.0"
 
 __all__ = [
+    "OBJECTIVES",
     "Check",
     "Constraint",
     "ConstraintRows",
@@ -59,8 +70,14 @@ __all__ = [
     "JointPolynomials",
     "JointPositionLimits",
     "JointVelocityLimits",
+    "MinAcceleration",
+    "MinEffort",
+    "MinLength",
+    "MinNorm",
     "ModelError",
     "MomentumMap",
+    "Objective",
+    "ObjectiveValue",
     "PathFamily",
     "Plan",
     "PlanFileError",
@@ -89,6 +106,7 @@ __all__ = [
     "inverse_dynamics",
     "is_planar",
     "load_robot",
+    "objective_named",
     "plan",
     "plan_from_solution",
     "planar_axis",

@@ -112,9 +112,7 @@ def plan(
         )
     else:
         value = chosen.evaluate(found.problem, found.solution.beta).value
-        report = ObjectiveReport(
-            name=chosen.name, unit=chosen.unit, value=value, start_value=value
-        )
+        report = ObjectiveReport(name=chosen.name, unit=chosen.unit, value=value, start_value=value)
     solve_time = time.perf_counter() - clock
     problem = found.problem.with_steps(found.solution.steps)
     with stage("sample and verify"):

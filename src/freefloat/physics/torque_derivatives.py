@@ -64,7 +64,7 @@ def torques_and_derivatives(
     rates = np.atleast_2d(np.asarray(rates, dtype=float))
     accelerations = np.atleast_2d(np.asarray(accelerations, dtype=float))
     configs = mmap.configurations(joints)
-    k_count, n = joints.shape
+    k_count = len(joints)
     nv = model.nv
     jv = np.array([j.idx_v for j in mmap.robot.joints], dtype=int)
     # Pinocchio calls only in the loop; the linear algebra is batched over the instants.

@@ -32,8 +32,11 @@ class Certified:
 
 
 def certify(problem: Problem, beta: np.ndarray, residual: float, tolerance: float) -> Certified:
-    """Refine the integration grid (up to three times) until its error at the root is below a
-    tenth of ``tolerance`` (rad), polishing the root on each finer grid."""
+    """Refine the integration grid at a root until its error is negligible.
+
+    Up to three refinements, until the error is below a tenth of ``tolerance`` (rad); the root
+    (with attitude residual ``residual``, rad) is polished on each finer grid.
+    """
     certified = problem
     error = certified.integration_error(beta)
     for _ in range(3):

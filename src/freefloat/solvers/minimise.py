@@ -3,11 +3,13 @@
 After the search has found a root (the paper's minimum-norm path, with the least freedom that
 reaches the goal), an objective other than ``min_norm`` is minimised over the roots
 (:func:`.optimise.optimise`) with the same freedom, then with ``k`` free coefficients on every
-joint for ``k`` in :data:`LEVELS`, each level starting from the previous best (the same path,
-embedded in the larger family). It stops when a level lowers the objective by less than
-:data:`MIN_GAIN` of its value, or at the last level. A scenario's ``[path] extra`` is the
-starting freedom; ``[path] raise_freedom = false`` keeps exactly that freedom. Every level is recorded. Budgets are counts (SLSQP iterations), so the
-result is the same on every machine.
+joint for ``k`` in :data:`LEVELS` (spatial problems: the first :data:`SPATIAL_EXTRA_LEVELS` of
+them), each level starting from the previous best (the same path, embedded in the larger
+family). It stops when a level lowers the objective by less than :data:`MIN_GAIN` of its
+value, when a level's coefficients grow too large for the monomial basis to keep the end
+conditions (:data:`MAX_ROUNDING`), or at the last level. A scenario's ``[path] extra`` is the
+starting freedom; ``[path] raise_freedom = false`` keeps exactly that freedom. Every level is
+recorded. Budgets are counts (SLSQP iterations), so the result is the same on every machine.
 """
 
 from __future__ import annotations
@@ -35,9 +37,12 @@ LEVELS = (2, 4, 6, 8)
 MIN_GAIN = 0.005
 #: Largest rounding bound of a level's end conditions (relative to the joint travel): beyond
 #: it the monomial coefficients are too large to represent the path accurately.
-MAX_ROUNDING = 1e-10
-#: SLSQP iterations per level.
-ITERATIONS_PER_LEVEL = 200
+MAX_ROUNDING = 3e-10
+#: SLSQP iterations per run (a level runs at most ``optimise.ROUNDS`` times).
+ITERATIONS_PER_LEVEL = 100
+#: Levels a spatial problem tries beyond its own freedom (each costs many attitude
+#: integrations and, with clearance, many distance queries).
+SPATIAL_EXTRA_LEVELS = 1
 
 
 @dataclass(frozen=True)
@@ -99,13 +104,12 @@ def minimise(
     problem, beta = found.problem, found.solution.beta
     objective = objective.converged(problem, beta)
     start_value = objective.evaluate(problem, beta).value
-    offset = np.array(
-        [2.0 * np.pi * found.full_turns.get(n, 0) for n in names], dtype=float
-    )
+    offset = np.array([2.0 * np.pi * found.full_turns.get(n, 0) for n in names], dtype=float)
     base = [found.freedom[n] for n in names]
     plans: list[list[int]] = [base]
     if scenario.raise_freedom:
-        plans += [[max(b, k) for b in base] for k in LEVELS if k > min(base)]
+        raised = [[max(b, k) for b in base] for k in LEVELS if k > min(base)]
+        plans += raised if problem.planar else raised[:SPATIAL_EXTRA_LEVELS]
     levels: list[Level] = []
     best_problem, best_beta, best_value, best_freedom = problem, beta, start_value, base
     for counts in plans:
@@ -142,17 +146,31 @@ def minimise(
             break
     if best_beta is beta:
         return Minimised(
-            found, objective, start_value, objective.error_estimate(problem, beta), start_value,
+            found,
+            objective,
+            start_value,
+            objective.error_estimate(problem, beta),
+            start_value,
             levels,
         )
     residual = float(np.linalg.norm(best_problem.residual(best_beta)))
     checked = certify(best_problem, best_beta, residual, options.tolerance)
     if not checked.passed or broken_constraint(checked.problem, constraints, checked.beta):
         # keep the search's root: it was certified
-        levels.append(Level(dict(zip(names, best_freedom, strict=True)), best_value, 0,
-                            "integration could not be certified"))
+        levels.append(
+            Level(
+                dict(zip(names, best_freedom, strict=True)),
+                best_value,
+                0,
+                "integration could not be certified",
+            )
+        )
         return Minimised(
-            found, objective, start_value, objective.error_estimate(problem, beta), start_value,
+            found,
+            objective,
+            start_value,
+            objective.error_estimate(problem, beta),
+            start_value,
             levels,
         )
     value = objective.evaluate(checked.problem, checked.beta).value

@@ -7,7 +7,9 @@ matrix ``G`` of the basis polynomials' second derivatives: in ``z`` the integral
 accelerations is a unit sphere, which keeps high-degree bases well conditioned. The objective
 is divided by its value at ``beta_0``. The result is polished back onto ``h = 0`` by
 minimum-norm Newton steps and kept only if it honours every constraint and lowers the
-objective; otherwise ``beta_0`` stands. The budget is SLSQP's iteration count.
+objective; otherwise ``beta_0`` stands. Constraints are rows at fixed instants during one SLSQP
+run; when the result breaks one between them, the run is repeated from there with the path's
+tightest instants added (at most :data:`ROUNDS` runs). The budget is SLSQP's iteration count.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..problem.constraints import Constraint
+from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.objectives import Objective, gauss_legendre
 from ..problem.residual import Problem
 from .newton import polish
@@ -25,7 +27,10 @@ from .options import SolveOptions
 from .restore import broken_constraint
 from .sqp import constraint_functions
 
-__all__ = ["Optimised", "optimise"]
+__all__ = ["ROUNDS", "Optimised", "optimise"]
+
+#: SLSQP runs at most, each adding the instants where the last one broke a constraint.
+ROUNDS = 3
 
 
 @dataclass(frozen=True)
@@ -116,36 +121,51 @@ def optimise(
     def dh(z: np.ndarray) -> np.ndarray:
         return cached("h", z, problem.residual_and_jacobian)[1] @ s_mat
 
-    cons: list[dict[str, object]] = [{"type": "eq", "fun": h, "jac": dh}]
-    for g, dg in constraint_functions(problem, constraints):
-        cons.append(
-            {
-                "type": "ineq",
-                "fun": lambda z, g=g: g(to_beta(z)),
-                "jac": lambda z, dg=dg: dg(to_beta(z)) @ s_mat,
-            }
-        )
-    with np.errstate(all="ignore"):
-        result = minimize(
-            fun,
-            np.zeros(problem.n_free),
-            jac=grad,
-            method="SLSQP",
-            constraints=cons,
-            options={"ftol": 1e-12, "maxiter": int(max_iterations)},
-        )
-    candidate = to_beta(np.asarray(result.x, dtype=float))
-    iterations = int(result.nit)
-    if not np.all(np.isfinite(candidate)):
-        return Optimised(beta0, start.value, start.value, iterations, False, "diverged")
-    try:
-        candidate, vector = polish(problem, candidate, options.tolerance)
-    except (np.linalg.LinAlgError, FloatingPointError, ValueError):
-        return Optimised(beta0, start.value, start.value, iterations, False, "polish failed")
-    if float(np.linalg.norm(vector)) >= options.tolerance:
-        return Optimised(beta0, start.value, start.value, iterations, False, "left the goal")
-    broken = broken_constraint(problem, constraints, candidate)
-    if broken:
+    instants = DEFAULT_INSTANTS
+    z = np.zeros(problem.n_free)
+    iterations = 0
+    for _ in range(ROUNDS):
+        cons: list[dict[str, object]] = [{"type": "eq", "fun": h, "jac": dh}]
+        for g, dg in constraint_functions(problem, constraints, instants):
+            cons.append(
+                {
+                    "type": "ineq",
+                    "fun": lambda z, g=g: g(to_beta(z)),
+                    "jac": lambda z, dg=dg: dg(to_beta(z)) @ s_mat,
+                }
+            )
+        with np.errstate(all="ignore"):
+            result = minimize(
+                fun,
+                z,
+                jac=grad,
+                method="SLSQP",
+                constraints=cons,
+                options={"ftol": 1e-12, "maxiter": int(max_iterations)},
+            )
+        iterations += int(result.nit)
+        z = np.asarray(result.x, dtype=float)
+        candidate = to_beta(z)
+        if not np.all(np.isfinite(candidate)):
+            return Optimised(beta0, start.value, start.value, iterations, False, "diverged")
+        try:
+            candidate, vector = polish(problem, candidate, options.tolerance)
+        except (np.linalg.LinAlgError, FloatingPointError, ValueError):
+            return Optimised(beta0, start.value, start.value, iterations, False, "polish failed")
+        if float(np.linalg.norm(vector)) >= options.tolerance:
+            return Optimised(beta0, start.value, start.value, iterations, False, "left the goal")
+        broken = broken_constraint(problem, constraints, candidate)
+        if not broken:
+            break
+        # Rows hold at the instants but not between them: add the path's tightest instants.
+        path = problem.polynomials(candidate)
+        extra = [
+            np.asarray(c.critical_times(problem.robot, path)) / problem.duration
+            for c in constraints
+            if c.applies_to(problem.robot)
+        ]
+        instants = np.unique(np.clip(np.concatenate([instants, *extra]), 0.0, 1.0))
+    else:
         return Optimised(beta0, start.value, start.value, iterations, False, f"breaks {broken}")
     value = objective.evaluate(problem, candidate).value
     if not value < start.value:

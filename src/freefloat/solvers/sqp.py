@@ -11,7 +11,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..problem.constraints import Constraint
+from ..problem.constraints import DEFAULT_INSTANTS, Constraint, ConstraintRows
 from ..problem.residual import Problem
 from .options import SolveOptions
 
@@ -21,28 +21,41 @@ Function = Callable[[np.ndarray], np.ndarray]
 
 
 def constraint_functions(
-    problem: Problem, constraints: Sequence[Constraint]
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    instants: np.ndarray = DEFAULT_INSTANTS,
 ) -> list[tuple[Function, Function]]:
     """``(g, dg/dbeta)`` pairs with ``g(beta) >= 0`` feasible (SLSQP's sign), one per constraint.
 
-    Affine constraints (``g = g0 + G beta``) are evaluated once.
+    Affine constraints (``g = g0 + G beta``) are evaluated once; the others once per ``beta``
+    for both the values and the Jacobian. ``instants`` are the normalised instants of the rows
+    (constraints that choose their own instants, as clearance does, ignore them).
     """
     out: list[tuple[Function, Function]] = []
     for constraint in constraints:
         if not constraint.applies_to(problem.robot):
             continue
         if constraint.affine:
-            rows = constraint.rows(problem, np.zeros(problem.n_free))
+            rows = constraint.rows(problem, np.zeros(problem.n_free), instants)
             if rows.count:
                 g0, g_mat = rows.values, rows.jacobian
-                out.append(
-                    (lambda b, g0=g0, g=g_mat: -(g0 + g @ b), lambda b, g=g_mat: -g)
-                )
+                out.append((lambda b, g0=g0, g=g_mat: -(g0 + g @ b), lambda b, g=g_mat: -g))
         else:
+            memo: dict[bytes, ConstraintRows] = {}
+
+            def rows_at(
+                b: np.ndarray, c: Constraint = constraint, memo: dict = memo
+            ) -> ConstraintRows:
+                key = np.asarray(b, dtype=float).tobytes()
+                if key not in memo:
+                    memo.clear()
+                    memo[key] = c.rows(problem, b, instants)
+                return memo[key]
+
             out.append(
                 (
-                    lambda b, c=constraint: -c.rows(problem, b).values,
-                    lambda b, c=constraint: -c.rows(problem, b).jacobian,
+                    lambda b, rows_at=rows_at: -rows_at(b).values,
+                    lambda b, rows_at=rows_at: -rows_at(b).jacobian,
                 )
             )
     return out

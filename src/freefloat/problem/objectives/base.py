@@ -73,8 +73,11 @@ class Objective(abc.ABC):
     def converged(
         self, problem: Problem, beta: np.ndarray, relative: float = 1e-9, max_nodes: int = 512
     ) -> Objective:
-        """This objective, or one with more nodes, whose error at ``beta`` is below
-        ``relative`` times its value (or with ``max_nodes`` nodes)."""
+        """This objective, or one with more nodes, converged at ``beta``.
+
+        Converged: its error estimate is below ``relative`` times its value (or it has
+        ``max_nodes`` nodes).
+        """
         objective: Objective = self
         while not objective.exact and objective.nodes_used < max_nodes:
             value = abs(objective.evaluate(problem, beta).value)

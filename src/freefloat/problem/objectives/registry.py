@@ -32,7 +32,5 @@ def objective_named(name: str) -> Objective:
     """
     if name not in OBJECTIVES:
         shown = name if len(name) <= 40 else name[:40] + "..."
-        raise InputError(
-            f"unknown objective {shown!r}; valid objectives: " + ", ".join(OBJECTIVES)
-        )
+        raise InputError(f"unknown objective {shown!r}; valid objectives: " + ", ".join(OBJECTIVES))
     return OBJECTIVES[name]()
