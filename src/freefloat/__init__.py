@@ -7,6 +7,7 @@ tables and the ``_deg`` fields of a plan).
 """
 
 from .errors import (
+    EffortLimitError,
     FreeFloatError,
     InfeasibleError,
     InputError,
@@ -31,6 +32,7 @@ from .problem.constraints import (
     Constraint,
     ConstraintRows,
     Excess,
+    JointEffortLimits,
     JointPositionLimits,
     JointVelocityLimits,
     default_constraints,
@@ -60,12 +62,14 @@ __all__ = [
     "Check",
     "Constraint",
     "ConstraintRows",
+    "EffortLimitError",
     "Excess",
     "FreeFloatError",
     "InfeasibleError",
     "InputError",
     "InverseDynamics",
     "Joint",
+    "JointEffortLimits",
     "JointLimitError",
     "JointPolynomials",
     "JointPositionLimits",

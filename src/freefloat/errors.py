@@ -160,6 +160,23 @@ class VelocityLimitError(FreeFloatError):
         )
 
 
+class EffortLimitError(FreeFloatError):
+    """Joint torques above a URDF effort limit; carries the shortest admissible duration."""
+
+    def __init__(
+        self, joint: str, peak: float, limit: float, shortest_duration: float, unit: str = "N m"
+    ) -> None:
+        self.joint = joint
+        self.peak = float(peak)
+        self.limit = float(limit)
+        self.shortest_duration = float(shortest_duration)
+        super().__init__(
+            f"joint {joint!r} needs {peak:.4g} {unit}, above its effort limit {limit:.4g} "
+            f"{unit}; the shortest duration that respects every effort limit is "
+            f"{shortest_duration:.4g} s"
+        )
+
+
 class UnreachableGoalError(FreeFloatError):
     """A Cartesian goal no configuration reaches; carries the miss and the workspace radius."""
 

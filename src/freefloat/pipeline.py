@@ -15,7 +15,14 @@ from dataclasses import asdict, replace
 
 import numpy as np
 
-from .errors import CollisionError, SolverError, VelocityLimitError, VerificationError
+from .errors import (
+    CollisionError,
+    EffortLimitError,
+    FreeFloatError,
+    SolverError,
+    VelocityLimitError,
+    VerificationError,
+)
 from .physics.attitude import geodesic_angle, quat_rotate, zyx_from_quat
 from .physics.dynamics import inverse_dynamics_batch
 from .plans.format import (
@@ -32,7 +39,13 @@ from .plans.format import (
     SolutionRecord,
     SolverReport,
 )
-from .problem.constraints import Clearance, Constraint, JointVelocityLimits, scenario_constraints
+from .problem.constraints import (
+    Clearance,
+    Constraint,
+    JointEffortLimits,
+    JointVelocityLimits,
+    scenario_constraints,
+)
 from .problem.constraints.clearance import clearance_at
 from .problem.objectives import DEFAULT_OBJECTIVE, objective_named
 from .problem.residual import Problem
@@ -40,7 +53,8 @@ from .problem.scenario import Scenario
 from .progress import stage
 from .solvers.minimise import minimise
 from .solvers.options import DEFAULT_TOLERANCE, Solution, SolveOptions
-from .solvers.search import search
+from .solvers.restore import broken_constraint
+from .solvers.search import SearchResult, search
 from .verify.checks import boundary_errors, verify_plan
 
 __all__ = ["BOUNDARY_TOLERANCE", "plan", "plan_from_solution"]
@@ -77,6 +91,7 @@ def plan(
         FreeFloatError: any subclass: bad input, infeasible request, no solution.
         VelocityLimitError: no path within the velocity limits at this duration; carries the
             shortest duration at which the path found without them respects them.
+        EffortLimitError: the same for the effort limits.
     """
     options = options or SolveOptions()
     if scenario.max_deviation is not None:
@@ -86,17 +101,23 @@ def plan(
     constraints = scenario_constraints(scenario) if constraints is None else list(constraints)
     _check_endpoints(scenario, constraints)
     clock = time.perf_counter()
-    try:
-        with stage("solve"):
-            found = search(scenario, options, constraints)
-    except SolverError as exc:
-        _explain_velocity_limits(scenario, options, constraints, exc)
-        raise
     chosen = objective_named(objective or scenario.objective)
+    eager = [c for c in constraints if not c.lazy]
+    with stage("solve"):
+        try:
+            found, imposed = _search_lazily(scenario, options, constraints)
+        except EffortLimitError:
+            if chosen.name == DEFAULT_OBJECTIVE:
+                raise
+            # another objective's freedom may find a path within the effort limits
+            found, imposed = search(scenario, options, eager), eager
     if chosen.name != DEFAULT_OBJECTIVE:
         with stage(f"minimise {chosen.name}"):
-            minimised = minimise(scenario, found, chosen, options, constraints)
+            minimised = minimise(scenario, found, chosen, options, imposed)
+            if len(imposed) < len(constraints) and _broken(minimised.found, constraints):
+                minimised = minimise(scenario, minimised.found, chosen, options, constraints)
         found = minimised.found
+        _explain_lazy_breaks(found, constraints)
         report = ObjectiveReport(
             name=chosen.name,
             unit=chosen.unit,
@@ -134,6 +155,47 @@ def plan(
     return replace(result, solver=solver, objective=report)
 
 
+def _broken(found: SearchResult, constraints: Sequence[Constraint]) -> str:
+    return broken_constraint(found.problem, constraints, found.solution.beta)
+
+
+def _explain_lazy_breaks(found: SearchResult, constraints: Sequence[Constraint]) -> None:
+    """Raise :class:`EffortLimitError` when the path found still breaks an effort limit."""
+    broken = _broken(found, constraints)
+    if not broken:
+        return
+    path = found.problem.polynomials(found.solution.beta)
+    for limit in constraints:
+        if isinstance(limit, JointEffortLimits) and limit.name in broken:
+            joint, peak, ratio = limit.worst(found.problem.robot, path)
+            if joint is not None and ratio > 1.0:
+                unit = "N" if joint.unit == "m" else "N m"
+                raise EffortLimitError(
+                    joint.name, peak, joint.effort_limit, path.duration * ratio**0.5, unit
+                )
+    raise SolverError(f"the path found breaks {broken}", 0.0)
+
+
+def _search_lazily(
+    scenario: Scenario, options: SolveOptions, constraints: list[Constraint]
+) -> tuple[SearchResult, list[Constraint]]:
+    """Search without the lazy constraints, then with them if the path found breaks one.
+
+    Returns the result and the constraints the solvers imposed.
+    """
+    eager = [c for c in constraints if not c.lazy]
+    imposed = eager
+    try:
+        found = search(scenario, options, eager)
+        if len(eager) < len(constraints) and _broken(found, constraints):
+            imposed = constraints
+            found = search(scenario, options, constraints)
+    except SolverError as exc:
+        _explain_duration_limits(scenario, options, constraints, exc)
+        raise
+    return found, imposed
+
+
 def _check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> None:
     """Refuse a start or goal configuration closer than a clearance margin, naming the pair."""
     for constraint in constraints:
@@ -161,32 +223,47 @@ def _safety_report(scenario: Scenario, constraints: Sequence[Constraint]) -> Saf
     )
 
 
-def _explain_velocity_limits(
+def _explain_duration_limits(
     scenario: Scenario,
     options: SolveOptions,
     constraints: list[Constraint],
     error: SolverError,
 ) -> None:
-    """Raise :class:`VelocityLimitError` when only the velocity limits stood in the way.
+    """Name the shortest duration when only the velocity or effort limits stood in the way.
 
-    Rates scale as 1/T and the path shape does not depend on T, so the shortest duration at
-    which the path found without velocity limits respects them is exact.
+    Raises :class:`VelocityLimitError` or :class:`EffortLimitError` (the one that needs the
+    longer duration), with the shortest duration that respects both. Rates scale as 1/T and
+    torques as 1/T^2, and the path shape does not depend on T, so the shortest duration at
+    which the path found without these limits respects them is exact.
     """
-    relaxed = [c for c in constraints if not isinstance(c, JointVelocityLimits)]
-    if len(relaxed) == len(constraints) or JointVelocityLimits.name not in str(error):
-        return  # the velocity limits did not stand in the way
+    timed = [c for c in constraints if isinstance(c, (JointVelocityLimits, JointEffortLimits))]
+    relaxed = [c for c in constraints if c not in timed]
+    if not timed or not any(c.name in str(error) for c in timed):
+        return  # the velocity and effort limits did not stand in the way
     try:
         found = search(scenario, options, relaxed)
     except SolverError:
         return
     robot = scenario.robot
     path = found.problem.polynomials(found.solution.beta)
-    worst, peak, ratio = JointVelocityLimits.worst(robot, path)
-    if worst is None or ratio <= 1.0:
-        return
-    raise VelocityLimitError(
-        worst.name, peak, worst.velocity_limit, path.duration * ratio, worst.unit
-    ) from error
+    worst: tuple[float, FreeFloatError] | None = None
+    for limit in timed:
+        if isinstance(limit, JointVelocityLimits):
+            joint, peak, ratio = JointVelocityLimits.worst(robot, path)
+            shortest = path.duration * ratio
+            make = VelocityLimitError
+        else:
+            joint, peak, ratio = limit.worst(robot, path)
+            shortest = path.duration * ratio**0.5
+            make = EffortLimitError
+        if joint is None or ratio <= 1.0:
+            continue
+        unit = joint.unit if make is VelocityLimitError else ("N" if joint.unit == "m" else "N m")
+        limit_value = joint.velocity_limit if make is VelocityLimitError else joint.effort_limit
+        if worst is None or shortest > worst[0]:
+            worst = (shortest, make(joint.name, peak, limit_value, shortest, unit))
+    if worst is not None:
+        raise worst[1] from error
 
 
 def plan_from_solution(

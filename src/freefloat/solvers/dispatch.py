@@ -82,13 +82,16 @@ def solve(
     start_evaluations = problem.evaluations
     zero = np.zeros(problem.n_free)
 
-    quintic_breaks = broken_constraint(problem, constraints, zero)
+    # Restoration serves the constraints every path must meet from the start; a lazy one
+    # (imposed only once a path broke it) is left to the strategy and the root filter.
+    eager = [c for c in constraints if not c.lazy]
+    quintic_breaks = broken_constraint(problem, eager, zero)
     given, start, restored = start, zero, []
     if given is not None and np.any(given) and not broken_constraint(problem, constraints, given):
         start = np.asarray(given, dtype=float)
         restored.append("continued from where the search with less freedom stopped")
     elif quintic_breaks:
-        found = feasible_start(problem, constraints, options)
+        found = feasible_start(problem, eager, options)
         restored.append(
             f"the quintic path breaks {quintic_breaks}: "
             + (

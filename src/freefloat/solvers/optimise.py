@@ -1,15 +1,16 @@
 """The root that minimises an objective, within every constraint (docs/method.md section 13).
 
-Starting from a root ``beta_0`` (``h(beta_0) = 0``, every constraint kept), SciPy's SLSQP
-minimises the objective subject to ``h(beta) = 0`` (exact Jacobian) and the path constraints.
-It works in coordinates ``z`` with ``beta = beta_0 + S z``, where ``S^T G S = I`` for the Gram
-matrix ``G`` of the basis polynomials' second derivatives: in ``z`` the integral of squared
-accelerations is a unit sphere, which keeps high-degree bases well conditioned. The objective
-is divided by its value at ``beta_0``. The result is polished back onto ``h = 0`` by
-minimum-norm Newton steps and kept only if it honours every constraint and lowers the
-objective; otherwise ``beta_0`` stands. Constraints are rows at fixed instants during one SLSQP
-run; when the result breaks one between them, the run is repeated from there with the path's
-tightest instants added (at most :data:`ROUNDS` runs). The budget is SLSQP's iteration count.
+Starting from a root ``beta_0`` (``h(beta_0) = 0``), SciPy's SLSQP minimises the objective
+subject to ``h(beta) = 0`` (exact Jacobian) and the path constraints. It works in coordinates
+``z`` with ``beta = beta_0 + S z``, where ``S^T G S = I`` for the Gram matrix ``G`` of the
+basis polynomials' second derivatives: in ``z`` the integral of squared accelerations is a
+unit sphere, which keeps high-degree bases well conditioned. The objective is divided by its
+value at ``beta_0``. The result is polished back onto ``h = 0`` by minimum-norm Newton steps
+and kept only if it honours every constraint and lowers the objective (or ``beta_0`` broke a
+constraint); otherwise ``beta_0`` stands. Constraints are rows at fixed instants during one
+SLSQP run; when the result breaks one between them, the run is repeated from there with the
+path's tightest instants added (at most :data:`ROUNDS` runs). The budget is SLSQP's iteration
+count.
 """
 
 from __future__ import annotations
@@ -80,7 +81,8 @@ def optimise(
 
     Args:
         problem: the problem (not changed).
-        beta: a root within the constraints.
+        beta: a root (within the constraints, or a start that breaks one: the result then
+            honours them or ``beta`` stands).
         objective: what to minimise.
         constraints: path constraints to keep.
         options: solver settings (attitude tolerance, rad).
@@ -168,6 +170,6 @@ def optimise(
     else:
         return Optimised(beta0, start.value, start.value, iterations, False, f"breaks {broken}")
     value = objective.evaluate(problem, candidate).value
-    if not value < start.value:
+    if not value < start.value and not broken_constraint(problem, constraints, beta0):
         return Optimised(beta0, start.value, start.value, iterations, False, "no lower value")
     return Optimised(candidate, value, start.value, iterations, True)

@@ -15,6 +15,7 @@ import numpy as np
 from ..problem.constraints import Constraint
 from ..problem.residual import Problem
 from .options import SolveOptions
+from .sqp import constraint_functions
 
 __all__ = ["broken_constraint", "feasible_start"]
 
@@ -37,12 +38,8 @@ def feasible_start(
 
     active = [c for c in constraints if c.applies_to(problem.robot)]
     rows = [
-        {
-            "type": "ineq",
-            "fun": lambda b, c=c: -c.rows(problem, b).values,
-            "jac": lambda b, c=c: -c.rows(problem, b).jacobian,
-        }
-        for c in active
+        {"type": "ineq", "fun": fun, "jac": jac}
+        for fun, jac in constraint_functions(problem, active)
     ]
     if not rows:
         return np.zeros(problem.n_free)

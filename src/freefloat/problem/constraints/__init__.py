@@ -2,6 +2,7 @@
 
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 from .clearance import Clearance
+from .joint_effort import JointEffortLimits
 from .joint_position import JointPositionLimits
 from .joint_velocity import JointVelocityLimits
 from .registry import CONSTRAINTS, default_constraints, scenario_constraints
@@ -13,6 +14,7 @@ __all__ = [
     "Constraint",
     "ConstraintRows",
     "Excess",
+    "JointEffortLimits",
     "JointPositionLimits",
     "JointVelocityLimits",
     "default_constraints",

@@ -66,12 +66,15 @@ class Constraint(abc.ABC):
         unit: unit of the values, the tolerance and the excess.
         tolerance: the largest excess verification accepts (unit), beyond rounding.
         affine: whether ``g`` is affine in ``beta`` (then its Jacobian is constant).
+        lazy: whether planning first ignores it and imposes it only when the path found
+            breaks it (for constraints whose rows are costly and rarely bind).
     """
 
     name: str = "constraint"
     unit: str = "1"
     tolerance: float = 1e-9
     affine: bool = False
+    lazy: bool = False
 
     @abc.abstractmethod
     def rows(

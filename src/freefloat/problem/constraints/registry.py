@@ -15,6 +15,7 @@ from ...robot.model import Robot
 from ..scenario import Scenario
 from .base import Constraint
 from .clearance import Clearance
+from .joint_effort import JointEffortLimits
 from .joint_position import JointPositionLimits
 from .joint_velocity import JointVelocityLimits
 
@@ -24,13 +25,14 @@ __all__ = ["CONSTRAINTS", "clearance_constraint", "default_constraints", "scenar
 CONSTRAINTS: dict[str, type[Constraint]] = {
     JointPositionLimits.name: JointPositionLimits,
     JointVelocityLimits.name: JointVelocityLimits,
+    JointEffortLimits.name: JointEffortLimits,
     Clearance.name: Clearance,
 }
 
 
 def default_constraints() -> list[Constraint]:
-    """The constraints every plan honours: joint position limits and joint velocity limits."""
-    return [JointPositionLimits(), JointVelocityLimits()]
+    """The constraints every plan honours: joint position, velocity and effort limits."""
+    return [JointPositionLimits(), JointVelocityLimits(), JointEffortLimits()]
 
 
 def scenario_constraints(scenario: Scenario) -> list[Constraint]:

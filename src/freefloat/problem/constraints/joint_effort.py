@@ -1,0 +1,162 @@
+"""Joint effort limits from the URDF along the whole path.
+
+The torques of a zero-momentum motion (N m, or N for prismatic joints) follow from the joint
+path alone (:mod:`freefloat.physics.torque_derivatives`). With ``s = t / T`` they are
+``tau(t) = tau_1(s) / T^2``: the path shape does not depend on ``T``, so the shortest duration
+at which a path respects every effort limit is exact, ``T_min = T sqrt(max_i peak_i / limit_i)``
+(:meth:`JointEffortLimits.shortest_duration`), as it is for velocity limits.
+
+Planning imposes them lazily (they rarely bind and their rows cost inverse dynamics with
+derivatives): first without them, then with them only if the path found breaks them. For the
+solvers, the limits are rows ``+-tau_i(s) - limit_i`` at the instants, with their exact
+Jacobian by the chain rule through Pinocchio's RNEA derivatives. The dense check samples the
+torques on :data:`DENSE_SAMPLES` instants, refines each joint's largest sample by a
+golden-section search between its neighbours, and reports as its error estimate how much the
+refinement added to the sampled peak (the grid's own miss), so that it never refuses a path for
+being coarse.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+
+import numpy as np
+
+from ...physics.dynamics import inverse_dynamics_batch
+from ...physics.momentum import MomentumMap
+from ...physics.torque_derivatives import torques_and_derivatives
+from ...robot.model import Joint, Robot
+from ..paths import JointPolynomials
+from ..residual import Problem
+from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
+
+__all__ = ["DENSE_SAMPLES", "JointEffortLimits"]
+
+#: Instants of the dense check on [0, T].
+DENSE_SAMPLES = 401
+_GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+
+
+class JointEffortLimits(Constraint):
+    """Every joint's torque stays within ``+-effort_limit`` of its URDF (N m or N)."""
+
+    name = "joint_effort_limits"
+    unit = "N m|N"
+    tolerance = 1e-9
+    affine = False
+    lazy = True
+
+    def __init__(self) -> None:
+        self._maps: weakref.WeakKeyDictionary[Robot, MomentumMap] = weakref.WeakKeyDictionary()
+
+    def applies_to(self, robot: Robot) -> bool:
+        """True when some joint has a finite effort limit."""
+        return any(math.isfinite(j.effort_limit) for j in robot.joints)
+
+    def _map(self, robot: Robot) -> MomentumMap:
+        if robot not in self._maps:
+            self._maps[robot] = MomentumMap(robot)
+        return self._maps[robot]
+
+    def rows(
+        self, problem: Problem, beta: np.ndarray, instants: np.ndarray = DEFAULT_INSTANTS
+    ) -> ConstraintRows:
+        """``+-tau_i(t) - limit_i`` at the instants (N m or N), exact Jacobian."""
+        samples = problem.family.affine_samples(np.asarray(instants, dtype=float))
+        path = samples.at(beta)
+        found = torques_and_derivatives(self._map(problem.robot), path.q, path.qd, path.qdd)
+        scale = problem.duration**-2
+        tau = found.tau * scale
+        dtau = scale * (
+            np.einsum("kij,kjf->kif", found.d_q, samples.dq)
+            + np.einsum("kij,kjf->kif", found.d_qd, samples.dqs)
+            + np.einsum("kij,kjf->kif", found.d_qdd, samples.dqss)
+        )
+        values, rows = [], []
+        for i, joint in enumerate(problem.robot.joints):
+            if math.isfinite(joint.effort_limit):
+                values += [tau[:, i] - joint.effort_limit, -tau[:, i] - joint.effort_limit]
+                rows += [dtau[:, i, :], -dtau[:, i, :]]
+        if not values:
+            return ConstraintRows(np.zeros(0), np.zeros((0, problem.n_free)))
+        return ConstraintRows(np.concatenate(values), np.concatenate(rows))
+
+    def peaks(self, robot: Robot, path: JointPolynomials) -> tuple[np.ndarray, np.ndarray, float]:
+        """Each joint's largest ``|tau|`` (N m or N), its time (s), and the grid's miss.
+
+        The miss is the largest amount a golden-section refinement added to a sampled peak.
+        """
+        mmap = self._map(robot)
+        t = np.linspace(0.0, path.duration, DENSE_SAMPLES)
+
+        def torques(times: np.ndarray) -> np.ndarray:
+            s = path.evaluate(times)
+            return np.abs(inverse_dynamics_batch(mmap, s.q, s.qd, s.qdd).tau)
+
+        sampled = torques(t)
+        peak = sampled.max(axis=0)
+        where = t[sampled.argmax(axis=0)]
+        miss = 0.0
+        step = t[1] - t[0]
+        for i in range(robot.n):
+            lo = max(0.0, where[i] - step)
+            hi = min(path.duration, where[i] + step)
+            for _ in range(40):  # the bracket shrinks by 0.618 per step: to ~1e-9 of a step
+                a = hi - _GOLDEN * (hi - lo)
+                b = lo + _GOLDEN * (hi - lo)
+                fa, fb = torques(np.array([a, b]))[:, i]
+                if fa >= fb:
+                    hi = b
+                else:
+                    lo = a
+            middle = 0.5 * (lo + hi)
+            refined = float(torques(np.array([middle]))[0, i])
+            if refined > peak[i]:
+                miss = max(miss, refined - float(peak[i]))
+                peak[i], where[i] = refined, middle
+        return peak, where, miss
+
+    def critical_times(self, robot: Robot, path: JointPolynomials) -> np.ndarray:
+        """Times (s) of each limited joint's largest torque."""
+        _, where, _ = self.peaks(robot, path)
+        return np.array([w for w, j in zip(where, robot.joints, strict=True) if _limited(j)])
+
+    def excess(self, robot: Robot, path: JointPolynomials) -> Excess:
+        """Largest torque beyond a limit (N m or N), with the grid's miss as error estimate."""
+        if not self.applies_to(robot):
+            return Excess(0.0, 0.0, "no joint has an effort limit")
+        peak, where, miss = self.peaks(robot, path)
+        worst, detail = -math.inf, ""
+        for i, joint in enumerate(robot.joints):
+            if _limited(joint) and peak[i] - joint.effort_limit > worst:
+                worst = float(peak[i] - joint.effort_limit)
+                detail = f"joint {joint.name!r} at t = {where[i]:.4g} s"
+        return Excess(worst, miss, detail)
+
+    def worst(self, robot: Robot, path: JointPolynomials) -> tuple[Joint | None, float, float]:
+        """The joint whose peak torque is the largest fraction of its limit.
+
+        Returns the joint (None when no joint has an effort limit), its peak torque (N m or
+        N) and that fraction of its limit.
+        """
+        if not self.applies_to(robot):
+            return None, 0.0, 0.0
+        peak, _, _ = self.peaks(robot, path)
+        ratios = [
+            (float(peak[i] / j.effort_limit), i) for i, j in enumerate(robot.joints) if _limited(j)
+        ]
+        ratio, i = max(ratios)
+        return robot.joints[i], float(peak[i]), ratio
+
+    def shortest_duration(self, robot: Robot, path: JointPolynomials) -> float:
+        """The shortest duration (s) at which this path shape respects every effort limit.
+
+        Torques scale as 1/T^2 and the shape does not depend on T, so this is exact up to the
+        peak's own accuracy: ``T_min = T sqrt(max_i(max |tau_i| / limit_i))``.
+        """
+        return path.duration * math.sqrt(self.worst(robot, path)[2])
+
+
+def _limited(joint: Joint) -> bool:
+    return math.isfinite(joint.effort_limit)

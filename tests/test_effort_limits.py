@@ -1,0 +1,118 @@
+"""Joint effort limits: exact Jacobian, dense peaks, exact shortest duration, clear refusals."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import freefloat as ff
+from freefloat.cli import main
+from freefloat.errors import EffortLimitError
+from freefloat.problem.paths import JointPolynomials
+from freefloat.verify.checks import joint_torque_function
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _limited_example(tmp_path: Path, limit: float, extra: str = "{ q2 = 1 }") -> Path:
+    """The worked example on a copy of its arm with effort limits of ``limit`` N m."""
+    urdf = (ROOT / "robots" / "planar_2dof.urdf").read_text()
+    urdf = urdf.replace(
+        '<axis xyz="0 0 1"/>',
+        f'<axis xyz="0 0 1"/><limit effort="{limit}" velocity="10" lower="-3.1" upper="3.1"/>',
+    )
+    (tmp_path / "arm.urdf").write_text(urdf)
+    scenario = (ROOT / "robots" / "scenarios" / "worked_example.toml").read_text()
+    scenario = scenario.replace('robot = "planar_2dof"', 'robot = "arm.urdf"')
+    scenario = scenario.replace("extra = { q2 = 1 }", f"extra = {extra}")
+    path = tmp_path / "limited.toml"
+    path.write_text(scenario)
+    return path
+
+
+def test_effort_rows_jacobian_matches_finite_differences(tmp_path):
+    scenario = ff.Scenario.from_toml(_limited_example(tmp_path, 3.0, "{ q1 = 2, q2 = 2 }"))
+    problem = ff.problem_from_scenario(scenario)
+    beta = np.array([0.3, -0.2, 0.5, 0.1])
+    limits = ff.JointEffortLimits()
+    instants = np.linspace(0.0, 1.0, 13)
+    rows = limits.rows(problem, beta, instants)
+    h = 1e-6
+    for k in range(len(beta)):
+        step = np.zeros_like(beta)
+        step[k] = h
+        fd = (
+            limits.rows(problem, beta + step, instants).values
+            - limits.rows(problem, beta - step, instants).values
+        ) / (2 * h)
+        np.testing.assert_allclose(rows.jacobian[:, k], fd, atol=1e-8)
+
+
+def test_dense_peak_matches_a_fine_independent_grid(worked_plan, tmp_path):
+    scenario = ff.Scenario.from_toml(_limited_example(tmp_path, 3.0))
+    robot = scenario.robot
+    path = JointPolynomials.from_lists(
+        [worked_plan.coefficients[n] for n in worked_plan.robot.joints], worked_plan.duration
+    )
+    peak, _, miss = ff.JointEffortLimits().peaks(robot, path)
+    tau = joint_torque_function(worked_plan, ff.MomentumMap(robot))
+    fine = np.array([np.abs(tau(t)) for t in np.linspace(0.0, worked_plan.duration, 20001)])
+    # the refined peak is at least the fine grid's and above it by no more than the fine
+    # grid's own miss (second order in its step)
+    assert np.all(peak >= fine.max(axis=0) - 1e-12)
+    assert np.all(peak <= fine.max(axis=0) + 1e-6)
+    assert miss < 1e-3
+
+
+def test_shortest_duration_is_exact(worked_plan, tmp_path):
+    scenario = ff.Scenario.from_toml(_limited_example(tmp_path, 2.0))
+    robot = scenario.robot
+    limits = ff.JointEffortLimits()
+    path = JointPolynomials.from_lists(
+        [worked_plan.coefficients[n] for n in worked_plan.robot.joints], worked_plan.duration
+    )
+    shortest = limits.shortest_duration(robot, path)
+    assert shortest > worked_plan.duration  # 2 N m is below the plan's peak
+    # the same shape run in `shortest` seconds: t -> t * T / shortest
+    ratio = worked_plan.duration / shortest
+    scaled = JointPolynomials(
+        path.coefficients * ratio ** np.arange(path.coefficients.shape[1]), shortest
+    )
+    _, peak, fraction = limits.worst(robot, scaled)
+    assert fraction == pytest.approx(1.0, abs=1e-9)
+    assert peak == pytest.approx(2.0, abs=1e-9)
+
+
+def test_too_short_a_duration_names_the_shortest_one(tmp_path, capsys):
+    path = _limited_example(tmp_path, 2.8)
+    out = tmp_path / "p.json"
+    assert main(["plan", str(path), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err
+    assert err.startswith("freefloat: error: joint 'q1' needs ")
+    assert "above its effort limit 2.8 N m; the shortest duration that respects every effort" in err
+    assert not out.exists()
+    with pytest.raises(EffortLimitError) as info:
+        ff.plan(ff.Scenario.from_toml(path))
+    shortest = info.value.shortest_duration
+    scenario = dataclasses.replace(ff.Scenario.from_toml(path), duration=shortest * 1.001)
+    p = ff.plan(scenario)
+    assert p.verification.passed
+    assert p.verification["joint_effort_limits"].value <= 0.0
+    peak = np.abs(np.asarray(p.samples.tau)).max()
+    assert peak == pytest.approx(2.8 / 1.001**2, rel=1e-3)
+    assert math.isfinite(shortest)
+
+
+def test_min_effort_finds_a_path_within_a_limit_the_minimum_norm_path_breaks(tmp_path):
+    scenario = ff.Scenario.from_toml(_limited_example(tmp_path, 3.0))
+    with pytest.raises(EffortLimitError):
+        ff.plan(scenario)
+    p = ff.plan(scenario, objective="min_effort")
+    assert p.verification.passed
+    assert np.abs(np.asarray(p.samples.tau)).max() <= 3.0
+    assert p.verification["joint_effort_limits"].value <= 0.0
