@@ -32,6 +32,13 @@ Sweep (issue 17, with --sweep or --sweep-only): the 81-job yaw sweep of the work
 (automatic freedom, 201 samples) on 1 and 2 local worker processes, and the runner's overhead
 per job against planning the same jobs one by one in this process.
 
+Objectives (issue 16, with --objectives or --objectives-only): the worked example planned with
+each objective (median plan time, integral of |tau|^2 measured from the plan's polynomials by
+a 96-node Gauss rule through the verification's torque function, attitude error, freedom used)
+against the optimal-control figure quoted in the issue (26.6 N^2 m^2 s); the same minimisation
+at fixed freedom k = 1..4 with exact gradients and with SciPy's finite differences side by
+side; and the Panda servicer's scenario with min_norm against min_effort.
+
 Run: python scripts/bench.py [--runs N] [--json FILE] [--reach-only] [--random N] [--sweep]
      [--sweep-only]
 """
@@ -545,6 +552,148 @@ def bench_sweep(rounds: int = 3) -> dict[str, float]:
     }
 
 
+#: The optimal-control figure the issue quotes for the worked example (N^2 m^2 s).
+PEER_EFFORT = 26.6
+
+
+def effort_of(plan: ff.Plan, robot: ff.Robot) -> float:
+    """Integral of |tau|^2 dt (N^2 m^2 s) of a plan, by a 96-node Gauss rule on [0, T]."""
+    from freefloat.verify.checks import joint_torque_function
+
+    tau = joint_torque_function(plan, ff.MomentumMap(robot))
+    x, w = np.polynomial.legendre.leggauss(96)
+    t = 0.5 * plan.duration * (x + 1.0)
+    return float(0.5 * plan.duration * sum(wi * float(tau(ti) @ tau(ti)) for ti, wi in zip(t, w)))
+
+
+def bench_objectives(runs: int = 3) -> dict[str, object]:
+    from freefloat.physics.dynamics import inverse_dynamics_batch
+    from freefloat.problem.objectives import gauss_legendre
+    from freefloat.solvers.optimise import optimise
+
+    worked = ff.Scenario.from_toml(ff.default_scenario_path())
+    rows = []
+    for name in ff.OBJECTIVES:
+        times, plan = [], None
+        for _ in range(runs):
+            clock = time.perf_counter()
+            plan = ff.plan(worked, objective=name)
+            times.append(time.perf_counter() - clock)
+        assert plan is not None
+        rows.append(
+            {
+                "scenario": "worked_example",
+                "objective": name,
+                "plan_s": statistics.median(times),
+                "effort": effort_of(plan, worked.robot),
+                "objective_value": plan.objective.value,
+                "attitude_error_rad": plan.base.attitude_error_rad,
+                "freedom": dict(plan.solver.freedom),
+                "verified": plan.verification.passed,
+            }
+        )
+    panda = ff.Scenario.from_toml(ROBOTS / "panda_servicer.toml")
+    for name in ("min_norm", "min_effort"):
+        clock = time.perf_counter()
+        plan = ff.plan(panda, objective=name)
+        rows.append(
+            {
+                "scenario": "panda_servicer",
+                "objective": name,
+                "plan_s": time.perf_counter() - clock,
+                "effort": effort_of(plan, panda.robot),
+                "objective_value": plan.objective.value,
+                "attitude_error_rad": plan.base.attitude_error_rad,
+                "freedom": dict(plan.solver.freedom),
+                "verified": plan.verification.passed,
+            }
+        )
+    # exact gradients against finite differences, same start, same freedom
+    gradients = []
+    resolved = worked.resolved()
+    constraints = ff.default_constraints()
+    options = ff.SolveOptions()
+    effort = ff.MinEffort()
+    s, w = gauss_legendre(effort.nodes)
+    for k in (1, 2, 3, 4):
+        problem = ff.problem_from_scenario(resolved, extra=[k, k])
+        start = ff.solve(problem, options, constraints).beta
+        clock = time.perf_counter()
+        exact = optimise(problem, start, effort, constraints, options, max_iterations=400)
+        exact_s = time.perf_counter() - clock
+
+        def fd_effort(beta: np.ndarray, problem: ff.Problem = problem) -> float:
+            path = problem.family.evaluate(beta, s)
+            tau = inverse_dynamics_batch(problem.mmap, path.q, path.qd, path.qdd).tau
+            return float(w @ (tau**2).sum(axis=1)) / problem.duration**3
+
+        clock = time.perf_counter()
+        result = minimize(
+            fd_effort,
+            start,
+            method="SLSQP",
+            constraints=[
+                {
+                    "type": "eq",
+                    "fun": lambda b, p=problem: p.residual(b),
+                    "jac": lambda b, p=problem: p.jacobian(b),
+                }
+            ],
+            options={"ftol": 1e-12, "maxiter": 400},
+        )
+        fd_s = time.perf_counter() - clock
+        gradients.append(
+            {
+                "k": k,
+                "exact_s": exact_s,
+                "exact_effort": exact.value,
+                "fd_s": fd_s,
+                "fd_effort": float(result.fun),
+                "fd_residual_rad": float(np.linalg.norm(problem.residual(result.x))),
+            }
+        )
+    return {"plans": rows, "gradients": gradients}
+
+
+def print_objectives(found: dict[str, object]) -> None:
+    print()
+    print(
+        "objectives: integral of |tau|^2 [N^2 m^2 s] measured from each plan (96-node Gauss); "
+        f"peer figure for the worked example {PEER_EFFORT}"
+    )
+    print(
+        "| scenario | objective | plan [s] | effort | vs min_norm | vs peer | attitude err [rad] "
+        "| freedom |"
+    )
+    print("|---|---|---:|---:|---:|---:|---:|---|")
+    plans = found["plans"]
+    assert isinstance(plans, list)
+    base = {r["scenario"]: r["effort"] for r in plans if r["objective"] == "min_norm"}
+    for r in plans:
+        peer = (
+            f"{100.0 * (r['effort'] / PEER_EFFORT - 1.0):+.1f} %"
+            if r["scenario"] == "worked_example"
+            else "-"
+        )
+        used = ", ".join(f"{v}" for v in r["freedom"].values())
+        print(
+            f"| {r['scenario']} | {r['objective']} | {r['plan_s']:.3f} | {r['effort']:.5g} | "
+            f"{100.0 * (r['effort'] / base[r['scenario']] - 1.0):+.1f} % | {peer} | "
+            f"{r['attitude_error_rad']:.1e} | {used} |"
+        )
+    print()
+    print("min_effort at fixed freedom k per joint: exact gradients vs finite differences")
+    print("| k | exact [s] | effort | finite differences [s] | effort | time ratio |")
+    print("|---:|---:|---:|---:|---:|---:|")
+    gradients = found["gradients"]
+    assert isinstance(gradients, list)
+    for g in gradients:
+        print(
+            f"| {g['k']} | {g['exact_s']:.3f} | {g['exact_effort']:.4f} | {g['fd_s']:.3f} | "
+            f"{g['fd_effort']:.4f} | {g['fd_s'] / g['exact_s']:.1f}x |"
+        )
+
+
 def try_plan(scenario: ff.Scenario) -> None:
     with contextlib.suppress(ff.FreeFloatError):
         ff.plan(scenario)
@@ -594,8 +743,20 @@ def main() -> None:
         "--collision-only", action="store_true", help="only the clearance cost table"
     )
     parser.add_argument("--sweep-only", action="store_true", help="only the sweep section")
+    parser.add_argument("--objectives", action="store_true", help="also the objectives section")
+    parser.add_argument(
+        "--objectives-only", action="store_true", help="only the objectives section"
+    )
     args = parser.parse_args()
     print(f"machine: {machine()}")
+    objectives = bench_objectives() if args.objectives or args.objectives_only else {}
+    if args.objectives_only:
+        print_objectives(objectives)
+        if args.json:
+            args.json.write_text(
+                json.dumps({"machine": machine(), "objectives": objectives}, indent=1)
+            )
+        return
     if args.collision_only:
         print_collision(bench_collision(args.runs))
         return
@@ -668,6 +829,8 @@ def main() -> None:
     if reach:
         print_reach(reach)
     print_collision(collision)
+    if objectives:
+        print_objectives(objectives)
     if args.json:
         args.json.write_text(
             json.dumps(
@@ -679,6 +842,7 @@ def main() -> None:
                     "reach": reach,
                     "sweep": sweep,
                     "collision": collision,
+                    "objectives": objectives,
                 },
                 indent=1,
             )

@@ -1,16 +1,26 @@
 """The root that minimises an objective, within every constraint (docs/method.md section 13).
 
 Starting from a root ``beta_0`` (``h(beta_0) = 0``), SciPy's SLSQP minimises the objective
-subject to ``h(beta) = 0`` (exact Jacobian) and the path constraints. It works in coordinates
-``z`` with ``beta = beta_0 + S z``, where ``S^T G S = I`` for the Gram matrix ``G`` of the
-basis polynomials' second derivatives: in ``z`` the integral of squared accelerations is a
-unit sphere, which keeps high-degree bases well conditioned. The objective is divided by its
-value at ``beta_0``. The result is polished back onto ``h = 0`` by minimum-norm Newton steps
-and kept only if it honours every constraint and lowers the objective (or ``beta_0`` broke a
-constraint); otherwise ``beta_0`` stands. Constraints are rows at fixed instants during one
-SLSQP run; when the result breaks one between them, the run is repeated from there with the
-path's tightest instants added (at most :data:`ROUNDS` runs). The budget is SLSQP's iteration
-count.
+subject to ``h(beta) = 0`` (exact Jacobian) and the path constraints.
+
+Scaling: SLSQP works in coordinates ``z`` with ``beta = beta_0 + S z``, in which the objective
+divided by its value at ``beta_0`` has a Hessian close to the identity. ``S`` comes from the
+objective's Gauss-Newton factor (weighted torque derivatives for ``min_effort``), regularised
+by the basis polynomials' second derivatives (alone for objectives without one). Without it a
+Panda's wrist joints, whose torques are tiny, leave directions almost flat and SLSQP crawls.
+
+Constraints: the first run imposes the affine constraints (cheap rows) and those ``beta_0``
+breaks; a costly constraint that is slack there (clearance far from its margin, say) is imposed
+only if a result breaks it. Rows sit at fixed instants during one run:
+:data:`COARSE_INSTANTS` evenly spaced ones and those where the path is tightest (each joint's
+extremes, say), and are held :data:`BACKOFF` tolerances inside the limit, so that a limit
+reached at a row is not broken between rows by more than its tolerance. When a result still
+breaks an imposed constraint, the run is repeated from there with its tightest instants added
+(at most :data:`ROUNDS` runs).
+
+The result is polished back onto ``h = 0`` by minimum-norm Newton steps and kept only if it
+honours every constraint and lowers the objective (or ``beta_0`` broke a constraint);
+otherwise ``beta_0`` stands. The budget is SLSQP's iteration count.
 """
 
 from __future__ import annotations
@@ -20,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..problem.constraints import DEFAULT_INSTANTS, Constraint
+from ..problem.constraints import Constraint
 from ..problem.objectives import Objective, gauss_legendre
 from ..problem.residual import Problem
 from .newton import polish
@@ -30,8 +40,13 @@ from .sqp import constraint_functions
 
 __all__ = ["ROUNDS", "Optimised", "optimise"]
 
-#: SLSQP runs at most, each adding the instants where the last one broke a constraint.
-ROUNDS = 3
+#: Rows are held this many of their constraint's tolerances inside the limit.
+BACKOFF = 100.0
+#: Evenly spaced normalised instants of the rows, to which the path's tightest are added.
+COARSE_INSTANTS = 25
+#: SLSQP runs at most, each adding what the last one broke: a left-out constraint, or the
+#: instants where it broke an imposed one.
+ROUNDS = 8
 
 
 @dataclass(frozen=True)
@@ -55,18 +70,45 @@ class Optimised:
     note: str = ""
 
 
-def acceleration_coordinates(problem: Problem) -> np.ndarray:
-    """``S`` with ``S^T G S = I``, ``G = int_0^1 (dq''/dbeta)^T (dq''/dbeta) ds``.
+def _tightest(
+    problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray, instants: np.ndarray
+) -> np.ndarray:
+    """``instants`` with the normalised instants where the path at ``beta`` is tightest."""
+    path = problem.polynomials(beta)
+    extra = [
+        np.asarray(c.critical_times(problem.robot, path), dtype=float) / problem.duration
+        for c in constraints
+    ]
+    return np.unique(np.clip(np.concatenate([instants, *extra]), 0.0, 1.0))
 
-    From the QR factors of the square-root-weighted second-derivative map on Gauss-Legendre
-    nodes (exact integration), not from a Cholesky factor of ``G``: that squares the condition
-    number of a high-degree monomial basis.
+
+def scaled_coordinates(
+    problem: Problem, objective: Objective, beta: np.ndarray, value: float
+) -> np.ndarray:
+    """``S`` with ``S^T (M^T M + r^2 A^T A) S = value I`` (see the module docstring).
+
+    ``M`` is the objective's metric at ``beta`` (its Gauss-Newton factor), ``A`` the weighted
+    second-derivative map of the basis (exact Gauss-Legendre integration), and ``r`` a small
+    multiple that keeps the matrix positive definite where ``M`` is rank deficient. Built from
+    the QR factors of the stacked matrices, not from a Cholesky factor of the product: that
+    squares the condition number of a high-degree monomial basis.
     """
     s, w = gauss_legendre(max(problem.family.degrees))
     dqss = problem.family.affine_samples(s).dqss
-    weighted = (np.sqrt(w)[:, None, None] * dqss).reshape(-1, problem.n_free)
-    r = np.linalg.qr(weighted, mode="r")
+    accel = (np.sqrt(w)[:, None, None] * dqss).reshape(-1, problem.n_free)
+    metric = objective.metric(problem, beta)
+    if metric is None:
+        stacked = accel * np.sqrt(max(value, 1e-300) / max(_norm2(accel), 1e-300))
+    else:
+        weight = 1e-3 * np.sqrt(_norm2(metric) / max(_norm2(accel), 1e-300))
+        stacked = np.vstack([metric, weight * accel]) / np.sqrt(max(value, 1e-300))
+    r = np.linalg.qr(stacked, mode="r")
     return np.linalg.solve(r, np.eye(problem.n_free))
+
+
+def _norm2(matrix: np.ndarray) -> float:
+    """Squared Frobenius norm."""
+    return float(np.sum(matrix * matrix))
 
 
 def optimise(
@@ -95,7 +137,7 @@ def optimise(
     if problem.n_free == 0:
         return Optimised(beta0, start.value, start.value, 0, False, "no free coefficients")
     scale = start.value if start.value > 0 else 1.0
-    s_mat = acceleration_coordinates(problem)
+    s_mat = scaled_coordinates(problem, objective, beta0, scale)
 
     def to_beta(z: np.ndarray) -> np.ndarray:
         return beta0 + s_mat @ z
@@ -123,19 +165,23 @@ def optimise(
     def dh(z: np.ndarray) -> np.ndarray:
         return cached("h", z, problem.residual_and_jacobian)[1] @ s_mat
 
-    instants = DEFAULT_INSTANTS
+    active = [c for c in constraints if c.applies_to(problem.robot)]
+    imposed = [c for c in active if c.affine or broken_constraint(problem, [c], beta0)]
+    instants = _tightest(problem, active, beta0, np.linspace(0.0, 1.0, COARSE_INSTANTS))
     z = np.zeros(problem.n_free)
     iterations = 0
     for _ in range(ROUNDS):
         cons: list[dict[str, object]] = [{"type": "eq", "fun": h, "jac": dh}]
-        for g, dg in constraint_functions(problem, constraints, instants):
-            cons.append(
-                {
-                    "type": "ineq",
-                    "fun": lambda z, g=g: g(to_beta(z)),
-                    "jac": lambda z, dg=dg: dg(to_beta(z)) @ s_mat,
-                }
-            )
+        for constraint in imposed:
+            backoff = BACKOFF * constraint.tolerance
+            for g, dg in constraint_functions(problem, [constraint], instants):
+                cons.append(
+                    {
+                        "type": "ineq",
+                        "fun": lambda z, g=g, b=backoff: g(to_beta(z)) - b,
+                        "jac": lambda z, dg=dg: dg(to_beta(z)) @ s_mat,
+                    }
+                )
         with np.errstate(all="ignore"):
             result = minimize(
                 fun,
@@ -159,14 +205,14 @@ def optimise(
         broken = broken_constraint(problem, constraints, candidate)
         if not broken:
             break
-        # Rows hold at the instants but not between them: add the path's tightest instants.
-        path = problem.polynomials(candidate)
-        extra = [
-            np.asarray(c.critical_times(problem.robot, path)) / problem.duration
-            for c in constraints
-            if c.applies_to(problem.robot)
+        missing = [
+            c for c in active if c not in imposed and broken_constraint(problem, [c], candidate)
         ]
-        instants = np.unique(np.clip(np.concatenate([instants, *extra]), 0.0, 1.0))
+        if missing:  # a constraint left out because it was slack at the start now binds
+            imposed += missing
+            continue
+        # Rows hold at the instants but not between them: add the path's tightest instants.
+        instants = _tightest(problem, active, candidate, instants)
     else:
         return Optimised(beta0, start.value, start.value, iterations, False, f"breaks {broken}")
     value = objective.evaluate(problem, candidate).value

@@ -59,6 +59,14 @@ class Objective(abc.ABC):
         """Numerical error of :meth:`evaluate`'s value (unit); 0 when exact."""
         return 0.0
 
+    def metric(self, problem: Problem, beta: np.ndarray) -> np.ndarray | None:
+        """A matrix ``M`` with ``M^T M`` close to half the Hessian at ``beta``, or None.
+
+        Objectives that are sums of squares give the Jacobian of their weighted residuals
+        (the Gauss-Newton approximation); solvers use it to scale their coordinates.
+        """
+        return None
+
     @property
     def nodes_used(self) -> int:
         """Quadrature nodes of the value (0 when exact or none are needed)."""

@@ -34,3 +34,10 @@ class MinAcceleration(Objective):
         value = scale * float(np.einsum("k,ki,ki->", w, qss, qss))
         gradient = 2.0 * scale * np.einsum("k,ki,kif->f", w, qss, samples.dqss)
         return ObjectiveValue(value, gradient)
+
+    def metric(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
+        """Weighted ``dq''/dbeta`` at the nodes: exactly half the Hessian's square root."""
+        s, w = gauss_legendre(max(problem.family.degrees))
+        dqss = problem.family.affine_samples(s).dqss
+        scale = problem.duration**-1.5
+        return (scale * np.sqrt(w)[:, None, None] * dqss).reshape(-1, problem.n_free)

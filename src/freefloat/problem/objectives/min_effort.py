@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...physics.dynamics import inverse_dynamics_batch
 from ...physics.torque_derivatives import torques_and_derivatives
 from ..residual import Problem
 from .base import Objective, ObjectiveValue, gauss_legendre
@@ -38,25 +39,42 @@ class MinEffort(Objective):
     def __init__(self, nodes: int = 32) -> None:
         self.nodes = int(nodes)
 
-    def _evaluate(
-        self, problem: Problem, beta: np.ndarray, nodes: int, gradient: bool = True
-    ) -> ObjectiveValue:
+    def _torques(
+        self, problem: Problem, beta: np.ndarray, nodes: int
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Weights, torques (T = 1 s) and their beta-derivatives at the Gauss nodes."""
         s, w = gauss_legendre(nodes)
         samples = problem.family.affine_samples(s)
         path = samples.at(beta)
         found = torques_and_derivatives(problem.mmap, path.q, path.qd, path.qdd)
-        scale = problem.duration**-3
-        tau = found.tau
-        value = scale * float(np.einsum("k,ki,ki->", w, tau, tau))
-        if not gradient:
-            return ObjectiveValue(value, np.zeros(problem.n_free))
         dtau = (
             np.einsum("kij,kjf->kif", found.d_q, samples.dq)
             + np.einsum("kij,kjf->kif", found.d_qd, samples.dqs)
             + np.einsum("kij,kjf->kif", found.d_qdd, samples.dqss)
         )
+        return w, found.tau, dtau
+
+    def _evaluate(
+        self, problem: Problem, beta: np.ndarray, nodes: int, gradient: bool = True
+    ) -> ObjectiveValue:
+        scale = problem.duration**-3
+        if not gradient:
+            s, w = gauss_legendre(nodes)
+            path = problem.family.affine_samples(s).at(beta)
+            tau = inverse_dynamics_batch(problem.mmap, path.q, path.qd, path.qdd).tau
+            return ObjectiveValue(
+                scale * float(np.einsum("k,ki,ki->", w, tau, tau)), np.zeros(problem.n_free)
+            )
+        w, tau, dtau = self._torques(problem, beta, nodes)
+        value = scale * float(np.einsum("k,ki,ki->", w, tau, tau))
         grad = 2.0 * scale * np.einsum("k,ki,kif->f", w, tau, dtau)
         return ObjectiveValue(value, grad)
+
+    def metric(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
+        """Weighted ``dtau/dbeta`` at the nodes (the Gauss-Newton factor of the Hessian)."""
+        w, _, dtau = self._torques(problem, beta, self.nodes)
+        scale = problem.duration**-1.5
+        return (scale * np.sqrt(w)[:, None, None] * dtau).reshape(-1, problem.n_free)
 
     def evaluate(self, problem: Problem, beta: np.ndarray) -> ObjectiveValue:
         """Value and exact gradient of the quadrature (N^2 m^2 s)."""

@@ -28,3 +28,7 @@ class MinNorm(Objective):
         """``beta . beta`` and ``2 beta``."""
         beta = np.asarray(beta, dtype=float)
         return ObjectiveValue(float(beta @ beta), 2.0 * beta)
+
+    def metric(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
+        """The identity (the Hessian is 2 I)."""
+        return np.eye(problem.n_free)
