@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import math
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -16,12 +17,29 @@ ROOT = Path(__file__).resolve().parents[1]
 
 @pytest.fixture(scope="session", autouse=True)
 def no_stray_meshcat_servers():
-    """After the whole run, no meshcat server subprocess may be left."""
+    """After the whole run, no meshcat server this run started may be left.
+
+    Only this process's descendants count: other runs on a shared machine have their own.
+    """
     yield
     out = subprocess.run(
         ["pgrep", "-f", "meshcat.servers.zmqserver"], capture_output=True, text=True, check=False
     )
-    assert out.stdout.split() == [], "meshcat servers left running"
+    mine = [pid for pid in out.stdout.split() if _descends_from(int(pid), os.getpid())]
+    assert mine == [], "meshcat servers left running"
+
+
+def _descends_from(pid: int, ancestor: int) -> bool:
+    """Whether process ``pid`` is a descendant of ``ancestor`` (Linux /proc)."""
+    while pid > 1:
+        try:
+            stat = Path(f"/proc/{pid}/stat").read_text()
+        except OSError:
+            return False
+        pid = int(stat.rsplit(")", 1)[1].split()[1])  # the parent's pid
+        if pid == ancestor:
+            return True
+    return False
 
 
 @pytest.fixture(scope="session")
