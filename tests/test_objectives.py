@@ -192,3 +192,27 @@ def test_cli_objective_flag(tmp_path, capsys):
     assert info.value.code == 2
     assert "invalid choice: 'fastest'" in capsys.readouterr().err
     assert math.isfinite(ff.Plan.load(out).objective.value)
+
+
+def test_min_effort_keeps_clear_of_the_hull(tmp_path):
+    """The UR5 pan that sweeps into the hull on the quintic path: min_effort keeps 1 cm."""
+    from test_collision import UR5_START, _scenario
+
+    from freefloat.robot.collision import CollisionModel, known_srdf
+
+    body = f"""
+[start]
+joints = {{ {UR5_START.format(pan=-90.0)} }}
+[goal]
+joints = {{ {UR5_START.format(pan=90.0)} }}
+base_zyx_deg = [-17.29, 1.5255, -33.449]
+"""
+    scenario = ff.Scenario.from_toml(_scenario(tmp_path, body))
+    best = ff.plan(scenario, objective="min_effort")
+    assert best.verification.passed
+    assert best.verification["clearance"].passed
+    assert best.base.attitude_error_rad < 1e-9
+    assert best.objective.value < best.objective.start_value
+    model = CollisionModel(scenario.robot, known_srdf(scenario.robot))
+    q = best.joint_positions(np.linspace(0.0, best.duration, 801))
+    assert min(model.distances(x).values.min() for x in q) >= 0.01 - 1e-6

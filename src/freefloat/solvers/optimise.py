@@ -208,8 +208,9 @@ def optimise(
         missing = [
             c for c in active if c not in imposed and broken_constraint(problem, [c], candidate)
         ]
-        if missing:  # a constraint left out because it was slack at the start now binds
-            imposed += missing
+        if missing:  # a constraint left out because it was slack at the start now binds:
+            imposed += missing  # impose it, from the start (whose path honours every one)
+            z = np.zeros(problem.n_free)
             continue
         # Rows hold at the instants but not between them: add the path's tightest instants.
         instants = _tightest(problem, active, candidate, instants)
