@@ -32,6 +32,7 @@ from .plans.format import (
 )
 from .problem.constraints import Clearance, Constraint, JointVelocityLimits, scenario_constraints
 from .problem.constraints.clearance import clearance_at
+from .problem.limits import check_samples
 from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .progress import stage
@@ -61,7 +62,8 @@ def plan(
         scenario: what to plan.
         options: solver settings; the scenario's ``max_deviation`` overrides the default
             bracket.
-        samples: number of equally spaced samples in [0, T] (>= 2).
+        samples: number of equally spaced samples in [0, T] (2 to
+            :data:`~freefloat.problem.limits.MAX_SAMPLES`).
         constraints: path constraints to honour (solvers and verification); default joint
             position and velocity limits.
 
@@ -70,6 +72,7 @@ def plan(
         VelocityLimitError: no path within the velocity limits at this duration; carries the
             shortest duration at which the path found without them respects them.
     """
+    check_samples(samples)
     options = options or SolveOptions()
     if scenario.max_deviation is not None:
         options = SolveOptions(**{**asdict(options), "max_deviation": scenario.max_deviation})
