@@ -6,10 +6,16 @@ Units: s, rad, m, kg, kg m^2 inside; degrees only at the edges (scenario files, 
 tables and the ``_deg`` fields of a plan).
 """
 
+from ._interrupt import guard_startup as _guard_startup
+
+_guard_startup()  # the command line only: Ctrl-C while importing is one line, exit 130
+
 from .errors import (
+    FileError,
     FreeFloatError,
     InfeasibleError,
     InputError,
+    InputLimitError,
     JointLimitError,
     ModelError,
     PlanFileError,
@@ -50,9 +56,11 @@ __all__ = [
     "Constraint",
     "ConstraintRows",
     "Excess",
+    "FileError",
     "FreeFloatError",
     "InfeasibleError",
     "InputError",
+    "InputLimitError",
     "InverseDynamics",
     "Joint",
     "JointLimitError",
