@@ -681,7 +681,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     undo = _handle_signals()
     try:
         parser = build_parser()
-        args = parser.parse_args(argv)
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit as exc:  # --help, --version, or a one-line argument error
+            return exc.code if isinstance(exc.code, int) else 2
         configure(getattr(args, "verbose", 0), getattr(args, "quiet", False))
         args.started = time.perf_counter()
         _check_arguments(args)
