@@ -79,3 +79,19 @@ def slider_arm() -> str:
     body += joint("turn", "l1", "l2", "revolute", (0, 0, 1))
     body += link("l2", mass=3.0)
     return robot(body)
+
+
+def chain(n: int, spatial: bool = False) -> str:
+    """A 500 kg base with an n-joint serial arm of light links (0.3 m, 2 kg each).
+
+    Planar: every axis along z. Spatial: axes z, y, x in turn.
+    """
+    body = BASE.format(mass=500.0, i=80.0)
+    axes = [(0, 0, 1), (0, 1, 0), (1, 0, 0)] if spatial else [(0, 0, 1)]
+    parent = "base"
+    for i in range(1, n + 1):
+        xyz = (0.5 if i == 1 else 0.3, 0, 0)
+        body += joint(f"j{i}", parent, f"l{i}", "revolute", axes[(i - 1) % len(axes)], xyz)
+        body += link(f"l{i}", mass=2.0, inertia=(0.02, 0.02, 0.02), com=(0.15, 0.0, 0.0))
+        parent = f"l{i}"
+    return robot(body, f"chain{n}")

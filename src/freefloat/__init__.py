@@ -6,11 +6,17 @@ Units: s, rad, m, kg, kg m^2 inside; degrees only at the edges (scenario files, 
 tables and the ``_deg`` fields of a plan).
 """
 
+from ._interrupt import guard_startup as _guard_startup
+
+_guard_startup()  # the command line only: Ctrl-C while importing is one line, exit 130
+
 from .errors import (
     EffortLimitError,
+    FileError,
     FreeFloatError,
     InfeasibleError,
     InputError,
+    InputLimitError,
     JointLimitError,
     ModelError,
     PlanFileError,
@@ -64,9 +70,11 @@ __all__ = [
     "ConstraintRows",
     "EffortLimitError",
     "Excess",
+    "FileError",
     "FreeFloatError",
     "InfeasibleError",
     "InputError",
+    "InputLimitError",
     "InverseDynamics",
     "Joint",
     "JointEffortLimits",

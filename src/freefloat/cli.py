@@ -12,12 +12,16 @@ bounds, verify, compose, show, plot, export, sweep); the plan summary lives in
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import math
+import signal
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from types import FrameType
+from typing import Any, NoReturn
 
 if sys.version_info >= (3, 11):
     pass
@@ -25,14 +29,16 @@ else:  # pragma: no cover
     pass
 
 from . import __version__
-from .errors import FreeFloatError, InputError, VelocityLimitError
+from .errors import FreeFloatError, InputError, InputLimitError, VelocityLimitError
+from .files import check_output
 from .pipeline import plan
 from .plans.format import Plan
 from .problem.build import planar_yaw_branch, problem_from_scenario
+from .problem.limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, check_number, check_samples
 from .problem.objectives import OBJECTIVES
 from .problem.scenario import Scenario, default_scenario_path
 from .progress import TIMINGS, configure, stage
-from .solvers.options import DEFAULT_TOLERANCE, SolveOptions
+from .solvers.options import DEFAULT_TOLERANCE, TOLERANCE_RANGE_RAD, SolveOptions
 from .verify.checks import MAX_REPLAY_STEPS, verify_plan
 from .viz.summary import cartesian_report, robot_label, summary
 
@@ -52,10 +58,6 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     scenario = _load_scenario(args.scenario)
     if args.allow_full_turns:
         scenario = dataclasses.replace(scenario, allow_full_turns=True)
-    if not (args.tolerance > 0 and math.isfinite(args.tolerance)):
-        raise InputError(f"--tolerance must be a positive number of rad, got {args.tolerance}")
-    if args.samples < 2:
-        raise InputError(f"--samples must be at least 2, got {args.samples}")
     result = plan(
         scenario,
         SolveOptions(tolerance=args.tolerance),
@@ -299,15 +301,24 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line ``freefloat: error: ...`` (exit code 2)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"freefloat: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``freefloat`` command."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="freefloat",
         description="Point-to-point motion planning for free-floating space manipulators. "
         "Angles on the command line and in scenario files are in degrees.",
     )
     parser.add_argument("--version", action="version", version=f"freefloat {__version__}")
-    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    commands = parser.add_subparsers(
+        dest="command", required=True, metavar="COMMAND", parser_class=_Parser
+    )
 
     p_plan = commands.add_parser(
         "plan",
@@ -561,22 +572,147 @@ def _in_degrees(exc: FreeFloatError) -> str:
     return str(exc)
 
 
+#: Largest ``bounds --budget`` (residual evaluations per direction; 14 directions).
+MAX_BUDGET = 100_000
+#: Most local worker processes of ``sweep --workers``.
+MAX_WORKERS = 1024
+#: Fastest playback of ``show --speed`` (times real time).
+MAX_SPEED = 1000.0
+
+
+def _positive(value: float, name: str, high: float, unit: str = "") -> float:
+    """A number in (0, high]; :class:`InputLimitError` naming ``name`` otherwise."""
+    if isinstance(value, float) and (math.isnan(value) or value <= 0.0):
+        units = f" of {unit}" if unit else ""
+        raise InputError(f"{name} must be a positive number{units}, got {value:g}")
+    return check_number(value, name, high, unit)
+
+
+def _check_arguments(args: argparse.Namespace) -> None:
+    """Refuse bad numbers and unwritable outputs before any work (README, "Limits")."""
+    command = args.command
+    if command == "plan":
+        check_samples(args.samples, "--samples")
+        low, high = TOLERANCE_RANGE_RAD
+        if not low <= args.tolerance <= high:  # NaN fails too
+            raise InputLimitError(
+                "--tolerance",
+                args.tolerance,
+                low,
+                high,
+                "rad",
+                why="the attitude integration certifies plans to 1e-12 rad and verification "
+                "holds them to 1e-7 rad",
+            )
+    elif command == "bounds":
+        _positive(args.max_angle, "--max-angle", 180.0, "deg")
+        if not 1 <= args.budget <= MAX_BUDGET:
+            raise InputLimitError("--budget", args.budget, 1, MAX_BUDGET)
+    elif command == "compose":
+        numbers: list[tuple[str, Any, float, str]] = [
+            ("--base-mass", [args.base_mass], MAX_MAGNITUDE, "kg"),
+            ("--base-size", args.base_size, MAX_LENGTH_M, "m"),
+            ("--base-inertia", args.base_inertia, MAX_MAGNITUDE, "kg m^2"),
+            ("--mount", args.mount, MAX_LENGTH_M, "m"),
+            ("--mount-rpy", args.mount_rpy, MAX_ANGLE_DEG, "deg"),
+            ("--payload-mass", [args.payload_mass], MAX_MAGNITUDE, "kg"),
+            ("--payload-com", args.payload_com, MAX_LENGTH_M, "m"),
+            ("--payload-inertia", args.payload_inertia, MAX_MAGNITUDE, "kg m^2"),
+            ("--payload-box", args.payload_box, MAX_LENGTH_M, "m"),
+        ]
+        for name, values, high, unit in numbers:
+            for value in values or ():
+                if value is not None:
+                    check_number(value, name, high, unit)
+    elif command == "sweep" and args.workers is not None:
+        if not 1 <= args.workers <= MAX_WORKERS:
+            raise InputLimitError("--workers", args.workers, 1, MAX_WORKERS)
+    elif command == "show":
+        _positive(args.speed, "--speed", MAX_SPEED)
+    for option, name, folder in _OUTPUTS.get(command, ()):
+        value = getattr(args, name, None)
+        if value:
+            is_folder = folder or (command == "export" and args.format == "ros2-bag")
+            check_output(value, option, folder=is_folder)
+
+
+#: Per command, the outputs checked before any work: (option, attribute, is a folder).
+_OUTPUTS: dict[str, tuple[tuple[str, str, bool], ...]] = {
+    "plan": (("-o", "output", False),),
+    "bounds": (("--plot", "plot", False),),
+    "compose": (("-o", "output", False),),
+    "plot": (("-o", "output", True),),
+    "show": (("--html", "html", False),),
+    "export": (("-o", "output", False),),
+    "sweep": (("-o", "output", False), ("--plots", "plots", True)),
+}
+
+
+class Terminated(BaseException):
+    """SIGTERM, raised like Ctrl-C's ``KeyboardInterrupt`` so that writers clean up."""
+
+
+def _terminate(signum: int, frame: FrameType | None) -> NoReturn:
+    raise Terminated
+
+
+def _handle_signals() -> Callable[[], None]:
+    """Ctrl-C raises ``KeyboardInterrupt`` and SIGTERM :class:`Terminated`; return an undo.
+
+    Both unwind through the atomic writers (:mod:`freefloat.files`), which remove their
+    temporary files, so an interrupted command leaves no partial file and the previous output
+    intact. Outside the main thread (a caller's thread) nothing is installed.
+    """
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+    previous = {
+        signal.SIGINT: signal.signal(signal.SIGINT, signal.default_int_handler),
+        signal.SIGTERM: signal.signal(signal.SIGTERM, _terminate),
+    }
+
+    def undo() -> None:
+        for number, handler in previous.items():
+            signal.signal(number, handler if handler is not None else signal.SIG_DFL)
+
+    return undo
+
+
+def _error_line(text: str) -> None:
+    with contextlib.suppress(OSError, ValueError):  # stderr closed
+        print(f"freefloat: {text}", file=sys.stderr, flush=True)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit code.
 
-    0: success; 1: ``verify`` found a failing check; 2: bad input, infeasible request or no plan.
+    0: success; 1: ``verify`` found a failing check; 2: bad input, infeasible request or no
+    plan (one line ``freefloat: error: ...`` on stderr); 130: interrupted by Ctrl-C; 143:
+    terminated by SIGTERM (one line each, no partial file left).
     """
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    configure(getattr(args, "verbose", 0), getattr(args, "quiet", False))
-    args.started = time.perf_counter()
+    undo = _handle_signals()
     try:
+        parser = build_parser()
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit as exc:  # --help, --version, or a one-line argument error
+            return exc.code if isinstance(exc.code, int) else 2
+        configure(getattr(args, "verbose", 0), getattr(args, "quiet", False))
+        args.started = time.perf_counter()
+        _check_arguments(args)
         return int(args.func(args))
     except FreeFloatError as exc:
-        print(f"freefloat: error: {_in_degrees(exc)}", file=sys.stderr)
+        _error_line(f"error: {_in_degrees(exc)}")
         return 2
-    except KeyboardInterrupt:  # pragma: no cover - interactive
+    except KeyboardInterrupt:
+        _error_line("interrupted")
         return 130
+    except Terminated:
+        _error_line("terminated")
+        return 143
+    finally:
+        undo()
 
 
 if __name__ == "__main__":  # pragma: no cover

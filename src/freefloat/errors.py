@@ -7,10 +7,70 @@ the command line can print it as it is (exit code 2) and a caller can test it.
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from typing import Any
+
+#: The most characters of a bad value an error message quotes (an excerpt beyond that).
+EXCERPT_CHARS = 60
+
+
+def excerpt(value: Any, width: int = EXCERPT_CHARS) -> str:
+    """A short printable form of ``value`` for an error message: at most about ``width`` chars.
+
+    Long values are cut and say how long they were (``[1.0, 1.0, ...] (1000000 items)``,
+    ``'aaaa...' (5000 characters)``, ``999999999999... (400 digits)``), so a message never
+    echoes a megabyte of input. Lists and tables are not turned into text whole: only their
+    first items are looked at.
+    """
+    if isinstance(value, bool) or value is None:
+        return repr(value)
+    if isinstance(value, int):
+        try:
+            text = str(value)
+        except ValueError:  # more digits than Python turns into text
+            return f"an integer of about {int(value.bit_length() * 0.30103)} digits"
+        if len(text) <= width:
+            return text
+        return f"{text[:12]}... ({len(text.lstrip('-'))} digits)"
+    if isinstance(value, (list, tuple, dict)):
+        opening, closing = ("{", "}") if isinstance(value, dict) else ("[", "]")
+        if width < 10:
+            return f"{opening}...{closing}" if value else f"{opening}{closing}"
+        items = list(value.items())[:width] if isinstance(value, dict) else list(value[:width])
+        parts: list[str] = []
+        room = width - 16  # what the items may take, leaving room for the count
+        for item in items:
+            if isinstance(value, dict):
+                part = f"{excerpt(str(item[0]), room // 2).strip(chr(39))} = "
+                part += excerpt(item[1], max(room // 2, 0))
+            else:
+                part = excerpt(item, room // 2)
+            if sum(len(p) + 2 for p in parts) + len(part) > room:
+                break
+            parts.append(part)
+        if len(parts) == len(value):
+            return opening + ", ".join(parts) + closing
+        return f"{opening}{', '.join([*parts, '...'])}{closing} ({len(value)} items)"
+    text = repr(value)
+    if len(text) <= width:
+        return text
+    return f"{text[: max(width - 24, 8)]}... ({len(text)} characters)"
 
 
 class FreeFloatError(Exception):
     """Root of every error freefloat raises on purpose."""
+
+
+class FileError(FreeFloatError):
+    """A file or folder that cannot be read or written; carries the path.
+
+    Missing, not a regular file (a directory, a FIFO, a device such as ``/dev/zero``), larger
+    than freefloat's limit for its kind, a symbolic-link loop, a NUL byte in the path, no
+    permission, a file where a folder should be.
+    """
+
+    def __init__(self, message: str, path: str | None = None) -> None:
+        self.path = path
+        super().__init__(message)
 
 
 class ModelError(FreeFloatError):
@@ -29,7 +89,7 @@ class UnknownNameError(FreeFloatError):
         self.name = name
         self.valid = tuple(valid)
         shown = ", ".join(self.valid) if self.valid else "(none)"
-        super().__init__(f"unknown {kind} {name!r}; valid: {shown}")
+        super().__init__(f"unknown {kind} {excerpt(name)}; valid: {shown}")
 
 
 class ScenarioError(FreeFloatError):
@@ -38,6 +98,44 @@ class ScenarioError(FreeFloatError):
 
 class InputError(FreeFloatError):
     """A numerical input that is not usable (NaN, infinite, non-positive duration...)."""
+
+
+class InputLimitError(InputError):
+    """A value beyond one of freefloat's stated limits (README, "Limits").
+
+    Attributes:
+        name: what the value is (``"duration"``, ``"--samples"``, ``"[path] extra for 'q2'"``).
+        value: the value given (quoted in the message as a short excerpt).
+        low: the smallest accepted value, or None.
+        high: the largest accepted value, or None.
+        unit: the unit of the value and the limits (``"s"``, ``"deg"``, ``""``).
+    """
+
+    def __init__(
+        self,
+        name: str,
+        value: Any,
+        low: float | None = None,
+        high: float | None = None,
+        unit: str = "",
+        why: str = "",
+    ) -> None:
+        self.name = name
+        self.value = value
+        self.low = low
+        self.high = high
+        self.unit = unit
+        u = f" {unit}" if unit else ""
+        low = None if low is None or low == -float("inf") else low
+        high = None if high is None or high == float("inf") else high
+        if low is not None and high is not None:
+            limit = f"outside the supported range [{low:g}, {high:g}]{u}"
+        elif high is not None:
+            limit = f"above the supported maximum {high:g}{u}"
+        else:
+            limit = f"below the supported minimum {low:g}{u}"
+        shown = f"{value:g}" if isinstance(value, float) else excerpt(value)
+        super().__init__(f"{name} = {shown}{u} is {limit}" + (f"; {why}" if why else ""))
 
 
 class JointLimitError(FreeFloatError):

@@ -1,17 +1,172 @@
-"""Atomic file writes: a reader never sees half a file, and a failure leaves nothing behind.
+"""Files in and out: checked reads, checked output paths, atomic writes.
 
-Files are created with the permissions of an ordinary ``open()``: ``0666`` less the process
-umask (``0644`` under the usual umask 022), not the ``0600`` of a temporary file.
+Every file freefloat reads (scenario, URDF, sweep file) goes through :func:`read_text_file`,
+and every file it writes through :func:`atomic_write` (after :func:`check_output` at the
+command line, before any work): a path with a NUL byte, a symbolic-link loop, a directory, a
+FIFO or a device (``/dev/zero``), a file larger than the limit for its kind, a read-only
+folder, a file where a folder should be, all become one :class:`~freefloat.errors.FileError`
+with a one-line message instead of a hang, a memory runaway or a traceback.
+
+Atomic writes: a reader never sees half a file, and a failure (or Ctrl-C, or SIGTERM at the
+command line) leaves nothing behind and the previous file intact. Files are created with the
+permissions of an ordinary ``open()``: ``0666`` less the process umask (``0644`` under the
+usual umask 022), not the ``0600`` of a temporary file.
 """
 
 from __future__ import annotations
 
+import errno
 import os
+import stat
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
-__all__ = ["atomic_write", "atomic_write_text", "default_file_mode"]
+from .errors import FileError, FreeFloatError, excerpt
+
+__all__ = [
+    "absolute_path",
+    "atomic_write",
+    "atomic_write_text",
+    "check_output",
+    "default_file_mode",
+    "read_text_file",
+]
+
+#: A factory of the error to raise: an error class taking the one-line message.
+ErrorClass = Callable[[str], FreeFloatError]
+
+
+def _reason(exc: OSError) -> str:
+    """A short account of an OS error: its text, without the path Python appends."""
+    if exc.errno == errno.ELOOP:
+        return "a symbolic-link loop"
+    return exc.strerror or str(exc)
+
+
+def absolute_path(path: str | Path, what: str, error: ErrorClass = FileError) -> Path:
+    """``path`` made absolute, symbolic links resolved, or a one-line error.
+
+    Args:
+        path: the path as given (``~`` is expanded).
+        what: what the file is, for messages (``"scenario"``, ``"URDF"``, ``"output"``).
+        error: the error class to raise (it takes the message).
+
+    Raises:
+        error: a NUL byte in the path, or a symbolic-link loop.
+    """
+    text = os.fspath(path)
+    if "\x00" in text:
+        raise error(f"{what} path {excerpt(text)} contains a NUL byte; give a file name")
+    try:
+        return Path(text).expanduser().resolve()
+    except RuntimeError:  # Python < 3.13 reports a loop this way
+        raise error(f"{what} path {excerpt(text)}: a symbolic-link loop") from None
+    except OSError as exc:
+        raise error(f"{what} path {excerpt(text)}: {_reason(exc)}") from None
+
+
+def _kind(mode: int) -> str:
+    if stat.S_ISDIR(mode):
+        return "a directory"
+    if stat.S_ISFIFO(mode):
+        return "a FIFO (named pipe)"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "not a regular file"
+
+
+def read_text_file(path: str | Path, what: str, limit: int, error: ErrorClass = FileError) -> str:
+    """The UTF-8 text of a regular file of at most ``limit`` bytes.
+
+    The file is checked before it is read (a FIFO is opened without blocking, and at most
+    ``limit + 1`` bytes are ever read), so a device or a huge file costs nothing.
+
+    Args:
+        path: the file.
+        what: what it is, for messages (``"scenario"``, ``"URDF"``, ``"sweep"``).
+        limit: the largest accepted size (bytes).
+        error: the error class to raise (it takes the message).
+
+    Raises:
+        error: a NUL byte in the path, a missing file, a symbolic-link loop, not a regular
+            file, larger than ``limit``, unreadable, or not UTF-8.
+    """
+    target = absolute_path(path, what, error)
+    try:
+        fd = os.open(target, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    except FileNotFoundError:
+        raise error(f"{what} file not found: {target}") from None
+    except OSError as exc:
+        raise error(f"cannot read {what} {target}: {_reason(exc)}") from None
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            raise error(f"{what} {target} is {_kind(info.st_mode)}, not a regular file")
+        if info.st_size > limit:
+            raise error(
+                f"{what} {target} is {info.st_size} bytes, above the limit of {limit} bytes "
+                f"for a {what} file"
+            )
+        chunks = []
+        size = 0
+        while size <= limit:
+            chunk = os.read(fd, limit + 1 - size)
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+        if size > limit:  # it grew while being read
+            raise error(f"{what} {target} is above the limit of {limit} bytes for a {what} file")
+    except OSError as exc:
+        raise error(f"cannot read {what} {target}: {_reason(exc)}") from None
+    finally:
+        os.close(fd)
+    try:
+        return b"".join(chunks).decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise error(
+            f"{what} {target} is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
+            f"{exc.start})"
+        ) from None
+
+
+def check_output(path: str | Path, what: str = "output", folder: bool = False) -> Path:
+    """Check that ``path`` can be written (before any work); return it absolute.
+
+    The target must not be a directory (or, with ``folder``, must be one or not exist yet);
+    its nearest existing ancestor must be a writable directory (missing folders below it are
+    created when the file is written).
+
+    Args:
+        path: the file (or folder) to write.
+        what: what it is, for messages (``"-o"``, ``"--html"``...).
+        folder: the output is a folder (plots, a ROS 2 bag) rather than a file.
+
+    Raises:
+        FileError: a NUL byte, a symbolic-link loop, a directory in the way (or a file where
+            the folder should be), a parent that is a file, a read-only folder.
+    """
+    target = absolute_path(path, what)
+    shown = os.fspath(path)
+    if target.is_dir() and not folder:
+        raise FileError(f"{what} {excerpt(shown)} is a directory; give a file name", shown)
+    if folder and target.exists() and not target.is_dir():
+        raise FileError(f"{what} {excerpt(shown)} is a file; give a folder", shown)
+    ancestor = target if folder and target.is_dir() else target.parent
+    while not ancestor.exists():
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise FileError(
+            f"cannot write {what} {excerpt(shown)}: {ancestor} is a file, not a folder", shown
+        )
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        raise FileError(
+            f"cannot write {what} {excerpt(shown)}: folder {ancestor} is not writable", shown
+        )
+    return target
 
 
 def default_file_mode() -> int:
@@ -21,8 +176,16 @@ def default_file_mode() -> int:
     return 0o666 & ~umask
 
 
+#: Test hook: seconds to pause after the temporary file is written and before the rename
+#: (``FREEFLOAT_TEST_WRITE_PAUSE``), so that a test can interrupt a write deterministically.
+_PAUSE_ENV = "FREEFLOAT_TEST_WRITE_PAUSE"
+
+
 def atomic_write(path: str | Path, write: Callable[[Path], None], suffix: str = "") -> Path:
     """Call ``write(temporary path)`` in the target's folder, then rename over the target.
+
+    The temporary file (``.NAME.XXXXXXXX``) is removed whatever happens: an error, Ctrl-C
+    (``KeyboardInterrupt``), or SIGTERM (the command line turns it into an exception).
 
     Args:
         path: the file to produce (its folder is created if needed).
@@ -31,16 +194,33 @@ def atomic_write(path: str | Path, write: Callable[[Path], None], suffix: str = 
 
     Returns:
         The absolute path written.
+
+    Raises:
+        FileError: the file cannot be written (read-only folder, a directory in the way, a
+            parent that is a file, a full disk...).
     """
-    target = Path(path).expanduser().resolve()
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=suffix, dir=target.parent)
+    target = absolute_path(path, "output")
+    if target.is_dir():
+        raise FileError(f"cannot write {target}: it is a directory", str(target))
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=suffix, dir=target.parent)
+    except OSError as exc:
+        raise FileError(f"cannot write {target}: {_reason(exc)}", str(target)) from None
     os.close(fd)
     try:
         write(Path(tmp))
         if Path(tmp).is_file():
             os.chmod(tmp, default_file_mode())
+        pause = os.environ.get(_PAUSE_ENV)
+        if pause:
+            import time
+
+            time.sleep(float(pause))
         os.replace(tmp, target)
+    except OSError as exc:
+        Path(tmp).unlink(missing_ok=True)
+        raise FileError(f"cannot write {target}: {_reason(exc)}", str(target)) from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

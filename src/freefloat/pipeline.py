@@ -47,6 +47,7 @@ from .problem.constraints import (
     scenario_constraints,
 )
 from .problem.constraints.clearance import clearance_at
+from .problem.limits import check_samples
 from .problem.objectives import DEFAULT_OBJECTIVE, objective_named
 from .problem.residual import Problem
 from .problem.scenario import Scenario
@@ -80,7 +81,8 @@ def plan(
         scenario: what to plan.
         options: solver settings; the scenario's ``max_deviation`` overrides the default
             bracket.
-        samples: number of equally spaced samples in [0, T] (>= 2).
+        samples: number of equally spaced samples in [0, T] (2 to
+            :data:`~freefloat.problem.limits.MAX_SAMPLES`).
         constraints: path constraints to honour (solvers and verification); default joint
             position and velocity limits.
         objective: which path is best among those that reach the goal (a name of
@@ -93,6 +95,7 @@ def plan(
             shortest duration at which the path found without them respects them.
         EffortLimitError: the same for the effort limits.
     """
+    check_samples(samples)
     options = options or SolveOptions()
     if scenario.max_deviation is not None:
         options = SolveOptions(**{**asdict(options), "max_deviation": scenario.max_deviation})

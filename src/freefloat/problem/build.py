@@ -20,6 +20,7 @@ from ..physics.momentum import MomentumMap, cached_planar_axis
 from ..physics.planar_map import cached_identify
 from ..robot.model import Robot
 from .bounds import cached_planar_bounds
+from .limits import check_duration, check_extra, check_joint_count
 from .paths import PathFamily
 from .residual import Problem, wrap_angle
 from .scenario import Scenario
@@ -88,6 +89,8 @@ def build_problem(
 
     Raises:
         InputError: non-finite numbers, a non-positive duration, a bad quaternion.
+        InputLimitError: a duration, a joint count or a count of free coefficients beyond
+            freefloat's limits (:mod:`freefloat.problem.limits`).
         JointLimitError: start or goal outside the joint limits.
         InfeasibleError: planar request outside the reachable interval, or a goal attitude a
             planar system cannot reach (it only turns about its z axis).
@@ -98,6 +101,8 @@ def build_problem(
         _check_finite(name, arr)
     if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0.0):
         raise InputError(f"duration must be a finite number of seconds > 0, got {duration!r}")
+    check_duration(duration)
+    check_joint_count(robot.n, repr(robot.name))
     quats = []
     for name, quat in (("start attitude", start_quaternion), ("goal attitude", goal_quaternion)):
         quat = np.asarray(quat, dtype=float)
@@ -128,6 +133,8 @@ def build_problem(
         counts = [int(c) for c in extra]
     if any(c < 0 for c in counts):
         raise InputError(f"free coefficient counts must be >= 0, got {counts}")
+    for name, count in zip(robot.joint_names, counts, strict=False):
+        check_extra(count, f"free coefficients of {name!r}")
     family = PathFamily.with_extra(start, goal, counts)
 
     bounds = yaw_change = None

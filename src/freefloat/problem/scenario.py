@@ -65,12 +65,29 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import FreeFloatError, InputError, ScenarioError, UnknownNameError
-from ..files import atomic_write_text
+from ..errors import (
+    FreeFloatError,
+    InputError,
+    InputLimitError,
+    ScenarioError,
+    UnknownNameError,
+    excerpt,
+)
+from ..files import absolute_path, atomic_write_text, read_text_file
 from ..physics.attitude import quat_from_zyx, quat_to_matrix
 from ..robot.collision import Obstacle
-from ..robot.model import Robot, load_robot, resolve_robot, robots_dir
+from ..robot.model import MAX_URDF_BYTES, Robot, load_robot, resolve_robot, robots_dir
 from ..robot.payload import Payload, attach_payload
+from .limits import (
+    MAX_ANGLE_DEG,
+    MAX_LENGTH_M,
+    MAX_MAGNITUDE,
+    MAX_SCENARIO_BYTES,
+    check_duration,
+    check_extra,
+    check_joint_count,
+    check_number,
+)
 from .objectives.registry import DEFAULT_OBJECTIVE, OBJECTIVES
 
 if TYPE_CHECKING:
@@ -120,18 +137,30 @@ def _check_keys(table: Mapping[str, Any], valid: tuple[str, ...], where: str) ->
             raise UnknownNameError(f"key in {where}", key, valid)
 
 
-def _number(value: Any, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ScenarioError(f"{where} must be a number, got {value!r}")
-    if not math.isfinite(value):
-        raise ScenarioError(f"{where} must be finite, got {value!r}")
-    return float(value)
+def _scenario_errors(check: Any, *args: Any, **kwargs: Any) -> Any:
+    """``check(*args, **kwargs)`` with its plain input errors as :class:`ScenarioError`.
+
+    Limit errors (:class:`InputLimitError`) pass as they are: they carry the limit.
+    """
+    try:
+        return check(*args, **kwargs)
+    except InputLimitError:
+        raise
+    except InputError as exc:
+        raise ScenarioError(str(exc)) from None
 
 
-def _numbers(value: Any, count: int, where: str) -> np.ndarray:
+def _number(value: Any, where: str, limit: float = MAX_MAGNITUDE, unit: str = "") -> float:
+    """A finite number of magnitude at most ``limit`` (README, "Limits")."""
+    return float(_scenario_errors(check_number, value, where, limit, unit))
+
+
+def _numbers(
+    value: Any, count: int, where: str, limit: float = MAX_MAGNITUDE, unit: str = ""
+) -> np.ndarray:
     if not isinstance(value, list) or len(value) != count:
-        raise ScenarioError(f"{where} must be a list of {count} numbers, got {value!r}")
-    return np.array([_number(v, f"{where}[{i}]") for i, v in enumerate(value)])
+        raise ScenarioError(f"{where} must be a list of {count} numbers, got {excerpt(value)}")
+    return np.array([_number(v, f"{where}[{i}]", limit, unit) for i, v in enumerate(value)])
 
 
 @dataclass(frozen=True)
@@ -192,7 +221,7 @@ class Scenario:
             UnknownNameError: an unknown key, joint or frame name (lists the valid ones).
             ModelError: the robot's URDF cannot be loaded.
         """
-        path = Path(path).expanduser().resolve()
+        path = absolute_path(path, "scenario", ScenarioError)
         data = read_toml(path, "scenario")
         try:
             return cls.from_dict(data, relative_to=path.parent, source=path)
@@ -229,14 +258,12 @@ class Scenario:
         else:
             raise ScenarioError(
                 "robot must be a shipped robot name, a URDF path or a [robot] table, got "
-                f"{data['robot']!r}"
+                f"{excerpt(data['robot'])}"
             )
-        duration = _number(data["duration"], "duration")
-        if duration <= 0.0:
-            raise ScenarioError(f"duration must be > 0 s, got {duration:g}")
+        duration = _scenario_errors(check_duration, data["duration"])
         end_effector = data.get("end_effector")
         if end_effector is not None and not isinstance(end_effector, str):
-            raise ScenarioError(f"end_effector must be a frame name, got {end_effector!r}")
+            raise ScenarioError(f"end_effector must be a frame name, got {excerpt(end_effector)}")
         payload = _payload(data.get("payload"))
         if payload is not None:
             urdf, robot_text = _with_payload(urdf, robot_text, end_effector, payload)
@@ -245,6 +272,7 @@ class Scenario:
             robot = known
         else:
             robot = load_robot(urdf, end_effector, text=robot_text)
+        check_joint_count(robot.n, repr(robot.name))
         safety = _safety(data.get("safety"), data.get("obstacles"), relative_to)
 
         states: list[tuple[dict[str, float], np.ndarray]] = []
@@ -265,7 +293,11 @@ class Scenario:
                 quat = quat / np.linalg.norm(quat)
             else:
                 zyx = _numbers(
-                    table.get("base_zyx_deg", [0.0, 0.0, 0.0]), 3, f"[{name}] base_zyx_deg"
+                    table.get("base_zyx_deg", [0.0, 0.0, 0.0]),
+                    3,
+                    f"[{name}] base_zyx_deg",
+                    MAX_ANGLE_DEG,
+                    "deg",
                 )
                 quat = quat_from_zyx(*np.radians(zyx))
             if name == "goal" and "end_effector_xyz" in table:
@@ -288,14 +320,14 @@ class Scenario:
             extra = {}
             for joint_name, count in path_table["extra"].items():
                 robot.joint(joint_name)
-                if isinstance(count, bool) or not isinstance(count, int) or count < 0:
-                    raise ScenarioError(
-                        f"[path] extra for {joint_name!r} must be an integer >= 0, got {count!r}"
-                    )
-                extra[joint_name] = count
+                extra[joint_name] = _scenario_errors(
+                    check_extra, count, f"[path] extra for {joint_name!r}"
+                )
         max_deviation = None
         if "max_deviation_deg" in path_table:
-            value = _number(path_table["max_deviation_deg"], "[path] max_deviation_deg")
+            value = _number(
+                path_table["max_deviation_deg"], "[path] max_deviation_deg", MAX_ANGLE_DEG, "deg"
+            )
             if value <= 0.0:
                 raise ScenarioError(f"[path] max_deviation_deg must be > 0, got {value:g}")
             max_deviation = math.radians(value)
@@ -303,19 +335,17 @@ class Scenario:
         allow_full_turns = path_table.get("allow_full_turns", False)
         if not isinstance(allow_full_turns, bool):
             raise ScenarioError(
-                f"[path] allow_full_turns must be true or false, got {allow_full_turns!r}"
+                f"[path] allow_full_turns must be true or false, got {excerpt(allow_full_turns)}"
             )
         objective = path_table.get("objective", DEFAULT_OBJECTIVE)
         if not isinstance(objective, str) or objective not in OBJECTIVES:
-            shown = repr(objective)
-            shown = shown if len(shown) <= 40 else shown[:40] + "..."
             raise ScenarioError(
-                f"[path] objective must be one of {', '.join(OBJECTIVES)}, got {shown}"
+                f"[path] objective must be one of {', '.join(OBJECTIVES)}, got {excerpt(objective)}"
             )
         raise_freedom = path_table.get("raise_freedom", True)
         if not isinstance(raise_freedom, bool):
             raise ScenarioError(
-                f"[path] raise_freedom must be true or false, got {raise_freedom!r}"
+                f"[path] raise_freedom must be true or false, got {excerpt(raise_freedom)}"
             )
         return cls(
             robot=robot,
@@ -397,17 +427,23 @@ _ROBOT_KEYS = (
 def read_toml(path: Path, what: str) -> dict[str, Any]:
     """The parsed tables of a TOML file; ``what`` names it in messages ("scenario"...).
 
+    At most :data:`~freefloat.problem.limits.MAX_SCENARIO_BYTES` are read, from a regular
+    file only.
+
     Raises:
-        ScenarioError: missing, unreadable or not TOML.
+        ScenarioError: missing, unreadable, not a regular file, too large, or not TOML.
     """
+    text = read_text_file(path, what, MAX_SCENARIO_BYTES, ScenarioError)
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ScenarioError(f"{what} file not found: {path}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(f"cannot read {what} {path}: {exc}") from None
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: invalid TOML ({exc})") from None
+        raise ScenarioError(f"{path}: invalid TOML ({excerpt(str(exc), 200)[1:-1]})") from None
+    except RecursionError:
+        raise ScenarioError(
+            f"{path}: arrays or tables nested too deeply for freefloat to read"
+        ) from None
+    except ValueError as exc:  # an integer of more digits than Python converts
+        raise ScenarioError(f"{path}: invalid TOML ({excerpt(str(exc), 200)[1:-1]})") from None
 
 
 def servicer_cache_dir() -> Path:
@@ -428,7 +464,11 @@ def _triple(
     default: list[float] | None = None,
     where: str = "[robot]",
 ) -> Any:
-    return tuple(float(x) for x in _numbers(table.get(key, default), 3, f"{where} {key}"))
+    limit, unit = (MAX_ANGLE_DEG, "deg") if key.endswith("_deg") else (MAX_LENGTH_M, "m")
+    if key.endswith("inertia"):
+        limit, unit = MAX_MAGNITUDE, "kg m^2"
+    values = _numbers(table.get(key, default), 3, f"{where} {key}", limit, unit)
+    return tuple(float(x) for x in values)
 
 
 def _inline_servicer(table: Mapping[str, Any]) -> tuple[Path, str | None, ServicerSpec]:
@@ -444,13 +484,15 @@ def _inline_servicer(table: Mapping[str, Any]) -> tuple[Path, str | None, Servic
         if key not in table:
             raise ScenarioError(f"[robot] needs {key!r} (required: arm, base_mass, base_size)")
     if not isinstance(table["arm"], str):
-        raise ScenarioError(f"[robot] arm must be an arm name or a URDF path, got {table['arm']!r}")
+        raise ScenarioError(
+            f"[robot] arm must be an arm name or a URDF path, got {excerpt(table['arm'])}"
+        )
     lock = table.get("lock", [])
     if not isinstance(lock, list) or not all(isinstance(x, str) for x in lock):
         raise ScenarioError("[robot] lock must be a list of joint names")
     spec = ServicerSpec(
         arm=table["arm"],
-        base_mass=_number(table["base_mass"], "[robot] base_mass"),
+        base_mass=_number(table["base_mass"], "[robot] base_mass", MAX_MAGNITUDE, "kg"),
         base_size=_triple(table, "base_size"),
         base_inertia=_triple(table, "base_inertia") if "base_inertia" in table else None,
         mount=_triple(table, "mount", [0.0, 0.0, 0.0]),
@@ -475,7 +517,8 @@ def _joint_table(robot: Robot, table: Mapping[str, Any], name: str) -> dict[str,
     joints: dict[str, float] = {}
     for joint_name, value in table["joints"].items():
         joint = robot.joint(joint_name)
-        number = _number(value, f"[{name}] joint {joint_name!r}")
+        limit, unit = (MAX_ANGLE_DEG, "deg") if joint.angular else (MAX_LENGTH_M, "m")
+        number = _number(value, f"[{name}] joint {joint_name!r}", limit, unit)
         joints[joint_name] = math.radians(number) if joint.angular else number
     robot.vector(joints, f"[{name}] joints")  # every joint given
     return joints
@@ -496,10 +539,11 @@ class CartesianGoal:
 
 def _cartesian_goal(table: Mapping[str, Any]) -> CartesianGoal:
     """The Cartesian goal of ``end_effector_xyz`` (m) and optional ``end_effector_rpy_deg``."""
-    xyz = _numbers(table["end_effector_xyz"], 3, "[goal] end_effector_xyz")
+    xyz = _numbers(table["end_effector_xyz"], 3, "[goal] end_effector_xyz", MAX_LENGTH_M, "m")
     rotation = None
     if "end_effector_rpy_deg" in table:
-        rpy = np.radians(_numbers(table["end_effector_rpy_deg"], 3, "[goal] end_effector_rpy_deg"))
+        where = "[goal] end_effector_rpy_deg"
+        rpy = np.radians(_numbers(table["end_effector_rpy_deg"], 3, where, MAX_ANGLE_DEG, "deg"))
         rotation = quat_to_matrix(quat_from_zyx(rpy[2], rpy[1], rpy[0]))
     return CartesianGoal(xyz, rotation)
 
@@ -529,13 +573,13 @@ def _safety(table: Any, obstacles: Any, relative_to: Path | None) -> Safety:
     if not isinstance(table, Mapping):
         raise ScenarioError("[safety] must be a table")
     _check_keys(table, _SAFETY_KEYS, "[safety]")
-    margin = _number(table.get("margin_m", 0.01), "[safety] margin_m")
+    margin = _number(table.get("margin_m", 0.01), "[safety] margin_m", MAX_LENGTH_M, "m")
     if margin < 0.0:
         raise ScenarioError(f"[safety] margin_m must be >= 0 m, got {margin:g}")
     srdf = None
     if "srdf" in table:
         if not isinstance(table["srdf"], str):
-            raise ScenarioError(f"[safety] srdf must be a file path, got {table['srdf']!r}")
+            raise ScenarioError(f"[safety] srdf must be a file path, got {excerpt(table['srdf'])}")
         srdf = Path(table["srdf"]).expanduser()
         if not srdf.is_absolute() and relative_to is not None:
             srdf = relative_to / srdf
@@ -543,7 +587,7 @@ def _safety(table: Any, obstacles: Any, relative_to: Path | None) -> Safety:
             raise ScenarioError(f"[safety] srdf file not found: {srdf}")
     check = table.get("check", True)
     if not isinstance(check, bool):
-        raise ScenarioError(f"[safety] check must be true or false, got {check!r}")
+        raise ScenarioError(f"[safety] check must be true or false, got {excerpt(check)}")
     items = [] if obstacles is None else obstacles
     if not isinstance(items, list) or not all(isinstance(o, Mapping) for o in items):
         raise ScenarioError("[[obstacles]] must be a list of tables")
@@ -563,9 +607,10 @@ def _safety(table: Any, obstacles: Any, relative_to: Path | None) -> Safety:
         shape = shapes[0]
         raw = item[shape]
         if shape == "sphere":
-            size = (_number(raw, f"{where} sphere"),)
+            size = (_number(raw, f"{where} sphere", MAX_LENGTH_M, "m"),)
         else:
-            size = tuple(_numbers(raw, 3 if shape == "box" else 2, f"{where} {shape}"))
+            count = 3 if shape == "box" else 2
+            size = tuple(_numbers(raw, count, f"{where} {shape}", MAX_LENGTH_M, "m"))
         try:
             parsed.append(
                 Obstacle(
@@ -580,7 +625,7 @@ def _safety(table: Any, obstacles: Any, relative_to: Path | None) -> Safety:
             raise ScenarioError(str(exc)) from None
     names = [o.name for o in parsed]
     if len(set(names)) != len(names):
-        raise ScenarioError(f"[[obstacles]] names must be unique, got {names}")
+        raise ScenarioError(f"[[obstacles]] names must be unique, got {excerpt(names)}")
     return Safety(margin, srdf, tuple(parsed), check)
 
 
@@ -601,7 +646,7 @@ def _payload(table: Any) -> Payload | None:
         )
     try:
         return Payload(
-            mass=_number(table["mass"], "[payload] mass"),
+            mass=_number(table["mass"], "[payload] mass", MAX_MAGNITUDE, "kg"),
             com_xyz=_triple(table, "com_xyz", [0.0, 0.0, 0.0], "[payload]"),
             inertia=tuple(float(v) for v in _numbers(table["inertia"], 6, "[payload] inertia")),  # type: ignore[arg-type]
             box=_triple(table, "box", None, "[payload]") if "box" in table else None,
@@ -615,10 +660,7 @@ def _with_payload(
 ) -> tuple[Path, str]:
     """The cache path and text of the robot's URDF with the payload attached."""
     if text is None:
-        try:
-            text = Path(urdf).read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ScenarioError(f"cannot read URDF {urdf}: {exc}") from None
+        text = read_text_file(urdf, "URDF", MAX_URDF_BYTES, ScenarioError)
     link = end_effector or load_robot(urdf, None, text=text).end_effector
     decorated = attach_payload(text, link, payload, Path(urdf).resolve().parent)
     digest = hashlib.sha256(decorated.encode()).hexdigest()[:16]

@@ -27,8 +27,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ModelError, UnknownNameError
-from ..files import atomic_write_text
-from .model import example_robot_data_dir
+from ..files import absolute_path, atomic_write_text, read_text_file
+from .model import MAX_URDF_BYTES, example_robot_data_dir
 from .payload import PAYLOAD_LINK, Payload
 
 LOGGER = logging.getLogger(__name__)
@@ -69,9 +69,8 @@ def arm_urdf(arm: str | Path) -> Path:
     path = Path(text).expanduser()
     if path.suffix.lower() != ".urdf" and not path.exists():
         raise UnknownNameError("arm", text, [*ARMS, "or a path to a .urdf file"])
-    if not path.is_file():
-        raise ModelError(f"arm URDF not found: {path}")
-    return path.resolve()
+    read_text_file(path, "arm URDF", MAX_URDF_BYTES, ModelError)  # a regular file, not huge
+    return absolute_path(path, "arm URDF", ModelError)
 
 
 @dataclass(frozen=True)

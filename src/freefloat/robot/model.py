@@ -25,9 +25,11 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelError, UnknownNameError
-from .urdf_checks import check_urdf_xml
+from ..files import absolute_path, read_text_file
+from .urdf_checks import check_urdf_xml, parser_messages
 
 __all__ = [
+    "MAX_URDF_BYTES",
     "Joint",
     "Robot",
     "example_robot_data_dir",
@@ -36,6 +38,10 @@ __all__ = [
     "robots_dir",
     "shipped_robots",
 ]
+
+#: Largest URDF file read (bytes); meshes are separate files, so a URDF is text of a few
+#: hundred kilobytes at most (the composed Panda servicer: 20 kB).
+MAX_URDF_BYTES = 50_000_000
 
 #: Pinocchio joint model short names, by the kind of joint freefloat exposes.
 _KINDS = {
@@ -241,7 +247,7 @@ def resolve_robot(name_or_path: str | Path, relative_to: Path | None = None) -> 
     path = Path(text).expanduser()
     if not path.is_absolute() and relative_to is not None:
         path = relative_to / path
-    return path.resolve()
+    return absolute_path(path, "URDF", ModelError)
 
 
 _TOOL_NAME = re.compile(r"tcp|end_?effector|eef|tool|(^|_)ee($|_)", re.IGNORECASE)
@@ -290,22 +296,24 @@ def load_robot(
             masses or inertias, or no movable joint.
         UnknownNameError: ``end_effector`` is not a frame of the robot.
     """
-    path = Path(urdf).expanduser().resolve()
+    path = absolute_path(urdf, "URDF", ModelError)
     if text is None:
-        if not path.is_file():
-            raise ModelError(f"URDF file not found: {path}")
-        try:
-            text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ModelError(f"cannot read URDF {path}: {exc}") from None
+        text = read_text_file(path, "URDF", MAX_URDF_BYTES, ModelError)
     try:
         root_link, links = check_urdf_xml(text)
     except ModelError as exc:
         raise ModelError(str(exc), urdf=str(path)) from None
-    try:
-        model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
-    except (RuntimeError, ValueError) as exc:
-        raise ModelError(f"Pinocchio cannot parse it ({exc})", urdf=str(path)) from None
+    with parser_messages() as messages:
+        try:
+            model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+        except (RuntimeError, ValueError) as exc:
+            error = exc
+        else:
+            error = None
+    if error is not None:
+        said = next((m for m in messages if m.startswith("Error:")), "")
+        said = f"; urdfdom: {said.removeprefix('Error:').strip()}" if said else ""
+        raise ModelError(f"Pinocchio cannot parse it ({error}{said})", urdf=str(path)) from None
 
     model.gravity = pin.Motion.Zero()  # free flight: no gravity acts on the system
     joints = []

@@ -2,19 +2,27 @@
 
 A free floater needs one root link (the spacecraft), a tree of revolute, continuous,
 prismatic or fixed joints, and numbers that parse (masses in kg, lengths in m, limits in rad
-or m).
+or m). Refused by name: closed loops (URDF cannot express one: a link with two parent joints,
+or links that are each other's ancestors), ``<mimic>`` joints (freefloat plans every movable
+joint on its own path), a revolute or prismatic joint without ``<limit>``, a zero axis.
 """
 
 from __future__ import annotations
 
 import math
+import os
+import sys
+import tempfile
 import xml.etree.ElementTree as ET
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 import numpy as np
 
 from ..errors import ModelError, UnknownNameError
+from ..progress import LOGGER
 
-__all__ = ["check_urdf_xml"]
+__all__ = ["check_urdf_xml", "parser_messages"]
 
 _URDF_JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
 
@@ -32,6 +40,50 @@ def _float_attr(element: ET.Element, attr: str, what: str, default: float | None
     if not math.isfinite(value):
         raise ModelError(f"{what} {attr}={raw!r} is not a finite number")
     return value
+
+
+_LIMIT_UNITS = {"revolute": "rad, N m, rad/s", "prismatic": "m, N, m/s"}
+
+
+def _check_movable_joint(joint: ET.Element, name: str, kind: str) -> None:
+    """Refuse by name what urdfdom would refuse with parser noise, or Pinocchio misread.
+
+    A ``<mimic>`` joint (Pinocchio would plan it as independent), a revolute or prismatic
+    joint without ``<limit>``, a ``<limit>`` without effort or velocity, a zero or malformed
+    axis.
+    """
+    mimic = joint.find("mimic")
+    if mimic is not None:
+        raise ModelError(
+            f"joint {name!r} mimics {mimic.get('joint', '?')!r}: mimic joints are not supported "
+            "(freefloat moves every joint on its own path); remove the <mimic> element, or "
+            "make the joint fixed"
+        )
+    limit = joint.find("limit")
+    if limit is None and kind in _LIMIT_UNITS:
+        hint = ", or make it continuous" if kind == "revolute" else ""
+        raise ModelError(
+            f"joint {name!r} ({kind}) has no <limit>; it needs <limit lower=... upper=... "
+            f"effort=... velocity=.../> ({_LIMIT_UNITS[kind]}){hint}"
+        )
+    if limit is not None:
+        for attr in ("effort", "velocity"):
+            _float_attr(limit, attr, f"joint {name!r} <limit>")
+        for attr in ("lower", "upper"):
+            _float_attr(limit, attr, f"joint {name!r} <limit>", 0.0)
+    axis = joint.find("axis")
+    raw = "1 0 0" if axis is None else axis.get("xyz", "1 0 0")
+    try:
+        xyz = [float(v) for v in raw.split()]
+    except ValueError:
+        xyz = []
+    if len(xyz) != 3 or not all(math.isfinite(v) for v in xyz):
+        raise ModelError(f"joint {name!r} <axis xyz={raw[:40]!r}> is not three finite numbers")
+    if max(abs(v) for v in xyz) < 1e-12:
+        raise ModelError(
+            f"joint {name!r} has a zero axis (xyz={raw[:40]!r}); give the direction it turns "
+            "or slides along"
+        )
 
 
 def check_urdf_xml(text: str) -> tuple[str, list[str]]:
@@ -86,6 +138,8 @@ def check_urdf_xml(text: str) -> tuple[str, list[str]]:
             raise ModelError(
                 f"joint {jname!r} has type {jtype!r}; supported: {', '.join(_URDF_JOINT_TYPES)}"
             )
+        if jtype != "fixed":
+            _check_movable_joint(joint, jname, jtype)
         parent_el, child_el = joint.find("parent"), joint.find("child")
         if parent_el is None or child_el is None:
             raise ModelError(f"joint {jname!r} needs a <parent> and a <child>")
@@ -116,3 +170,30 @@ def check_urdf_xml(text: str) -> tuple[str, list[str]]:
             seen.add(name)
             name = parent_of[name]
     return roots[0], links
+
+
+@contextmanager
+def parser_messages() -> Iterator[list[str]]:
+    """Collect what C++ code (urdfdom) prints on file descriptor 2 instead of showing it.
+
+    The lines are in the yielded list after the block; they are logged at DEBUG level (and an
+    error message quotes the first). Without a usable descriptor 2 nothing is captured.
+    """
+    lines: list[str] = []
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError, AttributeError):
+        yield lines
+        return
+    with tempfile.TemporaryFile() as sink:
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield lines
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            sink.seek(0)
+            lines += sink.read(100_000).decode("utf-8", "replace").splitlines()
+            for line in lines:
+                LOGGER.debug("URDF parser: %s", line)

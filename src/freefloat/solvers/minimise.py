@@ -32,7 +32,7 @@ from .search import SearchResult
 __all__ = ["LEVELS", "MIN_GAIN", "Level", "Minimised", "minimise"]
 
 #: Free coefficients per joint tried in turn by automatic freedom.
-LEVELS = (2, 4, 6, 8)
+LEVELS = (2, 4, 6)
 #: A level must lower the objective by this fraction of its value to try the next one.
 MIN_GAIN = 0.005
 #: Largest rounding bound of a level's end conditions (relative to the joint travel): beyond

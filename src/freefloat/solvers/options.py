@@ -7,9 +7,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import InputLimitError
+
 __all__ = [
     "DEFAULT_TOLERANCE",
     "POLISH",
+    "TOLERANCE_RANGE_RAD",
     "Attempt",
     "Root",
     "Solution",
@@ -36,6 +39,13 @@ class Strategy(str, enum.Enum):
 
 #: Default attitude tolerance (rad).
 DEFAULT_TOLERANCE = 1e-9
+#: Accepted attitude tolerances (rad). Below 1e-11 no plan can be certified: a solution is
+#: accepted only when the attitude integration's own error estimate is below a tenth of the
+#: tolerance, and the step control aims at 1e-12 rad (``INTEGRATION_TOLERANCE``), near the
+#: round-off floor of the sixth-order Magnus steps in double precision (about 1e-13 rad over
+#: thousands of steps). Above 1e-7 a plan could not pass verification, whose independent
+#: attitude check holds every plan to 1e-7 rad.
+TOLERANCE_RANGE_RAD = (1e-11, 1e-7)
 #: Iterations continue until the residual is this fraction of the tolerance (1e-13 rad by
 #: default): with exact Jacobians the last step costs one evaluation and buys three digits.
 POLISH = 1e-4
@@ -69,6 +79,11 @@ class SolveOptions:
     keep_solutions: int = 1
     max_evaluations: int = 4000
     strategy: Strategy | None = None
+
+    def __post_init__(self) -> None:
+        low, high = TOLERANCE_RANGE_RAD
+        if not low <= self.tolerance <= high:  # NaN fails too
+            raise InputLimitError("tolerance", self.tolerance, low, high, "rad")
 
 
 @dataclass(frozen=True)

@@ -298,8 +298,12 @@ def verify_plan(
     if not converged:
         # The steps allowed do not resolve this motion (a long, fast or sensitive one): the
         # difference bounds nothing, and the replay cannot tell its error from the value.
-        att_estimate = max(att_estimate, replay_att)
-        joint_estimate = max(joint_estimate, replay_joint)
+        # A level that blew up (a long chain's open-loop replay diverges) differs by inf: the
+        # value itself is then the bound, so the file holds finite numbers.
+        att_estimate = max(att_estimate, replay_att) if math.isfinite(att_estimate) else replay_att
+        joint_estimate = (
+            max(joint_estimate, replay_joint) if math.isfinite(joint_estimate) else replay_joint
+        )
         replay_detail += ", not converged: no verdict"
 
     boundary = boundary_errors(coeffs[0], start, goal, duration)

@@ -6,7 +6,7 @@ scenarios (``[path] objective``), the command line (``--objective``) and plans n
 
 from __future__ import annotations
 
-from ...errors import InputError
+from ...errors import InputError, excerpt
 from .base import Objective
 from .min_acceleration import MinAcceleration
 from .min_effort import MinEffort
@@ -31,6 +31,7 @@ def objective_named(name: str) -> Objective:
         InputError: the name is not one of :data:`OBJECTIVES`.
     """
     if name not in OBJECTIVES:
-        shown = name if len(name) <= 40 else name[:40] + "..."
-        raise InputError(f"unknown objective {shown!r}; valid objectives: " + ", ".join(OBJECTIVES))
+        raise InputError(
+            f"unknown objective {excerpt(name)}; valid objectives: " + ", ".join(OBJECTIVES)
+        )
     return OBJECTIVES[name]()
