@@ -233,7 +233,10 @@ def plan_from_solution(
         return unverified
     clock = time.perf_counter()
     verification = verify_plan(
-        unverified, robot, constraints=None if constraints is None else list(constraints)
+        unverified,
+        robot,
+        constraints=None if constraints is None else list(constraints),
+        recompute=False,  # the numbers were just computed by the same functions
     )
     if not verification.passed:
         raise VerificationError(verification.failures)

@@ -51,7 +51,7 @@ MAX_JOINTS = 64
 #: Most samples in a plan.
 MAX_SAMPLES = 1_000_000
 #: Most roots in the solver report.
-MAX_SOLUTIONS = 1000
+MAX_SOLUTIONS = 100
 #: Largest integration step count recorded by the solver (it uses at most 4096).
 MAX_INTEGRATION_STEPS = 1 << 16
 #: Largest size of one polynomial term ``|c_k| T^k`` (rad or m): a million radians of travel.
@@ -59,7 +59,7 @@ MAX_TERM = 1e6
 #: Largest magnitude of any number in a plan file.
 MAX_MAGNITUDE = 1e100
 #: How far from 1 the norm of a stated quaternion may be.
-UNIT_NORM_TOLERANCE = 1e-9
+UNIT_NORM_TOLERANCE = 1e-10
 
 
 def excerpt(value: Any, limit: int = 40) -> str:
