@@ -305,3 +305,35 @@ def _check_plan_values(data: Any) -> None:
         values = _per_joint(_key(root, "free_parameters", where[:-1]), where, joints)
         for name, degree in zip(joints, degrees, strict=True):
             _vector(values[name], [*where, name], degree - 5)
+
+    verification = data.get("verification") if data.get("format") != "freefloat.plan/1" else None
+    if isinstance(verification, Mapping) and isinstance(verification.get("checks"), list):
+        _check_flags(verification)
+
+
+def _check_flags(verification: Mapping[str, Any]) -> None:
+    """The stored ``passed`` flags must state what the stored figures say."""
+    verdicts = []
+    for i, check in enumerate(verification["checks"]):
+        where: list[str | int] = ["verification", "checks", i]
+        value = _number(_key(check, "value", where), [*where, "value"])
+        tolerance = _number(_key(check, "tolerance", where), [*where, "tolerance"])
+        estimate = check.get("error_estimate", 0.0)
+        estimate = _number(estimate, [*where, "error_estimate"])
+        if tolerance < 0 or estimate < 0:
+            raise _RefusalError(_field(where), "has a negative tolerance or error estimate")
+        verdict = value <= tolerance + estimate
+        stated = check.get("passed", verdict)
+        if stated is not verdict:
+            raise _RefusalError(
+                _field([*where, "passed"]),
+                f"is {excerpt(stated)}, but the value {value:.3g} is "
+                f"{'within' if verdict else 'beyond'} tolerance + estimate "
+                f"{tolerance + estimate:.3g}",
+            )
+        verdicts.append(verdict)
+    stated = verification.get("passed")
+    if stated is not (bool(verdicts) and all(verdicts)):
+        raise _RefusalError(
+            "verification.passed", f"is {excerpt(stated)}, but its checks say otherwise"
+        )
