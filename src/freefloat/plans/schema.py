@@ -77,7 +77,16 @@ def _describe(error: Any) -> str:
         return f"{where}: expected {' or '.join(map(repr, valid))}, got {got}"
     if kind in ("minItems", "maxItems"):
         return f"{where}: expected {error.validator_value} entries or {kind[:3]}, got {got}"
-    return f"{where}: {error.message}"
+    bounds = {
+        "minimum": "less than the minimum of",
+        "maximum": "greater than the maximum of",
+        "exclusiveMinimum": "at most the exclusive minimum of",
+        "exclusiveMaximum": "at least the exclusive maximum of",
+    }
+    if kind in bounds:
+        return f"{where}: {got} is {bounds[kind]} {error.validator_value}"
+    message = str(error.message)
+    return f"{where}: {message if len(message) <= 120 else message[:117] + '...'}"
 
 
 def schema_errors(document: Any, name: str = "plan") -> list[str]:
