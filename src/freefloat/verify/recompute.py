@@ -108,7 +108,7 @@ def _compare(
     if not bad.any():
         return
     ratio = np.where(bad, np.nan_to_num(diff, nan=np.inf) / np.maximum(tol, 1e-300), -1.0)
-    index = np.unravel_index(int(np.argmax(ratio)), diff.shape)
+    index = tuple(int(i) for i in np.unravel_index(int(np.argmax(ratio)), diff.shape))
     raise PlanMismatchError(
         field, float(diff[index]), float(tol[index]), unit, _where(index, times, columns)
     )
@@ -128,7 +128,7 @@ def _where(index: tuple[int, ...], times: np.ndarray | None, columns: Sequence[s
 
 def _compare_terms(
     field: str,
-    stored: Sequence[float],
+    stored: Sequence[float] | np.ndarray,
     coefficients: Sequence[float] | np.ndarray,
     first: int,
     duration: float,
@@ -157,7 +157,8 @@ def _rotation_angles(stored: np.ndarray, recomputed: np.ndarray) -> np.ndarray:
     """Per row, the angle (rad) between two attitudes, and any difference in norm."""
     angles = np.array([geodesic_angle(a, b) for a, b in zip(stored, recomputed, strict=True)])
     norms = np.abs(np.linalg.norm(stored, axis=-1) - np.linalg.norm(recomputed, axis=-1))
-    return angles + norms
+    out: np.ndarray = angles + norms
+    return out
 
 
 def problem_from_plan(plan: Plan, robot: Robot) -> tuple[Problem, np.ndarray]:
@@ -192,7 +193,9 @@ def problem_from_plan(plan: Plan, robot: Robot) -> tuple[Problem, np.ndarray]:
         raise PlanFileError(f"the plan's request is not a valid problem: {exc}") from None
     if plan.solver.integration_steps > 0:
         problem = problem.with_steps(plan.solver.integration_steps)
-    beta = problem.family.beta_from_time_coefficients([c[6:] for c in coefficients], plan.duration)
+    beta: np.ndarray = problem.family.beta_from_time_coefficients(
+        [c[6:] for c in coefficients], plan.duration
+    )
     return problem, beta
 
 
@@ -229,10 +232,10 @@ def check_plan_numbers(plan: Plan, robot: Robot) -> Problem:
     _compare("request.start_joints", plan.request.start_joints, start, joint_tol, unit, None, names)
     _compare("request.goal_joints", plan.request.goal_joints, goal, joint_tol, unit, None, names)
     problem, beta = problem_from_plan(plan, robot)
-    for name, c, again, scale in zip(
+    for name, c, rebuilt, scale in zip(
         names, stored, problem.family.time_coefficients(beta, T), term_scale, strict=True
     ):
-        _compare_terms(f"path.coefficients.{name}", c, again, 0, T, scale, unit)
+        _compare_terms(f"path.coefficients.{name}", c, rebuilt, 0, T, scale, unit)
 
     # The base report, with the attitude integration's own error estimate.
     estimate = problem.integration_error(beta)
