@@ -83,19 +83,28 @@ def test_verify_cli_fails_a_tampered_free_parameter(tmp_path, worked_plan, capsy
     def edit(data):
         data["path"]["coefficients"]["q2"][6] *= 1.001
 
-    assert main(["verify", str(_tampered(tmp_path, worked_plan, edit))]) == 1
-    out = capsys.readouterr().out
-    assert "attitude_independent [rad]" in out and "FAILED" in out
-    assert "boundary [1]" in out
+    path = _tampered(tmp_path, worked_plan, edit)
+    assert main(["verify", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("freefloat: error: plan field 'free_parameters.q2' disagrees"), err
+    # Consistent free parameters too: the checks alone fail the changed path.
+    data = json.loads(path.read_text())
+    data["free_parameters"]["q2"][0] = data["path"]["coefficients"]["q2"][6]
+    verdict = ff.verify_plan(ff.Plan.from_dict(data), recompute=False)
+    assert {"attitude_independent", "boundary"} <= set(verdict.failures)
 
 
 def test_verify_cli_fails_tampered_samples(tmp_path, worked_plan, capsys):
     def edit(data):
         data["samples"]["base_angular_velocity"][50][2] += 1e-3
 
-    assert main(["verify", str(_tampered(tmp_path, worked_plan, edit))]) == 1
-    out = capsys.readouterr().out
-    assert next(line for line in out.splitlines() if "momentum [" in line).endswith("FAILED")
+    path = _tampered(tmp_path, worked_plan, edit)
+    assert main(["verify", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "plan field 'samples.base_angular_velocity' disagrees" in err
+    assert "at t = 2.5 s (z)" in err
+    verdict = ff.verify_plan(ff.Plan.load(path), recompute=False)  # the checks alone
+    assert verdict.failures == ["momentum"]
 
 
 def test_verify_cli_corrupt_file_exits_2(tmp_path, capsys):
@@ -110,8 +119,8 @@ def test_a_plan_failing_verification_is_never_written(tmp_path, monkeypatch, cap
 
     real = plan_module.verify_plan
 
-    def failing(plan, robot=None, constraints=None):
-        result = real(plan, robot, constraints=constraints)
+    def failing(plan, robot=None, constraints=None, **options):
+        result = real(plan, robot, constraints=constraints, **options)
         wrong = ff.Check("replay_attitude", 1.0, 1e-4, "rad")
         return ff.Verification((*[c for c in result.checks if c.name != wrong.name], wrong))
 

@@ -261,7 +261,7 @@ def test_plan_file_missing_key(tmp_path, worked_plan):
     del data["samples"]
     path = tmp_path / "p.json"
     path.write_text(json.dumps(data))
-    with pytest.raises(ff.PlanFileError, match="corrupt plan file"):
+    with pytest.raises(ff.PlanFileError, match="plan field 'samples' is missing"):
         ff.Plan.load(path)
 
 

@@ -215,3 +215,26 @@ base_zyx_deg = [-17.29, 1.5255, -33.449]
     model = CollisionModel(scenario.robot, known_srdf(scenario.robot))
     q = best.joint_positions(np.linspace(0.0, best.duration, 801))
     assert min(model.distances(x).values.min() for x in q) >= 0.01 - 1e-6
+
+
+def test_verify_recomputes_the_objective(tmp_path, capsys, effort_plans):
+    import json
+
+    _, best = effort_plans
+    path = best.save(tmp_path / "best.json")
+    assert main(["verify", str(path)]) == 0
+    capsys.readouterr()
+    for field, change in (
+        ("value", lambda o: {**o, "value": o["value"] * (1 + 1e-6)}),
+        ("error_estimate", lambda o: {**o, "error_estimate": 1.0}),
+        ("unit", lambda o: {**o, "unit": "N m"}),
+        ("name", lambda o: {**o, "name": "min_acceleration"}),
+    ):
+        doc = json.loads(path.read_text())
+        doc["objective"] = change(doc["objective"])
+        tampered = tmp_path / f"{field}.json"
+        tampered.write_text(json.dumps(doc))
+        assert main(["verify", str(tampered)]) == 2, field
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err
+        assert "objective." in err, err

@@ -39,7 +39,7 @@ from .problem.objectives import OBJECTIVES
 from .problem.scenario import Scenario, default_scenario_path
 from .progress import TIMINGS, configure, stage
 from .solvers.options import DEFAULT_TOLERANCE, TOLERANCE_RANGE_RAD, SolveOptions
-from .verify.checks import MAX_REPLAY_STEPS, verify_plan
+from .verify.checks import MAX_REPLAY_STEPS, REPLAY_STEPS_LIMIT, verify_plan
 from .viz.summary import cartesian_report, robot_label, summary
 
 _robot_label = robot_label  # the name the tests know
@@ -99,10 +99,37 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     return 0
 
 
+def _checked_plan(args: argparse.Namespace) -> Plan:
+    """The plan file of ``show`` or ``plot``, verified unless ``--no-verify``.
+
+    Raises:
+        PlanFileError: unreadable, breaks the schema or a limit, disagrees with its
+            recomputation, or fails a check (with the hint to ``--no-verify``).
+    """
+    from .errors import PlanFileError, PlanMismatchError
+    from .plans.schema import load_plan_file
+
+    loaded = load_plan_file(args.plan)
+    if args.no_verify:
+        return loaded
+    hint = f"freefloat verify {args.plan} shows the checks; --no-verify {args.command}s it anyway"
+    try:
+        with stage("verify"):
+            verification = verify_plan(loaded)
+    except PlanMismatchError as exc:
+        raise PlanFileError(f"{args.plan}: {exc}; {hint}") from None
+    if not verification.passed:
+        raise PlanFileError(
+            f"{args.plan}: the plan fails verification ({', '.join(verification.failures)}); "
+            + hint
+        )
+    return loaded
+
+
 def _cmd_show(args: argparse.Namespace) -> int:
     from .viz.playback import serve, write_html
 
-    loaded = Plan.load(args.plan)
+    loaded = _checked_plan(args)
     if args.html:
         with stage("write playback page"):
             written = write_html(loaded, args.html, args.speed)
@@ -115,7 +142,7 @@ def _cmd_show(args: argparse.Namespace) -> int:
 def _cmd_plot(args: argparse.Namespace) -> int:
     from .viz.plots import save_figures
 
-    loaded = Plan.load(args.plan)
+    loaded = _checked_plan(args)
     with stage("write plots"):
         written = save_figures(loaded, args.output, svg=args.svg)
     print(f"freefloat plot: {len(written)} files in {Path(args.output).resolve()}")
@@ -176,10 +203,13 @@ def _cmd_bounds(args: argparse.Namespace) -> int:
 def _cmd_verify(args: argparse.Namespace) -> int:
     if args.replay_steps < 1:
         raise InputError(f"--replay-steps must be at least 1, got {args.replay_steps}")
-    from .plans.schema import check_plan_file
+    if args.replay_steps > REPLAY_STEPS_LIMIT:
+        raise InputError(
+            f"--replay-steps must be at most {REPLAY_STEPS_LIMIT}, got {args.replay_steps}"
+        )
+    from .plans.schema import load_plan_file
 
-    check_plan_file(args.plan)  # names the bad field before anything else reads the file
-    loaded = Plan.load(args.plan)
+    loaded = load_plan_file(args.plan)  # schema and limits first, naming the bad field
     result = verify_plan(loaded, replay_steps=args.replay_steps)
     print(
         f"freefloat verify: {args.plan} ({Path(loaded.robot.urdf).name}, T = {loaded.duration:g} s)"
@@ -387,17 +417,22 @@ def build_parser() -> argparse.ArgumentParser:
     p_verify = commands.add_parser(
         "verify",
         help="re-run the independent checks of a plan file",
-        description="Re-run a plan's checks from the file alone (and its URDF): momentum along "
-        "the samples, independent attitude integration, forward-dynamics replay under the "
-        "planned torques, boundary conditions. Exit code 0 if all pass, 1 if any fails, 2 for "
-        "an unreadable plan.",
+        description="Re-run a plan's checks from the file alone (and its URDF). The file is "
+        "checked against the plan schema and its limits first, then every number in it (free "
+        "parameters, samples, torques, base and end-effector paths, solver residuals, the "
+        "verification figures) is recomputed from the URDF, duration and coefficients and must "
+        "agree; then the checks run: momentum along the samples, independent attitude "
+        "integration, forward-dynamics replay under the planned torques, boundary conditions, "
+        "limits. Exit code 0 if all pass, 1 if a check fails, 2 for an unreadable plan or a "
+        "number that disagrees with its recomputation (the field is named).",
     )
     p_verify.add_argument("plan", help="plan JSON file")
     p_verify.add_argument(
         "--replay-steps",
         type=int,
         default=MAX_REPLAY_STEPS,
-        help="most RK4 steps the replay may take; it doubles its steps from 16 until its own "
+        help="most RK4 steps the replay may take, 1 to "
+        f"{REPLAY_STEPS_LIMIT}; it doubles its steps from 16 until its own "
         f"error estimate settles the verdict (default {MAX_REPLAY_STEPS})",
     )
     p_verify.set_defaults(func=_cmd_verify)
@@ -488,6 +523,7 @@ def build_parser() -> argparse.ArgumentParser:
     p_show.add_argument(
         "--speed", type=float, default=1.0, help="playback speed, 1 = real time (default)"
     )
+    _add_no_verify(p_show, "show")
     p_show.set_defaults(func=_cmd_show)
 
     p_export = commands.add_parser(
@@ -516,6 +552,7 @@ def build_parser() -> argparse.ArgumentParser:
     p_plot.add_argument("plan", help="plan JSON file")
     p_plot.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
     p_plot.add_argument("--svg", action="store_true", help="also write SVG files")
+    _add_no_verify(p_plot, "draw")
     p_plot.set_defaults(func=_cmd_plot)
 
     p_sweep = commands.add_parser(
@@ -541,6 +578,17 @@ def build_parser() -> argparse.ArgumentParser:
     for sub in [parser, *commands.choices.values()]:
         _add_common_flags(sub)
     return parser
+
+
+def _add_no_verify(parser: argparse.ArgumentParser, verb: str) -> None:
+    """--no-verify of show and plot."""
+    parser.add_argument(
+        "--no-verify",
+        action="store_true",
+        help=f"{verb} the plan without verifying it first (by default a plan that fails "
+        "verification or whose numbers disagree with their recomputation from its URDF is "
+        "refused)",
+    )
 
 
 def _add_common_flags(parser: argparse.ArgumentParser) -> None:

@@ -225,6 +225,41 @@ class PlanFileError(FreeFloatError):
     """A plan file that is unreadable, corrupt or of another format version."""
 
 
+class PlanMismatchError(PlanFileError):
+    """A plan file whose stored number disagrees with its recomputation; names the field.
+
+    Attributes:
+        field: the field's path in the file (``samples.tau``, ``free_parameters.q2``...).
+        difference: the largest disagreement found (in ``unit``; inf for a non-numeric field).
+        tolerance: the disagreement allowed (in ``unit``).
+        unit: unit of ``difference`` and ``tolerance``.
+        where: where the largest disagreement is (an instant, a joint), for the reader.
+    """
+
+    def __init__(
+        self,
+        field: str,
+        difference: float,
+        tolerance: float,
+        unit: str = "",
+        where: str = "",
+        message: str | None = None,
+    ) -> None:
+        self.field = field
+        self.difference = float(difference)
+        self.tolerance = float(tolerance)
+        self.unit = unit
+        self.where = where
+        units = f" {unit}" if unit else ""
+        at = f" {where}" if where else ""
+        super().__init__(
+            f"plan field {field!r} disagrees with the recomputation: {message}"
+            if message is not None
+            else f"plan field {field!r} disagrees with the recomputation by "
+            f"{self.difference:.3g}{units}{at} (tolerance {self.tolerance:.3g}{units})"
+        )
+
+
 class VerificationError(FreeFloatError):
     """A plan that fails its independent verification; carries the failed checks."""
 

@@ -8,7 +8,6 @@ verifies a solution found elsewhere. The file format lives in :mod:`freefloat.pl
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Sequence
 from dataclasses import asdict, replace
@@ -23,11 +22,8 @@ from .errors import (
     VelocityLimitError,
     VerificationError,
 )
-from .physics.attitude import geodesic_angle, quat_rotate, zyx_from_quat
-from .physics.dynamics import inverse_dynamics_batch
+from .physics.attitude import geodesic_angle
 from .plans.format import (
-    BaseReport,
-    Feasibility,
     ObjectiveLevel,
     ObjectiveReport,
     ObstacleRecord,
@@ -35,10 +31,9 @@ from .plans.format import (
     Request,
     RobotRef,
     SafetyReport,
-    Samples,
-    SolutionRecord,
     SolverReport,
 )
+from .plans.sampling import base_report, feasibility_report, sample_solution, solution_record
 from .problem.constraints import (
     Clearance,
     Constraint,
@@ -62,10 +57,6 @@ __all__ = ["BOUNDARY_TOLERANCE", "plan", "plan_from_solution"]
 
 #: Boundary conditions must hold to this (rad, rad/s, rad/s^2; relative to the joint travel).
 BOUNDARY_TOLERANCE = 1e-9
-
-
-def _deg(values: np.ndarray) -> list[float]:
-    return [math.degrees(float(v)) for v in values]
 
 
 def plan(
@@ -135,8 +126,7 @@ def plan(
             ],
         )
     else:
-        value = chosen.evaluate(found.problem, found.solution.beta).value
-        report = ObjectiveReport(name=chosen.name, unit=chosen.unit, value=value, start_value=value)
+        report = _norm_report(found.problem, found.solution.beta)
     solve_time = time.perf_counter() - clock
     problem = found.problem.with_steps(found.solution.steps)
     with stage("sample and verify"):
@@ -147,6 +137,7 @@ def plan(
             options.tolerance,
             constraints=constraints,
             safety=_safety_report(scenario, constraints),
+            objective=report,
         )
     solver = replace(
         result.solver,
@@ -155,7 +146,14 @@ def plan(
         tried=found.tried,
         solve_time_s=solve_time,
     )
-    return replace(result, solver=solver, objective=report)
+    return replace(result, solver=solver)
+
+
+def _norm_report(problem: Problem, beta: np.ndarray) -> ObjectiveReport:
+    """The record of a minimum-norm plan (the search's own choice)."""
+    norm = objective_named(DEFAULT_OBJECTIVE)
+    value = norm.evaluate(problem, beta).value
+    return ObjectiveReport(name=norm.name, unit=norm.unit, value=value, start_value=value)
 
 
 def _broken(found: SearchResult, constraints: Sequence[Constraint]) -> str:
@@ -277,6 +275,7 @@ def plan_from_solution(
     verify: bool = True,
     constraints: Sequence[Constraint] | None = None,
     safety: SafetyReport | None = None,
+    objective: ObjectiveReport | None = None,
 ) -> Plan:
     """Sample a solved problem into a verified :class:`Plan`.
 
@@ -290,6 +289,7 @@ def plan_from_solution(
         constraints: path constraints verification checks; default joint position and
             velocity limits.
         safety: the plan's record of its clearance constraint (default: none checked).
+        objective: the plan's record of what it minimised (default: the minimum norm).
 
     Raises:
         SolverError: the attitude reached (by the solver's grid or by the sampling grid) is
@@ -299,20 +299,14 @@ def plan_from_solution(
     robot, family, T = problem.robot, problem.family, problem.duration
     names = robot.joint_names
     clock = time.perf_counter()
-    s = np.linspace(0.0, 1.0, max(2, int(samples)))
-    t = s * T
-    path = family.at_times(solution.beta, t, T)
-    quats = problem.attitudes(solution.beta, s)
-    dyn = inverse_dynamics_batch(problem.mmap, path.q, path.qd, path.qdd)
-    base_position = quat_rotate(quats, -dyn.com)
-    ee_position = quat_rotate(quats, dyn.end_effector - dyn.com)
-    omega = dyn.base_twist[:, 3:]
-    tau = dyn.tau
+    sampled = sample_solution(problem, solution.beta, samples)
     sample_time = time.perf_counter() - clock
 
-    achieved = problem.achieved(solution.beta)
-    error = geodesic_angle(achieved, problem.goal_quaternion)
-    sampled_error = geodesic_angle(quats[-1], problem.goal_quaternion)
+    base = base_report(problem, solution.beta)
+    error = base.attitude_error_rad
+    sampled_error = geodesic_angle(
+        np.asarray(sampled.base_quaternion_xyzw[-1]), problem.goal_quaternion
+    )
     boundary = boundary_errors(
         family.time_coefficients(solution.beta, T), family.start, family.goal, T
     )["relative_max"]
@@ -323,18 +317,11 @@ def plan_from_solution(
             max(error, sampled_error),
         )
 
-    free = family.free_time_coefficients(solution.beta, T)
+    chosen = solution_record(problem, solution.beta, solution.residual, 0.0)
     solutions = [
-        SolutionRecord(
-            free_parameters=dict(
-                zip(names, family.free_time_coefficients(root.beta, T), strict=True)
-            ),
-            residual_rad=root.residual,
-            path_length=root.path_length,
-        )
+        solution_record(problem, root.beta, root.residual, root.path_length)
         for root in solution.roots
     ]
-    bounds = problem.bounds_interval
     unverified = Plan(
         robot=RobotRef(
             urdf=str(robot.urdf),
@@ -347,35 +334,10 @@ def plan_from_solution(
             name: c.tolist()
             for name, c in zip(names, family.time_coefficients(solution.beta, T), strict=True)
         },
-        free_parameters=dict(zip(names, free, strict=True)),
-        base=BaseReport(
-            start_quaternion_xyzw=problem.start_quaternion.tolist(),
-            target_quaternion_xyzw=problem.goal_quaternion.tolist(),
-            achieved_quaternion_xyzw=achieved.tolist(),
-            start_zyx_deg=_deg(zyx_from_quat(problem.start_quaternion)),
-            target_zyx_deg=_deg(zyx_from_quat(problem.goal_quaternion)),
-            achieved_zyx_deg=_deg(zyx_from_quat(achieved)),
-            attitude_error_rad=error,
-        ),
-        feasibility=Feasibility(
-            planar=problem.planar,
-            yaw_change_bounds_deg=None if bounds is None else _deg(np.array(bounds)),
-            requested_yaw_change_deg=(
-                None if problem.yaw_change is None else math.degrees(problem.yaw_change)
-            ),
-        ),
-        samples=Samples(
-            t=t.tolist(),
-            q=path.q.tolist(),
-            qd=path.qd.tolist(),
-            qdd=path.qdd.tolist(),
-            base_position=base_position.tolist(),
-            base_quaternion_xyzw=quats.tolist(),
-            base_zyx_deg=[_deg(zyx_from_quat(qt)) for qt in quats],
-            end_effector_position=ee_position.tolist(),
-            base_angular_velocity=omega.tolist(),
-            tau=tau.tolist(),
-        ),
+        free_parameters=chosen.free_parameters,
+        base=base,
+        feasibility=feasibility_report(problem),
+        samples=sampled,
         solver=SolverReport(
             method=solution.method,
             iterations=solution.iterations,
@@ -391,12 +353,16 @@ def plan_from_solution(
         ),
         request=Request(start_joints=family.start.tolist(), goal_joints=family.goal.tolist()),
         safety=safety or SafetyReport(),
+        objective=objective or _norm_report(problem, solution.beta),
     )
     if not verify:
         return unverified
     clock = time.perf_counter()
     verification = verify_plan(
-        unverified, robot, constraints=None if constraints is None else list(constraints)
+        unverified,
+        robot,
+        constraints=None if constraints is None else list(constraints),
+        recompute=False,  # the numbers were just computed by the same functions
     )
     if not verification.passed:
         raise VerificationError(verification.failures)

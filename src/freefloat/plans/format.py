@@ -33,6 +33,7 @@ import numpy as np
 
 from ..errors import PlanFileError
 from ..files import atomic_write_text
+from .limits import MAX_PLAN_BYTES, check_plan_file_kind, check_plan_values, excerpt
 
 __all__ = [
     "FORMAT",
@@ -392,9 +393,10 @@ class Plan:
         fmt = data.get("format")
         if fmt not in READABLE_FORMATS:
             raise PlanFileError(
-                f"{where}: plan format {fmt!r} is not supported; this freefloat reads "
+                f"{where}: plan format {excerpt(fmt)} is not supported; this freefloat reads "
                 + " and ".join(repr(f) for f in READABLE_FORMATS)
             )
+        check_plan_values(data, where)
         try:
             verification = (
                 Verification()  # format 1: its untyped checks are recomputed by verify
@@ -454,15 +456,30 @@ def _objective(data: Any) -> ObjectiveReport:
 def read_plan_json(path: str | Path) -> Any:
     """The parsed JSON of a plan file.
 
+    The path must name a regular file of at most :data:`~freefloat.plans.limits.MAX_PLAN_BYTES`
+    (checked before reading, so a FIFO or ``/dev/zero`` is refused, not read).
+
     Raises:
-        PlanFileError: missing, unreadable or not JSON.
+        PlanFileError: missing, not a regular file, too large, unreadable, not JSON, or nested
+            too deeply to parse.
     """
     path = Path(path).expanduser()
+    check_plan_file_kind(path)
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
+        with open(path, "rb") as handle:
+            raw = handle.read(MAX_PLAN_BYTES + 1)
+        if len(raw) > MAX_PLAN_BYTES:
+            raise PlanFileError(
+                f"{path}: larger than the {MAX_PLAN_BYTES // 2**20} MiB a plan file may have"
+            )
+        return json.loads(raw.decode("utf-8"))
     except FileNotFoundError:
         raise PlanFileError(f"plan file not found: {path}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise PlanFileError(f"cannot read plan file {path}: {exc}") from None
     except json.JSONDecodeError as exc:
         raise PlanFileError(f"{path}: not a plan file, corrupt JSON ({exc})") from None
+    except RecursionError:
+        raise PlanFileError(f"{path}: not a plan file, JSON nested too deeply") from None
+    except ValueError as exc:  # an integer of thousands of digits
+        raise PlanFileError(f"{path}: not a plan file ({excerpt(str(exc), 80)})") from None

@@ -3,7 +3,9 @@
 :func:`schema` returns one (``"plan"`` or ``"scenario"``); :func:`schema_errors` lists what is
 wrong with a document as one line per problem, naming the field by its path (for example
 ``samples.tau[3][1]: expected a number, got 'x'``); :func:`check_plan_file` reads a plan file
-and raises :class:`~freefloat.errors.PlanFileError` naming the first bad field. The schema
+and raises :class:`~freefloat.errors.PlanFileError` naming the first bad field;
+:func:`load_plan_file` reads a plan file once, checks it against the schema and the limits of
+:mod:`freefloat.plans.limits`, and returns the plan. The schema
 describes ``freefloat.plan/2``; files of older formats are left to :meth:`Plan.load`.
 """
 
@@ -17,9 +19,9 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import PlanFileError, ViewerError
-from .format import FORMAT, read_plan_json
+from .format import FORMAT, Plan, read_plan_json
 
-__all__ = ["SCHEMAS", "check_plan_file", "field_path", "schema", "schema_errors"]
+__all__ = ["SCHEMAS", "check_plan_file", "field_path", "load_plan_file", "schema", "schema_errors"]
 
 #: The shipped schemas by name.
 SCHEMAS = ("plan", "scenario")
@@ -75,7 +77,16 @@ def _describe(error: Any) -> str:
         return f"{where}: expected {' or '.join(map(repr, valid))}, got {got}"
     if kind in ("minItems", "maxItems"):
         return f"{where}: expected {error.validator_value} entries or {kind[:3]}, got {got}"
-    return f"{where}: {error.message}"
+    bounds = {
+        "minimum": "less than the minimum of",
+        "maximum": "greater than the maximum of",
+        "exclusiveMinimum": "at most the exclusive minimum of",
+        "exclusiveMaximum": "at least the exclusive maximum of",
+    }
+    if kind in bounds:
+        return f"{where}: {got} is {bounds[kind]} {error.validator_value}"
+    message = str(error.message)
+    return f"{where}: {message if len(message) <= 120 else message[:117] + '...'}"
 
 
 def schema_errors(document: Any, name: str = "plan") -> list[str]:
@@ -114,10 +125,26 @@ def check_plan_file(path: str | Path) -> None:
         PlanFileError: missing, not JSON, or a field that breaks the schema (named).
     """
     path = Path(path).expanduser()
-    data = read_plan_json(path)
+    _check_schema(read_plan_json(path), path)
+
+
+def _check_schema(data: Any, path: Path) -> None:
     if isinstance(data, dict) and data.get("format") != FORMAT:
         return
     errors = schema_errors(data, "plan")
     if errors:
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
         raise PlanFileError(f"{path}: does not match the plan schema: {errors[0]}{more}")
+
+
+def load_plan_file(path: str | Path) -> Plan:
+    """Read a plan file once: the schema first (format 2), then its limits, then the plan.
+
+    Raises:
+        PlanFileError: not a regular file, too large, not JSON, a field that breaks the schema
+            or a limit (named), another format version.
+    """
+    path = Path(path).expanduser()
+    data = read_plan_json(path)
+    _check_schema(data, path)
+    return Plan.from_dict(data, str(path))

@@ -13,12 +13,16 @@ Checks, each with a documented tolerance (:data:`TOLERANCES`):
 - ``replay``: forward dynamics of the free system (ABA, RK4) driven only by the planned joint
   torques from the start at rest: final attitude error (rad) and joint error (rad or m).
 
-Both integrating checks double their steps and report the difference between the last two
-results as their ``error_estimate`` (see :func:`verify_plan` and :func:`_decided`); the other
-checks are exact up to rounding.
 - ``boundary``: position, rate and acceleration errors of the polynomials at both ends (rad,
   rad/s, rad/s^2), against the requested start and goal, relative to the joint travel.
 - ``joint_limit_excess``: how far the sampled joints go beyond their URDF limits (rad or m).
+
+Both integrating checks double their steps and report the difference between the last two
+results as their ``error_estimate`` (see :func:`verify_plan` and :func:`_decided`); the other
+checks are exact up to rounding.
+
+This module is long because it holds every independent check with its tolerance, and the
+verdict logic that weighs each against its own error estimate.
 """
 
 from __future__ import annotations
@@ -39,6 +43,7 @@ from ..problem.constraints.registry import clearance_constraint
 from ..problem.paths import JointPolynomials
 from ..robot.collision import Obstacle
 from ..robot.model import Robot, load_robot
+from .recompute import check_plan_numbers, compare_verification
 from .stepping import (
     _FIRST_ATTITUDE_STEPS,
     _FIRST_REPLAY_STEPS,
@@ -55,12 +60,16 @@ from .stepping import (
 __all__ = [
     "CONVERGED_FRACTION",
     "MAX_REPLAY_STEPS",
+    "REPLAY_STEPS_LIMIT",
     "TOLERANCES",
     "boundary_errors",
     "joint_torque_function",
     "plan_constraints",
     "verify_plan",
 ]
+
+#: The most replay steps a caller may allow (``--replay-steps``): 65536 RK4 steps.
+REPLAY_STEPS_LIMIT = 1 << 16
 
 #: Pass thresholds of the checks (see the module docstring for units).
 TOLERANCES: dict[str, float] = {
@@ -168,8 +177,13 @@ def verify_plan(
     robot: Robot | None = None,
     replay_steps: int = MAX_REPLAY_STEPS,
     constraints: list[Constraint] | None = None,
+    recompute: bool = True,
 ) -> Verification:
     """Run every check on ``plan``; needs only the plan and its URDF.
+
+    First every number of the plan is recomputed from its URDF, duration and coefficients and
+    compared (:mod:`freefloat.verify.recompute`); then the checks run; then their figures are
+    compared with those the plan states, if it states any.
 
     The two integrating checks estimate their own error by step doubling (the difference
     between the results on M and 2 M steps, which bounds the error of the finer one while the
@@ -183,13 +197,21 @@ def verify_plan(
         replay_steps: the most RK4 steps the forward-dynamics replay may take (>= 1).
         constraints: path constraints to check densely; default joint position and velocity
             limits.
+        recompute: recompute and compare the plan's numbers and figures (the pipeline, which
+            has just computed them with the same functions, skips it).
 
     Raises:
-        ValueError: ``replay_steps`` < 1.
+        ValueError: ``replay_steps`` outside 1 to :data:`REPLAY_STEPS_LIMIT`.
+        PlanMismatchError: a stored number or figure disagrees with its recomputation.
+        PlanFileError: the plan's robot or request does not match its URDF.
     """
-    if replay_steps < 1:
-        raise ValueError(f"the replay needs at least one step, got replay_steps={replay_steps}")
+    if not 1 <= replay_steps <= REPLAY_STEPS_LIMIT:
+        raise ValueError(
+            f"the replay takes 1 to {REPLAY_STEPS_LIMIT} steps, got replay_steps={replay_steps}"
+        )
     robot = robot or _robot_for(plan)
+    if recompute:
+        check_plan_numbers(plan, robot)
     constraints = plan_constraints(plan, robot) if constraints is None else constraints
     mmap = MomentumMap(robot)
     model, data = robot.model, robot.model.createData()
@@ -371,7 +393,10 @@ def verify_plan(
                     excess.detail,
                 )
             )
-    return Verification(tuple(checks))
+    verification = Verification(tuple(checks))
+    if recompute:
+        compare_verification(plan.verification, verification)
+    return verification
 
 
 def _wrap_joints(robot: Robot, delta: np.ndarray) -> np.ndarray:
