@@ -11,6 +11,7 @@ from ._interrupt import guard_startup as _guard_startup
 _guard_startup()  # the command line only: Ctrl-C while importing is one line, exit 130
 
 from .errors import (
+    DurationLimitError,
     EffortLimitError,
     FileError,
     FreeFloatError,
@@ -69,6 +70,7 @@ __all__ = [
     "Check",
     "Constraint",
     "ConstraintRows",
+    "DurationLimitError",
     "EffortLimitError",
     "Excess",
     "FileError",

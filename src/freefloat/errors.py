@@ -276,37 +276,57 @@ class ViewerError(FreeFloatError):
     """The 3D viewer or the plotting stack is missing, broken, or cannot draw the robot."""
 
 
-class VelocityLimitError(FreeFloatError):
+class DurationLimitError(FreeFloatError):
+    """A joint beyond a URDF limit that a longer duration would respect.
+
+    Attributes:
+        joint: the joint's name.
+        peak: its largest value along the path (the limit's unit).
+        limit: the URDF limit.
+        shortest_duration: the shortest duration (s) at which the path respects the limits.
+    """
+
+    def __init__(
+        self, joint: str, peak: float, limit: float, shortest_duration: float, message: str
+    ) -> None:
+        self.joint = joint
+        self.peak = float(peak)
+        self.limit = float(limit)
+        self.shortest_duration = float(shortest_duration)
+        super().__init__(message)
+
+
+class VelocityLimitError(DurationLimitError):
     """Joint rates above a URDF velocity limit; carries the shortest admissible duration."""
 
     def __init__(
         self, joint: str, peak: float, limit: float, shortest_duration: float, unit: str = "rad"
     ) -> None:
-        self.joint = joint
-        self.peak = float(peak)
-        self.limit = float(limit)
-        self.shortest_duration = float(shortest_duration)
         super().__init__(
+            joint,
+            peak,
+            limit,
+            shortest_duration,
             f"joint {joint!r} reaches {peak:.4g} {unit}/s, above its velocity limit "
             f"{limit:.4g} {unit}/s; the shortest duration that respects every velocity limit "
-            f"is {shortest_duration:.4g} s"
+            f"is {shortest_duration:.4g} s",
         )
 
 
-class EffortLimitError(FreeFloatError):
+class EffortLimitError(DurationLimitError):
     """Joint torques above a URDF effort limit; carries the shortest admissible duration."""
 
     def __init__(
         self, joint: str, peak: float, limit: float, shortest_duration: float, unit: str = "N m"
     ) -> None:
-        self.joint = joint
-        self.peak = float(peak)
-        self.limit = float(limit)
-        self.shortest_duration = float(shortest_duration)
         super().__init__(
+            joint,
+            peak,
+            limit,
+            shortest_duration,
             f"joint {joint!r} needs {peak:.4g} {unit}, above its effort limit {limit:.4g} "
             f"{unit}; the shortest duration that respects every effort limit is "
-            f"{shortest_duration:.4g} s"
+            f"{shortest_duration:.4g} s",
         )
 
 

@@ -142,17 +142,15 @@ def minimise(
                 result.value,
                 counts,
             )
-        if levels and len(levels) > 1 and gain < MIN_GAIN * abs(best_value):
+        if len(levels) > 1 and gain < MIN_GAIN * abs(best_value):
             break
+
+    def keep_start() -> Minimised:
+        estimate = objective.error_estimate(problem, beta)
+        return Minimised(found, objective, start_value, estimate, start_value, levels)
+
     if best_beta is beta:
-        return Minimised(
-            found,
-            objective,
-            start_value,
-            objective.error_estimate(problem, beta),
-            start_value,
-            levels,
-        )
+        return keep_start()
     residual = float(np.linalg.norm(best_problem.residual(best_beta)))
     checked = certify(best_problem, best_beta, residual, options.tolerance)
     if not checked.passed or broken_constraint(checked.problem, constraints, checked.beta):
@@ -165,14 +163,7 @@ def minimise(
                 "integration could not be certified",
             )
         )
-        return Minimised(
-            found,
-            objective,
-            start_value,
-            objective.error_estimate(problem, beta),
-            start_value,
-            levels,
-        )
+        return keep_start()
     value = objective.evaluate(checked.problem, checked.beta).value
     solution = replace(
         found.solution,
