@@ -21,7 +21,14 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["AffineSamples", "JointPolynomials", "PathFamily", "PathSamples", "basis_coefficients"]
+__all__ = [
+    "AffineSamples",
+    "JointPolynomials",
+    "PathFamily",
+    "PathSamples",
+    "basis_coefficients",
+    "boundary_errors",
+]
 
 _QUINTIC = np.array([0.0, 0.0, 0.0, 10.0, -15.0, 6.0])
 
@@ -37,6 +44,38 @@ def basis_coefficients(power: int) -> np.ndarray:
     coeffs[3:6] = [-a3, -a4, -a5]
     coeffs[power] = 1.0
     return coeffs
+
+
+def boundary_errors(
+    coefficients: list[np.ndarray], start: np.ndarray, goal: np.ndarray, duration: float
+) -> dict[str, float]:
+    """Boundary-condition errors of joint polynomials (ascending powers of t in s).
+
+    The same evaluation a plan's verification makes of its stored coefficients.
+
+    Returns the largest position error against ``start`` and ``goal`` (rad or m), the largest
+    end rate (per s) and acceleration (per s^2), and ``relative_max``: the largest of these
+    made dimensionless by the duration and the joint travel (at least 1).
+    """
+    poly = np.polynomial.polynomial
+    groups = (
+        coefficients,
+        [poly.polyder(c) for c in coefficients],
+        [poly.polyder(c, 2) for c in coefficients],
+    )
+    q0, qd0, qdd0 = (np.array([poly.polyval(0.0, c) for c in g]) for g in groups)
+    q1, qd1, qdd1 = (np.array([poly.polyval(duration, c) for c in g]) for g in groups)
+    travel = np.maximum(1.0, np.abs(goal - start))
+    position = np.maximum(np.abs(q0 - start), np.abs(q1 - goal))
+    rate = np.maximum(np.abs(qd0), np.abs(qd1))
+    accel = np.maximum(np.abs(qdd0), np.abs(qdd1))
+    relative = np.maximum.reduce([position, rate * duration, accel * duration**2]) / travel
+    return {
+        "position": float(position.max()),
+        "rate": float(rate.max()),
+        "acceleration": float(accel.max()),
+        "relative_max": float(relative.max()),
+    }
 
 
 @dataclass(frozen=True)
@@ -328,22 +367,6 @@ class PathFamily:
                 return None
             out[position[key]] = value
         return out
-
-    def rounding_bound(self, beta: np.ndarray) -> float:
-        """Bound on the rounding error of the end conditions, relative to the joint travel.
-
-        Evaluating ``sum_j c_j s^j`` and its two derivatives at ``s = 1`` in floating point
-        errs by at most about ``eps * j^2 * sum_j |c_j|``; large coefficients of alternating
-        sign (a high-degree path in the monomial basis) make that bound grow. Dimensionless
-        (the joint travel, at least 1 rad or m, is the unit).
-        """
-        travel = np.maximum(1.0, np.abs(self.goal - self.start))
-        worst = 0.0
-        for i, c in enumerate(self.coefficients(beta)):
-            powers = np.arange(len(c), dtype=float)
-            size = float(np.abs(c) @ np.maximum(1.0, powers**2))
-            worst = max(worst, size / travel[i])
-        return float(np.finfo(float).eps) * worst
 
     def polynomials(self, beta: np.ndarray, duration: float) -> JointPolynomials:
         """The path at ``beta`` as polynomials in time on [0, ``duration``] (s)."""

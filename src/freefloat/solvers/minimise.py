@@ -7,7 +7,8 @@ joint for ``k`` in :data:`LEVELS` (spatial problems: the first :data:`SPATIAL_EX
 them), each level starting from the previous best (the same path, embedded in the larger
 family). It stops when a level lowers the objective by less than :data:`MIN_GAIN` of its
 value, when a level's coefficients grow too large for the monomial basis to keep the end
-conditions (:data:`MAX_ROUNDING`), or at the last level. A scenario's ``[path] extra`` is the
+conditions in floating point (:data:`MAX_BOUNDARY_ERROR`, measured as verification measures
+it), or at the last level. A scenario's ``[path] extra`` is the
 starting freedom; ``[path] raise_freedom = false`` keeps exactly that freedom. Every level is
 recorded. Budgets are counts (SLSQP iterations), so the result is the same on every machine.
 """
@@ -22,6 +23,8 @@ import numpy as np
 from ..problem.build import problem_from_scenario
 from ..problem.constraints import Constraint
 from ..problem.objectives import Objective
+from ..problem.paths import boundary_errors
+from ..problem.residual import Problem
 from ..problem.scenario import Scenario
 from .certify import certify
 from .optimise import optimise
@@ -35,9 +38,10 @@ __all__ = ["LEVELS", "MIN_GAIN", "Level", "Minimised", "minimise"]
 LEVELS = (2, 4, 6)
 #: A level must lower the objective by this fraction of its value to try the next one.
 MIN_GAIN = 0.005
-#: Largest rounding bound of a level's end conditions (relative to the joint travel): beyond
-#: it the monomial coefficients are too large to represent the path accurately.
-MAX_ROUNDING = 3e-10
+#: Largest end-condition error of a level's time coefficients, relative to the joint travel
+#: (half the 1e-9 a plan and its verification demand; checked again on the final path): beyond
+#: it the monomial coefficients are too large to keep the path's ends in floating point.
+MAX_BOUNDARY_ERROR = 5e-10
 #: SLSQP iterations per run (a level runs at most ``optimise.ROUNDS`` times).
 ITERATIONS_PER_LEVEL = 100
 #: Levels a spatial problem tries beyond its own freedom (each costs many attitude
@@ -81,6 +85,13 @@ class Minimised:
     error_estimate: float
     start_value: float
     levels: list[Level] = field(default_factory=list)
+
+
+def _end_error(problem: Problem, beta: np.ndarray) -> float:
+    """End-condition error of the path's time coefficients, relative to the joint travel."""
+    family, duration = problem.family, problem.duration
+    coefficients = family.time_coefficients(beta, duration)
+    return boundary_errors(coefficients, family.start, family.goal, duration)["relative_max"]
 
 
 def minimise(
@@ -128,9 +139,9 @@ def minimise(
             level_problem, start, objective, constraints, options, ITERATIONS_PER_LEVEL
         )
         freedom = dict(zip(names, counts, strict=True))
-        rounding = level_problem.family.rounding_bound(result.beta)
-        if result.improved and rounding > MAX_ROUNDING:
-            note = f"coefficients too large to keep the end conditions (rounding {rounding:.1g})"
+        ends = _end_error(level_problem, result.beta)
+        if result.improved and ends > MAX_BOUNDARY_ERROR:
+            note = f"coefficients too large to keep the end conditions (error {ends:.1g})"
             levels.append(Level(freedom, result.value, result.iterations, note))
             break
         levels.append(Level(freedom, result.value, result.iterations, result.note))
@@ -153,14 +164,18 @@ def minimise(
         return keep_start()
     residual = float(np.linalg.norm(best_problem.residual(best_beta)))
     checked = certify(best_problem, best_beta, residual, options.tolerance)
-    if not checked.passed or broken_constraint(checked.problem, constraints, checked.beta):
+    if (
+        not checked.passed
+        or broken_constraint(checked.problem, constraints, checked.beta)
+        or _end_error(checked.problem, checked.beta) > MAX_BOUNDARY_ERROR
+    ):
         # keep the search's root: it was certified
         levels.append(
             Level(
                 dict(zip(names, best_freedom, strict=True)),
                 best_value,
                 0,
-                "integration could not be certified",
+                "could not be certified (integration, constraints or end conditions)",
             )
         )
         return keep_start()

@@ -40,7 +40,7 @@ from ..physics.momentum import MomentumMap
 from ..plans.format import Check, Plan, Verification
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.constraints.registry import clearance_constraint
-from ..problem.paths import JointPolynomials
+from ..problem.paths import JointPolynomials, boundary_errors
 from ..robot.collision import Obstacle
 from ..robot.model import Robot, load_robot
 from .recompute import check_plan_numbers, compare_verification
@@ -93,36 +93,6 @@ def _polys(plan: Plan) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndar
 def _state(coeffs: tuple[list[np.ndarray], ...], t: float) -> tuple[np.ndarray, ...]:
     poly = np.polynomial.polynomial
     return tuple(np.array([poly.polyval(t, c) for c in group]) for group in coeffs)
-
-
-def boundary_errors(
-    coefficients: list[np.ndarray], start: np.ndarray, goal: np.ndarray, duration: float
-) -> dict[str, float]:
-    """Boundary-condition errors of joint polynomials (ascending powers of t in s).
-
-    Returns the largest position error against ``start`` and ``goal`` (rad or m), the largest
-    end rate (per s) and acceleration (per s^2), and ``relative_max``: the largest of these
-    made dimensionless by the duration and the joint travel (at least 1).
-    """
-    poly = np.polynomial.polynomial
-    groups = (
-        coefficients,
-        [poly.polyder(c) for c in coefficients],
-        [poly.polyder(c, 2) for c in coefficients],
-    )
-    q0, qd0, qdd0 = _state(groups, 0.0)
-    q1, qd1, qdd1 = _state(groups, duration)
-    travel = np.maximum(1.0, np.abs(goal - start))
-    position = np.maximum(np.abs(q0 - start), np.abs(q1 - goal))
-    rate = np.maximum(np.abs(qd0), np.abs(qd1))
-    accel = np.maximum(np.abs(qdd0), np.abs(qdd1))
-    relative = np.maximum.reduce([position, rate * duration, accel * duration**2]) / travel
-    return {
-        "position": float(position.max()),
-        "rate": float(rate.max()),
-        "acceleration": float(accel.max()),
-        "relative_max": float(relative.max()),
-    }
 
 
 def joint_torque_function(plan: Plan, mmap: MomentumMap) -> Callable[[float], np.ndarray]:
