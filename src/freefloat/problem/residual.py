@@ -115,6 +115,18 @@ class Problem:
         other._use_steps(int(steps))
         return other
 
+    def with_duration(self, duration: float) -> Problem:
+        """The same problem with motion time ``duration`` (s) (a copy; this one is unchanged).
+
+        The path shape, and so the attitude residual, does not depend on the duration; rates,
+        torques and objectives do. The copy shares the grids, the memo and the counter.
+        """
+        if float(duration) == self.duration:
+            return self
+        other = copy.copy(self)
+        other.duration = float(duration)
+        return other
+
     def with_goal(self, goal_quaternion: np.ndarray) -> Problem:
         """The same problem with another goal attitude ``[x, y, z, w]`` (a copy).
 

@@ -38,9 +38,10 @@ __all__ = ["LEVELS", "MIN_GAIN", "Level", "Minimised", "minimise"]
 LEVELS = (2, 4, 6)
 #: A level must lower the objective by this fraction of its value to try the next one.
 MIN_GAIN = 0.005
-#: Largest end-condition error of a level's time coefficients, relative to the joint travel
-#: (half the 1e-9 a plan and its verification demand; checked again on the final path): beyond
-#: it the monomial coefficients are too large to keep the path's ends in floating point.
+#: Largest end-condition error of a level's normalised coefficients, relative to the joint
+#: travel (half the 1e-9 a plan and its verification demand; the final path's time
+#: coefficients are held to the 1e-9 itself): beyond it the monomial coefficients are too large
+#: to keep the path's ends in floating point.
 MAX_BOUNDARY_ERROR = 5e-10
 #: SLSQP iterations per run (a level runs at most ``optimise.ROUNDS`` times).
 ITERATIONS_PER_LEVEL = 100
@@ -87,10 +88,17 @@ class Minimised:
     levels: list[Level] = field(default_factory=list)
 
 
-def _end_error(problem: Problem, beta: np.ndarray) -> float:
-    """End-condition error of the path's time coefficients, relative to the joint travel."""
-    family, duration = problem.family, problem.duration
-    coefficients = family.time_coefficients(beta, duration)
+def _end_error(problem: Problem, beta: np.ndarray, in_seconds: bool = False) -> float:
+    """End-condition error of the path's coefficients, relative to the joint travel.
+
+    On the normalised coefficients (``s`` in [0, 1]) by default, so that the choice of a level
+    does not depend on the duration; ``in_seconds``: on the time coefficients a plan stores.
+    """
+    family = problem.family
+    if in_seconds:
+        coefficients, duration = family.time_coefficients(beta, problem.duration), problem.duration
+    else:
+        coefficients, duration = family.coefficients(beta), 1.0
     return boundary_errors(coefficients, family.start, family.goal, duration)["relative_max"]
 
 
@@ -168,6 +176,7 @@ def minimise(
         not checked.passed
         or broken_constraint(checked.problem, constraints, checked.beta)
         or _end_error(checked.problem, checked.beta) > MAX_BOUNDARY_ERROR
+        or _end_error(checked.problem, checked.beta, in_seconds=True) > 2 * MAX_BOUNDARY_ERROR
     ):
         # keep the search's root: it was certified
         levels.append(

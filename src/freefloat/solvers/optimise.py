@@ -55,8 +55,8 @@ class Optimised:
 
     Attributes:
         beta: the root kept (``beta_0`` when nothing better was found).
-        value: the objective there (its unit).
-        start_value: the objective at ``beta_0``.
+        value: the objective there (its unit, at the problem's duration).
+        start_value: the objective at ``beta_0`` (the same).
         iterations: SLSQP iterations.
         improved: whether ``beta`` differs from ``beta_0``.
         note: why ``beta_0`` was kept, when it was.
@@ -133,11 +133,16 @@ def optimise(
     from scipy.optimize import minimize  # imported when first used
 
     beta0 = np.asarray(beta, dtype=float)
-    start = objective.evaluate(problem, beta0)
+    # The objective scales as T^-p: minimise it at T = 1 s, so that the path found does not
+    # depend on the duration to the last bit (the constraints keep the real duration).
+    unit = problem.with_duration(1.0)
+    start = objective.evaluate(unit, beta0)
+    at_t = problem.duration**-objective.duration_power  # value at T from value at 1 s
+    start_value = start.value * at_t
     if problem.n_free == 0:
-        return Optimised(beta0, start.value, start.value, 0, False, "no free coefficients")
+        return Optimised(beta0, start_value, start_value, 0, False, "no free coefficients")
     scale = start.value if start.value > 0 else 1.0
-    s_mat = scaled_coordinates(problem, objective, beta0, scale)
+    s_mat = scaled_coordinates(unit, objective, beta0, scale)
 
     def to_beta(z: np.ndarray) -> np.ndarray:
         return beta0 + s_mat @ z
@@ -153,10 +158,10 @@ def optimise(
         return memo[key]
 
     def fun(z: np.ndarray) -> float:
-        return cached("j", z, lambda b: objective.evaluate(problem, b)).value / scale
+        return cached("j", z, lambda b: objective.evaluate(unit, b)).value / scale
 
     def grad(z: np.ndarray) -> np.ndarray:
-        found = cached("j", z, lambda b: objective.evaluate(problem, b))
+        found = cached("j", z, lambda b: objective.evaluate(unit, b))
         return (s_mat.T @ found.gradient) / scale
 
     def h(z: np.ndarray) -> np.ndarray:
@@ -195,13 +200,13 @@ def optimise(
         z = np.asarray(result.x, dtype=float)
         candidate = to_beta(z)
         if not np.all(np.isfinite(candidate)):
-            return Optimised(beta0, start.value, start.value, iterations, False, "diverged")
+            return Optimised(beta0, start_value, start_value, iterations, False, "diverged")
         try:
             candidate, vector = polish(problem, candidate, options.tolerance)
         except (np.linalg.LinAlgError, FloatingPointError, ValueError):
-            return Optimised(beta0, start.value, start.value, iterations, False, "polish failed")
+            return Optimised(beta0, start_value, start_value, iterations, False, "polish failed")
         if float(np.linalg.norm(vector)) >= options.tolerance:
-            return Optimised(beta0, start.value, start.value, iterations, False, "left the goal")
+            return Optimised(beta0, start_value, start_value, iterations, False, "left the goal")
         broken = broken_constraint(problem, constraints, candidate)
         if not broken:
             break
@@ -215,8 +220,8 @@ def optimise(
         # Rows hold at the instants but not between them: add the path's tightest instants.
         instants = _tightest(problem, active, candidate, instants)
     else:
-        return Optimised(beta0, start.value, start.value, iterations, False, f"breaks {broken}")
-    value = objective.evaluate(problem, candidate).value
+        return Optimised(beta0, start_value, start_value, iterations, False, f"breaks {broken}")
+    value = objective.evaluate(unit, candidate).value
     if not value < start.value and not broken_constraint(problem, constraints, beta0):
-        return Optimised(beta0, start.value, start.value, iterations, False, "no lower value")
-    return Optimised(candidate, value, start.value, iterations, True)
+        return Optimised(beta0, start_value, start_value, iterations, False, "no lower value")
+    return Optimised(candidate, value * at_t, start_value, iterations, True)
