@@ -116,3 +116,31 @@ def test_min_effort_finds_a_path_within_a_limit_the_minimum_norm_path_breaks(tmp
     assert p.verification.passed
     assert np.abs(np.asarray(p.samples.tau)).max() <= 3.0
     assert p.verification["joint_effort_limits"].value <= 0.0
+
+
+def test_a_plan_of_the_previous_format_is_held_to_what_it_promised(tmp_path, capsys):
+    """A freefloat.plan/2 file (no objective record, no effort check) still verifies."""
+    import json
+
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
+    current = ff.plan(scenario)
+    assert "joint_effort_limits" in current.verification
+    doc = json.loads(current.to_json())
+    doc["format"] = "freefloat.plan/2"
+    del doc["objective"]
+    checks = doc["verification"]["checks"]
+    doc["verification"]["checks"] = [c for c in checks if c["name"] != "joint_effort_limits"]
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps(doc))
+    assert main(["verify", str(old)]) == 0, capsys.readouterr().err
+    loaded = ff.Plan.load(old)
+    assert loaded.format == "freefloat.plan/2"
+    assert "objective" not in json.loads(loaded.to_json())
+    # a current plan without its effort check is refused, naming the check list
+    doc["format"] = "freefloat.plan/3"
+    doc["objective"] = json.loads(current.to_json())["objective"]
+    tampered = tmp_path / "tampered.json"
+    tampered.write_text(json.dumps(doc))
+    capsys.readouterr()
+    assert main(["verify", str(tampered)]) == 2
+    assert "verification.checks" in capsys.readouterr().err

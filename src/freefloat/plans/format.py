@@ -1,4 +1,4 @@
-"""The plan file: typed records and their JSON form (``freefloat.plan/2``).
+"""The plan file: typed records and their JSON form (``freefloat.plan/3``).
 
 This module is long because it holds every record of the file format and its reading and
 writing in one place (the format is one concept; splitting it would scatter the schema).
@@ -12,11 +12,15 @@ sees half a plan and a failure leaves nothing behind. Units: seconds, radians (m
 prismatic joints and positions); Euler angles, marked ``_deg``, in degrees. Positions are in
 the inertial frame whose origin is the system centre of mass (docs/method.md section 10).
 
-Schema versions: ``freefloat.plan/2`` (this one) stores the verification as a list of typed
-checks, each with its value, tolerance, unit and the check's own numerical error estimate.
-``freefloat.plan/1`` files (freefloat 0.1) still load: their path, samples and solver report
-are read as they are and their verification is dropped (``Verification.checks`` empty, not
-passed), so ``freefloat verify`` recomputes it.
+Schema versions: ``freefloat.plan/3`` (this one) adds the ``objective`` record (what the path
+minimises, its value and the freedom levels tried) and, for robots with URDF effort limits,
+the ``joint_effort_limits`` check. ``freefloat.plan/2`` files still load and keep their format:
+they were minimum-norm plans (no objective record) that promised no effort limits, and
+``freefloat verify`` holds them to what they promised. ``freefloat.plan/2`` stores the
+verification as a list of typed checks, each with its value, tolerance, unit and the check's
+own numerical error estimate. ``freefloat.plan/1`` files (freefloat 0.1) still load: their
+path, samples and solver report are read as they are and their verification is dropped
+(``Verification.checks`` empty, not passed), so ``freefloat verify`` recomputes it.
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ from .limits import MAX_PLAN_BYTES, check_plan_file_kind, check_plan_values, exc
 
 __all__ = [
     "FORMAT",
+    "FORMAT_2",
     "READABLE_FORMATS",
     "BaseReport",
     "Check",
@@ -54,10 +59,12 @@ __all__ = [
 ]
 
 #: Format tag of plan files written by this version.
-FORMAT = "freefloat.plan/2"
+FORMAT = "freefloat.plan/3"
+#: The format before objectives and effort limits (still read, and kept when re-written).
+FORMAT_2 = "freefloat.plan/2"
 
 #: Format tags this version reads (older ones are converted on load).
-READABLE_FORMATS = ("freefloat.plan/1", FORMAT)
+READABLE_FORMATS = ("freefloat.plan/1", FORMAT_2, FORMAT)
 
 
 @dataclass(frozen=True)
@@ -363,7 +370,7 @@ class Plan:
                 "request": asdict(self.request),
                 "verification": self.verification.to_dict(),
                 "safety": asdict(self.safety),
-                "objective": asdict(self.objective),
+                **({} if self.format == FORMAT_2 else {"objective": asdict(self.objective)}),
             }
         )
 
@@ -424,6 +431,7 @@ class Plan:
                 verification=verification,
                 safety=_safety(data.get("safety")),
                 objective=_objective(data.get("objective")),
+                format=FORMAT_2 if fmt == FORMAT_2 else FORMAT,
             )
         except (KeyError, TypeError, AttributeError, ValueError) as exc:
             raise PlanFileError(f"{where}: corrupt plan file (bad or missing {exc})") from None

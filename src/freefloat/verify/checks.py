@@ -37,8 +37,8 @@ from ..errors import PlanFileError
 from ..physics.attitude import geodesic_angle
 from ..physics.dynamics import inverse_dynamics, inverse_dynamics_batch, replay
 from ..physics.momentum import MomentumMap
-from ..plans.format import Check, Plan, Verification
-from ..problem.constraints import Constraint, default_constraints
+from ..plans.format import FORMAT_2, Check, Plan, Verification
+from ..problem.constraints import Constraint, JointEffortLimits, default_constraints
 from ..problem.constraints.registry import clearance_constraint
 from ..problem.paths import JointPolynomials, boundary_errors
 from ..robot.collision import Obstacle
@@ -116,8 +116,14 @@ def _robot_for(plan: Plan) -> Robot:
 
 
 def plan_constraints(plan: Plan, robot: Robot) -> list[Constraint]:
-    """The constraints a plan states it honours: joint limits, and clearance when checked."""
+    """The constraints a plan states it honours: joint limits, and clearance when checked.
+
+    A ``freefloat.plan/2`` file promised no effort limits (it predates them): it is held to
+    its joint position and velocity limits only.
+    """
     constraints = default_constraints()
+    if plan.format == FORMAT_2:
+        constraints = [c for c in constraints if not isinstance(c, JointEffortLimits)]
     if plan.safety.checked:
         obstacles = [
             Obstacle(o.name, o.shape, tuple(o.size), tuple(o.xyz), tuple(o.rpy))  # type: ignore[arg-type]
