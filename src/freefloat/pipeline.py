@@ -96,20 +96,21 @@ def plan(
     _check_endpoints(scenario, constraints)
     clock = time.perf_counter()
     chosen = objective_named(objective or scenario.objective)
-    eager = [c for c in constraints if not c.lazy]
     with stage("solve"):
-        try:
-            found, imposed = _search_lazily(scenario, options, constraints)
-        except EffortLimitError:
-            if chosen.name == DEFAULT_OBJECTIVE:
-                raise
-            # another objective's freedom may find a path within the effort limits
-            found, imposed = search(scenario, options, eager), eager
+        # another objective's freedom may find a path within limits the search's path breaks
+        found, imposed = _search_lazily(
+            scenario, options, constraints, keep_broken=chosen.name != DEFAULT_OBJECTIVE
+        )
     if chosen.name != DEFAULT_OBJECTIVE:
         with stage(f"minimise {chosen.name}"):
             minimised = minimise(scenario, found, chosen, options, imposed)
             if len(imposed) < len(constraints) and _broken(minimised.found, constraints):
-                minimised = minimise(scenario, minimised.found, chosen, options, constraints)
+                again = minimise(scenario, minimised.found, chosen, options, constraints)
+                minimised = replace(
+                    again,
+                    start_value=minimised.start_value,
+                    levels=minimised.levels + again.levels,
+                )
         found = minimised.found
         _explain_lazy_breaks(found, constraints)
         report = ObjectiveReport(
@@ -121,7 +122,7 @@ def plan(
             duration_power=chosen.duration_power,
             start_value=minimised.start_value,
             levels=[
-                ObjectiveLevel(level.freedom, level.value, level.iterations, level.note)
+                ObjectiveLevel(level.freedom, level.value, level.iterations, level.note[:200])
                 for level in minimised.levels
             ],
         )
@@ -178,23 +179,32 @@ def _explain_lazy_breaks(found: SearchResult, constraints: Sequence[Constraint])
 
 
 def _search_lazily(
-    scenario: Scenario, options: SolveOptions, constraints: list[Constraint]
+    scenario: Scenario,
+    options: SolveOptions,
+    constraints: list[Constraint],
+    keep_broken: bool = False,
 ) -> tuple[SearchResult, list[Constraint]]:
     """Search without the lazy constraints, then with them if the path found breaks one.
 
-    Returns the result and the constraints the solvers imposed.
+    Returns the result and the constraints the solvers imposed. With ``keep_broken``, when no
+    path within the lazy constraints is found, the first path (which breaks them) is returned
+    with the constraints it honours, for an objective to improve on.
     """
     eager = [c for c in constraints if not c.lazy]
-    imposed = eager
     try:
         found = search(scenario, options, eager)
-        if len(eager) < len(constraints) and _broken(found, constraints):
-            imposed = constraints
-            found = search(scenario, options, constraints)
     except SolverError as exc:
         _explain_duration_limits(scenario, options, constraints, exc)
         raise
-    return found, imposed
+    if len(eager) == len(constraints) or not _broken(found, constraints):
+        return found, eager
+    try:
+        return search(scenario, options, constraints), constraints
+    except SolverError as exc:
+        if keep_broken:
+            return found, eager
+        _explain_duration_limits(scenario, options, constraints, exc)
+        raise
 
 
 def _check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> None:

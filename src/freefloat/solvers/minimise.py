@@ -15,6 +15,7 @@ recorded. Budgets are counts (SLSQP iterations), so the result is the same on ev
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
@@ -131,6 +132,9 @@ def minimise(
         plans += raised if problem.planar else raised[:SPATIAL_EXTRA_LEVELS]
     levels: list[Level] = []
     best_problem, best_beta, best_value, best_freedom = problem, beta, start_value, base
+    # A start that breaks a constraint (a lazy one the search did not impose) is beaten by any
+    # path within every constraint, whatever its value.
+    feasible = not broken_constraint(problem, constraints, beta)
     for counts in plans:
         if counts == best_freedom and levels:
             continue
@@ -153,15 +157,16 @@ def minimise(
             levels.append(Level(freedom, result.value, result.iterations, note))
             break
         levels.append(Level(freedom, result.value, result.iterations, result.note))
-        gain = best_value - result.value
-        if result.improved and result.value < best_value:
+        gain = best_value - result.value if feasible else math.inf
+        if result.improved and (result.value < best_value or not feasible):
             best_problem, best_beta, best_value, best_freedom = (
                 level_problem,
                 result.beta,
                 result.value,
                 counts,
             )
-        if len(levels) > 1 and gain < MIN_GAIN * abs(best_value):
+            feasible = True  # optimise keeps only paths within every constraint
+        if len(levels) > 1 and feasible and gain < MIN_GAIN * abs(best_value):
             break
 
     def keep_start() -> Minimised:
@@ -188,6 +193,7 @@ def minimise(
             )
         )
         return keep_start()
+    objective = objective.converged(checked.problem, checked.beta)  # at the final path too
     value = objective.evaluate(checked.problem, checked.beta).value
     solution = replace(
         found.solution,

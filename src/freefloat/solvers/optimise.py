@@ -20,7 +20,8 @@ breaks an imposed constraint, the run is repeated from there with its tightest i
 
 The result is polished back onto ``h = 0`` by minimum-norm Newton steps and kept only if it
 honours every constraint and lowers the objective (or ``beta_0`` broke a constraint);
-otherwise ``beta_0`` stands. The budget is SLSQP's iteration count.
+otherwise ``beta_0`` stands. Budgets are counts: SLSQP's iterations per run and
+:data:`MAX_EVALUATIONS` objective evaluations per call.
 """
 
 from __future__ import annotations
@@ -40,6 +41,9 @@ from .sqp import constraint_functions
 
 __all__ = ["ROUNDS", "Optimised", "optimise"]
 
+#: Objective evaluations one call may spend (SLSQP's line searches included); beyond it the
+#: start stands.
+MAX_EVALUATIONS = 400
 #: Rows are held this many of their constraint's tolerances inside the limit.
 BACKOFF = 100.0
 #: Evenly spaced normalised instants of the rows, to which the path's tightest are added.
@@ -68,6 +72,10 @@ class Optimised:
     iterations: int
     improved: bool
     note: str = ""
+
+
+class _BudgetSpentError(Exception):
+    """The objective evaluation budget of one call is spent."""
 
 
 def _tightest(
@@ -148,10 +156,15 @@ def optimise(
         return beta0 + s_mat @ z
 
     memo: dict[bytes, object] = {}
+    spent = [0]  # objective evaluations so far
 
     def cached(kind: str, z: np.ndarray, make):  # type: ignore[no-untyped-def]
         key = kind.encode() + np.asarray(z, dtype=float).tobytes()
         if key not in memo:
+            if kind == "j":
+                spent[0] += 1
+                if spent[0] > MAX_EVALUATIONS:
+                    raise _BudgetSpentError
             if len(memo) > 64:
                 memo.clear()
             memo[key] = make(to_beta(z))
@@ -187,15 +200,19 @@ def optimise(
                         "jac": lambda z, dg=dg: dg(to_beta(z)) @ s_mat,
                     }
                 )
-        with np.errstate(all="ignore"):
-            result = minimize(
-                fun,
-                z,
-                jac=grad,
-                method="SLSQP",
-                constraints=cons,
-                options={"ftol": 1e-12, "maxiter": int(max_iterations)},
-            )
+        try:
+            with np.errstate(all="ignore"):
+                result = minimize(
+                    fun,
+                    z,
+                    jac=grad,
+                    method="SLSQP",
+                    constraints=cons,
+                    options={"ftol": 1e-12, "maxiter": int(max_iterations)},
+                )
+        except _BudgetSpentError:
+            note = f"evaluation budget ({MAX_EVALUATIONS}) spent"
+            return Optimised(beta0, start_value, start_value, iterations, False, note)
         iterations += int(result.nit)
         z = np.asarray(result.x, dtype=float)
         candidate = to_beta(z)
@@ -210,6 +227,10 @@ def optimise(
         broken = broken_constraint(problem, constraints, candidate)
         if not broken:
             break
+        if not result.success and not any(
+            c not in imposed and broken_constraint(problem, [c], candidate) for c in active
+        ):  # SLSQP found no point within the imposed rows: more instants will not help
+            return Optimised(beta0, start_value, start_value, iterations, False, f"breaks {broken}")
         missing = [
             c for c in active if c not in imposed and broken_constraint(problem, [c], candidate)
         ]
