@@ -93,9 +93,11 @@ def test_shortest_duration_is_exact(worked_plan, tmp_path):
     scaled = JointPolynomials(
         path.coefficients * ratio ** np.arange(path.coefficients.shape[1]), shortest
     )
-    _, peak, fraction = limits.worst(robot, scaled)
-    assert fraction == pytest.approx(1.0, abs=1e-9)
-    assert peak == pytest.approx(2.0, abs=1e-9)
+    peak = limits.worst(robot, scaled)
+    assert peak is not None and peak.joint.name == "q1"
+    assert peak.fraction == pytest.approx(1.0, abs=1e-9)
+    assert peak.peak == pytest.approx(2.0, abs=1e-9)
+    assert peak.shortest_duration == pytest.approx(shortest, rel=1e-9)
 
 
 def test_too_short_a_duration_names_the_shortest_one(tmp_path, capsys):

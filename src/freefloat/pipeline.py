@@ -16,10 +16,7 @@ import numpy as np
 
 from .errors import (
     CollisionError,
-    EffortLimitError,
-    FreeFloatError,
     SolverError,
-    VelocityLimitError,
     VerificationError,
 )
 from .physics.attitude import geodesic_angle
@@ -37,8 +34,8 @@ from .plans.sampling import base_report, feasibility_report, sample_solution, so
 from .problem.constraints import (
     Clearance,
     Constraint,
-    JointEffortLimits,
-    JointVelocityLimits,
+    DurationScaledLimit,
+    LimitPeak,
     scenario_constraints,
 )
 from .problem.constraints.clearance import clearance_at
@@ -162,19 +159,16 @@ def _broken(found: SearchResult, constraints: Sequence[Constraint]) -> str:
 
 
 def _explain_lazy_breaks(found: SearchResult, constraints: Sequence[Constraint]) -> None:
-    """Raise :class:`EffortLimitError` when the path found still breaks an effort limit."""
+    """Refuse a path that still breaks a constraint, naming the shortest duration if it can."""
     broken = _broken(found, constraints)
     if not broken:
         return
     path = found.problem.polynomials(found.solution.beta)
     for limit in constraints:
-        if isinstance(limit, JointEffortLimits) and limit.name in broken:
-            joint, peak, ratio = limit.worst(found.problem.robot, path)
-            if joint is not None and ratio > 1.0:
-                unit = "N" if joint.unit == "m" else "N m"
-                raise EffortLimitError(
-                    joint.name, peak, joint.effort_limit, path.duration * ratio**0.5, unit
-                )
+        if isinstance(limit, DurationScaledLimit) and limit.name in broken:
+            peak = limit.worst(found.problem.robot, path)
+            if peak is not None and peak.fraction > 1.0:
+                raise limit.error(peak)
     raise SolverError(f"the path found breaks {broken}", 0.0)
 
 
@@ -247,7 +241,7 @@ def _explain_duration_limits(
     torques as 1/T^2, and the path shape does not depend on T, so the shortest duration at
     which the path found without these limits respects them is exact.
     """
-    timed = [c for c in constraints if isinstance(c, (JointVelocityLimits, JointEffortLimits))]
+    timed = [c for c in constraints if isinstance(c, DurationScaledLimit)]
     relaxed = [c for c in constraints if c not in timed]
     if not timed or not any(c.name in str(error) for c in timed):
         return  # the velocity and effort limits did not stand in the way
@@ -255,26 +249,16 @@ def _explain_duration_limits(
         found = search(scenario, options, relaxed)
     except SolverError:
         return
-    robot = scenario.robot
     path = found.problem.polynomials(found.solution.beta)
-    worst: tuple[float, FreeFloatError] | None = None
+    worst: tuple[DurationScaledLimit, LimitPeak] | None = None
     for limit in timed:
-        if isinstance(limit, JointVelocityLimits):
-            joint, peak, ratio = JointVelocityLimits.worst(robot, path)
-            shortest = path.duration * ratio
-            make = VelocityLimitError
-        else:
-            joint, peak, ratio = limit.worst(robot, path)
-            shortest = path.duration * ratio**0.5
-            make = EffortLimitError
-        if joint is None or ratio <= 1.0:
+        peak = limit.worst(scenario.robot, path)
+        if peak is None or peak.fraction <= 1.0:
             continue
-        unit = joint.unit if make is VelocityLimitError else ("N" if joint.unit == "m" else "N m")
-        limit_value = joint.velocity_limit if make is VelocityLimitError else joint.effort_limit
-        if worst is None or shortest > worst[0]:
-            worst = (shortest, make(joint.name, peak, limit_value, shortest, unit))
+        if worst is None or peak.shortest_duration > worst[1].shortest_duration:
+            worst = (limit, peak)
     if worst is not None:
-        raise worst[1] from error
+        raise worst[0].error(worst[1]) from error
 
 
 def plan_from_solution(

@@ -92,6 +92,11 @@ class Joint:
         return "m" if self.kind == "prismatic" else "rad"
 
     @property
+    def effort_unit(self) -> str:
+        """Unit of the joint's effort: ``"N m"`` (torque) or ``"N"`` (force, prismatic)."""
+        return "N" if self.kind == "prismatic" else "N m"
+
+    @property
     def angular(self) -> bool:
         """True for revolute and continuous joints (positions in rad)."""
         return self.kind != "prismatic"

@@ -93,13 +93,15 @@ def _tightest(
 def scaled_coordinates(
     problem: Problem, objective: Objective, beta: np.ndarray, value: float
 ) -> np.ndarray:
-    """``S`` with ``S^T (M^T M + r^2 A^T A) S = value I`` (see the module docstring).
+    """``S`` in which the objective divided by ``value`` has a Hessian near the identity.
 
-    ``M`` is the objective's metric at ``beta`` (its Gauss-Newton factor), ``A`` the weighted
-    second-derivative map of the basis (exact Gauss-Legendre integration), and ``r`` a small
-    multiple that keeps the matrix positive definite where ``M`` is rank deficient. Built from
-    the QR factors of the stacked matrices, not from a Cholesky factor of the product: that
-    squares the condition number of a high-degree monomial basis.
+    With the objective's metric ``M`` at ``beta`` (its Gauss-Newton factor),
+    ``S^T (M^T M + r^2 A^T A) S = value I``, where ``A`` is the weighted second-derivative map
+    of the basis (exact Gauss-Legendre integration) and ``r`` a small multiple that keeps the
+    matrix positive definite where ``M`` is rank deficient. Without a metric (``min_length``),
+    ``S^T A^T A S`` is ``value / |A|^2 I``: the acceleration norm, scaled to the value. Built
+    from the QR factors of the stacked matrices, not from a Cholesky factor of the product:
+    that squares the condition number of a high-degree monomial basis.
     """
     s, w = gauss_legendre(max(problem.family.degrees))
     dqss = problem.family.affine_samples(s).dqss

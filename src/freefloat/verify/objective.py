@@ -4,9 +4,9 @@
 the quadrature the record names, and must agree to :data:`RELATIVE_TOLERANCE` of its size (the
 computation is the planner's own, so only rounding separates them); ``error_estimate`` must
 agree to that plus half of itself. The unit and duration power must be the objective's, and a
-minimum-norm plan's ``start_value`` must be its ``value``. What cannot be recomputed from the
-file is the search's history: the value on the minimum-norm path the search found first (for
-other objectives) and the freedom levels tried.
+minimum-norm plan's ``start_value`` must be its ``value``; every objective is non-negative.
+What cannot be recomputed from the file is the search's history: the value on the
+minimum-norm path the search found first (for other objectives) and the freedom levels tried.
 """
 
 from __future__ import annotations
@@ -83,3 +83,7 @@ def check_objective(plan: Plan, problem: Problem, beta: np.ndarray) -> None:
         )
     if record.name == DEFAULT_OBJECTIVE and record.start_value != record.value:
         raise _mismatch("start_value", "a minimum-norm plan's start value is its value")
+    if record.start_value is None or not (
+        math.isfinite(record.start_value) and record.start_value >= 0
+    ):
+        raise _mismatch("start_value", "every objective is finite and non-negative")

@@ -1,6 +1,13 @@
 """Path constraints: one interface (:class:`Constraint`), one module per constraint."""
 
-from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
+from .base import (
+    DEFAULT_INSTANTS,
+    Constraint,
+    ConstraintRows,
+    DurationScaledLimit,
+    Excess,
+    LimitPeak,
+)
 from .clearance import Clearance
 from .joint_effort import JointEffortLimits
 from .joint_position import JointPositionLimits
@@ -13,10 +20,12 @@ __all__ = [
     "Clearance",
     "Constraint",
     "ConstraintRows",
+    "DurationScaledLimit",
     "Excess",
     "JointEffortLimits",
     "JointPositionLimits",
     "JointVelocityLimits",
+    "LimitPeak",
     "default_constraints",
     "scenario_constraints",
 ]

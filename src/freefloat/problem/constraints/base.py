@@ -15,11 +15,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...robot.model import Robot
+from ...errors import DurationLimitError
+from ...robot.model import Joint, Robot
 from ..paths import JointPolynomials
 from ..residual import Problem
 
-__all__ = ["DEFAULT_INSTANTS", "Constraint", "ConstraintRows", "Excess"]
+__all__ = [
+    "DEFAULT_INSTANTS",
+    "Constraint",
+    "ConstraintRows",
+    "DurationScaledLimit",
+    "Excess",
+    "LimitPeak",
+]
 
 #: Normalised instants at which solvers impose constraints by default (s = t / T in [0, 1]).
 DEFAULT_INSTANTS = np.linspace(0.0, 1.0, 97)
@@ -104,3 +112,48 @@ class Constraint(abc.ABC):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}()"
+
+
+@dataclass(frozen=True)
+class LimitPeak:
+    """The joint that comes closest to (or goes furthest beyond) its limit along a path.
+
+    Attributes:
+        joint: the joint.
+        peak: its largest value of the limited quantity (the limit's unit).
+        limit: its URDF limit.
+        fraction: ``peak / limit`` (above 1: beyond the limit).
+        shortest_duration: the shortest duration (s) at which the same path shape respects
+            every limit of this kind.
+    """
+
+    joint: Joint
+    peak: float
+    limit: float
+    fraction: float
+    shortest_duration: float
+
+
+class DurationScaledLimit(Constraint):
+    """A limit on a quantity that scales as ``T^-power`` for a fixed path shape.
+
+    Rates (power 1) and torques (power 2) of a path run in ``T`` seconds are those of the same
+    path run in one second times ``T^-power``; the path shape does not depend on ``T``, so the
+    shortest duration that respects the limits is exact:
+    ``T_min = T * max_i(peak_i / limit_i)^(1 / power)``.
+    """
+
+    power: int = 1
+
+    @abc.abstractmethod
+    def worst(self, robot: Robot, path: JointPolynomials) -> LimitPeak | None:
+        """The joint whose peak is the largest fraction of its limit; None when none has one."""
+
+    @abc.abstractmethod
+    def error(self, peak: LimitPeak) -> DurationLimitError:
+        """The error that names ``peak`` and the shortest duration."""
+
+    def shortest_duration(self, robot: Robot, path: JointPolynomials) -> float:
+        """The shortest duration (s) at which this path shape respects every such limit."""
+        peak = self.worst(robot, path)
+        return 0.0 if peak is None else peak.shortest_duration

@@ -22,13 +22,14 @@ import weakref
 
 import numpy as np
 
+from ...errors import EffortLimitError
 from ...physics.dynamics import inverse_dynamics_batch
 from ...physics.momentum import MomentumMap
 from ...physics.torque_derivatives import torques_and_derivatives
 from ...robot.model import Joint, Robot
 from ..paths import JointPolynomials
 from ..residual import Problem
-from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
+from .base import DEFAULT_INSTANTS, ConstraintRows, DurationScaledLimit, Excess, LimitPeak
 
 __all__ = ["DENSE_SAMPLES", "JointEffortLimits"]
 
@@ -37,7 +38,7 @@ DENSE_SAMPLES = 401
 _GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 
 
-class JointEffortLimits(Constraint):
+class JointEffortLimits(DurationScaledLimit):
     """Every joint's torque stays within ``+-effort_limit`` of its URDF (N m or N)."""
 
     name = "joint_effort_limits"
@@ -45,6 +46,7 @@ class JointEffortLimits(Constraint):
     tolerance = 1e-9
     affine = False
     lazy = True
+    power = 2
 
     def __init__(self) -> None:
         self._maps: weakref.WeakKeyDictionary[Robot, MomentumMap] = weakref.WeakKeyDictionary()
@@ -142,28 +144,23 @@ class JointEffortLimits(Constraint):
                 detail = f"joint {joint.name!r} at t = {where[i]:.4g} s"
         return Excess(worst, spread, detail)
 
-    def worst(self, robot: Robot, path: JointPolynomials) -> tuple[Joint | None, float, float]:
-        """The joint whose peak torque is the largest fraction of its limit.
-
-        Returns the joint (None when no joint has an effort limit), its peak torque (N m or
-        N) and that fraction of its limit.
-        """
+    def worst(self, robot: Robot, path: JointPolynomials) -> LimitPeak | None:
+        """The joint whose peak torque (N m or N) is the largest fraction of its limit."""
         if not self.applies_to(robot):
-            return None, 0.0, 0.0
+            return None
         peak, _, _ = self.peaks(robot, path)
-        ratios = [
+        fraction, i = max(
             (float(peak[i] / j.effort_limit), i) for i, j in enumerate(robot.joints) if _limited(j)
-        ]
-        ratio, i = max(ratios)
-        return robot.joints[i], float(peak[i]), ratio
+        )
+        joint = robot.joints[i]
+        shortest = path.duration * math.sqrt(fraction)
+        return LimitPeak(joint, float(peak[i]), joint.effort_limit, fraction, shortest)
 
-    def shortest_duration(self, robot: Robot, path: JointPolynomials) -> float:
-        """The shortest duration (s) at which this path shape respects every effort limit.
-
-        Torques scale as 1/T^2 and the shape does not depend on T, so this is exact up to the
-        peak's own accuracy: ``T_min = T sqrt(max_i(max |tau_i| / limit_i))``.
-        """
-        return path.duration * math.sqrt(self.worst(robot, path)[2])
+    def error(self, peak: LimitPeak) -> EffortLimitError:
+        """:class:`EffortLimitError` naming the joint, its torque and the shortest duration."""
+        return EffortLimitError(
+            peak.joint.name, peak.peak, peak.limit, peak.shortest_duration, peak.joint.effort_unit
+        )
 
 
 def _limited(joint: Joint) -> bool:

@@ -11,21 +11,23 @@ import math
 
 import numpy as np
 
-from ...robot.model import Joint, Robot
+from ...errors import VelocityLimitError
+from ...robot.model import Robot
 from ..paths import JointPolynomials
 from ..residual import Problem
-from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
+from .base import DEFAULT_INSTANTS, ConstraintRows, DurationScaledLimit, Excess, LimitPeak
 
 __all__ = ["JointVelocityLimits"]
 
 
-class JointVelocityLimits(Constraint):
+class JointVelocityLimits(DurationScaledLimit):
     """Every joint's rate stays within ``+-velocity_limit`` of its URDF (rad/s or m/s)."""
 
     name = "joint_velocity_limits"
     unit = "rad/s|m/s"
     tolerance = 1e-9
     affine = True
+    power = 1
 
     def applies_to(self, robot: Robot) -> bool:
         """True when some joint has a finite velocity limit."""
@@ -71,27 +73,22 @@ class JointVelocityLimits(Constraint):
             return Excess(0.0, 0.0, "no joint has a velocity limit")
         return Excess(worst, 0.0, detail)
 
-    @staticmethod
-    def worst(robot: Robot, path: JointPolynomials) -> tuple[Joint | None, float, float]:
-        """The joint whose peak rate is the largest fraction of its limit.
-
-        Returns the joint (None when no joint has a velocity limit), its exact peak rate
-        (rad/s or m/s) and that fraction of its limit.
-        """
-        worst, peak, ratio = None, 0.0, 0.0
+    def worst(self, robot: Robot, path: JointPolynomials) -> LimitPeak | None:
+        """The joint whose exact peak rate (rad/s or m/s) is the largest fraction of its limit."""
+        worst: LimitPeak | None = None
         for i, joint in enumerate(robot.joints):
             if math.isfinite(joint.velocity_limit):
                 (lo, _), (hi, _) = path.extremes(i, 1)
                 rate = max(abs(lo), abs(hi))
-                if worst is None or rate / joint.velocity_limit > ratio:
-                    worst, peak, ratio = joint, rate, rate / joint.velocity_limit
-        return worst, peak, ratio
+                fraction = rate / joint.velocity_limit
+                if worst is None or fraction > worst.fraction:
+                    worst = LimitPeak(
+                        joint, rate, joint.velocity_limit, fraction, path.duration * fraction
+                    )
+        return worst
 
-    @staticmethod
-    def shortest_duration(robot: Robot, path: JointPolynomials) -> float:
-        """The shortest duration (s) at which this path shape respects every velocity limit.
-
-        Rates scale as 1/T and the shape does not depend on T, so this is exact:
-        ``T_min = T * max_i(max |qdot_i| / limit_i)``.
-        """
-        return path.duration * JointVelocityLimits.worst(robot, path)[2]
+    def error(self, peak: LimitPeak) -> VelocityLimitError:
+        """:class:`VelocityLimitError` naming the joint, its rate and the shortest duration."""
+        return VelocityLimitError(
+            peak.joint.name, peak.peak, peak.limit, peak.shortest_duration, peak.joint.unit
+        )

@@ -18,7 +18,7 @@ __all__ = ["MinAcceleration"]
 
 
 class MinAcceleration(Objective):
-    """Integral of |qddot|^2 over the motion (rad^2/s^3), exact."""
+    """Integral of |qddot|^2 over the motion (rad^2/s^3; m^2/s^3 for prismatic joints), exact."""
 
     name = "min_acceleration"
     unit = "rad^2/s^3"

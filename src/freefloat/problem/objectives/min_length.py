@@ -19,7 +19,7 @@ __all__ = ["MinLength"]
 
 
 class MinLength(Objective):
-    """Smoothed joint-space path length (rad).
+    """Smoothed joint-space path length (rad; m for prismatic joints).
 
     Attributes:
         nodes: Gauss-Legendre nodes on [0, 1].
