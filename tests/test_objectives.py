@@ -89,14 +89,20 @@ def test_min_acceleration_of_a_quintic_is_its_closed_form(worked_scenario):
 
 
 def test_effort_scales_as_inverse_cube_of_duration(worked_scenario):
+    """Independent truth: torques of the path run in T seconds, integrated in seconds."""
     beta = np.array([0.3, -0.2, 0.5, 0.1])
+    problem = worked_problem(worked_scenario, {"q1": 2, "q2": 2})
+    x, w = np.polynomial.legendre.leggauss(80)
     values = []
     for duration in (4.0, 10.0, 25.0):
-        problem = dataclasses.replace(
-            worked_problem(worked_scenario, {"q1": 2, "q2": 2}), duration=duration
-        )
-        values.append(ff.MinEffort().evaluate(problem, beta).value * duration**3)
-    np.testing.assert_allclose(values, values[0], rtol=1e-12)
+        t = 0.5 * duration * (x + 1.0)
+        path = problem.family.at_times(beta, t, duration)  # rad, rad/s, rad/s^2
+        tau = inverse_dynamics_batch(problem.mmap, path.q, path.qd, path.qdd).tau
+        direct = 0.5 * duration * float(w @ (tau**2).sum(axis=1))
+        objective = ff.MinEffort().evaluate(problem.with_duration(duration), beta).value
+        assert objective == pytest.approx(direct, rel=1e-10)
+        values.append(direct * duration**3)
+    np.testing.assert_allclose(values, values[0], rtol=1e-10)
 
 
 def test_effort_quadrature_is_converged(worked_scenario):

@@ -35,9 +35,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import PlanFileError
+from ..errors import PlanFileError, excerpt
 from ..files import atomic_write_text
-from .limits import MAX_PLAN_BYTES, check_plan_file_kind, check_plan_values, excerpt
+from .limits import MAX_PLAN_BYTES, check_plan_file_kind, check_plan_values
 
 __all__ = [
     "FORMAT",

@@ -21,7 +21,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..errors import PlanFileError
+from ..errors import PlanFileError, excerpt
 
 __all__ = [
     "MAX_DEGREE",
@@ -60,16 +60,6 @@ MAX_TERM = 1e6
 MAX_MAGNITUDE = 1e100
 #: How far from 1 the norm of a stated quaternion may be.
 UNIT_NORM_TOLERANCE = 1e-10
-
-
-def excerpt(value: Any, limit: int = 40) -> str:
-    """``repr(value)``, cut to ``limit`` characters (never echoes a long list)."""
-    if isinstance(value, list) and len(value) > 8:
-        value = value[:8]
-        text = repr(value)[:-1] + ", ...]"
-    else:
-        text = repr(value)
-    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def check_plan_file_kind(path: Path) -> None:

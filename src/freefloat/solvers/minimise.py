@@ -10,7 +10,8 @@ value, when a level's coefficients grow too large for the monomial basis to keep
 conditions in floating point (:data:`MAX_BOUNDARY_ERROR`, measured as verification measures
 it), or at the last level. A scenario's ``[path] extra`` is the
 starting freedom; ``[path] raise_freedom = false`` keeps exactly that freedom. Every level is
-recorded. Budgets are counts (SLSQP iterations), so the result is the same on every machine.
+recorded. Budgets are counts (SLSQP iterations per run, :data:`EVALUATION_BUDGET` objective
+evaluations over all levels), so the result is the same on every machine.
 """
 
 from __future__ import annotations
@@ -44,6 +45,10 @@ MIN_GAIN = 0.005
 #: coefficients are held to the 1e-9 itself): beyond it the monomial coefficients are too large
 #: to keep the path's ends in floating point.
 MAX_BOUNDARY_ERROR = 5e-10
+#: Objective evaluations all levels together may spend, divided by the number of joints (each
+#: evaluation costs torque derivatives of every joint at every node): 2000 for the two-joint
+#: worked example, 571 for a Panda, 333 for a 12-joint chain.
+EVALUATION_BUDGET = 4000
 #: SLSQP iterations per run (a level runs at most ``optimise.ROUNDS`` times).
 ITERATIONS_PER_LEVEL = 100
 #: Levels a spatial problem tries beyond its own freedom (each costs many attitude
@@ -131,6 +136,7 @@ def minimise(
         raised = [[max(b, k) for b in base] for k in LEVELS if k > min(base)]
         plans += raised if problem.planar else raised[:SPATIAL_EXTRA_LEVELS]
     levels: list[Level] = []
+    budget = EVALUATION_BUDGET // max(1, robot.n)
     best_problem, best_beta, best_value, best_freedom = problem, beta, start_value, base
     # A start that breaks a constraint (a lazy one the search did not impose) is beaten by any
     # path within every constraint, whatever its value.
@@ -147,9 +153,12 @@ def minimise(
             start = level_problem.family.embed(best_problem.family, best_beta)
             if start is None:
                 break
+        if budget <= 0:
+            break
         result = optimise(
-            level_problem, start, objective, constraints, options, ITERATIONS_PER_LEVEL
+            level_problem, start, objective, constraints, options, ITERATIONS_PER_LEVEL, budget
         )
+        budget -= result.evaluations
         freedom = dict(zip(names, counts, strict=True))
         ends = _end_error(level_problem, result.beta)
         if result.improved and ends > MAX_BOUNDARY_ERROR:

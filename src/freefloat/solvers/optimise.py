@@ -41,8 +41,8 @@ from .sqp import constraint_functions
 
 __all__ = ["ROUNDS", "Optimised", "optimise"]
 
-#: Objective evaluations one call may spend (SLSQP's line searches included); beyond it the
-#: start stands.
+#: Objective evaluations one call may spend by default (SLSQP's line searches included);
+#: beyond its budget the start stands.
 MAX_EVALUATIONS = 400
 #: Rows are held this many of their constraint's tolerances inside the limit.
 BACKOFF = 100.0
@@ -64,6 +64,7 @@ class Optimised:
         iterations: SLSQP iterations.
         improved: whether ``beta`` differs from ``beta_0``.
         note: why ``beta_0`` was kept, when it was.
+        evaluations: objective evaluations spent.
     """
 
     beta: np.ndarray
@@ -72,6 +73,7 @@ class Optimised:
     iterations: int
     improved: bool
     note: str = ""
+    evaluations: int = 0
 
 
 class _BudgetSpentError(Exception):
@@ -128,6 +130,7 @@ def optimise(
     constraints: Sequence[Constraint],
     options: SolveOptions,
     max_iterations: int = 200,
+    max_evaluations: int = MAX_EVALUATIONS,
 ) -> Optimised:
     """Minimise ``objective`` over the roots, from the root ``beta`` (see the module docstring).
 
@@ -138,7 +141,8 @@ def optimise(
         objective: what to minimise.
         constraints: path constraints to keep.
         options: solver settings (attitude tolerance, rad).
-        max_iterations: SLSQP iteration budget.
+        max_iterations: SLSQP iteration budget per run.
+        max_evaluations: objective evaluation budget of the call.
     """
     from scipy.optimize import minimize  # imported when first used
 
@@ -165,7 +169,7 @@ def optimise(
         if key not in memo:
             if kind == "j":
                 spent[0] += 1
-                if spent[0] > MAX_EVALUATIONS:
+                if spent[0] > max_evaluations:
                     raise _BudgetSpentError
             if len(memo) > 64:
                 memo.clear()
@@ -190,6 +194,11 @@ def optimise(
     instants = _tightest(problem, active, beta0, np.linspace(0.0, 1.0, COARSE_INSTANTS))
     z = np.zeros(problem.n_free)
     iterations = 0
+
+    def kept(note: str) -> Optimised:
+        """The start stands (``note`` says why)."""
+        return Optimised(beta0, start_value, start_value, iterations, False, note, spent[0])
+
     for _ in range(ROUNDS):
         cons: list[dict[str, object]] = [{"type": "eq", "fun": h, "jac": dh}]
         for constraint in imposed:
@@ -213,26 +222,26 @@ def optimise(
                     options={"ftol": 1e-12, "maxiter": int(max_iterations)},
                 )
         except _BudgetSpentError:
-            note = f"evaluation budget ({MAX_EVALUATIONS}) spent"
-            return Optimised(beta0, start_value, start_value, iterations, False, note)
+            note = f"evaluation budget ({max_evaluations}) spent"
+            return kept(note)
         iterations += int(result.nit)
         z = np.asarray(result.x, dtype=float)
         candidate = to_beta(z)
         if not np.all(np.isfinite(candidate)):
-            return Optimised(beta0, start_value, start_value, iterations, False, "diverged")
+            return kept("diverged")
         try:
             candidate, vector = polish(problem, candidate, options.tolerance)
         except (np.linalg.LinAlgError, FloatingPointError, ValueError):
-            return Optimised(beta0, start_value, start_value, iterations, False, "polish failed")
+            return kept("polish failed")
         if float(np.linalg.norm(vector)) >= options.tolerance:
-            return Optimised(beta0, start_value, start_value, iterations, False, "left the goal")
+            return kept("left the goal")
         broken = broken_constraint(problem, constraints, candidate)
         if not broken:
             break
         if not result.success and not any(
             c not in imposed and broken_constraint(problem, [c], candidate) for c in active
         ):  # SLSQP found no point within the imposed rows: more instants will not help
-            return Optimised(beta0, start_value, start_value, iterations, False, f"breaks {broken}")
+            return kept(f"breaks {broken}")
         missing = [
             c for c in active if c not in imposed and broken_constraint(problem, [c], candidate)
         ]
@@ -243,8 +252,8 @@ def optimise(
         # Rows hold at the instants but not between them: add the path's tightest instants.
         instants = _tightest(problem, active, candidate, instants)
     else:
-        return Optimised(beta0, start_value, start_value, iterations, False, f"breaks {broken}")
+        return kept(f"breaks {broken}")
     value = objective.evaluate(unit, candidate).value
     if not value < start.value and not broken_constraint(problem, constraints, beta0):
-        return Optimised(beta0, start_value, start_value, iterations, False, "no lower value")
-    return Optimised(candidate, value * at_t, start_value, iterations, True)
+        return kept("no lower value")
+    return Optimised(candidate, value * at_t, start_value, iterations, True, "", spent[0])
