@@ -23,7 +23,7 @@ import tempfile
 import time
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -203,7 +203,7 @@ def test_a_mutated_scenario_is_planned_and_verified_or_refused_in_one_line(case)
 class _Counted(EvaluationCounter):
     """An evaluation counter that remembers every instance (every problem a plan builds)."""
 
-    made: list[EvaluationCounter] = []
+    made: ClassVar[list[EvaluationCounter]] = []
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
