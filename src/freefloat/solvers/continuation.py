@@ -13,7 +13,13 @@ along the geodesic from ``q_0`` to the goal, ``q(lam) = q_0 exp(lam delta)`` wit
 Every budget is a count (steps, residual evaluations), never a time, so the same problem gives
 the same answer on any machine. When the step size falls below its floor, the strategy stops
 and says how far it got (``reached_fraction``) and why (a constraint of a named joint, a
-singular map, or the freedom of the path family exhausted).
+singular map, or the freedom of the path family exhausted). It also stops when it has stalled:
+when, at the pace of its last :data:`PACE_WINDOW` steps, the rest of the step budget
+(:data:`MAX_STEPS`) would end short of the goal. A branch that creeps along a limit (tenths of
+a degree per step) would otherwise spend the whole budget, tens of seconds with the clearance
+rows, on the same refusal; stopping early also hands more freedom (the next path family,
+continued from here) a turn sooner. The check counts steps, so it is as reproducible as the
+budgets.
 """
 
 from __future__ import annotations
@@ -40,6 +46,8 @@ FIRST_STEP = math.radians(3.0)
 MIN_STEP = 1.7e-4
 #: Largest number of continuation steps (accepted or not).
 MAX_STEPS = 400
+#: Steps over which the progress is measured for the pace check (see :func:`track`).
+PACE_WINDOW = 20
 #: Residual (rad) an intermediate corrector must reach (about 0.006 deg: the next step corrects
 #: it anyway; only the goal itself is solved to the tolerance).
 INTERMEDIATE_TOLERANCE = 1e-4
@@ -232,12 +240,16 @@ def track(
     constraints: Sequence[Constraint],
     options: SolveOptions,
     origin: np.ndarray | None = None,
+    stall: bool = True,
 ) -> ContinuationResult:
     """Continue from ``origin`` (default ``beta = 0``) at its own attitude towards the goal.
 
     ``origin`` is the quintic path, or a path within the constraints when the quintic path
     breaks one (the dispatcher's feasibility restoration). The problem is not changed (targets
-    on the way are copies, :meth:`Problem.with_goal`).
+    on the way are copies, :meth:`Problem.with_goal`). With ``stall`` (the planner's default)
+    it stops once the pace of its last :data:`PACE_WINDOW` steps cannot reach the goal within
+    the step budget; without, it goes on until a budget or the step floor stops it (the reach
+    estimate of ``freefloat bounds``, which wants the furthest point within its budget).
     """
     zero = np.zeros(problem.n_free) if origin is None else np.asarray(origin, dtype=float)
     start = problem.achieved(zero)
@@ -272,10 +284,22 @@ def track(
         beta = solved
     dl = min(1.0, FIRST_STEP / angle) if angle > 0 else 1.0
     stopped_by = ""
+    reached = [0.0]  # lam after each step: the pace check's history
     while lam < 1.0:
         if steps >= MAX_STEPS:
             stopped_by = f"step budget ({MAX_STEPS} continuation steps)"
             break
+        if stall and steps >= PACE_WINDOW:
+            gain = lam - reached[steps - PACE_WINDOW]
+            if lam + gain * (MAX_STEPS - steps) / PACE_WINDOW < 1.0:
+                # At the pace of the last steps the step budget ends short of the goal: stop
+                # now rather than spend the budget on the same refusal.
+                tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache)
+                stopped_by = (
+                    f"{_why(problem, constraints, beta, tangent, jac)} (stalled: "
+                    f"{math.degrees(gain * angle):.2g} deg in the last {PACE_WINDOW} steps)"
+                )
+                break
         if problem.evaluations - first_evaluation > options.max_evaluations:
             stopped_by = f"evaluation budget ({options.max_evaluations} residual evaluations)"
             break
@@ -301,12 +325,14 @@ def track(
             )
             iterations += more
         if solved is None:
+            reached.append(lam)
             dl = 0.5 * step
             if dl * angle < MIN_STEP:
                 stopped_by = _why(problem, constraints, beta, tangent, jac)
                 break
             continue
         beta, lam, r, jac = solved, 1.0 if last else lam + step, r_new, jac_new
+        reached.append(lam)
         dl = step * (2.0 if its <= 4 else 1.0 if its <= 5 else 0.5)
     return ContinuationResult(beta, lam, angle, axis, r, steps, iterations, stopped_by)
 

@@ -95,7 +95,7 @@ def reach_set(
         axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
         goal = quat_multiply(quintic, quat_exp(max_angle * axis))
         before = problem.evaluations
-        result = track(problem.with_goal(goal), constraints, options)
+        result = track(problem.with_goal(goal), constraints, options, stall=False)
         out.append(
             DirectionReach(
                 axis=axis,

@@ -24,7 +24,7 @@ import numpy as np
 
 from ...robot.collision import CollisionModel
 from ...robot.model import Robot
-from ..paths import JointPolynomials
+from ..paths import JointPolynomials, PathFamily
 from ..residual import Problem
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 
@@ -59,7 +59,7 @@ class Clearance(Constraint):
             raise ValueError(f"clearance margin must be a finite number >= 0 m, got {margin!r}")
         self.model = model
         self.margin = float(margin)
-        self._memo: tuple[Problem, bytes, ConstraintRows] | None = None
+        self._memo: tuple[PathFamily, bytes, ConstraintRows] | None = None
         self._smallest_memo: dict[tuple[bytes, float, int, int], tuple[float, float, int]] = {}
         self._sampled_memo: tuple[tuple[bytes, float, int], np.ndarray] | None = None
 
@@ -83,7 +83,9 @@ class Clearance(Constraint):
         """
         beta = np.asarray(beta, dtype=float)
         key = beta.tobytes()
-        if self._memo is not None and self._memo[0] is problem and self._memo[1] == key:
+        # The rows depend on the path family and beta only: copies of a problem with another
+        # goal (continuation's targets) share the family, so they share the rows too.
+        if self._memo is not None and self._memo[0] is problem.family and self._memo[1] == key:
             return self._memo[2]
         grid = DEFAULT_INSTANTS
         values_grid, jacobian_grid = self._rows_at(problem, beta, grid)
@@ -93,7 +95,7 @@ class Clearance(Constraint):
         values = np.concatenate([values_grid, values_extra])
         jacobian = np.concatenate([jacobian_grid, jacobian_extra])
         rows = ConstraintRows(values, jacobian)
-        self._memo = (problem, key, rows)  # solvers ask for values, then Jacobian, at one beta
+        self._memo = (problem.family, key, rows)  # solvers ask several times at one beta
         return rows
 
     def _rows_at(
