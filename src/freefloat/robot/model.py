@@ -308,6 +308,7 @@ def load_robot(
         root_link, links = check_urdf_xml(text)
     except ModelError as exc:
         raise ModelError(str(exc), urdf=str(path)) from None
+    error: RuntimeError | ValueError | None
     with parser_messages() as messages:
         try:
             model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())

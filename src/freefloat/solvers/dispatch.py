@@ -154,10 +154,10 @@ def solve(
 
     # Certify the integration at the chosen root; refine the grid and polish when needed.
     chosen = roots[0]
-    found = certify(problem, chosen.beta, chosen.residual, tol)
-    chosen = Root(found.beta, found.residual, chosen.path_length)
-    error = found.integration_error
-    if not found.passed:
+    certified = certify(problem, chosen.beta, chosen.residual, tol)
+    chosen = Root(certified.beta, certified.residual, chosen.path_length)
+    error = certified.integration_error
+    if not certified.passed:
         raise SolverError(
             f"attitude integration error {error:.3g} rad is too large to certify the plan",
             chosen.residual,
@@ -172,7 +172,7 @@ def solve(
         wall_time=time.perf_counter() - start_time,
         roots=(chosen, *roots[1:]),
         integration_error=error,
-        steps=found.problem.steps,
+        steps=certified.problem.steps,
         strategy=strategy,
         tried=tuple(_dedupe(tried)),
     )

@@ -150,9 +150,10 @@ def minimise(
             level_problem = problem_from_scenario(
                 scenario, extra=counts, goal_offset=offset, mmap=problem.mmap, check_bounds=False
             )
-            start = level_problem.family.embed(best_problem.family, best_beta)
-            if start is None:
+            embedded = level_problem.family.embed(best_problem.family, best_beta)
+            if embedded is None:
                 break
+            start = embedded
         if budget <= 0:
             break
         result = optimise(

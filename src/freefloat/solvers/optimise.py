@@ -26,8 +26,9 @@ otherwise ``beta_0`` stands. Budgets are counts: SLSQP's iterations per run and
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -164,7 +165,7 @@ def optimise(
     memo: dict[bytes, object] = {}
     spent = [0]  # objective evaluations so far
 
-    def cached(kind: str, z: np.ndarray, make):  # type: ignore[no-untyped-def]
+    def cached(kind: str, z: np.ndarray, make: Callable[[np.ndarray], Any]) -> Any:
         key = kind.encode() + np.asarray(z, dtype=float).tobytes()
         if key not in memo:
             if kind == "j":

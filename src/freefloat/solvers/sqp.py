@@ -38,8 +38,16 @@ def constraint_functions(
         if constraint.affine:
             rows = constraint.rows(problem, np.zeros(problem.n_free), instants)
             if rows.count:
-                g0, g_mat = rows.values, rows.jacobian
-                out.append((lambda b, g0=g0, g=g_mat: -(g0 + g @ b), lambda b, g=g_mat: -g))
+
+                def values(
+                    b: np.ndarray, g0: np.ndarray = rows.values, g: np.ndarray = rows.jacobian
+                ) -> np.ndarray:
+                    return -(g0 + g @ b)
+
+                def jacobian(b: np.ndarray, g: np.ndarray = rows.jacobian) -> np.ndarray:
+                    return -g
+
+                out.append((values, jacobian))
         else:
             memo: dict[bytes, ConstraintRows] = {}
 
@@ -52,12 +60,17 @@ def constraint_functions(
                     memo[key] = c.rows(problem, b, instants)
                 return memo[key]
 
-            out.append(
-                (
-                    lambda b, rows_at=rows_at: -rows_at(b).values,
-                    lambda b, rows_at=rows_at: -rows_at(b).jacobian,
-                )
-            )
+            def row_values(
+                b: np.ndarray, rows_at: Callable[..., ConstraintRows] = rows_at
+            ) -> np.ndarray:
+                return -rows_at(b).values
+
+            def row_jacobian(
+                b: np.ndarray, rows_at: Callable[..., ConstraintRows] = rows_at
+            ) -> np.ndarray:
+                return -rows_at(b).jacobian
+
+            out.append((row_values, row_jacobian))
     return out
 
 
