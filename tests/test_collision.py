@@ -275,8 +275,8 @@ joints = {{ {UR5_START.format(pan=90.0)} }}
     assert "spacecraft_0" in excess.detail
 
 
-def test_the_ur5_pan_through_the_hull_plans_clear_of_it(tmp_path):
-    """Issue 13's case: the plain quintic pan sweeps the arm into the hull; the plan does not."""
+def ur5_pan_scenario(tmp_path) -> ff.Scenario:
+    """Issue 13's case: a UR5 pan from -90 to 90 deg whose plain quintic path enters the hull."""
     body = f"""
 [start]
 joints = {{ {UR5_START.format(pan=-90.0)} }}
@@ -284,7 +284,12 @@ joints = {{ {UR5_START.format(pan=-90.0)} }}
 joints = {{ {UR5_START.format(pan=90.0)} }}
 base_zyx_deg = [-17.29, 1.5255, -33.449]
 """
-    scenario = ff.Scenario.from_toml(_scenario(tmp_path, body))
+    return ff.Scenario.from_toml(_scenario(tmp_path, body))
+
+
+def test_the_ur5_pan_through_the_hull_plans_clear_of_it(tmp_path):
+    """Issue 13's case: the plain quintic pan sweeps the arm into the hull; the plan does not."""
+    scenario = ur5_pan_scenario(tmp_path)
     quintic = ff.problem_from_scenario(scenario, extra=[2] * 6)
     # The goal is a few tenths of a degree from the attitude the plain quintic pan reaches.
     offset = ff.geodesic_angle(quintic.achieved(np.zeros(12)), scenario.goal_attitude)

@@ -205,16 +205,9 @@ def test_cli_objective_flag(tmp_path, capsys):
 def test_min_effort_keeps_clear_of_the_hull(tmp_path):
     """The UR5 pan that sweeps into the hull on the quintic path: min_effort keeps 1 cm."""
     from freefloat.robot.collision import CollisionModel, known_srdf
-    from test_collision import UR5_START, _scenario
+    from test_collision import ur5_pan_scenario
 
-    body = f"""
-[start]
-joints = {{ {UR5_START.format(pan=-90.0)} }}
-[goal]
-joints = {{ {UR5_START.format(pan=90.0)} }}
-base_zyx_deg = [-17.29, 1.5255, -33.449]
-"""
-    scenario = ff.Scenario.from_toml(_scenario(tmp_path, body))
+    scenario = ur5_pan_scenario(tmp_path)
     best = ff.plan(scenario, objective="min_effort")
     assert best.verification.passed
     assert best.verification["clearance"].passed
