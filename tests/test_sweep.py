@@ -219,3 +219,28 @@ def test_a_payload_mass_axis_plans_each_mass_on_its_own_robot(tmp_path, monkeypa
         peak = max(abs(x) for sample in alone.samples.tau for x in sample)
         assert row.peak_torque == pytest.approx(peak, rel=1e-9)
     assert rows[0].peak_torque != pytest.approx(rows[1].peak_torque, rel=1e-3)
+
+
+def test_an_objective_axis_records_each_objective_and_its_value(tmp_path):
+    shutil.copy(DATA / "worked_example_auto.toml", tmp_path / "base.toml")
+    base = (tmp_path / "base.toml").read_text()
+    assert "\n[path]" not in base  # automatic freedom: no [path] table of its own
+    (tmp_path / "worked_example_auto.toml").write_text(base + '\n[path]\nobjective = "min_norm"\n')
+    path = tmp_path / "objectives.toml"
+    path.write_text(
+        'scenario = "worked_example_auto.toml"\nsamples = 21\n[[axis]]\nkey = "path.objective"\n'
+        'values = ["min_norm", "min_effort"]\n'
+    )
+    out = tmp_path / "objectives.csv"
+    rows = ff.sweep(path, workers=1, output=out, progress=False)
+    assert [(r.status, r.objective) for r in rows] == [
+        ("planned", "min_norm"),
+        ("planned", "min_effort"),
+    ]
+    effort = ff.plan(
+        ff.Scenario.from_toml(tmp_path / "worked_example_auto.toml"), objective="min_effort"
+    )
+    assert rows[1].objective_value == pytest.approx(effort.objective.value, rel=1e-12)
+    # the file reads back (resume) to the same rows
+    again = ff.sweep(path, workers=1, output=out, progress=False)
+    assert [r.without_timings() for r in again] == [r.without_timings() for r in rows]

@@ -49,6 +49,8 @@ class SweepRow:
         free_parameter_norm: Euclidean norm of all free coefficients (rad/s^k, m/s^k).
         path_length: summed joint travel of the chosen path (rad, plus m for prismatic).
         peak_torque: largest joint torque magnitude along the samples (N m, or N).
+        objective: what the path minimises (``min_norm``, ``min_effort`` ...); planned only.
+        objective_value: its value along the plan (the objective's unit, e.g. N^2 m^2 s).
         requested_yaw_change_deg: planar robots: the requested base yaw change (deg).
         yaw_change_min_deg: planar robots: lower end of the reachable interval (deg).
         yaw_change_max_deg: planar robots: upper end of the reachable interval (deg).
@@ -64,6 +66,8 @@ class SweepRow:
     free_parameter_norm: float | None = None
     path_length: float | None = None
     peak_torque: float | None = None
+    objective: str = ""
+    objective_value: float | None = None
     requested_yaw_change_deg: float | None = None
     yaw_change_min_deg: float | None = None
     yaw_change_max_deg: float | None = None
@@ -121,6 +125,8 @@ def _planned(job: Job, result: Plan, started: float) -> SweepRow:
         free_parameter_norm=float(math.sqrt(sum(c * c for c in free))),
         path_length=float(lengths[0]) if lengths else None,
         peak_torque=float(np.max(np.abs(tau))) if tau.size else None,
+        objective=result.objective.name,
+        objective_value=result.objective.value,
         requested_yaw_change_deg=feasibility.requested_yaw_change_deg,
         yaw_change_min_deg=None if bounds is None else float(bounds[0]),
         yaw_change_max_deg=None if bounds is None else float(bounds[1]),

@@ -63,7 +63,7 @@ def _row_cells(row: SweepRow) -> list[str]:
 def _parse_row(cells: Sequence[str], job: Job) -> SweepRow:
     values: dict[str, Any] = {}
     for f, text in zip(fields(SweepRow)[2:], cells, strict=True):
-        if f.name == "status" or f.name == "message":
+        if f.name in ("status", "message", "objective"):
             values[f.name] = text
         else:
             values[f.name] = float(text) if text else None
