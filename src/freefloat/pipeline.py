@@ -101,7 +101,8 @@ def plan(
     if chosen.name != DEFAULT_OBJECTIVE:
         with stage(f"minimise {chosen.name}"):
             minimised = minimise(scenario, found, chosen, options, imposed)
-            if len(imposed) < len(constraints) and _broken(minimised.found, constraints):
+            left_out = [c for c in constraints if c not in imposed]
+            if left_out and _broken(minimised.found, left_out):
                 again = minimise(scenario, minimised.found, chosen, options, constraints)
                 minimised = replace(
                     again,
@@ -109,7 +110,7 @@ def plan(
                     levels=minimised.levels + again.levels,
                 )
         found = minimised.found
-        _explain_lazy_breaks(found, constraints)
+        _explain_lazy_breaks(found, [c for c in constraints if c.lazy])
         report = ObjectiveReport(
             name=chosen.name,
             unit=chosen.unit,
@@ -159,7 +160,10 @@ def _broken(found: SearchResult, constraints: Sequence[Constraint]) -> str:
 
 
 def _explain_lazy_breaks(found: SearchResult, constraints: Sequence[Constraint]) -> None:
-    """Refuse a path that still breaks a constraint, naming the shortest duration if it can."""
+    """Refuse a path that still breaks a lazy constraint, naming the shortest duration if it can.
+
+    The others were imposed by the search and kept by the minimisation: not checked again.
+    """
     broken = _broken(found, constraints)
     if not broken:
         return
@@ -185,12 +189,13 @@ def _search_lazily(
     with the constraints it honours, for an objective to improve on.
     """
     eager = [c for c in constraints if not c.lazy]
+    lazy = [c for c in constraints if c.lazy]
     try:
         found = search(scenario, options, eager)
     except SolverError as exc:
         _explain_duration_limits(scenario, options, constraints, exc)
         raise
-    if len(eager) == len(constraints) or not _broken(found, constraints):
+    if not lazy or not _broken(found, lazy):  # the search honoured the eager ones
         return found, eager
     try:
         return search(scenario, options, constraints), constraints

@@ -135,7 +135,7 @@ def _planned(job: Job, result: Plan, started: float) -> SweepRow:
     )
 
 
-def _planar_feasibility(scenario: Scenario) -> dict[str, float]:
+def _planar_feasibility(scenario: Scenario) -> dict[str, Any]:
     """Requested yaw change and planar bounds (deg) of a planar scenario; empty otherwise."""
     from ..problem.build import problem_from_scenario
 

@@ -66,7 +66,7 @@ class JointEffortLimits(DurationScaledLimit):
         """``+-tau_i(t) - limit_i`` at the instants (N m or N), exact Jacobian."""
         samples = problem.family.affine_samples(np.asarray(instants, dtype=float))
         path = samples.at(beta)
-        found = torques_and_derivatives(self._map(problem.robot), path.q, path.qd, path.qdd)
+        found = torques_and_derivatives(problem.mmap, path.q, path.qd, path.qdd)
         scale = problem.duration**-2
         tau = found.tau * scale
         dtau = scale * (
