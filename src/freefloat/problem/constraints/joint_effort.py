@@ -50,6 +50,10 @@ class JointEffortLimits(DurationScaledLimit):
 
     def __init__(self) -> None:
         self._maps: weakref.WeakKeyDictionary[Robot, MomentumMap] = weakref.WeakKeyDictionary()
+        # the last paths' peaks per robot: planning checks a path, verification the same one
+        self._peaks: weakref.WeakKeyDictionary[
+            Robot, dict[bytes, tuple[np.ndarray, np.ndarray, float]]
+        ] = weakref.WeakKeyDictionary()
 
     def applies_to(self, robot: Robot) -> bool:
         """True when some joint has a finite effort limit."""
@@ -90,8 +94,22 @@ class JointEffortLimits(DurationScaledLimit):
         that could hold the peak (within four of the joint's largest second differences of its
         top sample, a bound on what the grid can miss) is refined by a golden-section search
         between its neighbours, all brackets in one batch per step. The error estimate is the
-        largest spread of ``|tau|`` over a final bracket.
+        largest spread of ``|tau|`` over a final bracket. The last few paths' results are kept
+        (copies are returned): planning and verification look at the same path.
         """
+        shape = np.asarray(path.coefficients.shape, dtype=np.int64).tobytes()
+        key = shape + np.float64(path.duration).tobytes() + path.coefficients.tobytes()
+        kept = self._peaks.setdefault(robot, {})
+        if key not in kept:
+            if len(kept) >= 4:
+                kept.clear()
+            kept[key] = self._peaks_of(robot, path)
+        peak, where, spread = kept[key]
+        return peak.copy(), where.copy(), spread
+
+    def _peaks_of(
+        self, robot: Robot, path: JointPolynomials
+    ) -> tuple[np.ndarray, np.ndarray, float]:
         mmap = self._map(robot)
         t = np.linspace(0.0, path.duration, DENSE_SAMPLES)
 
