@@ -1,15 +1,17 @@
 """Collision model of a free floater: which bodies may touch, and how far apart they are.
 
-Built with Pinocchio's URDF geometry parser and coal (collision geometry of the URDF, meshes
-resolved through the robot's package folders). Each mesh is replaced by its convex hull, so
+This is the solvers' model. Built with Pinocchio's URDF geometry parser and coal (collision
+geometry of the URDF, meshes resolved through the robot's package folders; see
+:mod:`freefloat.robot.geometry`). Each mesh is replaced by its **true** convex hull (qhull), so
 that every distance is a signed distance (negative when two shapes overlap, by GJK/EPA) and
-changes smoothly with the joints; the hull is never inside the mesh, so a clearance on hulls
-is a clearance on the meshes.
+changes smoothly with the joints; a hull contains its mesh, so a clearance on hulls is a
+clearance on the meshes. Verification measures the original meshes with a separately built
+model (:mod:`freefloat.verify.clearance`).
 
-Pairs checked: every body on the spacecraft (its hull, the arm's fixed first link, keep-out
-objects and anything else fixed to it) against every arm body except the one mounted on it;
-and every two arm bodies that are not parent and child. Pairs an SRDF disables (the MoveIt
-convention, ``<disable_collisions>``) are removed.
+Every query is checked: a non-finite or impossible distance (coal's EPA can return -DBL_MAX for
+some penetrating pairs at tight tolerances) is asked again at looser tolerances
+(:data:`RETRY_TOLERANCES`) and counted in :attr:`CollisionModel.retries`; a value still
+impossible raises :class:`~freefloat.errors.ModelError`, never reaching a solver.
 
 The base is free-floating, but every collision geometry here is fixed either to the spacecraft
 or to an arm link, so distances depend on the joints alone: they are computed with the
@@ -29,11 +31,23 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import InputError, ModelError
+from .geometry import (
+    HullInfo,
+    add_obstacles,
+    bodies_without_geometry,
+    checked_pairs,
+    hull_volume,
+    load_collision_geometry,
+    mesh_triangles,
+    mesh_volume,
+    true_hull,
+)
 from .model import Robot, example_robot_data_dir
 
 __all__ = [
     "ARM_SRDFS",
     "GJK_TOLERANCE",
+    "RETRY_TOLERANCES",
     "SHAPES",
     "CollisionModel",
     "Distances",
@@ -118,6 +132,8 @@ class Obstacle:
 
 #: Convergence tolerance of coal's GJK and EPA distance queries (m).
 GJK_TOLERANCE = 1e-9
+#: EPA tolerances (m) a query is asked again at when its answer is impossible.
+RETRY_TOLERANCES = (1e-6, 1e-4)
 
 
 @dataclass(frozen=True)
@@ -153,58 +169,25 @@ class CollisionModel:
         self.robot = robot
         self.obstacles = tuple(obstacles)
         self.srdf = None if srdf is None else Path(srdf).expanduser().resolve()
-        model = robot.model
-        try:
-            geometry = pin.buildGeomFromUrdf(
-                model,
-                str(robot.urdf),
-                pin.GeometryType.COLLISION,
-                None,
-                [str(d) for d in robot.package_dirs],
-            )
-        except (RuntimeError, ValueError) as exc:
-            raise ModelError(
-                f"cannot read its collision geometry ({exc})", str(robot.urdf)
-            ) from None
-        for obj in geometry.geometryObjects:
-            shape = obj.geometry
-            if hasattr(shape, "buildConvexRepresentation"):
-                shape.buildConvexRepresentation(False)
-                obj.geometry = shape.convex
-        base_frame = model.frames[model.getFrameId(robot.base_link)]
-        for obstacle in self.obstacles:
-            geometry.addGeometryObject(
-                pin.GeometryObject(
-                    f"obstacle:{obstacle.name}",
-                    1,  # the free-flyer joint: fixed to the spacecraft
-                    model.getFrameId(robot.base_link),
-                    base_frame.placement * obstacle.placement(),
-                    obstacle.geometry(),
-                )
-            )
-        parent = {j: int(model.parents[j]) for j in range(model.njoints)}
+        geometry = load_collision_geometry(robot)
+        #: Movable bodies with no collision geometry (their clearance cannot be checked).
+        self.uncovered = bodies_without_geometry(robot, geometry)
+        self._meshes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        for index, obj in enumerate(geometry.geometryObjects):
+            if isinstance(obj.geometry, coal.BVHModelBase):
+                self._meshes[index] = mesh_triangles(obj.geometry)
+                obj.geometry = true_hull(obj)
+        add_obstacles(robot, geometry, self.obstacles)
+        self.pairs = checked_pairs(robot, geometry, srdf)
         objects = list(geometry.geometryObjects)
-        for a in range(len(objects)):
-            for b in range(a + 1, len(objects)):
-                ja, jb = objects[a].parentJoint, objects[b].parentJoint
-                if ja == jb or parent[ja] == jb or parent[jb] == ja:
-                    continue  # one body, or parent and child: they touch by design
-                geometry.addCollisionPair(pin.CollisionPair(a, b))
-        if srdf is not None:
-            path = Path(srdf).expanduser().resolve()
-            if not path.is_file():
-                raise ModelError(f"SRDF file not found: {path}")
-            pin.removeCollisionPairs(model, geometry, str(path))
         self.geometry = geometry
-        self.pairs = [(int(p.first), int(p.second)) for p in geometry.collisionPairs]
         self.names = [f"{objects[a].name} / {objects[b].name}" for a, b in self.pairs]
         self._data = robot.model.createData()
         self._geometry_data = pin.GeometryData(geometry)
-        self._request = coal.DistanceRequest()
-        self._request.gjk_tolerance = GJK_TOLERANCE  # coal's default 1e-6 m is too coarse
-        self._request.epa_tolerance = GJK_TOLERANCE
-        self._request.gjk_max_iterations = 1000
-        self._request.enable_signed_distance = True
+        self._request = _distance_request(GJK_TOLERANCE)
+        self._retry_requests = [_distance_request(t) for t in RETRY_TOLERANCES]
+        #: Queries asked again at a looser EPA tolerance since the model was built.
+        self.retries = 0
         self._results: dict[int, coal.DistanceResult] = {}
         # Bounding spheres (centre in the shape's frame, radius; m) for exact culling: a pair
         # whose spheres are farther apart than the best exact distance cannot be the closest.
@@ -239,16 +222,9 @@ class CollisionModel:
         self._results = {}
         values = np.empty(len(self.pairs))
         for k, (a, b) in enumerate(self.pairs):
-            result = coal.DistanceResult()
-            values[k] = coal.distance(
-                objects[a].geometry,
-                placements[a],
-                objects[b].geometry,
-                placements[b],
-                self._request,
-                result,
+            values[k], self._results[k] = self._query(
+                k, objects[a].geometry, placements[a], objects[b].geometry, placements[b]
             )
-            self._results[k] = result
         if not gradients:
             return Distances(values)
         pin.computeJointJacobians(model, data, q)
@@ -294,11 +270,9 @@ class CollisionModel:
                     best, best_k = float(bound[k]), k
                 break
             a, b = self.pairs[k]
-            result = coal.DistanceResult()
-            value = coal.distance(
-                self._shapes[a], transform(a), self._shapes[b], transform(b), self._request, result
+            value, self._results[k] = self._query(
+                k, self._shapes[a], transform(a), self._shapes[b], transform(b)
             )
-            self._results[k] = result
             if value < best:
                 best, best_k = float(value), k
         return best, best_k
@@ -315,6 +289,46 @@ class CollisionModel:
             return value, np.zeros(self.robot.n), k
         pin.computeJointJacobians(self.robot.model, self._data)  # at closest_value's pose
         return value, self._gradient(k), k
+
+    def _query(
+        self,
+        k: int,
+        shape_a: coal.CollisionGeometry,
+        place_a: coal.Transform3s,
+        shape_b: coal.CollisionGeometry,
+        place_b: coal.Transform3s,
+    ) -> tuple[float, coal.DistanceResult]:
+        """Signed distance (m) of pair ``k``, asked again at looser tolerances if impossible.
+
+        Impossible: not finite, or outside what the bounding spheres allow (a separating
+        translation of the spheres separates the shapes, so a depth never exceeds theirs).
+        """
+        a, b = self.pairs[k]
+        centre_a = place_a.transform(self._centres[a])
+        gap = float(np.linalg.norm(centre_a - place_b.transform(self._centres[b])))
+        most = gap + self._radii[a] + self._radii[b]
+        least = gap - self._radii[a] - self._radii[b]
+        for request in (self._request, *self._retry_requests):
+            if request is not self._request:
+                self.retries += 1
+            result = coal.DistanceResult()
+            value = float(coal.distance(shape_a, place_a, shape_b, place_b, request, result))
+            if math.isfinite(value) and least - 1e-9 <= value <= most + 1e-9:
+                return value, result
+        raise ModelError(
+            f"coal returned an impossible distance {value:.6g} m for {self.names[k]} at every "
+            f"tolerance tried (EPA {GJK_TOLERANCE:g}, "
+            + ", ".join(f"{t:g}" for t in RETRY_TOLERANCES)
+            + " m)"
+        )
+
+    def hulls(self) -> list[HullInfo]:
+        """Per mesh, the volume it encloses and that of its hull (m^3), for reports."""
+        objects = self.geometry.geometryObjects
+        return [
+            HullInfo(objects[i].name, mesh_volume(*mesh), hull_volume(objects[i].geometry))
+            for i, mesh in self._meshes.items()
+        ]
 
     def _gradient(self, k: int) -> np.ndarray:
         """d(distance of pair k)/d(joints), after distances and joint Jacobians are computed."""
@@ -336,6 +350,16 @@ class CollisionModel:
             linear = jac[:3] - pin.skew(offset) @ jac[3:]
             grad += sign * (normal @ linear[:, self._columns])
         return grad
+
+
+def _distance_request(epa_tolerance: float) -> coal.DistanceRequest:
+    """A signed-distance request: GJK to :data:`GJK_TOLERANCE`, EPA to ``epa_tolerance`` (m)."""
+    request = coal.DistanceRequest()
+    request.gjk_tolerance = GJK_TOLERANCE  # coal's default 1e-6 m is too coarse
+    request.epa_tolerance = epa_tolerance
+    request.gjk_max_iterations = 1000
+    request.enable_signed_distance = True
+    return request
 
 
 def collision_model(

@@ -1,0 +1,198 @@
+"""Collision geometry of a robot as its URDF states it: loading, checked pairs, true hulls.
+
+Two distance models read the same URDF through this module and nothing else in common:
+
+- the solvers' :class:`~freefloat.robot.collision.CollisionModel`, where every mesh is replaced
+  by its **true convex hull** (qhull through coal, :func:`true_hull`); a hull contains its
+  mesh, so a clearance measured on hulls is a clearance on the meshes;
+- verification's :class:`~freefloat.verify.clearance.MeshClearance`, on the **original**
+  geometry (meshes as bounding-volume hierarchies of their own triangles, primitives as
+  themselves).
+
+Both check the same pairs (:func:`checked_pairs`): every body on the spacecraft against every
+arm body except the one mounted on it, and every two arm bodies that are not parent and child;
+pairs an SRDF disables (MoveIt's ``<disable_collisions>``) are removed.
+
+Hulls are built once per mesh file and scale in a process (:func:`true_hull` keeps them), so a
+second plan of the same robot pays nothing for them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+from ..errors import ModelError
+from .model import Robot
+
+__all__ = [
+    "HullInfo",
+    "add_obstacles",
+    "bodies_without_geometry",
+    "checked_pairs",
+    "load_collision_geometry",
+    "mesh_volume",
+    "true_hull",
+]
+
+
+def load_collision_geometry(robot: Robot) -> pin.GeometryModel:
+    """A fresh geometry model of the URDF's collision elements (meshes as BVHs; m).
+
+    Each call parses the URDF again, so two callers never share shape objects.
+
+    Raises:
+        ModelError: the URDF's collision geometry cannot be read (a missing or broken mesh).
+    """
+    try:
+        return pin.buildGeomFromUrdf(
+            robot.model,
+            str(robot.urdf),
+            pin.GeometryType.COLLISION,
+            None,
+            [str(d) for d in robot.package_dirs],
+        )
+    except (RuntimeError, ValueError) as exc:
+        raise ModelError(f"cannot read its collision geometry ({exc})", str(robot.urdf)) from None
+
+
+def add_obstacles(robot: Robot, geometry: pin.GeometryModel, obstacles: Sequence) -> None:
+    """Add keep-out objects (:class:`~freefloat.robot.collision.Obstacle`) fixed to the base."""
+    model = robot.model
+    frame = model.getFrameId(robot.base_link)
+    for obstacle in obstacles:
+        geometry.addGeometryObject(
+            pin.GeometryObject(
+                f"obstacle:{obstacle.name}",
+                1,  # the free-flyer joint: fixed to the spacecraft
+                frame,
+                model.frames[frame].placement * obstacle.placement(),
+                obstacle.geometry(),
+            )
+        )
+
+
+def checked_pairs(
+    robot: Robot, geometry: pin.GeometryModel, srdf: str | Path | None
+) -> list[tuple[int, int]]:
+    """The pairs of ``geometry`` whose clearance is checked, as index pairs (see module doc).
+
+    Adds them to ``geometry`` as its collision pairs too.
+
+    Raises:
+        ModelError: the SRDF file does not exist.
+    """
+    model = robot.model
+    parent = {j: int(model.parents[j]) for j in range(model.njoints)}
+    objects = list(geometry.geometryObjects)
+    geometry.removeAllCollisionPairs()
+    for a in range(len(objects)):
+        for b in range(a + 1, len(objects)):
+            ja, jb = objects[a].parentJoint, objects[b].parentJoint
+            if ja == jb or parent[ja] == jb or parent[jb] == ja:
+                continue  # one body, or parent and child: they touch by design
+            geometry.addCollisionPair(pin.CollisionPair(a, b))
+    if srdf is not None:
+        path = Path(srdf).expanduser().resolve()
+        if not path.is_file():
+            raise ModelError(f"SRDF file not found: {path}")
+        pin.removeCollisionPairs(model, geometry, str(path))
+    return [(int(p.first), int(p.second)) for p in geometry.collisionPairs]
+
+
+def bodies_without_geometry(robot: Robot, geometry: pin.GeometryModel) -> list[str]:
+    """Links moved by a joint (Pinocchio bodies) that carry no collision geometry at all.
+
+    A body is the link a joint moves together with every link fixed to it (fixed-joint merging
+    puts their collision elements on that joint); it is named by its first link.
+    """
+    model = robot.model
+    covered = {int(obj.parentJoint) for obj in geometry.geometryObjects}
+    missing = []
+    for joint in range(2, model.njoints):  # 0: the universe, 1: the spacecraft's free flyer
+        if joint in covered:
+            continue
+        body = next(
+            (f.name for f in model.frames if f.type == pin.FrameType.BODY and f.parentJoint == joint),
+            model.names[joint],
+        )
+        missing.append(body)
+    return missing
+
+
+@dataclass(frozen=True)
+class HullInfo:
+    """How much a link's convex hull adds to its mesh.
+
+    Attributes:
+        name: the geometry object's name.
+        mesh_volume: volume the mesh encloses (m^3); NaN when the mesh is not closed.
+        hull_volume: volume of its convex hull (m^3).
+    """
+
+    name: str
+    mesh_volume: float
+    hull_volume: float
+
+    @property
+    def extra_fraction(self) -> float:
+        """The hull's extra volume as a fraction of the mesh's (1), NaN when unknown."""
+        if not (math.isfinite(self.mesh_volume) and self.mesh_volume > 0.0):
+            return math.nan
+        return self.hull_volume / self.mesh_volume - 1.0
+
+
+#: True hulls by mesh file and scale, built once in a process.
+_HULLS: dict[tuple[str, tuple[float, ...]], coal.ConvexBase] = {}
+
+
+def true_hull(obj: pin.GeometryObject) -> coal.ConvexBase:
+    """The real convex hull (qhull, coal ``buildConvexHull(True, "Qt")``) of a mesh object.
+
+    Remembered per mesh file and scale. Never ``buildConvexRepresentation``: for a non-convex
+    mesh that keeps the mesh's own faces, and GJK's support search on it stops at local maxima.
+    """
+    key = (str(obj.meshPath), tuple(float(s) for s in obj.meshScale))
+    if key not in _HULLS:
+        shape = obj.geometry
+        shape.buildConvexHull(True, "Qt")
+        _HULLS[key] = shape.convex
+    return _HULLS[key]
+
+
+def mesh_triangles(shape: coal.BVHModelBase) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (V, 3) (m) and triangles (F, 3) (vertex indices) of a coal mesh."""
+    vertices = np.array(shape.vertices(), dtype=float).reshape(-1, 3)
+    triangles = np.array(
+        [[t[0], t[1], t[2]] for t in (shape.tri_indices(i) for i in range(shape.num_tris))],
+        dtype=int,
+    ).reshape(-1, 3)
+    return vertices, triangles
+
+
+def mesh_volume(vertices: np.ndarray, triangles: np.ndarray) -> float:
+    """Volume (m^3) a closed triangle mesh encloses (divergence theorem); NaN if not closed.
+
+    A mesh is closed when every edge is shared by exactly two triangles.
+    """
+    pairs = (triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]])
+    edges = np.sort(np.concatenate(pairs), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    if len(counts) == 0 or not np.all(counts == 2):
+        return math.nan
+    a, b, c = (vertices[triangles[:, k]] for k in range(3))
+    return abs(float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6.0)
+
+
+def hull_volume(hull: coal.ConvexBase) -> float:
+    """Volume of a coal convex hull (m^3), from its points (qhull through scipy)."""
+    from scipy.spatial import ConvexHull  # when needed: it costs start-up time
+
+    points = np.array(hull.points(), dtype=float).reshape(-1, 3)
+    return float(ConvexHull(points).volume)
