@@ -118,10 +118,9 @@ def bodies_without_geometry(robot: Robot, geometry: pin.GeometryModel) -> list[s
     for joint in range(2, model.njoints):  # 0: the universe, 1: the spacecraft's free flyer
         if joint in covered:
             continue
-        body = next(
-            (f.name for f in model.frames if f.type == pin.FrameType.BODY and f.parentJoint == joint),
-            model.names[joint],
-        )
+        bodies = [f.name for f in model.frames if f.type == pin.FrameType.BODY]
+        owners = [f.parentJoint for f in model.frames if f.type == pin.FrameType.BODY]
+        body = bodies[owners.index(joint)] if joint in owners else model.names[joint]
         missing.append(body)
     return missing
 
