@@ -39,10 +39,12 @@ from ..physics.dynamics import inverse_dynamics, inverse_dynamics_batch, replay
 from ..physics.momentum import MomentumMap
 from ..plans.format import FORMAT_2, Check, Plan, Verification
 from ..problem.constraints import Constraint, JointEffortLimits, default_constraints
+from ..problem.constraints.clearance import Clearance
 from ..problem.constraints.registry import clearance_constraint
 from ..problem.paths import JointPolynomials, boundary_errors
 from ..robot.collision import Obstacle
 from ..robot.model import Robot, load_robot
+from .clearance_check import clearance_checks
 from .recompute import check_plan_numbers, compare_verification
 from .stepping import (
     _FIRST_ATTITUDE_STEPS,
@@ -357,7 +359,9 @@ def verify_plan(
     ]
     path = JointPolynomials.from_lists([c.tolist() for c in coeffs[0]], duration)
     for constraint in constraints:
-        if constraint.applies_to(robot):
+        if isinstance(constraint, Clearance):
+            checks.extend(clearance_checks(robot, constraint, coeffs[0], duration))
+        elif constraint.applies_to(robot):
             excess = constraint.excess(robot, path)
             checks.append(
                 Check(

@@ -1,0 +1,188 @@
+"""The continuous-time clearance certificate of a path (see :mod:`freefloat.verify.clearance`).
+
+Work goes to the (interval, pair) with the lowest lower bound first (a heap), so the smallest
+measured clearance is found early and every interval whose bound lies within
+:data:`~freefloat.verify.clearance.ACCURACY` of it is settled without more queries. Each item
+is refined in two steps: exact distances at its two ends (in place of the bounding-sphere
+bounds it starts from), then halving.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from ..robot.collision import CollisionModel
+from .clearance import (
+    ACCURACY,
+    FIRST_INSTANTS,
+    MAX_BISECTIONS,
+    ClearanceCertificate,
+    MeshClearance,
+    hull_slack,
+)
+from .motion import PolynomialMotion
+
+__all__ = ["certify"]
+
+
+class _Instants:
+    """Placements, bounding-sphere bounds and exact distances per instant, computed once."""
+
+    def __init__(self, mesh: MeshClearance, motion: PolynomialMotion) -> None:
+        self.mesh, self.motion = mesh, motion
+        self.placements: dict[float, list[pin.SE3]] = {}
+        self.exact: dict[tuple[float, int], float] = {}
+
+    def at(self, t: float) -> list[pin.SE3]:
+        if t not in self.placements:
+            self.placements[t] = self.mesh.placements(self.motion.joints(t))
+        return self.placements[t]
+
+    def distance(self, t: float, k: int) -> float:
+        if (t, k) not in self.exact:
+            self.exact[(t, k)] = self.mesh.exact(self.at(t), k)
+        return self.exact[(t, k)]
+
+
+def _speeds(mesh: MeshClearance, motion: PolynomialMotion, t0: Any, t1: Any) -> np.ndarray:
+    """(K, P) Lipschitz constants of every pair's distance on each ``[t0, t1]`` (m/s)."""
+    speed = motion.rate_bounds(t0, t1) @ mesh.reach
+    return speed[:, mesh.first] + speed[:, mesh.second]
+
+
+def certify(
+    mesh: MeshClearance,
+    motion: PolynomialMotion,
+    margin: float,
+    solver: CollisionModel | None = None,
+    instants: int = FIRST_INSTANTS,
+) -> ClearanceCertificate:
+    """Certify that every checked pair stays ``margin`` apart (m) at every instant of ``motion``.
+
+    Args:
+        mesh: the original-geometry model.
+        motion: the joint paths.
+        margin: required clearance (m).
+        solver: the solvers' hull model, to compare its figures with the mesh's.
+        instants: instants of the first, uniform pass (>= 2).
+    """
+    store = _Instants(mesh, motion)
+    times = np.linspace(0.0, motion.duration, instants)
+    bounds = np.array([mesh.sphere_bounds(store.at(float(t))) for t in times])
+    k0, p0 = np.unravel_index(int(np.argmin(bounds)), bounds.shape)
+    measured, when, pair = store.distance(float(times[k0]), int(p0)), float(times[k0]), int(p0)
+    lipschitz = _speeds(mesh, motion, times[:-1], times[1:])
+    lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
+    settled = lbs >= measured - ACCURACY
+    lower = float(lbs[settled].min()) if settled.any() else math.inf
+    heap = [
+        (
+            float(lbs[i, k]),
+            float(times[i]),
+            float(times[i + 1]),
+            int(k),
+            False,
+            float(lipschitz[i, k]),
+        )
+        for i, k in zip(*np.nonzero(~settled), strict=True)
+    ]
+    heapq.heapify(heap)
+    bisections = 0
+    exhausted = False
+    while heap:
+        lb, t0, t1, k, exact, lipschitz = heap[0]
+        if lb >= measured - ACCURACY:
+            break  # this and every later item is within the accuracy of the minimum
+        heapq.heappop(heap)
+        if not exact:
+            d0, d1 = store.distance(t0, k), store.distance(t1, k)
+            for d, t in ((d0, t0), (d1, t1)):
+                if d < measured:
+                    measured, when, pair = d, t, k
+            heapq.heappush(
+                heap, (0.5 * (d0 + d1 - lipschitz * (t1 - t0)), t0, t1, k, True, lipschitz)
+            )
+            continue
+        if bisections >= MAX_BISECTIONS:
+            exhausted = True
+            heapq.heappush(heap, (lb, t0, t1, k, exact, lipschitz))
+            break
+        bisections += 1
+        mid = 0.5 * (t0 + t1)
+        dm = store.distance(mid, k)
+        if dm < measured:
+            measured, when, pair = dm, mid, k
+        for a, b in ((t0, mid), (mid, t1)):
+            speed = float(_speeds(mesh, motion, a, b)[0, k])
+            value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
+            heapq.heappush(heap, (value, a, b, k, True, speed))
+    if heap:
+        lower = min(lower, heap[0][0])
+    contained = _contained_at_start(mesh, store)
+    if contained is not None:
+        measured, when, pair = min(measured, -store.distance(0.0, contained)), 0.0, contained
+        lower = min(lower, measured)
+    lower = min(lower, measured)
+    agreement = (
+        (-math.inf, "") if solver is None else _disagreement(mesh, solver, store, {0.0, when})
+    )
+    return ClearanceCertificate(
+        margin=margin,
+        lower_bound=lower,
+        measured=measured,
+        time=when,
+        pair=mesh.names[pair],
+        kind=mesh.kinds[pair] + (", contained" if contained == pair else ""),
+        penetration=measured < 0.0,
+        instants=len(store.placements),
+        bisections=bisections,
+        certified=lower >= margin,
+        exhausted=exhausted,
+        hull_excess=agreement[0],
+        hull_detail=agreement[1],
+    )
+
+
+def _contained_at_start(mesh: MeshClearance, store: _Instants) -> int | None:
+    """A pair one of whose bodies starts inside the other's closed mesh, if any."""
+    placements = store.at(0.0)
+    near = np.flatnonzero(mesh.sphere_bounds(placements) < 0.0)
+    for k in near:
+        if store.distance(0.0, int(k)) > 0.0 and mesh.contained(placements, int(k)):
+            return int(k)
+    return None
+
+
+def _disagreement(
+    mesh: MeshClearance, solver: CollisionModel, store: _Instants, times: set[float]
+) -> tuple[float, str]:
+    """How far the solver's hull distances stray outside what their meshes allow (m).
+
+    A hull contains its mesh, so its distance is at most the mesh's and at least the mesh's
+    minus the two hulls' slack. Returns the worst excess over those bounds (negative or within
+    :data:`HULL_TOLERANCE` when every pair agrees) and where it occurs.
+    """
+    if solver.names != mesh.names:
+        return math.inf, "the solver checks other pairs than the URDF states"
+    slack = [hull_slack(solver, i) for i in range(len(mesh.shapes))]
+    worst, where = -math.inf, ""
+    for t in sorted(times):
+        hull = solver.distances(store.motion.joints(t)).values
+        for k, (a, b) in enumerate(mesh.pairs):
+            true = store.distance(t, k)
+            farther = hull[k] - true - HULL_TOLERANCE
+            nearer = (
+                true - hull[k] - slack[a] - slack[b] - HULL_TOLERANCE if true > 0.0 else -math.inf
+            )
+            if max(farther, nearer) > worst:
+                worst = max(farther, nearer)
+                where = (
+                    f"{mesh.names[k]} at t = {t:.4g} s: hull {hull[k]:.6g} m, mesh {true:.6g} m, "
+                    f"hull slack {slack[a] + slack[b]:.3g} m"
+                )
+    return worst, where

@@ -1,0 +1,269 @@
+"""Clearance verified on the URDF's original geometry, certified between samples.
+
+The solvers keep clearance on true convex hulls (:mod:`freefloat.robot.collision`). This check
+shares none of their shapes: it parses the URDF's collision elements again
+(:func:`~freefloat.robot.geometry.load_collision_geometry`) and measures the **original**
+geometry, meshes as bounding-volume hierarchies of their own triangles and primitives as
+themselves (coal). Only the list of checked pairs is common, since it defines what is checked.
+
+**Continuous time.** Every checked body moves no faster than a bound taken from the exact
+joint-rate extremes of the polynomials on each interval (the real roots of the joint
+accelerations) and the body's reach from each joint axis (link offsets plus the body's
+bounding sphere, independent of the configuration). The distance of a pair is then Lipschitz
+on the interval with constant ``L`` (the sum of its two bodies' bounds), and
+
+    min over [t0, t1] of d(t)  >=  (d(t0) + d(t1)) / 2 - L (t1 - t0) / 2.
+
+Intervals where that bound falls below the margin, or more than :data:`ACCURACY` below the
+smallest measured clearance, are halved (a counted budget, :data:`MAX_BISECTIONS`), so the
+reported lower bound holds for every instant and lies within :data:`ACCURACY` of the measured
+minimum once refined. Pairs whose bounding spheres are far apart are bounded by the spheres
+alone (a valid lower bound) and never queried.
+
+**Penetration** is reported as such, with a depth: coal's signed distance for a mesh against a
+primitive, the deepest triangle contact for two meshes (whose distance query stops at 0), and a
+body found inside a closed mesh at the start (winding number) counts its surface distance as
+depth. A body cannot enter a mesh later without crossing its surface, which the certificate
+would see.
+
+**Agreement with the solver.** At the instants of the smallest clearance the solver's hull
+distances are compared pair by pair: a hull may never report more clearance than its mesh
+(:data:`HULL_TOLERANCE`), nor less than the mesh minus the hulls' slack (for each hull face,
+every point lies within the longest edge over sqrt(3) of a mesh vertex).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+from ..robot.collision import GJK_TOLERANCE, CollisionModel, Obstacle
+from ..robot.geometry import add_obstacles, checked_pairs, load_collision_geometry, mesh_triangles
+from ..robot.model import Robot
+from .motion import reach_coefficients
+
+__all__ = [
+    "ACCURACY",
+    "HULL_TOLERANCE",
+    "MAX_BISECTIONS",
+    "ClearanceCertificate",
+    "MeshClearance",
+    "hull_slack",
+]
+
+#: Instants of the first pass (uniform in time).
+FIRST_INSTANTS = 401
+#: How close (m) the certified lower bound is brought to the smallest measured clearance.
+ACCURACY = 1e-4
+#: Most interval halvings of one certificate (a count, so the verdict is reproducible).
+MAX_BISECTIONS = 20000
+#: A hull may report at most this much more clearance than its mesh (m): GJK's tolerance.
+HULL_TOLERANCE = 1e-6
+
+
+@dataclass(frozen=True)
+class ClearanceCertificate:
+    """The clearance of a path on the original geometry, for every instant.
+
+    Attributes:
+        margin: required clearance (m).
+        lower_bound: certified smallest clearance over the whole path (m).
+        measured: smallest clearance measured at an instant (m); >= ``lower_bound``.
+        time: when ``measured`` occurs (s).
+        pair: the pair that has it (``"a / b"``).
+        kind: how that pair was measured (``"mesh / sphere"``...).
+        penetration: whether some pair overlaps (then ``measured`` is minus its depth).
+        instants: instants measured; ``bisections``: intervals halved.
+        certified: whether ``lower_bound >= margin`` holds on every interval.
+        exhausted: whether the halving budget ran out before the bound came within
+            :data:`ACCURACY` of ``measured`` (the bound still holds; it is only looser).
+        hull_excess: how far the solver's hull figures stray outside what the meshes allow
+            (m; negative when they agree, -inf when not compared).
+        hull_detail: the pair and instant of ``hull_excess``.
+    """
+
+    margin: float
+    lower_bound: float
+    measured: float
+    time: float
+    pair: str
+    kind: str
+    penetration: bool
+    instants: int
+    bisections: int
+    certified: bool
+    exhausted: bool = False
+    hull_excess: float = -math.inf
+    hull_detail: str = ""
+
+    @property
+    def detail(self) -> str:
+        """One line for the check's detail and the summary."""
+        what = "penetration" if self.penetration else "min clearance"
+        text = (
+            f"{what} {self.measured:.6g} m ({self.pair}, {self.kind}) at t = {self.time:.4g} s, "
+            f"margin {self.margin:g} m; certified >= {self.lower_bound:.6g} m at every instant "
+            f"({self.instants} instants, {self.bisections} halvings)"
+        )
+        if not self.certified:
+            text += "; NOT certified between samples"
+        if self.exhausted:
+            text += f"; halving budget ({MAX_BISECTIONS}) spent"
+        return text
+
+
+class MeshClearance:
+    """Distances of the checked pairs on the URDF's original collision geometry.
+
+    Args:
+        robot: the robot.
+        srdf: SRDF whose disabled pairs are not checked.
+        obstacles: keep-out objects fixed to the spacecraft.
+    """
+
+    def __init__(
+        self, robot: Robot, srdf: str | Path | None = None, obstacles: Sequence[Obstacle] = ()
+    ) -> None:
+        self.robot = robot
+        geometry = load_collision_geometry(robot)
+        add_obstacles(robot, geometry, obstacles)
+        self.pairs = checked_pairs(robot, geometry, srdf)
+        self.geometry = geometry
+        objects = list(geometry.geometryObjects)
+        self.shapes = [obj.geometry for obj in objects]
+        self.names = [f"{objects[a].name} / {objects[b].name}" for a, b in self.pairs]
+        self.meshes = {i: mesh_triangles(s) for i, s in enumerate(self.shapes) if _is_mesh(s)}
+        self.centres, self.radii = _bounding_spheres(self.shapes, self.meshes)
+        self.reach = reach_coefficients(robot, geometry, self.centres, self.radii)
+        pairs = np.array(self.pairs, dtype=int).reshape(-1, 2)
+        #: First and second geometry index of every pair.
+        self.first, self.second = pairs[:, 0], pairs[:, 1]
+        self._data = robot.model.createData()
+        self._gdata = pin.GeometryData(geometry)
+        self._request = coal.DistanceRequest()
+        self._request.gjk_tolerance = GJK_TOLERANCE
+        self._request.enable_signed_distance = True
+        self.kinds = [f"{_kind(self.shapes[a])} / {_kind(self.shapes[b])}" for a, b in self.pairs]
+
+    def placements(self, joints: np.ndarray) -> list[pin.SE3]:
+        """Pose of every geometry object in the spacecraft frame at ``joints`` (rad or m)."""
+        model = self.robot.model
+        pin.forwardKinematics(model, self._data, self.robot.configuration(joints))
+        pin.updateGeometryPlacements(model, self._data, self.geometry, self._gdata)
+        return [pin.SE3(m.rotation, m.translation) for m in self._gdata.oMg]
+
+    def sphere_bounds(self, placements: list[pin.SE3]) -> np.ndarray:
+        """(P,) lower bounds of every pair's distance from bounding spheres (m)."""
+        centres = np.array([m.act(c) for m, c in zip(placements, self.centres, strict=True)])
+        gap = np.linalg.norm(centres[self.first] - centres[self.second], axis=1)
+        return gap - self.radii[self.first] - self.radii[self.second]
+
+    def exact(self, placements: list[pin.SE3], k: int) -> float:
+        """Signed distance of pair ``k`` (m): negative is the depth of an overlap.
+
+        Two meshes that touch or cross report the deepest of their triangle contacts.
+        """
+        a, b = self.pairs[k]
+        ta, tb = (
+            coal.Transform3s(placements[i].rotation, placements[i].translation) for i in (a, b)
+        )
+        result = coal.DistanceResult()
+        value = float(coal.distance(self.shapes[a], ta, self.shapes[b], tb, self._request, result))
+        if value <= 0.0 and a in self.meshes and b in self.meshes:
+            request = coal.CollisionRequest()
+            request.enable_contact = True
+            request.num_max_contacts = 1000
+            collision = coal.CollisionResult()
+            coal.collide(self.shapes[a], ta, self.shapes[b], tb, request, collision)
+            depths = [abs(c.penetration_depth) for c in collision.getContacts()]
+            value = -max(depths, default=0.0)
+        return value
+
+    def contained(self, placements: list[pin.SE3], k: int) -> bool:
+        """Whether one body of pair ``k`` lies inside the other's closed mesh (winding number)."""
+        a, b = self.pairs[k]
+        for outer, inner in ((a, b), (b, a)):
+            if outer not in self.meshes:
+                continue
+            vertices, triangles = self.meshes[outer]
+            point = placements[inner].act(
+                self.meshes[inner][0][0] if inner in self.meshes else self.centres[inner]
+            )
+            local = placements[outer].actInv(point)
+            if abs(_winding_number(vertices, triangles, local)) > 0.5:
+                return True
+        return False
+
+
+def _is_mesh(shape: coal.CollisionGeometry) -> bool:
+    return isinstance(shape, coal.BVHModelBase)
+
+
+def _kind(shape: coal.CollisionGeometry) -> str:
+    return "mesh" if _is_mesh(shape) else type(shape).__name__.lower()
+
+
+def _bounding_spheres(
+    shapes: list[coal.CollisionGeometry], meshes: dict[int, tuple[np.ndarray, np.ndarray]]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Centre (in each shape's frame) and radius (m) of a sphere around each shape.
+
+    Meshes: the box of their vertices' centre and the farthest vertex (numpy); primitives:
+    coal's local box.
+    """
+    centres, radii = [], []
+    for i, shape in enumerate(shapes):
+        if i in meshes:
+            vertices = meshes[i][0]
+            centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
+            radius = float(np.linalg.norm(vertices - centre, axis=1).max())
+        else:
+            shape.computeLocalAABB()
+            centre, radius = np.asarray(shape.aabb_center, float), float(shape.aabb_radius)
+        centres.append(centre)
+        radii.append(radius)
+    return np.array(centres), np.array(radii)
+
+
+def _winding_number(vertices: np.ndarray, triangles: np.ndarray, point: np.ndarray) -> float:
+    """Generalised winding number of a triangle mesh about ``point`` (1 inside, 0 outside)."""
+    a, b, c = (vertices[triangles[:, k]] - point for k in range(3))
+    la, lb, lc = (np.linalg.norm(x, axis=1) for x in (a, b, c))
+    numerator = np.einsum("ij,ij->i", a, np.cross(b, c))
+    denominator = (
+        la * lb * lc
+        + np.einsum("ij,ij->i", a, b) * lc
+        + np.einsum("ij,ij->i", a, c) * lb
+        + np.einsum("ij,ij->i", b, c) * la
+    )
+    return float(np.arctan2(numerator, denominator).sum() / (2.0 * math.pi))
+
+
+#: Slack per hull object (id of the coal shape; hulls are shared and kept, see true_hull).
+_SLACK: dict[int, float] = {}
+
+
+def hull_slack(model: CollisionModel, index: int) -> float:
+    """How far a solver hull's surface may lie from its mesh (m): 0 for primitives.
+
+    Every hull vertex is a mesh vertex, so every point of a hull face lies within the face's
+    longest edge over sqrt(3) of a mesh point.
+    """
+    shape = model.geometry.geometryObjects[index].geometry
+    if not isinstance(shape, coal.ConvexBase):
+        return 0.0
+    if id(shape) not in _SLACK:
+        points = np.array(shape.points(), dtype=float).reshape(-1, 3)
+        faces = np.array(
+            [[f[0], f[1], f[2]] for f in (shape.polygons(i) for i in range(shape.num_polygons))]
+        )
+        corners = points[faces]
+        edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
+        _SLACK[id(shape)] = float(edges.max()) / math.sqrt(3.0)
+    return _SLACK[id(shape)]

@@ -1,0 +1,72 @@
+"""Verification's clearance checks: the certificate on the original geometry, and agreement.
+
+Two checks for a plan kept clear (:mod:`freefloat.verify.clearance`):
+
+- ``clearance``: the margin minus the certified lower bound of clearance over every instant,
+  measured on the URDF's own meshes and primitives (m; passes at <= 0 within 1e-6 m);
+- ``clearance_hull_agreement``: how far the solver's hull distances stray outside what the
+  meshes allow (m; passes at <= 1e-6 m, GJK's tolerance): a hull reporting more clearance
+  than its mesh, or less than the mesh minus the hull's slack, fails it.
+"""
+
+from __future__ import annotations
+
+import weakref
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..plans.format import Check
+from ..problem.constraints.clearance import Clearance
+from ..robot.model import Robot
+from .certificate import certify
+from .clearance import HULL_TOLERANCE, ClearanceCertificate, MeshClearance
+from .motion import PolynomialMotion
+
+__all__ = ["clearance_certificate", "clearance_checks", "mesh_clearance"]
+
+#: Tolerance of both checks (m).
+TOLERANCE = 1e-6
+
+
+def mesh_clearance(robot: Robot, constraint: Clearance) -> MeshClearance:
+    """The original-geometry model of the pairs a clearance constraint checks (built once)."""
+    models = _MODELS.setdefault(robot, {})
+    key = (
+        None if constraint.model.srdf is None else str(constraint.model.srdf),
+        constraint.model.obstacles,
+    )
+    if key not in models:
+        models[key] = MeshClearance(robot, constraint.model.srdf, constraint.model.obstacles)
+    return models[key]
+
+
+def clearance_certificate(
+    robot: Robot, constraint: Clearance, coefficients: Sequence[np.ndarray], duration: float
+) -> ClearanceCertificate:
+    """The certificate of the path (ascending coefficients in seconds per joint; s)."""
+    motion = PolynomialMotion(coefficients, duration)
+    return certify(mesh_clearance(robot, constraint), motion, constraint.margin, constraint.model)
+
+
+def clearance_checks(
+    robot: Robot, constraint: Clearance, coefficients: Sequence[np.ndarray], duration: float
+) -> list[Check]:
+    """The ``clearance`` and ``clearance_hull_agreement`` checks of a path (see module doc)."""
+    if not constraint.applies_to(robot):
+        return []
+    cert = clearance_certificate(robot, constraint, coefficients, duration)
+    return [
+        Check("clearance", float(cert.margin - cert.lower_bound), TOLERANCE, "m", 0.0, cert.detail),
+        Check(
+            "clearance_hull_agreement",
+            float(max(cert.hull_excess, -1.0)),
+            HULL_TOLERANCE,
+            "m",
+            0.0,
+            cert.hull_detail,
+        ),
+    ]
+
+
+_MODELS: weakref.WeakKeyDictionary[Robot, dict[tuple, MeshClearance]] = weakref.WeakKeyDictionary()
