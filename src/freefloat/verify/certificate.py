@@ -175,10 +175,8 @@ def _disagreement(
         hull = solver.distances(store.motion.joints(t)).values
         for k, (a, b) in enumerate(mesh.pairs):
             true = store.distance(t, k)
-            farther = hull[k] - true - HULL_TOLERANCE
-            nearer = (
-                true - hull[k] - slack[a] - slack[b] - HULL_TOLERANCE if true > 0.0 else -math.inf
-            )
+            farther = hull[k] - true
+            nearer = true - hull[k] - slack[a] - slack[b] if true > 0.0 else -math.inf
             if max(farther, nearer) > worst:
                 worst = max(farther, nearer)
                 where = (
