@@ -39,11 +39,13 @@ from .problem.constraints import (
     scenario_constraints,
 )
 from .problem.constraints.clearance import clearance_at
+from .problem.constraints.registry import cached_collision_model
 from .problem.limits import check_samples
 from .problem.objectives import DEFAULT_OBJECTIVE, objective_named
 from .problem.residual import Problem
 from .problem.scenario import Scenario
-from .progress import stage
+from .progress import LOGGER, stage
+from .robot.collision import known_srdf
 from .solvers.minimise import minimise
 from .solvers.options import DEFAULT_TOLERANCE, Solution, SolveOptions
 from .solvers.restore import broken_constraint
@@ -217,10 +219,28 @@ def _check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> N
 
 
 def _safety_report(scenario: Scenario, constraints: Sequence[Constraint]) -> SafetyReport:
-    """The plan's record of what it was kept clear of."""
+    """The plan's record of what it was kept clear of, warning of what it could not check."""
     clearance = next((c for c in constraints if isinstance(c, Clearance)), None)
+    safety = scenario.safety
+    if not safety.check:
+        note = "not checked ([safety] check = false)"
+        LOGGER.warning("clearance: %s", note)
+        return SafetyReport(checked=False, margin_m=safety.margin, note=note)
+    model = (
+        clearance.model
+        if clearance is not None
+        else cached_collision_model(
+            scenario.robot, safety.srdf or known_srdf(scenario.robot), safety.obstacles
+        )
+    )
+    note = ""
+    if model.uncovered:
+        bodies = ", ".join(model.uncovered)
+        note = f"no collision geometry for {bodies}"
+        LOGGER.warning("clearance: not checked for %s (no collision geometry)", bodies)
     if clearance is None or not clearance.applies_to(scenario.robot):
-        return SafetyReport(checked=False, margin_m=scenario.safety.margin)
+        note = f"not checked ({note or 'no pairs to check'})"
+        return SafetyReport(checked=False, margin_m=safety.margin, note=note)
     srdf = clearance.model.srdf
     return SafetyReport(
         checked=True,
@@ -230,6 +250,7 @@ def _safety_report(scenario: Scenario, constraints: Sequence[Constraint]) -> Saf
             ObstacleRecord(o.name, o.shape, list(o.size), list(o.xyz), list(o.rpy))
             for o in clearance.model.obstacles
         ],
+        note=note,
     )
 
 

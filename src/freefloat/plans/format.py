@@ -273,12 +273,15 @@ class SafetyReport:
         margin_m: required clearance between checked bodies (m).
         srdf: the SRDF whose disabled pairs were not checked, if any.
         obstacles: keep-out objects fixed to the spacecraft.
+        note: why clearance was not checked (``[safety] check = false``, no collision
+            geometry), or the movable bodies it could not check; empty when all were.
     """
 
     checked: bool = False
     margin_m: float = 0.01
     srdf: str | None = None
     obstacles: list[ObstacleRecord] = field(default_factory=list)
+    note: str = ""
 
 
 @dataclass(frozen=True)
@@ -446,6 +449,7 @@ def _safety(data: Any) -> SafetyReport:
         margin_m=float(data["margin_m"]),
         srdf=None if data.get("srdf") is None else str(data["srdf"]),
         obstacles=[ObstacleRecord(**o) for o in data.get("obstacles", [])],
+        note=str(data.get("note", "")),
     )
 
 

@@ -49,9 +49,11 @@ __all__ = [
     "GJK_TOLERANCE",
     "RETRY_TOLERANCES",
     "SHAPES",
+    "CheckedDistance",
     "CollisionModel",
     "Distances",
     "Obstacle",
+    "checked_distance",
     "collision_model",
     "known_srdf",
 ]
@@ -184,8 +186,6 @@ class CollisionModel:
         self.names = [f"{objects[a].name} / {objects[b].name}" for a, b in self.pairs]
         self._data = robot.model.createData()
         self._geometry_data = pin.GeometryData(geometry)
-        self._request = _distance_request(GJK_TOLERANCE)
-        self._retry_requests = [_distance_request(t) for t in RETRY_TOLERANCES]
         #: Queries asked again at a looser EPA tolerance since the model was built.
         self.retries = 0
         self._results: dict[int, coal.DistanceResult] = {}
@@ -298,29 +298,14 @@ class CollisionModel:
         shape_b: coal.CollisionGeometry,
         place_b: coal.Transform3s,
     ) -> tuple[float, coal.DistanceResult]:
-        """Signed distance (m) of pair ``k``, asked again at looser tolerances if impossible.
-
-        Impossible: not finite, or outside what the bounding spheres allow (a separating
-        translation of the spheres separates the shapes, so a depth never exceeds theirs).
-        """
+        """Signed distance (m) of pair ``k`` by :func:`checked_distance`, retries counted."""
         a, b = self.pairs[k]
         centre_a = place_a.transform(self._centres[a])
         gap = float(np.linalg.norm(centre_a - place_b.transform(self._centres[b])))
-        most = gap + self._radii[a] + self._radii[b]
-        least = gap - self._radii[a] - self._radii[b]
-        for request in (self._request, *self._retry_requests):
-            if request is not self._request:
-                self.retries += 1
-            result = coal.DistanceResult()
-            value = float(coal.distance(shape_a, place_a, shape_b, place_b, request, result))
-            if math.isfinite(value) and least - 1e-9 <= value <= most + 1e-9:
-                return value, result
-        raise ModelError(
-            f"coal returned an impossible distance {value:.6g} m for {self.names[k]} at every "
-            f"tolerance tried (EPA {GJK_TOLERANCE:g}, "
-            + ", ".join(f"{t:g}" for t in RETRY_TOLERANCES)
-            + " m)"
-        )
+        spheres = (gap - self._radii[a] - self._radii[b], gap + self._radii[a] + self._radii[b])
+        answer = checked_distance(shape_a, place_a, shape_b, place_b, spheres, self.names[k])
+        self.retries += answer.retries
+        return answer.value, answer.result
 
     def hulls(self) -> list[HullInfo]:
         """Per mesh, the volume it encloses and that of its hull (m^3), for reports."""
@@ -350,6 +335,59 @@ class CollisionModel:
             linear = jac[:3] - pin.skew(offset) @ jac[3:]
             grad += sign * (normal @ linear[:, self._columns])
         return grad
+
+
+@dataclass(frozen=True)
+class CheckedDistance:
+    """A signed distance that passed its plausibility check.
+
+    Attributes:
+        value: signed distance (m), negative when the shapes overlap.
+        result: coal's result (witness points, normal).
+        retries: queries asked again at a looser EPA tolerance to get it.
+    """
+
+    value: float
+    result: coal.DistanceResult
+    retries: int
+
+
+#: Requests at the first tolerance and at every retry tolerance, built once.
+_REQUESTS: list[coal.DistanceRequest] = []
+
+
+def checked_distance(
+    shape_a: coal.CollisionGeometry,
+    place_a: coal.Transform3s,
+    shape_b: coal.CollisionGeometry,
+    place_b: coal.Transform3s,
+    spheres: tuple[float, float],
+    name: str,
+) -> CheckedDistance:
+    """Signed distance (m) of two shapes, asked again at looser tolerances when impossible.
+
+    Impossible: not finite, or outside what the bounding spheres allow (``spheres``: their
+    lower and upper bounds of the distance, m; a translation separating the spheres separates
+    the shapes, so a depth never exceeds theirs).
+
+    Raises:
+        ModelError: no tolerance of :data:`RETRY_TOLERANCES` gives a possible value.
+    """
+    if not _REQUESTS:
+        _REQUESTS.extend(_distance_request(t) for t in (GJK_TOLERANCE, *RETRY_TOLERANCES))
+    least, most = spheres
+    value = math.nan
+    for retries, request in enumerate(_REQUESTS):
+        result = coal.DistanceResult()
+        value = float(coal.distance(shape_a, place_a, shape_b, place_b, request, result))
+        if math.isfinite(value) and least - 1e-9 <= value <= most + 1e-9:
+            return CheckedDistance(value, result, retries)
+    raise ModelError(
+        f"coal returned an impossible distance {value:.6g} m for {name} at every EPA "
+        "tolerance tried ("
+        + ", ".join(f"{t:g}" for t in (GJK_TOLERANCE, *RETRY_TOLERANCES))
+        + " m)"
+    )
 
 
 def _distance_request(epa_tolerance: float) -> coal.DistanceRequest:

@@ -43,7 +43,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from ..robot.collision import GJK_TOLERANCE, CollisionModel, Obstacle
+from ..robot.collision import CollisionModel, Obstacle, checked_distance
 from ..robot.geometry import add_obstacles, checked_pairs, load_collision_geometry, mesh_triangles
 from ..robot.model import Robot
 from .motion import reach_coefficients
@@ -146,9 +146,6 @@ class MeshClearance:
         self.first, self.second = pairs[:, 0], pairs[:, 1]
         self._data = robot.model.createData()
         self._gdata = pin.GeometryData(geometry)
-        self._request = coal.DistanceRequest()
-        self._request.gjk_tolerance = GJK_TOLERANCE
-        self._request.enable_signed_distance = True
         self.kinds = [f"{_kind(self.shapes[a])} / {_kind(self.shapes[b])}" for a, b in self.pairs]
 
     def placements(self, joints: np.ndarray) -> list[pin.SE3]:
@@ -173,8 +170,13 @@ class MeshClearance:
         ta, tb = (
             coal.Transform3s(placements[i].rotation, placements[i].translation) for i in (a, b)
         )
-        result = coal.DistanceResult()
-        value = float(coal.distance(self.shapes[a], ta, self.shapes[b], tb, self._request, result))
+        gap = float(
+            np.linalg.norm(placements[a].act(self.centres[a]) - placements[b].act(self.centres[b]))
+        )
+        spheres = (gap - self.radii[a] - self.radii[b], gap + self.radii[a] + self.radii[b])
+        value = checked_distance(
+            self.shapes[a], ta, self.shapes[b], tb, spheres, self.names[k]
+        ).value
         if value <= 0.0 and a in self.meshes and b in self.meshes:
             request = coal.CollisionRequest()
             request.enable_contact = True

@@ -16,7 +16,7 @@ import numpy as np
 from ..plans.format import Plan
 from ..problem.scenario import Scenario
 
-__all__ = ["cartesian_report", "robot_label", "summary"]
+__all__ = ["cartesian_report", "clearance_line", "robot_label", "summary"]
 
 
 def _attitude_table(p: Plan) -> list[str]:
@@ -69,6 +69,7 @@ def summary(
             f"{v['attitude_independent'].value:.1e} rad, replay "
             f"{v['replay_attitude'].value:.1e} rad, momentum {v['momentum'].value:.1e} kg m^2/s"
         )
+    lines.append(clearance_line(p))
     kinds = dict(zip(p.robot.joints, _kinds(p), strict=True))
     free = [
         f"{name}: "
@@ -118,6 +119,18 @@ def summary(
     if output is not None:
         lines.append(f"  plan            {output}")
     return "\n".join(lines)
+
+
+def clearance_line(p: Plan) -> str:
+    """What the plan was kept clear of, as verification measured it on the original geometry."""
+    safety = p.safety
+    if not safety.checked:
+        return f"  clearance       {safety.note or 'not checked'}"
+    check = next((c for c in p.verification.checks if c.name == "clearance"), None)
+    line = f"  clearance       {check.detail if check is not None else 'not verified'}"
+    if safety.note:
+        line += f"; {safety.note}"
+    return line
 
 
 def objective_line(p: Plan) -> str:

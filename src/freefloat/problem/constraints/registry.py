@@ -19,7 +19,13 @@ from .joint_effort import JointEffortLimits
 from .joint_position import JointPositionLimits
 from .joint_velocity import JointVelocityLimits
 
-__all__ = ["CONSTRAINTS", "clearance_constraint", "default_constraints", "scenario_constraints"]
+__all__ = [
+    "CONSTRAINTS",
+    "cached_collision_model",
+    "clearance_constraint",
+    "default_constraints",
+    "scenario_constraints",
+]
 
 #: Constraint classes by name.
 CONSTRAINTS: dict[str, type[Constraint]] = {
@@ -58,11 +64,19 @@ def clearance_constraint(
 
     The collision model (SRDF pairs removed, obstacles added) is built once per robot.
     """
+    model = cached_collision_model(robot, srdf, obstacles)
+    return Clearance(model, margin) if model.n_pairs else None
+
+
+def cached_collision_model(
+    robot: Robot, srdf: str | Path | None, obstacles: Sequence[Obstacle]
+) -> CollisionModel:
+    """The robot's collision model with an SRDF's pairs removed and obstacles added, built once."""
     models = _MODELS.setdefault(robot, {})
     key = (None if srdf is None else str(srdf), tuple(obstacles))
     if key not in models:
         models[key] = collision_model(robot, srdf, obstacles)
-    return Clearance(models[key], margin) if models[key].n_pairs else None
+    return models[key]
 
 
 #: Collision models per robot (by SRDF and obstacles), built once; entries go with the robot.
