@@ -743,6 +743,11 @@ def main() -> None:
         "--collision-only", action="store_true", help="only the clearance cost table"
     )
     parser.add_argument("--sweep-only", action="store_true", help="only the sweep section")
+    parser.add_argument(
+        "--clearance-only",
+        action="store_true",
+        help="only the true-hull and certified-clearance tables (bench_clearance.py)",
+    )
     parser.add_argument("--objectives", action="store_true", help="also the objectives section")
     parser.add_argument(
         "--objectives-only", action="store_true", help="only the objectives section"
@@ -759,6 +764,11 @@ def main() -> None:
         return
     if args.collision_only:
         print_collision(bench_collision(args.runs))
+        return
+    if args.clearance_only:
+        from bench_clearance import bench_certificate, bench_hulls, print_clearance
+
+        print_clearance(bench_hulls(args.runs), bench_certificate(max(3, args.runs // 3)))
         return
     sweep = bench_sweep() if args.sweep or args.sweep_only else {}
     if sweep:

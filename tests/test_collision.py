@@ -298,7 +298,8 @@ def test_the_ur5_pan_through_the_hull_plans_clear_of_it(tmp_path):
     assert plan.base.attitude_error_rad < 1e-9
     check = plan.verification["clearance"]
     assert check.passed and plan.safety.margin_m == 0.01
-    # Independent: coal along the planned path, densely, at least 1 cm everywhere.
+    # The solver's hull model along the planned path, densely: at least 1 cm everywhere (the
+    # original meshes against truth computed without coal: test_clearance_truth.py).
     robot = scenario.robot
     model = CollisionModel(robot, known_srdf(robot))
     t = np.linspace(0.0, plan.duration, 801)

@@ -8,6 +8,7 @@ verifies a solution found elsewhere. The file format lives in :mod:`freefloat.pl
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Sequence
 from dataclasses import asdict, replace
@@ -241,6 +242,10 @@ def _safety_report(scenario: Scenario, constraints: Sequence[Constraint]) -> Saf
     if clearance is None or not clearance.applies_to(scenario.robot):
         note = f"not checked ({note or 'no pairs to check'})"
         return SafetyReport(checked=False, margin_m=safety.margin, note=note)
+    if LOGGER.isEnabledFor(logging.INFO):
+        extra = [f"{h.name} {100.0 * h.extra_fraction:+.0f} %" for h in clearance.model.hulls()]
+        if extra:
+            LOGGER.info("clearance kept on true hulls; their extra volume: %s", ", ".join(extra))
     srdf = clearance.model.srdf
     return SafetyReport(
         checked=True,

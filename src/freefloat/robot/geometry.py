@@ -10,8 +10,9 @@ Two distance models read the same URDF through this module and nothing else in c
   themselves).
 
 Both check the same pairs (:func:`checked_pairs`): every body on the spacecraft against every
-arm body except the one mounted on it, and every two arm bodies that are not parent and child;
-pairs an SRDF disables (MoveIt's ``<disable_collisions>``) are removed.
+arm body except the one mounted on it, every keep-out object against every arm body, and every
+two arm bodies that are not parent and child; pairs an SRDF disables (MoveIt's
+``<disable_collisions>``) are removed.
 
 Hulls are built once per mesh file and scale in a process (:func:`true_hull` keeps them), so a
 second plan of the same robot pays nothing for them.
@@ -32,6 +33,7 @@ from ..errors import ModelError
 from .model import Robot
 
 __all__ = [
+    "OBSTACLE_PREFIX",
     "HullInfo",
     "add_obstacles",
     "bodies_without_geometry",
@@ -40,6 +42,10 @@ __all__ = [
     "mesh_volume",
     "true_hull",
 ]
+
+
+#: Name prefix of keep-out objects in a geometry model (``obstacle:<name>``).
+OBSTACLE_PREFIX = "obstacle:"
 
 
 def load_collision_geometry(robot: Robot) -> pin.GeometryModel:
@@ -69,7 +75,7 @@ def add_obstacles(robot: Robot, geometry: pin.GeometryModel, obstacles: Sequence
     for obstacle in obstacles:
         geometry.addGeometryObject(
             pin.GeometryObject(
-                f"obstacle:{obstacle.name}",
+                f"{OBSTACLE_PREFIX}{obstacle.name}",
                 1,  # the free-flyer joint: fixed to the spacecraft
                 frame,
                 model.frames[frame].placement * obstacle.placement(),
@@ -95,8 +101,11 @@ def checked_pairs(
     for a in range(len(objects)):
         for b in range(a + 1, len(objects)):
             ja, jb = objects[a].parentJoint, objects[b].parentJoint
-            if ja == jb or parent[ja] == jb or parent[jb] == ja:
-                continue  # one body, or parent and child: they touch by design
+            if ja == jb:
+                continue  # one body
+            kept_out = any(objects[i].name.startswith(OBSTACLE_PREFIX) for i in (a, b))
+            if not kept_out and (parent[ja] == jb or parent[jb] == ja):
+                continue  # parent and child touch by design (a keep-out object never does)
             geometry.addCollisionPair(pin.CollisionPair(a, b))
     if srdf is not None:
         path = Path(srdf).expanduser().resolve()

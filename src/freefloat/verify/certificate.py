@@ -2,7 +2,7 @@
 
 Work goes to the (interval, pair) with the lowest lower bound first (a heap), so the smallest
 measured clearance is found early and every interval whose bound lies within
-:data:`~freefloat.verify.clearance.ACCURACY` of it is settled without more queries. Each item
+:func:`_tolerance` of it is settled without more queries. Each item
 is refined in two steps: exact distances at its two ends (in place of the bounding-sphere
 bounds it starts from), then halving.
 """
@@ -21,6 +21,7 @@ from .clearance import (
     ACCURACY,
     FIRST_INSTANTS,
     MAX_BISECTIONS,
+    SLACK_FRACTION,
     ClearanceCertificate,
     MeshClearance,
     hull_slack,
@@ -55,6 +56,15 @@ def _speeds(mesh: MeshClearance, motion: PolynomialMotion, t0: Any, t1: Any) -> 
     return speed[:, mesh.first] + speed[:, mesh.second]
 
 
+def _tolerance(measured: float, margin: float) -> float:
+    """How far below the smallest measured clearance a settled bound may lie (m).
+
+    :data:`ACCURACY` near the margin, a fraction :data:`SLACK_FRACTION` of the slack above it:
+    a bound that close to a minimum well clear of the margin still clears it.
+    """
+    return max(ACCURACY, SLACK_FRACTION * (measured - margin))
+
+
 def certify(
     mesh: MeshClearance,
     motion: PolynomialMotion,
@@ -78,7 +88,7 @@ def certify(
     measured, when, pair = store.distance(float(times[k0]), int(p0)), float(times[k0]), int(p0)
     lipschitz = _speeds(mesh, motion, times[:-1], times[1:])
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
-    settled = lbs >= measured - ACCURACY
+    settled = lbs >= measured - _tolerance(measured, margin)
     lower = float(lbs[settled].min()) if settled.any() else math.inf
     heap = [
         (
@@ -96,7 +106,7 @@ def certify(
     exhausted = False
     while heap:
         lb, t0, t1, k, exact, lipschitz = heap[0]
-        if lb >= measured - ACCURACY:
+        if lb >= measured - _tolerance(measured, margin):
             break  # this and every later item is within the accuracy of the minimum
         heapq.heappop(heap)
         if not exact:

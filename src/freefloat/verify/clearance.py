@@ -14,11 +14,12 @@ on the interval with constant ``L`` (the sum of its two bodies' bounds), and
 
     min over [t0, t1] of d(t)  >=  (d(t0) + d(t1)) / 2 - L (t1 - t0) / 2.
 
-Intervals where that bound falls below the margin, or more than :data:`ACCURACY` below the
-smallest measured clearance, are halved (a counted budget, :data:`MAX_BISECTIONS`), so the
-reported lower bound holds for every instant and lies within :data:`ACCURACY` of the measured
-minimum once refined. Pairs whose bounding spheres are far apart are bounded by the spheres
-alone (a valid lower bound) and never queried.
+Intervals where that bound lies more than :data:`ACCURACY` (or :data:`SLACK_FRACTION` of the
+slack above the margin, if larger) below the smallest measured clearance are halved (a counted
+budget, :data:`MAX_BISECTIONS`), so the reported lower bound holds for every instant and, once
+refined, lies that close to the measured minimum: within 0.1 mm near the margin. Pairs whose
+bounding spheres are far apart are bounded by the spheres alone (a valid lower bound) and never
+queried.
 
 **Penetration** is reported as such, with a depth: coal's signed distance for a mesh against a
 primitive, the deepest triangle contact for two meshes (whose distance query stops at 0), and a
@@ -52,6 +53,7 @@ __all__ = [
     "ACCURACY",
     "HULL_TOLERANCE",
     "MAX_BISECTIONS",
+    "SLACK_FRACTION",
     "ClearanceCertificate",
     "MeshClearance",
     "hull_slack",
@@ -59,8 +61,10 @@ __all__ = [
 
 #: Instants of the first pass (uniform in time).
 FIRST_INSTANTS = 401
-#: How close (m) the certified lower bound is brought to the smallest measured clearance.
+#: How close (m) the certified lower bound is brought to the smallest measured clearance...
 ACCURACY = 1e-4
+#: ... or this fraction of that clearance's slack above the margin, whichever is larger.
+SLACK_FRACTION = 0.05
 #: Most interval halvings of one certificate (a count, so the verdict is reproducible).
 MAX_BISECTIONS = 20000
 #: A hull may report at most this much more clearance than its mesh (m): GJK's tolerance.
