@@ -14,7 +14,6 @@ import math
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
 from ..robot.collision import CollisionModel
 from .clearance import (
@@ -36,10 +35,10 @@ class _Instants:
 
     def __init__(self, mesh: MeshClearance, motion: PolynomialMotion) -> None:
         self.mesh, self.motion = mesh, motion
-        self.placements: dict[float, list[pin.SE3]] = {}
+        self.placements: dict[float, np.ndarray] = {}
         self.exact: dict[tuple[float, int], float] = {}
 
-    def at(self, t: float) -> list[pin.SE3]:
+    def at(self, t: float) -> np.ndarray:
         if t not in self.placements:
             self.placements[t] = self.mesh.placements(self.motion.joints(t))
         return self.placements[t]

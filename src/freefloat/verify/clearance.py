@@ -152,31 +152,28 @@ class MeshClearance:
         self._gdata = pin.GeometryData(geometry)
         self.kinds = [f"{_kind(self.shapes[a])} / {_kind(self.shapes[b])}" for a, b in self.pairs]
 
-    def placements(self, joints: np.ndarray) -> list[pin.SE3]:
-        """Pose of every geometry object in the spacecraft frame at ``joints`` (rad or m)."""
+    def placements(self, joints: np.ndarray) -> np.ndarray:
+        """(G, 4, 4) pose of every geometry object in the spacecraft frame at ``joints``."""
         model = self.robot.model
         pin.forwardKinematics(model, self._data, self.robot.configuration(joints))
         pin.updateGeometryPlacements(model, self._data, self.geometry, self._gdata)
-        return [pin.SE3(m.rotation, m.translation) for m in self._gdata.oMg]
+        return np.array([m.homogeneous for m in self._gdata.oMg])
 
-    def sphere_bounds(self, placements: list[pin.SE3]) -> np.ndarray:
+    def sphere_bounds(self, placements: np.ndarray) -> np.ndarray:
         """(P,) lower bounds of every pair's distance from bounding spheres (m)."""
-        centres = np.array([m.act(c) for m, c in zip(placements, self.centres, strict=True)])
+        centres = _centres(placements, self.centres)
         gap = np.linalg.norm(centres[self.first] - centres[self.second], axis=1)
         return gap - self.radii[self.first] - self.radii[self.second]
 
-    def exact(self, placements: list[pin.SE3], k: int) -> float:
+    def exact(self, placements: np.ndarray, k: int) -> float:
         """Signed distance of pair ``k`` (m): negative is the depth of an overlap.
 
         Two meshes that touch or cross report the deepest of their triangle contacts.
         """
         a, b = self.pairs[k]
-        ta, tb = (
-            coal.Transform3s(placements[i].rotation, placements[i].translation) for i in (a, b)
-        )
-        gap = float(
-            np.linalg.norm(placements[a].act(self.centres[a]) - placements[b].act(self.centres[b]))
-        )
+        ta, tb = (coal.Transform3s(placements[i, :3, :3], placements[i, :3, 3]) for i in (a, b))
+        ca, cb = (placements[i, :3, :3] @ self.centres[i] + placements[i, :3, 3] for i in (a, b))
+        gap = float(np.linalg.norm(ca - cb))
         spheres = (gap - self.radii[a] - self.radii[b], gap + self.radii[a] + self.radii[b])
         value = checked_distance(
             self.shapes[a], ta, self.shapes[b], tb, spheres, self.names[k]
@@ -191,20 +188,24 @@ class MeshClearance:
             value = -max(depths, default=0.0)
         return value
 
-    def contained(self, placements: list[pin.SE3], k: int) -> bool:
+    def contained(self, placements: np.ndarray, k: int) -> bool:
         """Whether one body of pair ``k`` lies inside the other's closed mesh (winding number)."""
         a, b = self.pairs[k]
         for outer, inner in ((a, b), (b, a)):
             if outer not in self.meshes:
                 continue
             vertices, triangles = self.meshes[outer]
-            point = placements[inner].act(
-                self.meshes[inner][0][0] if inner in self.meshes else self.centres[inner]
-            )
-            local = placements[outer].actInv(point)
+            own = self.meshes[inner][0][0] if inner in self.meshes else self.centres[inner]
+            point = placements[inner, :3, :3] @ own + placements[inner, :3, 3]
+            local = placements[outer, :3, :3].T @ (point - placements[outer, :3, 3])
             if abs(_winding_number(vertices, triangles, local)) > 0.5:
                 return True
         return False
+
+
+def _centres(placements: np.ndarray, local: np.ndarray) -> np.ndarray:
+    """(G, 3) points given in each object's frame, in the spacecraft frame (m)."""
+    return np.einsum("gij,gj->gi", placements[:, :3, :3], local) + placements[:, :3, 3]
 
 
 def _is_mesh(shape: coal.CollisionGeometry) -> bool:

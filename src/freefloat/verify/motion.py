@@ -74,7 +74,8 @@ class PolynomialMotion:
         amount, so the bounds are padded by a relative 1e-9.
         """
         t0, t1 = np.atleast_1d(np.asarray(t0, float)), np.atleast_1d(np.asarray(t1, float))
-        bound = np.maximum(np.abs(self.rates(t0)), np.abs(self.rates(t1)))
+        ends = np.abs(self.rates(np.concatenate([t0, t1])))
+        bound = np.maximum(ends[: len(t0)], ends[len(t0) :])
         lo = np.searchsorted(self._root_times, t0)
         hi = np.searchsorted(self._root_times, t1)
         for i in np.flatnonzero(hi > lo):
