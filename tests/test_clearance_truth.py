@@ -261,3 +261,17 @@ def test_solver_mesh_and_brute_force_agree_on_the_shipped_servicers(name):
                     assert true <= brute + 1e-9, mesh.names[k]
             worst = max(worst, hull[k] - true)
     assert worst <= 1e-6
+
+
+def test_bulk_distances_do_not_depend_on_what_was_asked_before():
+    """All pairs in one C++ pass, from coal's default guess: the distances at a configuration
+    are the same bits after any other query, and equal to a fresh model's."""
+    robot = ff.load_robot(UR5)
+    walked = CollisionModel(robot, known_srdf(robot))
+    fresh = CollisionModel(robot, known_srdf(robot))
+    target = UR5_START + 0.4 * (UR5_GOAL - UR5_START)
+    first = fresh.distances(target).values
+    for u in np.linspace(0.0, 1.0, 7):
+        walked.distances(UR5_START + u * (UR5_GOAL - UR5_START))
+    assert np.array_equal(walked.distances(target).values, first)
+    assert np.array_equal(fresh.distances(target).values, first)

@@ -186,11 +186,13 @@ class CollisionModel:
         self.names = [f"{objects[a].name} / {objects[b].name}" for a, b in self.pairs]
         self._data = robot.model.createData()
         self._geometry_data = pin.GeometryData(geometry)
+        for request in self._geometry_data.distanceRequests:
+            _configure(request, GJK_TOLERANCE)
         #: Queries asked again at a looser EPA tolerance since the model was built.
         self.retries = 0
         self._results: dict[int, coal.DistanceResult] = {}
-        # Bounding spheres (centre in the shape's frame, radius; m) for exact culling: a pair
-        # whose spheres are farther apart than the best exact distance cannot be the closest.
+        # Bounding spheres (centre in the shape's frame, radius; m): a distance outside what
+        # they allow is impossible (see checked_distance).
         centres, radii = [], []
         for obj in geometry.geometryObjects:
             obj.geometry.computeLocalAABB()
@@ -212,100 +214,58 @@ class CollisionModel:
 
         With ``gradients``, also their derivatives with respect to the joints.
         """
-        model, data, gdata = self.robot.model, self._data, self._geometry_data
-        q = self.robot.configuration(np.asarray(joints, dtype=float))
-        pin.forwardKinematics(model, data, q)
-        pin.updateGeometryPlacements(model, data, self.geometry, gdata)
-        # One fresh coal query per pair: results must not carry anything over between calls.
-        objects = self.geometry.geometryObjects
-        placements = [coal.Transform3s(m.rotation, m.translation) for m in gdata.oMg]
-        self._results = {}
-        values = np.empty(len(self.pairs))
-        for k, (a, b) in enumerate(self.pairs):
-            values[k], self._results[k] = self._query(
-                k, objects[a].geometry, placements[a], objects[b].geometry, placements[b]
-            )
+        values = self._bulk(joints)
         if not gradients:
             return Distances(values)
-        pin.computeJointJacobians(model, data, q)
+        pin.computeJointJacobians(self.robot.model, self._data)  # at _bulk's configuration
         grads = np.stack([self._gradient(k) for k in range(len(self.pairs))])
         return Distances(values, grads)
 
-    def closest_value(self, joints: np.ndarray, cap: float = math.inf) -> tuple[float, int]:
-        """The smallest signed distance over the pairs (m) and its pair index.
+    def closest_value(self, joints: np.ndarray) -> tuple[float, int]:
+        """The smallest signed distance over the pairs (m) and its pair index."""
+        values = self._bulk(joints)
+        k = int(np.argmin(values)) if len(values) else -1
+        return (float(values[k]) if k >= 0 else math.inf), k
 
-        Exact, and cheaper than :meth:`distances`: pairs are visited in the order of a lower
-        bound (bounding spheres) and the search stops once that bound exceeds the best exact
-        distance found. With a finite ``cap`` (m) it also stops once the bound exceeds the cap:
-        the answer is then a lower bound of the distance, larger than the cap (solvers only
-        need exact values near their margin).
-        """
-        model, data, gdata = self.robot.model, self._data, self._geometry_data
-        q = self.robot.configuration(np.asarray(joints, dtype=float))
-        pin.forwardKinematics(model, data, q)
-        pin.updateGeometryPlacements(model, data, self.geometry, gdata)
-        placements = list(gdata.oMg)
-        centres = np.array([m.act(c) for m, c in zip(placements, self._centres, strict=True)])
-        bound = (
-            np.linalg.norm(centres[self._first] - centres[self._second], axis=1)
-            - self._radii[self._first]
-            - self._radii[self._second]
-        )
-        transforms: dict[int, coal.Transform3s] = {}
-
-        def transform(index: int) -> coal.Transform3s:
-            if index not in transforms:
-                m = placements[index]
-                transforms[index] = coal.Transform3s(m.rotation, m.translation)
-            return transforms[index]
-
-        best, best_k = math.inf, -1
-        self._results = {}
-        for index in np.argsort(bound):
-            k = int(index)
-            if bound[k] > best:
-                break
-            if bound[k] > cap:
-                if bound[k] < best:
-                    best, best_k = float(bound[k]), k
-                break
-            a, b = self.pairs[k]
-            value, self._results[k] = self._query(
-                k, self._shapes[a], transform(a), self._shapes[b], transform(b)
-            )
-            if value < best:
-                best, best_k = float(value), k
-        return best, best_k
-
-    def closest(self, joints: np.ndarray, cap: float = math.inf) -> tuple[float, np.ndarray, int]:
-        """The smallest signed distance (m), its gradient over the joints, and its pair index.
-
-        Cheaper than :meth:`distances` with gradients: culled pairs, one gradient. Beyond a
-        finite ``cap`` (see :meth:`closest_value`) the value is a lower bound and the gradient
-        is zero.
-        """
-        value, k = self.closest_value(joints, cap)
-        if k not in self._results:
+    def closest(self, joints: np.ndarray) -> tuple[float, np.ndarray, int]:
+        """The smallest signed distance (m), its gradient over the joints, and its pair index."""
+        value, k = self.closest_value(joints)
+        if k < 0:
             return value, np.zeros(self.robot.n), k
         pin.computeJointJacobians(self.robot.model, self._data)  # at closest_value's pose
         return value, self._gradient(k), k
 
-    def _query(
-        self,
-        k: int,
-        shape_a: coal.CollisionGeometry,
-        place_a: coal.Transform3s,
-        shape_b: coal.CollisionGeometry,
-        place_b: coal.Transform3s,
-    ) -> tuple[float, coal.DistanceResult]:
-        """Signed distance (m) of pair ``k`` by :func:`checked_distance`, retries counted."""
-        a, b = self.pairs[k]
-        centre_a = place_a.transform(self._centres[a])
-        gap = float(np.linalg.norm(centre_a - place_b.transform(self._centres[b])))
-        spheres = (gap - self._radii[a] - self._radii[b], gap + self._radii[a] + self._radii[b])
-        answer = checked_distance(shape_a, place_a, shape_b, place_b, spheres, self.names[k])
-        self.retries += answer.retries
-        return answer.value, answer.result
+    def _bulk(self, joints: np.ndarray) -> np.ndarray:
+        """Every pair's signed distance (m), in one pass of Pinocchio's ``computeDistances``.
+
+        Each value is checked against its bounding spheres as :func:`checked_distance` does, and
+        an impossible one is asked again alone at looser tolerances (counted in
+        :attr:`retries`). The queries start from coal's default guess, never from the last
+        call's, so a distance does not depend on what was asked before.
+        """
+        model, data, gdata = self.robot.model, self._data, self._geometry_data
+        q = self.robot.configuration(np.asarray(joints, dtype=float))
+        pin.computeDistances(model, data, self.geometry, gdata, q)
+        results = gdata.distanceResults
+        values = np.array([r.min_distance for r in results], dtype=float)
+        poses = np.array([m.homogeneous for m in gdata.oMg])
+        centres = np.einsum("gij,gj->gi", poses[:, :3, :3], self._centres) + poses[:, :3, 3]
+        gap = np.linalg.norm(centres[self._first] - centres[self._second], axis=1)
+        reach = self._radii[self._first] + self._radii[self._second]
+        with np.errstate(invalid="ignore"):
+            possible = (values >= gap - reach - 1e-9) & (values <= gap + reach + 1e-9)
+        bad = ~(np.isfinite(values) & possible)
+        self._results = {k: results[k] for k in range(len(self.pairs))}
+        for index in np.flatnonzero(bad):
+            k = int(index)
+            a, b = self.pairs[k]
+            ta, tb = (coal.Transform3s(poses[i, :3, :3], poses[i, :3, 3]) for i in (a, b))
+            spheres = (float(gap[k] - reach[k]), float(gap[k] + reach[k]))
+            shapes = (self._shapes[a], ta, self._shapes[b], tb)
+            answer = checked_distance(*shapes, spheres, self.names[k])
+            self.retries += max(1, answer.retries)
+            values[k], self._results[k] = answer.value, answer.result
+        return values
 
     def hulls(self) -> list[HullInfo]:
         """Per mesh, the volume it encloses and that of its hull (m^3), for reports."""
@@ -392,11 +352,20 @@ def checked_distance(
 
 def _distance_request(epa_tolerance: float) -> coal.DistanceRequest:
     """A signed-distance request: GJK to :data:`GJK_TOLERANCE`, EPA to ``epa_tolerance`` (m)."""
-    request = coal.DistanceRequest()
-    request.gjk_tolerance = GJK_TOLERANCE  # coal's default 1e-6 m is too coarse
+    return _configure(coal.DistanceRequest(), epa_tolerance)
+
+
+def _configure(request: coal.DistanceRequest, epa_tolerance: float) -> coal.DistanceRequest:
+    """Set ``request`` up for signed distances from coal's default guess (never the last one's).
+
+    GJK to :data:`GJK_TOLERANCE` (coal's default 1e-6 m is too coarse), EPA to
+    ``epa_tolerance`` (m).
+    """
+    request.gjk_tolerance = GJK_TOLERANCE
     request.epa_tolerance = epa_tolerance
     request.gjk_max_iterations = 1000
     request.enable_signed_distance = True
+    request.gjk_initial_guess = coal.GJKInitialGuess.DefaultGuess
     return request
 
 

@@ -32,9 +32,6 @@ __all__ = ["REFINE", "SOLVER_SLACK", "Clearance", "clearance_at"]
 
 #: Extra clearance the solvers ask for beyond the margin, between constraint instants (m).
 SOLVER_SLACK = 2e-3
-#: Beyond the margin plus this (m), solvers get a lower bound of clearance (bounding spheres)
-#: with a zero gradient: such a row is far from active, and exact distances cost time.
-SOLVER_REACH = 0.25
 #: Samples of the dense verification check (every near-minimum is then refined in time).
 VERIFY_SAMPLES = 401
 #: Extra instants per grid interval next to a local minimum of clearance.
@@ -107,7 +104,7 @@ class Clearance(Constraint):
         values = np.empty(len(instants))
         jacobian = np.zeros((len(instants), problem.n_free))
         for k, joints in enumerate(q):
-            distance, gradient, _ = self.model.closest(joints, self.margin + SOLVER_REACH)
+            distance, gradient, _ = self.model.closest(joints)
             values[k] = self.margin + SOLVER_SLACK - distance
             jacobian[k] = -gradient @ dq[k]
         return values, jacobian
