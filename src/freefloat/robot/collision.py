@@ -240,11 +240,15 @@ class CollisionModel:
 
         Each value is checked against its bounding spheres as :func:`checked_distance` does, and
         an impossible one is asked again alone at looser tolerances (counted in
-        :attr:`retries`). The queries start from coal's default guess, never from the last
-        call's, so a distance does not depend on what was asked before.
+        :attr:`retries`). The queries start from coal's default guesses (of the separating
+        direction and of the support vertices), never from the last call's, so a distance does
+        not depend, to the last bit, on what was asked before.
         """
         model, data, gdata = self.robot.model, self._data, self._geometry_data
         q = self.robot.configuration(np.asarray(joints, dtype=float))
+        for request in gdata.distanceRequests:  # Pinocchio keeps each pair's last guess: drop it
+            request.cached_gjk_guess = _DEFAULT_REQUEST.cached_gjk_guess
+            request.cached_support_func_guess = _DEFAULT_REQUEST.cached_support_func_guess
         pin.computeDistances(model, data, self.geometry, gdata, q)
         results = gdata.distanceResults
         values = np.array([r.min_distance for r in results], dtype=float)
@@ -312,6 +316,8 @@ class CheckedDistance:
     retries: int
 
 
+#: A request as coal makes it: its guesses are where every query starts.
+_DEFAULT_REQUEST = coal.DistanceRequest()
 #: Requests at the first tolerance and at every retry tolerance, built once.
 _REQUESTS: list[coal.DistanceRequest] = []
 
