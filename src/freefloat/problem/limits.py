@@ -62,7 +62,7 @@ MAX_MAGNITUDE = 1e9
 #: Most free coefficients per joint beyond the quintic (polynomial degree at most 12).
 MAX_EXTRA_COEFFICIENTS = 7
 #: Most movable joints the planner takes.
-MAX_JOINTS = 12
+MAX_JOINTS = 24
 #: Most samples of a plan (``--samples``, ``samples =`` of a sweep, an export's ``--rate``
 #: times the duration): 10001 samples of the Panda servicer are a 12.5 MB plan file written in
 #: about 4 s; a plan's polynomials give any other instant exactly.

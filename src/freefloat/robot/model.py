@@ -24,14 +24,16 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ModelError, UnknownNameError
+from ..errors import AmbiguousEndEffectorError, ModelError, UnknownNameError
 from ..files import absolute_path, read_text_file
 from .urdf_checks import check_urdf_xml, parser_messages
 
 __all__ = [
     "MAX_URDF_BYTES",
+    "FINGER_NAME",
     "Joint",
     "Robot",
+    "end_effector_candidates",
     "example_robot_data_dir",
     "load_robot",
     "resolve_robot",
@@ -112,8 +114,11 @@ class Robot:
         model: Pinocchio model with a free-flyer root joint.
         joints: the movable joints, in Pinocchio's (depth-first) order.
         base_link: name of the URDF root link (the spacecraft body).
-        end_effector: name of the end-effector frame.
+        end_effector: name of the (first) end-effector frame.
         package_dirs: folders searched for ``package://`` mesh references.
+        link_names: the URDF's link names.
+        end_effectors: every end-effector frame, the first being ``end_effector`` (a
+            two-arm servicer names one per arm); default ``(end_effector,)``.
     """
 
     urdf: Path
@@ -124,6 +129,11 @@ class Robot:
     end_effector: str
     package_dirs: tuple[Path, ...] = ()
     link_names: tuple[str, ...] = field(default_factory=tuple)
+    end_effectors: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not self.end_effectors:
+            self.end_effectors = (self.end_effector,)
 
     @property
     def n(self) -> int:
@@ -144,6 +154,17 @@ class Robot:
     def end_effector_frame(self) -> int:
         """Pinocchio frame index of the end effector."""
         return int(self.model.getFrameId(self.end_effector))
+
+    @property
+    def end_effector_frames(self) -> list[int]:
+        """Pinocchio frame indices of every end effector, in :attr:`end_effectors` order."""
+        return [int(self.model.getFrameId(name)) for name in self.end_effectors]
+
+    def supporting_joints(self, frame: str) -> list[str]:
+        """Names of the movable joints that move ``frame`` (its chain from the base), in order."""
+        parent = self.model.frames[self.model.getFrameId(frame)].parentJoint
+        support = set(self.model.supports[parent])
+        return [j.name for j in self.joints if j.index in support]
 
     def joint(self, name: str) -> Joint:
         """The joint called ``name``; :class:`UnknownNameError` (listing the valid ones) if none."""
@@ -256,32 +277,51 @@ def resolve_robot(name_or_path: str | Path, relative_to: Path | None = None) -> 
 
 
 _TOOL_NAME = re.compile(r"tcp|end_?effector|eef|tool|(^|_)ee($|_)", re.IGNORECASE)
+#: Joint and link names of gripper fingers: never the default end effector.
+FINGER_NAME = re.compile(r"finger|gripper", re.IGNORECASE)
 
 
-def _default_end_effector(model: pin.Model) -> str:
-    """Name the body frame at the tip of the longest chain of movable joints.
+def end_effector_candidates(model: pin.Model) -> list[str]:
+    """The frame at the tip of each longest chain of movable joints that is not a finger.
 
-    Among the bodies carried by the deepest joint, a frame named like a tool (``tcp``,
-    ``end_effector``, ``eef``, ``tool``, ``ee``) wins; otherwise the latest in tree order. A
-    captured payload's link (``captured_payload``) is what the end effector holds, never the
-    end effector itself.
+    Body frames carried by a gripper or finger joint, or named like one (``finger``,
+    ``gripper``), are left out, as is a captured payload's link. Depth counts the movable
+    joints from the base. Among the bodies carried by one deepest joint, a frame named like a
+    tool (``tcp``, ``end_effector``, ``eef``, ``tool``, ``ee``) wins; otherwise the latest in
+    tree order. One name per deepest joint, in tree order.
     """
+    finger_joints = {j for j in range(2, model.njoints) if FINGER_NAME.search(model.names[j])}
+    bodies = []
+    for index, frame in enumerate(model.frames):
+        if frame.type != pin.FrameType.BODY or frame.name == "captured_payload":
+            continue
+        support = list(model.supports[frame.parentJoint])
+        if FINGER_NAME.search(frame.name) or finger_joints.intersection(support):
+            continue
+        depth = sum(1 for j in support if j >= 2)
+        bodies.append((depth, frame.parentJoint, bool(_TOOL_NAME.search(frame.name)), index))
+    if not bodies:  # every body is a finger's: fall back to the deepest of all
+        return [_deepest(model)]
+    deepest = max(b[0] for b in bodies)
+    best: dict[int, tuple[bool, int]] = {}
+    for depth, joint, tool, index in bodies:
+        if depth == deepest:
+            best[joint] = max(best.get(joint, (False, -1)), (tool, index))
+    return [model.frames[best[joint][1]].name for joint in sorted(best)]
+
+
+def _deepest(model: pin.Model) -> str:
     bodies = [
-        (
-            len(model.supports[frame.parentJoint]),
-            bool(_TOOL_NAME.search(frame.name)),
-            index,
-            frame.name,
-        )
+        (len(model.supports[frame.parentJoint]), index, frame.name)
         for index, frame in enumerate(model.frames)
         if frame.type == pin.FrameType.BODY and frame.name != "captured_payload"
     ]
-    return max(bodies)[3]
+    return max(bodies)[2]
 
 
 def load_robot(
     urdf: str | Path,
-    end_effector: str | None = None,
+    end_effector: str | Sequence[str] | None = None,
     package_dirs: Sequence[str | Path] = (),
     text: str | None = None,
 ) -> Robot:
@@ -290,8 +330,9 @@ def load_robot(
     Args:
         urdf: path of the URDF file; its root link is the spacecraft. With ``text`` the
             path names the robot (and its mesh folder) but is not read; it need not exist.
-        end_effector: name of the end-effector frame (a link name); default: the tip of the
-            longest chain of movable joints.
+        end_effector: name of the end-effector frame (a link name), or several names (the
+            first is the main one); default: the tip of the longest chain of movable joints
+            that is not a gripper finger (:func:`end_effector_candidates`).
         package_dirs: folders for ``package://`` mesh references (the URDF's own folder and
             example-robot-data's share folder are always searched).
         text: the URDF's content, when it is not (yet) in a file.
@@ -300,6 +341,7 @@ def load_robot(
         ModelError: unreadable or malformed file, closed loop, unsupported joint type, bad
             masses or inertias, or no movable joint.
         UnknownNameError: ``end_effector`` is not a frame of the robot.
+        AmbiguousEndEffectorError: no end effector named and several chains are longest.
     """
     path = absolute_path(urdf, "URDF", ModelError)
     if text is None:
@@ -377,9 +419,17 @@ def load_robot(
 
     frames = [f.name for f in model.frames if f.type == pin.FrameType.BODY]
     if end_effector is None:
-        end_effector = _default_end_effector(model)
-    elif end_effector not in frames:
-        raise UnknownNameError("end-effector frame", end_effector, frames)
+        candidates = end_effector_candidates(model)
+        if len(candidates) > 1:
+            raise AmbiguousEndEffectorError(candidates, str(path))
+        names: tuple[str, ...] = (candidates[0],)
+    else:
+        names = (end_effector,) if isinstance(end_effector, str) else tuple(end_effector)
+    if not names or len(set(names)) != len(names):
+        raise ModelError(f"end effectors must be distinct frame names, got {list(names)}")
+    for name in names:
+        if name not in frames:
+            raise UnknownNameError("end-effector frame", name, frames)
 
     share = example_robot_data_dir()
     dirs = (path.parent, *(Path(d).resolve() for d in package_dirs), *([share] if share else []))
@@ -389,7 +439,8 @@ def load_robot(
         model=model,
         joints=tuple(joints),
         base_link=root_link,
-        end_effector=end_effector,
+        end_effector=names[0],
         package_dirs=dirs,
         link_names=tuple(links),
+        end_effectors=names,
     )
