@@ -4,7 +4,10 @@ The arm is an ``example-robot-data`` arm by name (:data:`ARMS`) or any URDF file
 link ``spacecraft`` is a uniform box (mass in kg, size in m; inertia in kg m^2 from the box
 unless given); a fixed joint ``mount`` places the arm's root link at ``mount`` (m) with
 roll-pitch-yaw ``mount_rpy`` (rad) in the spacecraft frame. Gripper and finger joints are locked
-(made fixed at their zero position) by default. Mesh references stay ``package://`` (resolved
+by default (made fixed at 0, or at the middle of their range when 0 is outside it; the
+composition says so). Several arms may share the spacecraft (:class:`ArmSpec`): each arm's links
+and joints then carry its prefix, and its SRDF pairs are merged under that prefix
+(:mod:`freefloat.robot.srdf`). Mesh references stay ``package://`` (resolved
 at load time against ``example-robot-data``'s share folder) or become absolute paths for a URDF
 given by path. yourdfpy builds, validates and writes the result. An optional captured payload
 (:class:`~freefloat.robot.payload.Payload`) is then fixed to the composed robot's default end
@@ -26,21 +29,33 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, ModelError, UnknownNameError
+from ..errors import (
+    AmbiguousEndEffectorError,
+    InputError,
+    LockedJointError,
+    ModelError,
+    UnknownNameError,
+)
 from ..files import absolute_path, atomic_write_text, read_text_file
 from .model import MAX_URDF_BYTES, example_robot_data_dir
+from .lock import finger_lock_value, locked_origin
 from .payload import PAYLOAD_LINK, Payload
+from .srdf import merged_srdf
 
 LOGGER = logging.getLogger(__name__)
 
 __all__ = [
     "ARMS",
+    "ArmSpec",
+    "Composed",
     "ServicerSpec",
+    "compose",
     "arm_urdf",
     "compose_servicer",
     "compose_servicer_text",
     "payload_parent",
     "resolve_mesh",
+    "write_composed",
 ]
 
 #: example-robot-data arms by name: path of the URDF below ``example-robot-data/robots``.
@@ -74,6 +89,51 @@ def arm_urdf(arm: str | Path) -> Path:
 
 
 @dataclass(frozen=True)
+class ArmSpec:
+    """One more arm of a servicer (SI units; angles in rad).
+
+    Attributes:
+        arm: example-robot-data arm name or URDF path.
+        mount: arm root position in the spacecraft frame (m).
+        mount_rpy: arm root roll, pitch, yaw in the spacecraft frame (rad).
+        prefix: put before each of its link and joint names; default ``armK_`` (K = 1, 2...).
+        lock: joints of this arm to lock: a name (locked at 0) or ``(name, value)`` (rad or m).
+        keep_gripper: keep gripper and finger joints movable.
+    """
+
+    arm: str
+    mount: tuple[float, ...] = (0.0, 0.0, 0.0)
+    mount_rpy: tuple[float, ...] = (0.0, 0.0, 0.0)
+    prefix: str = ""
+    lock: tuple[str | tuple[str, float], ...] = ()
+    keep_gripper: bool = False
+
+
+@dataclass(frozen=True)
+class Composed:
+    """A composed servicer.
+
+    Attributes:
+        text: its URDF.
+        locked: every joint made fixed and its value (rad or m), by its name in the servicer.
+        notes: what the composition chose on its own (a finger locked mid-range...), one line
+            each.
+        end_effectors: the default end effector of each arm (the tip of its longest chain
+            that is not a finger), in arm order.
+        srdf: the SRDF text of the pairs never checked (each arm's own SRDF pairs, with the
+            arm's prefix), for a servicer of several arms; None otherwise.
+        prismatic: the locked joints that were prismatic (their values in m, not rad).
+    """
+
+    text: str
+    locked: dict[str, float]
+    notes: tuple[str, ...]
+    end_effectors: tuple[str, ...]
+    srdf: str | None = None
+    prismatic: frozenset[str] = frozenset()
+
+
+@dataclass(frozen=True)
 class ServicerSpec:
     """What to compose (SI units; angles in rad).
 
@@ -84,9 +144,13 @@ class ServicerSpec:
         mount: arm root position in the spacecraft frame (m).
         mount_rpy: arm root roll, pitch, yaw in the spacecraft frame (rad).
         base_inertia: principal moments Ixx, Iyy, Izz (kg m^2); default: the uniform box's.
-        lock: extra joints to lock (make fixed at zero).
-        keep_gripper: keep gripper and finger joints movable.
-        payload: a captured payload fixed to the end effector (validated by ``Payload``).
+        lock: extra joints to lock: a name (locked at 0) or ``(name, value)`` (rad or m).
+        keep_gripper: keep gripper and finger joints movable (else each finger is locked at 0,
+            or at the middle of its range when 0 is outside it).
+        payload: a captured payload fixed to the (first arm's) end effector.
+        more_arms: further arms on the same spacecraft; with any, every arm's links and joints
+            get its prefix (``prefix`` for this first one, default ``arm1_``).
+        prefix: the first arm's prefix (used only with ``more_arms``; default ``arm1_``).
     """
 
     arm: str
@@ -95,12 +159,18 @@ class ServicerSpec:
     mount: tuple[float, ...] = (0.0, 0.0, 0.0)
     mount_rpy: tuple[float, ...] = (0.0, 0.0, 0.0)
     base_inertia: tuple[float, ...] | None = None
-    lock: tuple[str, ...] = field(default_factory=tuple)
+    lock: tuple[str | tuple[str, float], ...] = field(default_factory=tuple)
     keep_gripper: bool = False
     payload: Payload | None = None
+    more_arms: tuple[ArmSpec, ...] = ()
+    prefix: str = ""
 
     def __post_init__(self) -> None:
         numbers = [self.base_mass, *self.base_size, *self.mount, *self.mount_rpy]
+        for arm in self.more_arms:
+            numbers += [*arm.mount, *arm.mount_rpy]
+            if len(arm.mount) != 3 or len(arm.mount_rpy) != 3:
+                raise InputError("each arm's mount and mount rpy take three numbers each")
         numbers += list(self.base_inertia or ())
         if not all(isinstance(x, (int, float)) and math.isfinite(x) for x in numbers):
             raise InputError("servicer numbers must be finite (mass, size, mount, inertia)")
@@ -118,6 +188,20 @@ class ServicerSpec:
                     "must be > 0 and no larger than the sum of the other two"
                 )
 
+    def arms(self) -> list[ArmSpec]:
+        """Every arm, the first from this spec's own fields, each with its prefix settled."""
+        first = ArmSpec(
+            self.arm, self.mount, self.mount_rpy, self.prefix, self.lock, self.keep_gripper
+        )
+        arms = [first, *self.more_arms]
+        if len(arms) == 1:
+            return arms
+        arms = [replace(a, prefix=a.prefix or f"arm{i + 1}_") for i, a in enumerate(arms)]
+        prefixes = [a.prefix for a in arms]
+        if len(set(prefixes)) != len(prefixes):
+            raise InputError(f"each arm needs its own prefix, got {prefixes}")
+        return arms
+
     @property
     def inertia(self) -> tuple[float, float, float]:
         """Principal moments of the spacecraft (kg m^2)."""
@@ -133,7 +217,8 @@ class ServicerSpec:
 
     def key(self) -> str:
         """A short hash of the spec and the arm file (for cache file names)."""
-        payload = json.dumps([self.__dict__, arm_urdf(self.arm).read_text()], default=str)
+        texts = [arm_urdf(arm.arm).read_text() for arm in self.arms()]
+        payload = json.dumps([self.__dict__, *texts], default=str)
         return hashlib.sha256(payload.encode()).hexdigest()[:16]
 
 
@@ -156,98 +241,65 @@ def _origin(xyz: Sequence[float], rpy: Sequence[float]) -> np.ndarray:
 def compose_servicer(spec: ServicerSpec, output: str | Path) -> Path:
     """Compose the servicer, validate it with yourdfpy and write it atomically to ``output``.
 
+    A servicer of several arms also gets its SRDF (each arm's pairs never checked, prefixed)
+    next to it, ``output`` with the suffix ``.srdf``.
+
     Raises:
         ModelError: the arm URDF cannot be read, or the result does not validate.
         UnknownNameError: a joint to lock is not in the arm (lists the arm's joints).
+        LockedJointError: a joint locked outside its limits.
         InputError: bad numbers in ``spec``.
     """
-    text = compose_servicer_text(spec)
-    return atomic_write_text(output, text)
+    return write_composed(compose(spec), output)
+
+
+def write_composed(composed: Composed, output: str | Path) -> Path:
+    """Write a composed servicer's URDF to ``output`` (and its SRDF beside it, if any)."""
+    if composed.srdf is not None:
+        atomic_write_text(Path(output).with_suffix(".srdf"), composed.srdf)
+    return atomic_write_text(output, composed.text)
 
 
 def compose_servicer_text(spec: ServicerSpec) -> str:
     """Compose the servicer and validate it with yourdfpy; return the URDF text (no file).
 
+    Raises: as :func:`compose`.
+    """
+    return compose(spec).text
+
+
+def compose(spec: ServicerSpec) -> Composed:
+    """Compose the servicer and validate it with yourdfpy (no file is written).
+
     Raises:
-        ModelError: the arm URDF cannot be read, or the result does not validate.
-        UnknownNameError: a joint to lock is not in the arm (lists the arm's joints).
-        InputError: bad numbers in ``spec``.
+        ModelError: an arm URDF cannot be read, or the result does not validate.
+        UnknownNameError: a joint to lock is not in its arm (lists the arm's joints).
+        LockedJointError: a joint locked outside its limits.
+        InputError: bad numbers in ``spec``, or two arms with one prefix.
     """
     import yourdfpy
 
-    source = arm_urdf(spec.arm)
-    try:
-        arm = yourdfpy.URDF.load(
-            str(source),
-            build_scene_graph=False,
-            load_meshes=False,
-            filename_handler=yourdfpy.filename_handler_null,  # meshes are referenced, not read
-        )
-    except Exception as exc:
-        raise ModelError(f"cannot read arm URDF {source}: {exc}") from None
-    robot = arm.robot
-    names = [j.name for j in robot.joints]
-    for name in spec.lock:
-        if name not in names:
-            raise UnknownNameError("joint to lock", name, names)
-    if any(link.name == BASE_LINK for link in robot.links):
-        raise ModelError(f"the arm already has a link named {BASE_LINK!r}")
-
-    locked = set(spec.lock)
-    if not spec.keep_gripper:
-        locked |= {j.name for j in robot.joints if j.type != "fixed" and _GRIPPER.search(j.name)}
-    joints = []
-    for joint in robot.joints:
-        if joint.name in locked:
-            joint = replace(
-                joint,
-                type="fixed",
-                limit=None,
-                mimic=None,
-                axis=None,
-                dynamics=None,
-                safety_controller=None,
-                calibration=None,
-            )
-        elif joint.mimic is not None and joint.mimic.joint in locked:
-            joint = replace(joint, mimic=None)
-        joints.append(joint)
-
-    links = []
-    for link in robot.links:
-        visuals = [_absolute_mesh(v, source.parent) for v in link.visuals]
-        collisions = [_absolute_mesh(c, source.parent) for c in link.collisions]
-        links.append(replace(link, visuals=visuals, collisions=collisions))
-
-    roots = [link.name for link in robot.links if link.name not in {j.child for j in joints}]
-    if len(roots) != 1:
-        raise ModelError(f"arm URDF {source} must have one root link, found {roots}")
-    ixx, iyy, izz = spec.inertia
-    box = yourdfpy.Geometry(box=yourdfpy.Box(size=np.array(spec.base_size, dtype=float)))
-    hull = yourdfpy.Material(
-        name="freefloat_hull", color=yourdfpy.Color(rgba=np.array([0.78, 0.78, 0.82, 1.0]))
-    )
-    spacecraft = yourdfpy.Link(
-        name=BASE_LINK,
-        inertial=yourdfpy.Inertial(
-            origin=np.eye(4), mass=float(spec.base_mass), inertia=np.diag([ixx, iyy, izz])
-        ),
-        visuals=[yourdfpy.Visual(name="hull", origin=np.eye(4), geometry=box, material=hull)],
-        collisions=[yourdfpy.Collision(name="hull", origin=np.eye(4), geometry=box)],
-    )
-    mount = yourdfpy.Joint(
-        name="mount",
-        type="fixed",
-        parent=BASE_LINK,
-        child=roots[0],
-        origin=_origin(spec.mount, spec.mount_rpy),
-    )
-    arm_name = spec.arm if spec.arm in ARMS else Path(spec.arm).stem
+    arms = spec.arms()
+    links, joints, materials = [], [], {}
+    locked: dict[str, float] = {}
+    notes: list[str] = []
+    prismatic: set[str] = set()
+    for arm in arms:
+        part = _arm_part(arm)
+        links += part.links
+        joints += part.joints
+        for material in part.materials:
+            materials.setdefault(material.name, material)
+        locked.update(part.locked)
+        notes += part.notes
+        prismatic |= part.prismatic
+    spacecraft, hull = _spacecraft(spec)
+    names = [a.arm if a.arm in ARMS else Path(a.arm).stem for a in arms]
     composed = yourdfpy.Robot(
-        name=f"{arm_name}_servicer",
+        name="_".join(names) + "_servicer",
         links=[spacecraft, *links],
-        joints=[mount, *joints],
-        materials=[hull, *robot.materials],
+        joints=joints,
+        materials=[hull, *materials.values()],
     )
     urdf = yourdfpy.URDF(
         robot=composed,
@@ -271,14 +323,174 @@ def compose_servicer_text(spec: ServicerSpec) -> str:
 
     body = etree.tostring(urdf.write_xml(), pretty_print=True, encoding="unicode")
     text = "<?xml version='1.0' encoding='UTF-8'?>\n" + body
-    if spec.payload is None:
-        return text
-    from .model import load_robot
-    from .payload import attach_payload
+    tips = _arm_tips(text, [a.prefix for a in arms])
+    srdf = merged_srdf([a.arm for a in arms], [a.prefix for a in arms]) if len(arms) > 1 else None
+    for note in notes:
+        LOGGER.info("%s", note)
+    if spec.payload is not None:
+        from .payload import attach_payload
 
-    # The default end effector of the servicer without the payload holds it.
-    end_effector = load_robot(source.parent / f"{arm_name}_servicer.urdf", text=text).end_effector
-    return attach_payload(text, end_effector, spec.payload)
+        text = attach_payload(text, tips[0], spec.payload)
+    return Composed(text, locked, tuple(notes), tips, srdf, frozenset(prismatic))
+
+
+@dataclass(frozen=True)
+class _Part:
+    """One arm's links, joints (mount first) and materials, renamed and locked."""
+
+    links: list[Any]
+    joints: list[Any]
+    materials: list[Any]
+    locked: dict[str, float]
+    notes: list[str]
+    prismatic: set[str]
+
+
+def _arm_part(arm: ArmSpec) -> _Part:
+    import yourdfpy
+
+    source = arm_urdf(arm.arm)
+    try:
+        loaded = yourdfpy.URDF.load(
+            str(source),
+            build_scene_graph=False,
+            load_meshes=False,
+            filename_handler=yourdfpy.filename_handler_null,  # meshes are referenced, not read
+        )
+    except Exception as exc:
+        raise ModelError(f"cannot read arm URDF {source}: {exc}") from None
+    robot = loaded.robot
+    if any(link.name == BASE_LINK for link in robot.links):
+        raise ModelError(f"the arm already has a link named {BASE_LINK!r}")
+    values, notes = _lock_values(arm, robot.joints)
+    prefix = arm.prefix
+    prismatic = {prefix + j.name for j in robot.joints if j.type == "prismatic"} & set(values)
+    joints = []
+    for joint in robot.joints:
+        joint = replace(
+            joint, name=prefix + joint.name, parent=prefix + joint.parent, child=prefix + joint.child
+        )
+        if joint.name in values:
+            origin = joint.origin if joint.origin is not None else np.eye(4)
+            axis = joint.axis if joint.axis is not None else (1.0, 0.0, 0.0)
+            joint = replace(
+                joint,
+                type="fixed",
+                origin=locked_origin(origin, joint.type, axis, values[joint.name]),
+                limit=None,
+                mimic=None,
+                axis=None,
+                dynamics=None,
+                safety_controller=None,
+                calibration=None,
+            )
+        elif joint.mimic is not None:
+            joint = replace(joint, mimic=replace(joint.mimic, joint=prefix + joint.mimic.joint))
+        joints.append(joint)
+    links = []
+    for link in robot.links:
+        visuals = [_absolute_mesh(v, source.parent) for v in link.visuals]
+        collisions = [_absolute_mesh(c, source.parent) for c in link.collisions]
+        links.append(
+            replace(link, name=prefix + link.name, visuals=visuals, collisions=collisions)
+        )
+    roots = [link.name for link in links if link.name not in {j.child for j in joints}]
+    if len(roots) != 1:
+        raise ModelError(f"arm URDF {source} must have one root link, found {roots}")
+    mount = yourdfpy.Joint(
+        name=prefix + "mount",
+        type="fixed",
+        parent=BASE_LINK,
+        child=roots[0],
+        origin=_origin(arm.mount, arm.mount_rpy),
+    )
+    return _Part(links, [mount, *joints], list(robot.materials), values, notes, prismatic)
+
+
+def _lock_values(arm: ArmSpec, joints: Sequence[Any]) -> tuple[dict[str, float], list[str]]:
+    """``{prefixed name: value}`` (rad or m) of the arm's joints to lock, and what was chosen.
+
+    Raises:
+        UnknownNameError: a name to lock is not a joint of the arm.
+        LockedJointError: a value outside the joint's limits.
+    """
+    movable = {j.name: j for j in joints if j.type in ("revolute", "continuous", "prismatic")}
+    asked = dict(
+        (item, 0.0) if isinstance(item, str) else (item[0], float(item[1])) for item in arm.lock
+    )
+    values: dict[str, float] = {}
+    notes: list[str] = []
+    for name, value in asked.items():
+        if name not in movable:
+            raise UnknownNameError("joint to lock", name, [j.name for j in joints])
+        joint = movable[name]
+        if joint.type != "continuous" and joint.limit is not None:
+            low, high = float(joint.limit.lower), float(joint.limit.upper)
+            if not low <= value <= high:
+                scale, unit = (1.0, "m") if joint.type == "prismatic" else (180 / math.pi, "deg")
+                raise LockedJointError(
+                    arm.prefix + name, value * scale, low * scale, high * scale, unit
+                )
+        values[arm.prefix + name] = value
+    fingers = [] if arm.keep_gripper else [j for j in movable.values() if _GRIPPER.search(j.name)]
+    for joint in fingers:
+        if joint.name in asked:
+            continue
+        low, high = -math.inf, math.inf
+        if joint.type != "continuous" and joint.limit is not None:
+            low, high = float(joint.limit.lower), float(joint.limit.upper)
+        value = finger_lock_value(low, high)
+        values[arm.prefix + joint.name] = value
+        if value != 0.0:
+            scale, unit = (1.0, "m") if joint.type == "prismatic" else (180 / math.pi, "deg")
+            notes.append(
+                f"finger joint {arm.prefix + joint.name!r} locked at {value * scale:.4g} {unit}, "
+                f"the middle of its range [{low * scale:.4g}, {high * scale:.4g}] {unit} "
+                "(0 is outside it)"
+            )
+    for joint in movable.values():  # a follower of a locked joint is locked with it
+        target = None if joint.mimic is None else arm.prefix + joint.mimic.joint
+        if target in values and arm.prefix + joint.name not in values:
+            multiplier = float(joint.mimic.multiplier or 1.0)
+            offset = float(joint.mimic.offset or 0.0)
+            values[arm.prefix + joint.name] = multiplier * values[target] + offset
+    return values, notes
+
+
+def _spacecraft(spec: ServicerSpec) -> tuple[Any, Any]:
+    """The spacecraft link (a uniform box) and its material."""
+    import yourdfpy
+
+    ixx, iyy, izz = spec.inertia
+    box = yourdfpy.Geometry(box=yourdfpy.Box(size=np.array(spec.base_size, dtype=float)))
+    hull = yourdfpy.Material(
+        name="freefloat_hull", color=yourdfpy.Color(rgba=np.array([0.78, 0.78, 0.82, 1.0]))
+    )
+    spacecraft = yourdfpy.Link(
+        name=BASE_LINK,
+        inertial=yourdfpy.Inertial(
+            origin=np.eye(4), mass=float(spec.base_mass), inertia=np.diag([ixx, iyy, izz])
+        ),
+        visuals=[yourdfpy.Visual(name="hull", origin=np.eye(4), geometry=box, material=hull)],
+        collisions=[yourdfpy.Collision(name="hull", origin=np.eye(4), geometry=box)],
+    )
+    return spacecraft, hull
+
+
+def _arm_tips(text: str, prefixes: Sequence[str]) -> tuple[str, ...]:
+    """The default end effector of each arm (by its prefix) in a composed URDF."""
+    import pinocchio as pin
+
+    from .model import end_effector_candidates
+
+    model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    tips = []
+    for prefix in prefixes:
+        found = end_effector_candidates(model, prefix)
+        if len(found) > 1:
+            raise AmbiguousEndEffectorError(found)
+        tips.append(found[0])
+    return tuple(tips)
 
 
 def payload_parent(text: str) -> str | None:
