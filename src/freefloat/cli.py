@@ -28,6 +28,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     pass
 
+
 from . import __version__
 from .errors import FreeFloatError, InputError, InputLimitError, VelocityLimitError
 from .files import check_output
@@ -232,6 +233,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
 def _cmd_compose(args: argparse.Namespace) -> int:
     from .robot.compose import compose, write_composed
     from .robot.model import load_robot
+    from .robot.payload import Payload
 
     def _compose_payload(args: argparse.Namespace) -> Payload | None:
         """The ``--payload-*`` options as a validated ``Payload``, or None without a mass."""
@@ -270,15 +272,17 @@ def _cmd_compose(args: argparse.Namespace) -> int:
     print(f"freefloat compose: wrote {path}")
     if composed.srdf is not None:
         print(f"  with {path.with_suffix('.srdf').name}: each arm's SRDF pairs, prefixed")
-    print(
-        f"  {robot.n} joints ({', '.join(robot.joint_names)}), total mass "
-        f"{robot.total_mass:.3f} kg, end effector(s) {', '.join(robot.end_effectors)}"
-    )
     for name, value in composed.locked.items():
         shown = value if name in composed.prismatic else math.degrees(value)
         print(f"  locked {name} at {shown:.6g} {'m' if name in composed.prismatic else 'deg'}")
     for note in composed.notes:
         print(f"  note: {note}")
+    tips = ", ".join(repr(e) for e in robot.end_effectors)
+    print(
+        f"  {robot.n} joints ({', '.join(robot.joint_names)}), total mass "
+        f"{robot.total_mass:.3f} kg, end effector{'s' if len(robot.end_effectors) > 1 else ''} "
+        f"{tips}"
+    )
     if spec.payload is not None:
         print(
             f"  captured payload {spec.payload.mass:g} kg fixed to {robot.end_effector!r} "
@@ -295,7 +299,8 @@ def _servicer_spec(args: argparse.Namespace, payload: Payload | None) -> Service
     count = len(args.arm)
     rpys = args.mount_rpy or [[0.0, 0.0, 0.0]] * count
     prefixes = args.prefix or [""] * count
-    for option, given in (("--mount", args.mount), ("--mount-rpy", rpys), ("--prefix", prefixes)):
+    given_per_arm = (("--mount", args.mount), ("--mount-rpy", rpys), ("--prefix", prefixes))
+    for option, given in given_per_arm:
         if len(given) != count:
             raise InputError(f"give {option} once per --arm ({count}), got {len(given)}")
     arms = [
@@ -303,11 +308,19 @@ def _servicer_spec(args: argparse.Namespace, payload: Payload | None) -> Service
         for arm, mount, rpy, prefix in zip(args.arm, args.mount, rpys, prefixes, strict=True)
     ]
     if count > 1:
-        arms = [dataclasses.replace(a, prefix=a.prefix or f"arm{i + 1}_") for i, a in enumerate(arms)]
+        arms = [
+            dataclasses.replace(a, prefix=a.prefix or f"arm{i + 1}_") for i, a in enumerate(arms)
+        ]
     locks: list[list[str | tuple[str, float]]] = [[] for _ in arms]
     for item in args.lock or ():
         name, _, degrees = item.partition("=")
-        value = math.radians(check_number(float(degrees), f"--lock {name}", MAX_ANGLE_DEG))
+        value = 0.0
+        if degrees:
+            try:
+                amount = float(degrees)
+            except ValueError:
+                raise InputError(f"--lock {item}: give JOINT or JOINT=DEG") from None
+            value = math.radians(check_number(amount, f"--lock {name}", MAX_ANGLE_DEG, "deg"))
         owner = next((i for i, a in enumerate(arms) if name.startswith(a.prefix)), None)
         if owner is None:
             raise InputError(
@@ -729,8 +742,8 @@ def _check_arguments(args: argparse.Namespace) -> None:
             ("--base-mass", [args.base_mass], MAX_MAGNITUDE, "kg"),
             ("--base-size", args.base_size, MAX_LENGTH_M, "m"),
             ("--base-inertia", args.base_inertia, MAX_MAGNITUDE, "kg m^2"),
-            ("--mount", sum(args.mount, []), MAX_LENGTH_M, "m"),
-            ("--mount-rpy", sum(args.mount_rpy or [], []), MAX_ANGLE_DEG, "deg"),
+            ("--mount", [x for m in args.mount for x in m], MAX_LENGTH_M, "m"),
+            ("--mount-rpy", [x for m in args.mount_rpy or [] for x in m], MAX_ANGLE_DEG, "deg"),
             ("--payload-mass", [args.payload_mass], MAX_MAGNITUDE, "kg"),
             ("--payload-com", args.payload_com, MAX_LENGTH_M, "m"),
             ("--payload-inertia", args.payload_inertia, MAX_MAGNITUDE, "kg m^2"),

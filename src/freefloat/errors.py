@@ -1,5 +1,8 @@
 """The exceptions freefloat raises: one root, :class:`FreeFloatError`, and subclasses with data.
 
+This module is long because every error of the package, with the data it carries and its
+one-line message, is in one place.
+
 Every message is a single line that names the problem and says what would be valid, so that
 the command line can print it as it is (exit code 2) and a caller can test it.
 """
@@ -374,7 +377,7 @@ class AmbiguousEndEffectorError(ModelError):
         super().__init__(
             f"the end effector is ambiguous: {len(self.candidates)} chains are longest "
             f"({', '.join(self.candidates)}); name one in the scenario "
-            "(end_effector = \"...\" or end_effectors = [...])",
+            '(end_effector = "..." or end_effectors = [...])',
             urdf,
         )
 

@@ -37,8 +37,8 @@ from ..errors import (
     UnknownNameError,
 )
 from ..files import absolute_path, atomic_write_text, read_text_file
-from .model import MAX_URDF_BYTES, example_robot_data_dir
 from .lock import finger_lock_value, locked_origin
+from .model import MAX_URDF_BYTES, example_robot_data_dir
 from .payload import PAYLOAD_LINK, Payload
 from .srdf import merged_srdf
 
@@ -49,8 +49,9 @@ __all__ = [
     "ArmSpec",
     "Composed",
     "ServicerSpec",
-    "compose",
+    "arm_tips",
     "arm_urdf",
+    "compose",
     "compose_servicer",
     "compose_servicer_text",
     "payload_parent",
@@ -323,7 +324,7 @@ def compose(spec: ServicerSpec) -> Composed:
 
     body = etree.tostring(urdf.write_xml(), pretty_print=True, encoding="unicode")
     text = "<?xml version='1.0' encoding='UTF-8'?>\n" + body
-    tips = _arm_tips(text, [a.prefix for a in arms])
+    tips = arm_tips(text, [a.prefix for a in arms])
     srdf = merged_srdf([a.arm for a in arms], [a.prefix for a in arms]) if len(arms) > 1 else None
     for note in notes:
         LOGGER.info("%s", note)
@@ -368,7 +369,10 @@ def _arm_part(arm: ArmSpec) -> _Part:
     joints = []
     for joint in robot.joints:
         joint = replace(
-            joint, name=prefix + joint.name, parent=prefix + joint.parent, child=prefix + joint.child
+            joint,
+            name=prefix + joint.name,
+            parent=prefix + joint.parent,
+            child=prefix + joint.child,
         )
         if joint.name in values:
             origin = joint.origin if joint.origin is not None else np.eye(4)
@@ -391,9 +395,7 @@ def _arm_part(arm: ArmSpec) -> _Part:
     for link in robot.links:
         visuals = [_absolute_mesh(v, source.parent) for v in link.visuals]
         collisions = [_absolute_mesh(c, source.parent) for c in link.collisions]
-        links.append(
-            replace(link, name=prefix + link.name, visuals=visuals, collisions=collisions)
-        )
+        links.append(replace(link, name=prefix + link.name, visuals=visuals, collisions=collisions))
     roots = [link.name for link in links if link.name not in {j.child for j in joints}]
     if len(roots) != 1:
         raise ModelError(f"arm URDF {source} must have one root link, found {roots}")
@@ -477,7 +479,7 @@ def _spacecraft(spec: ServicerSpec) -> tuple[Any, Any]:
     return spacecraft, hull
 
 
-def _arm_tips(text: str, prefixes: Sequence[str]) -> tuple[str, ...]:
+def arm_tips(text: str, prefixes: Sequence[str]) -> tuple[str, ...]:
     """The default end effector of each arm (by its prefix) in a composed URDF."""
     import pinocchio as pin
 

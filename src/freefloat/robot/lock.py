@@ -34,9 +34,7 @@ def finger_lock_value(lower: float, upper: float) -> float:
     return 0.5 * (lower + upper)
 
 
-def locked_origin(
-    origin: np.ndarray, kind: str, axis: Sequence[float], value: float
-) -> np.ndarray:
+def locked_origin(origin: np.ndarray, kind: str, axis: Sequence[float], value: float) -> np.ndarray:
     """The 4 x 4 origin of a joint locked at ``value`` (rad, or m for a prismatic joint).
 
     Args:
@@ -75,9 +73,7 @@ def movable_joints(text: str) -> dict[str, tuple[str, float, float]]:
     return joints
 
 
-def lock_joints(
-    text: str, values: Mapping[str, float], source_dir: Path | None = None
-) -> str:
+def lock_joints(text: str, values: Mapping[str, float], source_dir: Path | None = None) -> str:
     """The URDF ``text`` with the named joints fixed at ``values`` (rad or m).
 
     Relative mesh file names are made absolute against ``source_dir`` (the folder of the

@@ -9,6 +9,9 @@ Fixed joints are merged into their parent body by Pinocchio's URDF parser.
 The public API speaks of one number per movable joint: an angle in rad for ``revolute`` and
 ``continuous`` joints (Pinocchio stores a continuous joint as ``(cos, sin)``), a displacement
 in m for ``prismatic`` joints.
+
+This module is long because loading checks every part of the model a planner relies on (joint
+kinds and limits, masses, inertias, end effectors), each with its own message.
 """
 
 from __future__ import annotations
@@ -29,8 +32,8 @@ from ..files import absolute_path, read_text_file
 from .urdf_checks import check_urdf_xml, parser_messages
 
 __all__ = [
-    "MAX_URDF_BYTES",
     "FINGER_NAME",
+    "MAX_URDF_BYTES",
     "Joint",
     "Robot",
     "end_effector_candidates",
