@@ -243,10 +243,10 @@ class Scenario:
                 raise ScenarioError(
                     f"missing required key {key!r} (required: robot, duration, [start], [goal])"
                 )
-        source = robot_source(data["robot"], data["start"], relative_to)
-        urdf, robot_text, servicer = source.urdf, source.text, source.servicer
+        origin = robot_source(data["robot"], data["start"], relative_to)
+        urdf, robot_text, servicer = origin.urdf, origin.text, origin.servicer
         duration = _scenario_errors(check_duration, data["duration"])
-        names = _end_effector_names(data, source)
+        names = _end_effector_names(data, origin)
         payload = _payload(data.get("payload"))
         if payload is not None:
             first = names[0] if names else None
@@ -258,8 +258,8 @@ class Scenario:
             robot = load_robot(urdf, names or None, text=robot_text)
         check_joint_count(robot.n, repr(robot.name))
         safety = _safety(data.get("safety"), data.get("obstacles"), relative_to)
-        if safety.srdf is None and source.srdf is not None:
-            safety = replace(safety, srdf=source.srdf)
+        if safety.srdf is None and origin.srdf is not None:
+            safety = replace(safety, srdf=origin.srdf)
 
         states: list[tuple[dict[str, float], np.ndarray]] = []
         goal_poses: dict[str, CartesianGoal] = {}
@@ -294,9 +294,9 @@ class Scenario:
                 joints = {}
             elif name == "goal" and "end_effectors" in table:
                 goal_poses = _frame_goals(table["end_effectors"])
-                joints = _joint_table(robot, table, name, source.locked, partial=True)
+                joints = _joint_table(robot, table, name, origin.locked, partial=True)
             else:
-                joints = _joint_table(robot, table, name, source.locked)
+                joints = _joint_table(robot, table, name, origin.locked)
             states.append((joints, quat))
 
         path_table = data.get("path", {})
@@ -355,7 +355,7 @@ class Scenario:
             safety=safety,
             payload=payload,
             servicer=servicer,
-            srdf_text=source.srdf_text,
+            srdf_text=origin.srdf_text,
         )
 
     def resolved(self) -> Scenario:

@@ -53,7 +53,9 @@ def merged_srdf(arms: Sequence[str], prefixes: Sequence[str]) -> str:
     root = ET.Element("robot", name="servicer")
     for arm, prefix in zip(arms, prefixes, strict=True):
         path = arm_srdf(arm)
-        for first, second in [] if path is None else disabled_pairs(path):
+        if path is None:
+            continue
+        for first, second in disabled_pairs(path):
             ET.SubElement(
                 root,
                 "disable_collisions",
