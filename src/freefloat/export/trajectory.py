@@ -122,7 +122,7 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
         grid = grid[grid < T - 1e-9 * max(1.0, T)]
         times = np.append(grid, T)
     t = np.asarray(times, dtype=float)
-    robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+    robot = load_robot(plan.robot.urdf, plan.robot.frames)
     mmap = MomentumMap(robot)
     poly = np.polynomial.polynomial
     coefficients = [np.asarray(plan.coefficients[name], float) for name in plan.robot.joints]

@@ -220,7 +220,7 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
     import meshcat.geometry as g
     from meshcat.animation import Animation
 
-    robot = robot or load_robot(plan.robot.urdf, plan.robot.end_effector)
+    robot = robot or load_robot(plan.robot.urdf, plan.robot.frames)
     visual = _visual_model(robot)
     samples = plan.samples
     n = len(samples.t)

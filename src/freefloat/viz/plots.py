@@ -123,7 +123,7 @@ def clearance_curve(
     from ..robot.collision import CollisionModel
     from ..robot.model import load_robot
 
-    robot = robot or load_robot(plan.robot.urdf, plan.robot.end_effector)
+    robot = robot or load_robot(plan.robot.urdf, plan.robot.frames)
     model = CollisionModel(robot, plan.safety.srdf, plan_obstacles(plan))
     if model.n_pairs == 0:
         return None
@@ -165,7 +165,7 @@ def _limits(plan: Plan) -> dict[str, tuple[float, float, float]]:
     from ..robot.model import load_robot
 
     try:
-        robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+        robot = load_robot(plan.robot.urdf, plan.robot.frames)
     except (FreeFloatError, OSError):
         return {}
     return {j.name: (j.lower, j.upper, j.velocity_limit) for j in robot.joints}
