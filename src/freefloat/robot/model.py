@@ -302,7 +302,7 @@ def end_effector_candidates(model: pin.Model, prefix: str = "") -> list[str]:
         if not frame.name.startswith(prefix):
             continue
         support = list(model.supports[frame.parentJoint])
-        if FINGER_NAME.search(frame.name) or finger_joints.intersection(support):
+        if _on_a_finger(model, index) or finger_joints.intersection(support):
             continue
         depth = sum(1 for j in support if j >= 2)
         bodies.append((depth, frame.parentJoint, bool(_TOOL_NAME.search(frame.name)), index))
@@ -314,6 +314,23 @@ def end_effector_candidates(model: pin.Model, prefix: str = "") -> list[str]:
         if depth == deepest:
             best[joint] = max(best.get(joint, (False, -1)), (tool, index))
     return [model.frames[best[joint][1]].name for joint in sorted(best)]
+
+
+def _on_a_finger(model: pin.Model, index: int) -> bool:
+    """Whether a frame is named like a finger or hangs below a (locked) finger joint.
+
+    Walks up the frame tree through fixed joints and bodies to the movable joint carrying it.
+    """
+    seen = set()
+    while index not in seen:
+        seen.add(index)
+        frame = model.frames[index]
+        if FINGER_NAME.search(frame.name):
+            return True
+        if frame.type == pin.FrameType.JOINT:
+            return False
+        index = int(frame.parentFrame)
+    return False
 
 
 def _deepest(model: pin.Model, prefix: str) -> str:

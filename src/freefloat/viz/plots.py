@@ -184,20 +184,28 @@ def _draw(
     scale, kinds = _joint_scale(plan)
     names = plan.robot.joints
     unit = "deg" if all(k != "prismatic" for k in kinds) else "deg | m"
+    frames = plan.robot.frames
     if topic == "end_effector":
-        ee = np.asarray(s.end_effector_position)
-        for i, axis in enumerate("xyz"):
-            if i < 2 or np.ptp(ee[:, 2]) > 1e-9:
-                ax.plot(t, ee[:, i], label=f"${axis}_E$")
-        ax.set_ylabel("end effector [m]")
+        for number, frame in enumerate(frames):
+            ee = np.asarray(s.path_of(frame))
+            tag = "" if len(frames) == 1 else f" {frame}"
+            for i, axis in enumerate("xyz"):
+                if i < 2 or np.ptp(ee[:, 2]) > 1e-9:
+                    style = "-" if number == 0 else (0, (4, 2 * number))
+                    ax.plot(t, ee[:, i], linestyle=style, label=f"${axis}_E${tag}")
+        ax.set_ylabel("end effector [m]" if len(frames) == 1 else "end effectors [m]")
     elif topic == "end_effector_path":
-        ee = np.asarray(s.end_effector_position)
-        ax.plot(ee[:, 0], ee[:, 1], label="path")
-        ax.plot(ee[:1, 0], ee[:1, 1], "o", label="start")
-        ax.plot(ee[-1:, 0], ee[-1:, 1], "s", label="goal")
+        flat = True
+        for frame in frames:
+            ee = np.asarray(s.path_of(frame))
+            tag = "" if len(frames) == 1 else f" {frame}"
+            (line,) = ax.plot(ee[:, 0], ee[:, 1], label=f"path{tag}")
+            color = line.get_color()
+            ax.plot(ee[:1, 0], ee[:1, 1], "o", color=color, label=f"start{tag}")
+            ax.plot(ee[-1:, 0], ee[-1:, 1], "s", color=color, label=f"goal{tag}")
+            flat = flat and np.ptp(ee[:, 2]) <= 1e-9
         ax.plot([0.0], [0.0], "+", color="k", label="system CM")
         ax.set_aspect("equal", adjustable="datalim")
-        flat = np.ptp(ee[:, 2]) <= 1e-9
         plane = "inertial x-y plane" if flat else "projection onto the inertial x-y plane"
         ax.set_xlabel(f"x [m] ({plane})")
         ax.set_ylabel("y [m]")
