@@ -67,6 +67,7 @@ def dual_plan():
     return scenario, ff.plan(scenario)
 
 
+@pytest.mark.slow
 def test_shipped_dual_scenario_plans_and_verifies(dual_plan):
     _scenario, plan = dual_plan
     assert plan.format == "freefloat.plan/4"
@@ -97,6 +98,7 @@ def test_shipped_dual_scenario_plans_and_verifies(dual_plan):
         )
 
 
+@pytest.mark.slow
 def test_shipped_dual_plan_plays_back_every_end_effector(dual_plan):
     _, plan = dual_plan
     with build_playback(plan) as playback:
@@ -108,6 +110,7 @@ def test_shipped_dual_plan_plays_back_every_end_effector(dual_plan):
             np.testing.assert_allclose(positions, np.asarray(path), atol=1e-9)
 
 
+@pytest.mark.slow
 def test_dual_plan_exports_and_reloads_every_path(dual_plan, tmp_path):
     from freefloat.export.csv_file import columns
     from freefloat.export.trajectory import from_samples
