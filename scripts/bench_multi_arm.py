@@ -64,8 +64,7 @@ def r2_scenarios(folder: Path) -> dict[str, ff.Scenario]:
     robot = ff.load_robot(urdf, R2_PALMS)
     start = {j.name: float(np.degrees(0.5 * (j.lower + j.upper))) for j in robot.joints}
     goal = {
-        j.name: start[j.name] + float(np.degrees(0.125 * (j.upper - j.lower)))
-        for j in robot.joints
+        j.name: start[j.name] + float(np.degrees(0.125 * (j.upper - j.lower))) for j in robot.joints
     }
     head = f'duration = 10.0\nend_effectors = {R2_PALMS!r}\n[robot]\nurdf = "{urdf}"\n'
     head = head.replace("'", '"')
