@@ -370,10 +370,12 @@ def test_compose_locks_fingers_mid_range_and_never_picks_a_finger(tmp_path, caps
         )
         == 0
     )
-    printed = capsys.readouterr().out
-    assert (
+    captured = capsys.readouterr()
+    printed = captured.out
+    assert "locked gripper_left_finger_joint at 30.0803 deg" in printed
+    assert (  # said once, as a warning: a value the user did not state
         "gripper_left_finger_joint' locked at 30.08 deg, the middle of its range "
-        "[20.05, 40.11] deg (0 is outside it)" in printed
+        "[20.05, 40.11] deg (0 is outside it)" in captured.err
     )
     assert "end effector 'fore'" in printed
     servicer = ff.load_robot(out)

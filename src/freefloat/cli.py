@@ -275,8 +275,6 @@ def _cmd_compose(args: argparse.Namespace) -> int:
     for name, value in composed.locked.items():
         shown = value if name in composed.prismatic else math.degrees(value)
         print(f"  locked {name} at {shown:.6g} {'m' if name in composed.prismatic else 'deg'}")
-    for note in composed.notes:
-        print(f"  note: {note}")
     tips = ", ".join(repr(e) for e in robot.end_effectors)
     print(
         f"  {robot.n} joints ({', '.join(robot.joint_names)}), total mass "

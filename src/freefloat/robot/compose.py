@@ -259,7 +259,7 @@ def compose(spec: ServicerSpec) -> Composed:
     tips = arm_tips(text, [a.prefix for a in arms])
     srdf = merged_srdf([a.arm for a in arms], [a.prefix for a in arms]) if len(arms) > 1 else None
     for note in notes:
-        LOGGER.info("%s", note)
+        LOGGER.warning("%s", note)  # a choice the user did not state
     if spec.payload is not None:
         from .payload import attach_payload
 
