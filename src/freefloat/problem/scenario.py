@@ -9,7 +9,8 @@ The file speaks degrees (joint angles, Euler angles) and metres (prismatic joint
     robot = "planar_2dof"          # a shipped robot name, a URDF path relative to this file,
                                    # or a [robot] table composing a servicer (see below)
     duration = 10.0                # [s]
-    end_effector = "ee"            # optional frame name; default: the tip of the chain
+    end_effector = "ee"            # optional frame name; default: the tip of the longest
+                                   # chain that is not a finger (or end_effectors = [...])
     [start]
     joints = { q1 = 80.0, q2 = 30.0 }      # deg (m for prismatic joints)
     base_zyx_deg = [-50.0, 0.0, 0.0]       # yaw, pitch, roll [deg]; optional, default zeros
@@ -50,6 +51,17 @@ written to its content-addressed cache file when a plan is made, see :meth:`Scen
     base_size = [0.6, 0.6, 0.6]    # [m]
     mount = [0.3, 0.0, 0.0]        # [m], in the spacecraft frame
     mount_rpy_deg = [0.0, 90.0, 0.0]   # optional [deg]; also base_inertia, lock, keep_gripper
+
+Two or more arms (``arms = [{ arm = ..., mount = ..., prefix = ... }, ...]``), a URDF with
+joints locked (``[robot] urdf = ...``, ``lock = [...]``): see
+:mod:`freefloat.problem.robot_table`. Cartesian goals per end effector, solved together, with
+any joint goals held and every other joint at its start value (docs/multi_arm.md)::
+
+    [goal]
+    joints = { right_elbow_joint = 80.0 }  # optional joint goals (deg)
+    [goal.end_effectors.left_tool0]
+    xyz = [0.48, 0.63, -0.43]              # [m], from the system CM
+    rpy_deg = [0.0, 90.0, 0.0]             # optional [deg]
 """
 
 from __future__ import annotations
