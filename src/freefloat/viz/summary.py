@@ -140,9 +140,10 @@ def robot_label(scenario: Scenario) -> str:
     spec, robot = scenario.servicer, scenario.robot
     if spec is not None:
         edges = " x ".join(f"{float(x):g}" for x in spec.base_size)
+        arms = " + ".join(Path(str(a.arm)).stem for a in spec.arms())
         return (
-            f"servicer: {Path(str(spec.arm)).stem} arm on a {spec.base_mass:g} kg, {edges} m base "
-            f"({robot.n} joints)"
+            f"servicer: {arms} arm{'s' if spec.more_arms else ''} on a {spec.base_mass:g} kg, "
+            f"{edges} m base ({robot.n} joints)"
         )
     return f"{robot.name} ({Path(robot.urdf).name}, {robot.n} joints)"
 
