@@ -141,6 +141,18 @@ def test_dual_plan_exports_and_reloads_every_path(dual_plan, tmp_path):
     )
 
 
+@pytest.mark.slow
+def test_dual_plan_figures_draw_every_end_effector(dual_plan):
+    from freefloat.viz.plots import figures
+
+    _, plan = dual_plan
+    figure = figures(plan, ["end_effector_path"])["end_effector_path"]
+    lines = {line.get_label(): line for line in figure.axes[0].get_lines()}
+    for frame in plan.robot.end_effectors:
+        drawn = lines[f"path {frame}"].get_xydata()
+        np.testing.assert_allclose(drawn, np.asarray(plan.samples.end_effector_paths[frame])[:, :2])
+
+
 # -- two Cartesian goals at once --------------------------------------------------------------
 
 
