@@ -174,7 +174,10 @@ def test_missing_joint_in_scenario(tmp_path):
 
 def test_unknown_robot_name(tmp_path):
     msg = _scenario_error(tmp_path, scenario_text(robot="hubble"), ff.UnknownNameError)
-    assert "unknown robot 'hubble'; valid: dual_ur5_servicer, panda_servicer, planar_2dof, ur5_servicer" in msg
+    assert (
+        "unknown robot 'hubble'; valid: dual_ur5_servicer, panda_servicer, planar_2dof, "
+        "ur5_servicer" in msg
+    )
 
 
 def test_nan_in_scenario(tmp_path):
