@@ -441,11 +441,16 @@ def test_two_arms_compose_with_prefixes_and_their_own_srdf_pairs(tmp_path, capsy
         "-o",
         str(out),
     ]
-    assert main(args) == 0
+    assert main([*args, "--lock", "elbow_joint"]) == 2  # which arm's? the prefixes are named
+    assert "--lock elbow_joint: name a joint with its arm's prefix (arm1_, arm2_)" in (
+        capsys.readouterr().err
+    )
+    assert main([*args, "--lock", "arm2_panda_joint7=30"]) == 0
     printed = capsys.readouterr().out
+    assert "locked arm2_panda_joint7 at 30 deg" in printed
     assert "end effectors 'arm1_tool0', 'arm2_panda_hand_tcp'" in printed
     robot = ff.load_robot(out, ["arm1_tool0", "arm2_panda_hand_tcp"])
-    assert robot.n == 13 and all(n.startswith(("arm1_", "arm2_")) for n in robot.joint_names)
+    assert robot.n == 12 and all(n.startswith(("arm1_", "arm2_")) for n in robot.joint_names)
     from freefloat.robot.collision import CollisionModel
     from freefloat.robot.model import example_robot_data_dir
 
