@@ -63,4 +63,5 @@ def merged_srdf(arms: Sequence[str], prefixes: Sequence[str]) -> str:
                 link2=prefix + second,
                 reason=f"from {path.name}",
             )
-    return "<?xml version='1.0' encoding='UTF-8'?>\n" + ET.tostring(root, encoding="unicode")
+    ET.indent(root)
+    return "<?xml version='1.0' encoding='UTF-8'?>\n" + ET.tostring(root, encoding="unicode") + "\n"
