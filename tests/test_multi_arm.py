@@ -507,3 +507,58 @@ def test_a_format_3_plan_still_loads_verifies_and_keeps_its_format(worked_plan, 
     assert old.samples.path_of("ee") == old.samples.end_effector_position
     assert "end_effector_paths" not in old.to_dict()["samples"]
     assert main(["verify", str(path)]) == 0
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"end_effectors": 3}, "end_effector must be a frame name (end_effectors a list of them)"),
+        ({"end_effector": "left_tool0", "end_effectors": ["left_tool0"]}, "not both"),
+        ({"goal": {"end_effectors": {"left_tool0": {"xyz": "up"}}}}, "xyz must be a list of 3"),
+        (
+            {"goal": {"end_effectors": {"left_tool0": {"xyz": [0, 0, 0], "rpy": [0, 0, 0]}}}},
+            "unknown key in [goal.end_effectors.left_tool0] 'rpy'; valid: xyz, rpy_deg",
+        ),
+        ({"goal": {"end_effectors": {"left_tool0": [1, 2, 3]}}}, "needs xyz = [x, y, z]"),
+        ({"robot": {"urdf": str(DUAL), "lock": "left_elbow_joint"}}, "lock must be a list"),
+        ({"robot": {"urdf": str(DUAL), "lock": [{"joint": 3}]}}, "lock entries are joint names"),
+        (
+            {"robot": {"urdf": str(DUAL), "lock": [{"joint": "left_elbow_joint", "deg": 3}]}},
+            "unknown key in [robot] lock entry 'deg'; valid: joint, value",
+        ),
+        ({"robot": {"urdf": str(DUAL), "arm": "ur5"}}, "unknown key in [robot] (with urdf) 'arm'"),
+        (
+            {"robot": {"arms": "ur5", "base_mass": 1.0, "base_size": [1, 1, 1]}},
+            "[robot] arms must be a list of tables",
+        ),
+        (
+            {"robot": {"arm": "ur5", "arms": [], "base_mass": 1.0, "base_size": [1, 1, 1]}},
+            "[robot] needs 'arm' (one arm) or 'arms' (a list of arm tables), not both or neither",
+        ),
+        (
+            {
+                "robot": {
+                    "arms": [{"arm": "ur5", "prefix": 3}],
+                    "base_mass": 1.0,
+                    "base_size": [1, 1, 1],
+                }
+            },
+            "[robot] arms #1 prefix must be text, got 3",
+        ),
+    ],
+)
+def test_bad_multi_arm_keys_are_one_line_errors(change, message):
+    start = {k: v for k, v in _both(UR5_START).items()}
+    data = {
+        "robot": str(DUAL),
+        "duration": 5.0,
+        "end_effector": "left_tool0",
+        "start": {"joints": start},
+        "goal": {"joints": start},
+    }
+    data.update(change)
+    if "end_effectors" in change and "end_effector" not in change:
+        del data["end_effector"]
+    with pytest.raises(ff.FreeFloatError) as info:
+        ff.Scenario.from_dict(data)
+    assert message in str(info.value) and "\n" not in str(info.value)
