@@ -39,8 +39,12 @@ against the optimal-control figure quoted in the issue (26.6 N^2 m^2 s); the sam
 at fixed freedom k = 1..4 with exact gradients and with SciPy's finite differences side by
 side; and the Panda servicer's scenario with min_norm against min_effort.
 
+Many joints and two arms (issue 24, with --multi-arm-only; scripts/bench_multi_arm.py):
+Robonaut 2's 14 joints keeping the torso still, generated chains of 14 to 24 joints, the shipped
+dual-arm servicer.
+
 Run: python scripts/bench.py [--runs N] [--json FILE] [--reach-only] [--random N] [--sweep]
-     [--sweep-only]
+     [--sweep-only] [--multi-arm-only]
 """
 
 from __future__ import annotations
@@ -752,8 +756,19 @@ def main() -> None:
     parser.add_argument(
         "--objectives-only", action="store_true", help="only the objectives section"
     )
+    parser.add_argument(
+        "--multi-arm-only", action="store_true", help="only the many-joints, two-arms section"
+    )
     args = parser.parse_args()
     print(f"machine: {machine()}")
+    if args.multi_arm_only:
+        from bench_multi_arm import bench_multi_arm, print_multi_arm
+
+        multi = bench_multi_arm(max(1, args.runs // 3), chain_urdf)
+        print_multi_arm(multi, ff.SolveOptions().max_evaluations)
+        if args.json:
+            args.json.write_text(json.dumps({"machine": machine(), "multi_arm": multi}, indent=1))
+        return
     objectives = bench_objectives() if args.objectives or args.objectives_only else {}
     if args.objectives_only:
         print_objectives(objectives)

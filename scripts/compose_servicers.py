@@ -1,6 +1,8 @@
 """Regenerate the shipped servicer URDFs in robots/ (maintenance script).
 
-Each is an example-robot-data arm on a 0.6 m, 100 kg box spacecraft, mounted on the +x face.
+Each is an example-robot-data arm on a 0.6 m, 100 kg box spacecraft, mounted on the +x face;
+the dual servicer carries two UR5 arms side by side on that face (prefixes ``left_`` at
+y = +0.2 m and ``right_`` at y = -0.2 m), with its SRDF (each arm's pairs, prefixed) beside it.
 Run from the repository root: python scripts/compose_servicers.py
 """
 
@@ -8,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from freefloat.robot.compose import ServicerSpec, compose_servicer
+from freefloat.robot.compose import ArmSpec, ServicerSpec, compose_servicer
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 
@@ -28,6 +30,23 @@ SERVICERS = {
         (0.6, 0.6, 0.6),
         mount=(0.3, 0.0, 0.0),
         mount_rpy=(0.0, 1.5707963267948966, 0.0),
+    ),
+    # 12 joints: two UR5 arms on one box.
+    "dual_ur5_servicer": ServicerSpec(
+        "ur5",
+        100.0,
+        (0.6, 0.6, 0.6),
+        mount=(0.3, 0.2, 0.0),
+        mount_rpy=(0.0, 1.5707963267948966, 0.0),
+        prefix="left_",
+        more_arms=(
+            ArmSpec(
+                "ur5",
+                mount=(0.3, -0.2, 0.0),
+                mount_rpy=(0.0, 1.5707963267948966, 0.0),
+                prefix="right_",
+            ),
+        ),
     ),
 }
 

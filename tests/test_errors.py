@@ -174,7 +174,10 @@ def test_missing_joint_in_scenario(tmp_path):
 
 def test_unknown_robot_name(tmp_path):
     msg = _scenario_error(tmp_path, scenario_text(robot="hubble"), ff.UnknownNameError)
-    assert "unknown robot 'hubble'; valid: panda_servicer, planar_2dof, ur5_servicer" in msg
+    assert (
+        "unknown robot 'hubble'; valid: dual_ur5_servicer, panda_servicer, planar_2dof, "
+        "ur5_servicer" in msg
+    )
 
 
 def test_nan_in_scenario(tmp_path):
@@ -245,14 +248,15 @@ def test_corrupt_plan_file(tmp_path):
 
 def test_plan_file_of_another_version(tmp_path, worked_plan):
     data = worked_plan.to_dict()
-    data["format"] = "freefloat.plan/4"
+    data["format"] = "freefloat.plan/5"
     path = tmp_path / "p.json"
     path.write_text(json.dumps(data))
     with pytest.raises(ff.PlanFileError) as info:
         ff.Plan.load(path)
     assert (
-        "plan format 'freefloat.plan/4' is not supported; this freefloat reads "
-        "'freefloat.plan/1' and 'freefloat.plan/2' and 'freefloat.plan/3'" in str(info.value)
+        "plan format 'freefloat.plan/5' is not supported; this freefloat reads "
+        "'freefloat.plan/1' and 'freefloat.plan/2' and 'freefloat.plan/3' and "
+        "'freefloat.plan/4'" in str(info.value)
     )
 
 

@@ -43,6 +43,9 @@ else:  # pragma: no cover
 SCENARIOS = {
     p.stem: tomllib.loads(p.read_text())
     for p in sorted((ROOT / "robots" / "scenarios").glob("*.toml"))
+    # the 12-joint dual-arm scenario solves inverse kinematics of two chains before planning:
+    # a mutated case takes longer than CASE_SECONDS (tests/test_multi_arm.py covers its errors)
+    if p.stem != "dual_ur5_servicer"
 }
 for _name, _data in SCENARIOS.items():
     if _name != "worked_example":

@@ -11,6 +11,7 @@ from ._interrupt import guard_startup as _guard_startup
 _guard_startup()  # the command line only: Ctrl-C while importing is one line, exit 130
 
 from .errors import (
+    AmbiguousEndEffectorError,
     DurationLimitError,
     EffortLimitError,
     FileError,
@@ -19,6 +20,7 @@ from .errors import (
     InputError,
     InputLimitError,
     JointLimitError,
+    LockedJointError,
     ModelError,
     PlanFileError,
     PlanMismatchError,
@@ -67,6 +69,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "OBJECTIVES",
+    "AmbiguousEndEffectorError",
     "Check",
     "Constraint",
     "ConstraintRows",
@@ -85,6 +88,7 @@ __all__ = [
     "JointPolynomials",
     "JointPositionLimits",
     "JointVelocityLimits",
+    "LockedJointError",
     "MinAcceleration",
     "MinEffort",
     "MinLength",

@@ -21,12 +21,13 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from types import FrameType
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 if sys.version_info >= (3, 11):
     pass
 else:  # pragma: no cover
     pass
+
 
 from . import __version__
 from .errors import FreeFloatError, InputError, InputLimitError, VelocityLimitError
@@ -41,6 +42,10 @@ from .progress import TIMINGS, configure, stage
 from .solvers.options import DEFAULT_TOLERANCE, TOLERANCE_RANGE_RAD, SolveOptions
 from .verify.checks import MAX_REPLAY_STEPS, REPLAY_STEPS_LIMIT, verify_plan
 from .viz.summary import cartesian_report, robot_label, summary
+
+if TYPE_CHECKING:
+    from .robot.compose import ServicerSpec
+    from .robot.payload import Payload
 
 _robot_label = robot_label  # the name the tests know
 
@@ -226,7 +231,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
 
 
 def _cmd_compose(args: argparse.Namespace) -> int:
-    from .robot.compose import ServicerSpec, compose_servicer
+    from .robot.compose import compose, write_composed
     from .robot.model import load_robot
     from .robot.payload import Payload
 
@@ -259,24 +264,22 @@ def _cmd_compose(args: argparse.Namespace) -> int:
             box=tuple(args.payload_box) if args.payload_box is not None else None,
         )
 
-    spec = ServicerSpec(
-        arm=args.arm,
-        base_mass=args.base_mass,
-        base_size=tuple(args.base_size),
-        base_inertia=tuple(args.base_inertia) if args.base_inertia else None,
-        mount=tuple(args.mount),
-        mount_rpy=tuple(math.radians(a) for a in args.mount_rpy),
-        lock=tuple(args.lock or ()),
-        keep_gripper=args.keep_gripper,
-        payload=_compose_payload(args),
-    )
+    spec = _servicer_spec(args, _compose_payload(args))
     with stage("compose servicer"):
-        path = compose_servicer(spec, args.output)
-        robot = load_robot(path)  # a payload link is never the default end effector
+        composed = compose(spec)
+        path = write_composed(composed, args.output)
+        robot = load_robot(path, composed.end_effectors)
     print(f"freefloat compose: wrote {path}")
+    if composed.srdf is not None:
+        print(f"  with {path.with_suffix('.srdf').name}: each arm's SRDF pairs, prefixed")
+    for name, value in composed.locked.items():
+        shown = value if name in composed.prismatic else math.degrees(value)
+        print(f"  locked {name} at {shown:.6g} {'m' if name in composed.prismatic else 'deg'}")
+    tips = ", ".join(repr(e) for e in robot.end_effectors)
     print(
         f"  {robot.n} joints ({', '.join(robot.joint_names)}), total mass "
-        f"{robot.total_mass:.3f} kg, end effector {robot.end_effector!r}"
+        f"{robot.total_mass:.3f} kg, end effector{'s' if len(robot.end_effectors) > 1 else ''} "
+        f"{tips}"
     )
     if spec.payload is not None:
         print(
@@ -284,6 +287,64 @@ def _cmd_compose(args: argparse.Namespace) -> int:
             "(link 'captured_payload')"
         )
     return 0
+
+
+def _servicer_spec(args: argparse.Namespace, payload: Payload | None) -> ServicerSpec:
+    """The ``compose`` options as a spec: one ``--arm`` with its ``--mount`` per arm."""
+    from .errors import InputError
+    from .robot.compose import ArmSpec, ServicerSpec
+
+    count = len(args.arm)
+    rpys = args.mount_rpy or [[0.0, 0.0, 0.0]] * count
+    prefixes = args.prefix or [""] * count
+    given_per_arm = (("--mount", args.mount), ("--mount-rpy", rpys), ("--prefix", prefixes))
+    for option, given in given_per_arm:
+        if len(given) != count:
+            raise InputError(f"give {option} once per --arm ({count}), got {len(given)}")
+    arms = [
+        ArmSpec(arm, tuple(mount), tuple(math.radians(a) for a in rpy), prefix)
+        for arm, mount, rpy, prefix in zip(args.arm, args.mount, rpys, prefixes, strict=True)
+    ]
+    if count > 1:
+        arms = [
+            dataclasses.replace(a, prefix=a.prefix or f"arm{i + 1}_") for i, a in enumerate(arms)
+        ]
+    locks: list[list[str | tuple[str, float]]] = [[] for _ in arms]
+    for item in args.lock or ():
+        name, _, degrees = item.partition("=")
+        value = 0.0
+        if degrees:
+            try:
+                amount = float(degrees)
+            except ValueError:
+                raise InputError(f"--lock {item}: give JOINT or JOINT=DEG") from None
+            value = math.radians(check_number(amount, f"--lock {name}", MAX_ANGLE_DEG, "deg"))
+        owner = next((i for i, a in enumerate(arms) if name.startswith(a.prefix)), None)
+        if owner is None:
+            raise InputError(
+                f"--lock {name}: name a joint with its arm's prefix "
+                f"({', '.join(a.prefix for a in arms)})"
+            )
+        local = name[len(arms[owner].prefix) :]
+        locks[owner].append((local, value) if degrees else local)
+    arms = [
+        dataclasses.replace(a, lock=tuple(lock), keep_gripper=args.keep_gripper)
+        for a, lock in zip(arms, locks, strict=True)
+    ]
+    first = arms[0]
+    return ServicerSpec(
+        arm=first.arm,
+        base_mass=args.base_mass,
+        base_size=tuple(args.base_size),
+        base_inertia=tuple(args.base_inertia) if args.base_inertia else None,
+        mount=first.mount,
+        mount_rpy=first.mount_rpy,
+        lock=first.lock,
+        keep_gripper=args.keep_gripper,
+        payload=payload,
+        more_arms=tuple(arms[1:]),
+        prefix=first.prefix,
+    )
 
 
 def _spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
@@ -439,12 +500,18 @@ def build_parser() -> argparse.ArgumentParser:
 
     p_compose = commands.add_parser(
         "compose",
-        help="mount an arm on a box spacecraft and write one validated URDF",
-        description="Compose a servicer: an example-robot-data arm (panda, ur5, kinova, "
-        "xarm7, z1) or a URDF file, mounted on a uniform box spacecraft. Gripper and finger "
-        "joints are locked unless --keep-gripper. Angles in degrees.",
+        help="mount one or more arms on a box spacecraft and write one validated URDF",
+        description="Compose a servicer: example-robot-data arms (panda, ur5, kinova, "
+        "xarm7, z1) or URDF files, mounted on a uniform box spacecraft (--arm A --mount ... "
+        "--arm B --mount ...). Gripper and finger joints are locked (at 0, or mid-range when "
+        "0 is outside their limits) unless --keep-gripper. Angles in degrees.",
     )
-    p_compose.add_argument("--arm", required=True, help="arm name or URDF path")
+    p_compose.add_argument(
+        "--arm",
+        required=True,
+        action="append",
+        help="arm name or URDF path; repeat for more arms, each with its --mount",
+    )
     p_compose.add_argument("--base-mass", type=float, required=True, metavar="KG")
     p_compose.add_argument(
         "--base-size",
@@ -466,18 +533,30 @@ def build_parser() -> argparse.ArgumentParser:
         type=float,
         nargs=3,
         required=True,
+        action="append",
         metavar=("X", "Y", "Z"),
-        help="arm root in the spacecraft frame [m]",
+        help="arm root in the spacecraft frame [m] (once per --arm)",
     )
     p_compose.add_argument(
         "--mount-rpy",
         type=float,
         nargs=3,
-        default=[0.0, 0.0, 0.0],
+        action="append",
         metavar=("R", "P", "Y"),
-        help="arm root roll, pitch, yaw [deg]",
+        help="arm root roll, pitch, yaw [deg] (once per --arm; default 0 0 0)",
     )
-    p_compose.add_argument("--lock", nargs="*", metavar="JOINT", help="more joints to lock at zero")
+    p_compose.add_argument(
+        "--prefix",
+        action="append",
+        help="put before each link and joint name of the arm (once per --arm; with several "
+        "arms default arm1_, arm2_...)",
+    )
+    p_compose.add_argument(
+        "--lock",
+        nargs="*",
+        metavar="JOINT[=DEG]",
+        help="more joints to lock, at 0 or at DEG (with several arms, prefixed names)",
+    )
     p_compose.add_argument(
         "--keep-gripper", action="store_true", help="keep gripper and finger joints movable"
     )
@@ -661,8 +740,8 @@ def _check_arguments(args: argparse.Namespace) -> None:
             ("--base-mass", [args.base_mass], MAX_MAGNITUDE, "kg"),
             ("--base-size", args.base_size, MAX_LENGTH_M, "m"),
             ("--base-inertia", args.base_inertia, MAX_MAGNITUDE, "kg m^2"),
-            ("--mount", args.mount, MAX_LENGTH_M, "m"),
-            ("--mount-rpy", args.mount_rpy, MAX_ANGLE_DEG, "deg"),
+            ("--mount", [x for m in args.mount for x in m], MAX_LENGTH_M, "m"),
+            ("--mount-rpy", [x for m in args.mount_rpy or [] for x in m], MAX_ANGLE_DEG, "deg"),
             ("--payload-mass", [args.payload_mass], MAX_MAGNITUDE, "kg"),
             ("--payload-com", args.payload_com, MAX_LENGTH_M, "m"),
             ("--payload-inertia", args.payload_inertia, MAX_MAGNITUDE, "kg m^2"),

@@ -1,5 +1,8 @@
 """The exceptions freefloat raises: one root, :class:`FreeFloatError`, and subclasses with data.
 
+This module is long because every error of the package, with the data it carries and its
+one-line message, is in one place.
+
 Every message is a single line that names the problem and says what would be valid, so that
 the command line can print it as it is (exit code 2) and a caller can test it.
 """
@@ -359,4 +362,46 @@ class CollisionError(FreeFloatError):
         super().__init__(
             f"{where} configuration: {pair} {state} {amount}, below the clearance margin "
             f"{margin:g} m; move the {where} joints or lower [safety] margin_m"
+        )
+
+
+class AmbiguousEndEffectorError(ModelError):
+    """No single default end effector: several chains end equally deep; carries the tips.
+
+    Attributes:
+        candidates: the frame at the tip of each longest chain (none of them a gripper finger).
+    """
+
+    def __init__(self, candidates: Sequence[str], urdf: str | None = None) -> None:
+        self.candidates = tuple(candidates)
+        super().__init__(
+            f"the end effector is ambiguous: {len(self.candidates)} chains are longest "
+            f"({', '.join(self.candidates)}); name one in the scenario "
+            '(end_effector = "..." or end_effectors = [...])',
+            urdf,
+        )
+
+
+class LockedJointError(FreeFloatError):
+    """A joint locked at a value outside its limits (or a goal that moves a locked joint).
+
+    Attributes:
+        joint: the joint's name.
+        value: the locked value (deg for angular joints, m for prismatic ones).
+        lower, upper: its limits (same unit).
+        unit: ``"deg"`` or ``"m"``.
+    """
+
+    def __init__(
+        self, joint: str, value: float, lower: float, upper: float, unit: str, why: str = ""
+    ) -> None:
+        self.joint = joint
+        self.value = float(value)
+        self.lower = float(lower)
+        self.upper = float(upper)
+        self.unit = unit
+        reason = why or f"outside its limits [{lower:.6g}, {upper:.6g}] {unit}"
+        super().__init__(
+            f"joint {joint!r} locked at {value:.6g} {unit}: {reason}; lock it within "
+            f"[{lower:.6g}, {upper:.6g}] {unit}"
         )

@@ -353,6 +353,7 @@ def plan_from_solution(
             joints=names,
             end_effector=robot.end_effector,
             joint_kinds=[j.kind for j in robot.joints],
+            end_effectors=list(robot.end_effectors),
         ),
         duration=T,
         coefficients={

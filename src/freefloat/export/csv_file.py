@@ -38,6 +38,8 @@ def columns(traj: Trajectory) -> list[str]:
     names += [f"base_q{c} [1]" for c in "xyzw"]
     names += [f"base_{c} [m]" for c in "xyz"]
     names += [f"ee_{c} [m]" for c in "xyz"]
+    for frame in traj.end_effectors[1:]:  # further end effectors, by frame name
+        names += [f"ee_{frame}_{c} [m]" for c in "xyz"]
     return names
 
 
@@ -53,6 +55,7 @@ def write_csv(traj: Trajectory, path: str | Path) -> Path:
             traj.base_quaternion_xyzw,
             traj.base_position,
             traj.end_effector_position,
+            *traj.end_effector_paths[1:],
         ]
     )
 

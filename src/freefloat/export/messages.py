@@ -11,7 +11,9 @@ Topics (times relative to the plan's start, which is stamped 0 s):
   rad/s or m/s, effort N m or N);
 - ``/tf``: ``tf2_msgs/msg/TFMessage`` per sample, the base pose: parent frame ``world``
   (inertial, origin at the system centre of mass), child frame the URDF's root link (m);
-- ``/end_effector``: ``geometry_msgs/msg/PointStamped`` per sample, in ``world`` (m).
+- ``/end_effector``: ``geometry_msgs/msg/PointStamped`` per sample, in ``world`` (m);
+  further end effectors of the robot on ``/end_effector_2``, ``/end_effector_3``... in the
+  plan's end-effector order.
 """
 
 from __future__ import annotations
@@ -158,9 +160,13 @@ def messages(traj: Trajectory, child_frame: str) -> Iterator[Message]:
                 ]
             ),
         )
-        ex, ey, ez = (float(v) for v in traj.end_effector_position[k])
-        yield Message(
-            *END_EFFECTOR,
-            ns,
-            PointStamped(header=header(ns, WORLD_FRAME), point=GeoPoint(x=ex, y=ey, z=ez)),
-        )
+        paths = traj.end_effector_paths[1:]
+        for number, point in enumerate([traj.end_effector_position[k], *(p[k] for p in paths)]):
+            ex, ey, ez = (float(v) for v in point)
+            topic = END_EFFECTOR[0] + ("" if number == 0 else f"_{number + 1}")
+            yield Message(
+                topic,
+                END_EFFECTOR[1],
+                ns,
+                PointStamped(header=header(ns, WORLD_FRAME), point=GeoPoint(x=ex, y=ey, z=ez)),
+            )

@@ -18,7 +18,7 @@ planner's integration accuracy (tested).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -45,8 +45,10 @@ class Trajectory:
         tau: (K, N) joint torques (N m, or N for prismatic joints).
         base_quaternion_xyzw: (K, 4) base attitude in the inertial frame.
         base_position: (K, 3) base origin (m) in the inertial frame (origin: system CM).
-        end_effector_position: (K, 3) end-effector position (m), same frame.
+        end_effector_position: (K, 3) end-effector position (m), same frame (the first one).
         resampled: whether the series was recomputed at a rate (else the plan's samples).
+        end_effectors: every end-effector frame, in order (the first is the one above).
+        end_effector_paths: (E, K, 3) each end effector's position (m), same frame.
     """
 
     joints: list[str]
@@ -60,6 +62,8 @@ class Trajectory:
     base_position: np.ndarray
     end_effector_position: np.ndarray
     resampled: bool = False
+    end_effectors: list[str] = field(default_factory=list)
+    end_effector_paths: np.ndarray = field(default_factory=lambda: np.empty((0, 0, 3)))
 
 
 def from_samples(plan: Plan) -> Trajectory:
@@ -78,6 +82,8 @@ def from_samples(plan: Plan) -> Trajectory:
         base_quaternion_xyzw=np.asarray(s.base_quaternion_xyzw, dtype=float),
         base_position=np.asarray(s.base_position, dtype=float),
         end_effector_position=np.asarray(s.end_effector_position, dtype=float),
+        end_effectors=plan.robot.frames,
+        end_effector_paths=np.asarray([s.path_of(f) for f in plan.robot.frames], dtype=float),
     )
 
 
@@ -122,8 +128,9 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
         grid = grid[grid < T - 1e-9 * max(1.0, T)]
         times = np.append(grid, T)
     t = np.asarray(times, dtype=float)
-    robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+    robot = load_robot(plan.robot.urdf, plan.robot.frames)
     mmap = MomentumMap(robot)
+    frames = list(robot.end_effectors)
     poly = np.polynomial.polynomial
     coefficients = [np.asarray(plan.coefficients[name], float) for name in plan.robot.joints]
 
@@ -150,7 +157,7 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
     base, ee, tau = [], [], []
     for qk, qdk, qddk, quat in zip(q, qd, qdd, quats, strict=True):
         base.append(mmap.base_position(qk, quat))
-        ee.append(mmap.end_effector_pose(qk, quat).translation.copy())
+        ee.append([mmap.end_effector_pose(qk, quat, f).translation.copy() for f in frames])
         tau.append(inverse_dynamics(mmap, qk, qdk, qddk).tau)
     return Trajectory(
         joints=list(plan.robot.joints),
@@ -162,8 +169,10 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
         tau=np.asarray(tau),
         base_quaternion_xyzw=quats,
         base_position=np.asarray(base),
-        end_effector_position=np.asarray(ee),
+        end_effector_position=np.asarray(ee)[:, 0],
         resampled=True,
+        end_effectors=frames,
+        end_effector_paths=np.asarray(ee).transpose(1, 0, 2),
     )
 
 

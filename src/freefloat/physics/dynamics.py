@@ -96,6 +96,8 @@ class InverseDynamicsBatch:
         base_twist: (K, 6) zero-momentum base twist (m/s, rad/s; base frame).
         com: (K, 3) system CM in the base frame, base at the origin (m).
         end_effector: (K, 3) end-effector position in the base frame, base at the origin (m).
+        end_effectors: (E, K, 3) the same for each of the robot's E end effectors (the first
+            is ``end_effector``).
     """
 
     tau: np.ndarray
@@ -103,6 +105,7 @@ class InverseDynamicsBatch:
     base_twist: np.ndarray
     com: np.ndarray
     end_effector: np.ndarray
+    end_effectors: np.ndarray
 
 
 def inverse_dynamics_batch(
@@ -136,11 +139,12 @@ def inverse_dynamics_batch(
     twist = twist[..., 0]
     v = np.concatenate([twist, rates], axis=1)
     d_ag = np.empty((k_count, 6, nv))
-    frame = mmap.robot.end_effector_frame
-    ee = np.empty((k_count, 3))
+    frames = mmap.robot.end_effector_frames
+    ee = np.empty((len(frames), k_count, 3))
     for k in range(k_count):
         d_ag[k] = pin.computeCentroidalMapTimeVariation(model, data, configs[k], v[k])
-        ee[k] = pin.updateFramePlacement(model, data, frame).translation
+        for e, frame in enumerate(frames):
+            ee[e, k] = pin.updateFramePlacement(model, data, frame).translation
     rhs = np.einsum("kij,kj->ki", ag[:, :, 6:], accelerations) + np.einsum("kij,kj->ki", d_ag, v)
     a_base = -np.linalg.solve(ag[:, :, :6], rhs[..., None])[..., 0]
     a = np.concatenate([a_base, accelerations], axis=1)
@@ -149,7 +153,12 @@ def inverse_dynamics_batch(
         full[k] = pin.rnea(model, data, configs[k], v[k], a[k])
     mmap.evaluations += k_count
     return InverseDynamicsBatch(
-        tau=full[:, 6:], base_wrench=full[:, :6], base_twist=twist, com=com, end_effector=ee
+        tau=full[:, 6:],
+        base_wrench=full[:, :6],
+        base_twist=twist,
+        com=com,
+        end_effector=ee[0],
+        end_effectors=ee,
     )
 
 

@@ -130,11 +130,17 @@ class MomentumMap:
         """Full Pinocchio velocity ``[v_base; qdot]`` with the zero-momentum base twist."""
         return np.concatenate([self.base_twist_map(joints) @ rates, rates])
 
-    def end_effector_pose(self, joints: np.ndarray, quaternion_xyzw: np.ndarray) -> pin.SE3:
-        """End-effector placement in the inertial frame (CM at the origin; m, rotation)."""
+    def end_effector_pose(
+        self, joints: np.ndarray, quaternion_xyzw: np.ndarray, frame: str | None = None
+    ) -> pin.SE3:
+        """End-effector placement in the inertial frame (CM at the origin; m, rotation).
+
+        ``frame``: which end effector (a frame name); default the robot's first.
+        """
         q = self.configuration(joints, quaternion_xyzw)
         pin.framesForwardKinematics(self.model, self.data, q)
-        return self.data.oMf[self.robot.end_effector_frame].copy()
+        index = self.robot.end_effector_frame if frame is None else self.model.getFrameId(frame)
+        return self.data.oMf[index].copy()
 
     def momentum(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Total momentum ``[linear (kg m/s); angular about the CM (kg m^2/s)]``, inertial frame."""

@@ -1,4 +1,4 @@
-"""The plan file: typed records and their JSON form (``freefloat.plan/3``).
+"""The plan file: typed records and their JSON form (``freefloat.plan/4``).
 
 This module is long because it holds every record of the file format and its reading and
 writing in one place (the format is one concept; splitting it would scatter the schema).
@@ -12,7 +12,11 @@ sees half a plan and a failure leaves nothing behind. Units: seconds, radians (m
 prismatic joints and positions); Euler angles, marked ``_deg``, in degrees. Positions are in
 the inertial frame whose origin is the system centre of mass (docs/method.md section 10).
 
-Schema versions: ``freefloat.plan/3`` (this one) adds the ``objective`` record (what the path
+Schema versions: ``freefloat.plan/4`` (this one) adds every end effector: ``robot.end_effectors``
+(the frames, the first being ``robot.end_effector``) and ``samples.end_effector_paths`` (each
+one's positions, by frame; ``samples.end_effector_position`` stays the first one's).
+``freefloat.plan/3`` files still load and keep their format (their one end effector's path is
+its only path). ``freefloat.plan/3`` adds the ``objective`` record (what the path
 minimises, its value and the freedom levels tried) and, for robots with URDF effort limits,
 the ``joint_effort_limits`` check. ``freefloat.plan/2`` files still load and keep their format:
 they were minimum-norm plans (no objective record) that promised no effort limits, and
@@ -29,7 +33,7 @@ import copy
 import json
 import math
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +46,7 @@ from .limits import MAX_PLAN_BYTES, check_plan_file_kind, check_plan_values
 __all__ = [
     "FORMAT",
     "FORMAT_2",
+    "FORMAT_3",
     "READABLE_FORMATS",
     "BaseReport",
     "Check",
@@ -59,22 +64,34 @@ __all__ = [
 ]
 
 #: Format tag of plan files written by this version.
-FORMAT = "freefloat.plan/3"
+FORMAT = "freefloat.plan/4"
+#: The format before every end effector's path (still read, and kept when re-written).
+FORMAT_3 = "freefloat.plan/3"
 #: The format before objectives and effort limits (still read, and kept when re-written).
 FORMAT_2 = "freefloat.plan/2"
 
 #: Format tags this version reads (older ones are converted on load).
-READABLE_FORMATS = ("freefloat.plan/1", FORMAT_2, FORMAT)
+READABLE_FORMATS = ("freefloat.plan/1", FORMAT_2, FORMAT_3, FORMAT)
 
 
 @dataclass(frozen=True)
 class RobotRef:
-    """The robot a plan is for: URDF path, joint names in order, end-effector frame."""
+    """The robot a plan is for: URDF path, joint names in order, end-effector frame(s).
+
+    ``end_effectors`` lists every end-effector frame, the first being ``end_effector``
+    (format 4; a file of an older format has its one end effector there).
+    """
 
     urdf: str
     joints: list[str]
     end_effector: str
     joint_kinds: list[str] = field(default_factory=list)
+    end_effectors: list[str] = field(default_factory=list)
+
+    @property
+    def frames(self) -> list[str]:
+        """Every end-effector frame (``end_effectors``, or ``[end_effector]`` when empty)."""
+        return list(self.end_effectors) or [self.end_effector]
 
 
 @dataclass(frozen=True)
@@ -105,8 +122,9 @@ class Samples:
 
     ``t`` (s); ``q`` (rad or m), ``qd`` (per s), ``qdd`` (per s^2), one value per joint;
     ``base_position`` (m), ``base_quaternion_xyzw``, ``base_zyx_deg`` (deg),
-    ``base_angular_velocity`` (rad/s, base frame), ``end_effector_position`` (m), ``tau`` joint
-    torques (N m, or N for prismatic joints).
+    ``base_angular_velocity`` (rad/s, base frame), ``end_effector_position`` (m, the first end
+    effector), ``tau`` joint torques (N m, or N for prismatic joints), ``end_effector_paths``
+    every end effector's position (m) by frame name (format 4).
     """
 
     t: list[float]
@@ -119,6 +137,15 @@ class Samples:
     end_effector_position: list[list[float]]
     base_angular_velocity: list[list[float]] = field(default_factory=list)
     tau: list[list[float]] = field(default_factory=list)
+    end_effector_paths: dict[str, list[list[float]]] = field(default_factory=dict)
+
+    def path_of(self, frame: str) -> list[list[float]]:
+        """The positions (m) of end effector ``frame`` (the first one's in an older file)."""
+        if frame in self.end_effector_paths:
+            return self.end_effector_paths[frame]
+        if not self.end_effector_paths:
+            return self.end_effector_position
+        raise KeyError(f"no path of end effector {frame!r}; {', '.join(self.end_effector_paths)}")
 
 
 @dataclass(frozen=True)
@@ -359,16 +386,20 @@ class Plan:
 
     def to_dict(self) -> dict[str, Any]:
         """The plan as the JSON-ready dictionary of the file format (a deep copy)."""
+        robot, samples = asdict(self.robot), asdict(self.samples)
+        if self.format != FORMAT:  # an older file keeps its keys
+            robot.pop("end_effectors")
+            samples.pop("end_effector_paths")
         return copy.deepcopy(
             {
                 "format": self.format,
-                "robot": asdict(self.robot),
+                "robot": robot,
                 "duration": self.duration,
                 "path": {"family": "polynomial", "coefficients": self.coefficients},
                 "free_parameters": self.free_parameters,
                 "base": asdict(self.base),
                 "feasibility": asdict(self.feasibility),
-                "samples": asdict(self.samples),
+                "samples": samples,
                 "solver": asdict(self.solver),
                 "request": asdict(self.request),
                 "verification": self.verification.to_dict(),
@@ -414,13 +445,13 @@ class Plan:
                 else Verification.from_dict(data["verification"])
             )
             return cls(
-                robot=RobotRef(**data["robot"]),
+                robot=_robot(data["robot"]),
                 duration=float(data["duration"]),
                 coefficients={k: list(v) for k, v in data["path"]["coefficients"].items()},
                 free_parameters={k: list(v) for k, v in data["free_parameters"].items()},
                 base=BaseReport(**data["base"]),
                 feasibility=Feasibility(**data["feasibility"]),
-                samples=Samples(**data["samples"]),
+                samples=_samples(data["samples"], data["robot"]),
                 solver=SolverReport(
                     **{
                         **data["solver"],
@@ -434,10 +465,25 @@ class Plan:
                 verification=verification,
                 safety=_safety(data.get("safety")),
                 objective=_objective(data.get("objective")),
-                format=FORMAT_2 if fmt == FORMAT_2 else FORMAT,
+                format=fmt if fmt in (FORMAT_2, FORMAT_3) else FORMAT,
             )
         except (KeyError, TypeError, AttributeError, ValueError) as exc:
             raise PlanFileError(f"{where}: corrupt plan file (bad or missing {exc})") from None
+
+
+def _robot(data: Mapping[str, Any]) -> RobotRef:
+    """The ``robot`` section; a file before format 4 has its one end effector as the list."""
+    robot = RobotRef(**data)
+    return robot if robot.end_effectors else replace(robot, end_effectors=[robot.end_effector])
+
+
+def _samples(data: Mapping[str, Any], robot: Mapping[str, Any]) -> Samples:
+    """The ``samples`` section; before format 4 the one end effector's path is the only one."""
+    samples = Samples(**data)
+    if samples.end_effector_paths:
+        return samples
+    paths = {str(robot["end_effector"]): samples.end_effector_position}
+    return replace(samples, end_effector_paths=paths)
 
 
 def _safety(data: Any) -> SafetyReport:

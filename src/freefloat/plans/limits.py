@@ -269,6 +269,7 @@ def _check_plan_values(data: Any) -> None:
     for key, width in (("base_angular_velocity", 3), ("tau", n)):
         if isinstance(samples, Mapping) and key in samples:
             _rows(samples[key], ["samples", key], rows, width, True)
+    _check_end_effectors(robot, samples, rows)
 
     request = _key(data, "request", [])
     for key in ("start_joints", "goal_joints"):
@@ -299,6 +300,31 @@ def _check_plan_values(data: Any) -> None:
     verification = data.get("verification") if data.get("format") != "freefloat.plan/1" else None
     if isinstance(verification, Mapping) and isinstance(verification.get("checks"), list):
         _check_flags(verification)
+
+
+def _check_end_effectors(robot: Any, samples: Any, rows: int) -> None:
+    """Format 4: the end-effector frames are distinct names, each with a path of ``rows``."""
+    frames = robot.get("end_effectors") if isinstance(robot, Mapping) else None
+    if frames is not None and (
+        not isinstance(frames, list)
+        or not 1 <= len(frames) <= MAX_JOINTS
+        or not all(isinstance(f, str) for f in frames)
+        or len(set(frames)) != len(frames)
+    ):
+        raise _RefusalError(
+            "robot.end_effectors",
+            f"must name 1 to {MAX_JOINTS} distinct frames, got {excerpt(frames)}",
+        )
+    paths = samples.get("end_effector_paths") if isinstance(samples, Mapping) else None
+    if paths is None:
+        return
+    if not isinstance(paths, Mapping) or (frames is not None and sorted(paths) != sorted(frames)):
+        raise _RefusalError(
+            "samples.end_effector_paths",
+            f"must hold one path per end effector ({excerpt(frames)}), got {excerpt(paths)}",
+        )
+    for frame, path in paths.items():
+        _rows(path, ["samples", "end_effector_paths", frame], rows, 3, False)
 
 
 def _check_flags(verification: Mapping[str, Any]) -> None:

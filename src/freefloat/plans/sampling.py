@@ -1,7 +1,7 @@
 """The numbers of a plan, computed from its problem and free coefficients.
 
 One function per record: :func:`sample_solution` (the ``samples`` section: joints, base pose
-and rate, end effector and torques at equally spaced instants), :func:`base_report` (the
+and rate, every end effector and torques at equally spaced instants), :func:`base_report` (the
 attitudes at start, goal and as reached), :func:`feasibility_report` (the planar bounds and the
 request), :func:`solution_record` (a root's free parameters, residual and path length). The
 planning pipeline writes a plan with them, and :mod:`freefloat.verify` recomputes a plan file's
@@ -45,6 +45,8 @@ def sample_solution(problem: Problem, beta: np.ndarray, count: int) -> Samples:
     path = problem.family.at_times(beta, t, duration)
     quats = problem.attitudes(beta, s)
     dyn = inverse_dynamics_batch(problem.mmap, path.q, path.qd, path.qdd)
+    frames = problem.robot.end_effectors
+    paths = [quat_rotate(quats, ee - dyn.com).tolist() for ee in dyn.end_effectors]
     return Samples(
         t=t.tolist(),
         q=path.q.tolist(),
@@ -53,9 +55,10 @@ def sample_solution(problem: Problem, beta: np.ndarray, count: int) -> Samples:
         base_position=quat_rotate(quats, -dyn.com).tolist(),
         base_quaternion_xyzw=quats.tolist(),
         base_zyx_deg=[degrees(zyx_from_quat(qt)) for qt in quats],
-        end_effector_position=quat_rotate(quats, dyn.end_effector - dyn.com).tolist(),
+        end_effector_position=paths[0],
         base_angular_velocity=dyn.base_twist[:, 3:].tolist(),
         tau=dyn.tau.tolist(),
+        end_effector_paths=dict(zip(frames, paths, strict=True)),
     )
 
 

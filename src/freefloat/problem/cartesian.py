@@ -1,26 +1,30 @@
 """Cartesian goals: inverse kinematics of the free-floating system.
 
-A goal may give the end-effector position (m, inertial frame, origin at the system CM) and,
-optionally, its orientation instead of joint values. With the base attitude fixed by the goal
-and the base position fixed by the CM staying at the origin, the end-effector pose is a
-function of the joint values alone; the goal joints are found by bounded least squares from
-the start joints (so the nearest solution is preferred), then from further starts.
+A goal may give the position (m, inertial frame, origin at the system CM) and, optionally, the
+orientation of one or more end-effector frames instead of joint values. With the base attitude
+fixed by the goal and the base position fixed by the CM staying at the origin, every frame's
+pose is a function of the joint values alone; the goal joints are found by bounded least
+squares over the joints that move a goal frame (the others hold their start or given goal
+value), from the start joints (so the nearest solution is preferred), then from further
+starts.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 from scipy.optimize import least_squares, minimize
 from scipy.stats import qmc
 
-from ..errors import UnreachableGoalError
+from ..errors import InputError, UnreachableGoalError
 from ..physics.momentum import MomentumMap
 from .bounds import joint_ranges
 
-__all__ = ["solve_cartesian_goal", "workspace_radius"]
+__all__ = ["FrameGoal", "solve_cartesian_goal", "solve_frame_goals", "workspace_radius"]
 
 #: Accepted end-effector error (m, and rad for orientation).
 TOLERANCE = 1e-9
@@ -32,18 +36,22 @@ def _bounds(mmap: MomentumMap) -> tuple[np.ndarray, np.ndarray]:
     return lower, upper
 
 
-def workspace_radius(mmap: MomentumMap, quaternion_xyzw: np.ndarray, samples: int = 512) -> float:
-    """Largest end-effector distance from the system CM (m), sampled and refined.
+def workspace_radius(
+    mmap: MomentumMap, quaternion_xyzw: np.ndarray, samples: int = 512, frame: str | None = None
+) -> float:
+    """Largest distance of an end effector from the system CM (m), sampled and refined.
 
     An estimate from below: the largest distance found by sampling configurations within the
-    joint limits and refining the best ones.
+    joint limits and refining the best ones. ``frame``: which end effector (default the
+    robot's first).
     """
     ranges = joint_ranges(mmap)
     unit = qmc.Sobol(len(ranges), scramble=True, seed=1).random(samples)
     points = ranges[:, 0] + unit * (ranges[:, 1] - ranges[:, 0])
+    index_of = mmap.model.getFrameId(frame or mmap.robot.end_effector)
 
     def distance(q: np.ndarray) -> float:
-        return float(np.linalg.norm(mmap.end_effector_pose(q, quaternion_xyzw).translation))
+        return float(np.linalg.norm(_placement(mmap, q, quaternion_xyzw, index_of).translation))
 
     values = np.array([distance(p) for p in points])
     best = float(values.max())
@@ -58,6 +66,27 @@ def workspace_radius(mmap: MomentumMap, quaternion_xyzw: np.ndarray, samples: in
     return best
 
 
+@dataclass(frozen=True)
+class FrameGoal:
+    """A wanted pose of one end-effector frame, from the system CM in the inertial frame.
+
+    Attributes:
+        frame: the end-effector frame's name.
+        position: wanted position (m).
+        rotation: wanted orientation (3 x 3), or None for position only.
+    """
+
+    frame: str
+    position: np.ndarray
+    rotation: np.ndarray | None = None
+
+
+def _placement(mmap: MomentumMap, q: np.ndarray, quat: np.ndarray, frame: int) -> pin.SE3:
+    config = mmap.configuration(q, quat)
+    pin.framesForwardKinematics(mmap.model, mmap.data, config)
+    return mmap.data.oMf[frame]
+
+
 def solve_cartesian_goal(
     mmap: MomentumMap,
     position: np.ndarray,
@@ -66,35 +95,85 @@ def solve_cartesian_goal(
     rotation: np.ndarray | None = None,
     starts: int = 8,
 ) -> np.ndarray:
-    """Joint values (rad or m) that put the end effector at ``position`` (and ``rotation``).
+    """Joint values (rad or m) that put the first end effector at ``position`` (``rotation``).
+
+    The joints that move it are solved for; every other joint keeps its start value (see
+    :func:`solve_frame_goals`).
+    """
+    goal = FrameGoal(mmap.robot.end_effector, np.asarray(position, dtype=float), rotation)
+    return solve_frame_goals(mmap, [goal], base_quaternion_xyzw, start_joints, starts=starts)
+
+
+def solve_frame_goals(
+    mmap: MomentumMap,
+    goals: Sequence[FrameGoal],
+    base_quaternion_xyzw: np.ndarray,
+    start_joints: np.ndarray,
+    held: Mapping[str, float] | None = None,
+    starts: int = 8,
+) -> np.ndarray:
+    """Joint values (rad or m) that put every goal frame at its pose at once.
+
+    Only the joints that move a goal frame (its chain from the base) and are not in ``held``
+    are solved for; the others keep their ``held`` value, or their start value. The base
+    attitude is the goal's and the system CM stays at the origin, so moving any joint (an idle
+    arm too) moves the base and with it every frame: all goals are solved together.
 
     Args:
         mmap: momentum map of the robot.
-        position: wanted end-effector position (m), inertial frame, origin at the system CM.
+        goals: the wanted frame poses (m; rotation 3 x 3 or None), inertial frame, CM origin.
         base_quaternion_xyzw: base attitude at the goal.
-        start_joints: the start configuration, tried first (nearest solution preferred).
-        rotation: wanted end-effector orientation (3 x 3), or None for position only.
+        start_joints: the start configuration (N values, rad or m), tried first, so the nearest
+            solution is preferred.
+        held: joint goals given by name (rad or m): these joints do not move for the goals.
         starts: number of starting configurations tried.
 
     Raises:
-        UnreachableGoalError: no configuration within the joint limits reaches the goal; gives
-            the closest distance and the workspace radius.
+        UnreachableGoalError: no configuration within the joint limits reaches every goal;
+            gives the worst miss and that frame's workspace radius.
+        InputError: a goal frame no free joint moves.
     """
-    position = np.asarray(position, dtype=float)
+    robot = mmap.robot
+    held = dict(held or {})
+    base = np.asarray(start_joints, dtype=float).copy()
+    for name, value in held.items():
+        base[robot.joint_names.index(name)] = value
+    moving: set[str] = set()
+    for goal in goals:
+        chain = [j for j in robot.supporting_joints(goal.frame) if j not in held]
+        if not chain:
+            raise InputError(
+                f"no free joint moves end effector {goal.frame!r}: its joints are all given "
+                "as joint goals; leave some out or drop its Cartesian goal"
+            )
+        moving.update(chain)
+    free = np.array([i for i, j in enumerate(robot.joint_names) if j in moving], dtype=int)
+    frames = [mmap.model.getFrameId(goal.frame) for goal in goals]
     lower, upper = _bounds(mmap)
+    lower, upper = lower[free], upper[free]
+    quat = base_quaternion_xyzw
 
-    def residual(q: np.ndarray) -> np.ndarray:
-        pose = mmap.end_effector_pose(q, base_quaternion_xyzw)
-        error = pose.translation - position
-        if rotation is not None:
-            error = np.concatenate([error, pin.log3(rotation.T @ pose.rotation)])
-        return error
+    def full(x: np.ndarray) -> np.ndarray:
+        q = base.copy()
+        q[free] = x
+        return q
 
-    ranges = joint_ranges(mmap)
+    def residual(x: np.ndarray) -> np.ndarray:
+        config = mmap.configuration(full(x), quat)
+        pin.framesForwardKinematics(mmap.model, mmap.data, config)
+        errors = []
+        for goal, frame in zip(goals, frames, strict=True):
+            pose = mmap.data.oMf[frame]
+            errors.append(pose.translation - goal.position)
+            if goal.rotation is not None:
+                errors.append(pin.log3(goal.rotation.T @ pose.rotation))
+        return np.concatenate(errors)
+
+    ranges = joint_ranges(mmap)[free]
     rng = np.random.default_rng(0)
-    guesses = [np.clip(start_joints, lower, upper)]
+    guesses = [np.clip(base[free], lower, upper)]
     guesses += [rng.uniform(ranges[:, 0], ranges[:, 1]) for _ in range(starts - 1)]
-    best_q, best = guesses[0], math.inf
+    best_x, best = guesses[0], math.inf
     for guess in guesses:
         result = least_squares(
             residual,
@@ -108,15 +187,33 @@ def solve_cartesian_goal(
         )
         error = float(np.linalg.norm(result.fun))
         if error < best:
-            best_q, best = result.x, error
+            best_x, best = result.x, error
         if best < TOLERANCE:
-            return np.asarray(best_q, dtype=float)
-    radius = workspace_radius(mmap, base_quaternion_xyzw)
-    what = "pose" if rotation is not None else "position"
-    raise UnreachableGoalError(
-        f"end-effector goal {what} {np.round(position, 4).tolist()} m is out of reach: the "
-        f"closest configuration within the joint limits misses it by {best:.3g}; the workspace "
-        f"radius from the system CM is about {radius:.3f} m",
+            return full(np.asarray(best_x, dtype=float))
+    raise _unreachable(mmap, goals, frames, full(best_x), quat, best)
+
+
+def _unreachable(
+    mmap: MomentumMap,
+    goals: Sequence[FrameGoal],
+    frames: Sequence[int],
+    closest: np.ndarray,
+    quat: np.ndarray,
+    best: float,
+) -> UnreachableGoalError:
+    """The error for goals missed by ``best``, naming the worst-missed frame's goal."""
+    misses = [
+        float(np.linalg.norm(_placement(mmap, closest, quat, f).translation - g.position))
+        for g, f in zip(goals, frames, strict=True)
+    ]
+    worst = goals[int(np.argmax(misses))]
+    radius = workspace_radius(mmap, quat, frame=worst.frame)
+    what = "pose" if worst.rotation is not None else "position"
+    named = f" ({worst.frame!r})" if len(goals) > 1 else ""
+    return UnreachableGoalError(
+        f"end-effector goal{named} {what} {np.round(worst.position, 4).tolist()} m is out of "
+        f"reach: the closest configuration within the joint limits misses it by {best:.3g}; the "
+        f"workspace radius from the system CM is about {radius:.3f} m",
         distance=best,
         radius=radius,
     )

@@ -19,9 +19,11 @@ its unit, quoting at most a short excerpt of the value. Why these values:
   for 6.3 GB).
 - :data:`MAX_JOINTS`: the planner's cost grows faster than linearly with the joint count (the
   planar map has N (N + 1) / 2 terms, the freedom search up to N + 2 attempts, every Jacobian
-  N columns per free coefficient); measured on generated chains (README, "Limits"), planar
-  chains of 16 to 30 joints took 10 to 180 s, while the shipped and composed robots have at
-  most 9 joints.
+  N columns per free coefficient), but its work is bounded by counts (residual evaluations per
+  freedom distribution, continuation steps, objective evaluations 4000 / N), not by time.
+  24 covers two 7-joint arms with grippers or a 7-joint arm on a boom; measured in
+  ``scripts/bench.py --multi-arm-only`` and docs/multi_arm.md (Robonaut 2's 14 joints plan in
+  well under 2 s, generated 24-joint chains plan or are refused within their budget).
 - :data:`MAX_SAMPLES`: memory and file size grow with the samples (100001 samples of the
   worked example: 18 s, 0.8 GB, a 58 MB file).
 """
@@ -61,8 +63,8 @@ MAX_LENGTH_M = 1000.0
 MAX_MAGNITUDE = 1e9
 #: Most free coefficients per joint beyond the quintic (polynomial degree at most 12).
 MAX_EXTRA_COEFFICIENTS = 7
-#: Most movable joints the planner takes.
-MAX_JOINTS = 12
+#: Most movable joints the planner takes (two 7-joint arms with grippers fit).
+MAX_JOINTS = 24
 #: Most samples of a plan (``--samples``, ``samples =`` of a sweep, an export's ``--rate``
 #: times the duration): 10001 samples of the Panda servicer are a 12.5 MB plan file written in
 #: about 4 s; a plan's polynomials give any other instant exactly.
@@ -170,5 +172,6 @@ def check_joint_count(count: int, robot: str = "the robot") -> None:
             None,
             MAX_JOINTS,
             why="the planner's budget is stated for at most that many (README, Limits); "
-            "lock joints (freefloat compose --lock) to plan with fewer",
+            "lock joints ([robot] lock = [...] in the scenario, or freefloat compose --lock) "
+            "to plan with fewer",
         )

@@ -9,7 +9,8 @@ The file speaks degrees (joint angles, Euler angles) and metres (prismatic joint
     robot = "planar_2dof"          # a shipped robot name, a URDF path relative to this file,
                                    # or a [robot] table composing a servicer (see below)
     duration = 10.0                # [s]
-    end_effector = "ee"            # optional frame name; default: the tip of the chain
+    end_effector = "ee"            # optional frame name; default: the tip of the longest
+                                   # chain that is not a finger (or end_effectors = [...])
     [start]
     joints = { q1 = 80.0, q2 = 30.0 }      # deg (m for prismatic joints)
     base_zyx_deg = [-50.0, 0.0, 0.0]       # yaw, pitch, roll [deg]; optional, default zeros
@@ -50,13 +51,23 @@ written to its content-addressed cache file when a plan is made, see :meth:`Scen
     base_size = [0.6, 0.6, 0.6]    # [m]
     mount = [0.3, 0.0, 0.0]        # [m], in the spacecraft frame
     mount_rpy_deg = [0.0, 90.0, 0.0]   # optional [deg]; also base_inertia, lock, keep_gripper
+
+Two or more arms (``arms = [{ arm = ..., mount = ..., prefix = ... }, ...]``), a URDF with
+joints locked (``[robot] urdf = ...``, ``lock = [...]``): see
+:mod:`freefloat.problem.robot_table`. Cartesian goals per end effector, solved together, with
+any joint goals held and every other joint at its start value (docs/multi_arm.md)::
+
+    [goal]
+    joints = { right_elbow_joint = 80.0 }  # optional joint goals (deg)
+    [goal.end_effectors.left_tool0]
+    xyz = [0.48, 0.63, -0.43]              # [m], from the system CM
+    rpy_deg = [0.0, 90.0, 0.0]             # optional [deg]
 """
 
 from __future__ import annotations
 
 import hashlib
 import math
-import os
 import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -68,15 +79,13 @@ import numpy as np
 from ..errors import (
     FreeFloatError,
     InputError,
-    InputLimitError,
     ScenarioError,
-    UnknownNameError,
     excerpt,
 )
 from ..files import absolute_path, atomic_write_text, read_text_file
 from ..physics.attitude import quat_from_zyx, quat_to_matrix
 from ..robot.collision import Obstacle
-from ..robot.model import MAX_URDF_BYTES, Robot, load_robot, resolve_robot, robots_dir
+from ..robot.model import MAX_URDF_BYTES, Robot, load_robot, robots_dir
 from ..robot.payload import Payload, attach_payload
 from .limits import (
     MAX_ANGLE_DEG,
@@ -86,9 +95,18 @@ from .limits import (
     check_duration,
     check_extra,
     check_joint_count,
-    check_number,
 )
 from .objectives.registry import DEFAULT_OBJECTIVE, OBJECTIVES
+from .robot_table import (
+    RobotSource,
+    check_keys,
+    number,
+    numbers,
+    robot_source,
+    scenario_errors,
+    servicer_cache_dir,
+    triple,
+)
 
 if TYPE_CHECKING:
     from ..robot.compose import ServicerSpec
@@ -111,6 +129,7 @@ _TOP_KEYS = (
     "robot",
     "duration",
     "end_effector",
+    "end_effectors",
     "start",
     "goal",
     "path",
@@ -122,7 +141,8 @@ _SAFETY_KEYS = ("margin_m", "srdf", "check")
 _OBSTACLE_KEYS = ("name", "box", "sphere", "capsule", "xyz", "rpy_deg")
 _PAYLOAD_KEYS = ("mass", "com_xyz", "inertia", "box")
 _STATE_KEYS = ("joints", "base_zyx_deg", "base_quaternion_xyzw")
-_GOAL_KEYS = (*_STATE_KEYS, "end_effector_xyz", "end_effector_rpy_deg")
+_GOAL_KEYS = (*_STATE_KEYS, "end_effector_xyz", "end_effector_rpy_deg", "end_effectors")
+_FRAME_GOAL_KEYS = ("xyz", "rpy_deg")
 _PATH_KEYS = ("extra", "max_deviation_deg", "allow_full_turns", "objective", "raise_freedom")
 
 
@@ -131,36 +151,11 @@ def default_scenario_path() -> Path:
     return robots_dir() / "scenarios" / "worked_example.toml"
 
 
-def _check_keys(table: Mapping[str, Any], valid: tuple[str, ...], where: str) -> None:
-    for key in table:
-        if key not in valid:
-            raise UnknownNameError(f"key in {where}", key, valid)
-
-
-def _scenario_errors(check: Any, *args: Any, **kwargs: Any) -> Any:
-    """``check(*args, **kwargs)`` with its plain input errors as :class:`ScenarioError`.
-
-    Limit errors (:class:`InputLimitError`) pass as they are: they carry the limit.
-    """
-    try:
-        return check(*args, **kwargs)
-    except InputLimitError:
-        raise
-    except InputError as exc:
-        raise ScenarioError(str(exc)) from None
-
-
-def _number(value: Any, where: str, limit: float = MAX_MAGNITUDE, unit: str = "") -> float:
-    """A finite number of magnitude at most ``limit`` (README, "Limits")."""
-    return float(_scenario_errors(check_number, value, where, limit, unit))
-
-
-def _numbers(
-    value: Any, count: int, where: str, limit: float = MAX_MAGNITUDE, unit: str = ""
-) -> np.ndarray:
-    if not isinstance(value, list) or len(value) != count:
-        raise ScenarioError(f"{where} must be a list of {count} numbers, got {excerpt(value)}")
-    return np.array([_number(v, f"{where}[{i}]", limit, unit) for i, v in enumerate(value)])
+_check_keys = check_keys
+_scenario_errors = scenario_errors
+_number = number
+_numbers = numbers
+_triple = triple
 
 
 @dataclass(frozen=True)
@@ -182,13 +177,17 @@ class Scenario:
         raise_freedom: an objective other than ``min_norm`` may add free coefficients beyond
             ``extra`` while it keeps falling (docs/method.md section 13).
         source: the TOML file it came from, if any.
-        goal_pose: a Cartesian end-effector goal still to be solved for goal joints (by
-            :meth:`resolved`); None when the goal joints are given.
+        goal_poses: Cartesian goals per end-effector frame still to be solved for goal joints
+            (by :meth:`resolved`); empty when the goal joints are given. With them,
+            ``goal_joints`` holds the joint goals given (held while solving); the joints that
+            move no goal frame and have no goal keep their start value.
         robot_text: the URDF of an inline servicer not yet written to ``robot.urdf`` (by
             :meth:`write_robot`); None otherwise.
         safety: what the plan must keep clear of (``[safety]``, ``[[obstacles]]``).
         payload: a captured payload held by the end effector (``[payload]``), if any.
         servicer: the description of an inline ``[robot]`` servicer, if the robot is one.
+        srdf_text: the SRDF of a servicer of several arms not yet written to ``safety.srdf``
+            (by :meth:`write_robot`); None otherwise.
 
     Reading a scenario is pure: no file is written and no inverse kinematics runs until
     :meth:`resolved` and :meth:`write_robot` are called (planning calls both).
@@ -206,11 +205,17 @@ class Scenario:
     objective: str = DEFAULT_OBJECTIVE
     raise_freedom: bool = True
     source: Path | None = None
-    goal_pose: CartesianGoal | None = None
+    goal_poses: Mapping[str, CartesianGoal] = field(default_factory=dict)
     robot_text: str | None = None
     safety: Safety = field(default_factory=lambda: Safety())
     payload: Payload | None = None
     servicer: ServicerSpec | None = None
+    srdf_text: str | None = None
+
+    @property
+    def goal_pose(self) -> CartesianGoal | None:
+        """The first end effector's Cartesian goal still to be solved, if any."""
+        return self.goal_poses.get(self.robot.end_effector)
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Scenario:
@@ -250,33 +255,26 @@ class Scenario:
                 raise ScenarioError(
                     f"missing required key {key!r} (required: robot, duration, [start], [goal])"
                 )
-        robot_text, servicer = None, None
-        if isinstance(data["robot"], Mapping):
-            urdf, robot_text, servicer = _inline_servicer(data["robot"])
-        elif isinstance(data["robot"], str):
-            urdf = resolve_robot(data["robot"], relative_to)
-        else:
-            raise ScenarioError(
-                "robot must be a shipped robot name, a URDF path or a [robot] table, got "
-                f"{excerpt(data['robot'])}"
-            )
+        origin = robot_source(data["robot"], data["start"], relative_to)
+        urdf, robot_text, servicer = origin.urdf, origin.text, origin.servicer
         duration = _scenario_errors(check_duration, data["duration"])
-        end_effector = data.get("end_effector")
-        if end_effector is not None and not isinstance(end_effector, str):
-            raise ScenarioError(f"end_effector must be a frame name, got {excerpt(end_effector)}")
+        names = _end_effector_names(data, origin)
         payload = _payload(data.get("payload"))
         if payload is not None:
-            urdf, robot_text = _with_payload(urdf, robot_text, end_effector, payload)
+            first = names[0] if names else None
+            urdf, robot_text = _with_payload(urdf, robot_text, first, payload)
         same = known is not None and known.urdf == Path(urdf).expanduser().resolve()
-        if same and known is not None and end_effector in (None, known.end_effector):
+        if same and known is not None and (not names or names == known.end_effectors):
             robot = known
         else:
-            robot = load_robot(urdf, end_effector, text=robot_text)
+            robot = load_robot(urdf, names or None, text=robot_text)
         check_joint_count(robot.n, repr(robot.name))
         safety = _safety(data.get("safety"), data.get("obstacles"), relative_to)
+        if safety.srdf is None and origin.srdf is not None:
+            safety = replace(safety, srdf=origin.srdf)
 
         states: list[tuple[dict[str, float], np.ndarray]] = []
-        goal_pose = None
+        goal_poses: dict[str, CartesianGoal] = {}
         for name in ("start", "goal"):
             table = data[name]
             if not isinstance(table, Mapping):
@@ -301,12 +299,16 @@ class Scenario:
                 )
                 quat = quat_from_zyx(*np.radians(zyx))
             if name == "goal" and "end_effector_xyz" in table:
-                if "joints" in table:
-                    raise ScenarioError("[goal] gives both joints and end_effector_xyz; give one")
-                goal_pose = _cartesian_goal(table)
+                if "joints" in table or "end_effectors" in table:
+                    other = "joints" if "joints" in table else "end_effectors"
+                    raise ScenarioError(f"[goal] gives both {other} and end_effector_xyz; give one")
+                goal_poses = {robot.end_effector: _cartesian_goal(table)}
                 joints = {}
+            elif name == "goal" and "end_effectors" in table:
+                goal_poses = _frame_goals(table["end_effectors"])
+                joints = _joint_table(robot, table, name, origin.locked, partial=True)
             else:
-                joints = _joint_table(robot, table, name)
+                joints = _joint_table(robot, table, name, origin.locked)
             states.append((joints, quat))
 
         path_table = data.get("path", {})
@@ -360,11 +362,12 @@ class Scenario:
             extra=extra,
             max_deviation=max_deviation,
             source=source,
-            goal_pose=goal_pose,
+            goal_poses=goal_poses,
             robot_text=robot_text,
             safety=safety,
             payload=payload,
             servicer=servicer,
+            srdf_text=origin.srdf_text,
         )
 
     def resolved(self) -> Scenario:
@@ -373,23 +376,23 @@ class Scenario:
         Raises:
             UnreachableGoalError: no configuration reaches the end-effector goal.
         """
-        if self.goal_pose is None:
+        if not self.goal_poses:
             return self
         from ..physics.momentum import MomentumMap
-        from .cartesian import solve_cartesian_goal
+        from .cartesian import FrameGoal, solve_frame_goals
 
-        values = solve_cartesian_goal(
-            MomentumMap(self.robot),
-            self.goal_pose.position,
-            self.goal_attitude,
-            self.start,
-            self.goal_pose.rotation,
+        goals = [FrameGoal(f, g.position, g.rotation) for f, g in self.goal_poses.items()]
+        values = solve_frame_goals(
+            MomentumMap(self.robot), goals, self.goal_attitude, self.start, self.goal_joints
         )
         joints = dict(zip(self.robot.joint_names, values.tolist(), strict=True))
-        return replace(self, goal_joints=joints, goal_pose=None)
+        return replace(self, goal_joints=joints, goal_poses={})
 
     def write_robot(self) -> Path:
-        """Write an inline servicer's URDF to its cache file if it is not there; return it."""
+        """Write an inline servicer's URDF (and SRDF) to its cache file if not there; return it."""
+        srdf = self.safety.srdf
+        if self.srdf_text is not None and srdf is not None and not srdf.is_file():
+            atomic_write_text(srdf, self.srdf_text)
         path = self.robot.urdf
         if self.robot_text is not None and not path.is_file():
             atomic_write_text(path, self.robot_text)
@@ -407,21 +410,9 @@ class Scenario:
         A Cartesian goal is solved here each time it is asked for; :meth:`resolved` solves it
         once.
         """
-        if self.goal_pose is not None:
+        if self.goal_poses:
             return self.resolved().goal
         return self.robot.vector(self.goal_joints, "goal joints")
-
-
-_ROBOT_KEYS = (
-    "arm",
-    "base_mass",
-    "base_size",
-    "base_inertia",
-    "mount",
-    "mount_rpy_deg",
-    "lock",
-    "keep_gripper",
-)
 
 
 def read_toml(path: Path, what: str) -> dict[str, Any]:
@@ -446,82 +437,95 @@ def read_toml(path: Path, what: str) -> dict[str, Any]:
         raise ScenarioError(f"{path}: invalid TOML ({excerpt(str(exc), 200)[1:-1]})") from None
 
 
-def servicer_cache_dir() -> Path:
-    """Folder of servicers composed from inline ``[robot]`` tables.
-
-    ``$FREEFLOAT_CACHE`` if set, else ``$XDG_CACHE_HOME/freefloat/servicers`` (default
-    ``~/.cache``).
-    """
-    if os.environ.get("FREEFLOAT_CACHE"):
-        return Path(os.environ["FREEFLOAT_CACHE"])
-    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return base / "freefloat" / "servicers"
-
-
-def _triple(
+def _joint_table(
+    robot: Robot,
     table: Mapping[str, Any],
-    key: str,
-    default: list[float] | None = None,
-    where: str = "[robot]",
-) -> Any:
-    limit, unit = (MAX_ANGLE_DEG, "deg") if key.endswith("_deg") else (MAX_LENGTH_M, "m")
-    if key.endswith("inertia"):
-        limit, unit = MAX_MAGNITUDE, "kg m^2"
-    values = _numbers(table.get(key, default), 3, f"{where} {key}", limit, unit)
-    return tuple(float(x) for x in values)
+    name: str,
+    locked: Mapping[str, float] | None = None,
+    partial: bool = False,
+) -> dict[str, float]:
+    """``{joint: value}`` in rad or m from a ``joints`` table in degrees (m for prismatic).
 
-
-def _inline_servicer(table: Mapping[str, Any]) -> tuple[Path, str | None, ServicerSpec]:
-    """The cache path of the servicer an inline ``[robot]`` table describes, and its URDF.
-
-    The URDF text is None when the cache file exists (it is read from there); otherwise the
-    servicer is composed in memory and written only by :meth:`Scenario.write_robot`.
+    Locked joints may be named with their locked value (and are left out); with ``partial``
+    (Cartesian goals) any subset of the joints may be given.
     """
-    from ..robot.compose import ServicerSpec, compose_servicer_text
-
-    _check_keys(table, _ROBOT_KEYS, "[robot]")
-    for key in ("arm", "base_mass", "base_size"):
-        if key not in table:
-            raise ScenarioError(f"[robot] needs {key!r} (required: arm, base_mass, base_size)")
-    if not isinstance(table["arm"], str):
-        raise ScenarioError(
-            f"[robot] arm must be an arm name or a URDF path, got {excerpt(table['arm'])}"
-        )
-    lock = table.get("lock", [])
-    if not isinstance(lock, list) or not all(isinstance(x, str) for x in lock):
-        raise ScenarioError("[robot] lock must be a list of joint names")
-    spec = ServicerSpec(
-        arm=table["arm"],
-        base_mass=_number(table["base_mass"], "[robot] base_mass", MAX_MAGNITUDE, "kg"),
-        base_size=_triple(table, "base_size"),
-        base_inertia=_triple(table, "base_inertia") if "base_inertia" in table else None,
-        mount=_triple(table, "mount", [0.0, 0.0, 0.0]),
-        mount_rpy=tuple(math.radians(a) for a in _triple(table, "mount_rpy_deg", [0.0] * 3)),
-        lock=tuple(lock),
-        keep_gripper=bool(table.get("keep_gripper", False)),
-    )
-    path = servicer_cache_dir() / f"{spec.key()}.urdf"
-    if path.is_file():
-        return path, None, spec
-    return path, compose_servicer_text(spec), spec
-
-
-def _joint_table(robot: Robot, table: Mapping[str, Any], name: str) -> dict[str, float]:
-    """``{joint: value}`` in rad or m from a ``joints`` table in degrees (m for prismatic)."""
-    if "joints" not in table or not isinstance(table["joints"], Mapping):
+    locked = locked or {}
+    raw = table.get("joints", {} if partial else None)
+    if not isinstance(raw, Mapping):
         extra = " (or end_effector_xyz = [x, y, z])" if name == "goal" else ""
         raise ScenarioError(
             f"[{name}] needs joints = {{ name = value, ... }}{extra} "
             f"(joints: {', '.join(robot.joint_names)})"
         )
     joints: dict[str, float] = {}
-    for joint_name, value in table["joints"].items():
+    for joint_name, value in raw.items():
+        if joint_name in locked:
+            _check_locked(joint_name, value, locked[joint_name], name)
+            continue
         joint = robot.joint(joint_name)
         limit, unit = (MAX_ANGLE_DEG, "deg") if joint.angular else (MAX_LENGTH_M, "m")
         number = _number(value, f"[{name}] joint {joint_name!r}", limit, unit)
         joints[joint_name] = math.radians(number) if joint.angular else number
-    robot.vector(joints, f"[{name}] joints")  # every joint given
+    if not partial:
+        robot.vector(joints, f"[{name}] joints")  # every joint given
     return joints
+
+
+def _check_locked(joint: str, value: Any, locked: float, where: str) -> None:
+    """A locked joint named in ``[start]`` or ``[goal]`` must be at its locked value."""
+    given = _number(value, f"[{where}] joint {joint!r}", MAX_ANGLE_DEG)
+    for amount, _unit in ((math.degrees(locked), "deg"), (locked, "m")):
+        if abs(given - amount) <= 1e-9 * max(1.0, abs(amount)):
+            return
+    raise ScenarioError(
+        f"[{where}] joint {joint!r} is {given:g} but the joint is locked at "
+        f"{math.degrees(locked):.6g} deg (m for a prismatic joint); give that value or leave "
+        "it out"
+    )
+
+
+def _end_effector_names(data: Mapping[str, Any], source: RobotSource) -> tuple[str, ...]:
+    """The end-effector frames a scenario names: ``end_effector(s)``, then goal frames.
+
+    Empty when it names none and its robot brings none (the robot's default then applies).
+    """
+    if "end_effector" in data and "end_effectors" in data:
+        raise ScenarioError("give end_effector or end_effectors, not both")
+    named = data.get("end_effectors", data.get("end_effector"))
+    if named is None:
+        names = list(source.end_effectors)
+    elif isinstance(named, str):
+        names = [named]
+    elif isinstance(named, list) and named and all(isinstance(n, str) for n in named):
+        names = list(named)
+    else:
+        raise ScenarioError(
+            f"end_effector must be a frame name (end_effectors a list of them), got "
+            f"{excerpt(named)}"
+        )
+    goal = data.get("goal")
+    frames = goal.get("end_effectors", {}) if isinstance(goal, Mapping) else {}
+    if not isinstance(frames, Mapping):
+        raise ScenarioError(
+            "[goal] end_effectors must be tables [goal.end_effectors.<frame>] xyz = [x, y, z]"
+        )
+    return tuple(names + [f for f in frames if f not in names])
+
+
+def _frame_goals(tables: Any) -> dict[str, CartesianGoal]:
+    """``[goal.end_effectors.<frame>]`` tables (``xyz`` in m, ``rpy_deg``) as goals."""
+    if not isinstance(tables, Mapping) or not tables:
+        raise ScenarioError(
+            "[goal] end_effectors must be tables [goal.end_effectors.<frame>] xyz = [x, y, z]"
+        )
+    goals = {}
+    for frame, table in tables.items():
+        where = f"[goal.end_effectors.{frame}]"
+        if not isinstance(table, Mapping) or "xyz" not in table:
+            raise ScenarioError(f"{where} needs xyz = [x, y, z] [m] (optional rpy_deg)")
+        _check_keys(table, _FRAME_GOAL_KEYS, where)
+        goals[str(frame)] = _pose(table["xyz"], table.get("rpy_deg"), where)
+    return goals
 
 
 @dataclass(frozen=True)
@@ -539,11 +543,19 @@ class CartesianGoal:
 
 def _cartesian_goal(table: Mapping[str, Any]) -> CartesianGoal:
     """The Cartesian goal of ``end_effector_xyz`` (m) and optional ``end_effector_rpy_deg``."""
-    xyz = _numbers(table["end_effector_xyz"], 3, "[goal] end_effector_xyz", MAX_LENGTH_M, "m")
+    return _pose(
+        table["end_effector_xyz"], table.get("end_effector_rpy_deg"), "[goal] end_effector"
+    )
+
+
+def _pose(xyz_value: Any, rpy_value: Any, where: str) -> CartesianGoal:
+    """A goal from ``xyz`` (m, from the system CM) and roll, pitch, yaw (deg) or None."""
+    suffix = "_" if where.endswith("end_effector") else " "
+    xyz = _numbers(xyz_value, 3, f"{where}{suffix}xyz", MAX_LENGTH_M, "m")
     rotation = None
-    if "end_effector_rpy_deg" in table:
-        where = "[goal] end_effector_rpy_deg"
-        rpy = np.radians(_numbers(table["end_effector_rpy_deg"], 3, where, MAX_ANGLE_DEG, "deg"))
+    if rpy_value is not None:
+        rpy = _numbers(rpy_value, 3, f"{where}{suffix}rpy_deg", MAX_ANGLE_DEG, "deg")
+        rpy = np.radians(rpy)
         rotation = quat_to_matrix(quat_from_zyx(rpy[2], rpy[1], rpy[0]))
     return CartesianGoal(xyz, rotation)
 

@@ -4,7 +4,10 @@ The arm is an ``example-robot-data`` arm by name (:data:`ARMS`) or any URDF file
 link ``spacecraft`` is a uniform box (mass in kg, size in m; inertia in kg m^2 from the box
 unless given); a fixed joint ``mount`` places the arm's root link at ``mount`` (m) with
 roll-pitch-yaw ``mount_rpy`` (rad) in the spacecraft frame. Gripper and finger joints are locked
-(made fixed at their zero position) by default. Mesh references stay ``package://`` (resolved
+by default (made fixed at 0, or at the middle of their range when 0 is outside it; the
+composition says so). Several arms may share the spacecraft (:class:`ArmSpec`): each arm's links
+and joints then carry its prefix, and its SRDF pairs are merged under that prefix
+(:mod:`freefloat.robot.srdf`). Mesh references stay ``package://`` (resolved
 at load time against ``example-robot-data``'s share folder) or become absolute paths for a URDF
 given by path. yourdfpy builds, validates and writes the result. An optional captured payload
 (:class:`~freefloat.robot.payload.Payload`) is then fixed to the composed robot's default end
@@ -18,7 +21,6 @@ import hashlib
 import json
 import logging
 import math
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -26,51 +28,57 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, ModelError, UnknownNameError
-from ..files import absolute_path, atomic_write_text, read_text_file
-from .model import MAX_URDF_BYTES, example_robot_data_dir
+from ..errors import (
+    AmbiguousEndEffectorError,
+    InputError,
+    ModelError,
+)
+from ..files import atomic_write_text
+from .arms import ARMS, BASE_LINK, ArmSpec, arm_part, arm_urdf
+from .model import example_robot_data_dir
 from .payload import PAYLOAD_LINK, Payload
+from .srdf import merged_srdf
 
 LOGGER = logging.getLogger(__name__)
 
 __all__ = [
     "ARMS",
+    "ArmSpec",
+    "Composed",
     "ServicerSpec",
+    "arm_tips",
     "arm_urdf",
+    "compose",
     "compose_servicer",
     "compose_servicer_text",
     "payload_parent",
     "resolve_mesh",
+    "write_composed",
 ]
 
-#: example-robot-data arms by name: path of the URDF below ``example-robot-data/robots``.
-ARMS = {
-    "panda": "panda_description/urdf/panda.urdf",
-    "ur5": "ur_description/urdf/ur5_robot.urdf",
-    "kinova": "kinova_description/robots/kinova.urdf",
-    "xarm7": "xarm_description/urdf/xarm7.urdf",
-    "z1": "z1_description/urdf/z1.urdf",
-}
 
-_GRIPPER = re.compile(r"finger|gripper", re.IGNORECASE)
-BASE_LINK = "spacecraft"
+@dataclass(frozen=True)
+class Composed:
+    """A composed servicer.
 
+    Attributes:
+        text: its URDF.
+        locked: every joint made fixed and its value (rad or m), by its name in the servicer.
+        notes: what the composition chose on its own (a finger locked mid-range...), one line
+            each.
+        end_effectors: the default end effector of each arm (the tip of its longest chain
+            that is not a finger), in arm order.
+        srdf: the SRDF text of the pairs never checked (each arm's own SRDF pairs, with the
+            arm's prefix), for a servicer of several arms; None otherwise.
+        prismatic: the locked joints that were prismatic (their values in m, not rad).
+    """
 
-def arm_urdf(arm: str | Path) -> Path:
-    """Path of an arm's URDF: an example-robot-data arm name or a URDF file path."""
-    text = str(arm)
-    if text in ARMS:
-        share = example_robot_data_dir()
-        if share is None:
-            raise ModelError(
-                f"arm {text!r} needs the example-robot-data package: pip install example-robot-data"
-            )
-        return share / "example-robot-data" / "robots" / ARMS[text]
-    path = Path(text).expanduser()
-    if path.suffix.lower() != ".urdf" and not path.exists():
-        raise UnknownNameError("arm", text, [*ARMS, "or a path to a .urdf file"])
-    read_text_file(path, "arm URDF", MAX_URDF_BYTES, ModelError)  # a regular file, not huge
-    return absolute_path(path, "arm URDF", ModelError)
+    text: str
+    locked: dict[str, float]
+    notes: tuple[str, ...]
+    end_effectors: tuple[str, ...]
+    srdf: str | None = None
+    prismatic: frozenset[str] = frozenset()
 
 
 @dataclass(frozen=True)
@@ -84,9 +92,13 @@ class ServicerSpec:
         mount: arm root position in the spacecraft frame (m).
         mount_rpy: arm root roll, pitch, yaw in the spacecraft frame (rad).
         base_inertia: principal moments Ixx, Iyy, Izz (kg m^2); default: the uniform box's.
-        lock: extra joints to lock (make fixed at zero).
-        keep_gripper: keep gripper and finger joints movable.
-        payload: a captured payload fixed to the end effector (validated by ``Payload``).
+        lock: extra joints to lock: a name (locked at 0) or ``(name, value)`` (rad or m).
+        keep_gripper: keep gripper and finger joints movable (else each finger is locked at 0,
+            or at the middle of its range when 0 is outside it).
+        payload: a captured payload fixed to the (first arm's) end effector.
+        more_arms: further arms on the same spacecraft; with any, every arm's links and joints
+            get its prefix (``prefix`` for this first one, default ``arm1_``).
+        prefix: the first arm's prefix (used only with ``more_arms``; default ``arm1_``).
     """
 
     arm: str
@@ -95,12 +107,18 @@ class ServicerSpec:
     mount: tuple[float, ...] = (0.0, 0.0, 0.0)
     mount_rpy: tuple[float, ...] = (0.0, 0.0, 0.0)
     base_inertia: tuple[float, ...] | None = None
-    lock: tuple[str, ...] = field(default_factory=tuple)
+    lock: tuple[str | tuple[str, float], ...] = field(default_factory=tuple)
     keep_gripper: bool = False
     payload: Payload | None = None
+    more_arms: tuple[ArmSpec, ...] = ()
+    prefix: str = ""
 
     def __post_init__(self) -> None:
         numbers = [self.base_mass, *self.base_size, *self.mount, *self.mount_rpy]
+        for arm in self.more_arms:
+            numbers += [*arm.mount, *arm.mount_rpy]
+            if len(arm.mount) != 3 or len(arm.mount_rpy) != 3:
+                raise InputError("each arm's mount and mount rpy take three numbers each")
         numbers += list(self.base_inertia or ())
         if not all(isinstance(x, (int, float)) and math.isfinite(x) for x in numbers):
             raise InputError("servicer numbers must be finite (mass, size, mount, inertia)")
@@ -118,6 +136,20 @@ class ServicerSpec:
                     "must be > 0 and no larger than the sum of the other two"
                 )
 
+    def arms(self) -> list[ArmSpec]:
+        """Every arm, the first from this spec's own fields, each with its prefix settled."""
+        first = ArmSpec(
+            self.arm, self.mount, self.mount_rpy, self.prefix, self.lock, self.keep_gripper
+        )
+        arms = [first, *self.more_arms]
+        if len(arms) == 1:
+            return arms
+        arms = [replace(a, prefix=a.prefix or f"arm{i + 1}_") for i, a in enumerate(arms)]
+        prefixes = [a.prefix for a in arms]
+        if len(set(prefixes)) != len(prefixes):
+            raise InputError(f"each arm needs its own prefix, got {prefixes}")
+        return arms
+
     @property
     def inertia(self) -> tuple[float, float, float]:
         """Principal moments of the spacecraft (kg m^2)."""
@@ -133,121 +165,74 @@ class ServicerSpec:
 
     def key(self) -> str:
         """A short hash of the spec and the arm file (for cache file names)."""
-        payload = json.dumps([self.__dict__, arm_urdf(self.arm).read_text()], default=str)
+        texts = [arm_urdf(arm.arm).read_text() for arm in self.arms()]
+        payload = json.dumps([self.__dict__, *texts], default=str)
         return hashlib.sha256(payload.encode()).hexdigest()[:16]
-
-
-def _origin(xyz: Sequence[float], rpy: Sequence[float]) -> np.ndarray:
-    roll, pitch, yaw = rpy
-    cr, sr, cp, sp = math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch)
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    out = np.eye(4)
-    out[:3, :3] = np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
-    out[:3, 3] = xyz
-    return out
 
 
 def compose_servicer(spec: ServicerSpec, output: str | Path) -> Path:
     """Compose the servicer, validate it with yourdfpy and write it atomically to ``output``.
 
+    A servicer of several arms also gets its SRDF (each arm's pairs never checked, prefixed)
+    next to it, ``output`` with the suffix ``.srdf``.
+
     Raises:
         ModelError: the arm URDF cannot be read, or the result does not validate.
         UnknownNameError: a joint to lock is not in the arm (lists the arm's joints).
+        LockedJointError: a joint locked outside its limits.
         InputError: bad numbers in ``spec``.
     """
-    text = compose_servicer_text(spec)
-    return atomic_write_text(output, text)
+    return write_composed(compose(spec), output)
+
+
+def write_composed(composed: Composed, output: str | Path) -> Path:
+    """Write a composed servicer's URDF to ``output`` (and its SRDF beside it, if any)."""
+    if composed.srdf is not None:
+        atomic_write_text(Path(output).with_suffix(".srdf"), composed.srdf)
+    return atomic_write_text(output, composed.text)
 
 
 def compose_servicer_text(spec: ServicerSpec) -> str:
     """Compose the servicer and validate it with yourdfpy; return the URDF text (no file).
 
+    Raises: as :func:`compose`.
+    """
+    return compose(spec).text
+
+
+def compose(spec: ServicerSpec) -> Composed:
+    """Compose the servicer and validate it with yourdfpy (no file is written).
+
     Raises:
-        ModelError: the arm URDF cannot be read, or the result does not validate.
-        UnknownNameError: a joint to lock is not in the arm (lists the arm's joints).
-        InputError: bad numbers in ``spec``.
+        ModelError: an arm URDF cannot be read, or the result does not validate.
+        UnknownNameError: a joint to lock is not in its arm (lists the arm's joints).
+        LockedJointError: a joint locked outside its limits.
+        InputError: bad numbers in ``spec``, or two arms with one prefix.
     """
     import yourdfpy
 
-    source = arm_urdf(spec.arm)
-    try:
-        arm = yourdfpy.URDF.load(
-            str(source),
-            build_scene_graph=False,
-            load_meshes=False,
-            filename_handler=yourdfpy.filename_handler_null,  # meshes are referenced, not read
-        )
-    except Exception as exc:
-        raise ModelError(f"cannot read arm URDF {source}: {exc}") from None
-    robot = arm.robot
-    names = [j.name for j in robot.joints]
-    for name in spec.lock:
-        if name not in names:
-            raise UnknownNameError("joint to lock", name, names)
-    if any(link.name == BASE_LINK for link in robot.links):
-        raise ModelError(f"the arm already has a link named {BASE_LINK!r}")
-
-    locked = set(spec.lock)
-    if not spec.keep_gripper:
-        locked |= {j.name for j in robot.joints if j.type != "fixed" and _GRIPPER.search(j.name)}
-    joints = []
-    for joint in robot.joints:
-        if joint.name in locked:
-            joint = replace(
-                joint,
-                type="fixed",
-                limit=None,
-                mimic=None,
-                axis=None,
-                dynamics=None,
-                safety_controller=None,
-                calibration=None,
-            )
-        elif joint.mimic is not None and joint.mimic.joint in locked:
-            joint = replace(joint, mimic=None)
-        joints.append(joint)
-
-    links = []
-    for link in robot.links:
-        visuals = [_absolute_mesh(v, source.parent) for v in link.visuals]
-        collisions = [_absolute_mesh(c, source.parent) for c in link.collisions]
-        links.append(replace(link, visuals=visuals, collisions=collisions))
-
-    roots = [link.name for link in robot.links if link.name not in {j.child for j in joints}]
-    if len(roots) != 1:
-        raise ModelError(f"arm URDF {source} must have one root link, found {roots}")
-    ixx, iyy, izz = spec.inertia
-    box = yourdfpy.Geometry(box=yourdfpy.Box(size=np.array(spec.base_size, dtype=float)))
-    hull = yourdfpy.Material(
-        name="freefloat_hull", color=yourdfpy.Color(rgba=np.array([0.78, 0.78, 0.82, 1.0]))
-    )
-    spacecraft = yourdfpy.Link(
-        name=BASE_LINK,
-        inertial=yourdfpy.Inertial(
-            origin=np.eye(4), mass=float(spec.base_mass), inertia=np.diag([ixx, iyy, izz])
-        ),
-        visuals=[yourdfpy.Visual(name="hull", origin=np.eye(4), geometry=box, material=hull)],
-        collisions=[yourdfpy.Collision(name="hull", origin=np.eye(4), geometry=box)],
-    )
-    mount = yourdfpy.Joint(
-        name="mount",
-        type="fixed",
-        parent=BASE_LINK,
-        child=roots[0],
-        origin=_origin(spec.mount, spec.mount_rpy),
-    )
-    arm_name = spec.arm if spec.arm in ARMS else Path(spec.arm).stem
+    arms = spec.arms()
+    links, joints = [], []
+    materials: dict[str, Any] = {}
+    locked: dict[str, float] = {}
+    notes: list[str] = []
+    prismatic: set[str] = set()
+    for arm in arms:
+        part = arm_part(arm)
+        links += part.links
+        joints += part.joints
+        for material in part.materials:
+            materials.setdefault(material.name, material)
+        locked.update(part.locked)
+        notes += part.notes
+        prismatic |= part.prismatic
+    spacecraft, hull = _spacecraft(spec)
+    names = [a.arm if a.arm in ARMS else Path(a.arm).stem for a in arms]
     composed = yourdfpy.Robot(
-        name=f"{arm_name}_servicer",
+        name="_".join(names) + "_servicer",
         links=[spacecraft, *links],
-        joints=[mount, *joints],
-        materials=[hull, *robot.materials],
+        joints=joints,
+        materials=[hull, *materials.values()],
     )
     urdf = yourdfpy.URDF(
         robot=composed,
@@ -271,14 +256,51 @@ def compose_servicer_text(spec: ServicerSpec) -> str:
 
     body = etree.tostring(urdf.write_xml(), pretty_print=True, encoding="unicode")
     text = "<?xml version='1.0' encoding='UTF-8'?>\n" + body
-    if spec.payload is None:
-        return text
-    from .model import load_robot
-    from .payload import attach_payload
+    tips = arm_tips(text, [a.prefix for a in arms])
+    srdf = merged_srdf([a.arm for a in arms], [a.prefix for a in arms]) if len(arms) > 1 else None
+    for note in notes:
+        LOGGER.warning("%s", note)  # a choice the user did not state
+    if spec.payload is not None:
+        from .payload import attach_payload
 
-    # The default end effector of the servicer without the payload holds it.
-    end_effector = load_robot(source.parent / f"{arm_name}_servicer.urdf", text=text).end_effector
-    return attach_payload(text, end_effector, spec.payload)
+        text = attach_payload(text, tips[0], spec.payload)
+    return Composed(text, locked, tuple(notes), tips, srdf, frozenset(prismatic))
+
+
+def _spacecraft(spec: ServicerSpec) -> tuple[Any, Any]:
+    """The spacecraft link (a uniform box) and its material."""
+    import yourdfpy
+
+    ixx, iyy, izz = spec.inertia
+    box = yourdfpy.Geometry(box=yourdfpy.Box(size=np.array(spec.base_size, dtype=float)))
+    hull = yourdfpy.Material(
+        name="freefloat_hull", color=yourdfpy.Color(rgba=np.array([0.78, 0.78, 0.82, 1.0]))
+    )
+    spacecraft = yourdfpy.Link(
+        name=BASE_LINK,
+        inertial=yourdfpy.Inertial(
+            origin=np.eye(4), mass=float(spec.base_mass), inertia=np.diag([ixx, iyy, izz])
+        ),
+        visuals=[yourdfpy.Visual(name="hull", origin=np.eye(4), geometry=box, material=hull)],
+        collisions=[yourdfpy.Collision(name="hull", origin=np.eye(4), geometry=box)],
+    )
+    return spacecraft, hull
+
+
+def arm_tips(text: str, prefixes: Sequence[str]) -> tuple[str, ...]:
+    """The default end effector of each arm (by its prefix) in a composed URDF."""
+    import pinocchio as pin
+
+    from .model import end_effector_candidates
+
+    model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    tips = []
+    for prefix in prefixes:
+        found = end_effector_candidates(model, prefix)
+        if len(found) > 1:
+            raise AmbiguousEndEffectorError(found)
+        tips.append(found[0])
+    return tuple(tips)
 
 
 def payload_parent(text: str) -> str | None:
@@ -315,15 +337,3 @@ def resolve_mesh(name: str) -> Path | None:
     else:
         path = Path(name)
     return path if path is not None and path.is_file() else None
-
-
-def _absolute_mesh(element: Any, folder: Path) -> Any:
-    """Make a relative mesh filename absolute (``package://`` references stay)."""
-    geometry = element.geometry
-    if geometry is None or geometry.mesh is None:
-        return element
-    name = geometry.mesh.filename
-    if "://" in name or Path(name).is_absolute():
-        return element
-    mesh = replace(geometry.mesh, filename=str((folder / name).resolve()))
-    return replace(element, geometry=replace(geometry, mesh=mesh))

@@ -9,6 +9,9 @@ Fixed joints are merged into their parent body by Pinocchio's URDF parser.
 The public API speaks of one number per movable joint: an angle in rad for ``revolute`` and
 ``continuous`` joints (Pinocchio stores a continuous joint as ``(cos, sin)``), a displacement
 in m for ``prismatic`` joints.
+
+This module is long because loading checks every part of the model a planner relies on (joint
+kinds and limits, masses, inertias, end effectors), each with its own message.
 """
 
 from __future__ import annotations
@@ -24,14 +27,16 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ModelError, UnknownNameError
+from ..errors import AmbiguousEndEffectorError, ModelError, UnknownNameError
 from ..files import absolute_path, read_text_file
 from .urdf_checks import check_urdf_xml, parser_messages
 
 __all__ = [
+    "FINGER_NAME",
     "MAX_URDF_BYTES",
     "Joint",
     "Robot",
+    "end_effector_candidates",
     "example_robot_data_dir",
     "load_robot",
     "resolve_robot",
@@ -112,8 +117,11 @@ class Robot:
         model: Pinocchio model with a free-flyer root joint.
         joints: the movable joints, in Pinocchio's (depth-first) order.
         base_link: name of the URDF root link (the spacecraft body).
-        end_effector: name of the end-effector frame.
+        end_effector: name of the (first) end-effector frame.
         package_dirs: folders searched for ``package://`` mesh references.
+        link_names: the URDF's link names.
+        end_effectors: every end-effector frame, the first being ``end_effector`` (a
+            two-arm servicer names one per arm); default ``(end_effector,)``.
     """
 
     urdf: Path
@@ -124,6 +132,11 @@ class Robot:
     end_effector: str
     package_dirs: tuple[Path, ...] = ()
     link_names: tuple[str, ...] = field(default_factory=tuple)
+    end_effectors: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not self.end_effectors:
+            self.end_effectors = (self.end_effector,)
 
     @property
     def n(self) -> int:
@@ -144,6 +157,17 @@ class Robot:
     def end_effector_frame(self) -> int:
         """Pinocchio frame index of the end effector."""
         return int(self.model.getFrameId(self.end_effector))
+
+    @property
+    def end_effector_frames(self) -> list[int]:
+        """Pinocchio frame indices of every end effector, in :attr:`end_effectors` order."""
+        return [int(self.model.getFrameId(name)) for name in self.end_effectors]
+
+    def supporting_joints(self, frame: str) -> list[str]:
+        """Names of the movable joints that move ``frame`` (its chain from the base), in order."""
+        parent = self.model.frames[self.model.getFrameId(frame)].parentJoint
+        support = set(self.model.supports[parent])
+        return [j.name for j in self.joints if j.index in support]
 
     def joint(self, name: str) -> Joint:
         """The joint called ``name``; :class:`UnknownNameError` (listing the valid ones) if none."""
@@ -256,32 +280,73 @@ def resolve_robot(name_or_path: str | Path, relative_to: Path | None = None) -> 
 
 
 _TOOL_NAME = re.compile(r"tcp|end_?effector|eef|tool|(^|_)ee($|_)", re.IGNORECASE)
+#: Joint and link names of gripper fingers: never the default end effector.
+FINGER_NAME = re.compile(r"finger|gripper", re.IGNORECASE)
 
 
-def _default_end_effector(model: pin.Model) -> str:
-    """Name the body frame at the tip of the longest chain of movable joints.
+def end_effector_candidates(model: pin.Model, prefix: str = "") -> list[str]:
+    """The frame at the tip of each longest chain of movable joints that is not a finger.
 
-    Among the bodies carried by the deepest joint, a frame named like a tool (``tcp``,
-    ``end_effector``, ``eef``, ``tool``, ``ee``) wins; otherwise the latest in tree order. A
-    captured payload's link (``captured_payload``) is what the end effector holds, never the
-    end effector itself.
+    Body frames carried by a gripper or finger joint, or named like one (``finger``,
+    ``gripper``), are left out, as is a captured payload's link. Depth counts the movable
+    joints from the base. Among the bodies carried by one deepest joint, a frame named like a
+    tool (``tcp``, ``end_effector``, ``eef``, ``tool``, ``ee``) wins; otherwise the latest in
+    tree order. One name per deepest joint, in tree order. With ``prefix``, only frames whose
+    name starts with it (one arm of a composed servicer).
     """
+    finger_joints = {j for j in range(2, model.njoints) if FINGER_NAME.search(model.names[j])}
+    bodies = []
+    for index, frame in enumerate(model.frames):
+        if frame.type != pin.FrameType.BODY or frame.name == "captured_payload":
+            continue
+        if not frame.name.startswith(prefix):
+            continue
+        support = list(model.supports[frame.parentJoint])
+        if _on_a_finger(model, index) or finger_joints.intersection(support):
+            continue
+        depth = sum(1 for j in support if j >= 2)
+        bodies.append((depth, frame.parentJoint, bool(_TOOL_NAME.search(frame.name)), index))
+    if not bodies:  # every body is a finger's: fall back to the deepest of all
+        return [_deepest(model, prefix)]
+    deepest = max(b[0] for b in bodies)
+    best: dict[int, tuple[bool, int]] = {}
+    for depth, joint, tool, index in bodies:
+        if depth == deepest:
+            best[joint] = max(best.get(joint, (False, -1)), (tool, index))
+    return [model.frames[best[joint][1]].name for joint in sorted(best)]
+
+
+def _on_a_finger(model: pin.Model, index: int) -> bool:
+    """Whether a frame is named like a finger or hangs below a (locked) finger joint.
+
+    Walks up the frame tree through fixed joints and bodies to the movable joint carrying it.
+    """
+    seen = set()
+    while index not in seen:
+        seen.add(index)
+        frame = model.frames[index]
+        if FINGER_NAME.search(frame.name):
+            return True
+        if frame.type == pin.FrameType.JOINT:
+            return False
+        index = int(frame.parentFrame)
+    return False
+
+
+def _deepest(model: pin.Model, prefix: str) -> str:
     bodies = [
-        (
-            len(model.supports[frame.parentJoint]),
-            bool(_TOOL_NAME.search(frame.name)),
-            index,
-            frame.name,
-        )
+        (len(model.supports[frame.parentJoint]), index, frame.name)
         for index, frame in enumerate(model.frames)
-        if frame.type == pin.FrameType.BODY and frame.name != "captured_payload"
+        if frame.type == pin.FrameType.BODY
+        and frame.name != "captured_payload"
+        and frame.name.startswith(prefix)
     ]
-    return max(bodies)[3]
+    return max(bodies)[2]
 
 
 def load_robot(
     urdf: str | Path,
-    end_effector: str | None = None,
+    end_effector: str | Sequence[str] | None = None,
     package_dirs: Sequence[str | Path] = (),
     text: str | None = None,
 ) -> Robot:
@@ -290,8 +355,9 @@ def load_robot(
     Args:
         urdf: path of the URDF file; its root link is the spacecraft. With ``text`` the
             path names the robot (and its mesh folder) but is not read; it need not exist.
-        end_effector: name of the end-effector frame (a link name); default: the tip of the
-            longest chain of movable joints.
+        end_effector: name of the end-effector frame (a link name), or several names (the
+            first is the main one); default: the tip of the longest chain of movable joints
+            that is not a gripper finger (:func:`end_effector_candidates`).
         package_dirs: folders for ``package://`` mesh references (the URDF's own folder and
             example-robot-data's share folder are always searched).
         text: the URDF's content, when it is not (yet) in a file.
@@ -300,6 +366,7 @@ def load_robot(
         ModelError: unreadable or malformed file, closed loop, unsupported joint type, bad
             masses or inertias, or no movable joint.
         UnknownNameError: ``end_effector`` is not a frame of the robot.
+        AmbiguousEndEffectorError: no end effector named and several chains are longest.
     """
     path = absolute_path(urdf, "URDF", ModelError)
     if text is None:
@@ -377,9 +444,17 @@ def load_robot(
 
     frames = [f.name for f in model.frames if f.type == pin.FrameType.BODY]
     if end_effector is None:
-        end_effector = _default_end_effector(model)
-    elif end_effector not in frames:
-        raise UnknownNameError("end-effector frame", end_effector, frames)
+        candidates = end_effector_candidates(model)
+        if len(candidates) > 1:
+            raise AmbiguousEndEffectorError(candidates, str(path))
+        names: tuple[str, ...] = (candidates[0],)
+    else:
+        names = (end_effector,) if isinstance(end_effector, str) else tuple(end_effector)
+    if not names or len(set(names)) != len(names):
+        raise ModelError(f"end effectors must be distinct frame names, got {list(names)}")
+    for name in names:
+        if name not in frames:
+            raise UnknownNameError("end-effector frame", name, frames)
 
     share = example_robot_data_dir()
     dirs = (path.parent, *(Path(d).resolve() for d in package_dirs), *([share] if share else []))
@@ -389,7 +464,8 @@ def load_robot(
         model=model,
         joints=tuple(joints),
         base_link=root_link,
-        end_effector=end_effector,
+        end_effector=names[0],
         package_dirs=dirs,
         link_names=tuple(links),
+        end_effectors=names,
     )

@@ -90,9 +90,22 @@ def _one_line(text: str) -> str:
 
 
 def _robot_key(data: Mapping[str, Any], job: Job) -> str:
+    goal = data.get("goal")
+    frames = goal.get("end_effectors") if isinstance(goal, Mapping) else None
+    robot = data.get("robot")
+    locked_at_start = isinstance(robot, Mapping) and "lock" in robot  # start values lock joints
     return json.dumps(
-        [data.get("robot"), data.get("end_effector"), data.get("payload"), str(job.relative_to)],
+        [
+            robot,
+            data.get("end_effector"),
+            data.get("end_effectors"),
+            sorted(frames) if isinstance(frames, Mapping) else None,
+            data.get("start") if locked_at_start else None,
+            data.get("payload"),
+            str(job.relative_to),
+        ],
         sort_keys=True,
+        default=str,
     )
 
 

@@ -109,7 +109,7 @@ def joint_torque_function(plan: Plan, mmap: MomentumMap) -> Callable[[float], np
 
 
 def _robot_for(plan: Plan) -> Robot:
-    robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+    robot = load_robot(plan.robot.urdf, plan.robot.frames)
     if robot.joint_names != list(plan.robot.joints):
         raise PlanFileError(
             f"the plan's joints {plan.robot.joints} do not match the URDF's {robot.joint_names}"

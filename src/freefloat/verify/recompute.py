@@ -324,6 +324,12 @@ def check_plan_numbers(plan: Plan, robot: Robot) -> Problem:
     for key, mine in zip(("base_position", "end_effector_position"), positions, strict=True):
         tol = RELATIVE_TOLERANCE * size + estimate * _scale(mine)
         _compare(f"samples.{key}", getattr(samples, key), mine, tol, "m", times, _AXES)
+    for frame, path in again.end_effector_paths.items():  # every end effector (format 4)
+        mine = np.asarray(path)
+        tol = RELATIVE_TOLERANCE * _scale(np.asarray(again.base_position), mine)
+        tol += estimate * _scale(mine)
+        theirs = samples.path_of(frame)
+        _compare(f"samples.end_effector_paths.{frame}", theirs, mine, tol, "m", times, _AXES)
     torque_unit = _unit(kinds, "N m", "N")
     for key, mine, label, columns in (
         ("base_angular_velocity", again.base_angular_velocity, "rad/s", _AXES),

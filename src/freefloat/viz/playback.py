@@ -142,6 +142,16 @@ def _with_simple_shapes(robot: Robot) -> tuple[str | None, list[str]]:
     return ET.tostring(root, encoding="unicode"), missing
 
 
+#: Colours of the end-effector trails, in end-effector order.
+_TRAIL_COLOURS = (0x1F77B4, 0xFF7F0E, 0x9467BD, 0x8C564B)
+
+
+def _tip_nodes(count: int) -> list[tuple[str, str]]:
+    """Viewer nodes (trail, marker) per end effector: the first unnumbered, then ``_2``..."""
+    tags = [""] + [f"_{k}" for k in range(2, count + 1)]
+    return [(f"{EXTRAS}/trail{tag}", f"{EXTRAS}/end_effector{tag}") for tag in tags[:count]]
+
+
 def _visual_model(robot: Robot) -> pin.GeometryModel:
     text, missing = _with_simple_shapes(robot)
     if missing:
@@ -220,7 +230,7 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
     import meshcat.geometry as g
     from meshcat.animation import Animation
 
-    robot = robot or load_robot(plan.robot.urdf, plan.robot.end_effector)
+    robot = robot or load_robot(plan.robot.urdf, plan.robot.frames)
     visual = _visual_model(robot)
     samples = plan.samples
     n = len(samples.t)
@@ -238,22 +248,25 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
         viz.initViewer(viewer=viewer)
         viz.loadViewerModel(rootNodeName=ROOT_NODE)
 
-        ee = np.asarray(samples.end_effector_position, dtype=float)
-        extent = float(max(np.linalg.norm(ee, axis=1).max(), 0.5))
-        viewer[f"{EXTRAS}/trail"].set_object(
-            g.Line(
-                g.PointsGeometry(ee.T.astype(np.float32)),
-                g.LineBasicMaterial(color=0x1F77B4, linewidth=2),
+        paths = [np.asarray(samples.path_of(f), dtype=float) for f in robot.end_effectors]
+        extent = float(max(max(np.linalg.norm(p, axis=1).max() for p in paths), 0.5))
+        tips = _tip_nodes(len(paths))
+        for number, (path, (trail, _)) in enumerate(zip(paths, tips, strict=True)):
+            viewer[trail].set_object(
+                g.Line(
+                    g.PointsGeometry(path.T.astype(np.float32)),
+                    g.LineBasicMaterial(color=_TRAIL_COLOURS[number % 4], linewidth=2),
+                )
             )
-        )
         viewer[f"{EXTRAS}/cm"].set_object(
             g.Sphere(0.03 * extent), g.MeshLambertMaterial(color=0xD62728)
         )
         viewer[f"{EXTRAS}/inertial_axes"].set_object(g.triad(0.5 * extent))
         viewer[f"{EXTRAS}/base_frame"].set_object(g.triad(0.25 * extent))
-        viewer[f"{EXTRAS}/end_effector"].set_object(
-            g.Sphere(0.02 * extent), g.MeshLambertMaterial(color=0x2CA02C)
-        )
+        for _, tip_node in tips:
+            viewer[tip_node].set_object(
+                g.Sphere(0.02 * extent), g.MeshLambertMaterial(color=0x2CA02C)
+            )
         obstacles = {obstacle_node(o.name): o for o in plan_obstacles(plan)}
         for node, obstacle in obstacles.items():
             _draw_obstacle(viewer, g, node, obstacle)
@@ -268,7 +281,7 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
 
         animation = Animation(default_framerate=fps)
         data, gdata = robot.model.createData(), visual.createData()
-        ee_frame = robot.end_effector_frame
+        ee_frames = robot.end_effector_frames
         for k in range(n):
             q = robot.configuration(
                 samples.q[k], samples.base_position[k], samples.base_quaternion_xyzw[k]
@@ -284,9 +297,10 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
             base[:3, :3] = pin.Quaternion(np.asarray(samples.base_quaternion_xyzw[k])).matrix()
             base[:3, 3] = samples.base_position[k]
             poses[f"{EXTRAS}/base_frame"] = base
-            tip = np.eye(4)
-            tip[:3, 3] = data.oMf[ee_frame].translation
-            poses[f"{EXTRAS}/end_effector"] = tip
+            for frame, (_, tip_node) in zip(ee_frames, tips, strict=True):
+                tip = np.eye(4)
+                tip[:3, 3] = data.oMf[frame].translation
+                poses[tip_node] = tip
             for node, obstacle in obstacles.items():  # as the collision model places them
                 poses[node] = (data.oMf[base_link] * obstacle.placement()).homogeneous.copy()
             playback.frames.append(poses)
@@ -295,7 +309,7 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
                     frame[name].set_transform(pose)
             if k == 0:  # static placement too (keeps mesh scales; animation sets pose only)
                 viz.display(q)
-                for name in (f"{EXTRAS}/base_frame", f"{EXTRAS}/end_effector", *obstacles):
+                for name in (f"{EXTRAS}/base_frame", *(t for _, t in tips), *obstacles):
                     viewer[name].set_transform(poses[name])
         viewer.set_animation(animation, play=True, repetitions=LOOPS)
         playback.animation = animation

@@ -123,7 +123,7 @@ def clearance_curve(
     from ..robot.collision import CollisionModel
     from ..robot.model import load_robot
 
-    robot = robot or load_robot(plan.robot.urdf, plan.robot.end_effector)
+    robot = robot or load_robot(plan.robot.urdf, plan.robot.frames)
     model = CollisionModel(robot, plan.safety.srdf, plan_obstacles(plan))
     if model.n_pairs == 0:
         return None
@@ -165,7 +165,7 @@ def _limits(plan: Plan) -> dict[str, tuple[float, float, float]]:
     from ..robot.model import load_robot
 
     try:
-        robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+        robot = load_robot(plan.robot.urdf, plan.robot.frames)
     except (FreeFloatError, OSError):
         return {}
     return {j.name: (j.lower, j.upper, j.velocity_limit) for j in robot.joints}
@@ -184,20 +184,28 @@ def _draw(
     scale, kinds = _joint_scale(plan)
     names = plan.robot.joints
     unit = "deg" if all(k != "prismatic" for k in kinds) else "deg | m"
+    frames = plan.robot.frames
     if topic == "end_effector":
-        ee = np.asarray(s.end_effector_position)
-        for i, axis in enumerate("xyz"):
-            if i < 2 or np.ptp(ee[:, 2]) > 1e-9:
-                ax.plot(t, ee[:, i], label=f"${axis}_E$")
-        ax.set_ylabel("end effector [m]")
+        for number, frame in enumerate(frames):
+            ee = np.asarray(s.path_of(frame))
+            tag = "" if len(frames) == 1 else f" {frame}"
+            for i, axis in enumerate("xyz"):
+                if i < 2 or np.ptp(ee[:, 2]) > 1e-9:
+                    style = "-" if number == 0 else (0, (4, 2 * number))
+                    ax.plot(t, ee[:, i], linestyle=style, label=f"${axis}_E${tag}")
+        ax.set_ylabel("end effector [m]" if len(frames) == 1 else "end effectors [m]")
     elif topic == "end_effector_path":
-        ee = np.asarray(s.end_effector_position)
-        ax.plot(ee[:, 0], ee[:, 1], label="path")
-        ax.plot(ee[:1, 0], ee[:1, 1], "o", label="start")
-        ax.plot(ee[-1:, 0], ee[-1:, 1], "s", label="goal")
+        flat = True
+        for frame in frames:
+            ee = np.asarray(s.path_of(frame))
+            tag = "" if len(frames) == 1 else f" {frame}"
+            (line,) = ax.plot(ee[:, 0], ee[:, 1], label=f"path{tag}")
+            color = line.get_color()
+            ax.plot(ee[:1, 0], ee[:1, 1], "o", color=color, label=f"start{tag}")
+            ax.plot(ee[-1:, 0], ee[-1:, 1], "s", color=color, label=f"goal{tag}")
+            flat = flat and np.ptp(ee[:, 2]) <= 1e-9
         ax.plot([0.0], [0.0], "+", color="k", label="system CM")
         ax.set_aspect("equal", adjustable="datalim")
-        flat = np.ptp(ee[:, 2]) <= 1e-9
         plane = "inertial x-y plane" if flat else "projection onto the inertial x-y plane"
         ax.set_xlabel(f"x [m] ({plane})")
         ax.set_ylabel("y [m]")

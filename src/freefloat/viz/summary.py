@@ -153,17 +153,17 @@ def robot_label(scenario: Scenario) -> str:
     spec, robot = scenario.servicer, scenario.robot
     if spec is not None:
         edges = " x ".join(f"{float(x):g}" for x in spec.base_size)
+        arms = " + ".join(Path(str(a.arm)).stem for a in spec.arms())
         return (
-            f"servicer: {Path(str(spec.arm)).stem} arm on a {spec.base_mass:g} kg, {edges} m base "
-            f"({robot.n} joints)"
+            f"servicer: {arms} arm{'s' if spec.more_arms else ''} on a {spec.base_mass:g} kg, "
+            f"{edges} m base ({robot.n} joints)"
         )
     return f"{robot.name} ({Path(robot.urdf).name}, {robot.n} joints)"
 
 
 def cartesian_report(scenario: Scenario, p: Plan) -> list[str]:
-    """Goal joints chosen by inverse kinematics and the end-effector error at the goal."""
-    goal = scenario.goal_pose
-    if goal is None:
+    """Goal joints chosen by inverse kinematics and each end effector's error at the goal."""
+    if not scenario.goal_poses:
         return []
     from ..physics.momentum import MomentumMap
 
@@ -172,17 +172,22 @@ def cartesian_report(scenario: Scenario, p: Plan) -> list[str]:
         f"{name} {_joint_value(value, kind)}"
         for name, value, kind in zip(p.robot.joints, p.request.goal_joints, kinds, strict=True)
     )
-    pose = MomentumMap(scenario.robot).end_effector_pose(
-        np.asarray(p.request.goal_joints), np.asarray(p.base.achieved_quaternion_xyzw)
-    )
-    miss = float(np.linalg.norm(pose.translation - goal.position))
-    lines = [
-        f"  goal joints     (inverse kinematics) {chosen}",
-        "  end effector    goal (" + ", ".join(f"{x:.4f}" for x in goal.position) + ") m, "
-        f"position error {miss:.3e} m",
-    ]
-    if goal.rotation is not None:
-        cos = (np.trace(goal.rotation.T @ pose.rotation) - 1.0) / 2.0
-        angle = math.degrees(math.acos(min(1.0, max(-1.0, cos))))
-        lines[-1] += f", orientation error {angle:.3e} deg"
+    lines = [f"  goal joints     (inverse kinematics) {chosen}"]
+    mmap = MomentumMap(scenario.robot)
+    for frame, goal in scenario.goal_poses.items():
+        pose = mmap.end_effector_pose(
+            np.asarray(p.request.goal_joints), np.asarray(p.base.achieved_quaternion_xyzw), frame
+        )
+        miss = float(np.linalg.norm(pose.translation - goal.position))
+        named = "" if len(scenario.goal_poses) == 1 else f" {frame}"
+        line = (
+            f"  end effector{named}    goal ("
+            + ", ".join(f"{x:.4f}" for x in goal.position)
+            + f") m, position error {miss:.3e} m"
+        )
+        if goal.rotation is not None:
+            cos = (np.trace(goal.rotation.T @ pose.rotation) - 1.0) / 2.0
+            angle = math.degrees(math.acos(min(1.0, max(-1.0, cos))))
+            line += f", orientation error {angle:.3e} deg"
+        lines.append(line)
     return lines
