@@ -174,8 +174,9 @@ def _unit(rng: np.random.Generator) -> np.ndarray:
 
 
 def test_a_thin_plate_crossed_between_samples_is_caught(tmp_path):
-    """A 2 mm ball sweeps through a 2 mm plate between two of the 401 instants where it is
-    clear of it (closed form): the certificate refines and reports the penetration."""
+    """A 2 mm ball sweeps through a 2 mm plate between two of 401 instants (the sampled check
+    verification made before) where it is clear of it (closed form): the certificate refines
+    and reports the penetration."""
     from test_collision import SPHERE_ARM
 
     path = tmp_path / "sphere_arm.urdf"
@@ -235,14 +236,15 @@ def test_the_ur5_keep_out_ball_plans_clear_on_the_true_meshes(tmp_path):
     assert reported <= truth + 1e-9 and truth - reported < 1e-3
 
 
-@pytest.mark.parametrize("name", ["ur5_servicer", "panda_servicer"])
+@pytest.mark.parametrize("name", ["ur5_servicer", "panda_servicer", "dual_ur5_servicer"])
 def test_solver_mesh_and_brute_force_agree_on_the_shipped_servicers(name):
     """Every pair at configurations along the shipped scenario's plain motion: hull (solver)
     <= mesh (verification) <= nearest vertex pair or vertex-box distance (brute force, numpy),
     and mesh <= hull + the hull's slack."""
     s = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / f"{name}.toml")
-    solver = CollisionModel(s.robot, known_srdf(s.robot))
-    mesh = MeshClearance(s.robot, known_srdf(s.robot))
+    srdf = s.safety.srdf or known_srdf(s.robot)
+    solver = CollisionModel(s.robot, srdf)
+    mesh = MeshClearance(s.robot, srdf)
     worst = 0.0
     for u in np.linspace(0.0, 1.0, 4):
         joints = np.asarray(s.start) + u * (np.asarray(s.goal) - np.asarray(s.start))

@@ -225,7 +225,7 @@ def _safety_report(scenario: Scenario, constraints: Sequence[Constraint]) -> Saf
     safety = scenario.safety
     if not safety.check:
         note = "not checked ([safety] check = false)"
-        LOGGER.warning("clearance: %s", note)
+        LOGGER.info("clearance: %s", note)
         return SafetyReport(checked=False, margin_m=safety.margin, note=note)
     model = (
         clearance.model

@@ -51,8 +51,7 @@ class _Instants:
 
 def _speeds(mesh: MeshClearance, motion: PolynomialMotion, t0: Any, t1: Any) -> np.ndarray:
     """(K, P) Lipschitz constants of every pair's distance on each ``[t0, t1]`` (m/s)."""
-    speed = motion.rate_bounds(t0, t1) @ mesh.reach
-    return speed[:, mesh.first] + speed[:, mesh.second]
+    return motion.rate_bounds(t0, t1) @ mesh.pair_reach
 
 
 def _tolerance(measured: float, margin: float) -> float:
