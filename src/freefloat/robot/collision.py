@@ -190,7 +190,11 @@ class CollisionModel:
             _configure(request, GJK_TOLERANCE)
         #: Queries asked again at a looser EPA tolerance since the model was built.
         self.retries = 0
-        self._results: dict[int, coal.DistanceResult] = {}
+        # Views of Pinocchio's per-pair requests and results (they stay valid: the vectors are
+        # never resized), and the results of pairs asked again alone in the last call.
+        self._requests = list(self._geometry_data.distanceRequests)
+        self._pair_results = list(self._geometry_data.distanceResults)
+        self._retried: dict[int, coal.DistanceResult] = {}
         # Bounding spheres (centre in the shape's frame, radius; m): a distance outside what
         # they allow is impossible (see checked_distance).
         centres, radii = [], []
@@ -222,8 +226,12 @@ class CollisionModel:
         return Distances(values, grads)
 
     def closest_value(self, joints: np.ndarray) -> tuple[float, int]:
-        """The smallest signed distance over the pairs (m) and its pair index."""
-        values = self._bulk(joints)
+        """The smallest signed distance over the pairs (m) and its pair index.
+
+        Exact: only the pairs whose bounding spheres allow a distance below the smallest upper
+        bound of all (the sum of centre distance and radii) are measured.
+        """
+        values = self._bulk(joints, nearest=True)
         k = int(np.argmin(values)) if len(values) else -1
         return (float(values[k]) if k >= 0 else math.inf), k
 
@@ -235,31 +243,41 @@ class CollisionModel:
         pin.computeJointJacobians(self.robot.model, self._data)  # at closest_value's pose
         return value, self._gradient(k), k
 
-    def _bulk(self, joints: np.ndarray) -> np.ndarray:
-        """Every pair's signed distance (m), in one pass of Pinocchio's ``computeDistances``.
+    def _bulk(self, joints: np.ndarray, nearest: bool = False) -> np.ndarray:
+        """Signed distances (m) of the pairs, in one pass of Pinocchio's ``computeDistances``.
 
-        Each value is checked against its bounding spheres as :func:`checked_distance` does, and
-        an impossible one is asked again alone at looser tolerances (counted in
-        :attr:`retries`). The queries start from coal's default guesses (of the separating
-        direction and of the support vertices), never from the last call's, so a distance does
-        not depend, to the last bit, on what was asked before.
+        With ``nearest``, only the pairs that can be the closest are measured (the others are
+        ``inf``). Each value is checked against its bounding spheres as
+        :func:`checked_distance` does, and an impossible one is asked again alone at looser
+        tolerances (counted in :attr:`retries`). The queries start from coal's default guesses
+        (of the separating direction and of the support vertices), never from the last call's,
+        so a distance does not depend, to the last bit, on what was asked before.
         """
         model, data, gdata = self.robot.model, self._data, self._geometry_data
         q = self.robot.configuration(np.asarray(joints, dtype=float))
-        for request in gdata.distanceRequests:  # Pinocchio keeps each pair's last guess: drop it
-            request.cached_gjk_guess = _DEFAULT_REQUEST.cached_gjk_guess
-            request.cached_support_func_guess = _DEFAULT_REQUEST.cached_support_func_guess
-        pin.computeDistances(model, data, self.geometry, gdata, q)
-        results = gdata.distanceResults
-        values = np.array([r.min_distance for r in results], dtype=float)
+        pin.forwardKinematics(model, data, q)
+        pin.updateGeometryPlacements(model, data, self.geometry, gdata)
         poses = np.array([m.homogeneous for m in gdata.oMg])
         centres = np.einsum("gij,gj->gi", poses[:, :3, :3], self._centres) + poses[:, :3, 3]
         gap = np.linalg.norm(centres[self._first] - centres[self._second], axis=1)
         reach = self._radii[self._first] + self._radii[self._second]
+        keep = np.ones(len(gap), dtype=bool)
+        if nearest and len(gap):
+            keep = gap - reach <= float((gap + reach).min()) + 1e-9
+        active = np.zeros((len(poses), len(poses)), dtype=bool)
+        active[self._first[keep], self._second[keep]] = True
+        gdata.setActiveCollisionPairs(self.geometry, active, True)
+        measured = [int(k) for k in np.flatnonzero(keep)]
+        for k in measured:  # Pinocchio keeps each pair's last guesses: start from coal's own
+            self._requests[k].cached_gjk_guess = _DEFAULT_REQUEST.cached_gjk_guess
+            self._requests[k].cached_support_func_guess = _DEFAULT_REQUEST.cached_support_func_guess
+        pin.computeDistances(self.geometry, gdata)
+        values = np.full(len(gap), math.inf)
+        values[measured] = [self._pair_results[k].min_distance for k in measured]
         with np.errstate(invalid="ignore"):
             possible = (values >= gap - reach - 1e-9) & (values <= gap + reach + 1e-9)
-        bad = ~(np.isfinite(values) & possible)
-        self._results = {k: results[k] for k in range(len(self.pairs))}
+        bad = keep & ~(np.isfinite(values) & possible)
+        self._retried = {}
         for index in np.flatnonzero(bad):
             k = int(index)
             a, b = self.pairs[k]
@@ -268,7 +286,7 @@ class CollisionModel:
             shapes = (self._shapes[a], ta, self._shapes[b], tb)
             answer = checked_distance(*shapes, spheres, self.names[k])
             self.retries += max(1, answer.retries)
-            values[k], self._results[k] = answer.value, answer.result
+            values[k], self._retried[k] = answer.value, answer.result
         return values
 
     def hulls(self) -> list[HullInfo]:
@@ -282,7 +300,7 @@ class CollisionModel:
     def _gradient(self, k: int) -> np.ndarray:
         """d(distance of pair k)/d(joints), after distances and joint Jacobians are computed."""
         model, data = self.robot.model, self._data
-        result = self._results[k]
+        result = self._retried.get(k, self._pair_results[k])
         normal = np.asarray(result.normal)
         objects = self.geometry.geometryObjects
         a, b = self.pairs[k]
