@@ -67,7 +67,7 @@ def root_link(urdf: str) -> str:
     from ..robot.urdf_checks import check_urdf_xml
 
     try:
-        return str(check_urdf_xml(Path(urdf).read_text(encoding="utf-8"))[0])
+        return check_urdf_xml(Path(urdf).read_text(encoding="utf-8")).root_link
     except Exception:
         return "base"
 

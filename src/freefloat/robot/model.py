@@ -16,7 +16,6 @@ from __future__ import annotations
 import importlib.metadata
 import math
 import re
-import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,6 +25,7 @@ import pinocchio as pin
 
 from ..errors import ModelError, UnknownNameError
 from ..files import absolute_path, read_text_file
+from .built_model import check_built_model
 from .urdf_checks import check_urdf_xml, parser_messages
 
 __all__ = [
@@ -305,13 +305,13 @@ def load_robot(
     if text is None:
         text = read_text_file(path, "URDF", MAX_URDF_BYTES, ModelError)
     try:
-        root_link, links = check_urdf_xml(text)
+        checked = check_urdf_xml(text)
     except ModelError as exc:
         raise ModelError(str(exc), urdf=str(path)) from None
     error: RuntimeError | ValueError | None
     with parser_messages() as messages:
-        try:
-            model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+        try:  # the checked tree, written out again: Pinocchio loads what was checked
+            model = pin.buildModelFromXML(checked.text, pin.JointModelFreeFlyer())
         except (RuntimeError, ValueError) as exc:
             error = exc
         else:
@@ -359,21 +359,10 @@ def load_robot(
             "one",
             urdf=str(path),
         )
-    for index in range(1, model.njoints):
-        inertia = model.inertias[index]
-        body = model.names[index] if index > 1 else f"base {root_link!r}"
-        if inertia.mass <= 0.0:
-            raise ModelError(
-                f"the body moved by joint {body!r} has no mass; every moving body needs a "
-                "positive <mass>",
-                urdf=str(path),
-            )
-        if np.linalg.eigvalsh(inertia.inertia).min() <= 0.0 and index == 1:
-            raise ModelError(
-                f"the base {root_link!r} has a singular rotational inertia; give it a positive "
-                "definite <inertia>",
-                urdf=str(path),
-            )
+    try:
+        check_built_model(model, checked)
+    except ModelError as exc:
+        raise ModelError(str(exc), urdf=str(path)) from None
 
     frames = [f.name for f in model.frames if f.type == pin.FrameType.BODY]
     if end_effector is None:
@@ -385,11 +374,11 @@ def load_robot(
     dirs = (path.parent, *(Path(d).resolve() for d in package_dirs), *([share] if share else []))
     return Robot(
         urdf=path,
-        name=ET.fromstring(text).get("name", path.stem),
+        name=checked.name or path.stem,
         model=model,
         joints=tuple(joints),
-        base_link=root_link,
+        base_link=checked.root_link,
         end_effector=end_effector,
         package_dirs=dirs,
-        link_names=tuple(links),
+        link_names=checked.links,
     )
