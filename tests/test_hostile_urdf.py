@@ -17,9 +17,7 @@ PLANAR = ROOT / "robots" / "planar_2dof.urdf"
 
 #: A document type whose unused entity hides a second robot from Python's parser: TinyXML2
 #: ends the declaration at the first '>' and reads the <robot> inside the entity's text.
-HIDDEN_ROBOT = (
-    '<!DOCTYPE robot [<!ENTITY e "x> {robot} <!--">]>\n<!-- -->\n'
-)
+HIDDEN_ROBOT = '<!DOCTYPE robot [<!ENTITY e "x> {robot} <!--">]>\n<!-- -->\n'
 
 
 #: A massless link with a negative inertia, fixed to link2 (2.5 kg m^2 about z).
@@ -93,7 +91,7 @@ def test_numbers_urdfdom_reads_otherwise_are_refused(tmp_path, raw):
 
 
 def test_an_inertia_attribute_urdfdom_needs_is_required(tmp_path):
-    """Without ixy urdfdom drops the whole <inertial>: a massless base where the file says 400 kg."""
+    """Without ixy urdfdom drops the <inertial>: a massless base where the file says 400 kg."""
     path = _variant(tmp_path, 'ixy="0"', "")
     with pytest.raises(ff.ModelError, match="link 'base' inertia has no 'ixy' attribute"):
         ff.load_robot(path)
@@ -121,9 +119,7 @@ def test_the_built_model_is_checked_against_the_checked_file():
     assert np.linalg.eigvalsh(merged.inertias[3].inertia).min() == pytest.approx(-97.5)
     with pytest.raises(ff.ModelError, match=r"body moved by joint 'q2'.*unphysical.*-97\.5"):
         check_built_model(merged, checked)
-    renamed = pin.buildModelFromXML(
-        text.replace('"q2"', '"q3"'), pin.JointModelFreeFlyer()
-    )
+    renamed = pin.buildModelFromXML(text.replace('"q2"', '"q3"'), pin.JointModelFreeFlyer())
     with pytest.raises(ff.ModelError, match=r"built joints \['q1', 'q3'\]"):
         check_built_model(renamed, checked)
 

@@ -219,9 +219,7 @@ def _check_inertial(link: ET.Element, name: str) -> float:
     ixx, ixy, ixz, iyy, iyz, izz = (
         _float_attr(inertia_el, k, f"link {name!r} inertia", None, MAX_INERTIA) for k in keys
     )
-    eigenvalues = np.linalg.eigvalsh(
-        np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-    )
+    eigenvalues = np.linalg.eigvalsh(np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]))
     shown = np.round(eigenvalues, 9).tolist()
     if mass > 0.0 and eigenvalues.min() <= 0.0:
         raise ModelError(
