@@ -48,8 +48,11 @@ def _names() -> tuple[str, ...]:
 
 
 def _nothing(signum: int, frame: FrameType | None) -> None:
-    """A later signal: already ending (a Python no-op, not ``SIG_IGN``, which would make
-    CPython print "Signal N ignored due to race condition" for one already on its way)."""
+    """Do nothing: a later signal, while the command already ends.
+
+    A Python no-op rather than ``SIG_IGN``, which would make CPython print "Signal N ignored
+    due to race condition" for a signal already on its way.
+    """
 
 
 def _first(exc: BaseException) -> None:
