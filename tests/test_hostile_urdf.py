@@ -178,3 +178,43 @@ def test_a_byte_order_mark_is_accepted(tmp_path):
     path = tmp_path / "bom.urdf"
     path.write_bytes(b"\xef\xbb\xbf" + PLANAR.read_bytes())
     assert ff.load_robot(path).n == 2
+
+
+# -- plans that name their robot badly ----------------------------------------------------
+
+
+def _plan_doc(worked_plan):
+    import json
+
+    return json.loads(worked_plan.to_json())
+
+
+def _load(tmp_path, text):
+    from freefloat.plans.schema import load_plan_file
+
+    path = tmp_path / "p.json"
+    path.write_text(text)
+    return load_plan_file(path)
+
+
+def test_duplicate_json_keys_in_a_plan_are_refused_by_name(tmp_path, worked_plan):
+    text = worked_plan.to_json().replace('"duration": ', '"duration": 1.0, "duration": ', 1)
+    with pytest.raises(ff.PlanFileError, match="key 'duration' appears twice in one object"):
+        _load(tmp_path, text)
+
+
+def test_an_empty_joint_name_in_a_plan_is_refused_by_name(tmp_path, worked_plan):
+    import json
+
+    doc = _plan_doc(worked_plan)
+    doc["robot"]["joints"][1] = ""
+    with pytest.raises(ff.PlanFileError, match=r"robot\.joints\[1\]: '' is empty"):
+        _load(tmp_path, json.dumps(doc))
+    doc["format"] = "freefloat.plan/1"  # not schema-checked: the limits name it
+    with pytest.raises(ff.PlanFileError, match=r"robot\.joints\[1\]' is an empty name"):
+        _load(tmp_path, json.dumps(doc))
+
+
+def test_a_plan_with_a_byte_order_mark_loads(tmp_path, worked_plan):
+    plan = _load(tmp_path, "\ufeff" + worked_plan.to_json())
+    assert plan.duration == worked_plan.duration

@@ -29,6 +29,7 @@ from .plans.format import (
     RobotRef,
     SafetyReport,
     SolverReport,
+    sha256_hex,
 )
 from .plans.sampling import base_report, feasibility_report, sample_solution, solution_record
 from .problem.constraints import (
@@ -327,6 +328,8 @@ def plan_from_solution(
             joints=names,
             end_effector=robot.end_effector,
             joint_kinds=[j.kind for j in robot.joints],
+            urdf_text=robot.urdf_text,
+            urdf_sha256=sha256_hex(robot.urdf_text),
         ),
         duration=T,
         coefficients={

@@ -113,7 +113,7 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
     from ..physics.attitude import magnus_increments, propagate, step_nodes
     from ..physics.dynamics import inverse_dynamics
     from ..physics.momentum import MomentumMap
-    from ..robot.model import load_robot
+    from ..plans.robot_copy import plan_robot
 
     T = plan.duration
     _check_rate(rate, T)
@@ -122,7 +122,7 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
         grid = grid[grid < T - 1e-9 * max(1.0, T)]
         times = np.append(grid, T)
     t = np.asarray(times, dtype=float)
-    robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+    robot = plan_robot(plan)
     mmap = MomentumMap(robot)
     poly = np.polynomial.polynomial
     coefficients = [np.asarray(plan.coefficients[name], float) for name in plan.robot.joints]

@@ -114,6 +114,8 @@ class Robot:
         base_link: name of the URDF root link (the spacecraft body).
         end_effector: name of the end-effector frame.
         package_dirs: folders searched for ``package://`` mesh references.
+        link_names: every URDF link, in file order.
+        urdf_text: the URDF text the robot was loaded from (what a plan carries).
     """
 
     urdf: Path
@@ -124,6 +126,7 @@ class Robot:
     end_effector: str
     package_dirs: tuple[Path, ...] = ()
     link_names: tuple[str, ...] = field(default_factory=tuple)
+    urdf_text: str = ""
 
     @property
     def n(self) -> int:
@@ -381,4 +384,5 @@ def load_robot(
         end_effector=end_effector,
         package_dirs=dirs,
         link_names=checked.links,
+        urdf_text=text,
     )
