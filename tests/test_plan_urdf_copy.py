@@ -54,7 +54,7 @@ def test_a_changed_urdf_is_refused_naming_both_sums(moved, capsys):
 
 
 def test_an_edited_copy_is_refused_by_its_sum(moved, capsys):
-    path, urdf = moved
+    path, _ = moved
     doc = json.loads(path.read_text())
     doc["robot"]["urdf_text"] = doc["robot"]["urdf_text"].replace("40.0", "41.0", 1)
     path.write_text(json.dumps(doc))
