@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import signal
 import sys
 import threading
@@ -107,12 +108,18 @@ def flush_output() -> None:
         sys.stdout.flush()
 
 
+#: Lines of a C++ (Pinocchio, coal) exception that say where in the library it was raised.
+_CPP_CONTEXT = re.compile(r"(From file|in function|at line): [^\n]*\n|\n?Hint: [^\n)]*|message: ")
+
+
 def error_line(text: str) -> None:
     """Print ``freefloat: TEXT`` as one line on standard error; say nothing if it fails.
 
     Line breaks in ``text`` (a C++ loader's multi-line message) become ``; ``, so the line
-    is one line whatever a library put into it.
+    is one line whatever a library put into it; a C++ exception's source file, function,
+    line number and hint are left out (what failed, and on which file, stays).
     """
+    text = _CPP_CONTEXT.sub("", text)
     flat = "; ".join(part.strip() for part in text.splitlines() if part.strip())
     if sys.stderr is None:  # started with descriptor 2 closed
         return

@@ -30,6 +30,7 @@ from ..errors import InputError, ModelError, UnknownNameError
 from ..files import absolute_path, atomic_write_text, read_text_file
 from .model import MAX_URDF_BYTES, example_robot_data_dir
 from .payload import PAYLOAD_LINK, Payload
+from .urdf_checks import urdf_document
 
 LOGGER = logging.getLogger(__name__)
 
@@ -176,6 +177,10 @@ def compose_servicer_text(spec: ServicerSpec) -> str:
     import yourdfpy
 
     source = arm_urdf(spec.arm)
+    try:  # one clear line for what is no URDF, before yourdfpy's parser says more
+        urdf_document(read_text_file(source, "arm URDF", MAX_URDF_BYTES, ModelError))
+    except ModelError as exc:
+        raise ModelError(f"cannot read arm URDF {source}: {exc}") from None
     try:
         arm = yourdfpy.URDF.load(
             str(source),

@@ -42,6 +42,7 @@ __all__ = [
     "CheckedUrdf",
     "check_urdf_xml",
     "parser_messages",
+    "urdf_document",
 ]
 
 _URDF_JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
@@ -303,13 +304,11 @@ def _check_tree(root: ET.Element, links: list[str]) -> tuple[str, list[str]]:
     return roots[0], movable
 
 
-def check_urdf_xml(text: str) -> CheckedUrdf:
-    """Check the URDF's structure, numbers and inertials; return what Pinocchio is to load.
+def urdf_document(text: str) -> ET.Element:
+    """The ``<robot>`` element of a URDF's text, parsed once, without a document type.
 
     Raises:
-        ModelError: a document type declaration, malformed XML, or a check above that fails
-            (one line naming the link, joint or value).
-        UnknownNameError: a joint names a link that does not exist.
+        ModelError: a document type declaration, malformed XML, or another root element.
     """
     text = text.removeprefix("\ufeff")  # a UTF-8 byte-order mark
     _refuse_document_type(text)
@@ -319,6 +318,18 @@ def check_urdf_xml(text: str) -> CheckedUrdf:
         raise ModelError(f"malformed URDF XML ({exc})") from None
     if root.tag != "robot":
         raise ModelError(f"root element is <{excerpt(root.tag)}>, expected <robot>")
+    return root
+
+
+def check_urdf_xml(text: str) -> CheckedUrdf:
+    """Check the URDF's structure, numbers and inertials; return what Pinocchio is to load.
+
+    Raises:
+        ModelError: a document type declaration, malformed XML, or a check above that fails
+            (one line naming the link, joint or value).
+        UnknownNameError: a joint names a link that does not exist.
+    """
+    root = urdf_document(text)
     links = [link.get("name") or "" for link in root.findall("link")]
     if not links:
         raise ModelError("the URDF has no <link>")
