@@ -21,7 +21,7 @@ def _refused(capfd, *argv):
     """Run in-process; one line on descriptor 2 (C++ noise included), exit 2. The line."""
     start = time.perf_counter()
     code = main([str(a) for a in argv])
-    out, err = capfd.readouterr()
+    _, err = capfd.readouterr()
     assert code == 2, err
     assert err.count("\n") == 1 and err.startswith("freefloat: error: "), err[:600]
     assert time.perf_counter() - start < 30.0
