@@ -176,10 +176,12 @@ def _check_movable_joint(joint: ET.Element, name: str, kind: str) -> None:
 
 
 def _refuse_document_type(text: str) -> None:
-    """Refuse a ``<!DOCTYPE>`` (and with it every entity) before the tree is read.
+    """Refuse a ``<!DOCTYPE>`` (and with it every entity), and processing instructions.
 
     Python's parser expands entities; TinyXML2, which Pinocchio uses, ends the declaration at
     the first ``>`` and reads what follows as elements: the two would see different robots.
+    A processing instruction (other than the leading ``<?xml ...?>``) Python skips and
+    TinyXML2 refuses.
     """
 
     def refuse(*_: object) -> None:
@@ -189,9 +191,17 @@ def _refuse_document_type(text: str) -> None:
             "write entity values out"
         )
 
+    def instruction(target: str, data: str) -> None:
+        raise ModelError(
+            f"the URDF has a processing instruction <?{excerpt(target, 20)} ...?>: not "
+            "accepted, because Pinocchio's XML parser refuses one inside the document; "
+            "remove it"
+        )
+
     parser = expat.ParserCreate()
     parser.StartDoctypeDeclHandler = refuse
     parser.EntityDeclHandler = refuse
+    parser.ProcessingInstructionHandler = instruction
     try:
         parser.Parse(text, True)
     except expat.ExpatError as exc:
