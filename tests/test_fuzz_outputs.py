@@ -11,11 +11,13 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
 import freefloat as ff
-from freefloat.files import atomic_write_text, check_output
+from freefloat.cli import main
+from freefloat.files import atomic_write_text
 
 from conftest import ROOT
 
@@ -75,16 +77,52 @@ def test_signals_at_random_instants_of_a_write_leave_nothing(tmp_path, seed):
     assert target.read_text() == "x" * 200_000  # and the file is whole
 
 
-def test_outputs_onto_devices_and_fifos_are_refused(tmp_path):
+def _targets(tmp_path):
+    """Things in the way of an output that are not regular files: (path, what the message says)."""
+    import socket
+
     fifo = tmp_path / "fifo"
     os.mkfifo(fifo)
-    for target, kind in ((fifo, r"a FIFO \(named pipe\)"), ("/dev/null", "a device")):
-        with pytest.raises(ff.FileError, match=f"is {kind}.*regular files only"):
-            check_output(target, "-o")
-        with pytest.raises(ff.FileError, match=f"is {kind}; freefloat replaces regular"):
-            atomic_write_text(target, "{}")
-    assert fifo.is_fifo() and os.path.exists("/dev/null")
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["fifo"]
+    sock = tmp_path / "sock"
+    server = socket.socket(socket.AF_UNIX)
+    server.bind(str(sock))
+    (tmp_path / "to_fifo").symlink_to(fifo)
+    (tmp_path / "to_null").symlink_to("/dev/null")
+    return server, [
+        (fifo, r"a FIFO \(named pipe\)"),
+        (tmp_path / "to_fifo", r"a FIFO \(named pipe\)"),
+        (sock, "a socket"),
+        ("/dev/null", "a device"),
+        ("/dev/zero", "a device"),
+        ("/dev/full", "a device"),
+        (tmp_path / "to_null", "a device"),
+    ]
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_outputs_onto_devices_fifos_and_sockets_are_refused(tmp_path, capsys, plan_file, seed):
+    """Every command that writes a file, onto every kind of non-regular file: one line."""
+    rng = random.Random(seed)
+    server, targets = _targets(tmp_path)
+    commands = [
+        lambda t: ["export", str(plan_file), "--format", "csv", "-o", str(t)],
+        lambda t: ["export", str(plan_file), "--format", "mcap", "-o", str(t)],
+        lambda t: ["show", str(plan_file), "--html", str(t), "--no-verify"],
+        lambda t: ["plan", "--samples", "5", "-o", str(t)],
+        lambda t: ["sweep", str(tmp_path / "none.toml"), "-o", str(t)],
+    ]
+    try:
+        for _ in range(8):
+            target, kind = rng.choice(targets)
+            with pytest.raises(ff.FileError, match=f"is {kind}"):
+                atomic_write_text(target, "{}")
+            assert main(rng.choice(commands)(target)) == 2
+            err = capsys.readouterr().err
+            assert err.count("\n") == 1 and "regular files only" in err, err
+    finally:
+        server.close()
+    assert Path("/dev/null").is_char_device() and (tmp_path / "fifo").is_fifo()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temporary file
 
 
 def _run(argv, stdout, stderr=subprocess.PIPE):

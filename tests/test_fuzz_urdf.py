@@ -143,13 +143,18 @@ def _inertia(rng: np.random.Generator, kind: str) -> np.ndarray:
     return np.zeros((3, 3)) if kind == "zero" else base
 
 
+def _v(*values) -> str:
+    return " ".join(repr(float(v)) for v in values)
+
+
 def _link_xml(name: str, mass: float, com, rpy, inertia: np.ndarray) -> str:
     i = inertia
+    keys = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
+    entries = (i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2])
+    attrs = " ".join(f'{k}="{_v(e)}"' for k, e in zip(keys, entries, strict=True))
     return (
-        f'<link name="{name}"><inertial><origin xyz="{float(com[0])!r} {float(com[1])!r} {float(com[2])!r}" '
-        f'rpy="{float(rpy[0])!r} {float(rpy[1])!r} {float(rpy[2])!r}"/><mass value="{mass!r}"/>'
-        f'<inertia ixx="{float(i[0, 0])!r}" iyy="{float(i[1, 1])!r}" izz="{float(i[2, 2])!r}" ixy="{float(i[0, 1])!r}" '
-        f'ixz="{float(i[0, 2])!r}" iyz="{float(i[1, 2])!r}"/></inertial></link>'
+        f'<link name="{name}"><inertial><origin xyz="{_v(*com)}" rpy="{_v(*rpy)}"/>'
+        f'<mass value="{mass!r}"/><inertia {attrs}/></inertial></link>'
     )
 
 
@@ -170,8 +175,7 @@ def _random_tree(rng: np.random.Generator):
             if k:
                 joints.append(
                     f'<joint name="{link}_fix" type="fixed"><parent link="{name}"/>'
-                    f'<child link="{link}"/><origin xyz="{float(place[0])!r} {float(place[1])!r} {float(place[2])!r}" '
-                    f'rpy="{float(turn[0])!r} {float(turn[1])!r} {float(turn[2])!r}"/></joint>'
+                    f'<child link="{link}"/><origin xyz="{_v(*place)}" rpy="{_v(*turn)}"/></joint>'
                 )
                 rotation, offset = _rpy_matrix(*turn), place
             else:
@@ -182,7 +186,8 @@ def _random_tree(rng: np.random.Generator):
         if b:
             parent = ["base", "l1"][b - 1]
             joints.append(
-                f'<joint name="j{b}" type="revolute"><parent link="{parent}"/><child link="{name}"/>'
+                f'<joint name="j{b}" type="revolute"><parent link="{parent}"/>'
+                f'<child link="{name}"/>'
                 f'<origin xyz="0.3 0 0"/><axis xyz="0 0 1"/>'
                 f'<limit lower="-2" upper="2" effort="10" velocity="1"/></joint>'
             )
