@@ -101,3 +101,24 @@ def test_older_plans_keep_their_format(moved):
     path.write_text(json.dumps(doc))
     again = json.loads(ff.Plan.load(path).to_json())
     assert again["format"] == "freefloat.plan/3" and "urdf_text" not in again["robot"]
+
+
+def test_a_clearance_checked_plan_verifies_and_exports_when_its_urdf_is_gone(tmp_path, capsys):
+    """Collision geometry and the export's root frame come from the plan's copy."""
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
+    plan = ff.plan(scenario, samples=21)
+    assert plan.safety.checked
+    urdf = tmp_path / "cache" / "servicer.urdf"
+    urdf.parent.mkdir()
+    shutil.copy(scenario.robot.urdf, urdf)
+    doc = json.loads(plan.to_json())
+    doc["robot"]["urdf"] = str(urdf)
+    path = tmp_path / "plan.json"
+    path.write_text(json.dumps(doc))
+    urdf.unlink()
+    shutil.rmtree(urdf.parent)  # a cleared cache
+    assert main(["verify", str(path)]) == 0, capsys.readouterr().err
+    assert "clearance" in capsys.readouterr().out
+    from freefloat.export.messages import root_link
+
+    assert root_link(str(urdf), doc["robot"]["urdf_text"]) == scenario.robot.base_link

@@ -11,12 +11,18 @@ the file at their path as it is now, and a warning says so.
 
 from __future__ import annotations
 
+import atexit
+import shutil
+import tempfile
+import xml.etree.ElementTree as ET
+from dataclasses import replace
 from pathlib import Path
 
 from ..errors import PlanFileError
 from ..files import read_text_file
 from ..progress import LOGGER
 from ..robot.model import MAX_URDF_BYTES, Robot, load_robot
+from ..robot.urdf_checks import urdf_document
 from .format import Plan, sha256_hex
 
 __all__ = ["plan_robot"]
@@ -27,6 +33,25 @@ def _on_disk(path: str) -> str | None:
     if not Path(path).exists():
         return None
     return read_text_file(path, "URDF", MAX_URDF_BYTES, PlanFileError)
+
+
+def _materialised(text: str, original: Path) -> Path:
+    """The plan's URDF copy as a file in a private temporary folder (removed at exit).
+
+    Relative mesh paths are made absolute against the original URDF's folder, where they
+    were looked for when the plan was made; ``package://`` paths are left to the package
+    folders.
+    """
+    root = urdf_document(text)
+    for element in root.iter():
+        name = element.get("filename")
+        if name and "://" not in name and not Path(name).is_absolute():
+            element.set("filename", str(original.parent / name))
+    folder = Path(tempfile.mkdtemp(prefix="freefloat-urdf-"))
+    atexit.register(shutil.rmtree, folder, True)
+    path = folder / original.name
+    path.write_text(ET.tostring(root, encoding="unicode"), encoding="utf-8")
+    return path
 
 
 def plan_robot(plan: Plan) -> Robot:
@@ -47,6 +72,8 @@ def plan_robot(plan: Plan) -> Robot:
                 "for it, or move it away to check the plan against the copy it carries"
             )
         robot = load_robot(ref.urdf, ref.end_effector, text=ref.urdf_text)
+        if text is None:  # gone: collision geometry is read from a file, so give it one
+            robot = replace(robot, urdf=_materialised(ref.urdf_text, Path(ref.urdf)))
     else:
         LOGGER.warning(
             "a %s plan carries no copy of its URDF: read from %s as it is now (a plan made by "
