@@ -410,7 +410,9 @@ def build_parser() -> argparse.ArgumentParser:
     p_verify = commands.add_parser(
         "verify",
         help="re-run the independent checks of a plan file",
-        description="Re-run a plan's checks from the file alone (and its URDF). The file is "
+        description="Re-run a plan's checks from the file alone (a freefloat.plan/4 file "
+        "carries its URDF and its SHA-256; a URDF file at its path must still be that one). "
+        "The file is "
         "checked against the plan schema and its limits first, then every number in it (free "
         "parameters, samples, torques, base and end-effector paths, solver residuals, the "
         "verification figures) is recomputed from the URDF, duration and coefficients and must "
