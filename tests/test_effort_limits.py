@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -133,8 +134,9 @@ def test_min_effort_finds_a_path_within_a_limit_the_minimum_norm_path_breaks(tmp
     assert p.verification["joint_effort_limits"].value <= 0.0
 
 
-def test_a_plan_of_the_previous_format_is_held_to_what_it_promised(tmp_path, capsys):
-    """A freefloat.plan/2 file (no objective record, no effort check) still verifies."""
+def test_a_plan_of_an_older_format_is_held_to_every_limit_of_its_urdf(tmp_path, capsys):
+    """A freefloat.plan/2 file (no objective record, no effort check) still verifies, and is
+    held to its URDF's effort limits all the same: relabelling a plan cannot escape them."""
     import json
 
     scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
@@ -142,7 +144,7 @@ def test_a_plan_of_the_previous_format_is_held_to_what_it_promised(tmp_path, cap
     assert "joint_effort_limits" in current.verification
     doc = json.loads(current.to_json())
     doc["format"] = "freefloat.plan/2"
-    del doc["objective"]
+    del doc["objective"], doc["robot"]["urdf_text"], doc["robot"]["urdf_sha256"]
     checks = doc["verification"]["checks"]
     doc["verification"]["checks"] = [c for c in checks if c["name"] != "joint_effort_limits"]
     old = tmp_path / "old.json"
@@ -151,6 +153,20 @@ def test_a_plan_of_the_previous_format_is_held_to_what_it_promised(tmp_path, cap
     loaded = ff.Plan.load(old)
     assert loaded.format == "freefloat.plan/2"
     assert "objective" not in json.loads(loaded.to_json())
+    # the URDF's effort limits cut below the plan's peak torque: the /2 plan now fails
+    peak = max(abs(v) for row in current.samples.tau for v in row)  # N m
+    urdf = Path(doc["robot"]["urdf"]).read_text()
+    cut = re.sub(r'effort="[0-9.e+-]+"', f'effort="{peak / 2:.6g}"', urdf)
+    assert cut != urdf
+    (tmp_path / "cut.urdf").write_text(cut)
+    doc["robot"]["urdf"] = "cut.urdf"  # relative: read from the plan's folder
+    relabelled = tmp_path / "relabelled.json"
+    relabelled.write_text(json.dumps(doc))
+    capsys.readouterr()
+    assert main(["verify", "-q", str(relabelled)]) == 1
+    out = capsys.readouterr().out
+    assert re.search(r"joint_effort_limits .* FAILED", out), out
+    doc["robot"]["urdf"] = str(Path(current.robot.urdf))
     # a current plan without its effort check is refused, naming the check list
     doc["format"] = "freefloat.plan/3"
     doc["objective"] = json.loads(current.to_json())["objective"]

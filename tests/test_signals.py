@@ -40,6 +40,7 @@ def _wait_for(predicate, timeout: float = 60.0) -> None:
     [
         (signal.SIGTERM, 143, "freefloat: terminated"),
         (signal.SIGINT, 130, "freefloat: interrupted"),
+        (signal.SIGHUP, 129, "freefloat: hung up"),
     ],
 )
 def test_a_signal_while_writing_leaves_the_previous_plan(tmp_path, signum, code, line):

@@ -152,6 +152,7 @@ def test_layers_flow_one_way_and_no_circle():
     order = [
         "errors",
         "files",
+        "_exits",
         "progress",
         "robot",
         "physics",

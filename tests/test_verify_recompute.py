@@ -297,4 +297,11 @@ def test_show_catches_a_urdf_changed_after_planning(original, tmp_path, capsys):
     assert heavier != text
     urdf.write_text(heavier)
     line = _refused(capsys, "show", path, "--html", page)
+    assert f"the URDF {urdf} has changed since the plan was made" in line
+    assert not page.exists()
+    # A format-3 plan carries no URDF copy: its numbers disagree with the changed file's.
+    for key in ("urdf_text", "urdf_sha256"):
+        del data["robot"][key]
+    data["format"] = "freefloat.plan/3"
+    line = _refused(capsys, "show", _write(tmp_path, data), "--html", page, "-q")
     assert "disagrees with the recomputation" in line and not page.exists()

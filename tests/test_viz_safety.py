@@ -8,6 +8,7 @@ import gzip
 import json
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,7 +16,7 @@ import umsgpack
 from PIL import Image
 
 import freefloat as ff
-from freefloat.plans.format import ObstacleRecord, SafetyReport
+from freefloat.plans.format import ObstacleRecord, SafetyReport, sha256_hex
 from freefloat.robot.collision import CollisionModel, Obstacle
 from freefloat.viz.playback import EXTRAS, build_playback, obstacle_node, write_html
 from freefloat.viz.plots import clearance_curve, figures, save_figures
@@ -153,9 +154,12 @@ def _collision_urdf(tmp_path) -> str:
 @pytest.fixture(scope="module")
 def checked_plan(worked_plan, tmp_path_factory):
     urdf = _collision_urdf(tmp_path_factory.mktemp("collide"))
+    text = Path(urdf).read_text(encoding="utf-8")  # the same robot, with collision geometry
     return dataclasses.replace(
         worked_plan,
-        robot=dataclasses.replace(worked_plan.robot, urdf=urdf),
+        robot=dataclasses.replace(
+            worked_plan.robot, urdf=urdf, urdf_text=text, urdf_sha256=sha256_hex(text)
+        ),
         safety=SafetyReport(checked=True, margin_m=0.05, obstacles=[BALL]),
     )
 

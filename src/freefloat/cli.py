@@ -12,24 +12,16 @@ bounds, verify, compose, show, plot, export, sweep); the plan summary lives in
 from __future__ import annotations
 
 import argparse
-import contextlib
 import dataclasses
 import math
-import signal
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
-from types import FrameType
 from typing import TYPE_CHECKING, Any, NoReturn
 
-if sys.version_info >= (3, 11):
-    pass
-else:  # pragma: no cover
-    pass
-
-
 from . import __version__
+from ._exits import HungUp, Terminated, error_line, flush_output, handle_signals, silence_output
 from .errors import FreeFloatError, InputError, InputLimitError, VelocityLimitError
 from .files import check_output
 from .pipeline import plan
@@ -374,7 +366,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         raise InputError(f"--workers must be at least 1, got {args.workers}")
     if args.plots:
         check_plottable(spec)
-    client = connect(args.scheduler) if args.scheduler else None
+    client = connect(args.scheduler) if args.scheduler is not None else None
     try:
         rows = sweep(spec, workers=args.workers, client=client, output=args.output)
     finally:
@@ -478,7 +470,9 @@ def build_parser() -> argparse.ArgumentParser:
     p_verify = commands.add_parser(
         "verify",
         help="re-run the independent checks of a plan file",
-        description="Re-run a plan's checks from the file alone (and its URDF). The file is "
+        description="Re-run a plan's checks from the file alone (a freefloat.plan/4 file "
+        "carries its URDF and its SHA-256; a URDF file at its path must still be that one). "
+        "The file is "
         "checked against the plan schema and its limits first, then every number in it (free "
         "parameters, samples, torques, base and end-effector paths, solver residuals, the "
         "verification figures) is recomputed from the URDF, duration and coefficients and must "
@@ -751,9 +745,14 @@ def _check_arguments(args: argparse.Namespace) -> None:
             for value in values or ():
                 if value is not None:
                     check_number(value, name, high, unit)
-    elif command == "sweep" and args.workers is not None:
-        if not 1 <= args.workers <= MAX_WORKERS:
+    elif command == "sweep":
+        if args.workers is not None and not 1 <= args.workers <= MAX_WORKERS:
             raise InputLimitError("--workers", args.workers, 1, MAX_WORKERS)
+        if args.scheduler is not None and not args.scheduler.strip():
+            raise InputError(
+                "--scheduler is empty; give the Dask scheduler's address (tcp://host:8786), "
+                "or leave the option out to run on local processes"
+            )
     elif command == "show":
         _positive(args.speed, "--speed", MAX_SPEED)
     for option, name, folder in _OUTPUTS.get(command, ()):
@@ -775,69 +774,47 @@ _OUTPUTS: dict[str, tuple[tuple[str, str, bool], ...]] = {
 }
 
 
-class Terminated(BaseException):
-    """SIGTERM, raised like Ctrl-C's ``KeyboardInterrupt`` so that writers clean up."""
-
-
-def _terminate(signum: int, frame: FrameType | None) -> NoReturn:
-    raise Terminated
-
-
-def _handle_signals() -> Callable[[], None]:
-    """Ctrl-C raises ``KeyboardInterrupt`` and SIGTERM :class:`Terminated`; return an undo.
-
-    Both unwind through the atomic writers (:mod:`freefloat.files`), which remove their
-    temporary files, so an interrupted command leaves no partial file and the previous output
-    intact. Outside the main thread (a caller's thread) nothing is installed.
-    """
-    import threading
-
-    if threading.current_thread() is not threading.main_thread():
-        return lambda: None
-    previous = {
-        signal.SIGINT: signal.signal(signal.SIGINT, signal.default_int_handler),
-        signal.SIGTERM: signal.signal(signal.SIGTERM, _terminate),
-    }
-
-    def undo() -> None:
-        for number, handler in previous.items():
-            signal.signal(number, handler if handler is not None else signal.SIG_DFL)
-
-    return undo
-
-
-def _error_line(text: str) -> None:
-    with contextlib.suppress(OSError, ValueError):  # stderr closed
-        print(f"freefloat: {text}", file=sys.stderr, flush=True)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit code.
 
-    0: success; 1: ``verify`` found a failing check; 2: bad input, infeasible request or no
-    plan (one line ``freefloat: error: ...`` on stderr); 130: interrupted by Ctrl-C; 143:
-    terminated by SIGTERM (one line each, no partial file left).
+    0: success; 1: ``verify`` found a failing check; 2: bad input, infeasible request, no
+    plan, or standard output cannot be written (one line ``freefloat: error: ...`` on
+    stderr); 130: interrupted by Ctrl-C; 143: terminated by SIGTERM; 129: SIGHUP (one line
+    each, no partial file left); 141: standard output was closed (silently).
     """
-    undo = _handle_signals()
+    undo = handle_signals()
     try:
         parser = build_parser()
         try:
             args = parser.parse_args(argv)
         except SystemExit as exc:  # --help, --version, or a one-line argument error
+            flush_output()
             return exc.code if isinstance(exc.code, int) else 2
         configure(getattr(args, "verbose", 0), getattr(args, "quiet", False))
         args.started = time.perf_counter()
         _check_arguments(args)
-        return int(args.func(args))
+        code = int(args.func(args))
+        flush_output()
+        return code
     except FreeFloatError as exc:
-        _error_line(f"error: {_in_degrees(exc)}")
+        error_line(f"error: {_in_degrees(exc)}")
+        return 2
+    except BrokenPipeError:  # standard output closed (| head): nothing more to say
+        silence_output(1)
+        return 141
+    except OSError as exc:  # a stream, not a file (files raise FileError): > /dev/full
+        silence_output(1)
+        error_line(f"error: cannot write the output: {exc.strerror or exc}")
         return 2
     except KeyboardInterrupt:
-        _error_line("interrupted")
+        error_line("interrupted")
         return 130
     except Terminated:
-        _error_line("terminated")
+        error_line("terminated")
         return 143
+    except HungUp:
+        error_line("hung up")
+        return 129
     finally:
         undo()
 

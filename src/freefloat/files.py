@@ -7,8 +7,9 @@ FIFO or a device (``/dev/zero``), a file larger than the limit for its kind, a r
 folder, a file where a folder should be, all become one :class:`~freefloat.errors.FileError`
 with a one-line message instead of a hang, a memory runaway or a traceback.
 
-Atomic writes: a reader never sees half a file, and a failure (or Ctrl-C, or SIGTERM at the
-command line) leaves nothing behind and the previous file intact. Files are created with the
+Atomic writes: a reader never sees half a file, and a failure (or Ctrl-C, SIGTERM or SIGHUP at
+the command line, at any instant) leaves nothing behind and the previous file intact; only a
+regular file is ever replaced (never a FIFO or a device). Files are created with the
 permissions of an ordinary ``open()``: ``0666`` less the process umask (``0644`` under the
 usual umask 022), not the ``0600`` of a temporary file.
 """
@@ -19,7 +20,9 @@ import errno
 import os
 import stat
 import tempfile
-from collections.abc import Callable
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from .errors import FileError, FreeFloatError, excerpt
@@ -30,7 +33,9 @@ __all__ = [
     "atomic_write_text",
     "check_output",
     "default_file_mode",
+    "raise_when_free",
     "read_text_file",
+    "signals_held",
 ]
 
 #: A factory of the error to raise: an error class taking the one-line message.
@@ -90,6 +95,8 @@ def read_text_file(path: str | Path, what: str, limit: int, error: ErrorClass = 
         limit: the largest accepted size (bytes).
         error: the error class to raise (it takes the message).
 
+    A UTF-8 byte-order mark at the start is dropped.
+
     Raises:
         error: a NUL byte in the path, a missing file, a symbolic-link loop, not a regular
             file, larger than ``limit``, unreadable, or not UTF-8.
@@ -124,8 +131,8 @@ def read_text_file(path: str | Path, what: str, limit: int, error: ErrorClass = 
         raise error(f"cannot read {what} {target}: {_reason(exc)}") from None
     finally:
         os.close(fd)
-    try:
-        return b"".join(chunks).decode("utf-8")
+    try:  # a byte-order mark is accepted (and dropped)
+        return b"".join(chunks).decode("utf-8").removeprefix("\ufeff")
     except UnicodeDecodeError as exc:
         raise error(
             f"{what} {target} is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
@@ -146,13 +153,20 @@ def check_output(path: str | Path, what: str = "output", folder: bool = False) -
         folder: the output is a folder (plots, a ROS 2 bag) rather than a file.
 
     Raises:
-        FileError: a NUL byte, a symbolic-link loop, a directory in the way (or a file where
-            the folder should be), a parent that is a file, a read-only folder.
+        FileError: a NUL byte, a symbolic-link loop, a directory, FIFO or device in the way
+            (or a file where the folder should be), a parent that is a file, a read-only
+            folder.
     """
     target = absolute_path(path, what)
     shown = os.fspath(path)
     if target.is_dir() and not folder:
         raise FileError(f"{what} {excerpt(shown)} is a directory; give a file name", shown)
+    if not folder and target.exists() and not target.is_file():
+        raise FileError(
+            f"{what} {excerpt(shown)} is {_kind(target.stat().st_mode)}; freefloat replaces "
+            "regular files only: give a file name",
+            shown,
+        )
     if folder and target.exists() and not target.is_dir():
         raise FileError(f"{what} {excerpt(shown)} is a file; give a folder", shown)
     ancestor = target if folder and target.is_dir() else target.parent
@@ -181,11 +195,68 @@ def default_file_mode() -> int:
 _PAUSE_ENV = "FREEFLOAT_TEST_WRITE_PAUSE"
 
 
+class _Held:
+    """Signal exceptions held back in the main thread: how deep, and the first one pending."""
+
+    depth = 0
+    pending: BaseException | None = None
+
+
+@contextmanager
+def signals_held() -> Iterator[None]:
+    """Hold back the exceptions the command line's signal handlers raise, until the block ends.
+
+    A temporary file is created, and renamed or removed, in such a block, so that its name is
+    known to the cleanup by the time a signal can raise: no instant leaves a file behind. The
+    handlers (:mod:`freefloat._exits`) hand their exception to :func:`raise_when_free`, which
+    keeps it until the outermost block ends. Only the main thread (where Python runs signal
+    handlers) holds anything; the mask of the operating system is not used, because a signal
+    may arrive on any thread (NumPy's, Pinocchio's) and Python still runs its handler.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _Held.depth += 1
+    try:
+        yield
+    finally:
+        _Held.depth -= 1
+        if _Held.depth == 0 and _Held.pending is not None:
+            pending, _Held.pending = _Held.pending, None
+            raise pending
+
+
+def raise_when_free(exc: BaseException) -> None:
+    """Raise ``exc`` now, or when the current :func:`signals_held` block ends."""
+    if _Held.depth and threading.current_thread() is threading.main_thread():
+        if _Held.pending is None:
+            _Held.pending = exc
+        return
+    raise exc
+
+
+def _replaceable(target: Path) -> None:
+    """Refuse to replace anything but a regular file (a FIFO, a device, a socket)."""
+    try:
+        mode = os.stat(target).st_mode
+    except FileNotFoundError:
+        return
+    except OSError as exc:
+        raise FileError(f"cannot write {target}: {_reason(exc)}", str(target)) from None
+    if not stat.S_ISREG(mode):
+        raise FileError(
+            f"cannot write {target}: it is {_kind(mode)}; freefloat replaces regular files only",
+            str(target),
+        )
+
+
 def atomic_write(path: str | Path, write: Callable[[Path], None], suffix: str = "") -> Path:
     """Call ``write(temporary path)`` in the target's folder, then rename over the target.
 
     The temporary file (``.NAME.XXXXXXXX``) is removed whatever happens: an error, Ctrl-C
-    (``KeyboardInterrupt``), or SIGTERM (the command line turns it into an exception).
+    (``KeyboardInterrupt``), SIGTERM or SIGHUP (the command line turns them into exceptions),
+    at any instant: it is created, and renamed or removed, in a :func:`signals_held` block. Only
+    a regular file (or nothing) is replaced.
 
     Args:
         path: the file to produce (its folder is created if needed).
@@ -196,19 +267,17 @@ def atomic_write(path: str | Path, write: Callable[[Path], None], suffix: str = 
         The absolute path written.
 
     Raises:
-        FileError: the file cannot be written (read-only folder, a directory in the way, a
-            parent that is a file, a full disk...).
+        FileError: the file cannot be written (read-only folder, a directory, FIFO or device
+            in the way, a parent that is a file, a full disk...).
     """
     target = absolute_path(path, "output")
-    if target.is_dir():
-        raise FileError(f"cannot write {target}: it is a directory", str(target))
+    _replaceable(target)
+    tmp: str | None = None
     try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=suffix, dir=target.parent)
-    except OSError as exc:
-        raise FileError(f"cannot write {target}: {_reason(exc)}", str(target)) from None
-    os.close(fd)
-    try:
+        with signals_held():
+            target.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=suffix, dir=target.parent)
+            os.close(fd)
         write(Path(tmp))
         if Path(tmp).is_file():
             os.chmod(tmp, default_file_mode())
@@ -217,13 +286,16 @@ def atomic_write(path: str | Path, write: Callable[[Path], None], suffix: str = 
             import time
 
             time.sleep(float(pause))
-        os.replace(tmp, target)
+        with signals_held():
+            _replaceable(target)
+            os.replace(tmp, target)
+            tmp = None
     except OSError as exc:
-        Path(tmp).unlink(missing_ok=True)
         raise FileError(f"cannot write {target}: {_reason(exc)}", str(target)) from None
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    finally:
+        if tmp is not None:
+            with signals_held():
+                Path(tmp).unlink(missing_ok=True)
     return target
 
 

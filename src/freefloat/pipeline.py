@@ -30,8 +30,10 @@ from .plans.format import (
     RobotRef,
     SafetyReport,
     SolverReport,
+    sha256_hex,
 )
 from .plans.sampling import base_report, feasibility_report, sample_solution, solution_record
+from .problem.build import check_joint_limits
 from .problem.constraints import (
     Clearance,
     Constraint,
@@ -210,7 +212,13 @@ def _search_lazily(
 
 
 def _check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> None:
-    """Refuse a start or goal configuration closer than a clearance margin, naming the pair."""
+    """Refuse a start or goal outside the joint limits, then one too close to a collision.
+
+    Limits first: an overlap of a pose the arm cannot take says nothing useful. Each refusal
+    names the joint or the pair.
+    """
+    for where, values in (("start", scenario.start), ("goal", scenario.goal)):
+        check_joint_limits(scenario.robot, np.asarray(values, dtype=float), where)
     for constraint in constraints:
         if isinstance(constraint, Clearance) and constraint.applies_to(scenario.robot):
             for where, joints in (("start", scenario.start), ("goal", scenario.goal)):
@@ -354,6 +362,8 @@ def plan_from_solution(
             end_effector=robot.end_effector,
             joint_kinds=[j.kind for j in robot.joints],
             end_effectors=list(robot.end_effectors),
+            urdf_text=robot.urdf_text,
+            urdf_sha256=sha256_hex(robot.urdf_text),
         ),
         duration=T,
         coefficients={

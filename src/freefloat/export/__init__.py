@@ -42,7 +42,7 @@ def export(plan: Plan, path: str | Path, fmt: str, rate: float | None = None) ->
     if fmt == "mcap":
         from .mcap_file import write_mcap
 
-        return write_mcap(traj, path, plan.robot.urdf)
+        return write_mcap(traj, path, plan.robot.urdf, plan.robot.urdf_text)
     from .ros2_bag import write_bag
 
-    return write_bag(traj, path, plan.robot.urdf)
+    return write_bag(traj, path, plan.robot.urdf, plan.robot.urdf_text)

@@ -21,7 +21,7 @@ from .trajectory import Trajectory
 __all__ = ["write_mcap"]
 
 
-def write_mcap(traj: Trajectory, path: str | Path, urdf: str) -> Path:
+def write_mcap(traj: Trajectory, path: str | Path, urdf: str, urdf_text: str = "") -> Path:
     """Write the trajectory as an MCAP file atomically; return the absolute path.
 
     Raises:
@@ -35,7 +35,7 @@ def write_mcap(traj: Trajectory, path: str | Path, urdf: str) -> Path:
             "pip install mcap mcap-ros2-support"
         ) from None
     ts = typestore()
-    child = root_link(urdf)
+    child = root_link(urdf, urdf_text)
 
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as handle:

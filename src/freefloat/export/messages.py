@@ -64,12 +64,15 @@ def typestore() -> Any:
     return get_typestore(Stores.ROS2_HUMBLE)
 
 
-def root_link(urdf: str) -> str:
-    """The URDF's root link (the spacecraft), or ``base`` if the file cannot be read."""
+def root_link(urdf: str, text: str = "") -> str:
+    """The URDF's root link (the spacecraft); ``base`` if the URDF cannot be read.
+
+    Read from ``text`` (a plan's copy of its URDF) when given, else from the file ``urdf``.
+    """
     from ..robot.urdf_checks import check_urdf_xml
 
     try:
-        return str(check_urdf_xml(Path(urdf).read_text(encoding="utf-8"))[0])
+        return check_urdf_xml(text or Path(urdf).read_text(encoding="utf-8")).root_link
     except Exception:
         return "base"
 

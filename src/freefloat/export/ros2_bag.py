@@ -23,7 +23,7 @@ from .trajectory import Trajectory
 __all__ = ["write_bag"]
 
 
-def write_bag(traj: Trajectory, path: str | Path, urdf: str) -> Path:
+def write_bag(traj: Trajectory, path: str | Path, urdf: str, urdf_text: str = "") -> Path:
     """Write the trajectory as a ROS 2 bag folder; return its absolute path.
 
     Raises:
@@ -36,7 +36,7 @@ def write_bag(traj: Trajectory, path: str | Path, urdf: str) -> Path:
         raise InputError(f"{target} exists and is not a ROS 2 bag folder; choose another -o")
     target.parent.mkdir(parents=True, exist_ok=True)
     ts = typestore()
-    child = root_link(urdf)
+    child = root_link(urdf, urdf_text)
     holder = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
     try:
         bag = holder / target.name

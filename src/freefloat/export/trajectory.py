@@ -119,7 +119,7 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
     from ..physics.attitude import magnus_increments, propagate, step_nodes
     from ..physics.dynamics import inverse_dynamics
     from ..physics.momentum import MomentumMap
-    from ..robot.model import load_robot
+    from ..plans.robot_copy import plan_robot
 
     T = plan.duration
     _check_rate(rate, T)
@@ -128,7 +128,7 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
         grid = grid[grid < T - 1e-9 * max(1.0, T)]
         times = np.append(grid, T)
     t = np.asarray(times, dtype=float)
-    robot = load_robot(plan.robot.urdf, plan.robot.frames)
+    robot = plan_robot(plan)
     mmap = MomentumMap(robot)
     frames = list(robot.end_effectors)
     poly = np.polynomial.polynomial

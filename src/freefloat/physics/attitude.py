@@ -127,23 +127,42 @@ def quat_from_zyx(yaw: float, pitch: float = 0.0, roll: float = 0.0) -> np.ndarr
     )
 
 
+#: Below this value of ``cos(pitch / 2) -+ sin(pitch / 2)`` the attitude counts as gimbal-locked
+#: and roll is reported as 0: the rotation then moves by at most ``2 pi`` times this (rad).
+_LOCKED = 1e-13
+
+
 def zyx_from_quat(q: Sequence[float] | np.ndarray) -> np.ndarray:
-    """ZYX Euler angles ``[yaw, pitch, roll]`` (rad) of a unit quaternion.
+    """ZYX Euler angles ``[yaw, pitch, roll]`` (rad) of a unit quaternion, accurate everywhere.
 
     Yaw and roll lie in (-pi, pi], pitch in [-pi/2, pi/2]. At pitch = +-pi/2 the split between
     yaw and roll is not unique (gimbal lock): roll is then reported as 0.
+
+    With half angles ``a = yaw/2``, ``b = pitch/2``, ``c = roll/2`` the quaternion's pairs are
+    ``w + y = P cos(a - c)``, ``z - x = P sin(a - c)``, ``w - y = M cos(a + c)``, ``z + x =
+    M sin(a + c)``, with ``P = cos b + sin b`` and ``M = cos b - sin b`` (both >= 0). So
+    ``pitch = 2 atan2(P - M, P + M)`` is exact to rounding at every attitude (an ``asin`` loses
+    half the digits near the lock), and the half-angle sum and difference each come from their
+    own pair: near pitch = +-pi/2 the ill-determined one is scaled by M (or P) in the
+    rotation, so the angles returned give back the attitude to about 1e-15 rad.
     """
     x, y, z, w = (float(c) for c in q)
-    sin_pitch = 2.0 * (w * y - x * z)
-    if abs(sin_pitch) >= 1.0 - 1e-12:
-        pitch = math.copysign(math.pi / 2, sin_pitch)
-        yaw = -2.0 * math.copysign(1.0, sin_pitch) * math.atan2(x, w)
-        yaw = math.atan2(math.sin(yaw), math.cos(yaw))
-        return np.array([yaw, pitch, 0.0])
-    pitch = math.asin(sin_pitch)
-    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
-    return np.array([yaw, pitch, roll])
+    plus, minus = math.hypot(w + y, z - x), math.hypot(w - y, z + x)
+    pitch = 2.0 * math.atan2(plus - minus, plus + minus)
+    difference = math.atan2(z - x, w + y)  # a - c
+    total = math.atan2(z + x, w - y)  # a + c
+    if minus < _LOCKED:  # pitch = +pi/2: only a - c matters; roll 0
+        total = difference
+    elif plus < _LOCKED:  # pitch = -pi/2: only a + c matters; roll 0
+        difference = total
+    yaw, roll = total + difference, total - difference
+    return np.array([_wrap(yaw), pitch, _wrap(roll)])
+
+
+def _wrap(angle: float) -> float:
+    """``angle`` (rad) wrapped into (-pi, pi]."""
+    wrapped = math.remainder(angle, 2.0 * math.pi)
+    return math.pi if wrapped == -math.pi else wrapped
 
 
 def geodesic_angle(a: np.ndarray, b: np.ndarray) -> float:

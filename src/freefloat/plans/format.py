@@ -12,15 +12,21 @@ sees half a plan and a failure leaves nothing behind. Units: seconds, radians (m
 prismatic joints and positions); Euler angles, marked ``_deg``, in degrees. Positions are in
 the inertial frame whose origin is the system centre of mass (docs/method.md section 10).
 
-Schema versions: ``freefloat.plan/4`` (this one) adds every end effector: ``robot.end_effectors``
-(the frames, the first being ``robot.end_effector``) and ``samples.end_effector_paths`` (each
-one's positions, by frame; ``samples.end_effector_position`` stays the first one's).
-``freefloat.plan/3`` files still load and keep their format (their one end effector's path is
-its only path). ``freefloat.plan/3`` adds the ``objective`` record (what the path
+Schema versions: ``freefloat.plan/4`` (this one) adds every end effector and makes a plan
+self-contained: ``robot.end_effectors`` (the frames, the first being ``robot.end_effector``) and
+``samples.end_effector_paths`` (each one's positions, by frame; ``samples.end_effector_position``
+stays the first one's); ``robot`` carries the text of the URDF the plan was made with
+(``urdf_text``) and its SHA-256 (``urdf_sha256``), and a relative ``robot.urdf`` path is read from
+the plan file's folder; ``safety.note`` says what clearance could not check, and clearance is
+verified on the original geometry with a certificate between samples (``clearance``,
+``clearance_hull_agreement``). ``freefloat.plan/3`` and older files still load and keep their
+format (their one end effector's path is its only path; they carry no URDF, so they are checked
+against the file their path names, as it is now). ``freefloat.plan/3`` adds the ``objective``
+record (what the path
 minimises, its value and the freedom levels tried) and, for robots with URDF effort limits,
 the ``joint_effort_limits`` check. ``freefloat.plan/2`` files still load and keep their format:
-they were minimum-norm plans (no objective record) that promised no effort limits, and
-``freefloat verify`` holds them to what they promised. ``freefloat.plan/2`` stores the
+they were minimum-norm plans (no objective record); like every plan, whatever its format, they
+are held to every limit their URDF states (effort limits too). ``freefloat.plan/2`` stores the
 verification as a list of typed checks, each with its value, tolerance, unit and the check's
 own numerical error estimate. ``freefloat.plan/1`` files (freefloat 0.1) still load: their
 path, samples and solver report are read as they are and their verification is dropped
@@ -30,6 +36,7 @@ path, samples and solver report are read as they are and their verification is d
 from __future__ import annotations
 
 import copy
+import hashlib
 import json
 import math
 from collections.abc import Mapping
@@ -61,25 +68,33 @@ __all__ = [
     "SolverReport",
     "Verification",
     "read_plan_json",
+    "sha256_hex",
 ]
 
 #: Format tag of plan files written by this version.
 FORMAT = "freefloat.plan/4"
-#: The format before every end effector's path (still read, and kept when re-written).
+#: The format before plan format 4 (still read, and kept when re-written).
 FORMAT_3 = "freefloat.plan/3"
 #: The format before objectives and effort limits (still read, and kept when re-written).
 FORMAT_2 = "freefloat.plan/2"
 
-#: Format tags this version reads (older ones are converted on load).
+#: Format tags this version reads (``/1`` is converted on load).
 READABLE_FORMATS = ("freefloat.plan/1", FORMAT_2, FORMAT_3, FORMAT)
 
 
 @dataclass(frozen=True)
 class RobotRef:
-    """The robot a plan is for: URDF path, joint names in order, end-effector frame(s).
+    """The robot a plan is for.
 
-    ``end_effectors`` lists every end-effector frame, the first being ``end_effector``
-    (format 4; a file of an older format has its one end effector there).
+    Attributes:
+        urdf: the URDF's path (absolute, or relative to the plan file's folder).
+        joints: joint names, in order.
+        end_effector: the (first) end-effector frame.
+        joint_kinds: ``revolute``, ``continuous`` or ``prismatic`` per joint.
+        end_effectors: every end-effector frame, the first being ``end_effector`` (format 4; a
+            file of an older format has its one end effector there).
+        urdf_text: the URDF the plan was made with (empty in files before format 4).
+        urdf_sha256: SHA-256 of ``urdf_text`` (UTF-8), hexadecimal (empty before format 4).
     """
 
     urdf: str
@@ -87,11 +102,25 @@ class RobotRef:
     end_effector: str
     joint_kinds: list[str] = field(default_factory=list)
     end_effectors: list[str] = field(default_factory=list)
+    urdf_text: str = ""
+    urdf_sha256: str = ""
 
     @property
     def frames(self) -> list[str]:
         """Every end-effector frame (``end_effectors``, or ``[end_effector]`` when empty)."""
         return list(self.end_effectors) or [self.end_effector]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``robot`` record (without the URDF copy in files of older formats)."""
+        record = asdict(self)
+        if not self.urdf_text:
+            del record["urdf_text"], record["urdf_sha256"]
+        return record
+
+
+def sha256_hex(text: str) -> str:
+    """The SHA-256 of ``text`` encoded as UTF-8, in hexadecimal."""
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
 @dataclass(frozen=True)
@@ -386,7 +415,7 @@ class Plan:
 
     def to_dict(self) -> dict[str, Any]:
         """The plan as the JSON-ready dictionary of the file format (a deep copy)."""
-        robot, samples = asdict(self.robot), asdict(self.samples)
+        robot, samples = self.robot.to_dict(), asdict(self.samples)
         if self.format != FORMAT:  # an older file keeps its keys
             robot.pop("end_effectors")
             samples.pop("end_effector_paths")
@@ -424,11 +453,22 @@ class Plan:
             PlanFileError: unreadable, not JSON, another format version, or missing keys.
         """
         path = Path(path).expanduser()
-        return cls.from_dict(read_plan_json(path), str(path))
+        return cls.from_dict(read_plan_json(path), str(path), path.parent)
 
     @classmethod
-    def from_dict(cls, data: Any, where: str = "plan") -> Plan:
-        """Build a plan from its file dictionary, checking the format and the keys."""
+    def from_dict(cls, data: Any, where: str = "plan", folder: Path | None = None) -> Plan:
+        """Build a plan from its file dictionary, checking the format and the keys.
+
+        Args:
+            data: the parsed file.
+            where: the file's name, for messages.
+            folder: the plan file's folder: a relative ``robot.urdf`` (or ``safety.srdf``)
+                path is read from there (default: the working directory).
+
+        Raises:
+            PlanFileError: another format, a bad or missing key, a limit broken, or a URDF
+                copy whose SHA-256 is not the one stated.
+        """
         if not isinstance(data, Mapping):
             raise PlanFileError(f"{where}: not a plan file (top level is not an object)")
         fmt = data.get("format")
@@ -445,7 +485,7 @@ class Plan:
                 else Verification.from_dict(data["verification"])
             )
             return cls(
-                robot=_robot(data["robot"]),
+                robot=_robot_ref(data["robot"], fmt, folder),
                 duration=float(data["duration"]),
                 coefficients={k: list(v) for k, v in data["path"]["coefficients"].items()},
                 free_parameters={k: list(v) for k, v in data["free_parameters"].items()},
@@ -463,18 +503,14 @@ class Plan:
                     goal_joints=list(data["request"]["goal_joints"]),
                 ),
                 verification=verification,
-                safety=_safety(data.get("safety")),
+                safety=_safety(data.get("safety"), folder),
                 objective=_objective(data.get("objective")),
-                format=fmt if fmt in (FORMAT_2, FORMAT_3) else FORMAT,
+                format=fmt if fmt in (FORMAT_2, FORMAT_3, FORMAT) else FORMAT_3,  # /1: as /3
             )
+        except _CopyError as exc:
+            raise PlanFileError(f"{where}: {exc}") from None
         except (KeyError, TypeError, AttributeError, ValueError) as exc:
             raise PlanFileError(f"{where}: corrupt plan file (bad or missing {exc})") from None
-
-
-def _robot(data: Mapping[str, Any]) -> RobotRef:
-    """The ``robot`` section; a file before format 4 has its one end effector as the list."""
-    robot = RobotRef(**data)
-    return robot if robot.end_effectors else replace(robot, end_effectors=[robot.end_effector])
 
 
 def _samples(data: Mapping[str, Any], robot: Mapping[str, Any]) -> Samples:
@@ -486,14 +522,44 @@ def _samples(data: Mapping[str, Any], robot: Mapping[str, Any]) -> Samples:
     return replace(samples, end_effector_paths=paths)
 
 
-def _safety(data: Any) -> SafetyReport:
+class _CopyError(Exception):
+    """The URDF copy of a plan does not match its stated SHA-256."""
+
+
+def _beside(path: str, folder: Path | None) -> str:
+    """``path`` read from ``folder`` when relative (``~`` expanded)."""
+    expanded = Path(path).expanduser()
+    if expanded.is_absolute() or folder is None:
+        return str(expanded)
+    return str(folder / expanded)
+
+
+def _robot_ref(data: Mapping[str, Any], fmt: str, folder: Path | None) -> RobotRef:
+    """The ``robot`` record: its path read from the plan's folder, its URDF copy checked."""
+    ref = RobotRef(**{**data, "urdf": _beside(str(data["urdf"]), folder)})
+    if not ref.end_effectors:  # a file before format 4: its one end effector
+        ref = replace(ref, end_effectors=[ref.end_effector])
+    if fmt == FORMAT and not ref.urdf_text:
+        raise _CopyError(
+            f"plan field 'robot.urdf_text' is missing or empty; {FORMAT} files carry their URDF"
+        )
+    if ref.urdf_text and sha256_hex(ref.urdf_text) != ref.urdf_sha256:
+        raise _CopyError(
+            f"plan field 'robot.urdf_sha256' ({excerpt(ref.urdf_sha256, 20)}) is not the SHA-256 "
+            f"of 'robot.urdf_text' ({sha256_hex(ref.urdf_text)[:16]}...): the URDF copy was "
+            "changed after the plan was made"
+        )
+    return ref
+
+
+def _safety(data: Any, folder: Path | None = None) -> SafetyReport:
     """The ``safety`` section (absent in files written before it existed: not checked)."""
     if data is None:
         return SafetyReport()
     return SafetyReport(
         checked=bool(data["checked"]),
         margin_m=float(data["margin_m"]),
-        srdf=None if data.get("srdf") is None else str(data["srdf"]),
+        srdf=None if data.get("srdf") is None else _beside(str(data["srdf"]), folder),
         obstacles=[ObstacleRecord(**o) for o in data.get("obstacles", [])],
         note=str(data.get("note", "")),
     )
@@ -511,15 +577,31 @@ def _objective(data: Any) -> ObjectiveReport:
     )
 
 
+class _DuplicateKeyError(Exception):
+    """A key twice in one JSON object (carries the key)."""
+
+
+def _no_duplicate_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object as a dict; a key given twice raises (``json`` would keep the last)."""
+    result: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in result:
+            raise _DuplicateKeyError(key)
+        result[key] = value
+    return result
+
+
 def read_plan_json(path: str | Path) -> Any:
     """The parsed JSON of a plan file.
 
     The path must name a regular file of at most :data:`~freefloat.plans.limits.MAX_PLAN_BYTES`
     (checked before reading, so a FIFO or ``/dev/zero`` is refused, not read).
 
+    A UTF-8 byte-order mark is accepted.
+
     Raises:
-        PlanFileError: missing, not a regular file, too large, unreadable, not JSON, or nested
-            too deeply to parse.
+        PlanFileError: missing, not a regular file, too large, unreadable, not JSON, a key
+            twice in one object, or nested too deeply to parse.
     """
     path = Path(path).expanduser()
     check_plan_file_kind(path)
@@ -530,7 +612,7 @@ def read_plan_json(path: str | Path) -> Any:
             raise PlanFileError(
                 f"{path}: larger than the {MAX_PLAN_BYTES // 2**20} MiB a plan file may have"
             )
-        return json.loads(raw.decode("utf-8"))
+        return json.loads(raw.decode("utf-8-sig"), object_pairs_hook=_no_duplicate_keys)
     except FileNotFoundError:
         raise PlanFileError(f"plan file not found: {path}") from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -539,5 +621,10 @@ def read_plan_json(path: str | Path) -> Any:
         raise PlanFileError(f"{path}: not a plan file, corrupt JSON ({exc})") from None
     except RecursionError:
         raise PlanFileError(f"{path}: not a plan file, JSON nested too deeply") from None
+    except _DuplicateKeyError as exc:
+        raise PlanFileError(
+            f"{path}: key {excerpt(exc.args[0])} appears twice in one object; a plan file "
+            "states each field once"
+        ) from None
     except ValueError as exc:  # an integer of thousands of digits
         raise PlanFileError(f"{path}: not a plan file ({excerpt(str(exc), 80)})") from None

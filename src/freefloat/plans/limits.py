@@ -201,6 +201,9 @@ def _check_plan_values(data: Any) -> None:
         raise _RefusalError(
             "robot.joints", f"must name 1 to {MAX_JOINTS} distinct joints, got {excerpt(joints)}"
         )
+    blank = next((i for i, j in enumerate(joints) if not j.strip()), None)
+    if blank is not None:
+        raise _RefusalError(f"robot.joints[{blank}]", "is an empty name; every joint has a name")
     n = len(joints)
     kinds = robot.get("joint_kinds", []) if isinstance(robot, Mapping) else []
     if not isinstance(kinds, list) or len(kinds) not in (0, n):

@@ -6,8 +6,8 @@ wrong with a document as one line per problem, naming the field by its path (for
 and raises :class:`~freefloat.errors.PlanFileError` naming the first bad field;
 :func:`load_plan_file` reads a plan file once, checks it against the schema and the limits of
 :mod:`freefloat.plans.limits`, and returns the plan. The schema
-describes ``freefloat.plan/3`` and ``/2`` (the same but for the objective record /3
-requires); ``/1`` files are left to :meth:`Plan.load`.
+describes ``freefloat.plan/4`` (the URDF copy it requires), ``/3`` (the objective record it
+requires) and ``/2``; ``/1`` files are left to :meth:`Plan.load`.
 """
 
 from __future__ import annotations
@@ -76,6 +76,8 @@ def _describe(error: Any) -> str:
     if kind in ("const", "enum"):
         valid = [error.validator_value] if kind == "const" else error.validator_value
         return f"{where}: expected {' or '.join(map(repr, valid))}, got {got}"
+    if kind == "minLength":
+        return f"{where}: {got} is empty; give at least {error.validator_value} character(s)"
     if kind in ("minItems", "maxItems"):
         return f"{where}: expected {error.validator_value} entries or {kind[:3]}, got {got}"
     bounds = {
@@ -148,4 +150,4 @@ def load_plan_file(path: str | Path) -> Plan:
     path = Path(path).expanduser()
     data = read_plan_json(path)
     _check_schema(data, path)
-    return Plan.from_dict(data, str(path))
+    return Plan.from_dict(data, str(path), path.parent)

@@ -25,7 +25,7 @@ from .paths import PathFamily
 from .residual import Problem, wrap_angle
 from .scenario import Scenario
 
-__all__ = ["build_problem", "planar_yaw_branch", "problem_from_scenario"]
+__all__ = ["build_problem", "check_joint_limits", "planar_yaw_branch", "problem_from_scenario"]
 
 
 def planar_yaw_branch(yaw_change: float, lo: float, hi: float) -> float | None:
@@ -51,7 +51,12 @@ def _check_finite(name: str, values: np.ndarray) -> None:
         raise InputError(f"{name} contains NaN or infinite values; give finite numbers")
 
 
-def _check_limits(robot: Robot, values: np.ndarray, where: str) -> None:
+def check_joint_limits(robot: Robot, values: np.ndarray, where: str) -> None:
+    """Refuse joint values (rad or m) outside the URDF limits; ``where`` is start or goal.
+
+    Raises:
+        JointLimitError: the first joint outside its limits, named, in deg or m.
+    """
     for joint, value in zip(robot.joints, values, strict=True):
         if joint.kind == "continuous":
             continue
@@ -111,8 +116,8 @@ def build_problem(
         if quat.shape != (4,) or norm < 1e-9:
             raise InputError(f"{name} must be a non-zero quaternion [x, y, z, w]")
         quats.append(quat / norm)
-    _check_limits(robot, start, "start")
-    _check_limits(robot, goal, "goal")
+    check_joint_limits(robot, start, "start")
+    check_joint_limits(robot, goal, "goal")
 
     mmap = mmap or MomentumMap(robot)
     axis = cached_planar_axis(robot)

@@ -21,6 +21,7 @@ from ..errors import LockedJointError, ModelError, UnknownNameError
 from ..files import absolute_path, read_text_file
 from .lock import finger_lock_value, locked_origin
 from .model import MAX_URDF_BYTES, example_robot_data_dir
+from .urdf_checks import urdf_document
 
 __all__ = ["ARMS", "BASE_LINK", "ArmPart", "ArmSpec", "arm_part", "arm_urdf", "mount_origin"]
 
@@ -116,6 +117,10 @@ def arm_part(arm: ArmSpec) -> ArmPart:
     import yourdfpy
 
     source = arm_urdf(arm.arm)
+    try:  # one clear line for what is no URDF, before yourdfpy's parser says more
+        urdf_document(read_text_file(source, "arm URDF", MAX_URDF_BYTES, ModelError))
+    except ModelError as exc:
+        raise ModelError(f"cannot read arm URDF {source}: {exc}") from None
     try:
         loaded = yourdfpy.URDF.load(
             str(source),

@@ -19,7 +19,6 @@ from __future__ import annotations
 import importlib.metadata
 import math
 import re
-import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,6 +28,7 @@ import pinocchio as pin
 
 from ..errors import AmbiguousEndEffectorError, ModelError, UnknownNameError
 from ..files import absolute_path, read_text_file
+from .built_model import check_built_model
 from .urdf_checks import check_urdf_xml, parser_messages
 
 __all__ = [
@@ -119,9 +119,10 @@ class Robot:
         base_link: name of the URDF root link (the spacecraft body).
         end_effector: name of the (first) end-effector frame.
         package_dirs: folders searched for ``package://`` mesh references.
-        link_names: the URDF's link names.
+        link_names: every URDF link, in file order.
         end_effectors: every end-effector frame, the first being ``end_effector`` (a
             two-arm servicer names one per arm); default ``(end_effector,)``.
+        urdf_text: the URDF text the robot was loaded from (what a plan carries).
     """
 
     urdf: Path
@@ -133,6 +134,7 @@ class Robot:
     package_dirs: tuple[Path, ...] = ()
     link_names: tuple[str, ...] = field(default_factory=tuple)
     end_effectors: tuple[str, ...] = ()
+    urdf_text: str = ""
 
     def __post_init__(self) -> None:
         if not self.end_effectors:
@@ -372,13 +374,13 @@ def load_robot(
     if text is None:
         text = read_text_file(path, "URDF", MAX_URDF_BYTES, ModelError)
     try:
-        root_link, links = check_urdf_xml(text)
+        checked = check_urdf_xml(text)
     except ModelError as exc:
         raise ModelError(str(exc), urdf=str(path)) from None
     error: RuntimeError | ValueError | None
     with parser_messages() as messages:
-        try:
-            model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+        try:  # the checked tree, written out again: Pinocchio loads what was checked
+            model = pin.buildModelFromXML(checked.text, pin.JointModelFreeFlyer())
         except (RuntimeError, ValueError) as exc:
             error = exc
         else:
@@ -426,21 +428,10 @@ def load_robot(
             "one",
             urdf=str(path),
         )
-    for index in range(1, model.njoints):
-        inertia = model.inertias[index]
-        body = model.names[index] if index > 1 else f"base {root_link!r}"
-        if inertia.mass <= 0.0:
-            raise ModelError(
-                f"the body moved by joint {body!r} has no mass; every moving body needs a "
-                "positive <mass>",
-                urdf=str(path),
-            )
-        if np.linalg.eigvalsh(inertia.inertia).min() <= 0.0 and index == 1:
-            raise ModelError(
-                f"the base {root_link!r} has a singular rotational inertia; give it a positive "
-                "definite <inertia>",
-                urdf=str(path),
-            )
+    try:
+        check_built_model(model, checked)
+    except ModelError as exc:
+        raise ModelError(str(exc), urdf=str(path)) from None
 
     frames = [f.name for f in model.frames if f.type == pin.FrameType.BODY]
     if end_effector is None:
@@ -460,12 +451,13 @@ def load_robot(
     dirs = (path.parent, *(Path(d).resolve() for d in package_dirs), *([share] if share else []))
     return Robot(
         urdf=path,
-        name=ET.fromstring(text).get("name", path.stem),
+        name=checked.name or path.stem,
         model=model,
         joints=tuple(joints),
-        base_link=root_link,
+        base_link=checked.root_link,
         end_effector=names[0],
         package_dirs=dirs,
-        link_names=tuple(links),
+        link_names=checked.links,
         end_effectors=names,
+        urdf_text=text,
     )

@@ -5,41 +5,130 @@ prismatic or fixed joints, and numbers that parse (masses in kg, lengths in m, l
 or m). Refused by name: closed loops (URDF cannot express one: a link with two parent joints,
 or links that are each other's ancestors), ``<mimic>`` joints (freefloat plans every movable
 joint on its own path), a revolute or prismatic joint without ``<limit>``, a zero axis.
+
+One parse: a document type declaration (``<!DOCTYPE``, entities) is refused, because
+Pinocchio's XML parser (TinyXML2) does not read one the way Python's does and would build
+another robot than the one checked; and what Pinocchio is given is the checked tree written
+out again (:attr:`CheckedUrdf.text`), never the file's own text. Every number read here is
+finite and within a stated magnitude (:data:`MAX_MASS_KG`, :data:`MAX_INERTIA`,
+:data:`MAX_LENGTH_M`), every inertia positive semi-definite (definite when the link has mass),
+every ``package://`` mesh path stays inside its package.
 """
 
 from __future__ import annotations
 
 import math
 import os
+import posixpath
+import re
 import sys
 import tempfile
 import xml.etree.ElementTree as ET
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
+from xml.parsers import expat
 
 import numpy as np
 
-from ..errors import ModelError, UnknownNameError
+from ..errors import ModelError, UnknownNameError, excerpt
 from ..progress import LOGGER
 
-__all__ = ["check_urdf_xml", "parser_messages"]
+__all__ = [
+    "MAX_INERTIA",
+    "MAX_LENGTH_M",
+    "MAX_LIMIT",
+    "MAX_MASS_KG",
+    "CheckedUrdf",
+    "check_urdf_xml",
+    "parser_messages",
+    "urdf_document",
+]
 
 _URDF_JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
 
+#: Largest mass of a link (kg): ten times a space station's.
+MAX_MASS_KG = 1e7
+#: Largest entry of a link's inertia matrix (kg m^2).
+MAX_INERTIA = 1e12
+#: Largest coordinate of an origin (m) or angle of one (rad).
+MAX_LENGTH_M = 1e6
+#: Largest magnitude of a joint limit (position, effort or velocity).
+MAX_LIMIT = 1e20
 
-def _float_attr(element: ET.Element, attr: str, what: str, default: float | None = None) -> float:
+
+@dataclass(frozen=True)
+class CheckedUrdf:
+    """What the checks read from a URDF.
+
+    Attributes:
+        text: the checked XML tree written out again: the only text Pinocchio is given.
+        name: the ``<robot name>``.
+        root_link: the root link (the spacecraft).
+        links: every link name, in file order.
+        movable_joints: names of the revolute, continuous and prismatic joints, in file order.
+        total_mass: sum of the links' masses (kg).
+    """
+
+    text: str
+    name: str
+    root_link: str
+    links: tuple[str, ...]
+    movable_joints: tuple[str, ...]
+    total_mass: float
+
+
+#: A number as urdfdom reads one (C locale, ASCII digits, nothing after it); Python's
+#: ``float`` also takes ``1_000``, ``\uff14\uff10`` and trailing blanks, which urdfdom refuses or
+#: reads as 0.
+_NUMBER = re.compile(r"\s*[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|\s*[+-]?(inf|nan)", re.I | re.A)
+
+
+def _parse(raw: str) -> float:
+    """``raw`` as a float, read as urdfdom reads it; ``ValueError`` otherwise."""
+    if not _NUMBER.fullmatch(raw):
+        raise ValueError(raw)
+    return float(raw)
+
+
+def _float_attr(
+    element: ET.Element,
+    attr: str,
+    what: str,
+    default: float | None = None,
+    high: float = MAX_LENGTH_M,
+) -> float:
     raw = element.get(attr)
     if raw is None:
         if default is None:
             raise ModelError(f"{what} has no {attr!r} attribute")
         return default
     try:
-        value = float(raw)
+        value = _parse(raw)
     except ValueError:
-        raise ModelError(f"{what} {attr}={raw!r} is not a number") from None
+        raise ModelError(f"{what} {attr}={excerpt(raw)} is not a number") from None
     if not math.isfinite(value):
-        raise ModelError(f"{what} {attr}={raw!r} is not a finite number")
+        raise ModelError(f"{what} {attr}={excerpt(raw)} is not a finite number")
+    if abs(value) > high:
+        raise ModelError(
+            f"{what} {attr}={excerpt(raw)} is beyond the largest magnitude accepted, {high:g}"
+        )
     return value
+
+
+def _triple(element: ET.Element | None, attr: str, what: str) -> list[float]:
+    """Three finite numbers of at most :data:`MAX_LENGTH_M` (``xyz`` or ``rpy``; default 0)."""
+    raw = "0 0 0" if element is None else element.get(attr, "0 0 0")
+    try:
+        values = [_parse(v) for v in raw.split()]
+    except ValueError:
+        values = []
+    if len(values) != 3 or not all(math.isfinite(v) and abs(v) <= MAX_LENGTH_M for v in values):
+        raise ModelError(
+            f"{what} {attr}={excerpt(raw)} is not three finite numbers of magnitude at most "
+            f"{MAX_LENGTH_M:g}"
+        )
+    return values
 
 
 _LIMIT_UNITS = {"revolute": "rad, N m, rad/s", "prismatic": "m, N, m/s"}
@@ -68,13 +157,13 @@ def _check_movable_joint(joint: ET.Element, name: str, kind: str) -> None:
         )
     if limit is not None:
         for attr in ("effort", "velocity"):
-            _float_attr(limit, attr, f"joint {name!r} <limit>")
-        for attr in ("lower", "upper"):
-            _float_attr(limit, attr, f"joint {name!r} <limit>", 0.0)
+            _float_attr(limit, attr, f"joint {name!r} <limit>", high=MAX_LIMIT)
+        for attr in ("lower", "upper"):  # +-1e16 stands for "none" in some files
+            _float_attr(limit, attr, f"joint {name!r} <limit>", 0.0, MAX_LIMIT)
     axis = joint.find("axis")
     raw = "1 0 0" if axis is None else axis.get("xyz", "1 0 0")
     try:
-        xyz = [float(v) for v in raw.split()]
+        xyz = [_parse(v) for v in raw.split()]
     except ValueError:
         xyz = []
     if len(xyz) != 3 or not all(math.isfinite(v) for v in xyz):
@@ -86,53 +175,103 @@ def _check_movable_joint(joint: ET.Element, name: str, kind: str) -> None:
         )
 
 
-def check_urdf_xml(text: str) -> tuple[str, list[str]]:
-    """Check the URDF's structure and inertials; return the root link and the link names."""
-    try:
-        root = ET.fromstring(text)
-    except ET.ParseError as exc:
-        raise ModelError(f"malformed URDF XML ({exc})") from None
-    if root.tag != "robot":
-        raise ModelError(f"root element is <{root.tag}>, expected <robot>")
-    links = [link.get("name") or "" for link in root.findall("link")]
-    if not links:
-        raise ModelError("the URDF has no <link>")
-    if "" in links:
-        raise ModelError("a <link> has no name")
-    duplicates = sorted({n for n in links if links.count(n) > 1})
-    if duplicates:
-        raise ModelError(f"duplicate link name(s) {', '.join(duplicates)}")
+def _refuse_document_type(text: str) -> None:
+    """Refuse a ``<!DOCTYPE>`` (and with it every entity), and processing instructions.
 
-    for link in root.findall("link"):
-        name = link.get("name")
-        inertial = link.find("inertial")
-        if inertial is None:
-            continue
-        mass_el = inertial.find("mass")
-        if mass_el is None:
-            raise ModelError(f"link {name!r} has an <inertial> without <mass>")
-        mass = _float_attr(mass_el, "value", f"link {name!r} mass")
-        if mass < 0.0:
-            raise ModelError(f"link {name!r} has negative mass {mass} kg; masses must be >= 0")
-        inertia_el = inertial.find("inertia")
-        if inertia_el is None:
-            if mass > 0.0:
-                raise ModelError(f"link {name!r} has mass but no <inertia>")
-            continue
-        keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-        ixx, ixy, ixz, iyy, iyz, izz = (
-            _float_attr(inertia_el, k, f"link {name!r} inertia", 0.0) for k in keys
+    Python's parser expands entities; TinyXML2, which Pinocchio uses, ends the declaration at
+    the first ``>`` and reads what follows as elements: the two would see different robots.
+    A processing instruction (other than the leading ``<?xml ...?>``) Python skips and
+    TinyXML2 refuses.
+    """
+
+    def refuse(*_: object) -> None:
+        raise ModelError(
+            "the URDF has a document type declaration (<!DOCTYPE ...>, entities): not "
+            "accepted, because Pinocchio's XML parser reads it differently; remove it and "
+            "write entity values out"
         )
-        inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-        if mass > 0.0 and np.linalg.eigvalsh(inertia).min() <= 0.0:
+
+    def instruction(target: str, data: str) -> None:
+        raise ModelError(
+            f"the URDF has a processing instruction <?{excerpt(target, 20)} ...?>: not "
+            "accepted, because Pinocchio's XML parser refuses one inside the document; "
+            "remove it"
+        )
+
+    parser = expat.ParserCreate()
+    parser.StartDoctypeDeclHandler = refuse
+    parser.EntityDeclHandler = refuse
+    parser.ProcessingInstructionHandler = instruction
+    try:
+        parser.Parse(text, True)
+    except expat.ExpatError as exc:
+        raise ModelError(f"malformed URDF XML ({exc})") from None
+
+
+def _check_inertial(link: ET.Element, name: str) -> float:
+    """Check a link's ``<inertial>``; return its mass (kg, 0 without one)."""
+    inertial = link.find("inertial")
+    if inertial is None:
+        return 0.0
+    _triple(inertial.find("origin"), "xyz", f"link {name!r} inertial origin")
+    _triple(inertial.find("origin"), "rpy", f"link {name!r} inertial origin")
+    mass_el = inertial.find("mass")
+    if mass_el is None:
+        raise ModelError(f"link {name!r} has an <inertial> without <mass>")
+    mass = _float_attr(mass_el, "value", f"link {name!r} mass", high=MAX_MASS_KG)
+    if mass < 0.0:
+        raise ModelError(f"link {name!r} has negative mass {mass} kg; masses must be >= 0")
+    inertia_el = inertial.find("inertia")
+    if inertia_el is None:
+        if mass > 0.0:
+            raise ModelError(f"link {name!r} has mass but no <inertia>")
+        return mass
+    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+    ixx, ixy, ixz, iyy, iyz, izz = (
+        _float_attr(inertia_el, k, f"link {name!r} inertia", None, MAX_INERTIA) for k in keys
+    )
+    eigenvalues = np.linalg.eigvalsh(np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]))
+    shown = np.round(eigenvalues, 9).tolist()
+    if mass > 0.0 and eigenvalues.min() <= 0.0:
+        raise ModelError(
+            f"link {name!r} inertia is not positive definite (eigenvalues {shown} kg m^2); "
+            "it must be"
+        )
+    if eigenvalues.min() < -1e-12 * max(1.0, float(np.abs(eigenvalues).max())):
+        raise ModelError(
+            f"link {name!r} has no mass but a negative inertia (eigenvalues {shown} kg m^2); "
+            "a massless link's inertia must be zero or positive semi-definite"
+        )
+    return mass
+
+
+def _check_mesh_paths(root: ET.Element) -> None:
+    """Refuse a ``package://`` mesh path that leaves its package (``package://p/../../x``)."""
+    for element in root.iter():
+        filename = element.get("filename")
+        if filename is None or not filename.startswith("package://"):
+            continue
+        package, _, inside = filename.removeprefix("package://").partition("/")
+        normal = posixpath.normpath(inside) if inside else ""
+        if package in ("", ".", "..") or normal.startswith("..") or inside.startswith("/"):
             raise ModelError(
-                f"link {name!r} inertia is not positive definite (eigenvalues "
-                f"{np.round(np.linalg.eigvalsh(inertia), 9).tolist()} kg m^2); it must be"
+                f"mesh path {excerpt(filename)} leaves its package; a package:// path names "
+                "a package and a file inside it (package://NAME/path/inside)"
             )
 
+
+def _check_tree(root: ET.Element, links: list[str]) -> tuple[str, list[str]]:
+    """Check the joints and that the links form one tree; return the root and movable joints."""
     parent_of: dict[str, str] = {}
+    movable: list[str] = []
+    names: set[str] = set()
     for joint in root.findall("joint"):
-        jname = joint.get("name") or "?"
+        jname = joint.get("name") or ""
+        if not jname.strip():
+            raise ModelError("a <joint> has no name (or an empty one); every joint needs one")
+        if jname in names:
+            raise ModelError(f"duplicate joint name {jname!r}")
+        names.add(jname)
         jtype = joint.get("type")
         if jtype not in _URDF_JOINT_TYPES:
             raise ModelError(
@@ -140,6 +279,9 @@ def check_urdf_xml(text: str) -> tuple[str, list[str]]:
             )
         if jtype != "fixed":
             _check_movable_joint(joint, jname, jtype)
+            movable.append(jname)
+        _triple(joint.find("origin"), "xyz", f"joint {jname!r} origin")
+        _triple(joint.find("origin"), "rpy", f"joint {jname!r} origin")
         parent_el, child_el = joint.find("parent"), joint.find("child")
         if parent_el is None or child_el is None:
             raise ModelError(f"joint {jname!r} needs a <parent> and a <child>")
@@ -169,7 +311,56 @@ def check_urdf_xml(text: str) -> tuple[str, list[str]]:
                 raise ModelError(f"closed loop through link {name!r}; the URDF must be a tree")
             seen.add(name)
             name = parent_of[name]
-    return roots[0], links
+    return roots[0], movable
+
+
+def urdf_document(text: str) -> ET.Element:
+    """The ``<robot>`` element of a URDF's text, parsed once, without a document type.
+
+    Raises:
+        ModelError: a document type declaration, malformed XML, or another root element.
+    """
+    text = text.removeprefix("\ufeff")  # a UTF-8 byte-order mark
+    _refuse_document_type(text)
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise ModelError(f"malformed URDF XML ({exc})") from None
+    if root.tag != "robot":
+        raise ModelError(f"root element is <{excerpt(root.tag)}>, expected <robot>")
+    return root
+
+
+def check_urdf_xml(text: str) -> CheckedUrdf:
+    """Check the URDF's structure, numbers and inertials; return what Pinocchio is to load.
+
+    Raises:
+        ModelError: a document type declaration, malformed XML, or a check above that fails
+            (one line naming the link, joint or value).
+        UnknownNameError: a joint names a link that does not exist.
+    """
+    root = urdf_document(text)
+    links = [link.get("name") or "" for link in root.findall("link")]
+    if not links:
+        raise ModelError("the URDF has no <link>")
+    if any(not n.strip() for n in links):
+        raise ModelError("a <link> has no name (or an empty one); every link needs one")
+    duplicates = sorted({n for n in links if links.count(n) > 1})
+    if duplicates:
+        raise ModelError(f"duplicate link name(s) {', '.join(duplicates)}")
+    total_mass = math.fsum(
+        _check_inertial(link, link.get("name", "")) for link in root.findall("link")
+    )
+    _check_mesh_paths(root)
+    root_link, movable = _check_tree(root, links)
+    return CheckedUrdf(
+        text=ET.tostring(root, encoding="unicode"),
+        name=root.get("name", ""),
+        root_link=root_link,
+        links=tuple(links),
+        movable_joints=tuple(movable),
+        total_mass=total_mass,
+    )
 
 
 @contextmanager

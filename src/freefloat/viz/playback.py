@@ -32,8 +32,9 @@ import pinocchio as pin
 from ..errors import FreeFloatError, ViewerError
 from ..files import atomic_write_text
 from ..plans.format import Plan
+from ..plans.robot_copy import plan_robot
 from ..robot.collision import Obstacle
-from ..robot.model import Robot, example_robot_data_dir, load_robot
+from ..robot.model import Robot, example_robot_data_dir
 from .plots import plan_obstacles
 
 __all__ = ["Playback", "build_playback", "serve", "write_html"]
@@ -125,7 +126,7 @@ def _with_simple_shapes(robot: Robot) -> tuple[str | None, list[str]]:
     import xml.etree.ElementTree as ET
 
     try:
-        root = ET.fromstring(Path(robot.urdf).read_text(encoding="utf-8"))
+        root = ET.fromstring(robot.urdf_text or Path(robot.urdf).read_text(encoding="utf-8"))
     except (OSError, ET.ParseError):
         return None, []
     missing = []
@@ -164,7 +165,8 @@ def _visual_model(robot: Robot) -> pin.GeometryModel:
             MISSING_MESH_RADIUS,
         )
     try:
-        if text is not None:
+        text = text if text is not None else robot.urdf_text
+        if text:  # the text the robot was loaded from (a plan's copy of its URDF)
             return pin.buildGeomFromUrdfString(
                 robot.model,
                 text,
@@ -230,7 +232,7 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
     import meshcat.geometry as g
     from meshcat.animation import Animation
 
-    robot = robot or load_robot(plan.robot.urdf, plan.robot.frames)
+    robot = robot or plan_robot(plan)
     visual = _visual_model(robot)
     samples = plan.samples
     n = len(samples.t)

@@ -120,10 +120,10 @@ def clearance_curve(
     """
     if not plan.safety.checked:
         return None
+    from ..plans.robot_copy import plan_robot
     from ..robot.collision import CollisionModel
-    from ..robot.model import load_robot
 
-    robot = robot or load_robot(plan.robot.urdf, plan.robot.frames)
+    robot = robot or plan_robot(plan)
     model = CollisionModel(robot, plan.safety.srdf, plan_obstacles(plan))
     if model.n_pairs == 0:
         return None
@@ -162,10 +162,10 @@ def _joint_scale(plan: Plan) -> tuple[np.ndarray, list[str]]:
 def _limits(plan: Plan) -> dict[str, tuple[float, float, float]]:
     """Per joint ``(lower, upper, velocity)`` limits (rad, rad/s or m, m/s); {} if no URDF."""
     from ..errors import FreeFloatError
-    from ..robot.model import load_robot
+    from ..plans.robot_copy import plan_robot
 
     try:
-        robot = load_robot(plan.robot.urdf, plan.robot.frames)
+        robot = plan_robot(plan)
     except (FreeFloatError, OSError):
         return {}
     return {j.name: (j.lower, j.upper, j.velocity_limit) for j in robot.joints}

@@ -1,0 +1,556 @@
+"""Hostile-input campaign (issue 26): the command line against inputs an attacker or a careless
+user would try, each judged from outside the code under test.
+
+Classes:
+
+- ``urdf-xml``: a shipped URDF with XML tricks (document types, entities, character
+  references, CDATA, comments, namespaces, processing instructions, repeated elements, numbers
+  urdfdom reads otherwise than Python). Oracle: Pinocchio given the raw file on its own. An
+  accepted plan whose robot differs from that (mass or joints) is a wrong accept.
+- ``inertia``: random trees with links fixed to moving bodies, masses sometimes zero,
+  inertias sometimes indefinite. Oracle: the merged bodies computed here by the
+  parallel-axis theorem; accepting an unphysical body is a wrong accept.
+- ``device``: every writing command onto a FIFO, a socket, a device, a link to one.
+- ``signal``: SIGINT, SIGTERM, SIGHUP sent the moment the temporary output appears, and at
+  random instants of a loop of writes; any file left behind counts.
+- ``stream``: standard output full (``/dev/full``) or closed at a random byte.
+- ``plan``: edited plan files (relabelled to an older format under a cut effort limit, a
+  relative path from another folder, a cleared URDF, a tampered URDF copy, duplicate keys,
+  empty names) and the issue's message cases (a goal beyond its limit that also collides,
+  byte-order marks, broken meshes, ``package://`` escapes, an inertia of 1e308, an arm that
+  is no URDF, an empty scheduler address, a goal pitch of 90 deg).
+
+Every run is a subprocess of ``python -m freefloat.cli``. A refusal must be exit code 2 (1 for
+a plan that ``verify`` finds failing) and exactly one line ``freefloat: error: ...`` on
+stderr; a traceback, ``Exception ignored`` or a second line is counted as a traceback.
+
+Run: python scripts/hostile_campaign.py [--seed N] [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import random
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+ROOT = Path(__file__).resolve().parents[1]
+PLANAR = ROOT / "robots" / "planar_2dof.urdf"
+SRC = ROOT / "src"
+
+sys.path.insert(0, str(ROOT / "tests"))
+import freefloat as ff  # noqa: E402
+from freefloat.robot.urdf_checks import parser_messages  # noqa: E402
+from test_fuzz_outputs import WRITER  # noqa: E402
+from test_fuzz_urdf import TRICKS, _merged, _physical, _random_tree  # noqa: E402
+
+
+@dataclass
+class Tally:
+    """Outcomes of one class of inputs."""
+
+    cases: int = 0
+    outcomes: Counter[str] = field(default_factory=Counter)
+    notes: list[str] = field(default_factory=list)
+
+    def add(self, outcome: str, note: str = "") -> None:
+        self.cases += 1
+        self.outcomes[outcome] += 1
+        if outcome in ("wrong accept", "traceback", "false refusal", "leftover") and note:
+            self.notes.append(f"{outcome}: {note[:200]}")
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(SRC), env.get("PYTHONPATH", "")])
+    env["FREEFLOAT_CACHE"] = env.get("FREEFLOAT_CACHE_CAMPAIGN", str(CACHE))
+    return env
+
+
+CACHE = Path(tempfile.mkdtemp(prefix="ff-campaign-cache-"))
+
+
+def run(argv: list[str], cwd: Path, **kwargs) -> subprocess.CompletedProcess:  # type: ignore[no-untyped-def]
+    kwargs.setdefault("stdout", subprocess.PIPE)
+    kwargs.setdefault("stderr", subprocess.PIPE)
+    return subprocess.run(
+        [sys.executable, "-m", "freefloat.cli", *map(str, argv)],
+        cwd=cwd,
+        env=_env(),
+        text=True,
+        timeout=600,
+        check=False,
+        **kwargs,
+    )
+
+
+def judged(result: subprocess.CompletedProcess, refuse: bool, codes=(2,)) -> tuple[str, str]:  # type: ignore[no-untyped-def]
+    """The outcome of a run that should refuse (or accept), and the stderr as the note."""
+    err = result.stderr or ""
+    noisy = "Traceback" in err or "Exception ignored" in err or "ignored due to race" in err
+    lines = [line for line in err.splitlines() if not line.startswith("freefloat: warning:")]
+    failed_check = result.returncode == 1 and 1 in codes and not lines  # verify: FAILED rows
+    if noisy or (result.returncode != 0 and len(lines) != 1 and not failed_check):
+        return "traceback", err
+    if refuse:
+        return ("clean refusal", err) if result.returncode in codes else ("wrong accept", err)
+    return ("correct accept", err) if result.returncode == 0 else ("false refusal", err)
+
+
+def scenario_for(urdf: Path, folder: Path, name: str = "s.toml") -> Path:
+    text = (ROOT / "robots" / "scenarios" / "worked_example.toml").read_text()
+    text = re.sub(r"^robot = .*$", f'robot = "{urdf}"', text, count=1, flags=re.M)
+    path = folder / name
+    path.write_text(text)
+    return path
+
+
+def _plan_robot_matches_raw(plan_path: Path, text: str) -> bool:
+    """Whether the planned robot is what Pinocchio builds from the raw text (mass, joints)."""
+    plan = json.loads(plan_path.read_text())
+    robot = ff.load_robot(plan["robot"]["urdf"], text=plan["robot"]["urdf_text"])
+    try:
+        with parser_messages():
+            raw = pin.buildModelFromXML(text.removeprefix("\ufeff"), pin.JointModelFreeFlyer())
+    except (RuntimeError, ValueError):
+        return False
+    masses = [i.mass for i in raw.inertias], [i.mass for i in robot.model.inertias]
+    return list(raw.names) == list(robot.model.names) and np.allclose(*masses, rtol=1e-12)
+
+
+def campaign_urdf_xml(tally: Tally, work: Path, rng: random.Random, cases: int) -> None:
+    for case in range(cases):
+        text = PLANAR.read_text()
+        for old, new in rng.sample(TRICKS, rng.randint(1, 3)):
+            text = text.replace(old, new, 1)
+        folder = work / f"xml{case}"
+        folder.mkdir()
+        urdf = folder / "r.urdf"
+        urdf.write_text(text, encoding="utf-8")
+        out = folder / "p.json"
+        result = run(["plan", scenario_for(urdf, folder), "-o", out, "-q"], folder)
+        outcome, note = judged(result, refuse=False)
+        if result.returncode == 0:
+            same = _plan_robot_matches_raw(out, text)
+            outcome = "correct accept" if same else "wrong accept"
+        elif outcome == "false refusal":
+            outcome = "clean refusal"  # a trick may well be refused: the line is what counts
+        tally.add(outcome, note or text[:200])
+
+
+def campaign_inertia(tally: Tally, work: Path, seed: int, cases: int) -> None:
+    rng = np.random.default_rng(seed)
+    for case in range(cases):
+        text, bodies = _random_tree(rng)
+        urdf = work / f"tree{case}.urdf"
+        urdf.write_text(text)
+        physical = all(_physical(members) for members in bodies)
+        try:
+            robot = ff.load_robot(urdf)
+        except ff.FreeFloatError as exc:
+            line_ok = "\n" not in str(exc)
+            tally.add(
+                "clean refusal"
+                if line_ok and not physical
+                else "traceback"
+                if not line_ok
+                else "false refusal",
+                str(exc),
+            )
+            continue
+        bodies_ok = all(
+            math.isclose(robot.model.inertias[i].mass, _merged(m)[0], rel_tol=1e-12)
+            for i, m in enumerate(bodies, start=1)
+        )
+        tally.add("correct accept" if physical and bodies_ok else "wrong accept", text)
+    # the issue's case, through the command line: a 0 kg link with izz = -100 fixed to link2
+    bad = (
+        '<link name="bad"><inertial><mass value="0"/><inertia ixx="0" iyy="0" izz="-100" '
+        'ixy="0" ixz="0" iyz="0"/></inertial></link><joint name="fix" type="fixed">'
+        '<parent link="link2"/><child link="bad"/></joint></robot>'
+    )
+    urdf = work / "negative.urdf"
+    urdf.write_text(PLANAR.read_text().replace("</robot>", bad))
+    tally.add(*judged(run(["plan", scenario_for(urdf, work), "-o", work / "n.json"], work), True))
+
+
+def _non_regular(work: Path) -> tuple[socket.socket, list[Path]]:
+    fifo = work / "fifo"
+    os.mkfifo(fifo)
+    sock = work / "sock"
+    server = socket.socket(socket.AF_UNIX)
+    server.bind(str(sock))
+    (work / "to_fifo").symlink_to(fifo)
+    (work / "to_null").symlink_to("/dev/null")
+    return server, [fifo, sock, work / "to_fifo", work / "to_null", Path("/dev/null")]
+
+
+def campaign_device(tally: Tally, work: Path, plan_file: Path) -> None:
+    server, targets = _non_regular(work)
+    commands = [
+        lambda t: ["export", plan_file, "--format", "csv", "-o", t],
+        lambda t: ["export", plan_file, "--format", "mcap", "-o", t],
+        lambda t: ["show", plan_file, "--html", t, "--no-verify"],
+        lambda t: ["plan", "--samples", "5", "-o", t],
+        lambda t: [
+            "compose",
+            "--arm",
+            "z1",
+            "--base-mass",
+            "50",
+            "--base-size",
+            "1",
+            "1",
+            "1",
+            "--mount",
+            "0.5",
+            "0",
+            "0",
+            "-o",
+            t,
+        ],
+    ]
+    try:
+        for target in targets:
+            for command in commands:
+                outcome, note = judged(run(command(target), work), refuse=True)
+                intact = (work / "fifo").is_fifo() and Path("/dev/null").is_char_device()
+                tally.add(outcome if intact else "wrong accept", note)
+    finally:
+        server.close()
+    _leftovers(tally, work)
+
+
+def _leftovers(tally: Tally, folder: Path) -> None:
+    left = [p.name for p in folder.rglob(".*") if p.is_file()]
+    if left:
+        tally.add("leftover", ", ".join(left))
+
+
+def campaign_signal(tally: Tally, work: Path, rng: random.Random, tries: int) -> None:
+    """The issue's race: the signal the moment the temporary plan file appears."""
+    kinds = [signal.SIGINT, signal.SIGTERM, signal.SIGHUP]
+    for attempt in range(tries):
+        folder = work / f"sig{attempt}"
+        folder.mkdir()
+        (folder / "x.json").write_text("previous")
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "freefloat.cli", "plan", "-o", "x.json", "--samples", "2001"],
+            cwd=folder,
+            env=_env(),
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        deadline = time.monotonic() + 120
+        while proc.poll() is None and time.monotonic() < deadline:
+            if any(p.name.startswith(".x.json.") for p in folder.iterdir()):
+                time.sleep(rng.uniform(0.0, 0.002))
+                proc.send_signal(rng.choice(kinds))
+                break
+            time.sleep(0.0005)
+        _, err = proc.communicate(timeout=120)
+        names = sorted(p.name for p in folder.iterdir())
+        whole = (folder / "x.json").read_text() in ("previous",) or (
+            (folder / "x.json").read_text().startswith("{")
+        )
+        if names != ["x.json"] or not whole:
+            tally.add("leftover", f"{names}")
+        elif "Traceback" in err or len(err.splitlines()) > 1:
+            tally.add("traceback", err)
+        else:
+            tally.add("clean refusal" if proc.returncode in (129, 130, 143) else "correct accept")
+    _random_instants(tally, work, rng)
+
+
+def _random_instants(tally: Tally, work: Path, rng: random.Random) -> None:
+    folder = work / "loop"
+    folder.mkdir()
+    target = folder / "x.json"
+    target.write_text("x" * 200_000)
+    child = subprocess.Popen(
+        [sys.executable, "-c", WRITER, str(target)],
+        env=_env(),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert child.stdout is not None
+    child.stdout.readline()
+    for _ in range(300):
+        time.sleep(rng.uniform(0.0, 0.004))
+        child.send_signal(rng.choice([signal.SIGINT, signal.SIGTERM, signal.SIGHUP]))
+    child.send_signal(signal.SIGUSR1)
+    out, err = child.communicate(timeout=120)
+    ended = int(out.strip() or 0)
+    left = sorted(p.name for p in folder.iterdir())
+    for _ in range(ended):
+        tally.add("clean refusal")
+    if left != ["x.json"] or target.read_text() != "x" * 200_000:
+        tally.add("leftover", f"{left}")
+    if err:
+        tally.add("traceback", err)
+
+
+def campaign_stream(tally: Tally, work: Path, plan_file: Path, rng: random.Random) -> None:
+    for argv in (["verify", plan_file], ["bounds"], ["plan", "--samples", "11", "-o", "o.json"]):
+        with open("/dev/full", "w") as full:
+            result = run(argv, work, stdout=full)
+        tally.add(*judged(result, refuse=True))
+    for _ in range(6):
+        keep = rng.randrange(0, 600)
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "freefloat.cli", "verify", str(plan_file)],
+            cwd=work,
+            env=_env(),
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+        )
+        assert proc.stdout is not None and proc.stderr is not None
+        proc.stdout.read(keep)
+        proc.stdout.close()
+        err = proc.stderr.read().decode()
+        proc.wait(timeout=120)
+        bad = err or proc.returncode not in (0, 141)
+        tally.add("traceback" if bad else "clean refusal", err)
+    # an error with standard error full: quiet, exit 2
+    with open("/dev/full", "w") as full:
+        result = run(["verify", work / "missing.json"], work, stderr=full)
+    tally.add("clean refusal" if result.returncode == 2 else "traceback", str(result.returncode))
+
+
+def _edited(plan_file: Path, folder: Path, edit, name: str = "p.json") -> Path:  # type: ignore[no-untyped-def]
+    doc = json.loads(plan_file.read_text())
+    text = edit(doc)
+    path = folder / name
+    path.write_text(text if isinstance(text, str) else json.dumps(doc))
+    return path
+
+
+def _older(doc: dict, fmt: str = "freefloat.plan/3") -> None:
+    doc["format"] = fmt
+    del doc["robot"]["urdf_text"], doc["robot"]["urdf_sha256"]
+
+
+def campaign_plans(tally: Tally, work: Path, ur5_plan: Path) -> None:
+    """Edited plans: each refused (verify exit 1 or 2), or accepted when it is sound."""
+    folder = work / "plans"
+    (folder / "robot").mkdir(parents=True)
+    doc = json.loads(ur5_plan.read_text())
+    peak = max(abs(v) for row in doc["samples"]["tau"] for v in row)
+    cut = re.sub(r'effort="[0-9.e+-]+"', f'effort="{peak / 3:.6g}"', doc["robot"]["urdf_text"])
+    (folder / "robot" / "robot.urdf").write_text(cut)
+
+    def relabel(d):  # type: ignore[no-untyped-def]
+        _older(d, "freefloat.plan/2")
+        del d["objective"]
+        checks = d["verification"]["checks"]
+        d["verification"]["checks"] = [c for c in checks if c["name"] != "joint_effort_limits"]
+        d["robot"]["urdf"] = "robot/robot.urdf"
+
+    def tamper(d):  # type: ignore[no-untyped-def]
+        d["robot"]["urdf_text"] = d["robot"]["urdf_text"].replace('effort="', 'effort="9', 1)
+
+    def duplicate(d):  # type: ignore[no-untyped-def]
+        return json.dumps(d).replace('"duration": ', '"duration": 1.0, "duration": ', 1)
+
+    def empty(d):  # type: ignore[no-untyped-def]
+        d["robot"]["joints"][0] = ""
+
+    def changed(d):  # type: ignore[no-untyped-def]
+        d["robot"]["urdf"] = str(folder / "robot" / "robot.urdf")
+
+    for edit in (relabel, tamper, duplicate, empty, changed):
+        path = _edited(ur5_plan, folder, edit, f"{edit.__name__}.json")
+        tally.add(*judged(run(["verify", path], work), refuse=True, codes=(1, 2)))
+    # sound plans: the URDF gone (a cleared cache), a relative path read from the plan's folder
+    gone = folder / "gone"
+    gone.mkdir()
+    shutil.copy(ROOT / "robots" / "ur5_servicer.urdf", gone / "r.urdf")
+    path = _edited(ur5_plan, gone, lambda d: d["robot"].update(urdf=str(gone / "r.urdf")))
+    (gone / "r.urdf").unlink()
+    tally.add(*judged(run(["verify", path], work), refuse=False))
+    elsewhere = folder / "elsewhere"
+    (elsewhere / "robot").mkdir(parents=True)
+    (elsewhere / "robot" / "robot.urdf").write_text(cut)  # another robot.urdf in the cwd
+    shutil.copy(ROOT / "robots" / "ur5_servicer.urdf", gone / "robot.urdf")
+
+    def relative(d):  # type: ignore[no-untyped-def]
+        _older(d)
+        d["robot"]["urdf"] = "robot.urdf"
+
+    path = _edited(ur5_plan, gone, relative, "relative.json")
+    tally.add(*judged(run(["verify", "-q", path], elsewhere), refuse=False))
+
+
+def campaign_messages(tally: Tally, work: Path, plan_file: Path) -> None:
+    folder = work / "messages"
+    folder.mkdir()
+    cases = _message_cases(folder, plan_file)
+    for argv, refuse, needle in cases:
+        result = run(argv, folder)
+        outcome, note = judged(result, refuse=refuse)
+        if outcome in ("clean refusal", "correct accept") and needle not in result.stderr:
+            outcome, note = "traceback", f"message without {needle!r}: {result.stderr}"
+        tally.add(outcome, note)
+
+
+def _message_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str]]:
+    planar = PLANAR.read_text()
+    (folder / "bom.urdf").write_bytes(b"\xef\xbb\xbf" + PLANAR.read_bytes())
+    bom = scenario_for(folder / "bom.urdf", folder, "bom.toml")
+    bom.write_bytes(b"\xef\xbb\xbf" + bom.read_bytes())
+    cylinder = '<geometry><cylinder radius="0.05" length="1.0"/></geometry>'
+    (folder / "broken.stl").write_text("solid x\nfacet normal 0 0 1\nouter loop\n")
+    urdfs = {
+        "escape": planar.replace(
+            cylinder, '<geometry><mesh filename="package://../../../../etc/passwd"/></geometry>'
+        ),
+        "huge": planar.replace('izz="3.33"', 'izz="1e308"'),
+        "mesh": planar.replace(
+            cylinder, f'<geometry><mesh filename="{folder / "broken.stl"}"/></geometry>'
+        ),
+    }
+    for name, text in urdfs.items():
+        (folder / f"{name}.urdf").write_text(text)
+    mesh_plan = folder / "mesh.json"
+    run(
+        ["plan", scenario_for(folder / "mesh.urdf", folder, "mesh.toml"), "-o", mesh_plan, "-q"],
+        folder,
+    )
+    joints = "joint1 = 0.0, joint3 = 0.0, joint4 = 30.0, joint5 = 0.0, joint6 = 0.0, joint7 = 0.0"
+    xarm = folder / "xarm.toml"
+    xarm.write_text(
+        'duration = 10.0\n[robot]\narm = "xarm7"\nbase_mass = 100.0\nbase_size = [0.6, 0.6, 0.6]\n'
+        "mount = [0.3, 0.0, 0.0]\nmount_rpy_deg = [0.0, 90.0, 0.0]\n"
+        f"[start]\njoints = {{ joint2 = 0.0, {joints} }}\n"
+        f"[goal]\njoints = {{ joint2 = 150.0, {joints} }}\nbase_zyx_deg = [1.0, 0.0, 0.0]\n"
+    )
+    compose = ["--base-mass", "100", "--base-size", "1", "1", "1", "--mount", "0.5", "0", "0"]
+    return [
+        (["plan", bom, "-o", "bom.json"], False, ""),
+        (["plan", xarm, "-o", "x.json"], True, "is outside its limits"),
+        (
+            ["plan", scenario_for(folder / "escape.urdf", folder, "e.toml"), "-o", "e.json"],
+            True,
+            "leaves its package",
+        ),
+        (
+            ["plan", scenario_for(folder / "huge.urdf", folder, "h.toml"), "-o", "h.json"],
+            True,
+            "izz='1e308'",
+        ),
+        (["show", mesh_plan, "--html", "m.html"], True, "broken.stl"),
+        (["compose", "--arm", "/etc/passwd", *compose, "-o", "c.urdf"], True, "malformed URDF XML"),
+        (["sweep", "none.toml", "-o", "r.csv", "--scheduler", ""], True, "--scheduler is empty"),
+        (
+            ["plan", scenario_for(PLANAR, folder, "d.toml"), "--samples", "5", "-o", "/dev/null"],
+            True,
+            "regular files only",
+        ),
+        (["verify", plan_file], False, ""),
+        *_pitch90_case(folder),
+    ]
+
+
+def _pitch90_case(folder: Path) -> list[tuple[list, bool, str]]:
+    """A Panda plan whose goal pitch is 90 deg: it must plan, verify and plot."""
+    from freefloat.physics.attitude import quat_from_zyx, quat_multiply, zyx_from_quat
+
+    turn = quat_from_zyx(*np.radians([-6.4, -8.8, -4.1]))
+    start = quat_multiply(quat_from_zyx(0.0, math.pi / 2, 0.0), turn * np.array([-1, -1, -1, 1]))
+    start_deg = ", ".join(repr(float(a)) for a in np.degrees(zyx_from_quat(start)))
+    text = (ROOT / "robots" / "scenarios" / "panda_servicer.toml").read_text()
+    text = text.replace("base_zyx_deg = [0.0, 0.0, 0.0]", f"base_zyx_deg = [{start_deg}]")
+    text = text.replace("[-6.4, -8.8, -4.1]", "[0.0, 90.0, 0.0]").replace(
+        '"panda_servicer"', f'"{ROOT / "robots" / "panda_servicer.urdf"}"'
+    )
+    (folder / "pitch90.toml").write_text(text)
+    return [
+        (["plan", folder / "pitch90.toml", "-o", "pitch90.json", "-q"], False, ""),
+        (["verify", "pitch90.json"], False, ""),
+        (["plot", "pitch90.json", "-o", "plots90"], False, ""),
+    ]
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--seed", type=int, default=26)
+    parser.add_argument("--quick", action="store_true", help="fewer cases per random class")
+    args = parser.parse_args()
+    rng = random.Random(args.seed)
+    n = 8 if args.quick else 30
+    tallies = {
+        name: Tally()
+        for name in ("urdf-xml", "inertia", "device", "signal", "stream", "plan", "messages")
+    }
+    started = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="ff-campaign-") as tmp:
+        work = Path(tmp)
+        plan_file = work / "worked.json"
+        run(["plan", "-o", plan_file, "-q"], work)
+        ur5 = work / "ur5.json"
+        run(["plan", ROOT / "robots" / "scenarios" / "ur5_servicer.toml", "-o", ur5, "-q"], work)
+        steps = [
+            ("urdf-xml", lambda t: campaign_urdf_xml(t, work, rng, n)),
+            ("inertia", lambda t: campaign_inertia(t, work, args.seed, 5 * n)),
+            ("device", lambda t: campaign_device(t, work, plan_file)),
+            ("signal", lambda t: campaign_signal(t, work, rng, n)),
+            ("stream", lambda t: campaign_stream(t, work, plan_file, rng)),
+            ("plan", lambda t: campaign_plans(t, work, ur5)),
+            ("messages", lambda t: campaign_messages(t, work, plan_file)),
+        ]
+        for name, step in steps:
+            clock = time.perf_counter()
+            step(tallies[name])
+            print(f"  {name:<10} done in {time.perf_counter() - clock:6.1f} s", file=sys.stderr)
+    shutil.rmtree(CACHE, ignore_errors=True)
+    return report(tallies, time.perf_counter() - started)
+
+
+COLUMNS = (
+    "clean refusal",
+    "correct accept",
+    "wrong accept",
+    "false refusal",
+    "traceback",
+    "leftover",
+)
+
+
+def report(tallies: dict[str, Tally], seconds: float) -> int:
+    print(f"hostile-input campaign (issue 26), {seconds:.0f} s wall time")
+    print(f"  {'class':<10}{'cases':>7}" + "".join(f"{c:>16}" for c in COLUMNS))
+    total = Counter()
+    for name, tally in tallies.items():
+        total.update(tally.outcomes)
+        row = "".join(f"{tally.outcomes[c]:>16}" for c in COLUMNS)
+        print(f"  {name:<10}{tally.cases:>7}{row}")
+    print(
+        f"  {'total':<10}{sum(t.cases for t in tallies.values()):>7}"
+        + "".join(f"{total[c]:>16}" for c in COLUMNS)
+    )
+    for name, tally in tallies.items():
+        for note in tally.notes:
+            print(f"  [{name}] {note}")
+    bad = sum(total[c] for c in ("wrong accept", "false refusal", "traceback", "leftover"))
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
