@@ -33,6 +33,7 @@ from collections.abc import Callable
 import numpy as np
 import pinocchio as pin
 
+from ..errors import PlanFileError
 from ..physics.attitude import geodesic_angle
 from ..physics.dynamics import inverse_dynamics, inverse_dynamics_batch, replay
 from ..physics.momentum import MomentumMap
