@@ -21,7 +21,7 @@ from .errors import (
 )
 from .physics.attitude import geodesic_angle
 from .plans.format import (
-    ObjectiveLevel,
+    ConstraintRecord,
     ObjectiveReport,
     ObstacleRecord,
     Plan,
@@ -36,11 +36,13 @@ from .problem.constraints import (
     Constraint,
     DurationScaledLimit,
     LimitPeak,
+    default_constraints,
     scenario_constraints,
 )
+from .problem.constraints.registry import SAFETY_RECORDED
 from .problem.constraints.clearance import clearance_at
 from .problem.limits import check_samples
-from .problem.objectives import DEFAULT_OBJECTIVE, objective_named
+from .problem.objectives import DEFAULT_OBJECTIVE, Objective, objective_named
 from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .progress import stage
@@ -61,7 +63,7 @@ def plan(
     options: SolveOptions | None = None,
     samples: int = 201,
     constraints: Sequence[Constraint] | None = None,
-    objective: str | None = None,
+    objective: str | Objective | None = None,
 ) -> Plan:
     """Plan the scenario's motion and sample it.
 
@@ -71,11 +73,13 @@ def plan(
             bracket.
         samples: number of equally spaced samples in [0, T] (2 to
             :data:`~freefloat.problem.limits.MAX_SAMPLES`).
-        constraints: path constraints to honour (solvers and verification); default joint
-            position and velocity limits.
-        objective: which path is best among those that reach the goal (a name of
-            :data:`~freefloat.problem.objectives.OBJECTIVES`); default the scenario's
-            ``[path] objective``.
+        constraints: path constraints to honour (solvers and verification); default the
+            scenario's (:func:`~freefloat.problem.constraints.scenario_constraints`: joint
+            position, velocity and effort limits, its ``[constraints.<name>]`` tables, and
+            clearance when checked). Each is recorded in the plan for ``freefloat verify``.
+        objective: which path is best among those that reach the goal: an objective, or the
+            name of one in :data:`~freefloat.problem.objectives.OBJECTIVES`; default the
+            scenario's ``[path] objective``.
 
     Raises:
         FreeFloatError: any subclass: bad input, infeasible request, no solution.
@@ -92,7 +96,11 @@ def plan(
     constraints = scenario_constraints(scenario) if constraints is None else list(constraints)
     _check_endpoints(scenario, constraints)
     clock = time.perf_counter()
-    chosen = objective_named(objective or scenario.objective)
+    chosen = (
+        objective
+        if isinstance(objective, Objective)
+        else objective_named(objective or scenario.objective)
+    )
     with stage("solve"):
         # another objective's freedom may find a path within limits the search's path breaks
         found, imposed = _search_lazily(
@@ -119,10 +127,8 @@ def plan(
             quadrature_nodes=minimised.objective.nodes_used,
             duration_power=chosen.duration_power,
             start_value=minimised.start_value,
-            levels=[
-                ObjectiveLevel(level.freedom, level.value, level.iterations, level.note[:200])
-                for level in minimised.levels
-            ],
+            levels=list(minimised.levels),
+            parameters=minimised.objective.to_record(),
         )
     else:
         report = _norm_report(found.problem, found.solution.beta)
@@ -285,8 +291,8 @@ def plan_from_solution(
         tolerance: attitude tolerance (rad).
         verify: run the independent checks of :mod:`freefloat.verify` (a plan from
             :func:`plan` always is).
-        constraints: path constraints verification checks; default joint position and
-            velocity limits.
+        constraints: path constraints verification checks, recorded in the plan; default
+            joint position, velocity and effort limits.
         safety: the plan's record of its clearance constraint (default: none checked).
         objective: the plan's record of what it minimised (default: the minimum norm).
 
@@ -353,6 +359,11 @@ def plan_from_solution(
         request=Request(start_joints=family.start.tolist(), goal_joints=family.goal.tolist()),
         safety=safety or SafetyReport(),
         objective=objective or _norm_report(problem, solution.beta),
+        constraints=[
+            ConstraintRecord(c.name, c.to_record())
+            for c in (default_constraints() if constraints is None else constraints)
+            if c.name not in SAFETY_RECORDED
+        ],
     )
     if not verify:
         return unverified

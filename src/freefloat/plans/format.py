@@ -1,4 +1,4 @@
-"""The plan file: typed records and their JSON form (``freefloat.plan/3``).
+"""The plan file: typed records and their JSON form (``freefloat.plan/4``).
 
 This module is long because it holds every record of the file format and its reading and
 writing in one place (the format is one concept; splitting it would scatter the schema).
@@ -12,7 +12,11 @@ sees half a plan and a failure leaves nothing behind. Units: seconds, radians (m
 prismatic joints and positions); Euler angles, marked ``_deg``, in degrees. Positions are in
 the inertial frame whose origin is the system centre of mass (docs/method.md section 10).
 
-Schema versions: ``freefloat.plan/3`` (this one) adds the ``objective`` record (what the path
+Schema versions: ``freefloat.plan/4`` (this one) adds the ``constraints`` record (every
+constraint the plan honours, by registered name with its parameters, so that
+``freefloat verify`` rebuilds each from the registry; clearance stays in ``safety``) and the
+objective's ``parameters``. ``freefloat.plan/3`` files still load and keep their format: they
+honour the joint position, velocity and effort limits (:data:`PROMISED`). ``freefloat.plan/3`` adds the ``objective`` record (what the path
 minimises, its value and the freedom levels tried) and, for robots with URDF effort limits,
 the ``joint_effort_limits`` check. ``freefloat.plan/2`` files still load and keep their format:
 they were minimum-norm plans (no objective record) that promised no effort limits, and
@@ -37,14 +41,18 @@ import numpy as np
 
 from ..errors import PlanFileError, excerpt
 from ..files import atomic_write_text
+from ..problem.objectives.base import Level
 from .limits import MAX_PLAN_BYTES, check_plan_file_kind, check_plan_values
 
 __all__ = [
     "FORMAT",
     "FORMAT_2",
     "READABLE_FORMATS",
+    "FORMAT_3",
+    "PROMISED",
     "BaseReport",
     "Check",
+    "ConstraintRecord",
     "Feasibility",
     "ObstacleRecord",
     "Plan",
@@ -59,12 +67,22 @@ __all__ = [
 ]
 
 #: Format tag of plan files written by this version.
-FORMAT = "freefloat.plan/3"
+FORMAT = "freefloat.plan/4"
+#: The format before constraint records (still read, and kept when re-written).
+FORMAT_3 = "freefloat.plan/3"
 #: The format before objectives and effort limits (still read, and kept when re-written).
 FORMAT_2 = "freefloat.plan/2"
 
 #: Format tags this version reads (older ones are converted on load).
-READABLE_FORMATS = ("freefloat.plan/1", FORMAT_2, FORMAT)
+READABLE_FORMATS = ("freefloat.plan/1", FORMAT_2, FORMAT_3, FORMAT)
+
+#: The constraints a file written before constraint records promised, by format: what it is
+#: held to (history, not a list of constraints: the registry is that).
+PROMISED: dict[str, tuple[str, ...]] = {
+    "freefloat.plan/1": ("joint_position_limits", "joint_velocity_limits", "joint_effort_limits"),
+    FORMAT_2: ("joint_position_limits", "joint_velocity_limits"),
+    FORMAT_3: ("joint_position_limits", "joint_velocity_limits", "joint_effort_limits"),
+}
 
 
 @dataclass(frozen=True)
@@ -282,20 +300,16 @@ class SafetyReport:
 
 
 @dataclass(frozen=True)
-class ObjectiveLevel:
-    """One freedom level the objective was minimised with.
+class ConstraintRecord:
+    """One constraint a plan honours, as the registry rebuilds it.
 
     Attributes:
-        freedom: free coefficients per joint.
-        value: the objective at that level's best root (the objective's unit).
-        iterations: SLSQP iterations spent.
-        note: why the level kept its starting path, when it did.
+        name: its name in :data:`~freefloat.problem.constraints.CONSTRAINTS`.
+        parameters: what its ``to_record()`` wrote (degrees for angles, metres).
     """
 
-    freedom: dict[str, int]
-    value: float
-    iterations: int
-    note: str = ""
+    name: str
+    parameters: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -312,6 +326,7 @@ class ObjectiveReport:
             duration of the same path.
         start_value: the objective along the minimum-norm path the search found first.
         levels: the freedom levels tried, in order.
+        parameters: what the objective's ``to_record()`` wrote (``freefloat.plan/4``).
     """
 
     name: str = "min_norm"
@@ -321,7 +336,8 @@ class ObjectiveReport:
     quadrature_nodes: int = 0
     duration_power: int = 0
     start_value: float | None = None
-    levels: list[ObjectiveLevel] = field(default_factory=list)
+    levels: list[Level] = field(default_factory=list)
+    parameters: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -341,6 +357,7 @@ class Plan:
     safety: SafetyReport = field(default_factory=SafetyReport)
     objective: ObjectiveReport = field(default_factory=ObjectiveReport)
     format: str = FORMAT
+    constraints: list[ConstraintRecord] = field(default_factory=list)
 
     # -- evaluation -------------------------------------------------------------------------
 
@@ -356,6 +373,9 @@ class Plan:
 
     def to_dict(self) -> dict[str, Any]:
         """The plan as the JSON-ready dictionary of the file format (a deep copy)."""
+        objective = asdict(self.objective)
+        if self.format != FORMAT:
+            del objective["parameters"]
         return copy.deepcopy(
             {
                 "format": self.format,
@@ -370,7 +390,12 @@ class Plan:
                 "request": asdict(self.request),
                 "verification": self.verification.to_dict(),
                 "safety": asdict(self.safety),
-                **({} if self.format == FORMAT_2 else {"objective": asdict(self.objective)}),
+                **({} if self.format == FORMAT_2 else {"objective": objective}),
+                **(
+                    {"constraints": [asdict(c) for c in self.constraints]}
+                    if self.format == FORMAT
+                    else {}
+                ),
             }
         )
 
@@ -431,7 +456,8 @@ class Plan:
                 verification=verification,
                 safety=_safety(data.get("safety")),
                 objective=_objective(data.get("objective")),
-                format=FORMAT_2 if fmt == FORMAT_2 else FORMAT,
+                format=fmt if fmt in (FORMAT_2, FORMAT_3) else FORMAT,
+                constraints=_constraints(data, fmt),
             )
         except (KeyError, TypeError, AttributeError, ValueError) as exc:
             raise PlanFileError(f"{where}: corrupt plan file (bad or missing {exc})") from None
@@ -456,9 +482,19 @@ def _objective(data: Any) -> ObjectiveReport:
     return ObjectiveReport(
         **{
             **data,
-            "levels": [ObjectiveLevel(**level) for level in data.get("levels", [])],
+            "levels": [Level(**level) for level in data.get("levels", [])],
         }
     )
+
+
+def _constraints(data: Mapping[str, Any], fmt: str) -> list[ConstraintRecord]:
+    """The ``constraints`` record; for older formats, the constraints they promised."""
+    if fmt in PROMISED:
+        return [ConstraintRecord(name) for name in PROMISED[fmt]]
+    return [
+        ConstraintRecord(str(item["name"]), dict(item.get("parameters", {})))
+        for item in data["constraints"]
+    ]
 
 
 def read_plan_json(path: str | Path) -> Any:

@@ -23,6 +23,10 @@ The file speaks degrees (joint angles, Euler angles) and metres (prismatic joint
     allow_full_turns = false       # optional: continuous joints may go the other way round
     objective = "min_norm"         # optional: min_norm | min_effort | min_acceleration | min_length
     raise_freedom = true           # optional: an objective may raise the freedom beyond extra
+    [constraints.end_effector_cone]        # optional: one table per extra constraint, by its
+    axis = [1.0, 0.0, 0.0]                 # registered name, with its parameters (see
+    direction = [1.0, 1.0, 0.0]            # freefloat.problem.constraints; the joint limits
+    half_angle_deg = 60.0                  # are always honoured)
 
 Safety, keep-out objects and a captured payload (all optional)::
 
@@ -88,6 +92,8 @@ from .limits import (
     check_joint_count,
     check_number,
 )
+from .constraints.base import Constraint
+from .constraints.registry import constraint_from_record, default_constraints
 from .objectives.registry import DEFAULT_OBJECTIVE, OBJECTIVES
 
 if TYPE_CHECKING:
@@ -117,6 +123,7 @@ _TOP_KEYS = (
     "safety",
     "obstacles",
     "payload",
+    "constraints",
 )
 _SAFETY_KEYS = ("margin_m", "srdf", "check")
 _OBSTACLE_KEYS = ("name", "box", "sphere", "capsule", "xyz", "rpy_deg")
@@ -189,6 +196,7 @@ class Scenario:
         safety: what the plan must keep clear of (``[safety]``, ``[[obstacles]]``).
         payload: a captured payload held by the end effector (``[payload]``), if any.
         servicer: the description of an inline ``[robot]`` servicer, if the robot is one.
+        constraints: constraints beyond the defaults (``[constraints.<name>]`` tables).
 
     Reading a scenario is pure: no file is written and no inverse kinematics runs until
     :meth:`resolved` and :meth:`write_robot` are called (planning calls both).
@@ -211,6 +219,7 @@ class Scenario:
     safety: Safety = field(default_factory=lambda: Safety())
     payload: Payload | None = None
     servicer: ServicerSpec | None = None
+    constraints: tuple[Constraint, ...] = ()
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Scenario:
@@ -365,6 +374,7 @@ class Scenario:
             safety=safety,
             payload=payload,
             servicer=servicer,
+            constraints=_constraints(data.get("constraints", {})),
         )
 
     def resolved(self) -> Scenario:
@@ -627,6 +637,24 @@ def _safety(table: Any, obstacles: Any, relative_to: Path | None) -> Safety:
     if len(set(names)) != len(names):
         raise ScenarioError(f"[[obstacles]] names must be unique, got {excerpt(names)}")
     return Safety(margin, srdf, tuple(parsed), check)
+
+
+def _constraints(table: Any) -> tuple[Constraint, ...]:
+    """``[constraints.<name>]`` tables as constraints, by the registry."""
+    if not isinstance(table, Mapping):
+        raise ScenarioError("[constraints] must hold one table per constraint, by name")
+    out = []
+    always = [c.name for c in default_constraints()]
+    for name, parameters in table.items():
+        if name in always:
+            raise ScenarioError(f"[constraints.{name}]: always honoured, it takes no table")
+        try:
+            out.append(constraint_from_record(name, parameters))
+        except UnknownNameError:
+            raise
+        except InputError as exc:
+            raise ScenarioError(f"[constraints.{name}] {exc}") from None
+    return tuple(out)
 
 
 def _radians3(degrees: tuple[float, float, float]) -> tuple[float, float, float]:

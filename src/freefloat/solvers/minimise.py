@@ -24,7 +24,7 @@ import numpy as np
 
 from ..problem.build import problem_from_scenario
 from ..problem.constraints import Constraint
-from ..problem.objectives import Objective
+from ..problem.objectives import Level, Objective
 from ..problem.paths import boundary_errors
 from ..problem.residual import Problem
 from ..problem.scenario import Scenario
@@ -54,23 +54,6 @@ ITERATIONS_PER_LEVEL = 100
 #: Levels a spatial problem tries beyond its own freedom (each costs many attitude
 #: integrations and, with clearance, many distance queries).
 SPATIAL_EXTRA_LEVELS = 1
-
-
-@dataclass(frozen=True)
-class Level:
-    """One freedom level tried.
-
-    Attributes:
-        freedom: free coefficients per joint.
-        value: the objective at the best root of that level (objective's unit).
-        iterations: SLSQP iterations spent.
-        note: why the level kept its starting path, when it did.
-    """
-
-    freedom: dict[str, int]
-    value: float
-    iterations: int
-    note: str = ""
 
 
 @dataclass

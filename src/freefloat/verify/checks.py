@@ -33,12 +33,12 @@ from collections.abc import Callable
 import numpy as np
 import pinocchio as pin
 
-from ..errors import PlanFileError
+from ..errors import FreeFloatError, PlanFileError
 from ..physics.attitude import geodesic_angle
 from ..physics.dynamics import inverse_dynamics, inverse_dynamics_batch, replay
 from ..physics.momentum import MomentumMap
-from ..plans.format import FORMAT_2, Check, Plan, Verification
-from ..problem.constraints import Constraint, JointEffortLimits, default_constraints
+from ..plans.format import Check, Plan, Verification
+from ..problem.constraints import Constraint, constraint_from_record
 from ..problem.constraints.registry import clearance_constraint
 from ..problem.paths import JointPolynomials, boundary_errors
 from ..robot.collision import Obstacle
@@ -116,14 +116,22 @@ def _robot_for(plan: Plan) -> Robot:
 
 
 def plan_constraints(plan: Plan, robot: Robot) -> list[Constraint]:
-    """The constraints a plan states it honours: joint limits, and clearance when checked.
+    """The constraints a plan states it honours, rebuilt from the registry by their records.
 
-    A ``freefloat.plan/2`` file promised no effort limits (it predates them): it is held to
-    its joint position and velocity limits only.
+    Every ``constraints`` record, and clearance when its ``safety`` record says it was checked.
+    A file written before constraint records is held to what its format promised
+    (:data:`~freefloat.plans.format.PROMISED`: a ``freefloat.plan/2`` file, no effort limits).
+
+    Raises:
+        PlanFileError: a record names a constraint this freefloat does not know, or a bad
+            parameter.
     """
-    constraints = default_constraints()
-    if plan.format == FORMAT_2:
-        constraints = [c for c in constraints if not isinstance(c, JointEffortLimits)]
+    constraints = []
+    for i, record in enumerate(plan.constraints):
+        try:
+            constraints.append(constraint_from_record(record.name, record.parameters))
+        except FreeFloatError as exc:
+            raise PlanFileError(f"plan field 'constraints[{i}]': {exc}") from None
     if plan.safety.checked:
         obstacles = [
             Obstacle(o.name, o.shape, tuple(o.size), tuple(o.xyz), tuple(o.rpy))  # type: ignore[arg-type]
@@ -171,8 +179,8 @@ def verify_plan(
         plan: the plan (for example from :meth:`Plan.load`).
         robot: the loaded robot, to skip reloading the URDF.
         replay_steps: the most RK4 steps the forward-dynamics replay may take (>= 1).
-        constraints: path constraints to check densely; default joint position and velocity
-            limits.
+        constraints: path constraints to check densely; default those the plan records
+            (:func:`plan_constraints`).
         recompute: recompute and compare the plan's numbers and figures (the pipeline, which
             has just computed them with the same functions, skips it).
 
