@@ -39,8 +39,8 @@ from .problem.constraints import (
     default_constraints,
     scenario_constraints,
 )
-from .problem.constraints.registry import SAFETY_RECORDED
 from .problem.constraints.clearance import clearance_at
+from .problem.constraints.registry import SAFETY_RECORDED
 from .problem.limits import check_samples
 from .problem.objectives import DEFAULT_OBJECTIVE, Objective, objective_named
 from .problem.residual import Problem

@@ -16,9 +16,10 @@ Schema versions: ``freefloat.plan/4`` (this one) adds the ``constraints`` record
 constraint the plan honours, by registered name with its parameters, so that
 ``freefloat verify`` rebuilds each from the registry; clearance stays in ``safety``) and the
 objective's ``parameters``. ``freefloat.plan/3`` files still load and keep their format: they
-honour the joint position, velocity and effort limits (:data:`PROMISED`). ``freefloat.plan/3`` adds the ``objective`` record (what the path
-minimises, its value and the freedom levels tried) and, for robots with URDF effort limits,
-the ``joint_effort_limits`` check. ``freefloat.plan/2`` files still load and keep their format:
+honour the joint position, velocity and effort limits (:data:`PROMISED`).
+``freefloat.plan/3`` adds the ``objective`` record (what the path minimises, its value and
+the freedom levels tried) and, for robots with URDF effort limits, the
+``joint_effort_limits`` check. ``freefloat.plan/2`` files still load and keep their format:
 they were minimum-norm plans (no objective record) that promised no effort limits, and
 ``freefloat verify`` holds them to what they promised. ``freefloat.plan/2`` stores the
 verification as a list of typed checks, each with its value, tolerance, unit and the check's
@@ -47,9 +48,9 @@ from .limits import MAX_PLAN_BYTES, check_plan_file_kind, check_plan_values
 __all__ = [
     "FORMAT",
     "FORMAT_2",
-    "READABLE_FORMATS",
     "FORMAT_3",
     "PROMISED",
+    "READABLE_FORMATS",
     "BaseReport",
     "Check",
     "ConstraintRecord",

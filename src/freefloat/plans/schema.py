@@ -66,9 +66,11 @@ _REGISTRY_ENUMS: dict[str, tuple[tuple[tuple[str, ...], str], ...]] = {
 
 
 def registry_names(kind: str) -> list[str]:
-    """Names in a registry, as the schemas list them: ``objectives``, ``recorded
-    constraints`` (a plan's records) or ``scenario constraints`` (its tables: not the joint
-    limits, always honoured)."""
+    """Names in a registry, as the schemas list them.
+
+    ``kind``: ``objectives``, ``recorded constraints`` (a plan's records) or ``scenario
+    constraints`` (a scenario's tables: not the joint limits, always honoured).
+    """
     from ..problem.constraints import default_constraints, recorded_constraints
     from ..problem.objectives import OBJECTIVES
 

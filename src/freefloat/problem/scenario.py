@@ -82,6 +82,8 @@ from ..physics.attitude import quat_from_zyx, quat_to_matrix
 from ..robot.collision import Obstacle
 from ..robot.model import MAX_URDF_BYTES, Robot, load_robot, resolve_robot, robots_dir
 from ..robot.payload import Payload, attach_payload
+from .constraints.base import Constraint
+from .constraints.registry import constraint_from_record, default_constraints
 from .limits import (
     MAX_ANGLE_DEG,
     MAX_LENGTH_M,
@@ -92,8 +94,6 @@ from .limits import (
     check_joint_count,
     check_number,
 )
-from .constraints.base import Constraint
-from .constraints.registry import constraint_from_record, default_constraints
 from .objectives.registry import DEFAULT_OBJECTIVE, OBJECTIVES
 
 if TYPE_CHECKING:

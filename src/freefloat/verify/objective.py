@@ -1,8 +1,9 @@
 """The plan's objective record, recomputed from its path.
 
 ``objective.value`` is recomputed by the named objective, rebuilt from the registry with the
-record's ``parameters``, at the plan's free coefficients, on the quadrature the record names, and must agree to :data:`RELATIVE_TOLERANCE` of its size (the
-computation is the planner's own, so only rounding separates them); ``error_estimate`` must
+record's ``parameters``, at the plan's free coefficients, on the quadrature the record names,
+and must agree to :data:`RELATIVE_TOLERANCE` of its size (the computation is the planner's
+own, so only rounding separates them); ``error_estimate`` must
 agree to that plus half of itself. The unit and duration power must be the objective's, and a
 minimum-norm plan's ``start_value`` must be its ``value``; every objective is non-negative.
 What cannot be recomputed from the file is the search's history: the value on the

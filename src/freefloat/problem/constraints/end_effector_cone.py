@@ -199,4 +199,3 @@ class EndEffectorCone(Constraint):
             f"EndEffectorCone(axis={self.axis.tolist()}, direction={self.direction.tolist()}, "
             f"half_angle={self.half_angle!r})"
         )
-

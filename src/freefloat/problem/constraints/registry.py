@@ -82,9 +82,9 @@ def default_constraints() -> list[Constraint]:
 
 
 def scenario_constraints(scenario: Scenario) -> list[Constraint]:
-    """The constraints a scenario's plan honours: the defaults, its ``[constraints.<name>]``
-    tables, and clearance when checked.
+    """The constraints a scenario's plan honours.
 
+    The defaults, its ``[constraints.<name>]`` tables, and clearance when checked.
     Clearance is added when ``[safety] check`` is on (the default) and the robot's collision
     geometry (with the scenario's obstacles and payload) has pairs to check.
     """
