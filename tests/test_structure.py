@@ -84,7 +84,7 @@ def test_solve_does_not_change_the_problem(planar_robot):
     before = (problem.steps, problem.family, problem.yaw_change)
     solution = ff.solve(problem)
     assert (problem.steps, problem.family, problem.yaw_change) == before
-    assert solution.strategy is ff.Strategy.SCAN
+    assert solution.strategy == ff.Strategy.SCAN
 
 
 def test_problem_from_scenario_equals_build_problem():

@@ -352,7 +352,7 @@ def plan_from_solution(
             solutions=solutions,
             integration_steps=problem.steps,
             integration_error_rad=solution.integration_error,
-            strategy=solution.strategy.value,
+            strategy=solution.strategy,
             solve_time_s=solution.wall_time,
             sample_time_s=sample_time,
         ),

@@ -33,16 +33,16 @@ __all__ = ["STRATEGIES", "choose_strategy", "solve"]
 
 StrategyFunction = Callable[[Problem, Sequence[Constraint], SolveOptions, np.ndarray], Attempt]
 
-#: The strategy functions by name.
-STRATEGIES: dict[Strategy, StrategyFunction] = {
-    Strategy.SCAN: scan,
-    Strategy.MULTISTART: multistart,
-    Strategy.CONTINUATION: continuation,
+#: The strategy functions by name: the one list (a new strategy is one module and one line).
+STRATEGIES: dict[str, StrategyFunction] = {
+    Strategy.SCAN.value: scan,
+    Strategy.MULTISTART.value: multistart,
+    Strategy.CONTINUATION.value: continuation,
 }
 
 
-def choose_strategy(problem: Problem, options: SolveOptions) -> Strategy:
-    """The strategy for this problem: the one asked for, else by the problem's shape.
+def choose_strategy(problem: Problem, options: SolveOptions) -> str:
+    """The strategy's name for this problem: the one asked for, else by the problem's shape.
 
     One unknown and one equation: ``scan``. Spatial problems: ``continuation`` when it is
     registered, else ``multistart``; planar problems with several unknowns: ``multistart``.
@@ -50,10 +50,10 @@ def choose_strategy(problem: Problem, options: SolveOptions) -> Strategy:
     if options.strategy is not None:
         return options.strategy
     if problem.n_free == 1 and problem.n_equations == 1:
-        return Strategy.SCAN
-    if not problem.planar and Strategy.CONTINUATION in STRATEGIES:
-        return Strategy.CONTINUATION
-    return Strategy.MULTISTART
+        return Strategy.SCAN.value
+    if not problem.planar and Strategy.CONTINUATION.value in STRATEGIES:
+        return Strategy.CONTINUATION.value
+    return Strategy.MULTISTART.value
 
 
 def solve(
@@ -102,14 +102,13 @@ def solve(
         )
         start = zero if found is None else found
     if np.linalg.norm(problem.residual(zero)) < 0.01 * tol and not quintic_breaks:
-        strategy = Strategy.NONE
+        strategy = Strategy.NONE.value
         attempt = Attempt(candidates=[zero], method="none (the quintic path already reaches it)")
     else:
         strategy = choose_strategy(problem, options)
         if strategy not in STRATEGIES:
             raise SolverError(
-                f"strategy {strategy.value!r} is not available; available: "
-                + ", ".join(s.value for s in STRATEGIES),
+                f"strategy {strategy!r} is not available; available: " + ", ".join(STRATEGIES),
                 float(np.linalg.norm(problem.residual(zero))),
             )
         try:
@@ -117,7 +116,7 @@ def solve(
         except (np.linalg.LinAlgError, FloatingPointError, ValueError) as exc:
             # A numerical breakdown (an SVD that does not converge on non-finite values) is a
             # failed attempt with a reason, never a crash.
-            attempt = Attempt(tried=[f"{strategy.value}: numerical failure ({exc})"])
+            attempt = Attempt(tried=[f"{strategy}: numerical failure ({exc})"])
     tried = restored + list(attempt.tried)
 
     roots = []
