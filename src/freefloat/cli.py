@@ -2,11 +2,8 @@
 
 Angles are printed in degrees. Every expected failure (a :class:`FreeFloatError`) is printed
 as one line ``freefloat: error: ...`` and exits with code 2, with no traceback and no file
-written.
-
-This module is long because it holds the parser and the handler of every subcommand (plan,
-bounds, verify, compose, show, plot, export, sweep); the plan summary lives in
-:mod:`freefloat.viz.summary` and the work itself in the layers below.
+written. The plan summary lives in :mod:`freefloat.viz.summary` and the work itself in the
+layers below.
 """
 
 from __future__ import annotations

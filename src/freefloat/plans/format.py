@@ -1,8 +1,5 @@
 """The plan file: typed records and their JSON form (``freefloat.plan/4``).
 
-This module is long because it holds every record of the file format and its reading and
-writing in one place (the format is one concept; splitting it would scatter the schema).
-
 This module is the format only: dataclasses for every section of a plan, reading and writing
 them, and the schema version. Planning a scenario into a plan lives in
 :mod:`freefloat.pipeline`; checking a plan lives in :mod:`freefloat.verify`.

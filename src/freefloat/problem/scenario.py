@@ -1,8 +1,5 @@
 """Scenarios: what to plan, read from a TOML file.
 
-This module is long because it checks every key and value of the scenario format with its
-own one-line message (the file is the user's first contact with freefloat).
-
 The file speaks degrees (joint angles, Euler angles) and metres (prismatic joints); a
 :class:`Scenario` holds radians and metres. Format::
 

@@ -20,9 +20,6 @@ Checks, each with a documented tolerance (:data:`TOLERANCES`):
 Both integrating checks double their steps and report the difference between the last two
 results as their ``error_estimate`` (see :func:`verify_plan` and :func:`_decided`); the other
 checks are exact up to rounding.
-
-This module is long because it holds every independent check with its tolerance, and the
-verdict logic that weighs each against its own error estimate.
 """
 
 from __future__ import annotations
