@@ -35,7 +35,13 @@ class BelowOnJoint(ff.Constraint):
         return ff.Excess(high - self.ceiling, 0.0, f"t = {when:.3g} s")
 
 
-def test_a_toy_constraint_through_the_public_interface_is_honoured():
+@pytest.fixture
+def registered(monkeypatch):
+    """BelowOnJoint registered (one line), as a plan's constraint must be."""
+    monkeypatch.setitem(ff.problem.constraints.CONSTRAINTS, BelowOnJoint.name, BelowOnJoint)
+
+
+def test_a_toy_constraint_through_the_public_interface_is_honoured(registered):
     scenario = ff.Scenario.from_toml(ff.default_scenario_path())
     free = ff.plan(scenario)
     assert max(np.array(free.samples.q)[:, 1]) > 1.9  # the minimum-norm root overshoots q2
@@ -51,12 +57,20 @@ def test_a_toy_constraint_through_the_public_interface_is_honoured():
     assert held.free_parameters["q2"] != free.free_parameters["q2"]
 
 
-def test_a_constraint_no_root_can_meet_is_a_clear_refusal():
+def test_a_constraint_no_root_can_meet_is_a_clear_refusal(registered):
     scenario = ff.Scenario.from_toml(ff.default_scenario_path())
     with pytest.raises(ff.SolverError) as info:
         ff.plan(scenario, constraints=[BelowOnJoint(1, 1.0)])
     assert "toy_ceiling" in str(info.value)
     assert "\n" not in str(info.value)
+
+
+def test_an_unregistered_constraint_is_refused_before_any_work():
+    scenario = ff.Scenario.from_toml(ff.default_scenario_path())
+    with pytest.raises(
+        ff.InputError, match=r"'toy_ceiling' \(BelowOnJoint\) is not in the registry"
+    ):
+        ff.plan(scenario, constraints=[BelowOnJoint(1, 1.6)])
 
 
 def test_typed_round_trip(tmp_path, worked_plan):

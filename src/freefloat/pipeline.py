@@ -21,14 +21,19 @@ from .errors import (
 )
 from .physics.attitude import geodesic_angle
 from .plans.format import (
-    ConstraintRecord,
     ObjectiveReport,
-    ObstacleRecord,
     Plan,
     Request,
     RobotRef,
     SafetyReport,
     SolverReport,
+)
+from .plans.reports import (
+    check_registered,
+    constraint_records,
+    norm_report,
+    objective_report,
+    safety_report,
 )
 from .plans.sampling import base_report, feasibility_report, sample_solution, solution_record
 from .problem.constraints import (
@@ -40,7 +45,6 @@ from .problem.constraints import (
     scenario_constraints,
 )
 from .problem.constraints.clearance import clearance_at
-from .problem.constraints.registry import SAFETY_RECORDED
 from .problem.limits import check_samples
 from .problem.objectives import DEFAULT_OBJECTIVE, Objective, objective_named
 from .problem.residual import Problem
@@ -94,13 +98,14 @@ def plan(
     scenario = scenario.resolved()
     scenario.write_robot()  # an inline servicer or a payload: its URDF, into the cache
     constraints = scenario_constraints(scenario) if constraints is None else list(constraints)
-    _check_endpoints(scenario, constraints)
-    clock = time.perf_counter()
     chosen = (
         objective
         if isinstance(objective, Objective)
         else objective_named(objective or scenario.objective)
     )
+    check_registered(chosen, constraints)  # what verify could not rebuild: before any work
+    _check_endpoints(scenario, constraints)
+    clock = time.perf_counter()
     with stage("solve"):
         # another objective's freedom may find a path within limits the search's path breaks
         found, imposed = _search_lazily(
@@ -119,19 +124,9 @@ def plan(
                 )
         found = minimised.found
         _explain_lazy_breaks(found, [c for c in constraints if c.lazy])
-        report = ObjectiveReport(
-            name=chosen.name,
-            unit=chosen.unit,
-            value=minimised.value,
-            error_estimate=minimised.error_estimate,
-            quadrature_nodes=minimised.objective.nodes_used,
-            duration_power=chosen.duration_power,
-            start_value=minimised.start_value,
-            levels=list(minimised.levels),
-            parameters=minimised.objective.to_record(),
-        )
+        report = objective_report(minimised)
     else:
-        report = _norm_report(found.problem, found.solution.beta)
+        report = norm_report(found.problem, found.solution.beta)
     solve_time = time.perf_counter() - clock
     problem = found.problem.with_steps(found.solution.steps)
     with stage("sample and verify"):
@@ -141,7 +136,7 @@ def plan(
             samples,
             options.tolerance,
             constraints=constraints,
-            safety=_safety_report(scenario, constraints),
+            safety=safety_report(scenario, constraints),
             objective=report,
         )
     solver = replace(
@@ -152,13 +147,6 @@ def plan(
         solve_time_s=solve_time,
     )
     return replace(result, solver=solver)
-
-
-def _norm_report(problem: Problem, beta: np.ndarray) -> ObjectiveReport:
-    """The record of a minimum-norm plan (the search's own choice)."""
-    norm = objective_named(DEFAULT_OBJECTIVE)
-    value = norm.evaluate(problem, beta).value
-    return ObjectiveReport(name=norm.name, unit=norm.unit, value=value, start_value=value)
 
 
 def _broken(found: SearchResult, constraints: Sequence[Constraint]) -> str:
@@ -220,23 +208,6 @@ def _check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> N
                 clearance, pair = clearance_at(constraint.model, joints)
                 if clearance < constraint.margin:
                     raise CollisionError(where, pair, clearance, constraint.margin)
-
-
-def _safety_report(scenario: Scenario, constraints: Sequence[Constraint]) -> SafetyReport:
-    """The plan's record of what it was kept clear of."""
-    clearance = next((c for c in constraints if isinstance(c, Clearance)), None)
-    if clearance is None or not clearance.applies_to(scenario.robot):
-        return SafetyReport(checked=False, margin_m=scenario.safety.margin)
-    srdf = clearance.model.srdf
-    return SafetyReport(
-        checked=True,
-        margin_m=clearance.margin,
-        srdf=None if srdf is None else str(srdf),
-        obstacles=[
-            ObstacleRecord(o.name, o.shape, list(o.size), list(o.xyz), list(o.rpy))
-            for o in clearance.model.obstacles
-        ],
-    )
 
 
 def _explain_duration_limits(
@@ -358,12 +329,10 @@ def plan_from_solution(
         ),
         request=Request(start_joints=family.start.tolist(), goal_joints=family.goal.tolist()),
         safety=safety or SafetyReport(),
-        objective=objective or _norm_report(problem, solution.beta),
-        constraints=[
-            ConstraintRecord(c.name, c.to_record())
-            for c in (default_constraints() if constraints is None else constraints)
-            if c.name not in SAFETY_RECORDED
-        ],
+        objective=objective or norm_report(problem, solution.beta),
+        constraints=constraint_records(
+            default_constraints() if constraints is None else constraints
+        ),
     )
     if not verify:
         return unverified

@@ -455,7 +455,7 @@ class Plan:
                 safety=_safety(data.get("safety")),
                 objective=_objective(data.get("objective")),
                 format=fmt if fmt in (FORMAT_2, FORMAT_3) else FORMAT,
-                constraints=_constraints(data, fmt),
+                constraints=_constraints(data, fmt, where),
             )
         except (KeyError, TypeError, AttributeError, ValueError) as exc:
             raise PlanFileError(f"{where}: corrupt plan file (bad or missing {exc})") from None
@@ -485,14 +485,22 @@ def _objective(data: Any) -> ObjectiveReport:
     )
 
 
-def _constraints(data: Mapping[str, Any], fmt: str) -> list[ConstraintRecord]:
+def _constraints(data: Mapping[str, Any], fmt: str, where: str) -> list[ConstraintRecord]:
     """The ``constraints`` record; for older formats, the constraints they promised."""
     if fmt in PROMISED:
         return [ConstraintRecord(name) for name in PROMISED[fmt]]
-    return [
+    records = [
         ConstraintRecord(str(item["name"]), dict(item.get("parameters", {})))
         for item in data["constraints"]
     ]
+    names = [r.name for r in records]
+    for i, name in enumerate(names):
+        if name in names[:i]:
+            raise PlanFileError(
+                f"{where}: plan field 'constraints[{i}]' names {excerpt(name)} again; each "
+                "constraint is recorded once"
+            )
+    return records
 
 
 def read_plan_json(path: str | Path) -> Any:
