@@ -26,7 +26,7 @@ import pinocchio as pin
 
 from ..errors import ModelError, UnknownNameError
 from ..files import absolute_path, read_text_file
-from .urdf_checks import check_urdf_xml, parser_messages
+from .urdf_checks import check_masses, check_urdf_xml, parser_messages
 
 __all__ = [
     "MAX_URDF_BYTES",
@@ -322,6 +322,35 @@ def load_robot(
         raise ModelError(f"Pinocchio cannot parse it ({error}{said})", urdf=str(path)) from None
 
     model.gravity = pin.Motion.Zero()  # free flight: no gravity acts on the system
+    joints = _joints(model, path)
+    check_masses(model, root_link, path)
+
+    frames = [f.name for f in model.frames if f.type == pin.FrameType.BODY]
+    if end_effector is None:
+        end_effector = _default_end_effector(model)
+    elif end_effector not in frames:
+        raise UnknownNameError("end-effector frame", end_effector, frames)
+
+    share = example_robot_data_dir()
+    dirs = (path.parent, *(Path(d).resolve() for d in package_dirs), *([share] if share else []))
+    return Robot(
+        urdf=path,
+        name=ET.fromstring(text).get("name", path.stem),
+        model=model,
+        joints=tuple(joints),
+        base_link=root_link,
+        end_effector=end_effector,
+        package_dirs=dirs,
+        link_names=tuple(links),
+    )
+
+
+def _joints(model: pin.Model, path: Path) -> list[Joint]:
+    """The movable joints of a free-flyer model, with their limits (rad or m, per s, N m or N).
+
+    Raises:
+        ModelError: a joint of unsupported type, inverted limits, or no movable joint.
+    """
     joints = []
     for index in range(2, model.njoints):
         jm = model.joints[index]
@@ -359,37 +388,4 @@ def load_robot(
             "one",
             urdf=str(path),
         )
-    for index in range(1, model.njoints):
-        inertia = model.inertias[index]
-        body = model.names[index] if index > 1 else f"base {root_link!r}"
-        if inertia.mass <= 0.0:
-            raise ModelError(
-                f"the body moved by joint {body!r} has no mass; every moving body needs a "
-                "positive <mass>",
-                urdf=str(path),
-            )
-        if np.linalg.eigvalsh(inertia.inertia).min() <= 0.0 and index == 1:
-            raise ModelError(
-                f"the base {root_link!r} has a singular rotational inertia; give it a positive "
-                "definite <inertia>",
-                urdf=str(path),
-            )
-
-    frames = [f.name for f in model.frames if f.type == pin.FrameType.BODY]
-    if end_effector is None:
-        end_effector = _default_end_effector(model)
-    elif end_effector not in frames:
-        raise UnknownNameError("end-effector frame", end_effector, frames)
-
-    share = example_robot_data_dir()
-    dirs = (path.parent, *(Path(d).resolve() for d in package_dirs), *([share] if share else []))
-    return Robot(
-        urdf=path,
-        name=ET.fromstring(text).get("name", path.stem),
-        model=model,
-        joints=tuple(joints),
-        base_link=root_link,
-        end_effector=end_effector,
-        package_dirs=dirs,
-        link_names=tuple(links),
-    )
+    return joints

@@ -16,13 +16,15 @@ import tempfile
 import xml.etree.ElementTree as ET
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 
 from ..errors import ModelError, UnknownNameError
 from ..progress import LOGGER
 
-__all__ = ["check_urdf_xml", "parser_messages"]
+__all__ = ["check_masses", "check_urdf_xml", "parser_messages"]
 
 _URDF_JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
 
@@ -103,32 +105,7 @@ def check_urdf_xml(text: str) -> tuple[str, list[str]]:
     if duplicates:
         raise ModelError(f"duplicate link name(s) {', '.join(duplicates)}")
 
-    for link in root.findall("link"):
-        name = link.get("name")
-        inertial = link.find("inertial")
-        if inertial is None:
-            continue
-        mass_el = inertial.find("mass")
-        if mass_el is None:
-            raise ModelError(f"link {name!r} has an <inertial> without <mass>")
-        mass = _float_attr(mass_el, "value", f"link {name!r} mass")
-        if mass < 0.0:
-            raise ModelError(f"link {name!r} has negative mass {mass} kg; masses must be >= 0")
-        inertia_el = inertial.find("inertia")
-        if inertia_el is None:
-            if mass > 0.0:
-                raise ModelError(f"link {name!r} has mass but no <inertia>")
-            continue
-        keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-        ixx, ixy, ixz, iyy, iyz, izz = (
-            _float_attr(inertia_el, k, f"link {name!r} inertia", 0.0) for k in keys
-        )
-        inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-        if mass > 0.0 and np.linalg.eigvalsh(inertia).min() <= 0.0:
-            raise ModelError(
-                f"link {name!r} inertia is not positive definite (eigenvalues "
-                f"{np.round(np.linalg.eigvalsh(inertia), 9).tolist()} kg m^2); it must be"
-            )
+    _check_inertials(root)
 
     parent_of: dict[str, str] = {}
     for joint in root.findall("joint"):
@@ -197,3 +174,56 @@ def parser_messages() -> Iterator[list[str]]:
             lines += sink.read(100_000).decode("utf-8", "replace").splitlines()
             for line in lines:
                 LOGGER.debug("URDF parser: %s", line)
+
+
+def _check_inertials(root: ET.Element) -> None:
+    """Every link's <inertial>: mass >= 0 (kg), a positive definite inertia if massive."""
+    for link in root.findall("link"):
+        name = link.get("name")
+        inertial = link.find("inertial")
+        if inertial is None:
+            continue
+        mass_el = inertial.find("mass")
+        if mass_el is None:
+            raise ModelError(f"link {name!r} has an <inertial> without <mass>")
+        mass = _float_attr(mass_el, "value", f"link {name!r} mass")
+        if mass < 0.0:
+            raise ModelError(f"link {name!r} has negative mass {mass} kg; masses must be >= 0")
+        inertia_el = inertial.find("inertia")
+        if inertia_el is None:
+            if mass > 0.0:
+                raise ModelError(f"link {name!r} has mass but no <inertia>")
+            continue
+        keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+        ixx, ixy, ixz, iyy, iyz, izz = (
+            _float_attr(inertia_el, k, f"link {name!r} inertia", 0.0) for k in keys
+        )
+        inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+        if mass > 0.0 and np.linalg.eigvalsh(inertia).min() <= 0.0:
+            raise ModelError(
+                f"link {name!r} inertia is not positive definite (eigenvalues "
+                f"{np.round(np.linalg.eigvalsh(inertia), 9).tolist()} kg m^2); it must be"
+            )
+
+
+def check_masses(model: pin.Model, root_link: str, path: Path) -> None:
+    """Every moving body has a mass (kg), the base a positive definite inertia (kg m^2).
+
+    Raises:
+        ModelError: naming the body.
+    """
+    for index in range(1, model.njoints):
+        inertia = model.inertias[index]
+        body = model.names[index] if index > 1 else f"base {root_link!r}"
+        if inertia.mass <= 0.0:
+            raise ModelError(
+                f"the body moved by joint {body!r} has no mass; every moving body needs a "
+                "positive <mass>",
+                urdf=str(path),
+            )
+        if np.linalg.eigvalsh(inertia.inertia).min() <= 0.0 and index == 1:
+            raise ModelError(
+                f"the base {root_link!r} has a singular rotational inertia; give it a positive "
+                "definite <inertia>",
+                urdf=str(path),
+            )
