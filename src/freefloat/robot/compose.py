@@ -193,25 +193,7 @@ def compose_servicer_text(spec: ServicerSpec) -> str:
     if any(link.name == BASE_LINK for link in robot.links):
         raise ModelError(f"the arm already has a link named {BASE_LINK!r}")
 
-    locked = set(spec.lock)
-    if not spec.keep_gripper:
-        locked |= {j.name for j in robot.joints if j.type != "fixed" and _GRIPPER.search(j.name)}
-    joints = []
-    for joint in robot.joints:
-        if joint.name in locked:
-            joint = replace(
-                joint,
-                type="fixed",
-                limit=None,
-                mimic=None,
-                axis=None,
-                dynamics=None,
-                safety_controller=None,
-                calibration=None,
-            )
-        elif joint.mimic is not None and joint.mimic.joint in locked:
-            joint = replace(joint, mimic=None)
-        joints.append(joint)
+    joints = _locked_joints(robot, spec)
 
     links = []
     for link in robot.links:
@@ -222,19 +204,7 @@ def compose_servicer_text(spec: ServicerSpec) -> str:
     roots = [link.name for link in robot.links if link.name not in {j.child for j in joints}]
     if len(roots) != 1:
         raise ModelError(f"arm URDF {source} must have one root link, found {roots}")
-    ixx, iyy, izz = spec.inertia
-    box = yourdfpy.Geometry(box=yourdfpy.Box(size=np.array(spec.base_size, dtype=float)))
-    hull = yourdfpy.Material(
-        name="freefloat_hull", color=yourdfpy.Color(rgba=np.array([0.78, 0.78, 0.82, 1.0]))
-    )
-    spacecraft = yourdfpy.Link(
-        name=BASE_LINK,
-        inertial=yourdfpy.Inertial(
-            origin=np.eye(4), mass=float(spec.base_mass), inertia=np.diag([ixx, iyy, izz])
-        ),
-        visuals=[yourdfpy.Visual(name="hull", origin=np.eye(4), geometry=box, material=hull)],
-        collisions=[yourdfpy.Collision(name="hull", origin=np.eye(4), geometry=box)],
-    )
+    spacecraft, hull = _spacecraft(spec)
     mount = yourdfpy.Joint(
         name="mount",
         type="fixed",
@@ -279,6 +249,50 @@ def compose_servicer_text(spec: ServicerSpec) -> str:
     # The default end effector of the servicer without the payload holds it.
     end_effector = load_robot(source.parent / f"{arm_name}_servicer.urdf", text=text).end_effector
     return attach_payload(text, end_effector, spec.payload)
+
+
+def _locked_joints(robot: Any, spec: ServicerSpec) -> list[Any]:
+    """The arm's joints, those locked by ``spec`` (and the gripper's, unless kept) fixed."""
+    locked = set(spec.lock)
+    if not spec.keep_gripper:
+        locked |= {j.name for j in robot.joints if j.type != "fixed" and _GRIPPER.search(j.name)}
+    joints = []
+    for joint in robot.joints:
+        if joint.name in locked:
+            joint = replace(
+                joint,
+                type="fixed",
+                limit=None,
+                mimic=None,
+                axis=None,
+                dynamics=None,
+                safety_controller=None,
+                calibration=None,
+            )
+        elif joint.mimic is not None and joint.mimic.joint in locked:
+            joint = replace(joint, mimic=None)
+        joints.append(joint)
+    return joints
+
+
+def _spacecraft(spec: ServicerSpec) -> tuple[Any, Any]:
+    """The spacecraft link (a box hull of ``base_size`` m, ``base_mass`` kg) and its material."""
+    import yourdfpy
+
+    ixx, iyy, izz = spec.inertia
+    box = yourdfpy.Geometry(box=yourdfpy.Box(size=np.array(spec.base_size, dtype=float)))
+    hull = yourdfpy.Material(
+        name="freefloat_hull", color=yourdfpy.Color(rgba=np.array([0.78, 0.78, 0.82, 1.0]))
+    )
+    spacecraft = yourdfpy.Link(
+        name=BASE_LINK,
+        inertial=yourdfpy.Inertial(
+            origin=np.eye(4), mass=float(spec.base_mass), inertia=np.diag([ixx, iyy, izz])
+        ),
+        visuals=[yourdfpy.Visual(name="hull", origin=np.eye(4), geometry=box, material=hull)],
+        collisions=[yourdfpy.Collision(name="hull", origin=np.eye(4), geometry=box)],
+    )
+    return spacecraft, hull
 
 
 def payload_parent(text: str) -> str | None:
