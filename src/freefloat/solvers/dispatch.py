@@ -67,7 +67,8 @@ def solve(
     Args:
         problem: the problem (not changed).
         options: solver settings.
-        constraints: path constraints to honour; default joint position and velocity limits.
+        constraints: path constraints to honour; default joint position, velocity and effort
+            limits.
         start: a path (within the constraints) to start from instead of the quintic path,
             e.g. where a search with less freedom stopped; ignored when it breaks one.
 
@@ -119,26 +120,7 @@ def solve(
             attempt = Attempt(tried=[f"{strategy}: numerical failure ({exc})"])
     tried = restored + list(attempt.tried)
 
-    roots = []
-    best_vector = problem.residual(zero)
-    for index, beta in enumerate(attempt.candidates):
-        if index in attempt.residuals:  # refined to 1e-14 rad already: no polishing
-            vector = attempt.residuals[index]
-        else:
-            try:
-                beta, vector = polish(problem, beta, tol)
-            except (np.linalg.LinAlgError, FloatingPointError, ValueError):
-                tried.append("a candidate could not be polished (numerical failure)")
-                continue
-        residual = float(np.linalg.norm(vector))
-        broken = broken_constraint(problem, constraints, beta)
-        if broken:
-            tried.append(f"a root breaks {broken}")
-            continue
-        if residual < np.linalg.norm(best_vector):
-            best_vector = vector
-        if residual < tol:
-            roots.append(Root(beta, residual, problem.path_length(beta)))
+    roots, best_vector = _roots(problem, attempt, constraints, tol, tried)
     roots.sort(key=lambda r: float(r.beta @ r.beta))
     if not roots:
         raise SolverError(
@@ -183,3 +165,39 @@ def _dedupe(items: list[str]) -> list[str]:
     for item in items:
         counts[item] = counts.get(item, 0) + 1
     return [item if n == 1 else f"{item} (x{n})" for item, n in counts.items()]
+
+
+def _roots(
+    problem: Problem,
+    attempt: Attempt,
+    constraints: Sequence[Constraint],
+    tol: float,
+    tried: list[str],
+) -> tuple[list[Root], np.ndarray]:
+    """The attempt's candidates, polished, that are roots within the constraints.
+
+    Returns them with the residual vector (rad) closest to zero; appends what was dropped to
+    ``tried``.
+    """
+    zero = np.zeros(problem.n_free)
+    roots = []
+    best_vector = problem.residual(zero)
+    for index, beta in enumerate(attempt.candidates):
+        if index in attempt.residuals:  # refined to 1e-14 rad already: no polishing
+            vector = attempt.residuals[index]
+        else:
+            try:
+                beta, vector = polish(problem, beta, tol)
+            except (np.linalg.LinAlgError, FloatingPointError, ValueError):
+                tried.append("a candidate could not be polished (numerical failure)")
+                continue
+        residual = float(np.linalg.norm(vector))
+        broken = broken_constraint(problem, constraints, beta)
+        if broken:
+            tried.append(f"a root breaks {broken}")
+            continue
+        if residual < np.linalg.norm(best_vector):
+            best_vector = vector
+        if residual < tol:
+            roots.append(Root(beta, residual, problem.path_length(beta)))
+    return roots, best_vector
