@@ -28,7 +28,7 @@ from ..problem.objectives import Level, Objective
 from ..problem.paths import boundary_errors
 from ..problem.residual import Problem
 from ..problem.scenario import Scenario
-from .certify import certify
+from .certify import Certified, certify
 from .optimise import optimise
 from .options import Root, SolveOptions
 from .restore import broken_constraint
@@ -186,6 +186,19 @@ def minimise(
             )
         )
         return keep_start()
+    return _minimised(found, objective, checked, best_freedom, start_value, levels)
+
+
+def _minimised(
+    found: SearchResult,
+    objective: Objective,
+    checked: Certified,
+    best_freedom: list[int],
+    start_value: float,
+    levels: list[Level],
+) -> Minimised:
+    """The result at the certified best path (its objective converged there too)."""
+    names = found.problem.robot.joint_names
     objective = objective.converged(checked.problem, checked.beta)  # at the final path too
     value = objective.evaluate(checked.problem, checked.beta).value
     solution = replace(
