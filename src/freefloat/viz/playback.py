@@ -217,7 +217,6 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
     if not (np.isfinite(speed) and speed > 0):
         raise InputError(f"--speed must be a positive number, got {speed}")
     meshcat, meshcat_visualizer = _import_viewer()
-    import meshcat.geometry as g
     from meshcat.animation import Animation
 
     robot = robot or load_robot(plan.robot.urdf, plan.robot.end_effector)
@@ -238,33 +237,8 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
         viz.initViewer(viewer=viewer)
         viz.loadViewerModel(rootNodeName=ROOT_NODE)
 
-        ee = np.asarray(samples.end_effector_position, dtype=float)
-        extent = float(max(np.linalg.norm(ee, axis=1).max(), 0.5))
-        viewer[f"{EXTRAS}/trail"].set_object(
-            g.Line(
-                g.PointsGeometry(ee.T.astype(np.float32)),
-                g.LineBasicMaterial(color=0x1F77B4, linewidth=2),
-            )
-        )
-        viewer[f"{EXTRAS}/cm"].set_object(
-            g.Sphere(0.03 * extent), g.MeshLambertMaterial(color=0xD62728)
-        )
-        viewer[f"{EXTRAS}/inertial_axes"].set_object(g.triad(0.5 * extent))
-        viewer[f"{EXTRAS}/base_frame"].set_object(g.triad(0.25 * extent))
-        viewer[f"{EXTRAS}/end_effector"].set_object(
-            g.Sphere(0.02 * extent), g.MeshLambertMaterial(color=0x2CA02C)
-        )
-        obstacles = {obstacle_node(o.name): o for o in plan_obstacles(plan)}
-        for node, obstacle in obstacles.items():
-            _draw_obstacle(viewer, g, node, obstacle)
+        obstacles = _draw_extras(viewer, plan)
         base_link = robot.model.getFrameId(robot.base_link)
-        # Camera: meshcat 0.3.2 API (Pinocchio's helpers need a newer meshcat). Inside the
-        # y-up "rotated" node, a world point (x, y, z) is (x, z, -y); it looks at the origin.
-        eye = np.array([0.5, -1.0, 1.1]) * 1.5 * extent
-        viewer["/Grid"].set_property("visible", False)  # no floor in orbit
-        viewer["/Cameras/default/rotated/<object>"].set_property(
-            "position", [float(eye[0]), float(eye[2]), float(-eye[1])]
-        )
 
         animation = Animation(default_framerate=fps)
         data, gdata = robot.model.createData(), visual.createData()
@@ -306,6 +280,43 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
         playback.close()
         raise ViewerError(f"the 3D viewer failed: {type(exc).__name__}: {exc}") from None
     return playback
+
+
+def _draw_extras(viewer: Any, plan: Plan) -> dict[str, Any]:
+    """The end effector's trail, the CM, frames and keep-out objects; the camera (m).
+
+    Returns the obstacles by viewer node.
+    """
+    import meshcat.geometry as g
+
+    samples = plan.samples
+    ee = np.asarray(samples.end_effector_position, dtype=float)
+    extent = float(max(np.linalg.norm(ee, axis=1).max(), 0.5))
+    viewer[f"{EXTRAS}/trail"].set_object(
+        g.Line(
+            g.PointsGeometry(ee.T.astype(np.float32)),
+            g.LineBasicMaterial(color=0x1F77B4, linewidth=2),
+        )
+    )
+    viewer[f"{EXTRAS}/cm"].set_object(
+        g.Sphere(0.03 * extent), g.MeshLambertMaterial(color=0xD62728)
+    )
+    viewer[f"{EXTRAS}/inertial_axes"].set_object(g.triad(0.5 * extent))
+    viewer[f"{EXTRAS}/base_frame"].set_object(g.triad(0.25 * extent))
+    viewer[f"{EXTRAS}/end_effector"].set_object(
+        g.Sphere(0.02 * extent), g.MeshLambertMaterial(color=0x2CA02C)
+    )
+    obstacles = {obstacle_node(o.name): o for o in plan_obstacles(plan)}
+    for node, obstacle in obstacles.items():
+        _draw_obstacle(viewer, g, node, obstacle)
+    # Camera: meshcat 0.3.2 API (Pinocchio's helpers need a newer meshcat). Inside the
+    # y-up "rotated" node, a world point (x, y, z) is (x, z, -y); it looks at the origin.
+    eye = np.array([0.5, -1.0, 1.1]) * 1.5 * extent
+    viewer["/Grid"].set_property("visible", False)  # no floor in orbit
+    viewer["/Cameras/default/rotated/<object>"].set_property(
+        "position", [float(eye[0]), float(eye[2]), float(-eye[1])]
+    )
+    return obstacles
 
 
 def page_html(plan: Plan, speed: float = 1.0) -> str:
