@@ -572,7 +572,11 @@ def effort_of(plan: ff.Plan, robot: ff.Robot) -> float:
     tau = joint_torque_function(plan, ff.MomentumMap(robot))
     x, w = np.polynomial.legendre.leggauss(96)
     t = 0.5 * plan.duration * (x + 1.0)
-    return float(0.5 * plan.duration * sum(wi * float(tau(ti) @ tau(ti)) for ti, wi in zip(t, w, strict=True)))
+    return float(
+        0.5
+        * plan.duration
+        * sum(wi * float(tau(ti) @ tau(ti)) for ti, wi in zip(t, w, strict=True))
+    )
 
 
 def bench_objectives(runs: int = 3) -> dict[str, object]:
