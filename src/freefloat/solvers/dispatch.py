@@ -87,21 +87,7 @@ def solve(
     # (imposed only once a path broke it) is left to the strategy and the root filter.
     eager = [c for c in constraints if not c.lazy]
     quintic_breaks = broken_constraint(problem, eager, zero)
-    given, start, restored = start, zero, []
-    if given is not None and np.any(given) and not broken_constraint(problem, constraints, given):
-        start = np.asarray(given, dtype=float)
-        restored.append("continued from where the search with less freedom stopped")
-    elif quintic_breaks:
-        found = feasible_start(problem, eager, options)
-        restored.append(
-            f"the quintic path breaks {quintic_breaks}: "
-            + (
-                "started from the nearest path within the constraints"
-                if found is not None
-                else "no path within the constraints found to start from"
-            )
-        )
-        start = zero if found is None else found
+    start, restored = _start(problem, constraints, quintic_breaks, start, options)
     if np.linalg.norm(problem.residual(zero)) < 0.01 * tol and not quintic_breaks:
         strategy = Strategy.NONE.value
         attempt = Attempt(candidates=[zero], method="none (the quintic path already reaches it)")
@@ -165,6 +151,34 @@ def _dedupe(items: list[str]) -> list[str]:
     for item in items:
         counts[item] = counts.get(item, 0) + 1
     return [item if n == 1 else f"{item} (x{n})" for item, n in counts.items()]
+
+
+def _start(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    quintic_breaks: str,
+    given: np.ndarray | None,
+    options: SolveOptions,
+) -> tuple[np.ndarray, list[str]]:
+    """Where the strategy starts, and what was done to start there (for the record).
+
+    ``given`` when it is within the constraints; else the quintic path, or the nearest path
+    within the eager constraints when the quintic breaks one. The start is in rad or m.
+    """
+    zero = np.zeros(problem.n_free)
+    if given is not None and np.any(given) and not broken_constraint(problem, constraints, given):
+        return np.asarray(given, dtype=float), [
+            "continued from where the search with less freedom stopped"
+        ]
+    if not quintic_breaks:
+        return zero, []
+    found = feasible_start(problem, [c for c in constraints if not c.lazy], options)
+    how = (
+        "started from the nearest path within the constraints"
+        if found is not None
+        else "no path within the constraints found to start from"
+    )
+    return (zero if found is None else found), [f"the quintic path breaks {quintic_breaks}: {how}"]
 
 
 def _roots(
