@@ -642,7 +642,7 @@ def _positive(value: float, name: str, high: float, unit: str = "") -> float:
 
 
 def _check_arguments(args: argparse.Namespace) -> None:
-    """Refuse bad numbers and unwritable outputs before any work (README, "Limits")."""
+    """Refuse bad numbers and unwritable outputs before any work (docs/limits.md)."""
     command = args.command
     if command == "plan":
         check_samples(args.samples, "--samples")

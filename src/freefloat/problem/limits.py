@@ -1,6 +1,6 @@
 """freefloat's stated limits on its inputs, checked before any work starts.
 
-Each limit is a named constant here (listed in the README's "Limits" section) and each
+Each limit is a named constant here (listed in docs/limits.md) and each
 refusal is an :class:`~freefloat.errors.InputLimitError` that names the value, the limit and
 its unit, quoting at most a short excerpt of the value. Why these values:
 
@@ -19,7 +19,7 @@ its unit, quoting at most a short excerpt of the value. Why these values:
   for 6.3 GB).
 - :data:`MAX_JOINTS`: the planner's cost grows faster than linearly with the joint count (the
   planar map has N (N + 1) / 2 terms, the freedom search up to N + 2 attempts, every Jacobian
-  N columns per free coefficient); measured on generated chains (README, "Limits"), planar
+  N columns per free coefficient); measured on generated chains (docs/limits.md), planar
   chains of 16 to 30 joints took 10 to 180 s, while the shipped and composed robots have at
   most 9 joints.
 - :data:`MAX_SAMPLES`: memory and file size grow with the samples (100001 samples of the
@@ -169,6 +169,6 @@ def check_joint_count(count: int, robot: str = "the robot") -> None:
             count,
             None,
             MAX_JOINTS,
-            why="the planner's budget is stated for at most that many (README, Limits); "
+            why="the planner's budget is stated for at most that many (docs/limits.md); "
             "lock joints (freefloat compose --lock) to plan with fewer",
         )

@@ -155,7 +155,7 @@ def _scenario_errors(check: Any, *args: Any, **kwargs: Any) -> Any:
 
 
 def _number(value: Any, where: str, limit: float = MAX_MAGNITUDE, unit: str = "") -> float:
-    """A finite number of magnitude at most ``limit`` (README, "Limits")."""
+    """A finite number of magnitude at most ``limit`` (docs/limits.md)."""
     return float(_scenario_errors(check_number, value, where, limit, unit))
 
 
