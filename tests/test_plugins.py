@@ -302,3 +302,43 @@ def test_a_format_3_plan_is_held_to_the_limits_it_promised(tmp_path, capsys, wor
     assert [c.name for c in loaded.constraints] == [
         c["name"] for c in worked_plan.to_dict()["constraints"]
     ]
+
+
+def _tool_angles_deg(plan: ff.Plan, robot: ff.Robot, axis, direction, samples=2001):
+    """Angle (deg) of the end effector's ``axis`` to ``direction`` (base frame) along the plan,
+    from Pinocchio's frame placements computed here (not by the constraint's code)."""
+    import pinocchio as pin
+
+    data, frame = robot.model.createData(), robot.end_effector_frame
+    out = []
+    for q in plan.joint_positions(np.linspace(0.0, plan.duration, samples)):
+        pin.framesForwardKinematics(robot.model, data, robot.configuration(q))
+        cos = float(direction @ (data.oMf[frame].rotation @ axis))
+        out.append(math.degrees(math.acos(min(1.0, max(-1.0, cos)))))
+    return np.array(out)
+
+
+def test_a_binding_cone_is_held_on_a_spatial_servicer(ur5_scenario, tmp_path, capsys):
+    """The UR5's tool axis swings 1.1 deg beyond its ends' angle on the minimum-norm path; a
+    cone 0.44 deg tighter than that swing is held, touching its edge."""
+    axis = np.array([0.0, 0.0, 1.0])
+    free = ff.plan(ur5_scenario)
+    robot = ur5_scenario.robot
+    import pinocchio as pin
+
+    data, frame = robot.model.createData(), robot.end_effector_frame
+    ends = []
+    for q in free.joint_positions(np.array([0.0, free.duration])):
+        pin.framesForwardKinematics(robot.model, data, robot.configuration(q))
+        ends.append(data.oMf[frame].rotation @ axis)
+    direction = (ends[0] + ends[1]) / np.linalg.norm(ends[0] + ends[1])
+    swing = _tool_angles_deg(free, robot, axis, direction)
+    edge = max(swing[0], swing[-1])
+    half = edge + 0.6 * (swing.max() - edge)
+    assert swing.max() > half + 0.4  # the minimum-norm path breaks the cone
+    cone = EndEffectorCone(axis, direction, math.radians(half))
+    held = ff.plan(ur5_scenario, constraints=[*scenario_constraints(ur5_scenario), cone])
+    angles = _tool_angles_deg(held, robot, axis, direction, 4001)
+    assert angles.max() <= half + 1e-6
+    assert angles.max() > half - 0.05  # it binds
+    assert main(["verify", str(held.save(tmp_path / "cone.json"))]) == 0, capsys.readouterr().err

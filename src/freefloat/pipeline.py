@@ -29,6 +29,7 @@ from .plans.format import (
     SolverReport,
 )
 from .plans.reports import (
+    as_rebuilt,
     check_registered,
     constraint_records,
     norm_report,
@@ -340,7 +341,7 @@ def plan_from_solution(
     verification = verify_plan(
         unverified,
         robot,
-        constraints=None if constraints is None else list(constraints),
+        constraints=None if constraints is None else as_rebuilt(constraints),
         recompute=False,  # the numbers were just computed by the same functions
     )
     if not verification.passed:

@@ -23,6 +23,7 @@ from ..solvers.minimise import Minimised
 from .format import ConstraintRecord, ObjectiveReport, ObstacleRecord, SafetyReport
 
 __all__ = [
+    "as_rebuilt",
     "check_registered",
     "constraint_records",
     "norm_report",
@@ -67,6 +68,16 @@ def constraint_records(constraints: Sequence[Constraint]) -> list[ConstraintReco
             raise InputError(f"two constraints named {constraint.name!r}; give each once")
         records.append(ConstraintRecord(constraint.name, constraint.to_record()))
     return records
+
+
+def as_rebuilt(constraints: Sequence[Constraint]) -> list[Constraint]:
+    """The constraints in the order ``freefloat verify`` rebuilds them from a plan.
+
+    The recorded ones in their order, then those the ``safety`` record describes: the plan's
+    checks are then listed in the order its verification recomputes them.
+    """
+    recorded = [c for c in constraints if c.name not in SAFETY_RECORDED]
+    return recorded + [c for c in constraints if c.name in SAFETY_RECORDED]
 
 
 def objective_report(minimised: Minimised) -> ObjectiveReport:
