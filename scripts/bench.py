@@ -41,10 +41,16 @@ side; and the Panda servicer's scenario with min_norm against min_effort.
 
 Many joints and two arms (issue 24, with --multi-arm-only; scripts/bench_multi_arm.py):
 Robonaut 2's 14 joints keeping the torso still, generated chains of 14 to 24 joints, the shipped
-dual-arm servicer.
+dual-arm servicer. True hulls and the certified clearance check (--clearance-only;
+scripts/bench_clearance.py).
 
-Run: python scripts/bench.py [--runs N] [--json FILE] [--reach-only] [--random N] [--sweep]
-     [--sweep-only] [--multi-arm-only]
+Run: python scripts/bench.py [--runs N] [--json FILE] [--markdown FILE] [--reach-only]
+     [--random N] [--sweep] [--sweep-only] [--multi-arm-only] [--clearance-only]
+
+``--markdown FILE`` also writes the tables as Markdown, each table preceded by its stamp: the
+date, the machine (CPU, cores), the Python, Pinocchio, numpy and freefloat versions, the load
+average and the command, so that a reader can tell runs apart and reproduce one
+(docs/benchmarks.md).
 """
 
 from __future__ import annotations
@@ -52,10 +58,14 @@ from __future__ import annotations
 import argparse
 import contextlib
 import dataclasses
+import datetime
+import io
 import json
 import os
 import platform
+import shlex
 import statistics
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -567,7 +577,11 @@ def effort_of(plan: ff.Plan, robot: ff.Robot) -> float:
     tau = joint_torque_function(plan, ff.MomentumMap(robot))
     x, w = np.polynomial.legendre.leggauss(96)
     t = 0.5 * plan.duration * (x + 1.0)
-    return float(0.5 * plan.duration * sum(wi * float(tau(ti) @ tau(ti)) for ti, wi in zip(t, w)))
+    return float(
+        0.5
+        * plan.duration
+        * sum(wi * float(tau(ti) @ tau(ti)) for ti, wi in zip(t, w, strict=True))
+    )
 
 
 def bench_objectives(runs: int = 3) -> dict[str, object]:
@@ -724,8 +738,67 @@ def machine() -> str:
     )
 
 
+def stamp() -> str:
+    """When, where and how a table was made: date, machine, versions, load and command."""
+    load = ", ".join(f"{x:.1f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "?"
+    when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    command = "python " + " ".join(shlex.quote(a) for a in sys.argv)
+    return (
+        f"*Measured {when} on {machine()}, numpy {np.__version__}; load average {load} "
+        f"(1, 5, 15 min); command: `{command}`*"
+    )
+
+
+def stamped_markdown(text: str) -> str:
+    """The printed report as Markdown, each table preceded by its stamp (progress dropped)."""
+    out: list[str] = []
+    mark = stamp()
+    in_table = False
+    for line in text.splitlines():
+        if line.startswith("  done:") or line.startswith("machine:"):
+            continue
+        table = line.startswith("|")
+        if table and not in_table:
+            if out and out[-1].strip():
+                out.append("")
+            out += [mark, ""]
+        out.append(line)
+        in_table = table
+    return "\n".join(out).strip() + "\n"
+
+
 def main() -> None:
+    markdown = next(
+        (Path(a.split("=", 1)[1]) for a in sys.argv if a.startswith("--markdown=")), None
+    )
+    if "--markdown" in sys.argv[1:]:
+        at = sys.argv.index("--markdown")
+        markdown = Path(sys.argv[at + 1]) if at + 1 < len(sys.argv) else None
+    if markdown is None:
+        run()
+        return
+    buffer = io.StringIO()
+
+    class Tee(io.TextIOBase):
+        def write(self, text: str) -> int:
+            buffer.write(text)
+            return sys.__stdout__.write(text) if sys.__stdout__ else len(text)
+
+    with contextlib.redirect_stdout(Tee()):
+        run()
+    markdown.write_text(stamped_markdown(buffer.getvalue()), encoding="utf-8")
+    print(f"wrote {markdown}")
+
+
+def run() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument(
+        "--markdown",
+        type=Path,
+        metavar="FILE",
+        help="also write the tables as Markdown, each stamped with date, machine, versions "
+        "and this command",
+    )
     parser.add_argument("--runs", type=int, default=9, help="freefloat runs per problem")
     parser.add_argument("--baseline-runs", type=int, default=3, help="baseline runs per problem")
     parser.add_argument("--json", type=Path, help="also write the tables as JSON")

@@ -6,6 +6,7 @@ SciPy's adaptive quadrature on the polynomials as printed there.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -112,3 +113,61 @@ def planar_gains(
     c2 = d7 + d6 * math.cos(q2) + d3 * math.cos(q1 + q2)
     total = c0 + c1 + c2
     return -(c1 + c2) / total, -c2 / total
+
+
+def _gain_arrays(q1: np.ndarray, q2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`gains` on arrays (the same formulas, vectorised)."""
+    d0 = D1 + D2 * np.cos(q1) + D3 * np.cos(q1 + q2)
+    d1 = D4 + D5 * np.cos(q1) + D6 * np.cos(q2)
+    d2 = D7 + D8 * np.cos(q2) + D9 * np.cos(q1 + q2)
+    total = d0 + d1 + d2
+    return -(d1 + d2) / total, -d2 / total
+
+
+def yaw_change_bounds_deg(
+    delta_q1: float, delta_q2: float, points: int = 361
+) -> tuple[float, float]:
+    """The reachable yaw-change interval (deg) of the worked example's arm, independently.
+
+    docs/method.md section 6: ``g_i,min dq_i .. g_i,max dq_i`` summed. The extremes of the
+    closed-form gains come from a dense grid over both continuous joints, each refined by
+    Nelder-Mead on the closed form (SciPy; no freefloat code).
+    """
+    from scipy.optimize import minimize
+
+    grid = np.linspace(-math.pi, math.pi, points)
+    a, b = np.meshgrid(grid, grid, indexing="ij")
+    values = _gain_arrays(a, b)
+    extremes = []
+    for i in range(2):
+        pair = []
+        for sign in (1.0, -1.0):  # minimum, then maximum
+            k = np.unravel_index(int(np.argmin(sign * values[i])), a.shape)
+            found = minimize(
+                lambda x, i=i, sign=sign: sign * gains(x[0], x[1])[i],
+                np.array([a[k], b[k]]),
+                method="Nelder-Mead",
+                options={"xatol": 1e-12, "fatol": 1e-15, "maxiter": 4000},
+            )
+            pair.append(sign * float(found.fun))
+        extremes.append(pair)
+    lo = hi = 0.0
+    for (g_min, g_max), dq in zip(extremes, (delta_q1, delta_q2), strict=True):
+        lo += min(g_min * dq, g_max * dq)
+        hi += max(g_min * dq, g_max * dq)
+    return math.degrees(lo), math.degrees(hi)
+
+
+@functools.cache
+def worked_bounds_deg() -> tuple[float, float]:
+    """The worked example's interval (deg): start q = (80, 30) deg, goal (-60, 90) deg.
+
+    The paper prints 1.4 and 72.2 deg.
+    """
+    return yaw_change_bounds_deg(math.radians(-140.0), math.radians(60.0))
+
+
+def worked_bounds_text() -> str:
+    """:func:`worked_bounds_deg` as freefloat prints an interval: ``(lo, hi)`` to 3 decimals."""
+    lo, hi = worked_bounds_deg()
+    return f"({lo:.3f}, {hi:.3f})"

@@ -11,6 +11,7 @@ import sys
 import numpy as np
 import pytest
 
+import freefloat as ff
 from freefloat.cli import main
 from freefloat.export import from_samples, resample
 
@@ -150,7 +151,18 @@ def test_ros2_bag_round_trip_resampled(worked_plan, plan_file, tmp_path):
     assert main(args) == 0
     assert main(args) == 0  # an existing bag is replaced
     assert "version: 8" in (out / "metadata.yaml").read_text()  # rosbag2 metadata format
-    truth = resample(worked_plan, 4.0)
+    # Truth evaluated here from the plan's coefficients (NumPy) and Pinocchio's inverse
+    # dynamics, not by the exporter's resample(): instants every 1/4 s, and T.
+    poly = np.polynomial.polynomial
+    t = np.arange(0.0, worked_plan.duration, 0.25)
+    t = np.append(t, worked_plan.duration) if t[-1] < worked_plan.duration else t
+    coefficients = [np.asarray(worked_plan.coefficients[n]) for n in worked_plan.robot.joints]
+    q, qd, qdd = (
+        np.stack([poly.polyval(t, poly.polyder(c, k)) for c in coefficients], axis=1)
+        for k in range(3)
+    )
+    mmap = ff.MomentumMap(ff.load_robot(worked_plan.robot.urdf))
+    tau = ff.physics.dynamics.inverse_dynamics_batch(mmap, q, qd, qdd).tau
     ts = get_typestore(Stores.ROS2_HUMBLE)
     got: dict[str, list] = {}
     with Reader(out) as reader:
@@ -160,18 +172,21 @@ def test_ros2_bag_round_trip_resampled(worked_plan, plan_file, tmp_path):
             )
     ((msgtype, _, traj),) = got["/joint_trajectory"]
     assert msgtype == "trajectory_msgs/msg/JointTrajectory"
-    np.testing.assert_array_equal([p.positions for p in traj.points], truth.q)
-    assert [m[0] for m in got["/tf"]] == ["tf2_msgs/msg/TFMessage"] * len(truth.t)
+    np.testing.assert_allclose([p.positions for p in traj.points], q, rtol=0, atol=1e-12)
+    assert [m[0] for m in got["/tf"]] == ["tf2_msgs/msg/TFMessage"] * len(t)
     states = got["/joint_states"]
-    assert [m[1] for m in states] == [round(t * 1e9) for t in truth.t]
-    np.testing.assert_array_equal([m[2].position for m in states], truth.q)
-    np.testing.assert_array_equal([m[2].effort for m in states], truth.tau)
-    quats = [m[2].transforms[0].transform.rotation for m in got["/tf"]]
-    np.testing.assert_array_equal([[r.x, r.y, r.z, r.w] for r in quats], truth.base_quaternion_xyzw)
-    # The final attitude recomputed at 4 Hz is the plan's achieved attitude.
-    np.testing.assert_allclose(
-        truth.base_quaternion_xyzw[-1], worked_plan.base.achieved_quaternion_xyzw, atol=1e-9
+    assert [m[1] for m in states] == [round(x * 1e9) for x in t]
+    np.testing.assert_allclose([m[2].position for m in states], q, rtol=0, atol=1e-12)
+    scale = np.abs(tau).max()
+    np.testing.assert_allclose([m[2].effort for m in states], tau, rtol=0, atol=1e-10 * scale)
+    quats = np.array(
+        [[r.x, r.y, r.z, r.w] for r in (m[2].transforms[0].transform.rotation for m in got["/tf"])]
     )
+    # The base attitude starts at the plan's start and ends at its goal, on unit quaternions.
+    np.testing.assert_allclose(np.linalg.norm(quats, axis=1), 1.0, atol=1e-12)
+    start, end = worked_plan.base.start_quaternion_xyzw, worked_plan.base.target_quaternion_xyzw
+    assert ff.geodesic_angle(quats[0], np.array(start)) < 1e-12
+    assert ff.geodesic_angle(quats[-1], np.array(end)) < 1e-9
 
 
 @pytest.mark.parametrize(

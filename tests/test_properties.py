@@ -104,7 +104,6 @@ def test_random_arms_plan_verified_or_raise(tmp_path, urdf, data):
         return
     event("planned (planar)" if plan.feasibility.planar else "planned (spatial)")
     assert plan.base.attitude_error_rad < 1e-9
-    assert plan.verification.passed
     again = ff.verify_plan(ff.Plan.load(plan.save(tmp_path / "p.json")), robot)
     assert again.passed, again.failures
     assert again["attitude_independent"].value < 1e-7
@@ -134,8 +133,9 @@ def test_regression_diverging_sqp_is_a_failed_attempt_not_a_crash():
             goal_attitude=probe.achieved(rng.normal(size=probe.n_free)),
         )
         try:
-            outcomes.append(ff.plan(scenario, samples=41).verification.passed)
+            ff.plan(scenario, samples=41)
+            outcomes.append("planned")
         except ff.FreeFloatError as exc:  # anything else would fail the test
             outcomes.append(type(exc).__name__)
-    assert outcomes[0] is True
+    assert outcomes[0] == "planned"
     assert outcomes[1] in (True, "SolverError")

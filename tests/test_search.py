@@ -10,6 +10,7 @@ import pytest
 import freefloat as ff
 from freefloat.solvers.search import freedom_candidates
 
+import reference as ref
 import urdfs
 from conftest import ROOT
 
@@ -36,7 +37,7 @@ def test_automatic_freedom_is_chosen_and_recorded(tmp_path):
     plan = ff.plan(scenario)
     assert plan.solver.freedom == {"q1": 1, "q2": 0}  # nearest the base first
     assert plan.solver.tried[-1].endswith("freedom q1+1: solved")
-    assert plan.base.attitude_error_rad < 1e-9 and plan.verification.passed
+    assert plan.base.attitude_error_rad < 1e-9
 
 
 TURNS = WORKED.replace("extra = { q2 = 1 }", "").replace(
@@ -50,7 +51,7 @@ def test_full_turns_are_not_used_unless_asked(tmp_path):
     assert "base_zyx_deg = [-90.0" in TURNS
     with pytest.raises(ff.InfeasibleError) as info:
         ff.plan(_scenario(tmp_path, TURNS))
-    assert "outside the reachable interval (1.358, 72.270) deg" in str(info.value)
+    assert f"outside the reachable interval {ref.worked_bounds_text()} deg" in str(info.value)
     assert "allow_full_turns = true (or --allow-full-turns)" in str(info.value)
 
 
@@ -58,7 +59,6 @@ def test_full_turns_make_an_unreachable_request_a_verified_plan(tmp_path):
     scenario = _scenario(tmp_path, TURNS.replace("[path]", "[path]\nallow_full_turns = true"))
     plan = ff.plan(scenario)
     assert plan.solver.full_turns == {"q1": 1, "q2": 0}
-    assert plan.verification.passed
     assert plan.base.achieved_zyx_deg[0] == pytest.approx(-90.0, abs=1e-7)
     q1 = np.array(plan.samples.q)[:, 0]
     assert q1[-1] == pytest.approx(math.radians(-60.0) + 2 * math.pi, abs=1e-12)
@@ -91,7 +91,11 @@ def test_velocity_limit_reports_the_shortest_duration(tmp_path):
     slow = ff.Scenario(
         robot, err.shortest_duration * 1.001, start, goal, goal_attitude=reached, extra={"q1": 1}
     )
-    assert ff.plan(slow).verification.passed
+    plan = ff.plan(slow)
+    # the joint rates on a dense grid of the stored polynomials, against the URDF limit
+    coefficients = np.polynomial.polynomial.polyder(plan.coefficients["q1"])
+    t = np.linspace(0.0, plan.duration, 20001)
+    assert np.abs(np.polynomial.polynomial.polyval(t, coefficients)).max() <= 2.0
 
 
 def test_spatial_failure_reports_the_residual_per_axis_and_what_was_tried():

@@ -35,7 +35,13 @@ class BelowOnJoint(ff.Constraint):
         return ff.Excess(high - self.ceiling, 0.0, f"t = {when:.3g} s")
 
 
-def test_a_toy_constraint_through_the_public_interface_is_honoured():
+@pytest.fixture
+def registered(monkeypatch):
+    """BelowOnJoint registered (one line), as a plan's constraint must be."""
+    monkeypatch.setitem(ff.problem.constraints.CONSTRAINTS, BelowOnJoint.name, BelowOnJoint)
+
+
+def test_a_toy_constraint_through_the_public_interface_is_honoured(registered):
     scenario = ff.Scenario.from_toml(ff.default_scenario_path())
     free = ff.plan(scenario)
     assert max(np.array(free.samples.q)[:, 1]) > 1.9  # the minimum-norm root overshoots q2
@@ -45,18 +51,26 @@ def test_a_toy_constraint_through_the_public_interface_is_honoured():
         [held.coefficients[n] for n in held.robot.joints], held.duration
     )
     assert path.extremes(1, 0)[1][0] <= 1.6 + 1e-9  # exact maximum of the polynomial
-    assert held.verification["toy_ceiling"].passed
+    assert "toy_ceiling" in held.verification
     assert held.base.attitude_error_rad < 1e-9
     # Another root of the same equation was chosen, not the minimum-norm one.
     assert held.free_parameters["q2"] != free.free_parameters["q2"]
 
 
-def test_a_constraint_no_root_can_meet_is_a_clear_refusal():
+def test_a_constraint_no_root_can_meet_is_a_clear_refusal(registered):
     scenario = ff.Scenario.from_toml(ff.default_scenario_path())
     with pytest.raises(ff.SolverError) as info:
         ff.plan(scenario, constraints=[BelowOnJoint(1, 1.0)])
     assert "toy_ceiling" in str(info.value)
     assert "\n" not in str(info.value)
+
+
+def test_an_unregistered_constraint_is_refused_before_any_work():
+    scenario = ff.Scenario.from_toml(ff.default_scenario_path())
+    with pytest.raises(
+        ff.InputError, match=r"'toy_ceiling' \(BelowOnJoint\) is not in the registry"
+    ):
+        ff.plan(scenario, constraints=[BelowOnJoint(1, 1.6)])
 
 
 def test_typed_round_trip(tmp_path, worked_plan):
@@ -84,7 +98,7 @@ def test_solve_does_not_change_the_problem(planar_robot):
     before = (problem.steps, problem.family, problem.yaw_change)
     solution = ff.solve(problem)
     assert (problem.steps, problem.family, problem.yaw_change) == before
-    assert solution.strategy is ff.Strategy.SCAN
+    assert solution.strategy == ff.Strategy.SCAN
 
 
 def test_problem_from_scenario_equals_build_problem():
@@ -179,11 +193,73 @@ def test_layers_flow_one_way_and_no_circle():
             )
 
 
-def test_no_module_is_too_long_without_a_reason():
+#: Modules allowed beyond 400 lines, each with its reason. Only modules being split now.
+LONG_MODULES = {
+    "cli.py": "being split into a cli/ package, one module per command",
+    "problem/scenario.py": "being split: TOML parsing apart from resolution (IK, cache, payload)",
+    "plans/format.py": "being split: plan records apart from JSON I/O and migration",
+    "verify/recompute.py": "being split with verify_plan into a list of checks",
+}
+#: Functions allowed beyond 80 lines of code (docstring aside), each with its reason.
+LONG_FUNCTIONS = {
+    ("cli.py", "build_parser"): "being split with cli.py (one parser per command module)",
+    ("problem/scenario.py", "from_dict"): "being split with problem/scenario.py",
+    ("verify/checks.py", "verify_plan"): "being restructured into a list of checks",
+    ("verify/recompute.py", "check_plan_numbers"): "being split with verify/recompute.py",
+}
+MAX_MODULE_LINES = 400
+MAX_FUNCTION_LINES = 80
+
+
+def _code_lines(node: ast.FunctionDef | ast.AsyncFunctionDef) -> int:
+    """Lines from the first statement after the docstring to the last."""
+    body = node.body
+    first = body[0]
+    if (
+        isinstance(first, ast.Expr)
+        and isinstance(first.value, ast.Constant)
+        and isinstance(first.value.value, str)
+        and len(body) > 1
+    ):
+        body = body[1:]
+    return int(body[-1].end_lineno or body[-1].lineno) - body[0].lineno + 1
+
+
+def test_no_module_is_too_long():
+    too_long = {}
     for path in SRC.rglob("*.py"):
+        name = path.relative_to(SRC).as_posix()
         lines = path.read_text().count("\n")
-        doc = ast.get_docstring(ast.parse(path.read_text())) or ""
-        assert lines <= 400 or "long because" in doc, f"{path.name}: {lines} lines"
+        if lines > MAX_MODULE_LINES and name not in LONG_MODULES:
+            too_long[name] = lines
+    assert not too_long, f"modules over {MAX_MODULE_LINES} lines: {too_long}"
+
+
+def test_no_function_is_too_long():
+    too_long = {}
+    for path in SRC.rglob("*.py"):
+        name = path.relative_to(SRC).as_posix()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                lines = _code_lines(node)
+                if lines > MAX_FUNCTION_LINES and (name, node.name) not in LONG_FUNCTIONS:
+                    too_long[f"{name}:{node.name}"] = lines
+    assert not too_long, f"functions over {MAX_FUNCTION_LINES} lines of code: {too_long}"
+
+
+def test_the_allow_lists_name_only_what_exists_and_is_long():
+    for name in LONG_MODULES:
+        assert (SRC / name).read_text().count("\n") > MAX_MODULE_LINES, name
+    for name, function in LONG_FUNCTIONS:
+        tree = ast.parse((SRC / name).read_text())
+        (node,) = [n for n in ast.walk(tree) if getattr(n, "name", None) == function]
+        assert _code_lines(node) > MAX_FUNCTION_LINES, (name, function)
+
+
+def test_no_module_claims_to_be_long_for_a_reason():
+    """The old escape hatch is gone: a docstring no longer excuses a long module."""
+    for path in SRC.rglob("*.py"):
+        assert "is long because" not in (ast.get_docstring(ast.parse(path.read_text())) or "")
 
 
 def test_method_document_exists_and_is_cited():
@@ -193,3 +269,142 @@ def test_method_document_exists_and_is_cited():
         assert f"## {section}." in text
     cited = [p for p in SRC.rglob("*.py") if "docs/method.md" in p.read_text()]
     assert len(cited) >= 5
+
+
+# -- one list per plug-in kind: schemas and CLI agree with the registries ---------------------
+
+
+def test_shipped_schemas_list_the_registries_plugins():
+    """The shipped files hold the built-in registries' names (scripts/write_schemas.py)."""
+    from freefloat.plans.schema import SCHEMAS, schema_text
+
+    for name in SCHEMAS:
+        shipped = (SRC / "schemas" / f"{name}.schema.json").read_text()
+        assert shipped == schema_text(name), f"{name}: run scripts/write_schemas.py"
+
+
+def test_schema_enums_follow_the_live_registries(monkeypatch):
+    from freefloat.plans.schema import schema
+
+    monkeypatch.setitem(ff.OBJECTIVES, "toy", ff.Objective)
+    objective = schema("plan")["properties"]["objective"]["properties"]["name"]
+    assert objective["enum"] == list(ff.OBJECTIVES)
+    path = schema("scenario")["properties"]["path"]["properties"]["objective"]
+    assert "toy" in path["enum"]
+
+
+def test_cli_choices_are_the_registries():
+    from freefloat.cli import build_parser
+    from freefloat.export import EXPORTS
+
+    parser = build_parser()
+    commands = next(a for a in parser._actions if a.choices and "plan" in a.choices).choices
+    objective = next(a for a in commands["plan"]._actions if "--objective" in a.option_strings)
+    assert list(objective.choices) == list(ff.OBJECTIVES)
+    export = next(a for a in commands["export"]._actions if "--format" in a.option_strings)
+    assert export.help == " | ".join(EXPORTS)
+
+
+def test_strategies_are_named_by_their_registry():
+    from freefloat.solvers import STRATEGIES
+
+    assert {s.value for s in ff.Strategy} - {"none"} == set(STRATEGIES)
+
+
+# -- one description per file format: the dataclasses and the schema agree ----------------------
+
+
+def _properties(schema: dict, path: tuple[str, ...]) -> tuple[set[str], set[str]]:
+    node = schema
+    for key in path:
+        node = node[key]
+    return set(node["properties"]), set(node.get("required", ()))
+
+
+def _fields(cls) -> tuple[set[str], set[str]]:
+    import dataclasses
+
+    fields = dataclasses.fields(cls)
+    required = {
+        f.name
+        for f in fields
+        if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+    }
+    return {f.name for f in fields}, required
+
+
+def test_plan_records_and_the_plan_schema_name_the_same_fields():
+    from freefloat.plans import format as fmt
+    from freefloat.plans.schema import schema
+
+    plan = schema("plan")
+    records = {
+        ("properties", "robot"): fmt.RobotRef,
+        ("properties", "base"): fmt.BaseReport,
+        ("properties", "feasibility"): fmt.Feasibility,
+        ("properties", "samples"): fmt.Samples,
+        ("properties", "request"): fmt.Request,
+        ("properties", "solver", "properties", "solutions", "items"): fmt.SolutionRecord,
+        ("properties", "verification", "properties", "checks", "items"): fmt.Check,
+        ("properties", "safety", "properties", "obstacles", "items"): fmt.ObstacleRecord,
+        ("properties", "objective", "properties", "levels", "items"): ff.problem.objectives.Level,
+        ("properties", "constraints", "items"): fmt.ConstraintRecord,
+    }
+    for path, cls in records.items():
+        names, required = _fields(cls)
+        in_schema, schema_required = _properties(plan, path)
+        in_schema.discard("passed")  # a check's verdict, written from its figures
+        assert names == in_schema, (cls.__name__, names ^ in_schema)
+        assert required == schema_required, (cls.__name__, required ^ schema_required)
+    # records whose every field has a default: the schema requires what the file must state
+    for path, cls in {
+        ("properties", "solver"): fmt.SolverReport,
+        ("properties", "safety"): fmt.SafetyReport,
+        ("properties", "objective"): fmt.ObjectiveReport,
+    }.items():
+        names, _ = _fields(cls)
+        in_schema, _ = _properties(plan, path)
+        assert names == in_schema, (cls.__name__, names ^ in_schema)
+    # the plan itself: its coefficients are the file's path, its verification the checks
+    names, _ = _fields(fmt.Plan)
+    top, _ = _properties(plan, ())
+    assert (names - {"coefficients"}) | {"path"} == top, names ^ top
+
+
+def test_plan_limits_are_the_schema_limits():
+    from freefloat.plans import limits
+    from freefloat.plans.schema import schema
+
+    p = schema("plan")["properties"]
+    assert p["robot"]["properties"]["joints"]["maxItems"] == limits.MAX_JOINTS
+    assert p["duration"]["minimum"] == limits.MIN_DURATION
+    assert p["duration"]["maximum"] == limits.MAX_DURATION
+    coefficients = p["path"]["properties"]["coefficients"]["additionalProperties"]
+    assert coefficients["maxItems"] == limits.MAX_DEGREE + 1
+    assert p["samples"]["properties"]["t"]["maxItems"] == limits.MAX_SAMPLES
+    assert p["solver"]["properties"]["solutions"]["maxItems"] == limits.MAX_SOLUTIONS
+    steps = p["solver"]["properties"]["integration_steps"]["maximum"]
+    assert steps == limits.MAX_INTEGRATION_STEPS
+    note = p["objective"]["properties"]["levels"]["items"]["properties"]["note"]["maxLength"]
+    assert note == ff.problem.objectives.base.MAX_NOTE
+
+
+def test_scenario_keys_and_the_scenario_schema_name_the_same_keys():
+    from freefloat.plans.schema import schema
+    from freefloat.problem import scenario as sc
+
+    s = schema("scenario")
+    for path, keys in {
+        (): sc._TOP_KEYS,
+        ("properties", "path"): sc._PATH_KEYS,
+        ("properties", "safety"): sc._SAFETY_KEYS,
+        ("properties", "payload"): sc._PAYLOAD_KEYS,
+        ("properties", "start"): sc._STATE_KEYS,
+        ("properties", "goal"): sc._GOAL_KEYS,
+        ("properties", "obstacles", "items"): sc._OBSTACLE_KEYS,
+        ("properties", "robot", "oneOf", 1): sc._ROBOT_KEYS,
+    }.items():
+        node = s
+        for key in path:
+            node = node[key]
+        assert set(node["properties"]) == set(keys), (path, set(node["properties"]) ^ set(keys))

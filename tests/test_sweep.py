@@ -14,6 +14,8 @@ import freefloat as ff
 from freefloat.cli import main
 from freefloat.sweep import TIMING_COLUMNS, SweepSpec
 
+import reference as ref
+
 DATA = Path(__file__).parent / "data"
 
 
@@ -51,7 +53,7 @@ def test_worked_example_yaw_sweep_planned_inside_infeasible_outside(yaw_sweep):
     assert len(rows) == 81
     assert [r.index for r in rows] == list(range(81))
     lo, hi = rows[0].yaw_change_min_deg, rows[0].yaw_change_max_deg
-    assert lo == pytest.approx(1.358, abs=1e-3) and hi == pytest.approx(72.270, abs=1e-3)
+    assert (lo, hi) == pytest.approx(ref.worked_bounds_deg(), abs=1e-6)  # closed form, grid
     for row in rows:
         change = round(row.values[0] + 50.0, 9)
         if lo < change < hi:

@@ -2,11 +2,8 @@
 
 Angles are printed in degrees. Every expected failure (a :class:`FreeFloatError`) is printed
 as one line ``freefloat: error: ...`` and exits with code 2, with no traceback and no file
-written.
-
-This module is long because it holds the parser and the handler of every subcommand (plan,
-bounds, verify, compose, show, plot, export, sweep); the plan summary lives in
-:mod:`freefloat.viz.summary` and the work itself in the layers below.
+written. The plan summary lives in :mod:`freefloat.viz.summary` and the work itself in the
+layers below.
 """
 
 from __future__ import annotations
@@ -149,10 +146,10 @@ def _cmd_plot(args: argparse.Namespace) -> int:
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
-    from .export import FORMATS, export
+    from .export import EXPORTS, export
 
-    if args.format not in FORMATS:
-        raise InputError(f"unknown --format {args.format!r}; valid: {', '.join(FORMATS)}")
+    if args.format not in EXPORTS:
+        raise InputError(f"unknown --format {args.format!r}; valid: {', '.join(EXPORTS)}")
     rate = None
     if args.rate is not None:
         try:
@@ -167,6 +164,12 @@ def _cmd_export(args: argparse.Namespace) -> int:
     source = "the plan's samples" if rate is None else f"resampled at {rate:g} Hz"
     print(f"freefloat export: wrote {written} ({args.format}, {source})")
     return 0
+
+
+def _export_names() -> list[str]:
+    from .export import EXPORTS
+
+    return list(EXPORTS)
 
 
 def _cmd_bounds(args: argparse.Namespace) -> int:
@@ -609,7 +612,9 @@ def build_parser() -> argparse.ArgumentParser:
         "rate from the plan's polynomials and robot. No ROS installation is needed.",
     )
     p_export.add_argument("plan", help="plan JSON file")
-    p_export.add_argument("--format", required=True, metavar="FORMAT", help="csv, mcap or ros2-bag")
+    p_export.add_argument(
+        "--format", required=True, metavar="FORMAT", help=" | ".join(_export_names())
+    )
     p_export.add_argument("--rate", metavar="HZ", help="resample at HZ samples per second")
     p_export.add_argument(
         "-o", "--output", required=True, metavar="FILE", help="file (folder for ros2-bag)"
@@ -710,7 +715,7 @@ def _positive(value: float, name: str, high: float, unit: str = "") -> float:
 
 
 def _check_arguments(args: argparse.Namespace) -> None:
-    """Refuse bad numbers and unwritable outputs before any work (README, "Limits")."""
+    """Refuse bad numbers and unwritable outputs before any work (docs/limits.md)."""
     command = args.command
     if command == "plan":
         check_samples(args.samples, "--samples")

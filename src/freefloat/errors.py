@@ -104,7 +104,7 @@ class InputError(FreeFloatError):
 
 
 class InputLimitError(InputError):
-    """A value beyond one of freefloat's stated limits (README, "Limits").
+    """A value beyond one of freefloat's stated limits (docs/limits.md).
 
     Attributes:
         name: what the value is (``"duration"``, ``"--samples"``, ``"[path] extra for 'q2'"``).

@@ -8,7 +8,6 @@ verifies a solution found elsewhere. The file format lives in :mod:`freefloat.pl
 
 from __future__ import annotations
 
-import logging
 import time
 from collections.abc import Sequence
 from dataclasses import asdict, replace
@@ -22,15 +21,21 @@ from .errors import (
 )
 from .physics.attitude import geodesic_angle
 from .plans.format import (
-    ObjectiveLevel,
     ObjectiveReport,
-    ObstacleRecord,
     Plan,
     Request,
     RobotRef,
     SafetyReport,
     SolverReport,
     sha256_hex,
+)
+from .plans.reports import (
+    as_rebuilt,
+    check_registered,
+    constraint_records,
+    norm_report,
+    objective_report,
+    safety_report,
 )
 from .plans.sampling import base_report, feasibility_report, sample_solution, solution_record
 from .problem.build import check_joint_limits
@@ -39,16 +44,15 @@ from .problem.constraints import (
     Constraint,
     DurationScaledLimit,
     LimitPeak,
+    default_constraints,
     scenario_constraints,
 )
 from .problem.constraints.clearance import clearance_at
-from .problem.constraints.registry import cached_collision_model
 from .problem.limits import check_samples
-from .problem.objectives import DEFAULT_OBJECTIVE, objective_named
+from .problem.objectives import DEFAULT_OBJECTIVE, Objective, objective_named
 from .problem.residual import Problem
 from .problem.scenario import Scenario
-from .progress import LOGGER, stage
-from .robot.collision import known_srdf
+from .progress import stage
 from .solvers.minimise import minimise
 from .solvers.options import DEFAULT_TOLERANCE, Solution, SolveOptions
 from .solvers.restore import broken_constraint
@@ -66,7 +70,7 @@ def plan(
     options: SolveOptions | None = None,
     samples: int = 201,
     constraints: Sequence[Constraint] | None = None,
-    objective: str | None = None,
+    objective: str | Objective | None = None,
 ) -> Plan:
     """Plan the scenario's motion and sample it.
 
@@ -76,11 +80,13 @@ def plan(
             bracket.
         samples: number of equally spaced samples in [0, T] (2 to
             :data:`~freefloat.problem.limits.MAX_SAMPLES`).
-        constraints: path constraints to honour (solvers and verification); default joint
-            position and velocity limits.
-        objective: which path is best among those that reach the goal (a name of
-            :data:`~freefloat.problem.objectives.OBJECTIVES`); default the scenario's
-            ``[path] objective``.
+        constraints: path constraints to honour (solvers and verification); default the
+            scenario's (:func:`~freefloat.problem.constraints.scenario_constraints`: joint
+            position, velocity and effort limits, its ``[constraints.<name>]`` tables, and
+            clearance when checked). Each is recorded in the plan for ``freefloat verify``.
+        objective: which path is best among those that reach the goal: an objective, or the
+            name of one in :data:`~freefloat.problem.objectives.OBJECTIVES`; default the
+            scenario's ``[path] objective``.
 
     Raises:
         FreeFloatError: any subclass: bad input, infeasible request, no solution.
@@ -95,9 +101,14 @@ def plan(
     scenario = scenario.resolved()
     scenario.write_robot()  # an inline servicer or a payload: its URDF, into the cache
     constraints = scenario_constraints(scenario) if constraints is None else list(constraints)
+    chosen = (
+        objective
+        if isinstance(objective, Objective)
+        else objective_named(objective or scenario.objective)
+    )
+    check_registered(chosen, constraints)  # what verify could not rebuild: before any work
     _check_endpoints(scenario, constraints)
     clock = time.perf_counter()
-    chosen = objective_named(objective or scenario.objective)
     with stage("solve"):
         # another objective's freedom may find a path within limits the search's path breaks
         found, imposed = _search_lazily(
@@ -116,21 +127,9 @@ def plan(
                 )
         found = minimised.found
         _explain_lazy_breaks(found, [c for c in constraints if c.lazy])
-        report = ObjectiveReport(
-            name=chosen.name,
-            unit=chosen.unit,
-            value=minimised.value,
-            error_estimate=minimised.error_estimate,
-            quadrature_nodes=minimised.objective.nodes_used,
-            duration_power=chosen.duration_power,
-            start_value=minimised.start_value,
-            levels=[
-                ObjectiveLevel(level.freedom, level.value, level.iterations, level.note[:200])
-                for level in minimised.levels
-            ],
-        )
+        report = objective_report(minimised)
     else:
-        report = _norm_report(found.problem, found.solution.beta)
+        report = norm_report(found.problem, found.solution.beta)
     solve_time = time.perf_counter() - clock
     problem = found.problem.with_steps(found.solution.steps)
     with stage("sample and verify"):
@@ -140,7 +139,7 @@ def plan(
             samples,
             options.tolerance,
             constraints=constraints,
-            safety=_safety_report(scenario, constraints),
+            safety=safety_report(scenario, constraints),
             objective=report,
         )
     solver = replace(
@@ -151,13 +150,6 @@ def plan(
         solve_time_s=solve_time,
     )
     return replace(result, solver=solver)
-
-
-def _norm_report(problem: Problem, beta: np.ndarray) -> ObjectiveReport:
-    """The record of a minimum-norm plan (the search's own choice)."""
-    norm = objective_named(DEFAULT_OBJECTIVE)
-    value = norm.evaluate(problem, beta).value
-    return ObjectiveReport(name=norm.name, unit=norm.unit, value=value, start_value=value)
 
 
 def _broken(found: SearchResult, constraints: Sequence[Constraint]) -> str:
@@ -227,46 +219,6 @@ def _check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> N
                     raise CollisionError(where, pair, clearance, constraint.margin)
 
 
-def _safety_report(scenario: Scenario, constraints: Sequence[Constraint]) -> SafetyReport:
-    """The plan's record of what it was kept clear of, warning of what it could not check."""
-    clearance = next((c for c in constraints if isinstance(c, Clearance)), None)
-    safety = scenario.safety
-    if not safety.check:
-        note = "not checked ([safety] check = false)"
-        LOGGER.info("clearance: %s", note)
-        return SafetyReport(checked=False, margin_m=safety.margin, note=note)
-    model = (
-        clearance.model
-        if clearance is not None
-        else cached_collision_model(
-            scenario.robot, safety.srdf or known_srdf(scenario.robot), safety.obstacles
-        )
-    )
-    note = ""
-    if model.uncovered:
-        bodies = ", ".join(model.uncovered)
-        note = f"no collision geometry for {bodies}"
-        LOGGER.warning("clearance: not checked for %s (no collision geometry)", bodies)
-    if clearance is None or not clearance.applies_to(scenario.robot):
-        note = f"not checked ({note or 'no pairs to check'})"
-        return SafetyReport(checked=False, margin_m=safety.margin, note=note)
-    if LOGGER.isEnabledFor(logging.INFO):
-        extra = [f"{h.name} {100.0 * h.extra_fraction:+.0f} %" for h in clearance.model.hulls()]
-        if extra:
-            LOGGER.info("clearance kept on true hulls; their extra volume: %s", ", ".join(extra))
-    srdf = clearance.model.srdf
-    return SafetyReport(
-        checked=True,
-        margin_m=clearance.margin,
-        srdf=None if srdf is None else str(srdf),
-        obstacles=[
-            ObstacleRecord(o.name, o.shape, list(o.size), list(o.xyz), list(o.rpy))
-            for o in clearance.model.obstacles
-        ],
-        note=note,
-    )
-
-
 def _explain_duration_limits(
     scenario: Scenario,
     options: SolveOptions,
@@ -319,8 +271,8 @@ def plan_from_solution(
         tolerance: attitude tolerance (rad).
         verify: run the independent checks of :mod:`freefloat.verify` (a plan from
             :func:`plan` always is).
-        constraints: path constraints verification checks; default joint position and
-            velocity limits.
+        constraints: path constraints verification checks, recorded in the plan; default
+            joint position, velocity and effort limits.
         safety: the plan's record of its clearance constraint (default: none checked).
         objective: the plan's record of what it minimised (default: the minimum norm).
 
@@ -383,13 +335,16 @@ def plan_from_solution(
             solutions=solutions,
             integration_steps=problem.steps,
             integration_error_rad=solution.integration_error,
-            strategy=solution.strategy.value,
+            strategy=solution.strategy,
             solve_time_s=solution.wall_time,
             sample_time_s=sample_time,
         ),
         request=Request(start_joints=family.start.tolist(), goal_joints=family.goal.tolist()),
         safety=safety or SafetyReport(),
-        objective=objective or _norm_report(problem, solution.beta),
+        objective=objective or norm_report(problem, solution.beta),
+        constraints=constraint_records(
+            default_constraints() if constraints is None else constraints
+        ),
     )
     if not verify:
         return unverified
@@ -397,7 +352,7 @@ def plan_from_solution(
     verification = verify_plan(
         unverified,
         robot,
-        constraints=None if constraints is None else list(constraints),
+        constraints=None if constraints is None else as_rebuilt(constraints),
         recompute=False,  # the numbers were just computed by the same functions
     )
     if not verification.passed:

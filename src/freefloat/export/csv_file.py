@@ -16,9 +16,10 @@ from pathlib import Path
 import numpy as np
 
 from ..files import atomic_write
+from ..plans.format import Plan
 from .trajectory import Trajectory
 
-__all__ = ["columns", "write_csv"]
+__all__ = ["columns", "write", "write_csv"]
 
 
 def _units(kind: str) -> tuple[str, str, str, str]:
@@ -41,6 +42,11 @@ def columns(traj: Trajectory) -> list[str]:
     for frame in traj.end_effectors[1:]:  # further end effectors, by frame name
         names += [f"ee_{frame}_{c} [m]" for c in "xyz"]
     return names
+
+
+def write(traj: Trajectory, path: str | Path, plan: Plan) -> Path:
+    """The export registry's entry: :func:`write_csv` of the plan's trajectory."""
+    return write_csv(traj, path)
 
 
 def write_csv(traj: Trajectory, path: str | Path) -> Path:

@@ -15,10 +15,16 @@ import numpy as np
 
 from ..errors import ViewerError
 from ..files import atomic_write
+from ..plans.format import Plan
 from .messages import messages, root_link, typestore
 from .trajectory import Trajectory
 
-__all__ = ["write_mcap"]
+__all__ = ["write", "write_mcap"]
+
+
+def write(traj: Trajectory, path: str | Path, plan: Plan) -> Path:
+    """The export registry's entry: :func:`write_mcap` of the plan's trajectory."""
+    return write_mcap(traj, path, plan.robot.urdf, plan.robot.urdf_text)
 
 
 def write_mcap(traj: Trajectory, path: str | Path, urdf: str, urdf_text: str = "") -> Path:

@@ -17,10 +17,16 @@ from typing import Any
 
 from ..errors import InputError
 from ..files import default_file_mode
+from ..plans.format import Plan
 from .messages import messages, root_link, typestore
 from .trajectory import Trajectory
 
-__all__ = ["write_bag"]
+__all__ = ["write", "write_bag"]
+
+
+def write(traj: Trajectory, path: str | Path, plan: Plan) -> Path:
+    """The export registry's entry: :func:`write_bag` of the plan's trajectory."""
+    return write_bag(traj, path, plan.robot.urdf, plan.robot.urdf_text)
 
 
 def write_bag(traj: Trajectory, path: str | Path, urdf: str, urdf_text: str = "") -> Path:

@@ -1,8 +1,5 @@
 """The plan file: typed records and their JSON form (``freefloat.plan/4``).
 
-This module is long because it holds every record of the file format and its reading and
-writing in one place (the format is one concept; splitting it would scatter the schema).
-
 This module is the format only: dataclasses for every section of a plan, reading and writing
 them, and the schema version. Planning a scenario into a plan lives in
 :mod:`freefloat.pipeline`; checking a plan lives in :mod:`freefloat.verify`.
@@ -12,21 +9,23 @@ sees half a plan and a failure leaves nothing behind. Units: seconds, radians (m
 prismatic joints and positions); Euler angles, marked ``_deg``, in degrees. Positions are in
 the inertial frame whose origin is the system centre of mass (docs/method.md section 10).
 
-Schema versions: ``freefloat.plan/4`` (this one) adds every end effector and makes a plan
-self-contained: ``robot.end_effectors`` (the frames, the first being ``robot.end_effector``) and
-``samples.end_effector_paths`` (each one's positions, by frame; ``samples.end_effector_position``
-stays the first one's); ``robot`` carries the text of the URDF the plan was made with
-(``urdf_text``) and its SHA-256 (``urdf_sha256``), and a relative ``robot.urdf`` path is read from
-the plan file's folder; ``safety.note`` says what clearance could not check, and clearance is
-verified on the original geometry with a certificate between samples (``clearance``,
-``clearance_hull_agreement``). ``freefloat.plan/3`` and older files still load and keep their
-format (their one end effector's path is its only path; they carry no URDF, so they are checked
-against the file their path names, as it is now). ``freefloat.plan/3`` adds the ``objective``
-record (what the path
-minimises, its value and the freedom levels tried) and, for robots with URDF effort limits,
-the ``joint_effort_limits`` check. ``freefloat.plan/2`` files still load and keep their format:
-they were minimum-norm plans (no objective record); like every plan, whatever its format, they
-are held to every limit their URDF states (effort limits too). ``freefloat.plan/2`` stores the
+Schema versions: ``freefloat.plan/4`` (this one) adds every end effector, makes a plan
+self-contained and records its plug-ins: ``robot.end_effectors`` (the frames, the first being
+``robot.end_effector``) and ``samples.end_effector_paths`` (each one's positions, by frame;
+``samples.end_effector_position`` stays the first one's); ``robot`` carries the text of the URDF
+the plan was made with (``urdf_text``) and its SHA-256 (``urdf_sha256``), and a relative
+``robot.urdf`` path is read from the plan file's folder; the ``constraints`` record lists every
+constraint the plan honours, by registered name with its parameters, so that
+``freefloat verify`` rebuilds each from the registry (clearance stays in ``safety``), and the
+objective has its ``parameters``; ``safety.note`` says what clearance could not check, and
+clearance is verified on the original geometry with a certificate between samples
+(``clearance``, ``clearance_hull_agreement``). ``freefloat.plan/3`` and older files still load
+and keep their format (their one end effector's path is its only path; they carry no URDF, so
+they are checked against the file their path names, as it is now; whatever their format, they
+are held to every limit their URDF states, :data:`PROMISED`). ``freefloat.plan/3`` adds the
+``objective`` record (what the path minimises, its value and the freedom levels tried) and, for
+robots with URDF effort limits, the ``joint_effort_limits`` check. ``freefloat.plan/2`` files
+were minimum-norm plans (no objective record). ``freefloat.plan/2`` stores the
 verification as a list of typed checks, each with its value, tolerance, unit and the check's
 own numerical error estimate. ``freefloat.plan/1`` files (freefloat 0.1) still load: their
 path, samples and solver report are read as they are and their verification is dropped
@@ -48,15 +47,18 @@ import numpy as np
 
 from ..errors import PlanFileError, excerpt
 from ..files import atomic_write_text
+from ..problem.objectives.base import Level
 from .limits import MAX_PLAN_BYTES, check_plan_file_kind, check_plan_values
 
 __all__ = [
     "FORMAT",
     "FORMAT_2",
     "FORMAT_3",
+    "PROMISED",
     "READABLE_FORMATS",
     "BaseReport",
     "Check",
+    "ConstraintRecord",
     "Feasibility",
     "ObstacleRecord",
     "Plan",
@@ -80,6 +82,13 @@ FORMAT_2 = "freefloat.plan/2"
 
 #: Format tags this version reads (``/1`` is converted on load).
 READABLE_FORMATS = ("freefloat.plan/1", FORMAT_2, FORMAT_3, FORMAT)
+
+#: The constraints a file written before constraint records is held to, by format: every limit
+#: its URDF states, whatever its format (a format label never chooses the limits).
+PROMISED: dict[str, tuple[str, ...]] = {
+    fmt: ("joint_position_limits", "joint_velocity_limits", "joint_effort_limits")
+    for fmt in ("freefloat.plan/1", FORMAT_2, FORMAT_3)
+}
 
 
 @dataclass(frozen=True)
@@ -341,20 +350,16 @@ class SafetyReport:
 
 
 @dataclass(frozen=True)
-class ObjectiveLevel:
-    """One freedom level the objective was minimised with.
+class ConstraintRecord:
+    """One constraint a plan honours, as the registry rebuilds it.
 
     Attributes:
-        freedom: free coefficients per joint.
-        value: the objective at that level's best root (the objective's unit).
-        iterations: SLSQP iterations spent.
-        note: why the level kept its starting path, when it did.
+        name: its name in :data:`~freefloat.problem.constraints.CONSTRAINTS`.
+        parameters: what its ``to_record()`` wrote (degrees for angles, metres).
     """
 
-    freedom: dict[str, int]
-    value: float
-    iterations: int
-    note: str = ""
+    name: str
+    parameters: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -371,6 +376,7 @@ class ObjectiveReport:
             duration of the same path.
         start_value: the objective along the minimum-norm path the search found first.
         levels: the freedom levels tried, in order.
+        parameters: what the objective's ``to_record()`` wrote (``freefloat.plan/4``).
     """
 
     name: str = "min_norm"
@@ -380,7 +386,8 @@ class ObjectiveReport:
     quadrature_nodes: int = 0
     duration_power: int = 0
     start_value: float | None = None
-    levels: list[ObjectiveLevel] = field(default_factory=list)
+    levels: list[Level] = field(default_factory=list)
+    parameters: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -400,6 +407,7 @@ class Plan:
     safety: SafetyReport = field(default_factory=SafetyReport)
     objective: ObjectiveReport = field(default_factory=ObjectiveReport)
     format: str = FORMAT
+    constraints: list[ConstraintRecord] = field(default_factory=list)
 
     # -- evaluation -------------------------------------------------------------------------
 
@@ -419,6 +427,9 @@ class Plan:
         if self.format != FORMAT:  # an older file keeps its keys
             robot.pop("end_effectors")
             samples.pop("end_effector_paths")
+        objective = asdict(self.objective)
+        if self.format != FORMAT:
+            del objective["parameters"]
         return copy.deepcopy(
             {
                 "format": self.format,
@@ -433,7 +444,12 @@ class Plan:
                 "request": asdict(self.request),
                 "verification": self.verification.to_dict(),
                 "safety": asdict(self.safety),
-                **({} if self.format == FORMAT_2 else {"objective": asdict(self.objective)}),
+                **({} if self.format == FORMAT_2 else {"objective": objective}),
+                **(
+                    {"constraints": [asdict(c) for c in self.constraints]}
+                    if self.format == FORMAT
+                    else {}
+                ),
             }
         )
 
@@ -506,6 +522,7 @@ class Plan:
                 safety=_safety(data.get("safety"), folder),
                 objective=_objective(data.get("objective")),
                 format=fmt if fmt in (FORMAT_2, FORMAT_3, FORMAT) else FORMAT_3,  # /1: as /3
+                constraints=_constraints(data, fmt, where),
             )
         except _CopyError as exc:
             raise PlanFileError(f"{where}: {exc}") from None
@@ -572,7 +589,7 @@ def _objective(data: Any) -> ObjectiveReport:
     return ObjectiveReport(
         **{
             **data,
-            "levels": [ObjectiveLevel(**level) for level in data.get("levels", [])],
+            "levels": [Level(**level) for level in data.get("levels", [])],
         }
     )
 
@@ -589,6 +606,24 @@ def _no_duplicate_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
             raise _DuplicateKeyError(key)
         result[key] = value
     return result
+
+
+def _constraints(data: Mapping[str, Any], fmt: str, where: str) -> list[ConstraintRecord]:
+    """The ``constraints`` record; for older formats, the constraints they promised."""
+    if fmt in PROMISED:
+        return [ConstraintRecord(name) for name in PROMISED[fmt]]
+    records = [
+        ConstraintRecord(str(item["name"]), dict(item.get("parameters", {})))
+        for item in data["constraints"]
+    ]
+    names = [r.name for r in records]
+    for i, name in enumerate(names):
+        if name in names[:i]:
+            raise PlanFileError(
+                f"{where}: plan field 'constraints[{i}]' names {excerpt(name)} again; each "
+                "constraint is recorded once"
+            )
+    return records
 
 
 def read_plan_json(path: str | Path) -> Any:

@@ -193,6 +193,39 @@ def check_plan_values(data: Any, where: str = "plan") -> None:
 
 def _check_plan_values(data: Any) -> None:
     _check_numbers(data)
+    joints = _check_robot(data)
+    duration = _number(_key(data, "duration", []), ["duration"])
+    if not MIN_DURATION <= duration <= MAX_DURATION:
+        raise _RefusalError(
+            "duration",
+            f"is {excerpt(duration)} s, outside the {MIN_DURATION:g} to {MAX_DURATION:g} s "
+            "a motion may last",
+        )
+    degrees = _check_path(data, joints, duration)
+    free = _per_joint(_key(data, "free_parameters", []), ["free_parameters"], joints)
+    for name, degree in zip(joints, degrees, strict=True):
+        _vector(free[name], ["free_parameters", name], degree - 5)
+
+    base = _key(data, "base", [])
+    for key in ("start_quaternion_xyzw", "target_quaternion_xyzw", "achieved_quaternion_xyzw"):
+        quat = _vector(_key(base, key, ["base"]), ["base", key], 4)
+        norm = math.sqrt(sum(x * x for x in quat))
+        if abs(norm - 1.0) > UNIT_NORM_TOLERANCE:
+            raise _RefusalError(f"base.{key}", f"has norm {norm:.9g}; a unit quaternion is needed")
+
+    _check_samples(_key(data, "samples", []), len(joints), _key(data, "robot", []))
+    request = _key(data, "request", [])
+    for key in ("start_joints", "goal_joints"):
+        _vector(_key(request, key, ["request"]), ["request", key], len(joints))
+    _check_solver(_key(data, "solver", []), joints, degrees)
+
+    verification = data.get("verification") if data.get("format") != "freefloat.plan/1" else None
+    if isinstance(verification, Mapping) and isinstance(verification.get("checks"), list):
+        _check_flags(verification)
+
+
+def _check_robot(data: Any) -> list[str]:
+    """The ``robot`` record; returns the joint names."""
     robot = _key(data, "robot", [])
     joints = _key(robot, "joints", ["robot"])
     if not isinstance(joints, list) or not all(isinstance(j, str) for j in joints):
@@ -204,19 +237,14 @@ def _check_plan_values(data: Any) -> None:
     blank = next((i for i, j in enumerate(joints) if not j.strip()), None)
     if blank is not None:
         raise _RefusalError(f"robot.joints[{blank}]", "is an empty name; every joint has a name")
-    n = len(joints)
     kinds = robot.get("joint_kinds", []) if isinstance(robot, Mapping) else []
-    if not isinstance(kinds, list) or len(kinds) not in (0, n):
-        raise _RefusalError("robot.joint_kinds", f"must list one kind per joint ({n})")
+    if not isinstance(kinds, list) or len(kinds) not in (0, len(joints)):
+        raise _RefusalError("robot.joint_kinds", f"must list one kind per joint ({len(joints)})")
+    return joints
 
-    duration = _number(_key(data, "duration", []), ["duration"])
-    if not MIN_DURATION <= duration <= MAX_DURATION:
-        raise _RefusalError(
-            "duration",
-            f"is {excerpt(duration)} s, outside the {MIN_DURATION:g} to {MAX_DURATION:g} s "
-            "a motion may last",
-        )
 
+def _check_path(data: Any, joints: list[str], duration: float) -> list[int]:
+    """The ``path`` record; returns each joint's polynomial degree."""
     path = _key(data, "path", [])
     coefficients = _per_joint(
         _key(path, "coefficients", ["path"]), ["path", "coefficients"], joints
@@ -239,19 +267,11 @@ def _check_plan_values(data: Any) -> None:
                     f"t = T, beyond the {MAX_TERM:g} (rad or m) a path term may have",
                 )
         degrees.append(len(c) - 1)
+    return degrees
 
-    free = _per_joint(_key(data, "free_parameters", []), ["free_parameters"], joints)
-    for name, degree in zip(joints, degrees, strict=True):
-        _vector(free[name], ["free_parameters", name], degree - 5)
 
-    base = _key(data, "base", [])
-    for key in ("start_quaternion_xyzw", "target_quaternion_xyzw", "achieved_quaternion_xyzw"):
-        quat = _vector(_key(base, key, ["base"]), ["base", key], 4)
-        norm = math.sqrt(sum(x * x for x in quat))
-        if abs(norm - 1.0) > UNIT_NORM_TOLERANCE:
-            raise _RefusalError(f"base.{key}", f"has norm {norm:.9g}; a unit quaternion is needed")
-
-    samples = _key(data, "samples", [])
+def _check_samples(samples: Any, n: int, robot: Any) -> None:
+    """The ``samples`` record: as many rows everywhere as instants, each as wide as it says."""
     t = _key(samples, "t", ["samples"])
     if not isinstance(t, list) or not 2 <= len(t) <= MAX_SAMPLES:
         count = len(t) if isinstance(t, list) else excerpt(t)
@@ -274,11 +294,9 @@ def _check_plan_values(data: Any) -> None:
             _rows(samples[key], ["samples", key], rows, width, True)
     _check_end_effectors(robot, samples, rows)
 
-    request = _key(data, "request", [])
-    for key in ("start_joints", "goal_joints"):
-        _vector(_key(request, key, ["request"]), ["request", key], n)
 
-    solver = _key(data, "solver", [])
+def _check_solver(solver: Any, joints: list[str], degrees: list[int]) -> None:
+    """The ``solver`` record: its step count and roots."""
     steps = solver.get("integration_steps", 0) if isinstance(solver, Mapping) else 0
     if isinstance(steps, bool) or not isinstance(steps, int):
         raise _RefusalError("solver.integration_steps", f"must be an integer, got {excerpt(steps)}")
@@ -295,14 +313,10 @@ def _check_plan_values(data: Any) -> None:
             f"must list 1 to {MAX_SOLUTIONS} roots (the chosen first), got {count}",
         )
     for i, root in enumerate(solutions):
-        where = ["solver", "solutions", i, "free_parameters"]
+        where: list[str | int] = ["solver", "solutions", i, "free_parameters"]
         values = _per_joint(_key(root, "free_parameters", where[:-1]), where, joints)
         for name, degree in zip(joints, degrees, strict=True):
             _vector(values[name], [*where, name], degree - 5)
-
-    verification = data.get("verification") if data.get("format") != "freefloat.plan/1" else None
-    if isinstance(verification, Mapping) and isinstance(verification.get("checks"), list):
-        _check_flags(verification)
 
 
 def _check_end_effectors(robot: Any, samples: Any, rows: int) -> None:

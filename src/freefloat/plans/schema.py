@@ -6,8 +6,13 @@ wrong with a document as one line per problem, naming the field by its path (for
 and raises :class:`~freefloat.errors.PlanFileError` naming the first bad field;
 :func:`load_plan_file` reads a plan file once, checks it against the schema and the limits of
 :mod:`freefloat.plans.limits`, and returns the plan. The schema
-describes ``freefloat.plan/4`` (the URDF copy it requires), ``/3`` (the objective record it
-requires) and ``/2``; ``/1`` files are left to :meth:`Plan.load`.
+describes ``freefloat.plan/4`` (the URDF copy and the records it requires), ``/3`` (the
+objective record it requires) and ``/2``; ``/1`` files are left to :meth:`Plan.load`.
+
+The names of plug-ins in the schemas (objectives, recorded constraints) come from their
+registries: :func:`schema` fills them in from the live registries (so a plug-in registered at
+run time is accepted), and the shipped files hold those of the built-in plug-ins, which
+``tests/test_structure.py`` checks against the registries (:func:`schema_text` writes them).
 """
 
 from __future__ import annotations
@@ -22,7 +27,16 @@ from typing import Any
 from ..errors import PlanFileError, ViewerError
 from .format import FORMAT, FORMAT_2, FORMAT_3, Plan, read_plan_json
 
-__all__ = ["SCHEMAS", "check_plan_file", "field_path", "load_plan_file", "schema", "schema_errors"]
+__all__ = [
+    "SCHEMAS",
+    "check_plan_file",
+    "field_path",
+    "load_plan_file",
+    "registry_names",
+    "schema",
+    "schema_errors",
+    "schema_text",
+]
 
 #: The shipped schemas by name.
 SCHEMAS = ("plan", "scenario")
@@ -38,14 +52,70 @@ _TYPES = {
 }
 
 
-@cache
-def schema(name: str) -> dict[str, Any]:
-    """The JSON Schema (draft 2020-12) ``name``: ``"plan"`` or ``"scenario"``."""
+#: Where each schema lists plug-in names: the path of the ``enum`` and the registry's kind.
+_REGISTRY_ENUMS: dict[str, tuple[tuple[tuple[str, ...], str], ...]] = {
+    "plan": (
+        (("properties", "objective", "properties", "name"), "objectives"),
+        (("properties", "constraints", "items", "properties", "name"), "recorded constraints"),
+    ),
+    "scenario": (
+        (("properties", "path", "properties", "objective"), "objectives"),
+        (("properties", "constraints", "propertyNames"), "scenario constraints"),
+    ),
+}
+
+
+def registry_names(kind: str) -> list[str]:
+    """Names in a registry, as the schemas list them.
+
+    ``kind``: ``objectives``, ``recorded constraints`` (a plan's records) or ``scenario
+    constraints`` (a scenario's tables: not the joint limits, always honoured).
+    """
+    from ..problem.constraints import default_constraints, recorded_constraints
+    from ..problem.objectives import OBJECTIVES
+
+    if kind == "objectives":
+        return list(OBJECTIVES)
+    if kind == "recorded constraints":
+        return recorded_constraints()
+    always = {c.name for c in default_constraints()}
+    return [name for name in recorded_constraints() if name not in always]
+
+
+def _shipped(name: str) -> dict[str, Any]:
     if name not in SCHEMAS:
         raise ValueError(f"unknown schema {name!r}; valid: {', '.join(SCHEMAS)}")
     text = (resources.files("freefloat") / "schemas" / f"{name}.schema.json").read_text("utf-8")
     loaded: dict[str, Any] = json.loads(text)
     return loaded
+
+
+@cache
+def _filled(name: str, names: tuple[tuple[str, ...], ...]) -> dict[str, Any]:
+    document = _shipped(name)
+    for (path, _), enum in zip(_REGISTRY_ENUMS[name], names, strict=True):
+        node = document
+        for key in path:
+            node = node[key]
+        node["enum"] = list(enum)
+    return document
+
+
+def schema(name: str) -> dict[str, Any]:
+    """The JSON Schema (draft 2020-12) ``name``: ``"plan"`` or ``"scenario"``.
+
+    Plug-in names are those of the registries now (see the module docstring). Shared between
+    callers: read-only.
+    """
+    if name not in SCHEMAS:
+        raise ValueError(f"unknown schema {name!r}; valid: {', '.join(SCHEMAS)}")
+    names = tuple(tuple(registry_names(kind)) for _, kind in _REGISTRY_ENUMS[name])
+    return _filled(name, names)
+
+
+def schema_text(name: str) -> str:
+    """The text of the shipped schema file ``name`` with the registries' names filled in."""
+    return json.dumps(schema(name), indent=1) + "\n"
 
 
 def field_path(parts: Iterable[str | int]) -> str:
@@ -141,7 +211,7 @@ def _check_schema(data: Any, path: Path) -> None:
 
 
 def load_plan_file(path: str | Path) -> Plan:
-    """Read a plan file once: the schema first (format 2), then its limits, then the plan.
+    """Read a plan file once: the schema first (formats 2 to 4), then its limits, then the plan.
 
     Raises:
         PlanFileError: not a regular file, too large, not JSON, a field that breaks the schema

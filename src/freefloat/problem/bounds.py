@@ -20,7 +20,7 @@ from ..physics.momentum import MomentumMap
 from ..physics.planar_map import PlanarMap
 from ..robot.model import Robot
 
-__all__ = ["PlanarBounds", "SpatialEstimate", "joint_ranges", "planar_bounds", "spatial_estimate"]
+__all__ = ["PlanarBounds", "joint_ranges", "planar_bounds"]
 
 
 @dataclass(frozen=True)
@@ -181,40 +181,3 @@ def _projected_descent(
         curvature = float(s @ y)
         step = float(s @ s) / curvature if curvature > 1e-300 else 2.0 * step
     return float(f)
-
-
-@dataclass(frozen=True)
-class SpatialEstimate:
-    """Sampled extremes of ``F1`` for a spatial robot: an estimate, not a bound.
-
-    Attributes:
-        f1_min: (3, N) smallest sampled entries of ``F1`` (rad of base rotation per unit joint
-            motion, base frame axes x, y, z).
-        f1_max: (3, N) largest sampled entries.
-        samples: number of configurations sampled.
-    """
-
-    f1_min: np.ndarray
-    f1_max: np.ndarray
-    samples: int
-
-    def intervals(self, delta_q: np.ndarray) -> np.ndarray:
-        """(3, 2) estimated range of the base rotation about each axis (rad) for ``delta_q``.
-
-        Each joint moving monotonically contributes between ``min F1 dq`` and ``max F1 dq``
-        per axis; the axes are treated separately, as if rotations added (small angles).
-        """
-        lo = np.minimum(self.f1_min * delta_q, self.f1_max * delta_q).sum(axis=1)
-        hi = np.maximum(self.f1_min * delta_q, self.f1_max * delta_q).sum(axis=1)
-        return np.stack([lo, hi], axis=1)
-
-
-def spatial_estimate(mmap: MomentumMap, samples: int = 2048, seed: int = 0) -> SpatialEstimate:
-    """Sample ``F1`` over the joint ranges (a scrambled Sobol set) and keep its extremes."""
-    ranges = joint_ranges(mmap)
-    from scipy.stats import qmc  # slow to import: only when sampling is asked for
-
-    unit = qmc.Sobol(len(ranges), scramble=True, seed=seed).random(samples)
-    points = ranges[:, 0] + unit * (ranges[:, 1] - ranges[:, 0])
-    values = np.array([mmap.f1(p) for p in points])
-    return SpatialEstimate(values.min(axis=0), values.max(axis=0), samples)

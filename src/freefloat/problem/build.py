@@ -125,21 +125,7 @@ def build_problem(
     planar_map = None
     if axis is not None:
         planar_map = cached_identify(robot, axis)
-    if extra is None:
-        counts = [0] * robot.n
-        for i in range(1 if planar else 3):
-            counts[i % robot.n] += 1
-    elif isinstance(extra, Mapping):
-        counts = [0] * robot.n
-        for name, count in extra.items():
-            index = robot.joint_names.index(robot.joint(name).name)
-            counts[index] = int(count)
-    else:
-        counts = [int(c) for c in extra]
-    if any(c < 0 for c in counts):
-        raise InputError(f"free coefficient counts must be >= 0, got {counts}")
-    for name, count in zip(robot.joint_names, counts, strict=False):
-        check_extra(count, f"free coefficients of {name!r}")
+    counts = _free_counts(robot, extra, planar)
     family = PathFamily.with_extra(start, goal, counts)
 
     bounds = yaw_change = None
@@ -187,6 +173,32 @@ def build_problem(
             "[path] extra"
         )
     return problem.with_steps(problem.steps_for())
+
+
+def _free_counts(
+    robot: Robot, extra: Sequence[int] | Mapping[str, int] | None, planar: bool
+) -> list[int]:
+    """Free coefficients per joint beyond the quintic (see :func:`build_problem`'s ``extra``).
+
+    Raises:
+        InputError: a negative count; InputLimitError: a count beyond freefloat's limit.
+    """
+    if extra is None:
+        counts = [0] * robot.n
+        for i in range(1 if planar else 3):
+            counts[i % robot.n] += 1
+    elif isinstance(extra, Mapping):
+        counts = [0] * robot.n
+        for name, count in extra.items():
+            index = robot.joint_names.index(robot.joint(name).name)
+            counts[index] = int(count)
+    else:
+        counts = [int(c) for c in extra]
+    if any(c < 0 for c in counts):
+        raise InputError(f"free coefficient counts must be >= 0, got {counts}")
+    for name, count in zip(robot.joint_names, counts, strict=False):
+        check_extra(count, f"free coefficients of {name!r}")
+    return counts
 
 
 def problem_from_scenario(

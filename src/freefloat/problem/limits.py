@@ -1,6 +1,6 @@
 """freefloat's stated limits on its inputs, checked before any work starts.
 
-Each limit is a named constant here (listed in the README's "Limits" section) and each
+Each limit is a named constant here (listed in docs/limits.md) and each
 refusal is an :class:`~freefloat.errors.InputLimitError` that names the value, the limit and
 its unit, quoting at most a short excerpt of the value. Why these values:
 
@@ -171,7 +171,7 @@ def check_joint_count(count: int, robot: str = "the robot") -> None:
             count,
             None,
             MAX_JOINTS,
-            why="the planner's budget is stated for at most that many (README, Limits); "
+            why="the planner's budget is stated for at most that many (docs/limits.md); "
             "lock joints ([robot] lock = [...] in the scenario, or freefloat compose --lock) "
             "to plan with fewer",
         )

@@ -1,8 +1,5 @@
 """Scenarios: what to plan, read from a TOML file.
 
-This module is long because it checks every key and value of the scenario format with its
-own one-line message (the file is the user's first contact with freefloat).
-
 The file speaks degrees (joint angles, Euler angles) and metres (prismatic joints); a
 :class:`Scenario` holds radians and metres. Format::
 
@@ -24,6 +21,10 @@ The file speaks degrees (joint angles, Euler angles) and metres (prismatic joint
     allow_full_turns = false       # optional: continuous joints may go the other way round
     objective = "min_norm"         # optional: min_norm | min_effort | min_acceleration | min_length
     raise_freedom = true           # optional: an objective may raise the freedom beyond extra
+    [constraints.end_effector_cone]        # optional: one table per extra constraint, by its
+    axis = [1.0, 0.0, 0.0]                 # registered name, with its parameters (see
+    direction = [1.0, 1.0, 0.0]            # freefloat.problem.constraints; the joint limits
+    half_angle_deg = 60.0                  # are always honoured)
 
 Safety, keep-out objects and a captured payload (all optional)::
 
@@ -80,6 +81,7 @@ from ..errors import (
     FreeFloatError,
     InputError,
     ScenarioError,
+    UnknownNameError,
     excerpt,
 )
 from ..files import absolute_path, atomic_write_text, read_text_file
@@ -87,6 +89,8 @@ from ..physics.attitude import quat_from_zyx, quat_to_matrix
 from ..robot.collision import Obstacle
 from ..robot.model import MAX_URDF_BYTES, Robot, load_robot, robots_dir
 from ..robot.payload import Payload, attach_payload
+from .constraints.base import Constraint
+from .constraints.registry import constraint_from_record, default_constraints
 from .limits import (
     MAX_ANGLE_DEG,
     MAX_LENGTH_M,
@@ -136,6 +140,7 @@ _TOP_KEYS = (
     "safety",
     "obstacles",
     "payload",
+    "constraints",
 )
 _SAFETY_KEYS = ("margin_m", "srdf", "check")
 _OBSTACLE_KEYS = ("name", "box", "sphere", "capsule", "xyz", "rpy_deg")
@@ -188,6 +193,7 @@ class Scenario:
         servicer: the description of an inline ``[robot]`` servicer, if the robot is one.
         srdf_text: the SRDF of a servicer of several arms not yet written to ``safety.srdf``
             (by :meth:`write_robot`); None otherwise.
+        constraints: constraints beyond the defaults (``[constraints.<name>]`` tables).
 
     Reading a scenario is pure: no file is written and no inverse kinematics runs until
     :meth:`resolved` and :meth:`write_robot` are called (planning calls both).
@@ -211,6 +217,7 @@ class Scenario:
     payload: Payload | None = None
     servicer: ServicerSpec | None = None
     srdf_text: str | None = None
+    constraints: tuple[Constraint, ...] = ()
 
     @property
     def goal_pose(self) -> CartesianGoal | None:
@@ -368,6 +375,7 @@ class Scenario:
             payload=payload,
             servicer=servicer,
             srdf_text=origin.srdf_text,
+            constraints=_constraints(data.get("constraints", {})),
         )
 
     def resolved(self) -> Scenario:
@@ -639,6 +647,24 @@ def _safety(table: Any, obstacles: Any, relative_to: Path | None) -> Safety:
     if len(set(names)) != len(names):
         raise ScenarioError(f"[[obstacles]] names must be unique, got {excerpt(names)}")
     return Safety(margin, srdf, tuple(parsed), check)
+
+
+def _constraints(table: Any) -> tuple[Constraint, ...]:
+    """``[constraints.<name>]`` tables as constraints, by the registry."""
+    if not isinstance(table, Mapping):
+        raise ScenarioError("[constraints] must hold one table per constraint, by name")
+    out = []
+    always = [c.name for c in default_constraints()]
+    for name, parameters in table.items():
+        if name in always:
+            raise ScenarioError(f"[constraints.{name}]: always honoured, it takes no table")
+        try:
+            out.append(constraint_from_record(name, parameters))
+        except UnknownNameError:
+            raise
+        except InputError as exc:
+            raise ScenarioError(f"[constraints.{name}] {exc}") from None
+    return tuple(out)
 
 
 def _radians3(degrees: tuple[float, float, float]) -> tuple[float, float, float]:

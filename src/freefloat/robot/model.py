@@ -391,6 +391,48 @@ def load_robot(
         raise ModelError(f"Pinocchio cannot parse it ({error}{said})", urdf=str(path)) from None
 
     model.gravity = pin.Motion.Zero()  # free flight: no gravity acts on the system
+    joints = _joints(model, path)
+    try:
+        check_built_model(model, checked)
+    except ModelError as exc:
+        raise ModelError(str(exc), urdf=str(path)) from None
+
+    frames = [f.name for f in model.frames if f.type == pin.FrameType.BODY]
+    if end_effector is None:
+        candidates = end_effector_candidates(model)
+        if len(candidates) > 1:
+            raise AmbiguousEndEffectorError(candidates, str(path))
+        names: tuple[str, ...] = (candidates[0],)
+    else:
+        names = (end_effector,) if isinstance(end_effector, str) else tuple(end_effector)
+    if not names or len(set(names)) != len(names):
+        raise ModelError(f"end effectors must be distinct frame names, got {list(names)}")
+    for name in names:
+        if name not in frames:
+            raise UnknownNameError("end-effector frame", name, frames)
+
+    share = example_robot_data_dir()
+    dirs = (path.parent, *(Path(d).resolve() for d in package_dirs), *([share] if share else []))
+    return Robot(
+        urdf=path,
+        name=checked.name or path.stem,
+        model=model,
+        joints=tuple(joints),
+        base_link=checked.root_link,
+        end_effector=names[0],
+        package_dirs=dirs,
+        link_names=checked.links,
+        end_effectors=names,
+        urdf_text=text,
+    )
+
+
+def _joints(model: pin.Model, path: Path) -> list[Joint]:
+    """The movable joints of a free-flyer model, with their limits (rad or m, per s, N m or N).
+
+    Raises:
+        ModelError: a joint of unsupported type, inverted limits, or no movable joint.
+    """
     joints = []
     for index in range(2, model.njoints):
         jm = model.joints[index]
@@ -428,36 +470,4 @@ def load_robot(
             "one",
             urdf=str(path),
         )
-    try:
-        check_built_model(model, checked)
-    except ModelError as exc:
-        raise ModelError(str(exc), urdf=str(path)) from None
-
-    frames = [f.name for f in model.frames if f.type == pin.FrameType.BODY]
-    if end_effector is None:
-        candidates = end_effector_candidates(model)
-        if len(candidates) > 1:
-            raise AmbiguousEndEffectorError(candidates, str(path))
-        names: tuple[str, ...] = (candidates[0],)
-    else:
-        names = (end_effector,) if isinstance(end_effector, str) else tuple(end_effector)
-    if not names or len(set(names)) != len(names):
-        raise ModelError(f"end effectors must be distinct frame names, got {list(names)}")
-    for name in names:
-        if name not in frames:
-            raise UnknownNameError("end-effector frame", name, frames)
-
-    share = example_robot_data_dir()
-    dirs = (path.parent, *(Path(d).resolve() for d in package_dirs), *([share] if share else []))
-    return Robot(
-        urdf=path,
-        name=checked.name or path.stem,
-        model=model,
-        joints=tuple(joints),
-        base_link=checked.root_link,
-        end_effector=names[0],
-        package_dirs=dirs,
-        link_names=checked.links,
-        end_effectors=names,
-        urdf_text=text,
-    )
+    return joints

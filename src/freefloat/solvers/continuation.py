@@ -312,16 +312,9 @@ def track(
         predicted = beta + step * tangent
         solved, r_new, jac_new, its = _correct(target, constraints, predicted, tol, instants, cache)
         iterations += its
-        refine = 0
-        while solved is not None and not _dense_ok(problem, constraints, solved):
-            # Inside at the instants, not everywhere: add the tightest instants and correct.
-            refine += 1
-            if refine > 3:
-                solved = None
-                break
-            instants = _with_critical(problem, constraints, solved, instants)
-            solved, r_new, jac_new, more = _correct(
-                target, constraints, solved, tol, instants, cache
+        if solved is not None and not _dense_ok(problem, constraints, solved):
+            solved, r_new, jac_new, more, instants = _densely(
+                problem, target, constraints, solved, tol, instants, cache
             )
             iterations += more
         if solved is None:
@@ -335,6 +328,35 @@ def track(
         reached.append(lam)
         dl = step * (2.0 if its <= 4 else 1.0 if its <= 5 else 0.5)
     return ContinuationResult(beta, lam, angle, axis, r, steps, iterations, stopped_by)
+
+
+def _densely(
+    problem: Problem,
+    target: Problem,
+    constraints: Sequence[Constraint],
+    solved: np.ndarray,
+    tol: float,
+    instants: np.ndarray,
+    cache: RowCache,
+) -> tuple[np.ndarray | None, np.ndarray, np.ndarray, int, np.ndarray]:
+    """Correct a path inside at the instants but not everywhere, at its tightest instants.
+
+    Up to three times: add the path's tightest instants and correct again. Returns the path
+    (None when it stays outside), its residual (rad) and Jacobian, the corrector iterations
+    spent and the instants now imposed.
+    """
+    r = jac = np.zeros(0)
+    iterations = 0
+    for _ in range(3):
+        instants = _with_critical(problem, constraints, solved, instants)
+        found, r, jac, more = _correct(target, constraints, solved, tol, instants, cache)
+        iterations += more
+        if found is None:
+            return None, r, jac, iterations, instants
+        solved = found
+        if _dense_ok(problem, constraints, solved):
+            return solved, r, jac, iterations, instants
+    return None, r, jac, iterations, instants
 
 
 def continuation(

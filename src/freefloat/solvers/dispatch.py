@@ -33,16 +33,16 @@ __all__ = ["STRATEGIES", "choose_strategy", "solve"]
 
 StrategyFunction = Callable[[Problem, Sequence[Constraint], SolveOptions, np.ndarray], Attempt]
 
-#: The strategy functions by name.
-STRATEGIES: dict[Strategy, StrategyFunction] = {
-    Strategy.SCAN: scan,
-    Strategy.MULTISTART: multistart,
-    Strategy.CONTINUATION: continuation,
+#: The strategy functions by name: the one list (a new strategy is one module and one line).
+STRATEGIES: dict[str, StrategyFunction] = {
+    Strategy.SCAN.value: scan,
+    Strategy.MULTISTART.value: multistart,
+    Strategy.CONTINUATION.value: continuation,
 }
 
 
-def choose_strategy(problem: Problem, options: SolveOptions) -> Strategy:
-    """The strategy for this problem: the one asked for, else by the problem's shape.
+def choose_strategy(problem: Problem, options: SolveOptions) -> str:
+    """The strategy's name for this problem: the one asked for, else by the problem's shape.
 
     One unknown and one equation: ``scan``. Spatial problems: ``continuation`` when it is
     registered, else ``multistart``; planar problems with several unknowns: ``multistart``.
@@ -50,10 +50,10 @@ def choose_strategy(problem: Problem, options: SolveOptions) -> Strategy:
     if options.strategy is not None:
         return options.strategy
     if problem.n_free == 1 and problem.n_equations == 1:
-        return Strategy.SCAN
-    if not problem.planar and Strategy.CONTINUATION in STRATEGIES:
-        return Strategy.CONTINUATION
-    return Strategy.MULTISTART
+        return Strategy.SCAN.value
+    if not problem.planar and Strategy.CONTINUATION.value in STRATEGIES:
+        return Strategy.CONTINUATION.value
+    return Strategy.MULTISTART.value
 
 
 def solve(
@@ -67,7 +67,8 @@ def solve(
     Args:
         problem: the problem (not changed).
         options: solver settings.
-        constraints: path constraints to honour; default joint position and velocity limits.
+        constraints: path constraints to honour; default joint position, velocity and effort
+            limits.
         start: a path (within the constraints) to start from instead of the quintic path,
             e.g. where a search with less freedom stopped; ignored when it breaks one.
 
@@ -86,30 +87,15 @@ def solve(
     # (imposed only once a path broke it) is left to the strategy and the root filter.
     eager = [c for c in constraints if not c.lazy]
     quintic_breaks = broken_constraint(problem, eager, zero)
-    given, start, restored = start, zero, []
-    if given is not None and np.any(given) and not broken_constraint(problem, constraints, given):
-        start = np.asarray(given, dtype=float)
-        restored.append("continued from where the search with less freedom stopped")
-    elif quintic_breaks:
-        found = feasible_start(problem, eager, options)
-        restored.append(
-            f"the quintic path breaks {quintic_breaks}: "
-            + (
-                "started from the nearest path within the constraints"
-                if found is not None
-                else "no path within the constraints found to start from"
-            )
-        )
-        start = zero if found is None else found
+    start, restored = _start(problem, constraints, quintic_breaks, start, options)
     if np.linalg.norm(problem.residual(zero)) < 0.01 * tol and not quintic_breaks:
-        strategy = Strategy.NONE
+        strategy = Strategy.NONE.value
         attempt = Attempt(candidates=[zero], method="none (the quintic path already reaches it)")
     else:
         strategy = choose_strategy(problem, options)
         if strategy not in STRATEGIES:
             raise SolverError(
-                f"strategy {strategy.value!r} is not available; available: "
-                + ", ".join(s.value for s in STRATEGIES),
+                f"strategy {strategy!r} is not available; available: " + ", ".join(STRATEGIES),
                 float(np.linalg.norm(problem.residual(zero))),
             )
         try:
@@ -117,29 +103,10 @@ def solve(
         except (np.linalg.LinAlgError, FloatingPointError, ValueError) as exc:
             # A numerical breakdown (an SVD that does not converge on non-finite values) is a
             # failed attempt with a reason, never a crash.
-            attempt = Attempt(tried=[f"{strategy.value}: numerical failure ({exc})"])
+            attempt = Attempt(tried=[f"{strategy}: numerical failure ({exc})"])
     tried = restored + list(attempt.tried)
 
-    roots = []
-    best_vector = problem.residual(zero)
-    for index, beta in enumerate(attempt.candidates):
-        if index in attempt.residuals:  # refined to 1e-14 rad already: no polishing
-            vector = attempt.residuals[index]
-        else:
-            try:
-                beta, vector = polish(problem, beta, tol)
-            except (np.linalg.LinAlgError, FloatingPointError, ValueError):
-                tried.append("a candidate could not be polished (numerical failure)")
-                continue
-        residual = float(np.linalg.norm(vector))
-        broken = broken_constraint(problem, constraints, beta)
-        if broken:
-            tried.append(f"a root breaks {broken}")
-            continue
-        if residual < np.linalg.norm(best_vector):
-            best_vector = vector
-        if residual < tol:
-            roots.append(Root(beta, residual, problem.path_length(beta)))
+    roots, best_vector = _roots(problem, attempt, constraints, tol, tried)
     roots.sort(key=lambda r: float(r.beta @ r.beta))
     if not roots:
         raise SolverError(
@@ -184,3 +151,67 @@ def _dedupe(items: list[str]) -> list[str]:
     for item in items:
         counts[item] = counts.get(item, 0) + 1
     return [item if n == 1 else f"{item} (x{n})" for item, n in counts.items()]
+
+
+def _start(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    quintic_breaks: str,
+    given: np.ndarray | None,
+    options: SolveOptions,
+) -> tuple[np.ndarray, list[str]]:
+    """Where the strategy starts, and what was done to start there (for the record).
+
+    ``given`` when it is within the constraints; else the quintic path, or the nearest path
+    within the eager constraints when the quintic breaks one. The start is in rad or m.
+    """
+    zero = np.zeros(problem.n_free)
+    if given is not None and np.any(given) and not broken_constraint(problem, constraints, given):
+        return np.asarray(given, dtype=float), [
+            "continued from where the search with less freedom stopped"
+        ]
+    if not quintic_breaks:
+        return zero, []
+    found = feasible_start(problem, [c for c in constraints if not c.lazy], options)
+    how = (
+        "started from the nearest path within the constraints"
+        if found is not None
+        else "no path within the constraints found to start from"
+    )
+    return (zero if found is None else found), [f"the quintic path breaks {quintic_breaks}: {how}"]
+
+
+def _roots(
+    problem: Problem,
+    attempt: Attempt,
+    constraints: Sequence[Constraint],
+    tol: float,
+    tried: list[str],
+) -> tuple[list[Root], np.ndarray]:
+    """The attempt's candidates, polished, that are roots within the constraints.
+
+    Returns them with the residual vector (rad) closest to zero; appends what was dropped to
+    ``tried``.
+    """
+    zero = np.zeros(problem.n_free)
+    roots = []
+    best_vector = problem.residual(zero)
+    for index, beta in enumerate(attempt.candidates):
+        if index in attempt.residuals:  # refined to 1e-14 rad already: no polishing
+            vector = attempt.residuals[index]
+        else:
+            try:
+                beta, vector = polish(problem, beta, tol)
+            except (np.linalg.LinAlgError, FloatingPointError, ValueError):
+                tried.append("a candidate could not be polished (numerical failure)")
+                continue
+        residual = float(np.linalg.norm(vector))
+        broken = broken_constraint(problem, constraints, beta)
+        if broken:
+            tried.append(f"a root breaks {broken}")
+            continue
+        if residual < np.linalg.norm(best_vector):
+            best_vector = vector
+        if residual < tol:
+            roots.append(Root(beta, residual, problem.path_length(beta)))
+    return roots, best_vector

@@ -24,11 +24,11 @@ import numpy as np
 
 from ..problem.build import problem_from_scenario
 from ..problem.constraints import Constraint
-from ..problem.objectives import Objective
+from ..problem.objectives import Level, Objective
 from ..problem.paths import boundary_errors
 from ..problem.residual import Problem
 from ..problem.scenario import Scenario
-from .certify import certify
+from .certify import Certified, certify
 from .optimise import optimise
 from .options import Root, SolveOptions
 from .restore import broken_constraint
@@ -54,23 +54,6 @@ ITERATIONS_PER_LEVEL = 100
 #: Levels a spatial problem tries beyond its own freedom (each costs many attitude
 #: integrations and, with clearance, many distance queries).
 SPATIAL_EXTRA_LEVELS = 1
-
-
-@dataclass(frozen=True)
-class Level:
-    """One freedom level tried.
-
-    Attributes:
-        freedom: free coefficients per joint.
-        value: the objective at the best root of that level (objective's unit).
-        iterations: SLSQP iterations spent.
-        note: why the level kept its starting path, when it did.
-    """
-
-    freedom: dict[str, int]
-    value: float
-    iterations: int
-    note: str = ""
 
 
 @dataclass
@@ -203,6 +186,19 @@ def minimise(
             )
         )
         return keep_start()
+    return _minimised(found, objective, checked, best_freedom, start_value, levels)
+
+
+def _minimised(
+    found: SearchResult,
+    objective: Objective,
+    checked: Certified,
+    best_freedom: list[int],
+    start_value: float,
+    levels: list[Level],
+) -> Minimised:
+    """The result at the certified best path (its objective converged there too)."""
+    names = found.problem.robot.joint_names
     objective = objective.converged(checked.problem, checked.beta)  # at the final path too
     value = objective.evaluate(checked.problem, checked.beta).value
     solution = replace(

@@ -159,36 +159,8 @@ def optimise(
     scale = start.value if start.value > 0 else 1.0
     s_mat = scaled_coordinates(unit, objective, beta0, scale)
 
-    def to_beta(z: np.ndarray) -> np.ndarray:
-        return beta0 + s_mat @ z
-
-    memo: dict[bytes, object] = {}
-    spent = [0]  # objective evaluations so far
-
-    def cached(kind: str, z: np.ndarray, make: Callable[[np.ndarray], Any]) -> Any:
-        key = kind.encode() + np.asarray(z, dtype=float).tobytes()
-        if key not in memo:
-            if kind == "j":
-                spent[0] += 1
-                if spent[0] > max_evaluations:
-                    raise _BudgetSpentError
-            if len(memo) > 64:
-                memo.clear()
-            memo[key] = make(to_beta(z))
-        return memo[key]
-
-    def fun(z: np.ndarray) -> float:
-        return cached("j", z, lambda b: objective.evaluate(unit, b)).value / scale
-
-    def grad(z: np.ndarray) -> np.ndarray:
-        found = cached("j", z, lambda b: objective.evaluate(unit, b))
-        return (s_mat.T @ found.gradient) / scale
-
-    def h(z: np.ndarray) -> np.ndarray:
-        return cached("h", z, problem.residual_and_jacobian)[0]
-
-    def dh(z: np.ndarray) -> np.ndarray:
-        return cached("h", z, problem.residual_and_jacobian)[1] @ s_mat
+    ev = _Evaluations(problem, unit, objective, beta0, s_mat, scale, max_evaluations)
+    to_beta = ev.to_beta
 
     active = [c for c in constraints if c.applies_to(problem.robot)]
     imposed = [c for c in active if c.affine or broken_constraint(problem, [c], beta0)]
@@ -198,26 +170,17 @@ def optimise(
 
     def kept(note: str) -> Optimised:
         """The start stands (``note`` says why)."""
-        return Optimised(beta0, start_value, start_value, iterations, False, note, spent[0])
+        return Optimised(beta0, start_value, start_value, iterations, False, note, ev.spent)
 
     for _ in range(ROUNDS):
-        cons: list[dict[str, object]] = [{"type": "eq", "fun": h, "jac": dh}]
-        for constraint in imposed:
-            backoff = BACKOFF * constraint.tolerance
-            for g, dg in constraint_functions(problem, [constraint], instants):
-                cons.append(
-                    {
-                        "type": "ineq",
-                        "fun": lambda z, g=g, b=backoff: g(to_beta(z)) - b,
-                        "jac": lambda z, dg=dg: dg(to_beta(z)) @ s_mat,
-                    }
-                )
+        cons = [{"type": "eq", "fun": ev.h, "jac": ev.dh}]
+        cons += _inequalities(problem, imposed, instants, ev)
         try:
             with np.errstate(all="ignore"):
                 result = minimize(
-                    fun,
+                    ev.fun,
                     z,
-                    jac=grad,
+                    jac=ev.grad,
                     method="SLSQP",
                     constraints=cons,
                     options={"ftol": 1e-12, "maxiter": int(max_iterations)},
@@ -257,4 +220,75 @@ def optimise(
     value = objective.evaluate(unit, candidate).value
     if not value < start.value and not broken_constraint(problem, constraints, beta0):
         return kept("no lower value")
-    return Optimised(candidate, value * at_t, start_value, iterations, True, "", spent[0])
+    return Optimised(candidate, value * at_t, start_value, iterations, True, "", ev.spent)
+
+
+class _Evaluations:
+    """The objective and the attitude residual in scaled coordinates ``z``.
+
+    ``beta = beta0 + S z``; the objective at T = 1 s divided by ``scale``. Values are kept for
+    the last few points; objective evaluations are counted against a budget (a count).
+    """
+
+    def __init__(
+        self,
+        problem: Problem,
+        unit: Problem,
+        objective: Objective,
+        beta0: np.ndarray,
+        s_mat: np.ndarray,
+        scale: float,
+        budget: int,
+    ) -> None:
+        self.problem, self.unit, self.objective = problem, unit, objective
+        self.beta0, self.s_mat, self.scale, self.budget = beta0, s_mat, scale, budget
+        self.memo: dict[bytes, Any] = {}
+        self.spent = 0  # objective evaluations so far
+
+    def to_beta(self, z: np.ndarray) -> np.ndarray:
+        return self.beta0 + self.s_mat @ z
+
+    def _cached(self, kind: str, z: np.ndarray, make: Callable[[np.ndarray], Any]) -> Any:
+        key = kind.encode() + np.asarray(z, dtype=float).tobytes()
+        if key not in self.memo:
+            if kind == "j":
+                self.spent += 1
+                if self.spent > self.budget:
+                    raise _BudgetSpentError
+            if len(self.memo) > 64:
+                self.memo.clear()
+            self.memo[key] = make(self.to_beta(z))
+        return self.memo[key]
+
+    def _objective(self, z: np.ndarray) -> Any:
+        return self._cached("j", z, lambda b: self.objective.evaluate(self.unit, b))
+
+    def fun(self, z: np.ndarray) -> float:
+        return float(self._objective(z).value) / self.scale
+
+    def grad(self, z: np.ndarray) -> np.ndarray:
+        return np.asarray(self.s_mat.T @ self._objective(z).gradient) / self.scale
+
+    def h(self, z: np.ndarray) -> np.ndarray:
+        return np.asarray(self._cached("h", z, self.problem.residual_and_jacobian)[0])
+
+    def dh(self, z: np.ndarray) -> np.ndarray:
+        return np.asarray(self._cached("h", z, self.problem.residual_and_jacobian)[1] @ self.s_mat)
+
+
+def _inequalities(
+    problem: Problem, imposed: Sequence[Constraint], instants: np.ndarray, ev: _Evaluations
+) -> list[dict[str, object]]:
+    """SLSQP inequality rows of the imposed constraints at the instants, backed off a little."""
+    cons: list[dict[str, object]] = []
+    for constraint in imposed:
+        backoff = BACKOFF * constraint.tolerance
+        for g, dg in constraint_functions(problem, [constraint], instants):
+            cons.append(
+                {
+                    "type": "ineq",
+                    "fun": lambda z, g=g, b=backoff: g(ev.to_beta(z)) - b,
+                    "jac": lambda z, dg=dg: dg(ev.to_beta(z)) @ ev.s_mat,
+                }
+            )
+    return cons

@@ -22,7 +22,11 @@ __all__ = [
 
 
 class Strategy(str, enum.Enum):
-    """How ``h(beta) = 0`` is solved; recorded in the plan by value.
+    """The built-in strategies' names (how ``h(beta) = 0`` is solved); recorded in the plan.
+
+    The registry of strategy functions (:data:`~freefloat.solvers.dispatch.STRATEGIES`) is
+    keyed by name, so a new strategy needs no member here: options, solutions and plans carry
+    the plain name.
 
     - ``none``: the quintic path (``beta = 0``) already reaches the goal.
     - ``scan``: one unknown, one equation: scan a bracket, refine every sign change.
@@ -68,7 +72,9 @@ class SolveOptions:
         keep_solutions: stop after this many solutions; the minimum-norm one is returned.
         max_evaluations: no new start or step is begun after this many residual evaluations
             (a count, so the same input gives the same plan on any machine).
-        strategy: force a strategy; default: chosen from the problem's shape.
+        strategy: force a strategy (a name in
+            :data:`~freefloat.solvers.dispatch.STRATEGIES`, or a :class:`Strategy`); default:
+            chosen from the problem's shape.
     """
 
     tolerance: float = DEFAULT_TOLERANCE
@@ -78,9 +84,11 @@ class SolveOptions:
     starts: int = 7
     keep_solutions: int = 1
     max_evaluations: int = 4000
-    strategy: Strategy | None = None
+    strategy: str | None = None
 
     def __post_init__(self) -> None:
+        if isinstance(self.strategy, Strategy):  # carried by its plain name
+            object.__setattr__(self, "strategy", self.strategy.value)
         low, high = TOLERANCE_RANGE_RAD
         if not low <= self.tolerance <= high:  # NaN fails too
             raise InputLimitError("tolerance", self.tolerance, low, high, "rad")
@@ -115,7 +123,7 @@ class Solution:
         roots: every root found, the chosen one first.
         integration_error: estimated error of the attitude integration at ``beta`` (rad).
         steps: integration steps on which ``beta`` was certified.
-        strategy: the strategy that found ``beta``.
+        strategy: the name of the strategy that found ``beta``.
         tried: what was attempted, in order.
     """
 
@@ -128,7 +136,7 @@ class Solution:
     roots: tuple[Root, ...] = field(default_factory=tuple)
     integration_error: float = 0.0
     steps: int = 0
-    strategy: Strategy = Strategy.NONE
+    strategy: str = Strategy.NONE.value
     tried: tuple[str, ...] = ()
 
 

@@ -81,7 +81,7 @@ def reach_set(
         problem: a spatial problem (its goal is ignored; not changed).
         directions: rotation axes (rows, base frame); default :func:`default_directions`.
         max_angle: the rotation to head for in each direction (rad, below pi).
-        constraints: path constraints; default joint position and velocity limits.
+        constraints: path constraints; default joint position, velocity and effort limits.
         options: solver settings (the evaluation budget applies per direction).
     """
     if problem.planar:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import NoReturn
 
 import numpy as np
 
@@ -119,7 +120,6 @@ def search(
     """
     robot = scenario.robot
     names = robot.joint_names
-    continuous = any(j.kind == "continuous" for j in robot.joints)
     offsets = [np.zeros(robot.n)]
     if scenario.allow_full_turns:
         offsets += turn_candidates(scenario)
@@ -137,16 +137,7 @@ def search(
             if not turns
             else "goal " + ", ".join(f"{n} {k:+d} turn(s)" for n, k in turns.items())
         )
-        if scenario.extra is not None:
-            distributions: list[list[int] | None] = [None]
-        else:
-            spatial_continuation = not planar and options.strategy in (
-                None,
-                Strategy.CONTINUATION,
-            )
-            distributions = list(
-                freedom_candidates(robot.n, 1 if planar else 3, spatial_continuation)
-            )
+        distributions = _distributions(scenario, options, planar)
         carry: tuple[PathFamily, tuple[float, ...]] | None = None
         for counts in distributions:
             extra = scenario.extra if counts is None else counts
@@ -202,13 +193,44 @@ def search(
                 tried=tried,
             )
 
+    _refuse(scenario, len(offsets), first_error, best, best_axes, best_error, tried)
+
+
+def _distributions(
+    scenario: Scenario, options: SolveOptions, planar: bool
+) -> list[list[int] | None]:
+    """Free coefficients per joint to try in turn (None: the scenario's ``[path] extra``)."""
+    if scenario.extra is not None:
+        return [None]
+    n = scenario.robot.n
+    spatial_continuation = not planar and options.strategy in (None, Strategy.CONTINUATION)
+    return list(freedom_candidates(n, 1 if planar else 3, spatial_continuation))
+
+
+def _refuse(
+    scenario: Scenario,
+    attempts: int,
+    first_error: FreeFloatError | None,
+    best: float,
+    best_axes: tuple[float, ...] | None,
+    best_error: SolverError | None,
+    tried: list[str],
+) -> NoReturn:
+    """Raise the refusal of a search that found no root (``attempts`` goal offsets tried).
+
+    Raises:
+        InfeasibleError: the planar bounds refused the only goal tried.
+        InputError: bad input, and no attempt got to solve.
+        SolverError: otherwise, with the best residual (rad) and every attempt.
+    """
+    continuous = any(j.kind == "continuous" for j in scenario.robot.joints)
     hint = ""
     if continuous and not scenario.allow_full_turns:
         hint = (
             "a continuous joint could reach its goal the other way round: try "
             "[path] allow_full_turns = true (or --allow-full-turns)"
         )
-    if isinstance(first_error, InfeasibleError) and len(offsets) == 1:
+    if isinstance(first_error, InfeasibleError) and attempts == 1:
         message = f"{first_error}; {hint}" if hint else str(first_error)
         raise InfeasibleError(first_error.requested_deg, first_error.bounds_deg, message=message)
     if isinstance(first_error, InputError) and best == math.inf:

@@ -20,9 +20,6 @@ Checks, each with a documented tolerance (:data:`TOLERANCES`):
 Both integrating checks double their steps and report the difference between the last two
 results as their ``error_estimate`` (see :func:`verify_plan` and :func:`_decided`); the other
 checks are exact up to rounding.
-
-This module is long because it holds every independent check with its tolerance, and the
-verdict logic that weighs each against its own error estimate.
 """
 
 from __future__ import annotations
@@ -33,13 +30,13 @@ from collections.abc import Callable
 import numpy as np
 import pinocchio as pin
 
-from ..errors import PlanFileError
+from ..errors import FreeFloatError, PlanFileError
 from ..physics.attitude import geodesic_angle
 from ..physics.dynamics import inverse_dynamics, inverse_dynamics_batch, replay
 from ..physics.momentum import MomentumMap
 from ..plans.format import FORMAT, FORMAT_2, Check, Plan, Verification
 from ..plans.robot_copy import plan_robot
-from ..problem.constraints import Constraint, JointEffortLimits, default_constraints
+from ..problem.constraints import Constraint, JointEffortLimits, constraint_from_record
 from ..problem.constraints.clearance import Clearance
 from ..problem.constraints.registry import clearance_constraint
 from ..problem.paths import JointPolynomials, boundary_errors
@@ -114,12 +111,22 @@ def joint_torque_function(plan: Plan, mmap: MomentumMap) -> Callable[[float], np
 
 
 def plan_constraints(plan: Plan, robot: Robot) -> list[Constraint]:
-    """The constraints a plan is held to: every limit of its URDF, and clearance when checked.
+    """The constraints a plan states it honours, rebuilt from the registry by their records.
 
-    Whatever its format: a ``freefloat.plan/2`` file, which predates effort limits, is held
-    to its URDF's effort limits too (a format label never chooses the limits).
+    Every ``constraints`` record, and clearance when its ``safety`` record says it was checked.
+    A file written before constraint records is held to what its format promised
+    (:data:`~freefloat.plans.format.PROMISED`: a ``freefloat.plan/2`` file, no effort limits).
+
+    Raises:
+        PlanFileError: a record names a constraint this freefloat does not know, or a bad
+            parameter.
     """
-    constraints = default_constraints()
+    constraints = []
+    for i, record in enumerate(plan.constraints):
+        try:
+            constraints.append(constraint_from_record(record.name, record.parameters))
+        except FreeFloatError as exc:
+            raise PlanFileError(f"plan field 'constraints[{i}]': {exc}") from None
     if plan.safety.checked:
         obstacles = [
             Obstacle(o.name, o.shape, tuple(o.size), tuple(o.xyz), tuple(o.rpy))  # type: ignore[arg-type]
@@ -167,8 +174,8 @@ def verify_plan(
         plan: the plan (for example from :meth:`Plan.load`).
         robot: the loaded robot, to skip reloading the URDF.
         replay_steps: the most RK4 steps the forward-dynamics replay may take (>= 1).
-        constraints: path constraints to check densely; default joint position and velocity
-            limits.
+        constraints: path constraints to check densely; default those the plan records
+            (:func:`plan_constraints`).
         recompute: recompute and compare the plan's numbers and figures (the pipeline, which
             has just computed them with the same functions, skips it).
 

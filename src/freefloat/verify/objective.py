@@ -1,8 +1,9 @@
 """The plan's objective record, recomputed from its path.
 
-``objective.value`` is recomputed by the named objective at the plan's free coefficients, on
-the quadrature the record names, and must agree to :data:`RELATIVE_TOLERANCE` of its size (the
-computation is the planner's own, so only rounding separates them); ``error_estimate`` must
+``objective.value`` is recomputed by the named objective, rebuilt from the registry with the
+record's ``parameters``, at the plan's free coefficients, on the quadrature the record names,
+and must agree to :data:`RELATIVE_TOLERANCE` of its size (the computation is the planner's
+own, so only rounding separates them); ``error_estimate`` must
 agree to that plus half of itself. The unit and duration power must be the objective's, and a
 minimum-norm plan's ``start_value`` must be its ``value``; every objective is non-negative.
 What cannot be recomputed from the file is the search's history: the value on the
@@ -15,7 +16,7 @@ import math
 
 import numpy as np
 
-from ..errors import PlanMismatchError
+from ..errors import FreeFloatError, PlanMismatchError
 from ..plans.format import Plan
 from ..problem.objectives import DEFAULT_OBJECTIVE, OBJECTIVES, Objective
 from ..problem.residual import Problem
@@ -47,8 +48,13 @@ def check_objective(plan: Plan, problem: Problem, beta: np.ndarray) -> None:
     if record.value is None:  # written before objectives existed: a minimum-norm plan
         return
     if record.name not in OBJECTIVES:
-        raise _mismatch("name", f"unknown objective {record.name!r}")
-    objective: Objective = OBJECTIVES[record.name]()
+        raise _mismatch(
+            "name", f"unknown objective {record.name!r}; valid: {', '.join(OBJECTIVES)}"
+        )
+    try:
+        objective: Objective = OBJECTIVES[record.name].from_record(record.parameters)
+    except FreeFloatError as exc:
+        raise _mismatch("parameters", str(exc)) from None
     if objective.exact:
         if record.quadrature_nodes != 0:
             raise _mismatch(
@@ -60,7 +66,7 @@ def check_objective(plan: Plan, problem: Problem, beta: np.ndarray) -> None:
             raise _mismatch(
                 "quadrature_nodes", f"{record.quadrature_nodes} is not in 1..{MAX_NODES}"
             )
-        objective = type(objective)(nodes=record.quadrature_nodes)  # type: ignore[call-arg]
+        objective = objective.with_nodes(record.quadrature_nodes)
     if record.unit != objective.unit:
         raise _mismatch("unit", f"{record.name} is in {objective.unit}, not {record.unit!r}")
     if record.duration_power != objective.duration_power:

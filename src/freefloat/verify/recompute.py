@@ -1,9 +1,5 @@
 """Every number of a plan file, recomputed from its URDF, duration and coefficients.
 
-This module is long because it recomputes and compares every record of the plan format in one
-place, in the order in which the fields depend on each other (splitting it would scatter one
-comparison over several files).
-
 A plan file vouches for every number in it, so ``freefloat verify`` trusts none of them: it
 rebuilds the plan's problem from the URDF, the duration, the path coefficients and the stated
 start and goal attitudes, recomputes each record with the functions that wrote it

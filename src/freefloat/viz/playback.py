@@ -229,7 +229,6 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
     if not (np.isfinite(speed) and speed > 0):
         raise InputError(f"--speed must be a positive number, got {speed}")
     meshcat, meshcat_visualizer = _import_viewer()
-    import meshcat.geometry as g
     from meshcat.animation import Animation
 
     robot = robot or plan_robot(plan)
@@ -250,36 +249,8 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
         viz.initViewer(viewer=viewer)
         viz.loadViewerModel(rootNodeName=ROOT_NODE)
 
-        paths = [np.asarray(samples.path_of(f), dtype=float) for f in robot.end_effectors]
-        extent = float(max(max(np.linalg.norm(p, axis=1).max() for p in paths), 0.5))
-        tips = _tip_nodes(len(paths))
-        for number, (path, (trail, _)) in enumerate(zip(paths, tips, strict=True)):
-            viewer[trail].set_object(
-                g.Line(
-                    g.PointsGeometry(path.T.astype(np.float32)),
-                    g.LineBasicMaterial(color=_TRAIL_COLOURS[number % 4], linewidth=2),
-                )
-            )
-        viewer[f"{EXTRAS}/cm"].set_object(
-            g.Sphere(0.03 * extent), g.MeshLambertMaterial(color=0xD62728)
-        )
-        viewer[f"{EXTRAS}/inertial_axes"].set_object(g.triad(0.5 * extent))
-        viewer[f"{EXTRAS}/base_frame"].set_object(g.triad(0.25 * extent))
-        for _, tip_node in tips:
-            viewer[tip_node].set_object(
-                g.Sphere(0.02 * extent), g.MeshLambertMaterial(color=0x2CA02C)
-            )
-        obstacles = {obstacle_node(o.name): o for o in plan_obstacles(plan)}
-        for node, obstacle in obstacles.items():
-            _draw_obstacle(viewer, g, node, obstacle)
+        obstacles, tips = _draw_extras(viewer, plan, robot)
         base_link = robot.model.getFrameId(robot.base_link)
-        # Camera: meshcat 0.3.2 API (Pinocchio's helpers need a newer meshcat). Inside the
-        # y-up "rotated" node, a world point (x, y, z) is (x, z, -y); it looks at the origin.
-        eye = np.array([0.5, -1.0, 1.1]) * 1.5 * extent
-        viewer["/Grid"].set_property("visible", False)  # no floor in orbit
-        viewer["/Cameras/default/rotated/<object>"].set_property(
-            "position", [float(eye[0]), float(eye[2]), float(-eye[1])]
-        )
 
         animation = Animation(default_framerate=fps)
         data, gdata = robot.model.createData(), visual.createData()
@@ -322,6 +293,46 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
         playback.close()
         raise ViewerError(f"the 3D viewer failed: {type(exc).__name__}: {exc}") from None
     return playback
+
+
+def _draw_extras(
+    viewer: Any, plan: Plan, robot: Robot
+) -> tuple[dict[str, Any], list[tuple[str, str]]]:
+    """Every end effector's trail and marker, the CM, frames and keep-out objects; the camera.
+
+    Returns the obstacles by viewer node, and each end effector's (trail, marker) nodes.
+    """
+    import meshcat.geometry as g
+
+    samples = plan.samples
+    paths = [np.asarray(samples.path_of(f), dtype=float) for f in robot.end_effectors]
+    extent = float(max(max(np.linalg.norm(p, axis=1).max() for p in paths), 0.5))
+    tips = _tip_nodes(len(paths))
+    for number, (path, (trail, _)) in enumerate(zip(paths, tips, strict=True)):
+        viewer[trail].set_object(
+            g.Line(
+                g.PointsGeometry(path.T.astype(np.float32)),
+                g.LineBasicMaterial(color=_TRAIL_COLOURS[number % 4], linewidth=2),
+            )
+        )
+    viewer[f"{EXTRAS}/cm"].set_object(
+        g.Sphere(0.03 * extent), g.MeshLambertMaterial(color=0xD62728)
+    )
+    viewer[f"{EXTRAS}/inertial_axes"].set_object(g.triad(0.5 * extent))
+    viewer[f"{EXTRAS}/base_frame"].set_object(g.triad(0.25 * extent))
+    for _, tip_node in tips:
+        viewer[tip_node].set_object(g.Sphere(0.02 * extent), g.MeshLambertMaterial(color=0x2CA02C))
+    obstacles = {obstacle_node(o.name): o for o in plan_obstacles(plan)}
+    for node, obstacle in obstacles.items():
+        _draw_obstacle(viewer, g, node, obstacle)
+    # Camera: meshcat 0.3.2 API (Pinocchio's helpers need a newer meshcat). Inside the
+    # y-up "rotated" node, a world point (x, y, z) is (x, z, -y); it looks at the origin.
+    eye = np.array([0.5, -1.0, 1.1]) * 1.5 * extent
+    viewer["/Grid"].set_property("visible", False)  # no floor in orbit
+    viewer["/Cameras/default/rotated/<object>"].set_property(
+        "position", [float(eye[0]), float(eye[2]), float(-eye[1])]
+    )
+    return obstacles, tips
 
 
 def page_html(plan: Plan, speed: float = 1.0) -> str:

@@ -182,8 +182,6 @@ def _draw(
     s = plan.samples
     t = np.asarray(s.t)
     scale, kinds = _joint_scale(plan)
-    names = plan.robot.joints
-    unit = "deg" if all(k != "prismatic" for k in kinds) else "deg | m"
     frames = plan.robot.frames
     if topic == "end_effector":
         for number, frame in enumerate(frames):
@@ -228,41 +226,7 @@ def _draw(
             ax.plot(t, omega[:, i], label=f"$\\omega_{axis}$")
         ax.set_ylabel("base angular rate [deg/s]")
     elif topic in ("joint_positions", "joint_rates", "joint_torques"):
-        key = {"joint_positions": "q", "joint_rates": "qd", "joint_torques": "tau"}[topic]
-        values = np.asarray(getattr(s, key), dtype=float)
-        if topic != "joint_torques":
-            values = values * scale
-        for i, name in enumerate(names):
-            (line,) = ax.plot(t, values[:, i], label=name)
-            colour = line.get_color()
-            if topic == "joint_positions" and i < len(plan.request.goal_joints):
-                goal = plan.request.goal_joints[i] * scale[i]
-                ax.plot([t[-1]], [goal], "o", mfc="none", color=colour, label="_goal")
-            lower, upper, rate = limits.get(name, (-math.inf, math.inf, math.inf))
-            marks = (lower, upper) if topic == "joint_positions" else (-rate, rate)
-            if topic != "joint_torques":
-                for mark in marks:
-                    if math.isfinite(mark):
-                        ax.axhline(
-                            mark * scale[i],
-                            color=colour,
-                            linestyle="--",
-                            linewidth=0.8,
-                            label="_limit",
-                        )
-        if topic == "joint_positions":
-            ax.plot([], [], "o", mfc="none", color="0.3", label="goal at T")
-        if any(line.get_label() == "_limit" for line in ax.lines):
-            ax.plot([], [], "--", color="0.3", label="limit (URDF)")
-        ax.set_ylabel(
-            {
-                "joint_positions": f"joint position [{unit}]",
-                "joint_rates": f"joint rate [{unit}/s]",
-                "joint_torques": "joint torque [N m | N]"
-                if "prismatic" in kinds
-                else "joint torque [N m]",
-            }[topic]
-        )
+        _draw_joints(plan, topic, ax, limits, scale, kinds)
     elif topic == "clearance" and clearance is not None:
         value, when, pair = clearance.closest
         ax.plot(clearance.t, clearance.smallest, label="smallest clearance")
@@ -282,6 +246,56 @@ def _draw(
         ax.set_xlim(0.0, plan.duration)
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize="small")
+
+
+def _draw_joints(
+    plan: Plan,
+    topic: str,
+    ax: Any,
+    limits: dict[str, tuple[float, float, float]],
+    scale: np.ndarray,
+    kinds: list[str],
+) -> None:
+    """Joint positions, rates or torques (deg, m, N m, N) with their goals and URDF limits."""
+    s = plan.samples
+    t = np.asarray(s.t)
+    names = plan.robot.joints
+    unit = "deg" if all(k != "prismatic" for k in kinds) else "deg | m"
+    key = {"joint_positions": "q", "joint_rates": "qd", "joint_torques": "tau"}[topic]
+    values = np.asarray(getattr(s, key), dtype=float)
+    if topic != "joint_torques":
+        values = values * scale
+    for i, name in enumerate(names):
+        (line,) = ax.plot(t, values[:, i], label=name)
+        colour = line.get_color()
+        if topic == "joint_positions" and i < len(plan.request.goal_joints):
+            goal = plan.request.goal_joints[i] * scale[i]
+            ax.plot([t[-1]], [goal], "o", mfc="none", color=colour, label="_goal")
+        lower, upper, rate = limits.get(name, (-math.inf, math.inf, math.inf))
+        marks = (lower, upper) if topic == "joint_positions" else (-rate, rate)
+        if topic != "joint_torques":
+            for mark in marks:
+                if math.isfinite(mark):
+                    ax.axhline(
+                        mark * scale[i],
+                        color=colour,
+                        linestyle="--",
+                        linewidth=0.8,
+                        label="_limit",
+                    )
+    if topic == "joint_positions":
+        ax.plot([], [], "o", mfc="none", color="0.3", label="goal at T")
+    if any(line.get_label() == "_limit" for line in ax.lines):
+        ax.plot([], [], "--", color="0.3", label="limit (URDF)")
+    ax.set_ylabel(
+        {
+            "joint_positions": f"joint position [{unit}]",
+            "joint_rates": f"joint rate [{unit}/s]",
+            "joint_torques": "joint torque [N m | N]"
+            if "prismatic" in kinds
+            else "joint torque [N m]",
+        }[topic]
+    )
 
 
 def _clearance(plan: Plan) -> ClearanceCurve | None:

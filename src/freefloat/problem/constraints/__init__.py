@@ -9,10 +9,17 @@ from .base import (
     LimitPeak,
 )
 from .clearance import Clearance
+from .end_effector_cone import EndEffectorCone
 from .joint_effort import JointEffortLimits
 from .joint_position import JointPositionLimits
 from .joint_velocity import JointVelocityLimits
-from .registry import CONSTRAINTS, default_constraints, scenario_constraints
+from .registry import (
+    CONSTRAINTS,
+    constraint_from_record,
+    default_constraints,
+    recorded_constraints,
+    scenario_constraints,
+)
 
 __all__ = [
     "CONSTRAINTS",
@@ -21,11 +28,14 @@ __all__ = [
     "Constraint",
     "ConstraintRows",
     "DurationScaledLimit",
+    "EndEffectorCone",
     "Excess",
     "JointEffortLimits",
     "JointPositionLimits",
     "JointVelocityLimits",
     "LimitPeak",
+    "constraint_from_record",
     "default_constraints",
+    "recorded_constraints",
     "scenario_constraints",
 ]

@@ -6,16 +6,23 @@ the free path coefficients ``beta`` at a set of normalised instants; and it give
 a dense, independent measure of how far a finished path goes beyond it, computed from the
 path's time polynomials alone (no solver data). Solvers receive constraints as a list; adding
 one means one new module with a subclass, plus its name in :mod:`.registry`.
+
+A constraint writes and reads its own parameters (:meth:`Constraint.to_record` and
+:meth:`Constraint.from_record`): the same table is a scenario's ``[constraints.<name>]`` and a
+plan's ``constraints`` record, so a plan names every constraint it honours and
+``freefloat verify`` rebuilds them from the registry (docs/developers.md).
 """
 
 from __future__ import annotations
 
 import abc
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from ...errors import DurationLimitError
+from ...errors import DurationLimitError, InputError
 from ...robot.model import Joint, Robot
 from ..paths import JointPolynomials
 from ..residual import Problem
@@ -109,6 +116,27 @@ class Constraint(abc.ABC):
     def applies_to(self, robot: Robot) -> bool:
         """Whether the constraint has anything to check on this robot (default: yes)."""
         return True
+
+    def to_record(self) -> dict[str, Any]:
+        """The constraint's parameters, JSON-ready, as a plan and a scenario write them.
+
+        Angles in degrees (keys ending ``_deg``), lengths in metres. Default: no parameters.
+        ``type(self).from_record(self.to_record())`` is the same constraint.
+        """
+        return {}
+
+    @classmethod
+    def from_record(cls, record: Mapping[str, Any]) -> Constraint:
+        """The constraint its parameters describe (as :meth:`to_record` writes them).
+
+        Raises:
+            InputError: an unknown, missing or bad parameter, named, with what is valid.
+        """
+        if record:
+            raise InputError(
+                f"constraint {cls.name!r} takes no parameters, got {', '.join(map(repr, record))}"
+            )
+        return cls()
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}()"

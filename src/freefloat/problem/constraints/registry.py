@@ -1,39 +1,80 @@
 """The constraints freefloat knows by name, and the default list a plan honours.
 
-A new constraint is one module with a :class:`~.base.Constraint` subclass plus one entry
-here; solvers, verification and the plan file pick it up from the list.
+A new constraint is one module with a :class:`~.base.Constraint` subclass plus one entry in
+:data:`CONSTRAINTS`; from that entry a scenario reads its ``[constraints.<name>]`` table, a plan
+records it (``constraints``, with :meth:`~.base.Constraint.to_record`), ``freefloat verify``
+rebuilds it (:func:`constraint_from_record`) and the schemas list its name.
+
+Clearance is the exception for now: its collision model is built from the robot, the SRDF and
+the obstacles, so it is described by the scenario's ``[safety]`` and the plan's ``safety``
+record (:data:`SAFETY_RECORDED`), not by a constraint record.
 """
 
 from __future__ import annotations
 
 import weakref
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
+from ...errors import InputError, UnknownNameError
 from ...robot.collision import CollisionModel, Obstacle, collision_model, known_srdf
 from ...robot.model import Robot
-from ..scenario import Scenario
 from .base import Constraint
 from .clearance import Clearance
+from .end_effector_cone import EndEffectorCone
 from .joint_effort import JointEffortLimits
 from .joint_position import JointPositionLimits
 from .joint_velocity import JointVelocityLimits
 
+if TYPE_CHECKING:
+    from ..scenario import Scenario
+
 __all__ = [
     "CONSTRAINTS",
+    "SAFETY_RECORDED",
     "cached_collision_model",
     "clearance_constraint",
+    "constraint_from_record",
     "default_constraints",
+    "recorded_constraints",
     "scenario_constraints",
 ]
 
-#: Constraint classes by name.
+#: Constraint classes by name: the one list (scenario keys, plan records, verify, schemas).
 CONSTRAINTS: dict[str, type[Constraint]] = {
-    JointPositionLimits.name: JointPositionLimits,
-    JointVelocityLimits.name: JointVelocityLimits,
-    JointEffortLimits.name: JointEffortLimits,
-    Clearance.name: Clearance,
+    cls.name: cls
+    for cls in (
+        JointPositionLimits,
+        JointVelocityLimits,
+        JointEffortLimits,
+        Clearance,
+        EndEffectorCone,
+    )
 }
+
+#: Constraints described by the ``[safety]`` table and the plan's ``safety`` record instead of
+#: a constraint record (see the module docstring).
+SAFETY_RECORDED = (Clearance.name,)
+
+
+def recorded_constraints() -> list[str]:
+    """Names of the constraints a scenario table or a plan record may name, in order."""
+    return [name for name in CONSTRAINTS if name not in SAFETY_RECORDED]
+
+
+def constraint_from_record(name: str, record: Mapping[str, Any]) -> Constraint:
+    """The constraint ``name`` with the parameters of its record (scenario table, plan record).
+
+    Raises:
+        UnknownNameError: ``name`` is not a recorded constraint (lists the valid ones).
+        InputError: a bad parameter (named by the constraint).
+    """
+    if name not in CONSTRAINTS or name in SAFETY_RECORDED:
+        raise UnknownNameError("constraint", name, recorded_constraints())
+    if not isinstance(record, Mapping):
+        raise InputError(f"constraint {name!r}: its parameters must be a table, got {record!r}")
+    return CONSTRAINTS[name].from_record(record)
 
 
 def default_constraints() -> list[Constraint]:
@@ -42,12 +83,13 @@ def default_constraints() -> list[Constraint]:
 
 
 def scenario_constraints(scenario: Scenario) -> list[Constraint]:
-    """The constraints a scenario's plan honours: the defaults, and clearance when checked.
+    """The constraints a scenario's plan honours.
 
+    The defaults, its ``[constraints.<name>]`` tables, and clearance when checked.
     Clearance is added when ``[safety] check`` is on (the default) and the robot's collision
     geometry (with the scenario's obstacles and payload) has pairs to check.
     """
-    constraints = default_constraints()
+    constraints = [*default_constraints(), *scenario.constraints]
     safety = scenario.safety
     if safety.check:
         srdf = safety.srdf or known_srdf(scenario.robot)

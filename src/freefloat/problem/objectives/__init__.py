@@ -1,6 +1,6 @@
 """Objectives: which of the paths that reach the goal is best (docs/method.md section 13)."""
 
-from .base import Objective, ObjectiveValue, gauss_legendre
+from .base import Level, Objective, ObjectiveValue, gauss_legendre
 from .min_acceleration import MinAcceleration
 from .min_effort import MinEffort
 from .min_length import MinLength
@@ -10,6 +10,7 @@ from .registry import DEFAULT_OBJECTIVE, OBJECTIVES, objective_named
 __all__ = [
     "DEFAULT_OBJECTIVE",
     "OBJECTIVES",
+    "Level",
     "MinAcceleration",
     "MinEffort",
     "MinLength",

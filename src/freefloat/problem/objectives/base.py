@@ -6,19 +6,30 @@ exact gradient, evaluated at the problem's duration ``T`` in physical units. Eve
 here scales with the duration as a power, ``J_T = J_1 T^-p`` (the path shape does not depend on
 ``T``), so the path that is best at one duration is best at every duration. Solvers receive one
 objective; adding one means one new module with a subclass, plus its name in :mod:`.registry`.
+
+An objective writes and reads its own parameters (:meth:`Objective.to_record`,
+:meth:`Objective.from_record`; the quadrature is not a parameter: a plan records it apart), so
+a plan names its objective completely and ``freefloat verify`` rebuilds it from the registry.
 """
 
 from __future__ import annotations
 
 import abc
+import copy
 import functools
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from ...errors import InputError
 from ..residual import Problem
 
-__all__ = ["Objective", "ObjectiveValue", "gauss_legendre"]
+__all__ = ["Level", "Objective", "ObjectiveValue", "gauss_legendre"]
+
+#: Longest ``Level.note`` kept (characters): the plan file's limit.
+MAX_NOTE = 200
 
 
 @dataclass(frozen=True)
@@ -32,6 +43,27 @@ class ObjectiveValue:
 
     value: float
     gradient: np.ndarray
+
+
+@dataclass(frozen=True)
+class Level:
+    """One freedom level an objective was minimised with (the minimiser's result, as stored).
+
+    Attributes:
+        freedom: free coefficients per joint.
+        value: the objective at that level's best root (the objective's unit).
+        iterations: SLSQP iterations spent.
+        note: why the level kept its starting path, when it did (cut to :data:`MAX_NOTE`
+            characters).
+    """
+
+    freedom: dict[str, int]
+    value: float
+    iterations: int
+    note: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "note", self.note[:MAX_NOTE])
 
 
 class Objective(abc.ABC):
@@ -72,11 +104,37 @@ class Objective(abc.ABC):
         """Quadrature nodes of the value (0 when exact or none are needed)."""
         return int(getattr(self, "nodes", 0))
 
-    def refined(self) -> Objective:
-        """The same objective with twice the quadrature nodes (itself when exact)."""
+    def with_nodes(self, nodes: int) -> Objective:
+        """A copy on ``nodes`` quadrature nodes, other parameters kept (itself when exact)."""
         if self.exact:
             return self
-        return type(self)(nodes=2 * self.nodes_used)  # type: ignore[call-arg]
+        out = copy.copy(self)
+        out.nodes = int(nodes)  # type: ignore[attr-defined]
+        return out
+
+    def refined(self) -> Objective:
+        """The same objective with twice the quadrature nodes (itself when exact)."""
+        return self.with_nodes(2 * self.nodes_used)
+
+    def to_record(self) -> dict[str, Any]:
+        """The objective's parameters, JSON-ready, as a plan writes them (default: none).
+
+        ``type(self).from_record(self.to_record())`` is the same objective (quadrature aside).
+        """
+        return {}
+
+    @classmethod
+    def from_record(cls, record: Mapping[str, Any]) -> Objective:
+        """The objective its parameters describe (as :meth:`to_record` writes them).
+
+        Raises:
+            InputError: an unknown, missing or bad parameter, named, with what is valid.
+        """
+        if record:
+            raise InputError(
+                f"objective {cls.name!r} takes no parameters, got {', '.join(map(repr, record))}"
+            )
+        return cls()
 
     def converged(
         self, problem: Problem, beta: np.ndarray, relative: float = 1e-9, max_nodes: int = 512

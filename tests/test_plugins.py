@@ -1,0 +1,344 @@
+"""The plug-in contract: every registered constraint and objective passes the same checks.
+
+- its Jacobian (constraints) or gradient (objectives) agrees with central finite differences
+  of its own values, on a spatial servicer with free coefficients on every joint;
+- its record round-trips: ``from_record(to_record())`` through JSON gives the same values;
+- a plan made with it is saved, loaded and passes ``freefloat verify``, which rebuilds it from
+  the registry by its record.
+
+A plug-in defined here, in the test file (:class:`ToyCeiling`, :class:`ToyWeightedNorm`), is
+registered with one line each and goes the whole way: scenario key, plan, file, verify.
+A new built-in plug-in must be added to :data:`CONSTRAINT_EXAMPLES` (a test says so).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import freefloat as ff
+from freefloat.cli import main
+from freefloat.errors import InputError
+from freefloat.problem.constraints import (
+    CONSTRAINTS,
+    Constraint,
+    ConstraintRows,
+    EndEffectorCone,
+    Excess,
+    JointEffortLimits,
+    JointPositionLimits,
+    JointVelocityLimits,
+    scenario_constraints,
+)
+from freefloat.problem.constraints.base import DEFAULT_INSTANTS
+from freefloat.problem.constraints.registry import SAFETY_RECORDED
+from freefloat.problem.objectives import OBJECTIVES, Objective, ObjectiveValue
+from test_objectives import _fd_gradient
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: One example of every built-in constraint, given a scenario whose robot it is for.
+CONSTRAINT_EXAMPLES: dict[str, Callable[[ff.Scenario], Constraint]] = {
+    "joint_position_limits": lambda _: JointPositionLimits(),
+    "joint_velocity_limits": lambda _: JointVelocityLimits(),
+    "joint_effort_limits": lambda _: JointEffortLimits(),
+    "clearance": lambda scenario: next(
+        c for c in scenario_constraints(scenario) if c.name == "clearance"
+    ),
+    "end_effector_cone": lambda _: EndEffectorCone([0.0, 0.0, 1.0], [1.0, 0.0, 0.0], 0.9),
+}
+
+
+# -- plug-ins defined in this test file -------------------------------------------------------
+
+
+class ToyCeiling(Constraint):
+    """Joint ``joint`` stays below ``ceiling`` (rad) at every instant (a test plug-in)."""
+
+    name = "toy_ceiling"
+    unit = "rad"
+    affine = True
+
+    def __init__(self, joint: str, ceiling: float) -> None:
+        self.joint, self.ceiling = joint, ceiling
+
+    def to_record(self) -> dict[str, Any]:
+        return {"joint": self.joint, "ceiling_deg": math.degrees(self.ceiling)}
+
+    @classmethod
+    def from_record(cls, record: Mapping[str, Any]) -> ToyCeiling:
+        if set(record) != {"joint", "ceiling_deg"}:
+            raise InputError(f"toy_ceiling takes joint and ceiling_deg, got {sorted(record)}")
+        return cls(str(record["joint"]), math.radians(float(record["ceiling_deg"])))
+
+    def rows(self, problem, beta, instants=DEFAULT_INSTANTS):
+        i = problem.robot.joint_names.index(self.joint)
+        base, dq, _ = problem.family.linear_map(np.asarray(instants, dtype=float))
+        return ConstraintRows(base.q[:, i] + dq[:, i, :] @ beta - self.ceiling, dq[:, i, :])
+
+    def critical_times(self, robot, path):
+        (_, _), (_, t_hi) = path.extremes(robot.joint_names.index(self.joint), 0)
+        return np.array([t_hi])
+
+    def excess(self, robot, path):
+        (_, _), (hi, t_hi) = path.extremes(robot.joint_names.index(self.joint), 0)
+        return Excess(hi - self.ceiling, 0.0, f"at t = {t_hi:.4g} s")
+
+
+class ToyWeightedNorm(Objective):
+    """``weight * |beta|^2`` (rad^2; a test plug-in with a parameter)."""
+
+    name = "toy_weighted_norm"
+    unit = "rad^2"
+
+    def __init__(self, weight: float = 2.0) -> None:
+        self.weight = weight
+
+    def evaluate(self, problem, beta):
+        beta = np.asarray(beta, dtype=float)
+        return ObjectiveValue(self.weight * float(beta @ beta), 2.0 * self.weight * beta)
+
+    def to_record(self) -> dict[str, Any]:
+        return {"weight": self.weight}
+
+    @classmethod
+    def from_record(cls, record: Mapping[str, Any]) -> ToyWeightedNorm:
+        return cls(float(record.get("weight", 2.0)))
+
+
+@pytest.fixture
+def toy_plugins(monkeypatch):
+    """The test plug-ins, registered with one line each (taken out again after the test)."""
+    monkeypatch.setitem(CONSTRAINTS, ToyCeiling.name, ToyCeiling)
+    monkeypatch.setitem(OBJECTIVES, ToyWeightedNorm.name, ToyWeightedNorm)
+
+
+@pytest.fixture(scope="module")
+def ur5_scenario():
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
+    scenario = scenario.resolved()
+    scenario.write_robot()
+    return scenario
+
+
+# -- the contract ------------------------------------------------------------------------------
+
+
+def test_every_registered_constraint_has_a_contract_example():
+    assert set(CONSTRAINTS) == set(CONSTRAINT_EXAMPLES)
+
+
+@pytest.mark.parametrize("name", sorted(CONSTRAINT_EXAMPLES))
+def test_constraint_jacobian_matches_finite_differences(ur5_scenario, name):
+    constraint = CONSTRAINT_EXAMPLES[name](ur5_scenario)
+    problem = ff.problem_from_scenario(ur5_scenario, extra=[1] * ur5_scenario.robot.n)
+    beta = 0.05 * np.random.default_rng(5).normal(size=problem.n_free)
+    instants = np.linspace(0.05, 0.95, 7)
+    rows = constraint.rows(problem, beta, instants)
+    assert rows.count > 0 and rows.jacobian.shape == (rows.count, problem.n_free)
+    h = 1e-6
+    fd = np.empty_like(rows.jacobian)
+    for k in range(problem.n_free):
+        step = np.zeros(problem.n_free)
+        step[k] = h
+        plus = constraint.rows(problem, beta + step, instants).values
+        minus = constraint.rows(problem, beta - step, instants).values
+        fd[:, k] = (plus - minus) / (2 * h)
+    scale = max(1.0, float(np.abs(rows.jacobian).max()))
+    np.testing.assert_allclose(rows.jacobian, fd, rtol=1e-5, atol=1e-6 * scale)
+
+
+@pytest.mark.parametrize("name", sorted(CONSTRAINT_EXAMPLES))
+def test_constraint_record_round_trips(ur5_scenario, name):
+    constraint = CONSTRAINT_EXAMPLES[name](ur5_scenario)
+    if name in SAFETY_RECORDED:  # recorded by the plan's safety section (test_collision)
+        assert constraint.to_record() == {}
+        return
+    record = json.loads(json.dumps(constraint.to_record()))
+    again = ff.problem.constraints.constraint_from_record(name, record)
+    problem = ff.problem_from_scenario(ur5_scenario, extra=[1] * ur5_scenario.robot.n)
+    beta = 0.05 * np.random.default_rng(6).normal(size=problem.n_free)
+    assert type(again) is type(constraint) and again.to_record() == record
+    np.testing.assert_array_equal(
+        again.rows(problem, beta).values, constraint.rows(problem, beta).values
+    )
+
+
+@pytest.mark.parametrize("name", sorted(OBJECTIVES))
+def test_objective_gradient_and_record(ur5_scenario, name):
+    problem = ff.problem_from_scenario(ur5_scenario, extra=[1] * ur5_scenario.robot.n)
+    beta = 0.05 * np.random.default_rng(3).normal(size=problem.n_free)
+    objective = OBJECTIVES[name]()
+    found = objective.evaluate(problem, beta)
+    fd = _fd_gradient(lambda b: objective.evaluate(problem, b).value, beta, h=1e-5)
+    scale = max(np.abs(found.gradient).max(), 1e-300)
+    np.testing.assert_allclose(found.gradient, fd, rtol=1e-5, atol=1e-7 * scale)
+    again = OBJECTIVES[name].from_record(json.loads(json.dumps(objective.to_record())))
+    assert again.evaluate(problem, beta).value == found.value
+
+
+def test_toy_plugins_pass_the_contract(worked_scenario, toy_plugins):
+    problem = ff.problem_from_scenario(worked_scenario, extra=[0, 2])
+    beta = np.array([0.3, -0.2])
+    ceiling = ToyCeiling("q2", 1.0)
+    rows = ceiling.rows(problem, beta)
+    step = 1e-6 * np.eye(2)
+    fd = np.stack(
+        [(ceiling.rows(problem, beta + s).values - rows.values) / 1e-6 for s in step], axis=1
+    )
+    np.testing.assert_allclose(rows.jacobian, fd, atol=1e-7)  # affine: forward differences
+    toy = ToyWeightedNorm(3.0)
+    fd = _fd_gradient(lambda b: toy.evaluate(problem, b).value, beta)
+    np.testing.assert_allclose(toy.evaluate(problem, beta).gradient, fd, rtol=1e-7)
+    assert ToyWeightedNorm.from_record(toy.to_record()).weight == 3.0
+
+
+# -- end to end: scenario key, plan, file, freefloat verify -------------------------------------
+
+
+def _scenario(tmp_path: Path, extra: str) -> Path:
+    text = ff.default_scenario_path().read_text() + extra
+    path = tmp_path / "scenario.toml"
+    path.write_text(text)
+    return path
+
+
+#: The worked example's end-effector axis (its x axis, along the arm) must stay within 60 deg
+#: of the base direction at 70 deg from x: the joints' sum runs from 110 to 30 deg.
+CONE = """
+[constraints.end_effector_cone]
+axis = [1.0, 0.0, 0.0]
+direction = [0.3420201433256687, 0.9396926207859083, 0.0]
+half_angle_deg = 60.0
+"""
+
+
+def test_cone_and_toy_plugins_round_trip_through_plan_file_and_verify(
+    tmp_path, capsys, toy_plugins
+):
+    scenario = _scenario(
+        tmp_path,
+        CONE + '\n[constraints.toy_ceiling]\njoint = "q2"\nceiling_deg = 120.0\n',
+    )
+    out = tmp_path / "plan.json"
+    code = main(["plan", str(scenario), "-o", str(out), "--objective", "toy_weighted_norm"])
+    _, err = capsys.readouterr()
+    assert code == 0, err
+    data = json.loads(out.read_text())
+    assert data["format"] == "freefloat.plan/4"
+    assert data["objective"]["name"] == "toy_weighted_norm"
+    assert data["objective"]["parameters"] == {"weight": 2.0}
+    records = {c["name"]: c["parameters"] for c in data["constraints"]}
+    assert records["toy_ceiling"] == {"joint": "q2", "ceiling_deg": pytest.approx(120.0)}
+    assert records["end_effector_cone"]["half_angle_deg"] == pytest.approx(60.0)
+    checks = {c["name"]: c for c in data["verification"]["checks"]}
+    # Closed form, not the constraint's code: the planar arm's x axis points at q1 + q2 in
+    # the base plane, so the cone's gap is cos(60 deg) - cos(q1 + q2 - 70 deg).
+    plan = ff.Plan.load(out)
+    t = np.linspace(0.0, plan.duration, 20001)
+    q = plan.joint_positions(t)
+    gap = math.cos(math.radians(60)) - np.cos(q[:, 0] + q[:, 1] - math.radians(70))
+    assert checks["end_effector_cone"]["value"] == pytest.approx(gap.max(), abs=1e-7)
+    assert checks["toy_ceiling"]["value"] == pytest.approx(
+        q[:, 1].max() - math.radians(120), abs=1e-7
+    )
+    assert main(["verify", str(out)]) == 0
+    capsys.readouterr()
+
+    # verify rebuilds the constraints from the records: a ceiling 20 deg lower moves the
+    # toy_ceiling check's figure by 20 deg from the one stored
+    index = [c["name"] for c in data["verification"]["checks"]].index("toy_ceiling")
+    for item in data["constraints"]:
+        if item["name"] == "toy_ceiling":
+            item["parameters"]["ceiling_deg"] = 100.0
+    out.write_text(json.dumps(data))
+    assert main(["verify", str(out)]) == 2
+    _, err = capsys.readouterr()
+    assert f"verification.checks[{index}].value' disagrees" in err
+    assert f"by {math.radians(20):.3g} rad" in err
+
+
+def test_a_plan_naming_an_unregistered_plugin_is_refused_in_one_line(tmp_path, capsys, worked_plan):
+    data = json.loads(worked_plan.to_json())
+    data["constraints"].append({"name": "toy_ceiling", "parameters": {}})
+    path = tmp_path / "plan.json"
+    path.write_text(json.dumps(data))
+    assert main(["verify", str(path)]) == 2
+    _, err = capsys.readouterr()
+    assert "toy_ceiling" in err and "end_effector_cone" in err and len(err.splitlines()) == 1
+
+
+def test_scenario_constraint_errors(tmp_path):
+    bad = {
+        "[constraints.nope]\n": "unknown constraint 'nope'",
+        "[constraints.joint_position_limits]\n": "always honoured",
+        "[constraints.end_effector_cone]\naxis = [1, 0, 0]\n": "missing 'direction'",
+        CONE.replace("60.0", "190.0"): "half_angle_deg must be a number between 0 and 180",
+        CONE.replace("[1.0, 0.0, 0.0]", "[0, 0, 0]"): "axis must be a finite non-zero",
+    }
+    for text, message in bad.items():
+        with pytest.raises(ff.FreeFloatError, match=message):
+            ff.Scenario.from_toml(_scenario(tmp_path, text))
+
+
+def test_a_format_3_plan_is_held_to_the_limits_it_promised(tmp_path, capsys, worked_plan):
+    data = json.loads(worked_plan.to_json())
+    assert [c["name"] for c in data["constraints"]] == list(
+        ff.plans.format.PROMISED["freefloat.plan/3"]
+    )
+    data["format"] = "freefloat.plan/3"
+    del data["constraints"], data["objective"]["parameters"]
+    path = tmp_path / "old.json"
+    path.write_text(json.dumps(data))
+    assert main(["verify", str(path)]) == 0, capsys.readouterr().err
+    loaded = ff.Plan.load(path)
+    assert loaded.format == "freefloat.plan/3" and "constraints" not in loaded.to_dict()
+    assert [c.name for c in loaded.constraints] == [
+        c["name"] for c in worked_plan.to_dict()["constraints"]
+    ]
+
+
+def _tool_angles_deg(plan: ff.Plan, robot: ff.Robot, axis, direction, samples=2001):
+    """Angle (deg) of the end effector's ``axis`` to ``direction`` (base frame) along the plan,
+    from Pinocchio's frame placements computed here (not by the constraint's code)."""
+    import pinocchio as pin
+
+    data, frame = robot.model.createData(), robot.end_effector_frame
+    out = []
+    for q in plan.joint_positions(np.linspace(0.0, plan.duration, samples)):
+        pin.framesForwardKinematics(robot.model, data, robot.configuration(q))
+        cos = float(direction @ (data.oMf[frame].rotation @ axis))
+        out.append(math.degrees(math.acos(min(1.0, max(-1.0, cos)))))
+    return np.array(out)
+
+
+def test_a_binding_cone_is_held_on_a_spatial_servicer(ur5_scenario, tmp_path, capsys):
+    """The UR5's tool axis swings 1.1 deg beyond its ends' angle on the minimum-norm path; a
+    cone 0.44 deg tighter than that swing is held, touching its edge."""
+    axis = np.array([0.0, 0.0, 1.0])
+    free = ff.plan(ur5_scenario)
+    robot = ur5_scenario.robot
+    import pinocchio as pin
+
+    data, frame = robot.model.createData(), robot.end_effector_frame
+    ends = []
+    for q in free.joint_positions(np.array([0.0, free.duration])):
+        pin.framesForwardKinematics(robot.model, data, robot.configuration(q))
+        ends.append(data.oMf[frame].rotation @ axis)
+    direction = (ends[0] + ends[1]) / np.linalg.norm(ends[0] + ends[1])
+    swing = _tool_angles_deg(free, robot, axis, direction)
+    edge = max(swing[0], swing[-1])
+    half = edge + 0.6 * (swing.max() - edge)
+    assert swing.max() > half + 0.4  # the minimum-norm path breaks the cone
+    cone = EndEffectorCone(axis, direction, math.radians(half))
+    held = ff.plan(ur5_scenario, constraints=[*scenario_constraints(ur5_scenario), cone])
+    angles = _tool_angles_deg(held, robot, axis, direction, 4001)
+    assert angles.max() <= half + 1e-6
+    assert angles.max() > half - 0.05  # it binds
+    assert main(["verify", str(held.save(tmp_path / "cone.json"))]) == 0, capsys.readouterr().err
