@@ -49,7 +49,9 @@ class ReplayOutcome:
     steps: int
 
 
-def replay_attitude(plan: Plan, robot: Robot, start_quaternion: np.ndarray | None = None) -> ReplayOutcome:
+def replay_attitude(
+    plan: Plan, robot: Robot, start_quaternion: np.ndarray | None = None
+) -> ReplayOutcome:
     """Integrate the base attitude along the plan's joint paths in ``robot``'s model.
 
     Args:

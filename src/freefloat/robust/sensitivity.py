@@ -103,9 +103,7 @@ def body_names(robot: Robot) -> tuple[str, ...]:
             names.append(robot.base_link)
             continue
         link = next(
-            f.name
-            for f in model.frames
-            if f.type == pin.FrameType.BODY and f.parentJoint == joint
+            f.name for f in model.frames if f.type == pin.FrameType.BODY and f.parentJoint == joint
         )
         names.append(link)
     return tuple(names)
@@ -136,7 +134,9 @@ def _dynamic_jacobian(params: np.ndarray) -> np.ndarray:
     m, c = params[0], params[1:4]
     cx, cy, cz = c
     # S = |c|^2 1 - c c^T in Pinocchio's order xx, xy, yy, xz, yz, zz (positions 4..9).
-    s = np.array([cy * cy + cz * cz, -cx * cy, cx * cx + cz * cz, -cx * cz, -cy * cz, cx * cx + cy * cy])
+    s = np.array(
+        [cy * cy + cz * cz, -cx * cy, cx * cx + cz * cz, -cx * cz, -cy * cz, cx * cx + cy * cy]
+    )
     ds = np.array(  # d S / d (cx, cy, cz), rows in the order of s
         [
             [0.0, 2 * cy, 2 * cz],

@@ -1,0 +1,39 @@
+"""Text reports of a plan's robustness to its mass properties (angles in degrees)."""
+
+from __future__ import annotations
+
+import math
+
+from ..robust.uncertainty import AttitudeSpread
+
+__all__ = ["robustness_line", "sensitivity_table"]
+
+
+def robustness_line(spread: AttitudeSpread) -> str:
+    """The plan summary's one line: first-order attitude error for an uncertainty (deg)."""
+    return (
+        f"  mass properties {spread.uncertainty.describe()} off -> final attitude "
+        f"{math.degrees(spread.rms):.3g} deg RMS, {math.degrees(spread.worst):.3g} deg worst "
+        "case (first order; freefloat sensitivity)"
+    )
+
+
+def sensitivity_table(spread: AttitudeSpread) -> list[str]:
+    """Per body the error each uncertainty causes, then the combined figures (deg)."""
+    width = max(12, *(len(b.body) + 2 for b in spread.bodies))
+    lines = [
+        f"  uncertainty: {spread.uncertainty.describe()} (each parameter of each body)",
+        f"  {'body':<{width}}{'mass [deg]':>12}{'com [deg]':>12}{'inertia [deg]':>15}"
+        f"{'all, RMS [deg]':>16}",
+    ]
+    for body in spread.bodies:
+        lines.append(
+            f"  {body.body:<{width}}{math.degrees(body.mass):>12.4g}"
+            f"{math.degrees(body.com):>12.4g}{math.degrees(body.inertia):>15.4g}"
+            f"{math.degrees(body.rms):>16.4g}"
+        )
+    lines.append(
+        f"  combined: RMS {math.degrees(spread.rms):.4g} deg, worst case "
+        f"{math.degrees(spread.worst):.4g} deg (first order; per-body columns are worst cases)"
+    )
+    return lines
