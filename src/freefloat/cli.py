@@ -337,6 +337,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers must be at least 1, got {args.workers}")
     if args.plots:
+        if spec.replay:
+            raise InputError("--plots draws feasibility maps of plans; a replay sweep has none")
         check_plottable(spec)
     client = connect(args.scheduler) if args.scheduler else None
     try:
@@ -344,6 +346,14 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     finally:
         if client is not None:
             client.close()
+    if spec.replay:
+        from .sweep.replay import error_distribution
+        from .viz.robustness import distribution_lines
+
+        print(f"freefloat sweep: {len(rows)} replays of {spec.scenario_path.name}")
+        print("\n".join(distribution_lines(error_distribution(rows), len(rows))))
+        print(f"  results         {Path(args.output).resolve()}")
+        return 0
     counts = {s: sum(r.status == s for r in rows) for s in ("planned", "infeasible", "failed")}
     print(
         f"freefloat sweep: {len(rows)} jobs over {', '.join(spec.keys)}: "

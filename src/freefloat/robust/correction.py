@@ -86,8 +86,8 @@ def correcting_plan(
     """The verified motion from the plan's goal joints back to them, to the goal attitude.
 
     It turns the spacecraft from ``measured_quaternion`` (``[x, y, z, w]``) to the plan's goal
-    attitude, and takes the plan's duration, samples and constraints (joint limits, clearance when the
-    plan was kept clear).
+    attitude, and takes the plan's duration, samples and constraints (joint limits, clearance
+    when the plan was kept clear).
 
     Raises:
         SolverError: one motion cannot turn the spacecraft that far (the message gives the

@@ -5,8 +5,23 @@ from __future__ import annotations
 import math
 
 from ..robust.uncertainty import AttitudeSpread
+from ..sweep.replay import ErrorDistribution
 
-__all__ = ["robustness_line", "sensitivity_table"]
+__all__ = ["distribution_lines", "robustness_line", "sensitivity_table"]
+
+
+def distribution_lines(found: ErrorDistribution | None, jobs: int) -> list[str]:
+    """The final attitude error distribution of a replay sweep (deg)."""
+    if found is None:
+        return [f"  no job of {jobs} was replayed (see the message column)"]
+    d = math.degrees
+    rms = math.sqrt(float(found.covariance.trace()))
+    return [
+        f"  replayed {found.count} of {jobs}; final attitude error [deg]: mean {d(found.mean):.4g},"
+        f" std {d(found.std):.4g}, median {d(found.median):.4g}, 95 % {d(found.p95):.4g}, "
+        f"largest {d(found.largest):.4g}",
+        f"  error rotation vector: RMS spread {d(rms):.4g} deg (sqrt of the covariance's trace)",
+    ]
 
 
 def robustness_line(spread: AttitudeSpread) -> str:
