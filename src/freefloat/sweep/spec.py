@@ -268,8 +268,8 @@ class SweepSpec:
 def _plan_source(name: str, folder: Path) -> tuple[Path, dict[str, Any], str]:
     """A plan file to replay (relative to the sweep file): its path, no tables, its URDF."""
     from ..plans.schema import load_plan_file
-    from ..robust.inertial import robot_text
     from ..robust.from_file import plan_robot
+    from ..robust.inertial import robot_text
 
     path = (folder / name).expanduser().resolve()
     return path, {}, robot_text(plan_robot(load_plan_file(path)))

@@ -1,0 +1,242 @@
+"""Robustness to wrong mass properties: sensitivity, perturbed replays, correction.
+
+Truths used: central finite differences of an independent integrator (RK4 replays in models
+whose URDF was changed and re-parsed by Pinocchio) for the exact sensitivity, brute-force
+vertex enumeration for the worst case, the Monte Carlo replays for the first-order spread, and
+a replay in the perturbed model for the correction.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import freefloat as ff
+from freefloat.cli import main
+from freefloat.errors import InfeasibleError, InputError, ScenarioError, UnknownNameError
+from freefloat.physics.attitude import quat_from_zyx, zyx_from_quat
+from freefloat.problem.scenario import Scenario
+from freefloat.robot.model import load_robot, robots_dir
+from freefloat.robust import attitude_sensitivity, perturbed_robot, replay_attitude
+from freefloat.robust.correction import correcting_plan
+from freefloat.robust.inertial import link_inertials, robot_text, with_inertials
+from freefloat.robust.sensitivity import body_parameters
+from freefloat.robust.uncertainty import Uncertainty, spread, worst_case
+from freefloat.sweep import SweepSpec
+
+SCENARIOS = robots_dir() / "scenarios"
+
+
+def _planned(name: str, tmp: Path) -> tuple[ff.Plan, Path]:
+    result = ff.plan(Scenario.from_toml(SCENARIOS / f"{name}.toml"), samples=41)
+    return result, result.save(tmp / f"{name}.plan.json")
+
+
+@pytest.fixture(scope="module")
+def worked(tmp_path_factory):
+    plan, path = _planned("worked_example", tmp_path_factory.mktemp("we"))
+    return plan, path, load_robot(plan.robot.urdf, plan.robot.end_effector)
+
+
+@pytest.fixture(scope="module")
+def panda(tmp_path_factory):
+    plan, path = _planned("panda_servicer", tmp_path_factory.mktemp("panda"))
+    return plan, path, load_robot(plan.robot.urdf, plan.robot.end_effector)
+
+
+def _replayed_error(plan, robot, link, key, value):
+    return replay_attitude(plan, perturbed_robot(robot, {link: {key: value}})).error_rotvec
+
+
+@pytest.mark.parametrize(
+    ("fixture", "link", "body", "key", "column"),
+    [
+        ("worked", "base", 0, "inertia.izz", 6),
+        ("worked", "link2", 2, "mass", 0),
+        ("worked", "link1", 1, "com.0", 1),
+        ("panda", "panda_link4", 4, "inertia.izz", 6),
+        ("panda", "panda_link4", 4, "com.0", 1),
+        ("panda", "panda_link2", 2, "mass", 0),
+        ("panda", "spacecraft", 0, "inertia.ixy", 7),
+        ("panda", "spacecraft", 0, "inertia.ixx", 4),
+    ],
+)
+def test_sensitivity_matches_finite_differences_of_rk4_replays(
+    request, fixture, link, body, key, column
+):
+    plan, _, robot = request.getfixturevalue(fixture)
+    sens = attitude_sensitivity(plan, robot)
+    link_value = link_inertials(robot_text(robot))[link].value(key)
+    scale = 0.05 if key.startswith("com") else max(abs(link_value), 0.1)
+    estimates = []
+    for h in (1e-3 * scale, 5e-4 * scale):  # step control: Richardson on two steps
+        plus = _replayed_error(plan, robot, link, key, link_value + h)
+        minus = _replayed_error(plan, robot, link, key, link_value - h)
+        estimates.append((plus - minus) / (2 * h))
+    fd = (4 * estimates[1] - estimates[0]) / 3
+    exact = sens.jacobian[:, body, column]
+    # a link joined by fixed joints moves its body's centre of mass: only moments map 1:1
+    assert np.linalg.norm(fd - exact) <= 1e-5 * np.linalg.norm(exact) + 1e-12
+    assert np.linalg.norm(exact) > 0.0 or key == "inertia.ixy"
+
+
+def test_worst_case_equals_brute_force_vertex_enumeration():
+    rng = np.random.default_rng(3)
+    for n in (5, 15):
+        s, u = rng.normal(size=(3, n)), rng.uniform(0.2, 1.0, n)
+        brute = max(
+            np.linalg.norm(s @ (np.array(v) * u)) for v in itertools.product((1, -1), repeat=n)
+        )
+        assert worst_case(s, u) == pytest.approx(brute, rel=1e-12)
+
+
+def _draws(robot, link, count, fraction, seed):
+    """Models with the link's three moments each off by a normal fraction (1-sigma)."""
+    nominal = link_inertials(robot_text(robot))[link]
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        changes = {
+            f"inertia.{k}": nominal.value(f"inertia.{k}") * (1 + fraction * rng.normal())
+            for k in ("ixx", "iyy", "izz")
+        }
+        yield perturbed_robot(robot, {link: changes})
+
+
+@pytest.mark.parametrize(("fixture", "link"), [("worked", "base"), ("panda", "spacecraft")])
+def test_first_order_spread_agrees_with_monte_carlo_replays(request, fixture, link):
+    plan, _, robot = request.getfixturevalue(fixture)
+    sens = attitude_sensitivity(plan, robot)
+    replayed, predicted = [], []
+    for model in _draws(robot, link, 60, 0.01, seed=1):
+        replayed.append(replay_attitude(plan, model).error_rotvec)
+        predicted.append(sens.first_order(body_parameters(model) - sens.nominal))
+    replayed, predicted = np.array(replayed), np.array(predicted)
+    mean_mc = np.linalg.norm(replayed, axis=1).mean()
+    mean_first = np.linalg.norm(predicted, axis=1).mean()
+    assert mean_first == pytest.approx(mean_mc, rel=0.05)
+    cov_mc, cov_first = np.cov(replayed.T), np.cov(predicted.T)
+    assert np.linalg.norm(cov_first - cov_mc) <= 0.2 * np.linalg.norm(cov_mc)
+    # and the analytic covariance of the 1 % uncertainty of those three moments
+    only = Uncertainty(mass_fraction=0.0, com_m=0.0, inertia_fraction=0.01)
+    sizes = only.sizes(sens.nominal)
+    sizes[:, 7:] = 0.0
+    sizes[1:] = 0.0
+    scaled = (sens.jacobian * sizes[None]).reshape(3, -1)
+    assert np.trace(scaled @ scaled.T) == pytest.approx(np.trace(cov_mc), rel=0.5)
+
+
+def test_spread_figures_add_up(panda):
+    plan, _, robot = panda
+    result = spread(attitude_sensitivity(plan, robot), Uncertainty(0.05, 0.01, 0.1))
+    assert result.rms == pytest.approx(math.sqrt(sum(b.rms**2 for b in result.bodies)))
+    assert result.worst >= max(max(b.mass, b.com, b.inertia) for b in result.bodies)
+    assert result.worst >= result.rms * 0.5
+
+
+def test_correction_reaches_the_goal_and_shrinks_a_five_percent_error(worked):
+    plan, _, robot = worked
+    true = perturbed_robot(robot, {"base": {"inertia.izz": 66.67 * 1.05}})
+    before = replay_attitude(plan, true)
+    assert before.error_rad > 1e-3
+    corr = correcting_plan(plan, robot, before.quaternion)
+    assert corr.request.start_joints == corr.request.goal_joints == plan.request.goal_joints
+    nominal = replay_attitude(corr, robot)  # RK4, not the planner's Magnus scheme
+    assert nominal.error_rad <= 1e-9 + nominal.estimate_rad
+    after = replay_attitude(corr, true, start_quaternion=before.quaternion)
+    assert after.error_rad <= 0.1 * before.error_rad
+
+
+def test_a_correction_no_motion_can_make_is_refused(worked):
+    plan, _, robot = worked
+    measured = quat_from_zyx(0.0, math.radians(2.0), 0.0)  # a planar base cannot pitch
+    with pytest.raises(InfeasibleError, match="this robot is planar"):
+        correcting_plan(plan, robot, measured)
+
+
+def test_unphysical_or_unknown_inertial_values_are_refused():
+    text = (robots_dir() / "planar_2dof.urdf").read_text()
+    with pytest.raises(InputError, match="mass must be a finite number > 0"):
+        with_inertials(text, {"link1": {"mass": -1.0}})
+    with pytest.raises(InputError, match="triangle inequality"):
+        with_inertials(text, {"link1": {"inertia.izz": 10.0}})
+    with pytest.raises(UnknownNameError, match="link2"):
+        with_inertials(text, {"link9": {"mass": 1.0}})
+    changed = link_inertials(with_inertials(text, {"link1": {"com.1": 0.25}}))
+    assert changed["link1"].com[1] == 0.25
+    assert changed["link2"] == link_inertials(text)["link2"]
+
+
+def _replay_sweep(tmp_path: Path, plan_path: Path, body: str) -> Path:
+    path = tmp_path / "mc.toml"
+    path.write_text(f'plan = "{plan_path}"\n' + body)
+    return path
+
+
+def test_random_draws_are_physical_reproducible_and_drawn_together(tmp_path, worked):
+    _, plan_path, _ = worked
+    body = (
+        '[[axis]]\nkey = "robot.links.link2.mass"\n'
+        "values = { uniform = [-30.0, 60.0], samples = 40, seed = 4 }\n"
+        '[[axis]]\nkey = "robot.links.base.inertia.izz"\n'
+        "values = { normal = [66.67, 1.0], samples = 40, seed = 5 }\n"
+    )
+    spec = SweepSpec.from_toml(_replay_sweep(tmp_path, plan_path, body))
+    again = SweepSpec.from_toml(_replay_sweep(tmp_path, plan_path, body))
+    assert spec.size == 40 and spec.axes == again.axes
+    masses = [job.changes["link2"]["mass"] for job in spec.jobs()]
+    assert min(masses) > 0.0 and max(masses) <= 60.0  # negative masses drawn again
+    bad = body.replace("samples = 40, seed = 5", "samples = 30, seed = 5")
+    with pytest.raises(ScenarioError, match="same samples"):
+        SweepSpec.from_toml(_replay_sweep(tmp_path, plan_path, bad))
+    with pytest.raises(ScenarioError, match="inertial keys"):
+        SweepSpec.from_toml(
+            _replay_sweep(tmp_path, plan_path, '[[axis]]\nkey = "duration"\nvalues = [1.0]\n')
+        )
+
+
+def test_replay_sweep_rows_are_the_replays_locally_and_on_dask(tmp_path, worked):
+    plan, plan_path, robot = worked
+    body = (
+        '[[axis]]\nkey = "robot.links.base.inertia.izz"\n'
+        "values = { normal = [66.67, 3.0], samples = 6, seed = 1 }\n"
+    )
+    spec = SweepSpec.from_toml(_replay_sweep(tmp_path, plan_path, body))
+    local = ff.sweep(spec, workers=2, output=tmp_path / "local.csv", progress=False)
+    for row in local:
+        direct = _replayed_error(plan, robot, "base", "inertia.izz", row.values[0])
+        assert row.status == "replayed"
+        assert [row.error_x_rad, row.error_y_rad, row.error_z_rad] == direct.tolist()
+    distributed = pytest.importorskip("distributed")
+    with (
+        distributed.LocalCluster(
+            processes=True,
+            n_workers=2,
+            threads_per_worker=1,
+            host="127.0.0.1",
+            dashboard_address=None,
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        remote = ff.sweep(spec, client=client, output=tmp_path / "dask.csv", progress=False)
+    assert [r.without_timings() for r in remote] == [r.without_timings() for r in local]
+
+
+def test_cli_sensitivity_and_correct(tmp_path, worked, capsys):
+    plan, plan_path, robot = worked
+    assert main(["sensitivity", str(plan_path), "--inertia-pct", "5"]) == 0
+    out = capsys.readouterr().out
+    assert "inertia 5 %" in out and "combined: RMS" in out and "link2" in out
+    assert main(["sensitivity", str(plan_path), "--com-mm", "-3"]) == 2
+    assert "--com-mm" in capsys.readouterr().err
+    true = perturbed_robot(robot, {"base": {"inertia.izz": 66.67 * 1.05}})
+    measured = np.degrees(zyx_from_quat(replay_attitude(plan, true).quaternion))
+    output = tmp_path / "c.json"
+    argv = ["correct", str(plan_path), "--base-zyx-deg", *map(str, measured), "-o", str(output)]
+    assert main(argv) == 0
+    assert ff.Plan.load(output).base.attitude_error_rad <= 1e-9
+    assert main(["correct", str(plan_path), "--base-zyx-deg", "0", "3", "0"]) == 2
+    assert "this robot is planar" in capsys.readouterr().err
