@@ -49,9 +49,11 @@ import argparse
 import contextlib
 import dataclasses
 import json
+import math
 import os
 import platform
 import statistics
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -694,6 +696,46 @@ def print_objectives(found: dict[str, object]) -> None:
         )
 
 
+def bench_robustness(draws: int = 500) -> dict[str, object]:
+    """Robustness (docs/robustness.md): ``sensitivity`` on the Panda servicer plan (target
+    <= 1 s) and a replay Monte Carlo of its spacecraft inertia 5 % off (target <= 30 s for 500
+    draws on two workers)."""
+    import subprocess
+    import tempfile
+
+    from freefloat.robust import attitude_sensitivity
+    from freefloat.robust.uncertainty import spread
+
+    with tempfile.TemporaryDirectory() as folder:
+        tmp = Path(folder)
+        scenario = ff.Scenario.from_toml(ROBOTS / "panda_servicer.toml")
+        plan = ff.plan(scenario)
+        path = plan.save(tmp / "panda.plan.json")
+        in_process, _ = timed(lambda: spread(attitude_sensitivity(plan, scenario.robot)), 5)
+        command = [sys.executable, "-m", "freefloat.cli", "sensitivity", str(path), "-q"]
+        whole = timed_once(lambda: subprocess.run(command, check=True, capture_output=True))
+        axes = "".join(
+            f'[[axis]]\nkey = "robot.links.spacecraft.inertia.{k}"\n'
+            f"values = {{ normal = [6.0, 0.3], samples = {draws}, seed = {seed} }}\n"
+            for seed, k in enumerate(("ixx", "iyy", "izz"), start=1)
+        )
+        sweep_file = tmp / "mc.toml"
+        sweep_file.write_text(f'plan = "{path}"\n' + axes)
+        rows: list = []
+        wall = timed_once(
+            lambda: rows.extend(ff.sweep(sweep_file, workers=2, output=tmp / "mc.csv"))
+        )
+    errors = [r.attitude_error_rad for r in rows if r.status == "replayed"]
+    return {
+        "sensitivity_in_process_ms": 1000.0 * in_process,
+        "sensitivity_command_s": whole,
+        "monte_carlo_draws": draws,
+        "monte_carlo_replayed": len(errors),
+        "monte_carlo_2_workers_s": wall,
+        "monte_carlo_mean_error_deg": math.degrees(float(np.mean(errors))),
+    }
+
+
 def try_plan(scenario: ff.Scenario) -> None:
     with contextlib.suppress(ff.FreeFloatError):
         ff.plan(scenario)
@@ -747,8 +789,24 @@ def main() -> None:
     parser.add_argument(
         "--objectives-only", action="store_true", help="only the objectives section"
     )
+    parser.add_argument(
+        "--robustness-only", action="store_true", help="only the robustness section"
+    )
     args = parser.parse_args()
     print(f"machine: {machine()}")
+    if args.robustness_only:
+        found = bench_robustness()
+        print(
+            "robustness: sensitivity on the Panda servicer plan "
+            f"{found['sensitivity_in_process_ms']:.0f} ms in process, "
+            f"{found['sensitivity_command_s']:.2f} s the whole command (target <= 1 s); replay "
+            f"Monte Carlo {found['monte_carlo_replayed']} of {found['monte_carlo_draws']} draws "
+            f"on 2 workers {found['monte_carlo_2_workers_s']:.1f} s (target <= 30 s), mean "
+            f"error {found['monte_carlo_mean_error_deg']:.3f} deg"
+        )
+        if args.json:
+            args.json.write_text(json.dumps({"machine": machine(), "robustness": found}, indent=1))
+        return
     objectives = bench_objectives() if args.objectives or args.objectives_only else {}
     if args.objectives_only:
         print_objectives(objectives)

@@ -55,6 +55,8 @@ def _load_scenario(path: str | None) -> Scenario:
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
+    from .robust.plan_robustness import with_robustness
+
     scenario = _load_scenario(args.scenario)
     if args.allow_full_turns:
         scenario = dataclasses.replace(scenario, allow_full_turns=True)
@@ -65,6 +67,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         objective=args.objective,
     )
     cartesian = cartesian_report(scenario, result)
+    with stage("sensitivity"):
+        result = with_robustness(result, scenario.robot)
     if args.output:
         output = Path(args.output)
     elif args.scenario:
@@ -305,8 +309,8 @@ def _spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
 
 
 def _cmd_sensitivity(args: argparse.Namespace) -> int:
-    from .robust.from_file import plan_sensitivity
-    from .robust.uncertainty import Uncertainty
+    from .problem.uncertainty import Uncertainty
+    from .robust.plan_robustness import plan_sensitivity
     from .viz.robustness import sensitivity_table
 
     uncertainty = Uncertainty(args.mass_pct / 100.0, args.com_mm / 1000.0, args.inertia_pct / 100.0)
@@ -318,7 +322,7 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
 
 
 def _cmd_correct(args: argparse.Namespace) -> int:
-    from .robust.from_file import correct_plan
+    from .robust.plan_robustness import correct_plan
 
     with stage("plan correction"):
         result, residual = correct_plan(args.plan, args.base_zyx_deg)
@@ -330,7 +334,7 @@ def _cmd_correct(args: argparse.Namespace) -> int:
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from .sweep import SweepSpec, connect, plot_sweep, sweep
+    from .sweep import SweepRow, SweepSpec, connect, plot_sweep, sweep
     from .sweep.plots import check_plottable
 
     spec = SweepSpec.from_toml(args.sweep)
@@ -347,11 +351,22 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         if client is not None:
             client.close()
     if spec.replay:
-        from .sweep.replay import error_distribution
+        import numpy as np
+
+        from .robust.distribution import error_distribution
+        from .sweep.replay import ReplayRow
         from .viz.robustness import distribution_lines
 
         print(f"freefloat sweep: {len(rows)} replays of {spec.scenario_path.name}")
-        print("\n".join(distribution_lines(error_distribution(rows), len(rows))))
+        vectors = np.array(
+            [
+                [r.error_x_rad, r.error_y_rad, r.error_z_rad]
+                for r in rows
+                if isinstance(r, ReplayRow) and r.status == "replayed"
+            ],
+            dtype=float,
+        )
+        print("\n".join(distribution_lines(error_distribution(vectors), len(rows))))
         print(f"  results         {Path(args.output).resolve()}")
         return 0
     counts = {s: sum(r.status == s for r in rows) for s in ("planned", "infeasible", "failed")}
@@ -361,7 +376,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     )
     print(f"  results         {Path(args.output).resolve()}")
     if args.plots:
-        written = plot_sweep(spec, rows, args.plots)
+        written = plot_sweep(spec, [r for r in rows if isinstance(r, SweepRow)], args.plots)
         print(f"  plots           {', '.join(str(p) for p in written)}")
     return 0
 

@@ -1,4 +1,4 @@
-"""The plan file: typed records and their JSON form (``freefloat.plan/3``).
+"""The plan file: typed records and their JSON form (``freefloat.plan/4``).
 
 This module is long because it holds every record of the file format and its reading and
 writing in one place (the format is one concept; splitting it would scatter the schema).
@@ -12,7 +12,10 @@ sees half a plan and a failure leaves nothing behind. Units: seconds, radians (m
 prismatic joints and positions); Euler angles, marked ``_deg``, in degrees. Positions are in
 the inertial frame whose origin is the system centre of mass (docs/method.md section 10).
 
-Schema versions: ``freefloat.plan/3`` (this one) adds the ``objective`` record (what the path
+Schema versions: ``freefloat.plan/4`` (this one) adds the optional ``robustness`` record: the
+first-order final attitude error under an uncertainty of the mass properties
+(docs/robustness.md); ``freefloat.plan/3`` files load and keep their format (no record).
+``freefloat.plan/3`` adds the ``objective`` record (what the path
 minimises, its value and the freedom levels tried) and, for robots with URDF effort limits,
 the ``joint_effort_limits`` check. ``freefloat.plan/2`` files still load and keep their format:
 they were minimum-norm plans (no objective record) that promised no effort limits, and
@@ -50,6 +53,7 @@ __all__ = [
     "Plan",
     "Request",
     "RobotRef",
+    "RobustnessReport",
     "SafetyReport",
     "Samples",
     "SolutionRecord",
@@ -59,12 +63,14 @@ __all__ = [
 ]
 
 #: Format tag of plan files written by this version.
-FORMAT = "freefloat.plan/3"
+FORMAT = "freefloat.plan/4"
+#: The format before the robustness record (still read, and kept when re-written).
+FORMAT_3 = "freefloat.plan/3"
 #: The format before objectives and effort limits (still read, and kept when re-written).
 FORMAT_2 = "freefloat.plan/2"
 
 #: Format tags this version reads (older ones are converted on load).
-READABLE_FORMATS = ("freefloat.plan/1", FORMAT_2, FORMAT)
+READABLE_FORMATS = ("freefloat.plan/1", FORMAT_2, FORMAT_3, FORMAT)
 
 
 @dataclass(frozen=True)
@@ -325,6 +331,26 @@ class ObjectiveReport:
 
 
 @dataclass(frozen=True)
+class RobustnessReport:
+    """First-order final attitude error under an uncertainty of the mass properties.
+
+    Attributes:
+        mass_fraction: uncertainty of every body's mass (fraction, 0.05 = 5 %).
+        com_m: of every centre-of-mass coordinate (m).
+        inertia_fraction: of every inertia component's scale (fraction).
+        rms_rad: RMS final attitude error, the parameters independent with those standard
+            deviations (rad).
+        worst_rad: largest final attitude error, every parameter within those bounds (rad).
+    """
+
+    mass_fraction: float
+    com_m: float
+    inertia_fraction: float
+    rms_rad: float
+    worst_rad: float
+
+
+@dataclass(frozen=True)
 class Plan:
     """A verified point-to-point motion of a free-floating space manipulator."""
 
@@ -340,6 +366,7 @@ class Plan:
     verification: Verification = field(default_factory=Verification)
     safety: SafetyReport = field(default_factory=SafetyReport)
     objective: ObjectiveReport = field(default_factory=ObjectiveReport)
+    robustness: RobustnessReport | None = None
     format: str = FORMAT
 
     # -- evaluation -------------------------------------------------------------------------
@@ -371,6 +398,11 @@ class Plan:
                 "verification": self.verification.to_dict(),
                 "safety": asdict(self.safety),
                 **({} if self.format == FORMAT_2 else {"objective": asdict(self.objective)}),
+                **(
+                    {"robustness": asdict(self.robustness)}
+                    if self.robustness is not None and self.format == FORMAT
+                    else {}
+                ),
             }
         )
 
@@ -431,7 +463,8 @@ class Plan:
                 verification=verification,
                 safety=_safety(data.get("safety")),
                 objective=_objective(data.get("objective")),
-                format=FORMAT_2 if fmt == FORMAT_2 else FORMAT,
+                robustness=_robustness(data.get("robustness") if fmt == FORMAT else None),
+                format=fmt if fmt in (FORMAT_2, FORMAT_3) else FORMAT,
             )
         except (KeyError, TypeError, AttributeError, ValueError) as exc:
             raise PlanFileError(f"{where}: corrupt plan file (bad or missing {exc})") from None
@@ -459,6 +492,13 @@ def _objective(data: Any) -> ObjectiveReport:
             "levels": [ObjectiveLevel(**level) for level in data.get("levels", [])],
         }
     )
+
+
+def _robustness(data: Any) -> RobustnessReport | None:
+    """The ``robustness`` section (optional; absent before ``freefloat.plan/4``)."""
+    if data is None:
+        return None
+    return RobustnessReport(**{k: float(v) for k, v in data.items()})
 
 
 def read_plan_json(path: str | Path) -> Any:

@@ -10,27 +10,18 @@ random draws gives the error's distribution. Each worker process keeps the plans
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
 from dataclasses import dataclass, fields, replace
-
-import numpy as np
 
 from ..errors import FreeFloatError
 from ..plans.format import Plan
 from ..plans.schema import load_plan_file
 from ..robot.model import Robot
-from ..robust.from_file import plan_robot
 from ..robust.inertial import perturbed_robot, robot_text
+from ..robust.plan_robustness import plan_robot
 from ..robust.replay import replay_attitude
 from .spec import Job, Value
 
-__all__ = [
-    "REPLAY_STATUSES",
-    "ErrorDistribution",
-    "ReplayRow",
-    "error_distribution",
-    "run_replay_job",
-]
+__all__ = ["REPLAY_STATUSES", "ReplayRow", "run_replay_job"]
 
 #: The outcomes of a replay job.
 REPLAY_STATUSES = ("replayed", "failed")
@@ -109,46 +100,4 @@ def run_replay_job(job: Job) -> ReplayRow:
         error_z_rad=z,
         integration_error_rad=outcome.estimate_rad,
         total_time_s=time.perf_counter() - started,
-    )
-
-
-@dataclass(frozen=True)
-class ErrorDistribution:
-    """The final attitude error over the replayed rows of a sweep (rad).
-
-    Attributes:
-        count: rows replayed.
-        mean: mean error angle.
-        std: its standard deviation (sample, N - 1; 0 for one row).
-        median: median error angle.
-        p95: 95th percentile (linear interpolation).
-        largest: largest error angle.
-        covariance: 3 x 3 sample covariance of the error rotation vectors (rad^2).
-    """
-
-    count: int
-    mean: float
-    std: float
-    median: float
-    p95: float
-    largest: float
-    covariance: np.ndarray
-
-
-def error_distribution(rows: Sequence[ReplayRow]) -> ErrorDistribution | None:
-    """The distribution of the replayed rows' errors; None when none was replayed."""
-    done = [r for r in rows if r.status == "replayed" and r.attitude_error_rad is not None]
-    if not done:
-        return None
-    angles = np.array([r.attitude_error_rad for r in done], dtype=float)
-    vectors = np.array([[r.error_x_rad, r.error_y_rad, r.error_z_rad] for r in done], float)
-    covariance = np.cov(vectors.T) if len(done) > 1 else np.zeros((3, 3))
-    return ErrorDistribution(
-        count=len(done),
-        mean=float(angles.mean()),
-        std=float(angles.std(ddof=1)) if len(done) > 1 else 0.0,
-        median=float(np.median(angles)),
-        p95=float(np.percentile(angles, 95)),
-        largest=float(angles.max()),
-        covariance=np.atleast_2d(covariance),
     )

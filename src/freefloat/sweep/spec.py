@@ -202,9 +202,9 @@ class SweepSpec:
 
     def _combinations(self) -> list[tuple[Value, ...]]:
         """Axis values of every job: grid axes combined (last fastest), random ones drawn."""
-        grid = [a.values if not a.random else (None,) for a in self.axes]
+        grid: list[tuple[Value, ...]] = [a.values if not a.random else (0,) for a in self.axes]
         draws = max((len(a.values) for a in self.axes if a.random), default=1)
-        out = []
+        out: list[tuple[Value, ...]] = []
         for combination in itertools.product(*grid):
             for draw in range(draws):
                 out.append(
@@ -268,8 +268,8 @@ class SweepSpec:
 def _plan_source(name: str, folder: Path) -> tuple[Path, dict[str, Any], str]:
     """A plan file to replay (relative to the sweep file): its path, no tables, its URDF."""
     from ..plans.schema import load_plan_file
-    from ..robust.from_file import plan_robot
     from ..robust.inertial import robot_text
+    from ..robust.plan_robustness import plan_robot
 
     path = (folder / name).expanduser().resolve()
     return path, {}, robot_text(plan_robot(load_plan_file(path)))
@@ -410,7 +410,7 @@ def _axis(table: Any, position: int, base: Mapping[str, Any], replay: bool = Fal
     if len(set(values)) != len(values):
         raise ScenarioError(f"axis {key!r} repeats a value")
     if inertial is not None:
-        values = tuple(float(v) for v in values)  # type: ignore[arg-type]
+        values = tuple(float(v) for v in values)
     return Axis(key, path, values, inertial)
 
 

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import math
 
-from ..robust.uncertainty import AttitudeSpread
-from ..sweep.replay import ErrorDistribution
+from ..plans.format import RobustnessReport
+from ..problem.uncertainty import AttitudeSpread, Uncertainty
+from ..robust.distribution import ErrorDistribution
 
 __all__ = ["distribution_lines", "robustness_line", "sensitivity_table"]
 
@@ -24,12 +25,13 @@ def distribution_lines(found: ErrorDistribution | None, jobs: int) -> list[str]:
     ]
 
 
-def robustness_line(spread: AttitudeSpread) -> str:
+def robustness_line(record: RobustnessReport) -> str:
     """The plan summary's one line: first-order attitude error for an uncertainty (deg)."""
+    described = Uncertainty(record.mass_fraction, record.com_m, record.inertia_fraction)
     return (
-        f"  mass properties {spread.uncertainty.describe()} off -> final attitude "
-        f"{math.degrees(spread.rms):.3g} deg RMS, {math.degrees(spread.worst):.3g} deg worst "
-        "case (first order; freefloat sensitivity)"
+        f"  robustness      {described.describe()} off: final attitude "
+        f"{math.degrees(record.rms_rad):.3g} deg RMS, {math.degrees(record.worst_rad):.3g} deg "
+        "worst case (first order; freefloat sensitivity)"
     )
 
 

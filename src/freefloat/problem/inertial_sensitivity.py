@@ -1,6 +1,6 @@
-"""Attitude sensitivity of a plan to the bodies' inertial parameters (docs/robustness.md).
+"""Attitude sensitivity of a path to the bodies' inertial parameters (docs/robustness.md).
 
-Along the plan's fixed joint paths the final base attitude depends on every body's mass
+Along fixed joint paths (a plan's) the final base attitude depends on every body's mass
 ``m`` (kg), centre of mass ``c`` (m, body frame) and inertia about it ``I_c`` (kg m^2, body
 frame): the momentum map ``omega = F1(q; pi) q'`` does. This module differentiates the final
 attitude error (rotation vector of ``q_goal^* q_reached``, rad, goal frame) with respect to
@@ -39,9 +39,8 @@ from ..physics.attitude import (
     so3_right_jacobian,
     step_nodes,
 )
-from ..plans.format import Plan
 from ..robot.model import Robot
-from ..verify.recompute import problem_from_plan
+from .residual import Problem
 
 __all__ = [
     "BODY_PARAMETERS",
@@ -189,18 +188,17 @@ def _node_sensitivities(robot: Robot, q: np.ndarray, qs: np.ndarray) -> tuple[np
     return omega, domega
 
 
-def attitude_sensitivity(plan: Plan, robot: Robot, steps: int | None = None) -> Sensitivity:
-    """The exact sensitivity of the plan's final attitude error to every body's parameters.
+def attitude_sensitivity(
+    problem: Problem, beta: np.ndarray, steps: int | None = None
+) -> Sensitivity:
+    """The exact sensitivity of the final attitude error along a path to every body's parameters.
 
     Args:
-        plan: a plan (its coefficients, duration, start and goal attitudes are used).
-        robot: its robot (the nominal model).
-        steps: Magnus steps on [0, 1]; default the plan's integration grid.
-
-    Raises:
-        PlanFileError: the plan's request is not a problem of this robot.
+        problem: the problem (its robot is the nominal model; start and goal attitudes).
+        beta: the path's free coefficients (rad or m).
+        steps: Magnus steps on [0, 1]; default the problem's integration grid.
     """
-    problem, beta = problem_from_plan(plan, robot)
+    robot = problem.robot
     steps = problem.steps if steps is None else int(steps)
     nodes, h = step_nodes(np.linspace(0.0, 1.0, steps + 1))
     path = problem.family.evaluate(beta, nodes)

@@ -3,7 +3,7 @@
 An :class:`Uncertainty` gives each body parameter a size ``u``: the mass a fraction of itself,
 each centre-of-mass coordinate a length, each inertia component a fraction of its scale (its
 own value for a moment, ``sqrt(I_aa I_bb)`` for a product ``I_ab``). With the exact
-sensitivity ``S`` (:mod:`freefloat.robust.sensitivity`), the error is ``e = S d`` to first
+sensitivity ``S`` (:mod:`freefloat.problem.inertial_sensitivity`), the error is ``e = S d`` to first
 order and
 
 - **RMS**: the parameters independent with standard deviations ``u``: covariance
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from .sensitivity import Sensitivity
+from .inertial_sensitivity import Sensitivity
 
 __all__ = ["DEFAULT_UNCERTAINTY", "AttitudeSpread", "BodyEffect", "Uncertainty", "spread"]
 
