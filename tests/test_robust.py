@@ -9,6 +9,7 @@ a replay in the perturbed model for the correction.
 from __future__ import annotations
 
 import itertools
+import json
 import math
 from pathlib import Path
 
@@ -19,14 +20,17 @@ import freefloat as ff
 from freefloat.cli import main
 from freefloat.errors import InfeasibleError, InputError, ScenarioError, UnknownNameError
 from freefloat.physics.attitude import quat_from_zyx, zyx_from_quat
+from freefloat.problem.inertial_sensitivity import attitude_sensitivity as path_sensitivity
+from freefloat.problem.inertial_sensitivity import body_parameters
 from freefloat.problem.scenario import Scenario
+from freefloat.problem.uncertainty import Uncertainty, spread, worst_case
 from freefloat.robot.model import load_robot, robots_dir
-from freefloat.robust import attitude_sensitivity, perturbed_robot, replay_attitude
+from freefloat.robust import perturbed_robot, replay_attitude
 from freefloat.robust.correction import correcting_plan
 from freefloat.robust.inertial import link_inertials, robot_text, with_inertials
-from freefloat.robust.sensitivity import body_parameters
-from freefloat.robust.uncertainty import Uncertainty, spread, worst_case
+from freefloat.robust.plan_robustness import plan_spread, with_robustness
 from freefloat.sweep import SweepSpec
+from freefloat.verify.recompute import problem_from_plan
 
 SCENARIOS = robots_dir() / "scenarios"
 
@@ -46,6 +50,10 @@ def worked(tmp_path_factory):
 def panda(tmp_path_factory):
     plan, path = _planned("panda_servicer", tmp_path_factory.mktemp("panda"))
     return plan, path, load_robot(plan.robot.urdf, plan.robot.end_effector)
+
+
+def attitude_sensitivity(plan, robot):
+    return path_sensitivity(*problem_from_plan(plan, robot))
 
 
 def _replayed_error(plan, robot, link, key, value):
@@ -240,3 +248,28 @@ def test_cli_sensitivity_and_correct(tmp_path, worked, capsys):
     assert ff.Plan.load(output).base.attitude_error_rad <= 1e-9
     assert main(["correct", str(plan_path), "--base-zyx-deg", "0", "3", "0"]) == 2
     assert "this robot is planar" in capsys.readouterr().err
+
+
+def test_the_robustness_record_is_recomputed_by_verify_and_old_plans_load(tmp_path, worked):
+    plan, _, robot = worked
+    recorded = with_robustness(plan, robot)
+    found = plan_spread(plan, robot)
+    assert recorded.robustness.rms_rad == found.rms and recorded.format == "freefloat.plan/4"
+    path = recorded.save(tmp_path / "r.json")
+    assert main(["verify", str(path)]) == 0
+    data = json.loads(path.read_text())
+    data["robustness"]["worst_rad"] *= 1.001
+    tampered = tmp_path / "t.json"
+    tampered.write_text(json.dumps(data))
+    assert main(["verify", str(tampered)]) == 2
+    older = recorded.to_dict()
+    older["format"] = "freefloat.plan/3"
+    del older["robustness"]
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps(older))
+    loaded = ff.Plan.load(old)
+    assert loaded.format == "freefloat.plan/3" and loaded.robustness is None
+    assert json.loads(loaded.to_json())["format"] == "freefloat.plan/3"
+    older["robustness"] = data["robustness"]  # a /3 file cannot hold the record
+    old.write_text(json.dumps(older))
+    assert main(["verify", str(old)]) == 2

@@ -22,20 +22,33 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, InputLimitError, ScenarioError, UnknownNameError, excerpt
-from ..robust.inertial import PARAMETERS, with_inertials
+from ..errors import (
+    FreeFloatError,
+    InputError,
+    InputLimitError,
+    ScenarioError,
+    UnknownNameError,
+    excerpt,
+)
+from ..plans.schema import load_plan_file
+from ..problem.scenario import Scenario
+from ..robust.inertial import PARAMETERS, robot_text, with_inertials
 
 __all__ = [
     "REDRAWS",
     "Changes",
+    "check_inertial_value",
     "inertial_changes",
     "inertial_key",
     "is_random",
+    "plan_source",
     "random_values",
+    "scenario_urdf",
 ]
 
 #: A link's new inertial values: ``{link: {key: value}}`` (kg, m, kg m^2).
@@ -168,3 +181,25 @@ def random_values(
                 continue  # not physical: draw again
         draws.append(draw)
     return [tuple(d[i] for d in draws) for i in range(len(tables))]
+
+
+def plan_source(name: str, folder: Path) -> tuple[Path, dict[str, Any], str]:
+    """A plan file to replay (relative to the sweep file): its path, no tables, its URDF."""
+    from ..robust.plan_robustness import plan_robot
+
+    path = (folder / name).expanduser().resolve()
+    return path, {}, robot_text(plan_robot(load_plan_file(path)))
+
+
+def scenario_urdf(base: Mapping[str, Any], path: Path) -> str:
+    """The URDF text of the base scenario's robot (for inertial axes)."""
+    return robot_text(Scenario.from_dict(base, relative_to=path.parent, source=path).robot)
+
+
+def check_inertial_value(urdf: str, key: str, inertial: tuple[str, str], value: Any) -> None:
+    """Refuse an inertial axis value that leaves its body unphysical (or names no link)."""
+    link, parameter = inertial
+    try:
+        with_inertials(urdf, {link: {parameter: float(value)}})
+    except FreeFloatError as exc:
+        raise ScenarioError(f"axis {key!r} = {value!r}: {exc}") from None

@@ -1,5 +1,8 @@
 """Sweep files: a base scenario and the axes to vary, read from TOML.
 
+This module is long because it reads and checks every kind of axis of the one sweep file
+format (scenario values, inertial values, random draws) before any job runs.
+
 A sweep speaks the scenario's units (degrees for angles, metres, kilograms, seconds)::
 
     scenario = "worked_example.toml"   # relative to this file, or a shipped scenario name
@@ -42,7 +45,16 @@ from ..errors import FreeFloatError, InputLimitError, ScenarioError, UnknownName
 from ..problem.limits import check_samples
 from ..problem.scenario import Scenario, read_toml
 from ..robot.model import robots_dir
-from .draws import Changes, inertial_changes, inertial_key, is_random, random_values
+from .draws import (
+    Changes,
+    check_inertial_value,
+    inertial_changes,
+    inertial_key,
+    is_random,
+    plan_source,
+    random_values,
+    scenario_urdf,
+)
 
 __all__ = ["Axis", "Job", "SweepSpec", "Value"]
 
@@ -161,7 +173,7 @@ class SweepSpec:
             )
         folder = (relative_to or Path.cwd()).resolve()
         if replay:
-            scenario_path, base, urdf = _plan_source(name, folder)
+            scenario_path, base, urdf = plan_source(name, folder)
         else:
             scenario_path = _scenario_path(name, folder)
             base = read_toml(scenario_path, "scenario")
@@ -177,7 +189,7 @@ class SweepSpec:
             )
         axes = tuple(_axis(table, i, base, replay) for i, table in enumerate(tables))
         if any(axis.inertial is not None for axis in axes) and urdf is None:
-            urdf = _scenario_urdf(base, scenario_path)
+            urdf = scenario_urdf(base, scenario_path)
         axes = _drawn(axes, tables, urdf)
         spec = cls(base, scenario_path, axes, samples, source, replay)
         if spec.size > MAX_SWEEP_JOBS:
@@ -202,17 +214,12 @@ class SweepSpec:
 
     def _combinations(self) -> list[tuple[Value, ...]]:
         """Axis values of every job: grid axes combined (last fastest), random ones drawn."""
-        grid: list[tuple[Value, ...]] = [a.values if not a.random else (0,) for a in self.axes]
+        grid: list[Sequence[Value]] = [a.values if not a.random else (0,) for a in self.axes]
         draws = max((len(a.values) for a in self.axes if a.random), default=1)
-        out: list[tuple[Value, ...]] = []
-        for combination in itertools.product(*grid):
-            for draw in range(draws):
-                out.append(
-                    tuple(
-                        a.values[draw] if a.random else v
-                        for a, v in zip(self.axes, combination, strict=True)
-                    )
-                )
+        out = []
+        for *values, draw in itertools.product(*grid, range(draws)):
+            pairs = zip(self.axes, values, strict=True)
+            out.append(tuple(a.values[int(draw)] if a.random else v for a, v in pairs))
         return out
 
     def jobs(self) -> list[Job]:
@@ -241,20 +248,12 @@ class SweepSpec:
 
         Inertial values are put into the robot's URDF (``urdf``) and must be physical.
         """
-        from ..robust.inertial import with_inertials
-
         for axis in self.axes:
             for value in axis.values:
                 if axis.inertial is not None:
                     assert urdf is not None
-                    link, parameter = axis.inertial
-                    try:
-                        with_inertials(urdf, {link: {parameter: float(value)}})
-                    except FreeFloatError as exc:
-                        raise ScenarioError(f"axis {axis.key!r} = {value!r}: {exc}") from None
+                    check_inertial_value(urdf, axis.key, axis.inertial, value)
                     continue
-                if self.replay:
-                    raise ScenarioError(f"axis {axis.key!r}: a plan replay sweeps inertial keys")
                 data = copy.deepcopy(dict(self.base))
                 _put(data, axis.path, value)
                 try:
@@ -263,23 +262,6 @@ class SweepSpec:
                     )
                 except FreeFloatError as exc:
                     raise ScenarioError(f"axis {axis.key!r} = {value!r}: {exc}") from None
-
-
-def _plan_source(name: str, folder: Path) -> tuple[Path, dict[str, Any], str]:
-    """A plan file to replay (relative to the sweep file): its path, no tables, its URDF."""
-    from ..plans.schema import load_plan_file
-    from ..robust.inertial import robot_text
-    from ..robust.plan_robustness import plan_robot
-
-    path = (folder / name).expanduser().resolve()
-    return path, {}, robot_text(plan_robot(load_plan_file(path)))
-
-
-def _scenario_urdf(base: Mapping[str, Any], path: Path) -> str:
-    """The URDF text of the base scenario's robot (for inertial axes)."""
-    from ..robust.inertial import robot_text
-
-    return robot_text(Scenario.from_dict(base, relative_to=path.parent, source=path).robot)
 
 
 def _drawn(axes: tuple[Axis, ...], tables: list[Any], urdf: str | None) -> tuple[Axis, ...]:
