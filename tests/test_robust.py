@@ -56,8 +56,36 @@ def attitude_sensitivity(plan, robot):
     return path_sensitivity(*problem_from_plan(plan, robot))
 
 
+def _reparsed(robot, changes, text=None):
+    """The robot with changed inertial values, parsed again by Pinocchio from the URDF."""
+    source = robot_text(robot) if text is None else text
+    return load_robot(robot.urdf, robot.end_effector, text=with_inertials(source, changes))
+
+
 def _replayed_error(plan, robot, link, key, value):
-    return replay_attitude(plan, perturbed_robot(robot, {link: {key: value}})).error_rotvec
+    return replay_attitude(plan, _reparsed(robot, {link: {key: value}})).error_rotvec
+
+
+def test_changing_a_loaded_model_equals_parsing_the_changed_urdf(tmp_path):
+    robot = load_robot(robots_dir() / "panda_servicer.urdf")
+    text = robot_text(robot).replace(  # an inertia frame turned against its link
+        '<origin xyz="-0.003141 -0.02872 0.003495" rpy="0.0 -0.0 0.0"/>',
+        '<origin xyz="-0.003141 -0.02872 0.003495" rpy="0.3 -0.2 0.7"/>',
+    )
+    assert "0.3 -0.2 0.7" in text
+    path = tmp_path / "tilted.urdf"
+    path.write_text(text)
+    robot = load_robot(path)
+    changes = {
+        "spacecraft": {"mass": 101.0, "com.1": 0.02, "inertia.ixy": 0.3},
+        "panda_link0": {"mass": 0.7, "com.2": 0.06, "inertia.izz": 0.005},  # merged into the base
+        "panda_link2": {"mass": 0.9, "com.0": 0.01, "inertia.ixz": 0.002},
+        "panda_hand": {"mass": 0.8, "inertia.iyy": 0.0026},  # merged into link 7
+    }
+    fast, parsed = perturbed_robot(robot, changes, text), _reparsed(robot, changes, text)
+    for a, b in zip(fast.model.inertias, parsed.model.inertias, strict=True):
+        assert np.abs(a.toDynamicParameters() - b.toDynamicParameters()).max() < 1e-12
+    assert fast.total_mass == pytest.approx(robot.total_mass + 1.0 + 0.070231 + 0.253074 + 0.07)
 
 
 @pytest.mark.parametrize(

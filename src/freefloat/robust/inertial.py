@@ -7,8 +7,9 @@ frame of ``origin rpy``). This module names those values by dotted keys, as swee
     mass, com.0, com.1, com.2, inertia.ixx, inertia.iyy, inertia.izz, inertia.ixy,
     inertia.ixz, inertia.iyz
 
-and writes a URDF text with new values for named links (:func:`with_inertials`), refusing any
-value no rigid body can have (a non-positive mass, an inertia that is not positive definite or
+and writes a URDF text with new values for named links (:func:`with_inertials`), or changes a
+loaded robot's model the same way (:func:`perturbed_robot`), refusing any value no rigid body
+can have (a non-positive mass, an inertia that is not positive definite or
 breaks the triangle inequality of its principal moments). The robot's other content is kept.
 """
 
@@ -20,10 +21,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
+import pinocchio as pin
 
 from ..errors import InputError, ModelError, UnknownNameError
 from ..files import read_text_file
-from ..robot.model import MAX_URDF_BYTES, Robot, load_robot
+from ..robot.model import MAX_URDF_BYTES, Robot
 from ..robot.payload import PAYLOAD_LINK
 
 __all__ = [
@@ -202,15 +204,43 @@ def robot_text(robot: Robot) -> str:
     return read_text_file(robot.urdf, "URDF", MAX_URDF_BYTES, ModelError)
 
 
+def _spatial_inertia(inertial: LinkInertial) -> pin.Inertia:
+    """The link's inertia in its own frame, as Pinocchio's URDF parser builds it."""
+    rotation = pin.rpy.rpyToMatrix(*inertial.rpy)
+    return pin.Inertia(
+        inertial.mass, np.array(inertial.com), rotation @ inertial.matrix @ rotation.T
+    )
+
+
 def perturbed_robot(
     robot: Robot, changes: Mapping[str, Mapping[str, float]], text: str | None = None
 ) -> Robot:
     """The robot with new inertial values for named links (see :func:`with_inertials`).
 
-    ``text`` is the robot's URDF when already read. The new robot keeps the file's path (for
-    its meshes) and end effector.
+    Pinocchio merges a link joined by fixed joints into the body of its parent joint; a
+    body's dynamic parameters are linear in its links' inertias, so the link's old
+    contribution is replaced by its new one in a copy of the model (no re-parsing; a test
+    holds it to Pinocchio's parser of the changed URDF). ``text`` is the robot's URDF when
+    already read. The new robot keeps the file's path (for its meshes) and end effector.
+
+    Raises:
+        UnknownNameError: a link without ``<inertial>`` or an unknown key.
+        InputError: the new values are not physical (:func:`check_physical`).
     """
-    source = robot_text(robot) if text is None else text
-    return load_robot(
-        robot.urdf, robot.end_effector, robot.package_dirs, text=with_inertials(source, changes)
-    )
+    current = link_inertials(robot_text(robot) if text is None else text)
+    model = robot.model.copy()
+    for given, values in changes.items():
+        name = PAYLOAD_LINK if given == "payload" else given
+        if name not in current:
+            raise UnknownNameError("link with inertial values", given, sorted(current))
+        inertial = current[name]
+        for key, value in values.items():
+            _check_key(key)
+            inertial = inertial.with_value(key, value)
+        check_physical(inertial)
+        frame = model.frames[model.getFrameId(name, pin.FrameType.BODY)]
+        before = frame.placement.act(_spatial_inertia(current[name])).toDynamicParameters()
+        after = frame.placement.act(_spatial_inertia(inertial)).toDynamicParameters()
+        body = model.inertias[frame.parentJoint].toDynamicParameters()
+        model.inertias[frame.parentJoint] = pin.Inertia.FromDynamicParameters(body - before + after)
+    return replace(robot, model=model)
