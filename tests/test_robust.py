@@ -147,22 +147,21 @@ def test_first_order_spread_agrees_with_monte_carlo_replays(request, fixture, li
     plan, _, robot = request.getfixturevalue(fixture)
     sens = attitude_sensitivity(plan, robot)
     replayed, predicted = [], []
-    for model in _draws(robot, link, 60, 0.01, seed=1):
+    for model in _draws(robot, link, 300, 0.01, seed=1):
         replayed.append(replay_attitude(plan, model).error_rotvec)
         predicted.append(sens.first_order(body_parameters(model) - sens.nominal))
     replayed, predicted = np.array(replayed), np.array(predicted)
+    # the same draws: first order against the replays (linearity at a 1 % size)
     mean_mc = np.linalg.norm(replayed, axis=1).mean()
-    mean_first = np.linalg.norm(predicted, axis=1).mean()
-    assert mean_first == pytest.approx(mean_mc, rel=0.05)
-    cov_mc, cov_first = np.cov(replayed.T), np.cov(predicted.T)
-    assert np.linalg.norm(cov_first - cov_mc) <= 0.2 * np.linalg.norm(cov_mc)
-    # and the analytic covariance of the 1 % uncertainty of those three moments
+    assert np.linalg.norm(predicted, axis=1).mean() == pytest.approx(mean_mc, rel=0.05)
+    # the analytic covariance of a 1 % uncertainty of those three moments, against the draws'
     only = Uncertainty(mass_fraction=0.0, com_m=0.0, inertia_fraction=0.01)
     sizes = only.sizes(sens.nominal)
     sizes[:, 7:] = 0.0
     sizes[1:] = 0.0
     scaled = (sens.jacobian * sizes[None]).reshape(3, -1)
-    assert np.trace(scaled @ scaled.T) == pytest.approx(np.trace(cov_mc), rel=0.5)
+    cov_mc = np.cov(replayed.T)
+    assert np.linalg.norm(scaled @ scaled.T - cov_mc) <= 0.2 * np.linalg.norm(cov_mc)
 
 
 def test_spread_figures_add_up(panda):
