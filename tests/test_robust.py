@@ -8,6 +8,7 @@ a replay in the perturbed model for the correction.
 
 from __future__ import annotations
 
+import csv
 import itertools
 import json
 import math
@@ -300,3 +301,44 @@ def test_the_robustness_record_is_recomputed_by_verify_and_old_plans_load(tmp_pa
     older["robustness"] = data["robustness"]  # a /3 file cannot hold the record
     old.write_text(json.dumps(older))
     assert main(["verify", str(old)]) == 2
+
+
+def test_an_inertial_axis_of_a_scenario_sweep_plans_in_the_changed_model(tmp_path):
+    from dataclasses import replace as with_field
+
+    from freefloat.sweep import run_job
+
+    path = tmp_path / "s.toml"
+    path.write_text(
+        'scenario = "worked_example"\nsamples = 21\n[[axis]]\n'
+        'key = "robot.links.link2.mass"\nvalues = [30.0, 36.0]\n'
+    )
+    spec = SweepSpec.from_toml(path)
+    nominal, heavier = (run_job(job) for job in spec.jobs())
+    scenario = Scenario.from_toml(SCENARIOS / "worked_example.toml")
+    base = ff.plan(scenario, samples=21)
+    changed = with_field(scenario, robot=_reparsed(scenario.robot, {"link2": {"mass": 36.0}}))
+    direct = ff.plan(changed, samples=21)
+    assert nominal.path_length == pytest.approx(base.solver.solutions[0].path_length, rel=1e-12)
+    assert heavier.path_length == pytest.approx(direct.solver.solutions[0].path_length, rel=1e-9)
+    assert heavier.path_length != pytest.approx(nominal.path_length, rel=1e-3)
+
+
+def test_cli_replay_sweep_prints_the_error_distribution(tmp_path, worked, capsys):
+    from freefloat.robust import error_distribution
+
+    _, plan_path, _ = worked
+    body = (
+        '[[axis]]\nkey = "robot.links.base.inertia.izz"\n'
+        "values = { uniform = [60.0, 70.0], samples = 4, seed = 2 }\n"
+    )
+    path = _replay_sweep(tmp_path, plan_path, body)
+    out = tmp_path / "mc.csv"
+    assert main(["sweep", str(path), "-o", str(out), "--workers", "1"]) == 0
+    printed = capsys.readouterr().out
+    rows = list(csv.DictReader(out.open()))
+    vectors = np.array([[float(r[f"error_{a}_rad"]) for a in "xyz"] for r in rows])
+    found = error_distribution(vectors)
+    assert found.count == 4 and found.largest == max(float(r["attitude_error_rad"]) for r in rows)
+    assert f"mean {math.degrees(found.mean):.4g}" in printed and "replayed 4 of 4" in printed
+    assert main(["sweep", str(path), "-o", str(out), "--plots", str(tmp_path / "p")]) == 2

@@ -17,7 +17,6 @@ import numpy as np
 from ..errors import PlanFileError
 from ..physics.attitude import geodesic_angle, quat_from_zyx
 from ..plans.format import FORMAT, Plan, RobustnessReport
-from ..plans.schema import load_plan_file
 from ..problem.inertial_sensitivity import attitude_sensitivity
 from ..problem.uncertainty import DEFAULT_UNCERTAINTY, AttitudeSpread, Uncertainty, spread
 from ..robot.model import Robot, load_robot
@@ -69,7 +68,7 @@ def with_robustness(
 
 def plan_sensitivity(path: str | Path, uncertainty: Uncertainty) -> tuple[Plan, AttitudeSpread]:
     """The plan file at ``path`` and its first-order attitude error under ``uncertainty``."""
-    plan = load_plan_file(path)
+    plan = Plan.load(path)
     return plan, plan_spread(plan, plan_robot(plan), uncertainty)
 
 
@@ -83,7 +82,7 @@ def correct_plan(path: str | Path, measured_zyx_deg: Sequence[float]) -> tuple[P
     Returns:
         The correcting plan and the angle it turns the spacecraft back by (rad).
     """
-    plan = load_plan_file(path)
+    plan = Plan.load(path)
     yaw, pitch, roll = (np.radians(float(a)) for a in measured_zyx_deg)
     measured = quat_from_zyx(yaw, pitch, roll)
     goal = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)

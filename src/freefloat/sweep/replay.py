@@ -14,7 +14,6 @@ from dataclasses import dataclass, fields, replace
 
 from ..errors import FreeFloatError
 from ..plans.format import Plan
-from ..plans.schema import load_plan_file
 from ..robot.model import Robot
 from ..robust.inertial import perturbed_robot, robot_text
 from ..robust.plan_robustness import plan_robot
@@ -68,7 +67,7 @@ class ReplayRow:
 
 def _plan(path: str) -> tuple[Plan, Robot, str]:
     if path not in _PLANS:
-        plan = load_plan_file(path)
+        plan = Plan.load(path)  # checked against the schema when the sweep was read
         robot = plan_robot(plan)
         _PLANS[path] = (plan, robot, robot_text(robot))
     return _PLANS[path]
