@@ -192,8 +192,9 @@ def plan_source(name: str, folder: Path) -> tuple[Path, dict[str, Any], str]:
 
 
 def scenario_urdf(base: Mapping[str, Any], path: Path) -> str:
-    """The URDF text of the base scenario's robot (for inertial axes)."""
-    return robot_text(Scenario.from_dict(base, relative_to=path.parent, source=path).robot)
+    """The URDF text of the base scenario's robot (for inertial axes), written or not yet."""
+    scenario = Scenario.from_dict(base, relative_to=path.parent, source=path)
+    return scenario.robot_text or robot_text(scenario.robot)
 
 
 def check_inertial_value(urdf: str, key: str, inertial: tuple[str, str], value: Any) -> None:

@@ -171,7 +171,8 @@ def _run(job: Job, started: float) -> SweepRow:
     try:
         scenario = _scenario(job)
         if job.changes:  # the robot with other mass properties: plan in that model
-            scenario = replace(scenario, robot=perturbed_robot(scenario.robot, job.changes))
+            changed = perturbed_robot(scenario.robot, job.changes, scenario.robot_text)
+            scenario = replace(scenario, robot=changed)
         return _planned(job, plan(scenario, samples=job.samples), started)
     except InfeasibleError as exc:
         lo, hi = exc.bounds_deg
