@@ -118,11 +118,13 @@ def correcting_plan(
     try:
         solution = solve(problem, options, constraints, start)
     except SolverError as exc:
+        said = "continued from where the search with less freedom stopped"  # the solver's words
+        tried = [t.replace(said, "started from the quadratic-model loop") for t in exc.tried]
         raise SolverError(
             f"one correcting motion cannot turn the spacecraft back by {math.degrees(angle):.4g}"
             f" deg within the plan's limits ({exc.headline})",
             exc.best_residual,
-            exc.tried,
+            tried,
             per_axis=exc.per_axis,
             stopped_by=exc.stopped_by,
             reached_fraction=exc.reached_fraction,
