@@ -260,6 +260,8 @@ def test_replay_sweep_rows_are_the_replays_locally_and_on_dask(tmp_path, worked)
         direct = _replayed_error(plan, robot, "base", "inertia.izz", row.values[0])
         assert row.status == "replayed"
         assert [row.error_x_rad, row.error_y_rad, row.error_z_rad] == direct.tolist()
+    resumed = ff.sweep(spec, workers=1, output=tmp_path / "local.csv", progress=False)
+    assert resumed == local  # every row read back from the file, none run again
     distributed = pytest.importorskip("distributed")
     with (
         distributed.LocalCluster(
@@ -356,3 +358,29 @@ def test_cli_replay_sweep_prints_the_error_distribution(tmp_path, worked, capsys
     assert found.count == 4 and found.largest == max(float(r["attitude_error_rad"]) for r in rows)
     assert f"mean {math.degrees(found.mean):.4g}" in printed and "replayed 4 of 4" in printed
     assert main(["sweep", str(path), "-o", str(out), "--plots", str(tmp_path / "p")]) == 2
+
+
+def test_a_payload_axis_replays_the_plan_with_the_payload_changed(tmp_path):
+    from freefloat.robot.payload import PAYLOAD_LINK
+    from freefloat.sweep.replay import run_replay_job
+
+    text = (SCENARIOS / "worked_example.toml").read_text().replace('robot = "planar_2dof"', "")
+    urdf = robots_dir() / "planar_2dof.urdf"
+    scenario_path = tmp_path / "held.toml"
+    scenario_path.write_text(
+        f'robot = "{urdf}"\n{text}\n[payload]\nmass = 20.0\ncom_xyz = [0.3, 0.0, 0.0]\n'
+        "inertia = [0.5, 0.5, 0.5, 0.0, 0.0, 0.0]\n"
+    )
+    plan = ff.plan(Scenario.from_toml(scenario_path), samples=21)
+    plan_path = plan.save(tmp_path / "held.plan.json")
+    body = '[[axis]]\nkey = "payload.mass"\nvalues = [18.0, 22.0]\n'
+    spec = SweepSpec.from_toml(_replay_sweep(tmp_path, plan_path, body))
+    robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+    for job in spec.jobs():
+        row = run_replay_job(job)
+        mass = job.changes["payload"]["mass"]
+        direct = replay_attitude(plan, _reparsed(robot, {PAYLOAD_LINK: {"mass": mass}}))
+        assert [row.error_x_rad, row.error_y_rad, row.error_z_rad] == pytest.approx(
+            direct.error_rotvec.tolist(), abs=1e-12
+        )
+        assert row.attitude_error_rad > 1e-4  # 2 kg at the tip turns the base measurably
