@@ -61,6 +61,7 @@ import dataclasses
 import datetime
 import io
 import json
+import math
 import os
 import platform
 import shlex
@@ -712,6 +713,59 @@ def print_objectives(found: dict[str, object]) -> None:
         )
 
 
+def bench_robustness(draws: int = 500) -> dict[str, object]:
+    """Robustness (docs/robustness.md): ``sensitivity`` on the Panda servicer plan (target
+    <= 1 s) and a replay Monte Carlo of its spacecraft inertia 5 % off (target <= 30 s for 500
+    draws on two workers)."""
+    import subprocess
+    import tempfile
+
+    from freefloat.robust import plan_spread
+
+    with tempfile.TemporaryDirectory() as folder:
+        tmp = Path(folder)
+        scenario = ff.Scenario.from_toml(ROBOTS / "panda_servicer.toml")
+        plan = ff.plan(scenario)
+        path = plan.save(tmp / "panda.plan.json")
+        in_process, _ = timed(lambda: plan_spread(plan, scenario.robot), 5)
+        command = [sys.executable, "-m", "freefloat.cli", "sensitivity", str(path), "-q"]
+        process_time = []
+
+        def run_command() -> None:
+            before = os.times()
+            subprocess.run(command, check=True, capture_output=True)
+            after = os.times()
+            process_time.append(
+                after.children_user
+                + after.children_system
+                - before.children_user
+                - before.children_system
+            )
+
+        whole = timed_once(run_command)
+        axes = "".join(
+            f'[[axis]]\nkey = "robot.links.spacecraft.inertia.{k}"\n'
+            f"values = {{ normal = [6.0, 0.3], samples = {draws}, seed = {seed} }}\n"
+            for seed, k in enumerate(("ixx", "iyy", "izz"), start=1)
+        )
+        sweep_file = tmp / "mc.toml"
+        sweep_file.write_text(f'plan = "{path}"\n' + axes)
+        rows: list = []
+        wall = timed_once(
+            lambda: rows.extend(ff.sweep(sweep_file, workers=2, output=tmp / "mc.csv"))
+        )
+    errors = [r.attitude_error_rad for r in rows if r.status == "replayed"]
+    return {
+        "sensitivity_in_process_ms": 1000.0 * in_process,
+        "sensitivity_command_s": whole,
+        "sensitivity_command_cpu_s": process_time[0],
+        "monte_carlo_draws": draws,
+        "monte_carlo_replayed": len(errors),
+        "monte_carlo_2_workers_s": wall,
+        "monte_carlo_mean_error_deg": math.degrees(float(np.mean(errors))),
+    }
+
+
 def try_plan(scenario: ff.Scenario) -> None:
     with contextlib.suppress(ff.FreeFloatError):
         ff.plan(scenario)
@@ -832,6 +886,9 @@ def run() -> None:
     parser.add_argument(
         "--multi-arm-only", action="store_true", help="only the many-joints, two-arms section"
     )
+    parser.add_argument(
+        "--robustness-only", action="store_true", help="only the robustness section"
+    )
     args = parser.parse_args()
     print(f"machine: {machine()}")
     if args.multi_arm_only:
@@ -841,6 +898,20 @@ def run() -> None:
         print_multi_arm(multi, ff.SolveOptions().max_evaluations)
         if args.json:
             args.json.write_text(json.dumps({"machine": machine(), "multi_arm": multi}, indent=1))
+        return
+    if args.robustness_only:
+        found = bench_robustness()
+        print(
+            "robustness: sensitivity on the Panda servicer plan "
+            f"{found['sensitivity_in_process_ms']:.0f} ms in process, "
+            f"{found['sensitivity_command_s']:.2f} s the whole command (CPU "
+            f"{found['sensitivity_command_cpu_s']:.2f} s; target <= 1 s); replay "
+            f"Monte Carlo {found['monte_carlo_replayed']} of {found['monte_carlo_draws']} draws "
+            f"on 2 workers {found['monte_carlo_2_workers_s']:.1f} s (target <= 30 s), mean "
+            f"error {found['monte_carlo_mean_error_deg']:.3f} deg"
+        )
+        if args.json:
+            args.json.write_text(json.dumps({"machine": machine(), "robustness": found}, indent=1))
         return
     objectives = bench_objectives() if args.objectives or args.objectives_only else {}
     if args.objectives_only:

@@ -29,6 +29,7 @@ def test_plan_without_arguments_plans_the_worked_example(tmp_path, monkeypatch, 
     plan_path = tmp_path / "freefloat-out" / "plan.json"
     data = json.loads(plan_path.read_text())
     assert data["format"] == "freefloat.plan/4"
+    assert data["robustness"]["inertia_fraction"] == 0.1 and data["robustness"]["rms_rad"] > 0
     assert data["free_parameters"]["q2"][0] == pytest.approx(-0.552e-4, rel=0.01)
     assert "achieved" in out and "attitude error" in out and "t^6 -5.518" in out
     assert str(plan_path) in out

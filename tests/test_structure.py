@@ -161,8 +161,8 @@ def _imports(path: Path) -> set[str]:
 
 
 def test_layers_flow_one_way_and_no_circle():
-    """robot -> physics -> problem -> solvers -> plans -> verify -> pipeline -> viz, export,
-    sweep -> cli."""
+    """robot -> physics -> problem -> solvers -> plans -> verify -> pipeline -> robust -> viz,
+    export, sweep -> cli."""
     order = [
         "errors",
         "files",
@@ -175,6 +175,7 @@ def test_layers_flow_one_way_and_no_circle():
         "plans",
         "verify",
         "pipeline",
+        "robust",
         "viz",
         "export",
         "sweep",

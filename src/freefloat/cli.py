@@ -49,6 +49,8 @@ def _load_scenario(path: str | None) -> Scenario:
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
+    from .robust.plan_robustness import with_robustness
+
     scenario = _load_scenario(args.scenario)
     if args.allow_full_turns:
         scenario = dataclasses.replace(scenario, allow_full_turns=True)
@@ -59,6 +61,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         objective=args.objective,
     )
     cartesian = cartesian_report(scenario, result)
+    with stage("sensitivity"):
+        result = with_robustness(result, scenario.robot)
     if args.output:
         output = Path(args.output)
     elif args.scenario:
@@ -360,14 +364,41 @@ def _spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_sensitivity(args: argparse.Namespace) -> int:
+    from .problem.uncertainty import Uncertainty
+    from .robust.plan_robustness import plan_sensitivity
+    from .viz.robustness import sensitivity_table
+
+    uncertainty = Uncertainty(args.mass_pct / 100.0, args.com_mm / 1000.0, args.inertia_pct / 100.0)
+    with stage("sensitivity"):
+        loaded, result = plan_sensitivity(args.plan, uncertainty)
+    print(f"freefloat sensitivity: {args.plan} ({Path(loaded.robot.urdf).name}), final attitude")
+    print("\n".join(sensitivity_table(result)))
+    return 0
+
+
+def _cmd_correct(args: argparse.Namespace) -> int:
+    from .robust.plan_robustness import correct_plan
+
+    with stage("plan correction"):
+        result, residual = correct_plan(args.plan, args.base_zyx_deg)
+    output = Path(args.output) if args.output else Path(args.plan).with_suffix(".correct.json")
+    written = result.save(output)
+    print(f"freefloat correct: turns the spacecraft back by {math.degrees(residual):.4g} deg")
+    print(summary(result, written, wall_time_s=time.perf_counter() - args.started))
+    return 0
+
+
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from .sweep import SweepSpec, connect, plot_sweep, sweep
+    from .sweep import SweepRow, SweepSpec, connect, plot_sweep, sweep
     from .sweep.plots import check_plottable
 
     spec = SweepSpec.from_toml(args.sweep)
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers must be at least 1, got {args.workers}")
     if args.plots:
+        if spec.replay:
+            raise InputError("--plots draws feasibility maps of plans; a replay sweep has none")
         check_plottable(spec)
     client = connect(args.scheduler) if args.scheduler is not None else None
     try:
@@ -375,6 +406,25 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     finally:
         if client is not None:
             client.close()
+    if spec.replay:
+        import numpy as np
+
+        from .robust.distribution import error_distribution
+        from .sweep.replay import ReplayRow
+        from .viz.robustness import distribution_lines
+
+        print(f"freefloat sweep: {len(rows)} replays of {spec.scenario_path.name}")
+        vectors = np.array(
+            [
+                [r.error_x_rad, r.error_y_rad, r.error_z_rad]
+                for r in rows
+                if isinstance(r, ReplayRow) and r.status == "replayed"
+            ],
+            dtype=float,
+        )
+        print("\n".join(distribution_lines(error_distribution(vectors), len(rows))))
+        print(f"  results         {Path(args.output).resolve()}")
+        return 0
     counts = {s: sum(r.status == s for r in rows) for s in ("planned", "infeasible", "failed")}
     print(
         f"freefloat sweep: {len(rows)} jobs over {', '.join(spec.keys)}: "
@@ -382,7 +432,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     )
     print(f"  results         {Path(args.output).resolve()}")
     if args.plots:
-        written = plot_sweep(spec, rows, args.plots)
+        written = plot_sweep(spec, [r for r in rows if isinstance(r, SweepRow)], args.plots)
         print(f"  plots           {', '.join(str(p) for p in written)}")
     return 0
 
@@ -633,6 +683,42 @@ def build_parser() -> argparse.ArgumentParser:
     _add_no_verify(p_plot, "draw")
     p_plot.set_defaults(func=_cmd_plot)
 
+    p_sens = commands.add_parser(
+        "sensitivity",
+        help="how far the spacecraft ends off its goal when the mass properties are wrong",
+        description="Exact first-order sensitivity of a plan's final attitude to every body's "
+        "mass, centre of mass and inertia, along the plan's fixed joint paths: per body the "
+        "attitude error each uncertainty causes (worst case), and the combined RMS and worst "
+        "case, in degrees (docs/robustness.md).",
+    )
+    p_sens.add_argument("plan", help="plan JSON file")
+    p_sens.add_argument("--mass-pct", type=float, default=5.0, help="mass uncertainty, %% (5)")
+    p_sens.add_argument("--com-mm", type=float, default=10.0, help="centre of mass, mm (10)")
+    p_sens.add_argument(
+        "--inertia-pct", type=float, default=10.0, help="inertia components, %% (10)"
+    )
+    p_sens.set_defaults(func=_cmd_sensitivity)
+
+    p_correct = commands.add_parser(
+        "correct",
+        help="plan a motion back to the same joints that turns the spacecraft to its goal",
+        description="After a plan ran and the spacecraft ended at a measured attitude off its "
+        "goal: plan a second motion from the plan's goal joints back to the same joints that "
+        "turns the spacecraft from the measured attitude to the goal, within the plan's limits "
+        "and clearance; refused with the reachable angle when one motion cannot turn that far.",
+    )
+    p_correct.add_argument("plan", help="plan JSON file (the motion that was run)")
+    p_correct.add_argument(
+        "--base-zyx-deg",
+        type=float,
+        nargs=3,
+        required=True,
+        metavar=("Y", "P", "R"),
+        help="measured spacecraft attitude: yaw, pitch, roll [deg]",
+    )
+    p_correct.add_argument("-o", "--output", help="plan file to write (default PLAN.correct.json)")
+    p_correct.set_defaults(func=_cmd_correct)
+
     p_sweep = commands.add_parser(
         "sweep",
         help="plan every combination of scenario values and write one CSV row per job",
@@ -760,6 +846,12 @@ def _check_arguments(args: argparse.Namespace) -> None:
             )
     elif command == "show":
         _positive(args.speed, "--speed", MAX_SPEED)
+    elif command == "sensitivity":
+        for option in ("mass_pct", "com_mm", "inertia_pct"):
+            check_number(getattr(args, option), f"--{option.replace('_', '-')}", 1000.0, low=0.0)
+    elif command == "correct":
+        for value in args.base_zyx_deg:
+            check_number(value, "--base-zyx-deg", MAX_ANGLE_DEG, "deg")
     for option, name, folder in _OUTPUTS.get(command, ()):
         value = getattr(args, name, None)
         if value:
@@ -776,6 +868,7 @@ _OUTPUTS: dict[str, tuple[tuple[str, str, bool], ...]] = {
     "show": (("--html", "html", False),),
     "export": (("-o", "output", False),),
     "sweep": (("-o", "output", False), ("--plots", "plots", True)),
+    "correct": (("-o", "output", False),),
 }
 
 

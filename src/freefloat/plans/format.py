@@ -19,7 +19,9 @@ constraint the plan honours, by registered name with its parameters, so that
 ``freefloat verify`` rebuilds each from the registry (clearance stays in ``safety``), and the
 objective has its ``parameters``; ``safety.note`` says what clearance could not check, and
 clearance is verified on the original geometry with a certificate between samples
-(``clearance``, ``clearance_hull_agreement``). ``freefloat.plan/3`` and older files still load
+(``clearance``, ``clearance_hull_agreement``); the optional ``robustness`` record holds the
+first-order final attitude error under an uncertainty of the mass properties
+(docs/robustness.md). ``freefloat.plan/3`` and older files still load
 and keep their format (their one end effector's path is its only path; they carry no URDF, so
 they are checked against the file their path names, as it is now; whatever their format, they
 are held to every limit their URDF states, :data:`PROMISED`). ``freefloat.plan/3`` adds the
@@ -64,6 +66,7 @@ __all__ = [
     "Plan",
     "Request",
     "RobotRef",
+    "RobustnessReport",
     "SafetyReport",
     "Samples",
     "SolutionRecord",
@@ -391,6 +394,26 @@ class ObjectiveReport:
 
 
 @dataclass(frozen=True)
+class RobustnessReport:
+    """First-order final attitude error under an uncertainty of the mass properties.
+
+    Attributes:
+        mass_fraction: uncertainty of every body's mass (fraction, 0.05 = 5 %).
+        com_m: of every centre-of-mass coordinate (m).
+        inertia_fraction: of every inertia component's scale (fraction).
+        rms_rad: RMS final attitude error, the parameters independent with those standard
+            deviations (rad).
+        worst_rad: largest final attitude error, every parameter within those bounds (rad).
+    """
+
+    mass_fraction: float
+    com_m: float
+    inertia_fraction: float
+    rms_rad: float
+    worst_rad: float
+
+
+@dataclass(frozen=True)
 class Plan:
     """A verified point-to-point motion of a free-floating space manipulator."""
 
@@ -406,6 +429,7 @@ class Plan:
     verification: Verification = field(default_factory=Verification)
     safety: SafetyReport = field(default_factory=SafetyReport)
     objective: ObjectiveReport = field(default_factory=ObjectiveReport)
+    robustness: RobustnessReport | None = None
     format: str = FORMAT
     constraints: list[ConstraintRecord] = field(default_factory=list)
 
@@ -448,6 +472,11 @@ class Plan:
                 **(
                     {"constraints": [asdict(c) for c in self.constraints]}
                     if self.format == FORMAT
+                    else {}
+                ),
+                **(
+                    {"robustness": asdict(self.robustness)}
+                    if self.robustness is not None and self.format == FORMAT
                     else {}
                 ),
             }
@@ -523,6 +552,7 @@ class Plan:
                 objective=_objective(data.get("objective")),
                 format=fmt if fmt in (FORMAT_2, FORMAT_3, FORMAT) else FORMAT_3,  # /1: as /3
                 constraints=_constraints(data, fmt, where),
+                robustness=_robustness(data.get("robustness") if fmt == FORMAT else None),
             )
         except _CopyError as exc:
             raise PlanFileError(f"{where}: {exc}") from None
@@ -624,6 +654,13 @@ def _constraints(data: Mapping[str, Any], fmt: str, where: str) -> list[Constrai
                 "constraint is recorded once"
             )
     return records
+
+
+def _robustness(data: Any) -> RobustnessReport | None:
+    """The ``robustness`` section (optional; absent before ``freefloat.plan/4``)."""
+    if data is None:
+        return None
+    return RobustnessReport(**{k: float(v) for k, v in data.items()})
 
 
 def read_plan_json(path: str | Path) -> Any:

@@ -22,6 +22,8 @@ from ..pipeline import plan
 from ..plans.format import Plan
 from ..problem.scenario import Scenario
 from ..robot.model import Robot
+from ..robust.inertial import perturbed_robot
+from .replay import ReplayRow, run_replay_job
 from .spec import Job, Value
 
 __all__ = ["STATUSES", "TIMING_COLUMNS", "SweepRow", "run_job"]
@@ -166,8 +168,10 @@ def _planar_feasibility(scenario: Scenario) -> dict[str, Any]:
     }
 
 
-def run_job(job: Job) -> SweepRow:
-    """Plan one job; return its row. Never raises (a failure is a row with its message)."""
+def run_job(job: Job) -> SweepRow | ReplayRow:
+    """Plan (or replay) one job; return its row. Never raises (a failure is a row)."""
+    if job.replay:
+        return run_replay_job(job)
     started = time.perf_counter()
     with warnings.catch_warnings():
         # a diverging solver attempt may overflow; its outcome is in the row, not a warning
@@ -179,6 +183,9 @@ def _run(job: Job, started: float) -> SweepRow:
     scenario: Scenario | None = None
     try:
         scenario = _scenario(job)
+        if job.changes:  # the robot with other mass properties: plan in that model
+            changed = perturbed_robot(scenario.robot, job.changes, scenario.robot_text)
+            scenario = replace(scenario, robot=changed)
         return _planned(job, plan(scenario, samples=job.samples), started)
     except InfeasibleError as exc:
         lo, hi = exc.bounds_deg

@@ -26,9 +26,10 @@ from typing import Any
 from ..errors import InputError, ScenarioError
 from ..files import atomic_write_text
 from .jobs import _ROBOTS, SweepRow, run_job
+from .replay import ReplayRow
 from .spec import Job, SweepSpec
 
-__all__ = ["connect", "read_rows", "sweep"]
+__all__ = ["connect", "read_rows", "row_class", "sweep"]
 
 
 def _cell(value: Any) -> str:
@@ -42,8 +43,16 @@ def _cell(value: Any) -> str:
     return str(value)
 
 
+def row_class(spec: SweepSpec) -> type[SweepRow] | type[ReplayRow]:
+    """The rows a sweep gives: :class:`SweepRow` (plans) or :class:`ReplayRow` (replays)."""
+    return ReplayRow if spec.replay else SweepRow
+
+
+Row = SweepRow | ReplayRow
+
+
 def _header(spec: SweepSpec) -> list[str]:
-    return ["index", *spec.keys, *SweepRow.result_columns()]
+    return ["index", *spec.keys, *row_class(spec).result_columns()]
 
 
 def _line(cells: Sequence[str]) -> str:
@@ -52,25 +61,25 @@ def _line(cells: Sequence[str]) -> str:
     return buffer.getvalue()
 
 
-def _row_cells(row: SweepRow) -> list[str]:
+def _row_cells(row: Row) -> list[str]:
     return [
         str(row.index),
         *(_cell(v) for v in row.values),
-        *(_cell(getattr(row, name)) for name in SweepRow.result_columns()),
+        *(_cell(getattr(row, name)) for name in row.result_columns()),
     ]
 
 
-def _parse_row(cells: Sequence[str], job: Job) -> SweepRow:
+def _parse_row(cells: Sequence[str], job: Job, kind: type[Row]) -> Row:
     values: dict[str, Any] = {}
-    for f, text in zip(fields(SweepRow)[2:], cells, strict=True):
+    for f, text in zip(fields(kind)[2:], cells, strict=True):
         if f.name in ("status", "message", "objective"):
             values[f.name] = text
         else:
             values[f.name] = float(text) if text else None
-    return SweepRow(index=job.index, values=job.values, **values)
+    return kind(index=job.index, values=job.values, **values)
 
 
-def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, SweepRow]:
+def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, Row]:
     """The rows of an existing output file, by job index (resume); empty if there is none.
 
     Raises:
@@ -92,7 +101,7 @@ def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, SweepRow]:
             "output file or delete it"
         )
     jobs = spec.jobs()
-    rows: dict[int, SweepRow] = {}
+    rows: dict[int, Row] = {}
     n_axes = len(spec.axes)
     for number, cells in enumerate(lines[1:], start=2):
         if len(cells) != len(header) or not cells[0].isdigit() or int(cells[0]) >= len(jobs):
@@ -103,11 +112,11 @@ def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, SweepRow]:
                 f"{path} line {number} has other axis values than job {job.index}; choose "
                 "another output file or delete it"
             )
-        rows[job.index] = _parse_row(cells[1 + n_axes :], job)
+        rows[job.index] = _parse_row(cells[1 + n_axes :], job, row_class(spec))
     return rows
 
 
-def write_rows(spec: SweepSpec, output: str | Path, rows: Sequence[SweepRow]) -> Path:
+def write_rows(spec: SweepSpec, output: str | Path, rows: Sequence[Row]) -> Path:
     """Write the whole output file atomically, rows sorted by index."""
     text = _line(_header(spec)) + "".join(
         _line(_row_cells(r)) for r in sorted(rows, key=lambda r: r.index)
@@ -118,7 +127,7 @@ def write_rows(spec: SweepSpec, output: str | Path, rows: Sequence[SweepRow]) ->
 class _Appender:
     """Appends whole rows to the output file (one ``write`` per row, ``O_APPEND``)."""
 
-    def __init__(self, spec: SweepSpec, path: Path, rows: dict[int, SweepRow]) -> None:
+    def __init__(self, spec: SweepSpec, path: Path, rows: dict[int, Row]) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
         if not path.is_file() or not rows:
             write_rows(spec, path, [])
@@ -126,7 +135,7 @@ class _Appender:
             write_rows(spec, path, list(rows.values()))
         self._fd = os.open(path, os.O_WRONLY | os.O_APPEND)
 
-    def add(self, row: SweepRow) -> None:
+    def add(self, row: Row) -> None:
         os.write(self._fd, _line(_row_cells(row)).encode("utf-8"))
 
     def close(self) -> None:
@@ -159,7 +168,7 @@ def _blas_env() -> Iterator[None]:
                 os.environ[key] = value
 
 
-def _local(jobs: Sequence[Job], workers: int) -> Iterator[SweepRow]:
+def _local(jobs: Sequence[Job], workers: int) -> Iterator[Row]:
     """Run the jobs on fresh worker processes (forkserver, else spawn); rows as they finish.
 
     Even one worker is a separate process, so that no state of the caller (its BLAS threads,
@@ -200,7 +209,7 @@ def _check_dask(client: Any) -> None:
             )
 
 
-def _dask(jobs: Sequence[Job], client: Any) -> Iterator[SweepRow]:
+def _dask(jobs: Sequence[Job], client: Any) -> Iterator[Row]:
     from distributed import as_completed as dask_completed
 
     futures = client.map(run_job, list(jobs), pure=False)
@@ -236,8 +245,8 @@ def sweep(
     client: Any = None,
     output: str | Path | None = None,
     progress: bool | None = None,
-    on_row: Callable[[SweepRow], None] | None = None,
-) -> list[SweepRow]:
+    on_row: Callable[[Row], None] | None = None,
+) -> list[Row]:
     """Run every job of a sweep; return the rows sorted by job index.
 
     Args:

@@ -1,5 +1,8 @@
 """Sweep files: a base scenario and the axes to vary, read from TOML.
 
+This module is long because it reads and checks every kind of axis of the one sweep file
+format (scenario values, inertial values, random draws) before any job runs.
+
 A sweep speaks the scenario's units (degrees for angles, metres, kilograms, seconds)::
 
     scenario = "worked_example.toml"   # relative to this file, or a shipped scenario name
@@ -17,6 +20,13 @@ must name a value present in the base scenario (a number, string or boolean: joi
 attitudes, duration, and the parameters of an inline ``[robot]`` servicer such as
 ``robot.base_mass`` or ``robot.mount.0``); every value of every axis is checked by building
 the scenario it gives before any job runs.
+
+Mass properties (docs/robustness.md): ``robot.links.<link>.mass`` (``.com.0``,
+``.inertia.ixx``...) changes a URDF link's inertial values, and ``values`` may be random draws
+(:mod:`freefloat.sweep.draws`). With ``plan = "FILE.plan.json"`` instead of ``scenario``, a
+sweep replays that plan's fixed joint paths in each changed model instead of planning (its
+axes are inertial ones, ``payload.*`` naming the captured payload's link) and reports where
+the spacecraft ends (:mod:`freefloat.sweep.replay`).
 """
 
 from __future__ import annotations
@@ -24,9 +34,8 @@ from __future__ import annotations
 import copy
 import itertools
 import math
-import sys
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -36,18 +45,23 @@ from ..errors import FreeFloatError, InputLimitError, ScenarioError, UnknownName
 from ..problem.limits import check_samples
 from ..problem.scenario import Scenario, read_toml
 from ..robot.model import robots_dir
-
-if sys.version_info >= (3, 11):
-    pass
-else:  # pragma: no cover
-    pass
+from .draws import (
+    Changes,
+    check_inertial_value,
+    inertial_changes,
+    inertial_key,
+    is_random,
+    plan_source,
+    random_values,
+    scenario_urdf,
+)
 
 __all__ = ["Axis", "Job", "SweepSpec", "Value"]
 
 #: A value an axis can take: what the scenario's TOML holds at that key.
 Value = float | int | str | bool
 
-_SWEEP_KEYS = ("scenario", "samples", "axis")
+_SWEEP_KEYS = ("scenario", "plan", "samples", "axis")
 _AXIS_KEYS = ("key", "values")
 _RANGE_KEYS = ("start", "stop", "num")
 #: Most jobs of one sweep (the product of the axis lengths): a sweep is validated value by
@@ -63,11 +77,16 @@ class Axis:
         key: the dotted key as written, e.g. ``"goal.base_zyx_deg.0"``.
         path: the key split into table names and list positions.
         values: the values it takes, in the scenario file's units (degrees for angles).
+        inertial: ``(link, parameter)`` for an axis of a link's inertial values, else None.
+        random: whether the values are random draws (drawn together with the other random
+            axes: one job per draw, not per combination).
     """
 
     key: str
     path: tuple[str | int, ...]
     values: tuple[Value, ...]
+    inertial: tuple[str, str] | None = None
+    random: bool = False
 
 
 @dataclass(frozen=True)
@@ -79,8 +98,10 @@ class Job:
         values: one value per axis, in the scenario file's units.
         data: the scenario's TOML tables with the values put in.
         relative_to: folder that relative paths in ``data`` are resolved against.
-        source: the base scenario file.
+        source: the base scenario file (the plan file when replaying).
         samples: samples per plan.
+        changes: new inertial values of links, ``{link: {parameter: value}}``.
+        replay: replay the plan ``source`` instead of planning ``data``.
     """
 
     index: int
@@ -89,6 +110,8 @@ class Job:
     relative_to: Path
     source: Path
     samples: int
+    changes: Changes = field(default_factory=dict)
+    replay: bool = False
 
 
 @dataclass(frozen=True)
@@ -101,6 +124,7 @@ class SweepSpec:
         axes: the varied values; their product is the set of jobs.
         samples: samples per plan (>= 2).
         source: the sweep file, if any.
+        replay: ``scenario_path`` is a plan file to replay in each changed model.
     """
 
     base: Mapping[str, Any]
@@ -108,6 +132,7 @@ class SweepSpec:
     axes: tuple[Axis, ...]
     samples: int = 201
     source: Path | None = None
+    replay: bool = False
 
     @classmethod
     def from_toml(cls, path: str | Path) -> SweepSpec:
@@ -139,14 +164,20 @@ class SweepSpec:
         for key in data:
             if key not in _SWEEP_KEYS:
                 raise UnknownNameError("key in the sweep file", key, _SWEEP_KEYS)
-        if not isinstance(data.get("scenario"), str):
+        replay = "plan" in data
+        name = data.get("plan" if replay else "scenario")
+        if not isinstance(name, str) or ("plan" in data and "scenario" in data):
             raise ScenarioError(
                 'the sweep file needs scenario = "FILE.toml" (relative to the sweep file, or '
-                "a shipped scenario name)"
+                'a shipped scenario name), or plan = "FILE.plan.json" to replay a plan'
             )
         folder = (relative_to or Path.cwd()).resolve()
-        scenario_path = _scenario_path(data["scenario"], folder)
-        base = read_toml(scenario_path, "scenario")
+        if replay:
+            scenario_path, base, urdf = plan_source(name, folder)
+        else:
+            scenario_path = _scenario_path(name, folder)
+            base = read_toml(scenario_path, "scenario")
+            urdf = None
         samples = data.get("samples", 201)
         if isinstance(samples, bool) or not isinstance(samples, int) or samples < 2:
             raise ScenarioError(f"samples must be an integer >= 2, got {excerpt(samples)}")
@@ -156,17 +187,19 @@ class SweepSpec:
             raise ScenarioError(
                 "the sweep file needs at least one [[axis]] table with key and values"
             )
-        axes = tuple(_axis(table, i, base) for i, table in enumerate(tables))
-        jobs = math.prod(len(axis.values) for axis in axes)
-        if jobs > MAX_SWEEP_JOBS:
-            raise InputLimitError("jobs of the sweep", jobs, 1, MAX_SWEEP_JOBS)
+        axes = tuple(_axis(table, i, base, replay) for i, table in enumerate(tables))
+        if any(axis.inertial is not None for axis in axes) and urdf is None:
+            urdf = scenario_urdf(base, scenario_path)
+        axes = _drawn(axes, tables, urdf)
+        spec = cls(base, scenario_path, axes, samples, source, replay)
+        if spec.size > MAX_SWEEP_JOBS:
+            raise InputLimitError("jobs of the sweep", spec.size, 1, MAX_SWEEP_JOBS)
         seen: set[tuple[str | int, ...]] = set()
         for axis in axes:
             if axis.path in seen:
                 raise ScenarioError(f"axis key {axis.key!r} is given twice")
             seen.add(axis.path)
-        spec = cls(base, scenario_path, axes, samples, source)
-        spec._check_values()
+        spec._check_values(urdf)
         return spec
 
     @property
@@ -176,21 +209,29 @@ class SweepSpec:
 
     @property
     def size(self) -> int:
-        """Number of jobs (the product of the axis lengths)."""
-        return math.prod(len(axis.values) for axis in self.axes)
+        """Number of jobs (the grid axes' product, times the draws of the random axes)."""
+        return len(self._combinations())
+
+    def _combinations(self) -> list[tuple[Value, ...]]:
+        """Axis values of every job: grid axes combined (last fastest), random ones drawn."""
+        grid: list[Sequence[Value]] = [a.values if not a.random else (0,) for a in self.axes]
+        draws = max((len(a.values) for a in self.axes if a.random), default=1)
+        out = []
+        for *values, draw in itertools.product(*grid, range(draws)):
+            pairs = zip(self.axes, values, strict=True)
+            out.append(tuple(a.values[int(draw)] if a.random else v for a, v in pairs))
+        return out
 
     def jobs(self) -> list[Job]:
-        """Every job, in index order (last axis fastest)."""
-        return [
-            self.job(index, values)
-            for index, values in enumerate(itertools.product(*(a.values for a in self.axes)))
-        ]
+        """Every job, in index order (last axis fastest, the draws of random axes last)."""
+        return [self.job(index, values) for index, values in enumerate(self._combinations())]
 
     def job(self, index: int, values: Sequence[Value]) -> Job:
         """The job that puts ``values`` (one per axis) into the base scenario."""
         data = copy.deepcopy(dict(self.base))
         for axis, value in zip(self.axes, values, strict=True):
-            _put(data, axis.path, value)
+            if axis.inertial is None:
+                _put(data, axis.path, value)
         return Job(
             index,
             tuple(values),
@@ -198,12 +239,21 @@ class SweepSpec:
             self.scenario_path.parent,
             self.scenario_path,
             self.samples,
+            changes=inertial_changes([a.inertial for a in self.axes], values),
+            replay=self.replay,
         )
 
-    def _check_values(self) -> None:
-        """Parse the scenario for every value of every axis (others at their base value)."""
+    def _check_values(self, urdf: str | None) -> None:
+        """Parse the scenario for every value of every axis (others at their base value).
+
+        Inertial values are put into the robot's URDF (``urdf``) and must be physical.
+        """
         for axis in self.axes:
             for value in axis.values:
+                if axis.inertial is not None:
+                    assert urdf is not None
+                    check_inertial_value(urdf, axis.key, axis.inertial, value)
+                    continue
                 data = copy.deepcopy(dict(self.base))
                 _put(data, axis.path, value)
                 try:
@@ -212,6 +262,20 @@ class SweepSpec:
                     )
                 except FreeFloatError as exc:
                     raise ScenarioError(f"axis {axis.key!r} = {value!r}: {exc}") from None
+
+
+def _drawn(axes: tuple[Axis, ...], tables: list[Any], urdf: str | None) -> tuple[Axis, ...]:
+    """The axes with the random ones' values drawn (together, physical bodies only)."""
+    chosen = [i for i, axis in enumerate(axes) if axis.random]
+    if not chosen:
+        return axes
+    drawn = random_values(
+        [(axes[i].key, tables[i]["values"], axes[i].inertial) for i in chosen], urdf
+    )
+    out = list(axes)
+    for i, values in zip(chosen, drawn, strict=True):
+        out[i] = replace(axes[i], values=values)
+    return tuple(out)
 
 
 def _scenario_path(name: str, folder: Path) -> Path:
@@ -275,7 +339,7 @@ def _put(data: Any, path: Sequence[str | int], value: Value) -> None:
     node[path[-1]] = value
 
 
-def _axis(table: Any, position: int, base: Mapping[str, Any]) -> Axis:
+def _axis(table: Any, position: int, base: Mapping[str, Any], replay: bool = False) -> Axis:
     where = f"[[axis]] {position + 1}"
     if not isinstance(table, Mapping):
         raise ScenarioError(f"{where} must be a table with key and values")
@@ -285,12 +349,22 @@ def _axis(table: Any, position: int, base: Mapping[str, Any]) -> Axis:
     key = table.get("key")
     if not isinstance(key, str):
         raise ScenarioError(f'{where} needs key = "dotted.key" (e.g. "goal.joints.q2")')
-    path = _split(key, base)
-    current = _leaf(base, path)
+    inertial = inertial_key(key, replay)
+    if inertial is None and replay:
+        raise ScenarioError(
+            f"axis {key!r}: a plan replay sweeps inertial keys (robot.links.LINK.mass, "
+            "robot.links.LINK.com.0, robot.links.LINK.inertia.ixx, payload.mass ...)"
+        )
+    path = (key,) if inertial is not None else _split(key, base)
+    current = 0.0 if inertial is not None else _leaf(base, path)
     if "values" not in table:
         raise ScenarioError(f"axis {key!r} needs values = [...] or {{ start, stop, num }}")
     raw = table["values"]
     values: tuple[Value, ...]
+    if is_random(raw):
+        if not isinstance(current, (int, float)) or isinstance(current, bool):
+            raise ScenarioError(f"axis {key!r}: random values need a number at that key")
+        return Axis(key, path, (), inertial, random=True)  # drawn with the other random axes
     if isinstance(raw, Mapping):
         values = _range(raw, key)
     elif isinstance(raw, list) and raw:
@@ -317,7 +391,9 @@ def _axis(table: Any, position: int, base: Mapping[str, Any]) -> Axis:
             )
     if len(set(values)) != len(values):
         raise ScenarioError(f"axis {key!r} repeats a value")
-    return Axis(key, path, values)
+    if inertial is not None:
+        values = tuple(float(v) for v in values)
+    return Axis(key, path, values, inertial)
 
 
 def _range(raw: Mapping[str, Any], key: str) -> tuple[float, ...]:

@@ -7,8 +7,8 @@ start and goal attitudes, recomputes each record with the functions that wrote i
 naming the first field that disagrees beyond its tolerance. The order is that of dependence:
 ``robot``, ``path.coefficients``, ``free_parameters``, ``request``, ``base``, ``feasibility``,
 ``samples`` (t, q, qd, qdd, base pose, end effector, base rate, torques), ``solver`` (residual,
-integration error, roots, freedom); the verification figures are compared after the checks
-have run (:func:`compare_verification`).
+integration error, roots, freedom), ``objective``, ``robustness`` (when present); the
+verification figures are compared after the checks have run (:func:`compare_verification`).
 
 Tolerances. The recomputation runs the same deterministic code on the same numbers (the
 coefficients round-trip through JSON exactly), so a genuine plan disagrees with it by
@@ -42,7 +42,9 @@ from ..physics.attitude import geodesic_angle, quat_from_zyx
 from ..plans.format import Plan, Verification
 from ..plans.sampling import base_report, feasibility_report, sample_solution
 from ..problem.build import build_problem
+from ..problem.inertial_sensitivity import attitude_sensitivity
 from ..problem.residual import Problem
+from ..problem.uncertainty import Uncertainty, spread
 from ..robot.model import Robot
 from .objective import check_objective
 
@@ -63,6 +65,8 @@ RELATIVE_TOLERANCE = 1e-10
 BOUNDS_TOLERANCE_DEG = 1e-6
 #: Allowed disagreement of a root's attitude residual (rad), plus the integration estimate.
 RESIDUAL_TOLERANCE = 1e-9
+#: Allowed disagreement of the robustness record's figures, relative to the figure.
+ROBUSTNESS_TOLERANCE = 1e-8
 #: A verification figure agrees when within this fraction of its check's tolerance (plus twice
 #: the recomputed error estimate).
 FIGURE_FRACTION = 1e-3
@@ -383,7 +387,28 @@ def check_plan_numbers(plan: Plan, robot: Robot) -> Problem:
                 f"{len(plan.coefficients.get(name, [0] * 6)) - 6} free coefficients there",
             )
     check_objective(plan, problem, beta)
+    _check_robustness(plan, problem, beta)
     return problem
+
+
+def _check_robustness(plan: Plan, problem: Problem, beta: np.ndarray) -> None:
+    """Recompute the ``robustness`` record (format 4, optional) for its stated uncertainty.
+
+    The figures come from the exact sensitivity on the plan's grid and, for the worst case, a
+    vertex search; both are deterministic, so :data:`ROBUSTNESS_TOLERANCE` of the figure is
+    rounding with a wide margin.
+    """
+    record = plan.robustness
+    if record is None:
+        return
+    try:
+        uncertainty = Uncertainty(record.mass_fraction, record.com_m, record.inertia_fraction)
+    except FreeFloatError as exc:
+        raise PlanMismatchError("robustness", math.inf, 0.0, message=str(exc)) from None
+    found = spread(attitude_sensitivity(problem, beta), uncertainty)
+    for key, value in (("rms_rad", found.rms), ("worst_rad", found.worst)):
+        tolerance = ROBUSTNESS_TOLERANCE * value + 1e-15
+        _compare(f"robustness.{key}", getattr(record, key), value, tolerance, "rad")
 
 
 def compare_verification(stored: Verification, recomputed: Verification) -> None:

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..plans.format import Plan
 from ..problem.scenario import Scenario
+from .robustness import robustness_line
 
 __all__ = ["cartesian_report", "clearance_line", "robot_label", "summary"]
 
@@ -61,6 +62,8 @@ def summary(
     lines = [f"freefloat plan: {robot_label or Path(p.robot.urdf).name}, T = {p.duration:g} s"]
     lines += _attitude_table(p)
     lines.append(f"  attitude error  {p.base.attitude_error_rad:.3e} rad")
+    if p.robustness is not None:
+        lines.append(robustness_line(p.robustness))
     lines += list(extra_lines)
     v = p.verification
     if v.checks:

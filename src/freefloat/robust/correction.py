@@ -1,0 +1,140 @@
+"""A correcting motion: back to the same joints, turning the spacecraft to its goal.
+
+After a plan has run, the spacecraft is measured at an attitude off its goal (its mass
+properties were not what the model said). A second motion from the plan's goal joints back to
+the same joints (paper's example 5.2) turns it, because a closed loop in joint space turns the
+base by the momentum map's curvature over the area it encloses. Its first-order turn is zero
+(the joints return), so the quintic path ``beta = 0`` is a singular point of ``h``: the
+correction starts from a loop chosen with the quadratic model of the turn instead,
+
+    turn(beta) ~ 1/2 [beta^T H_k beta]_k,   H_k = d^2 h_k / d beta^2 at beta = 0,
+
+(``H`` from central differences of the exact Jacobian): the loop along the top eigenvector of
+``sum_k a_k H_k`` (``a``: the unit direction of the turn wanted), scaled to the angle wanted.
+From there the planner's continuation reaches the goal attitude within the plan's limits and
+clearance, and the result is sampled and verified like any plan.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..errors import SolverError
+from ..physics.attitude import geodesic_angle, quat_conjugate, quat_log, quat_multiply
+from ..pipeline import plan_from_solution
+from ..plans.format import Plan
+from ..problem.build import build_problem
+from ..problem.constraints import Constraint
+from ..problem.residual import Problem
+from ..robot.model import Robot
+from ..solvers.dispatch import solve
+from ..solvers.options import SolveOptions
+from ..solvers.restore import broken_constraint
+from ..verify.checks import plan_constraints
+
+__all__ = ["FREEDOM", "correcting_plan", "loop_start"]
+
+#: Free coefficients per joint of the correcting motion.
+FREEDOM = 2
+#: Step of the central differences of the Jacobian that give ``H`` (rad of beta).
+_STEP = 1e-3
+
+
+def _curvature(problem: Problem) -> np.ndarray:
+    """(equations, n_free, n_free) symmetric ``H`` of the quadratic turn at ``beta = 0``."""
+    n = problem.n_free
+    out = np.empty((problem.n_equations, n, n))
+    for i in range(n):
+        e = np.zeros(n)
+        e[i] = _STEP
+        plus = problem.jacobian(e)
+        minus = problem.jacobian(-e)
+        out[:, :, i] = (plus - minus) / (2.0 * _STEP)
+    return 0.5 * (out + out.transpose(0, 2, 1))
+
+
+def loop_start(
+    problem: Problem, constraints: Sequence[Constraint], turn: np.ndarray
+) -> np.ndarray | None:
+    """A closed loop whose quadratic-model turn is ``turn`` (rad, equations' frame).
+
+    Halved while it breaks a constraint (at most 20 times); None when no loop turns that way.
+    """
+    hessian = _curvature(problem)
+    size = float(np.linalg.norm(turn))
+    direction = turn / size
+    values, vectors = np.linalg.eigh(np.einsum("k,kij->ij", direction, hessian))
+    if values[-1] <= 0.0:
+        return None
+    beta = math.sqrt(2.0 * size / values[-1]) * vectors[:, -1]
+    for _ in range(20):
+        if not broken_constraint(problem, constraints, beta):
+            return np.asarray(beta)
+        beta = 0.5 * beta
+    return None
+
+
+def correcting_plan(
+    plan: Plan,
+    robot: Robot,
+    measured_quaternion: np.ndarray,
+    options: SolveOptions | None = None,
+) -> Plan:
+    """The verified motion from the plan's goal joints back to them, to the goal attitude.
+
+    It turns the spacecraft from ``measured_quaternion`` (``[x, y, z, w]``) to the plan's goal
+    attitude, and takes the plan's duration, samples and constraints (joint limits, clearance
+    when the plan was kept clear).
+
+    Raises:
+        SolverError: one motion cannot turn the spacecraft that far (the message gives the
+            angle asked and how far the search got).
+    """
+    options = options or SolveOptions()
+    goal_joints = np.asarray(plan.request.goal_joints, dtype=float)
+    goal = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
+    measured = np.asarray(measured_quaternion, dtype=float)
+    measured = measured / np.linalg.norm(measured)
+    angle = geodesic_angle(measured, goal)
+    problem = build_problem(
+        robot,
+        goal_joints,
+        goal_joints,
+        measured,
+        goal,
+        plan.duration,
+        extra=[FREEDOM] * robot.n,
+        check_bounds=False,
+    )
+    constraints = plan_constraints(plan, robot)
+    # the loop turns the base frame at the end: the turn wanted, in that frame (planar: yaw)
+    turn = quat_log(quat_multiply(quat_conjugate(measured), goal))
+    if problem.planar:
+        turn = -problem.residual(np.zeros(problem.n_free))
+    start = loop_start(problem, constraints, turn) if angle > 0.0 else None
+    try:
+        solution = solve(problem, options, constraints, start)
+    except SolverError as exc:
+        said = "continued from where the search with less freedom stopped"  # the solver's words
+        tried = [t.replace(said, "started from the quadratic-model loop") for t in exc.tried]
+        raise SolverError(
+            f"one correcting motion cannot turn the spacecraft back by {math.degrees(angle):.4g}"
+            f" deg within the plan's limits ({exc.headline})",
+            exc.best_residual,
+            tried,
+            per_axis=exc.per_axis,
+            stopped_by=exc.stopped_by,
+            reached_fraction=exc.reached_fraction,
+        ) from None
+    problem = problem.with_steps(solution.steps)
+    return plan_from_solution(
+        problem,
+        solution,
+        samples=len(plan.samples.t),
+        tolerance=options.tolerance,
+        constraints=constraints,
+        safety=plan.safety,
+    )

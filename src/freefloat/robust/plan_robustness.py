@@ -1,0 +1,90 @@
+"""A plan's robustness to its mass properties: its record, and the commands' library side.
+
+:func:`plan_spread` is the first-order final attitude error of a plan under an uncertainty
+(:mod:`freefloat.problem.uncertainty`); :func:`with_robustness` puts that figure into the plan
+(its ``robustness`` record, format ``freefloat.plan/4``); :func:`plan_sensitivity` and
+:func:`correct_plan` take a plan file, as the commands ``sensitivity`` and ``correct`` do.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import PlanFileError
+from ..physics.attitude import geodesic_angle, quat_from_zyx
+from ..plans.format import FORMAT, Plan, RobustnessReport
+from ..problem.inertial_sensitivity import attitude_sensitivity
+from ..problem.uncertainty import DEFAULT_UNCERTAINTY, AttitudeSpread, Uncertainty, spread
+from ..robot.model import Robot, load_robot
+from ..verify.recompute import problem_from_plan
+from .correction import correcting_plan
+
+__all__ = ["correct_plan", "plan_robot", "plan_sensitivity", "plan_spread", "with_robustness"]
+
+
+def plan_robot(plan: Plan) -> Robot:
+    """The plan's robot, loaded from its URDF; its joints must be the plan's.
+
+    Raises:
+        PlanFileError: the URDF's joints are not the plan's.
+    """
+    robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+    if robot.joint_names != list(plan.robot.joints):
+        raise PlanFileError(
+            f"the plan's joints {plan.robot.joints} do not match the URDF's {robot.joint_names}"
+        )
+    return robot
+
+
+def plan_spread(
+    plan: Plan, robot: Robot, uncertainty: Uncertainty = DEFAULT_UNCERTAINTY
+) -> AttitudeSpread:
+    """The plan's first-order final attitude error under ``uncertainty`` (rad).
+
+    The sensitivity is exact along the plan's joint paths, on its own integration grid.
+    """
+    problem, beta = problem_from_plan(plan, robot)
+    return spread(attitude_sensitivity(problem, beta), uncertainty)
+
+
+def with_robustness(
+    plan: Plan, robot: Robot, uncertainty: Uncertainty = DEFAULT_UNCERTAINTY
+) -> Plan:
+    """The plan with its ``robustness`` record (format ``freefloat.plan/4``)."""
+    found = plan_spread(plan, robot, uncertainty)
+    record = RobustnessReport(
+        mass_fraction=uncertainty.mass_fraction,
+        com_m=uncertainty.com_m,
+        inertia_fraction=uncertainty.inertia_fraction,
+        rms_rad=found.rms,
+        worst_rad=found.worst,
+    )
+    return replace(plan, robustness=record, format=FORMAT)
+
+
+def plan_sensitivity(path: str | Path, uncertainty: Uncertainty) -> tuple[Plan, AttitudeSpread]:
+    """The plan file at ``path`` and its first-order attitude error under ``uncertainty``."""
+    plan = Plan.load(path)
+    return plan, plan_spread(plan, plan_robot(plan), uncertainty)
+
+
+def correct_plan(path: str | Path, measured_zyx_deg: Sequence[float]) -> tuple[Plan, float]:
+    """The correcting plan for the plan file at ``path`` from a measured attitude.
+
+    Args:
+        path: the plan that ran.
+        measured_zyx_deg: the spacecraft's measured yaw, pitch, roll (deg).
+
+    Returns:
+        The correcting plan and the angle it turns the spacecraft back by (rad).
+    """
+    plan = Plan.load(path)
+    yaw, pitch, roll = (np.radians(float(a)) for a in measured_zyx_deg)
+    measured = quat_from_zyx(yaw, pitch, roll)
+    goal = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
+    result = correcting_plan(plan, plan_robot(plan), measured)
+    return result, geodesic_angle(measured, goal)

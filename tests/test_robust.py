@@ -1,0 +1,386 @@
+"""Robustness to wrong mass properties: sensitivity, perturbed replays, correction.
+
+Truths used: central finite differences of an independent integrator (RK4 replays in models
+whose URDF was changed and re-parsed by Pinocchio) for the exact sensitivity, brute-force
+vertex enumeration for the worst case, the Monte Carlo replays for the first-order spread, and
+a replay in the perturbed model for the correction.
+"""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import freefloat as ff
+from freefloat.cli import main
+from freefloat.errors import (
+    InfeasibleError,
+    InputError,
+    ScenarioError,
+    SolverError,
+    UnknownNameError,
+)
+from freefloat.physics.attitude import quat_from_zyx, zyx_from_quat
+from freefloat.problem.inertial_sensitivity import attitude_sensitivity as path_sensitivity
+from freefloat.problem.inertial_sensitivity import body_parameters
+from freefloat.problem.scenario import Scenario
+from freefloat.problem.uncertainty import Uncertainty, spread, worst_case
+from freefloat.robot.model import load_robot, robots_dir
+from freefloat.robust import perturbed_robot, replay_attitude
+from freefloat.robust.correction import correcting_plan
+from freefloat.robust.inertial import link_inertials, robot_text, with_inertials
+from freefloat.robust.plan_robustness import plan_spread, with_robustness
+from freefloat.sweep import SweepSpec
+from freefloat.verify.recompute import problem_from_plan
+
+SCENARIOS = robots_dir() / "scenarios"
+
+
+def _planned(name: str, tmp: Path) -> tuple[ff.Plan, Path]:
+    result = ff.plan(Scenario.from_toml(SCENARIOS / f"{name}.toml"), samples=41)
+    return result, result.save(tmp / f"{name}.plan.json")
+
+
+@pytest.fixture(scope="module")
+def worked(tmp_path_factory):
+    plan, path = _planned("worked_example", tmp_path_factory.mktemp("we"))
+    return plan, path, load_robot(plan.robot.urdf, plan.robot.end_effector)
+
+
+@pytest.fixture(scope="module")
+def panda(tmp_path_factory):
+    plan, path = _planned("panda_servicer", tmp_path_factory.mktemp("panda"))
+    return plan, path, load_robot(plan.robot.urdf, plan.robot.end_effector)
+
+
+def attitude_sensitivity(plan, robot):
+    return path_sensitivity(*problem_from_plan(plan, robot))
+
+
+def _reparsed(robot, changes, text=None):
+    """The robot with changed inertial values, parsed again by Pinocchio from the URDF."""
+    source = robot_text(robot) if text is None else text
+    return load_robot(robot.urdf, robot.end_effector, text=with_inertials(source, changes))
+
+
+def _replayed_error(plan, robot, link, key, value):
+    return replay_attitude(plan, _reparsed(robot, {link: {key: value}})).error_rotvec
+
+
+def test_changing_a_loaded_model_equals_parsing_the_changed_urdf(tmp_path):
+    robot = load_robot(robots_dir() / "panda_servicer.urdf")
+    text = robot_text(robot).replace(  # an inertia frame turned against its link
+        '<origin xyz="-0.003141 -0.02872 0.003495" rpy="0.0 -0.0 0.0"/>',
+        '<origin xyz="-0.003141 -0.02872 0.003495" rpy="0.3 -0.2 0.7"/>',
+    )
+    assert "0.3 -0.2 0.7" in text
+    path = tmp_path / "tilted.urdf"
+    path.write_text(text)
+    robot = load_robot(path)
+    changes = {
+        "spacecraft": {"mass": 101.0, "com.1": 0.02, "inertia.ixy": 0.3},
+        "panda_link0": {"mass": 0.7, "com.2": 0.06, "inertia.izz": 0.005},  # merged into the base
+        "panda_link2": {"mass": 0.9, "com.0": 0.01, "inertia.ixz": 0.002},
+        "panda_hand": {"mass": 0.8, "inertia.iyy": 0.0026},  # merged into link 7
+    }
+    fast, parsed = perturbed_robot(robot, changes, text), _reparsed(robot, changes, text)
+    for a, b in zip(fast.model.inertias, parsed.model.inertias, strict=True):
+        assert np.abs(a.toDynamicParameters() - b.toDynamicParameters()).max() < 1e-12
+    assert fast.total_mass == pytest.approx(robot.total_mass + 1.0 + 0.070231 + 0.253074 + 0.07)
+
+
+@pytest.mark.parametrize(
+    ("fixture", "link", "body", "key", "column"),
+    [
+        ("worked", "base", 0, "inertia.izz", 6),
+        ("worked", "link2", 2, "mass", 0),
+        ("worked", "link1", 1, "com.0", 1),
+        ("panda", "panda_link4", 4, "inertia.izz", 6),
+        ("panda", "panda_link4", 4, "com.0", 1),
+        ("panda", "panda_link2", 2, "mass", 0),
+        ("panda", "spacecraft", 0, "inertia.ixy", 7),
+        ("panda", "spacecraft", 0, "inertia.ixx", 4),
+    ],
+)
+def test_sensitivity_matches_finite_differences_of_rk4_replays(
+    request, fixture, link, body, key, column
+):
+    plan, _, robot = request.getfixturevalue(fixture)
+    sens = attitude_sensitivity(plan, robot)
+    link_value = link_inertials(robot_text(robot))[link].value(key)
+    scale = 0.05 if key.startswith("com") else max(abs(link_value), 0.1)
+    estimates = []
+    for h in (1e-3 * scale, 5e-4 * scale):  # step control: Richardson on two steps
+        plus = _replayed_error(plan, robot, link, key, link_value + h)
+        minus = _replayed_error(plan, robot, link, key, link_value - h)
+        estimates.append((plus - minus) / (2 * h))
+    fd = (4 * estimates[1] - estimates[0]) / 3
+    exact = sens.jacobian[:, body, column]
+    # a link joined by fixed joints moves its body's centre of mass: only moments map 1:1
+    assert np.linalg.norm(fd - exact) <= 1e-5 * np.linalg.norm(exact) + 1e-12
+    assert np.linalg.norm(exact) > 0.0 or key == "inertia.ixy"
+
+
+def test_worst_case_equals_brute_force_vertex_enumeration():
+    rng = np.random.default_rng(3)
+    for n in (5, 15):
+        s, u = rng.normal(size=(3, n)), rng.uniform(0.2, 1.0, n)
+        brute = max(
+            np.linalg.norm(s @ (np.array(v) * u)) for v in itertools.product((1, -1), repeat=n)
+        )
+        assert worst_case(s, u) == pytest.approx(brute, rel=1e-12)
+
+
+def _draws(robot, link, count, fraction, seed):
+    """Models with the link's three moments each off by a normal fraction (1-sigma)."""
+    nominal = link_inertials(robot_text(robot))[link]
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        changes = {
+            f"inertia.{k}": nominal.value(f"inertia.{k}") * (1 + fraction * rng.normal())
+            for k in ("ixx", "iyy", "izz")
+        }
+        yield perturbed_robot(robot, {link: changes})
+
+
+@pytest.mark.parametrize(("fixture", "link"), [("worked", "base"), ("panda", "spacecraft")])
+def test_first_order_spread_agrees_with_monte_carlo_replays(request, fixture, link):
+    plan, _, robot = request.getfixturevalue(fixture)
+    sens = attitude_sensitivity(plan, robot)
+    replayed, predicted = [], []
+    for model in _draws(robot, link, 300, 0.01, seed=1):
+        replayed.append(replay_attitude(plan, model).error_rotvec)
+        predicted.append(sens.first_order(body_parameters(model) - sens.nominal))
+    replayed, predicted = np.array(replayed), np.array(predicted)
+    # the same draws: first order against the replays (linearity at a 1 % size)
+    mean_mc = np.linalg.norm(replayed, axis=1).mean()
+    assert np.linalg.norm(predicted, axis=1).mean() == pytest.approx(mean_mc, rel=0.05)
+    # the analytic covariance of a 1 % uncertainty of those three moments, against the draws'
+    only = Uncertainty(mass_fraction=0.0, com_m=0.0, inertia_fraction=0.01)
+    sizes = only.sizes(sens.nominal)
+    sizes[:, 7:] = 0.0
+    sizes[1:] = 0.0
+    scaled = (sens.jacobian * sizes[None]).reshape(3, -1)
+    cov_mc = np.cov(replayed.T)
+    assert np.linalg.norm(scaled @ scaled.T - cov_mc) <= 0.2 * np.linalg.norm(cov_mc)
+
+
+def test_spread_figures_add_up(panda):
+    plan, _, robot = panda
+    result = spread(attitude_sensitivity(plan, robot), Uncertainty(0.05, 0.01, 0.1))
+    assert result.rms == pytest.approx(math.sqrt(sum(b.rms**2 for b in result.bodies)))
+    assert result.worst >= max(max(b.mass, b.com, b.inertia) for b in result.bodies)
+    assert result.worst >= result.rms * 0.5
+
+
+def test_correction_reaches_the_goal_and_shrinks_a_five_percent_error(worked):
+    plan, _, robot = worked
+    true = perturbed_robot(robot, {"base": {"inertia.izz": 66.67 * 1.05}})
+    before = replay_attitude(plan, true)
+    assert before.error_rad > 1e-3
+    corr = correcting_plan(plan, robot, before.quaternion)
+    assert corr.request.start_joints == corr.request.goal_joints == plan.request.goal_joints
+    nominal = replay_attitude(corr, robot)  # RK4, not the planner's Magnus scheme
+    assert nominal.error_rad <= 1e-9 + nominal.estimate_rad
+    after = replay_attitude(corr, true, start_quaternion=before.quaternion)
+    assert after.error_rad <= 0.1 * before.error_rad
+
+
+def test_a_correction_beyond_one_motion_is_refused_in_one_line(worked):
+    plan, _, robot = worked
+    with pytest.raises(SolverError, match="cannot turn the spacecraft back by 179 deg") as info:
+        correcting_plan(plan, robot, quat_from_zyx(math.radians(179.0)))
+    assert "started from the quadratic-model loop" in str(info.value)
+    assert "\n" not in str(info.value)
+
+
+def test_a_correction_no_motion_can_make_is_refused(worked):
+    plan, _, robot = worked
+    measured = quat_from_zyx(0.0, math.radians(2.0), 0.0)  # a planar base cannot pitch
+    with pytest.raises(InfeasibleError, match="this robot is planar"):
+        correcting_plan(plan, robot, measured)
+
+
+def test_unphysical_or_unknown_inertial_values_are_refused():
+    text = (robots_dir() / "planar_2dof.urdf").read_text()
+    with pytest.raises(InputError, match="mass must be a finite number > 0"):
+        with_inertials(text, {"link1": {"mass": -1.0}})
+    with pytest.raises(InputError, match="triangle inequality"):
+        with_inertials(text, {"link1": {"inertia.izz": 10.0}})
+    with pytest.raises(UnknownNameError, match="link2"):
+        with_inertials(text, {"link9": {"mass": 1.0}})
+    changed = link_inertials(with_inertials(text, {"link1": {"com.1": 0.25}}))
+    assert changed["link1"].com[1] == 0.25
+    assert changed["link2"] == link_inertials(text)["link2"]
+
+
+def _replay_sweep(tmp_path: Path, plan_path: Path, body: str) -> Path:
+    path = tmp_path / "mc.toml"
+    path.write_text(f'plan = "{plan_path}"\n' + body)
+    return path
+
+
+def test_random_draws_are_physical_reproducible_and_drawn_together(tmp_path, worked):
+    _, plan_path, _ = worked
+    body = (
+        '[[axis]]\nkey = "robot.links.link2.mass"\n'
+        "values = { uniform = [-30.0, 60.0], samples = 40, seed = 4 }\n"
+        '[[axis]]\nkey = "robot.links.base.inertia.izz"\n'
+        "values = { normal = [66.67, 1.0], samples = 40, seed = 5 }\n"
+    )
+    spec = SweepSpec.from_toml(_replay_sweep(tmp_path, plan_path, body))
+    again = SweepSpec.from_toml(_replay_sweep(tmp_path, plan_path, body))
+    assert spec.size == 40 and spec.axes == again.axes
+    masses = [job.changes["link2"]["mass"] for job in spec.jobs()]
+    assert min(masses) > 0.0 and max(masses) <= 60.0  # negative masses drawn again
+    bad = body.replace("samples = 40, seed = 5", "samples = 30, seed = 5")
+    with pytest.raises(ScenarioError, match="same samples"):
+        SweepSpec.from_toml(_replay_sweep(tmp_path, plan_path, bad))
+    with pytest.raises(ScenarioError, match="inertial keys"):
+        SweepSpec.from_toml(
+            _replay_sweep(tmp_path, plan_path, '[[axis]]\nkey = "duration"\nvalues = [1.0]\n')
+        )
+
+
+def test_replay_sweep_rows_are_the_replays_locally_and_on_dask(tmp_path, worked):
+    plan, plan_path, robot = worked
+    body = (
+        '[[axis]]\nkey = "robot.links.base.inertia.izz"\n'
+        "values = { normal = [66.67, 3.0], samples = 6, seed = 1 }\n"
+    )
+    spec = SweepSpec.from_toml(_replay_sweep(tmp_path, plan_path, body))
+    local = ff.sweep(spec, workers=2, output=tmp_path / "local.csv", progress=False)
+    for row in local:
+        direct = _replayed_error(plan, robot, "base", "inertia.izz", row.values[0])
+        assert row.status == "replayed"
+        assert [row.error_x_rad, row.error_y_rad, row.error_z_rad] == direct.tolist()
+    resumed = ff.sweep(spec, workers=1, output=tmp_path / "local.csv", progress=False)
+    assert resumed == local  # every row read back from the file, none run again
+    distributed = pytest.importorskip("distributed")
+    with (
+        distributed.LocalCluster(
+            processes=True,
+            n_workers=2,
+            threads_per_worker=1,
+            host="127.0.0.1",
+            dashboard_address=None,
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        remote = ff.sweep(spec, client=client, output=tmp_path / "dask.csv", progress=False)
+    assert [r.without_timings() for r in remote] == [r.without_timings() for r in local]
+
+
+def test_cli_sensitivity_and_correct(tmp_path, worked, capsys):
+    plan, plan_path, robot = worked
+    assert main(["sensitivity", str(plan_path), "--inertia-pct", "5"]) == 0
+    out = capsys.readouterr().out
+    assert "inertia 5 %" in out and "combined: RMS" in out and "link2" in out
+    assert main(["sensitivity", str(plan_path), "--com-mm", "-3"]) == 2
+    assert "--com-mm" in capsys.readouterr().err
+    true = perturbed_robot(robot, {"base": {"inertia.izz": 66.67 * 1.05}})
+    measured = np.degrees(zyx_from_quat(replay_attitude(plan, true).quaternion))
+    output = tmp_path / "c.json"
+    argv = ["correct", str(plan_path), "--base-zyx-deg", *map(str, measured), "-o", str(output)]
+    assert main(argv) == 0
+    assert ff.Plan.load(output).base.attitude_error_rad <= 1e-9
+    assert main(["correct", str(plan_path), "--base-zyx-deg", "0", "3", "0"]) == 2
+    assert "this robot is planar" in capsys.readouterr().err
+
+
+def test_the_robustness_record_is_recomputed_by_verify_and_old_plans_load(tmp_path, worked):
+    plan, _, robot = worked
+    recorded = with_robustness(plan, robot)
+    found = plan_spread(plan, robot)
+    assert recorded.robustness.rms_rad == found.rms and recorded.format == "freefloat.plan/4"
+    path = recorded.save(tmp_path / "r.json")
+    assert main(["verify", str(path)]) == 0
+    data = json.loads(path.read_text())
+    data["robustness"]["worst_rad"] *= 1.001
+    tampered = tmp_path / "t.json"
+    tampered.write_text(json.dumps(data))
+    assert main(["verify", str(tampered)]) == 2
+    older = recorded.to_dict()
+    older["format"] = "freefloat.plan/3"
+    del older["robustness"]
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps(older))
+    loaded = ff.Plan.load(old)
+    assert loaded.format == "freefloat.plan/3" and loaded.robustness is None
+    assert json.loads(loaded.to_json())["format"] == "freefloat.plan/3"
+    older["robustness"] = data["robustness"]  # a /3 file cannot hold the record
+    old.write_text(json.dumps(older))
+    assert main(["verify", str(old)]) == 2
+
+
+def test_an_inertial_axis_of_a_scenario_sweep_plans_in_the_changed_model(tmp_path):
+    from dataclasses import replace as with_field
+
+    from freefloat.sweep import run_job
+
+    path = tmp_path / "s.toml"
+    path.write_text(
+        'scenario = "worked_example"\nsamples = 21\n[[axis]]\n'
+        'key = "robot.links.link2.mass"\nvalues = [30.0, 36.0]\n'
+    )
+    spec = SweepSpec.from_toml(path)
+    nominal, heavier = (run_job(job) for job in spec.jobs())
+    scenario = Scenario.from_toml(SCENARIOS / "worked_example.toml")
+    base = ff.plan(scenario, samples=21)
+    changed = with_field(scenario, robot=_reparsed(scenario.robot, {"link2": {"mass": 36.0}}))
+    direct = ff.plan(changed, samples=21)
+    assert nominal.path_length == pytest.approx(base.solver.solutions[0].path_length, rel=1e-12)
+    assert heavier.path_length == pytest.approx(direct.solver.solutions[0].path_length, rel=1e-9)
+    assert heavier.path_length != pytest.approx(nominal.path_length, rel=1e-3)
+
+
+def test_cli_replay_sweep_prints_the_error_distribution(tmp_path, worked, capsys):
+    from freefloat.robust import error_distribution
+
+    _, plan_path, _ = worked
+    body = (
+        '[[axis]]\nkey = "robot.links.base.inertia.izz"\n'
+        "values = { uniform = [60.0, 70.0], samples = 4, seed = 2 }\n"
+    )
+    path = _replay_sweep(tmp_path, plan_path, body)
+    out = tmp_path / "mc.csv"
+    assert main(["sweep", str(path), "-o", str(out), "--workers", "1"]) == 0
+    printed = capsys.readouterr().out
+    rows = list(csv.DictReader(out.open()))
+    vectors = np.array([[float(r[f"error_{a}_rad"]) for a in "xyz"] for r in rows])
+    found = error_distribution(vectors)
+    assert found.count == 4 and found.largest == max(float(r["attitude_error_rad"]) for r in rows)
+    assert f"mean {math.degrees(found.mean):.4g}" in printed and "replayed 4 of 4" in printed
+    assert main(["sweep", str(path), "-o", str(out), "--plots", str(tmp_path / "p")]) == 2
+
+
+def test_a_payload_axis_replays_the_plan_with_the_payload_changed(tmp_path):
+    from freefloat.robot.payload import PAYLOAD_LINK
+    from freefloat.sweep.replay import run_replay_job
+
+    text = (SCENARIOS / "worked_example.toml").read_text().replace('robot = "planar_2dof"', "")
+    urdf = robots_dir() / "planar_2dof.urdf"
+    scenario_path = tmp_path / "held.toml"
+    scenario_path.write_text(
+        f'robot = "{urdf}"\n{text}\n[payload]\nmass = 20.0\ncom_xyz = [0.3, 0.0, 0.0]\n'
+        "inertia = [0.5, 0.5, 0.5, 0.0, 0.0, 0.0]\n"
+    )
+    plan = ff.plan(Scenario.from_toml(scenario_path), samples=21)
+    plan_path = plan.save(tmp_path / "held.plan.json")
+    body = '[[axis]]\nkey = "payload.mass"\nvalues = [18.0, 22.0]\n'
+    spec = SweepSpec.from_toml(_replay_sweep(tmp_path, plan_path, body))
+    robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+    for job in spec.jobs():
+        row = run_replay_job(job)
+        mass = job.changes["payload"]["mass"]
+        direct = replay_attitude(plan, _reparsed(robot, {PAYLOAD_LINK: {"mass": mass}}))
+        assert [row.error_x_rad, row.error_y_rad, row.error_z_rad] == pytest.approx(
+            direct.error_rotvec.tolist(), abs=1e-12
+        )
+        assert row.attitude_error_rad > 1e-4  # 2 kg at the tip turns the base measurably
