@@ -6,8 +6,9 @@ wrong with a document as one line per problem, naming the field by its path (for
 and raises :class:`~freefloat.errors.PlanFileError` naming the first bad field;
 :func:`load_plan_file` reads a plan file once, checks it against the schema and the limits of
 :mod:`freefloat.plans.limits`, and returns the plan. The schema
-describes ``freefloat.plan/4`` (the URDF copy and the records it requires, the optional robustness record), ``/3`` (the
-objective record it requires) and ``/2``; ``/1`` files are left to :meth:`Plan.load`.
+describes ``freefloat.plan/4`` (the URDF copy and the records it requires, the optional
+robustness record), ``/3`` (the objective record it requires) and ``/2``; ``/1`` files are left
+to :meth:`Plan.load`.
 
 The names of plug-ins in the schemas (objectives, recorded constraints) come from their
 registries: :func:`schema` fills them in from the live registries (so a plug-in registered at
