@@ -72,3 +72,21 @@ def worked_problem(scenario: ff.Scenario, extra: dict[str, int]) -> ff.Problem:
 
 def deg(x: float) -> float:
     return math.radians(x)
+
+
+def as_older_format(doc: dict, fmt: str = "freefloat.plan/3") -> dict:
+    """A plan document as a file of an older format would hold it: without every field of
+    format 4 (end effectors, the URDF copy, constraint records, objective parameters, the
+    safety note, the robustness record), and without the objective record for /2."""
+    doc["format"] = fmt
+    for key in ("urdf_text", "urdf_sha256", "end_effectors"):
+        doc["robot"].pop(key, None)
+    doc["samples"].pop("end_effector_paths", None)
+    doc.pop("constraints", None)
+    doc.pop("robustness", None)
+    doc.get("safety", {}).pop("note", None)
+    if "objective" in doc:
+        doc["objective"].pop("parameters", None)
+        if fmt == "freefloat.plan/2":
+            del doc["objective"]
+    return doc

@@ -16,6 +16,8 @@ from freefloat.errors import EffortLimitError
 from freefloat.problem.paths import JointPolynomials
 from freefloat.verify.checks import joint_torque_function
 
+from conftest import as_older_format
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -141,9 +143,7 @@ def test_a_plan_of_an_older_format_is_held_to_every_limit_of_its_urdf(tmp_path, 
     current = ff.plan(scenario)
     assert "joint_effort_limits" in current.verification
     doc = json.loads(current.to_json())
-    doc["format"] = "freefloat.plan/2"
-    del doc["objective"], doc["robot"]["urdf_text"], doc["robot"]["urdf_sha256"]
-    del doc["constraints"]
+    as_older_format(doc, "freefloat.plan/2")
     checks = doc["verification"]["checks"]
     doc["verification"]["checks"] = [c for c in checks if c["name"] != "joint_effort_limits"]
     old = tmp_path / "old.json"

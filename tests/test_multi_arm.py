@@ -20,7 +20,7 @@ import freefloat as ff
 from freefloat.cli import main
 from freefloat.viz.playback import EXTRAS, build_playback
 
-from conftest import ROOT
+from conftest import ROOT, as_older_format
 from urdfs import BASE, joint, link, robot
 
 DUAL = ROOT / "robots" / "dual_ur5_servicer.urdf"
@@ -498,8 +498,7 @@ arms = [
 def test_a_format_3_plan_still_loads_verifies_and_keeps_its_format(worked_plan, tmp_path):
     data = json.loads(worked_plan.to_json())
     assert data["format"] == "freefloat.plan/4"
-    data["format"] = "freefloat.plan/3"
-    del data["robot"]["end_effectors"], data["samples"]["end_effector_paths"]
+    as_older_format(data)
     path = tmp_path / "old.json"
     path.write_text(json.dumps(data))
     old = ff.Plan.load(path)

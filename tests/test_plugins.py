@@ -41,6 +41,8 @@ from freefloat.problem.constraints.registry import SAFETY_RECORDED
 from freefloat.problem.objectives import OBJECTIVES, Objective, ObjectiveValue
 from test_objectives import _fd_gradient
 
+from conftest import as_older_format
+
 ROOT = Path(__file__).resolve().parents[1]
 
 #: One example of every built-in constraint, given a scenario whose robot it is for.
@@ -292,8 +294,7 @@ def test_a_format_3_plan_is_held_to_the_limits_it_promised(tmp_path, capsys, wor
     assert [c["name"] for c in data["constraints"]] == list(
         ff.plans.format.PROMISED["freefloat.plan/3"]
     )
-    data["format"] = "freefloat.plan/3"
-    del data["constraints"], data["objective"]["parameters"]
+    as_older_format(data)
     path = tmp_path / "old.json"
     path.write_text(json.dumps(data))
     assert main(["verify", str(path)]) == 0, capsys.readouterr().err

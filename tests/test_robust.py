@@ -39,6 +39,8 @@ from freefloat.robust.plan_robustness import plan_spread, with_robustness
 from freefloat.sweep import SweepSpec
 from freefloat.verify.recompute import problem_from_plan
 
+from conftest import as_older_format
+
 SCENARIOS = robots_dir() / "scenarios"
 
 
@@ -307,8 +309,7 @@ def test_the_robustness_record_is_recomputed_by_verify_and_old_plans_load(tmp_pa
     tampered.write_text(json.dumps(data))
     assert main(["verify", str(tampered)]) == 2
     older = recorded.to_dict()
-    older["format"] = "freefloat.plan/3"
-    del older["robustness"]
+    as_older_format(older)
     old = tmp_path / "old.json"
     old.write_text(json.dumps(older))
     loaded = ff.Plan.load(old)

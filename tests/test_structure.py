@@ -392,6 +392,7 @@ def test_plan_limits_are_the_schema_limits():
 
 def test_scenario_keys_and_the_scenario_schema_name_the_same_keys():
     from freefloat.plans.schema import schema
+    from freefloat.problem import robot_table as rt
     from freefloat.problem import scenario as sc
 
     s = schema("scenario")
@@ -403,7 +404,8 @@ def test_scenario_keys_and_the_scenario_schema_name_the_same_keys():
         ("properties", "start"): sc._STATE_KEYS,
         ("properties", "goal"): sc._GOAL_KEYS,
         ("properties", "obstacles", "items"): sc._OBSTACLE_KEYS,
-        ("properties", "robot", "oneOf", 1): sc._ROBOT_KEYS,
+        ("properties", "robot", "oneOf", 1): rt._SERVICER_KEYS,
+        ("properties", "robot", "oneOf", 2): rt._URDF_KEYS,
     }.items():
         node = s
         for key in path:

@@ -16,7 +16,7 @@ import freefloat.verify.recompute as recompute
 from freefloat.cli import main
 from freefloat.plans.limits import MAX_PLAN_BYTES
 
-from conftest import ROOT
+from conftest import ROOT, as_older_format
 
 SCENARIOS = sorted((ROOT / "robots" / "scenarios").glob("*.toml"))
 
@@ -300,8 +300,6 @@ def test_show_catches_a_urdf_changed_after_planning(original, tmp_path, capsys):
     assert f"the URDF {urdf} has changed since the plan was made" in line
     assert not page.exists()
     # A format-3 plan carries no URDF copy: its numbers disagree with the changed file's.
-    for key in ("urdf_text", "urdf_sha256"):
-        del data["robot"][key]
-    data["format"] = "freefloat.plan/3"
+    as_older_format(data)
     line = _refused(capsys, "show", _write(tmp_path, data), "--html", page, "-q")
     assert "disagrees with the recomputation" in line and not page.exists()

@@ -291,7 +291,7 @@ def arm_tips(text: str, prefixes: Sequence[str]) -> tuple[str, ...]:
     """The default end effector of each arm (by its prefix) in a composed URDF."""
     import pinocchio as pin
 
-    from .model import end_effector_candidates
+    from .end_effectors import end_effector_candidates
 
     model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
     tips = []

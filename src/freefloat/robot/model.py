@@ -10,15 +10,12 @@ The public API speaks of one number per movable joint: an angle in rad for ``rev
 ``continuous`` joints (Pinocchio stores a continuous joint as ``(cos, sin)``), a displacement
 in m for ``prismatic`` joints.
 
-This module is long because loading checks every part of the model a planner relies on (joint
-kinds and limits, masses, inertias, end effectors), each with its own message.
+The default end effector is chosen in :mod:`freefloat.robot.end_effectors`.
 """
 
 from __future__ import annotations
 
-import importlib.metadata
 import math
-import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,14 +26,14 @@ import pinocchio as pin
 from ..errors import AmbiguousEndEffectorError, ModelError, UnknownNameError
 from ..files import absolute_path, read_text_file
 from .built_model import check_built_model
+from .end_effectors import end_effector_candidates
+from .locations import example_robot_data_dir, resolve_robot, robots_dir, shipped_robots
 from .urdf_checks import check_urdf_xml, parser_messages
 
 __all__ = [
-    "FINGER_NAME",
     "MAX_URDF_BYTES",
     "Joint",
     "Robot",
-    "end_effector_candidates",
     "example_robot_data_dir",
     "load_robot",
     "resolve_robot",
@@ -235,115 +232,6 @@ class Robot:
             else:
                 out[i] = q[joint.idx_q]
         return out
-
-
-def example_robot_data_dir() -> Path | None:
-    """The ``share`` folder holding ``example-robot-data`` (its package dir), if installed."""
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
-        return None
-    share = Path(str(dist.locate_file("cmeel.prefix/share")))
-    return share if (share / "example-robot-data").is_dir() else None
-
-
-def robots_dir() -> Path:
-    """Folder of the shipped robots and scenarios (installed package data or the checkout)."""
-    installed = Path(__file__).resolve().parents[1] / "robots"
-    if installed.is_dir():
-        return installed
-    checkout = Path(__file__).resolve().parents[3] / "robots"
-    if checkout.is_dir():
-        return checkout
-    raise ModelError("the shipped robots folder is missing from this installation")
-
-
-def shipped_robots() -> list[str]:
-    """Names of the shipped robots (URDF files in :func:`robots_dir`)."""
-    return sorted(p.stem for p in robots_dir().glob("*.urdf"))
-
-
-def resolve_robot(name_or_path: str | Path, relative_to: Path | None = None) -> Path:
-    """Resolve a shipped robot name or a URDF path to an absolute URDF path.
-
-    A plain name without a suffix or separator (``"planar_2dof"``) is a shipped robot; anything
-    else is a path, relative to ``relative_to`` (a folder) when not absolute.
-    """
-    text = str(name_or_path)
-    if "/" not in text and "\\" not in text and not text.endswith(".urdf"):
-        path = robots_dir() / f"{text}.urdf"
-        if not path.is_file():
-            raise UnknownNameError("robot", text, shipped_robots())
-        return path
-    path = Path(text).expanduser()
-    if not path.is_absolute() and relative_to is not None:
-        path = relative_to / path
-    return absolute_path(path, "URDF", ModelError)
-
-
-_TOOL_NAME = re.compile(r"tcp|end_?effector|eef|tool|(^|_)ee($|_)", re.IGNORECASE)
-#: Joint and link names of gripper fingers: never the default end effector.
-FINGER_NAME = re.compile(r"finger|gripper", re.IGNORECASE)
-
-
-def end_effector_candidates(model: pin.Model, prefix: str = "") -> list[str]:
-    """The frame at the tip of each longest chain of movable joints that is not a finger.
-
-    Body frames carried by a gripper or finger joint, or named like one (``finger``,
-    ``gripper``), are left out, as is a captured payload's link. Depth counts the movable
-    joints from the base. Among the bodies carried by one deepest joint, a frame named like a
-    tool (``tcp``, ``end_effector``, ``eef``, ``tool``, ``ee``) wins; otherwise the latest in
-    tree order. One name per deepest joint, in tree order. With ``prefix``, only frames whose
-    name starts with it (one arm of a composed servicer).
-    """
-    finger_joints = {j for j in range(2, model.njoints) if FINGER_NAME.search(model.names[j])}
-    bodies = []
-    for index, frame in enumerate(model.frames):
-        if frame.type != pin.FrameType.BODY or frame.name == "captured_payload":
-            continue
-        if not frame.name.startswith(prefix):
-            continue
-        support = list(model.supports[frame.parentJoint])
-        if _on_a_finger(model, index) or finger_joints.intersection(support):
-            continue
-        depth = sum(1 for j in support if j >= 2)
-        bodies.append((depth, frame.parentJoint, bool(_TOOL_NAME.search(frame.name)), index))
-    if not bodies:  # every body is a finger's: fall back to the deepest of all
-        return [_deepest(model, prefix)]
-    deepest = max(b[0] for b in bodies)
-    best: dict[int, tuple[bool, int]] = {}
-    for depth, joint, tool, index in bodies:
-        if depth == deepest:
-            best[joint] = max(best.get(joint, (False, -1)), (tool, index))
-    return [model.frames[best[joint][1]].name for joint in sorted(best)]
-
-
-def _on_a_finger(model: pin.Model, index: int) -> bool:
-    """Whether a frame is named like a finger or hangs below a (locked) finger joint.
-
-    Walks up the frame tree through fixed joints and bodies to the movable joint carrying it.
-    """
-    seen = set()
-    while index not in seen:
-        seen.add(index)
-        frame = model.frames[index]
-        if FINGER_NAME.search(frame.name):
-            return True
-        if frame.type == pin.FrameType.JOINT:
-            return False
-        index = int(frame.parentFrame)
-    return False
-
-
-def _deepest(model: pin.Model, prefix: str) -> str:
-    bodies = [
-        (len(model.supports[frame.parentJoint]), index, frame.name)
-        for index, frame in enumerate(model.frames)
-        if frame.type == pin.FrameType.BODY
-        and frame.name != "captured_payload"
-        and frame.name.startswith(prefix)
-    ]
-    return max(bodies)[2]
 
 
 def load_robot(

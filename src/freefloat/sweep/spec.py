@@ -1,8 +1,5 @@
 """Sweep files: a base scenario and the axes to vary, read from TOML.
 
-This module is long because it reads and checks every kind of axis of the one sweep file
-format (scenario values, inertial values, random draws) before any job runs.
-
 A sweep speaks the scenario's units (degrees for angles, metres, kilograms, seconds)::
 
     scenario = "worked_example.toml"   # relative to this file, or a shipped scenario name
@@ -55,6 +52,7 @@ from .draws import (
     random_values,
     scenario_urdf,
 )
+from .keys import leaf, put, split_key
 
 __all__ = ["Axis", "Job", "SweepSpec", "Value"]
 
@@ -231,7 +229,7 @@ class SweepSpec:
         data = copy.deepcopy(dict(self.base))
         for axis, value in zip(self.axes, values, strict=True):
             if axis.inertial is None:
-                _put(data, axis.path, value)
+                put(data, axis.path, value)
         return Job(
             index,
             tuple(values),
@@ -255,7 +253,7 @@ class SweepSpec:
                     check_inertial_value(urdf, axis.key, axis.inertial, value)
                     continue
                 data = copy.deepcopy(dict(self.base))
-                _put(data, axis.path, value)
+                put(data, axis.path, value)
                 try:
                     Scenario.from_dict(
                         data, relative_to=self.scenario_path.parent, source=self.scenario_path
@@ -294,51 +292,6 @@ def _scenario_path(name: str, folder: Path) -> Path:
     )
 
 
-def _split(key: str, base: Mapping[str, Any]) -> tuple[str | int, ...]:
-    """Resolve a dotted key against the base scenario; refuse it naming the valid keys."""
-    if not key:
-        raise ScenarioError('axis key must be a dotted key such as "goal.joints.q2"')
-    path: list[str | int] = []
-    node: Any = base
-    for part in key.split("."):
-        prefix = ".".join(str(p) for p in path)
-        where = f"{prefix}." if prefix else ""
-        if isinstance(node, Mapping):
-            if part not in node:
-                raise UnknownNameError("sweep key", key, [f"{where}{k}" for k in node])
-            path.append(part)
-            node = node[part]
-        elif isinstance(node, list):
-            if not part.isdigit() or int(part) >= len(node):
-                raise UnknownNameError("sweep key", key, [f"{where}{i}" for i in range(len(node))])
-            path.append(int(part))
-            node = node[int(part)]
-        else:
-            raise ScenarioError(f"sweep key {key!r}: {prefix!r} is a value, not a table or list")
-    if isinstance(node, (Mapping, list)):
-        inner = node if isinstance(node, Mapping) else range(len(node))
-        raise UnknownNameError(
-            "sweep key (it names a table or list, not a value)",
-            key,
-            [f"{key}.{k}" for k in inner],
-        )
-    return tuple(path)
-
-
-def _leaf(base: Mapping[str, Any], path: Sequence[str | int]) -> Any:
-    node: Any = base
-    for part in path:
-        node = node[part]
-    return node
-
-
-def _put(data: Any, path: Sequence[str | int], value: Value) -> None:
-    node = data
-    for part in path[:-1]:
-        node = node[part]
-    node[path[-1]] = value
-
-
 def _axis(table: Any, position: int, base: Mapping[str, Any], replay: bool = False) -> Axis:
     where = f"[[axis]] {position + 1}"
     if not isinstance(table, Mapping):
@@ -355,8 +308,8 @@ def _axis(table: Any, position: int, base: Mapping[str, Any], replay: bool = Fal
             f"axis {key!r}: a plan replay sweeps inertial keys (robot.links.LINK.mass, "
             "robot.links.LINK.com.0, robot.links.LINK.inertia.ixx, payload.mass ...)"
         )
-    path = (key,) if inertial is not None else _split(key, base)
-    current = 0.0 if inertial is not None else _leaf(base, path)
+    path = (key,) if inertial is not None else split_key(key, base)
+    current = 0.0 if inertial is not None else leaf(base, path)
     if "values" not in table:
         raise ScenarioError(f"axis {key!r} needs values = [...] or {{ start, stop, num }}")
     raw = table["values"]

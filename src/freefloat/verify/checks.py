@@ -34,7 +34,7 @@ from ..errors import FreeFloatError, PlanFileError
 from ..physics.attitude import geodesic_angle
 from ..physics.dynamics import inverse_dynamics, inverse_dynamics_batch, replay
 from ..physics.momentum import MomentumMap
-from ..plans.format import FORMAT, FORMAT_2, Check, Plan, Verification
+from ..plans.format import FORMAT_2, FORMAT_3, Check, Plan, Verification
 from ..plans.robot_copy import plan_robot
 from ..problem.constraints import Constraint, JointEffortLimits, constraint_from_record
 from ..problem.constraints.clearance import Clearance
@@ -84,8 +84,14 @@ TOLERANCES: dict[str, float] = {
 }
 
 
-#: Checks a file of an older format cannot state (it predates them), by format.
-_PREDATED: dict[str, tuple[str, ...]] = {FORMAT_2: (JointEffortLimits.name,)}
+#: Checks an older file cannot state as they are made now: effort (a /2 file predates it) and
+#: clearance (before format 4: sampled on the meshes' own faces). Their stated figures are not
+#: compared; the checks made now still decide whether the plan passes.
+_CLEARANCE_CHECKS = ("clearance", "clearance_hull_agreement")
+_PREDATED: dict[str, tuple[str, ...]] = {
+    FORMAT_2: (JointEffortLimits.name, *_CLEARANCE_CHECKS),
+    FORMAT_3: _CLEARANCE_CHECKS,
+}
 
 
 def _polys(plan: Plan) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
@@ -187,13 +193,6 @@ def verify_plan(
     if not 1 <= replay_steps <= REPLAY_STEPS_LIMIT:
         raise ValueError(
             f"the replay takes 1 to {REPLAY_STEPS_LIMIT} steps, got replay_steps={replay_steps}"
-        )
-    if recompute and plan.safety.checked and plan.format != FORMAT:
-        raise PlanFileError(
-            f"this {plan.format} plan measured clearance on the meshes' own faces, which are not "
-            "their hulls, and only at samples: its clearance cannot be verified as stated; plan "
-            f"it again with this freefloat ({FORMAT}: true hulls, a certificate between samples "
-            "on the original geometry)"
         )
     robot = robot or plan_robot(plan)
     if recompute:
@@ -383,12 +382,12 @@ def verify_plan(
             )
     verification = Verification(tuple(checks))
     if recompute:
-        # A freefloat.plan/2 file states no effort check (it predates them): the figures it
-        # does state are compared; the effort check still decides whether the plan passes.
-        stated = Verification(
-            tuple(c for c in checks if c.name not in _PREDATED.get(plan.format, ()))
-        )
-        compare_verification(plan.verification, stated)
+        # An older file states some checks as they were made then (_PREDATED): the figures it
+        # states otherwise are compared; every check made now decides whether the plan passes.
+        predated = _PREDATED.get(plan.format, ())
+        stated = Verification(tuple(c for c in checks if c.name not in predated))
+        on_file = Verification(tuple(c for c in plan.verification.checks if c.name not in predated))
+        compare_verification(on_file, stated)
     return verification
 
 

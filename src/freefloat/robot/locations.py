@@ -1,0 +1,55 @@
+"""Where robots are: shipped robots and scenarios, example-robot-data, a name or a path."""
+
+from __future__ import annotations
+
+import importlib.metadata
+from pathlib import Path
+
+from ..errors import ModelError, UnknownNameError
+from ..files import absolute_path
+
+__all__ = ["example_robot_data_dir", "resolve_robot", "robots_dir", "shipped_robots"]
+
+
+def example_robot_data_dir() -> Path | None:
+    """The ``share`` folder holding ``example-robot-data`` (its package dir), if installed."""
+    try:
+        dist = importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        return None
+    share = Path(str(dist.locate_file("cmeel.prefix/share")))
+    return share if (share / "example-robot-data").is_dir() else None
+
+
+def robots_dir() -> Path:
+    """Folder of the shipped robots and scenarios (installed package data or the checkout)."""
+    installed = Path(__file__).resolve().parents[1] / "robots"
+    if installed.is_dir():
+        return installed
+    checkout = Path(__file__).resolve().parents[3] / "robots"
+    if checkout.is_dir():
+        return checkout
+    raise ModelError("the shipped robots folder is missing from this installation")
+
+
+def shipped_robots() -> list[str]:
+    """Names of the shipped robots (URDF files in :func:`robots_dir`)."""
+    return sorted(p.stem for p in robots_dir().glob("*.urdf"))
+
+
+def resolve_robot(name_or_path: str | Path, relative_to: Path | None = None) -> Path:
+    """Resolve a shipped robot name or a URDF path to an absolute URDF path.
+
+    A plain name without a suffix or separator (``"planar_2dof"``) is a shipped robot; anything
+    else is a path, relative to ``relative_to`` (a folder) when not absolute.
+    """
+    text = str(name_or_path)
+    if "/" not in text and "\\" not in text and not text.endswith(".urdf"):
+        path = robots_dir() / f"{text}.urdf"
+        if not path.is_file():
+            raise UnknownNameError("robot", text, shipped_robots())
+        return path
+    path = Path(text).expanduser()
+    if not path.is_absolute() and relative_to is not None:
+        path = relative_to / path
+    return absolute_path(path, "URDF", ModelError)
