@@ -30,7 +30,13 @@ from .plans.format import (
     SafetyReport,
     SolverReport,
 )
-from .plans.sampling import base_report, feasibility_report, sample_solution, solution_record
+from .plans.sampling import (
+    base_report,
+    feasibility_report,
+    path_quality,
+    sample_solution,
+    solution_record,
+)
 from .problem.constraints import (
     Clearance,
     Constraint,
@@ -41,6 +47,7 @@ from .problem.constraints import (
 from .problem.constraints.clearance import clearance_at
 from .problem.limits import check_samples
 from .problem.objectives import DEFAULT_OBJECTIVE, objective_named
+from .problem.paths import boundary_errors
 from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .progress import stage
@@ -48,7 +55,7 @@ from .solvers.minimise import minimise
 from .solvers.options import DEFAULT_TOLERANCE, Solution, SolveOptions
 from .solvers.restore import broken_constraint
 from .solvers.search import SearchResult, search
-from .verify.checks import boundary_errors, verify_plan
+from .verify.checks import verify_plan
 
 __all__ = ["BOUNDARY_TOLERANCE", "plan", "plan_from_solution"]
 
@@ -307,7 +314,7 @@ def plan_from_solution(
         np.asarray(sampled.base_quaternion_xyzw[-1]), problem.goal_quaternion
     )
     boundary = boundary_errors(
-        family.time_coefficients(solution.beta, T), family.start, family.goal, T
+        problem.polynomials(solution.beta), family.start, family.goal
     )["relative_max"]
     if max(error, sampled_error) > tolerance or boundary > BOUNDARY_TOLERANCE:
         raise SolverError(
@@ -329,10 +336,7 @@ def plan_from_solution(
             joint_kinds=[j.kind for j in robot.joints],
         ),
         duration=T,
-        coefficients={
-            name: c.tolist()
-            for name, c in zip(names, family.time_coefficients(solution.beta, T), strict=True)
-        },
+        coefficients=chosen.free_parameters,
         free_parameters=chosen.free_parameters,
         base=base,
         feasibility=feasibility_report(problem),
@@ -353,6 +357,7 @@ def plan_from_solution(
         request=Request(start_joints=family.start.tolist(), goal_joints=family.goal.tolist()),
         safety=safety or SafetyReport(),
         objective=objective or _norm_report(problem, solution.beta),
+        quality=path_quality(problem, solution.beta),
     )
     if not verify:
         return unverified
