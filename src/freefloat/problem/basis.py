@@ -21,9 +21,9 @@ normalisation ``P_n^(6,6)(1) = C(n + 6, n)``). Why this basis:
   ``sum beta_in^2 = int_0^1 |q(s) - q_quintic(s)|^2 ds`` (rad^2): the norm of the free
   parameters is the squared L2 deviation of the joint paths from the quintic;
 - orthonormal bases are perfectly conditioned in that norm (Gram matrix the identity at every
-  degree); they are evaluated here through their Chebyshev series in ``x``, computed once by
-  the Jacobi three-term recurrence in Chebyshev arithmetic (no monomial coefficients, whose
-  magnitudes grow like 4^n and cancel on evaluation).
+  degree); they are evaluated here through their Chebyshev series in ``x``, computed once,
+  exactly, by the Jacobi three-term recurrence (no monomial coefficients, whose magnitudes
+  grow like 4^n and cancel on evaluation).
 
 Everything is duration independent: ``beta`` is in rad (m for prismatic joints).
 """
@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import functools
 import math
+from fractions import Fraction
 
 import numpy as np
 
@@ -55,6 +56,18 @@ def basis_scale(n: int) -> float:
     return math.exp(log - math.lgamma(n + 7))
 
 
+def _times_x(c: list[Fraction]) -> list[Fraction]:
+    """Chebyshev coefficients of ``x f(x)`` (exact): ``x T_k = (T_{k-1} + T_{k+1}) / 2``."""
+    out = [Fraction(0)] * (len(c) + 1)
+    for k, value in enumerate(c):
+        if k == 0:
+            out[1] += value
+        else:
+            out[k - 1] += value / 2
+            out[k + 1] += value / 2
+    return out
+
+
 @functools.lru_cache(maxsize=64)
 def basis_chebyshev(count: int) -> np.ndarray:
     """(count, count + 6) Chebyshev coefficients in ``x = 2 s - 1`` of ``phi_0 .. phi_{count-1}``.
@@ -62,21 +75,22 @@ def basis_chebyshev(count: int) -> np.ndarray:
     Row n holds ``phi_n`` (dimensionless, degree n + 6). The Jacobi three-term recurrence
     (``a = b = 6``), ``2 n (n + 12)(2 n + 10) P_n = (2 n + 11)(2 n + 12)(2 n + 10) x P_{n-1}
     - 2 (n + 5)^2 (2 n + 12) P_{n-2}`` with ``P_0 = 1``, ``P_1 = 7 x``, is linear, so it holds
-    for ``phi_n / c_n`` as well; it is run on the normalised ``phi_n`` directly (each term of
-    size one, no cancellation of the large values ``P_n`` takes near the ends).
-    Read-only (shared between callers).
+    for ``s^3 (1 - s)^3 P_n`` as well; it is run on those in exact rational arithmetic, then
+    rounded once and scaled by ``c_n``: the end conditions hold to the rounding of the
+    coefficients (all of size below one). Read-only (shared between callers).
     """
-    # s^3 (1 - s)^3 = (1 - x^2)^3 / 64
-    bubble = _CHEB.poly2cheb(np.array([1.0, 0.0, -3.0, 0.0, 3.0, 0.0, -1.0]) / 64.0)
-    rows = [basis_scale(0) * bubble, 7.0 * basis_scale(1) * _CHEB.chebmulx(bubble)]
+    # s^3 (1 - s)^3 = (1 - x^2)^3 / 64 = (10 T_0 - 15 T_2 + 6 T_4 - T_6) / 2048
+    bubble = [Fraction(v, 2048) for v in (10, 0, -15, 0, 6, 0, -1)]
+    rows = [bubble, [7 * v for v in _times_x(bubble)]]
     for n in range(2, count):
-        lead = (2 * n + 11) * (2 * n + 12) * (2 * n + 10) * basis_scale(n) / basis_scale(n - 1)
-        back = 2 * (n + 5) ** 2 * (2 * n + 12) * basis_scale(n) / basis_scale(n - 2)
-        term = _CHEB.chebsub(lead * _CHEB.chebmulx(rows[-1]), back * rows[-2])
-        rows.append(term / (2 * n * (n + 12) * (2 * n + 10)))
+        lead = Fraction((2 * n + 11) * (2 * n + 12) * (2 * n + 10), 2 * n * (n + 12) * (2 * n + 10))
+        back = Fraction(2 * (n + 5) ** 2 * (2 * n + 12), 2 * n * (n + 12) * (2 * n + 10))
+        ahead = _times_x(rows[-1])
+        rows.append([lead * a - back * (rows[-2][k] if k < len(rows[-2]) else 0)
+                     for k, a in enumerate(ahead)])
     out = np.zeros((count, count + 6))
     for n in range(count):
-        out[n, : len(rows[n])] = rows[n]
+        out[n, : len(rows[n])] = [basis_scale(n) * float(v) for v in rows[n]]
     out.flags.writeable = False
     return out
 
