@@ -6,7 +6,7 @@ wrong with a document as one line per problem, naming the field by its path (for
 and raises :class:`~freefloat.errors.PlanFileError` naming the first bad field;
 :func:`load_plan_file` reads a plan file once, checks it against the schema and the limits of
 :mod:`freefloat.plans.limits`, and returns the plan. The schema
-describes ``freefloat.plan/3`` and ``/2`` (the same but for the objective record /3
+describes ``freefloat.plan/4``, ``/3`` and ``/2`` (the same but for the objective record /3
 requires); ``/1`` files are left to :meth:`Plan.load`.
 """
 
@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import PlanFileError, ViewerError
-from .format import FORMAT, FORMAT_2, Plan, read_plan_json
+from .format import FORMAT, FORMAT_2, FORMAT_3, Plan, read_plan_json
 
 __all__ = ["SCHEMAS", "check_plan_file", "field_path", "load_plan_file", "schema", "schema_errors"]
 
@@ -130,7 +130,7 @@ def check_plan_file(path: str | Path) -> None:
 
 
 def _check_schema(data: Any, path: Path) -> None:
-    if isinstance(data, dict) and data.get("format") not in (FORMAT, FORMAT_2):
+    if isinstance(data, dict) and data.get("format") not in (FORMAT, FORMAT_3, FORMAT_2):
         return
     errors = schema_errors(data, "plan")
     if errors:

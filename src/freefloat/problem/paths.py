@@ -150,9 +150,7 @@ class JointPolynomials:
         matrix = np.zeros((len(coefficients), width))
         for i, c in enumerate(coefficients):
             # t = T (1 + x) / 2: a polynomial in x, then its Chebyshev series
-            in_x = np.polynomial.Polynomial(np.asarray(c, float)).convert(
-                domain=[-1.0, 1.0], window=[0.0, duration]
-            )
+            in_x = np.polynomial.Polynomial(np.asarray(c, float)).convert(domain=[0.0, duration])
             series = _CHEB.poly2cheb(in_x.coef)
             matrix[i, : len(series)] = series
         return cls(matrix, duration)
@@ -163,8 +161,8 @@ class JointPolynomials:
         out = np.zeros_like(self.coefficients)
         for i, c in enumerate(self.coefficients):
             in_x = _CHEB.cheb2poly(c)
-            in_t = np.polynomial.Polynomial(in_x).convert(
-                domain=[0.0, self.duration], window=[-1.0, 1.0]
+            in_t = np.polynomial.Polynomial(in_x, domain=[0.0, self.duration]).convert(
+                domain=[-1.0, 1.0]
             )
             out[i, : len(in_t.coef)] = in_t.coef
         return out
