@@ -61,8 +61,8 @@ def _scenario(tmp_path, text, name="s.toml"):
         ({"yaw": "1e20"}, "[goal] base_zyx_deg[0] = 1e+20 deg is outside"),
         (
             {"path": "[path]\nextra = { q2 = 1000000 }"},
-            "[path] extra for 'q2' = 1000000 is outside the supported range [0, 7]; "
-            "polynomial degree at most 12",
+            "[path] extra for 'q2' = 1000000 is outside the supported range [0, 20]; "
+            "polynomial degree at most 25",
         ),
         (
             {"path": "[path]\nmax_deviation_deg = 1e308"},
