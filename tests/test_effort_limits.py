@@ -15,6 +15,8 @@ from freefloat.errors import EffortLimitError
 from freefloat.problem.paths import JointPolynomials
 from freefloat.verify.checks import joint_torque_function
 
+from legacy import as_format_3
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -55,9 +57,7 @@ def test_effort_rows_jacobian_matches_finite_differences(tmp_path):
 def test_dense_peak_matches_a_fine_independent_grid(worked_plan, tmp_path):
     scenario = ff.Scenario.from_toml(_limited_example(tmp_path, 3.0))
     robot = scenario.robot
-    path = JointPolynomials.from_lists(
-        [worked_plan.coefficients[n] for n in worked_plan.robot.joints], worked_plan.duration
-    )
+    path = worked_plan.path()
     peak, _, spread = ff.JointEffortLimits().peaks(robot, path)
     tau = joint_torque_function(worked_plan, ff.MomentumMap(robot))
     t = np.linspace(0.0, worked_plan.duration, 20001)
@@ -83,16 +83,11 @@ def test_shortest_duration_is_exact(worked_plan, tmp_path):
     scenario = ff.Scenario.from_toml(_limited_example(tmp_path, 2.0))
     robot = scenario.robot
     limits = ff.JointEffortLimits()
-    path = JointPolynomials.from_lists(
-        [worked_plan.coefficients[n] for n in worked_plan.robot.joints], worked_plan.duration
-    )
+    path = worked_plan.path()
     shortest = limits.shortest_duration(robot, path)
     assert shortest > worked_plan.duration  # 2 N m is below the plan's peak
-    # the same shape run in `shortest` seconds: t -> t * T / shortest
-    ratio = worked_plan.duration / shortest
-    scaled = JointPolynomials(
-        path.coefficients * ratio ** np.arange(path.coefficients.shape[1]), shortest
-    )
+    # the same shape run in `shortest` seconds (coefficients in normalised time)
+    scaled = JointPolynomials(path.coefficients, shortest)
     peak = limits.worst(robot, scaled)
     assert peak is not None and peak.joint.name == "q1"
     assert peak.fraction == pytest.approx(1.0, abs=1e-9)
@@ -140,7 +135,7 @@ def test_a_plan_of_the_previous_format_is_held_to_what_it_promised(tmp_path, cap
     scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
     current = ff.plan(scenario)
     assert "joint_effort_limits" in current.verification
-    doc = json.loads(current.to_json())
+    doc = as_format_3(json.loads(current.to_json()))
     doc["format"] = "freefloat.plan/2"
     del doc["objective"]
     checks = doc["verification"]["checks"]
@@ -153,7 +148,7 @@ def test_a_plan_of_the_previous_format_is_held_to_what_it_promised(tmp_path, cap
     assert "objective" not in json.loads(loaded.to_json())
     # a current plan without its effort check is refused, naming the check list
     doc["format"] = "freefloat.plan/3"
-    doc["objective"] = json.loads(current.to_json())["objective"]
+    doc["objective"] = as_format_3(json.loads(current.to_json()))["objective"]
     tampered = tmp_path / "tampered.json"
     tampered.write_text(json.dumps(doc))
     capsys.readouterr()

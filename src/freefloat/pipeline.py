@@ -111,6 +111,8 @@ def plan(
             left_out = [c for c in constraints if c not in imposed]
             if left_out and _broken(minimised.found, left_out):
                 again = minimise(scenario, minimised.found, chosen, options, constraints)
+                if _broken(again.found, left_out):  # from the search's own path instead
+                    again = minimise(scenario, found, chosen, options, constraints)
                 minimised = replace(
                     again,
                     start_value=minimised.start_value,
