@@ -39,8 +39,11 @@ against the optimal-control figure quoted in the issue (26.6 N^2 m^2 s); the sam
 at fixed freedom k = 1..4 with exact gradients and with SciPy's finite differences side by
 side; and the Panda servicer's scenario with min_norm against min_effort.
 
+Paths (issue 23, with --paths or --paths-only): the orthonormal path basis against the monomial
+basis before it, side by side (scripts/bench_paths.py).
+
 Run: python scripts/bench.py [--runs N] [--json FILE] [--reach-only] [--random N] [--sweep]
-     [--sweep-only]
+     [--sweep-only] [--paths] [--paths-only] [--paths-baseline REV]
 """
 
 from __future__ import annotations
@@ -62,6 +65,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import minimize, newton, root
 
 import freefloat as ff
+from bench_paths import BASELINE_REVISION, bench_paths, print_paths
 from freefloat.physics import attitude as att
 from freefloat.robot.collision import CollisionModel, known_srdf
 
@@ -747,8 +751,23 @@ def main() -> None:
     parser.add_argument(
         "--objectives-only", action="store_true", help="only the objectives section"
     )
+    parser.add_argument("--paths", action="store_true", help="also the path-basis section")
+    parser.add_argument("--paths-only", action="store_true", help="only the path-basis section")
+    parser.add_argument(
+        "--paths-baseline", default=None, help="git revision of the monomial basis to compare"
+    )
     args = parser.parse_args()
     print(f"machine: {machine()}")
+    paths = (
+        bench_paths(max(1, min(args.runs, 3)), args.paths_baseline or BASELINE_REVISION)
+        if args.paths or args.paths_only
+        else {}
+    )
+    if args.paths_only:
+        print_paths(paths)
+        if args.json:
+            args.json.write_text(json.dumps({"machine": machine(), "paths": paths}, indent=1))
+        return
     objectives = bench_objectives() if args.objectives or args.objectives_only else {}
     if args.objectives_only:
         print_objectives(objectives)
@@ -831,6 +850,8 @@ def main() -> None:
     print_collision(collision)
     if objectives:
         print_objectives(objectives)
+    if paths:
+        print_paths(paths)
     if args.json:
         args.json.write_text(
             json.dumps(
@@ -843,6 +864,7 @@ def main() -> None:
                     "sweep": sweep,
                     "collision": collision,
                     "objectives": objectives,
+                    "paths": paths,
                 },
                 indent=1,
             )

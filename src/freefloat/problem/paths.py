@@ -171,6 +171,11 @@ class JointPolynomials:
         """(N, K) Chebyshev coefficients in x of the ``order``-th time derivative (per s^order)."""
         if order == 0:
             return self.coefficients
+        if order <= 2:
+            return self._derivatives[order - 1]
+        return self._derived(order)
+
+    def _derived(self, order: int) -> np.ndarray:
         width = self.coefficients.shape[1]
         out = np.zeros_like(self.coefficients)
         if width > order:
@@ -178,6 +183,11 @@ class JointPolynomials:
                 self.coefficients.T, order, scl=2.0 / self.duration
             ).T
         return out
+
+    @cached_property
+    def _derivatives(self) -> tuple[np.ndarray, np.ndarray]:
+        """The first two derivatives' coefficients, computed once per path."""
+        return self._derived(1), self._derived(2)
 
     def evaluate(self, t: np.ndarray) -> PathSamples:
         """Positions (rad or m), rates (per s) and accelerations (per s^2) at times ``t`` (s)."""

@@ -18,7 +18,7 @@ from ..problem.scenario import Scenario
 
 __all__ = ["cartesian_report", "robot_label", "summary"]
 
-#: Paths with at most this many free parameters on every joint also show them as the paper's
+#: Paths with at most this many free parameters in all also show them as the paper's
 #: monomial coefficients in t (higher degrees would print large cancelling numbers).
 OLD_UNITS_MAX_FREE = 3
 
@@ -140,8 +140,8 @@ def free_parameter_lines(p: Plan) -> list[str]:
         + ("; ".join(free) if free else "(none)")
         + f" (basis {p.basis}: L2 deviation from the quintic)"
     ]
-    longest = max((len(v) for v in p.free_parameters.values()), default=0)
-    if 0 < longest <= OLD_UNITS_MAX_FREE:
+    total = sum(len(v) for v in p.free_parameters.values())
+    if 0 < total <= OLD_UNITS_MAX_FREE:
         monomials = p.path().monomials()
         old = [
             f"{name}: "
