@@ -31,7 +31,15 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-REAL_ARMS = REPO.parent / "shared" / "real-arms"
+#: The real robots, beside the repository (or beside the directory of its worktrees).
+REAL_ARMS = next(
+    (
+        d / "shared" / "real-arms"
+        for d in (REPO.parent, REPO.parent.parent)
+        if (d / "shared" / "real-arms").is_dir()
+    ),
+    REPO.parent / "shared" / "real-arms",
+)
 #: The last revision with the monomial path basis.
 BASELINE_REVISION = "a6e46b9"
 #: The optimal-control figure quoted by the issue for the worked example (N^2 m^2 s).
@@ -149,6 +157,7 @@ def _export(revision: str, into: Path) -> Path:
         capture_output=True,
         check=True,
     )
+    into.mkdir(parents=True, exist_ok=True)
     subprocess.run(["tar", "-x", "-C", str(into)], input=archive.stdout, check=True)
     return into / "src"
 
