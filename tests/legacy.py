@@ -21,9 +21,8 @@ def _monomials_in_s(start: float, goal: float, beta: list[float]) -> np.ndarray:
     s = poly([0.0, 1.0])
     out = start + (goal - start) * (10 * s**3 - 15 * s**4 + 6 * s**5)
     for n, b in enumerate(beta):
-        scale = math.sqrt((2 * n + 13) * math.factorial(n + 12) * math.factorial(n)) / math.factorial(
-            n + 6
-        )
+        factorial = math.factorial
+        scale = math.sqrt((2 * n + 13) * factorial(n + 12) * factorial(n)) / factorial(n + 6)
         # P_n^(6,6) from its values at n + 1 Chebyshev points (exact for degree n), in s
         x = np.cos(np.pi * (np.arange(n + 1) + 0.5) / (n + 1))
         jacobi = poly.fit(x, eval_jacobi(n, 6, 6, x), n, domain=[-1, 1], window=[-1, 1])

@@ -315,9 +315,9 @@ def plan_from_solution(
     sampled_error = geodesic_angle(
         np.asarray(sampled.base_quaternion_xyzw[-1]), problem.goal_quaternion
     )
-    boundary = boundary_errors(
-        problem.polynomials(solution.beta), family.start, family.goal
-    )["relative_max"]
+    boundary = boundary_errors(problem.polynomials(solution.beta), family.start, family.goal)[
+        "relative_max"
+    ]
     if max(error, sampled_error) > tolerance or boundary > BOUNDARY_TOLERANCE:
         raise SolverError(
             "the planned path misses its target (attitude error "

@@ -53,12 +53,12 @@ __all__ = [
     "FORMAT_2",
     "FORMAT_3",
     "MONOMIAL_BASIS",
-    "PathQuality",
     "READABLE_FORMATS",
     "BaseReport",
     "Check",
     "Feasibility",
     "ObstacleRecord",
+    "PathQuality",
     "Plan",
     "Request",
     "RobotRef",
@@ -498,7 +498,8 @@ class Plan:
                 format=fmt if fmt in (FORMAT_2, FORMAT) else FORMAT_3,
                 basis=basis,
                 quality=(
-                    None if data.get("path_quality") is None
+                    None
+                    if data.get("path_quality") is None
                     else PathQuality(**data["path_quality"])
                 ),
             )

@@ -276,7 +276,7 @@ def _check_plan_values(data: Any) -> None:
             f"must list 1 to {MAX_SOLUTIONS} roots (the chosen first), got {count}",
         )
     for i, root in enumerate(solutions):
-        where = ["solver", "solutions", i, "free_parameters"]
+        where: list[str | int] = ["solver", "solutions", i, "free_parameters"]
         values = _per_joint(_key(root, "free_parameters", where[:-1]), where, joints)
         for name, degree in zip(joints, degrees, strict=True):
             _vector(values[name], [*where, name], degree - 5)
@@ -298,8 +298,7 @@ def _degree(c: Any, name: str, duration: float, in_basis: bool) -> int:
     if not isinstance(c, list) or not low <= len(c) <= high:
         raise _RefusalError(
             _field(where),
-            f"must list {low} to {high} coefficients (degree 5 to {MAX_DEGREE}), "
-            f"got {excerpt(c)}",
+            f"must list {low} to {high} coefficients (degree 5 to {MAX_DEGREE}), got {excerpt(c)}",
         )
     for k, value in enumerate(_vector(c, where, None)):
         term = abs(value) * (1.0 if in_basis else duration**k)

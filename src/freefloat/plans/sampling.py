@@ -20,8 +20,8 @@ import numpy as np
 
 from ..physics.attitude import geodesic_angle, quat_rotate, zyx_from_quat
 from ..physics.dynamics import inverse_dynamics_batch
-from ..problem.residual import Problem
 from ..problem.paths import excursions
+from ..problem.residual import Problem
 from .format import BaseReport, Feasibility, PathQuality, Samples, SolutionRecord
 
 __all__ = [

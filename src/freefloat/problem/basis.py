@@ -86,8 +86,12 @@ def basis_chebyshev(count: int) -> np.ndarray:
         lead = Fraction((2 * n + 11) * (2 * n + 12) * (2 * n + 10), 2 * n * (n + 12) * (2 * n + 10))
         back = Fraction(2 * (n + 5) ** 2 * (2 * n + 12), 2 * n * (n + 12) * (2 * n + 10))
         ahead = _times_x(rows[-1])
-        rows.append([lead * a - back * (rows[-2][k] if k < len(rows[-2]) else 0)
-                     for k, a in enumerate(ahead)])
+        rows.append(
+            [
+                lead * a - back * (rows[-2][k] if k < len(rows[-2]) else 0)
+                for k, a in enumerate(ahead)
+            ]
+        )
     out = np.zeros((count, count + 6))
     for n in range(count):
         out[n, : len(rows[n])] = [basis_scale(n) * float(v) for v in rows[n]]

@@ -141,10 +141,12 @@ class JointPolynomials:
 
     @classmethod
     def from_monomials(
-        cls, coefficients: Sequence[Sequence[float]], duration: float
+        cls, coefficients: Sequence[Sequence[float] | np.ndarray], duration: float
     ) -> JointPolynomials:
-        """From per-joint ascending coefficients in ``t`` (s), as plan files before format 4
-        stored them (any lengths)."""
+        """From per-joint ascending coefficients in ``t`` (s) of any lengths.
+
+        As plan files before format 4 stored them.
+        """
         duration = float(duration)
         width = max(len(c) for c in coefficients)
         matrix = np.zeros((len(coefficients), width))
@@ -156,8 +158,10 @@ class JointPolynomials:
         return cls(matrix, duration)
 
     def monomials(self) -> np.ndarray:
-        """(N, K) ascending coefficients in ``t`` (s) (display and old formats; loses precision
-        to cancellation at high degree)."""
+        """(N, K) ascending coefficients in ``t`` (s).
+
+        For display and old formats: they lose precision to cancellation at high degree.
+        """
         out = np.zeros_like(self.coefficients)
         for i, c in enumerate(self.coefficients):
             in_x = _CHEB.cheb2poly(c)
@@ -313,8 +317,10 @@ class PathFamily:
         return out
 
     def _powers(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Chebyshev polynomials at ``x = 2 s - 1`` and their first two s-derivatives, each
-        (len(s), max degree + 1) as maps from Chebyshev coefficients."""
+        """Chebyshev polynomials at ``x = 2 s - 1`` and their first two s-derivatives.
+
+        Each (len(s), max degree + 1), as maps from Chebyshev coefficients.
+        """
         width = max(self.degrees) + 1
         values = _CHEB.chebvander(2.0 * np.asarray(s, dtype=float) - 1.0, width - 1)
         first, second = _derivative_matrices(width)
@@ -374,8 +380,9 @@ class PathFamily:
         """``beta`` of ``other`` as free coefficients of this family (new ones zero).
 
         The path is unchanged: each free coefficient multiplies the same basis polynomial in
-        both families (the basis polynomials do not depend on the family's degrees). None when this family lacks one of ``other``'s coefficients or the two
-        join different configurations.
+        both families (the basis polynomials do not depend on the family's degrees). None when
+        this family lacks one of ``other``'s coefficients or the two join different
+        configurations.
         """
         if not (np.array_equal(self.start, other.start) and np.array_equal(self.goal, other.goal)):
             return None

@@ -3,11 +3,12 @@
 After the search has found a root (the paper's minimum-norm path, with the least freedom that
 reaches the goal), an objective other than ``min_norm`` is minimised over the roots
 (:func:`.optimise.optimise`) with the same freedom, then with ``k`` free coefficients on every
-joint for ``k`` in :data:`LEVELS` (spatial problems: :data:`SPATIAL_LEVELS`), each level starting from the previous best (the same path, embedded in the larger
-family). It stops when a level lowers the objective by less than :data:`MIN_GAIN` of its
-value, or at the last level. The orthonormal basis (:mod:`freefloat.problem.basis`) keeps
-the end conditions exactly at every degree, so high levels cost only time. A scenario's ``[path] extra`` is the
-starting freedom; ``[path] raise_freedom = false`` keeps exactly that freedom. Every level is
+joint for ``k`` in :data:`LEVELS` (spatial problems: :data:`SPATIAL_LEVELS`), each level
+starting from the previous best (the same path, embedded in the larger family). It stops when
+a level lowers the objective by less than :data:`MIN_GAIN` of its value, or at the last level.
+The orthonormal basis (:mod:`freefloat.problem.basis`) keeps the end conditions exactly at
+every degree, so high levels cost only time. A scenario's ``[path] extra`` is the starting
+freedom; ``[path] raise_freedom = false`` keeps exactly that freedom. Every level is
 recorded. Budgets are counts (SLSQP iterations per run, :data:`EVALUATION_BUDGET` objective
 evaluations over all levels), so the result is the same on every machine.
 """
@@ -23,7 +24,6 @@ import numpy as np
 from ..problem.build import problem_from_scenario
 from ..problem.constraints import Constraint
 from ..problem.objectives import Objective
-from ..problem.residual import Problem
 from ..problem.scenario import Scenario
 from .certify import certify
 from .optimise import optimise
@@ -162,10 +162,7 @@ def minimise(
         return keep_start()
     residual = float(np.linalg.norm(best_problem.residual(best_beta)))
     checked = certify(best_problem, best_beta, residual, options.tolerance)
-    if (
-        not checked.passed
-        or broken_constraint(checked.problem, constraints, checked.beta)
-    ):
+    if not checked.passed or broken_constraint(checked.problem, constraints, checked.beta):
         # keep the search's root: it was certified
         levels.append(
             Level(

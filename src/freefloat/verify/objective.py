@@ -34,8 +34,11 @@ def _mismatch(field: str, message: str) -> PlanMismatchError:
 
 
 def _old_norm(plan: Plan) -> float:
-    """``min_norm`` of a file before format 4: the squared norm of its free coefficients in
-    the old monomial basis, ``sum_j (b_j T^j)^2`` (rad^2) for the ``t^j`` coefficients ``b_j``."""
+    """``min_norm`` of a file before format 4 (rad^2).
+
+    The squared norm of its free coefficients in the old monomial basis, ``sum_j (b_j T^j)^2``
+    for the ``t^j`` coefficients ``b_j``.
+    """
     total = 0.0
     for values in plan.free_parameters.values():
         for k, value in enumerate(values):

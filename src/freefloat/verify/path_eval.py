@@ -88,9 +88,7 @@ class FilePath:
             p2 = (n + 13) * (n + 14) * _jacobi(n, 2, x)
             q[:, i] += (b[:, None] * p0) @ c
             qd[:, i] += ((b1[:, None] * p0 + b[:, None] * p1) @ c) / T
-            qdd[:, i] += (
-                (b2[:, None] * p0 + 2 * b1[:, None] * p1 + b[:, None] * p2) @ c
-            ) / T**2
+            qdd[:, i] += ((b2[:, None] * p0 + 2 * b1[:, None] * p1 + b[:, None] * p2) @ c) / T**2
         return q, qd, qdd
 
 

@@ -9,9 +9,9 @@ rebuilds the plan's problem from the URDF, the duration, the path coefficients a
 start and goal attitudes, recomputes each record with the functions that wrote it
 (:mod:`freefloat.plans.sampling`), and raises :class:`~freefloat.errors.PlanMismatchError`
 naming the first field that disagrees beyond its tolerance. The order is that of dependence:
-``robot``, ``path.coefficients``, ``free_parameters``, ``request``, ``path_quality``, ``base``, ``feasibility``,
-``samples`` (t, q, qd, qdd, base pose, end effector, base rate, torques), ``solver`` (residual,
-integration error, roots, freedom); the verification figures are compared after the checks
+``robot``, ``path.coefficients``, ``free_parameters``, ``request``, ``path_quality``, ``base``,
+``feasibility``, ``samples`` (t, q, qd, qdd, base pose, end effector, base rate, torques),
+``solver`` (residual, integration error, roots, freedom); the verification figures are compared after the checks
 have run (:func:`compare_verification`).
 
 Tolerances. The recomputation runs the same deterministic code on the same numbers (the
@@ -230,8 +230,8 @@ def check_plan_numbers(plan: Plan, robot: Robot) -> Problem:
         goal = np.array([np.polynomial.polynomial.polyval(T, c) for c in stored])
         joint_tol = RELATIVE_TOLERANCE * np.array(term_scale)
         for name, c, scale in zip(names, stored, term_scale, strict=True):
-            free = plan.free_parameters[name]
-            _compare_terms(f"free_parameters.{name}", free, c, 6, T, scale, unit)
+            stated_free = plan.free_parameters[name]
+            _compare_terms(f"free_parameters.{name}", stated_free, c, 6, T, scale, unit)
         for key, value in (("start_joints", start), ("goal_joints", goal)):
             stated = getattr(plan.request, key)
             _compare(f"request.{key}", stated, value, joint_tol, unit, None, names)

@@ -123,9 +123,7 @@ def free_parameter_lines(p: Plan) -> list[str]:
     if p.basis == MONOMIAL_BASIS:
         free = [
             f"{name}: "
-            + ", ".join(
-                f"t^{6 + k} {c:.9e} {unit[name]}/s^{6 + k}" for k, c in enumerate(values)
-            )
+            + ", ".join(f"t^{6 + k} {c:.9e} {unit[name]}/s^{6 + k}" for k, c in enumerate(values))
             for name, values in p.free_parameters.items()
             if values
         ]
