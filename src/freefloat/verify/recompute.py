@@ -11,8 +11,8 @@ start and goal attitudes, recomputes each record with the functions that wrote i
 naming the first field that disagrees beyond its tolerance. The order is that of dependence:
 ``robot``, ``path.coefficients``, ``free_parameters``, ``request``, ``path_quality``, ``base``,
 ``feasibility``, ``samples`` (t, q, qd, qdd, base pose, end effector, base rate, torques),
-``solver`` (residual, integration error, roots, freedom); the verification figures are compared after the checks
-have run (:func:`compare_verification`).
+``solver`` (residual, integration error, roots, freedom); the verification figures are
+compared after the checks have run (:func:`compare_verification`).
 
 Tolerances. The recomputation runs the same deterministic code on the same numbers (the
 coefficients round-trip through JSON exactly), so a genuine plan disagrees with it by
