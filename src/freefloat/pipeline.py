@@ -52,6 +52,7 @@ from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .progress import stage
 from .solvers.minimise import minimise
+from .solvers.nearest import nearest_root
 from .solvers.options import DEFAULT_TOLERANCE, Solution, SolveOptions
 from .solvers.restore import broken_constraint
 from .solvers.search import SearchResult, search
@@ -134,7 +135,13 @@ def plan(
             ],
         )
     else:
-        report = _norm_report(found.problem, found.solution.beta)
+        with stage("nearest root"):
+            start_value = float(found.solution.beta @ found.solution.beta)
+            nearest = nearest_root(scenario, found, options, constraints)
+            found = replace(nearest.found, tried=[*found.tried, *nearest.tried])
+        report = replace(
+            _norm_report(found.problem, found.solution.beta), start_value=start_value
+        )
     solve_time = time.perf_counter() - clock
     problem = found.problem.with_steps(found.solution.steps)
     with stage("sample and verify"):

@@ -4,7 +4,8 @@
 the quadrature the record names, and must agree to :data:`RELATIVE_TOLERANCE` of its size (the
 computation is the planner's own, so only rounding separates them); ``error_estimate`` must
 agree to that plus half of itself. The unit and duration power must be the objective's, and a
-minimum-norm plan's ``start_value`` must be its ``value``; every objective is non-negative.
+minimum-norm plan's ``start_value`` (the search's root) must be at least its ``value`` (a
+refinement only lowers it); every objective is non-negative.
 Files before format 4 measured ``min_norm`` in their monomial basis: it is recomputed there.
 What cannot be recomputed from the file is the search's history: the value on the
 minimum-norm path the search found first (for other objectives) and the freedom levels tried.
@@ -97,8 +98,10 @@ def check_objective(plan: Plan, problem: Problem, beta: np.ndarray) -> None:
             scale + 0.5 * estimate,
             objective.unit,
         )
-    if record.name == DEFAULT_OBJECTIVE and record.start_value != record.value:
-        raise _mismatch("start_value", "a minimum-norm plan's start value is its value")
+    if record.name == DEFAULT_OBJECTIVE and not (
+        record.start_value is not None and record.start_value >= record.value
+    ):
+        raise _mismatch("start_value", "a minimum-norm plan's start value is at least its value")
     if record.start_value is None or not (
         math.isfinite(record.start_value) and record.start_value >= 0
     ):
