@@ -27,10 +27,10 @@ import numpy as np
 
 from ..problem.build import problem_from_scenario
 from ..problem.constraints import Constraint
+from ..problem.objectives import MinNorm
 from ..problem.paths import excursions
 from ..problem.residual import Problem
 from ..problem.scenario import Scenario
-from ..problem.objectives import MinNorm
 from .certify import certify
 from .newton import polish
 from .optimise import optimise
