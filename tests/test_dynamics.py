@@ -81,7 +81,7 @@ def test_verify_cli_passes_a_good_plan(tmp_path, worked_plan, capsys):
 
 def test_verify_cli_fails_a_tampered_free_parameter(tmp_path, worked_plan, capsys):
     def edit(data):
-        data["path"]["coefficients"]["q2"][6] *= 1.001
+        data["path"]["coefficients"]["q2"][0] *= 1.001
 
     path = _tampered(tmp_path, worked_plan, edit)
     assert main(["verify", str(path)]) == 2
@@ -89,7 +89,7 @@ def test_verify_cli_fails_a_tampered_free_parameter(tmp_path, worked_plan, capsy
     assert err.startswith("freefloat: error: plan field 'free_parameters.q2' disagrees"), err
     # Consistent free parameters too: the checks alone fail the changed path.
     data = json.loads(path.read_text())
-    data["free_parameters"]["q2"][0] = data["path"]["coefficients"]["q2"][6]
+    data["free_parameters"]["q2"][0] = data["path"]["coefficients"]["q2"][0]
     verdict = ff.verify_plan(ff.Plan.from_dict(data), recompute=False)
     assert {"attitude_independent", "boundary"} <= set(verdict.failures)
 

@@ -327,13 +327,7 @@ class PathFamily:
         return values, values @ first, values @ second
 
     def linear_map(self, s: np.ndarray) -> tuple[PathSamples, np.ndarray, np.ndarray]:
-        """The path at instants ``s`` as an affine function of ``beta``.
-
-        Returns:
-            ``(base, dq, dqs)``: the quintic path (``beta = 0``) with its s-derivatives, and the
-            (len(s), N, n_free) arrays with ``q = base.q + dq @ beta`` and
-            ``q_s = base.qd + dqs @ beta``.
-        """
+        """``(base, dq, dqs)`` of :meth:`affine_samples`: ``q = base.q + dq @ beta``, ...."""
         full = self.affine_samples(s)
         return full.base, full.dq, full.dqs
 
