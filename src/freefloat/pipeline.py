@@ -345,7 +345,7 @@ def plan_from_solution(
             joint_kinds=[j.kind for j in robot.joints],
         ),
         duration=T,
-        coefficients=chosen.free_parameters,
+        coefficients={name: list(values) for name, values in chosen.free_parameters.items()},
         free_parameters=chosen.free_parameters,
         base=base,
         feasibility=feasibility_report(problem),
