@@ -135,10 +135,11 @@ def plan(
             ],
         )
     else:
-        with stage("nearest root"):
-            start_value = float(found.solution.beta @ found.solution.beta)
-            nearest = nearest_root(scenario, found, options, constraints)
-            found = replace(nearest.found, tried=[*found.tried, *nearest.tried])
+        start_value = float(found.solution.beta @ found.solution.beta)
+        if not found.problem.planar and scenario.raise_freedom:
+            with stage("nearest root"):
+                nearest = nearest_root(scenario, found, options, constraints)
+                found = replace(nearest.found, tried=[*found.tried, *nearest.tried])
         report = replace(
             _norm_report(found.problem, found.solution.beta), start_value=start_value
         )
