@@ -106,6 +106,12 @@ def plan(
         found, imposed = _search_lazily(
             scenario, options, constraints, keep_broken=chosen.name != DEFAULT_OBJECTIVE
         )
+    searched_norm = float(found.solution.beta @ found.solution.beta)
+    if not found.problem.planar and scenario.raise_freedom:
+        with stage("nearest root"):  # every objective starts from a natural path
+            keep = constraints if chosen.name == DEFAULT_OBJECTIVE else imposed
+            nearest = nearest_root(scenario, found, options, keep)
+            found = replace(nearest.found, tried=[*found.tried, *nearest.tried])
     if chosen.name != DEFAULT_OBJECTIVE:
         with stage(f"minimise {chosen.name}"):
             minimised = minimise(scenario, found, chosen, options, imposed)
@@ -135,13 +141,8 @@ def plan(
             ],
         )
     else:
-        start_value = float(found.solution.beta @ found.solution.beta)
-        if not found.problem.planar and scenario.raise_freedom:
-            with stage("nearest root"):
-                nearest = nearest_root(scenario, found, options, constraints)
-                found = replace(nearest.found, tried=[*found.tried, *nearest.tried])
         report = replace(
-            _norm_report(found.problem, found.solution.beta), start_value=start_value
+            _norm_report(found.problem, found.solution.beta), start_value=searched_norm
         )
     solve_time = time.perf_counter() - clock
     problem = found.problem.with_steps(found.solution.steps)

@@ -1,4 +1,6 @@
-"""The root nearest the quintic, for a default path that strays far from its start-goal spans.
+"""The root nearest the quintic, for a search's path that strays far from its start-goal spans.
+
+Every objective starts from the path this returns (the default objective keeps it).
 
 The search's root is the minimum-norm root its continuation reached, with the least freedom
 that reaches the goal; on some robots (a heavy satellite whose small arm must turn it) that root
