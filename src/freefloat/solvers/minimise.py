@@ -36,7 +36,7 @@ __all__ = ["LEVELS", "MIN_GAIN", "SPATIAL_LEVELS", "Level", "Minimised", "minimi
 #: Free coefficients per joint tried in turn by automatic freedom on planar problems (the
 #: orthonormal basis is exact at any of them; the worked example's least effort falls to
 #: within 1.7 % of the optimal-control figure at 16).
-LEVELS = (4, 16)
+LEVELS = (4, 8, 16)
 #: A level must lower the objective by this fraction of its value to try the next one.
 MIN_GAIN = 0.005
 #: Objective evaluations all levels together may spend, divided by the number of joints (each
