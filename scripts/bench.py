@@ -44,8 +44,12 @@ Robonaut 2's 14 joints keeping the torso still, generated chains of 14 to 24 joi
 dual-arm servicer. True hulls and the certified clearance check (--clearance-only;
 scripts/bench_clearance.py).
 
+Paths (issue 23, with --paths or --paths-only): the orthonormal path basis against the monomial
+basis before it, side by side (scripts/bench_paths.py).
+
 Run: python scripts/bench.py [--runs N] [--json FILE] [--markdown FILE] [--reach-only]
-     [--random N] [--sweep] [--sweep-only] [--multi-arm-only] [--clearance-only]
+     [--random N] [--sweep] [--sweep-only] [--multi-arm-only] [--clearance-only] [--paths]
+     [--paths-only] [--paths-baseline REV]
 
 ``--markdown FILE`` also writes the tables as Markdown, each table preceded by its stamp: the
 date, the machine (CPU, cores), the Python, Pinocchio, numpy and freefloat versions, the load
@@ -77,6 +81,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import minimize, newton, root
 
 import freefloat as ff
+from bench_paths import BASELINE_REVISION, bench_paths, print_paths
 from freefloat.physics import attitude as att
 from freefloat.robot.collision import CollisionModel, known_srdf
 
@@ -889,6 +894,11 @@ def run() -> None:
     parser.add_argument(
         "--robustness-only", action="store_true", help="only the robustness section"
     )
+    parser.add_argument("--paths", action="store_true", help="also the path-basis section")
+    parser.add_argument("--paths-only", action="store_true", help="only the path-basis section")
+    parser.add_argument(
+        "--paths-baseline", default=None, help="git revision of the monomial basis to compare"
+    )
     args = parser.parse_args()
     print(f"machine: {machine()}")
     if args.multi_arm_only:
@@ -912,6 +922,16 @@ def run() -> None:
         )
         if args.json:
             args.json.write_text(json.dumps({"machine": machine(), "robustness": found}, indent=1))
+        return
+    paths = (
+        bench_paths(max(1, min(args.runs, 3)), args.paths_baseline or BASELINE_REVISION)
+        if args.paths or args.paths_only
+        else {}
+    )
+    if args.paths_only:
+        print_paths(paths)
+        if args.json:
+            args.json.write_text(json.dumps({"machine": machine(), "paths": paths}, indent=1))
         return
     objectives = bench_objectives() if args.objectives or args.objectives_only else {}
     if args.objectives_only:
@@ -1000,6 +1020,8 @@ def run() -> None:
     print_collision(collision)
     if objectives:
         print_objectives(objectives)
+    if paths:
+        print_paths(paths)
     if args.json:
         args.json.write_text(
             json.dumps(
@@ -1012,6 +1034,7 @@ def run() -> None:
                     "sweep": sweep,
                     "collision": collision,
                     "objectives": objectives,
+                    "paths": paths,
                 },
                 indent=1,
             )

@@ -23,10 +23,10 @@ import pinocchio as pin
 import freefloat as ff
 from freefloat.problem.constraints.clearance import Clearance
 from freefloat.problem.constraints.registry import scenario_constraints
-from freefloat.problem.paths import JointPolynomials
 from freefloat.robot import geometry
 from freefloat.robot.collision import CollisionModel, known_srdf
 from freefloat.verify.clearance_check import clearance_certificate
+from freefloat.verify.path_eval import file_path
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ("panda_servicer", "ur5_servicer")
@@ -104,20 +104,19 @@ def _certificate_row(name: str, runs: int) -> dict[str, object]:
     s = ff.Scenario.from_toml(path)
     plan = ff.plan(s)
     clearance = next(c for c in scenario_constraints(s) if isinstance(c, Clearance))
-    coefficients = [np.asarray(plan.coefficients[j]) for j in plan.robot.joints]
-    path_poly = JointPolynomials.from_lists([c.tolist() for c in coefficients], plan.duration)
+    path = file_path(plan)
 
     def sampled() -> None:
         clearance._smallest_memo.clear()
         clearance._sampled_memo = None
-        clearance.excess(s.robot, path_poly)
+        clearance.excess(s.robot, plan.path())
 
-    cert = clearance_certificate(s.robot, clearance, coefficients, plan.duration)
+    cert = clearance_certificate(s.robot, clearance, path)
     return {
         "robot": name,
         "sampled_hull_ms": _median_ms(sampled, runs),
         "certificate_ms": _median_ms(
-            lambda: clearance_certificate(s.robot, clearance, coefficients, plan.duration), runs
+            lambda: clearance_certificate(s.robot, clearance, path), runs
         ),
         "instants": cert.instants,
         "halvings": cert.bisections,

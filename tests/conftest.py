@@ -75,18 +75,22 @@ def deg(x: float) -> float:
 
 
 def as_older_format(doc: dict, fmt: str = "freefloat.plan/3") -> dict:
-    """A plan document as a file of an older format would hold it: without every field of
-    format 4 (end effectors, the URDF copy, constraint records, objective parameters, the
-    safety note, the robustness record), and without the objective record for /2."""
-    doc["format"] = fmt
+    """A plan document as a file of an older format holds the same plan: the path as monomials
+    in seconds (:func:`legacy.as_format_3`), without every other field of format 4 (end
+    effectors, the URDF copy, constraint records, objective parameters, the safety note, the
+    robustness record), and without the objective record for /2."""
+    from legacy import as_format_3
+
+    old = as_format_3(doc)
+    old["format"] = fmt
     for key in ("urdf_text", "urdf_sha256", "end_effectors"):
-        doc["robot"].pop(key, None)
-    doc["samples"].pop("end_effector_paths", None)
-    doc.pop("constraints", None)
-    doc.pop("robustness", None)
-    doc.get("safety", {}).pop("note", None)
-    if "objective" in doc:
-        doc["objective"].pop("parameters", None)
+        old["robot"].pop(key, None)
+    old["samples"].pop("end_effector_paths", None)
+    for key in ("constraints", "robustness", "path_quality"):
+        old.pop(key, None)
+    old.get("safety", {}).pop("note", None)
+    if "objective" in old:
+        old["objective"].pop("parameters", None)
         if fmt == "freefloat.plan/2":
-            del doc["objective"]
-    return doc
+            del old["objective"]
+    return old

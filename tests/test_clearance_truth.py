@@ -43,7 +43,7 @@ UR5_GOAL = np.radians([57.3, -57.3, 68.8, -68.8, -57.3, 28.6])
 
 def _quintic(start: np.ndarray, goal: np.ndarray, duration: float) -> PolynomialMotion:
     d = goal - start
-    return PolynomialMotion(
+    return PolynomialMotion.from_monomials(
         [
             [s, 0, 0, 10 * x / duration**3, -15 * x / duration**4, 6 * x / duration**5]
             for s, x in zip(start, d, strict=True)
@@ -115,7 +115,7 @@ def test_a_u_shaped_mesh_gets_its_true_hull_and_verification_its_true_surface(tm
     # Inside the left bar: no triangle is within 3 cm, but the ball is inside the solid.
     inside = Obstacle("inside", "sphere", (0.02,), (1.05, 0.15, 0.05))
     mesh = MeshClearance(robot, None, [inside])
-    still = PolynomialMotion([[0.0]], 1.0)
+    still = PolynomialMotion.from_monomials([[0.0]], 1.0)
     cert = certify(mesh, still, 0.0)
     assert cert.penetration and not cert.certified and "contained" in cert.kind
     assert cert.measured == pytest.approx(-0.03, abs=1e-7)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -30,8 +31,11 @@ def test_plan_without_arguments_plans_the_worked_example(tmp_path, monkeypatch, 
     data = json.loads(plan_path.read_text())
     assert data["format"] == "freefloat.plan/4"
     assert data["robustness"]["inertia_fraction"] == 0.1 and data["robustness"]["rms_rad"] > 0
-    assert data["free_parameters"]["q2"][0] == pytest.approx(-0.552e-4, rel=0.01)
+    # the paper's b26 = -0.552e-4 rad/s^6 is -sqrt(12012) beta / T^6 (docs/method.md section 4)
+    b26 = -math.sqrt(12012.0) * data["free_parameters"]["q2"][0] / 10.0**6
+    assert b26 == pytest.approx(-0.552e-4, rel=0.01)
     assert "achieved" in out and "attitude error" in out and "t^6 -5.518" in out
+    assert "deviation from the quintic 28.8 deg RMS" in out and "path quality" in out
     assert str(plan_path) in out
     html = tmp_path / "freefloat-out" / "plan.html"
     assert html.stat().st_size > 100_000 and str(html) in out

@@ -58,9 +58,7 @@ def test_effort_rows_jacobian_matches_finite_differences(tmp_path):
 def test_dense_peak_matches_a_fine_independent_grid(worked_plan, tmp_path):
     scenario = ff.Scenario.from_toml(_limited_example(tmp_path, 3.0))
     robot = scenario.robot
-    path = JointPolynomials.from_lists(
-        [worked_plan.coefficients[n] for n in worked_plan.robot.joints], worked_plan.duration
-    )
+    path = worked_plan.path()
     peak, _, spread = ff.JointEffortLimits().peaks(robot, path)
     tau = joint_torque_function(worked_plan, ff.MomentumMap(robot))
     t = np.linspace(0.0, worked_plan.duration, 20001)
@@ -86,16 +84,11 @@ def test_shortest_duration_is_exact(worked_plan, tmp_path):
     scenario = ff.Scenario.from_toml(_limited_example(tmp_path, 2.0))
     robot = scenario.robot
     limits = ff.JointEffortLimits()
-    path = JointPolynomials.from_lists(
-        [worked_plan.coefficients[n] for n in worked_plan.robot.joints], worked_plan.duration
-    )
+    path = worked_plan.path()
     shortest = limits.shortest_duration(robot, path)
     assert shortest > worked_plan.duration  # 2 N m is below the plan's peak
-    # the same shape run in `shortest` seconds: t -> t * T / shortest
-    ratio = worked_plan.duration / shortest
-    scaled = JointPolynomials(
-        path.coefficients * ratio ** np.arange(path.coefficients.shape[1]), shortest
-    )
+    # the same shape run in `shortest` seconds (coefficients in normalised time)
+    scaled = JointPolynomials(path.coefficients, shortest)
     peak = limits.worst(robot, scaled)
     assert peak is not None and peak.joint.name == "q1"
     assert peak.fraction == pytest.approx(1.0, abs=1e-9)
@@ -142,8 +135,7 @@ def test_a_plan_of_an_older_format_is_held_to_every_limit_of_its_urdf(tmp_path, 
     scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
     current = ff.plan(scenario)
     assert "joint_effort_limits" in current.verification
-    doc = json.loads(current.to_json())
-    as_older_format(doc, "freefloat.plan/2")
+    doc = as_older_format(json.loads(current.to_json()), "freefloat.plan/2")
     checks = doc["verification"]["checks"]
     doc["verification"]["checks"] = [c for c in checks if c["name"] != "joint_effort_limits"]
     old = tmp_path / "old.json"
@@ -168,7 +160,7 @@ def test_a_plan_of_an_older_format_is_held_to_every_limit_of_its_urdf(tmp_path, 
     doc["robot"]["urdf"] = str(Path(current.robot.urdf))
     # a current plan without its effort check is refused, naming the check list
     doc["format"] = "freefloat.plan/3"
-    doc["objective"] = json.loads(current.to_json())["objective"]
+    doc["objective"] = as_older_format(json.loads(current.to_json()))["objective"]
     tampered = tmp_path / "tampered.json"
     tampered.write_text(json.dumps(doc))
     capsys.readouterr()

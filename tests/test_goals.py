@@ -91,7 +91,7 @@ def test_goal_at_pitch_90_degrees(tmp_path):
     probe = ff.build_problem(
         robot, start_j, goal_j, att.IDENTITY, att.IDENTITY, 8.0, extra=[1, 1, 1]
     )
-    change = probe.achieved(np.array([3.0, -2.0, 4.0]))  # attitude change of a known path
+    change = probe.achieved(np.array([0.03, -0.02, 0.04]))  # attitude change of a known path
     target = ff.quat_from_zyx(0.3, math.pi / 2, 0.0)  # pitch exactly +90 deg
     start = att.quat_multiply(target, att.quat_conjugate(change))
     scenario = ff.Scenario(

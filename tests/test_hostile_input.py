@@ -61,8 +61,8 @@ def _scenario(tmp_path, text, name="s.toml"):
         ({"yaw": "1e20"}, "[goal] base_zyx_deg[0] = 1e+20 deg is outside"),
         (
             {"path": "[path]\nextra = { q2 = 1000000 }"},
-            "[path] extra for 'q2' = 1000000 is outside the supported range [0, 7]; "
-            "polynomial degree at most 12",
+            "[path] extra for 'q2' = 1000000 is outside the supported range [0, 20]; "
+            "polynomial degree at most 25",
         ),
         (
             {"path": "[path]\nmax_deviation_deg = 1e308"},
@@ -113,8 +113,8 @@ def test_limits_in_the_api(planar_robot):
     with pytest.raises(ff.InputLimitError) as info:
         ff.build_problem(planar_robot, [0, 0], [1, 1], [0, 0, 0, 1], [0, 0, 0, 1], 1e-300)
     assert (info.value.name, info.value.low, info.value.high) == ("duration", 1e-3, 1e6)
-    with pytest.raises(ff.InputLimitError, match="free coefficients of 'q2' = 8"):
-        ff.build_problem(planar_robot, [0, 0], [1, 1], [0, 0, 0, 1], [0, 0, 0, 1], 1.0, [0, 8])
+    with pytest.raises(ff.InputLimitError, match="free coefficients of 'q2' = 21"):
+        ff.build_problem(planar_robot, [0, 0], [1, 1], [0, 0, 0, 1], [0, 0, 0, 1], 1.0, [0, 21])
     with pytest.raises(ff.InputLimitError, match=r"tolerance = 1e-30 rad is outside"):
         ff.SolveOptions(tolerance=1e-30)
     with pytest.raises(ff.InputLimitError, match=r"samples = 20000000 is outside"):

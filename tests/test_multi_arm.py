@@ -498,7 +498,7 @@ arms = [
 def test_a_format_3_plan_still_loads_verifies_and_keeps_its_format(worked_plan, tmp_path):
     data = json.loads(worked_plan.to_json())
     assert data["format"] == "freefloat.plan/4"
-    as_older_format(data)
+    data = as_older_format(data)
     path = tmp_path / "old.json"
     path.write_text(json.dumps(data))
     old = ff.Plan.load(path)

@@ -68,7 +68,7 @@ def test_a_relative_path_is_read_from_the_plans_folder(moved, tmp_path, monkeypa
     path, urdf = moved
     doc = json.loads(path.read_text())
     doc["robot"]["urdf"] = "robot/robot.urdf"
-    as_older_format(doc)  # as a format-3 file: only the path counts
+    doc = as_older_format(doc)  # as a format-3 file: only the path counts
     path.write_text(json.dumps(doc))
     elsewhere = tmp_path / "elsewhere"
     (elsewhere / "robot").mkdir(parents=True)
@@ -93,7 +93,7 @@ def test_a_format_4_plan_without_its_copy_is_refused(moved, capsys):
 def test_older_plans_keep_their_format(moved):
     path, _ = moved
     doc = json.loads(path.read_text())
-    as_older_format(doc)
+    doc = as_older_format(doc)
     path.write_text(json.dumps(doc))
     again = json.loads(ff.Plan.load(path).to_json())
     assert again["format"] == "freefloat.plan/3" and "urdf_text" not in again["robot"]

@@ -294,7 +294,7 @@ def test_a_format_3_plan_is_held_to_the_limits_it_promised(tmp_path, capsys, wor
     assert [c["name"] for c in data["constraints"]] == list(
         ff.plans.format.PROMISED["freefloat.plan/3"]
     )
-    as_older_format(data)
+    data = as_older_format(data)
     path = tmp_path / "old.json"
     path.write_text(json.dumps(data))
     assert main(["verify", str(path)]) == 0, capsys.readouterr().err
@@ -320,9 +320,9 @@ def _tool_angles_deg(plan: ff.Plan, robot: ff.Robot, axis, direction, samples=20
 
 
 def test_a_binding_cone_is_held_on_a_spatial_servicer(ur5_scenario, tmp_path, capsys):
-    """The UR5's tool axis swings 1.1 deg beyond its ends' angle on the minimum-norm path; a
-    cone 0.44 deg tighter than that swing is held, touching its edge."""
-    axis = np.array([0.0, 0.0, 1.0])
+    """The UR5's tool x axis swings 1.9 deg beyond its ends' angle on the default path; a cone
+    0.28 deg tighter than that swing is held, touching its edge."""
+    axis = np.array([1.0, 0.0, 0.0])
     free = ff.plan(ur5_scenario)
     robot = ur5_scenario.robot
     import pinocchio as pin
@@ -335,8 +335,8 @@ def test_a_binding_cone_is_held_on_a_spatial_servicer(ur5_scenario, tmp_path, ca
     direction = (ends[0] + ends[1]) / np.linalg.norm(ends[0] + ends[1])
     swing = _tool_angles_deg(free, robot, axis, direction)
     edge = max(swing[0], swing[-1])
-    half = edge + 0.6 * (swing.max() - edge)
-    assert swing.max() > half + 0.4  # the minimum-norm path breaks the cone
+    half = edge + 0.85 * (swing.max() - edge)
+    assert swing.max() > half + 0.25  # the default path breaks the cone
     cone = EndEffectorCone(axis, direction, math.radians(half))
     held = ff.plan(ur5_scenario, constraints=[*scenario_constraints(ur5_scenario), cone])
     angles = _tool_angles_deg(held, robot, axis, direction, 4001)

@@ -309,7 +309,7 @@ def test_the_robustness_record_is_recomputed_by_verify_and_old_plans_load(tmp_pa
     tampered.write_text(json.dumps(data))
     assert main(["verify", str(tampered)]) == 2
     older = recorded.to_dict()
-    as_older_format(older)
+    older = as_older_format(older)
     old = tmp_path / "old.json"
     old.write_text(json.dumps(older))
     loaded = ff.Plan.load(old)

@@ -11,6 +11,8 @@ import pytest
 
 import freefloat as ff
 
+from legacy import as_format_3
+
 SRC = Path(__file__).resolve().parents[1] / "src" / "freefloat"
 
 
@@ -47,9 +49,7 @@ def test_a_toy_constraint_through_the_public_interface_is_honoured(registered):
     assert max(np.array(free.samples.q)[:, 1]) > 1.9  # the minimum-norm root overshoots q2
     constraints = [*ff.default_constraints(), BelowOnJoint(1, 1.6)]
     held = ff.plan(scenario, constraints=constraints)
-    path = ff.JointPolynomials.from_lists(
-        [held.coefficients[n] for n in held.robot.joints], held.duration
-    )
+    path = held.path()
     assert path.extremes(1, 0)[1][0] <= 1.6 + 1e-9  # exact maximum of the polynomial
     assert "toy_ceiling" in held.verification
     assert held.base.attitude_error_rad < 1e-9
@@ -82,7 +82,7 @@ def test_typed_round_trip(tmp_path, worked_plan):
 
 
 def test_a_plan_file_of_format_1_still_loads_and_verify_recomputes(tmp_path, worked_plan):
-    data = worked_plan.to_dict()
+    data = as_format_3(worked_plan.to_dict())
     data["format"] = "freefloat.plan/1"
     data["verification"] = {"passed": True, "momentum_max": 0.0}  # the old untyped section
     path = tmp_path / "old.json"

@@ -101,7 +101,7 @@ def light_wrist(tmp_path_factory) -> tuple[ff.Robot, ff.Plan]:
     )
     # A three-axis goal the path family reaches: the attitude of one of its members.
     scenario = dataclasses.replace(
-        scenario, extra=extra, goal_attitude=probe.achieved(np.full(probe.n_free, 0.5))
+        scenario, extra=extra, goal_attitude=probe.achieved(np.full(probe.n_free, 0.05))
     )
     return arm, ff.plan(scenario, samples=41)
 
@@ -113,7 +113,8 @@ def test_light_wrist_plan_refused_by_the_fixed_step_replay_now_passes(light_wris
     t = np.linspace(0.0, p.duration, 1001)
     table = inverse_dynamics_batch(mmap, *_path(p, t)).tau
     coarse = ff.replay(mmap, start, np.array(p.base.start_quaternion_xyzw), table, p.duration, 500)
-    assert np.abs(coarse.joints - goal).max() > 1e-2  # what the old fixed 500 steps judged
+    # what the old fixed 500 steps judged: far from the goal, or diverged (NaN)
+    assert not np.abs(coarse.joints - goal).max() <= 1e-2
     v = p.verification
     assert v.passed
     joints = v["replay_joints"]
@@ -123,11 +124,11 @@ def test_light_wrist_plan_refused_by_the_fixed_step_replay_now_passes(light_wris
 
 def test_corrupted_plan_is_refused(worked_plan, light_wrist):
     for p, robot_ in ((worked_plan, None), (light_wrist[1], light_wrist[0])):
-        name = p.robot.joints[-1]
+        name = [n for n in p.robot.joints if p.coefficients[n]][-1]  # the last with any
         coefficients = {k: list(v) for k, v in p.coefficients.items()}
         coefficients[name][-1] += 1e-6
         bad = dataclasses.replace(p, coefficients=coefficients)
-        # the last coefficient is a free parameter (worked example) or moves the goal (wrist)
+        # the last coefficient is a free parameter
         named = f"'(free_parameters.{name}|request.goal_joints)' disagrees"
         with pytest.raises(ff.PlanMismatchError, match=named):
             ff.verify_plan(bad, robot_)

@@ -82,12 +82,12 @@ def _figure(d):
     [
         (_bump_tau, "samples.tau", "by 1e-06 N m at t = 2.5 s (q1)"),
         (_double_tau, "samples.tau", "N m at t = "),
-        (_free, "free_parameters.q2", "rad/s^k (k = 6)"),
+        (_free, "free_parameters.q2", "rad (entry 0)"),
         (_move_ee, "samples.end_effector_position", "by 0.1 m at t = 0 s (x)"),
-        (
+        (  # format 4: the request defines the quintic, so the path moves with it
             lambda d: d["request"]["start_joints"].__setitem__(0, 1.0),
-            "request.start_joints",
-            "(q1)",
+            "base.achieved_quaternion_xyzw",
+            "rad",
         ),
         (lambda d: d["samples"]["q"][7].__setitem__(1, 0.5), "samples.q", "at t = 0.35 s (q2)"),
         (lambda d: d["samples"]["base_zyx_deg"][9].__setitem__(0, 1.0), "samples.base_zyx_deg", ""),
@@ -142,22 +142,22 @@ def test_a_stated_flag_must_say_what_the_figures_say(original, tmp_path, capsys)
     ("change", "message"),
     [
         (
-            lambda d: d["path"]["coefficients"]["q1"].__setitem__(3, float("nan")),
-            "plan field 'path.coefficients.q1[3]' is nan; every number must be finite",
+            lambda d: d["path"]["coefficients"]["q2"].__setitem__(0, float("nan")),
+            "plan field 'path.coefficients.q2[0]' is nan; every number must be finite",
         ),
         (
-            lambda d: d["path"]["coefficients"]["q1"].__setitem__(3, 1e308),
-            "plan field 'path.coefficients.q1[3]' is 1e+308, beyond the 1e+100",
+            lambda d: d["path"]["coefficients"]["q2"].__setitem__(0, 1e308),
+            "plan field 'path.coefficients.q2[0]' is 1e+308, beyond the 1e+100",
         ),
         (
-            lambda d: d["path"]["coefficients"]["q1"].__setitem__(3, 1e20),
-            "its term reaches 1e+23 at t = T, beyond the 1e+06 (rad or m)",
+            lambda d: d["path"]["coefficients"]["q2"].__setitem__(0, 1e20),
+            "its term reaches 1e+20, beyond the 1e+06 (rad or m)",
         ),
         (lambda d: d.__setitem__("duration", "nan"), "duration: expected a number, got 'nan'"),
         (lambda d: d.__setitem__("duration", 1e-300), "duration: 1e-300 is less than the minimum"),
         (
-            lambda d: d["path"]["coefficients"]["q1"].__setitem__(3, "1.0"),
-            "path.coefficients.q1[3]: expected a number, got '1.0'",
+            lambda d: d["path"]["coefficients"]["q2"].__setitem__(0, "1.0"),
+            "path.coefficients.q2[0]: expected a number, got '1.0'",
         ),
         (lambda d: d["samples"]["q"].pop(), "'samples.q' has 200 rows, expected 201"),
         (lambda d: d["samples"]["tau"].pop(), "'samples.tau' has 200 rows, expected 201"),
@@ -171,7 +171,7 @@ def test_a_stated_flag_must_say_what_the_figures_say(original, tmp_path, capsys)
         ),
         (
             lambda d: d["path"]["coefficients"]["q2"].extend([0.0] * 30),
-            "path.coefficients.q2: expected 21 entries or max",
+            "path.coefficients.q2: expected 25 entries or max",
         ),
         (
             lambda d: d["free_parameters"]["q2"].append(0.0),
@@ -300,6 +300,6 @@ def test_show_catches_a_urdf_changed_after_planning(original, tmp_path, capsys):
     assert f"the URDF {urdf} has changed since the plan was made" in line
     assert not page.exists()
     # A format-3 plan carries no URDF copy: its numbers disagree with the changed file's.
-    as_older_format(data)
+    data = as_older_format(data)
     line = _refused(capsys, "show", _write(tmp_path, data), "--html", page, "-q")
     assert "disagrees with the recomputation" in line and not page.exists()

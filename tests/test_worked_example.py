@@ -50,9 +50,21 @@ def test_bounds_gains_are_extremes_of_the_closed_form(planar_robot):
     assert bounds.g_max == pytest.approx(values.max(axis=0), abs=1e-5)
 
 
+#: phi_0 = C0 s^3 (1 - s)^3 with C0 = sqrt(13 * 12! / 6!^2) = sqrt(12012); the paper's
+#: s^6 - (a3 s^3 + a4 s^4 + a5 s^5) is -s^3 (1 - s)^3, so b26 T^6 = -C0 beta.
+C0 = math.sqrt(12012.0)
+
+
+def _b26(beta: float, duration: float = 10.0) -> float:
+    """The paper's t^6 coefficient (rad/s^6) of a path whose free parameter is ``beta`` (rad)."""
+    return -C0 * beta / duration**6
+
+
 def test_minimum_norm_root_b26(worked_plan):
-    (b26,) = worked_plan.free_parameters["q2"]
+    (beta,) = worked_plan.free_parameters["q2"]
     assert worked_plan.free_parameters["q1"] == []
+    b26 = worked_plan.path().monomials()[1, 6]  # the plan's path in the old units
+    assert b26 == pytest.approx(_b26(beta), rel=1e-9)
     assert b26 == pytest.approx(-0.552e-4, rel=0.01)
     # Independent truth: the closed-form yaw integral with docs/method.md's printed coefficients.
     c1, c2 = ref.worked_example_coefficients(b26)
@@ -61,7 +73,7 @@ def test_minimum_norm_root_b26(worked_plan):
 
 def test_all_roots_listed_and_minimum_norm_is_shortest(worked_plan):
     solutions = worked_plan.solver.solutions
-    b26s = [s.free_parameters["q2"][0] for s in solutions]
+    b26s = [_b26(s.free_parameters["q2"][0]) for s in solutions]
     # docs/method.md: five roots between -5e-4 and 5e-4.
     assert len([b for b in b26s if abs(b) < 5e-4]) == 5
     assert abs(b26s[0]) == min(abs(b) for b in b26s)
@@ -73,34 +85,28 @@ def test_all_roots_listed_and_minimum_norm_is_shortest(worked_plan):
 
 
 def test_coefficients_equal_the_printed_polynomials(worked_plan):
-    (b26,) = worked_plan.free_parameters["q2"]
-    c1, c2 = ref.worked_example_coefficients(b26)
-    coeffs = worked_plan.coefficients
-    np.testing.assert_allclose(coeffs["q1"][::-1], c1, rtol=1e-12, atol=1e-18)
-    np.testing.assert_allclose(coeffs["q2"][::-1], c2, rtol=1e-10, atol=1e-18)
+    c1, c2 = ref.worked_example_coefficients(_b26(worked_plan.free_parameters["q2"][0]))
+    coeffs = worked_plan.path().monomials()
+    np.testing.assert_allclose(coeffs[0][: len(c1)][::-1], c1, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(coeffs[1][::-1], c2, rtol=1e-10, atol=1e-14)
 
 
 def test_achieved_yaw_within_1e9(worked_plan):
     assert worked_plan.base.attitude_error_rad < 1e-9
     # Independent: adaptive quadrature of the closed form along the planned polynomials.
-    c1 = np.array(worked_plan.coefficients["q1"][::-1])
-    c2 = np.array(worked_plan.coefficients["q2"][::-1])
+    monomials = worked_plan.path().monomials()
+    c1, c2 = monomials[0][::-1], monomials[1][::-1]
     yaw = math.radians(-50.0) + ref.yaw_change(c1, c2, 10.0)
     assert abs(yaw) < 1e-9
     assert worked_plan.base.achieved_zyx_deg[0] == pytest.approx(0.0, abs=1e-7)
 
 
 def test_joint_boundary_conditions_exact(worked_plan):
-    poly = np.polynomial.polynomial
     start, goal = (deg(80), deg(30)), (deg(-60), deg(90))
-    for i, name in enumerate(["q1", "q2"]):
-        c = worked_plan.coefficients[name]
-        assert poly.polyval(0.0, c) == pytest.approx(start[i], abs=1e-15)
-        assert poly.polyval(10.0, c) == pytest.approx(goal[i], abs=1e-12)
-        for order in (1, 2):
-            d = poly.polyder(c, order)
-            assert abs(poly.polyval(0.0, d)) < 1e-15
-            assert abs(poly.polyval(10.0, d)) < 1e-12
+    ends = worked_plan.path().evaluate(np.array([0.0, 10.0]))
+    assert ends.q[0] == pytest.approx(start, abs=1e-15)
+    assert ends.q[1] == pytest.approx(goal, abs=1e-14)
+    assert np.abs(ends.qd).max() < 1e-15 and np.abs(ends.qdd).max() < 1e-15
     q = np.array(worked_plan.samples.q)
     assert q[0] == pytest.approx(start, abs=1e-15)
     assert q[-1] == pytest.approx(goal, abs=1e-12)
@@ -118,8 +124,8 @@ def test_duration_does_not_change_the_path(worked_scenario, worked_plan, duratio
     scenario = ff.Scenario(**{**worked_scenario.__dict__, "duration": duration})
     other = ff.plan(scenario)
     (b_ref,), (b_new,) = worked_plan.free_parameters["q2"], other.free_parameters["q2"]
-    # Same path: b26 scales as T^-6, the attitude reached is the same.
-    assert b_new * duration**6 == pytest.approx(b_ref * 10.0**6, rel=1e-9)
+    # Same path: the free parameter does not depend on T, the attitude reached is the same.
+    assert b_new == pytest.approx(b_ref, rel=1e-9)
     assert other.base.achieved_quaternion_xyzw == pytest.approx(
         worked_plan.base.achieved_quaternion_xyzw, abs=1e-12
     )
@@ -141,7 +147,7 @@ def test_duration_does_not_change_the_path(worked_scenario, worked_plan, duratio
 def test_attitude_integral_accurate_to_1e10(worked_scenario, b26):
     problem = worked_problem(worked_scenario, {"q2": 1})
     c1, c2 = ref.worked_example_coefficients(b26)
-    assert problem.yaw_change_of(np.array([b26 * 10.0**6])) == pytest.approx(
+    assert problem.yaw_change_of(np.array([-b26 * 10.0**6 / C0])) == pytest.approx(
         ref.yaw_change(c1, c2, 10.0), abs=1e-10
     )
 
@@ -186,7 +192,7 @@ def test_spatial_integrator_agrees_with_the_planar_integral(worked_scenario, wor
     import dataclasses
 
     problem = worked_problem(worked_scenario, {"q2": 1})
-    beta = np.array([worked_plan.free_parameters["q2"][0] * 10.0**6])
+    beta = np.array(worked_plan.free_parameters["q2"])
     spatial = dataclasses.replace(problem, planar=False)
     assert ff.geodesic_angle(spatial.achieved(beta), problem.achieved(beta)) < 1e-12
     assert ff.geodesic_angle(spatial.achieved(beta), problem.goal_quaternion) < 1e-9

@@ -37,7 +37,13 @@ from .plans.reports import (
     objective_report,
     safety_report,
 )
-from .plans.sampling import base_report, feasibility_report, sample_solution, solution_record
+from .plans.sampling import (
+    base_report,
+    feasibility_report,
+    path_quality,
+    sample_solution,
+    solution_record,
+)
 from .problem.build import check_joint_limits
 from .problem.constraints import (
     Clearance,
@@ -50,14 +56,16 @@ from .problem.constraints import (
 from .problem.constraints.clearance import clearance_at
 from .problem.limits import check_samples
 from .problem.objectives import DEFAULT_OBJECTIVE, Objective, objective_named
+from .problem.paths import boundary_errors
 from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .progress import stage
 from .solvers.minimise import minimise
+from .solvers.nearest import nearest_root
 from .solvers.options import DEFAULT_TOLERANCE, Solution, SolveOptions
 from .solvers.restore import broken_constraint
 from .solvers.search import SearchResult, search
-from .verify.checks import boundary_errors, verify_plan
+from .verify.checks import verify_plan
 
 __all__ = ["BOUNDARY_TOLERANCE", "plan", "plan_from_solution"]
 
@@ -114,12 +122,20 @@ def plan(
         found, imposed = _search_lazily(
             scenario, options, constraints, keep_broken=chosen.name != DEFAULT_OBJECTIVE
         )
+    searched_norm = float(found.solution.beta @ found.solution.beta)
+    if not found.problem.planar and scenario.raise_freedom:
+        with stage("nearest root"):  # every objective starts from a natural path
+            keep = constraints if chosen.name == DEFAULT_OBJECTIVE else imposed
+            nearest = nearest_root(scenario, found, options, keep)
+            found = replace(nearest.found, tried=[*found.tried, *nearest.tried])
     if chosen.name != DEFAULT_OBJECTIVE:
         with stage(f"minimise {chosen.name}"):
             minimised = minimise(scenario, found, chosen, options, imposed)
             left_out = [c for c in constraints if c not in imposed]
             if left_out and _broken(minimised.found, left_out):
                 again = minimise(scenario, minimised.found, chosen, options, constraints)
+                if _broken(again.found, left_out):  # from the search's own path instead
+                    again = minimise(scenario, found, chosen, options, constraints)
                 minimised = replace(
                     again,
                     start_value=minimised.start_value,
@@ -129,7 +145,7 @@ def plan(
         _explain_lazy_breaks(found, [c for c in constraints if c.lazy])
         report = objective_report(minimised)
     else:
-        report = norm_report(found.problem, found.solution.beta)
+        report = replace(norm_report(found.problem, found.solution.beta), start_value=searched_norm)
     solve_time = time.perf_counter() - clock
     problem = found.problem.with_steps(found.solution.steps)
     with stage("sample and verify"):
@@ -292,9 +308,9 @@ def plan_from_solution(
     sampled_error = geodesic_angle(
         np.asarray(sampled.base_quaternion_xyzw[-1]), problem.goal_quaternion
     )
-    boundary = boundary_errors(
-        family.time_coefficients(solution.beta, T), family.start, family.goal, T
-    )["relative_max"]
+    boundary = boundary_errors(problem.polynomials(solution.beta), family.start, family.goal)[
+        "relative_max"
+    ]
     if max(error, sampled_error) > tolerance or boundary > BOUNDARY_TOLERANCE:
         raise SolverError(
             "the planned path misses its target (attitude error "
@@ -318,10 +334,7 @@ def plan_from_solution(
             urdf_sha256=sha256_hex(robot.urdf_text),
         ),
         duration=T,
-        coefficients={
-            name: c.tolist()
-            for name, c in zip(names, family.time_coefficients(solution.beta, T), strict=True)
-        },
+        coefficients={name: list(values) for name, values in chosen.free_parameters.items()},
         free_parameters=chosen.free_parameters,
         base=base,
         feasibility=feasibility_report(problem),
@@ -345,6 +358,7 @@ def plan_from_solution(
         constraints=constraint_records(
             default_constraints() if constraints is None else constraints
         ),
+        quality=path_quality(problem, solution.beta),
     )
     if not verify:
         return unverified

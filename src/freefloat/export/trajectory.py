@@ -131,13 +131,9 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
     robot = plan_robot(plan)
     mmap = MomentumMap(robot)
     frames = list(robot.end_effectors)
-    poly = np.polynomial.polynomial
-    coefficients = [np.asarray(plan.coefficients[name], float) for name in plan.robot.joints]
-
-    def evaluate(at: np.ndarray, order: int) -> np.ndarray:
-        return np.stack([poly.polyval(at, poly.polyder(c, order)) for c in coefficients], -1)
-
-    q, qd, qdd = evaluate(t, 0), evaluate(t, 1), evaluate(t, 2)
+    path = plan.path()
+    exact = path.evaluate(t)
+    q, qd, qdd = exact.q, exact.qd, exact.qdd
 
     # Attitude: Magnus steps on a fine grid that contains every output instant.
     edges = [0.0]
@@ -147,7 +143,8 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
             edges.extend(np.linspace(a, b, steps + 1)[1:].tolist())
     fine = np.asarray(edges)
     nodes, h = step_nodes(fine)
-    omega = mmap.base_rates(evaluate(nodes, 0), evaluate(nodes, 1)).omega.reshape(-1, 3, 3)
+    at_nodes = path.evaluate(nodes)
+    omega = mmap.base_rates(at_nodes.q, at_nodes.qd).omega.reshape(-1, 3, 3)
     attitudes = propagate(
         np.asarray(plan.base.start_quaternion_xyzw, float), magnus_increments(omega, h)
     )

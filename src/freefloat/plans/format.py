@@ -9,8 +9,12 @@ sees half a plan and a failure leaves nothing behind. Units: seconds, radians (m
 prismatic joints and positions); Euler angles, marked ``_deg``, in degrees. Positions are in
 the inertial frame whose origin is the system centre of mass (docs/method.md section 10).
 
-Schema versions: ``freefloat.plan/4`` (this one) adds every end effector, makes a plan
-self-contained and records its plug-ins: ``robot.end_effectors`` (the frames, the first being
+Schema versions: ``freefloat.plan/4`` (this one) stores the joint paths in the orthonormal
+basis of :mod:`freefloat.problem.basis` (``path.basis = "quintic+jacobi66"``: per joint the
+coefficients ``beta`` in rad, the quintic between ``request.start_joints`` and
+``request.goal_joints`` implied; ``free_parameters`` and each root's are the same ``beta``) and
+adds the ``path_quality`` record; it also adds every end effector, makes a plan self-contained
+and records its plug-ins: ``robot.end_effectors`` (the frames, the first being
 ``robot.end_effector``) and ``samples.end_effector_paths`` (each one's positions, by frame;
 ``samples.end_effector_position`` stays the first one's); ``robot`` carries the text of the URDF
 the plan was made with (``urdf_text``) and its SHA-256 (``urdf_sha256``), and a relative
@@ -21,13 +25,15 @@ objective has its ``parameters``; ``safety.note`` says what clearance could not 
 clearance is verified on the original geometry with a certificate between samples
 (``clearance``, ``clearance_hull_agreement``); the optional ``robustness`` record holds the
 first-order final attitude error under an uncertainty of the mass properties
-(docs/robustness.md). ``freefloat.plan/3`` and older files still load
-and keep their format (their one end effector's path is its only path; they carry no URDF, so
-they are checked against the file their path names, as it is now; whatever their format, they
-are held to every limit their URDF states, :data:`PROMISED`). ``freefloat.plan/3`` adds the
-``objective`` record (what the path minimises, its value and the freedom levels tried) and, for
-robots with URDF effort limits, the ``joint_effort_limits`` check. ``freefloat.plan/2`` files
-were minimum-norm plans (no objective record). ``freefloat.plan/2`` stores the
+(docs/robustness.md). Older files store monomials in seconds (``path.coefficients``: ascending
+powers of t; ``free_parameters``: the coefficients of t^6 and up); they load with
+``Plan.basis == MONOMIAL_BASIS`` and keep their format when re-written (their one end
+effector's path is its only path; they carry no URDF, so they are checked against the file
+their path names, as it is now; whatever their format, they are held to every limit their URDF
+states, :data:`PROMISED`). ``freefloat.plan/3`` adds the ``objective`` record (what the path
+minimises, its value and the freedom levels tried) and, for robots with URDF effort limits, the
+``joint_effort_limits`` check. ``freefloat.plan/2`` files were minimum-norm plans (no objective
+record). ``freefloat.plan/2`` stores the
 verification as a list of typed checks, each with its value, tolerance, unit and the check's
 own numerical error estimate. ``freefloat.plan/1`` files (freefloat 0.1) still load: their
 path, samples and solver report are read as they are and their verification is dropped
@@ -49,13 +55,16 @@ import numpy as np
 
 from ..errors import PlanFileError, excerpt
 from ..files import atomic_write_text
+from ..problem.basis import BASIS_NAME
 from ..problem.objectives.base import Level
+from ..problem.paths import JointPolynomials, PathFamily
 from .limits import MAX_PLAN_BYTES, check_plan_file_kind, check_plan_values
 
 __all__ = [
     "FORMAT",
     "FORMAT_2",
     "FORMAT_3",
+    "MONOMIAL_BASIS",
     "PROMISED",
     "READABLE_FORMATS",
     "BaseReport",
@@ -63,6 +72,7 @@ __all__ = [
     "ConstraintRecord",
     "Feasibility",
     "ObstacleRecord",
+    "PathQuality",
     "Plan",
     "Request",
     "RobotRef",
@@ -92,6 +102,9 @@ PROMISED: dict[str, tuple[str, ...]] = {
     fmt: ("joint_position_limits", "joint_velocity_limits", "joint_effort_limits")
     for fmt in ("freefloat.plan/1", FORMAT_2, FORMAT_3)
 }
+
+#: ``Plan.basis`` of files before format 4: ascending monomial coefficients in t (s).
+MONOMIAL_BASIS = "monomial"
 
 
 @dataclass(frozen=True)
@@ -194,7 +207,8 @@ class SolutionRecord:
     """One root of the attitude equations found by the solver.
 
     Attributes:
-        free_parameters: per joint, the coefficients of ``t^6`` and up (rad/s^k or m/s^k).
+        free_parameters: per joint, the coefficients ``beta`` in the plan's basis (rad or m;
+            before format 4: the coefficients of ``t^6`` and up, rad/s^k or m/s^k).
         residual_rad: norm of the attitude residual there (rad).
         path_length: summed joint travel along the path (rad, plus m for prismatic joints).
     """
@@ -209,7 +223,7 @@ class SolverReport:
     """How the free coefficients were found.
 
     ``solutions`` lists every root found (the chosen one first) with its free parameters
-    (``t^6`` and up, per joint), residual (rad) and summed joint travel (rad or m);
+    (in the plan's basis, per joint), residual (rad) and summed joint travel (rad or m);
     ``freedom`` the free coefficients per joint the planner used; ``full_turns`` the whole turns
     added to continuous joints' goals; ``tried`` every attempt in order. Stage times (s, wall
     clock; 0 when not measured, as in files written before they were recorded): ``solve_time_s``
@@ -414,6 +428,26 @@ class RobustnessReport:
 
 
 @dataclass(frozen=True)
+class PathQuality:
+    """How natural the joint paths are (format 4).
+
+    Attributes:
+        excursion_beyond_span: per joint, how far it goes beyond the interval between its
+            start and goal values (deg; m for prismatic joints), from the exact extremes.
+        largest_excursion: the largest of them (same unit).
+        largest_joint: the joint where it occurs.
+        deviation_rms_deg: ``sqrt(int_0^1 |q(s) - q_quintic(s)|^2 ds)`` in deg (metres of
+            prismatic joints counted as radians): the RMS over normalised time of the
+            joint-space distance from the quintic path; equals ``sqrt(|beta|^2)``.
+    """
+
+    excursion_beyond_span: dict[str, float] = field(default_factory=dict)
+    largest_excursion: float = 0.0
+    largest_joint: str = ""
+    deviation_rms_deg: float = 0.0
+
+
+@dataclass(frozen=True)
 class Plan:
     """A verified point-to-point motion of a free-floating space manipulator."""
 
@@ -432,16 +466,30 @@ class Plan:
     robustness: RobustnessReport | None = None
     format: str = FORMAT
     constraints: list[ConstraintRecord] = field(default_factory=list)
+    basis: str = BASIS_NAME
+    quality: PathQuality | None = None
 
     # -- evaluation -------------------------------------------------------------------------
 
-    def joint_positions(self, t: float | np.ndarray) -> np.ndarray:
-        """Joint values (rad or m) at times ``t`` (s) from the plan's polynomials."""
-        t = np.asarray(t, dtype=float)
-        poly = np.polynomial.polynomial
-        return np.stack(
-            [poly.polyval(t, self.coefficients[name]) for name in self.robot.joints], axis=-1
+    def path(self) -> JointPolynomials:
+        """The joint paths on [0, T], from the file's basis and coefficients."""
+        names = self.robot.joints
+        if self.basis == MONOMIAL_BASIS:
+            return JointPolynomials.from_monomials(
+                [self.coefficients[name] for name in names], self.duration
+            )
+        family = PathFamily(
+            np.asarray(self.request.start_joints, dtype=float),
+            np.asarray(self.request.goal_joints, dtype=float),
+            tuple(5 + len(self.coefficients[name]) for name in names),
         )
+        beta = np.concatenate([np.asarray(self.coefficients[n], dtype=float) for n in names])
+        return family.polynomials(beta, self.duration)
+
+    def joint_positions(self, t: float | np.ndarray) -> np.ndarray:
+        """Joint values (rad or m) at times ``t`` (s) from the plan's path."""
+        t = np.asarray(t, dtype=float)
+        return self.path().evaluate(np.atleast_1d(t)).q.reshape(*t.shape, -1)
 
     # -- file -------------------------------------------------------------------------------
 
@@ -459,7 +507,11 @@ class Plan:
                 "format": self.format,
                 "robot": robot,
                 "duration": self.duration,
-                "path": {"family": "polynomial", "coefficients": self.coefficients},
+                "path": {
+                    "family": "polynomial",
+                    **({} if self.basis == MONOMIAL_BASIS else {"basis": self.basis}),
+                    "coefficients": self.coefficients,
+                },
                 "free_parameters": self.free_parameters,
                 "base": asdict(self.base),
                 "feasibility": asdict(self.feasibility),
@@ -479,6 +531,7 @@ class Plan:
                     if self.robustness is not None and self.format == FORMAT
                     else {}
                 ),
+                **({} if self.quality is None else {"path_quality": asdict(self.quality)}),
             }
         )
 
@@ -523,6 +576,13 @@ class Plan:
                 + " and ".join(repr(f) for f in READABLE_FORMATS)
             )
         check_plan_values(data, where)
+        section = data.get("path")
+        basis = section.get("basis", MONOMIAL_BASIS) if isinstance(section, Mapping) else ""
+        if (fmt == FORMAT) != (basis == BASIS_NAME):
+            raise PlanFileError(
+                f"{where}: path basis {excerpt(basis)} does not belong to format {fmt}; "
+                f"format {FORMAT} stores basis {BASIS_NAME!r}, older formats monomials"
+            )
         try:
             verification = (
                 Verification()  # format 1: its untyped checks are recomputed by verify
@@ -553,6 +613,12 @@ class Plan:
                 format=fmt if fmt in (FORMAT_2, FORMAT_3, FORMAT) else FORMAT_3,  # /1: as /3
                 constraints=_constraints(data, fmt, where),
                 robustness=_robustness(data.get("robustness") if fmt == FORMAT else None),
+                basis=basis,
+                quality=(
+                    None
+                    if data.get("path_quality") is None
+                    else PathQuality(**data["path_quality"])
+                ),
             )
         except _CopyError as exc:
             raise PlanFileError(f"{where}: {exc}") from None

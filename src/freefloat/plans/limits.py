@@ -44,8 +44,9 @@ __all__ = [
 MAX_PLAN_BYTES = 200 * 1024 * 1024
 #: Motion time range (s): a millisecond to about eleven days.
 MIN_DURATION, MAX_DURATION = 1e-3, 1e6
-#: Highest polynomial degree of a joint path (the planner uses 5 to 8).
-MAX_DEGREE = 20
+#: Highest polynomial degree of a joint path (the planner uses 5 to 11; the orthonormal basis
+#: of format 4 stays exact far beyond).
+MAX_DEGREE = 30
 #: Most joints in a plan.
 MAX_JOINTS = 64
 #: Most samples in a plan.
@@ -249,25 +250,8 @@ def _check_path(data: Any, joints: list[str], duration: float) -> list[int]:
     coefficients = _per_joint(
         _key(path, "coefficients", ["path"]), ["path", "coefficients"], joints
     )
-    degrees = []
-    for name in joints:
-        where: list[str | int] = ["path", "coefficients", name]
-        c = coefficients[name]
-        if not isinstance(c, list) or not 6 <= len(c) <= MAX_DEGREE + 1:
-            raise _RefusalError(
-                _field(where),
-                f"must list 6 to {MAX_DEGREE + 1} coefficients (degree 5 to {MAX_DEGREE}), "
-                f"got {excerpt(c)}",
-            )
-        for k, value in enumerate(_vector(c, where, None)):
-            if abs(value) * duration**k > MAX_TERM:
-                raise _RefusalError(
-                    _field([*where, k]),
-                    f"is {excerpt(value)}: its term reaches {abs(value) * duration**k:.3g} at "
-                    f"t = T, beyond the {MAX_TERM:g} (rad or m) a path term may have",
-                )
-        degrees.append(len(c) - 1)
-    return degrees
+    basis = path.get("basis") if isinstance(path, Mapping) else None
+    return [_degree(coefficients[name], name, duration, basis is not None) for name in joints]
 
 
 def _check_samples(samples: Any, n: int, robot: Any) -> None:
@@ -342,6 +326,32 @@ def _check_end_effectors(robot: Any, samples: Any, rows: int) -> None:
         )
     for frame, path in paths.items():
         _rows(path, ["samples", "end_effector_paths", frame], rows, 3, False)
+
+
+def _degree(c: Any, name: str, duration: float, in_basis: bool) -> int:
+    """A joint's path degree from its coefficient list, whose size is checked.
+
+    Format 4 (``in_basis``): 0 to ``MAX_DEGREE - 5`` basis coefficients (rad or m) of basis
+    functions of unit RMS; older formats: 6 to ``MAX_DEGREE + 1`` monomials in t, each term
+    ``c_k T^k`` within :data:`MAX_TERM`.
+    """
+    where: list[str | int] = ["path", "coefficients", name]
+    low, high = (0, MAX_DEGREE - 5) if in_basis else (6, MAX_DEGREE + 1)
+    if not isinstance(c, list) or not low <= len(c) <= high:
+        raise _RefusalError(
+            _field(where),
+            f"must list {low} to {high} coefficients (degree 5 to {MAX_DEGREE}), got {excerpt(c)}",
+        )
+    for k, value in enumerate(_vector(c, where, None)):
+        term = abs(value) * (1.0 if in_basis else duration**k)
+        if term > MAX_TERM:
+            raise _RefusalError(
+                _field([*where, k]),
+                f"is {excerpt(value)}: its term reaches {term:.3g}"
+                f"{'' if in_basis else ' at t = T'}, beyond the {MAX_TERM:g} "
+                "(rad or m) a path term may have",
+            )
+    return len(c) + 5 if in_basis else len(c) - 1
 
 
 def _check_flags(verification: Mapping[str, Any]) -> None:

@@ -20,10 +20,19 @@ import numpy as np
 
 from ..physics.attitude import geodesic_angle, quat_rotate, zyx_from_quat
 from ..physics.dynamics import inverse_dynamics_batch
+from ..problem.paths import excursions
 from ..problem.residual import Problem
-from .format import BaseReport, Feasibility, Samples, SolutionRecord
+from .format import BaseReport, Feasibility, PathQuality, Samples, SolutionRecord
 
-__all__ = ["base_report", "degrees", "feasibility_report", "sample_solution", "solution_record"]
+__all__ = [
+    "base_report",
+    "degrees",
+    "feasibility_report",
+    "free_parameters",
+    "path_quality",
+    "sample_solution",
+    "solution_record",
+]
 
 
 def degrees(values: Sequence[float] | np.ndarray) -> list[float]:
@@ -91,10 +100,35 @@ def feasibility_report(problem: Problem) -> Feasibility:
 def solution_record(
     problem: Problem, beta: np.ndarray, residual: float, path_length: float
 ) -> SolutionRecord:
-    """One root as the plan file records it: free parameters in time (t^6 and up, per joint)."""
-    free = problem.family.free_time_coefficients(beta, problem.duration)
+    """One root as the plan file records it: its free parameters (rad or m, per joint)."""
     return SolutionRecord(
-        free_parameters=dict(zip(problem.robot.joint_names, free, strict=True)),
+        free_parameters=free_parameters(problem, beta),
         residual_rad=residual,
         path_length=path_length,
+    )
+
+
+def free_parameters(problem: Problem, beta: np.ndarray) -> dict[str, list[float]]:
+    """Per joint, its entries of ``beta`` (the basis coefficients, rad or m) in basis order."""
+    out: dict[str, list[float]] = {name: [] for name in problem.robot.joint_names}
+    names = problem.robot.joint_names
+    for value, (joint, _) in zip(np.asarray(beta, float), problem.family.free_index, strict=True):
+        out[names[joint]].append(float(value))
+    return out
+
+
+def path_quality(problem: Problem, beta: np.ndarray) -> PathQuality:
+    """Excursions beyond the start-goal spans (deg; m for prismatic) and RMS deviation (deg)."""
+    family = problem.family
+    beyond = excursions(problem.polynomials(beta), family.start, family.goal)
+    shown = [
+        float(v) if joint.kind == "prismatic" else math.degrees(float(v))
+        for v, joint in zip(beyond, problem.robot.joints, strict=True)
+    ]
+    worst = int(np.argmax(shown))
+    return PathQuality(
+        excursion_beyond_span=dict(zip(problem.robot.joint_names, shown, strict=True)),
+        largest_excursion=shown[worst],
+        largest_joint=problem.robot.joint_names[worst],
+        deviation_rms_deg=math.degrees(math.sqrt(float(np.dot(beta, beta)))),
     )

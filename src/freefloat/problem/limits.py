@@ -61,8 +61,9 @@ MAX_ANGLE_DEG = 3600.0
 MAX_LENGTH_M = 1000.0
 #: Largest magnitude of any other number in a scenario (kg, kg m^2, quaternion components).
 MAX_MAGNITUDE = 1e9
-#: Most free coefficients per joint beyond the quintic (polynomial degree at most 12).
-MAX_EXTRA_COEFFICIENTS = 7
+#: Most free coefficients per joint beyond the quintic (polynomial degree at most 25; the
+#: orthonormal basis keeps the end conditions exactly at any degree).
+MAX_EXTRA_COEFFICIENTS = 20
 #: Most movable joints the planner takes (two 7-joint arms with grippers fit).
 MAX_JOINTS = 24
 #: Most samples of a plan (``--samples``, ``samples =`` of a sweep, an export's ``--rate``

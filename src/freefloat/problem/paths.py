@@ -3,72 +3,68 @@
 Joint i follows a polynomial of degree ``k_i >= 5`` in time on ``[0, T]`` with zero rate and
 acceleration at both ends. Internally time is normalised, ``s = t / T`` in [0, 1]:
 
-    q_i(s) = q_i0 + dq_i (10 s^3 - 15 s^4 + 6 s^5) + sum_{j=6..k_i} beta_ij phi_j(s)
+    q_i(s) = q_i0 + dq_i (10 s^3 - 15 s^4 + 6 s^5) + sum_{n=0..k_i-6} beta_in phi_n(s)
 
-where ``phi_j(s) = s^j - (a3 s^3 + a4 s^4 + a5 s^5)`` keeps the six boundary conditions, so
-that each ``beta_ij`` is exactly the coefficient of ``s^j``; in time it is the coefficient of
-``t^j`` times ``T^j``. The free parameters ``beta`` (rad, or m for prismatic joints) are
-duration independent: the path shape, and so the attitude reached, does not depend on T.
+where ``phi_n`` (degree ``6 + n``) are the orthonormal polynomials of :mod:`.basis`: each keeps
+the six boundary conditions, and ``|beta|^2 = int_0^1 |q(s) - q_quintic(s)|^2 ds`` (rad^2).
+The free parameters ``beta`` (rad, or m for prismatic joints) are duration independent: the
+path shape, and so the attitude reached, does not depend on T. Paths are held and evaluated as
+Chebyshev series in ``x = 2 s - 1`` (stable at any degree and duration), never as monomials.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 
 from ..errors import InputError
+from .basis import basis_chebyshev, quintic_chebyshev
 
 __all__ = [
     "AffineSamples",
     "JointPolynomials",
     "PathFamily",
     "PathSamples",
-    "basis_coefficients",
     "boundary_errors",
+    "excursions",
 ]
 
-_QUINTIC = np.array([0.0, 0.0, 0.0, 10.0, -15.0, 6.0])
+_CHEB = np.polynomial.chebyshev
 
 
-def basis_coefficients(power: int) -> np.ndarray:
-    """Ascending coefficients of ``phi_power(s)``: ``s^power`` with the six end conditions zero."""
-    if power < 6:
-        raise ValueError("free coefficients start at s^6")
-    lhs = np.array([[1.0, 1.0, 1.0], [3.0, 4.0, 5.0], [6.0, 12.0, 20.0]])
-    rhs = np.array([1.0, power, power * (power - 1.0)])
-    a3, a4, a5 = np.linalg.solve(lhs, rhs)
-    coeffs = np.zeros(power + 1)
-    coeffs[3:6] = [-a3, -a4, -a5]
-    coeffs[power] = 1.0
-    return coeffs
+@lru_cache(maxsize=16)
+def _derivative_matrices(width: int) -> tuple[np.ndarray, np.ndarray]:
+    """(width, width) maps from Chebyshev coefficients in x to those of d/ds and d^2/ds^2."""
+    eye = np.eye(width)
+    first = np.zeros((width, width))
+    second = np.zeros((width, width))
+    if width > 1:
+        first[: width - 1] = _CHEB.chebder(eye, 1, scl=2.0)
+    if width > 2:
+        second[: width - 2] = _CHEB.chebder(eye, 2, scl=2.0)
+    return first, second
 
 
 def boundary_errors(
-    coefficients: list[np.ndarray], start: np.ndarray, goal: np.ndarray, duration: float
+    path: JointPolynomials, start: np.ndarray, goal: np.ndarray
 ) -> dict[str, float]:
-    """Boundary-condition errors of joint polynomials (ascending powers of t in s).
+    """Boundary-condition errors of joint paths.
 
-    The same evaluation a plan's verification makes of its stored coefficients.
+    The same evaluation a plan's verification makes of its stored path.
 
     Returns the largest position error against ``start`` and ``goal`` (rad or m), the largest
     end rate (per s) and acceleration (per s^2), and ``relative_max``: the largest of these
     made dimensionless by the duration and the joint travel (at least 1).
     """
-    poly = np.polynomial.polynomial
-    groups = (
-        coefficients,
-        [poly.polyder(c) for c in coefficients],
-        [poly.polyder(c, 2) for c in coefficients],
-    )
-    q0, qd0, qdd0 = (np.array([poly.polyval(0.0, c) for c in g]) for g in groups)
-    q1, qd1, qdd1 = (np.array([poly.polyval(duration, c) for c in g]) for g in groups)
+    ends = path.evaluate(np.array([0.0, path.duration]))
+    duration = path.duration
     travel = np.maximum(1.0, np.abs(goal - start))
-    position = np.maximum(np.abs(q0 - start), np.abs(q1 - goal))
-    rate = np.maximum(np.abs(qd0), np.abs(qd1))
-    accel = np.maximum(np.abs(qdd0), np.abs(qdd1))
+    position = np.maximum(np.abs(ends.q[0] - start), np.abs(ends.q[1] - goal))
+    rate = np.abs(ends.qd).max(axis=0)
+    accel = np.abs(ends.qdd).max(axis=0)
     relative = np.maximum.reduce([position, rate * duration, accel * duration**2]) / travel
     return {
         "position": float(position.max()),
@@ -76,6 +72,20 @@ def boundary_errors(
         "acceleration": float(accel.max()),
         "relative_max": float(relative.max()),
     }
+
+
+def excursions(path: JointPolynomials, start: np.ndarray, goal: np.ndarray) -> np.ndarray:
+    """Per joint, how far the path goes beyond its start-goal span (rad or m, >= 0).
+
+    From the exact extremes of each joint's polynomial: ``max(0, max q - max(q0, q1),
+    min(q0, q1) - min q)``.
+    """
+    out = np.zeros(len(start))
+    for i in range(len(start)):
+        (lo, _), (hi, _) = path.extremes(i, 0)
+        top, bottom = max(start[i], goal[i]), min(start[i], goal[i])
+        out[i] = max(0.0, hi - top, bottom - lo)
+    return out
 
 
 @dataclass(frozen=True)
@@ -116,11 +126,13 @@ class AffineSamples:
 
 @dataclass(frozen=True)
 class JointPolynomials:
-    """Finished joint paths as polynomials in time, as a plan file stores them.
+    """Finished joint paths on [0, T] as Chebyshev series in normalised time.
 
     Attributes:
-        coefficients: (N, K) ascending coefficients of each joint's polynomial in t (s);
-            values in rad (or m), so row i, column k is in rad/s^k.
+        coefficients: (N, K) Chebyshev coefficients of each joint's path in ``x = 2 t / T - 1``
+            (rad or m): ``q_i(t) = sum_k coefficients[i, k] T_k(x)``. They do not depend on
+            the duration: the same array with another ``duration`` is the same shape run
+            faster or slower.
         duration: T (s); the paths are defined on [0, T].
     """
 
@@ -128,32 +140,64 @@ class JointPolynomials:
     duration: float
 
     @classmethod
-    def from_lists(
-        cls, coefficients: Sequence[Sequence[float]], duration: float
+    def from_monomials(
+        cls, coefficients: Sequence[Sequence[float] | np.ndarray], duration: float
     ) -> JointPolynomials:
-        """From per-joint coefficient lists of any lengths (padded with zeros)."""
+        """From per-joint ascending coefficients in ``t`` (s) of any lengths.
+
+        As plan files before format 4 stored them.
+        """
+        duration = float(duration)
         width = max(len(c) for c in coefficients)
         matrix = np.zeros((len(coefficients), width))
         for i, c in enumerate(coefficients):
-            matrix[i, : len(c)] = c
-        return cls(matrix, float(duration))
+            # t = T (1 + x) / 2: a polynomial in x, then its Chebyshev series
+            in_x = np.polynomial.Polynomial(np.asarray(c, float)).convert(domain=[0.0, duration])
+            series = _CHEB.poly2cheb(in_x.coef)
+            matrix[i, : len(series)] = series
+        return cls(matrix, duration)
+
+    def monomials(self) -> np.ndarray:
+        """(N, K) ascending coefficients in ``t`` (s).
+
+        For display and old formats: they lose precision to cancellation at high degree.
+        """
+        out = np.zeros_like(self.coefficients)
+        for i, c in enumerate(self.coefficients):
+            in_x = _CHEB.cheb2poly(c)
+            in_t = np.polynomial.Polynomial(in_x, domain=[0.0, self.duration]).convert(
+                domain=[-1.0, 1.0]
+            )
+            out[i, : len(in_t.coef)] = in_t.coef
+        return out
 
     def derivative(self, order: int) -> np.ndarray:
-        """(N, K - order) coefficients of the ``order``-th time derivative (per s^order)."""
-        c = self.coefficients
-        for _ in range(order):
-            c = c[:, 1:] * np.arange(1, c.shape[1])[None, :]
-        return c if c.shape[1] else np.zeros((len(self.coefficients), 1))
+        """(N, K) Chebyshev coefficients in x of the ``order``-th time derivative (per s^order)."""
+        if order == 0:
+            return self.coefficients
+        if order <= 2:
+            return self._derivatives[order - 1]
+        return self._derived(order)
+
+    def _derived(self, order: int) -> np.ndarray:
+        width = self.coefficients.shape[1]
+        out = np.zeros_like(self.coefficients)
+        if width > order:
+            out[:, : width - order] = _CHEB.chebder(
+                self.coefficients.T, order, scl=2.0 / self.duration
+            ).T
+        return out
+
+    @cached_property
+    def _derivatives(self) -> tuple[np.ndarray, np.ndarray]:
+        """The first two derivatives' coefficients, computed once per path."""
+        return self._derived(1), self._derived(2)
 
     def evaluate(self, t: np.ndarray) -> PathSamples:
         """Positions (rad or m), rates (per s) and accelerations (per s^2) at times ``t`` (s)."""
-        t = np.asarray(t, dtype=float)
-        out = []
-        for order in range(3):
-            c = self.derivative(order)
-            powers = t[:, None] ** np.arange(c.shape[1])[None, :]
-            out.append(powers @ c.T)
-        return PathSamples(*out)
+        x = 2.0 * np.asarray(t, dtype=float) / self.duration - 1.0
+        vander = _CHEB.chebvander(x, self.coefficients.shape[1] - 1)
+        return PathSamples(*(vander @ self.derivative(order).T for order in range(3)))
 
     def extremes(
         self, joint: int, order: int = 0
@@ -161,22 +205,19 @@ class JointPolynomials:
         """Exact ``((min, t_min), (max, t_max))`` of a joint's ``order``-th derivative on [0, T].
 
         Extremes of a polynomial on an interval are at its ends or at real roots of its
-        derivative inside (found by numpy's companion-matrix roots, then evaluated).
+        derivative inside (found as eigenvalues of the Chebyshev colleague matrix, then
+        evaluated).
         """
-        poly = np.polynomial.polynomial
         c = self.derivative(order)[joint]
-        dc = poly.polyder(c) if len(c) > 1 else np.zeros(1)
-        candidates = [0.0, self.duration]
-        if np.any(dc != 0.0):
-            trimmed = np.trim_zeros(dc, "b")
-            if len(trimmed) > 1:
-                for root in poly.polyroots(trimmed):
-                    if abs(root.imag) <= 1e-9 * max(1.0, abs(root.real)):
-                        r = float(root.real)
-                        if 0.0 < r < self.duration:
-                            candidates.append(r)
-        times = np.array(candidates)
-        values = poly.polyval(times, c)
+        dc = np.trim_zeros(_CHEB.chebder(c), "b") if len(c) > 1 else np.zeros(0)
+        candidates = [-1.0, 1.0]
+        if len(dc) > 1:
+            for root in _CHEB.chebroots(dc):
+                if abs(root.imag) <= 1e-9 and -1.0 < root.real < 1.0:
+                    candidates.append(float(root.real))
+        x = np.array(candidates)
+        values = _CHEB.chebval(x, c)
+        times = 0.5 * (x + 1.0) * self.duration
         lo, hi = int(np.argmin(values)), int(np.argmax(values))
         return (float(values[lo]), float(times[lo])), (float(values[hi]), float(times[hi]))
 
@@ -232,80 +273,61 @@ class PathFamily:
 
     @property
     def free_index(self) -> tuple[tuple[int, int], ...]:
-        """``(joint, power)`` of each entry of ``beta``."""
+        """``(joint, degree)`` of each entry of ``beta``: basis polynomial ``phi_{degree-6}``."""
         return self._index
 
     @cached_property
     def _basis(self) -> np.ndarray:
-        """(n_free, max degree + 1) ascending coefficients of each free basis polynomial."""
+        """(n_free, max degree + 1) Chebyshev coefficients in x of each free basis polynomial."""
         width = max(self.degrees) + 1
+        table = basis_chebyshev(max(1, width - 6))
         out = np.zeros((self.n_free, width))
-        for k, (_, power) in enumerate(self._index):
-            out[k, : power + 1] = basis_coefficients(power)
+        for k, (_, degree) in enumerate(self._index):
+            out[k, : degree + 1] = table[degree - 6, : degree + 1]
         return out
 
-    def coefficients(self, beta: np.ndarray) -> list[np.ndarray]:
-        """Ascending coefficients in ``s`` of each joint's polynomial (rad or m)."""
+    def chebyshev(self, beta: np.ndarray) -> np.ndarray:
+        """(N, max degree + 1) Chebyshev coefficients in ``x = 2 s - 1`` of each joint's path."""
         beta = self._check(beta)
-        out = []
-        delta = self.goal - self.start
-        for i, degree in enumerate(self.degrees):
-            c = np.zeros(degree + 1)
-            c[:6] = delta[i] * _QUINTIC
-            c[0] = self.start[i]
-            out.append(c)
+        out = self._coefficient_matrix.T.copy()
         for k, (i, _) in enumerate(self._index):
-            out[i] += beta[k] * self._basis[k, : self.degrees[i] + 1]
+            out[i] += beta[k] * self._basis[k]
         return out
 
-    def time_coefficients(self, beta: np.ndarray, duration: float) -> list[np.ndarray]:
-        """Ascending coefficients in ``t`` (seconds) of each joint's polynomial."""
-        return [c / duration ** np.arange(len(c)) for c in self.coefficients(beta)]
+    def beta_from_path(self, path: JointPolynomials) -> np.ndarray:
+        """The free parameters of a path of this family (its L2 projection on the basis, rad).
 
-    def free_time_coefficients(self, beta: np.ndarray, duration: float) -> list[list[float]]:
-        """Per joint, the coefficients of ``t^6`` and up (rad/s^j or m/s^j)."""
-        beta = self._check(beta)
-        out: list[list[float]] = [[] for _ in self.degrees]
-        for k, (i, power) in enumerate(self._index):
-            out[i].append(float(beta[k] / duration**power))
-        return out
-
-    def beta_from_time_coefficients(
-        self, free: Sequence[Sequence[float]], duration: float
-    ) -> np.ndarray:
-        """Inverse of :meth:`free_time_coefficients`."""
-        beta = np.zeros(self.n_free)
-        counters = [0] * self.n_joints
-        for k, (i, power) in enumerate(self._index):
-            beta[k] = free[i][counters[i]] * duration**power
-            counters[i] += 1
-        return beta
+        Exact for a path of the family (the basis is orthonormal): Gauss-Legendre quadrature
+        of ``(q - q_quintic) phi_n`` with enough nodes for the degrees involved.
+        """
+        nodes = max(path.coefficients.shape[1], max(self.degrees) + 1) + 1
+        x, w = np.polynomial.legendre.leggauss(nodes)
+        deviation = _CHEB.chebvander(x, path.coefficients.shape[1] - 1) @ path.coefficients.T
+        deviation = deviation - self.evaluate(np.zeros(self.n_free), 0.5 * (x + 1.0)).q
+        dq = self.affine_samples(0.5 * (x + 1.0)).dq
+        return 0.5 * np.einsum("k,ki,kif->f", w, deviation, dq)
 
     @cached_property
     def _coefficient_matrix(self) -> np.ndarray:
-        """(max degree + 1, N) coefficients of the quintic paths (beta = 0), zero-padded."""
+        """(max degree + 1, N) Chebyshev coefficients of the quintic paths (beta = 0)."""
         out = np.zeros((max(self.degrees) + 1, self.n_joints))
-        for i, c in enumerate(self.coefficients(np.zeros(self.n_free))):
-            out[: len(c), i] = c
+        blend = quintic_chebyshev()
+        out[: len(blend)] = np.outer(blend, self.goal - self.start)
+        out[0] += self.start
         return out
 
     def _powers(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Powers of ``s`` and their first two derivatives, each (len(s), max degree + 1)."""
-        j = np.arange(max(self.degrees) + 1)
-        s = np.asarray(s, dtype=float)[:, None]
-        powers = s**j
-        first = j * s ** np.maximum(j - 1, 0)
-        second = j * (j - 1) * s ** np.maximum(j - 2, 0)
-        return powers, first, second
+        """Chebyshev polynomials at ``x = 2 s - 1`` and their first two s-derivatives.
+
+        Each (len(s), max degree + 1), as maps from Chebyshev coefficients.
+        """
+        width = max(self.degrees) + 1
+        values = _CHEB.chebvander(2.0 * np.asarray(s, dtype=float) - 1.0, width - 1)
+        first, second = _derivative_matrices(width)
+        return values, values @ first, values @ second
 
     def linear_map(self, s: np.ndarray) -> tuple[PathSamples, np.ndarray, np.ndarray]:
-        """The path at instants ``s`` as an affine function of ``beta``.
-
-        Returns:
-            ``(base, dq, dqs)``: the quintic path (``beta = 0``) with its s-derivatives, and the
-            (len(s), N, n_free) arrays with ``q = base.q + dq @ beta`` and
-            ``q_s = base.qd + dqs @ beta``.
-        """
+        """``(base, dq, dqs)`` of :meth:`affine_samples`: ``q = base.q + dq @ beta``, ...."""
         full = self.affine_samples(s)
         return full.base, full.dq, full.dqs
 
@@ -339,12 +361,9 @@ class PathFamily:
 
     def evaluate(self, beta: np.ndarray, s: np.ndarray) -> PathSamples:
         """Positions and s-derivatives (per unit s, per unit s^2) at normalised instants ``s``."""
-        beta = self._check(beta)
-        c = self._coefficient_matrix.copy()
-        for k, (i, _) in enumerate(self._index):
-            c[:, i] += beta[k] * self._basis[k]
-        powers, first, second = self._powers(np.asarray(s, dtype=float))
-        return PathSamples(powers @ c, first @ c, second @ c)
+        c = self.chebyshev(beta).T
+        values, first, second = self._powers(np.asarray(s, dtype=float))
+        return PathSamples(values @ c, first @ c, second @ c)
 
     def at_times(self, beta: np.ndarray, t: np.ndarray, duration: float) -> PathSamples:
         """Positions (rad or m), rates (per s) and accelerations (per s^2) at times ``t`` (s)."""
@@ -355,8 +374,9 @@ class PathFamily:
         """``beta`` of ``other`` as free coefficients of this family (new ones zero).
 
         The path is unchanged: each free coefficient multiplies the same basis polynomial in
-        both families. None when this family lacks one of ``other``'s coefficients or the two
-        join different configurations.
+        both families (the basis polynomials do not depend on the family's degrees). None when
+        this family lacks one of ``other``'s coefficients or the two join different
+        configurations.
         """
         if not (np.array_equal(self.start, other.start) and np.array_equal(self.goal, other.goal)):
             return None
@@ -369,10 +389,8 @@ class PathFamily:
         return out
 
     def polynomials(self, beta: np.ndarray, duration: float) -> JointPolynomials:
-        """The path at ``beta`` as polynomials in time on [0, ``duration``] (s)."""
-        return JointPolynomials.from_lists(
-            [c.tolist() for c in self.time_coefficients(beta, duration)], duration
-        )
+        """The path at ``beta`` on [0, ``duration``] (s)."""
+        return JointPolynomials(self.chebyshev(beta), float(duration))
 
     def _check(self, beta: np.ndarray) -> np.ndarray:
         beta = np.asarray(beta, dtype=float).reshape(-1)

@@ -62,11 +62,15 @@ def broyden(problem: Problem, beta: np.ndarray, options: SolveOptions) -> tuple[
 
 
 def starts(n: int, count: int) -> list[tuple[str, np.ndarray]]:
-    """The quintic path, then ``count - 1`` deterministic pseudo-random starts (rad)."""
+    """The quintic path, then ``count - 1`` deterministic pseudo-random starts.
+
+    Their sizes, 0.01, 0.03 and 0.1 rad, are RMS deviations from the quintic (``|beta|`` in the
+    orthonormal basis): those of the sizes 1, 3 and 10 the monomial basis used to take.
+    """
     rng = np.random.default_rng(20070101)
     out = [("the quintic path", np.zeros(n))]
     for k in range(1, count):
-        scale = (1.0, 3.0, 10.0)[(k - 1) // 4 % 3]
+        scale = (0.01, 0.03, 0.1)[(k - 1) // 4 % 3]
         direction = rng.normal(size=n)
         beta = scale * direction / np.linalg.norm(direction)
         out.append((f"start {k} (|beta| = {scale:g})", beta))

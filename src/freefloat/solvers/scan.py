@@ -12,7 +12,6 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..problem.constraints import Constraint
-from ..problem.paths import basis_coefficients
 from ..problem.residual import Problem
 from .options import Attempt, SolveOptions
 
@@ -57,8 +56,7 @@ def bracket_roots(
     Sign changes on a coarse grid are refined with Brent's method, or, with a planar map,
     all at once by safeguarded Newton steps with the exact slope.
     """
-    power = problem.family.free_index[0][1]
-    shape = np.polynomial.polynomial.polyval(np.linspace(0.0, 1.0, 201), basis_coefficients(power))
+    shape = problem.family.affine_samples(np.linspace(0.0, 1.0, 201)).dq[:, :, 0]
     half_width = options.max_deviation / np.abs(shape).max()
     grid = np.linspace(-half_width, half_width, options.scan_points)
     coarse = problem.with_steps(max(16, problem.steps // 4))  # sign changes need less accuracy

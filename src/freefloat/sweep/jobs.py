@@ -48,7 +48,8 @@ class SweepRow:
         values: one value per axis, in the scenario file's units (degrees for angles).
         status: ``planned``, ``infeasible`` (outside the planar bounds) or ``failed``.
         attitude_error_rad: angle between achieved and goal attitude (rad); planned only.
-        free_parameter_norm: Euclidean norm of all free coefficients (rad/s^k, m/s^k).
+        free_parameter_norm: Euclidean norm of all free coefficients (rad): the RMS deviation
+            of the joint paths from the quintic (docs/paths.md).
         path_length: summed joint travel of the chosen path (rad, plus m for prismatic).
         peak_torque: largest joint torque magnitude along the samples (N m, or N).
         objective: what the path minimises (``min_norm``, ``min_effort`` ...); planned only.

@@ -39,10 +39,10 @@ from ..plans.robot_copy import plan_robot
 from ..problem.constraints import Constraint, JointEffortLimits, constraint_from_record
 from ..problem.constraints.clearance import Clearance
 from ..problem.constraints.registry import clearance_constraint
-from ..problem.paths import JointPolynomials, boundary_errors
 from ..robot.collision import Obstacle
 from ..robot.model import Robot
 from .clearance_check import clearance_checks
+from .path_eval import FilePath, file_path
 from .recompute import check_plan_numbers, compare_verification
 from .stepping import (
     _FIRST_ATTITUDE_STEPS,
@@ -62,7 +62,6 @@ __all__ = [
     "MAX_REPLAY_STEPS",
     "REPLAY_STEPS_LIMIT",
     "TOLERANCES",
-    "boundary_errors",
     "joint_torque_function",
     "plan_constraints",
     "verify_plan",
@@ -94,15 +93,13 @@ _PREDATED: dict[str, tuple[str, ...]] = {
 }
 
 
-def _polys(plan: Plan) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
-    poly = np.polynomial.polynomial
-    c = [np.asarray(plan.coefficients[name], dtype=float) for name in plan.robot.joints]
-    return c, [poly.polyder(x) for x in c], [poly.polyder(x, 2) for x in c]
+def _polys(plan: Plan) -> FilePath:
+    """The plan's joint paths as its file defines them (:mod:`.path_eval`)."""
+    return file_path(plan)
 
 
-def _state(coeffs: tuple[list[np.ndarray], ...], t: float) -> tuple[np.ndarray, ...]:
-    poly = np.polynomial.polynomial
-    return tuple(np.array([poly.polyval(t, c) for c in group]) for group in coeffs)
+def _state(path: FilePath, t: float) -> tuple[np.ndarray, ...]:
+    return tuple(x[0] for x in path(np.array([t])))
 
 
 def joint_torque_function(plan: Plan, mmap: MomentumMap) -> Callable[[float], np.ndarray]:
@@ -144,17 +141,20 @@ def plan_constraints(plan: Plan, robot: Robot) -> list[Constraint]:
     return constraints
 
 
-def _eval_polys(coefficients: list[np.ndarray], t: np.ndarray) -> np.ndarray:
-    """(K, N) values of N polynomials (ascending powers) at K instants ``t``."""
-    poly = np.polynomial.polynomial
-    return np.stack([poly.polyval(t, c) for c in coefficients], axis=1)
+def _path_at(path: FilePath, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Joint values, rates and accelerations (K, N) of the plan's paths at times ``t`` (s)."""
+    return path(np.asarray(t, dtype=float))
 
 
-def _path_at(
-    coeffs: tuple[list[np.ndarray], ...], t: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Joint values, rates and accelerations (K, N) of the plan's polynomials at times ``t``."""
-    return _eval_polys(coeffs[0], t), _eval_polys(coeffs[1], t), _eval_polys(coeffs[2], t)
+def _boundary(path: FilePath, start: np.ndarray, goal: np.ndarray) -> float:
+    """Largest end-condition error, relative to the duration and the joint travel (>= 1)."""
+    T = path.duration
+    q, qd, qdd = path(np.array([0.0, T]))
+    travel = np.maximum(1.0, np.abs(goal - start))
+    position = np.maximum(np.abs(q[0] - start), np.abs(q[1] - goal))
+    rates = np.abs(qd).max(axis=0) * T
+    accelerations = np.abs(qdd).max(axis=0) * T**2
+    return float((np.maximum.reduce([position, rates, accelerations]) / travel).max())
 
 
 def verify_plan(
@@ -313,7 +313,7 @@ def verify_plan(
         )
         replay_detail += ", not converged: no verdict"
 
-    boundary = boundary_errors(coeffs[0], start, goal, duration)
+    boundary = _boundary(coeffs, start, goal)
     travel = np.maximum(1.0, np.abs(goal - start))
 
     # The samples are the polynomials, sampled.
@@ -361,13 +361,13 @@ def verify_plan(
             joint_estimate,
             replay_detail,
         ),
-        Check("boundary", boundary["relative_max"], tol["boundary_relative"], "1"),
+        Check("boundary", boundary, tol["boundary_relative"], "1"),
         Check("samples", worst, tol["samples_relative"], "1"),
     ]
-    path = JointPolynomials.from_lists([c.tolist() for c in coeffs[0]], duration)
+    path = plan.path()
     for constraint in constraints:
         if isinstance(constraint, Clearance):
-            checks.extend(clearance_checks(robot, constraint, coeffs[0], duration))
+            checks.extend(clearance_checks(robot, constraint, coeffs))
         elif constraint.applies_to(robot):
             excess = constraint.excess(robot, path)
             checks.append(

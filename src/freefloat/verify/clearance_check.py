@@ -12,9 +12,6 @@ Two checks for a plan kept clear (:mod:`freefloat.verify.clearance`):
 from __future__ import annotations
 
 import weakref
-from collections.abc import Sequence
-
-import numpy as np
 
 from ..plans.format import Check
 from ..problem.constraints.clearance import Clearance
@@ -22,6 +19,7 @@ from ..robot.model import Robot
 from .certificate import certify
 from .clearance import HULL_TOLERANCE, ClearanceCertificate, MeshClearance
 from .motion import PolynomialMotion
+from .path_eval import FilePath
 
 __all__ = ["clearance_certificate", "clearance_checks", "mesh_clearance"]
 
@@ -42,20 +40,18 @@ def mesh_clearance(robot: Robot, constraint: Clearance) -> MeshClearance:
 
 
 def clearance_certificate(
-    robot: Robot, constraint: Clearance, coefficients: Sequence[np.ndarray], duration: float
+    robot: Robot, constraint: Clearance, path: FilePath
 ) -> ClearanceCertificate:
-    """The certificate of the path (ascending coefficients in seconds per joint; s)."""
-    motion = PolynomialMotion(coefficients, duration)
+    """The certificate of a plan file's joint paths (:mod:`.path_eval`)."""
+    motion = PolynomialMotion(path, path.duration, path.degree)
     return certify(mesh_clearance(robot, constraint), motion, constraint.margin, constraint.model)
 
 
-def clearance_checks(
-    robot: Robot, constraint: Clearance, coefficients: Sequence[np.ndarray], duration: float
-) -> list[Check]:
+def clearance_checks(robot: Robot, constraint: Clearance, path: FilePath) -> list[Check]:
     """The ``clearance`` and ``clearance_hull_agreement`` checks of a path (see module doc)."""
     if not constraint.applies_to(robot):
         return []
-    cert = clearance_certificate(robot, constraint, coefficients, duration)
+    cert = clearance_certificate(robot, constraint, path)
     return [
         Check("clearance", float(cert.margin - cert.lower_bound), TOLERANCE, "m", 0.0, cert.detail),
         Check(

@@ -14,58 +14,78 @@ an end of the interval or at a real root of ``qdd_j`` inside it.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import pinocchio as pin
 
 from ..robot.model import Robot
 
-__all__ = ["PolynomialMotion", "reach_coefficients"]
+__all__ = ["PathFunction", "PolynomialMotion", "reach_coefficients"]
+
+#: ``path(t)``: joint values, rates and accelerations, each (K, N), at K times t (s).
+PathFunction = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
 class PolynomialMotion:
-    """Joint paths as polynomials in time (ascending powers, s), with exact rate extremes.
+    """Polynomial joint paths on [0, T] with exact extremes of the joint rates.
 
     Args:
-        coefficients: per joint, ascending coefficients of q(t) (rad or m; t in s).
-        duration: the path's duration (s).
+        path: ``path(t)`` gives the joint values, rates and accelerations, each (K, N), at the
+            times ``t`` (s); for example a plan file's own definition
+            (:func:`~freefloat.verify.path_eval.file_path`).
+        duration: T (s).
+        degree: the paths' polynomial degree (at least that of every joint).
     """
 
-    def __init__(self, coefficients: Sequence[Sequence[float]], duration: float) -> None:
-        poly = np.polynomial.polynomial
+    def __init__(self, path: PathFunction, duration: float, degree: int) -> None:
+        self.path = path
         self.duration = float(duration)
-        self.q = [np.asarray(c, dtype=float) for c in coefficients]
-        self.qd = [poly.polyder(c) for c in self.q]
+        # Each joint's acceleration is a polynomial of degree <= degree - 2: interpolated at
+        # that many Chebyshev points it is exact up to rounding, and its real roots in (0, T)
+        # are where the rates peak.
+        points = max(degree - 1, 1)
+        chebyshev = np.polynomial.Chebyshev
+        x = np.cos(np.pi * (np.arange(points) + 0.5) / points)
+        acceleration = path(0.5 * (x + 1.0) * self.duration)[2]
         roots: list[tuple[float, int]] = []
-        for j, c in enumerate(self.q):
-            acceleration = poly.polyder(c, 2)
-            if len(acceleration) < 2 or not np.any(acceleration[1:]):
+        for j in range(acceleration.shape[1]):
+            series = chebyshev.fit(x, acceleration[:, j], points - 1, domain=[-1, 1])
+            if not np.any(np.abs(series.coef[1:]) > 0.0):
                 continue
-            for r in np.atleast_1d(poly.polyroots(np.trim_zeros(acceleration, "b"))):
-                if abs(r.imag) <= 1e-9 * max(1.0, abs(r.real)) and 0.0 < r.real < self.duration:
-                    roots.append((float(r.real), j))
+            for r in np.atleast_1d(series.roots()):
+                if abs(r.imag) <= 1e-9 and -1.0 < r.real < 1.0:
+                    roots.append((0.5 * (float(r.real) + 1.0) * self.duration, j))
         roots.sort()
         self._root_times = np.array([r for r, _ in roots])
         self._root_joints = np.array([j for _, j in roots], dtype=int)
-        self._q_matrix = _padded(self.q)
-        self._qd_matrix = _padded(self.qd)
-        self._root_rates = np.array(
-            [abs(poly.polyval(t, self.qd[j])) for t, j in roots], dtype=float
-        )
+        rates = path(self._root_times)[1] if roots else np.zeros((0, acceleration.shape[1]))
+        self._root_rates = np.abs(rates[np.arange(len(roots)), self._root_joints])
 
-    @property
-    def n(self) -> int:
-        """Number of joints."""
-        return len(self.q)
+    @classmethod
+    def from_monomials(
+        cls, coefficients: Sequence[Sequence[float]], duration: float
+    ) -> PolynomialMotion:
+        """Paths given by ascending monomial coefficients in t (s) per joint."""
+        poly = np.polynomial.polynomial
+        q = [np.asarray(c, dtype=float) for c in coefficients]
+
+        def path(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+            t = np.atleast_1d(np.asarray(t, dtype=float))
+            return tuple(  # type: ignore[return-value]
+                np.stack([poly.polyval(t, poly.polyder(c, k)) for c in q], axis=-1)
+                for k in range(3)
+            )
+
+        return cls(path, duration, max(len(c) for c in q) - 1)
 
     def joints(self, t: float) -> np.ndarray:
         """Joint values (rad or m) at time ``t`` (s)."""
-        return _horner(self._q_matrix, np.array([t], dtype=float))[0]
+        return self.path(np.array([t], dtype=float))[0][0]
 
     def rates(self, t: np.ndarray) -> np.ndarray:
         """(K, N) joint rates (rad/s or m/s) at the times ``t`` (s)."""
-        return _horner(self._qd_matrix, np.atleast_1d(np.asarray(t, dtype=float)))
+        return self.path(np.atleast_1d(np.asarray(t, dtype=float)))[1]
 
     def rate_bounds(self, t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
         """(K, N) largest ``|qd_j|`` over each ``[t0, t1]`` (rad/s or m/s), exact up to rounding.
@@ -83,23 +103,6 @@ class PolynomialMotion:
                 j = self._root_joints[k]
                 bound[i, j] = max(bound[i, j], self._root_rates[k])
         return bound * (1.0 + 1e-9) + 1e-15
-
-
-def _padded(coefficients: list[np.ndarray]) -> np.ndarray:
-    """(N, D) ascending coefficients, zero-padded to one degree."""
-    width = max(1, max(len(c) for c in coefficients))
-    out = np.zeros((len(coefficients), width))
-    for j, c in enumerate(coefficients):
-        out[j, : len(c)] = c
-    return out
-
-
-def _horner(matrix: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """(K, N) values of N polynomials (rows of ``matrix``, ascending) at K times ``t``."""
-    out = np.zeros((len(t), matrix.shape[0]))
-    for column in matrix.T[::-1]:
-        out = out * t[:, None] + column
-    return out
 
 
 def reach_coefficients(

@@ -5,10 +5,11 @@ rebuilds the plan's problem from the URDF, the duration, the path coefficients a
 start and goal attitudes, recomputes each record with the functions that wrote it
 (:mod:`freefloat.plans.sampling`), and raises :class:`~freefloat.errors.PlanMismatchError`
 naming the first field that disagrees beyond its tolerance. The order is that of dependence:
-``robot``, ``path.coefficients``, ``free_parameters``, ``request``, ``base``, ``feasibility``,
-``samples`` (t, q, qd, qdd, base pose, end effector, base rate, torques), ``solver`` (residual,
-integration error, roots, freedom), ``objective``, ``robustness`` (when present); the
-verification figures are compared after the checks have run (:func:`compare_verification`).
+``robot``, ``path.coefficients``, ``free_parameters``, ``request``, ``path_quality``, ``base``,
+``feasibility``, ``samples`` (t, q, qd, qdd, base pose, end effector, base rate, torques),
+``solver`` (residual, integration error, roots, freedom), ``objective``, ``robustness`` (when
+present); the verification figures are compared after the checks have run
+(:func:`compare_verification`).
 
 Tolerances. The recomputation runs the same deterministic code on the same numbers (the
 coefficients round-trip through JSON exactly), so a genuine plan disagrees with it by
@@ -39,7 +40,7 @@ import numpy as np
 
 from ..errors import FreeFloatError, InfeasibleError, PlanFileError, PlanMismatchError
 from ..physics.attitude import geodesic_angle, quat_from_zyx
-from ..plans.format import Plan, Verification
+from ..plans.format import MONOMIAL_BASIS, Plan, Verification
 from ..plans.sampling import base_report, feasibility_report, sample_solution
 from ..problem.build import build_problem
 from ..problem.inertial_sensitivity import attitude_sensitivity
@@ -47,6 +48,7 @@ from ..problem.residual import Problem
 from ..problem.uncertainty import Uncertainty, spread
 from ..robot.model import Robot
 from .objective import check_objective
+from .path_records import check_quality, free_counts, root_beta
 
 __all__ = [
     "BOUNDS_TOLERANCE_DEG",
@@ -165,17 +167,15 @@ def _rotation_angles(stored: np.ndarray, recomputed: np.ndarray) -> np.ndarray:
 def problem_from_plan(plan: Plan, robot: Robot) -> tuple[Problem, np.ndarray]:
     """The plan's problem (on its solver's integration grid) and its free coefficients beta.
 
-    The path family's degrees come from the coefficient lists, beta from their ``t^6`` and
-    higher entries, the start and goal joints from the request (checked against the path
-    first by :func:`check_plan_numbers`).
+    The path family's degrees come from the coefficient lists, beta from them (format 4) or
+    from the monomials (older formats, :mod:`.path_records`), the start and goal joints from
+    the request (checked against an older format's path first by :func:`check_plan_numbers`).
 
     Raises:
         PlanFileError: the plan's request cannot be a problem (joints beyond their limits, a
             goal a planar robot cannot reach).
         PlanMismatchError: the requested yaw change lies outside the planar bounds.
     """
-    names = plan.robot.joints
-    coefficients = [list(plan.coefficients[name]) for name in names]
     try:
         problem = build_problem(
             robot,
@@ -184,7 +184,7 @@ def problem_from_plan(plan: Plan, robot: Robot) -> tuple[Problem, np.ndarray]:
             np.asarray(plan.base.start_quaternion_xyzw, dtype=float),
             np.asarray(plan.base.target_quaternion_xyzw, dtype=float),
             plan.duration,
-            extra=[len(c) - 6 for c in coefficients],
+            extra=free_counts(plan),
         )
     except InfeasibleError as exc:
         raise PlanMismatchError(
@@ -194,9 +194,10 @@ def problem_from_plan(plan: Plan, robot: Robot) -> tuple[Problem, np.ndarray]:
         raise PlanFileError(f"the plan's request is not a valid problem: {exc}") from None
     if plan.solver.integration_steps > 0:
         problem = problem.with_steps(plan.solver.integration_steps)
-    beta: np.ndarray = problem.family.beta_from_time_coefficients(
-        [c[6:] for c in coefficients], plan.duration
-    )
+    if plan.basis == MONOMIAL_BASIS:
+        beta = problem.family.beta_from_path(plan.path())
+    else:
+        beta = root_beta(plan, problem.family, [plan.coefficients[n] for n in plan.robot.joints])
     return problem, beta
 
 
@@ -224,19 +225,27 @@ def check_plan_numbers(plan: Plan, robot: Robot) -> Problem:
 
     # The path: boundary structure, free parameters, request.
     stored = [np.asarray(plan.coefficients[name], dtype=float) for name in names]
-    term_scale = [max(1.0, float(np.max(np.abs(c) * T ** np.arange(len(c))))) for c in stored]
-    start = np.array([c[0] for c in stored])
-    goal = np.array([np.polynomial.polynomial.polyval(T, c) for c in stored])
-    joint_tol = RELATIVE_TOLERANCE * np.array(term_scale)
-    for name, c, scale in zip(names, stored, term_scale, strict=True):
-        _compare_terms(f"free_parameters.{name}", plan.free_parameters[name], c, 6, T, scale, unit)
-    _compare("request.start_joints", plan.request.start_joints, start, joint_tol, unit, None, names)
-    _compare("request.goal_joints", plan.request.goal_joints, goal, joint_tol, unit, None, names)
+    if plan.basis == MONOMIAL_BASIS:
+        term_scale = [max(1.0, float(np.max(np.abs(c) * T ** np.arange(len(c))))) for c in stored]
+        start = np.array([c[0] for c in stored])
+        goal = np.array([np.polynomial.polynomial.polyval(T, c) for c in stored])
+        joint_tol = RELATIVE_TOLERANCE * np.array(term_scale)
+        for name, c, scale in zip(names, stored, term_scale, strict=True):
+            stated_free = plan.free_parameters[name]
+            _compare_terms(f"free_parameters.{name}", stated_free, c, 6, T, scale, unit)
+        for key, value in (("start_joints", start), ("goal_joints", goal)):
+            stated = getattr(plan.request, key)
+            _compare(f"request.{key}", stated, value, joint_tol, unit, None, names)
+    else:  # format 4: the path is the free parameters (the quintic is the request's)
+        for name, c in zip(names, stored, strict=True):
+            tol = RELATIVE_TOLERANCE * max(1.0, float(np.abs(c).max(initial=0.0)))
+            _compare(f"free_parameters.{name}", plan.free_parameters[name], c, tol, unit)
     problem, beta = problem_from_plan(plan, robot)
-    for name, c, rebuilt, scale in zip(
-        names, stored, problem.family.time_coefficients(beta, T), term_scale, strict=True
-    ):
-        _compare_terms(f"path.coefficients.{name}", c, rebuilt, 0, T, scale, unit)
+    if plan.basis == MONOMIAL_BASIS:
+        rebuilt = problem.polynomials(beta).monomials()
+        for name, c, again, scale in zip(names, stored, rebuilt, term_scale, strict=True):
+            _compare_terms(f"path.coefficients.{name}", c, again[: len(c)], 0, T, scale, unit)
+    check_quality(plan, problem, beta, RELATIVE_TOLERANCE)
 
     # The base report, with the attitude integration's own error estimate.
     estimate = problem.integration_error(beta)
@@ -356,12 +365,12 @@ def check_plan_numbers(plan: Plan, robot: Robot) -> Problem:
     for i, root in enumerate(solver.solutions):
         free = [root.free_parameters[name] for name in names]
         if i == 0:
-            for name, c, scale in zip(names, stored, term_scale, strict=True):
+            for name in names:
                 field = f"solver.solutions[0].free_parameters.{name}"
-                _compare_terms(field, root.free_parameters[name], c, 6, T, scale, unit)
-        root_beta = problem.family.beta_from_time_coefficients(free, T)
-        residual = float(np.linalg.norm(problem.residual(root_beta)))
-        root_estimate = problem.integration_error(root_beta)
+                _compare(field, root.free_parameters[name], plan.free_parameters[name], 0.0)
+        beta_i = root_beta(plan, problem.family, free)
+        residual = float(np.linalg.norm(problem.residual(beta_i)))
+        root_estimate = problem.integration_error(beta_i)
         _compare(
             f"solver.solutions[{i}].residual_rad",
             root.residual_rad,
@@ -369,7 +378,7 @@ def check_plan_numbers(plan: Plan, robot: Robot) -> Problem:
             RESIDUAL_TOLERANCE + root_estimate,
             "rad",
         )
-        length = problem.path_length(root_beta)
+        length = problem.path_length(beta_i)
         _compare(
             f"solver.solutions[{i}].path_length",
             root.path_length,
@@ -377,14 +386,15 @@ def check_plan_numbers(plan: Plan, robot: Robot) -> Problem:
             RESIDUAL_TOLERANCE * max(1.0, length),
             unit,
         )
+    counts = dict(zip(names, free_counts(plan), strict=True))
     for name, count in solver.freedom.items():
-        if name not in plan.coefficients or count != len(plan.coefficients[name]) - 6:
+        if count != counts.get(name):
             raise PlanMismatchError(
                 f"solver.freedom.{name}",
                 math.inf,
                 0.0,
                 message=f"the file says {count!r}, the path has "
-                f"{len(plan.coefficients.get(name, [0] * 6)) - 6} free coefficients there",
+                f"{counts.get(name, 'no')} free coefficients there",
             )
     check_objective(plan, problem, beta)
     _check_robustness(plan, problem, beta)

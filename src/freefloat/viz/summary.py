@@ -13,11 +13,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ..plans.format import Plan
+from ..plans.format import MONOMIAL_BASIS, Plan
 from ..problem.scenario import Scenario
 from .robustness import robustness_line
 
 __all__ = ["cartesian_report", "clearance_line", "robot_label", "summary"]
+
+#: Paths with at most this many free parameters in all also show them as the paper's
+#: monomial coefficients in t (higher degrees would print large cancelling numbers).
+OLD_UNITS_MAX_FREE = 3
 
 
 def _attitude_table(p: Plan) -> list[str]:
@@ -73,17 +77,7 @@ def summary(
             f"{v['replay_attitude'].value:.1e} rad, momentum {v['momentum'].value:.1e} kg m^2/s"
         )
     lines.append(clearance_line(p))
-    kinds = dict(zip(p.robot.joints, _kinds(p), strict=True))
-    free = [
-        f"{name}: "
-        + ", ".join(
-            f"t^{6 + k} {c:.9e} {'m' if kinds.get(name) == 'prismatic' else 'rad'}/s^{6 + k}"
-            for k, c in enumerate(values)
-        )
-        for name, values in p.free_parameters.items()
-        if values
-    ]
-    lines.append("  free parameters " + ("; ".join(free) if free else "(none)"))
+    lines += free_parameter_lines(p)
     if p.feasibility.planar and p.feasibility.yaw_change_bounds_deg is not None:
         lo, hi = p.feasibility.yaw_change_bounds_deg
         lines.append(
@@ -91,6 +85,8 @@ def summary(
             f"({lo:.3f}, {hi:.3f}) deg"
         )
     lines.append(objective_line(p))
+    if p.quality is not None:
+        lines.append(quality_line(p))
     s = p.solver
     lines.append(
         f"  solver          {s.method}; {len(s.solutions)} solution(s); {s.evaluations} "
@@ -136,12 +132,73 @@ def clearance_line(p: Plan) -> str:
     return line
 
 
+def free_parameter_lines(p: Plan) -> list[str]:
+    """The free parameters in the plan's basis and, for low degrees, as the paper's monomials."""
+    kinds = dict(zip(p.robot.joints, _kinds(p), strict=True))
+    unit = {name: "m" if kinds.get(name) == "prismatic" else "rad" for name in p.robot.joints}
+    if p.basis == MONOMIAL_BASIS:
+        free = [
+            f"{name}: "
+            + ", ".join(f"t^{6 + k} {c:.9e} {unit[name]}/s^{6 + k}" for k, c in enumerate(values))
+            for name, values in p.free_parameters.items()
+            if values
+        ]
+        return ["  free parameters " + ("; ".join(free) if free else "(none)")]
+    free = [
+        f"{name}: " + ", ".join(f"{c:.9g}" for c in values) + f" {unit[name]}"
+        for name, values in p.free_parameters.items()
+        if values
+    ]
+    lines = [
+        "  free parameters "
+        + ("; ".join(free) if free else "(none)")
+        + f" (basis {p.basis}: L2 deviation from the quintic)"
+    ]
+    total = sum(len(v) for v in p.free_parameters.values())
+    if 0 < total <= OLD_UNITS_MAX_FREE:
+        monomials = p.path().monomials()
+        old = [
+            f"{name}: "
+            + ", ".join(
+                f"t^{6 + k} {c:.6e} {unit[name]}/s^{6 + k}"
+                for k, c in enumerate(monomials[i, 6 : 6 + len(p.free_parameters[name])])
+            )
+            for i, name in enumerate(p.robot.joints)
+            if p.free_parameters[name]
+        ]
+        lines.append("  as monomials    " + "; ".join(old))
+    return lines
+
+
+def quality_line(p: Plan) -> str:
+    """The largest excursion beyond a start-goal span, and each joint's (deg, m if prismatic)."""
+    assert p.quality is not None
+    kinds = dict(zip(p.robot.joints, _kinds(p), strict=True))
+
+    def shown(name: str, value: float) -> str:
+        return f"{value:.3g} {'m' if kinds.get(name) == 'prismatic' else 'deg'}"
+
+    q = p.quality
+    each = ", ".join(f"{k} {shown(k, v)}" for k, v in q.excursion_beyond_span.items())
+    return (
+        f"  path quality    largest excursion beyond a start-goal span "
+        f"{shown(q.largest_joint, q.largest_excursion)} ({q.largest_joint}); {each}"
+    )
+
+
 def objective_line(p: Plan) -> str:
     """The objective, its value and what the freedom bought, in one line."""
     o = p.objective
     if o.value is None:
         return f"  objective       {o.name}"
     line = f"  objective       {o.name} = {o.value:.6g} {o.unit}"
+    if o.name == "min_norm" and p.basis != MONOMIAL_BASIS:
+        line = (
+            f"  objective       {o.name}: deviation from the quintic "
+            f"{math.degrees(math.sqrt(max(o.value, 0.0))):.3g} deg RMS ({o.value:.4g} {o.unit})"
+        )
+    elif p.quality is not None:
+        line += f" (deviation from the quintic {p.quality.deviation_rms_deg:.3g} deg RMS)"
     if o.error_estimate:
         line += f" (+- {o.error_estimate:.1g}, {o.quadrature_nodes} Gauss nodes)"
     if o.start_value and o.name != "min_norm":

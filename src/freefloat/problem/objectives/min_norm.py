@@ -1,9 +1,12 @@
-"""The paper's objective: the smallest free coefficients.
+"""The paper's objective, the smallest free coefficients: the smallest deviation from the quintic.
 
-``J = sum_k beta_k^2`` (rad^2, or m^2 for prismatic joints): the squared norm of the free
-coefficients of the normalised path. It does not depend on the duration. It has no physical
-meaning (it depends on how the polynomial basis is scaled), but it is the planner's default,
-so plans made before objectives existed are unchanged.
+``J = sum_k beta_k^2`` (rad^2, or m^2 for prismatic joints). In the orthonormal path basis
+(:mod:`freefloat.problem.basis`) this is exactly ``int_0^1 |q(s) - q_quintic(s)|^2 ds``: the
+squared L2 deviation of the joint paths from the plain quintic, over normalised time. It does
+not depend on the duration; ``sqrt(J)`` is the RMS joint-space distance from the quintic (plans
+print it in degrees). It is the planner's default: of all paths that reach the goal attitude,
+the one that departs least from the smooth quintic, which is what keeps joints from swinging
+far beyond their start-goal spans.
 """
 
 from __future__ import annotations
@@ -17,12 +20,12 @@ __all__ = ["MinNorm"]
 
 
 class MinNorm(Objective):
-    """Squared norm of the free coefficients (rad^2); the default."""
+    """Squared L2 deviation from the quintic, ``|beta|^2`` (rad^2); the default."""
 
     name = "min_norm"
     unit = "rad^2"
     duration_power = 0
-    description = "smallest free coefficients (the paper's choice)"
+    description = "smallest deviation from the quintic (the paper's minimum norm, L2 over time)"
 
     def evaluate(self, problem: Problem, beta: np.ndarray) -> ObjectiveValue:
         """``beta . beta`` and ``2 beta``."""

@@ -20,7 +20,8 @@ OBJECTIVES: dict[str, type[Objective]] = {
     cls.name: cls for cls in (MinNorm, MinEffort, MinAcceleration, MinLength)
 }
 
-#: The objective when none is named: the paper's minimum norm.
+#: The objective when none is named: the paper's minimum norm, the smallest deviation from the
+#: quintic in the orthonormal basis.
 DEFAULT_OBJECTIVE = MinNorm.name
 
 

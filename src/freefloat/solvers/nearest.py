@@ -1,0 +1,172 @@
+"""The root nearest the quintic, for a search's path that strays far from its start-goal spans.
+
+Every objective starts from the path this returns (the default objective keeps it).
+
+The search's root is the minimum-norm root its continuation reached, with the least freedom
+that reaches the goal; on some robots (a heavy satellite whose small arm must turn it) that root
+still swings a joint far beyond its start-goal span. When the largest such excursion exceeds
+:data:`NATURAL_EXCURSION`, the default objective (the smallest deviation from the quintic,
+``|beta|^2``) is minimised over the roots with more freedom: at each level of
+:data:`LEVELS` free coefficients per joint, from the previous path embedded in the larger family,
+by sequential quadratic programming with the exact Hessian of the objective (``2 I``, the
+constraint's curvature left out): each step goes to the least-norm point of the linearised root
+set, ``beta+ = J^+ (J beta - h(beta))``, damped by a backtracking search on the merit function
+``|beta|^2 + mu |h(beta)|_1``, then polished onto ``h = 0`` by minimum-norm Newton steps; when
+that root breaks a constraint, SLSQP minimises ``|beta|^2`` with the constraints as rows
+(:func:`.optimise.optimise`, from the previous path, which honours them). A level
+is kept only if its path is certified (integration refined, :func:`.certify.certify`), honours
+every constraint and deviates less; the levels stop once the excursion is natural. Planar
+problems keep the search's root (the paper's examples and their roots are unchanged). Budgets
+are counts (:data:`ITERATIONS` steps per level).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..problem.build import problem_from_scenario
+from ..problem.constraints import Constraint
+from ..problem.objectives import MinNorm
+from ..problem.paths import excursions
+from ..problem.residual import Problem
+from ..problem.scenario import Scenario
+from .certify import certify
+from .newton import polish
+from .optimise import optimise
+from .options import Root, SolveOptions
+from .restore import broken_constraint
+from .search import SearchResult
+
+__all__ = ["ITERATIONS", "LEVELS", "NATURAL_EXCURSION", "Nearest", "nearest_root"]
+
+#: A default path whose joints stay within this of their start-goal spans (rad) is kept.
+NATURAL_EXCURSION = np.radians(60.0)
+#: Free coefficients per joint tried in turn when the search's path is not natural.
+LEVELS = (3, 4, 6)
+#: SQP steps per level.
+ITERATIONS = 30
+#: SLSQP iterations per level when the least-norm root breaks a constraint (a collision, a
+#: joint limit): :func:`.optimise.optimise` then keeps the constraints as rows.
+SLSQP_ITERATIONS = 60
+
+
+@dataclass(frozen=True)
+class Nearest:
+    """The default path after refinement.
+
+    Attributes:
+        found: the search result to plan with (the search's own when nothing better was found).
+        tried: what each level gave, for the record.
+    """
+
+    found: SearchResult
+    tried: tuple[str, ...]
+
+
+def _largest_excursion(problem: Problem, beta: np.ndarray) -> float:
+    family = problem.family
+    return float(excursions(problem.polynomials(beta), family.start, family.goal).max())
+
+
+def _least_norm_root(problem: Problem, beta: np.ndarray, options: SolveOptions) -> np.ndarray:
+    """SQP on ``min |beta|^2 s.t. h(beta) = 0`` from ``beta`` (see the module docstring)."""
+    r, jac = problem.residual_and_jacobian(beta)
+    for _ in range(ITERATIONS):
+        pinv = np.linalg.pinv(jac)
+        step = pinv @ (jac @ beta - r) - beta
+        multiplier = -2.0 * pinv.T @ beta  # from 2 beta + J^T lambda = 0
+        mu = 2.0 * float(np.abs(multiplier).max()) + 1e-12
+        merit = float(beta @ beta) + mu * float(np.abs(r).sum())
+        slope = 2.0 * float(beta @ step) - mu * float(np.abs(r).sum())
+        t = 1.0
+        while t > 1e-3:
+            trial = beta + t * step
+            r_trial, jac_trial = problem.residual_and_jacobian(trial)
+            value = float(trial @ trial) + mu * float(np.abs(r_trial).sum())
+            if np.all(np.isfinite(r_trial)) and value <= merit + 1e-4 * t * min(slope, 0.0):
+                break
+            t *= 0.5
+        else:
+            break
+        beta, r, jac = trial, r_trial, jac_trial
+        if t * float(np.linalg.norm(step)) <= 1e-9 * max(1.0, float(np.linalg.norm(beta))):
+            break
+    return polish(problem, beta, options.tolerance)[0]
+
+
+def nearest_root(
+    scenario: Scenario,
+    found: SearchResult,
+    options: SolveOptions,
+    constraints: Sequence[Constraint],
+) -> Nearest:
+    """The search's result, or a root nearer the quintic when its path is not natural.
+
+    Args:
+        scenario: the resolved scenario that was searched.
+        found: the search's result.
+        options: solver settings (attitude tolerance, rad).
+        constraints: the path constraints every root must keep.
+    """
+    problem, beta = found.problem, found.solution.beta
+    if problem.planar or not scenario.raise_freedom:
+        return Nearest(found, ())
+    if _largest_excursion(problem, beta) <= NATURAL_EXCURSION:
+        return Nearest(found, ())
+    names = scenario.robot.joint_names
+    offset = np.array([2.0 * np.pi * found.full_turns.get(n, 0) for n in names], dtype=float)
+    base = [found.freedom[n] for n in names]
+    best = found
+    tried: list[str] = []
+    for k in LEVELS:
+        counts = [max(b, k) for b in base]
+        if counts == [best.freedom[n] for n in names]:
+            continue
+        level = problem_from_scenario(
+            scenario, extra=counts, goal_offset=offset, mmap=problem.mmap, check_bounds=False
+        )
+        start = level.family.embed(best.problem.family, best.solution.beta)
+        if start is None:
+            break
+        candidate, how = _least_norm_root(level, start, options), "least-norm SQP"
+        if broken_constraint(level, constraints, candidate):  # the constraints bind: SLSQP
+            kept = optimise(level, start, MinNorm(), constraints, options, SLSQP_ITERATIONS)
+            candidate, how = kept.beta, "SLSQP on min_norm"
+        residual = float(np.linalg.norm(level.residual(candidate)))
+        checked = certify(level, candidate, residual, options.tolerance)
+        deviation = float(checked.beta @ checked.beta)
+        best_deviation = float(best.solution.beta @ best.solution.beta)
+        if (
+            not checked.passed
+            or deviation >= best_deviation
+            or broken_constraint(checked.problem, constraints, checked.beta)
+        ):
+            tried.append(f"nearest root, freedom {k}: not kept")
+            continue
+        excursion = _largest_excursion(checked.problem, checked.beta)
+        tried.append(
+            f"nearest root, freedom {k}: deviation {np.degrees(np.sqrt(deviation)):.3g} deg RMS, "
+            f"largest excursion {np.degrees(excursion):.3g} deg"
+        )
+        length = checked.problem.path_length(checked.beta)
+        solution = replace(
+            found.solution,
+            beta=checked.beta,
+            residual=checked.residual,
+            roots=(Root(checked.beta, checked.residual, length),),
+            integration_error=checked.integration_error,
+            steps=checked.problem.steps,
+            method=f"{found.solution.method}, then {how} with {k} per joint",
+        )
+        best = replace(
+            found,
+            problem=checked.problem,
+            solution=solution,
+            freedom=dict(zip(names, counts, strict=True)),
+        )
+        if excursion <= NATURAL_EXCURSION:
+            break
+    return Nearest(best, tuple(tried))

@@ -1,0 +1,114 @@
+"""A plan's joint paths evaluated from the file alone, independently of the planner's code.
+
+The planner holds paths as Chebyshev series (:mod:`freefloat.problem.paths`); verification
+evaluates the file's own definition instead, so that an error in either shows as a
+disagreement:
+
+- format 4 (``path.basis = "quintic+jacobi66"``): the quintic between the requested start and
+  goal plus ``sum_n beta_n c_n s^3 (1 - s)^3 P_n^(6,6)(2 s - 1)``, with the Jacobi polynomials
+  of :func:`scipy.special.eval_jacobi`, ``c_n`` from its closed form, and the derivatives from
+  ``d/dx P_n^(a,b) = (n + a + b + 1) / 2 P_{n-1}^(a+1,b+1)`` and the product rule;
+- older formats: the stored monomials in t, by Horner's rule (:func:`numpy.polynomial`).
+
+Units: t in s; positions rad (m), rates per s, accelerations per s^2.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import eval_jacobi
+
+from ..plans.format import MONOMIAL_BASIS, Plan
+
+__all__ = ["FilePath", "file_path"]
+
+
+def _scale(n: np.ndarray) -> np.ndarray:
+    """``c_n = sqrt((2 n + 13) (n + 12)! n!) / (n + 6)!`` for each n."""
+    return np.array(
+        [
+            math.exp(
+                0.5 * (math.log(2 * k + 13) + math.lgamma(k + 13) + math.lgamma(k + 1))
+                - math.lgamma(k + 7)
+            )
+            for k in n
+        ]
+    )
+
+
+def _jacobi(n: np.ndarray, shift: int, x: np.ndarray) -> np.ndarray:
+    """``P_{n - shift}^(6 + shift, 6 + shift)(x)`` (zero where ``n < shift``), (len(x), len(n))."""
+    m = n - shift
+    values = eval_jacobi(np.maximum(m, 0)[None, :], 6 + shift, 6 + shift, x[:, None])
+    return np.where(m[None, :] >= 0, values, 0.0)
+
+
+@dataclass(frozen=True)
+class FilePath:
+    """The joint paths of one plan file (see the module docstring)."""
+
+    duration: float
+    start: np.ndarray
+    goal: np.ndarray
+    beta: list[np.ndarray] | None
+    monomials: list[np.ndarray] | None
+
+    @property
+    def degree(self) -> int:
+        """The highest polynomial degree of the joint paths."""
+        if self.monomials is not None:
+            return max(len(c) for c in self.monomials) - 1
+        assert self.beta is not None
+        return 5 + max(len(b) for b in self.beta)
+
+    def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Joint values, rates and accelerations, each (len(t), N), at times ``t`` (s)."""
+        t = np.asarray(t, dtype=float)
+        if self.monomials is not None:
+            poly = np.polynomial.polynomial
+            return tuple(  # type: ignore[return-value]
+                np.stack([poly.polyval(t, poly.polyder(c, k)) for c in self.monomials], -1)
+                for k in range(3)
+            )
+        assert self.beta is not None
+        T = self.duration
+        s = t / T
+        x = 2.0 * s - 1.0
+        blend = (10 * s**3 - 15 * s**4 + 6 * s**5, 30 * s**2 - 60 * s**3 + 30 * s**4)
+        blend2 = 60 * s - 180 * s**2 + 120 * s**3
+        delta = self.goal - self.start
+        q = self.start + np.outer(blend[0], delta)
+        qd = np.outer(blend[1], delta) / T
+        qdd = np.outer(blend2, delta) / T**2
+        b = s**3 * (1 - s) ** 3
+        b1 = 3 * s**2 * (1 - s) ** 3 - 3 * s**3 * (1 - s) ** 2
+        b2 = 6 * s * (1 - s) ** 3 - 18 * s**2 * (1 - s) ** 2 + 6 * s**3 * (1 - s)
+        for i, beta in enumerate(self.beta):
+            if not len(beta):
+                continue
+            n = np.arange(len(beta))
+            c = _scale(n) * beta
+            p0 = _jacobi(n, 0, x)
+            p1 = (n + 13) * _jacobi(n, 1, x)  # d/ds = 2 d/dx
+            p2 = (n + 13) * (n + 14) * _jacobi(n, 2, x)
+            q[:, i] += (b[:, None] * p0) @ c
+            qd[:, i] += ((b1[:, None] * p0 + b[:, None] * p1) @ c) / T
+            qdd[:, i] += ((b2[:, None] * p0 + 2 * b1[:, None] * p1 + b[:, None] * p2) @ c) / T**2
+        return q, qd, qdd
+
+
+def file_path(plan: Plan) -> FilePath:
+    """The plan's joint paths as its file defines them."""
+    names = plan.robot.joints
+    stored = [np.asarray(plan.coefficients[name], dtype=float) for name in names]
+    monomial = plan.basis == MONOMIAL_BASIS
+    return FilePath(
+        duration=plan.duration,
+        start=np.asarray(plan.request.start_joints, dtype=float),
+        goal=np.asarray(plan.request.goal_joints, dtype=float),
+        beta=None if monomial else stored,
+        monomials=stored if monomial else None,
+    )
