@@ -34,6 +34,7 @@ import quadprog
 from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
 from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.residual import Problem
+from ..progress import heartbeat
 from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
 from .restore import broken_constraint
@@ -304,6 +305,11 @@ def track(
             stopped_by = f"evaluation budget ({options.max_evaluations} residual evaluations)"
             break
         steps += 1
+        heartbeat(
+            lambda: f"continuation: {math.degrees(lam * angle):.4g} of {math.degrees(angle):.4g} "
+            f"deg after {steps} steps ({problem.evaluations - first_evaluation} residual "
+            "evaluations)"
+        )
         tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache)
         step = min(dl, 1.0 - lam)
         last = lam + step >= 1.0

@@ -11,7 +11,7 @@ the continuation does not find) may reach further.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,6 +21,7 @@ from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
 from .continuation import track
 from .options import SolveOptions
+from .restore import broken_constraint
 
 __all__ = ["DirectionReach", "ReachEstimate", "default_directions", "describe", "reach_set"]
 
@@ -35,6 +36,9 @@ class DirectionReach:
         asked: the rotation continuation headed for (rad).
         stopped_by: why it stopped ("" when it reached ``asked``).
         evaluations: residual evaluations spent on this direction.
+        beta: free coefficients of the path that reaches ``reached`` (rad or m).
+        breaks: a lazy constraint (velocity or effort limits) that path breaks at the
+            problem's duration ("" when none): planning would ask for a longer duration.
     """
 
     axis: np.ndarray
@@ -42,6 +46,8 @@ class DirectionReach:
     asked: float
     stopped_by: str
     evaluations: int
+    beta: np.ndarray | None = None
+    breaks: str = ""
 
 
 @dataclass(frozen=True)
@@ -68,43 +74,72 @@ def default_directions() -> np.ndarray:
     return np.vstack([axes, corners])
 
 
+#: Called after each direction with (directions done, directions in all, its reach).
+ReachProgress = Callable[[int, int, DirectionReach], None]
+
+
 def reach_set(
     problem: Problem,
     directions: np.ndarray | None = None,
-    max_angle: float = math.radians(60.0),
+    max_angle: float | np.ndarray = math.radians(60.0),
     constraints: Sequence[Constraint] | None = None,
     options: SolveOptions | None = None,
+    progress: ReachProgress | None = None,
+    deferred: Sequence[Constraint] = (),
 ) -> ReachEstimate:
     """Continue as far as possible from the quintic attitude in each direction.
+
+    The constraints planning imposes from the start are tracked; the lazy ones (imposed by
+    planning only once a path breaks them: velocity and effort limits) are checked on the
+    furthest path of each direction and named in :attr:`DirectionReach.breaks`, as planning
+    would find them. Constraints in ``deferred`` (costly ones such as clearance) are checked
+    on that furthest path too, and only when it breaks one is the direction tracked again with
+    it imposed. Every budget is a count (``options.max_evaluations`` per direction and pass).
 
     Args:
         problem: a spatial problem (its goal is ignored; not changed).
         directions: rotation axes (rows, base frame); default :func:`default_directions`.
-        max_angle: the rotation to head for in each direction (rad, below pi).
-        constraints: path constraints; default joint position and velocity limits.
+        max_angle: the rotation to head for in each direction (rad, below pi): one for all,
+            or one per direction (e.g. an outer bound of that direction).
+        constraints: path constraints; default joint position, velocity and effort limits.
         options: solver settings (the evaluation budget applies per direction).
+        progress: called after each direction (see :data:`ReachProgress`).
+        deferred: constraints among ``constraints`` to check at the end of a direction
+            rather than track.
     """
     if problem.planar:
         raise ValueError("reach_set is for spatial problems; planar ones have exact bounds")
     options = options or SolveOptions()
     constraints = default_constraints() if constraints is None else list(constraints)
+    eager = [c for c in constraints if not c.lazy]
+    lazy = [c for c in constraints if c.lazy]
+    tracked = [c for c in eager if not any(c is d for d in deferred)]
     directions = default_directions() if directions is None else np.atleast_2d(directions)
+    angles = np.broadcast_to(np.asarray(max_angle, dtype=float), (len(directions),))
     quintic = problem.achieved(np.zeros(problem.n_free))
-    out = []
-    for axis in directions:
+    out: list[DirectionReach] = []
+    for axis, angle in zip(directions, angles, strict=True):
         axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-        goal = quat_multiply(quintic, quat_exp(max_angle * axis))
         before = problem.evaluations
-        result = track(problem.with_goal(goal), constraints, options, stall=False)
-        out.append(
-            DirectionReach(
-                axis=axis,
-                reached=result.fraction * result.angle,
-                asked=result.angle,
-                stopped_by=result.stopped_by,
-                evaluations=problem.evaluations - before,
-            )
+        reached, stopped_by, beta = 0.0, "", np.zeros(problem.n_free)
+        if angle > 0.0:
+            target = problem.with_goal(quat_multiply(quintic, quat_exp(angle * axis)))
+            result = track(target, tracked, options, stall=False)
+            if len(tracked) < len(eager) and broken_constraint(problem, eager, result.beta):
+                result = track(target, eager, options, stall=False)
+            reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
+        direction = DirectionReach(
+            axis=axis,
+            reached=reached,
+            asked=float(angle),
+            stopped_by=stopped_by,
+            evaluations=problem.evaluations - before,
+            beta=beta,
+            breaks=broken_constraint(problem, lazy, beta) if lazy else "",
         )
+        out.append(direction)
+        if progress is not None:
+            progress(len(out), len(directions), direction)
     freedom = tuple(d - 5 for d in problem.family.degrees)
     return ReachEstimate(quintic, tuple(out), freedom)
 
