@@ -99,26 +99,60 @@ class Feasibility:
     requested_yaw_change_deg: float | None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Samples:
-    """The plan sampled in time; each field is a list with one entry per sample.
+    """The plan sampled in time; each field is a NumPy array with one row per sample.
 
-    ``t`` (s); ``q`` (rad or m), ``qd`` (per s), ``qdd`` (per s^2), one value per joint;
-    ``base_position`` (m), ``base_quaternion_xyzw``, ``base_zyx_deg`` (deg),
-    ``base_angular_velocity`` (rad/s, base frame), ``end_effector_position`` (m), ``tau`` joint
-    torques (N m, or N for prismatic joints).
+    ``t`` (s, shape (K,)); ``q`` (rad or m), ``qd`` (per s), ``qdd`` (per s^2), shape (K, N);
+    ``base_position`` (m, (K, 3)), ``base_quaternion_xyzw`` ((K, 4)), ``base_zyx_deg`` (deg,
+    (K, 3)), ``base_angular_velocity`` (rad/s, base frame, (K, 3)), ``end_effector_position``
+    (m, (K, 3)), ``tau`` joint torques (N m, or N for prismatic joints, (K, N)). Lists given
+    to the constructor (a plan file's) are turned into float arrays; two records are equal when
+    every array is.
     """
 
-    t: list[float]
-    q: list[list[float]]
-    qd: list[list[float]]
-    qdd: list[list[float]]
-    base_position: list[list[float]]
-    base_quaternion_xyzw: list[list[float]]
-    base_zyx_deg: list[list[float]]
-    end_effector_position: list[list[float]]
-    base_angular_velocity: list[list[float]] = field(default_factory=list)
-    tau: list[list[float]] = field(default_factory=list)
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    base_position: np.ndarray
+    base_quaternion_xyzw: np.ndarray
+    base_zyx_deg: np.ndarray
+    end_effector_position: np.ndarray
+    base_angular_velocity: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    tau: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+
+    def __post_init__(self) -> None:
+        for name in _SAMPLE_FIELDS:
+            object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Samples):
+            return NotImplemented
+        return all(
+            np.array_equal(getattr(self, name), getattr(other, name)) for name in _SAMPLE_FIELDS
+        )
+
+    __hash__ = None  # type: ignore[assignment]  # arrays: not hashable
+
+    def to_dict(self) -> dict[str, list[Any]]:
+        """The samples as the plan file's lists (JSON-ready)."""
+        return {name: getattr(self, name).tolist() for name in _SAMPLE_FIELDS}
+
+
+#: The fields of :class:`Samples`, in file order.
+_SAMPLE_FIELDS = (
+    "t",
+    "q",
+    "qd",
+    "qdd",
+    "base_position",
+    "base_quaternion_xyzw",
+    "base_zyx_deg",
+    "end_effector_position",
+    "base_angular_velocity",
+    "tau",
+)
 
 
 @dataclass(frozen=True)
@@ -365,7 +399,7 @@ class Plan:
                 "free_parameters": self.free_parameters,
                 "base": asdict(self.base),
                 "feasibility": asdict(self.feasibility),
-                "samples": asdict(self.samples),
+                "samples": self.samples.to_dict(),
                 "solver": asdict(self.solver),
                 "request": asdict(self.request),
                 "verification": self.verification.to_dict(),

@@ -34,6 +34,7 @@ from ..files import atomic_write_text
 from ..plans.format import Plan
 from ..robot.collision import Obstacle
 from ..robot.model import Robot, example_robot_data_dir, load_robot
+from .controls import CM_COLOR, EE_COLOR, TRAIL_COLOR
 from .plots import plan_obstacles
 
 __all__ = ["Playback", "build_playback", "serve", "write_html"]
@@ -46,6 +47,9 @@ EXTRAS = "freefloat_extras"
 LOOPS = 10000
 #: Colour (hex RGB) and opacity of the keep-out objects.
 OBSTACLE_COLOR = 0xE02020
+#: Material settings of a marker drawn over the meshes (three.js: no depth test; transparent
+#: materials are drawn after the opaque ones).
+ON_TOP = {"depthTest": False, "transparent": True, "opacity": 0.95}
 OBSTACLE_OPACITY = 0.35
 
 
@@ -243,16 +247,18 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
         viewer[f"{EXTRAS}/trail"].set_object(
             g.Line(
                 g.PointsGeometry(ee.T.astype(np.float32)),
-                g.LineBasicMaterial(color=0x1F77B4, linewidth=2),
+                g.LineBasicMaterial(color=TRAIL_COLOR, linewidth=2),
             )
         )
+        # The markers are drawn over everything (no depth test, after the opaque meshes): the
+        # system CM lies inside the spacecraft and the end effector inside its own link.
         viewer[f"{EXTRAS}/cm"].set_object(
-            g.Sphere(0.03 * extent), g.MeshLambertMaterial(color=0xD62728)
+            g.Sphere(0.03 * extent), g.MeshLambertMaterial(color=CM_COLOR, **ON_TOP)
         )
         viewer[f"{EXTRAS}/inertial_axes"].set_object(g.triad(0.5 * extent))
         viewer[f"{EXTRAS}/base_frame"].set_object(g.triad(0.25 * extent))
         viewer[f"{EXTRAS}/end_effector"].set_object(
-            g.Sphere(0.02 * extent), g.MeshLambertMaterial(color=0x2CA02C)
+            g.Sphere(0.02 * extent), g.MeshLambertMaterial(color=EE_COLOR, **ON_TOP)
         )
         obstacles = {obstacle_node(o.name): o for o in plan_obstacles(plan)}
         for node, obstacle in obstacles.items():
