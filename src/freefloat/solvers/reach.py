@@ -19,7 +19,7 @@ import numpy as np
 from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
-from .continuation import track
+from .continuation import ContinuationResult, track
 from .options import SolveOptions
 from .restore import broken_constraint
 
@@ -74,6 +74,59 @@ def default_directions() -> np.ndarray:
     return np.vstack([axes, corners])
 
 
+#: Tries to confirm a direction's furthest turn as the planner would solve it (a count).
+CONFIRM_TRIES = 3
+#: After a failed confirmation, the next try asks for this share of where it stopped.
+CONFIRM_SHRINK = 0.9
+
+
+def _furthest(
+    problem: Problem,
+    quintic: np.ndarray,
+    axis: np.ndarray,
+    angle: float,
+    tracked: Sequence[Constraint],
+    eager: Sequence[Constraint],
+    options: SolveOptions,
+    stall: bool,
+) -> ContinuationResult:
+    """Continuation towards ``angle`` about ``axis``; again with every eager constraint when
+    the path it ends on breaks one that was not tracked."""
+    target = problem.with_goal(quat_multiply(quintic, quat_exp(angle * axis)))
+    result = track(target, tracked, options, stall=stall)
+    if len(tracked) < len(eager) and broken_constraint(problem, eager, result.beta):
+        result = track(target, eager, options, stall=stall)
+    return result
+
+
+def _confirmed(
+    problem: Problem,
+    quintic: np.ndarray,
+    axis: np.ndarray,
+    reached: float,
+    tracked: Sequence[Constraint],
+    eager: Sequence[Constraint],
+    options: SolveOptions,
+) -> tuple[float, np.ndarray]:
+    """The largest turn up to ``reached`` that the planner's own continuation solves.
+
+    Tracking towards a farther goal solves the points on the way only to the intermediate
+    tolerance, along steps of its own; the planner heads for the goal itself, with its
+    final tolerance and the stall check. The turn is asked as the planner would ask it (at
+    most :data:`CONFIRM_TRIES` times, each a share of where the last one stopped), so the
+    reported turn is one the planner reaches. Returns the turn (rad) and its path.
+    """
+    beta = np.zeros(problem.n_free)
+    for _ in range(CONFIRM_TRIES):
+        if reached <= 0.0:
+            break
+        result = _furthest(problem, quintic, axis, reached, tracked, eager, options, True)
+        if result.reached:
+            return reached, result.beta
+        reached *= CONFIRM_SHRINK * result.fraction
+    return 0.0, beta
+
+
 #: Called after each direction with (directions done, directions in all, its reach).
 ReachProgress = Callable[[int, int, DirectionReach], None]
 
@@ -123,11 +176,9 @@ def reach_set(
         before = problem.evaluations
         reached, stopped_by, beta = 0.0, "", np.zeros(problem.n_free)
         if angle > 0.0:
-            target = problem.with_goal(quat_multiply(quintic, quat_exp(angle * axis)))
-            result = track(target, tracked, options, stall=False)
-            if len(tracked) < len(eager) and broken_constraint(problem, eager, result.beta):
-                result = track(target, eager, options, stall=False)
-            reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
+            result = _furthest(problem, quintic, axis, angle, tracked, eager, options, False)
+            reached, stopped_by = result.fraction * angle, result.stopped_by
+            reached, beta = _confirmed(problem, quintic, axis, reached, tracked, eager, options)
         direction = DirectionReach(
             axis=axis,
             reached=reached,
