@@ -39,8 +39,12 @@ against the optimal-control figure quoted in the issue (26.6 N^2 m^2 s); the sam
 at fixed freedom k = 1..4 with exact gradients and with SciPy's finite differences side by
 side; and the Panda servicer's scenario with min_norm against min_effort.
 
+freefloat reach (issue 28, with --reachable-only; scripts/bench_reachable.py): its time on the
+shipped servicers and a composed Kinova servicer, and 50 goals sampled inside its inner set
+planned with ff.plan.
+
 Run: python scripts/bench.py [--runs N] [--json FILE] [--reach-only] [--random N] [--sweep]
-     [--sweep-only]
+     [--sweep-only] [--reachable-only]
 """
 
 from __future__ import annotations
@@ -743,12 +747,25 @@ def main() -> None:
         "--collision-only", action="store_true", help="only the clearance cost table"
     )
     parser.add_argument("--sweep-only", action="store_true", help="only the sweep section")
+    parser.add_argument(
+        "--reachable-only",
+        action="store_true",
+        help="only the freefloat reach section (issue 28: times, inner set against plan)",
+    )
     parser.add_argument("--objectives", action="store_true", help="also the objectives section")
     parser.add_argument(
         "--objectives-only", action="store_true", help="only the objectives section"
     )
     args = parser.parse_args()
     print(f"machine: {machine()}")
+    if args.reachable_only:
+        from bench_reachable import bench_reachable, print_reachable
+
+        found = bench_reachable()
+        print_reachable(found)
+        if args.json:
+            args.json.write_text(json.dumps({"machine": machine(), "reachable": found}, indent=1))
+        return
     objectives = bench_objectives() if args.objectives or args.objectives_only else {}
     if args.objectives_only:
         print_objectives(objectives)

@@ -36,7 +36,7 @@ def test_check_reports_limits_and_exit_code(capsys) -> None:
     assert main(["check", str(UR5), "--at", f"0,-90,{beyond},-90,-90,0"]) == 1
     out = capsys.readouterr().out
     row = next(line for line in out.splitlines() if line.strip().startswith("elbow_joint"))
-    value, lower, upper, room = (float(x) for x in row.split()[1:5])
+    value, _, upper, room = (float(x) for x in row.split()[1:5])
     assert (value, upper) == pytest.approx((beyond, elbow_upper), abs=1e-3)
     assert room == pytest.approx(-5.0, abs=1e-3) and "OUTSIDE" in row
     assert "configuration: NOT OK" in out

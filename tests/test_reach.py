@@ -28,13 +28,23 @@ base_size = [2.0, 2.0, 2.0]
 mount = [1.0, 0.0, 0.0]
 mount_rpy_deg = [0.0, 90.0, 0.0]
 [start]
-joints = { j2s6s200_joint_1 = 0, j2s6s200_joint_2 = 180, j2s6s200_joint_3 = 180, j2s6s200_joint_4 = 0, j2s6s200_joint_5 = 180, j2s6s200_joint_6 = 0 }
+joints = START
 [goal]
-joints = { j2s6s200_joint_1 = 40, j2s6s200_joint_2 = 150, j2s6s200_joint_3 = 200, j2s6s200_joint_4 = 30, j2s6s200_joint_5 = 150, j2s6s200_joint_6 = 20 }
+joints = GOALJOINTS
 base_zyx_deg = GOAL
 [safety]
 check = false
-"""
+""".replace(
+    "START",
+    "{ "
+    + ", ".join(f"j2s6s200_joint_{i} = {v}" for i, v in enumerate((0, 180, 180, 0, 180, 0), 1))
+    + " }",
+).replace(
+    "GOALJOINTS",
+    "{ "
+    + ", ".join(f"j2s6s200_joint_{i} = {v}" for i, v in enumerate((40, 150, 200, 30, 150, 20), 1))
+    + " }",
+)
 
 ROW = re.compile(
     r"^\s+([+-]\d\.\d\d) ([+-]\d\.\d\d) ([+-]\d\.\d\d)\s+(\d+\.\d+)\s+(\d+\.\d+)\s+"
@@ -52,8 +62,12 @@ def _turn(robot: ff.Robot, path, duration: float, steps: int = 400) -> float:
         wx, wy, wz = mmap.f1(q) @ qd
         x, y, z, w = quat
         return 0.5 * np.array(
-            [w * wx + y * wz - z * wy, w * wy + z * wx - x * wz, w * wz + x * wy - y * wx,
-             -x * wx - y * wy - z * wz]
+            [
+                w * wx + y * wz - z * wy,
+                w * wy + z * wx - x * wz,
+                w * wz + x * wy - y * wx,
+                -x * wx - y * wy - z * wz,
+            ]
         )
 
     quat = np.array([0.0, 0.0, 0.0, 1.0])
@@ -140,13 +154,14 @@ def test_a_goal_read_from_reach_output_plans_first_try(kinova_reach, capsys) -> 
     np.testing.assert_allclose(plan.base.achieved_zyx_deg, goal, atol=1e-6)
     # The printed goal is the printed turn about the printed axis from the printed drift.
     turned = ff.geodesic_angle(
-        ff.quat_from_zyx(*np.radians(goal)), ff.quat_from_zyx(*np.radians([float(x) for x in drift.groups()]))
+        ff.quat_from_zyx(*np.radians(goal)),
+        ff.quat_from_zyx(*np.radians([float(x) for x in drift.groups()])),
     )
     assert math.degrees(turned) == pytest.approx(diagonal[3], abs=2e-3)
 
 
 def test_goals_inside_the_inner_set_plan(kinova_reach) -> None:
-    path, folder = kinova_reach
+    path, _ = kinova_reach
     scenario = ff.Scenario.from_toml(path)
     axes = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]])
     report = ff.reachable(scenario, budget=30, directions=axes)

@@ -37,8 +37,8 @@ from .problem.build import planar_yaw_branch, problem_from_scenario
 from .problem.limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, check_number, check_samples
 from .problem.objectives import OBJECTIVES
 from .problem.scenario import Scenario, default_scenario_path
-from .reachable import DEFAULT_BUDGET as DEFAULT_REACH_BUDGET
 from .progress import TIMINGS, configure, stage
+from .reachable import DEFAULT_BUDGET as DEFAULT_REACH_BUDGET
 from .solvers.options import DEFAULT_TOLERANCE, TOLERANCE_RANGE_RAD, SolveOptions
 from .verify.checks import MAX_REPLAY_STEPS, REPLAY_STEPS_LIMIT, verify_plan
 from .viz.summary import cartesian_report, robot_label, summary

@@ -108,9 +108,7 @@ def check_configuration(scenario: Scenario, joints: np.ndarray) -> Configuration
         JointRoom(j.name, float(v), j.lower, j.upper, j.angular)
         for j, v in zip(robot.joints, joints, strict=True)
     )
-    clearance = next(
-        (c for c in scenario_constraints(scenario) if isinstance(c, Clearance)), None
-    )
+    clearance = next((c for c in scenario_constraints(scenario) if isinstance(c, Clearance)), None)
     if clearance is None or not clearance.applies_to(robot):
         return ConfigurationReport(rooms, (), None)
     model = clearance.model

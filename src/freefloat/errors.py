@@ -357,9 +357,9 @@ class UnreachableGoalError(FreeFloatError):
 
 
 class UnreachableAttitudeError(SolverError, UnreachableGoalError):
-    """A goal attitude beyond where the planner's search got: a :class:`SolverError` that
-    is also an :class:`UnreachableGoalError`.
+    """A goal attitude beyond where the planner's search got.
 
+    A :class:`SolverError` that is also an :class:`UnreachableGoalError`.
     Its message and its figures agree: ``reached`` of ``asked`` (rad, about ``axis``) is where
     the search stopped, ``best_residual`` the rest of the way (the attitude error of the path
     it stopped on, rad), ``reached_fraction = reached / asked``.

@@ -46,16 +46,16 @@ def sample_solution(problem: Problem, beta: np.ndarray, count: int) -> Samples:
     quats = problem.attitudes(beta, s)
     dyn = inverse_dynamics_batch(problem.mmap, path.q, path.qd, path.qdd)
     return Samples(
-        t=t.tolist(),
-        q=path.q.tolist(),
-        qd=path.qd.tolist(),
-        qdd=path.qdd.tolist(),
-        base_position=quat_rotate(quats, -dyn.com).tolist(),
-        base_quaternion_xyzw=quats.tolist(),
-        base_zyx_deg=[degrees(zyx_from_quat(qt)) for qt in quats],
-        end_effector_position=quat_rotate(quats, dyn.end_effector - dyn.com).tolist(),
-        base_angular_velocity=dyn.base_twist[:, 3:].tolist(),
-        tau=dyn.tau.tolist(),
+        t=np.array(t, dtype=float),
+        q=np.array(path.q, dtype=float),
+        qd=np.array(path.qd, dtype=float),
+        qdd=np.array(path.qdd, dtype=float),
+        base_position=quat_rotate(quats, -dyn.com),
+        base_quaternion_xyzw=np.array(quats, dtype=float),
+        base_zyx_deg=np.array([degrees(zyx_from_quat(qt)) for qt in quats], dtype=float),
+        end_effector_position=quat_rotate(quats, dyn.end_effector - dyn.com),
+        base_angular_velocity=np.array(dyn.base_twist[:, 3:], dtype=float),
+        tau=np.array(dyn.tau, dtype=float),
     )
 
 

@@ -62,8 +62,13 @@ def _box(mmap: MomentumMap, start: np.ndarray, goal: np.ndarray, factor: float) 
     slack = 0.5 * (factor - 1.0) * (hi - lo)
     lower = np.array([j.lower for j in mmap.robot.joints])
     upper = np.array([j.upper for j in mmap.robot.joints])
-    return np.stack([np.maximum(lo - slack, np.minimum(lower, lo)),
-                     np.minimum(hi + slack, np.maximum(upper, hi))], axis=1)
+    return np.stack(
+        [
+            np.maximum(lo - slack, np.minimum(lower, lo)),
+            np.minimum(hi + slack, np.maximum(upper, hi)),
+        ],
+        axis=1,
+    )
 
 
 def simple_motion_bound(
@@ -157,7 +162,9 @@ def inertia_ratio(mmap: MomentumMap, joints: np.ndarray) -> float:
     for index in range(1, model.njoints):
         inertia = data.oMi[index].act(model.inertias[index])
         offset = np.asarray(inertia.lever) - com
-        about_cm = inertia.inertia + inertia.mass * (offset @ offset * np.eye(3) - np.outer(offset, offset))
+        about_cm = inertia.inertia + inertia.mass * (
+            offset @ offset * np.eye(3) - np.outer(offset, offset)
+        )
         traces.append(float(np.trace(about_cm)))
     base, arm = traces[0], sum(traces[1:])
     return base / arm if arm > 0.0 else math.inf

@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import quadprog
@@ -236,6 +237,14 @@ def _why(
     return "freedom exhausted (the corrector does not converge with this path family)"
 
 
+def _where(reached: float, angle: float, steps: int, evaluations: int) -> str:
+    """A progress line: how far along (rad, printed in deg) after how much work."""
+    return (
+        f"continuation: {math.degrees(reached):.4g} of {math.degrees(angle):.4g} deg after "
+        f"{steps} steps ({evaluations} residual evaluations)"
+    )
+
+
 def track(
     problem: Problem,
     constraints: Sequence[Constraint],
@@ -306,9 +315,7 @@ def track(
             break
         steps += 1
         heartbeat(
-            lambda: f"continuation: {math.degrees(lam * angle):.4g} of {math.degrees(angle):.4g} "
-            f"deg after {steps} steps ({problem.evaluations - first_evaluation} residual "
-            "evaluations)"
+            partial(_where, lam * angle, angle, steps, problem.evaluations - first_evaluation)
         )
         tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache)
         step = min(dl, 1.0 - lam)

@@ -146,7 +146,9 @@ def solve(
         # Out of reach: every figure of the error is taken at the path where the search
         # stopped (how far it got, and what remains of the way).
         stopped_at = problem.residual(attempt.last_beta)
-        turn = quat_log(quat_multiply(quat_conjugate(problem.achieved(start)), problem.goal_quaternion))
+        turn = quat_log(
+            quat_multiply(quat_conjugate(problem.achieved(start)), problem.goal_quaternion)
+        )
         asked = float(np.linalg.norm(turn))
         raise UnreachableAttitudeError(
             attempt.message,

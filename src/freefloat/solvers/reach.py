@@ -74,6 +74,8 @@ def default_directions() -> np.ndarray:
     return np.vstack([axes, corners])
 
 
+#: The rotation each direction heads for by default (rad).
+DEFAULT_MAX_ANGLE = math.radians(60.0)
 #: Tries to confirm a direction's furthest turn as the planner would solve it (a count).
 CONFIRM_TRIES = 3
 #: After a failed confirmation, the next try asks for this share of where it stopped.
@@ -90,8 +92,10 @@ def _furthest(
     options: SolveOptions,
     stall: bool,
 ) -> ContinuationResult:
-    """Continuation towards ``angle`` about ``axis``; again with every eager constraint when
-    the path it ends on breaks one that was not tracked."""
+    """Continuation towards ``angle`` about ``axis`` (rad).
+
+    Again with every eager constraint when the path it ends on breaks one that was not tracked.
+    """
     target = problem.with_goal(quat_multiply(quintic, quat_exp(angle * axis)))
     result = track(target, tracked, options, stall=stall)
     if len(tracked) < len(eager) and broken_constraint(problem, eager, result.beta):
@@ -134,7 +138,7 @@ ReachProgress = Callable[[int, int, DirectionReach], None]
 def reach_set(
     problem: Problem,
     directions: np.ndarray | None = None,
-    max_angle: float | np.ndarray = math.radians(60.0),
+    max_angle: float | np.ndarray = DEFAULT_MAX_ANGLE,
     constraints: Sequence[Constraint] | None = None,
     options: SolveOptions | None = None,
     progress: ReachProgress | None = None,

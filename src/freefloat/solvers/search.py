@@ -189,8 +189,7 @@ def search(
                         closest = exc
                 if start is not None:  # its reach counts from a later point: keep the first
                     tried.append(
-                        f"{label}, freedom {_describe(used, names)} (continued): "
-                        + _short(exc)
+                        f"{label}, freedom {_describe(used, names)} (continued): " + _short(exc)
                     )
                     first_error = first_error or exc
                     continue

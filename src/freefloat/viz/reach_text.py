@@ -60,7 +60,9 @@ def reach_lines(report: ReachReport) -> list[str]:
             "  every goal up to 'inner' about a listed axis is reached by a solved path",
         ]
     else:
-        lines.append("planar bounds (docs/method.md section 6): the yaw changes simple motions reach")
+        lines.append(
+            "planar bounds (docs/method.md section 6): the yaw changes simple motions reach"
+        )
     lines.append(
         f"  {'axis (base frame)':<20}{'inner [deg]':>12}{'outer [deg]':>12}  "
         f"{'goal base_zyx_deg at inner':<30}  stopped by"
