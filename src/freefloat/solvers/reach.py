@@ -146,6 +146,10 @@ def reach_set(
 ) -> ReachEstimate:
     """Continue as far as possible from the quintic attitude in each direction.
 
+    Each direction is tracked as the planner tracks a goal there (its continuation with the
+    stall check); when it stops short, the turn where it stopped is confirmed as the planner
+    would solve it (:func:`_confirmed`).
+
     The constraints planning imposes from the start are tracked; the lazy ones (imposed by
     planning only once a path breaks them: velocity and effort limits) are checked on the
     furthest path of each direction and named in :attr:`DirectionReach.breaks`, as planning
@@ -180,9 +184,10 @@ def reach_set(
         before = problem.evaluations
         reached, stopped_by, beta = 0.0, "", np.zeros(problem.n_free)
         if angle > 0.0:
-            result = _furthest(problem, quintic, axis, angle, tracked, eager, options, False)
-            reached, stopped_by = result.fraction * angle, result.stopped_by
-            reached, beta = _confirmed(problem, quintic, axis, reached, tracked, eager, options)
+            result = _furthest(problem, quintic, axis, angle, tracked, eager, options, True)
+            reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
+            if not result.reached:  # solved on the way only to the intermediate tolerance
+                reached, beta = _confirmed(problem, quintic, axis, reached, tracked, eager, options)
         direction = DirectionReach(
             axis=axis,
             reached=reached,
