@@ -293,7 +293,8 @@ def _spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
     extra = scenario.extra if scenario.extra is not None else [2] * scenario.robot.n
     problem = problem_from_scenario(scenario.resolved(), extra=extra, check_bounds=False)
     angle = math.radians(args.max_angle)
-    estimate = reach_set(problem, None, angle, None, SolveOptions(max_evaluations=args.budget))
+    options = SolveOptions(max_evaluations=args.budget)
+    estimate = reach_set(problem, None, angle, None, options, confirm=False)
     print(f"freefloat bounds: {scenario.robot.name} (spatial) -- INNER ESTIMATE")
     for line in describe(estimate, scenario.robot.joint_names, angle, problem.goal_quaternion):
         print(f"  {line}")

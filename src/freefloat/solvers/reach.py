@@ -143,12 +143,13 @@ def reach_set(
     options: SolveOptions | None = None,
     progress: ReachProgress | None = None,
     deferred: Sequence[Constraint] = (),
+    confirm: bool = True,
 ) -> ReachEstimate:
     """Continue as far as possible from the quintic attitude in each direction.
 
-    Each direction is tracked as the planner tracks a goal there (its continuation with the
-    stall check); when it stops short, the turn where it stopped is confirmed as the planner
-    would solve it (:func:`_confirmed`).
+    With ``confirm`` each direction is tracked as the planner tracks a goal there (its
+    continuation with the stall check); when it stops short, the turn where it stopped is
+    confirmed as the planner would solve it (:func:`_confirmed`).
 
     The constraints planning imposes from the start are tracked; the lazy ones (imposed by
     planning only once a path breaks them: velocity and effort limits) are checked on the
@@ -167,6 +168,9 @@ def reach_set(
         progress: called after each direction (see :data:`ReachProgress`).
         deferred: constraints among ``constraints`` to check at the end of a direction
             rather than track.
+        confirm: track as the planner does and confirm where it stops (see above); False
+            tracks each direction to its budget without the stall check and reports where it
+            got, solved to the intermediate tolerance (``freefloat bounds``).
     """
     if problem.planar:
         raise ValueError("reach_set is for spatial problems; planar ones have exact bounds")
@@ -184,9 +188,9 @@ def reach_set(
         before = problem.evaluations
         reached, stopped_by, beta = 0.0, "", np.zeros(problem.n_free)
         if angle > 0.0:
-            result = _furthest(problem, quintic, axis, angle, tracked, eager, options, True)
+            result = _furthest(problem, quintic, axis, angle, tracked, eager, options, confirm)
             reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
-            if not result.reached:  # solved on the way only to the intermediate tolerance
+            if confirm and not result.reached:  # solved only to the intermediate tolerance
                 reached, beta = _confirmed(problem, quintic, axis, reached, tracked, eager, options)
         direction = DirectionReach(
             axis=axis,
