@@ -258,7 +258,7 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
         viewer[f"{EXTRAS}/inertial_axes"].set_object(g.triad(0.5 * extent))
         viewer[f"{EXTRAS}/base_frame"].set_object(g.triad(0.25 * extent))
         viewer[f"{EXTRAS}/end_effector"].set_object(
-            g.Sphere(0.02 * extent), g.MeshLambertMaterial(color=EE_COLOR, **ON_TOP)
+            g.Sphere(0.04 * extent), g.MeshLambertMaterial(color=EE_COLOR, **ON_TOP)
         )
         obstacles = {obstacle_node(o.name): o for o in plan_obstacles(plan)}
         for node, obstacle in obstacles.items():
