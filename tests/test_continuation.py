@@ -139,9 +139,20 @@ def test_more_freedom_continues_from_where_less_stopped() -> None:
 
 
 def test_a_stopped_search_is_continued_with_more_freedom(panda: ff.Scenario) -> None:
+    import io
+
+    from freefloat.progress import configure
+
     far = ff.quat_from_zyx(math.radians(40.0), 0.0, 0.0)
-    with pytest.raises(ff.SolverError) as info:
-        ff.plan(dataclasses.replace(panda, goal_attitude=far))
+    log = io.StringIO()
+    configure(1, stream=log)  # -v: a line per freedom level
+    try:
+        with pytest.raises(ff.SolverError) as info:
+            ff.plan(dataclasses.replace(panda, goal_attitude=far))
+    finally:
+        configure(0)
+    assert "(level 1 of 2)" in log.getvalue() and "(level 2 of 2)" in log.getvalue()
+    assert "solve: level 2 stopped: reachable up to" in log.getvalue()
     err = info.value
     assert "(continued): stopped" in str(err)
     assert err.stopped_by

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -35,6 +36,7 @@ import numpy as np
 from ..problem.constraints import Constraint
 from ..problem.objectives import Objective, gauss_legendre
 from ..problem.residual import Problem
+from ..progress import heartbeat
 from .newton import polish
 from .options import SolveOptions
 from .restore import broken_constraint
@@ -124,6 +126,11 @@ def _norm2(matrix: np.ndarray) -> float:
     return float(np.sum(matrix * matrix))
 
 
+def _where(name: str, spent: int, budget: int) -> str:
+    """A progress line of the minimisation (evaluations are counts)."""
+    return f"minimise {name}: {spent} of at most {budget} objective evaluations at this level"
+
+
 def optimise(
     problem: Problem,
     beta: np.ndarray,
@@ -172,6 +179,7 @@ def optimise(
                 spent[0] += 1
                 if spent[0] > max_evaluations:
                     raise _BudgetSpentError
+                heartbeat(partial(_where, objective.name, spent[0], max_evaluations))
             if len(memo) > 64:
                 memo.clear()
             memo[key] = make(to_beta(z))
