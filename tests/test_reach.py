@@ -110,7 +110,8 @@ def test_simple_motion_bound_holds_for_integrated_paths(factor: float) -> None:
 
 def test_drift_lies_within_the_bound_and_turn_limits_have_closed_forms() -> None:
     scenario = ff.Scenario.from_toml(SCENARIOS / "ur5_servicer.toml")
-    report = ff.reachable(scenario, budget=1, directions=np.eye(3))
+    report = ff.reachable(scenario, budget=0, directions=np.eye(3))
+    assert all(d.inner == 0.0 and d.outer > 0.0 for d in report.directions)
     moved = ff.geodesic_angle(report.start_quaternion, report.drift_quaternion)
     assert report.bound is not None and moved <= report.bound.bound  # the quintic is simple
     # From the start attitude every axis has the whole bound; a drift of D about z leaves

@@ -489,7 +489,8 @@ def build_parser() -> argparse.ArgumentParser:
         type=int,
         default=DEFAULT_REACH_BUDGET,
         help="residual evaluations per direction of the inner estimate "
-        f"(default {DEFAULT_REACH_BUDGET}; a count)",
+        f"(default {DEFAULT_REACH_BUDGET}; a count); 0: the drift attitude and the outer bound "
+        "only (well under a second)",
     )
     p_reach.add_argument("--plot", metavar="FILE", help="also draw it (PNG, SVG or PDF)")
     p_reach.set_defaults(func=_cmd_reach)
@@ -758,8 +759,8 @@ def _check_arguments(args: argparse.Namespace) -> None:
             raise InputLimitError("--budget", args.budget, 1, MAX_BUDGET)
     elif command == "reach":
         check_number(args.travel, "--travel", MAX_TRAVEL, low=1.0)
-        if not 1 <= args.budget <= MAX_BUDGET:
-            raise InputLimitError("--budget", args.budget, 1, MAX_BUDGET)
+        if not 0 <= args.budget <= MAX_BUDGET:
+            raise InputLimitError("--budget", args.budget, 0, MAX_BUDGET)
     elif command == "compose":
         numbers: list[tuple[str, Any, float, str]] = [
             ("--base-mass", [args.base_mass], MAX_MAGNITUDE, "kg"),

@@ -46,6 +46,8 @@ __all__ = ["DEFAULT_BUDGET", "SMALL_REACH_DEG", "DirectionLimits", "ReachReport"
 DEFAULT_BUDGET = 60
 #: Below this largest outer turn (deg) the report says the reach is small.
 SMALL_REACH_DEG = 5.0
+#: ``stopped_by`` of a direction whose inner turn was not estimated (budget 0).
+NOT_ESTIMATED = "not estimated (budget 0)"
 #: The inner estimate is reported rounded down to this (deg), so a printed goal lies inside.
 REPORT_STEP_DEG = 0.01
 
@@ -153,7 +155,8 @@ def reachable(
     Args:
         scenario: the request.
         travel_factor: ``k >= 1`` of the outer bound (1: every joint monotone).
-        budget: residual evaluations per direction of the inner estimate (a count).
+        budget: residual evaluations per direction of the inner estimate (a count); 0: the
+            drift attitude and the outer bound only (every ``inner`` is 0).
         directions: rotation axes (rows, base frame); default the six axes and eight diagonals.
         progress: called after each direction of the inner estimate.
     """
@@ -175,15 +178,20 @@ def reachable(
     outer = np.array([turn_limit(moved, axis, bound.bound) for axis in axes])
     before = problem.evaluations
     constraints = scenario_constraints(scenario)
-    estimate = reach_set(
-        problem,
-        axes,
-        outer,
-        constraints,
-        SolveOptions(max_evaluations=budget),
-        progress,
-        deferred=[c for c in constraints if isinstance(c, Clearance)],
-    )
+    if budget > 0:
+        estimate = reach_set(
+            problem,
+            axes,
+            outer,
+            constraints,
+            SolveOptions(max_evaluations=budget),
+            progress,
+            deferred=[c for c in constraints if isinstance(c, Clearance)],
+        )
+    else:  # the drift attitude and the outer bound only
+        skipped = DirectionReach(np.zeros(3), 0.0, 0.0, NOT_ESTIMATED, 0)
+        freedom = tuple(d - 5 for d in problem.family.degrees)
+        estimate = ReachEstimate(drift, (skipped,) * len(axes), freedom)
     return ReachReport(
         robot=scenario.robot.name,
         planar=False,

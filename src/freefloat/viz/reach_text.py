@@ -54,11 +54,16 @@ def reach_lines(report: ReachReport) -> list[str]:
             f"  the base turns at most {math.degrees(bound.bound):.4g} deg from the start "
             "attitude (sum over joints of the largest |F1 column| over the",
             "  configurations such a path visits, sampled and refined, times the joint's travel)",
-            f"inner estimate: continuation from the drift attitude towards the outer bound, "
-            f"freedom +{max(report.freedom)} per joint, {report.budget} residual evaluations "
-            "per direction;",
-            "  every goal up to 'inner' about a listed axis is reached by a solved path",
         ]
+        if report.budget > 0:
+            lines += [
+                f"inner estimate: continuation from the drift attitude towards the outer bound, "
+                f"freedom +{max(report.freedom)} per joint, {report.budget} residual evaluations "
+                "per direction;",
+                "  every goal up to 'inner' about a listed axis is reached by a solved path",
+            ]
+        else:
+            lines.append("inner estimate: not computed (--budget 0)")
     else:
         lines.append(
             "planar bounds (docs/method.md section 6): the yaw changes simple motions reach"
@@ -70,6 +75,8 @@ def reach_lines(report: ReachReport) -> list[str]:
     for d in report.directions:
         axis = " ".join(f"{x:+.2f}" for x in d.axis)
         why = d.stopped_by or ("-" if d.inner < d.outer else "reached the outer bound")
+        if report.budget == 0 and not report.planar:
+            why = "-"
         if d.breaks:
             why += f"; at this duration breaks {d.breaks}"
         lines.append(
