@@ -194,7 +194,7 @@ def _with_goal(scenario: ff.Scenario, goal: np.ndarray) -> ff.Scenario:
 def test_reach_refuses_bad_options_in_one_line(capsys) -> None:
     path = str(SCENARIOS / "ur5_servicer.toml")
     assert main(["reach", path, "--travel", "0.5"]) == 2
-    assert main(["reach", path, "--budget", "0"]) == 2
+    assert main(["reach", path, "--budget", "-1"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and all(line.startswith("freefloat: error: --") for line in err)
 
