@@ -752,6 +752,11 @@ def main() -> None:
         action="store_true",
         help="only the freefloat reach section (issue 28: times, inner set against plan)",
     )
+    parser.add_argument(
+        "--reachable-no-panda",
+        action="store_true",
+        help="reach section without the Panda servicer (minutes with clearance)",
+    )
     parser.add_argument("--objectives", action="store_true", help="also the objectives section")
     parser.add_argument(
         "--objectives-only", action="store_true", help="only the objectives section"
@@ -761,7 +766,7 @@ def main() -> None:
     if args.reachable_only:
         from bench_reachable import bench_reachable, print_reachable
 
-        found = bench_reachable()
+        found = bench_reachable(panda=not args.reachable_no_panda)
         print_reachable(found)
         if args.json:
             args.json.write_text(json.dumps({"machine": machine(), "reachable": found}, indent=1))
