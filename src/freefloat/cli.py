@@ -5,7 +5,7 @@ as one line ``freefloat: error: ...`` and exits with code 2, with no traceback a
 written.
 
 This module is long because it holds the parser and the handler of every subcommand (plan,
-bounds, verify, compose, show, plot, export, sweep); the plan summary lives in
+bounds, reach, check, verify, compose, show, plot, export, sweep); the plan summary lives in
 :mod:`freefloat.viz.summary` and the work itself in the layers below.
 """
 
@@ -445,7 +445,8 @@ def build_parser() -> argparse.ArgumentParser:
         "and the interval of yaw changes a simple motion can reach, in degrees. For a spatial "
         "robot: a constructive inner estimate; from the quintic path's attitude, continuation "
         "goes as far as it can about six axis directions and eight diagonals within the joint "
-        "limits, with the scenario's freedom (default two free coefficients per joint).",
+        "limits, with the scenario's freedom (default two free coefficients per joint). "
+        "freefloat reach prints the drift attitude, an outer bound and goal attitudes to paste.",
     )
     p_bounds.add_argument(
         "--plot", metavar="FILE", help="spatial: also draw the estimate (PNG, SVG or PDF)"
