@@ -127,7 +127,7 @@ def _limits(
     drift: np.ndarray, axis: np.ndarray, outer: float, reached: DirectionReach | None
 ) -> DirectionLimits:
     step = math.radians(REPORT_STEP_DEG)
-    inner = outer if reached is None else math.floor(reached.reached / step) * step
+    inner = outer if reached is None else math.floor(reached.reached / step + 1e-9) * step
     goal = quat_multiply(drift, quat_exp(inner * axis))
     return DirectionLimits(
         axis=axis,
@@ -187,6 +187,7 @@ def reachable(
             SolveOptions(max_evaluations=budget),
             progress,
             deferred=[c for c in constraints if isinstance(c, Clearance)],
+            step=math.radians(REPORT_STEP_DEG),
         )
     else:  # the drift attitude and the outer bound only
         skipped = DirectionReach(np.zeros(3), 0.0, 0.0, NOT_ESTIMATED, 0)

@@ -111,6 +111,7 @@ def _confirmed(
     tracked: Sequence[Constraint],
     eager: Sequence[Constraint],
     options: SolveOptions,
+    step: float = 0.0,
 ) -> tuple[float, np.ndarray]:
     """The largest turn up to ``reached`` that the planner's own continuation solves.
 
@@ -118,10 +119,13 @@ def _confirmed(
     tolerance, along steps of its own; the planner heads for the goal itself, with its
     final tolerance and the stall check. The turn is asked as the planner would ask it (at
     most :data:`CONFIRM_TRIES` times, each a share of where the last one stopped), so the
-    reported turn is one the planner reaches. Returns the turn (rad) and its path.
+    reported turn is one the planner reaches; with ``step`` (rad) the turn asked is rounded
+    down to a multiple of it first. Returns the turn (rad) and its path.
     """
     beta = np.zeros(problem.n_free)
     for _ in range(CONFIRM_TRIES):
+        if step > 0.0:  # the turn reported, so that the goal printed is the one confirmed
+            reached = math.floor(reached / step + 1e-9) * step
         if reached <= 0.0:
             break
         result = _furthest(problem, quintic, axis, reached, tracked, eager, options, True)
@@ -144,6 +148,7 @@ def reach_set(
     progress: ReachProgress | None = None,
     deferred: Sequence[Constraint] = (),
     confirm: bool = True,
+    step: float = 0.0,
 ) -> ReachEstimate:
     """Continue as far as possible from the quintic attitude in each direction.
 
@@ -171,6 +176,8 @@ def reach_set(
         confirm: track as the planner does and confirm where it stops (see above); False
             tracks each direction to its budget without the stall check and reports where it
             got, solved to the intermediate tolerance (``freefloat bounds``).
+        step: a turn that stops short is confirmed rounded down to a multiple of this (rad;
+            0: not rounded), the precision it is reported at.
     """
     if problem.planar:
         raise ValueError("reach_set is for spatial problems; planar ones have exact bounds")
@@ -191,7 +198,9 @@ def reach_set(
             result = _furthest(problem, quintic, axis, angle, tracked, eager, options, confirm)
             reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
             if confirm and not result.reached:  # solved only to the intermediate tolerance
-                reached, beta = _confirmed(problem, quintic, axis, reached, tracked, eager, options)
+                reached, beta = _confirmed(
+                    problem, quintic, axis, reached, tracked, eager, options, step
+                )
         direction = DirectionReach(
             axis=axis,
             reached=reached,
