@@ -160,6 +160,8 @@ def test_layers_flow_one_way_and_no_circle():
         "plans",
         "verify",
         "pipeline",
+        "configuration",
+        "reachable",
         "viz",
         "export",
         "sweep",
