@@ -47,9 +47,13 @@ scripts/bench_clearance.py).
 Paths (issue 23, with --paths or --paths-only): the orthonormal path basis against the monomial
 basis before it, side by side (scripts/bench_paths.py).
 
+freefloat reach (issue 28, with --reachable-only; scripts/bench_reachable.py): its time on the
+shipped servicers and a composed Kinova servicer, and 50 goals sampled inside its inner set
+planned with ff.plan.
+
 Run: python scripts/bench.py [--runs N] [--json FILE] [--markdown FILE] [--reach-only]
      [--random N] [--sweep] [--sweep-only] [--multi-arm-only] [--clearance-only] [--paths]
-     [--paths-only] [--paths-baseline REV]
+     [--paths-only] [--paths-baseline REV] [--reachable-only]
 
 ``--markdown FILE`` also writes the tables as Markdown, each table preceded by its stamp: the
 date, the machine (CPU, cores), the Python, Pinocchio, numpy and freefloat versions, the load
@@ -884,6 +888,16 @@ def run() -> None:
         action="store_true",
         help="only the true-hull and certified-clearance tables (bench_clearance.py)",
     )
+    parser.add_argument(
+        "--reachable-only",
+        action="store_true",
+        help="only the freefloat reach section (issue 28: times, inner set against plan)",
+    )
+    parser.add_argument(
+        "--reachable-no-panda",
+        action="store_true",
+        help="reach section without the Panda servicer (minutes with clearance)",
+    )
     parser.add_argument("--objectives", action="store_true", help="also the objectives section")
     parser.add_argument(
         "--objectives-only", action="store_true", help="only the objectives section"
@@ -932,6 +946,14 @@ def run() -> None:
         print_paths(paths)
         if args.json:
             args.json.write_text(json.dumps({"machine": machine(), "paths": paths}, indent=1))
+        return
+    if args.reachable_only:
+        from bench_reachable import bench_reachable, print_reachable
+
+        found = bench_reachable(panda=not args.reachable_no_panda)
+        print_reachable(found)
+        if args.json:
+            args.json.write_text(json.dumps({"machine": machine(), "reachable": found}, indent=1))
         return
     objectives = bench_objectives() if args.objectives or args.objectives_only else {}
     if args.objectives_only:

@@ -139,8 +139,27 @@ def test_more_freedom_continues_from_where_less_stopped() -> None:
 
 
 def test_a_stopped_search_is_continued_with_more_freedom(panda: ff.Scenario) -> None:
+    import io
+
+    from freefloat.progress import configure
+
     far = ff.quat_from_zyx(math.radians(40.0), 0.0, 0.0)
-    with pytest.raises(ff.SolverError) as info:
-        ff.plan(dataclasses.replace(panda, goal_attitude=far))
-    assert "(continued): best residual" in str(info.value)
-    assert info.value.stopped_by  # the reach reported is the first attempt's, from the quintic
+    log = io.StringIO()
+    configure(1, stream=log)  # -v: a line per freedom level
+    try:
+        with pytest.raises(ff.SolverError) as info:
+            ff.plan(dataclasses.replace(panda, goal_attitude=far))
+    finally:
+        configure(0)
+    assert "(level 1 of 2)" in log.getvalue() and "(level 2 of 2)" in log.getvalue()
+    assert "solve: level 2 stopped: reachable up to" in log.getvalue()
+    err = info.value
+    assert "(continued): stopped" in str(err)
+    assert err.stopped_by
+    # One figure throughout: the reach from the quintic attitude plus what the path the
+    # search stopped on misses (its residual, recomputed here) make up the turn asked.
+    assert isinstance(err, ff.UnreachableGoalError)
+    assert err.reached + err.best_residual == pytest.approx(err.asked, abs=2e-3)
+    assert err.reached_fraction == pytest.approx(err.reached / err.asked, rel=1e-12)
+    assert f"reachable up to {math.degrees(err.reached):.3g} deg of the" in str(err)
+    assert f"misses the goal by {err.best_residual:.3g} rad" in str(err)

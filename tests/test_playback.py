@@ -94,6 +94,31 @@ def test_browser_renders_and_animates(html_page):
     assert changed.mean() > 0.002  # the robot moved between the two instants
 
 
+def test_markers_are_drawn_on_top_in_the_legend_colours(html_page):
+    """The CM lies inside the spacecraft and the end effector inside its own link: the page's
+    scene commands (decoded here) draw both without depth test, in the legend's colours."""
+    import base64
+    import gzip
+    import json
+    import re
+
+    import umsgpack
+
+    from freefloat.viz.controls import LEGEND
+
+    packed = json.loads(re.search(r"const commands = (\[.*?\]);", html_page.read_text()).group(1))
+    objects = {}
+    for item in packed:
+        command = umsgpack.unpackb(gzip.decompress(base64.b64decode(item)))
+        if command.get("type") == "set_object":
+            objects[command["path"].rsplit("/", 1)[-1]] = command["object"]
+    legend = {text.split(" (")[0]: css for css, text in LEGEND}
+    for node, label in (("cm", "system centre of mass"), ("end_effector", "end effector")):
+        material = objects[node]["materials"][0]
+        assert material["depthTest"] is False and material["transparent"] is True
+        assert f"#{material['color']:06x}" == legend[label]
+
+
 def test_show_html_cli_leaves_no_server(tmp_path, worked_plan, capsys):
     plan_path = worked_plan.save(tmp_path / "p.json")
     before = _servers()

@@ -108,6 +108,12 @@ def test_goal_values_and_projection_are_marked(figs, worked_plan):
     ax = figs["base_attitude"].axes[0]
     targets = [line.get_ydata()[0] for line in ax.lines if line.get_label() == "_goal"]
     np.testing.assert_allclose(targets, worked_plan.base.target_zyx_deg)
+    # Coinciding angles stay distinguishable: one line style each, goal markers drawn on top.
+    data = [line for line in ax.lines if not line.get_label().startswith("_")][:3]
+    assert len({line.get_linestyle() for line in data}) == 3
+    at_t = [line for line in ax.lines if line.get_label() == "_goal_at_T"]
+    assert [line.get_ydata()[0] for line in at_t] == list(worked_plan.base.target_zyx_deg)
+    assert all(line.get_zorder() > max(d.get_zorder() for d in data) for line in at_t)
     assert "inertial x-y plane" in figs["end_effector_path"].axes[0].get_xlabel()
 
 

@@ -80,3 +80,29 @@ def test_verbose_logs_stage_timings_and_quiet_silences(tmp_path):
     quiet = [*_command(tmp_path)[:3], "plan", "-q", *_command(tmp_path)[4:]]
     proc = subprocess.run(quiet, capture_output=True, text=True, env=_env(), check=True)
     assert proc.stderr == "" and "freefloat plan:" in proc.stdout
+
+
+def test_heartbeat_speaks_at_least_every_period_with_v(monkeypatch):
+    """-v: a long loop's heartbeat prints once each period has passed (display only)."""
+    import io
+
+    from freefloat import progress
+
+    clock = [100.0]
+    monkeypatch.setattr(progress.time, "perf_counter", lambda: clock[0])
+    log = io.StringIO()
+    progress.configure(1, stream=log)
+    try:
+        for now in (100.0, 104.0, 105.5, 106.0, 110.6, 111.0):
+            clock[0] = now
+            progress.heartbeat(lambda now=now: f"at {now}")
+        quiet = io.StringIO()
+        progress.configure(0, stream=quiet)  # without -v: nothing
+        clock[0] = 200.0
+        progress.heartbeat(lambda: "never")
+        clock[0] = 300.0
+        progress.heartbeat(lambda: "never")
+    finally:
+        progress.configure(0)
+    assert log.getvalue().splitlines() == ["freefloat: info: at 105.5", "freefloat: info: at 110.6"]
+    assert quiet.getvalue() == ""

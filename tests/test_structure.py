@@ -176,6 +176,8 @@ def test_layers_flow_one_way_and_no_circle():
         "verify",
         "pipeline",
         "robust",
+        "configuration",
+        "reachable",
         "viz",
         "export",
         "sweep",

@@ -27,6 +27,7 @@ from .errors import (
     ScenarioError,
     SolverError,
     UnknownNameError,
+    UnreachableAttitudeError,
     UnreachableGoalError,
     VelocityLimitError,
     VerificationError,
@@ -60,6 +61,7 @@ from .problem.objectives import (
 from .problem.paths import JointPolynomials, PathFamily
 from .problem.residual import Problem
 from .problem.scenario import Scenario, default_scenario_path
+from .reachable import ReachReport, reachable
 from .robot.model import Joint, Robot, load_robot, shipped_robots
 from .solvers import Solution, SolveOptions, Strategy, solve
 from .sweep import SweepRow, SweepSpec, sweep
@@ -103,6 +105,7 @@ __all__ = [
     "PlanMismatchError",
     "PlanarBounds",
     "Problem",
+    "ReachReport",
     "ReplayResult",
     "Robot",
     "Scenario",
@@ -114,6 +117,7 @@ __all__ = [
     "SweepRow",
     "SweepSpec",
     "UnknownNameError",
+    "UnreachableAttitudeError",
     "UnreachableGoalError",
     "VelocityLimitError",
     "Verification",
@@ -133,6 +137,7 @@ __all__ = [
     "planar_bounds",
     "problem_from_scenario",
     "quat_from_zyx",
+    "reachable",
     "replay",
     "shipped_robots",
     "solve",

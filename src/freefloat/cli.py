@@ -28,6 +28,7 @@ from .problem.limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, check_nu
 from .problem.objectives import OBJECTIVES
 from .problem.scenario import Scenario, default_scenario_path
 from .progress import TIMINGS, configure, stage
+from .reachable import DEFAULT_BUDGET as DEFAULT_REACH_BUDGET
 from .solvers.options import DEFAULT_TOLERANCE, TOLERANCE_RANGE_RAD, SolveOptions
 from .verify.checks import MAX_REPLAY_STEPS, REPLAY_STEPS_LIMIT, verify_plan
 from .viz.summary import cartesian_report, robot_label, summary
@@ -352,7 +353,8 @@ def _spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
     extra = scenario.extra if scenario.extra is not None else [2] * scenario.robot.n
     problem = problem_from_scenario(scenario.resolved(), extra=extra, check_bounds=False)
     angle = math.radians(args.max_angle)
-    estimate = reach_set(problem, None, angle, None, SolveOptions(max_evaluations=args.budget))
+    options = SolveOptions(max_evaluations=args.budget)
+    estimate = reach_set(problem, None, angle, None, options, confirm=False)
     print(f"freefloat bounds: {scenario.robot.name} (spatial) -- INNER ESTIMATE")
     for line in describe(estimate, scenario.robot.joint_names, angle, problem.goal_quaternion):
         print(f"  {line}")
@@ -387,6 +389,57 @@ def _cmd_correct(args: argparse.Namespace) -> int:
     print(f"freefloat correct: turns the spacecraft back by {math.degrees(residual):.4g} deg")
     print(summary(result, written, wall_time_s=time.perf_counter() - args.started))
     return 0
+
+
+def _cmd_reach(args: argparse.Namespace) -> int:
+    from .progress import counted
+    from .reachable import reachable
+    from .solvers.reach import default_directions
+    from .viz.reach_text import reach_lines
+
+    scenario = _load_scenario(args.scenario)
+    with counted("reach", len(default_directions())) as advance:
+        report = reachable(
+            scenario,
+            travel_factor=args.travel,
+            budget=args.budget,
+            progress=lambda i, n, d: advance(
+                f"axis {' '.join(f'{x:+.2f}' for x in d.axis)}: {math.degrees(d.reached):.3f} deg"
+                f" ({d.evaluations} evaluations)"
+            ),
+        )
+    print("\n".join(reach_lines(report)))
+    if args.plot:
+        from .viz.reach_plot import save_reach_figure
+
+        written = save_reach_figure(report.estimate(), args.plot, title=report.robot)
+        print(f"figure: {written.resolve()}")
+    return 0
+
+
+def _cmd_check(args: argparse.Namespace) -> int:
+    from .configuration import check_configuration, parse_joints
+
+    scenario = _load_scenario(args.scenario)
+    report = check_configuration(scenario, parse_joints(args.at, scenario))
+    print(f"freefloat check: {scenario.robot.name} at {args.at}")
+    print(f"  {'joint':<24}{'value':>12}{'lower':>12}{'upper':>12}{'room':>12}")
+    for j in report.joints:
+        scale, unit = (math.degrees, "deg") if j.angular else (float, "m")
+        cells = "".join(f"{scale(v):>12.3f}" for v in (j.value, j.lower, j.upper, j.room))
+        flag = "" if j.room >= 0.0 else "  OUTSIDE"
+        print(f"  {j.name:<24}{cells}  {unit}{flag}")
+    if report.margin is None:
+        print("  clearance: not checked (no collision pairs, or [safety] check = false)")
+    else:
+        print(f"  closest pairs (signed distance; margin {report.margin:g} m):")
+        for name, distance in report.pairs:
+            print(f"    {name:<50}{distance:>10.4f} m")
+        state = "keeps" if report.clear else "is below"
+        print(f"  clearance {report.pairs[0][1]:.4f} m {state} the margin {report.margin:g} m")
+    verdict = "ok" if report.within_limits and report.clear else "NOT OK"
+    print(f"  configuration: {verdict}")
+    return 0 if verdict == "ok" else 1
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
@@ -498,7 +551,8 @@ def build_parser() -> argparse.ArgumentParser:
         "and the interval of yaw changes a simple motion can reach, in degrees. For a spatial "
         "robot: a constructive inner estimate; from the quintic path's attitude, continuation "
         "goes as far as it can about six axis directions and eight diagonals within the joint "
-        "limits, with the scenario's freedom (default two free coefficients per joint).",
+        "limits, with the scenario's freedom (default two free coefficients per joint). "
+        "freefloat reach prints the drift attitude, an outer bound and goal attitudes to paste.",
     )
     p_bounds.add_argument(
         "--plot", metavar="FILE", help="spatial: also draw the estimate (PNG, SVG or PDF)"
@@ -519,6 +573,52 @@ def build_parser() -> argparse.ArgumentParser:
         "scenario", nargs="?", help="scenario TOML file (default: worked example)"
     )
     p_bounds.set_defaults(func=_cmd_bounds)
+
+    p_reach = commands.add_parser(
+        "reach",
+        help="print the drift attitude and the attitudes a simple motion can reach",
+        description="Where the plain quintic path leaves the spacecraft (the drift attitude), "
+        "an outer bound on the turn of every simple motion (joint travel at most --travel times "
+        "its start-goal span; 1: every joint monotone), and per direction the largest turn from "
+        "the drift attitude reached by a solved path, with the goal attitude to paste into the "
+        "scenario (docs/reach.md). The scenario's goal attitude is ignored.",
+    )
+    p_reach.add_argument("scenario", nargs="?", help="scenario TOML file (default: worked example)")
+    p_reach.add_argument(
+        "--travel",
+        type=float,
+        default=1.0,
+        metavar="K",
+        help="outer bound for joint travel at most K x the start-goal span (default 1: monotone)",
+    )
+    p_reach.add_argument(
+        "--budget",
+        type=int,
+        default=DEFAULT_REACH_BUDGET,
+        help="residual evaluations per direction of the inner estimate "
+        f"(default {DEFAULT_REACH_BUDGET}; a count); 0: the drift attitude and the outer bound "
+        "only (well under a second)",
+    )
+    p_reach.add_argument("--plot", metavar="FILE", help="also draw it (PNG, SVG or PDF)")
+    p_reach.set_defaults(func=_cmd_reach)
+
+    p_check = commands.add_parser(
+        "check",
+        help="check one configuration: joint limits, closest pairs, clearance",
+        description="Joint values against the URDF limits (room to the nearer one), the "
+        "closest body pairs of the collision model and the smallest clearance against the "
+        "scenario's margin, at the start, the goal or given joint values. Exit code 0 when "
+        "within the limits and clear, 1 otherwise.",
+    )
+    p_check.add_argument("scenario", help="scenario TOML file")
+    p_check.add_argument(
+        "--at",
+        default="start",
+        metavar="start|goal|J1,J2,...",
+        help="the configuration: start (default), goal, or one value per joint, "
+        "comma-separated (deg; m for prismatic joints)",
+    )
+    p_check.set_defaults(func=_cmd_check)
 
     p_verify = commands.add_parser(
         "verify",
@@ -786,6 +886,8 @@ def _in_degrees(exc: FreeFloatError) -> str:
 
 #: Largest ``bounds --budget`` (residual evaluations per direction; 14 directions).
 MAX_BUDGET = 100_000
+#: Largest ``reach --travel`` (joint travel over the start-goal span).
+MAX_TRAVEL = 100.0
 #: Most local worker processes of ``sweep --workers``.
 MAX_WORKERS = 1024
 #: Fastest playback of ``show --speed`` (times real time).
@@ -820,6 +922,10 @@ def _check_arguments(args: argparse.Namespace) -> None:
         _positive(args.max_angle, "--max-angle", 180.0, "deg")
         if not 1 <= args.budget <= MAX_BUDGET:
             raise InputLimitError("--budget", args.budget, 1, MAX_BUDGET)
+    elif command == "reach":
+        check_number(args.travel, "--travel", MAX_TRAVEL, low=1.0)
+        if not 0 <= args.budget <= MAX_BUDGET:
+            raise InputLimitError("--budget", args.budget, 0, MAX_BUDGET)
     elif command == "compose":
         numbers: list[tuple[str, Any, float, str]] = [
             ("--base-mass", [args.base_mass], MAX_MAGNITUDE, "kg"),
@@ -863,6 +969,7 @@ def _check_arguments(args: argparse.Namespace) -> None:
 _OUTPUTS: dict[str, tuple[tuple[str, str, bool], ...]] = {
     "plan": (("-o", "output", False),),
     "bounds": (("--plot", "plot", False),),
+    "reach": (("--plot", "plot", False),),
     "compose": (("-o", "output", False),),
     "plot": (("-o", "output", True),),
     "show": (("--html", "html", False),),

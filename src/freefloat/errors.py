@@ -2,10 +2,14 @@
 
 Every message is a single line that names the problem and says what would be valid, so that
 the command line can print it as it is (exit code 2) and a caller can test it.
+
+This module is long because it holds every exception class with its data and its message (one
+exception root, one module).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from typing import Any
 
@@ -172,9 +176,14 @@ class SolverError(FreeFloatError):
             axes = "; per axis x, y, z: " + ", ".join(f"{x:.3g}" for x in self.per_axis)
         detail = f"; tried: {'; '.join(self.tried)}" if self.tried else ""
         hint = f"; {hint}" if hint else ""
-        super().__init__(
-            f"{message} (best residual {self.best_residual:.3g} rad{axes}){detail}{hint}"
-        )
+        if self.last_beta is not None:  # the residual of the path where the search stopped
+            figure = (
+                f"the path it stopped on misses the goal by {self.best_residual:.3g} rad = "
+                f"{math.degrees(self.best_residual):.3g} deg{axes}"
+            )
+        else:
+            figure = f"best residual {self.best_residual:.3g} rad{axes}"
+        super().__init__(f"{message} ({figure}){detail}{hint}")
 
 
 class PlanFileError(FreeFloatError):
@@ -287,12 +296,67 @@ class EffortLimitError(DurationLimitError):
 
 
 class UnreachableGoalError(FreeFloatError):
-    """A Cartesian goal no configuration reaches; carries the miss and the workspace radius."""
+    """A goal out of reach: no configuration reaches a Cartesian goal, or no path an attitude.
 
-    def __init__(self, message: str, distance: float, radius: float) -> None:
+    Raised as is for a Cartesian goal (with the miss and the workspace radius); an attitude
+    goal beyond where the planner's search got raises the subclass
+    :class:`UnreachableAttitudeError`.
+
+    Attributes:
+        distance: Cartesian goals: the smallest distance to the goal found (m); NaN otherwise.
+        radius: Cartesian goals: the workspace radius (m); NaN otherwise.
+    """
+
+    def __init__(
+        self, message: str, distance: float = float("nan"), radius: float = float("nan")
+    ) -> None:
         self.distance = float(distance)
         self.radius = float(radius)
         super().__init__(message)
+
+
+class UnreachableAttitudeError(SolverError, UnreachableGoalError):
+    """A goal attitude beyond where the planner's search got.
+
+    A :class:`SolverError` that is also an :class:`UnreachableGoalError`.
+    Its message and its figures agree: ``reached`` of ``asked`` (rad, about ``axis``) is where
+    the search stopped, ``best_residual`` the rest of the way (the attitude error of the path
+    it stopped on, rad), ``reached_fraction = reached / asked``.
+
+    Attributes:
+        reached: the largest turn towards the goal reached by a solved path (rad).
+        asked: the turn the goal asks for, from where the search started (rad).
+        axis: the unit axis of that turn (base frame at the search's starting attitude).
+    """
+
+    def __init__(
+        self,
+        message: str,
+        best_residual: float,
+        reached: float,
+        asked: float,
+        tried: Sequence[str] = (),
+        per_axis: Sequence[float] | None = None,
+        hint: str = "",
+        stopped_by: str = "",
+        last_beta: Sequence[float] | None = None,
+        axis: Sequence[float] = (0.0, 0.0, 1.0),
+    ) -> None:
+        self.reached = float(reached)
+        self.asked = float(asked)
+        self.axis = tuple(float(a) for a in axis)
+        SolverError.__init__(
+            self,
+            message,
+            best_residual,
+            tried,
+            per_axis=per_axis,
+            hint=hint,
+            stopped_by=stopped_by,
+            reached_fraction=self.reached / self.asked if self.asked > 0.0 else 0.0,
+            last_beta=last_beta,
+        )
+        self.distance = self.radius = float("nan")
 
 
 class CollisionError(FreeFloatError):

@@ -70,7 +70,7 @@ def from_samples(plan: Plan) -> Trajectory:
     """The plan's own samples as arrays (torques must be present)."""
     s = plan.samples
     n = len(plan.robot.joints)
-    tau = np.asarray(s.tau, dtype=float) if s.tau else np.full((len(s.t), n), np.nan)
+    tau = np.asarray(s.tau, dtype=float) if len(s.tau) else np.full((len(s.t), n), np.nan)
     return Trajectory(
         joints=list(plan.robot.joints),
         kinds=_kinds(plan),

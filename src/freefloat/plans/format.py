@@ -170,36 +170,81 @@ class Feasibility:
     requested_yaw_change_deg: float | None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Samples:
-    """The plan sampled in time; each field is a list with one entry per sample.
+    """The plan sampled in time; each field is a NumPy array with one row per sample.
 
-    ``t`` (s); ``q`` (rad or m), ``qd`` (per s), ``qdd`` (per s^2), one value per joint;
-    ``base_position`` (m), ``base_quaternion_xyzw``, ``base_zyx_deg`` (deg),
-    ``base_angular_velocity`` (rad/s, base frame), ``end_effector_position`` (m, the first end
-    effector), ``tau`` joint torques (N m, or N for prismatic joints), ``end_effector_paths``
-    every end effector's position (m) by frame name (format 4).
+    ``t`` (s, shape (K,)); ``q`` (rad or m), ``qd`` (per s), ``qdd`` (per s^2), shape (K, N);
+    ``base_position`` (m, (K, 3)), ``base_quaternion_xyzw`` ((K, 4)), ``base_zyx_deg`` (deg,
+    (K, 3)), ``base_angular_velocity`` (rad/s, base frame, (K, 3)), ``end_effector_position``
+    (m, (K, 3), the first end effector), ``tau`` joint torques (N m, or N for prismatic joints,
+    (K, N)), ``end_effector_paths`` every end effector's positions (m, (K, 3)) by frame name
+    (format 4). Lists given to the constructor (a plan file's) are turned into float arrays; two
+    records are equal when every array is.
     """
 
-    t: list[float]
-    q: list[list[float]]
-    qd: list[list[float]]
-    qdd: list[list[float]]
-    base_position: list[list[float]]
-    base_quaternion_xyzw: list[list[float]]
-    base_zyx_deg: list[list[float]]
-    end_effector_position: list[list[float]]
-    base_angular_velocity: list[list[float]] = field(default_factory=list)
-    tau: list[list[float]] = field(default_factory=list)
-    end_effector_paths: dict[str, list[list[float]]] = field(default_factory=dict)
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    base_position: np.ndarray
+    base_quaternion_xyzw: np.ndarray
+    base_zyx_deg: np.ndarray
+    end_effector_position: np.ndarray
+    base_angular_velocity: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    tau: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    end_effector_paths: dict[str, np.ndarray] = field(default_factory=dict)
 
-    def path_of(self, frame: str) -> list[list[float]]:
-        """The positions (m) of end effector ``frame`` (the first one's in an older file)."""
+    def __post_init__(self) -> None:
+        for name in _SAMPLE_FIELDS:
+            object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float))
+        paths = {str(k): np.asarray(v, dtype=float) for k, v in self.end_effector_paths.items()}
+        object.__setattr__(self, "end_effector_paths", paths)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Samples):
+            return NotImplemented
+        return (
+            all(
+                np.array_equal(getattr(self, name), getattr(other, name)) for name in _SAMPLE_FIELDS
+            )
+            and self.end_effector_paths.keys() == other.end_effector_paths.keys()
+            and all(
+                np.array_equal(v, other.end_effector_paths[k])
+                for k, v in self.end_effector_paths.items()
+            )
+        )
+
+    __hash__ = None  # type: ignore[assignment]  # arrays: not hashable
+
+    def path_of(self, frame: str) -> np.ndarray:
+        """Positions (m, (K, 3)) of end effector ``frame`` (the first one's in an older file)."""
         if frame in self.end_effector_paths:
             return self.end_effector_paths[frame]
         if not self.end_effector_paths:
             return self.end_effector_position
         raise KeyError(f"no path of end effector {frame!r}; {', '.join(self.end_effector_paths)}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """The samples as the plan file's lists (JSON-ready)."""
+        record: dict[str, Any] = {name: getattr(self, name).tolist() for name in _SAMPLE_FIELDS}
+        record["end_effector_paths"] = {k: v.tolist() for k, v in self.end_effector_paths.items()}
+        return record
+
+
+#: The fields of :class:`Samples` that are arrays, in file order.
+_SAMPLE_FIELDS = (
+    "t",
+    "q",
+    "qd",
+    "qdd",
+    "base_position",
+    "base_quaternion_xyzw",
+    "base_zyx_deg",
+    "end_effector_position",
+    "base_angular_velocity",
+    "tau",
+)
 
 
 @dataclass(frozen=True)
@@ -495,7 +540,7 @@ class Plan:
 
     def to_dict(self) -> dict[str, Any]:
         """The plan as the JSON-ready dictionary of the file format (a deep copy)."""
-        robot, samples = self.robot.to_dict(), asdict(self.samples)
+        robot, samples = self.robot.to_dict(), self.samples.to_dict()
         if self.format != FORMAT:  # an older file keeps its keys
             robot.pop("end_effectors")
             samples.pop("end_effector_paths")

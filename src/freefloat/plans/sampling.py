@@ -55,18 +55,18 @@ def sample_solution(problem: Problem, beta: np.ndarray, count: int) -> Samples:
     quats = problem.attitudes(beta, s)
     dyn = inverse_dynamics_batch(problem.mmap, path.q, path.qd, path.qdd)
     frames = problem.robot.end_effectors
-    paths = [quat_rotate(quats, ee - dyn.com).tolist() for ee in dyn.end_effectors]
+    paths = [quat_rotate(quats, ee - dyn.com) for ee in dyn.end_effectors]
     return Samples(
-        t=t.tolist(),
-        q=path.q.tolist(),
-        qd=path.qd.tolist(),
-        qdd=path.qdd.tolist(),
-        base_position=quat_rotate(quats, -dyn.com).tolist(),
-        base_quaternion_xyzw=quats.tolist(),
-        base_zyx_deg=[degrees(zyx_from_quat(qt)) for qt in quats],
+        t=np.array(t, dtype=float),
+        q=np.array(path.q, dtype=float),
+        qd=np.array(path.qd, dtype=float),
+        qdd=np.array(path.qdd, dtype=float),
+        base_position=quat_rotate(quats, -dyn.com),
+        base_quaternion_xyzw=np.array(quats, dtype=float),
+        base_zyx_deg=np.array([degrees(zyx_from_quat(qt)) for qt in quats], dtype=float),
         end_effector_position=paths[0],
-        base_angular_velocity=dyn.base_twist[:, 3:].tolist(),
-        tau=dyn.tau.tolist(),
+        base_angular_velocity=np.array(dyn.base_twist[:, 3:], dtype=float),
+        tau=np.array(dyn.tau, dtype=float),
         end_effector_paths=dict(zip(frames, paths, strict=True)),
     )
 

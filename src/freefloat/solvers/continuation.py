@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import quadprog
@@ -34,6 +35,7 @@ import quadprog
 from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
 from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.residual import Problem
+from ..progress import heartbeat
 from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
 from .restore import broken_constraint
@@ -235,6 +237,14 @@ def _why(
     return "freedom exhausted (the corrector does not converge with this path family)"
 
 
+def _where(reached: float, angle: float, steps: int, evaluations: int) -> str:
+    """A progress line: how far along (rad, printed in deg) after how much work."""
+    return (
+        f"continuation: {math.degrees(reached):.4g} of {math.degrees(angle):.4g} deg after "
+        f"{steps} steps ({evaluations} residual evaluations)"
+    )
+
+
 def track(
     problem: Problem,
     constraints: Sequence[Constraint],
@@ -304,6 +314,9 @@ def track(
             stopped_by = f"evaluation budget ({options.max_evaluations} residual evaluations)"
             break
         steps += 1
+        heartbeat(
+            partial(_where, lam * angle, angle, steps, problem.evaluations - first_evaluation)
+        )
         tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache)
         step = min(dl, 1.0 - lam)
         last = lam + step >= 1.0

@@ -18,7 +18,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..errors import SolverError
+from ..errors import SolverError, UnreachableAttitudeError
+from ..physics.attitude import quat_conjugate, quat_log, quat_multiply
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
 from .certify import certify
@@ -108,6 +109,25 @@ def solve(
 
     roots, best_vector = _roots(problem, attempt, constraints, tol, tried)
     roots.sort(key=lambda r: float(r.beta @ r.beta))
+    if not roots and attempt.stopped_by and attempt.last_beta is not None:
+        # Out of reach: every figure of the error is taken at the path where the search
+        # stopped (how far it got, and what remains of the way).
+        stopped_at = problem.residual(attempt.last_beta)
+        turn = quat_log(
+            quat_multiply(quat_conjugate(problem.achieved(start)), problem.goal_quaternion)
+        )
+        asked = float(np.linalg.norm(turn))
+        raise UnreachableAttitudeError(
+            attempt.message,
+            float(np.linalg.norm(stopped_at)),
+            reached=attempt.reached_fraction * asked,
+            asked=asked,
+            tried=_dedupe(tried),
+            per_axis=stopped_at.tolist(),
+            stopped_by=attempt.stopped_by,
+            last_beta=attempt.last_beta.tolist(),
+            axis=(turn / max(asked, 1e-300)).tolist(),
+        )
     if not roots:
         raise SolverError(
             attempt.message or "no path within the constraints reaches the goal attitude",

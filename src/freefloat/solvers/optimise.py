@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -35,6 +36,7 @@ import numpy as np
 from ..problem.constraints import Constraint
 from ..problem.objectives import Objective, gauss_legendre
 from ..problem.residual import Problem
+from ..progress import heartbeat
 from .newton import polish
 from .options import SolveOptions
 from .restore import broken_constraint
@@ -122,6 +124,11 @@ def scaled_coordinates(
 def _norm2(matrix: np.ndarray) -> float:
     """Squared Frobenius norm."""
     return float(np.sum(matrix * matrix))
+
+
+def _where(name: str, spent: int, budget: int) -> str:
+    """A progress line of the minimisation (evaluations are counts)."""
+    return f"minimise {name}: {spent} of at most {budget} objective evaluations at this level"
 
 
 def optimise(
@@ -255,6 +262,7 @@ class _Evaluations:
                 self.spent += 1
                 if self.spent > self.budget:
                     raise _BudgetSpentError
+                heartbeat(partial(_where, self.objective.name, self.spent, self.budget))
             if len(self.memo) > 64:
                 self.memo.clear()
             self.memo[key] = make(self.to_beta(z))

@@ -11,7 +11,7 @@ the continuation does not find) may reach further.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,8 +19,9 @@ import numpy as np
 from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
-from .continuation import track
+from .continuation import ContinuationResult, track
 from .options import SolveOptions
+from .restore import broken_constraint
 
 __all__ = ["DirectionReach", "ReachEstimate", "default_directions", "describe", "reach_set"]
 
@@ -35,6 +36,9 @@ class DirectionReach:
         asked: the rotation continuation headed for (rad).
         stopped_by: why it stopped ("" when it reached ``asked``).
         evaluations: residual evaluations spent on this direction.
+        beta: free coefficients of the path that reaches ``reached`` (rad or m).
+        breaks: a lazy constraint (velocity or effort limits) that path breaks at the
+            problem's duration ("" when none): planning would ask for a longer duration.
     """
 
     axis: np.ndarray
@@ -42,6 +46,8 @@ class DirectionReach:
     asked: float
     stopped_by: str
     evaluations: int
+    beta: np.ndarray | None = None
+    breaks: str = ""
 
 
 @dataclass(frozen=True)
@@ -68,43 +74,145 @@ def default_directions() -> np.ndarray:
     return np.vstack([axes, corners])
 
 
+#: The rotation each direction heads for by default (rad).
+DEFAULT_MAX_ANGLE = math.radians(60.0)
+#: Tries to confirm a direction's furthest turn as the planner would solve it (a count).
+CONFIRM_TRIES = 3
+#: After a failed confirmation, the next try asks for this share of where it stopped.
+CONFIRM_SHRINK = 0.9
+
+
+def _furthest(
+    problem: Problem,
+    quintic: np.ndarray,
+    axis: np.ndarray,
+    angle: float,
+    tracked: Sequence[Constraint],
+    eager: Sequence[Constraint],
+    options: SolveOptions,
+    stall: bool,
+) -> ContinuationResult:
+    """Continuation towards ``angle`` about ``axis`` (rad).
+
+    Again with every eager constraint when the path it ends on breaks one that was not tracked.
+    """
+    target = problem.with_goal(quat_multiply(quintic, quat_exp(angle * axis)))
+    result = track(target, tracked, options, stall=stall)
+    if len(tracked) < len(eager) and broken_constraint(problem, eager, result.beta):
+        result = track(target, eager, options, stall=stall)
+    return result
+
+
+def _confirmed(
+    problem: Problem,
+    quintic: np.ndarray,
+    axis: np.ndarray,
+    reached: float,
+    tracked: Sequence[Constraint],
+    eager: Sequence[Constraint],
+    options: SolveOptions,
+    step: float = 0.0,
+) -> tuple[float, np.ndarray]:
+    """The largest turn up to ``reached`` that the planner's own continuation solves.
+
+    Tracking towards a farther goal solves the points on the way only to the intermediate
+    tolerance, along steps of its own; the planner heads for the goal itself, with its
+    final tolerance and the stall check. The turn is asked as the planner would ask it (at
+    most :data:`CONFIRM_TRIES` times, each a share of where the last one stopped), so the
+    reported turn is one the planner reaches; with ``step`` (rad) the turn asked is rounded
+    down to a multiple of it first. Returns the turn (rad) and its path.
+    """
+    beta = np.zeros(problem.n_free)
+    for _ in range(CONFIRM_TRIES):
+        if step > 0.0:  # the turn reported, so that the goal printed is the one confirmed
+            reached = math.floor(reached / step + 1e-9) * step
+        if reached <= 0.0:
+            break
+        result = _furthest(problem, quintic, axis, reached, tracked, eager, options, True)
+        if result.reached:
+            return reached, result.beta
+        reached *= CONFIRM_SHRINK * result.fraction
+    return 0.0, beta
+
+
+#: Called after each direction with (directions done, directions in all, its reach).
+ReachProgress = Callable[[int, int, DirectionReach], None]
+
+
 def reach_set(
     problem: Problem,
     directions: np.ndarray | None = None,
-    max_angle: float = math.radians(60.0),
+    max_angle: float | np.ndarray = DEFAULT_MAX_ANGLE,
     constraints: Sequence[Constraint] | None = None,
     options: SolveOptions | None = None,
+    progress: ReachProgress | None = None,
+    deferred: Sequence[Constraint] = (),
+    confirm: bool = True,
+    step: float = 0.0,
 ) -> ReachEstimate:
     """Continue as far as possible from the quintic attitude in each direction.
+
+    With ``confirm`` each direction is tracked as the planner tracks a goal there (its
+    continuation with the stall check); when it stops short, the turn where it stopped is
+    confirmed as the planner would solve it (:func:`_confirmed`).
+
+    The constraints planning imposes from the start are tracked; the lazy ones (imposed by
+    planning only once a path breaks them: velocity and effort limits) are checked on the
+    furthest path of each direction and named in :attr:`DirectionReach.breaks`, as planning
+    would find them. Constraints in ``deferred`` (costly ones such as clearance) are checked
+    on that furthest path too, and only when it breaks one is the direction tracked again with
+    it imposed. Every budget is a count (``options.max_evaluations`` per direction and pass).
 
     Args:
         problem: a spatial problem (its goal is ignored; not changed).
         directions: rotation axes (rows, base frame); default :func:`default_directions`.
-        max_angle: the rotation to head for in each direction (rad, below pi).
+        max_angle: the rotation to head for in each direction (rad, below pi): one for all,
+            or one per direction (e.g. an outer bound of that direction).
         constraints: path constraints; default joint position, velocity and effort limits.
         options: solver settings (the evaluation budget applies per direction).
+        progress: called after each direction (see :data:`ReachProgress`).
+        deferred: constraints among ``constraints`` to check at the end of a direction
+            rather than track.
+        confirm: track as the planner does and confirm where it stops (see above); False
+            tracks each direction to its budget without the stall check and reports where it
+            got, solved to the intermediate tolerance (``freefloat bounds``).
+        step: a turn that stops short is confirmed rounded down to a multiple of this (rad;
+            0: not rounded), the precision it is reported at.
     """
     if problem.planar:
         raise ValueError("reach_set is for spatial problems; planar ones have exact bounds")
     options = options or SolveOptions()
     constraints = default_constraints() if constraints is None else list(constraints)
+    eager = [c for c in constraints if not c.lazy]
+    lazy = [c for c in constraints if c.lazy]
+    tracked = [c for c in eager if not any(c is d for d in deferred)]
     directions = default_directions() if directions is None else np.atleast_2d(directions)
+    angles = np.broadcast_to(np.asarray(max_angle, dtype=float), (len(directions),))
     quintic = problem.achieved(np.zeros(problem.n_free))
-    out = []
-    for axis in directions:
+    out: list[DirectionReach] = []
+    for axis, angle in zip(directions, angles, strict=True):
         axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-        goal = quat_multiply(quintic, quat_exp(max_angle * axis))
         before = problem.evaluations
-        result = track(problem.with_goal(goal), constraints, options, stall=False)
-        out.append(
-            DirectionReach(
-                axis=axis,
-                reached=result.fraction * result.angle,
-                asked=result.angle,
-                stopped_by=result.stopped_by,
-                evaluations=problem.evaluations - before,
-            )
+        reached, stopped_by, beta = 0.0, "", np.zeros(problem.n_free)
+        if angle > 0.0:
+            result = _furthest(problem, quintic, axis, angle, tracked, eager, options, confirm)
+            reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
+            if confirm and not result.reached:  # solved only to the intermediate tolerance
+                reached, beta = _confirmed(
+                    problem, quintic, axis, reached, tracked, eager, options, step
+                )
+        direction = DirectionReach(
+            axis=axis,
+            reached=reached,
+            asked=float(angle),
+            stopped_by=stopped_by,
+            evaluations=problem.evaluations - before,
+            beta=beta,
+            breaks=broken_constraint(problem, lazy, beta) if lazy else "",
         )
+        out.append(direction)
+        if progress is not None:
+            progress(len(out), len(directions), direction)
     freedom = tuple(d - 5 for d in problem.family.degrees)
     return ReachEstimate(quintic, tuple(out), freedom)
 

@@ -22,6 +22,7 @@ from ..errors import (
     InfeasibleError,
     InputError,
     SolverError,
+    UnreachableAttitudeError,
 )
 from ..physics.momentum import cached_planar_axis
 from ..problem.build import problem_from_scenario
@@ -29,6 +30,7 @@ from ..problem.constraints import Constraint
 from ..problem.paths import PathFamily
 from ..problem.residual import Problem
 from ..problem.scenario import Scenario
+from ..progress import LOGGER
 from .dispatch import solve
 from .options import Solution, SolveOptions, Strategy
 
@@ -129,6 +131,8 @@ def search(
     best = math.inf
     best_axes: tuple[float, ...] | None = None
     best_error: SolverError | None = None
+    origin: UnreachableAttitudeError | None = None
+    closest: UnreachableAttitudeError | None = None
 
     for offset in offsets:
         turns = {n: round(o / (2 * math.pi)) for n, o in zip(names, offset, strict=True) if o}
@@ -139,7 +143,7 @@ def search(
         )
         distributions = _distributions(scenario, options, planar)
         carry: tuple[PathFamily, tuple[float, ...]] | None = None
-        for counts in distributions:
+        for level, counts in enumerate(distributions, start=1):
             extra = scenario.extra if counts is None else counts
             try:
                 problem = problem_from_scenario(scenario, extra=extra, goal_offset=offset)
@@ -155,22 +159,36 @@ def search(
             start = None
             if carry is not None:  # continue where less freedom stopped (new ones start at 0)
                 start = problem.family.embed(carry[0], np.asarray(carry[1]))
+            LOGGER.info(
+                "solve: %s, freedom %s (level %d of %d)%s",
+                label,
+                _describe(used, names),
+                level,
+                len(distributions),
+                " continued from where less freedom stopped" if start is not None else "",
+            )
             try:
                 solution = solve(problem, options, constraints, start)
             except SolverError as exc:
+                LOGGER.info("solve: level %d stopped: %s", level, exc.headline)
                 if exc.last_beta is not None:
                     carry = (problem.family, exc.last_beta)
+                if isinstance(exc, UnreachableAttitudeError):
+                    if start is None:
+                        origin = exc  # the turn asked from the quintic path's attitude
+                    if closest is None or exc.best_residual < closest.best_residual:
+                        closest = exc
                 if start is not None:  # its reach counts from a later point: keep the first
                     tried.append(
-                        f"{label}, freedom {_describe(used, names)} (continued): best residual "
-                        f"{exc.best_residual:.3g} rad"
+                        f"{label}, freedom {_describe(used, names)} (continued): " + _short(exc)
                     )
                     first_error = first_error or exc
                     continue
                 breaks = [item for item in exc.tried if " breaks " in item]
                 tried.append(
-                    f"{label}, freedom {_describe(used, names)}: best residual "
-                    f"{exc.best_residual:.3g} rad" + (f" ({breaks[0]})" if breaks else "")
+                    f"{label}, freedom {_describe(used, names)}: "
+                    + _short(exc)
+                    + (f" ({breaks[0]})" if breaks else "")
                 )
                 further = best_error is not None and exc.reached_fraction > max(
                     best_error.reached_fraction, 0.0
@@ -193,7 +211,9 @@ def search(
                 tried=tried,
             )
 
-    _refuse(scenario, len(offsets), first_error, best, best_axes, best_error, tried)
+    _refuse(
+        scenario, len(offsets), first_error, (best, best_axes, best_error), tried, (origin, closest)
+    )
 
 
 def _distributions(
@@ -211,18 +231,23 @@ def _refuse(
     scenario: Scenario,
     attempts: int,
     first_error: FreeFloatError | None,
-    best: float,
-    best_axes: tuple[float, ...] | None,
-    best_error: SolverError | None,
+    nearest: tuple[float, tuple[float, ...] | None, SolverError | None],
     tried: list[str],
+    turns: tuple[UnreachableAttitudeError | None, UnreachableAttitudeError | None],
 ) -> NoReturn:
     """Raise the refusal of a search that found no root (``attempts`` goal offsets tried).
+
+    ``nearest``: the best residual (rad), its axes and error; ``turns``: the first level's
+    unreachable-attitude error (the turn asked from the quintic path's attitude) and the one
+    that got closest.
 
     Raises:
         InfeasibleError: the planar bounds refused the only goal tried.
         InputError: bad input, and no attempt got to solve.
         SolverError: otherwise, with the best residual (rad) and every attempt.
     """
+    best, best_axes, best_error = nearest
+    origin, closest = turns
     continuous = any(j.kind == "continuous" for j in scenario.robot.joints)
     hint = ""
     if continuous and not scenario.allow_full_turns:
@@ -235,6 +260,26 @@ def _refuse(
         raise InfeasibleError(first_error.requested_deg, first_error.bounds_deg, message=message)
     if isinstance(first_error, InputError) and best == math.inf:
         raise first_error
+    if extra_hint := _extra_hint(scenario, best_error or first_error):
+        hint = f"{extra_hint}; {hint}" if hint else extra_hint
+    if origin is not None and closest is not None and attempts == 1:
+        # One figure: how far along the turn asked from the quintic attitude any level got.
+        reached = max(origin.asked - closest.best_residual, origin.reached)
+        axis = ", ".join(f"{a:.3f}" for a in origin.axis)
+        raise UnreachableAttitudeError(
+            f"reachable up to {math.degrees(reached):.3g} deg of the "
+            f"{math.degrees(origin.asked):.3g} deg asked about this direction (axis {axis} "
+            f"from the quintic path's attitude); stopped by {closest.stopped_by}",
+            closest.best_residual,
+            reached=reached,
+            asked=origin.asked,
+            tried=tried,
+            per_axis=closest.per_axis,
+            hint=hint,
+            stopped_by=closest.stopped_by,
+            last_beta=closest.last_beta,
+            axis=origin.axis,
+        )
     headline = "no path reaches the goal attitude"
     if best_error is not None and best_error.stopped_by:
         headline = best_error.headline
@@ -247,3 +292,25 @@ def _refuse(
         stopped_by=best_error.stopped_by if best_error else "",
         reached_fraction=best_error.reached_fraction if best_error else 0.0,
     )
+
+
+def _extra_hint(scenario: Scenario, error: FreeFloatError | None) -> str:
+    """When a fixed ``[path] extra`` may be the cause, say so and how to remove it."""
+    if scenario.extra is None or not isinstance(error, SolverError):
+        return ""
+    fixed = sum(int(k) for k in scenario.extra.values())
+    return (
+        f"the scenario fixes [path] extra ({fixed} free coefficient(s) in all), which may be too "
+        "little freedom for this goal: remove [path] extra and the planner raises the freedom "
+        "as it needs (freefloat reach SCENARIO shows what is reachable)"
+    )
+
+
+def _short(error: SolverError) -> str:
+    """A level's figure for the list of attempts (the same figure as the error's)."""
+    if error.last_beta is not None:
+        return (
+            f"stopped {math.degrees(error.best_residual):.3g} deg "
+            f"({error.best_residual:.3g} rad) short of the goal"
+        )
+    return f"best residual {error.best_residual:.3g} rad"

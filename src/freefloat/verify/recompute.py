@@ -345,7 +345,7 @@ def check_plan_numbers(plan: Plan, robot: Robot) -> Problem:
         ("tau", again.tau, torque_unit, names),
     ):
         theirs = getattr(samples, key)
-        if theirs:  # absent from files written before these were recorded
+        if len(theirs):  # absent from files written before these were recorded
             tol = RELATIVE_TOLERANCE * _scale(np.asarray(mine))
             _compare(f"samples.{key}", theirs, mine, tol, label, times, columns)
 

@@ -20,13 +20,16 @@ from pathlib import Path
 
 from ..plans.format import Plan
 
-__all__ = ["inject_controls", "plan_title"]
+__all__ = ["CM_COLOR", "EE_COLOR", "LEGEND", "TRAIL_COLOR", "inject_controls", "plan_title"]
+
+#: Colours of the end-effector path, the end-effector marker and the CM marker (RGB).
+TRAIL_COLOR, EE_COLOR, CM_COLOR = 0x1F77B4, 0x2CA02C, 0xD62728
 
 #: What the page draws, with the colours playback.py uses (CSS hex).
 LEGEND = (
-    ("#1f77b4", "end-effector path"),
-    ("#2ca02c", "end effector"),
-    ("#d62728", "system centre of mass (origin)"),
+    (f"#{TRAIL_COLOR:06x}", "end-effector path"),
+    (f"#{EE_COLOR:06x}", "end effector (drawn over the arm)"),
+    (f"#{CM_COLOR:06x}", "system centre of mass (origin, drawn over the spacecraft)"),
     ("linear-gradient(90deg,#f00,#0f0,#00f)", "axes: large inertial, small base (x y z)"),
 )
 

@@ -35,6 +35,7 @@ from ..plans.format import Plan
 from ..plans.robot_copy import plan_robot
 from ..robot.collision import Obstacle
 from ..robot.model import Robot, example_robot_data_dir
+from .controls import CM_COLOR, EE_COLOR, TRAIL_COLOR
 from .plots import plan_obstacles
 
 __all__ = ["Playback", "build_playback", "serve", "write_html"]
@@ -47,6 +48,9 @@ EXTRAS = "freefloat_extras"
 LOOPS = 10000
 #: Colour (hex RGB) and opacity of the keep-out objects.
 OBSTACLE_COLOR = 0xE02020
+#: Material settings of a marker drawn over the meshes (three.js: no depth test; transparent
+#: materials are drawn after the opaque ones).
+ON_TOP = {"depthTest": False, "transparent": True, "opacity": 0.95}
 OBSTACLE_OPACITY = 0.35
 
 
@@ -144,7 +148,7 @@ def _with_simple_shapes(robot: Robot) -> tuple[str | None, list[str]]:
 
 
 #: Colours of the end-effector trails, in end-effector order.
-_TRAIL_COLOURS = (0x1F77B4, 0xFF7F0E, 0x9467BD, 0x8C564B)
+_TRAIL_COLOURS = (TRAIL_COLOR, 0xFF7F0E, 0x9467BD, 0x8C564B)
 
 
 def _tip_nodes(count: int) -> list[tuple[str, str]]:
@@ -315,13 +319,17 @@ def _draw_extras(
                 g.LineBasicMaterial(color=_TRAIL_COLOURS[number % 4], linewidth=2),
             )
         )
+    # The markers are drawn over everything (no depth test, after the opaque meshes): the
+    # system CM lies inside the spacecraft and an end effector inside its own link.
     viewer[f"{EXTRAS}/cm"].set_object(
-        g.Sphere(0.03 * extent), g.MeshLambertMaterial(color=0xD62728)
+        g.Sphere(0.03 * extent), g.MeshLambertMaterial(color=CM_COLOR, **ON_TOP)
     )
     viewer[f"{EXTRAS}/inertial_axes"].set_object(g.triad(0.5 * extent))
     viewer[f"{EXTRAS}/base_frame"].set_object(g.triad(0.25 * extent))
     for _, tip_node in tips:
-        viewer[tip_node].set_object(g.Sphere(0.02 * extent), g.MeshLambertMaterial(color=0x2CA02C))
+        viewer[tip_node].set_object(
+            g.Sphere(0.04 * extent), g.MeshLambertMaterial(color=EE_COLOR, **ON_TOP)
+        )
     obstacles = {obstacle_node(o.name): o for o in plan_obstacles(plan)}
     for node, obstacle in obstacles.items():
         _draw_obstacle(viewer, g, node, obstacle)

@@ -209,16 +209,34 @@ def _draw(
         ax.set_ylabel("y [m]")
     elif topic == "base_attitude":
         zyx = np.asarray(s.base_zyx_deg)
+        # Angles often coincide (pitch and roll both 0 for a planar robot): each has its own
+        # line style and marker, and the goals are drawn over the data (open markers at T).
+        styles = (("-", "o"), ("--", "s"), ("-.", "^"))
         for i, label in enumerate(("yaw", "pitch", "roll")):
-            (line,) = ax.plot(t, zyx[:, i], label=label)
-            ax.axhline(
-                plan.base.target_zyx_deg[i],
-                color=line.get_color(),
-                linestyle=":",
-                linewidth=1,
-                label="_goal",
+            linestyle, marker = styles[i]
+            (line,) = ax.plot(
+                t,
+                zyx[:, i],
+                linestyle=linestyle,
+                marker=marker,
+                markevery=max(1, len(t) // 8),
+                markersize=4,
+                label=label,
             )
-        ax.plot([], [], ":", color="0.3", label="goal")
+            goal = plan.base.target_zyx_deg[i]
+            ax.axhline(goal, color=line.get_color(), linestyle=":", linewidth=1, label="_goal")
+            ax.plot(
+                [t[-1]],
+                [goal],
+                marker=marker,
+                markersize=10 - 2 * i,
+                mfc="none",
+                mew=1.5,
+                color=line.get_color(),
+                zorder=5,
+                label="_goal_at_T",
+            )
+        ax.plot([], [], ":", marker="o", mfc="none", color="0.3", label="goal (at T)")
         ax.set_ylabel("base attitude [deg]")
     elif topic == "base_rate":
         omega = np.degrees(np.asarray(s.base_angular_velocity))

@@ -1,0 +1,118 @@
+"""One configuration of a scenario's robot checked: joint limits, closest pairs, clearance.
+
+:func:`check_configuration` is what ``freefloat check`` prints: per joint its value and room to
+either URDF limit, and, when the scenario checks clearance, the closest body pairs of the
+collision model (signed distances, m: negative when they overlap) and whether the smallest one
+keeps the scenario's margin. Nothing is planned and nothing is written (except an inline
+servicer's URDF into its cache).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InputError
+from .problem.constraints import Clearance, scenario_constraints
+from .problem.scenario import Scenario
+
+__all__ = ["ConfigurationReport", "JointRoom", "check_configuration", "parse_joints"]
+
+#: Closest pairs a report lists.
+CLOSEST_PAIRS = 5
+
+
+@dataclass(frozen=True)
+class JointRoom:
+    """One joint's value and its room to the URDF limits.
+
+    Attributes:
+        name: the joint.
+        value: its value (rad or m).
+        lower: lower limit (rad or m; -inf for a continuous joint).
+        upper: upper limit (same unit).
+        angular: whether the unit is rad (else m).
+    """
+
+    name: str
+    value: float
+    lower: float
+    upper: float
+    angular: bool
+
+    @property
+    def room(self) -> float:
+        """Distance to the nearer limit (rad or m); negative outside the limits."""
+        return min(self.value - self.lower, self.upper - self.value)
+
+
+@dataclass(frozen=True)
+class ConfigurationReport:
+    """A configuration's limits and clearance.
+
+    Attributes:
+        joints: per joint, value and room.
+        pairs: the closest checked pairs, ``(name "a / b", signed distance m)``, nearest first;
+            empty when the scenario checks no clearance.
+        margin: the clearance margin (m), or None when clearance is not checked.
+    """
+
+    joints: tuple[JointRoom, ...]
+    pairs: tuple[tuple[str, float], ...]
+    margin: float | None
+
+    @property
+    def within_limits(self) -> bool:
+        """Every joint inside its limits."""
+        return all(j.room >= 0.0 for j in self.joints)
+
+    @property
+    def clear(self) -> bool:
+        """The smallest clearance keeps the margin (True when clearance is not checked)."""
+        return self.margin is None or not self.pairs or self.pairs[0][1] >= self.margin
+
+
+def parse_joints(text: str, scenario: Scenario) -> np.ndarray:
+    """``start``, ``goal`` or comma-separated joint values (deg; m for prismatic) in rad/m."""
+    if text == "start":
+        return np.asarray(scenario.start, dtype=float)
+    if text == "goal":
+        return np.asarray(scenario.goal, dtype=float)
+    joints = scenario.robot.joints
+    parts = [p for p in text.replace(" ", "").split(",") if p]
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        raise InputError(
+            f"--at must be start, goal or {len(joints)} comma-separated numbers "
+            f"(deg; m for prismatic joints), got {text!r}"
+        ) from None
+    if len(values) != len(joints) or not all(math.isfinite(v) for v in values):
+        raise InputError(
+            f"--at needs {len(joints)} finite values, one per joint "
+            f"({', '.join(j.name for j in joints)}), got {len(values)}"
+        )
+    return np.array(
+        [math.radians(v) if j.angular else v for v, j in zip(values, joints, strict=True)]
+    )
+
+
+def check_configuration(scenario: Scenario, joints: np.ndarray) -> ConfigurationReport:
+    """Limits, closest pairs and clearance of the scenario's robot at ``joints`` (rad or m)."""
+    scenario = scenario.resolved()
+    scenario.write_robot()
+    robot = scenario.robot
+    rooms = tuple(
+        JointRoom(j.name, float(v), j.lower, j.upper, j.angular)
+        for j, v in zip(robot.joints, joints, strict=True)
+    )
+    clearance = next((c for c in scenario_constraints(scenario) if isinstance(c, Clearance)), None)
+    if clearance is None or not clearance.applies_to(robot):
+        return ConfigurationReport(rooms, (), None)
+    model = clearance.model
+    values = np.asarray(model.distances(np.asarray(joints, dtype=float)).values)
+    order = np.argsort(values)[:CLOSEST_PAIRS]
+    pairs = tuple((model.names[k], float(values[k])) for k in order)
+    return ConfigurationReport(rooms, pairs, clearance.margin)

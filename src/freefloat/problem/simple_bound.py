@@ -1,0 +1,170 @@
+"""Outer bound on the base turn of a *simple* motion of a spatial (or planar) free floater.
+
+The base angular velocity is ``omega = F1(q) qdot`` (base frame, rad/s), so along any joint
+path the base turns by at most ``integral |omega| dt <= sum_i G_i L_i``, where ``L_i`` is the
+travel of joint ``i`` (the integral of ``|qdot_i|``, rad or m) and ``G_i`` the largest norm
+of the column ``F1[:, i](q)`` over the configurations the path can visit (rad of base turn per
+rad or m of joint travel). A simple motion is one with ``L_i <= k |goal_i - start_i|`` for a
+stated ``k >= 1``: ``k = 1`` is every joint monotone between start and goal (as the quintic
+path is), and then the path stays in the box spanned by start and goal; with ``k > 1`` a joint
+may leave that box by ``(k - 1) |goal_i - start_i| / 2`` on either side (within its limits).
+
+The geodesic angle between the start attitude and the end attitude is at most the length of
+the attitude's path, so ``B = sum_i G_i L_i`` bounds how far from the start attitude any simple
+motion leaves the spacecraft. ``G_i`` is the largest value found by sampling the box (a
+scrambled Sobol set) and refining the best samples by bounded quasi-Newton searches: a
+maximum estimated, not certified (a narrow peak between samples could be missed), so the bound
+is as good as that search. Cyclic back-and-forth motions (``k`` large) can turn the base
+further; the bound says nothing about them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..physics.attitude import quat_exp, quat_log, quat_multiply
+from ..physics.momentum import MomentumMap
+
+__all__ = ["SimpleMotionBound", "inertia_ratio", "simple_motion_bound", "turn_limit"]
+
+#: Configurations sampled in the box before refinement.
+SAMPLES = 256
+#: Quasi-Newton iterations per refined joint gain.
+REFINE_ITERATIONS = 40
+
+
+@dataclass(frozen=True)
+class SimpleMotionBound:
+    """How far a simple motion can turn the base, and from what.
+
+    Attributes:
+        travel_factor: ``k``: every joint travels at most ``k`` times its start-goal span.
+        travel: per joint, the travel allowed (rad or m).
+        box: (N, 2) per joint, the values a path of that travel can visit (rad or m).
+        gains: per joint, the largest ``|F1[:, i](q)|`` found over the box (rad per rad or m).
+        bound: ``sum_i gains_i travel_i``: largest turn from the start attitude (rad).
+    """
+
+    travel_factor: float
+    travel: np.ndarray
+    box: np.ndarray
+    gains: np.ndarray
+    bound: float
+
+
+def _box(mmap: MomentumMap, start: np.ndarray, goal: np.ndarray, factor: float) -> np.ndarray:
+    """(N, 2) values reachable with travel ``factor |goal - start|`` (clipped to the limits)."""
+    lo, hi = np.minimum(start, goal), np.maximum(start, goal)
+    slack = 0.5 * (factor - 1.0) * (hi - lo)
+    lower = np.array([j.lower for j in mmap.robot.joints])
+    upper = np.array([j.upper for j in mmap.robot.joints])
+    return np.stack(
+        [
+            np.maximum(lo - slack, np.minimum(lower, lo)),
+            np.minimum(hi + slack, np.maximum(upper, hi)),
+        ],
+        axis=1,
+    )
+
+
+def simple_motion_bound(
+    mmap: MomentumMap,
+    start: np.ndarray,
+    goal: np.ndarray,
+    travel_factor: float = 1.0,
+    samples: int = SAMPLES,
+    seed: int = 0,
+) -> SimpleMotionBound:
+    """The bound ``B`` (rad) on the base turn of every motion with travel ``<= k`` x span.
+
+    Args:
+        mmap: the robot's momentum map.
+        start: start joint values (rad or m).
+        goal: goal joint values (rad or m).
+        travel_factor: ``k >= 1`` (1: every joint monotone between start and goal).
+        samples: configurations sampled in the box before refinement.
+        seed: seed of the Sobol scrambling (deterministic for a seed).
+    """
+    if not travel_factor >= 1.0:
+        raise ValueError(f"travel_factor must be at least 1, got {travel_factor}")
+    start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
+    box = _box(mmap, start, goal, travel_factor)
+    travel = travel_factor * np.abs(goal - start)
+    n = len(start)
+    from scipy import optimize
+    from scipy.stats import qmc
+
+    unit = qmc.Sobol(n, scramble=True, seed=seed).random(samples)
+    points = np.vstack([start, goal, box[:, 0] + unit * (box[:, 1] - box[:, 0])])
+    norms = np.array([np.linalg.norm(mmap.f1(p), axis=0) for p in points])  # (K, N)
+    gains = norms.max(axis=0)
+    bounds = [(float(a), float(b)) for a, b in box]
+    for i in range(n):
+        if travel[i] == 0.0:
+            continue  # this joint does not move: its gain does not enter the bound
+        result = optimize.minimize(
+            lambda q, i=i: -float(np.linalg.norm(mmap.f1(q)[:, i])),
+            points[int(np.argmax(norms[:, i]))],
+            method="L-BFGS-B",
+            bounds=bounds,
+            options={"maxiter": REFINE_ITERATIONS},
+        )
+        gains[i] = max(gains[i], -float(result.fun))
+    return SimpleMotionBound(
+        travel_factor=float(travel_factor),
+        travel=travel,
+        box=box,
+        gains=gains,
+        bound=float(gains @ travel),
+    )
+
+
+def turn_limit(drift: np.ndarray, axis: np.ndarray, bound: float) -> float:
+    """Largest turn (rad) about ``axis`` from the drift attitude within ``bound`` of the start.
+
+    ``drift`` is the rotation from the start attitude to the drift attitude (``[x, y, z, w]``)
+    and ``axis`` a unit axis in the base frame at the drift attitude: the first ``theta >= 0``
+    where ``angle(drift exp(theta axis)) = bound``. The angle is 1-Lipschitz in ``theta``, so
+    stepping by the remaining room never jumps over the first crossing.
+    """
+    axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+
+    def room(theta: float) -> float:
+        turned = quat_multiply(drift, quat_exp(theta * axis))
+        return bound - float(np.linalg.norm(quat_log(turned)))
+
+    theta, left = 0.0, room(0.0)
+    if left < 0.0:
+        return 0.0
+    for _ in range(200):
+        if left < 1e-12 or theta > math.pi:
+            break
+        theta += left
+        left = room(theta)
+    return min(theta, math.pi)
+
+
+def inertia_ratio(mmap: MomentumMap, joints: np.ndarray) -> float:
+    """Spacecraft over arm rotational inertia about the system CM at ``joints`` (traces).
+
+    The spacecraft is the URDF's root body; the arm is every other body (a captured payload
+    included). Both inertias are taken about the system's centre of mass, base frame.
+    """
+    model, data = mmap.model, mmap.data
+    q = mmap.robot.configuration(np.asarray(joints, dtype=float))
+    pin.forwardKinematics(model, data, q)
+    com = pin.centerOfMass(model, data, q)
+    traces = []
+    for index in range(1, model.njoints):
+        inertia = data.oMi[index].act(model.inertias[index])
+        offset = np.asarray(inertia.lever) - com
+        about_cm = inertia.inertia + inertia.mass * (
+            offset @ offset * np.eye(3) - np.outer(offset, offset)
+        )
+        traces.append(float(np.trace(about_cm)))
+    base, arm = traces[0], sum(traces[1:])
+    return base / arm if arm > 0.0 else math.inf

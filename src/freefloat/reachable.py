@@ -1,0 +1,240 @@
+"""Where a scenario's motion can leave the spacecraft: drift attitude and reachable set.
+
+:func:`reachable` answers, before any goal attitude is guessed:
+
+- the *drift attitude*: where the plain quintic path (every joint monotone, no free
+  coefficient) leaves the spacecraft;
+- an *outer bound for simple motions* (:mod:`freefloat.problem.simple_bound`): no motion whose
+  joints travel at most ``k`` times their start-goal span ends farther than ``B`` from the
+  start attitude, and so, per direction from the drift attitude, no farther than a turn it
+  gives;
+- an *inner estimate*: per direction, the largest turn from the drift attitude that
+  continuation reached with a solved path, heading for that outer limit, with the same
+  freedom and constraints the planner tries first (:func:`freefloat.solvers.reach.reach_set`);
+  every goal on that segment is one the planner plans.
+
+For a planar robot the reachable yaw changes are the planar bounds (docs/method.md section 6).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .physics.attitude import (
+    quat_conjugate,
+    quat_exp,
+    quat_log,
+    quat_multiply,
+    zyx_from_quat,
+)
+from .physics.momentum import MomentumMap
+from .problem.build import problem_from_scenario
+from .problem.constraints import Clearance, scenario_constraints
+from .problem.residual import Problem
+from .problem.scenario import Scenario
+from .problem.simple_bound import SimpleMotionBound, inertia_ratio, simple_motion_bound, turn_limit
+from .solvers.options import SolveOptions
+from .solvers.reach import DirectionReach, ReachEstimate, default_directions, reach_set
+
+__all__ = ["DEFAULT_BUDGET", "SMALL_REACH_DEG", "DirectionLimits", "ReachReport", "reachable"]
+
+#: Residual evaluations per direction of the inner estimate (a count; ``--budget``).
+DEFAULT_BUDGET = 60
+#: Below this largest outer turn (deg) the report says the reach is small.
+SMALL_REACH_DEG = 5.0
+#: ``stopped_by`` of a direction whose inner turn was not estimated (budget 0).
+NOT_ESTIMATED = "not estimated (budget 0)"
+#: The inner estimate is reported rounded down to this (deg), so a printed goal lies inside.
+REPORT_STEP_DEG = 0.01
+
+
+@dataclass(frozen=True)
+class DirectionLimits:
+    """Reach about one axis from the drift attitude.
+
+    Attributes:
+        axis: unit axis, base frame at the drift attitude.
+        outer: largest turn a simple motion can give about it (rad).
+        inner: largest turn reached by a solved path, rounded down to
+            :data:`REPORT_STEP_DEG` (rad).
+        stopped_by: why the inner estimate stopped short of ``outer`` ("" if it did not).
+        breaks: a velocity or effort limit the path at ``inner`` breaks at this duration.
+        goal_quaternion: the attitude at ``inner``, ``[x, y, z, w]`` (world).
+        goal_zyx_deg: the same as yaw, pitch, roll (deg), for a scenario's ``base_zyx_deg``.
+    """
+
+    axis: np.ndarray
+    outer: float
+    inner: float
+    stopped_by: str
+    breaks: str
+    goal_quaternion: np.ndarray
+    goal_zyx_deg: np.ndarray
+
+
+@dataclass(frozen=True)
+class ReachReport:
+    """Drift attitude, outer bound and inner estimate of a scenario's reachable attitudes.
+
+    Attributes:
+        robot: the robot's name.
+        planar: whether the robot is planar (then ``directions`` are +- its axis).
+        start_quaternion: the start attitude ``[x, y, z, w]``.
+        drift_quaternion: where the plain quintic path leaves the spacecraft.
+        drift_zyx_deg: the same as yaw, pitch, roll (deg).
+        bound: the simple-motion bound (turn from the start attitude; spatial robots).
+        inertia_ratio: spacecraft over arm rotational inertia about the system CM at the start.
+        directions: per direction, the outer and inner reach.
+        freedom: free coefficients per joint of the inner estimate's path family.
+        evaluations: residual evaluations spent on the inner estimate.
+        budget: the evaluation budget per direction.
+    """
+
+    robot: str
+    planar: bool
+    start_quaternion: np.ndarray
+    drift_quaternion: np.ndarray
+    drift_zyx_deg: np.ndarray
+    bound: SimpleMotionBound | None
+    inertia_ratio: float
+    directions: tuple[DirectionLimits, ...]
+    freedom: tuple[int, ...]
+    evaluations: int
+    budget: int
+
+    @property
+    def largest_outer(self) -> float:
+        """Largest outer turn over the directions (rad)."""
+        return max((d.outer for d in self.directions), default=0.0)
+
+    def estimate(self) -> ReachEstimate:
+        """The inner estimate as a :class:`ReachEstimate` (for its figure)."""
+        return ReachEstimate(
+            self.drift_quaternion,
+            tuple(
+                DirectionReach(d.axis, d.inner, d.outer, d.stopped_by, 0, None, d.breaks)
+                for d in self.directions
+            ),
+            self.freedom,
+        )
+
+
+def _limits(
+    drift: np.ndarray, axis: np.ndarray, outer: float, reached: DirectionReach | None
+) -> DirectionLimits:
+    step = math.radians(REPORT_STEP_DEG)
+    inner = outer if reached is None else math.floor(reached.reached / step + 1e-9) * step
+    goal = quat_multiply(drift, quat_exp(inner * axis))
+    return DirectionLimits(
+        axis=axis,
+        outer=outer,
+        inner=inner,
+        stopped_by="" if reached is None else reached.stopped_by,
+        breaks="" if reached is None else reached.breaks,
+        goal_quaternion=goal,
+        goal_zyx_deg=np.degrees(zyx_from_quat(goal)),
+    )
+
+
+def reachable(
+    scenario: Scenario,
+    travel_factor: float = 1.0,
+    budget: int = DEFAULT_BUDGET,
+    directions: np.ndarray | None = None,
+    progress: Callable[[int, int, DirectionReach], None] | None = None,
+) -> ReachReport:
+    """Drift attitude, outer bound and inner estimate of the scenario's reachable attitudes.
+
+    The scenario's goal attitude is ignored (its joints are used). Nothing is written except an
+    inline servicer's URDF into its cache.
+
+    Args:
+        scenario: the request.
+        travel_factor: ``k >= 1`` of the outer bound (1: every joint monotone).
+        budget: residual evaluations per direction of the inner estimate (a count); 0: the
+            drift attitude and the outer bound only (every ``inner`` is 0).
+        directions: rotation axes (rows, base frame); default the six axes and eight diagonals.
+        progress: called after each direction of the inner estimate.
+    """
+    scenario = scenario.resolved()
+    scenario.write_robot()
+    probe = problem_from_scenario(scenario, check_bounds=False)
+    mmap = MomentumMap(scenario.robot)
+    ratio = inertia_ratio(mmap, probe.family.start)
+    if probe.planar:
+        return _planar_report(scenario, probe, ratio)
+    extra = scenario.extra if scenario.extra is not None else [2] * scenario.robot.n
+    problem = problem_from_scenario(scenario, extra=extra, check_bounds=False)
+    start = problem.start_quaternion
+    drift = problem.achieved(np.zeros(problem.n_free))
+    bound = simple_motion_bound(mmap, problem.family.start, problem.family.goal, travel_factor)
+    moved = quat_multiply(quat_conjugate(start), drift)
+    axes = default_directions() if directions is None else np.atleast_2d(directions)
+    axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
+    outer = np.array([turn_limit(moved, axis, bound.bound) for axis in axes])
+    before = problem.evaluations
+    constraints = scenario_constraints(scenario)
+    if budget > 0:
+        estimate = reach_set(
+            problem,
+            axes,
+            outer,
+            constraints,
+            SolveOptions(max_evaluations=budget),
+            progress,
+            deferred=[c for c in constraints if isinstance(c, Clearance)],
+            step=math.radians(REPORT_STEP_DEG),
+        )
+    else:  # the drift attitude and the outer bound only
+        skipped = DirectionReach(np.zeros(3), 0.0, 0.0, NOT_ESTIMATED, 0)
+        freedom = tuple(d - 5 for d in problem.family.degrees)
+        estimate = ReachEstimate(drift, (skipped,) * len(axes), freedom)
+    return ReachReport(
+        robot=scenario.robot.name,
+        planar=False,
+        start_quaternion=start,
+        drift_quaternion=drift,
+        drift_zyx_deg=np.degrees(zyx_from_quat(drift)),
+        bound=bound,
+        inertia_ratio=ratio,
+        directions=tuple(
+            _limits(drift, axis, float(limit), reached)
+            for axis, limit, reached in zip(axes, outer, estimate.directions, strict=True)
+        ),
+        freedom=estimate.freedom,
+        evaluations=problem.evaluations - before,
+        budget=budget,
+    )
+
+
+def _planar_report(scenario: Scenario, problem: Problem, ratio: float) -> ReachReport:
+    """The planar bounds as a reach report: +- the planar axis from the drift attitude."""
+    interval = problem.bounds_interval
+    if interval is None:
+        raise ValueError("a planar problem without planar bounds")
+    start = problem.start_quaternion
+    drift = problem.achieved(np.zeros(problem.n_free))
+    change = float(quat_log(quat_multiply(quat_conjugate(start), drift)) @ problem.axis)
+    lo, hi = interval
+    axis = np.asarray(problem.axis, dtype=float)
+    directions = (
+        _limits(drift, axis, max(hi - change, 0.0), None),
+        _limits(drift, -axis, max(change - lo, 0.0), None),
+    )
+    return ReachReport(
+        robot=scenario.robot.name,
+        planar=True,
+        start_quaternion=start,
+        drift_quaternion=drift,
+        drift_zyx_deg=np.degrees(zyx_from_quat(drift)),
+        bound=None,
+        inertia_ratio=ratio,
+        directions=directions,
+        freedom=tuple(d - 5 for d in problem.family.degrees),
+        evaluations=0,
+        budget=0,
+    )

@@ -1,0 +1,91 @@
+"""The reach report as lines for people (degrees), with attitudes to paste into a scenario."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..reachable import SMALL_REACH_DEG, ReachReport
+
+__all__ = ["reach_lines", "verdict"]
+
+
+def _vector(values: np.ndarray, digits: int = 4) -> str:
+    return "[" + ", ".join(f"{v:.{digits}f}" for v in values) + "]"
+
+
+def verdict(report: ReachReport) -> str:
+    """One line when the reach is small, naming why (the inertia ratio); "" otherwise."""
+    largest = math.degrees(report.largest_outer)
+    if largest >= SMALL_REACH_DEG:
+        return ""
+    if report.bound is not None:
+        turn = math.degrees(report.bound.bound)
+        what = f"at most {turn:.2g} deg from the start attitude per simple motion"
+    else:
+        what = f"at most {largest:.2g} deg from the drift attitude per simple motion"
+    return (
+        f"this spacecraft is {report.inertia_ratio:.3g}x the arm's inertia: {what}; "
+        "a goal farther away needs cyclic joint motions, which freefloat does not plan"
+    )
+
+
+def reach_lines(report: ReachReport) -> list[str]:
+    """The report: drift attitude, outer bound, inner estimate per direction, verdict."""
+    kind = "planar" if report.planar else "spatial"
+    drift = report.drift_quaternion
+    lines = [
+        f"freefloat reach: {report.robot} ({kind})",
+        "drift attitude (where the plain quintic path leaves the spacecraft):",
+        f"  base_zyx_deg = {_vector(report.drift_zyx_deg)}",
+        f"  base_quaternion_xyzw = {_vector(drift, 6)}",
+        f"spacecraft / arm rotational inertia about the system CM: {report.inertia_ratio:.3g}",
+    ]
+    if report.bound is not None:
+        bound = report.bound
+        travel = (
+            "every joint monotone between start and goal"
+            if bound.travel_factor == 1.0
+            else f"every joint travelling at most {bound.travel_factor:g}x its start-goal span"
+        )
+        lines += [
+            f"outer bound for simple motions ({travel}):",
+            f"  the base turns at most {math.degrees(bound.bound):.4g} deg from the start "
+            "attitude (sum over joints of the largest |F1 column| over the",
+            "  configurations such a path visits, sampled and refined, times the joint's travel)",
+        ]
+        if report.budget > 0:
+            lines += [
+                f"inner estimate: continuation from the drift attitude towards the outer bound, "
+                f"freedom +{max(report.freedom)} per joint, {report.budget} residual evaluations "
+                "per direction;",
+                "  every goal up to 'inner' about a listed axis is reached by a solved path",
+            ]
+        else:
+            lines.append("inner estimate: not computed (--budget 0)")
+    else:
+        lines.append(
+            "planar bounds (docs/method.md section 6): the yaw changes simple motions reach"
+        )
+    lines.append(
+        f"  {'axis (base frame)':<20}{'inner [deg]':>12}{'outer [deg]':>12}  "
+        f"{'goal base_zyx_deg at inner':<30}  stopped by"
+    )
+    for d in report.directions:
+        axis = " ".join(f"{x:+.2f}" for x in d.axis)
+        why = d.stopped_by or ("-" if d.inner < d.outer else "reached the outer bound")
+        if report.budget == 0 and not report.planar:
+            why = "-"
+        if d.breaks:
+            why += f"; at this duration breaks {d.breaks}"
+        lines.append(
+            f"  {axis:<20}{math.degrees(d.inner):>12.2f}{math.degrees(d.outer):>12.2f}  "
+            f"{_vector(d.goal_zyx_deg, 4):<30}  {why}"
+        )
+    if report.planar:
+        lines.append("  the interval is open: a goal at its very end is not reached")
+    said = verdict(report)
+    if said:
+        lines.append(f"verdict: {said}")
+    return lines

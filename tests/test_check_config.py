@@ -1,0 +1,96 @@
+"""freefloat check (one configuration: limits, closest pairs, clearance), the fixed-extra hint,
+the shipped sweep scenario, and plans' samples as arrays."""
+
+from __future__ import annotations
+
+import math
+import re
+import xml.etree.ElementTree as ET
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import freefloat as ff
+from freefloat.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+UR5 = ROOT / "robots" / "scenarios" / "ur5_servicer.toml"
+
+
+def _urdf_limits(urdf: Path) -> dict[str, tuple[float, float]]:
+    """Joint limits (rad) read from the URDF text itself."""
+    out = {}
+    for joint in ET.parse(urdf).getroot().iter("joint"):
+        limit = joint.find("limit")
+        if limit is not None and joint.get("type") == "revolute":
+            out[joint.get("name")] = (float(limit.get("lower")), float(limit.get("upper")))
+    return out
+
+
+def test_check_reports_limits_and_exit_code(capsys) -> None:
+    limits = _urdf_limits(ROOT / "robots" / "ur5_servicer.urdf")
+    elbow_upper = math.degrees(limits["elbow_joint"][1])
+    beyond = elbow_upper + 5.0
+    assert main(["check", str(UR5), "--at", f"0,-90,{beyond},-90,-90,0"]) == 1
+    out = capsys.readouterr().out
+    row = next(line for line in out.splitlines() if line.strip().startswith("elbow_joint"))
+    value, _, upper, room = (float(x) for x in row.split()[1:5])
+    assert (value, upper) == pytest.approx((beyond, elbow_upper), abs=1e-3)
+    assert room == pytest.approx(-5.0, abs=1e-3) and "OUTSIDE" in row
+    assert "configuration: NOT OK" in out
+
+
+def test_check_names_the_closest_pair_at_the_goal(capsys) -> None:
+    assert main(["check", str(UR5), "--at", "goal"]) == 0
+    out = capsys.readouterr().out
+    distances = [float(x) for x in re.findall(r"(-?\d+\.\d+) m$", out, re.M)]
+    pairs = distances[:-1]  # the last is the clearance line's margin
+    assert pairs == sorted(pairs) and len(pairs) == 5
+    # The planner's start/goal check (pipeline) agrees: the goal keeps the margin.
+    plan_scenario = ff.Scenario.from_toml(UR5)
+    assert f"clearance {pairs[0]:.4f} m keeps the margin" in out
+    assert plan_scenario.safety.margin < pairs[0]
+
+
+@pytest.mark.parametrize("at", ["1,2", "a,b,c,d,e,f", "nan,0,0,0,0,0"])
+def test_check_refuses_bad_joints_in_one_line(at: str, capsys) -> None:
+    assert main(["check", str(UR5), "--at", at]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("freefloat: error: --at") and "\n" not in err
+
+
+def test_a_fixed_extra_too_small_is_named_in_the_refusal() -> None:
+    scenario = ff.Scenario.from_toml(ff.default_scenario_path())  # extra = { q2 = 1 }
+    # 40 deg of yaw change lies inside the planar bounds (1.358, 72.27) deg but one free
+    # coefficient on q2 has no root there; automatic freedom plans it.
+    goal = replace(scenario, goal_attitude=ff.quat_from_zyx(math.radians(-10.0)))
+    with pytest.raises(ff.SolverError) as info:
+        ff.plan(goal)
+    assert "fixes [path] extra" in str(info.value) and "remove [path] extra" in str(info.value)
+    planned = ff.plan(replace(goal, extra=None))
+    assert planned.base.attitude_error_rad < 1e-9
+
+
+def test_the_shipped_sweep_scenario_plans_inside_the_planar_bounds(tmp_path) -> None:
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text(
+        'scenario = "worked_example_sweep.toml"\nsamples = 21\n[[axis]]\n'
+        'key = "goal.base_zyx_deg.0"\nvalues = { start = -55.0, stop = 25.0, num = 17 }\n'
+        '[[axis]]\nkey = "goal.joints.q2"\nvalues = [60.0, 120.0]\n'
+    )
+    rows = ff.sweep(sweep, workers=2, output=tmp_path / "out.csv", progress=False)
+    for row in rows:
+        low, high = row.yaw_change_min_deg, row.yaw_change_max_deg
+        inside = low < row.requested_yaw_change_deg < high
+        assert row.status == ("planned" if inside else "infeasible"), row.message
+
+
+def test_samples_are_arrays_and_survive_the_file(tmp_path) -> None:
+    plan = ff.plan(ff.Scenario.from_toml(ff.default_scenario_path()), samples=11)
+    assert plan.samples.q.shape == (11, 2) and plan.samples.t.shape == (11,)
+    assert plan.samples.base_quaternion_xyzw.shape == (11, 4)
+    np.testing.assert_allclose(plan.samples.q[-1], plan.request.goal_joints, atol=1e-12)
+    again = ff.Plan.load(plan.save(tmp_path / "p.json"))
+    assert again == plan and isinstance(again.samples.tau, np.ndarray)

@@ -1,0 +1,207 @@
+"""freefloat reach: the simple-motion bound against integrated paths, and goals read from its
+printed output planned as a new user would (a composed servicer, first try)."""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import freefloat as ff
+from freefloat.cli import main
+from freefloat.problem.simple_bound import simple_motion_bound, turn_limit
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIOS = ROOT / "robots" / "scenarios"
+
+#: The issue's servicer: a Kinova arm on a heavy 2 m cube (the reach is about a degree), no
+#: clearance constraint so that the test stays fast.
+KINOVA = """
+duration = 20.0
+[robot]
+arm = "kinova"
+base_mass = 500.0
+base_size = [2.0, 2.0, 2.0]
+mount = [1.0, 0.0, 0.0]
+mount_rpy_deg = [0.0, 90.0, 0.0]
+[start]
+joints = START
+[goal]
+joints = GOALJOINTS
+base_zyx_deg = GOAL
+[safety]
+check = false
+""".replace(
+    "START",
+    "{ "
+    + ", ".join(f"j2s6s200_joint_{i} = {v}" for i, v in enumerate((0, 180, 180, 0, 180, 0), 1))
+    + " }",
+).replace(
+    "GOALJOINTS",
+    "{ "
+    + ", ".join(f"j2s6s200_joint_{i} = {v}" for i, v in enumerate((40, 150, 200, 30, 150, 20), 1))
+    + " }",
+)
+
+ROW = re.compile(
+    r"^\s+([+-]\d\.\d\d) ([+-]\d\.\d\d) ([+-]\d\.\d\d)\s+(\d+\.\d+)\s+(\d+\.\d+)\s+"
+    r"\[([-\d.]+), ([-\d.]+), ([-\d.]+)\]"
+)
+
+
+def _turn(robot: ff.Robot, path, duration: float, steps: int = 400) -> float:
+    """Angle (rad) the base turns over a joint path, by RK4 on the quaternion (own code)."""
+    mmap = ff.MomentumMap(robot)
+    h = duration / steps
+
+    def rate(t: float, quat: np.ndarray) -> np.ndarray:
+        q, qd = path(t)
+        wx, wy, wz = mmap.f1(q) @ qd
+        x, y, z, w = quat
+        return 0.5 * np.array(
+            [
+                w * wx + y * wz - z * wy,
+                w * wy + z * wx - x * wz,
+                w * wz + x * wy - y * wx,
+                -x * wx - y * wy - z * wz,
+            ]
+        )
+
+    quat = np.array([0.0, 0.0, 0.0, 1.0])
+    for k in range(steps):
+        t = k * h
+        k1 = rate(t, quat)
+        k2 = rate(t + h / 2, quat + h / 2 * k1)
+        k3 = rate(t + h / 2, quat + h / 2 * k2)
+        k4 = rate(t + h, quat + h * k3)
+        quat = quat + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        quat /= np.linalg.norm(quat)
+    return 2.0 * math.acos(min(1.0, abs(quat[3])))
+
+
+@pytest.mark.parametrize("factor", [1.0, 3.0])
+def test_simple_motion_bound_holds_for_integrated_paths(factor: float) -> None:
+    """Random paths whose joints travel at most k x their span never turn the base further."""
+    scenario = ff.Scenario.from_toml(SCENARIOS / "ur5_servicer.toml").resolved()
+    start, goal = np.asarray(scenario.start), np.asarray(scenario.goal)
+    bound = simple_motion_bound(ff.MomentumMap(scenario.robot), start, goal, factor)
+    rng = np.random.default_rng(3)
+    turns = []
+    for _ in range(4):
+        powers = rng.uniform(0.3, 3.0, len(start))  # monotone profiles s_i = u^p_i
+        over = rng.uniform(0.0, (factor - 1.0) / 2.0, len(start))  # overshoot, then back
+
+        def path(t: float, powers=powers, over=over) -> tuple[np.ndarray, np.ndarray]:
+            u = t / 10.0
+            # s(u) = u^p (1 + a sin(pi u)): travel (1 + 2 a) x span at most for a <= (k-1)/2
+            s = u**powers + over * np.sin(math.pi * u)
+            ds = (powers * u ** np.maximum(powers - 1.0, 0.0) if u > 0 else 0.0 * powers) + over * (
+                math.pi * np.cos(math.pi * u)
+            )
+            return start + (goal - start) * s, (goal - start) * ds / 10.0
+
+        turns.append(_turn(scenario.robot, path, 10.0))
+    assert max(turns) <= bound.bound
+    assert max(turns) > 0.05 * bound.bound  # and the bound is not vacuous
+
+
+def test_drift_lies_within_the_bound_and_turn_limits_have_closed_forms() -> None:
+    scenario = ff.Scenario.from_toml(SCENARIOS / "ur5_servicer.toml")
+    report = ff.reachable(scenario, budget=0, directions=np.eye(3))
+    assert all(d.inner == 0.0 and d.outer > 0.0 for d in report.directions)
+    moved = ff.geodesic_angle(report.start_quaternion, report.drift_quaternion)
+    assert report.bound is not None and moved <= report.bound.bound  # the quintic is simple
+    # From the start attitude every axis has the whole bound; a drift of D about z leaves
+    # B - D ahead and B + D behind.
+    bound, drift = 0.3, 0.1
+    assert turn_limit(np.array([0.0, 0.0, 0.0, 1.0]), np.array([1.0, 2.0, 2.0]), bound) == (
+        pytest.approx(bound, abs=1e-12)
+    )
+    about_z = np.array([0.0, 0.0, math.sin(drift / 2), math.cos(drift / 2)])
+    assert turn_limit(about_z, np.array([0, 0, 1.0]), bound) == pytest.approx(bound - drift)
+    assert turn_limit(about_z, np.array([0, 0, -1.0]), bound) == pytest.approx(bound + drift)
+
+
+@pytest.fixture(scope="module")
+def kinova_reach(tmp_path_factory) -> tuple[Path, str]:
+    folder = tmp_path_factory.mktemp("kinova")
+    path = folder / "kinova.toml"
+    path.write_text(KINOVA.replace("GOAL", "[0.0, 0.0, 0.0]"))
+    return path, folder
+
+
+def test_a_goal_read_from_reach_output_plans_first_try(kinova_reach, capsys) -> None:
+    path, folder = kinova_reach
+    assert main(["-v", "reach", str(path), "--budget", "30"]) == 0
+    out, err = capsys.readouterr()
+    assert len(re.findall(r"reach \d+/14: axis", err)) == 14  # -v: one line per direction
+    rows = [ROW.match(line) for line in out.splitlines()]
+    rows = [[float(x) for x in m.groups()] for m in rows if m]
+    assert len(rows) == 14
+    drift = re.search(r"base_zyx_deg = \[([-\d.]+), ([-\d.]+), ([-\d.]+)\]", out)
+    assert drift is not None
+    assert "verdict: this spacecraft is" in out  # about a degree at most: said in one line
+    # A new user: the three-axis direction that reaches furthest, its printed goal attitude.
+    diagonal = max((r for r in rows if all(abs(a) > 0.5 for a in r[:3])), key=lambda r: r[3])
+    assert diagonal[3] > 0.0
+    goal = diagonal[5:8]
+    scenario = folder / "goal.toml"
+    scenario.write_text(KINOVA.replace("GOAL", str(goal)))
+    plan = ff.plan(ff.Scenario.from_toml(scenario))
+    assert plan.verification.passed
+    np.testing.assert_allclose(plan.base.achieved_zyx_deg, goal, atol=1e-6)
+    # The printed goal is the printed turn about the printed axis from the printed drift.
+    turned = ff.geodesic_angle(
+        ff.quat_from_zyx(*np.radians(goal)),
+        ff.quat_from_zyx(*np.radians([float(x) for x in drift.groups()])),
+    )
+    assert math.degrees(turned) == pytest.approx(diagonal[3], abs=2e-3)
+
+
+def test_goals_inside_the_inner_set_plan(kinova_reach) -> None:
+    path, _ = kinova_reach
+    scenario = ff.Scenario.from_toml(path)
+    axes = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]])
+    report = ff.reachable(scenario, budget=30, directions=axes)
+    planned = 0
+    for direction, fraction in zip(report.directions, (1.0, 0.5, 0.7), strict=True):
+        assert direction.inner <= direction.outer
+        if direction.inner == 0.0:
+            continue
+        goal = _turned(report, direction, fraction)
+        plan = ff.plan(_with_goal(scenario, goal))
+        assert ff.geodesic_angle(np.array(plan.base.achieved_quaternion_xyzw), goal) < 1e-9
+        planned += 1
+    assert planned >= 2
+
+
+def _turned(report, direction, fraction):
+    from freefloat.physics.attitude import quat_exp, quat_multiply
+
+    turn = quat_exp(fraction * direction.inner * direction.axis)
+    return quat_multiply(report.drift_quaternion, turn)
+
+
+def _with_goal(scenario: ff.Scenario, goal: np.ndarray) -> ff.Scenario:
+    from dataclasses import replace
+
+    return replace(scenario, goal_attitude=np.asarray(goal))
+
+
+def test_reach_refuses_bad_options_in_one_line(capsys) -> None:
+    path = str(SCENARIOS / "ur5_servicer.toml")
+    assert main(["reach", path, "--travel", "0.5"]) == 2
+    assert main(["reach", path, "--budget", "-1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and all(line.startswith("freefloat: error: --") for line in err)
+
+
+def test_planar_reach_is_the_planar_interval(capsys) -> None:
+    assert main(["reach", str(SCENARIOS / "worked_example.toml")]) == 0
+    out = capsys.readouterr().out
+    # Planar bounds of the worked example, from its bounds command: (1.358, 72.270) deg of
+    # yaw from the start at -50 deg, so goal yaws from -48.642 to 22.270 deg.
+    assert "[22.2700, 0.0000, 0.0000]" in out and "[-48.6419, 0.0000, 0.0000]" in out
