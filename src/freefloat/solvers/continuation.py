@@ -13,20 +13,15 @@ along the geodesic from ``q_0`` to the goal, ``q(lam) = q_0 exp(lam delta)`` wit
 Every budget is a count (steps, residual evaluations), never a time, so the same problem gives
 the same answer on any machine. When the step size falls below its floor, the strategy stops
 and says how far it got (``reached_fraction``) and why (a constraint of a named joint, a
-singular map, or the freedom of the path family exhausted). It also stops when it has stalled:
-when, at the pace of its last :data:`PACE_WINDOW` steps, the rest of the step budget
-(:data:`MAX_STEPS`) would end short of the goal. A branch that creeps along a limit (tenths of
-a degree per step) would otherwise spend the whole budget, tens of seconds with the clearance
-rows, on the same refusal; stopping early also hands more freedom (the next path family,
-continued from here) a turn sooner. The check counts steps, so it is as reproducible as the
-budgets.
+singular map, or the freedom of the path family exhausted). It also stops once stalled: when,
+at the pace of its last :data:`PACE_WINDOW` steps, the rest of the step budget
+(:data:`MAX_STEPS`) would end short of the goal (a count too, so as reproducible).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
@@ -39,6 +34,7 @@ from ..progress import heartbeat
 from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
 from .restore import broken_constraint
+from .tracked import ContinuationResult
 
 __all__ = ["ContinuationResult", "continuation", "track"]
 
@@ -62,36 +58,6 @@ MARGIN = 1e-7
 MAX_ADDED_INSTANTS = 256
 #: Singular-value ratio below which dh/dbeta counts as singular.
 SINGULAR = 1e-9
-
-
-@dataclass(frozen=True)
-class ContinuationResult:
-    """How far the continuation got.
-
-    Attributes:
-        beta: free coefficients at the last solved point (rad or m).
-        fraction: how far along the geodesic to the goal that point is (0-1).
-        angle: the whole angle from the quintic attitude to the goal (rad).
-        axis: unit rotation axis of that geodesic (base frame at the quintic attitude).
-        residual: residual vector at ``beta`` for the target at ``fraction`` (rad).
-        steps: continuation steps taken.
-        iterations: Newton iterations in all correctors.
-        stopped_by: why it stopped short ("" when it reached the goal).
-    """
-
-    beta: np.ndarray
-    fraction: float
-    angle: float
-    axis: np.ndarray
-    residual: np.ndarray
-    steps: int
-    iterations: int
-    stopped_by: str = ""
-
-    @property
-    def reached(self) -> bool:
-        """Whether the goal itself was reached."""
-        return not self.stopped_by
 
 
 #: Affine constraint rows at beta = 0 by (constraint index, instants), for one path family.

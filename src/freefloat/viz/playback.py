@@ -7,9 +7,7 @@ Also drawn: the end-effector trail, the system centre of mass (a fixed point at 
 the inertial axes and the base frame's axes. A link whose mesh file cannot be found is drawn
 as a small sphere, with a warning (the dynamics never need the meshes). The plan's keep-out
 objects (``plan.safety.obstacles``) are drawn semi-transparent red, fixed to the spacecraft
-(each one's node ``freefloat_extras/obstacles/NAME`` is animated with the base pose; a capsule
-is a cylinder and two spheres). A captured payload is a link of the plan's URDF, drawn when it
-has a box.
+(animated with the base pose; a capsule is a cylinder and two spheres).
 
 meshcat 0.3.2 quirks handled here: the scene can only be exported (``static_html``) while its
 server subprocess runs, and ``Visualizer.close()`` raises; :class:`Playback` stops the server

@@ -1,0 +1,61 @@
+"""The exceptions freefloat raises: one root, :class:`FreeFloatError`, and subclasses with data.
+
+Every message is a single line that names the problem and says what would be valid, so that
+the command line can print it as it is (exit code 2) and a caller can test it. The motion
+errors (limits needing a longer duration, goals out of reach) are in :mod:`.motion`.
+"""
+
+from ..excerpts import EXCERPT_CHARS, excerpt
+from .base import (
+    AmbiguousEndEffectorError,
+    CollisionError,
+    FileError,
+    FreeFloatError,
+    InfeasibleError,
+    InputError,
+    InputLimitError,
+    JointLimitError,
+    LockedJointError,
+    ModelError,
+    PlanFileError,
+    PlanMismatchError,
+    ScenarioError,
+    SolverError,
+    UnknownNameError,
+    VerificationError,
+    ViewerError,
+)
+from .motion import (
+    DurationLimitError,
+    EffortLimitError,
+    UnreachableAttitudeError,
+    UnreachableGoalError,
+    VelocityLimitError,
+)
+
+__all__ = [
+    "EXCERPT_CHARS",
+    "AmbiguousEndEffectorError",
+    "CollisionError",
+    "DurationLimitError",
+    "EffortLimitError",
+    "FileError",
+    "FreeFloatError",
+    "InfeasibleError",
+    "InputError",
+    "InputLimitError",
+    "JointLimitError",
+    "LockedJointError",
+    "ModelError",
+    "PlanFileError",
+    "PlanMismatchError",
+    "ScenarioError",
+    "SolverError",
+    "UnknownNameError",
+    "UnreachableAttitudeError",
+    "UnreachableGoalError",
+    "VelocityLimitError",
+    "VerificationError",
+    "ViewerError",
+    "excerpt",
+]

@@ -1,0 +1,128 @@
+"""Errors of motions that cannot be made: limits that need a longer duration, goals out of reach.
+
+Units as in every message: rad, rad/s, N m (m, m/s, N for prismatic joints), s.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from .base import FreeFloatError, SolverError
+
+
+class DurationLimitError(FreeFloatError):
+    """A joint beyond a URDF limit that a longer duration would respect.
+
+    Attributes:
+        joint: the joint's name.
+        peak: its largest value along the path (the limit's unit).
+        limit: the URDF limit.
+        shortest_duration: the shortest duration (s) at which the path respects the limits.
+    """
+
+    def __init__(
+        self, joint: str, peak: float, limit: float, shortest_duration: float, message: str
+    ) -> None:
+        self.joint = joint
+        self.peak = float(peak)
+        self.limit = float(limit)
+        self.shortest_duration = float(shortest_duration)
+        super().__init__(message)
+
+
+class VelocityLimitError(DurationLimitError):
+    """Joint rates above a URDF velocity limit; carries the shortest admissible duration."""
+
+    def __init__(
+        self, joint: str, peak: float, limit: float, shortest_duration: float, unit: str = "rad"
+    ) -> None:
+        super().__init__(
+            joint,
+            peak,
+            limit,
+            shortest_duration,
+            f"joint {joint!r} reaches {peak:.4g} {unit}/s, above its velocity limit "
+            f"{limit:.4g} {unit}/s; the shortest duration that respects every velocity limit "
+            f"is {shortest_duration:.4g} s",
+        )
+
+
+class EffortLimitError(DurationLimitError):
+    """Joint torques above a URDF effort limit; carries the shortest admissible duration."""
+
+    def __init__(
+        self, joint: str, peak: float, limit: float, shortest_duration: float, unit: str = "N m"
+    ) -> None:
+        super().__init__(
+            joint,
+            peak,
+            limit,
+            shortest_duration,
+            f"joint {joint!r} needs {peak:.4g} {unit}, above its effort limit {limit:.4g} "
+            f"{unit}; the shortest duration that respects every effort limit is "
+            f"{shortest_duration:.4g} s",
+        )
+
+
+class UnreachableGoalError(FreeFloatError):
+    """A goal out of reach: no configuration reaches a Cartesian goal, or no path an attitude.
+
+    Raised as is for a Cartesian goal (with the miss and the workspace radius); an attitude
+    goal beyond where the planner's search got raises the subclass
+    :class:`UnreachableAttitudeError`.
+
+    Attributes:
+        distance: Cartesian goals: the smallest distance to the goal found (m); NaN otherwise.
+        radius: Cartesian goals: the workspace radius (m); NaN otherwise.
+    """
+
+    def __init__(
+        self, message: str, distance: float = float("nan"), radius: float = float("nan")
+    ) -> None:
+        self.distance = float(distance)
+        self.radius = float(radius)
+        super().__init__(message)
+
+
+class UnreachableAttitudeError(SolverError, UnreachableGoalError):
+    """A goal attitude beyond where the planner's search got.
+
+    A :class:`SolverError` that is also an :class:`UnreachableGoalError`.
+    Its message and its figures agree: ``reached`` of ``asked`` (rad, about ``axis``) is where
+    the search stopped, ``best_residual`` the rest of the way (the attitude error of the path
+    it stopped on, rad), ``reached_fraction = reached / asked``.
+
+    Attributes:
+        reached: the largest turn towards the goal reached by a solved path (rad).
+        asked: the turn the goal asks for, from where the search started (rad).
+        axis: the unit axis of that turn (base frame at the search's starting attitude).
+    """
+
+    def __init__(
+        self,
+        message: str,
+        best_residual: float,
+        reached: float,
+        asked: float,
+        tried: Sequence[str] = (),
+        per_axis: Sequence[float] | None = None,
+        hint: str = "",
+        stopped_by: str = "",
+        last_beta: Sequence[float] | None = None,
+        axis: Sequence[float] = (0.0, 0.0, 1.0),
+    ) -> None:
+        self.reached = float(reached)
+        self.asked = float(asked)
+        self.axis = tuple(float(a) for a in axis)
+        SolverError.__init__(
+            self,
+            message,
+            best_residual,
+            tried,
+            per_axis=per_axis,
+            hint=hint,
+            stopped_by=stopped_by,
+            reached_fraction=self.reached / self.asked if self.asked > 0.0 else 0.0,
+            last_beta=last_beta,
+        )
+        self.distance = self.radius = float("nan")

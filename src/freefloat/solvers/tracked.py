@@ -1,0 +1,39 @@
+"""How far a continuation got (:mod:`freefloat.solvers.continuation`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["ContinuationResult"]
+
+
+@dataclass(frozen=True)
+class ContinuationResult:
+    """How far the continuation got.
+
+    Attributes:
+        beta: free coefficients at the last solved point (rad or m).
+        fraction: how far along the geodesic to the goal that point is (0-1).
+        angle: the whole angle from the quintic attitude to the goal (rad).
+        axis: unit rotation axis of that geodesic (base frame at the quintic attitude).
+        residual: residual vector at ``beta`` for the target at ``fraction`` (rad).
+        steps: continuation steps taken.
+        iterations: Newton iterations in all correctors.
+        stopped_by: why it stopped short ("" when it reached the goal).
+    """
+
+    beta: np.ndarray
+    fraction: float
+    angle: float
+    axis: np.ndarray
+    residual: np.ndarray
+    steps: int
+    iterations: int
+    stopped_by: str = ""
+
+    @property
+    def reached(self) -> bool:
+        """Whether the goal itself was reached."""
+        return not self.stopped_by
