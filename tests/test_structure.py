@@ -209,7 +209,7 @@ LONG_FUNCTIONS = {
     ("problem/scenario.py", "from_dict"): "being split with problem/scenario.py",
     ("verify/checks.py", "verify_plan"): "being restructured into a list of checks",
     ("solvers/dispatch.py", "solve"): "the nearest-root refinement joined it; split pending",
-    ("solvers/search.py", "search"): "the single reach figure of a refusal joined it; split pending",
+    ("solvers/search.py", "search"): "the one reach figure of a refusal joined it; split pending",
     ("viz/plots.py", "_draw"): "every end effector's lines joined it; split pending",
     ("verify/recompute.py", "check_plan_numbers"): "being split with verify/recompute.py",
 }
