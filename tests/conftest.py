@@ -75,22 +75,12 @@ def deg(x: float) -> float:
 
 
 def as_older_format(doc: dict, fmt: str = "freefloat.plan/3") -> dict:
-    """A plan document as a file of an older format holds the same plan: the path as monomials
-    in seconds (:func:`legacy.as_format_3`), without every other field of format 4 (end
-    effectors, the URDF copy, constraint records, objective parameters, the safety note, the
-    robustness record), and without the objective record for /2."""
+    """A plan document as a file of an older format holds the same plan (:mod:`legacy`), and
+    without the objective record for /2."""
     from legacy import as_format_3
 
     old = as_format_3(doc)
     old["format"] = fmt
-    for key in ("urdf_text", "urdf_sha256", "end_effectors"):
-        old["robot"].pop(key, None)
-    old["samples"].pop("end_effector_paths", None)
-    for key in ("constraints", "robustness", "path_quality"):
-        old.pop(key, None)
-    old.get("safety", {}).pop("note", None)
-    if "objective" in old:
-        old["objective"].pop("parameters", None)
-        if fmt == "freefloat.plan/2":
-            del old["objective"]
+    if fmt == "freefloat.plan/2":
+        old.pop("objective", None)
     return old

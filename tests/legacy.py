@@ -61,4 +61,12 @@ def as_format_3(doc: dict) -> dict:
             for k, b in enumerate(values)
         )
         old["objective"]["value"] = old["objective"]["start_value"] = norm
+    # and without the other records of format 4
+    for key in ("urdf_text", "urdf_sha256", "end_effectors"):
+        old["robot"].pop(key, None)
+    old["samples"].pop("end_effector_paths", None)
+    for key in ("constraints", "robustness"):
+        old.pop(key, None)
+    old.get("safety", {}).pop("note", None)
+    old.get("objective", {}).pop("parameters", None)
     return old

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 import os
 import stat
 import subprocess
@@ -156,7 +157,10 @@ def test_ros2_bag_round_trip_resampled(worked_plan, plan_file, tmp_path):
     poly = np.polynomial.polynomial
     t = np.arange(0.0, worked_plan.duration, 0.25)
     t = np.append(t, worked_plan.duration) if t[-1] < worked_plan.duration else t
-    coefficients = [np.asarray(worked_plan.coefficients[n]) for n in worked_plan.robot.joints]
+    from legacy import as_format_3  # the file's basis as monomials in t, rebuilt by NumPy
+
+    monomials = as_format_3(json.loads(worked_plan.to_json()))["path"]["coefficients"]
+    coefficients = [np.asarray(monomials[n]) for n in worked_plan.robot.joints]
     q, qd, qdd = (
         np.stack([poly.polyval(t, poly.polyder(c, k)) for c in coefficients], axis=1)
         for k in range(3)

@@ -374,7 +374,10 @@ def test_plan_records_and_the_plan_schema_name_the_same_fields():
     # the plan itself: its coefficients are the file's path, its verification the checks
     names, _ = _fields(fmt.Plan)
     top, _ = _properties(plan, ())
-    assert (names - {"coefficients"}) | {"path"} == top, names ^ top
+    # (the path's basis is path.basis, its quality record path_quality)
+    assert (names - {"coefficients", "basis", "quality"}) | {"path", "path_quality"} == top, (
+        names ^ top
+    )
 
 
 def test_plan_limits_are_the_schema_limits():

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 
 import numpy as np
@@ -19,10 +20,14 @@ from urdfs import BASE, joint, link, robot
 
 
 def _path(p: ff.Plan, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(K, N) joint values, rates and accelerations at times ``t`` (s), by NumPy from the
-    plan's stored coefficients (not the verifier's helpers)."""
+    """(K, N) joint values, rates and accelerations at times ``t`` (s), as monomials in t
+    rebuilt by NumPy from the plan file's basis (``legacy``), not by the verifier's helpers."""
+    from legacy import as_format_3
+
+    doc = as_format_3(json.loads(p.to_json()))
     poly = np.polynomial.polynomial
-    coefficients = [np.asarray(p.coefficients[name], dtype=float) for name in p.robot.joints]
+    names = p.robot.joints
+    coefficients = [np.asarray(doc["path"]["coefficients"][n], dtype=float) for n in names]
     q, qd, qdd = (
         np.stack([poly.polyval(t, poly.polyder(c, order)) for c in coefficients], axis=1)
         for order in range(3)

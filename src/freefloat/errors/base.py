@@ -2,9 +2,6 @@
 
 Every message is a single line that names the problem and says what would be valid, so that
 the command line can print it as it is (exit code 2) and a caller can test it.
-
-This module is long because it holds every exception class with its data and its message (one
-exception root, one module).
 """
 
 from __future__ import annotations

@@ -18,6 +18,7 @@ from ..physics.attitude import geodesic_angle, quat_conjugate, quat_log, quat_mu
 from ..physics.momentum import MomentumMap
 from ..plans.format import Plan
 from ..robot.model import Robot
+from ..verify.path_eval import file_path
 from ..verify.stepping import _refine, _rk4_attitude
 
 __all__ = ["ReplayOutcome", "replay_attitude"]
@@ -61,9 +62,7 @@ def replay_attitude(
         start_quaternion: base attitude at t = 0 ``[x, y, z, w]``; default the plan's.
     """
     mmap = MomentumMap(robot)
-    poly = np.polynomial.polynomial
-    coeffs = [np.asarray(plan.coefficients[name], dtype=float) for name in plan.robot.joints]
-    rates = [poly.polyder(c) for c in coeffs]
+    path = file_path(plan)  # the file's own definition of its paths, as verification reads it
     duration = plan.duration
     start = np.asarray(
         plan.base.start_quaternion_xyzw if start_quaternion is None else start_quaternion, float
@@ -72,8 +71,7 @@ def replay_attitude(
     goal = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
 
     def omega_at(t: np.ndarray) -> np.ndarray:
-        q = np.stack([poly.polyval(t, c) for c in coeffs], axis=1)
-        qd = np.stack([poly.polyval(t, c) for c in rates], axis=1)
+        q, qd, _ = path(t)
         return mmap.base_rates(q, qd).omega
 
     steps = FIRST_STEPS
