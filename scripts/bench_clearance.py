@@ -104,14 +104,14 @@ def _certificate_row(name: str, runs: int) -> dict[str, object]:
     s = ff.Scenario.from_toml(path)
     plan = ff.plan(s)
     clearance = next(c for c in scenario_constraints(s) if isinstance(c, Clearance))
-    path = file_path(plan)
+    paths = file_path(plan)
 
     def sampled() -> None:
         clearance._smallest_memo.clear()
         clearance._sampled_memo = None
         clearance.excess(s.robot, plan.path())
 
-    cert = clearance_certificate(s.robot, clearance, path)
+    cert = clearance_certificate(s.robot, clearance, paths)
     return {
         "robot": name,
         "sampled_hull_ms": _median_ms(sampled, runs),

@@ -117,7 +117,7 @@ def test_dual_plan_exports_and_reloads_every_path(dual_plan, tmp_path):
 
     _, plan = dual_plan
     saved = ff.Plan.load(plan.save(tmp_path / "dual.json"))
-    assert saved.samples.end_effector_paths == plan.samples.end_effector_paths
+    assert saved.samples == plan.samples  # every array, every end effector's path
     traj = from_samples(saved)
     header = columns(traj)
     assert "ee_right_tool0_x [m]" in header and header.count("ee_x [m]") == 1
