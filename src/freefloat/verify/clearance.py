@@ -65,7 +65,7 @@ FIRST_INSTANTS = 51
 #: How close (m) the certified lower bound is brought to the smallest measured clearance...
 ACCURACY = 1e-4
 #: ... or this fraction of that clearance's slack above the margin, whichever is larger.
-SLACK_FRACTION = 0.05
+SLACK_FRACTION = 0.25
 #: Most interval halvings of one certificate (a count, so the verdict is reproducible).
 MAX_BISECTIONS = 20000
 #: A hull may report at most this much more clearance than its mesh (m): GJK's tolerance.
