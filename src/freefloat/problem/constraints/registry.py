@@ -15,7 +15,7 @@ from __future__ import annotations
 import weakref
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from ...errors import InputError, UnknownNameError
 from ...robot.collision import CollisionModel, Obstacle, collision_model, known_srdf
@@ -27,8 +27,33 @@ from .joint_effort import JointEffortLimits
 from .joint_position import JointPositionLimits
 from .joint_velocity import JointVelocityLimits
 
-if TYPE_CHECKING:
-    from ..scenario import Scenario
+
+class ScenarioSafety(Protocol):
+    """What :func:`scenario_constraints` reads of a scenario's ``[safety]`` (m)."""
+
+    @property
+    def check(self) -> bool: ...
+    @property
+    def margin(self) -> float: ...
+    @property
+    def srdf(self) -> Path | None: ...
+    @property
+    def obstacles(self) -> tuple[Obstacle, ...]: ...
+
+
+class ScenarioLike(Protocol):
+    """What :func:`scenario_constraints` reads of a scenario.
+
+    A protocol, so that the scenario module (which reads constraint tables) is not imported.
+    """
+
+    @property
+    def robot(self) -> Robot: ...
+    @property
+    def safety(self) -> ScenarioSafety: ...
+    @property
+    def constraints(self) -> tuple[Constraint, ...]: ...
+
 
 __all__ = [
     "CONSTRAINTS",
@@ -82,7 +107,7 @@ def default_constraints() -> list[Constraint]:
     return [JointPositionLimits(), JointVelocityLimits(), JointEffortLimits()]
 
 
-def scenario_constraints(scenario: Scenario) -> list[Constraint]:
+def scenario_constraints(scenario: ScenarioLike) -> list[Constraint]:
     """The constraints a scenario's plan honours.
 
     The defaults, its ``[constraints.<name>]`` tables, and clearance when checked.
