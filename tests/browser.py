@@ -46,7 +46,7 @@ def screenshot(page: Path, virtual_ms: int, attempts: int = 3) -> np.ndarray:
     """
     from PIL import Image
 
-    for attempt in range(attempts):
+    for attempt in range(1, attempts + 1):
         with tempfile.TemporaryDirectory() as tmp:
             out = Path(tmp) / "shot.png"
             try:
@@ -64,8 +64,8 @@ def screenshot(page: Path, virtual_ms: int, attempts: int = 3) -> np.ndarray:
                     timeout=120,
                 )
             except subprocess.TimeoutExpired:
-                if attempt == attempts - 1:
-                    raise
-                continue
+                if attempt < attempts:
+                    continue
+                raise
             return np.asarray(Image.open(out).convert("RGB")).astype(int)
-    raise AssertionError("unreachable")
+    raise ValueError(f"attempts must be >= 1, got {attempts}")
