@@ -200,8 +200,8 @@ def test_layers_flow_one_way_and_no_circle():
 LONG_MODULES = {
     "cli.py": "being split into a cli/ package, one module per command",
     "problem/scenario.py": "being split: TOML parsing apart from resolution (IK, cache, payload)",
-    "plans/format.py": "being split: plan records apart from JSON I/O and migration",
     "verify/recompute.py": "being split with verify_plan into a list of checks",
+    "verify/checks.py": "being split into a list of checks (its imports grew with plans/)",
 }
 #: Functions allowed beyond 80 lines of code (docstring aside), each with its reason.
 LONG_FUNCTIONS = {
@@ -340,7 +340,7 @@ def _fields(cls) -> tuple[set[str], set[str]]:
 
 
 def test_plan_records_and_the_plan_schema_name_the_same_fields():
-    from freefloat.plans import format as fmt
+    from freefloat import plans as fmt
     from freefloat.plans.schema import schema
 
     plan = schema("plan")

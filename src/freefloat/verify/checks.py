@@ -34,8 +34,10 @@ from ..errors import FreeFloatError, PlanFileError
 from ..physics.attitude import geodesic_angle
 from ..physics.dynamics import inverse_dynamics, inverse_dynamics_batch, replay
 from ..physics.momentum import MomentumMap
-from ..plans.format import FORMAT_2, FORMAT_3, Check, Plan, Verification
+from ..plans.format import Plan
+from ..plans.guarantees import Check, Verification
 from ..plans.robot_copy import plan_robot
+from ..plans.versions import FORMAT_2, FORMAT_3
 from ..problem.constraints import Constraint, JointEffortLimits, constraint_from_record
 from ..problem.constraints.clearance import Clearance
 from ..problem.constraints.registry import clearance_constraint
@@ -118,7 +120,7 @@ def plan_constraints(plan: Plan, robot: Robot) -> list[Constraint]:
 
     Every ``constraints`` record, and clearance when its ``safety`` record says it was checked.
     A file written before constraint records is held to what its format promised
-    (:data:`~freefloat.plans.format.PROMISED`: a ``freefloat.plan/2`` file, no effort limits).
+    (:data:`~freefloat.plans.versions.PROMISED`: a ``freefloat.plan/2`` file, no effort limits).
 
     Raises:
         PlanFileError: a record names a constraint this freefloat does not know, or a bad

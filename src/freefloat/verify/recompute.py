@@ -40,8 +40,10 @@ import numpy as np
 
 from ..errors import FreeFloatError, InfeasibleError, PlanFileError, PlanMismatchError
 from ..physics.attitude import geodesic_angle, quat_from_zyx
-from ..plans.format import MONOMIAL_BASIS, Plan, Verification
+from ..plans.format import Plan
+from ..plans.guarantees import Verification
 from ..plans.sampling import base_report, feasibility_report, sample_solution
+from ..plans.versions import MONOMIAL_BASIS
 from ..problem.build import build_problem
 from ..problem.inertial_sensitivity import attitude_sensitivity
 from ..problem.residual import Problem
