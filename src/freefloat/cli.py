@@ -30,7 +30,8 @@ from .problem.scenario import Scenario, default_scenario_path
 from .progress import TIMINGS, configure, stage
 from .reachable import DEFAULT_BUDGET as DEFAULT_REACH_BUDGET
 from .solvers.options import DEFAULT_TOLERANCE, TOLERANCE_RANGE_RAD, SolveOptions
-from .verify.checks import MAX_REPLAY_STEPS, REPLAY_STEPS_LIMIT, verify_plan
+from .verify.checks import REPLAY_STEPS_LIMIT, verify_plan
+from .verify.stepping import MAX_REPLAY_STEPS
 from .viz.summary import cartesian_report, robot_label, summary
 
 if TYPE_CHECKING:
