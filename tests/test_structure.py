@@ -203,7 +203,6 @@ LONG_MODULES = {
 LONG_FUNCTIONS = {
     ("solvers/dispatch.py", "solve"): "the nearest-root refinement joined it; split pending",
     ("solvers/search.py", "search"): "the one reach figure of a refusal joined it; split pending",
-    ("viz/plots.py", "_draw"): "every end effector's lines joined it; split pending",
 }
 MAX_MODULE_LINES = 400
 MAX_FUNCTION_LINES = 80
