@@ -196,10 +196,8 @@ def test_layers_flow_one_way_and_no_circle():
             )
 
 
-#: Modules allowed beyond 400 lines, each with its reason. Only modules being split now.
-LONG_MODULES = {
-}
-#: Functions allowed beyond 80 lines of code (docstring aside), each with its reason.
+#: Functions allowed beyond 80 lines of code (docstring aside), each with its reason: only the
+#: two solver functions another branch is splitting now. No module is allowed beyond 400 lines.
 LONG_FUNCTIONS = {
     ("solvers/dispatch.py", "solve"): "the nearest-root refinement joined it; split pending",
     ("solvers/search.py", "search"): "the one reach figure of a refusal joined it; split pending",
@@ -227,7 +225,7 @@ def test_no_module_is_too_long():
     for path in SRC.rglob("*.py"):
         name = path.relative_to(SRC).as_posix()
         lines = path.read_text().count("\n")
-        if lines > MAX_MODULE_LINES and name not in LONG_MODULES:
+        if lines > MAX_MODULE_LINES:
             too_long[name] = lines
     assert not too_long, f"modules over {MAX_MODULE_LINES} lines: {too_long}"
 
@@ -244,9 +242,7 @@ def test_no_function_is_too_long():
     assert not too_long, f"functions over {MAX_FUNCTION_LINES} lines of code: {too_long}"
 
 
-def test_the_allow_lists_name_only_what_exists_and_is_long():
-    for name in LONG_MODULES:
-        assert (SRC / name).read_text().count("\n") > MAX_MODULE_LINES, name
+def test_the_allow_list_names_only_what_exists_and_is_long():
     for name, function in LONG_FUNCTIONS:
         tree = ast.parse((SRC / name).read_text())
         (node,) = [n for n in ast.walk(tree) if getattr(n, "name", None) == function]

@@ -5,8 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..errors import InputError
-from ..verify.checks import REPLAY_STEPS_LIMIT, verify_plan
+from ..verify.checks import REPLAY_STEPS_LIMIT, check_replay_steps, verify_plan
 from ..verify.stepping import MAX_REPLAY_STEPS
 from .common import Commands
 
@@ -43,13 +42,8 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
 
 
 def check(args: argparse.Namespace) -> None:
-    """Refuse a replay cap outside 1 to :data:`REPLAY_STEPS_LIMIT` before reading the plan."""
-    if args.replay_steps < 1:
-        raise InputError(f"--replay-steps must be at least 1, got {args.replay_steps}")
-    if args.replay_steps > REPLAY_STEPS_LIMIT:
-        raise InputError(
-            f"--replay-steps must be at most {REPLAY_STEPS_LIMIT}, got {args.replay_steps}"
-        )
+    """Refuse a replay cap the library refuses, naming the option, before reading the plan."""
+    check_replay_steps(args.replay_steps, "--replay-steps")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -23,7 +23,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import FreeFloatError, PlanFileError
+from ..errors import FreeFloatError, InputError, PlanFileError
 from ..physics.dynamics import inverse_dynamics
 from ..physics.momentum import MomentumMap
 from ..plans.format import Plan
@@ -52,6 +52,7 @@ from .stepping import MAX_REPLAY_STEPS
 __all__ = [
     "PLAN_CHECKS",
     "REPLAY_STEPS_LIMIT",
+    "check_replay_steps",
     "constraint_checks",
     "joint_torque_function",
     "plan_constraints",
@@ -120,6 +121,18 @@ def plan_constraints(plan: Plan, robot: Robot) -> list[Constraint]:
     return constraints
 
 
+def check_replay_steps(steps: int, name: str = "replay_steps") -> None:
+    """Refuse a replay cap outside 1 to :data:`REPLAY_STEPS_LIMIT` (``name`` for messages).
+
+    Raises:
+        InputError: ``steps`` below 1 or above the limit.
+    """
+    if steps < 1:
+        raise InputError(f"{name} must be at least 1, got {steps}")
+    if steps > REPLAY_STEPS_LIMIT:
+        raise InputError(f"{name} must be at most {REPLAY_STEPS_LIMIT}, got {steps}")
+
+
 def verify_plan(
     plan: Plan,
     robot: Robot | None = None,
@@ -149,14 +162,11 @@ def verify_plan(
             has just computed them with the same functions, skips it).
 
     Raises:
-        ValueError: ``replay_steps`` outside 1 to :data:`REPLAY_STEPS_LIMIT`.
+        InputError: ``replay_steps`` outside 1 to :data:`REPLAY_STEPS_LIMIT`.
         PlanMismatchError: a stored number or figure disagrees with its recomputation.
         PlanFileError: the plan's robot or request does not match its URDF.
     """
-    if not 1 <= replay_steps <= REPLAY_STEPS_LIMIT:
-        raise ValueError(
-            f"the replay takes 1 to {REPLAY_STEPS_LIMIT} steps, got replay_steps={replay_steps}"
-        )
+    check_replay_steps(replay_steps)
     robot = robot or plan_robot(plan)
     if recompute:
         check_plan_numbers(plan, robot)
