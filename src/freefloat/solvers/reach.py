@@ -87,20 +87,13 @@ def _furthest(
     quintic: np.ndarray,
     axis: np.ndarray,
     angle: float,
-    tracked: Sequence[Constraint],
-    eager: Sequence[Constraint],
+    constraints: Sequence[Constraint],
     options: SolveOptions,
     stall: bool,
 ) -> ContinuationResult:
-    """Continuation towards ``angle`` about ``axis`` (rad).
-
-    Again with every eager constraint when the path it ends on breaks one that was not tracked.
-    """
+    """Continuation towards ``angle`` about ``axis`` (rad) within ``constraints``."""
     target = problem.with_goal(quat_multiply(quintic, quat_exp(angle * axis)))
-    result = track(target, tracked, options, stall=stall)
-    if len(tracked) < len(eager) and broken_constraint(problem, eager, result.beta):
-        result = track(target, eager, options, stall=stall)
-    return result
+    return track(target, constraints, options, stall=stall)
 
 
 def _confirmed(
@@ -108,8 +101,7 @@ def _confirmed(
     quintic: np.ndarray,
     axis: np.ndarray,
     reached: float,
-    tracked: Sequence[Constraint],
-    eager: Sequence[Constraint],
+    constraints: Sequence[Constraint],
     options: SolveOptions,
     step: float = 0.0,
 ) -> tuple[float, np.ndarray]:
@@ -128,11 +120,47 @@ def _confirmed(
             reached = math.floor(reached / step + 1e-9) * step
         if reached <= 0.0:
             break
-        result = _furthest(problem, quintic, axis, reached, tracked, eager, options, True)
+        result = _furthest(problem, quintic, axis, reached, constraints, options, True)
         if result.reached:
             return reached, result.beta
         reached *= CONFIRM_SHRINK * result.fraction
     return 0.0, beta
+
+
+def _direction(
+    problem: Problem,
+    quintic: np.ndarray,
+    axis: np.ndarray,
+    angle: float,
+    tracked: Sequence[Constraint],
+    eager: Sequence[Constraint],
+    options: SolveOptions,
+    confirm: bool,
+    step: float,
+) -> tuple[float, str, np.ndarray]:
+    """How far one direction goes: the turn (rad), why it stopped short, its path.
+
+    The deferred constraints (``eager`` but not ``tracked``) are checked on the path where
+    the direction ends; only when that path breaks one is the turn confirmed again with
+    every eager constraint imposed, as the planner imposes them (one continuation per try,
+    from the turn reached without them: never farther).
+    """
+    result = _furthest(problem, quintic, axis, angle, tracked, options, confirm)
+    reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
+    deferred = len(tracked) < len(eager)
+    if not confirm:  # the bounds estimate: as far as the budget goes
+        if deferred and broken_constraint(problem, eager, beta):
+            result = _furthest(problem, quintic, axis, angle, eager, options, False)
+            reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
+        return reached, stopped_by, beta
+    if not result.reached:  # solved only to the intermediate tolerance
+        reached, beta = _confirmed(problem, quintic, axis, reached, tracked, options, step)
+    if deferred and reached > 0.0:
+        broken = broken_constraint(problem, eager, beta)
+        if broken:
+            reached, beta = _confirmed(problem, quintic, axis, reached, eager, options, step)
+            stopped_by = stopped_by or broken
+    return reached, stopped_by, beta
 
 
 #: Called after each direction with (directions done, directions in all, its reach).
@@ -195,12 +223,9 @@ def reach_set(
         before = problem.evaluations
         reached, stopped_by, beta = 0.0, "", np.zeros(problem.n_free)
         if angle > 0.0:
-            result = _furthest(problem, quintic, axis, angle, tracked, eager, options, confirm)
-            reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
-            if confirm and not result.reached:  # solved only to the intermediate tolerance
-                reached, beta = _confirmed(
-                    problem, quintic, axis, reached, tracked, eager, options, step
-                )
+            reached, stopped_by, beta = _direction(
+                problem, quintic, axis, float(angle), tracked, eager, options, confirm, step
+            )
         direction = DirectionReach(
             axis=axis,
             reached=reached,
