@@ -278,7 +278,7 @@ def verify_plan(
     replay_joint = float(np.abs(_wrap_joints(robot, coarse_j - goal)).max())
     speed = max(float(np.abs(qd_s).max()), float(np.abs(samples.base_angular_velocity).max()), 0.0)
     att_estimate = joint_estimate = math.inf
-    previous = earlier = (math.inf, math.inf)
+    prev = before = (math.inf, math.inf)  # the last two differences (attitude, joints)
     converged = False
     while 2 * steps <= replay_steps:
         steps *= 2
@@ -295,14 +295,12 @@ def verify_plan(
         joint_estimate = _finite(float(np.abs(_wrap_joints(robot, fine_j - coarse_j)).max()))
         turn = speed * duration / steps
         if _decided(
-            replay_att, att_estimate, previous[0], tol["replay_attitude_rad"], turn, earlier[0]
-        ) and _decided(
-            replay_joint, joint_estimate, previous[1], tol["replay_joint"], turn, earlier[1]
-        ):
+            replay_att, att_estimate, prev[0], tol["replay_attitude_rad"], turn, before[0]
+        ) and _decided(replay_joint, joint_estimate, prev[1], tol["replay_joint"], turn, before[1]):
             converged = True
             break
         coarse_q, coarse_j = fine_q, fine_j
-        earlier, previous = previous, (att_estimate, joint_estimate)
+        before, prev = prev, (att_estimate, joint_estimate)
     replay_detail = f"RK4, {steps} steps"
     if not converged:
         # The steps allowed do not resolve this motion (a long, fast or sensitive one): the
