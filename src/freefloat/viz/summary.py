@@ -13,7 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..plans.format import MONOMIAL_BASIS, Plan
+from ..plans.format import Plan
+from ..plans.versions import MONOMIAL_BASIS
 from ..problem.scenario import Scenario
 from .robustness import robustness_line
 
