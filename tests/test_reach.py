@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -161,21 +162,26 @@ def test_a_goal_read_from_reach_output_plans_first_try(kinova_reach, capsys) -> 
     assert math.degrees(turned) == pytest.approx(diagonal[3], abs=2e-3)
 
 
-def test_goals_inside_the_inner_set_plan(kinova_reach) -> None:
-    path, _ = kinova_reach
-    scenario = ff.Scenario.from_toml(path)
-    axes = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]])
+def test_goals_sampled_inside_the_inner_set_plan() -> None:
+    """Goals drawn at random (seeded) inside the reported inner set: each one plans.
+
+    The UR5 servicer without its clearance constraint, four directions, so that the test
+    stays fast; the truth is each plan's own independent verification (the attitude it
+    reaches, integrated apart from the planner), not the reach estimate.
+    """
+    shipped = ff.Scenario.from_toml(SCENARIOS / "ur5_servicer.toml")
+    scenario = replace(shipped, safety=replace(shipped.safety, check=False))
+    axes = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 1.0, 1.0], [-1.0, 1.0, -1.0]])
     report = ff.reachable(scenario, budget=30, directions=axes)
-    planned = 0
-    for direction, fraction in zip(report.directions, (1.0, 0.5, 0.7), strict=True):
-        assert direction.inner <= direction.outer
-        if direction.inner == 0.0:
-            continue
-        goal = _turned(report, direction, fraction)
-        plan = ff.plan(_with_goal(scenario, goal))
+    inside = [d for d in report.directions if d.inner > 0.0]
+    assert len(inside) == len(axes) and all(d.inner <= d.outer for d in inside)
+    rng = np.random.default_rng(28)
+    for _ in range(5):
+        direction = inside[int(rng.integers(len(inside)))]
+        goal = _turned(report, direction, float(rng.uniform(0.2, 1.0)))
+        plan = ff.plan(replace(scenario, goal_attitude=goal), samples=41)
+        assert plan.verification.passed
         assert ff.geodesic_angle(np.array(plan.base.achieved_quaternion_xyzw), goal) < 1e-9
-        planned += 1
-    assert planned >= 2
 
 
 def _turned(report, direction, fraction):
@@ -183,12 +189,6 @@ def _turned(report, direction, fraction):
 
     turn = quat_exp(fraction * direction.inner * direction.axis)
     return quat_multiply(report.drift_quaternion, turn)
-
-
-def _with_goal(scenario: ff.Scenario, goal: np.ndarray) -> ff.Scenario:
-    from dataclasses import replace
-
-    return replace(scenario, goal_attitude=np.asarray(goal))
 
 
 def test_reach_refuses_bad_options_in_one_line(capsys) -> None:

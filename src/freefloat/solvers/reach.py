@@ -87,20 +87,13 @@ def _furthest(
     quintic: np.ndarray,
     axis: np.ndarray,
     angle: float,
-    tracked: Sequence[Constraint],
-    eager: Sequence[Constraint],
+    constraints: Sequence[Constraint],
     options: SolveOptions,
     stall: bool,
 ) -> ContinuationResult:
-    """Continuation towards ``angle`` about ``axis`` (rad).
-
-    Again with every eager constraint when the path it ends on breaks one that was not tracked.
-    """
+    """Continuation towards ``angle`` about ``axis`` (rad) within ``constraints``."""
     target = problem.with_goal(quat_multiply(quintic, quat_exp(angle * axis)))
-    result = track(target, tracked, options, stall=stall)
-    if len(tracked) < len(eager) and broken_constraint(problem, eager, result.beta):
-        result = track(target, eager, options, stall=stall)
-    return result
+    return track(target, constraints, options, stall=stall)
 
 
 def _confirmed(
@@ -108,11 +101,10 @@ def _confirmed(
     quintic: np.ndarray,
     axis: np.ndarray,
     reached: float,
-    tracked: Sequence[Constraint],
-    eager: Sequence[Constraint],
+    constraints: Sequence[Constraint],
     options: SolveOptions,
     step: float = 0.0,
-) -> tuple[float, np.ndarray]:
+) -> tuple[float, np.ndarray, str]:
     """The largest turn up to ``reached`` that the planner's own continuation solves.
 
     Tracking towards a farther goal solves the points on the way only to the intermediate
@@ -120,19 +112,58 @@ def _confirmed(
     final tolerance and the stall check. The turn is asked as the planner would ask it (at
     most :data:`CONFIRM_TRIES` times, each a share of where the last one stopped), so the
     reported turn is one the planner reaches; with ``step`` (rad) the turn asked is rounded
-    down to a multiple of it first. Returns the turn (rad) and its path.
+    down to a multiple of it first. Returns the turn (rad), its path and why the first try
+    stopped short ("" when it did not).
     """
-    beta = np.zeros(problem.n_free)
+    beta, why = np.zeros(problem.n_free), ""
     for _ in range(CONFIRM_TRIES):
         if step > 0.0:  # the turn reported, so that the goal printed is the one confirmed
             reached = math.floor(reached / step + 1e-9) * step
         if reached <= 0.0:
             break
-        result = _furthest(problem, quintic, axis, reached, tracked, eager, options, True)
+        result = _furthest(problem, quintic, axis, reached, constraints, options, True)
         if result.reached:
-            return reached, result.beta
+            return reached, result.beta, why
+        why = why or result.stopped_by
         reached *= CONFIRM_SHRINK * result.fraction
-    return 0.0, beta
+    return 0.0, beta, why
+
+
+def _direction(
+    problem: Problem,
+    quintic: np.ndarray,
+    axis: np.ndarray,
+    angle: float,
+    tracked: Sequence[Constraint],
+    eager: Sequence[Constraint],
+    options: SolveOptions,
+    confirm: bool,
+    step: float,
+) -> tuple[float, str, np.ndarray]:
+    """How far one direction goes: the turn (rad), why it stopped short, its path.
+
+    The deferred constraints (``eager`` but not ``tracked``) are checked on the path where
+    the direction ends; only when that path breaks one is the turn confirmed with every
+    eager constraint imposed, as the planner imposes them (one continuation per try, from
+    the turn reached without them: never farther), and the confirmation without them is
+    skipped.
+    """
+    result = _furthest(problem, quintic, axis, angle, tracked, options, confirm)
+    reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
+    deferred = len(tracked) < len(eager)
+    if not confirm:  # the bounds estimate: as far as the budget goes
+        if deferred and broken_constraint(problem, eager, beta):
+            result = _furthest(problem, quintic, axis, angle, eager, options, False)
+            reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
+        return reached, stopped_by, beta
+    broken = broken_constraint(problem, eager, beta) if deferred else ""
+    if not result.reached and not broken:  # solved only to the intermediate tolerance
+        reached, beta, _ = _confirmed(problem, quintic, axis, reached, tracked, options, step)
+        broken = broken_constraint(problem, eager, beta) if deferred and reached > 0.0 else ""
+    if broken:  # confirmed as the planner solves it, with every eager constraint imposed
+        reached, beta, why = _confirmed(problem, quintic, axis, reached, eager, options, step)
+        stopped_by = why or stopped_by
+    return reached, stopped_by, beta
 
 
 #: Called after each direction with (directions done, directions in all, its reach).
@@ -195,12 +226,9 @@ def reach_set(
         before = problem.evaluations
         reached, stopped_by, beta = 0.0, "", np.zeros(problem.n_free)
         if angle > 0.0:
-            result = _furthest(problem, quintic, axis, angle, tracked, eager, options, confirm)
-            reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
-            if confirm and not result.reached:  # solved only to the intermediate tolerance
-                reached, beta = _confirmed(
-                    problem, quintic, axis, reached, tracked, eager, options, step
-                )
+            reached, stopped_by, beta = _direction(
+                problem, quintic, axis, float(angle), tracked, eager, options, confirm, step
+            )
         direction = DirectionReach(
             axis=axis,
             reached=reached,

@@ -149,7 +149,7 @@ def _replay(subject: Subject) -> _Replay:
         0.0,
     )
     att_estimate = joint_estimate = math.inf
-    previous = (math.inf, math.inf)
+    previous = earlier = (math.inf, math.inf)  # the last two differences (attitude, joints)
     while 2 * steps <= subject.replay_steps:
         steps *= 2
         ends = _with_midpoints(ends)
@@ -164,12 +164,20 @@ def _replay(subject: Subject) -> _Replay:
         att_estimate = _finite(geodesic_angle(coarse_q, fine_q))
         joint_estimate = _finite(float(np.abs(_wrap_joints(robot, fine_j - coarse_j)).max()))
         turn = speed * duration / steps
-        if _decided(
-            replay_att, att_estimate, previous[0], TOLERANCES["replay_attitude_rad"], turn
-        ) and _decided(replay_joint, joint_estimate, previous[1], TOLERANCES["replay_joint"], turn):
+        attitude_settled = _decided(
+            replay_att,
+            att_estimate,
+            previous[0],
+            TOLERANCES["replay_attitude_rad"],
+            turn,
+            earlier[0],
+        )
+        if attitude_settled and _decided(
+            replay_joint, joint_estimate, previous[1], TOLERANCES["replay_joint"], turn, earlier[1]
+        ):
             return _Replay(replay_att, replay_joint, att_estimate, joint_estimate, steps, True)
         coarse_q, coarse_j = fine_q, fine_j
-        previous = (att_estimate, joint_estimate)
+        earlier, previous = previous, (att_estimate, joint_estimate)
     return _Replay(replay_att, replay_joint, att_estimate, joint_estimate, steps, False)
 
 

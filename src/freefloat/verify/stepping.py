@@ -30,26 +30,35 @@ _MAX_ATTITUDE_STEPS = 1 << 14
 _MAX_TURN = 0.25
 
 
-def _decided(value: float, estimate: float, previous: float, tolerance: float, turn: float) -> bool:
+def _decided(
+    value: float,
+    estimate: float,
+    previous: float,
+    tolerance: float,
+    turn: float,
+    earlier: float | None = None,
+) -> bool:
     """Whether a step-doubling check's verdict stands whatever its numerical error.
 
     ``estimate`` is the difference between the results on M and 2 M steps, ``previous`` the
-    one between M / 2 and M. It bounds the error of the finer result only once the scheme
+    one between M / 2 and M, ``earlier`` the one between M / 4 and M / 2 (inf while not
+    known; None: not asked for). It bounds the error of the finer result only once the scheme
     converges at its order (RK4: the difference shrinks about 16-fold per doubling), so the
     verdict is trusted only once the steps resolve the motion (``turn``, the largest rotation
-    in one step, rad, at most :data:`_MAX_TURN`) and the difference has shrunk at least 8-fold
-    (or is already below rounding); then the check is decided when the estimate is small
-    against the tolerance or the value is clear of the tolerance by more than the estimate
-    (and, to refuse, the estimate is also small against the value).
+    in one step, rad, at most :data:`_MAX_TURN`) and the difference has shrunk at least
+    8-fold (or is already below rounding); then the check is decided when the estimate is
+    small against the tolerance or the value is clear of the tolerance by more than the
+    estimate. To refuse, the estimate must also be small against the value, and the
+    difference must have shrunk 8-fold over the doubling before as well: an erratic sequence
+    (an open-loop replay whose error grows without bound, say) can shrink once by chance.
     """
     converging = estimate <= previous / 8.0 or estimate <= 1e-3 * CONVERGED_FRACTION * tolerance
     if turn > _MAX_TURN or not converging:
         return False
-    return (
-        estimate <= CONVERGED_FRACTION * tolerance
-        or value + estimate <= tolerance
-        or (value - estimate > tolerance and estimate <= CONVERGED_FRACTION * value)
-    )
+    if estimate <= CONVERGED_FRACTION * tolerance or value + estimate <= tolerance:
+        return True
+    settled = earlier is None or (math.isfinite(earlier) and previous <= earlier / 8.0)
+    return settled and value - estimate > tolerance and estimate <= CONVERGED_FRACTION * value
 
 
 def _finite(x: float) -> float:

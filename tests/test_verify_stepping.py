@@ -1,0 +1,60 @@
+"""Step-doubling verdicts: a refusal needs two converging doublings in a row.
+
+An open-loop forward-dynamics replay can be erratic (its error grows without bound over a long
+motion): the difference between two step counts may then shrink 8-fold once by chance, and the
+verifier refused a valid plan on it (a Kinova servicer goal inside the reach's inner set). The
+truth here is RK4's own convergence on an ODE with a closed-form solution, against a sequence
+that does not converge.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+from freefloat.verify.stepping import _decided
+
+TOLERANCE = 1e-4
+
+
+def _rk4_exp(steps: int) -> float:
+    """y' = y on [0, 1] from y(0) = 1 by RK4 (the exact value is e)."""
+    h, y = 1.0 / steps, 1.0
+    for _ in range(steps):
+        k1 = y
+        k2 = y + h / 2 * k1
+        k3 = y + h / 2 * k2
+        k4 = y + h * k3
+        y += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return y
+
+
+def _verdict(results: list[float], target: float) -> tuple[bool, float] | None:
+    """Doubling loop of the verifier over ``results`` (one per step count, doubling).
+
+    Returns (passed, value) once decided, None when never decided (no verdict).
+    """
+    previous = earlier = math.inf
+    for coarse, fine in itertools.pairwise(results):
+        value, estimate = abs(fine - target), abs(fine - coarse)
+        if _decided(value, estimate, previous, TOLERANCE, 0.01, earlier):
+            return value <= TOLERANCE + estimate, value  # as Check.passed judges it
+        earlier, previous = previous, estimate
+    return None
+
+
+def test_a_converging_integration_is_decided_both_ways() -> None:
+    results = [_rk4_exp(2**k) for k in range(1, 10)]
+    passed = _verdict(results, math.e)
+    assert passed is not None and passed[0]  # converges to e: passes
+    refused = _verdict(results, math.e + 0.5)  # a wrong target: refused, the value near 0.5
+    assert refused is not None and not refused[0]
+    assert abs(refused[1] - 0.5) < 1e-6
+
+
+def test_an_erratic_sequence_that_shrinks_once_gives_no_verdict() -> None:
+    # Differences 4.0, 1.2, 0.15: the last shrinks 8-fold, the one before only 3.3-fold.
+    results = [5.0, 1.0, 2.2, 2.05]
+    assert _verdict(results, 0.0) is None
+    # Without the earlier difference (the former rule) the same sequence was refused.
+    assert _decided(2.05, 0.15, 1.2, TOLERANCE, 0.01)
