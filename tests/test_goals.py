@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -52,6 +53,10 @@ def test_unreachable_cartesian_goal_names_the_workspace(tmp_path, capsys):
     radius = ref.A + ref.B + ref.C
     assert "end-effector goal position [2.5, 0.3, 0.0] m is out of reach" in err
     assert f"the workspace radius from the system CM is about {radius:.3f} m" in err
+    # the miss has its unit, and no configuration comes nearer than the goal's distance from
+    # the system CM less the arm's full reach (closed form)
+    miss = float(re.search(r"misses it by ([0-9.e+-]+) m;", err).group(1))
+    assert miss >= math.hypot(2.5, 0.3) - radius - 1e-3
     assert not (tmp_path / "p.json").exists()
 
 

@@ -165,6 +165,7 @@ def test_layers_flow_one_way_and_no_circle():
     export, sweep -> cli."""
     order = [
         "errors",
+        "plugins",
         "files",
         "_exits",
         "progress",

@@ -105,7 +105,7 @@ def test_bad_values_are_refused_before_any_job(tmp_path, monkeypatch, axis, matc
         raise AssertionError("a job ran")
 
     # ff.sweep is the function; the package's modules are reached through sys.modules
-    monkeypatch.setattr(sys.modules["freefloat.sweep.runner"], "run_job", no_job)
+    monkeypatch.setattr(sys.modules["freefloat.sweep.runner"], "run_job_collecting", no_job)
     with pytest.raises(ff.FreeFloatError, match=match):
         ff.sweep(path, workers=1, progress=False)
 
@@ -246,3 +246,16 @@ def test_an_objective_axis_records_each_objective_and_its_value(tmp_path):
     # the file reads back (resume) to the same rows
     again = ff.sweep(path, workers=1, output=out, progress=False)
     assert [r.without_timings() for r in again] == [r.without_timings() for r in rows]
+
+
+def test_a_warning_of_every_job_is_said_once_with_the_prefix(tmp_path, capfd):
+    """The planar arm has no collision geometry: each job's plan notes it, the sweep says it
+    once, as a ``freefloat: warning:`` line (workers print nothing themselves)."""
+    path = _sweep_file(tmp_path, '[[axis]]\nkey = "goal.base_zyx_deg.0"\nvalues = [-30.0, 0.0]\n')
+    assert main(["sweep", str(path), "-o", str(tmp_path / "out.csv"), "--workers", "2"]) == 0
+    err = capfd.readouterr().err.splitlines()
+    assert [line for line in err if "clearance" in line] == [
+        "freefloat: warning: clearance: not checked for link1, link2 (no collision geometry)"
+    ]
+    rows = ff.sweep(path, workers=1, progress=False)
+    assert [row.status for row in rows] == ["planned", "planned"]

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 import stat
 import tempfile
 import threading
@@ -33,6 +34,7 @@ __all__ = [
     "atomic_write_text",
     "check_output",
     "default_file_mode",
+    "other_kind_hint",
     "raise_when_free",
     "read_text_file",
     "signals_held",
@@ -309,3 +311,25 @@ def atomic_write_text(path: str | Path, text: str) -> Path:
             os.fsync(handle.fileno())
 
     return atomic_write(path, write)
+
+
+#: The start of a TOML file: a comment, a table header or a ``key =`` line.
+_TOML_START = re.compile(r"\s*(#|\[\[?\s*[A-Za-z_]|[A-Za-z_][\w.-]*\s*=)")
+
+
+def other_kind_hint(path: str | Path, text: str, expected: str) -> str:
+    """A hint for a file that failed to parse as ``expected`` but looks like the other kind.
+
+    ``expected``: ``"plan"`` (JSON) or ``"toml"`` (a scenario or sweep file). The file's
+    suffix or its first characters decide; the hint names the command that reads the other
+    kind (``"; it looks like ..."``), or is empty.
+    """
+    suffix = Path(path).suffix.lower()
+    if expected == "plan" and (suffix == ".toml" or _TOML_START.match(text)):
+        return f"; it looks like a scenario file (TOML): freefloat plan {path} plans it"
+    if expected == "toml" and (suffix == ".json" or text.lstrip().startswith("{")):
+        return (
+            f"; it looks like a plan file (JSON): freefloat verify {path} checks it "
+            "(show, plot and export read plans too)"
+        )
+    return ""

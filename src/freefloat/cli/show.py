@@ -38,7 +38,7 @@ def check(args: argparse.Namespace) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Serve the plan in MeshCat, or write its standalone page."""
+    """Serve the plan in MeshCat until Ctrl-C (exit 130, by main), or write its standalone page."""
     from ..viz.playback import serve, write_html
 
     loaded = checked_plan(args)

@@ -301,3 +301,16 @@ class LockedJointError(FreeFloatError):
             f"joint {joint!r} locked at {value:.6g} {unit}: {reason}; lock it within "
             f"[{lower:.6g}, {upper:.6g}] {unit}"
         )
+
+
+class PluginError(FreeFloatError):
+    """An installed plug-in (a package's entry point) that cannot be loaded or registered.
+
+    Carries the entry point's group (``freefloat.constraints``...), its name and its
+    distribution; the message says what went wrong in one line.
+    """
+
+    def __init__(self, group: str, name: str, distribution: str, reason: str) -> None:
+        self.group, self.name, self.distribution = group, name, distribution
+        where = f"plug-in {name!r} of package {distribution!r} (entry point group {group!r})"
+        super().__init__(f"{where}: {reason}")

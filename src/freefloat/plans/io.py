@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import PlanFileError, excerpt
+from ..files import other_kind_hint
 from ..problem.objectives.base import Level
 from .guarantees import (
     Check,
@@ -303,7 +304,8 @@ def read_plan_json(path: str | Path) -> Any:
     except (OSError, UnicodeDecodeError) as exc:
         raise PlanFileError(f"cannot read plan file {path}: {exc}") from None
     except json.JSONDecodeError as exc:
-        raise PlanFileError(f"{path}: not a plan file, corrupt JSON ({exc})") from None
+        hint = other_kind_hint(path, exc.doc[:200], "plan")
+        raise PlanFileError(f"{path}: not a plan file, corrupt JSON ({exc}){hint}") from None
     except RecursionError:
         raise PlanFileError(f"{path}: not a plan file, JSON nested too deeply") from None
     except _DuplicateKeyError as exc:

@@ -201,19 +201,30 @@ def _unreachable(
     quat: np.ndarray,
     best: float,
 ) -> UnreachableGoalError:
-    """The error for goals missed by ``best``, naming the worst-missed frame's goal."""
+    """The error for goals missed, naming the worst-missed frame's goal and its miss (m, deg).
+
+    ``best`` is the least-squares residual's norm (metres and radians mixed), used only to
+    choose the closest configuration; the message gives the miss of the worst-missed frame's
+    position in m and, for a pose goal, of its orientation in deg.
+    """
+    placements = [pin.SE3(_placement(mmap, closest, quat, f)) for f in frames]
     misses = [
-        float(np.linalg.norm(_placement(mmap, closest, quat, f).translation - g.position))
-        for g, f in zip(goals, frames, strict=True)
+        float(np.linalg.norm(p.translation - g.position))
+        for g, p in zip(goals, placements, strict=True)
     ]
-    worst = goals[int(np.argmax(misses))]
-    radius = workspace_radius(mmap, quat, frame=worst.frame)
+    k = int(np.argmax(misses))
+    worst = goals[k]
+    miss = f"{misses[k]:.3g} m"
+    if worst.rotation is not None:
+        angle = float(np.linalg.norm(pin.log3(worst.rotation.T @ placements[k].rotation)))
+        miss += f" and {math.degrees(angle):.3g} deg"
+    radius = workspace_radius(mmap, quat, frame=worst.frame)  # reuses the model's data
     what = "pose" if worst.rotation is not None else "position"
     named = f" ({worst.frame!r})" if len(goals) > 1 else ""
     return UnreachableGoalError(
         f"end-effector goal{named} {what} {np.round(worst.position, 4).tolist()} m is out of "
-        f"reach: the closest configuration within the joint limits misses it by {best:.3g}; the "
+        f"reach: the closest configuration within the joint limits misses it by {miss}; the "
         f"workspace radius from the system CM is about {radius:.3f} m",
-        distance=best,
+        distance=misses[k],
         radius=radius,
     )

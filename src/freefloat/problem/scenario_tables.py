@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ScenarioError, excerpt
-from ..files import read_text_file
+from ..files import other_kind_hint, read_text_file
 from ..physics.attitude import quat_from_zyx, quat_to_matrix
 from ..robot.model import Robot
 from ..robot.payload import Payload
@@ -84,7 +84,9 @@ def read_toml(path: Path, what: str) -> dict[str, Any]:
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: invalid TOML ({excerpt(str(exc), 200)[1:-1]})") from None
+        hint = other_kind_hint(path, text[:200], "toml")
+        reason = excerpt(str(exc), 200)[1:-1]
+        raise ScenarioError(f"{path}: invalid TOML ({reason}){hint}") from None
     except RecursionError:
         raise ScenarioError(
             f"{path}: arrays or tables nested too deeply for freefloat to read"

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import SolverError, UnreachableAttitudeError
 from ..physics.attitude import quat_conjugate, quat_log, quat_multiply
+from ..plugins import Registry, plugin_function
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
 from .certify import certify
@@ -34,12 +35,17 @@ __all__ = ["STRATEGIES", "choose_strategy", "solve"]
 
 StrategyFunction = Callable[[Problem, Sequence[Constraint], SolveOptions, np.ndarray], Attempt]
 
-#: The strategy functions by name: the one list (a new strategy is one module and one line).
-STRATEGIES: dict[str, StrategyFunction] = {
-    Strategy.SCAN.value: scan,
-    Strategy.MULTISTART.value: multistart,
-    Strategy.CONTINUATION.value: continuation,
-}
+#: The strategy functions by name: the one list (a new strategy is one module and one line, or
+#: a ``freefloat.strategies`` entry point of another package).
+STRATEGIES: Registry[StrategyFunction] = Registry(
+    "strategy",
+    {
+        Strategy.SCAN.value: scan,
+        Strategy.MULTISTART.value: multistart,
+        Strategy.CONTINUATION.value: continuation,
+    },
+    plugin_function("strategy"),
+)
 
 
 def choose_strategy(problem: Problem, options: SolveOptions) -> str:

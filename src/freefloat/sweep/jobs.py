@@ -8,7 +8,9 @@ per-robot work (model, planar bounds, identified planar map) is done once per wo
 from __future__ import annotations
 
 import json
+import logging
 import math
+import threading
 import time
 import warnings
 from collections.abc import Mapping
@@ -21,12 +23,13 @@ from ..errors import FreeFloatError, InfeasibleError
 from ..pipeline import plan
 from ..plans.format import Plan
 from ..problem.scenario import Scenario
+from ..progress import LOGGER
 from ..robot.model import Robot
 from ..robust.inertial import perturbed_robot
 from .replay import ReplayRow, run_replay_job
 from .spec import Job, Value
 
-__all__ = ["STATUSES", "TIMING_COLUMNS", "SweepRow", "run_job"]
+__all__ = ["STATUSES", "TIMING_COLUMNS", "JobOutcome", "SweepRow", "run_job", "run_job_collecting"]
 
 #: The outcomes of a job.
 STATUSES = ("planned", "infeasible", "failed")
@@ -178,6 +181,51 @@ def run_job(job: Job) -> SweepRow | ReplayRow:
         # a diverging solver attempt may overflow; its outcome is in the row, not a warning
         warnings.simplefilter("ignore", RuntimeWarning)
         return _run(job, started)
+
+
+@dataclass(frozen=True)
+class JobOutcome:
+    """A job's row and the distinct warnings the package logged while it ran.
+
+    A worker process does not print its warnings: the sweep says each distinct one once, on
+    the caller's warning path (``freefloat: warning: ...`` at the command line).
+    """
+
+    row: SweepRow | ReplayRow
+    warnings: tuple[str, ...] = ()
+
+
+class _Collector(logging.Handler):
+    """Keeps the package's warnings of the job each thread is running, instead of printing."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.WARNING)
+        self.local = threading.local()
+
+    def emit(self, record: logging.LogRecord) -> None:
+        messages = getattr(self.local, "messages", None)
+        if messages is not None and record.getMessage() not in messages:
+            messages.append(record.getMessage())
+
+
+_COLLECTOR = _Collector()
+
+
+def run_job_collecting(job: Job) -> JobOutcome:
+    """:func:`run_job` in a worker process, its warnings collected rather than printed.
+
+    The first call makes the collector the only handler of the package's logger in this
+    process: call it in worker processes only. Never raises.
+    """
+    if LOGGER.handlers != [_COLLECTOR]:
+        LOGGER.handlers[:] = [_COLLECTOR]
+        LOGGER.propagate = False
+    _COLLECTOR.local.messages = []
+    try:
+        row = run_job(job)
+    finally:
+        messages, _COLLECTOR.local.messages = _COLLECTOR.local.messages, None
+    return JobOutcome(row, tuple(messages))
 
 
 def _run(job: Job, started: float) -> SweepRow:

@@ -25,7 +25,8 @@ from typing import Any
 
 from ..errors import InputError, ScenarioError
 from ..files import atomic_write_text
-from .jobs import _ROBOTS, SweepRow, run_job
+from ..progress import LOGGER
+from .jobs import _ROBOTS, JobOutcome, SweepRow, run_job_collecting
 from .replay import ReplayRow
 from .spec import Job, SweepSpec
 
@@ -168,7 +169,7 @@ def _blas_env() -> Iterator[None]:
                 os.environ[key] = value
 
 
-def _local(jobs: Sequence[Job], workers: int) -> Iterator[Row]:
+def _local(jobs: Sequence[Job], workers: int) -> Iterator[JobOutcome]:
     """Run the jobs on fresh worker processes (forkserver, else spawn); rows as they finish.
 
     Even one worker is a separate process, so that no state of the caller (its BLAS threads,
@@ -184,7 +185,7 @@ def _local(jobs: Sequence[Job], workers: int) -> Iterator[Row]:
         pool = ProcessPoolExecutor(
             max_workers=min(workers, len(jobs)), mp_context=context, initializer=_init_worker
         )
-        futures = [pool.submit(run_job, job) for job in jobs]
+        futures = [pool.submit(run_job_collecting, job) for job in jobs]
     try:
         for future in as_completed(futures):
             yield future.result()
@@ -209,10 +210,10 @@ def _check_dask(client: Any) -> None:
             )
 
 
-def _dask(jobs: Sequence[Job], client: Any) -> Iterator[Row]:
+def _dask(jobs: Sequence[Job], client: Any) -> Iterator[JobOutcome]:
     from distributed import as_completed as dask_completed
 
-    futures = client.map(run_job, list(jobs), pure=False)
+    futures = client.map(run_job_collecting, list(jobs), pure=False)
     try:
         for future in dask_completed(futures):
             yield future.result()
@@ -282,7 +283,13 @@ def sweep(
     )
     try:
         stream = _dask(todo, client) if client is not None else _local(todo, workers)
-        for row in stream:
+        said: set[str] = set()
+        for outcome in stream:
+            for message in outcome.warnings:  # each distinct warning once per sweep
+                if message not in said:
+                    said.add(message)
+                    LOGGER.warning("%s", message)
+            row = outcome.row
             rows[row.index] = row
             if appender is not None:
                 appender.add(row)

@@ -368,7 +368,8 @@ def serve(plan: Plan, speed: float = 1.0, announce: Any = print) -> None:
 
     The page is the same self-contained page :func:`write_html` writes, so the served and the
     written playback look and behave alike; a plain HTTP server on loopback serves it, and
-    nothing is left running afterwards.
+    nothing is left running afterwards. Ctrl-C's ``KeyboardInterrupt`` is raised again once
+    the server has stopped (the command line exits 130, as every command does).
     """
     import http.server
     import threading
@@ -393,8 +394,6 @@ def serve(plan: Plan, speed: float = 1.0, announce: Any = print) -> None:
         announce(f"freefloat show: open http://127.0.0.1:{server.server_port}/ (Ctrl-C to stop)")
         while True:
             time.sleep(3600)
-    except KeyboardInterrupt:
-        pass
     finally:
         server.shutdown()
         server.server_close()

@@ -1,9 +1,10 @@
 """The constraints freefloat knows by name, and the default list a plan honours.
 
 A new constraint is one module with a :class:`~.base.Constraint` subclass plus one entry in
-:data:`CONSTRAINTS`; from that entry a scenario reads its ``[constraints.<name>]`` table, a plan
-records it (``constraints``, with :meth:`~.base.Constraint.to_record`), ``freefloat verify``
-rebuilds it (:func:`constraint_from_record`) and the schemas list its name.
+:data:`CONSTRAINTS` (or, from another package, one ``freefloat.constraints`` entry point:
+:mod:`freefloat.plugins`); from that entry a scenario reads its ``[constraints.<name>]``
+table, a plan records it (``constraints``, with :meth:`~.base.Constraint.to_record`),
+``freefloat verify`` rebuilds it (:func:`constraint_from_record`) and the schemas list its name.
 
 Clearance is the exception for now: its collision model is built from the robot, the SRDF and
 the obstacles, so it is described by the scenario's ``[safety]`` and the plan's ``safety``
@@ -18,6 +19,7 @@ from pathlib import Path
 from typing import Any, Protocol
 
 from ...errors import InputError, UnknownNameError
+from ...plugins import Registry, plugin_class
 from ...robot.collision import CollisionModel, Obstacle, collision_model, known_srdf
 from ...robot.model import Robot
 from .base import Constraint
@@ -66,17 +68,22 @@ __all__ = [
     "scenario_constraints",
 ]
 
-#: Constraint classes by name: the one list (scenario keys, plan records, verify, schemas).
-CONSTRAINTS: dict[str, type[Constraint]] = {
-    cls.name: cls
-    for cls in (
-        JointPositionLimits,
-        JointVelocityLimits,
-        JointEffortLimits,
-        Clearance,
-        EndEffectorCone,
-    )
-}
+#: Constraint classes by name: the one list (scenario keys, plan records, verify, schemas);
+#: with those installed packages declare in the ``freefloat.constraints`` entry point group.
+CONSTRAINTS: Registry[type[Constraint]] = Registry(
+    "constraint",
+    {
+        cls.name: cls
+        for cls in (
+            JointPositionLimits,
+            JointVelocityLimits,
+            JointEffortLimits,
+            Clearance,
+            EndEffectorCone,
+        )
+    },
+    plugin_class(Constraint, "constraint"),
+)
 
 #: Constraints described by the ``[safety]`` table and the plan's ``safety`` record instead of
 #: a constraint record (see the module docstring).

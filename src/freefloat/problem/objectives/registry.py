@@ -1,12 +1,14 @@
 """The objectives freefloat knows by name.
 
-A new objective is one module with an :class:`~.base.Objective` subclass plus one entry here;
+A new objective is one module with an :class:`~.base.Objective` subclass plus one entry here
+(or, from another package, one ``freefloat.objectives`` entry point: :mod:`freefloat.plugins`);
 scenarios (``[path] objective``), the command line (``--objective``) and plans name it.
 """
 
 from __future__ import annotations
 
 from ...errors import InputError, excerpt
+from ...plugins import Registry, plugin_class
 from .base import Objective
 from .min_acceleration import MinAcceleration
 from .min_effort import MinEffort
@@ -15,10 +17,13 @@ from .min_norm import MinNorm
 
 __all__ = ["DEFAULT_OBJECTIVE", "OBJECTIVES", "objective_named"]
 
-#: Objective classes by name.
-OBJECTIVES: dict[str, type[Objective]] = {
-    cls.name: cls for cls in (MinNorm, MinEffort, MinAcceleration, MinLength)
-}
+#: Objective classes by name; with those installed packages declare in the
+#: ``freefloat.objectives`` entry point group.
+OBJECTIVES: Registry[type[Objective]] = Registry(
+    "objective",
+    {cls.name: cls for cls in (MinNorm, MinEffort, MinAcceleration, MinLength)},
+    plugin_class(Objective, "objective"),
+)
 
 #: The objective when none is named: the paper's minimum norm, the smallest deviation from the
 #: quintic in the orthonormal basis.
