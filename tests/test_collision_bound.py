@@ -1,0 +1,99 @@
+"""The bound that spares distance queries: its weights, its truth, and that plans do not change.
+
+Truth here: the weights' closed form (lever arms read off the URDF by hand), every pair's
+distance measured afresh (no pair spared), and plans made with every pair measured.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import freefloat as ff
+import freefloat.robot.collision as collision
+from freefloat.robot.collision import CollisionModel, known_srdf
+from freefloat.robot.motion_bound import BOUND_SLACK
+
+from conftest import ROOT
+from test_collision import sphere_arm, ur5_pan_scenario  # noqa: F401 (fixture)
+
+PANDA = ROOT / "robots" / "scenarios" / "panda_servicer.toml"
+UR5 = ROOT / "robots" / "scenarios" / "ur5_servicer.toml"
+
+
+def test_the_weights_of_the_sphere_arm_are_its_lever_arms(sphere_arm):  # noqa: F811
+    """The sphere (r 0.1 m, 0.6 m beyond joint 2, which is 1.0 m beyond joint 1) against the
+    spacecraft: 1.0 + 0.6 + 0.1 m per rad of joint 1, 0.6 + 0.1 m per rad of joint 2."""
+    model = CollisionModel(sphere_arm)
+    assert model.n_pairs == 1
+    assert np.allclose(model._weights, [[1.7, 0.7]], atol=1e-12)
+
+
+def test_the_bound_holds_between_any_two_configurations():
+    """|d(q) - d(q')| <= weights @ |q - q'| for every pair, measured on the Panda servicer."""
+    scenario = ff.Scenario.from_toml(PANDA)
+    robot = scenario.robot
+    model = CollisionModel(robot, known_srdf(robot))
+    rng = np.random.default_rng(7)
+    lower = np.array([max(j.lower, -math.pi) for j in robot.joints])
+    upper = np.array([min(j.upper, math.pi) for j in robot.joints])
+    tight = 0
+    for _ in range(12):
+        q = rng.uniform(lower, upper)
+        q2 = np.clip(q + rng.normal(0.0, 0.2, robot.n), lower, upper)
+        change = np.abs(model.distances(q).values - model.distances(q2).values)
+        bound = model._weights @ np.abs(q - q2)
+        assert np.all(change <= bound + BOUND_SLACK)
+        tight = max(tight, float(np.max(change / np.maximum(bound, 1e-12))))
+    assert tight > 0.05  # the bound is not vacuous: some pair moves a fair part of it
+
+
+@pytest.mark.parametrize("path", [PANDA, UR5])
+def test_the_closest_pair_is_the_same_bits_as_with_every_pair_measured(path):
+    """After any history of queries, the smallest distance, its pair and its gradient are
+    those of a fresh model that measures every pair."""
+    scenario = ff.Scenario.from_toml(path)
+    robot = scenario.robot
+    walked = CollisionModel(robot, known_srdf(robot))
+    start, goal = np.asarray(scenario.start), np.asarray(scenario.goal)
+    rng = np.random.default_rng(3)
+    for u in rng.uniform(0.0, 1.0, 30):
+        joints = start + u * (goal - start) + rng.normal(0.0, 0.05, robot.n)
+        value, gradient, pair = walked.closest(joints)
+        fresh = CollisionModel(robot, known_srdf(robot)).distances(joints, gradients=True)
+        k = int(np.argmin(fresh.values))
+        assert (value, pair) == (float(fresh.values[k]), k)
+        assert np.array_equal(gradient, fresh.gradients[k])
+
+
+def _everything(monkeypatch: pytest.MonkeyPatch) -> None:
+    """No bound: pairs spared by their bounding spheres alone (the model before the bound)."""
+    monkeypatch.setattr(collision, "motion_weights", lambda *args: None)
+
+
+def _pan(tmp_path):  # type: ignore[no-untyped-def]
+    """A plan where clearance binds: the UR5 pan whose quintic path enters the hull."""
+    return lambda: ur5_pan_scenario(tmp_path)
+
+
+@pytest.mark.parametrize("case", ["panda", "ur5", pytest.param("pan", marks=pytest.mark.slow)])
+def test_plans_are_the_same_bits_with_every_pair_measured(case, monkeypatch, tmp_path):
+    scenario = {
+        "panda": lambda: ff.Scenario.from_toml(PANDA),
+        "ur5": lambda: ff.Scenario.from_toml(UR5),
+        "pan": _pan(tmp_path),
+    }[case]
+    bounded = ff.plan(scenario())
+    calls = []
+    _everything(monkeypatch)
+    original = CollisionModel._spheres
+    monkeypatch.setattr(
+        CollisionModel, "_spheres", lambda self, p: calls.append(len(p)) or original(self, p)
+    )
+    measured = ff.plan(scenario())
+    assert calls  # the spheres-only model did the measuring
+    t = np.linspace(0.0, bounded.duration, 101)
+    assert np.array_equal(bounded.path().evaluate(t).q, measured.path().evaluate(t).q)
+    assert bounded.solver.solutions == measured.solver.solutions
