@@ -208,8 +208,6 @@ LONG_FUNCTIONS = {
     ("cli.py", "build_parser"): "being split with cli.py (one parser per command module)",
     ("problem/scenario.py", "from_dict"): "being split with problem/scenario.py",
     ("verify/checks.py", "verify_plan"): "being restructured into a list of checks",
-    ("solvers/dispatch.py", "solve"): "the nearest-root refinement joined it; split pending",
-    ("solvers/search.py", "search"): "the one reach figure of a refusal joined it; split pending",
     ("viz/plots.py", "_draw"): "every end effector's lines joined it; split pending",
     ("verify/recompute.py", "check_plan_numbers"): "being split with verify/recompute.py",
 }
