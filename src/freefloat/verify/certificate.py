@@ -38,6 +38,11 @@ class _Instants:
         self.placements: dict[float, np.ndarray] = {}
         self.exact: dict[tuple[float, int], float] = {}
 
+    def load(self, times: np.ndarray) -> None:
+        """Placements at many instants (s), their joints evaluated in one call."""
+        for t, joints in zip(times, self.motion.path(times)[0], strict=True):
+            self.placements.setdefault(float(t), self.mesh.placements(joints))
+
     def at(self, t: float) -> np.ndarray:
         if t not in self.placements:
             self.placements[t] = self.mesh.placements(self.motion.joints(t))
@@ -81,6 +86,7 @@ def certify(
     """
     store = _Instants(mesh, motion)
     times = np.linspace(0.0, motion.duration, instants)
+    store.load(times)
     bounds = np.array([mesh.sphere_bounds(store.at(float(t))) for t in times])
     k0, p0 = np.unravel_index(int(np.argmin(bounds)), bounds.shape)
     measured, when, pair = store.distance(float(times[k0]), int(p0)), float(times[k0]), int(p0)
