@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+import coal
 import numpy as np
 import pytest
 
@@ -97,3 +98,20 @@ def test_plans_are_the_same_bits_with_every_pair_measured(case, monkeypatch, tmp
     t = np.linspace(0.0, bounded.duration, 101)
     assert np.array_equal(bounded.path().evaluate(t).q, measured.path().evaluate(t).q)
     assert bounded.solver.solutions == measured.solver.solutions
+
+
+def test_each_caller_gets_its_own_geometry():
+    """The URDF is parsed once, but a caller that changes its geometry model changes no
+    other caller's (the solver's model replaces meshes by hulls, verification keeps them)."""
+    from freefloat.robot.geometry import load_collision_geometry
+
+    robot = ff.Scenario.from_toml(UR5).robot
+    first, second = load_collision_geometry(robot), load_collision_geometry(robot)
+    mesh = next(
+        i for i, o in enumerate(first.geometryObjects) if isinstance(o.geometry, coal.BVHModelBase)
+    )
+    first.geometryObjects[mesh].geometry.buildConvexHull(True, "Qt")
+    assert first.geometryObjects[mesh].geometry.convex is not None
+    assert second.geometryObjects[mesh].geometry.convex is None
+    first.addGeometryObject(first.geometryObjects[0].copy())
+    assert len(second.geometryObjects) == len(first.geometryObjects) - 1

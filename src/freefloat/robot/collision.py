@@ -50,8 +50,8 @@ from .geometry import (
     checked_pairs,
     hull_volume,
     load_collision_geometry,
-    mesh_triangles,
     mesh_volume,
+    object_triangles,
     true_hull,
 )
 from .model import Robot, example_robot_data_dir
@@ -184,7 +184,7 @@ class CollisionModel:
         self._meshes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         for index, obj in enumerate(geometry.geometryObjects):
             if isinstance(obj.geometry, coal.BVHModelBase):
-                self._meshes[index] = mesh_triangles(obj.geometry)
+                self._meshes[index] = object_triangles(obj)
                 obj.geometry = true_hull(obj)
         add_obstacles(robot, geometry, self.obstacles)
         self.pairs = checked_pairs(robot, geometry, srdf)
