@@ -115,3 +115,46 @@ def test_each_caller_gets_its_own_geometry():
     assert second.geometryObjects[mesh].geometry.convex is None
     first.addGeometryObject(first.geometryObjects[0].copy())
     assert len(second.geometryObjects) == len(first.geometryObjects) - 1
+
+
+def test_rate_bounds_hold_and_are_tight_against_dense_samples():
+    """Every |qd_j| sampled densely inside each interval is within its bound, and the bound
+    of a short interval is within a few per cent of the largest sample."""
+    from freefloat.problem.constraints.clearance import rate_bounds
+
+    scenario = ff.Scenario.from_toml(PANDA)
+    problem = ff.problem_from_scenario(scenario, extra=[2] * scenario.robot.n)
+    beta = np.random.default_rng(5).normal(0.0, 0.05, problem.n_free)
+    path = problem.polynomials(beta)
+    edges = np.linspace(0.0, path.duration, 26)
+    bounds = rate_bounds(path, edges[:-1], edges[1:])
+    for k in range(25):
+        inside = np.linspace(edges[k], edges[k + 1], 200)
+        sampled = np.abs(path.evaluate(inside).qd).max(axis=0)
+        assert np.all(sampled <= bounds[k])
+        assert np.all(bounds[k] <= 1.25 * sampled + 0.02 * sampled.max())
+
+
+def test_the_dense_checks_decision_is_that_of_the_refined_minimum():
+    """The solvers' check decides from a bound where it can: on paths near and far from the
+    margin, it breaks exactly when the refined smallest clearance (every sample measured,
+    every near-minimum refined) is below the margin."""
+    from freefloat.problem.constraints.clearance import Clearance
+
+    scenario = ff.Scenario.from_toml(UR5)
+    robot = scenario.robot
+    problem = ff.problem_from_scenario(scenario, extra=[2] * robot.n)
+    model = CollisionModel(robot, known_srdf(robot))
+    rng = np.random.default_rng(9)
+    decided = 0
+    for scale in (0.0, 0.2, 0.5, 1.0, 2.0):
+        beta = rng.normal(0.0, scale, problem.n_free)
+        smallest = Clearance(model, 0.01).smallest(problem.polynomials(beta), 201)[0]
+        for margin in (0.005, 0.01, smallest - 1e-3, smallest + 1e-3):
+            if margin < 0.0:
+                continue
+            check = Clearance(model, margin)
+            excess = check.violation(problem, beta)
+            assert (excess.value > check.tolerance) == (smallest < margin - check.tolerance)
+            decided += excess.detail.startswith("min clearance >=")
+    assert decided > 0  # the bound decided some, without the refined minimum

@@ -223,6 +223,14 @@ class CollisionModel:
         self._last_values = np.full(len(self.pairs), math.nan)
 
     @property
+    def weights(self) -> np.ndarray | None:
+        """(P, N) how fast each pair's distance can change per joint (m per rad), or None.
+
+        See :func:`~freefloat.robot.motion_bound.motion_weights` (None: no bound).
+        """
+        return self._weights
+
+    @property
     def n_pairs(self) -> int:
         """Number of checked pairs."""
         return len(self.pairs)
