@@ -158,3 +158,26 @@ def test_the_dense_checks_decision_is_that_of_the_refined_minimum():
             assert (excess.value > check.tolerance) == (smallest < margin - check.tolerance)
             decided += excess.detail.startswith("min clearance >=")
     assert decided > 0  # the bound decided some, without the refined minimum
+
+
+@pytest.mark.parametrize("path", [PANDA, UR5])
+def test_the_smallest_clearance_is_the_same_bits_with_every_sample_measured(path):
+    """Samples spared by the bound change neither the smallest clearance, nor its time, nor
+    its pair (every sample measured and every near-minimum refined, by a model without the
+    bound)."""
+    from freefloat.problem.constraints.clearance import Clearance
+
+    scenario = ff.Scenario.from_toml(path)
+    robot = scenario.robot
+    problem = ff.problem_from_scenario(scenario, extra=[2] * robot.n)
+    bounded = Clearance(CollisionModel(robot, known_srdf(robot)))
+    everything = CollisionModel(robot, known_srdf(robot))
+    everything._weights = None
+    unbounded = Clearance(everything)
+    rng = np.random.default_rng(13)
+    spared = 0
+    for scale in (0.0, 0.1, 0.3, 1.0):
+        polynomials = problem.polynomials(rng.normal(0.0, scale, problem.n_free))
+        assert bounded.smallest(polynomials, 201) == unbounded.smallest(polynomials, 201)
+        spared += int(np.isnan(bounded._measured_memo[1]).sum())
+    assert spared > 0  # the bound spared some samples
