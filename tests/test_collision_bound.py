@@ -6,6 +6,7 @@ distance measured afresh (no pair spared), and plans made with every pair measur
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import coal
@@ -181,3 +182,49 @@ def test_the_smallest_clearance_is_the_same_bits_with_every_sample_measured(path
         assert bounded.smallest(polynomials, 201) == unbounded.smallest(polynomials, 201)
         spared += int(np.isnan(bounded._measured_memo[1]).sum())
     assert spared > 0  # the bound spared some samples
+
+
+@pytest.mark.slow
+def test_a_path_crossing_a_plate_between_samples_is_never_planned(tmp_path, monkeypatch):
+    """A 2 mm ball on a planar arm whose plain path crosses a 2 mm plate between two of the
+    dense check's samples, where every sample is clear (closed form): the planner either
+    refuses or returns a path clear of the plate at every instant (closed form, densely)."""
+    from test_collision import SPHERE_ARM, _sphere_centre
+
+    monkeypatch.setenv("FREEFLOAT_CACHE", str(tmp_path / "cache"))
+    urdf = tmp_path / "sphere_arm.urdf"
+    urdf.write_text(SPHERE_ARM.replace('radius="0.1"', 'radius="0.002"'))
+    duration, start, goal = 1.0, np.array([-1.5, 0.0]), np.array([1.5, 0.0])
+    s = np.linspace(0.0, 1.0, 201)
+    angles = start[0] + (goal[0] - start[0]) * (10 * s**3 - 15 * s**4 + 6 * s**5)
+    k = int(np.argmax(np.diff(angles)))
+    crossing = 0.5 * (angles[k] + angles[k + 1])
+    centre = np.array([0.5 + 1.6 * math.cos(crossing), 1.6 * math.sin(crossing), 0.0])
+    assert np.min(1.6 * np.abs(np.sin(angles - crossing)) - 0.003) > 0.0  # samples clear
+    body = (
+        f'robot = "{urdf}"\nduration = {duration}\n'
+        "[start]\njoints = { q1 = -85.94366926962348, q2 = 0.0 }\n"
+        "[goal]\njoints = { q1 = 85.94366926962348, q2 = 0.0 }\n"
+        "[safety]\nmargin_m = 0.0\n"
+        '[[obstacles]]\nname = "plate"\nbox = [2.0, 0.002, 0.5]\n'
+        f"xyz = [{float(centre[0])!r}, {float(centre[1])!r}, 0.0]\n"
+        f"rpy_deg = [0.0, 0.0, {math.degrees(float(crossing))!r}]\n"
+    )
+    path = tmp_path / "plate.toml"
+    path.write_text(body)
+    scenario = ff.Scenario.from_toml(path)
+    quintic = ff.problem_from_scenario(scenario, extra=[1, 0], check_bounds=False)
+    scenario = dataclasses.replace(scenario, goal_attitude=quintic.achieved(np.zeros(1)))
+    try:
+        plan = ff.plan(scenario)
+    except ff.FreeFloatError:
+        return  # refused: nothing colliding returned
+    rotation = np.array(
+        [[math.cos(crossing), -math.sin(crossing)], [math.sin(crossing), math.cos(crossing)]]
+    )
+    worst = math.inf
+    for q in plan.joint_positions(np.linspace(0.0, duration, 4001)):
+        local = rotation.T @ (_sphere_centre(*q)[:2] - centre[:2])
+        outside = np.maximum(np.abs(local) - np.array([1.0, 0.001]), 0.0)
+        worst = min(worst, float(np.linalg.norm(outside)) - 0.002)
+    assert worst >= -1e-9
