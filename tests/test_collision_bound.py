@@ -228,3 +228,15 @@ def test_a_path_crossing_a_plate_between_samples_is_never_planned(tmp_path, monk
         outside = np.maximum(np.abs(local) - np.array([1.0, 0.001]), 0.0)
         worst = min(worst, float(np.linalg.norm(outside)) - 0.002)
     assert worst >= -1e-9
+
+
+def test_a_plan_files_positions_alone_are_those_of_the_whole_evaluation():
+    """The certificate's halving asks for joint values one instant at a time: the values alone
+    are the same bits as the first of the values, rates and accelerations."""
+    from freefloat.verify.path_eval import file_path
+
+    plan = ff.plan(ff.Scenario.from_toml(UR5))
+    path = file_path(plan)
+    t = np.linspace(0.0, plan.duration, 37)
+    assert np.array_equal(path.positions(t), path(t)[0])
+    assert all(np.array_equal(path.positions(t[k : k + 1]), path(t[k : k + 1])[0]) for k in (0, 5))
