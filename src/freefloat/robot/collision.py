@@ -197,8 +197,8 @@ class CollisionModel:
             configure(request, GJK_TOLERANCE)
         #: Queries asked again at a looser EPA tolerance since the model was built.
         self.retries = 0
-        # Views of Pinocchio's per-pair requests and results (they stay valid: the vectors are
-        # never resized), and the results of pairs asked again alone in the last call.
+        # Views of Pinocchio's per-pair requests and results (valid: the vectors never resize),
+        # and the results of pairs asked again alone in the last call.
         self._requests = list(self._geometry_data.distanceRequests)
         self._pair_results = list(self._geometry_data.distanceResults)
         self._retried: dict[int, coal.DistanceResult] = {}
@@ -212,12 +212,12 @@ class CollisionModel:
         self._centres, self._radii = np.array(centres), np.array(radii)
         self._shapes = [obj.geometry for obj in geometry.geometryObjects]
         pairs = np.array(self.pairs, dtype=int).reshape(-1, 2)
-        self._first, self._second = pairs[:, 0], pairs[:, 1]
+        self._reach = self._radii[pairs[:, 0]] + self._radii[pairs[:, 1]]
+        self._neutral = pin.neutral(robot.model)  # joint values go into a copy (no continuous)
+        plain = all(j.kind != "continuous" for j in robot.joints)
+        self._slots = np.array([j.idx_q for j in robot.joints]) if plain else None
         self._columns = np.array([j.idx_v for j in robot.joints])
-        # How far each pair's distance can move per unit joint motion (m per rad), and each
-        # pair's last measured distance (m) with the joints it was measured at: together a
-        # bound of every pair's distance anywhere, which spares the pairs that cannot be the
-        # closest (see _bulk).
+        # Each pair's last measured distance (m) and the joints then: see _may_be_closest.
         self._weights = motion_weights(robot, geometry, self.pairs, self._centres, self._radii)
         self._last_joints = np.zeros((len(self.pairs), robot.n))
         self._last_values = np.full(len(self.pairs), math.nan)
@@ -277,7 +277,7 @@ class CollisionModel:
         """
         model, data, gdata = self.robot.model, self._data, self._geometry_data
         joints = np.asarray(joints, dtype=float)
-        pin.forwardKinematics(model, data, self.robot.configuration(joints))
+        pin.forwardKinematics(model, data, self._configuration(joints))
         pin.updateGeometryPlacements(model, data, self.geometry, gdata)
         everything = np.arange(len(self.pairs))
         if nearest and len(self.pairs):
@@ -310,19 +310,30 @@ class CollisionModel:
         values[measured] = found
         return values
 
+    def _configuration(self, joints: np.ndarray) -> np.ndarray:
+        """Pinocchio's configuration at the joint values, spacecraft at the identity."""
+        if self._slots is None:
+            return self.robot.configuration(joints)
+        q = self._neutral.copy()
+        q[self._slots] = joints
+        return q
+
     def _spheres(self, pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Per pair (indices), the distance of its bounding spheres' centres and their radii (m).
 
         The distance is within ``gap +- reach``; at the placements of the last
         ``updateGeometryPlacements``.
         """
-        first, second = self._first[pairs], self._second[pairs]
         placements = self._geometry_data.oMg
-        centres = np.zeros((len(self._centres), 3))
-        for g in set(first.tolist()) | set(second.tolist()):
-            centres[g] = placements[g].act(self._centres[g])
-        gap = np.linalg.norm(centres[first] - centres[second], axis=1)
-        return gap, self._radii[first] + self._radii[second]
+        centres: dict[int, np.ndarray] = {}
+        gap = np.empty(len(pairs))
+        for i, k in enumerate(pairs.tolist()):
+            a, b = self.pairs[k]
+            for g in (a, b):
+                if g not in centres:
+                    centres[g] = placements[g].act(self._centres[g])
+            gap[i] = math.dist(centres[a], centres[b])
+        return gap, self._reach[pairs]
 
     def _may_be_closest(self, joints: np.ndarray) -> np.ndarray:
         """Which pairs may have the smallest distance at ``joints`` (a boolean mask).
