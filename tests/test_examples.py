@@ -51,3 +51,15 @@ def test_example_runs(script, tmp_path):
         if name.endswith(".plan.json"):
             # the file alone, every number recomputed and every check run again
             assert ff.verify_plan(ff.Plan.load(out / name)).passed
+
+
+def test_the_readme_sweep_file_names_the_shipped_scenario_and_its_grid():
+    """examples/yaw_sweep.toml (the README's sweep command): 81 yaws x 3 elbow angles."""
+    from freefloat.sweep.spec import SweepSpec
+
+    spec = SweepSpec.from_toml(ROOT / "examples" / "yaw_sweep.toml")
+    assert spec.scenario_path == (ROOT / "robots" / "scenarios" / "worked_example_sweep.toml")
+    jobs = spec.jobs()
+    assert len(jobs) == 81 * 3
+    yaws = sorted({float(v) for v in spec.axes[0].values})
+    assert yaws[0] == -55.0 and yaws[-1] == 25.0 and yaws[1] - yaws[0] == 1.0

@@ -292,7 +292,7 @@ def test_scenario_constraint_errors(tmp_path):
 def test_a_format_3_plan_is_held_to_the_limits_it_promised(tmp_path, capsys, worked_plan):
     data = json.loads(worked_plan.to_json())
     assert [c["name"] for c in data["constraints"]] == list(
-        ff.plans.format.PROMISED["freefloat.plan/3"]
+        ff.plans.versions.PROMISED["freefloat.plan/3"]
     )
     data = as_older_format(data)
     path = tmp_path / "old.json"

@@ -6,7 +6,9 @@ import math
 import re
 
 import freefloat as ff
-from freefloat.cli import _in_degrees, _robot_label, main
+from freefloat.cli import main
+from freefloat.cli.messages import in_degrees
+from freefloat.viz.summary import robot_label
 
 import reference as ref
 from conftest import ROOT
@@ -95,15 +97,15 @@ joints = { shoulder_pan_joint = 10.0, shoulder_lift_joint = -60.0, elbow_joint =
 wrist_1_joint = 0.0, wrist_2_joint = 0.0, wrist_3_joint = 0.0 }
 """
     )
-    label = _robot_label(ff.Scenario.from_toml(path))
+    label = robot_label(ff.Scenario.from_toml(path))
     assert label == "servicer: ur5 arm on a 120 kg, 0.6 x 0.5 x 0.4 m base (6 joints)"
 
 
 def test_velocity_limit_error_is_printed_in_degrees_per_second():
     err = ff.VelocityLimitError("q1", 5.625, 2.0, 2.8125, "rad")
-    text = _in_degrees(err)
+    text = in_degrees(err)
     assert f"reaches {math.degrees(5.625):.4g} deg/s" in text
     assert f"velocity limit {math.degrees(2.0):.4g} deg/s" in text
     assert "rad" not in text and "2.812 s" in text
     metres = ff.VelocityLimitError("slide", 0.5, 0.2, 3.0, "m")
-    assert _in_degrees(metres) == str(metres)
+    assert in_degrees(metres) == str(metres)

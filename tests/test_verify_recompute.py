@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import freefloat as ff
-import freefloat.verify.recompute as recompute
+import freefloat.verify.agreement as agreement
 from freefloat.cli import main
 from freefloat.plans.limits import MAX_PLAN_BYTES
 
@@ -250,7 +250,7 @@ def test_genuine_plans_agree_with_their_recomputation_a_thousandfold(
 ):
     """Every shipped scenario's plan passes verify, with its disagreements far below tolerance."""
     ratios: dict[str, float] = {}
-    compare = recompute._compare
+    compare = agreement.compare
 
     def spy(field, stored, recomputed, tolerance, *args, **kwargs):
         diff = np.abs(np.asarray(stored, float) - np.asarray(recomputed, float))
@@ -258,7 +258,7 @@ def test_genuine_plans_agree_with_their_recomputation_a_thousandfold(
         ratios[field] = max(ratios.get(field, 0.0), float(np.max(ratio, initial=0.0)))
         return compare(field, stored, recomputed, tolerance, *args, **kwargs)
 
-    monkeypatch.setattr(recompute, "_compare", spy)
+    monkeypatch.setattr(agreement, "compare", spy)
     code, out, err, _ = _run(capsys, "verify", shipped_plans[name])
     assert code == 0 and err == [], err
     assert "verification                            passed" in out

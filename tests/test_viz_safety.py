@@ -16,10 +16,12 @@ import umsgpack
 from PIL import Image
 
 import freefloat as ff
-from freefloat.plans.format import ObstacleRecord, SafetyReport, sha256_hex
+from freefloat.plans.guarantees import ObstacleRecord, SafetyReport
+from freefloat.plans.records import sha256_hex
 from freefloat.robot.collision import CollisionModel, Obstacle
+from freefloat.viz.clearance_curve import clearance_curve
 from freefloat.viz.playback import EXTRAS, build_playback, obstacle_node, write_html
-from freefloat.viz.plots import clearance_curve, figures, save_figures
+from freefloat.viz.plots import figures, save_figures
 
 from conftest import ROOT
 

@@ -36,7 +36,8 @@ from .physics.attitude import geodesic_angle, quat_from_zyx, zyx_from_quat
 from .physics.dynamics import InverseDynamics, ReplayResult, inverse_dynamics, replay
 from .physics.momentum import MomentumMap, is_planar, planar_axis
 from .pipeline import plan, plan_from_solution
-from .plans.format import Check, Plan, Verification
+from .plans.format import Plan
+from .plans.guarantees import Check, Verification
 from .problem.bounds import PlanarBounds, planar_bounds
 from .problem.build import build_problem, problem_from_scenario
 from .problem.constraints import (

@@ -20,15 +20,9 @@ from .errors import (
     VerificationError,
 )
 from .physics.attitude import geodesic_angle
-from .plans.format import (
-    ObjectiveReport,
-    Plan,
-    Request,
-    RobotRef,
-    SafetyReport,
-    SolverReport,
-    sha256_hex,
-)
+from .plans.format import Plan
+from .plans.guarantees import ObjectiveReport, SafetyReport
+from .plans.records import Request, RobotRef, SolverReport, sha256_hex
 from .plans.reports import (
     as_rebuilt,
     check_registered,

@@ -1,27 +1,41 @@
-"""The plan file format (typed records, JSON, schema version)."""
+"""The plan file format: typed records (records, guarantees), the plan, JSON I/O, versions."""
 
-from .format import (
-    FORMAT,
-    BaseReport,
+from .format import Plan
+from .guarantees import (
     Check,
+    ConstraintRecord,
+    ObjectiveReport,
+    ObstacleRecord,
+    RobustnessReport,
+    SafetyReport,
+    Verification,
+)
+from .records import (
+    BaseReport,
     Feasibility,
-    Plan,
+    PathQuality,
     Request,
     RobotRef,
     Samples,
     SolutionRecord,
     SolverReport,
-    Verification,
 )
+from .versions import FORMAT
 
 __all__ = [
     "FORMAT",
     "BaseReport",
     "Check",
+    "ConstraintRecord",
     "Feasibility",
+    "ObjectiveReport",
+    "ObstacleRecord",
+    "PathQuality",
     "Plan",
     "Request",
     "RobotRef",
+    "RobustnessReport",
+    "SafetyReport",
     "Samples",
     "SolutionRecord",
     "SolverReport",

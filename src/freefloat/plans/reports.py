@@ -23,7 +23,7 @@ from ..problem.scenario import Scenario
 from ..progress import LOGGER
 from ..robot.collision import known_srdf
 from ..solvers.minimise import Minimised
-from .format import ConstraintRecord, ObjectiveReport, ObstacleRecord, SafetyReport
+from .guarantees import ConstraintRecord, ObjectiveReport, ObstacleRecord, SafetyReport
 
 __all__ = [
     "as_rebuilt",

@@ -23,7 +23,8 @@ from ..files import read_text_file
 from ..progress import LOGGER
 from ..robot.model import MAX_URDF_BYTES, Robot, load_robot
 from ..robot.urdf_checks import urdf_document
-from .format import Plan, sha256_hex
+from .format import Plan
+from .records import sha256_hex
 
 __all__ = ["plan_robot"]
 

@@ -22,7 +22,7 @@ from ..physics.attitude import geodesic_angle, quat_rotate, zyx_from_quat
 from ..physics.dynamics import inverse_dynamics_batch
 from ..problem.paths import excursions
 from ..problem.residual import Problem
-from .format import BaseReport, Feasibility, PathQuality, Samples, SolutionRecord
+from .records import BaseReport, Feasibility, PathQuality, Samples, SolutionRecord
 
 __all__ = [
     "base_report",

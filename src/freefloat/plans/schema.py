@@ -26,7 +26,9 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import PlanFileError, ViewerError
-from .format import FORMAT, FORMAT_2, FORMAT_3, Plan, read_plan_json
+from .format import Plan
+from .io import read_plan_json
+from .versions import FORMAT, FORMAT_2, FORMAT_3
 
 __all__ = [
     "SCHEMAS",

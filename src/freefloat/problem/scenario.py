@@ -53,6 +53,11 @@ written to its content-addressed cache file when a plan is made, see :meth:`Scen
     mount = [0.3, 0.0, 0.0]        # [m], in the spacecraft frame
     mount_rpy_deg = [0.0, 90.0, 0.0]   # optional [deg]; also base_inertia, lock, keep_gripper
 
+Reading is pure parsing (:mod:`freefloat.problem.scenario_tables`,
+:mod:`freefloat.problem.scenario_safety`, :mod:`freefloat.problem.robot_table`); resolution is
+explicit: :meth:`Scenario.resolved` solves Cartesian goals by inverse kinematics and
+:meth:`Scenario.write_robot` writes a composed robot to its cache file.
+
 Two or more arms (``arms = [{ arm = ..., mount = ..., prefix = ... }, ...]``), a URDF with
 joints locked (``[robot] urdf = ...``, ``lock = [...]``): see
 :mod:`freefloat.problem.robot_table`. Cartesian goals per end effector, solved together, with
@@ -68,8 +73,6 @@ any joint goals held and every other joint at its start value (docs/multi_arm.md
 from __future__ import annotations
 
 import hashlib
-import math
-import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -77,90 +80,35 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import (
-    FreeFloatError,
-    InputError,
-    ScenarioError,
-    UnknownNameError,
-    excerpt,
-)
+from ..errors import FreeFloatError, ScenarioError
 from ..files import absolute_path, atomic_write_text, read_text_file
-from ..physics.attitude import quat_from_zyx, quat_to_matrix
-from ..robot.collision import Obstacle
+from ..physics.attitude import quat_from_zyx
 from ..robot.model import MAX_URDF_BYTES, Robot, load_robot, robots_dir
 from ..robot.payload import Payload, attach_payload
 from .constraints.base import Constraint
-from .constraints.registry import constraint_from_record, default_constraints
-from .limits import (
-    MAX_ANGLE_DEG,
-    MAX_LENGTH_M,
-    MAX_MAGNITUDE,
-    MAX_SCENARIO_BYTES,
-    check_duration,
-    check_extra,
-    check_joint_count,
-)
-from .objectives.registry import DEFAULT_OBJECTIVE, OBJECTIVES
-from .robot_table import (
-    RobotSource,
-    check_keys,
-    number,
-    numbers,
-    robot_source,
-    scenario_errors,
-    servicer_cache_dir,
-    triple,
+from .limits import check_duration, check_joint_count
+from .objectives.registry import DEFAULT_OBJECTIVE
+from .robot_table import robot_source, scenario_errors, servicer_cache_dir
+from .scenario_safety import Safety, constraint_tables, safety_tables
+from .scenario_tables import (
+    CartesianGoal,
+    check_top_keys,
+    end_effector_names,
+    path_options,
+    payload_table,
+    read_toml,
+    state_tables,
 )
 
 if TYPE_CHECKING:
     from ..robot.compose import ServicerSpec
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
-
-__all__ = [
-    "CartesianGoal",
-    "Safety",
-    "Scenario",
-    "default_scenario_path",
-    "read_toml",
-    "servicer_cache_dir",
-]
-
-_TOP_KEYS = (
-    "robot",
-    "duration",
-    "end_effector",
-    "end_effectors",
-    "start",
-    "goal",
-    "path",
-    "safety",
-    "obstacles",
-    "payload",
-    "constraints",
-)
-_SAFETY_KEYS = ("margin_m", "srdf", "check")
-_OBSTACLE_KEYS = ("name", "box", "sphere", "capsule", "xyz", "rpy_deg")
-_PAYLOAD_KEYS = ("mass", "com_xyz", "inertia", "box")
-_STATE_KEYS = ("joints", "base_zyx_deg", "base_quaternion_xyzw")
-_GOAL_KEYS = (*_STATE_KEYS, "end_effector_xyz", "end_effector_rpy_deg", "end_effectors")
-_FRAME_GOAL_KEYS = ("xyz", "rpy_deg")
-_PATH_KEYS = ("extra", "max_deviation_deg", "allow_full_turns", "objective", "raise_freedom")
+__all__ = ["Scenario", "default_scenario_path"]
 
 
 def default_scenario_path() -> Path:
     """The shipped worked example of docs/method.md section 8."""
     return robots_dir() / "scenarios" / "worked_example.toml"
-
-
-_check_keys = check_keys
-_scenario_errors = scenario_errors
-_number = number
-_numbers = numbers
-_triple = triple
 
 
 @dataclass(frozen=True)
@@ -256,17 +204,12 @@ class Scenario:
         is the robot the tables name (the same URDF path, composed servicer or payload) and
         its end effector is the one asked for, instead of loading it again.
         """
-        _check_keys(data, _TOP_KEYS, "the scenario")
-        for key in ("robot", "duration", "start", "goal"):
-            if key not in data:
-                raise ScenarioError(
-                    f"missing required key {key!r} (required: robot, duration, [start], [goal])"
-                )
+        check_top_keys(data)
         origin = robot_source(data["robot"], data["start"], relative_to)
-        urdf, robot_text, servicer = origin.urdf, origin.text, origin.servicer
-        duration = _scenario_errors(check_duration, data["duration"])
-        names = _end_effector_names(data, origin)
-        payload = _payload(data.get("payload"))
+        urdf, robot_text = origin.urdf, origin.text
+        duration = scenario_errors(check_duration, data["duration"])
+        names = end_effector_names(data, origin)
+        payload = payload_table(data.get("payload"))
         if payload is not None:
             first = names[0] if names else None
             urdf, robot_text = _with_payload(urdf, robot_text, first, payload)
@@ -276,106 +219,31 @@ class Scenario:
         else:
             robot = load_robot(urdf, names or None, text=robot_text)
         check_joint_count(robot.n, repr(robot.name))
-        safety = _safety(data.get("safety"), data.get("obstacles"), relative_to)
+        safety = safety_tables(data.get("safety"), data.get("obstacles"), relative_to)
         if safety.srdf is None and origin.srdf is not None:
             safety = replace(safety, srdf=origin.srdf)
-
-        states: list[tuple[dict[str, float], np.ndarray]] = []
-        goal_poses: dict[str, CartesianGoal] = {}
-        for name in ("start", "goal"):
-            table = data[name]
-            if not isinstance(table, Mapping):
-                raise ScenarioError(f"[{name}] must be a table")
-            _check_keys(table, _GOAL_KEYS if name == "goal" else _STATE_KEYS, f"[{name}]")
-            if "base_zyx_deg" in table and "base_quaternion_xyzw" in table:
-                raise ScenarioError(
-                    f"[{name}] gives both base_zyx_deg and base_quaternion_xyzw; give one"
-                )
-            if "base_quaternion_xyzw" in table:
-                quat = _numbers(table["base_quaternion_xyzw"], 4, f"[{name}] base_quaternion_xyzw")
-                if np.linalg.norm(quat) < 1e-9:
-                    raise ScenarioError(f"[{name}] base_quaternion_xyzw must be non-zero")
-                quat = quat / np.linalg.norm(quat)
-            else:
-                zyx = _numbers(
-                    table.get("base_zyx_deg", [0.0, 0.0, 0.0]),
-                    3,
-                    f"[{name}] base_zyx_deg",
-                    MAX_ANGLE_DEG,
-                    "deg",
-                )
-                quat = quat_from_zyx(*np.radians(zyx))
-            if name == "goal" and "end_effector_xyz" in table:
-                if "joints" in table or "end_effectors" in table:
-                    other = "joints" if "joints" in table else "end_effectors"
-                    raise ScenarioError(f"[goal] gives both {other} and end_effector_xyz; give one")
-                goal_poses = {robot.end_effector: _cartesian_goal(table)}
-                joints = {}
-            elif name == "goal" and "end_effectors" in table:
-                goal_poses = _frame_goals(table["end_effectors"])
-                joints = _joint_table(robot, table, name, origin.locked, partial=True)
-            else:
-                joints = _joint_table(robot, table, name, origin.locked)
-            states.append((joints, quat))
-
-        path_table = data.get("path", {})
-        if not isinstance(path_table, Mapping):
-            raise ScenarioError("[path] must be a table")
-        _check_keys(path_table, _PATH_KEYS, "[path]")
-        extra = None
-        if "extra" in path_table:
-            if not isinstance(path_table["extra"], Mapping):
-                raise ScenarioError("[path] extra must be a table { joint = count, ... }")
-            extra = {}
-            for joint_name, count in path_table["extra"].items():
-                robot.joint(joint_name)
-                extra[joint_name] = _scenario_errors(
-                    check_extra, count, f"[path] extra for {joint_name!r}"
-                )
-        max_deviation = None
-        if "max_deviation_deg" in path_table:
-            value = _number(
-                path_table["max_deviation_deg"], "[path] max_deviation_deg", MAX_ANGLE_DEG, "deg"
-            )
-            if value <= 0.0:
-                raise ScenarioError(f"[path] max_deviation_deg must be > 0, got {value:g}")
-            max_deviation = math.radians(value)
-
-        allow_full_turns = path_table.get("allow_full_turns", False)
-        if not isinstance(allow_full_turns, bool):
-            raise ScenarioError(
-                f"[path] allow_full_turns must be true or false, got {excerpt(allow_full_turns)}"
-            )
-        objective = path_table.get("objective", DEFAULT_OBJECTIVE)
-        if not isinstance(objective, str) or objective not in OBJECTIVES:
-            raise ScenarioError(
-                f"[path] objective must be one of {', '.join(OBJECTIVES)}, got {excerpt(objective)}"
-            )
-        raise_freedom = path_table.get("raise_freedom", True)
-        if not isinstance(raise_freedom, bool):
-            raise ScenarioError(
-                f"[path] raise_freedom must be true or false, got {excerpt(raise_freedom)}"
-            )
+        states = state_tables(data, robot, origin.locked)
+        path = path_options(data.get("path", {}), robot)
         return cls(
             robot=robot,
-            allow_full_turns=allow_full_turns,
-            objective=objective,
-            raise_freedom=raise_freedom,
+            allow_full_turns=path.allow_full_turns,
+            objective=path.objective,
+            raise_freedom=path.raise_freedom,
             duration=duration,
-            start_joints=states[0][0],
-            goal_joints=states[1][0],
-            start_attitude=states[0][1],
-            goal_attitude=states[1][1],
-            extra=extra,
-            max_deviation=max_deviation,
+            start_joints=states.start_joints,
+            goal_joints=states.goal_joints,
+            start_attitude=states.start_attitude,
+            goal_attitude=states.goal_attitude,
+            extra=path.extra,
+            max_deviation=path.max_deviation,
             source=source,
-            goal_poses=goal_poses,
+            goal_poses=states.goal_poses,
             robot_text=robot_text,
             safety=safety,
             payload=payload,
-            servicer=servicer,
+            servicer=origin.servicer,
             srdf_text=origin.srdf_text,
-            constraints=_constraints(data.get("constraints", {})),
+            constraints=constraint_tables(data.get("constraints", {})),
         )
 
     def resolved(self) -> Scenario:
@@ -421,276 +289,6 @@ class Scenario:
         if self.goal_poses:
             return self.resolved().goal
         return self.robot.vector(self.goal_joints, "goal joints")
-
-
-def read_toml(path: Path, what: str) -> dict[str, Any]:
-    """The parsed tables of a TOML file; ``what`` names it in messages ("scenario"...).
-
-    At most :data:`~freefloat.problem.limits.MAX_SCENARIO_BYTES` are read, from a regular
-    file only.
-
-    Raises:
-        ScenarioError: missing, unreadable, not a regular file, too large, or not TOML.
-    """
-    text = read_text_file(path, what, MAX_SCENARIO_BYTES, ScenarioError)
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: invalid TOML ({excerpt(str(exc), 200)[1:-1]})") from None
-    except RecursionError:
-        raise ScenarioError(
-            f"{path}: arrays or tables nested too deeply for freefloat to read"
-        ) from None
-    except ValueError as exc:  # an integer of more digits than Python converts
-        raise ScenarioError(f"{path}: invalid TOML ({excerpt(str(exc), 200)[1:-1]})") from None
-
-
-def _joint_table(
-    robot: Robot,
-    table: Mapping[str, Any],
-    name: str,
-    locked: Mapping[str, float] | None = None,
-    partial: bool = False,
-) -> dict[str, float]:
-    """``{joint: value}`` in rad or m from a ``joints`` table in degrees (m for prismatic).
-
-    Locked joints may be named with their locked value (and are left out); with ``partial``
-    (Cartesian goals) any subset of the joints may be given.
-    """
-    locked = locked or {}
-    raw = table.get("joints", {} if partial else None)
-    if not isinstance(raw, Mapping):
-        extra = " (or end_effector_xyz = [x, y, z])" if name == "goal" else ""
-        raise ScenarioError(
-            f"[{name}] needs joints = {{ name = value, ... }}{extra} "
-            f"(joints: {', '.join(robot.joint_names)})"
-        )
-    joints: dict[str, float] = {}
-    for joint_name, value in raw.items():
-        if joint_name in locked:
-            _check_locked(joint_name, value, locked[joint_name], name)
-            continue
-        joint = robot.joint(joint_name)
-        limit, unit = (MAX_ANGLE_DEG, "deg") if joint.angular else (MAX_LENGTH_M, "m")
-        number = _number(value, f"[{name}] joint {joint_name!r}", limit, unit)
-        joints[joint_name] = math.radians(number) if joint.angular else number
-    if not partial:
-        robot.vector(joints, f"[{name}] joints")  # every joint given
-    return joints
-
-
-def _check_locked(joint: str, value: Any, locked: float, where: str) -> None:
-    """A locked joint named in ``[start]`` or ``[goal]`` must be at its locked value."""
-    given = _number(value, f"[{where}] joint {joint!r}", MAX_ANGLE_DEG)
-    for amount, _unit in ((math.degrees(locked), "deg"), (locked, "m")):
-        if abs(given - amount) <= 1e-9 * max(1.0, abs(amount)):
-            return
-    raise ScenarioError(
-        f"[{where}] joint {joint!r} is {given:g} but the joint is locked at "
-        f"{math.degrees(locked):.6g} deg (m for a prismatic joint); give that value or leave "
-        "it out"
-    )
-
-
-def _end_effector_names(data: Mapping[str, Any], source: RobotSource) -> tuple[str, ...]:
-    """The end-effector frames a scenario names: ``end_effector(s)``, then goal frames.
-
-    Empty when it names none and its robot brings none (the robot's default then applies).
-    """
-    if "end_effector" in data and "end_effectors" in data:
-        raise ScenarioError("give end_effector or end_effectors, not both")
-    named = data.get("end_effectors", data.get("end_effector"))
-    if named is None:
-        names = list(source.end_effectors)
-    elif isinstance(named, str):
-        names = [named]
-    elif isinstance(named, list) and named and all(isinstance(n, str) for n in named):
-        names = list(named)
-    else:
-        raise ScenarioError(
-            f"end_effector must be a frame name (end_effectors a list of them), got "
-            f"{excerpt(named)}"
-        )
-    goal = data.get("goal")
-    frames = goal.get("end_effectors", {}) if isinstance(goal, Mapping) else {}
-    if not isinstance(frames, Mapping):
-        raise ScenarioError(
-            "[goal] end_effectors must be tables [goal.end_effectors.<frame>] xyz = [x, y, z]"
-        )
-    return tuple(names + [f for f in frames if f not in names])
-
-
-def _frame_goals(tables: Any) -> dict[str, CartesianGoal]:
-    """``[goal.end_effectors.<frame>]`` tables (``xyz`` in m, ``rpy_deg``) as goals."""
-    if not isinstance(tables, Mapping) or not tables:
-        raise ScenarioError(
-            "[goal] end_effectors must be tables [goal.end_effectors.<frame>] xyz = [x, y, z]"
-        )
-    goals = {}
-    for frame, table in tables.items():
-        where = f"[goal.end_effectors.{frame}]"
-        if not isinstance(table, Mapping) or "xyz" not in table:
-            raise ScenarioError(f"{where} needs xyz = [x, y, z] [m] (optional rpy_deg)")
-        _check_keys(table, _FRAME_GOAL_KEYS, where)
-        goals[str(frame)] = _pose(table["xyz"], table.get("rpy_deg"), where)
-    return goals
-
-
-@dataclass(frozen=True)
-class CartesianGoal:
-    """An end-effector goal, from the system CM in the inertial frame.
-
-    Attributes:
-        position: wanted end-effector position (m).
-        rotation: wanted end-effector orientation (3 x 3), or None for position only.
-    """
-
-    position: np.ndarray
-    rotation: np.ndarray | None = None
-
-
-def _cartesian_goal(table: Mapping[str, Any]) -> CartesianGoal:
-    """The Cartesian goal of ``end_effector_xyz`` (m) and optional ``end_effector_rpy_deg``."""
-    return _pose(
-        table["end_effector_xyz"], table.get("end_effector_rpy_deg"), "[goal] end_effector"
-    )
-
-
-def _pose(xyz_value: Any, rpy_value: Any, where: str) -> CartesianGoal:
-    """A goal from ``xyz`` (m, from the system CM) and roll, pitch, yaw (deg) or None."""
-    suffix = "_" if where.endswith("end_effector") else " "
-    xyz = _numbers(xyz_value, 3, f"{where}{suffix}xyz", MAX_LENGTH_M, "m")
-    rotation = None
-    if rpy_value is not None:
-        rpy = _numbers(rpy_value, 3, f"{where}{suffix}rpy_deg", MAX_ANGLE_DEG, "deg")
-        rpy = np.radians(rpy)
-        rotation = quat_to_matrix(quat_from_zyx(rpy[2], rpy[1], rpy[0]))
-    return CartesianGoal(xyz, rotation)
-
-
-@dataclass(frozen=True)
-class Safety:
-    """What the plan must keep clear of.
-
-    Attributes:
-        margin: required clearance between checked bodies (m).
-        srdf: SRDF whose disabled pairs are not checked; None: the known SRDF of a composed
-            example-robot-data arm, or none.
-        obstacles: keep-out objects fixed to the spacecraft.
-        check: whether clearance is a constraint at all (``[safety] check = false`` turns it
-            off; verification then reports no clearance check).
-    """
-
-    margin: float = 0.01
-    srdf: Path | None = None
-    obstacles: tuple[Obstacle, ...] = ()
-    check: bool = True
-
-
-def _safety(table: Any, obstacles: Any, relative_to: Path | None) -> Safety:
-    """``[safety]`` and ``[[obstacles]]`` (metres, degrees) as a :class:`Safety`."""
-    table = {} if table is None else table
-    if not isinstance(table, Mapping):
-        raise ScenarioError("[safety] must be a table")
-    _check_keys(table, _SAFETY_KEYS, "[safety]")
-    margin = _number(table.get("margin_m", 0.01), "[safety] margin_m", MAX_LENGTH_M, "m")
-    if margin < 0.0:
-        raise ScenarioError(f"[safety] margin_m must be >= 0 m, got {margin:g}")
-    srdf = None
-    if "srdf" in table:
-        if not isinstance(table["srdf"], str):
-            raise ScenarioError(f"[safety] srdf must be a file path, got {excerpt(table['srdf'])}")
-        srdf = Path(table["srdf"]).expanduser()
-        if not srdf.is_absolute() and relative_to is not None:
-            srdf = relative_to / srdf
-        if not srdf.is_file():
-            raise ScenarioError(f"[safety] srdf file not found: {srdf}")
-    check = table.get("check", True)
-    if not isinstance(check, bool):
-        raise ScenarioError(f"[safety] check must be true or false, got {excerpt(check)}")
-    items = [] if obstacles is None else obstacles
-    if not isinstance(items, list) or not all(isinstance(o, Mapping) for o in items):
-        raise ScenarioError("[[obstacles]] must be a list of tables")
-    parsed = []
-    for index, item in enumerate(items):
-        where = f"[[obstacles]] #{index + 1}"
-        _check_keys(item, _OBSTACLE_KEYS, where)
-        name = item.get("name", f"obstacle_{index + 1}")
-        if not isinstance(name, str) or not name:
-            raise ScenarioError(f"{where}: name must be a non-empty string")
-        shapes = [s for s in ("box", "sphere", "capsule") if s in item]
-        if len(shapes) != 1:
-            raise ScenarioError(
-                f"{where} ({name}): give exactly one shape: box = [x, y, z], sphere = r or "
-                "capsule = [r, length] (m)"
-            )
-        shape = shapes[0]
-        raw = item[shape]
-        if shape == "sphere":
-            size = (_number(raw, f"{where} sphere", MAX_LENGTH_M, "m"),)
-        else:
-            count = 3 if shape == "box" else 2
-            size = tuple(_numbers(raw, count, f"{where} {shape}", MAX_LENGTH_M, "m"))
-        try:
-            parsed.append(
-                Obstacle(
-                    name,
-                    shape,
-                    tuple(float(s) for s in size),
-                    _triple(item, "xyz", [0.0, 0.0, 0.0], where),
-                    _radians3(_triple(item, "rpy_deg", [0.0] * 3, where)),
-                )
-            )
-        except InputError as exc:
-            raise ScenarioError(str(exc)) from None
-    names = [o.name for o in parsed]
-    if len(set(names)) != len(names):
-        raise ScenarioError(f"[[obstacles]] names must be unique, got {excerpt(names)}")
-    return Safety(margin, srdf, tuple(parsed), check)
-
-
-def _constraints(table: Any) -> tuple[Constraint, ...]:
-    """``[constraints.<name>]`` tables as constraints, by the registry."""
-    if not isinstance(table, Mapping):
-        raise ScenarioError("[constraints] must hold one table per constraint, by name")
-    out = []
-    always = [c.name for c in default_constraints()]
-    for name, parameters in table.items():
-        if name in always:
-            raise ScenarioError(f"[constraints.{name}]: always honoured, it takes no table")
-        try:
-            out.append(constraint_from_record(name, parameters))
-        except UnknownNameError:
-            raise
-        except InputError as exc:
-            raise ScenarioError(f"[constraints.{name}] {exc}") from None
-    return tuple(out)
-
-
-def _radians3(degrees: tuple[float, float, float]) -> tuple[float, float, float]:
-    return (math.radians(degrees[0]), math.radians(degrees[1]), math.radians(degrees[2]))
-
-
-def _payload(table: Any) -> Payload | None:
-    """``[payload]`` (kg, m, kg m^2) as a :class:`Payload`, or None."""
-    if table is None:
-        return None
-    if not isinstance(table, Mapping):
-        raise ScenarioError("[payload] must be a table")
-    _check_keys(table, _PAYLOAD_KEYS, "[payload]")
-    if "mass" not in table or "inertia" not in table:
-        raise ScenarioError(
-            "[payload] needs mass [kg] and inertia = [ixx, iyy, izz, ixy, ixz, iyz]"
-        )
-    try:
-        return Payload(
-            mass=_number(table["mass"], "[payload] mass", MAX_MAGNITUDE, "kg"),
-            com_xyz=_triple(table, "com_xyz", [0.0, 0.0, 0.0], "[payload]"),
-            inertia=tuple(float(v) for v in _numbers(table["inertia"], 6, "[payload] inertia")),  # type: ignore[arg-type]
-            box=_triple(table, "box", None, "[payload]") if "box" in table else None,
-        )
-    except InputError as exc:
-        raise ScenarioError(str(exc)) from None
 
 
 def _with_payload(

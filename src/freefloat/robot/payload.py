@@ -63,6 +63,22 @@ class Payload:
         if self.box is not None and not all(math.isfinite(s) and s > 0.0 for s in self.box):
             raise InputError(f"payload box sizes must be finite and > 0 m, got {list(self.box)}")
 
+    @classmethod
+    def uniform_box(
+        cls,
+        mass: float,
+        box: tuple[float, float, float],
+        com_xyz: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    ) -> Payload:
+        """A uniform box of ``mass`` (kg) and edges ``box`` (m), centred on its centre of mass.
+
+        Its inertia about the centre of mass is ``m / 12 (y^2 + z^2)`` and so on (kg m^2).
+        """
+        x, y, z = box
+        m = mass / 12.0
+        inertia = (m * (y * y + z * z), m * (x * x + z * z), m * (x * x + y * y), 0.0, 0.0, 0.0)
+        return cls(mass=mass, com_xyz=com_xyz, inertia=inertia, box=box)
+
     @property
     def matrix(self) -> np.ndarray:
         """The 3 x 3 inertia matrix about the centre of mass (kg m^2)."""

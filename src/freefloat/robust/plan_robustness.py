@@ -16,7 +16,9 @@ import numpy as np
 
 from ..errors import PlanFileError
 from ..physics.attitude import geodesic_angle, quat_from_zyx
-from ..plans.format import FORMAT, Plan, RobustnessReport
+from ..plans.format import Plan
+from ..plans.guarantees import RobustnessReport
+from ..plans.versions import FORMAT
 from ..problem.inertial_sensitivity import attitude_sensitivity
 from ..problem.uncertainty import DEFAULT_UNCERTAINTY, AttitudeSpread, Uncertainty, spread
 from ..robot.model import Robot, load_robot

@@ -40,7 +40,8 @@ import numpy as np
 
 from ..errors import FreeFloatError, InputLimitError, ScenarioError, UnknownNameError, excerpt
 from ..problem.limits import check_samples
-from ..problem.scenario import Scenario, read_toml
+from ..problem.scenario import Scenario
+from ..problem.scenario_tables import read_toml
 from ..robot.model import robots_dir
 from .draws import (
     Changes,

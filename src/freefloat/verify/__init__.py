@@ -1,5 +1,6 @@
 """Independent verification of a plan, from the plan file and its URDF alone."""
 
-from .checks import TOLERANCES, verify_plan
+from .checks import PLAN_CHECKS, verify_plan
+from .plan_checks import TOLERANCES
 
-__all__ = ["TOLERANCES", "verify_plan"]
+__all__ = ["PLAN_CHECKS", "TOLERANCES", "verify_plan"]

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import weakref
 
-from ..plans.format import Check
+from ..plans.guarantees import Check
 from ..problem.constraints.clearance import Clearance
 from ..robot.model import Robot
 from .certificate import certify

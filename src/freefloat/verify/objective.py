@@ -19,7 +19,8 @@ import math
 import numpy as np
 
 from ..errors import FreeFloatError, PlanMismatchError
-from ..plans.format import MONOMIAL_BASIS, Plan
+from ..plans.format import Plan
+from ..plans.versions import MONOMIAL_BASIS
 from ..problem.objectives import DEFAULT_OBJECTIVE, OBJECTIVES, MinNorm, Objective
 from ..problem.residual import Problem
 

@@ -21,7 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import eval_jacobi
 
-from ..plans.format import MONOMIAL_BASIS, Plan
+from ..plans.format import Plan
+from ..plans.versions import MONOMIAL_BASIS
 
 __all__ = ["FilePath", "file_path"]
 

@@ -15,8 +15,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import PlanMismatchError
-from ..plans.format import MONOMIAL_BASIS, Plan
+from ..plans.format import Plan
 from ..plans.sampling import path_quality
+from ..plans.versions import MONOMIAL_BASIS
 from ..problem.paths import JointPolynomials, PathFamily
 from ..problem.residual import Problem
 

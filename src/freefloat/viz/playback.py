@@ -33,8 +33,8 @@ from ..plans.format import Plan
 from ..plans.robot_copy import plan_robot
 from ..robot.collision import Obstacle
 from ..robot.model import Robot, example_robot_data_dir
+from .clearance_curve import plan_obstacles
 from .controls import CM_COLOR, EE_COLOR, TRAIL_COLOR
-from .plots import plan_obstacles
 
 __all__ = ["Playback", "build_playback", "serve", "write_html"]
 

@@ -11,47 +11,31 @@ Marked: the goal values (joint goals at t = T, the target base attitude; dotted)
 URDF's finite joint position and velocity limits (dashed, in the joint's colour; read from the
 plan's URDF when it loads, else left out).
 
-``clearance`` (only when the plan was kept clear, ``plan.safety.checked``): the smallest
-signed distance (m) over the checked pairs, recomputed with the plan's collision model (its
-SRDF and keep-out objects) on :data:`CLEARANCE_SAMPLES` instants of the plan's polynomials, the
-margin dashed, and the closest pair named in the legend. Skipped when not checked, or when the
-collision model cannot be built (with a warning).
+``clearance`` (only when the plan was kept clear, ``plan.safety.checked``): the smallest signed
+distance (m) over the checked pairs, recomputed with the plan's collision model (its SRDF and
+keep-out objects) on :data:`~freefloat.viz.clearance_curve.CLEARANCE_SAMPLES` instants of the
+plan's polynomials, the margin dashed, and the closest pair named in the legend. Skipped when
+not checked, or when the collision model cannot be built (with a warning).
 """
 
 from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from ..errors import InputError, ViewerError
 from ..files import atomic_write
 from ..plans.format import Plan
+from .clearance_curve import ClearanceCurve, clearance_curve
 
-if TYPE_CHECKING:
-    from ..robot.collision import Obstacle
-    from ..robot.model import Robot
-
-__all__ = [
-    "CLEARANCE_SAMPLES",
-    "OPTIONAL_TOPICS",
-    "TOPICS",
-    "ClearanceCurve",
-    "clearance_curve",
-    "figures",
-    "plan_obstacles",
-    "save_figures",
-]
+__all__ = ["OPTIONAL_TOPICS", "TOPICS", "figures", "save_figures"]
 
 LOGGER = logging.getLogger(__name__)
-
-#: Instants (evenly spaced over [0, T]) at which the clearance figure recomputes distances.
-CLEARANCE_SAMPLES = 400
 
 #: Figure names, in order (the overview sheet is ``overview``).
 TOPICS = (
@@ -65,78 +49,6 @@ TOPICS = (
 )
 #: Figures drawn only when the plan has what they show (``clearance``: ``safety.checked``).
 OPTIONAL_TOPICS = ("clearance",)
-
-
-def plan_obstacles(plan: Plan) -> list[Obstacle]:
-    """The plan's keep-out objects (``plan.safety.obstacles``) as collision-model obstacles."""
-    from ..robot.collision import Obstacle
-
-    return [
-        Obstacle(
-            o.name,
-            o.shape,
-            tuple(float(v) for v in o.size),
-            (float(o.xyz[0]), float(o.xyz[1]), float(o.xyz[2])),
-            (float(o.rpy[0]), float(o.rpy[1]), float(o.rpy[2])),
-        )
-        for o in plan.safety.obstacles
-    ]
-
-
-@dataclass(frozen=True)
-class ClearanceCurve:
-    """The smallest clearance along a plan.
-
-    Attributes:
-        t: instants (s).
-        smallest: per instant, the smallest signed distance over the checked pairs (m).
-        pair: per instant, the index (into ``names``) of the pair at that distance.
-        names: the checked pairs, ``"a / b"``.
-        margin: the plan's clearance margin (m).
-    """
-
-    t: np.ndarray
-    smallest: np.ndarray
-    pair: np.ndarray
-    names: list[str]
-    margin: float
-
-    @property
-    def closest(self) -> tuple[float, float, str]:
-        """``(distance m, time s, pair name)`` of the smallest clearance along the plan."""
-        k = int(np.argmin(self.smallest))
-        return float(self.smallest[k]), float(self.t[k]), self.names[int(self.pair[k])]
-
-
-def clearance_curve(
-    plan: Plan, samples: int = CLEARANCE_SAMPLES, robot: Robot | None = None
-) -> ClearanceCurve | None:
-    """The smallest clearance on ``samples`` instants of the plan's joint polynomials.
-
-    None when the plan was not kept clear (``plan.safety.checked`` false) or has no pairs.
-
-    Raises:
-        FreeFloatError: the robot or its collision model cannot be loaded.
-    """
-    if not plan.safety.checked:
-        return None
-    from ..plans.robot_copy import plan_robot
-    from ..robot.collision import CollisionModel
-
-    robot = robot or plan_robot(plan)
-    model = CollisionModel(robot, plan.safety.srdf, plan_obstacles(plan))
-    if model.n_pairs == 0:
-        return None
-    t = np.linspace(0.0, plan.duration, max(2, int(samples)))
-    joints = plan.joint_positions(t)
-    values = [model.closest_value(q) for q in joints]
-    return ClearanceCurve(
-        t=t,
-        smallest=np.array([v for v, _ in values]),
-        pair=np.array([k for _, k in values], dtype=int),
-        names=list(model.names),
-        margin=float(plan.safety.margin_m),
-    )
 
 
 def _pyplot() -> Any:
@@ -178,85 +90,14 @@ def _draw(
     limits: dict[str, tuple[float, float, float]] | None = None,
     clearance: ClearanceCurve | None = None,
 ) -> None:
-    limits = limits or {}
-    s = plan.samples
-    t = np.asarray(s.t)
-    scale, kinds = _joint_scale(plan)
-    frames = plan.robot.frames
-    if topic == "end_effector":
-        for number, frame in enumerate(frames):
-            ee = np.asarray(s.path_of(frame))
-            tag = "" if len(frames) == 1 else f" {frame}"
-            for i, axis in enumerate("xyz"):
-                if i < 2 or np.ptp(ee[:, 2]) > 1e-9:
-                    style = "-" if number == 0 else (0, (4, 2 * number))
-                    ax.plot(t, ee[:, i], linestyle=style, label=f"${axis}_E${tag}")
-        ax.set_ylabel("end effector [m]" if len(frames) == 1 else "end effectors [m]")
-    elif topic == "end_effector_path":
-        flat = True
-        for frame in frames:
-            ee = np.asarray(s.path_of(frame))
-            tag = "" if len(frames) == 1 else f" {frame}"
-            (line,) = ax.plot(ee[:, 0], ee[:, 1], label=f"path{tag}")
-            color = line.get_color()
-            ax.plot(ee[:1, 0], ee[:1, 1], "o", color=color, label=f"start{tag}")
-            ax.plot(ee[-1:, 0], ee[-1:, 1], "s", color=color, label=f"goal{tag}")
-            flat = flat and np.ptp(ee[:, 2]) <= 1e-9
-        ax.plot([0.0], [0.0], "+", color="k", label="system CM")
-        ax.set_aspect("equal", adjustable="datalim")
-        plane = "inertial x-y plane" if flat else "projection onto the inertial x-y plane"
-        ax.set_xlabel(f"x [m] ({plane})")
-        ax.set_ylabel("y [m]")
-    elif topic == "base_attitude":
-        zyx = np.asarray(s.base_zyx_deg)
-        # Angles often coincide (pitch and roll both 0 for a planar robot): each has its own
-        # line style and marker, and the goals are drawn over the data (open markers at T).
-        styles = (("-", "o"), ("--", "s"), ("-.", "^"))
-        for i, label in enumerate(("yaw", "pitch", "roll")):
-            linestyle, marker = styles[i]
-            (line,) = ax.plot(
-                t,
-                zyx[:, i],
-                linestyle=linestyle,
-                marker=marker,
-                markevery=max(1, len(t) // 8),
-                markersize=4,
-                label=label,
-            )
-            goal = plan.base.target_zyx_deg[i]
-            ax.axhline(goal, color=line.get_color(), linestyle=":", linewidth=1, label="_goal")
-            ax.plot(
-                [t[-1]],
-                [goal],
-                marker=marker,
-                markersize=10 - 2 * i,
-                mfc="none",
-                mew=1.5,
-                color=line.get_color(),
-                zorder=5,
-                label="_goal_at_T",
-            )
-        ax.plot([], [], ":", marker="o", mfc="none", color="0.3", label="goal (at T)")
-        ax.set_ylabel("base attitude [deg]")
-    elif topic == "base_rate":
-        omega = np.degrees(np.asarray(s.base_angular_velocity))
-        for i, axis in enumerate("xyz"):
-            ax.plot(t, omega[:, i], label=f"$\\omega_{axis}$")
-        ax.set_ylabel("base angular rate [deg/s]")
+    """Draw figure ``topic`` of ``plan`` on ``ax``, with its axes, grid and legend."""
+    if topic in _DRAWERS:
+        _DRAWERS[topic](plan, ax)
     elif topic in ("joint_positions", "joint_rates", "joint_torques"):
-        _draw_joints(plan, topic, ax, limits, scale, kinds)
+        scale, kinds = _joint_scale(plan)
+        _draw_joints(plan, topic, ax, limits or {}, scale, kinds)
     elif topic == "clearance" and clearance is not None:
-        value, when, pair = clearance.closest
-        ax.plot(clearance.t, clearance.smallest, label="smallest clearance")
-        ax.plot(
-            [when],
-            [value],
-            "o",
-            mfc="none",
-            label=f"closest: {pair}\n{value:.4g} m at {when:.3g} s",
-        )
-        ax.axhline(clearance.margin, color="C3", linestyle="--", linewidth=1, label="margin")
-        ax.set_ylabel("clearance [m]")
+        _draw_clearance(clearance, ax)
     else:  # pragma: no cover - guarded by the callers
         raise InputError(f"unknown figure {topic!r}; valid: {', '.join(TOPICS)}")
     if topic != "end_effector_path":
@@ -264,6 +105,101 @@ def _draw(
         ax.set_xlim(0.0, plan.duration)
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize="small")
+
+
+def _draw_end_effector(plan: Plan, ax: Any) -> None:
+    """Every end effector's x, y (and z when it moves) against time (m)."""
+    frames, t = plan.robot.frames, np.asarray(plan.samples.t)
+    for number, frame in enumerate(frames):
+        ee = np.asarray(plan.samples.path_of(frame))
+        tag = "" if len(frames) == 1 else f" {frame}"
+        for i, axis in enumerate("xyz"):
+            if i < 2 or np.ptp(ee[:, 2]) > 1e-9:
+                style = "-" if number == 0 else (0, (4, 2 * number))
+                ax.plot(t, ee[:, i], linestyle=style, label=f"${axis}_E${tag}")
+    ax.set_ylabel("end effector [m]" if len(frames) == 1 else "end effectors [m]")
+
+
+def _draw_end_effector_path(plan: Plan, ax: Any) -> None:
+    """Every end effector's path in the inertial x-y plane (m), with start, goal and CM."""
+    frames = plan.robot.frames
+    flat = True
+    for frame in frames:
+        ee = np.asarray(plan.samples.path_of(frame))
+        tag = "" if len(frames) == 1 else f" {frame}"
+        (line,) = ax.plot(ee[:, 0], ee[:, 1], label=f"path{tag}")
+        color = line.get_color()
+        ax.plot(ee[:1, 0], ee[:1, 1], "o", color=color, label=f"start{tag}")
+        ax.plot(ee[-1:, 0], ee[-1:, 1], "s", color=color, label=f"goal{tag}")
+        flat = flat and np.ptp(ee[:, 2]) <= 1e-9
+    ax.plot([0.0], [0.0], "+", color="k", label="system CM")
+    ax.set_aspect("equal", adjustable="datalim")
+    plane = "inertial x-y plane" if flat else "projection onto the inertial x-y plane"
+    ax.set_xlabel(f"x [m] ({plane})")
+    ax.set_ylabel("y [m]")
+
+
+def _draw_base_attitude(plan: Plan, ax: Any) -> None:
+    """Yaw, pitch and roll of the base (deg) against time, with their goals at T."""
+    t, zyx = np.asarray(plan.samples.t), np.asarray(plan.samples.base_zyx_deg)
+    # Angles often coincide (pitch and roll both 0 for a planar robot): each has its own
+    # line style and marker, and the goals are drawn over the data (open markers at T).
+    styles = (("-", "o"), ("--", "s"), ("-.", "^"))
+    for i, label in enumerate(("yaw", "pitch", "roll")):
+        linestyle, marker = styles[i]
+        (line,) = ax.plot(
+            t,
+            zyx[:, i],
+            linestyle=linestyle,
+            marker=marker,
+            markevery=max(1, len(t) // 8),
+            markersize=4,
+            label=label,
+        )
+        goal = plan.base.target_zyx_deg[i]
+        ax.axhline(goal, color=line.get_color(), linestyle=":", linewidth=1, label="_goal")
+        ax.plot(
+            [t[-1]],
+            [goal],
+            marker=marker,
+            markersize=10 - 2 * i,
+            mfc="none",
+            mew=1.5,
+            color=line.get_color(),
+            zorder=5,
+            label="_goal_at_T",
+        )
+    ax.plot([], [], ":", marker="o", mfc="none", color="0.3", label="goal (at T)")
+    ax.set_ylabel("base attitude [deg]")
+
+
+def _draw_base_rate(plan: Plan, ax: Any) -> None:
+    """The base's angular velocity (deg/s, base frame) against time."""
+    t = np.asarray(plan.samples.t)
+    omega = np.degrees(np.asarray(plan.samples.base_angular_velocity))
+    for i, axis in enumerate("xyz"):
+        ax.plot(t, omega[:, i], label=f"$\\omega_{axis}$")
+    ax.set_ylabel("base angular rate [deg/s]")
+
+
+def _draw_clearance(clearance: ClearanceCurve, ax: Any) -> None:
+    """The smallest clearance (m) against time, its closest instant and the margin."""
+    value, when, pair = clearance.closest
+    ax.plot(clearance.t, clearance.smallest, label="smallest clearance")
+    ax.plot(
+        [when], [value], "o", mfc="none", label=f"closest: {pair}\n{value:.4g} m at {when:.3g} s"
+    )
+    ax.axhline(clearance.margin, color="C3", linestyle="--", linewidth=1, label="margin")
+    ax.set_ylabel("clearance [m]")
+
+
+#: The figures drawn from the plan alone, by topic.
+_DRAWERS: dict[str, Callable[[Plan, Any], None]] = {
+    "end_effector": _draw_end_effector,
+    "end_effector_path": _draw_end_effector_path,
+    "base_attitude": _draw_base_attitude,
+    "base_rate": _draw_base_rate,
+}
 
 
 def _draw_joints(

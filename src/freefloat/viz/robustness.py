@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from ..plans.format import RobustnessReport
+from ..plans.guarantees import RobustnessReport
 from ..problem.uncertainty import AttitudeSpread, Uncertainty
 from ..robust.distribution import ErrorDistribution
 

@@ -13,7 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..plans.format import MONOMIAL_BASIS, Plan
+from ..plans.format import Plan
+from ..plans.versions import MONOMIAL_BASIS
 from ..problem.scenario import Scenario
 from .robustness import robustness_line
 
@@ -94,7 +95,7 @@ def summary(
     )
     if s.solve_time_s or s.sample_time_s or s.verify_time_s:
         lines.append(
-            f"  stage times     solve {1e3 * s.solve_time_s:.1f} ms, sample "
+            f"  stage times     solve {1e3 * s.solve_time_s:.1f} ms (every solver stage), sample "
             f"{1e3 * s.sample_time_s:.1f} ms, verify {1e3 * s.verify_time_s:.1f} ms"
         )
     turns = {k: t for k, t in s.full_turns.items() if t}

@@ -1,0 +1,105 @@
+"""``freefloat bounds``: the reachable yaw-change interval (planar) or an inner estimate."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from ..errors import InputLimitError
+from ..problem.build import planar_yaw_branch, problem_from_scenario
+from ..problem.scenario import Scenario
+from ..solvers.options import SolveOptions
+from .common import MAX_BUDGET, Commands, check_outputs, load_scenario, positive
+
+__all__ = ["add_parser", "check", "run"]
+
+
+def add_parser(commands: Commands) -> argparse.ArgumentParser:
+    """Add this command's sub-parser to ``commands``."""
+    p_bounds = commands.add_parser(
+        "bounds",
+        help="print the reachable yaw-change interval (planar) or an inner estimate (spatial)",
+        description="Planar bounds (docs/method.md section 6): per joint the extremes of dyaw/dq "
+        "and the interval of yaw changes a simple motion can reach, in degrees. For a spatial "
+        "robot: a constructive inner estimate; from the quintic path's attitude, continuation "
+        "goes as far as it can about six axis directions and eight diagonals within the joint "
+        "limits, with the scenario's freedom (default two free coefficients per joint). "
+        "freefloat reach prints the drift attitude, an outer bound and goal attitudes to paste.",
+    )
+    p_bounds.add_argument(
+        "--plot", metavar="FILE", help="spatial: also draw the estimate (PNG, SVG or PDF)"
+    )
+    p_bounds.add_argument(
+        "--max-angle",
+        type=float,
+        default=30.0,
+        help="spatial: the rotation to head for in each direction, deg (default 30)",
+    )
+    p_bounds.add_argument(
+        "--budget",
+        type=int,
+        default=300,
+        help="spatial: residual evaluations per direction (default 300)",
+    )
+    p_bounds.add_argument(
+        "scenario", nargs="?", help="scenario TOML file (default: worked example)"
+    )
+    p_bounds.set_defaults(func=run, check=check)
+    return p_bounds
+
+
+def check(args: argparse.Namespace) -> None:
+    """Refuse bad numbers and an unwritable figure before any work (docs/limits.md)."""
+    positive(args.max_angle, "--max-angle", 180.0, "deg")
+    if not 1 <= args.budget <= MAX_BUDGET:
+        raise InputLimitError("--budget", args.budget, 1, MAX_BUDGET)
+    check_outputs(args, ("--plot", "plot"))
+
+
+def run(args: argparse.Namespace) -> int:
+    """Print the planar bounds, or a spatial robot's inner estimate."""
+    scenario = load_scenario(args.scenario)
+    problem = problem_from_scenario(scenario.resolved(), check_bounds=False)
+    if problem.bounds is None or problem.yaw_change is None:
+        return spatial_bounds(scenario, args)
+    bounds = problem.bounds
+    delta = problem.family.goal - problem.family.start
+    print(f"freefloat bounds: {scenario.robot.name} (planar), simple point-to-point motion")
+    print(
+        f"  {'joint':<12}{'g_min':>12}{'g_max':>12}{'move':>14}{'yaw from [deg]':>17}"
+        f"{'to [deg]':>12}"
+    )
+    for i, joint in enumerate(scenario.robot.joints):
+        lo, hi = sorted((bounds.g_min[i] * delta[i], bounds.g_max[i] * delta[i]))
+        move = f"{math.degrees(delta[i]):.3f} deg" if joint.angular else f"{delta[i]:.4f} m"
+        print(
+            f"  {joint.name:<12}{bounds.g_min[i]:>12.6f}{bounds.g_max[i]:>12.6f}{move:>14}"
+            f"{math.degrees(lo):>17.3f}{math.degrees(hi):>12.3f}"
+        )
+    lo, hi = bounds.interval(delta)
+    branch = planar_yaw_branch(problem.yaw_change, lo, hi)
+    print(f"  reachable yaw change: ({math.degrees(lo):.3f}, {math.degrees(hi):.3f}) deg")
+    verdict = "feasible" if branch is not None else "outside the bounds: no simple path"
+    shown = math.degrees(problem.yaw_change if branch is None else branch)
+    print(f"  requested yaw change: {shown:.3f} deg -> {verdict}")
+    return 0
+
+
+def spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
+    """A spatial robot's inner estimate of its reachable attitudes (and its figure)."""
+    from ..solvers.reach import describe, reach_set
+
+    extra = scenario.extra if scenario.extra is not None else [2] * scenario.robot.n
+    problem = problem_from_scenario(scenario.resolved(), extra=extra, check_bounds=False)
+    angle = math.radians(args.max_angle)
+    options = SolveOptions(max_evaluations=args.budget)
+    estimate = reach_set(problem, None, angle, None, options, confirm=False)
+    print(f"freefloat bounds: {scenario.robot.name} (spatial) -- INNER ESTIMATE")
+    for line in describe(estimate, scenario.robot.joint_names, angle, problem.goal_quaternion):
+        print(f"  {line}")
+    if args.plot:
+        from ..viz.reach_plot import save_reach_figure
+
+        written = save_reach_figure(estimate, args.plot, title=scenario.robot.name)
+        print(f"  figure: {written.resolve()}")
+    return 0

@@ -1,0 +1,58 @@
+"""``freefloat check``: one configuration against the joint limits and the clearance."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from .common import Commands, load_scenario
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(commands: Commands) -> argparse.ArgumentParser:
+    """Add this command's sub-parser to ``commands``."""
+    p_check = commands.add_parser(
+        "check",
+        help="check one configuration: joint limits, closest pairs, clearance",
+        description="Joint values against the URDF limits (room to the nearer one), the "
+        "closest body pairs of the collision model and the smallest clearance against the "
+        "scenario's margin, at the start, the goal or given joint values. Exit code 0 when "
+        "within the limits and clear, 1 otherwise.",
+    )
+    p_check.add_argument("scenario", help="scenario TOML file")
+    p_check.add_argument(
+        "--at",
+        default="start",
+        metavar="start|goal|J1,J2,...",
+        help="the configuration: start (default), goal, or one value per joint, "
+        "comma-separated (deg; m for prismatic joints)",
+    )
+    p_check.set_defaults(func=run, check=None)
+    return p_check
+
+
+def run(args: argparse.Namespace) -> int:
+    """Print the configuration's joints, closest pairs and clearance; 1 when not ok."""
+    from ..configuration import check_configuration, parse_joints
+
+    scenario = load_scenario(args.scenario)
+    report = check_configuration(scenario, parse_joints(args.at, scenario))
+    print(f"freefloat check: {scenario.robot.name} at {args.at}")
+    print(f"  {'joint':<24}{'value':>12}{'lower':>12}{'upper':>12}{'room':>12}")
+    for j in report.joints:
+        scale, unit = (math.degrees, "deg") if j.angular else (float, "m")
+        cells = "".join(f"{scale(v):>12.3f}" for v in (j.value, j.lower, j.upper, j.room))
+        flag = "" if j.room >= 0.0 else "  OUTSIDE"
+        print(f"  {j.name:<24}{cells}  {unit}{flag}")
+    if report.margin is None:
+        print("  clearance: not checked (no collision pairs, or [safety] check = false)")
+    else:
+        print(f"  closest pairs (signed distance; margin {report.margin:g} m):")
+        for name, distance in report.pairs:
+            print(f"    {name:<50}{distance:>10.4f} m")
+        state = "keeps" if report.clear else "is below"
+        print(f"  clearance {report.pairs[0][1]:.4f} m {state} the margin {report.margin:g} m")
+    verdict = "ok" if report.within_limits and report.clear else "NOT OK"
+    print(f"  configuration: {verdict}")
+    return 0 if verdict == "ok" else 1

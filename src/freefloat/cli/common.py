@@ -1,0 +1,102 @@
+"""What the command modules share: the scenario and plan they read, limits, output checks."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ..errors import InputError, PlanFileError, PlanMismatchError
+from ..files import check_output
+from ..plans.format import Plan
+from ..problem.limits import check_number
+from ..problem.scenario import Scenario, default_scenario_path
+from ..progress import stage
+from ..verify.checks import verify_plan
+
+if TYPE_CHECKING:
+    Commands = argparse._SubParsersAction[argparse.ArgumentParser]
+else:
+    Commands = argparse._SubParsersAction
+
+__all__ = [
+    "DEFAULT_OUT_DIR",
+    "MAX_BUDGET",
+    "Commands",
+    "add_no_verify",
+    "check_outputs",
+    "checked_plan",
+    "load_scenario",
+    "positive",
+]
+
+#: Where ``freefloat plan`` without a scenario writes the worked example.
+DEFAULT_OUT_DIR = Path("freefloat-out")
+#: Largest ``bounds --budget`` and ``reach --budget`` (residual evaluations per direction).
+MAX_BUDGET = 100_000
+
+
+def load_scenario(path: str | None) -> Scenario:
+    """The scenario file at ``path``, or the worked example's without one."""
+    with stage("read scenario"):
+        return Scenario.from_toml(path if path else default_scenario_path())
+
+
+def checked_plan(args: argparse.Namespace) -> Plan:
+    """The plan file of ``show`` or ``plot``, verified unless ``--no-verify``.
+
+    Raises:
+        PlanFileError: unreadable, breaks the schema or a limit, disagrees with its
+            recomputation, or fails a check (with the hint to ``--no-verify``).
+    """
+    from ..plans.schema import load_plan_file
+
+    loaded = load_plan_file(args.plan)
+    if args.no_verify:
+        return loaded
+    hint = f"freefloat verify {args.plan} shows the checks; --no-verify {args.command}s it anyway"
+    try:
+        with stage("verify"):
+            verification = verify_plan(loaded)
+    except PlanMismatchError as exc:
+        raise PlanFileError(f"{args.plan}: {exc}; {hint}") from None
+    if not verification.passed:
+        raise PlanFileError(
+            f"{args.plan}: the plan fails verification ({', '.join(verification.failures)}); "
+            + hint
+        )
+    return loaded
+
+
+def add_no_verify(parser: argparse.ArgumentParser, verb: str) -> None:
+    """--no-verify of show and plot."""
+    parser.add_argument(
+        "--no-verify",
+        action="store_true",
+        help=f"{verb} the plan without verifying it first (by default a plan that fails "
+        "verification or whose numbers disagree with their recomputation from its URDF is "
+        "refused)",
+    )
+
+
+def positive(value: float, name: str, high: float, unit: str = "") -> float:
+    """A number in (0, high]; :class:`InputLimitError` naming ``name`` otherwise."""
+    if isinstance(value, float) and (math.isnan(value) or value <= 0.0):
+        units = f" of {unit}" if unit else ""
+        raise InputError(f"{name} must be a positive number{units}, got {value:g}")
+    return check_number(value, name, high, unit)
+
+
+def check_outputs(
+    args: argparse.Namespace, *outputs: tuple[str, str], folder: bool = False
+) -> None:
+    """Refuse unwritable outputs before any work: each ``(option, attribute)`` that is given.
+
+    Raises:
+        FileError: the output (a file, or a folder when ``folder``) cannot be written.
+    """
+    for option, name in outputs:
+        value = getattr(args, name, None)
+        if value:
+            check_output(value, option, folder=folder)

@@ -1,0 +1,252 @@
+"""``freefloat compose``: mount one or more arms on a box spacecraft and write one URDF."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+from typing import TYPE_CHECKING, Any
+
+from ..errors import InputError
+from ..problem.limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, check_number
+from ..progress import stage
+from .common import Commands, check_outputs
+
+if TYPE_CHECKING:
+    from ..robot.compose import ServicerSpec
+    from ..robot.payload import Payload
+
+__all__ = ["add_parser", "check", "run"]
+
+
+def add_parser(commands: Commands) -> argparse.ArgumentParser:
+    """Add this command's sub-parser to ``commands``."""
+    p_compose = commands.add_parser(
+        "compose",
+        help="mount one or more arms on a box spacecraft and write one validated URDF",
+        description="Compose a servicer: example-robot-data arms (panda, ur5, kinova, "
+        "xarm7, z1) or URDF files, mounted on a uniform box spacecraft (--arm A --mount ... "
+        "--arm B --mount ...). Gripper and finger joints are locked (at 0, or mid-range when "
+        "0 is outside their limits) unless --keep-gripper. Angles in degrees.",
+    )
+    p_compose.add_argument(
+        "--arm",
+        required=True,
+        action="append",
+        help="arm name or URDF path; repeat for more arms, each with its --mount",
+    )
+    p_compose.add_argument("--base-mass", type=float, required=True, metavar="KG")
+    p_compose.add_argument(
+        "--base-size",
+        type=float,
+        nargs=3,
+        required=True,
+        metavar=("X", "Y", "Z"),
+        help="box edges [m]",
+    )
+    p_compose.add_argument(
+        "--base-inertia",
+        type=float,
+        nargs=3,
+        metavar=("IXX", "IYY", "IZZ"),
+        help="principal moments [kg m^2] (default: uniform box)",
+    )
+    p_compose.add_argument(
+        "--mount",
+        type=float,
+        nargs=3,
+        required=True,
+        action="append",
+        metavar=("X", "Y", "Z"),
+        help="arm root in the spacecraft frame [m] (once per --arm)",
+    )
+    p_compose.add_argument(
+        "--mount-rpy",
+        type=float,
+        nargs=3,
+        action="append",
+        metavar=("R", "P", "Y"),
+        help="arm root roll, pitch, yaw [deg] (once per --arm; default 0 0 0)",
+    )
+    p_compose.add_argument(
+        "--prefix",
+        action="append",
+        help="put before each link and joint name of the arm (once per --arm; with several "
+        "arms default arm1_, arm2_...)",
+    )
+    p_compose.add_argument(
+        "--lock",
+        nargs="*",
+        metavar="JOINT[=DEG]",
+        help="more joints to lock, at 0 or at DEG (with several arms, prefixed names)",
+    )
+    p_compose.add_argument(
+        "--keep-gripper", action="store_true", help="keep gripper and finger joints movable"
+    )
+    _add_payload_options(p_compose)
+    p_compose.add_argument("-o", "--output", required=True, help="URDF file to write")
+    p_compose.set_defaults(func=run, check=check)
+    return p_compose
+
+
+def _add_payload_options(parser: argparse.ArgumentParser) -> None:
+    """The ``--payload-*`` options: a captured payload fixed to the end effector."""
+    parser.add_argument(
+        "--payload-mass",
+        type=float,
+        metavar="KG",
+        help="captured payload fixed to the end effector",
+    )
+    parser.add_argument(
+        "--payload-com",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "Z"),
+        help="payload centre of mass in the end-effector frame [m] (default: 0 0 0)",
+    )
+    parser.add_argument(
+        "--payload-inertia",
+        type=float,
+        nargs=6,
+        metavar=("IXX", "IYY", "IZZ", "IXY", "IXZ", "IYZ"),
+        help="payload inertia about its centre of mass [kg m^2] "
+        "(default: the uniform --payload-box's)",
+    )
+    parser.add_argument(
+        "--payload-box",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "Z"),
+        help="payload box (visual and collision), centred on its centre of mass [m]",
+    )
+
+
+def check(args: argparse.Namespace) -> None:
+    """Refuse numbers beyond the limits and an unwritable output before any work."""
+    numbers: list[tuple[str, Any, float, str]] = [
+        ("--base-mass", [args.base_mass], MAX_MAGNITUDE, "kg"),
+        ("--base-size", args.base_size, MAX_LENGTH_M, "m"),
+        ("--base-inertia", args.base_inertia, MAX_MAGNITUDE, "kg m^2"),
+        ("--mount", [x for m in args.mount for x in m], MAX_LENGTH_M, "m"),
+        ("--mount-rpy", [x for m in args.mount_rpy or [] for x in m], MAX_ANGLE_DEG, "deg"),
+        ("--payload-mass", [args.payload_mass], MAX_MAGNITUDE, "kg"),
+        ("--payload-com", args.payload_com, MAX_LENGTH_M, "m"),
+        ("--payload-inertia", args.payload_inertia, MAX_MAGNITUDE, "kg m^2"),
+        ("--payload-box", args.payload_box, MAX_LENGTH_M, "m"),
+    ]
+    for name, values, high, unit in numbers:
+        for value in values or ():
+            if value is not None:
+                check_number(value, name, high, unit)
+    check_outputs(args, ("-o", "output"))
+
+
+def run(args: argparse.Namespace) -> int:
+    """Compose the servicer, write its URDF (and SRDF) and print what it is."""
+    from ..robot.compose import compose, write_composed
+    from ..robot.model import load_robot
+
+    spec = _servicer_spec(args, _payload(args))
+    with stage("compose servicer"):
+        composed = compose(spec)
+        path = write_composed(composed, args.output)
+        robot = load_robot(path, composed.end_effectors)
+    print(f"freefloat compose: wrote {path}")
+    if composed.srdf is not None:
+        print(f"  with {path.with_suffix('.srdf').name}: each arm's SRDF pairs, prefixed")
+    for name, value in composed.locked.items():
+        shown = value if name in composed.prismatic else math.degrees(value)
+        print(f"  locked {name} at {shown:.6g} {'m' if name in composed.prismatic else 'deg'}")
+    tips = ", ".join(repr(e) for e in robot.end_effectors)
+    print(
+        f"  {robot.n} joints ({', '.join(robot.joint_names)}), total mass "
+        f"{robot.total_mass:.3f} kg, end effector{'s' if len(robot.end_effectors) > 1 else ''} "
+        f"{tips}"
+    )
+    if spec.payload is not None:
+        print(
+            f"  captured payload {spec.payload.mass:g} kg fixed to {robot.end_effector!r} "
+            "(link 'captured_payload')"
+        )
+    return 0
+
+
+def _payload(args: argparse.Namespace) -> Payload | None:
+    """The ``--payload-*`` options as a validated ``Payload``, or None without a mass."""
+    from ..robot.payload import Payload
+
+    extra = [args.payload_com, args.payload_inertia, args.payload_box]
+    if args.payload_mass is None:
+        if any(v is not None for v in extra):
+            raise InputError(
+                "--payload-com, --payload-inertia and --payload-box need --payload-mass"
+            )
+        return None
+    com = tuple(args.payload_com or (0.0, 0.0, 0.0))
+    box = tuple(args.payload_box) if args.payload_box is not None else None
+    if args.payload_inertia is not None:
+        ixx, iyy, izz, ixy, ixz, iyz = (float(v) for v in args.payload_inertia)
+        return Payload(args.payload_mass, com, (ixx, iyy, izz, ixy, ixz, iyz), box)
+    if box is None:
+        raise InputError(
+            "--payload-mass needs --payload-inertia IXX IYY IZZ IXY IXZ IYZ [kg m^2] "
+            "(or --payload-box X Y Z [m] for a uniform box)"
+        )
+    return Payload.uniform_box(args.payload_mass, box, com)
+
+
+def _servicer_spec(args: argparse.Namespace, payload: Payload | None) -> ServicerSpec:
+    """The ``compose`` options as a spec: one ``--arm`` with its ``--mount`` per arm."""
+    from ..robot.compose import ArmSpec, ServicerSpec
+
+    count = len(args.arm)
+    rpys = args.mount_rpy or [[0.0, 0.0, 0.0]] * count
+    prefixes = args.prefix or [""] * count
+    given_per_arm = (("--mount", args.mount), ("--mount-rpy", rpys), ("--prefix", prefixes))
+    for option, given in given_per_arm:
+        if len(given) != count:
+            raise InputError(f"give {option} once per --arm ({count}), got {len(given)}")
+    arms = [
+        ArmSpec(arm, tuple(mount), tuple(math.radians(a) for a in rpy), prefix)
+        for arm, mount, rpy, prefix in zip(args.arm, args.mount, rpys, prefixes, strict=True)
+    ]
+    if count > 1:
+        arms = [
+            dataclasses.replace(a, prefix=a.prefix or f"arm{i + 1}_") for i, a in enumerate(arms)
+        ]
+    locks: list[list[str | tuple[str, float]]] = [[] for _ in arms]
+    for item in args.lock or ():
+        name, _, degrees = item.partition("=")
+        value = 0.0
+        if degrees:
+            try:
+                amount = float(degrees)
+            except ValueError:
+                raise InputError(f"--lock {item}: give JOINT or JOINT=DEG") from None
+            value = math.radians(check_number(amount, f"--lock {name}", MAX_ANGLE_DEG, "deg"))
+        owner = next((i for i, a in enumerate(arms) if name.startswith(a.prefix)), None)
+        if owner is None:
+            raise InputError(
+                f"--lock {name}: name a joint with its arm's prefix "
+                f"({', '.join(a.prefix for a in arms)})"
+            )
+        local = name[len(arms[owner].prefix) :]
+        locks[owner].append((local, value) if degrees else local)
+    arms = [
+        dataclasses.replace(a, lock=tuple(lock), keep_gripper=args.keep_gripper)
+        for a, lock in zip(arms, locks, strict=True)
+    ]
+    first = arms[0]
+    return ServicerSpec(
+        arm=first.arm,
+        base_mass=args.base_mass,
+        base_size=tuple(args.base_size),
+        base_inertia=tuple(args.base_inertia) if args.base_inertia else None,
+        mount=first.mount,
+        mount_rpy=first.mount_rpy,
+        lock=first.lock,
+        keep_gripper=args.keep_gripper,
+        payload=payload,
+        more_arms=tuple(arms[1:]),
+        prefix=first.prefix,
+    )

@@ -1,0 +1,144 @@
+"""The ``freefloat`` command line: the parser of every command, and how the command ends.
+
+Angles are printed in degrees. Every expected failure (a :class:`FreeFloatError`) is printed
+as one line ``freefloat: error: ...`` and exits with code 2, with no traceback and no file
+written. Each command is a module of this package (:data:`COMMANDS`) that builds its own
+sub-parser, checks its arguments before any work and runs; the plan summary lives in
+:mod:`freefloat.viz.summary` and the work itself in the layers below.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections.abc import Sequence
+from types import ModuleType
+from typing import NoReturn
+
+from .. import __version__
+from .._exits import HungUp, Terminated, error_line, flush_output, handle_signals, silence_output
+from ..errors import FreeFloatError
+from ..progress import configure
+from . import (
+    bounds,
+    check,
+    compose,
+    correct,
+    export,
+    plan,
+    plot,
+    reach,
+    sensitivity,
+    show,
+    sweep,
+    verify,
+)
+from .messages import in_degrees
+
+__all__ = ["COMMANDS", "build_parser", "main"]
+
+#: The commands, in the order ``freefloat --help`` lists them: each module's ``add_parser``
+#: adds its sub-parser, whose defaults are its ``check`` (or None) and ``run``.
+COMMANDS: tuple[ModuleType, ...] = (
+    plan,
+    bounds,
+    reach,
+    check,
+    verify,
+    compose,
+    show,
+    export,
+    plot,
+    sensitivity,
+    correct,
+    sweep,
+)
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line ``freefloat: error: ...`` (exit code 2)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"freefloat: error: {message} (see {self.prog} --help)\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``freefloat`` command."""
+    parser = _Parser(
+        prog="freefloat",
+        description="Point-to-point motion planning for free-floating space manipulators. "
+        "Angles on the command line and in scenario files are in degrees.",
+    )
+    parser.add_argument("--version", action="version", version=f"freefloat {__version__}")
+    commands = parser.add_subparsers(
+        dest="command", required=True, metavar="COMMAND", parser_class=_Parser
+    )
+    for command in COMMANDS:
+        command.add_parser(commands)
+    for sub in [parser, *commands.choices.values()]:
+        _add_common_flags(sub)
+    return parser
+
+
+def _add_common_flags(parser: argparse.ArgumentParser) -> None:
+    """-v/--verbose and -q/--quiet, before or after the command name."""
+    parser.add_argument(
+        "-v",
+        "--verbose",
+        action="count",
+        default=argparse.SUPPRESS,
+        help="log stage timings (-v) and details (-vv) on stderr",
+    )
+    parser.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        default=argparse.SUPPRESS,
+        help="no progress display and no warnings; errors and results only",
+    )
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return the exit code.
+
+    0: success; 1: ``verify`` found a failing check; 2: bad input, infeasible request, no
+    plan, or standard output cannot be written (one line ``freefloat: error: ...`` on
+    stderr); 130: interrupted by Ctrl-C; 143: terminated by SIGTERM; 129: SIGHUP (one line
+    each, no partial file left); 141: standard output was closed (silently).
+    """
+    undo = handle_signals()
+    try:
+        parser = build_parser()
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit as exc:  # --help, --version, or a one-line argument error
+            flush_output()
+            return exc.code if isinstance(exc.code, int) else 2
+        configure(getattr(args, "verbose", 0), getattr(args, "quiet", False))
+        args.started = time.perf_counter()
+        if args.check is not None:
+            args.check(args)
+        code = int(args.func(args))
+        flush_output()
+        return code
+    except FreeFloatError as exc:
+        error_line(f"error: {in_degrees(exc)}")
+        return 2
+    except BrokenPipeError:  # standard output closed (| head): nothing more to say
+        silence_output(1)
+        return 141
+    except OSError as exc:  # a stream, not a file (files raise FileError): > /dev/full
+        silence_output(1)
+        error_line(f"error: cannot write the output: {exc.strerror or exc}")
+        return 2
+    except KeyboardInterrupt:
+        error_line("interrupted")
+        return 130
+    except Terminated:
+        error_line("terminated")
+        return 143
+    except HungUp:
+        error_line("hung up")
+        return 129
+    finally:
+        undo()

@@ -1,0 +1,125 @@
+"""``freefloat plan``: plan a scenario and write the plan file."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import time
+from pathlib import Path
+
+from ..errors import InputLimitError
+from ..pipeline import plan
+from ..problem.limits import check_samples
+from ..problem.objectives import OBJECTIVES
+from ..progress import TIMINGS, stage
+from ..solvers.options import DEFAULT_TOLERANCE, TOLERANCE_RANGE_RAD, SolveOptions
+from ..viz.summary import cartesian_report, robot_label, summary
+from .common import DEFAULT_OUT_DIR, Commands, check_outputs, load_scenario
+
+__all__ = ["add_parser", "check", "run"]
+
+
+def add_parser(commands: Commands) -> argparse.ArgumentParser:
+    """Add this command's sub-parser to ``commands``."""
+    p_plan = commands.add_parser(
+        "plan",
+        help="plan a scenario and write the plan file",
+        description="Plan joint paths that bring the base to its goal attitude; print a "
+        "summary and write the plan (JSON). Without SCENARIO, plan the shipped worked example "
+        "into ./freefloat-out/ with its playback page (plan.html) and plots (plots/).",
+    )
+    p_plan.add_argument("scenario", nargs="?", help="scenario TOML file (default: worked example)")
+    p_plan.add_argument(
+        "-o",
+        "--output",
+        help="plan file to write (default: SCENARIO.plan.json,"
+        " or freefloat-out/plan.json for the worked example)",
+    )
+    p_plan.add_argument(
+        "--allow-full-turns",
+        action="store_true",
+        help="continuous joints may reach their goal the other way round",
+    )
+    p_plan.add_argument(
+        "--objective",
+        choices=list(OBJECTIVES),
+        default=None,
+        help="which path is best among those that reach the goal (default: the scenario's "
+        "[path] objective, else min_norm); min_effort: least integral of squared torques",
+    )
+    p_plan.add_argument("--samples", type=int, default=201, help="samples in [0, T] (default 201)")
+    p_plan.add_argument(
+        "--tolerance",
+        type=float,
+        default=DEFAULT_TOLERANCE,
+        help=f"attitude tolerance in rad (default {DEFAULT_TOLERANCE:g})",
+    )
+    p_plan.set_defaults(func=run, check=check)
+    return p_plan
+
+
+def check(args: argparse.Namespace) -> None:
+    """Refuse bad numbers and an unwritable output before any work (docs/limits.md)."""
+    check_samples(args.samples, "--samples")
+    low, high = TOLERANCE_RANGE_RAD
+    if not low <= args.tolerance <= high:  # NaN fails too
+        raise InputLimitError(
+            "--tolerance",
+            args.tolerance,
+            low,
+            high,
+            "rad",
+            why="the attitude integration certifies plans to 1e-12 rad and verification "
+            "holds them to 1e-7 rad",
+        )
+    check_outputs(args, ("-o", "output"))
+
+
+def run(args: argparse.Namespace) -> int:
+    """Plan the scenario, write the plan (and for the worked example its page and plots)."""
+    from ..robust.plan_robustness import with_robustness
+
+    scenario = load_scenario(args.scenario)
+    if args.allow_full_turns:
+        scenario = dataclasses.replace(scenario, allow_full_turns=True)
+    result = plan(
+        scenario,
+        SolveOptions(tolerance=args.tolerance),
+        samples=args.samples,
+        objective=args.objective,
+    )
+    cartesian = cartesian_report(scenario, result)
+    with stage("sensitivity"):
+        result = with_robustness(result, scenario.robot)
+    if args.output:
+        output = Path(args.output)
+    elif args.scenario:
+        output = Path(f"{Path(args.scenario).stem}.plan.json")
+    else:
+        output = DEFAULT_OUT_DIR / "plan.json"
+    written = result.save(output)
+    after: list[str] = []
+    if not args.scenario and not args.output:
+        # The main job: the worked example with its playback page and plots.
+        from ..viz.playback import write_html
+        from ..viz.plots import save_figures
+
+        with stage("write playback page"):
+            html = write_html(result, DEFAULT_OUT_DIR / "plan.html")
+        after.append(f"  playback        {html}")
+        with stage("write plots"):
+            figures = save_figures(result, DEFAULT_OUT_DIR / "plots")
+        after.append(
+            f"  plots           {figures[0].parent} ({len(figures)} files: "
+            f"{', '.join(p.name for p in figures)})"
+        )
+    text = summary(
+        result,
+        written,
+        robot_label=robot_label(scenario),
+        wall_time_s=time.perf_counter() - args.started,
+        timings=dict(TIMINGS),
+        extra_lines=cartesian,
+    )
+    print("\n".join([text, *after]))
+    return 0

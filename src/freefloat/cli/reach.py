@@ -1,0 +1,83 @@
+"""``freefloat reach``: the drift attitude and the attitudes a simple motion can reach."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from ..errors import InputLimitError
+from ..problem.limits import check_number
+from ..reachable import DEFAULT_BUDGET as DEFAULT_REACH_BUDGET
+from .common import MAX_BUDGET, Commands, check_outputs, load_scenario
+
+__all__ = ["MAX_TRAVEL", "add_parser", "check", "run"]
+
+#: Largest ``reach --travel`` (joint travel over the start-goal span).
+MAX_TRAVEL = 100.0
+
+
+def add_parser(commands: Commands) -> argparse.ArgumentParser:
+    """Add this command's sub-parser to ``commands``."""
+    p_reach = commands.add_parser(
+        "reach",
+        help="print the drift attitude and the attitudes a simple motion can reach",
+        description="Where the plain quintic path leaves the spacecraft (the drift attitude), "
+        "an outer bound on the turn of every simple motion (joint travel at most --travel times "
+        "its start-goal span; 1: every joint monotone), and per direction the largest turn from "
+        "the drift attitude reached by a solved path, with the goal attitude to paste into the "
+        "scenario (docs/reach.md). The scenario's goal attitude is ignored.",
+    )
+    p_reach.add_argument("scenario", nargs="?", help="scenario TOML file (default: worked example)")
+    p_reach.add_argument(
+        "--travel",
+        type=float,
+        default=1.0,
+        metavar="K",
+        help="outer bound for joint travel at most K x the start-goal span (default 1: monotone)",
+    )
+    p_reach.add_argument(
+        "--budget",
+        type=int,
+        default=DEFAULT_REACH_BUDGET,
+        help="residual evaluations per direction of the inner estimate "
+        f"(default {DEFAULT_REACH_BUDGET}; a count); 0: the drift attitude and the outer bound "
+        "only (well under a second)",
+    )
+    p_reach.add_argument("--plot", metavar="FILE", help="also draw it (PNG, SVG or PDF)")
+    p_reach.set_defaults(func=run, check=check)
+    return p_reach
+
+
+def check(args: argparse.Namespace) -> None:
+    """Refuse bad numbers and an unwritable figure before any work (docs/limits.md)."""
+    check_number(args.travel, "--travel", MAX_TRAVEL, low=1.0)
+    if not 0 <= args.budget <= MAX_BUDGET:
+        raise InputLimitError("--budget", args.budget, 0, MAX_BUDGET)
+    check_outputs(args, ("--plot", "plot"))
+
+
+def run(args: argparse.Namespace) -> int:
+    """Print the drift attitude, the outer bound and the reached attitudes."""
+    from ..progress import counted
+    from ..reachable import reachable
+    from ..solvers.reach import default_directions
+    from ..viz.reach_text import reach_lines
+
+    scenario = load_scenario(args.scenario)
+    with counted("reach", len(default_directions())) as advance:
+        report = reachable(
+            scenario,
+            travel_factor=args.travel,
+            budget=args.budget,
+            progress=lambda i, n, d: advance(
+                f"axis {' '.join(f'{x:+.2f}' for x in d.axis)}: {math.degrees(d.reached):.3f} deg"
+                f" ({d.evaluations} evaluations)"
+            ),
+        )
+    print("\n".join(reach_lines(report)))
+    if args.plot:
+        from ..viz.reach_plot import save_reach_figure
+
+        written = save_reach_figure(report.estimate(), args.plot, title=report.robot)
+        print(f"figure: {written.resolve()}")
+    return 0

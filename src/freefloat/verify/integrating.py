@@ -1,0 +1,182 @@
+"""The checks of a plan that integrate: its attitude by RK4, and a forward-dynamics replay.
+
+- ``attitude_independent``: the final attitude (rad from the target) from a classical RK4
+  integration of the quaternion ODE in seconds along the file's paths (not the planner's
+  Magnus scheme).
+- ``replay_attitude``, ``replay_joints``: forward dynamics of the free system (ABA, RK4) driven
+  only by the planned joint torques from the start at rest: final attitude error (rad) and
+  joint error (rad or m; continuous joints wrapped).
+
+Both double their steps and report the difference between the last two results as their
+``error_estimate``; they refine until their verdict stands whatever that error, or the estimate
+is below :data:`~freefloat.verify.stepping.CONVERGED_FRACTION` of the tolerance
+(:mod:`freefloat.verify.stepping`). A replay the allowed steps cannot resolve says so in its
+``detail`` and reports an estimate at least its value: no verdict.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..physics.attitude import geodesic_angle
+from ..physics.dynamics import inverse_dynamics_batch, replay
+from ..plans.guarantees import Check
+from ..robot.model import Robot
+from .plan_checks import TOLERANCES, Subject
+from .stepping import (
+    _FIRST_ATTITUDE_STEPS,
+    _FIRST_REPLAY_STEPS,
+    _MAX_ATTITUDE_STEPS,
+    _decided,
+    _finite,
+    _refine,
+    _rk4_attitude,
+    _with_midpoints,
+)
+
+__all__ = ["attitude_check", "replay_checks"]
+
+
+def attitude_check(subject: Subject) -> list[Check]:
+    """``attitude_independent``: RK4 on the quaternion ODE in seconds, step doubling."""
+    plan, mmap, path = subject.plan, subject.mmap, subject.path
+    duration = plan.duration
+    start_quat = np.asarray(plan.base.start_quaternion_xyzw, dtype=float)
+    target = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
+    tolerance = TOLERANCES["attitude_independent_rad"]
+
+    def omega_at(t: np.ndarray) -> np.ndarray:
+        q, qd, _ = path(np.asarray(t, dtype=float))
+        return mmap.base_rates(q, qd).omega
+
+    steps = _FIRST_ATTITUDE_STEPS
+    omega = _refine(None, steps, duration, omega_at)
+    coarse = _rk4_attitude(start_quat, omega, duration)
+    previous_estimate = math.inf
+    while True:
+        steps *= 2
+        omega = _refine(omega, steps, duration, omega_at)
+        fine = _rk4_attitude(start_quat, omega, duration)
+        value = geodesic_angle(fine, target)
+        estimate = geodesic_angle(coarse, fine)
+        turn = float(np.abs(omega).max()) * duration / steps
+        if steps >= _MAX_ATTITUDE_STEPS or _decided(
+            value, estimate, previous_estimate, tolerance, turn
+        ):
+            break
+        coarse, previous_estimate = fine, estimate
+    detail = f"RK4, {steps} steps"
+    return [Check("attitude_independent", value, tolerance, "rad", estimate, detail)]
+
+
+@dataclass(frozen=True)
+class _Replay:
+    """The last level of a replay: its figures, estimates, steps and whether it converged."""
+
+    attitude: float
+    joints: float
+    attitude_estimate: float
+    joint_estimate: float
+    steps: int
+    converged: bool
+
+
+def replay_checks(subject: Subject) -> list[Check]:
+    """``replay_attitude`` and ``replay_joints``: forward dynamics from the start at rest."""
+    level = _replay(subject)
+    att_estimate, joint_estimate = level.attitude_estimate, level.joint_estimate
+    detail = f"RK4, {level.steps} steps"
+    if not level.converged:
+        # The steps allowed do not resolve this motion (a long, fast or sensitive one): the
+        # difference bounds nothing, and the replay cannot tell its error from the value.
+        # A level that blew up (a long chain's open-loop replay diverges) differs by inf: the
+        # value itself is then the bound, so the file holds finite numbers.
+        att_estimate = (
+            max(att_estimate, level.attitude) if math.isfinite(att_estimate) else level.attitude
+        )
+        joint_estimate = (
+            max(joint_estimate, level.joints) if math.isfinite(joint_estimate) else level.joints
+        )
+        detail += ", not converged: no verdict"
+    return [
+        Check(
+            "replay_attitude",
+            level.attitude,
+            TOLERANCES["replay_attitude_rad"],
+            "rad",
+            att_estimate,
+            detail,
+        ),
+        Check(
+            "replay_joints",
+            level.joints,
+            TOLERANCES["replay_joint"],
+            "rad|m",
+            joint_estimate,
+            detail,
+        ),
+    ]
+
+
+def _replay(subject: Subject) -> _Replay:
+    """Replay on doubling steps until both verdicts stand or the steps allowed run out."""
+    plan, mmap, robot, path = subject.plan, subject.mmap, subject.robot, subject.path
+    duration, start, goal = plan.duration, subject.start, subject.goal
+    start_quat = np.asarray(plan.base.start_quaternion_xyzw, dtype=float)
+    target = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
+
+    def torque_at(t: np.ndarray) -> np.ndarray:
+        q, qd, qdd = path(np.asarray(t, dtype=float))
+        return inverse_dynamics_batch(mmap, q, qd, qdd).tau
+
+    def run(ends: np.ndarray, table: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        result = replay(mmap, start, start_quat, table, duration, len(ends) - 1, False, nodes=ends)
+        return result.quaternion_xyzw, result.joints
+
+    steps = min(_FIRST_REPLAY_STEPS, subject.replay_steps)
+    ends = np.linspace(0.0, duration, steps + 1)
+    torques = torque_at(_with_midpoints(ends))
+    coarse_q, coarse_j = run(ends, torques)
+    replay_att = geodesic_angle(coarse_q, target)
+    replay_joint = float(np.abs(_wrap_joints(robot, coarse_j - goal)).max())
+    samples = plan.samples
+    speed = max(
+        float(np.abs(np.asarray(samples.qd, float)).max()),
+        float(np.abs(samples.base_angular_velocity).max()),
+        0.0,
+    )
+    att_estimate = joint_estimate = math.inf
+    previous = (math.inf, math.inf)
+    while 2 * steps <= subject.replay_steps:
+        steps *= 2
+        ends = _with_midpoints(ends)
+        fine_times = _with_midpoints(ends)
+        table = np.empty((len(fine_times), robot.n))
+        table[0::2] = torques
+        table[1::2] = torque_at(fine_times[1::2])
+        torques = table
+        fine_q, fine_j = run(ends, torques)
+        replay_att = geodesic_angle(fine_q, target)
+        replay_joint = float(np.abs(_wrap_joints(robot, fine_j - goal)).max())
+        att_estimate = _finite(geodesic_angle(coarse_q, fine_q))
+        joint_estimate = _finite(float(np.abs(_wrap_joints(robot, fine_j - coarse_j)).max()))
+        turn = speed * duration / steps
+        if _decided(
+            replay_att, att_estimate, previous[0], TOLERANCES["replay_attitude_rad"], turn
+        ) and _decided(replay_joint, joint_estimate, previous[1], TOLERANCES["replay_joint"], turn):
+            return _Replay(replay_att, replay_joint, att_estimate, joint_estimate, steps, True)
+        coarse_q, coarse_j = fine_q, fine_j
+        previous = (att_estimate, joint_estimate)
+    return _Replay(replay_att, replay_joint, att_estimate, joint_estimate, steps, False)
+
+
+def _wrap_joints(robot: Robot, delta: np.ndarray) -> np.ndarray:
+    """Joint differences, continuous joints wrapped to (-pi, pi] (rad or m)."""
+    out = np.array(delta, dtype=float)
+    for i, joint in enumerate(robot.joints):
+        if joint.kind == "continuous":
+            out[i] = math.remainder(out[i], 2.0 * math.pi)
+    return out
