@@ -47,13 +47,16 @@ scripts/bench_clearance.py).
 Paths (issue 23, with --paths or --paths-only): the orthonormal path basis against the monomial
 basis before it, side by side (scripts/bench_paths.py).
 
+Speed where users wait (issue 25, with --speed-only; scripts/bench_speed.py): every case a
+fresh ff.plan as a user makes it, paired rounds with and without clearance, medians.
+
 freefloat reach (issue 28, with --reachable-only; scripts/bench_reachable.py): its time on the
 shipped servicers and a composed Kinova servicer, and 50 goals sampled inside its inner set
 planned with ff.plan.
 
 Run: python scripts/bench.py [--runs N] [--json FILE] [--markdown FILE] [--reach-only]
      [--random N] [--sweep] [--sweep-only] [--multi-arm-only] [--clearance-only] [--paths]
-     [--paths-only] [--paths-baseline REV] [--reachable-only]
+     [--paths-only] [--paths-baseline REV] [--reachable-only] [--speed-only [--no-roll]]
 
 ``--markdown FILE`` also writes the tables as Markdown, each table preceded by its stamp: the
 date, the machine (CPU, cores), the Python, Pinocchio, numpy and freefloat versions, the load
@@ -889,6 +892,14 @@ def run() -> None:
         help="only the true-hull and certified-clearance tables (bench_clearance.py)",
     )
     parser.add_argument(
+        "--speed-only",
+        action="store_true",
+        help="only the speed section (issue 25: fresh calls, paired rounds; bench_speed.py)",
+    )
+    parser.add_argument(
+        "--no-roll", action="store_true", help="speed section without the 65 deg roll (slow)"
+    )
+    parser.add_argument(
         "--reachable-only",
         action="store_true",
         help="only the freefloat reach section (issue 28: times, inner set against plan)",
@@ -946,6 +957,16 @@ def run() -> None:
         print_paths(paths)
         if args.json:
             args.json.write_text(json.dumps({"machine": machine(), "paths": paths}, indent=1))
+        return
+    if args.speed_only:
+        from bench_speed import bench_speed, print_speed
+
+        speed = bench_speed(max(3, args.runs // 2), roll=not args.no_roll)
+        print_speed(speed)
+        if args.json:
+            args.json.write_text(
+                json.dumps({"machine": machine(), "speed": speed}, indent=1, default=str)
+            )
         return
     if args.reachable_only:
         from bench_reachable import bench_reachable, print_reachable

@@ -115,7 +115,9 @@ def _certificate_row(name: str, runs: int) -> dict[str, object]:
     return {
         "robot": name,
         "sampled_hull_ms": _median_ms(sampled, runs),
-        "certificate_ms": _median_ms(lambda: clearance_certificate(s.robot, clearance, paths), runs),
+        "certificate_ms": _median_ms(
+            lambda: clearance_certificate(s.robot, clearance, paths), runs
+        ),
         "instants": cert.instants,
         "halvings": cert.bisections,
         "measured_m": cert.measured,

@@ -8,10 +8,13 @@ changes smoothly with the joints; a hull contains its mesh, so a clearance on hu
 clearance on the meshes. Verification measures the original meshes with a separately built
 model (:mod:`freefloat.verify.clearance`).
 
-Every query is checked: a non-finite or impossible distance (coal's EPA can return -DBL_MAX for
-some penetrating pairs at tight tolerances) is asked again at looser tolerances
-(:data:`RETRY_TOLERANCES`) and counted in :attr:`CollisionModel.retries`; a value still
-impossible raises :class:`~freefloat.errors.ModelError`, never reaching a solver.
+Only the pairs that can be the closest are measured when only the closest is asked for
+(:mod:`freefloat.robot.motion_bound` bounds the others from their last measurement). Every
+query is checked (:mod:`freefloat.robot.distance_query`): a non-finite or impossible distance
+(coal's EPA can return -DBL_MAX for some penetrating pairs at tight tolerances) is asked again
+at looser tolerances (:data:`RETRY_TOLERANCES`) and counted in
+:attr:`CollisionModel.retries`; a value still impossible raises
+:class:`~freefloat.errors.ModelError`, never reaching a solver.
 
 The base is free-floating, but every collision geometry here is fixed either to the spacecraft
 or to an arm link, so distances depend on the joints alone: they are computed with the
@@ -30,7 +33,16 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from ..errors import InputError, ModelError
+from ..errors import InputError
+from .distance_query import (
+    DEFAULT_GUESS,
+    DEFAULT_SUPPORT_GUESS,
+    GJK_TOLERANCE,
+    RETRY_TOLERANCES,
+    CheckedDistance,
+    checked_distance,
+    configure,
+)
 from .geometry import (
     HullInfo,
     add_obstacles,
@@ -38,11 +50,12 @@ from .geometry import (
     checked_pairs,
     hull_volume,
     load_collision_geometry,
-    mesh_triangles,
     mesh_volume,
+    object_triangles,
     true_hull,
 )
 from .model import Robot, example_robot_data_dir
+from .motion_bound import BOUND_SLACK, motion_weights
 
 __all__ = [
     "ARM_SRDFS",
@@ -132,12 +145,6 @@ class Obstacle:
         return pin.SE3(pin.rpy.rpyToMatrix(*self.rpy), np.array(self.xyz, dtype=float))
 
 
-#: Convergence tolerance of coal's GJK and EPA distance queries (m).
-GJK_TOLERANCE = 1e-9
-#: EPA tolerances (m) a query is asked again at when its answer is impossible.
-RETRY_TOLERANCES = (1e-6, 1e-4)
-
-
 @dataclass(frozen=True)
 class Distances:
     """Signed distances of every checked pair at one configuration.
@@ -177,7 +184,7 @@ class CollisionModel:
         self._meshes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         for index, obj in enumerate(geometry.geometryObjects):
             if isinstance(obj.geometry, coal.BVHModelBase):
-                self._meshes[index] = mesh_triangles(obj.geometry)
+                self._meshes[index] = object_triangles(obj)
                 obj.geometry = true_hull(obj)
         add_obstacles(robot, geometry, self.obstacles)
         self.pairs = checked_pairs(robot, geometry, srdf)
@@ -187,11 +194,11 @@ class CollisionModel:
         self._data = robot.model.createData()
         self._geometry_data = pin.GeometryData(geometry)
         for request in self._geometry_data.distanceRequests:
-            _configure(request, GJK_TOLERANCE)
+            configure(request, GJK_TOLERANCE)
         #: Queries asked again at a looser EPA tolerance since the model was built.
         self.retries = 0
-        # Views of Pinocchio's per-pair requests and results (they stay valid: the vectors are
-        # never resized), and the results of pairs asked again alone in the last call.
+        # Views of Pinocchio's per-pair requests and results (valid: the vectors never resize),
+        # and the results of pairs asked again alone in the last call.
         self._requests = list(self._geometry_data.distanceRequests)
         self._pair_results = list(self._geometry_data.distanceResults)
         self._retried: dict[int, coal.DistanceResult] = {}
@@ -205,8 +212,23 @@ class CollisionModel:
         self._centres, self._radii = np.array(centres), np.array(radii)
         self._shapes = [obj.geometry for obj in geometry.geometryObjects]
         pairs = np.array(self.pairs, dtype=int).reshape(-1, 2)
-        self._first, self._second = pairs[:, 0], pairs[:, 1]
+        self._reach = self._radii[pairs[:, 0]] + self._radii[pairs[:, 1]]
+        self._neutral = pin.neutral(robot.model)  # joint values go into a copy (no continuous)
+        plain = all(j.kind != "continuous" for j in robot.joints)
+        self._slots = np.array([j.idx_q for j in robot.joints]) if plain else None
         self._columns = np.array([j.idx_v for j in robot.joints])
+        # Each pair's last measured distance (m) and the joints then: see _may_be_closest.
+        self._weights = motion_weights(robot, geometry, self.pairs, self._centres, self._radii)
+        self._last_joints = np.zeros((len(self.pairs), robot.n))
+        self._last_values = np.full(len(self.pairs), math.nan)
+
+    @property
+    def weights(self) -> np.ndarray | None:
+        """(P, N) how fast each pair's distance can change per joint (m per rad), or None.
+
+        See :func:`~freefloat.robot.motion_bound.motion_weights` (None: no bound).
+        """
+        return self._weights
 
     @property
     def n_pairs(self) -> int:
@@ -244,50 +266,97 @@ class CollisionModel:
         return value, self._gradient(k), k
 
     def _bulk(self, joints: np.ndarray, nearest: bool = False) -> np.ndarray:
-        """Signed distances (m) of the pairs, in one pass of Pinocchio's ``computeDistances``.
+        """Signed distances (m) of the pairs, each by Pinocchio's ``computeDistance``.
 
         With ``nearest``, only the pairs that can be the closest are measured (the others are
-        ``inf``). Each value is checked against its bounding spheres as
-        :func:`checked_distance` does, and an impossible one is asked again alone at looser
-        tolerances (counted in :attr:`retries`). The queries start from coal's default guesses
-        (of the separating direction and of the support vertices), never from the last call's,
-        so a distance does not depend, to the last bit, on what was asked before.
+        ``inf``; see :meth:`_may_be_closest`). Each value is checked against its bounding
+        spheres as :func:`checked_distance` does, and an impossible one is asked again alone at
+        looser tolerances (counted in :attr:`retries`). The queries start from coal's default
+        guesses (of the separating direction and of the support vertices), never from the last
+        call's, so a distance does not depend, to the last bit, on what was asked before.
         """
         model, data, gdata = self.robot.model, self._data, self._geometry_data
-        q = self.robot.configuration(np.asarray(joints, dtype=float))
-        pin.forwardKinematics(model, data, q)
+        joints = np.asarray(joints, dtype=float)
+        pin.forwardKinematics(model, data, self._configuration(joints))
         pin.updateGeometryPlacements(model, data, self.geometry, gdata)
-        poses = np.array([m.homogeneous for m in gdata.oMg])
-        centres = np.einsum("gij,gj->gi", poses[:, :3, :3], self._centres) + poses[:, :3, 3]
-        gap = np.linalg.norm(centres[self._first] - centres[self._second], axis=1)
-        reach = self._radii[self._first] + self._radii[self._second]
-        keep = np.ones(len(gap), dtype=bool)
-        if nearest and len(gap):
-            keep = gap - reach <= float((gap + reach).min()) + 1e-9
-        active = np.zeros((len(poses), len(poses)), dtype=bool)
-        active[self._first[keep], self._second[keep]] = True
-        gdata.setActiveCollisionPairs(self.geometry, active, True)
-        measured = [int(k) for k in np.flatnonzero(keep)]
-        for k in measured:  # Pinocchio keeps each pair's last guesses: start from coal's own
-            self._requests[k].cached_gjk_guess = _DEFAULT_REQUEST.cached_gjk_guess
-            self._requests[k].cached_support_func_guess = _DEFAULT_REQUEST.cached_support_func_guess
-        pin.computeDistances(self.geometry, gdata)
-        values = np.full(len(gap), math.inf)
-        values[measured] = [self._pair_results[k].min_distance for k in measured]
+        everything = np.arange(len(self.pairs))
+        if nearest and len(self.pairs):
+            measured = np.flatnonzero(self._may_be_closest(joints))
+        else:
+            measured = everything
+        gap, reach = self._spheres(measured)
+        for pair in measured:  # Pinocchio keeps each pair's last guesses: start from coal's own
+            self._requests[pair].cached_gjk_guess = DEFAULT_GUESS
+            self._requests[pair].cached_support_func_guess = DEFAULT_SUPPORT_GUESS
+        found = np.array(
+            [pin.computeDistance(self.geometry, gdata, int(k)).min_distance for k in measured]
+        )
         with np.errstate(invalid="ignore"):
-            possible = (values >= gap - reach - 1e-9) & (values <= gap + reach + 1e-9)
-        bad = keep & ~(np.isfinite(values) & possible)
+            possible = (found >= gap - reach - 1e-9) & (found <= gap + reach + 1e-9)
+        bad = ~(np.isfinite(found) & possible)
+        self._last_joints[measured] = joints
+        self._last_values[measured] = np.where(bad, math.nan, found)  # no retried reference
         self._retried = {}
-        for index in np.flatnonzero(bad):
-            k = int(index)
+        for i in np.flatnonzero(bad).tolist():
+            k = int(measured[i])
             a, b = self.pairs[k]
-            ta, tb = (coal.Transform3s(poses[i, :3, :3], poses[i, :3, 3]) for i in (a, b))
-            spheres = (float(gap[k] - reach[k]), float(gap[k] + reach[k]))
+            ta, tb = (_transform(gdata.oMg[j]) for j in (a, b))
+            spheres = (float(gap[i] - reach[i]), float(gap[i] + reach[i]))
             shapes = (self._shapes[a], ta, self._shapes[b], tb)
             answer = checked_distance(*shapes, spheres, self.names[k])
             self.retries += max(1, answer.retries)
-            values[k], self._retried[k] = answer.value, answer.result
+            found[i], self._retried[k] = answer.value, answer.result
+        values = np.full(len(self.pairs), math.inf)
+        values[measured] = found
         return values
+
+    def _configuration(self, joints: np.ndarray) -> np.ndarray:
+        """Pinocchio's configuration at the joint values, spacecraft at the identity."""
+        if self._slots is None:
+            return self.robot.configuration(joints)
+        q = self._neutral.copy()
+        q[self._slots] = joints
+        return q
+
+    def _spheres(self, pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Per pair (indices), the distance of its bounding spheres' centres and their radii (m).
+
+        The distance is within ``gap +- reach``; at the placements of the last
+        ``updateGeometryPlacements``.
+        """
+        placements = self._geometry_data.oMg
+        centres: dict[int, np.ndarray] = {}
+        gap = np.empty(len(pairs))
+        for i, k in enumerate(pairs.tolist()):
+            a, b = self.pairs[k]
+            for g in (a, b):
+                if g not in centres:
+                    centres[g] = placements[g].act(self._centres[g])
+            gap[i] = math.dist(centres[a], centres[b])
+        return gap, self._reach[pairs]
+
+    def _may_be_closest(self, joints: np.ndarray) -> np.ndarray:
+        """Which pairs may have the smallest distance at ``joints`` (a boolean mask).
+
+        A pair measured before is bounded by its distance then, plus or minus how far its two
+        bodies can have moved relative to each other since (:func:`motion_weights` times the
+        joint change, m) and :data:`BOUND_SLACK`; one never measured (or whose last value was
+        retried) by its bounding spheres. A pair whose lower bound exceeds the smallest upper
+        bound cannot be the closest, nor tie with it: it is not measured, so the smallest
+        distance and its pair are the same bits as with every pair measured.
+        """
+        if self._weights is None:  # no bound (a prismatic joint): the spheres alone
+            gap, reach = self._spheres(np.arange(len(self.pairs)))
+            return gap - reach <= float((gap + reach).min()) + 1e-9
+        moved = np.einsum("pn,pn->p", self._weights, np.abs(joints - self._last_joints))
+        moved += BOUND_SLACK
+        lower = self._last_values - moved
+        upper = self._last_values + moved
+        unknown = np.flatnonzero(np.isnan(self._last_values))
+        if len(unknown):
+            gap, reach = self._spheres(unknown)
+            lower[unknown], upper[unknown] = gap - reach, gap + reach
+        return lower <= float(upper.min()) + 1e-9
 
     def hulls(self) -> list[HullInfo]:
         """Per mesh, the volume it encloses and that of its hull (m^3), for reports."""
@@ -319,78 +388,9 @@ class CollisionModel:
         return grad
 
 
-@dataclass(frozen=True)
-class CheckedDistance:
-    """A signed distance that passed its plausibility check.
-
-    Attributes:
-        value: signed distance (m), negative when the shapes overlap.
-        result: coal's result (witness points, normal).
-        retries: queries asked again at a looser EPA tolerance to get it.
-    """
-
-    value: float
-    result: coal.DistanceResult
-    retries: int
-
-
-#: A request as coal makes it: its guesses are where every query starts.
-_DEFAULT_REQUEST = coal.DistanceRequest()
-#: Requests at the first tolerance and at every retry tolerance, built once.
-_REQUESTS: list[coal.DistanceRequest] = []
-
-
-def checked_distance(
-    shape_a: coal.CollisionGeometry,
-    place_a: coal.Transform3s,
-    shape_b: coal.CollisionGeometry,
-    place_b: coal.Transform3s,
-    spheres: tuple[float, float],
-    name: str,
-) -> CheckedDistance:
-    """Signed distance (m) of two shapes, asked again at looser tolerances when impossible.
-
-    Impossible: not finite, or outside what the bounding spheres allow (``spheres``: their
-    lower and upper bounds of the distance, m; a translation separating the spheres separates
-    the shapes, so a depth never exceeds theirs).
-
-    Raises:
-        ModelError: no tolerance of :data:`RETRY_TOLERANCES` gives a possible value.
-    """
-    if not _REQUESTS:
-        _REQUESTS.extend(_distance_request(t) for t in (GJK_TOLERANCE, *RETRY_TOLERANCES))
-    least, most = spheres
-    value = math.nan
-    for retries, request in enumerate(_REQUESTS):
-        result = coal.DistanceResult()
-        value = float(coal.distance(shape_a, place_a, shape_b, place_b, request, result))
-        if math.isfinite(value) and least - 1e-9 <= value <= most + 1e-9:
-            return CheckedDistance(value, result, retries)
-    raise ModelError(
-        f"coal returned an impossible distance {value:.6g} m for {name} at every EPA "
-        "tolerance tried ("
-        + ", ".join(f"{t:g}" for t in (GJK_TOLERANCE, *RETRY_TOLERANCES))
-        + " m)"
-    )
-
-
-def _distance_request(epa_tolerance: float) -> coal.DistanceRequest:
-    """A signed-distance request: GJK to :data:`GJK_TOLERANCE`, EPA to ``epa_tolerance`` (m)."""
-    return _configure(coal.DistanceRequest(), epa_tolerance)
-
-
-def _configure(request: coal.DistanceRequest, epa_tolerance: float) -> coal.DistanceRequest:
-    """Set ``request`` up for signed distances from coal's default guess (never the last one's).
-
-    GJK to :data:`GJK_TOLERANCE` (coal's default 1e-6 m is too coarse), EPA to
-    ``epa_tolerance`` (m).
-    """
-    request.gjk_tolerance = GJK_TOLERANCE
-    request.epa_tolerance = epa_tolerance
-    request.gjk_max_iterations = 1000
-    request.enable_signed_distance = True
-    request.gjk_initial_guess = coal.GJKInitialGuess.DefaultGuess
-    return request
+def _transform(placement: pin.SE3) -> coal.Transform3s:
+    """The coal transform of a Pinocchio placement."""
+    return coal.Transform3s(placement.rotation, placement.translation)
 
 
 def collision_model(

@@ -14,8 +14,10 @@ arm body except the one mounted on it, every keep-out object against every arm b
 two arm bodies that are not parent and child; pairs an SRDF disables (MoveIt's
 ``<disable_collisions>``) are removed.
 
-Hulls are built once per mesh file and scale in a process (:func:`true_hull` keeps them), so a
-second plan of the same robot pays nothing for them.
+The URDF's geometry is parsed once per URDF in a process (each caller gets its own deep copy,
+:func:`load_collision_geometry`), a mesh's triangles read once per file
+(:func:`object_triangles`), and hulls are built once per mesh file and scale in a process
+(:func:`true_hull` keeps them), so a second plan of the same robot pays nothing for them.
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ __all__ = [
     "checked_pairs",
     "load_collision_geometry",
     "mesh_volume",
+    "object_triangles",
     "true_hull",
 ]
 
@@ -51,21 +54,55 @@ OBSTACLE_PREFIX = "obstacle:"
 def load_collision_geometry(robot: Robot) -> pin.GeometryModel:
     """A fresh geometry model of the URDF's collision elements (meshes as BVHs; m).
 
-    Each call parses the URDF again, so two callers never share shape objects.
+    The URDF and its meshes are parsed once per URDF text, file, package folders and joint
+    names in a process (and again when a mesh file changes on disk); each call gets its own
+    deep copy, so two callers never share shape objects.
 
     Raises:
         ModelError: the URDF's collision geometry cannot be read (a missing or broken mesh).
     """
-    try:
-        return pin.buildGeomFromUrdf(
-            robot.model,
-            str(robot.urdf),
-            pin.GeometryType.COLLISION,
-            None,
-            [str(d) for d in robot.package_dirs],
-        )
-    except (RuntimeError, ValueError) as exc:
-        raise ModelError(f"cannot read its collision geometry ({exc})", str(robot.urdf)) from None
+    key = (
+        robot.urdf_text,
+        str(robot.urdf),
+        tuple(str(d) for d in robot.package_dirs),
+        tuple(robot.model.names),
+    )
+    parsed = _PARSED.get(key)
+    if parsed is None or parsed[1] != _stamps(parsed[0]):
+        try:
+            geometry = pin.buildGeomFromUrdf(
+                robot.model,
+                str(robot.urdf),
+                pin.GeometryType.COLLISION,
+                None,
+                [str(d) for d in robot.package_dirs],
+            )
+        except (RuntimeError, ValueError) as exc:
+            raise ModelError(
+                f"cannot read its collision geometry ({exc})", str(robot.urdf)
+            ) from None
+        if len(_PARSED) >= 16:
+            _PARSED.pop(next(iter(_PARSED)))
+        parsed = _PARSED[key] = (geometry, _stamps(geometry))
+    return parsed[0].clone()
+
+
+def _stamps(geometry: pin.GeometryModel) -> tuple[tuple[str, int, int], ...]:
+    """(path, modification time in ns, size in bytes) of every mesh file the model read."""
+    out = []
+    for obj in geometry.geometryObjects:
+        if obj.meshPath:
+            try:
+                stat = Path(obj.meshPath).stat()
+            except OSError:
+                out.append((obj.meshPath, -1, -1))
+                continue
+            out.append((obj.meshPath, stat.st_mtime_ns, stat.st_size))
+    return tuple(out)
+
+
+#: Parsed collision geometry per URDF (see load_collision_geometry), with its mesh files' stamps.
+_PARSED: dict[tuple, tuple[pin.GeometryModel, tuple[tuple[str, int, int], ...]]] = {}
 
 
 def add_obstacles(robot: Robot, geometry: pin.GeometryModel, obstacles: Sequence) -> None:
@@ -182,6 +219,30 @@ def mesh_triangles(shape: coal.BVHModelBase) -> tuple[np.ndarray, np.ndarray]:
         dtype=int,
     ).reshape(-1, 3)
     return vertices, triangles
+
+
+def object_triangles(obj: pin.GeometryObject) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`mesh_triangles` of a mesh object, read once per mesh file, scale and file stamp.
+
+    The arrays are shared between callers, so they are read-only.
+    """
+    path = Path(obj.meshPath)
+    try:
+        stat = path.stat()
+        stamp = (stat.st_mtime_ns, stat.st_size)
+    except OSError:
+        return mesh_triangles(obj.geometry)
+    key = (str(path), tuple(float(x) for x in obj.meshScale), *stamp)
+    if key not in _TRIANGLES:
+        vertices, triangles = mesh_triangles(obj.geometry)
+        vertices.setflags(write=False)
+        triangles.setflags(write=False)
+        _TRIANGLES[key] = (vertices, triangles)
+    return _TRIANGLES[key]
+
+
+#: Triangles per mesh file, scale and file stamp (see object_triangles).
+_TRIANGLES: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
 
 
 def mesh_volume(vertices: np.ndarray, triangles: np.ndarray) -> float:

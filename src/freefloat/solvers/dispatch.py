@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
+from typing import NoReturn
 
 import numpy as np
 
@@ -88,62 +89,13 @@ def solve(
     tol = options.tolerance
     start_time = time.perf_counter()
     start_evaluations = problem.evaluations
-    zero = np.zeros(problem.n_free)
-
-    # Restoration serves the constraints every path must meet from the start; a lazy one
-    # (imposed only once a path broke it) is left to the strategy and the root filter.
-    eager = [c for c in constraints if not c.lazy]
-    quintic_breaks = broken_constraint(problem, eager, zero)
-    start, restored = _start(problem, constraints, quintic_breaks, start, options)
-    if np.linalg.norm(problem.residual(zero)) < 0.01 * tol and not quintic_breaks:
-        strategy = Strategy.NONE.value
-        attempt = Attempt(candidates=[zero], method="none (the quintic path already reaches it)")
-    else:
-        strategy = choose_strategy(problem, options)
-        if strategy not in STRATEGIES:
-            raise SolverError(
-                f"strategy {strategy!r} is not available; available: " + ", ".join(STRATEGIES),
-                float(np.linalg.norm(problem.residual(zero))),
-            )
-        try:
-            attempt = STRATEGIES[strategy](problem, constraints, options, start)
-        except (np.linalg.LinAlgError, FloatingPointError, ValueError) as exc:
-            # A numerical breakdown (an SVD that does not converge on non-finite values) is a
-            # failed attempt with a reason, never a crash.
-            attempt = Attempt(tried=[f"{strategy}: numerical failure ({exc})"])
+    strategy, attempt, start, restored = _attempt(problem, constraints, options, start)
     tried = restored + list(attempt.tried)
 
     roots, best_vector = _roots(problem, attempt, constraints, tol, tried)
     roots.sort(key=lambda r: float(r.beta @ r.beta))
-    if not roots and attempt.stopped_by and attempt.last_beta is not None:
-        # Out of reach: every figure of the error is taken at the path where the search
-        # stopped (how far it got, and what remains of the way).
-        stopped_at = problem.residual(attempt.last_beta)
-        turn = quat_log(
-            quat_multiply(quat_conjugate(problem.achieved(start)), problem.goal_quaternion)
-        )
-        asked = float(np.linalg.norm(turn))
-        raise UnreachableAttitudeError(
-            attempt.message,
-            float(np.linalg.norm(stopped_at)),
-            reached=attempt.reached_fraction * asked,
-            asked=asked,
-            tried=_dedupe(tried),
-            per_axis=stopped_at.tolist(),
-            stopped_by=attempt.stopped_by,
-            last_beta=attempt.last_beta.tolist(),
-            axis=(turn / max(asked, 1e-300)).tolist(),
-        )
     if not roots:
-        raise SolverError(
-            attempt.message or "no path within the constraints reaches the goal attitude",
-            float(np.linalg.norm(best_vector)),
-            _dedupe(tried),
-            per_axis=best_vector.tolist(),
-            stopped_by=attempt.stopped_by,
-            reached_fraction=attempt.reached_fraction,
-            last_beta=None if attempt.last_beta is None else attempt.last_beta.tolist(),
-        )
+        _refuse(problem, attempt, start, tried, best_vector)
 
     # Certify the integration at the chosen root; refine the grid and polish when needed.
     chosen = roots[0]
@@ -168,6 +120,81 @@ def solve(
         steps=certified.problem.steps,
         strategy=strategy,
         tried=tuple(_dedupe(tried)),
+    )
+
+
+def _attempt(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    options: SolveOptions,
+    given: np.ndarray | None,
+) -> tuple[str, Attempt, np.ndarray, list[str]]:
+    """Run the strategy: (its name, its attempt, where it started, what restoration did)."""
+    zero = np.zeros(problem.n_free)
+    # Restoration serves the constraints every path must meet from the start; a lazy one
+    # (imposed only once a path broke it) is left to the strategy and the root filter.
+    eager = [c for c in constraints if not c.lazy]
+    quintic_breaks = broken_constraint(problem, eager, zero)
+    start, restored = _start(problem, constraints, quintic_breaks, given, options)
+    if np.linalg.norm(problem.residual(zero)) < 0.01 * options.tolerance and not quintic_breaks:
+        attempt = Attempt(candidates=[zero], method="none (the quintic path already reaches it)")
+        return Strategy.NONE.value, attempt, start, restored
+    strategy = choose_strategy(problem, options)
+    if strategy not in STRATEGIES:
+        raise SolverError(
+            f"strategy {strategy!r} is not available; available: " + ", ".join(STRATEGIES),
+            float(np.linalg.norm(problem.residual(zero))),
+        )
+    try:
+        attempt = STRATEGIES[strategy](problem, constraints, options, start)
+    except (np.linalg.LinAlgError, FloatingPointError, ValueError) as exc:
+        # A numerical breakdown (an SVD that does not converge on non-finite values) is a
+        # failed attempt with a reason, never a crash.
+        attempt = Attempt(tried=[f"{strategy}: numerical failure ({exc})"])
+    return strategy, attempt, start, restored
+
+
+def _refuse(
+    problem: Problem,
+    attempt: Attempt,
+    start: np.ndarray,
+    tried: list[str],
+    best_vector: np.ndarray,
+) -> NoReturn:
+    """Raise the refusal of an attempt with no root (``best_vector``: its best residual, rad).
+
+    Raises:
+        UnreachableAttitudeError: the strategy stopped on the way (out of reach); every
+            figure is taken at the path where it stopped.
+        SolverError: otherwise.
+    """
+    if attempt.stopped_by and attempt.last_beta is not None:
+        # Out of reach: every figure of the error is taken at the path where the search
+        # stopped (how far it got, and what remains of the way).
+        stopped_at = problem.residual(attempt.last_beta)
+        turn = quat_log(
+            quat_multiply(quat_conjugate(problem.achieved(start)), problem.goal_quaternion)
+        )
+        asked = float(np.linalg.norm(turn))
+        raise UnreachableAttitudeError(
+            attempt.message,
+            float(np.linalg.norm(stopped_at)),
+            reached=attempt.reached_fraction * asked,
+            asked=asked,
+            tried=_dedupe(tried),
+            per_axis=stopped_at.tolist(),
+            stopped_by=attempt.stopped_by,
+            last_beta=attempt.last_beta.tolist(),
+            axis=(turn / max(asked, 1e-300)).tolist(),
+        )
+    raise SolverError(
+        attempt.message or "no path within the constraints reaches the goal attitude",
+        float(np.linalg.norm(best_vector)),
+        _dedupe(tried),
+        per_axis=best_vector.tolist(),
+        stopped_by=attempt.stopped_by,
+        reached_fraction=attempt.reached_fraction,
+        last_beta=None if attempt.last_beta is None else attempt.last_beta.tolist(),
     )
 
 

@@ -126,14 +126,7 @@ def search(
     if scenario.allow_full_turns:
         offsets += turn_candidates(scenario)
     planar = cached_planar_axis(robot) is not None
-    tried: list[str] = []
-    first_error: FreeFloatError | None = None
-    best = math.inf
-    best_axes: tuple[float, ...] | None = None
-    best_error: SolverError | None = None
-    origin: UnreachableAttitudeError | None = None
-    closest: UnreachableAttitudeError | None = None
-
+    record = _Record()
     for offset in offsets:
         turns = {n: round(o / (2 * math.pi)) for n, o in zip(names, offset, strict=True) if o}
         label = (
@@ -148,14 +141,15 @@ def search(
             try:
                 problem = problem_from_scenario(scenario, extra=extra, goal_offset=offset)
             except InfeasibleError as exc:
-                tried.append(f"{label}: {exc}")
-                first_error = first_error or exc
+                record.tried.append(f"{label}: {exc}")
+                record.first_error = record.first_error or exc
                 break  # the planar bounds do not depend on the freedom
             except InputError as exc:
-                tried.append(f"{label}: {exc}")
-                first_error = first_error or exc
+                record.tried.append(f"{label}: {exc}")
+                record.first_error = record.first_error or exc
                 continue
             used = [sum(1 for i, _ in problem.family.free_index if i == j) for j in range(robot.n)]
+            freedom = f"{label}, freedom {_describe(used, names)}"
             start = None
             if carry is not None:  # continue where less freedom stopped (new ones start at 0)
                 start = problem.family.embed(carry[0], np.asarray(carry[1]))
@@ -173,32 +167,10 @@ def search(
                 LOGGER.info("solve: level %d stopped: %s", level, exc.headline)
                 if exc.last_beta is not None:
                     carry = (problem.family, exc.last_beta)
-                if isinstance(exc, UnreachableAttitudeError):
-                    if start is None:
-                        origin = exc  # the turn asked from the quintic path's attitude
-                    if closest is None or exc.best_residual < closest.best_residual:
-                        closest = exc
-                if start is not None:  # its reach counts from a later point: keep the first
-                    tried.append(
-                        f"{label}, freedom {_describe(used, names)} (continued): " + _short(exc)
-                    )
-                    first_error = first_error or exc
-                    continue
-                breaks = [item for item in exc.tried if " breaks " in item]
-                tried.append(
-                    f"{label}, freedom {_describe(used, names)}: "
-                    + _short(exc)
-                    + (f" ({breaks[0]})" if breaks else "")
-                )
-                further = best_error is not None and exc.reached_fraction > max(
-                    best_error.reached_fraction, 0.0
-                )
-                if exc.best_residual < best or further:
-                    best, best_axes, best_error = exc.best_residual, exc.per_axis, exc
-                first_error = first_error or exc
+                record.failed(exc, freedom, continued=start is not None)
                 continue
             how = " (continued from where less freedom stopped)" if start is not None else ""
-            tried.append(f"{label}, freedom {_describe(used, names)}: solved{how}")
+            record.tried.append(f"{freedom}: solved{how}")
             return SearchResult(
                 problem=problem,
                 solution=solution,
@@ -208,12 +180,58 @@ def search(
                     for n, j in zip(names, robot.joints, strict=True)
                     if j.kind == "continuous"
                 },
-                tried=tried,
+                tried=record.tried,
             )
 
     _refuse(
-        scenario, len(offsets), first_error, (best, best_axes, best_error), tried, (origin, closest)
+        scenario,
+        len(offsets),
+        record.first_error,
+        (record.best, record.best_axes, record.best_error),
+        record.tried,
+        (record.origin, record.closest),
     )
+
+
+@dataclass
+class _Record:
+    """What the search's failed levels leave: every attempt, the first error, the nearest.
+
+    Attributes:
+        tried: every attempt, in order.
+        first_error: the first error met.
+        best: the smallest residual of a level (rad), ``best_axes`` its vector and
+            ``best_error`` its error (or the level that got furthest along its way).
+        origin: the first level's unreachable-attitude error (the turn asked from the quintic
+            path's attitude); ``closest`` the one that got closest.
+    """
+
+    tried: list[str] = field(default_factory=list)
+    first_error: FreeFloatError | None = None
+    best: float = math.inf
+    best_axes: tuple[float, ...] | None = None
+    best_error: SolverError | None = None
+    origin: UnreachableAttitudeError | None = None
+    closest: UnreachableAttitudeError | None = None
+
+    def failed(self, exc: SolverError, freedom: str, continued: bool) -> None:
+        """Record a level (``freedom``: its label) that stopped with ``exc``."""
+        if isinstance(exc, UnreachableAttitudeError):
+            if not continued:
+                self.origin = exc  # the turn asked from the quintic path's attitude
+            if self.closest is None or exc.best_residual < self.closest.best_residual:
+                self.closest = exc
+        self.first_error = self.first_error or exc
+        if continued:  # its reach counts from a later point: keep the first
+            self.tried.append(f"{freedom} (continued): " + _short(exc))
+            return
+        breaks = [item for item in exc.tried if " breaks " in item]
+        self.tried.append(f"{freedom}: " + _short(exc) + (f" ({breaks[0]})" if breaks else ""))
+        further = self.best_error is not None and exc.reached_fraction > max(
+            self.best_error.reached_fraction, 0.0
+        )
+        if exc.best_residual < self.best or further:
+            self.best, self.best_axes, self.best_error = exc.best_residual, exc.per_axis, exc
 
 
 def _distributions(

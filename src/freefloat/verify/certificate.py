@@ -38,6 +38,11 @@ class _Instants:
         self.placements: dict[float, np.ndarray] = {}
         self.exact: dict[tuple[float, int], float] = {}
 
+    def load(self, times: np.ndarray) -> None:
+        """Placements at many instants (s), their joints evaluated in one call."""
+        for t, joints in zip(times, self.motion.path(times)[0], strict=True):
+            self.placements.setdefault(float(t), self.mesh.placements(joints))
+
     def at(self, t: float) -> np.ndarray:
         if t not in self.placements:
             self.placements[t] = self.mesh.placements(self.motion.joints(t))
@@ -81,6 +86,7 @@ def certify(
     """
     store = _Instants(mesh, motion)
     times = np.linspace(0.0, motion.duration, instants)
+    store.load(times)
     bounds = np.array([mesh.sphere_bounds(store.at(float(t))) for t in times])
     k0, p0 = np.unravel_index(int(np.argmin(bounds)), bounds.shape)
     measured, when, pair = store.distance(float(times[k0]), int(p0)), float(times[k0]), int(p0)
@@ -88,7 +94,7 @@ def certify(
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
     settled = lbs >= measured - _tolerance(measured, margin)
     lower = float(lbs[settled].min()) if settled.any() else math.inf
-    heap = [
+    heap: list[tuple[float, float, float, int, bool, float]] = [
         (
             float(lbs[i, k]),
             float(times[i]),
@@ -103,7 +109,7 @@ def certify(
     bisections = 0
     exhausted = False
     while heap:
-        lb, t0, t1, k, exact, lipschitz = heap[0]
+        lb, t0, t1, k, exact, speed = heap[0]
         if lb >= measured - _tolerance(measured, margin):
             break  # this and every later item is within the accuracy of the minimum
         heapq.heappop(heap)
@@ -112,13 +118,11 @@ def certify(
             for d, t in ((d0, t0), (d1, t1)):
                 if d < measured:
                     measured, when, pair = d, t, k
-            heapq.heappush(
-                heap, (0.5 * (d0 + d1 - lipschitz * (t1 - t0)), t0, t1, k, True, lipschitz)
-            )
+            heapq.heappush(heap, (0.5 * (d0 + d1 - speed * (t1 - t0)), t0, t1, k, True, speed))
             continue
         if bisections >= MAX_BISECTIONS:
             exhausted = True
-            heapq.heappush(heap, (lb, t0, t1, k, exact, lipschitz))
+            heapq.heappush(heap, (lb, t0, t1, k, exact, speed))
             break
         bisections += 1
         mid = 0.5 * (t0 + t1)

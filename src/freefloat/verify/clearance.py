@@ -46,7 +46,12 @@ import numpy as np
 import pinocchio as pin
 
 from ..robot.collision import CollisionModel, Obstacle, checked_distance
-from ..robot.geometry import add_obstacles, checked_pairs, load_collision_geometry, mesh_triangles
+from ..robot.geometry import (
+    add_obstacles,
+    checked_pairs,
+    load_collision_geometry,
+    object_triangles,
+)
 from ..robot.model import Robot
 from .motion import reach_coefficients
 
@@ -143,7 +148,9 @@ class MeshClearance:
         objects = list(geometry.geometryObjects)
         self.shapes = [obj.geometry for obj in objects]
         self.names = [f"{objects[a].name} / {objects[b].name}" for a, b in self.pairs]
-        self.meshes = {i: mesh_triangles(s) for i, s in enumerate(self.shapes) if _is_mesh(s)}
+        self.meshes = {
+            i: object_triangles(objects[i]) for i, s in enumerate(self.shapes) if _is_mesh(s)
+        }
         self.centres, self.radii = _bounding_spheres(self.shapes, self.meshes)
         reach = reach_coefficients(robot, geometry, self.centres, self.radii)
         pairs = np.array(self.pairs, dtype=int).reshape(-1, 2)

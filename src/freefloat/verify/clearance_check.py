@@ -43,7 +43,7 @@ def clearance_certificate(
     robot: Robot, constraint: Clearance, path: FilePath
 ) -> ClearanceCertificate:
     """The certificate of a plan file's joint paths (:mod:`.path_eval`)."""
-    motion = PolynomialMotion(path, path.duration, path.degree)
+    motion = PolynomialMotion(path, path.duration, path.degree, path.positions)
     return certify(mesh_clearance(robot, constraint), motion, constraint.margin, constraint.model)
 
 

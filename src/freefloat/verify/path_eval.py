@@ -65,6 +65,23 @@ class FilePath:
         assert self.beta is not None
         return 5 + max(len(b) for b in self.beta)
 
+    def positions(self, t: np.ndarray) -> np.ndarray:
+        """Joint values (len(t), N) at times ``t`` (s): those of :meth:`__call__`, alone."""
+        t = np.asarray(t, dtype=float)
+        if self.monomials is not None:
+            poly = np.polynomial.polynomial
+            return np.stack([poly.polyval(t, poly.polyder(c, 0)) for c in self.monomials], -1)
+        assert self.beta is not None
+        s = t / self.duration
+        x = 2.0 * s - 1.0
+        q = self.start + np.outer(10 * s**3 - 15 * s**4 + 6 * s**5, self.goal - self.start)
+        b = s**3 * (1 - s) ** 3
+        for i, beta in enumerate(self.beta):
+            if len(beta):
+                n = np.arange(len(beta))
+                q[:, i] += (b[:, None] * _jacobi(n, 0, x)) @ (_scale(n) * beta)
+        return q
+
     def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Joint values, rates and accelerations, each (len(t), N), at times ``t`` (s)."""
         t = np.asarray(t, dtype=float)

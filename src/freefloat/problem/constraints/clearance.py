@@ -24,11 +24,20 @@ import numpy as np
 
 from ...robot.collision import CollisionModel
 from ...robot.model import Robot
+from ...robot.motion_bound import BOUND_SLACK
 from ..paths import JointPolynomials, PathFamily
 from ..residual import Problem
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 
-__all__ = ["REFINE", "SOLVER_SLACK", "Clearance", "clearance_at"]
+__all__ = [
+    "COARSE_EVERY",
+    "NEAR",
+    "REFINE",
+    "SOLVER_SLACK",
+    "Clearance",
+    "clearance_at",
+    "rate_bounds",
+]
 
 #: Extra clearance the solvers ask for beyond the margin, between constraint instants (m).
 SOLVER_SLACK = 2e-3
@@ -36,6 +45,11 @@ SOLVER_SLACK = 2e-3
 VERIFY_SAMPLES = 401
 #: Extra instants per grid interval next to a local minimum of clearance.
 REFINE = 3
+#: Sampled local minima of clearance within this of the smallest are refined in time (m).
+NEAR = 0.01
+#: The solvers' dense check first measures every this many of its samples, and the ones
+#: between only where the bound between measured samples does not clear the margin.
+COARSE_EVERY = 8
 
 
 class Clearance(Constraint):
@@ -59,6 +73,7 @@ class Clearance(Constraint):
         self._memo: tuple[PathFamily, bytes, ConstraintRows] | None = None
         self._smallest_memo: dict[tuple[bytes, float, int, int], tuple[float, float, int]] = {}
         self._sampled_memo: tuple[tuple[bytes, float, int], np.ndarray] | None = None
+        self._measured_memo: tuple[tuple[bytes, float, int], np.ndarray] | None = None
 
     def __repr__(self) -> str:
         return f"Clearance(margin={self.margin:g} m, {self.model.n_pairs} pairs)"
@@ -127,7 +142,10 @@ class Clearance(Constraint):
         """Smallest clearance along ``path`` (m), its time (s) and pair, from ``samples``.
 
         Only every ``every``-th of the samples is used (so that a coarser search can reuse a
-        finer one's distances). Every sampled local minimum within 1 cm of the smallest is
+        finer one's distances); with every sample, those a bound shows to lie more than
+        :data:`NEAR` above the smallest are not measured (:meth:`_measured`: they can be
+        neither the smallest nor a local minimum near it, so the answer is the same). Every
+        sampled local minimum within :data:`NEAR` of the smallest is
         refined by a bounded scalar search between its neighbouring samples. The last few
         answers are remembered (solvers ask several times about one path).
         """
@@ -137,7 +155,10 @@ class Clearance(Constraint):
         if key in self._smallest_memo:
             return self._smallest_memo[key]
         t_all = np.linspace(0.0, path.duration, samples)
-        sampled_all = self._sampled(path, t_all)
+        if every == 1:  # the samples a bound cannot spare: the rest are above best + NEAR
+            sampled_all = np.nan_to_num(self._measured(path, samples, None)[0], nan=math.inf)
+        else:
+            sampled_all = self._sampled(path, t_all)
         t, sampled = t_all[::every], sampled_all[::every]
 
         def lowest(joints: np.ndarray) -> tuple[float, int]:
@@ -152,7 +173,7 @@ class Clearance(Constraint):
         right = np.concatenate([sampled[1:], [np.inf]])
         for index in np.flatnonzero((sampled <= left) & (sampled <= right)):
             k = int(index)
-            if sampled[k] > best + 0.01:
+            if sampled[k] > best + NEAR:
                 continue
             lo, hi = float(t[max(k - 1, 0)]), float(t[min(k + 1, count - 1)])
             result = minimize_scalar(
@@ -172,11 +193,60 @@ class Clearance(Constraint):
 
     def _sampled(self, path: JointPolynomials, t: np.ndarray) -> np.ndarray:
         """Smallest distance over the pairs at each time of ``t`` (m), remembered per path."""
-        key = (path.coefficients.tobytes(), path.duration, len(t))
+        key = self._key(path, t)
         if self._sampled_memo is None or self._sampled_memo[0] != key:
             q = path.evaluate(t).q
             self._sampled_memo = (key, np.array([self.model.closest_value(x)[0] for x in q]))
         return self._sampled_memo[1]
+
+    def _measured(
+        self, path: JointPolynomials, samples: int, limit: float | None
+    ) -> tuple[np.ndarray, float]:
+        """The smallest distance (m) at the samples a bound cannot spare, and a lower bound.
+
+        Coarse then exact, a count: the smallest distance over the pairs at every
+        :data:`COARSE_EVERY`-th of ``samples`` instants (those of :meth:`smallest`, the same
+        bits); between two measured instants the clearance is at least their mean less half
+        the time between them times how fast any pair's distance can change there (the pairs'
+        motion weights times bounds of the joint rates, :func:`rate_bounds`). Where that falls
+        below ``limit`` (the margin; or, with None, :data:`NEAR` above the smallest measured),
+        the sample halfway is measured too, down to neighbouring samples. Returns the
+        distances (NaN where spared: every such sample is above the limit) and the lower bound
+        of the clearance along the whole path (m). Remembered for the last path.
+        """
+        key = self._key(path, np.zeros(samples))
+        memo = self._measured_memo
+        t = np.linspace(0.0, path.duration, samples)
+        q = path.evaluate(t).q
+        known = np.full(samples, math.nan)
+        if memo is not None and memo[0] == key:
+            known = memo[1].copy()
+        todo = np.unique(np.append(np.arange(0, samples, COARSE_EVERY), samples - 1))
+        weights = self.model.weights
+        if weights is None:  # no bound: every sample
+            todo = np.arange(samples)
+        while True:
+            todo = todo[np.isnan(known[todo])]
+            known[todo] = [self.model.closest_value(q[k])[0] for k in todo]
+            nodes = np.flatnonzero(~np.isnan(known))
+            if weights is None or len(nodes) == samples:
+                bound = float(known.min())
+                break
+            a, b = nodes[:-1], nodes[1:]
+            speed = np.max(rate_bounds(path, t[a], t[b]) @ weights.T, axis=1)
+            lower = 0.5 * (known[a] + known[b] - speed * (t[b] - t[a])) - BOUND_SLACK
+            floor = float(np.nanmin(known)) + NEAR if limit is None else limit
+            short = (lower < floor) & (b - a >= 2)
+            if not np.any(short):
+                bound = float(min(lower.min(), np.nanmin(known)))
+                break
+            todo = (a[short] + b[short]) // 2
+        self._measured_memo = (key, known)
+        return known, bound
+
+    @staticmethod
+    def _key(path: JointPolynomials, t: np.ndarray) -> tuple[bytes, float, int]:
+        return (path.coefficients.tobytes(), path.duration, len(t))
 
     def excess(self, robot: Robot, path: JointPolynomials) -> Excess:
         """``margin - smallest clearance`` along the path (m), with its own error estimate."""
@@ -199,12 +269,36 @@ class Clearance(Constraint):
         """
         if self.model.n_pairs == 0:
             return Excess(-math.inf, 0.0, "no pairs to check")
-        clearance, when, pair = self.smallest(problem.polynomials(beta), 201)
+        path = problem.polynomials(beta)
+        bound = self._measured(path, 201, self.margin)[1]
+        if bound >= self.margin:  # clear everywhere: the refined minimum is not needed
+            detail = f"min clearance >= {bound:.6g} m everywhere, margin {self.margin:g} m"
+            return Excess(self.margin - bound, 0.0, detail)
+        clearance, when, pair = self.smallest(path, 201)
         detail = (
             f"min clearance {clearance:.6g} m ({self.model.names[pair]}) at t = {when:.4g} s, "
             f"margin {self.margin:g} m"
         )
         return Excess(self.margin - clearance, 0.0, detail)
+
+
+def rate_bounds(path: JointPolynomials, t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
+    """(K, N) bounds of every ``|qd_j|`` over each ``[t0, t1]`` (rad/s or m/s).
+
+    The Taylor series of a polynomial about the interval's middle is finite: ``|qd(mid + s)|``
+    is at most the sum over the orders ``o >= 1`` of ``|q^(o)(mid)| h^(o-1) / (o-1)!``, ``h``
+    half the interval; padded by a relative 1e-9 for rounding.
+    """
+    half = 0.5 * (t1 - t0)
+    x = (t0 + t1) / path.duration - 1.0
+    width = path.coefficients.shape[1]
+    vander = np.polynomial.chebyshev.chebvander(x, width - 1)
+    bound = np.zeros((len(x), path.coefficients.shape[0]))
+    factor = np.ones(len(x))
+    for order in range(1, width):
+        bound += np.abs(vander @ path.derivative(order).T) * factor[:, None]
+        factor = factor * half / order
+    return bound * (1.0 + 1e-9)
 
 
 def _lowest(values: np.ndarray) -> list[int]:

@@ -1,0 +1,242 @@
+"""The bound that spares distance queries: its weights, its truth, and that plans do not change.
+
+Truth here: the weights' closed form (lever arms read off the URDF by hand), every pair's
+distance measured afresh (no pair spared), and plans made with every pair measured.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import coal
+import numpy as np
+import pytest
+
+import freefloat as ff
+import freefloat.robot.collision as collision
+from freefloat.robot.collision import CollisionModel, known_srdf
+from freefloat.robot.motion_bound import BOUND_SLACK
+
+from conftest import ROOT
+from test_collision import sphere_arm, ur5_pan_scenario  # noqa: F401 (fixture)
+
+PANDA = ROOT / "robots" / "scenarios" / "panda_servicer.toml"
+UR5 = ROOT / "robots" / "scenarios" / "ur5_servicer.toml"
+
+
+def test_the_weights_of_the_sphere_arm_are_its_lever_arms(sphere_arm):  # noqa: F811
+    """The sphere (r 0.1 m, 0.6 m beyond joint 2, which is 1.0 m beyond joint 1) against the
+    spacecraft: 1.0 + 0.6 + 0.1 m per rad of joint 1, 0.6 + 0.1 m per rad of joint 2."""
+    model = CollisionModel(sphere_arm)
+    assert model.n_pairs == 1
+    assert np.allclose(model._weights, [[1.7, 0.7]], atol=1e-12)
+
+
+def test_the_bound_holds_between_any_two_configurations():
+    """|d(q) - d(q')| <= weights @ |q - q'| for every pair, measured on the Panda servicer."""
+    scenario = ff.Scenario.from_toml(PANDA)
+    robot = scenario.robot
+    model = CollisionModel(robot, known_srdf(robot))
+    rng = np.random.default_rng(7)
+    lower = np.array([max(j.lower, -math.pi) for j in robot.joints])
+    upper = np.array([min(j.upper, math.pi) for j in robot.joints])
+    tight = 0
+    for _ in range(12):
+        q = rng.uniform(lower, upper)
+        q2 = np.clip(q + rng.normal(0.0, 0.2, robot.n), lower, upper)
+        change = np.abs(model.distances(q).values - model.distances(q2).values)
+        bound = model._weights @ np.abs(q - q2)
+        assert np.all(change <= bound + BOUND_SLACK)
+        tight = max(tight, float(np.max(change / np.maximum(bound, 1e-12))))
+    assert tight > 0.05  # the bound is not vacuous: some pair moves a fair part of it
+
+
+@pytest.mark.parametrize("path", [PANDA, UR5])
+def test_the_closest_pair_is_the_same_bits_as_with_every_pair_measured(path):
+    """After any history of queries, the smallest distance, its pair and its gradient are
+    those of a fresh model that measures every pair."""
+    scenario = ff.Scenario.from_toml(path)
+    robot = scenario.robot
+    walked = CollisionModel(robot, known_srdf(robot))
+    start, goal = np.asarray(scenario.start), np.asarray(scenario.goal)
+    rng = np.random.default_rng(3)
+    for u in rng.uniform(0.0, 1.0, 30):
+        joints = start + u * (goal - start) + rng.normal(0.0, 0.05, robot.n)
+        value, gradient, pair = walked.closest(joints)
+        fresh = CollisionModel(robot, known_srdf(robot)).distances(joints, gradients=True)
+        k = int(np.argmin(fresh.values))
+        assert (value, pair) == (float(fresh.values[k]), k)
+        assert np.array_equal(gradient, fresh.gradients[k])
+
+
+def _everything(monkeypatch: pytest.MonkeyPatch) -> None:
+    """No bound: pairs spared by their bounding spheres alone (the model before the bound)."""
+    monkeypatch.setattr(collision, "motion_weights", lambda *args: None)
+
+
+def _pan(tmp_path):  # type: ignore[no-untyped-def]
+    """A plan where clearance binds: the UR5 pan whose quintic path enters the hull."""
+    return lambda: ur5_pan_scenario(tmp_path)
+
+
+@pytest.mark.parametrize("case", ["panda", "ur5", pytest.param("pan", marks=pytest.mark.slow)])
+def test_plans_are_the_same_bits_with_every_pair_measured(case, monkeypatch, tmp_path):
+    scenario = {
+        "panda": lambda: ff.Scenario.from_toml(PANDA),
+        "ur5": lambda: ff.Scenario.from_toml(UR5),
+        "pan": _pan(tmp_path),
+    }[case]
+    bounded = ff.plan(scenario())
+    calls = []
+    _everything(monkeypatch)
+    original = CollisionModel._spheres
+    monkeypatch.setattr(
+        CollisionModel, "_spheres", lambda self, p: calls.append(len(p)) or original(self, p)
+    )
+    measured = ff.plan(scenario())
+    assert calls  # the spheres-only model did the measuring
+    t = np.linspace(0.0, bounded.duration, 101)
+    assert np.array_equal(bounded.path().evaluate(t).q, measured.path().evaluate(t).q)
+    assert bounded.solver.solutions == measured.solver.solutions
+
+
+def test_each_caller_gets_its_own_geometry():
+    """The URDF is parsed once, but a caller that changes its geometry model changes no
+    other caller's (the solver's model replaces meshes by hulls, verification keeps them)."""
+    from freefloat.robot.geometry import load_collision_geometry
+
+    robot = ff.Scenario.from_toml(UR5).robot
+    first, second = load_collision_geometry(robot), load_collision_geometry(robot)
+    mesh = next(
+        i for i, o in enumerate(first.geometryObjects) if isinstance(o.geometry, coal.BVHModelBase)
+    )
+    first.geometryObjects[mesh].geometry.buildConvexHull(True, "Qt")
+    assert first.geometryObjects[mesh].geometry.convex is not None
+    assert second.geometryObjects[mesh].geometry.convex is None
+    first.addGeometryObject(first.geometryObjects[0].copy())
+    assert len(second.geometryObjects) == len(first.geometryObjects) - 1
+
+
+def test_rate_bounds_hold_and_are_tight_against_dense_samples():
+    """Every |qd_j| sampled densely inside each interval is within its bound, and the bound
+    of a short interval is within a few per cent of the largest sample."""
+    from freefloat.problem.constraints.clearance import rate_bounds
+
+    scenario = ff.Scenario.from_toml(PANDA)
+    problem = ff.problem_from_scenario(scenario, extra=[2] * scenario.robot.n)
+    beta = np.random.default_rng(5).normal(0.0, 0.05, problem.n_free)
+    path = problem.polynomials(beta)
+    edges = np.linspace(0.0, path.duration, 26)
+    bounds = rate_bounds(path, edges[:-1], edges[1:])
+    for k in range(25):
+        inside = np.linspace(edges[k], edges[k + 1], 200)
+        sampled = np.abs(path.evaluate(inside).qd).max(axis=0)
+        assert np.all(sampled <= bounds[k])
+        assert np.all(bounds[k] <= 1.25 * sampled + 0.02 * sampled.max())
+
+
+def test_the_dense_checks_decision_is_that_of_the_refined_minimum():
+    """The solvers' check decides from a bound where it can: on paths near and far from the
+    margin, it breaks exactly when the refined smallest clearance (every sample measured,
+    every near-minimum refined) is below the margin."""
+    from freefloat.problem.constraints.clearance import Clearance
+
+    scenario = ff.Scenario.from_toml(UR5)
+    robot = scenario.robot
+    problem = ff.problem_from_scenario(scenario, extra=[2] * robot.n)
+    model = CollisionModel(robot, known_srdf(robot))
+    rng = np.random.default_rng(9)
+    decided = 0
+    for scale in (0.0, 0.2, 0.5, 1.0, 2.0):
+        beta = rng.normal(0.0, scale, problem.n_free)
+        smallest = Clearance(model, 0.01).smallest(problem.polynomials(beta), 201)[0]
+        for margin in (0.005, 0.01, smallest - 1e-3, smallest + 1e-3):
+            if margin < 0.0:
+                continue
+            check = Clearance(model, margin)
+            excess = check.violation(problem, beta)
+            assert (excess.value > check.tolerance) == (smallest < margin - check.tolerance)
+            decided += excess.detail.startswith("min clearance >=")
+    assert decided > 0  # the bound decided some, without the refined minimum
+
+
+@pytest.mark.parametrize("path", [PANDA, UR5])
+def test_the_smallest_clearance_is_the_same_bits_with_every_sample_measured(path):
+    """Samples spared by the bound change neither the smallest clearance, nor its time, nor
+    its pair (every sample measured and every near-minimum refined, by a model without the
+    bound)."""
+    from freefloat.problem.constraints.clearance import Clearance
+
+    scenario = ff.Scenario.from_toml(path)
+    robot = scenario.robot
+    problem = ff.problem_from_scenario(scenario, extra=[2] * robot.n)
+    bounded = Clearance(CollisionModel(robot, known_srdf(robot)))
+    everything = CollisionModel(robot, known_srdf(robot))
+    everything._weights = None
+    unbounded = Clearance(everything)
+    rng = np.random.default_rng(13)
+    spared = 0
+    for scale in (0.0, 0.1, 0.3, 1.0):
+        polynomials = problem.polynomials(rng.normal(0.0, scale, problem.n_free))
+        assert bounded.smallest(polynomials, 201) == unbounded.smallest(polynomials, 201)
+        spared += int(np.isnan(bounded._measured_memo[1]).sum())
+    assert spared > 0  # the bound spared some samples
+
+
+@pytest.mark.slow
+def test_a_path_crossing_a_plate_between_samples_is_never_planned(tmp_path, monkeypatch):
+    """A 2 mm ball on a planar arm whose plain path crosses a 2 mm plate between two of the
+    dense check's samples, where every sample is clear (closed form): the planner either
+    refuses or returns a path clear of the plate at every instant (closed form, densely)."""
+    from test_collision import SPHERE_ARM, _sphere_centre
+
+    monkeypatch.setenv("FREEFLOAT_CACHE", str(tmp_path / "cache"))
+    urdf = tmp_path / "sphere_arm.urdf"
+    urdf.write_text(SPHERE_ARM.replace('radius="0.1"', 'radius="0.002"'))
+    duration, start, goal = 1.0, np.array([-1.5, 0.0]), np.array([1.5, 0.0])
+    s = np.linspace(0.0, 1.0, 201)
+    angles = start[0] + (goal[0] - start[0]) * (10 * s**3 - 15 * s**4 + 6 * s**5)
+    k = int(np.argmax(np.diff(angles)))
+    crossing = 0.5 * (angles[k] + angles[k + 1])
+    centre = np.array([0.5 + 1.6 * math.cos(crossing), 1.6 * math.sin(crossing), 0.0])
+    assert np.min(1.6 * np.abs(np.sin(angles - crossing)) - 0.003) > 0.0  # samples clear
+    body = (
+        f'robot = "{urdf}"\nduration = {duration}\n'
+        "[start]\njoints = { q1 = -85.94366926962348, q2 = 0.0 }\n"
+        "[goal]\njoints = { q1 = 85.94366926962348, q2 = 0.0 }\n"
+        "[safety]\nmargin_m = 0.0\n"
+        '[[obstacles]]\nname = "plate"\nbox = [2.0, 0.002, 0.5]\n'
+        f"xyz = [{float(centre[0])!r}, {float(centre[1])!r}, 0.0]\n"
+        f"rpy_deg = [0.0, 0.0, {math.degrees(float(crossing))!r}]\n"
+    )
+    path = tmp_path / "plate.toml"
+    path.write_text(body)
+    scenario = ff.Scenario.from_toml(path)
+    quintic = ff.problem_from_scenario(scenario, extra=[1, 0], check_bounds=False)
+    scenario = dataclasses.replace(scenario, goal_attitude=quintic.achieved(np.zeros(1)))
+    try:
+        plan = ff.plan(scenario)
+    except ff.FreeFloatError:
+        return  # refused: nothing colliding returned
+    rotation = np.array(
+        [[math.cos(crossing), -math.sin(crossing)], [math.sin(crossing), math.cos(crossing)]]
+    )
+    worst = math.inf
+    for q in plan.joint_positions(np.linspace(0.0, duration, 4001)):
+        local = rotation.T @ (_sphere_centre(*q)[:2] - centre[:2])
+        outside = np.maximum(np.abs(local) - np.array([1.0, 0.001]), 0.0)
+        worst = min(worst, float(np.linalg.norm(outside)) - 0.002)
+    assert worst >= -1e-9
+
+
+def test_a_plan_files_positions_alone_are_those_of_the_whole_evaluation():
+    """The certificate's halving asks for joint values one instant at a time: the values alone
+    are the same bits as the first of the values, rates and accelerations."""
+    from freefloat.verify.path_eval import file_path
+
+    plan = ff.plan(ff.Scenario.from_toml(UR5))
+    path = file_path(plan)
+    t = np.linspace(0.0, plan.duration, 37)
+    assert np.array_equal(path.positions(t), path(t)[0])
+    assert all(np.array_equal(path.positions(t[k : k + 1]), path(t[k : k + 1])[0]) for k in (0, 5))
