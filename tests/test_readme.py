@@ -34,12 +34,19 @@ def test_the_readme_scenario_block_plans_and_keeps_its_cone(tmp_path):
 
 
 def test_the_readme_python_blocks_run_in_order(tmp_path, monkeypatch):
+    from freefloat.problem.constraints import CONSTRAINTS
+
     monkeypatch.chdir(tmp_path)
     namespace: dict = {}
     blocks = _blocks("python")
     assert len(blocks) == 2
-    for block in blocks:
-        exec(compile(block, "README.md", "exec"), namespace)  # the README's code, as pasted
+    before = set(CONSTRAINTS)
+    try:
+        for block in blocks:
+            exec(compile(block, "README.md", "exec"), namespace)  # the README's code, as pasted
+    finally:  # the README registers its constraint: not for the tests that follow
+        for name in set(CONSTRAINTS) - before:
+            del CONSTRAINTS[name]
     held = namespace["held"]
     # The user's ceiling of 1.6 rad on joint 1, checked on the samples with numpy.
     assert np.asarray(held.samples.q)[:, 1].max() <= 1.6 + 1e-9
