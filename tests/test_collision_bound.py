@@ -240,3 +240,55 @@ def test_a_plan_files_positions_alone_are_those_of_the_whole_evaluation():
     t = np.linspace(0.0, plan.duration, 37)
     assert np.array_equal(path.positions(t), path(t)[0])
     assert all(np.array_equal(path.positions(t[k : k + 1]), path(t[k : k + 1])[0]) for k in (0, 5))
+
+
+class _Dip:
+    """A fake collision model along one joint: clearance ``margin - 1 mm + min(|q - q0|, cap)``
+    (m), its minimum exactly halfway between two of 201 samples of ``q = t`` over 1 s.
+
+    With ``weights`` None it gives no bound between samples (as with a prismatic joint); with
+    a weight of 1 m/rad the clearance changes at most 1 m per rad (true: slope 0 or 1).
+    """
+
+    n_pairs, names = 1, ["a-b"]
+
+    def __init__(self, margin: float, cap: float, weights: np.ndarray | None) -> None:
+        self.margin, self.cap, self.weights = margin, cap, weights
+
+    def closest_value(self, joints: np.ndarray) -> tuple[float, int]:
+        dip = abs(float(joints[0]) - 100.5 / 200)
+        return self.margin - 1e-3 + min(dip, self.cap), 0
+
+
+class _OnePath:
+    def __init__(self, path) -> None:
+        self.path = path
+
+    def polynomials(self, beta):
+        return self.path
+
+
+@pytest.mark.parametrize(
+    ("cap", "weights"),
+    [(0.5, None), (0.003, None), (0.5, np.array([[1.0]])), (0.003, np.array([[1.0]]))],
+    ids=["no-bound", "no-bound-near", "bound", "bound-near-everywhere"],
+)
+def test_a_dip_below_the_margin_between_samples_is_found_whatever_was_asked_before(cap, weights):
+    """Closed form: the clearance's minimum is margin - 1 mm, between samples 100 and 101.
+
+    Whether every sample ends up measured (the clearance near the margin all along, or no bound
+    between samples) or not, and whatever was asked about the path before, the solvers' check
+    says the path breaks the margin by 1 mm.
+    """
+    from freefloat.problem.constraints.clearance import Clearance
+    from freefloat.problem.paths import JointPolynomials
+
+    margin = 0.01
+    path = JointPolynomials.from_monomials([[0.0, 1.0]], 1.0)
+    for first in ("violation", "smallest"):
+        check = Clearance(_Dip(margin, cap, weights), margin)
+        if first == "smallest":
+            assert check.smallest(path, 201)[0] == pytest.approx(margin - 1e-3, abs=1e-8)
+        for _ in range(2):
+            value = check.violation(_OnePath(path), np.zeros(1)).value
+            assert value == pytest.approx(1e-3, abs=1e-8), (first, value)

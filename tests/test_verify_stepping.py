@@ -58,3 +58,12 @@ def test_an_erratic_sequence_that_shrinks_once_gives_no_verdict() -> None:
     assert _verdict(results, 0.0) is None
     # Without the earlier difference (the former rule) the same sequence was refused.
     assert _decided(2.05, 0.15, 1.2, TOLERANCE, 0.01)
+
+
+def test_a_first_chance_agreement_never_refuses() -> None:
+    # The first doubling (nothing before it) agreeing to 1e-6 on a value far over the
+    # tolerance: no convergence is shown yet, so no refusal; an acceptance needs none.
+    assert not _decided(1.0, 1e-6, math.inf, TOLERANCE, 0.01, math.inf)
+    assert _decided(1e-6, 1e-7, math.inf, TOLERANCE, 0.01, math.inf)
+    # A value over the tolerance by less than a small estimate is not refused either.
+    assert not _decided(1.05 * TOLERANCE, 0.1 * TOLERANCE, 1.0, TOLERANCE, 0.01, 8.0)

@@ -47,15 +47,17 @@ def _decided(
     verdict is trusted only once the steps resolve the motion (``turn``, the largest rotation
     in one step, rad, at most :data:`_MAX_TURN`) and the difference has shrunk at least
     8-fold (or is already below rounding); then the check is decided when the estimate is
-    small against the tolerance or the value is clear of the tolerance by more than the
-    estimate. To refuse, the estimate must also be small against the value, and the
+    small against the tolerance (and the value within it) or the value is clear of the
+    tolerance by more than the estimate. To refuse, the value must exceed the tolerance by
+    more than the estimate, the estimate must also be small against the value, and the
     difference must have shrunk 8-fold over the doubling before as well: an erratic sequence
     (an open-loop replay whose error grows without bound, say) can shrink once by chance.
     """
     converging = estimate <= previous / 8.0 or estimate <= 1e-3 * CONVERGED_FRACTION * tolerance
     if turn > _MAX_TURN or not converging:
         return False
-    if estimate <= CONVERGED_FRACTION * tolerance or value + estimate <= tolerance:
+    small = estimate <= CONVERGED_FRACTION * tolerance
+    if value + estimate <= tolerance or (small and value <= tolerance):
         return True
     settled = earlier is None or (math.isfinite(earlier) and previous <= earlier / 8.0)
     return settled and value - estimate > tolerance and estimate <= CONVERGED_FRACTION * value

@@ -73,7 +73,9 @@ class Clearance(Constraint):
         self._memo: tuple[PathFamily, bytes, ConstraintRows] | None = None
         self._smallest_memo: dict[tuple[bytes, float, int, int], tuple[float, float, int]] = {}
         self._sampled_memo: tuple[tuple[bytes, float, int], np.ndarray] | None = None
-        self._measured_memo: tuple[tuple[bytes, float, int], np.ndarray] | None = None
+        self._measured_memo: (
+            tuple[tuple[bytes, float, int, float | None], np.ndarray, float] | None
+        ) = None
 
     def __repr__(self) -> str:
         return f"Clearance(margin={self.margin:g} m, {self.model.n_pairs} pairs)"
@@ -141,8 +143,8 @@ class Clearance(Constraint):
     ) -> tuple[float, float, int]:
         """Smallest clearance along ``path`` (m), its time (s) and pair, from ``samples``.
 
-        Only every ``every``-th of the samples is used (so that a coarser search can reuse a
-        finer one's distances); with every sample, those a bound shows to lie more than
+        Only every ``every``-th of the samples is used (the verification's coarser estimate of
+        its own error); with every sample, those a bound shows to lie more than
         :data:`NEAR` above the smallest are not measured (:meth:`_measured`: they can be
         neither the smallest nor a local minimum near it, so the answer is the same). Every
         sampled local minimum within :data:`NEAR` of the smallest is
@@ -212,26 +214,27 @@ class Clearance(Constraint):
         below ``limit`` (the margin; or, with None, :data:`NEAR` above the smallest measured),
         the sample halfway is measured too, down to neighbouring samples. Returns the
         distances (NaN where spared: every such sample is above the limit) and the lower bound
-        of the clearance along the whole path (m). Remembered for the last path.
+        of the clearance along the whole path (m; -inf when the model has no motion weights,
+        a prismatic joint say: then nothing bounds the clearance between samples). Remembered
+        for the last path and limit only, so that the answer never depends on earlier calls.
         """
-        key = self._key(path, np.zeros(samples))
+        key = (*self._key(path, np.zeros(samples)), limit)
         memo = self._measured_memo
+        if memo is not None and memo[0] == key:  # the same path and limit: the same answer
+            return memo[1], memo[2]
         t = np.linspace(0.0, path.duration, samples)
         q = path.evaluate(t).q
         known = np.full(samples, math.nan)
-        if memo is not None and memo[0] == key:
-            known = memo[1].copy()
         todo = np.unique(np.append(np.arange(0, samples, COARSE_EVERY), samples - 1))
         weights = self.model.weights
-        if weights is None:  # no bound: every sample
-            todo = np.arange(samples)
+        if weights is None:  # no bound between samples: every sample, and no lower bound
+            known[:] = [self.model.closest_value(x)[0] for x in q]
+            self._measured_memo = (key, known, -math.inf)
+            return known, -math.inf
         while True:
             todo = todo[np.isnan(known[todo])]
             known[todo] = [self.model.closest_value(q[k])[0] for k in todo]
             nodes = np.flatnonzero(~np.isnan(known))
-            if weights is None or len(nodes) == samples:
-                bound = float(known.min())
-                break
             a, b = nodes[:-1], nodes[1:]
             speed = np.max(rate_bounds(path, t[a], t[b]) @ weights.T, axis=1)
             lower = 0.5 * (known[a] + known[b] - speed * (t[b] - t[a])) - BOUND_SLACK
@@ -241,7 +244,7 @@ class Clearance(Constraint):
                 bound = float(min(lower.min(), np.nanmin(known)))
                 break
             todo = (a[short] + b[short]) // 2
-        self._measured_memo = (key, known)
+        self._measured_memo = (key, known, bound)
         return known, bound
 
     @staticmethod
