@@ -186,7 +186,6 @@ def test_the_smallest_clearance_is_the_same_bits_with_every_sample_measured(path
     assert spared > 0  # the bound spared some samples
 
 
-@pytest.mark.slow
 def test_a_path_crossing_a_plate_between_samples_is_never_planned(tmp_path, monkeypatch):
     """A 2 mm ball on a planar arm whose plain path crosses a 2 mm plate between two of the
     dense check's samples, where every sample is clear (closed form): the planner either
