@@ -259,3 +259,21 @@ def test_a_warning_of_every_job_is_said_once_with_the_prefix(tmp_path, capfd):
     ]
     rows = ff.sweep(path, workers=1, progress=False)
     assert [row.status for row in rows] == ["planned", "planned"]
+
+
+def test_a_dask_worker_with_several_threads_is_refused_before_any_job(tmp_path, yaw_sweep):
+    distributed = pytest.importorskip("distributed")
+    path = _subset_file(tmp_path)
+    with (
+        distributed.LocalCluster(
+            processes=True,
+            n_workers=1,
+            threads_per_worker=2,
+            host="127.0.0.1",
+            dashboard_address=None,
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        with pytest.raises(ff.InputError, match=r"runs 2 threads; freefloat needs one thread"):
+            ff.sweep(path, client=client, output=tmp_path / "dask.csv", progress=False)
+    assert not (tmp_path / "dask.csv").exists()

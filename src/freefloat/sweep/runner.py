@@ -200,7 +200,20 @@ def _worker_env() -> dict[str, str | None]:
 
 
 def _check_dask(client: Any) -> None:
-    """Refuse Dask workers that do not run with :data:`BLAS_ENV`."""
+    """Refuse Dask workers that do not run with :data:`BLAS_ENV` or run several threads.
+
+    A worker process keeps one collision model per robot and its last distances (the bound of
+    which pairs can be the closest): jobs in two threads of one process would share them.
+    """
+    workers = client.scheduler_info().get("workers", {})
+    for address, info in workers.items():
+        threads = info.get("nthreads", 1)
+        if threads != 1:
+            raise InputError(
+                f"Dask worker {address} runs {threads} threads; freefloat needs one thread per "
+                "worker process (`dask worker ... --nthreads 1`, or LocalCluster("
+                "threads_per_worker=1))"
+            )
     for address, env in client.run(_worker_env).items():
         if env != BLAS_ENV:
             raise InputError(
