@@ -273,7 +273,7 @@ def test_a_dask_worker_with_several_threads_is_refused_before_any_job(tmp_path, 
             dashboard_address=None,
         ) as cluster,
         distributed.Client(cluster) as client,
+        pytest.raises(ff.InputError, match=r"runs 2 threads; freefloat needs one thread"),
     ):
-        with pytest.raises(ff.InputError, match=r"runs 2 threads; freefloat needs one thread"):
-            ff.sweep(path, client=client, output=tmp_path / "dask.csv", progress=False)
+        ff.sweep(path, client=client, output=tmp_path / "dask.csv", progress=False)
     assert not (tmp_path / "dask.csv").exists()
