@@ -319,6 +319,7 @@ def _fields(cls) -> tuple[set[str], set[str]]:
 def test_plan_records_and_the_plan_schema_name_the_same_fields():
     from freefloat import plans as fmt
     from freefloat.plans.schema import schema
+    from freefloat.robot.collision import Obstacle
 
     plan = schema("plan")
     records = {
@@ -329,7 +330,7 @@ def test_plan_records_and_the_plan_schema_name_the_same_fields():
         ("properties", "request"): fmt.Request,
         ("properties", "solver", "properties", "solutions", "items"): fmt.SolutionRecord,
         ("properties", "verification", "properties", "checks", "items"): fmt.Check,
-        ("properties", "safety", "properties", "obstacles", "items"): fmt.ObstacleRecord,
+        ("properties", "safety", "properties", "obstacles", "items"): Obstacle,
         ("properties", "objective", "properties", "levels", "items"): ff.problem.objectives.Level,
         ("properties", "constraints", "items"): fmt.ConstraintRecord,
     }
@@ -397,3 +398,30 @@ def test_scenario_keys_and_the_scenario_schema_name_the_same_keys():
         for key in path:
             node = node[key]
         assert set(node["properties"]) == set(keys), (path, set(node["properties"]) ^ set(keys))
+
+
+def test_no_record_is_a_field_for_field_copy_of_another():
+    """Every dataclass of the package (three fields or more) has its own set of field names."""
+    import dataclasses
+    import importlib
+    import itertools
+    import pkgutil
+
+    records: dict[str, frozenset[str]] = {}
+    for info in pkgutil.walk_packages(ff.__path__, "freefloat."):
+        if info.name.endswith("__main__"):
+            continue
+        module = importlib.import_module(info.name)
+        for value in vars(module).values():
+            if isinstance(value, type) and dataclasses.is_dataclass(value):
+                if value.__module__ != module.__name__:
+                    continue
+                fields = frozenset(f.name for f in dataclasses.fields(value))
+                records[f"{value.__module__}.{value.__qualname__}"] = fields
+    assert len(records) > 50  # the walk saw the package's records
+    copies = [
+        (a, b)
+        for (a, fa), (b, fb) in itertools.combinations(records.items(), 2)
+        if fa == fb and len(fa) >= 3
+    ]
+    assert not copies, copies

@@ -16,7 +16,7 @@ import umsgpack
 from PIL import Image
 
 import freefloat as ff
-from freefloat.plans.guarantees import ObstacleRecord, SafetyReport
+from freefloat.plans.guarantees import SafetyReport
 from freefloat.plans.records import sha256_hex
 from freefloat.robot.collision import CollisionModel, Obstacle
 from freefloat.viz.clearance_curve import clearance_curve
@@ -25,9 +25,9 @@ from freefloat.viz.plots import figures, save_figures
 
 from conftest import ROOT
 
-PANEL = ObstacleRecord("panel", "box", [0.2, 0.4, 0.6], [0.3, -1.2, 0.1], [0.0, 0.0, 0.5])
-BALL = ObstacleRecord("ball", "sphere", [0.25], [-1.0, 0.8, 0.0], [0.0, 0.0, 0.0])
-ROD = ObstacleRecord("rod", "capsule", [0.05, 0.8], [0.0, 1.2, 0.0], [math.pi / 2, 0.0, 0.0])
+PANEL = Obstacle("panel", "box", (0.2, 0.4, 0.6), (0.3, -1.2, 0.1), (0.0, 0.0, 0.5))
+BALL = Obstacle("ball", "sphere", (0.25,), (-1.0, 0.8, 0.0), (0.0, 0.0, 0.0))
+ROD = Obstacle("rod", "capsule", (0.05, 0.8), (0.0, 1.2, 0.0), (math.pi / 2, 0.0, 0.0))
 
 
 @pytest.fixture(scope="module")

@@ -13,12 +13,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..problem.objectives.base import Level
+from ..robot.collision import Obstacle
 
 __all__ = [
     "Check",
     "ConstraintRecord",
     "ObjectiveReport",
-    "ObstacleRecord",
     "RobustnessReport",
     "SafetyReport",
     "Verification",
@@ -80,17 +80,6 @@ class Verification:
 
 
 @dataclass(frozen=True)
-class ObstacleRecord:
-    """A keep-out object fixed to the spacecraft (shape sizes and position in m, rpy in rad)."""
-
-    name: str
-    shape: str
-    size: list[float]
-    xyz: list[float]
-    rpy: list[float]
-
-
-@dataclass(frozen=True)
 class SafetyReport:
     """What the plan was kept clear of.
 
@@ -98,7 +87,7 @@ class SafetyReport:
         checked: whether clearance was a constraint (and so a verification check).
         margin_m: required clearance between checked bodies (m).
         srdf: the SRDF whose disabled pairs were not checked, if any.
-        obstacles: keep-out objects fixed to the spacecraft.
+        obstacles: keep-out objects fixed to the spacecraft (the collision model's own).
         note: why clearance was not checked (``[safety] check = false``, no collision
             geometry), or the movable bodies it could not check; empty when all were.
     """
@@ -106,7 +95,7 @@ class SafetyReport:
     checked: bool = False
     margin_m: float = 0.01
     srdf: str | None = None
-    obstacles: list[ObstacleRecord] = field(default_factory=list)
+    obstacles: list[Obstacle] = field(default_factory=list)
     note: str = ""
 
 

@@ -20,11 +20,11 @@ from typing import TYPE_CHECKING, Any
 from ..errors import PlanFileError, excerpt
 from ..files import other_kind_hint
 from ..problem.objectives.base import Level
+from ..robot.collision import Obstacle
 from .guarantees import (
     Check,
     ConstraintRecord,
     ObjectiveReport,
-    ObstacleRecord,
     RobustnessReport,
     SafetyReport,
     Verification,
@@ -207,6 +207,18 @@ def _robot_ref(data: Mapping[str, Any], fmt: str, folder: Path | None) -> RobotR
     return ref
 
 
+def _obstacle(data: Mapping[str, Any]) -> Obstacle:
+    """One keep-out object of the ``safety`` section (m, rad; at the origin unless placed)."""
+    xyz, rpy = data.get("xyz", (0.0, 0.0, 0.0)), data.get("rpy", (0.0, 0.0, 0.0))
+    return Obstacle(
+        str(data["name"]),
+        str(data["shape"]),
+        tuple(float(v) for v in data["size"]),
+        (float(xyz[0]), float(xyz[1]), float(xyz[2])),
+        (float(rpy[0]), float(rpy[1]), float(rpy[2])),
+    )
+
+
 def _safety(data: Any, folder: Path | None = None) -> SafetyReport:
     """The ``safety`` section (absent in files written before it existed: not checked)."""
     if data is None:
@@ -215,7 +227,7 @@ def _safety(data: Any, folder: Path | None = None) -> SafetyReport:
         checked=bool(data["checked"]),
         margin_m=float(data["margin_m"]),
         srdf=None if data.get("srdf") is None else _beside(str(data["srdf"]), folder),
-        obstacles=[ObstacleRecord(**o) for o in data.get("obstacles", [])],
+        obstacles=[_obstacle(o) for o in data.get("obstacles", [])],
         note=str(data.get("note", "")),
     )
 

@@ -23,7 +23,7 @@ from ..problem.scenario import Scenario
 from ..progress import LOGGER
 from ..robot.collision import known_srdf
 from ..solvers.minimise import Minimised
-from .guarantees import ConstraintRecord, ObjectiveReport, ObstacleRecord, SafetyReport
+from .guarantees import ConstraintRecord, ObjectiveReport, SafetyReport
 
 __all__ = [
     "as_rebuilt",
@@ -138,9 +138,6 @@ def safety_report(scenario: Scenario, constraints: Sequence[Constraint]) -> Safe
         checked=True,
         margin_m=clearance.margin,
         srdf=None if srdf is None else str(srdf),
-        obstacles=[
-            ObstacleRecord(o.name, o.shape, list(o.size), list(o.xyz), list(o.rpy))
-            for o in clearance.model.obstacles
-        ],
+        obstacles=list(clearance.model.obstacles),
         note=note,
     )

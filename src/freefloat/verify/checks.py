@@ -33,7 +33,6 @@ from ..plans.versions import FORMAT_2, FORMAT_3
 from ..problem.constraints import Constraint, JointEffortLimits, constraint_from_record
 from ..problem.constraints.clearance import Clearance
 from ..problem.constraints.registry import clearance_constraint
-from ..robot.collision import Obstacle
 from ..robot.model import Robot
 from .clearance_check import clearance_checks
 from .integrating import attitude_check, replay_checks
@@ -111,11 +110,9 @@ def plan_constraints(plan: Plan, robot: Robot) -> list[Constraint]:
         except FreeFloatError as exc:
             raise PlanFileError(f"plan field 'constraints[{i}]': {exc}") from None
     if plan.safety.checked:
-        obstacles = [
-            Obstacle(o.name, o.shape, tuple(o.size), tuple(o.xyz), tuple(o.rpy))  # type: ignore[arg-type]
-            for o in plan.safety.obstacles
-        ]
-        clearance = clearance_constraint(robot, plan.safety.srdf, obstacles, plan.safety.margin_m)
+        clearance = clearance_constraint(
+            robot, plan.safety.srdf, plan.safety.obstacles, plan.safety.margin_m
+        )
         if clearance is not None:
             constraints.append(clearance)
     return constraints

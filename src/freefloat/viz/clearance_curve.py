@@ -1,6 +1,6 @@
 """The smallest clearance along a plan, recomputed with its collision model (for figures).
 
-The plan's keep-out objects (:func:`plan_obstacles`) and the smallest signed distance (m) over
+The plan's keep-out objects and the smallest signed distance (m) over
 the checked pairs at evenly spaced instants of the plan's joint polynomials
 (:func:`clearance_curve`), with the pair that is closest. Used by the ``clearance`` figure
 (:mod:`freefloat.viz.plots`) and the playback page's keep-out objects.
@@ -16,29 +16,12 @@ import numpy as np
 from ..plans.format import Plan
 
 if TYPE_CHECKING:
-    from ..robot.collision import Obstacle
     from ..robot.model import Robot
 
-__all__ = ["CLEARANCE_SAMPLES", "ClearanceCurve", "clearance_curve", "plan_obstacles"]
+__all__ = ["CLEARANCE_SAMPLES", "ClearanceCurve", "clearance_curve"]
 
 #: Instants (evenly spaced over [0, T]) at which the clearance figure recomputes distances.
 CLEARANCE_SAMPLES = 400
-
-
-def plan_obstacles(plan: Plan) -> list[Obstacle]:
-    """The plan's keep-out objects (``plan.safety.obstacles``) as collision-model obstacles."""
-    from ..robot.collision import Obstacle
-
-    return [
-        Obstacle(
-            o.name,
-            o.shape,
-            tuple(float(v) for v in o.size),
-            (float(o.xyz[0]), float(o.xyz[1]), float(o.xyz[2])),
-            (float(o.rpy[0]), float(o.rpy[1]), float(o.rpy[2])),
-        )
-        for o in plan.safety.obstacles
-    ]
 
 
 @dataclass(frozen=True)
@@ -82,7 +65,7 @@ def clearance_curve(
     from ..robot.collision import CollisionModel
 
     robot = robot or plan_robot(plan)
-    model = CollisionModel(robot, plan.safety.srdf, plan_obstacles(plan))
+    model = CollisionModel(robot, plan.safety.srdf, plan.safety.obstacles)
     if model.n_pairs == 0:
         return None
     t = np.linspace(0.0, plan.duration, max(2, int(samples)))

@@ -33,7 +33,6 @@ from ..plans.format import Plan
 from ..plans.robot_copy import plan_robot
 from ..robot.collision import Obstacle
 from ..robot.model import Robot, example_robot_data_dir
-from .clearance_curve import plan_obstacles
 from .controls import CM_COLOR, EE_COLOR, TRAIL_COLOR
 
 __all__ = ["Playback", "build_playback", "serve", "write_html"]
@@ -328,7 +327,7 @@ def _draw_extras(
         viewer[tip_node].set_object(
             g.Sphere(0.04 * extent), g.MeshLambertMaterial(color=EE_COLOR, **ON_TOP)
         )
-    obstacles = {obstacle_node(o.name): o for o in plan_obstacles(plan)}
+    obstacles = {obstacle_node(o.name): o for o in plan.safety.obstacles}
     for node, obstacle in obstacles.items():
         _draw_obstacle(viewer, g, node, obstacle)
     # Camera: meshcat 0.3.2 API (Pinocchio's helpers need a newer meshcat). Inside the
