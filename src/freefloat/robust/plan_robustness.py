@@ -14,32 +14,18 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import PlanFileError
 from ..physics.attitude import geodesic_angle, quat_from_zyx
 from ..plans.format import Plan
 from ..plans.guarantees import RobustnessReport
+from ..plans.robot_copy import plan_robot
 from ..plans.versions import FORMAT
 from ..problem.inertial_sensitivity import attitude_sensitivity
 from ..problem.uncertainty import DEFAULT_UNCERTAINTY, AttitudeSpread, Uncertainty, spread
-from ..robot.model import Robot, load_robot
+from ..robot.model import Robot
 from ..verify.recompute import problem_from_plan
 from .correction import correcting_plan
 
-__all__ = ["correct_plan", "plan_robot", "plan_sensitivity", "plan_spread", "with_robustness"]
-
-
-def plan_robot(plan: Plan) -> Robot:
-    """The plan's robot, loaded from its URDF; its joints must be the plan's.
-
-    Raises:
-        PlanFileError: the URDF's joints are not the plan's.
-    """
-    robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
-    if robot.joint_names != list(plan.robot.joints):
-        raise PlanFileError(
-            f"the plan's joints {plan.robot.joints} do not match the URDF's {robot.joint_names}"
-        )
-    return robot
+__all__ = ["correct_plan", "plan_sensitivity", "plan_spread", "with_robustness"]
 
 
 def plan_spread(

@@ -9,7 +9,6 @@ change on doubling) is small against the error it measures.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,7 +18,7 @@ from ..physics.momentum import MomentumMap
 from ..plans.format import Plan
 from ..robot.model import Robot
 from ..verify.path_eval import file_path
-from ..verify.stepping import _refine, _rk4_attitude
+from ..verify.stepping import AttitudeLevel, attitude_by_doubling
 
 __all__ = ["ReplayOutcome", "replay_attitude"]
 
@@ -74,19 +73,12 @@ def replay_attitude(
         q, qd, _ = path(t)
         return mmap.base_rates(q, qd).omega
 
-    steps = FIRST_STEPS
-    omega = _refine(None, steps, duration, omega_at)
-    coarse = _rk4_attitude(start, omega, duration)
-    previous = math.inf
-    while True:
-        steps *= 2
-        omega = _refine(omega, steps, duration, omega_at)
-        fine = _rk4_attitude(start, omega, duration)
-        estimate = geodesic_angle(coarse, fine)
-        error = geodesic_angle(fine, goal)
-        small = estimate <= max(ABSOLUTE_FLOOR, RELATIVE_ACCURACY * error)
-        if steps >= MAX_STEPS or (small and estimate <= previous / 8.0):
-            break
-        coarse, previous = fine, estimate
+    def accurate(level: AttitudeLevel) -> bool:
+        error = geodesic_angle(level.attitude, goal)
+        small = level.estimate <= max(ABSOLUTE_FLOOR, RELATIVE_ACCURACY * error)
+        return small and level.estimate <= level.previous / 8.0
+
+    level = attitude_by_doubling(start, omega_at, duration, FIRST_STEPS, MAX_STEPS, accurate)
+    fine = level.attitude
     rotvec = quat_log(quat_multiply(quat_conjugate(goal), fine))
-    return ReplayOutcome(fine, rotvec, float(np.linalg.norm(rotvec)), estimate, steps)
+    return ReplayOutcome(fine, rotvec, float(np.linalg.norm(rotvec)), level.estimate, level.steps)

@@ -185,7 +185,7 @@ def random_values(
 
 def plan_source(name: str, folder: Path) -> tuple[Path, dict[str, Any], str]:
     """A plan file to replay (relative to the sweep file): its path, no tables, its URDF."""
-    from ..robust.plan_robustness import plan_robot
+    from ..plans.robot_copy import plan_robot
 
     path = (folder / name).expanduser().resolve()
     return path, {}, robot_text(plan_robot(load_plan_file(path)))

@@ -14,9 +14,9 @@ from dataclasses import dataclass, fields, replace
 
 from ..errors import FreeFloatError
 from ..plans.format import Plan
+from ..plans.robot_copy import plan_robot
 from ..robot.model import Robot
 from ..robust.inertial import perturbed_robot, robot_text
-from ..robust.plan_robustness import plan_robot
 from ..robust.replay import replay_attitude
 from .spec import Job, Value
 

@@ -30,11 +30,11 @@ from .stepping import (
     _FIRST_ATTITUDE_STEPS,
     _FIRST_REPLAY_STEPS,
     _MAX_ATTITUDE_STEPS,
+    AttitudeLevel,
     _decided,
     _finite,
-    _refine,
-    _rk4_attitude,
     _with_midpoints,
+    attitude_by_doubling,
 )
 
 __all__ = ["attitude_check", "replay_checks"]
@@ -52,23 +52,15 @@ def attitude_check(subject: Subject) -> list[Check]:
         q, qd, _ = path(np.asarray(t, dtype=float))
         return mmap.base_rates(q, qd).omega
 
-    steps = _FIRST_ATTITUDE_STEPS
-    omega = _refine(None, steps, duration, omega_at)
-    coarse = _rk4_attitude(start_quat, omega, duration)
-    previous_estimate = math.inf
-    while True:
-        steps *= 2
-        omega = _refine(omega, steps, duration, omega_at)
-        fine = _rk4_attitude(start_quat, omega, duration)
-        value = geodesic_angle(fine, target)
-        estimate = geodesic_angle(coarse, fine)
-        turn = float(np.abs(omega).max()) * duration / steps
-        if steps >= _MAX_ATTITUDE_STEPS or _decided(
-            value, estimate, previous_estimate, tolerance, turn
-        ):
-            break
-        coarse, previous_estimate = fine, estimate
-    detail = f"RK4, {steps} steps"
+    def settled(level: AttitudeLevel) -> bool:
+        value = geodesic_angle(level.attitude, target)
+        return _decided(value, level.estimate, level.previous, tolerance, level.turn)
+
+    level = attitude_by_doubling(
+        start_quat, omega_at, duration, _FIRST_ATTITUDE_STEPS, _MAX_ATTITUDE_STEPS, settled
+    )
+    value, estimate = geodesic_angle(level.attitude, target), level.estimate
+    detail = f"RK4, {level.steps} steps"
     return [Check("attitude_independent", value, tolerance, "rad", estimate, detail)]
 
 

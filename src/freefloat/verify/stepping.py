@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["CONVERGED_FRACTION", "MAX_REPLAY_STEPS"]
+from ..physics.attitude import geodesic_angle
+
+__all__ = ["CONVERGED_FRACTION", "MAX_REPLAY_STEPS", "AttitudeLevel", "attitude_by_doubling"]
 
 #: A numerical check refines (doubles its steps) until its verdict no longer depends on its own
 #: error, or until its error estimate is below this fraction of its tolerance.
@@ -126,3 +129,58 @@ def _refine(
     out[0::2] = table
     out[1::2] = fill(t[1::2])
     return out
+
+
+@dataclass(frozen=True)
+class AttitudeLevel:
+    """The last level of an attitude integration by step doubling.
+
+    Attributes:
+        attitude: final attitude ``[x, y, z, w]`` on ``steps`` steps.
+        estimate: geodesic angle between it and the level of half as many steps (rad).
+        previous: the same difference one level before (rad; inf at the first).
+        steps: RK4 steps of the last level.
+        turn: largest base rotation in one step (rad).
+    """
+
+    attitude: np.ndarray
+    estimate: float
+    previous: float
+    steps: int
+    turn: float
+
+
+def attitude_by_doubling(
+    start: np.ndarray,
+    omega_at: Callable[[np.ndarray], np.ndarray],
+    duration: float,
+    first_steps: int,
+    max_steps: int,
+    done: Callable[[AttitudeLevel], bool],
+) -> AttitudeLevel:
+    """Integrate the base attitude by RK4 (:func:`_rk4_attitude`), doubling the steps.
+
+    Starts on ``first_steps`` steps and doubles (reusing every rate already computed) until
+    ``done`` accepts a level or ``max_steps`` is reached.
+
+    Args:
+        start: attitude ``[x, y, z, w]`` at t = 0.
+        omega_at: base angular velocity (rad/s) at an array of times (s), shape (K, 3).
+        duration: time span (s).
+        first_steps: steps of the coarsest level.
+        max_steps: the most steps.
+        done: whether a level settles the caller's question.
+    """
+    steps = first_steps
+    omega = _refine(None, steps, duration, omega_at)
+    coarse = _rk4_attitude(start, omega, duration)
+    previous = math.inf
+    while True:
+        steps *= 2
+        omega = _refine(omega, steps, duration, omega_at)
+        fine = _rk4_attitude(start, omega, duration)
+        turn = float(np.abs(omega).max()) * duration / steps
+        level = AttitudeLevel(fine, geodesic_angle(coarse, fine), previous, steps, turn)
+        if steps >= max_steps or done(level):
+            return level
+        coarse, previous = fine, level.estimate
