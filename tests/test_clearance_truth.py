@@ -278,3 +278,20 @@ def test_bulk_distances_do_not_depend_on_what_was_asked_before():
         walked.distances(UR5_START + u * (UR5_GOAL - UR5_START))
     assert np.array_equal(walked.distances(target).values, first)
     assert np.array_equal(fresh.distances(target).values, first)
+
+
+def test_a_mesh_file_changed_in_place_is_measured_anew(tmp_path):
+    """The same path, new content (a notebook user edits a mesh and plans again): the solver's
+    hull and verification's triangles are those of the new file (closed form: box faces)."""
+    urdf = tmp_path / "u.urdf"
+    urdf.write_text(_U_ROBOT)
+    ball = Obstacle("ball", "sphere", (0.02,), (1.5, 0.05, 0.05))
+    for width in (0.1, 0.3):  # the box spans x in [1, 1 + width] in the spacecraft frame
+        write_stl(tmp_path / "u.stl", _box_triangles(np.zeros(3), np.array([width, 0.1, 0.1])))
+        robot = ff.load_robot(urdf)
+        k = CollisionModel(robot, None, [ball]).names.index("u_0 / obstacle:ball")
+        truth = 1.5 - (1.0 + width) - 0.02  # the ball's centre faces the box's +x face
+        solver = CollisionModel(robot, None, [ball]).distances(np.zeros(1)).values[k]
+        assert solver == pytest.approx(truth, abs=1e-7)
+        mesh = MeshClearance(robot, None, [ball])
+        assert mesh.exact(mesh.placements(np.zeros(1)), k) == pytest.approx(truth, abs=1e-7)

@@ -22,6 +22,7 @@ The URDF's geometry is parsed once per URDF in a process (each caller gets its o
 
 from __future__ import annotations
 
+import hashlib
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -193,17 +194,29 @@ class HullInfo:
         return self.hull_volume / self.mesh_volume - 1.0
 
 
-#: True hulls by mesh file and scale, built once in a process.
-_HULLS: dict[tuple[str, tuple[float, ...]], coal.ConvexBase] = {}
+#: True hulls by mesh file, scale and vertices, built once in a process.
+_HULLS: dict[tuple[str, tuple[float, ...], str], coal.ConvexBase] = {}
+
+
+def _mesh_key(obj: pin.GeometryObject) -> tuple[str, tuple[float, ...], str]:
+    """A mesh object's file, scale and a digest of the vertices it was read with.
+
+    A mesh file changed on disk (between two plans, or while one is made) never meets the
+    cached hull or triangles of its former content.
+    """
+    vertices = np.ascontiguousarray(np.array(obj.geometry.vertices(), dtype=float))
+    digest = hashlib.sha256(vertices.tobytes()).hexdigest()
+    return str(obj.meshPath), tuple(float(s) for s in obj.meshScale), digest
 
 
 def true_hull(obj: pin.GeometryObject) -> coal.ConvexBase:
     """The real convex hull (qhull, coal ``buildConvexHull(True, "Qt")``) of a mesh object.
 
-    Remembered per mesh file and scale. Never ``buildConvexRepresentation``: for a non-convex
-    mesh that keeps the mesh's own faces, and GJK's support search on it stops at local maxima.
+    Remembered per mesh file, scale and vertices. Never ``buildConvexRepresentation``: for a
+    non-convex mesh that keeps the mesh's own faces, and GJK's support search on it stops at
+    local maxima.
     """
-    key = (str(obj.meshPath), tuple(float(s) for s in obj.meshScale))
+    key = _mesh_key(obj)
     if key not in _HULLS:
         shape = obj.geometry
         shape.buildConvexHull(True, "Qt")
@@ -222,17 +235,11 @@ def mesh_triangles(shape: coal.BVHModelBase) -> tuple[np.ndarray, np.ndarray]:
 
 
 def object_triangles(obj: pin.GeometryObject) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`mesh_triangles` of a mesh object, read once per mesh file, scale and file stamp.
+    """:func:`mesh_triangles` of a mesh object, read once per mesh file, scale and vertices.
 
     The arrays are shared between callers, so they are read-only.
     """
-    path = Path(obj.meshPath)
-    try:
-        stat = path.stat()
-        stamp = (stat.st_mtime_ns, stat.st_size)
-    except OSError:
-        return mesh_triangles(obj.geometry)
-    key = (str(path), tuple(float(x) for x in obj.meshScale), *stamp)
+    key = _mesh_key(obj)
     if key not in _TRIANGLES:
         vertices, triangles = mesh_triangles(obj.geometry)
         vertices.setflags(write=False)
@@ -241,8 +248,8 @@ def object_triangles(obj: pin.GeometryObject) -> tuple[np.ndarray, np.ndarray]:
     return _TRIANGLES[key]
 
 
-#: Triangles per mesh file, scale and file stamp (see object_triangles).
-_TRIANGLES: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+#: Triangles per mesh file, scale and vertices (see object_triangles).
+_TRIANGLES: dict[tuple[str, tuple[float, ...], str], tuple[np.ndarray, np.ndarray]] = {}
 
 
 def mesh_volume(vertices: np.ndarray, triangles: np.ndarray) -> float:
