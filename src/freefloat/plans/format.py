@@ -117,16 +117,5 @@ class Plan:
 
     @classmethod
     def from_dict(cls, data: Any, where: str = "plan", folder: Path | None = None) -> Plan:
-        """Build a plan from its file dictionary, checking the format and the keys.
-
-        Args:
-            data: the parsed file.
-            where: the file's name, for messages.
-            folder: the plan file's folder: a relative ``robot.urdf`` (or ``safety.srdf``)
-                path is read from there (default: the working directory).
-
-        Raises:
-            PlanFileError: another format, a bad or missing key, a limit broken, or a URDF
-                copy whose SHA-256 is not the one stated.
-        """
+        """Build a plan from its file dictionary (arguments and errors: :func:`.io.plan_fields`)."""
         return cls(**plan_fields(data, where, folder))
