@@ -205,3 +205,16 @@ def test_planar_reach_is_the_planar_interval(capsys) -> None:
     # Planar bounds of the worked example, from its bounds command: (1.358, 72.270) deg of
     # yaw from the start at -50 deg, so goal yaws from -48.642 to 22.270 deg.
     assert "[22.2700, 0.0000, 0.0000]" in out and "[-48.6419, 0.0000, 0.0000]" in out
+
+
+def test_reach_without_an_inner_estimate_offers_no_goal_to_paste(capsys) -> None:
+    """--budget 0: the inner column and the goal column say '-' (no zero turn that reads as
+    'unreachable', no drift attitude offered as a goal); the outer column is per axis."""
+    assert main(["reach", str(SCENARIOS / "ur5_servicer.toml"), "--budget", "0"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert "  per axis, turns measured from the drift attitude:" in out
+    rows = [line for line in out if re.match(r"\s+[+-]\d\.\d\d [+-]\d\.\d\d [+-]\d\.\d\d\s", line)]
+    assert len(rows) == 14
+    for row in rows:
+        inner, outer, goal = row.split()[3:6]
+        assert inner == "-" and goal == "-" and float(outer) > 0.0

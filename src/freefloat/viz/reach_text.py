@@ -68,21 +68,23 @@ def reach_lines(report: ReachReport) -> list[str]:
         lines.append(
             "planar bounds (docs/method.md section 6): the yaw changes simple motions reach"
         )
+    if not report.planar:
+        lines.append("  per axis, turns measured from the drift attitude:")
     lines.append(
         f"  {'axis (base frame)':<20}{'inner [deg]':>12}{'outer [deg]':>12}  "
         f"{'goal base_zyx_deg at inner':<30}  stopped by"
     )
+    skipped = report.budget == 0 and not report.planar  # no inner estimate: nothing to paste
     for d in report.directions:
         axis = " ".join(f"{x:+.2f}" for x in d.axis)
         why = d.stopped_by or ("-" if d.inner < d.outer else "reached the outer bound")
-        if report.budget == 0 and not report.planar:
+        if skipped:
             why = "-"
         if d.breaks:
             why += f"; at this duration breaks {d.breaks}"
-        lines.append(
-            f"  {axis:<20}{math.degrees(d.inner):>12.2f}{math.degrees(d.outer):>12.2f}  "
-            f"{_vector(d.goal_zyx_deg, 4):<30}  {why}"
-        )
+        inner = f"{'-':>12}" if skipped else f"{math.degrees(d.inner):>12.2f}"
+        goal = "-" if skipped else _vector(d.goal_zyx_deg, 4)
+        lines.append(f"  {axis:<20}{inner}{math.degrees(d.outer):>12.2f}  {goal:<30}  {why}")
     if report.planar:
         lines.append("  the interval is open: a goal at its very end is not reached")
     said = verdict(report)
