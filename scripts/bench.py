@@ -69,13 +69,10 @@ from __future__ import annotations
 import argparse
 import contextlib
 import dataclasses
-import datetime
 import io
 import json
 import math
 import os
-import platform
-import shlex
 import statistics
 import sys
 import time
@@ -89,6 +86,7 @@ from scipy.optimize import minimize, newton, root
 
 import freefloat as ff
 from bench_paths import BASELINE_REVISION, bench_paths, print_paths
+from bench_stamp import machine, stamped_markdown
 from freefloat.physics import attitude as att
 from freefloat.robot.collision import CollisionModel, known_srdf
 
@@ -787,50 +785,6 @@ def timed_once(fn) -> float:  # type: ignore[no-untyped-def]
     start = time.perf_counter()
     fn()
     return time.perf_counter() - start
-
-
-def machine() -> str:
-    cpu = "unknown CPU"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return (
-        f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, "
-        f"Pinocchio {pin.__version__}, freefloat {ff.__version__}"
-    )
-
-
-def stamp() -> str:
-    """When, where and how a table was made: date, machine, versions, load and command."""
-    load = ", ".join(f"{x:.1f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "?"
-    when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    command = "python " + " ".join(shlex.quote(a) for a in sys.argv)
-    return (
-        f"*Measured {when} on {machine()}, numpy {np.__version__}; load average {load} "
-        f"(1, 5, 15 min); command: `{command}`*"
-    )
-
-
-def stamped_markdown(text: str) -> str:
-    """The printed report as Markdown, each table preceded by its stamp (progress dropped)."""
-    out: list[str] = []
-    mark = stamp()
-    in_table = False
-    for line in text.splitlines():
-        if line.startswith("  done:") or line.startswith("machine:"):
-            continue
-        table = line.startswith("|")
-        if table and not in_table:
-            if out and out[-1].strip():
-                out.append("")
-            out += [mark, ""]
-        out.append(line)
-        in_table = table
-    return "\n".join(out).strip() + "\n"
 
 
 def main() -> None:

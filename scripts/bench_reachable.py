@@ -197,7 +197,7 @@ def main() -> None:
         import contextlib
         import io
 
-        from bench import stamped_markdown
+        from bench_stamp import stamped_markdown
 
         buffer = io.StringIO()
         with contextlib.redirect_stdout(buffer):
