@@ -52,10 +52,11 @@ def test_the_bound_holds_between_any_two_configurations():
     assert tight > 0.05  # the bound is not vacuous: some pair moves a fair part of it
 
 
+@pytest.mark.parametrize("slotted", [False, True])
 @pytest.mark.parametrize("path", [PANDA, UR5])
-def test_the_closest_pair_is_the_same_bits_as_with_every_pair_measured(path):
-    """After any history of queries, the smallest distance, its pair and its gradient are
-    those of a fresh model that measures every pair."""
+def test_the_closest_pair_is_the_same_bits_as_with_every_pair_measured(path, slotted):
+    """After any history of queries (in one slot, or in slots they come back to), the smallest
+    distance, its pair and its gradient are those of a fresh model that measures every pair."""
     scenario = ff.Scenario.from_toml(path)
     robot = scenario.robot
     walked = CollisionModel(robot, known_srdf(robot))
@@ -63,7 +64,8 @@ def test_the_closest_pair_is_the_same_bits_as_with_every_pair_measured(path):
     rng = np.random.default_rng(3)
     for u in rng.uniform(0.0, 1.0, 30):
         joints = start + u * (goal - start) + rng.normal(0.0, 0.05, robot.n)
-        value, gradient, pair = walked.closest(joints)
+        slot = float(round(u, 1)) if slotted else None
+        value, gradient, pair = walked.closest(joints, slot)
         fresh = CollisionModel(robot, known_srdf(robot)).distances(joints, gradients=True)
         k = int(np.argmin(fresh.values))
         assert (value, pair) == (float(fresh.values[k]), k)
@@ -262,7 +264,7 @@ class _Dip:
     def __init__(self, margin: float, cap: float, weights: np.ndarray | None) -> None:
         self.margin, self.cap, self.weights = margin, cap, weights
 
-    def closest_value(self, joints: np.ndarray) -> tuple[float, int]:
+    def closest_value(self, joints: np.ndarray, slot: float | None = None) -> tuple[float, int]:
         dip = abs(float(joints[0]) - 100.5 / 200)
         return self.margin - 1e-3 + min(dip, self.cap), 0
 

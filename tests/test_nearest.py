@@ -1,19 +1,25 @@
-"""The root nearest the quintic: first-order optimality, against SciPy's SLSQP."""
+"""The root nearest the quintic, free and within constraints: optimality, against SciPy's SLSQP."""
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 from scipy.optimize import minimize
 
 import freefloat as ff
-from freefloat.solvers.nearest import _least_norm_root
+from freefloat.problem.constraints.joint_position import JointPositionLimits
+from freefloat.solvers.least_norm import least_norm_root, least_norm_root_within
+from freefloat.solvers.newton import polish
+
+from conftest import worked_problem
 
 
 def test_least_norm_root_is_a_kkt_point_and_matches_slsqp(worked_scenario):
     scenario = worked_scenario.resolved()
     problem = ff.problem_from_scenario(scenario, extra=[2, 2])
     start = ff.solve(problem, ff.SolveOptions(), []).beta
-    beta = _least_norm_root(problem, start, ff.SolveOptions())
+    beta = least_norm_root(problem, start, ff.SolveOptions())
     residual, jac = problem.residual_and_jacobian(beta)
     assert np.linalg.norm(residual) < 1e-9
     # KKT of min |beta|^2 s.t. h = 0: beta lies in the row space of the Jacobian
@@ -31,3 +37,49 @@ def test_least_norm_root_is_a_kkt_point_and_matches_slsqp(worked_scenario):
     )
     assert other.success
     np.testing.assert_allclose(beta @ beta, other.x @ other.x, rtol=1e-6)
+
+
+def test_least_norm_root_within_a_binding_limit_matches_slsqp_on_a_dense_grid(worked_scenario):
+    """Joint q1 capped at 1.45 rad, below the least-norm root's 1.516 rad: from a feasible root
+    further out, the root found honours the cap everywhere (the polynomial's exact extremes),
+    has the least norm SciPy's SLSQP finds with the cap imposed at 401 instants (another
+    optimiser, another grid), and touches the cap (the constraint binds)."""
+    scenario = worked_scenario.resolved()
+    joints = list(scenario.robot.joints)
+    joints[0] = dataclasses.replace(joints[0], upper=1.45)
+    robot = dataclasses.replace(scenario.robot, joints=tuple(joints))
+    problem = worked_problem(dataclasses.replace(scenario, robot=robot), {"q1": 3, "q2": 3})
+    options = ff.SolveOptions()
+    least = ff.solve(problem, options, []).beta
+    limits = JointPositionLimits()
+    assert limits.violation(problem, least).value > 0.05  # the free least-norm root breaks it
+    null = np.linalg.svd(problem.jacobian(least))[2][3:]
+    start = polish(problem, least + 0.5 * null[0], 1e-10)[0]
+    assert limits.violation(problem, start).value < 0.0
+    found = least_norm_root_within(problem, start, [limits], options)
+    assert found.honoured
+    beta = found.beta
+    assert np.linalg.norm(problem.residual(beta)) < 1e-10
+    excess = limits.violation(problem, beta).value
+    assert -1e-6 < excess <= limits.tolerance
+    dense = np.linspace(0.0, 1.0, 401)
+    rows = limits.rows(problem, np.zeros(problem.n_free), dense)
+    cap = [
+        {
+            "type": "ineq",
+            "fun": lambda b: -(rows.values + rows.jacobian @ b),
+            "jac": lambda b: -rows.jacobian,
+        },
+        {"type": "eq", "fun": problem.residual, "jac": problem.jacobian},
+    ]
+    other = minimize(
+        lambda b: b @ b,
+        start,
+        jac=lambda b: 2 * b,
+        method="SLSQP",
+        constraints=cap,
+        options={"ftol": 1e-14, "maxiter": 500},
+    )
+    assert other.success
+    assert beta @ beta < start @ start
+    np.testing.assert_allclose(beta @ beta, other.x @ other.x, rtol=1e-5)

@@ -33,10 +33,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from ..errors import InputError
 from .distance_query import (
-    DEFAULT_GUESS,
-    DEFAULT_SUPPORT_GUESS,
     GJK_TOLERANCE,
     RETRY_TOLERANCES,
     CheckedDistance,
@@ -55,7 +52,8 @@ from .geometry import (
     true_hull,
 )
 from .model import Robot, example_robot_data_dir
-from .motion_bound import BOUND_SLACK, motion_weights
+from .motion_bound import PairBounds, motion_weights
+from .obstacle import SHAPES, Obstacle
 
 __all__ = [
     "ARM_SRDFS",
@@ -70,9 +68,6 @@ __all__ = [
     "collision_model",
     "known_srdf",
 ]
-
-#: Keep-out shapes and the sizes each takes (m): box [x, y, z], sphere [r], capsule [r, length].
-SHAPES = {"box": 3, "sphere": 1, "capsule": 2}
 
 #: SRDF files of example-robot-data arms (below ``example-robot-data/robots``).
 ARM_SRDFS = {
@@ -95,54 +90,6 @@ def known_srdf(robot: Robot) -> Path | None:
         return None
     path = share / "example-robot-data" / "robots" / ARM_SRDFS[arm]
     return path if path.is_file() else None
-
-
-@dataclass(frozen=True)
-class Obstacle:
-    """A keep-out object fixed to the spacecraft.
-
-    Attributes:
-        name: its name (in messages and plots).
-        shape: ``"box"``, ``"sphere"`` or ``"capsule"`` (a capsule's axis is its local z).
-        size: box edge lengths [x, y, z], sphere [radius], capsule [radius, length] (m).
-        xyz: position of its centre in the spacecraft frame (m).
-        rpy: its orientation in the spacecraft frame, roll, pitch, yaw (rad).
-    """
-
-    name: str
-    shape: str
-    size: tuple[float, ...]
-    xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
-
-    def __post_init__(self) -> None:
-        if self.shape not in SHAPES:
-            raise InputError(
-                f"obstacle {self.name!r}: unknown shape {self.shape!r}; valid: " + ", ".join(SHAPES)
-            )
-        if len(self.size) != SHAPES[self.shape]:
-            raise InputError(
-                f"obstacle {self.name!r}: a {self.shape} takes {SHAPES[self.shape]} size(s) "
-                f"[m], got {len(self.size)}"
-            )
-        if not all(math.isfinite(s) and s > 0.0 for s in self.size):
-            raise InputError(
-                f"obstacle {self.name!r}: sizes must be finite and > 0 m, got {list(self.size)}"
-            )
-        if not all(math.isfinite(v) for v in (*self.xyz, *self.rpy)):
-            raise InputError(f"obstacle {self.name!r}: pose must be finite numbers")
-
-    def geometry(self) -> coal.CollisionGeometry:
-        """The coal shape."""
-        if self.shape == "box":
-            return coal.Box(*self.size)
-        if self.shape == "sphere":
-            return coal.Sphere(self.size[0])
-        return coal.Capsule(self.size[0], self.size[1])
-
-    def placement(self) -> pin.SE3:
-        """Its pose in the spacecraft frame."""
-        return pin.SE3(pin.rpy.rpyToMatrix(*self.rpy), np.array(self.xyz, dtype=float))
 
 
 @dataclass(frozen=True)
@@ -193,13 +140,13 @@ class CollisionModel:
         self.names = [f"{objects[a].name} / {objects[b].name}" for a, b in self.pairs]
         self._data = robot.model.createData()
         self._geometry_data = pin.GeometryData(geometry)
-        for request in self._geometry_data.distanceRequests:
-            configure(request, GJK_TOLERANCE)
+        requests = self._geometry_data.distanceRequests
+        for k in range(len(requests)):  # coal's own requests: no guess kept from the last query
+            requests[k] = configure(coal.DistanceRequest(), GJK_TOLERANCE)
         #: Queries asked again at a looser EPA tolerance since the model was built.
         self.retries = 0
-        # Views of Pinocchio's per-pair requests and results (valid: the vectors never resize),
-        # and the results of pairs asked again alone in the last call.
-        self._requests = list(self._geometry_data.distanceRequests)
+        # Views of Pinocchio's per-pair results (valid: the vector never resizes), and the
+        # results of pairs asked again alone in the last call.
         self._pair_results = list(self._geometry_data.distanceResults)
         self._retried: dict[int, coal.DistanceResult] = {}
         # Bounding spheres (centre in the shape's frame, radius; m): a distance outside what
@@ -217,10 +164,9 @@ class CollisionModel:
         plain = all(j.kind != "continuous" for j in robot.joints)
         self._slots = np.array([j.idx_q for j in robot.joints]) if plain else None
         self._columns = np.array([j.idx_v for j in robot.joints])
-        # Each pair's last measured distance (m) and the joints then: see _may_be_closest.
+        # Each pair's last bounds of its distance per slot: see _may_be_closest.
         self._weights = motion_weights(robot, geometry, self.pairs, self._centres, self._radii)
-        self._last_joints = np.zeros((len(self.pairs), robot.n))
-        self._last_values = np.full(len(self.pairs), math.nan)
+        self._bounds = None if self._weights is None else PairBounds(self._weights)
 
     @property
     def weights(self) -> np.ndarray | None:
@@ -247,68 +193,95 @@ class CollisionModel:
         grads = np.stack([self._gradient(k) for k in range(len(self.pairs))])
         return Distances(values, grads)
 
-    def closest_value(self, joints: np.ndarray) -> tuple[float, int]:
+    def closest_value(self, joints: np.ndarray, slot: float | None = None) -> tuple[float, int]:
         """The smallest signed distance over the pairs (m) and its pair index.
 
-        Exact: only the pairs whose bounding spheres allow a distance below the smallest upper
-        bound of all (the sum of centre distance and radii) are measured.
+        Exact: only the pairs that can be the closest are measured (:meth:`_may_be_closest`),
+        bounded from their last measurement at ``slot`` (a normalised instant of a path, say:
+        queries that come back to a slot with nearby joints measure few pairs).
         """
-        values = self._bulk(joints, nearest=True)
+        values = self._bulk(joints, nearest=True, slot=slot)
         k = int(np.argmin(values)) if len(values) else -1
         return (float(values[k]) if k >= 0 else math.inf), k
 
-    def closest(self, joints: np.ndarray) -> tuple[float, np.ndarray, int]:
-        """The smallest signed distance (m), its gradient over the joints, and its pair index."""
-        value, k = self.closest_value(joints)
+    def floor(self, joints: np.ndarray, slot: float) -> float:
+        """A lower bound (m) of the smallest distance at ``joints``, without measuring.
+
+        From each pair's last bounds at ``slot`` and how far its bodies can have moved since
+        (:meth:`PairBounds.floor`); ``-inf`` when the slot is new or nothing bounds the motion.
+        """
+        if self._bounds is None:
+            return -math.inf
+        return self._bounds.floor(slot, np.asarray(joints, dtype=float))
+
+    def closest(
+        self, joints: np.ndarray, slot: float | None = None
+    ) -> tuple[float, np.ndarray, int]:
+        """The smallest signed distance (m), its gradient over the joints, and its pair index.
+
+        ``slot`` as for :meth:`closest_value`.
+        """
+        value, k = self.closest_value(joints, slot)
         if k < 0:
             return value, np.zeros(self.robot.n), k
         pin.computeJointJacobians(self.robot.model, self._data)  # at closest_value's pose
         return value, self._gradient(k), k
 
-    def _bulk(self, joints: np.ndarray, nearest: bool = False) -> np.ndarray:
+    def _bulk(
+        self, joints: np.ndarray, nearest: bool = False, slot: float | None = None
+    ) -> np.ndarray:
         """Signed distances (m) of the pairs, each by Pinocchio's ``computeDistance``.
 
         With ``nearest``, only the pairs that can be the closest are measured (the others are
-        ``inf``; see :meth:`_may_be_closest`). Each value is checked against its bounding
-        spheres as :func:`checked_distance` does, and an impossible one is asked again alone at
-        looser tolerances (counted in :attr:`retries`). The queries start from coal's default
-        guesses (of the separating direction and of the support vertices), never from the last
-        call's, so a distance does not depend, to the last bit, on what was asked before.
+        ``inf``; see :meth:`_may_be_closest`). A value outside its pair's bounds (its motion
+        bounds, else its bounding spheres) is checked against the spheres as
+        :func:`checked_distance` does, and an impossible one is asked again alone at looser
+        tolerances (counted in :attr:`retries`). Every query starts from coal's default
+        guesses (the requests keep none from the last query), so a distance does not depend,
+        to the last bit, on what was asked before.
         """
         model, data, gdata = self.robot.model, self._data, self._geometry_data
         joints = np.asarray(joints, dtype=float)
         pin.forwardKinematics(model, data, self._configuration(joints))
         pin.updateGeometryPlacements(model, data, self.geometry, gdata)
-        everything = np.arange(len(self.pairs))
         if nearest and len(self.pairs):
-            measured = np.flatnonzero(self._may_be_closest(joints))
+            measured, lower, upper = self._may_be_closest(joints, slot)
         else:
-            measured = everything
-        gap, reach = self._spheres(measured)
-        for pair in measured:  # Pinocchio keeps each pair's last guesses: start from coal's own
-            self._requests[pair].cached_gjk_guess = DEFAULT_GUESS
-            self._requests[pair].cached_support_func_guess = DEFAULT_SUPPORT_GUESS
+            measured = np.arange(len(self.pairs))
+            gap, reach = self._spheres(measured)
+            lower, upper = gap - reach, gap + reach
         found = np.array(
             [pin.computeDistance(self.geometry, gdata, int(k)).min_distance for k in measured]
         )
         with np.errstate(invalid="ignore"):
-            possible = (found >= gap - reach - 1e-9) & (found <= gap + reach + 1e-9)
-        bad = ~(np.isfinite(found) & possible)
-        self._last_joints[measured] = joints
-        self._last_values[measured] = np.where(bad, math.nan, found)  # no retried reference
+            suspect = ~((found >= lower - 1e-9) & (found <= upper + 1e-9))
         self._retried = {}
-        for i in np.flatnonzero(bad).tolist():
-            k = int(measured[i])
-            a, b = self.pairs[k]
-            ta, tb = (_transform(gdata.oMg[j]) for j in (a, b))
-            spheres = (float(gap[i] - reach[i]), float(gap[i] + reach[i]))
-            shapes = (self._shapes[a], ta, self._shapes[b], tb)
-            answer = checked_distance(*shapes, spheres, self.names[k])
-            self.retries += max(1, answer.retries)
-            found[i], self._retried[k] = answer.value, answer.result
+        for i in np.flatnonzero(suspect).tolist():
+            found[i] = self._recheck(int(measured[i]), float(found[i]))
+        if self._bounds is not None:  # a retried value is no reference: forgotten
+            known = np.where(np.isin(measured, list(self._retried)), math.nan, found)
+            self._bounds.record(slot, measured, joints, known, known)
         values = np.full(len(self.pairs), math.inf)
         values[measured] = found
         return values
+
+    def _recheck(self, k: int, value: float) -> float:
+        """Pair ``k``'s distance (m) when ``value`` lies outside its bounds: checked again.
+
+        Kept when its bounding spheres allow it; otherwise asked again alone at looser
+        tolerances (:func:`checked_distance`, counted in :attr:`retries`).
+        """
+        gap, reach = self._spheres(np.array([k]))
+        spheres = (float(gap[0] - reach[0]), float(gap[0] + reach[0]))
+        if math.isfinite(value) and spheres[0] - 1e-9 <= value <= spheres[1] + 1e-9:
+            return value
+        a, b = self.pairs[k]
+        placements = self._geometry_data.oMg
+        shapes = (self._shapes[a], _transform(placements[a]), self._shapes[b])
+        answer = checked_distance(*shapes, _transform(placements[b]), spheres, self.names[k])
+        self.retries += max(1, answer.retries)
+        self._retried[k] = answer.result
+        return answer.value
 
     def _configuration(self, joints: np.ndarray) -> np.ndarray:
         """Pinocchio's configuration at the joint values, spacecraft at the identity."""
@@ -335,28 +308,29 @@ class CollisionModel:
             gap[i] = math.dist(centres[a], centres[b])
         return gap, self._reach[pairs]
 
-    def _may_be_closest(self, joints: np.ndarray) -> np.ndarray:
-        """Which pairs may have the smallest distance at ``joints`` (a boolean mask).
+    def _may_be_closest(
+        self, joints: np.ndarray, slot: float | None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The pairs that may have the smallest distance at ``joints``, with their bounds (m).
 
-        A pair measured before is bounded by its distance then, plus or minus how far its two
-        bodies can have moved relative to each other since (:func:`motion_weights` times the
-        joint change, m) and :data:`BOUND_SLACK`; one never measured (or whose last value was
-        retried) by its bounding spheres. A pair whose lower bound exceeds the smallest upper
-        bound cannot be the closest, nor tie with it: it is not measured, so the smallest
-        distance and its pair are the same bits as with every pair measured.
+        Each pair is bounded from its last bounds at ``slot`` (:class:`PairBounds`: its
+        measured distance; or, for a pair never measured there, its bounding spheres, which are
+        then kept); with no motion bound (a prismatic joint), by its bounding spheres. A pair
+        that cannot be the closest is not measured, so the smallest distance and its pair are
+        the same bits as with every pair measured. Returns the pairs' indices and their lower
+        and upper bounds.
         """
-        if self._weights is None:  # no bound (a prismatic joint): the spheres alone
+        if self._bounds is None:
             gap, reach = self._spheres(np.arange(len(self.pairs)))
-            return gap - reach <= float((gap + reach).min()) + 1e-9
-        moved = np.einsum("pn,pn->p", self._weights, np.abs(joints - self._last_joints))
-        moved += BOUND_SLACK
-        lower = self._last_values - moved
-        upper = self._last_values + moved
-        unknown = np.flatnonzero(np.isnan(self._last_values))
-        if len(unknown):
-            gap, reach = self._spheres(unknown)
-            lower[unknown], upper[unknown] = gap - reach, gap + reach
-        return lower <= float(upper.min()) + 1e-9
+            lower, upper = gap - reach, gap + reach
+        else:
+            unknown = self._bounds.unknown(slot)
+            if len(unknown):
+                gap, reach = self._spheres(unknown)
+                self._bounds.record(slot, unknown, joints, gap - reach, gap + reach)
+            lower, upper = self._bounds.widened(slot, joints)
+        measured = np.flatnonzero(lower <= float(upper.min()) + 1e-9)
+        return measured, lower[measured], upper[measured]
 
     def hulls(self) -> list[HullInfo]:
         """Per mesh, the volume it encloses and that of its hull (m^3), for reports."""

@@ -17,7 +17,7 @@ import pinocchio as pin
 
 from .model import Robot
 
-__all__ = ["BOUND_SLACK", "motion_weights"]
+__all__ = ["BOUND_SLACK", "PairBounds", "motion_weights"]
 
 #: Allowance (m) for the error of a measured distance, in the bound of a pair not measured
 #: (a thousand times coal's GJK and EPA tolerance).
@@ -66,3 +66,81 @@ def motion_weights(
                 if k not in other:
                     weights[p, k] = rho
     return weights
+
+
+class PairBounds:
+    """Each pair's last bounds of its distance (m) and the joints then, per slot.
+
+    A slot names a place where queries come back (a normalised instant of a path, say): a
+    pair's bound from its last measurement *at that slot* is tight when the joints there
+    moved little since (a solver's iterates), where the last query elsewhere on the path may
+    be far. A new slot starts from the bounds of the last slot used. Bounds are valid whatever
+    their slot, so the slot changes which pairs are measured, never a distance. At most
+    :data:`SLOTS` slots are kept.
+
+    Args:
+        weights: (P, N) :func:`motion_weights` of the pairs (m per rad).
+    """
+
+    #: Slots kept before all are forgotten.
+    SLOTS = 4096
+
+    def __init__(self, weights: np.ndarray) -> None:
+        self.weights = weights
+        self._slots: dict[float | None, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._recent: float | None = None
+
+    def _arrays(self, slot: float | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(joints, lower, upper)`` of the slot, NaN bounds when new."""
+        found = self._slots.get(slot)
+        if found is None:
+            if len(self._slots) >= self.SLOTS:
+                self._slots.clear()
+            recent = self._slots.get(self._recent)
+            if recent is not None:  # a new slot starts from the last one used
+                found = (recent[0].copy(), recent[1].copy(), recent[2].copy())
+            else:
+                p, n = self.weights.shape
+                found = (np.zeros((p, n)), np.full(p, np.nan), np.full(p, np.nan))
+            self._slots[slot] = found
+        self._recent = slot
+        return found
+
+    def floor(self, slot: float | None, joints: np.ndarray) -> float:
+        """A lower bound (m) of the smallest distance over the pairs at ``joints``.
+
+        ``-inf`` when some pair has no bounds at the slot.
+        """
+        if slot not in self._slots:
+            return -np.inf
+        lower = self.widened(slot, joints)[0]
+        return -np.inf if np.isnan(lower).any() else float(lower.min())
+
+    def unknown(self, slot: float | None) -> np.ndarray:
+        """Indices of the pairs with no bounds at the slot."""
+        return np.flatnonzero(np.isnan(self._arrays(slot)[1]))
+
+    def record(
+        self,
+        slot: float | None,
+        pairs: np.ndarray,
+        joints: np.ndarray,
+        lower: np.ndarray,
+        upper: np.ndarray,
+    ) -> None:
+        """Bounds (m) of ``pairs`` at ``joints`` (rad or m); NaN to forget them."""
+        last_joints, last_lower, last_upper = self._arrays(slot)
+        last_joints[pairs] = joints
+        last_lower[pairs], last_upper[pairs] = lower, upper
+
+    def widened(self, slot: float | None, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds (m) of every pair's distance at ``joints``.
+
+        Every pair must have bounds at the slot. Each is widened by how far its two bodies can
+        have moved relative to each other since (weights times the joint change, m) and
+        :data:`BOUND_SLACK`.
+        """
+        last_joints, last_lower, last_upper = self._arrays(slot)
+        moved = np.einsum("pn,pn->p", self.weights, np.abs(joints - last_joints))
+        moved += BOUND_SLACK
+        return last_lower - moved, last_upper + moved

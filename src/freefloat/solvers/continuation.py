@@ -34,6 +34,7 @@ from ..progress import heartbeat
 from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
 from .restore import broken_constraint
+from .rows import RowCache, linear_rows, with_critical
 from .tracked import ContinuationResult
 
 __all__ = ["ContinuationResult", "continuation", "track"]
@@ -54,48 +55,8 @@ CORRECTOR_ITERATIONS = 8
 #: Constraints are imposed at the instants this far inside (their unit: rad, rad/s, m...),
 #: so that the path between instants stays inside too.
 MARGIN = 1e-7
-#: Most instants kept besides the default ones (the tightest instants found on the way).
-MAX_ADDED_INSTANTS = 256
 #: Singular-value ratio below which dh/dbeta counts as singular.
 SINGULAR = 1e-9
-
-
-#: Affine constraint rows at beta = 0 by (constraint index, instants), for one path family.
-RowCache = dict[tuple[int, bytes], tuple[np.ndarray, np.ndarray]]
-
-
-def _linear_rows(
-    problem: Problem,
-    constraints: Sequence[Constraint],
-    beta: np.ndarray,
-    instants: np.ndarray,
-    cache: RowCache,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Stacked constraint values ``g`` and Jacobian ``G`` at ``beta`` (g <= 0 feasible).
-
-    Affine constraints are evaluated once per instants (``cache``, one path family), then
-    ``g = g0 + G beta``.
-    """
-    values, rows = [np.zeros(0)], [np.zeros((0, problem.n_free))]
-    for index, constraint in enumerate(constraints):
-        if not constraint.applies_to(problem.robot):
-            continue
-        if constraint.affine:
-            key = (index, instants.tobytes())
-            cached = cache.get(key)
-            if cached is None:
-                at_zero = constraint.rows(problem, np.zeros(problem.n_free), instants)
-                cached = (at_zero.values, at_zero.jacobian)
-                if len(cache) > 64:
-                    cache.clear()
-                cache[key] = cached
-            values.append(cached[0] + cached[1] @ beta)
-            rows.append(cached[1])
-        else:
-            r = constraint.rows(problem, beta, instants)
-            values.append(r.values)
-            rows.append(r.jacobian)
-    return np.concatenate(values), np.concatenate(rows)
 
 
 def _correction(
@@ -122,7 +83,7 @@ def _tangent(
     cache: RowCache,
 ) -> np.ndarray:
     """Minimum-norm ``dbeta/dlam`` with ``J t = delta`` that slides along active constraints."""
-    g, g_mat = _linear_rows(problem, constraints, beta, instants, cache)
+    g, g_mat = linear_rows(problem, constraints, beta, instants, cache)
     active = g > -10.0 * MARGIN
     n = jac.shape[1]
     if np.any(active):
@@ -152,7 +113,7 @@ def _correct(
     previous = math.inf
     for iteration in range(1, CORRECTOR_ITERATIONS + 1):
         norm = float(np.linalg.norm(r))
-        g, g_mat = _linear_rows(problem, constraints, beta, instants, cache)
+        g, g_mat = linear_rows(problem, constraints, beta, instants, cache)
         if norm < tol and (len(g) == 0 or float(np.max(g)) <= 0.0):
             return beta, r, jac, iteration
         if iteration > 2 and norm > 0.5 * previous and norm > 1e3 * tol:
@@ -162,7 +123,7 @@ def _correct(
             break
         beta, previous = beta + d, norm
         r, jac = problem.residual_and_jacobian(beta)
-    g = _linear_rows(problem, constraints, beta, instants, cache)[0]
+    g = linear_rows(problem, constraints, beta, instants, cache)[0]
     if float(np.linalg.norm(r)) < tol and (len(g) == 0 or float(np.max(g)) <= 0.0):
         return beta, r, jac, CORRECTOR_ITERATIONS
     return None, r, jac, CORRECTOR_ITERATIONS
@@ -171,16 +132,6 @@ def _correct(
 def _dense_ok(problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray) -> bool:
     """Whether ``beta``'s path honours every constraint everywhere (exact dense check)."""
     return not broken_constraint(problem, constraints, beta)
-
-
-def _with_critical(
-    problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray, instants: np.ndarray
-) -> np.ndarray:
-    """``instants`` and the normalised times where each constraint is tightest at ``beta``."""
-    path = problem.polynomials(beta)
-    extra = [c.critical_times(problem.robot, path) / problem.duration for c in constraints]
-    added = np.setdiff1d(instants, DEFAULT_INSTANTS)[-MAX_ADDED_INSTANTS:]
-    return np.unique(np.concatenate([DEFAULT_INSTANTS, added, *extra]).clip(0.0, 1.0))
 
 
 def _why(
@@ -327,7 +278,7 @@ def _densely(
     r = jac = np.zeros(0)
     iterations = 0
     for _ in range(3):
-        instants = _with_critical(problem, constraints, solved, instants)
+        instants = with_critical(problem, constraints, solved, instants)
         found, r, jac, more = _correct(target, constraints, solved, tol, instants, cache)
         iterations += more
         if found is None:

@@ -8,16 +8,14 @@ still swings a joint far beyond its start-goal span. When the largest such excur
 :data:`NATURAL_EXCURSION`, the default objective (the smallest deviation from the quintic,
 ``|beta|^2``) is minimised over the roots with more freedom: at each level of
 :data:`LEVELS` free coefficients per joint, from the previous path embedded in the larger family,
-by sequential quadratic programming with the exact Hessian of the objective (``2 I``, the
-constraint's curvature left out): each step goes to the least-norm point of the linearised root
-set, ``beta+ = J^+ (J beta - h(beta))``, damped by a backtracking search on the merit function
-``|beta|^2 + mu |h(beta)|_1``, then polished onto ``h = 0`` by minimum-norm Newton steps; when
-that root breaks a constraint, SLSQP minimises ``|beta|^2`` with the constraints as rows
-(:func:`.optimise.optimise`, from the previous path, which honours them). A level
+by sequential quadratic programming with the exact Hessian of the objective
+(:func:`.least_norm.least_norm_root`); when that root breaks a constraint, by the same steps
+with the constraints linearised as rows of a small quadratic program, from the previous path,
+which honours them (:func:`.least_norm.least_norm_root_within`). A level
 is kept only if its path is certified (integration refined, :func:`.certify.certify`), honours
 every constraint and deviates less; the levels stop once the excursion is natural. Planar
 problems keep the search's root (the paper's examples and their roots are unchanged). Budgets
-are counts (:data:`ITERATIONS` steps per level).
+are counts (:data:`.least_norm.ITERATIONS` steps per level and round).
 """
 
 from __future__ import annotations
@@ -29,28 +27,21 @@ import numpy as np
 
 from ..problem.build import problem_from_scenario
 from ..problem.constraints import Constraint
-from ..problem.objectives import MinNorm
 from ..problem.paths import excursions
 from ..problem.residual import Problem
 from ..problem.scenario import Scenario
 from .certify import certify
-from .newton import polish
-from .optimise import optimise
+from .least_norm import least_norm_root, least_norm_root_within
 from .options import Root, SolveOptions
 from .restore import broken_constraint
 from .search import SearchResult
 
-__all__ = ["ITERATIONS", "LEVELS", "NATURAL_EXCURSION", "Nearest", "nearest_root"]
+__all__ = ["LEVELS", "NATURAL_EXCURSION", "Nearest", "nearest_root"]
 
 #: A default path whose joints stay within this of their start-goal spans (rad) is kept.
 NATURAL_EXCURSION = np.radians(60.0)
 #: Free coefficients per joint tried in turn when the search's path is not natural.
 LEVELS = (3, 4, 6)
-#: SQP steps per level.
-ITERATIONS = 30
-#: SLSQP iterations per level when the least-norm root breaks a constraint (a collision, a
-#: joint limit): :func:`.optimise.optimise` then keeps the constraints as rows.
-SLSQP_ITERATIONS = 60
 
 
 @dataclass(frozen=True)
@@ -69,32 +60,6 @@ class Nearest:
 def _largest_excursion(problem: Problem, beta: np.ndarray) -> float:
     family = problem.family
     return float(excursions(problem.polynomials(beta), family.start, family.goal).max())
-
-
-def _least_norm_root(problem: Problem, beta: np.ndarray, options: SolveOptions) -> np.ndarray:
-    """SQP on ``min |beta|^2 s.t. h(beta) = 0`` from ``beta`` (see the module docstring)."""
-    r, jac = problem.residual_and_jacobian(beta)
-    for _ in range(ITERATIONS):
-        pinv = np.linalg.pinv(jac)
-        step = pinv @ (jac @ beta - r) - beta
-        multiplier = -2.0 * pinv.T @ beta  # from 2 beta + J^T lambda = 0
-        mu = 2.0 * float(np.abs(multiplier).max()) + 1e-12
-        merit = float(beta @ beta) + mu * float(np.abs(r).sum())
-        slope = 2.0 * float(beta @ step) - mu * float(np.abs(r).sum())
-        t = 1.0
-        while t > 1e-3:
-            trial = beta + t * step
-            r_trial, jac_trial = problem.residual_and_jacobian(trial)
-            value = float(trial @ trial) + mu * float(np.abs(r_trial).sum())
-            if np.all(np.isfinite(r_trial)) and value <= merit + 1e-4 * t * min(slope, 0.0):
-                break
-            t *= 0.5
-        else:
-            break
-        beta, r, jac = trial, r_trial, jac_trial
-        if t * float(np.linalg.norm(step)) <= 1e-9 * max(1.0, float(np.linalg.norm(beta))):
-            break
-    return polish(problem, beta, options.tolerance)[0]
 
 
 def nearest_root(
@@ -131,10 +96,10 @@ def nearest_root(
         start = level.family.embed(best.problem.family, best.solution.beta)
         if start is None:
             break
-        candidate, how = _least_norm_root(level, start, options), "least-norm SQP"
-        if broken_constraint(level, constraints, candidate):  # the constraints bind: SLSQP
-            kept = optimise(level, start, MinNorm(), constraints, options, SLSQP_ITERATIONS)
-            candidate, how = kept.beta, "SLSQP on min_norm"
+        candidate, how = least_norm_root(level, start, options), "least-norm SQP"
+        if broken_constraint(level, constraints, candidate):  # the constraints bind
+            candidate = least_norm_root_within(level, start, constraints, options).beta
+            how = "least-norm SQP within the constraints"
         residual = float(np.linalg.norm(level.residual(candidate)))
         checked = certify(level, candidate, residual, options.tolerance)
         deviation = float(checked.beta @ checked.beta)

@@ -34,6 +34,7 @@ __all__ = [
     "NEAR",
     "REFINE",
     "SOLVER_SLACK",
+    "WINDOW",
     "Clearance",
     "clearance_at",
     "rate_bounds",
@@ -41,6 +42,9 @@ __all__ = [
 
 #: Extra clearance the solvers ask for beyond the margin, between constraint instants (m).
 SOLVER_SLACK = 2e-3
+#: A row whose instant a bound keeps this far beyond the margin and slack (m) is not measured:
+#: its value is that bound's (never below the true row) and its gradient zero.
+WINDOW = 0.05
 #: Samples of the dense verification check (every near-minimum is then refined in time).
 VERIFY_SAMPLES = 401
 #: Extra instants per grid interval next to a local minimum of clearance.
@@ -115,13 +119,25 @@ class Clearance(Constraint):
     def _rows_at(
         self, problem: Problem, beta: np.ndarray, instants: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Row values (m) and Jacobian at normalised ``instants`` (one closest pair each)."""
+        """Row values (m) and Jacobian at normalised ``instants`` (one closest pair each).
+
+        An instant whose clearance a bound from its last measurement there keeps more than
+        :data:`WINDOW` beyond the margin and slack is not measured: its row is that bound,
+        which the true row never exceeds, with a zero gradient (a step that would make it
+        bind moves the joints enough for the bound to fall, and then it is measured).
+        """
         base, dq, _ = problem.family.linear_map(instants)
         q = base.q + dq @ beta
         values = np.empty(len(instants))
         jacobian = np.zeros((len(instants), problem.n_free))
+        far = self.margin + SOLVER_SLACK + WINDOW
         for k, joints in enumerate(q):
-            distance, gradient, _ = self.model.closest(joints)
+            slot = float(instants[k])
+            floor = self.model.floor(joints, slot)
+            if floor > far:  # a bound keeps it WINDOW clear: its row cannot bind in one step
+                values[k] = self.margin + SOLVER_SLACK - floor
+                continue
+            distance, gradient, _ = self.model.closest(joints, slot)
             values[k] = self.margin + SOLVER_SLACK - distance
             jacobian[k] = -gradient @ dq[k]
         return values, jacobian
@@ -233,7 +249,7 @@ class Clearance(Constraint):
             return known, -math.inf
         while True:
             todo = todo[np.isnan(known[todo])]
-            known[todo] = [self.model.closest_value(q[k])[0] for k in todo]
+            known[todo] = [self.model.closest_value(q[k], k / (samples - 1))[0] for k in todo]
             nodes = np.flatnonzero(~np.isnan(known))
             a, b = nodes[:-1], nodes[1:]
             speed = np.max(rate_bounds(path, t[a], t[b]) @ weights.T, axis=1)

@@ -1,0 +1,234 @@
+"""The root of least norm: ``min |beta|^2`` subject to ``h(beta) = 0``, within the constraints.
+
+``|beta|^2`` is the path's mean squared deviation from the quintic (orthonormal basis,
+docs/paths.md), so the least-norm root is the natural path among the roots of a family.
+
+Both solvers are sequential quadratic programming with the exact Hessian of the objective
+(``2 I``; the constraint's curvature left out):
+
+- :func:`least_norm_root`, without path constraints: each step goes to the least-norm point of
+  the linearised root set, ``beta+ = J^+ (J beta - h(beta))``, damped by a backtracking search on
+  the merit ``|beta|^2 + mu |h(beta)|_1``;
+- :func:`least_norm_root_within`, with every path constraint linearised at fixed instants
+  (``g + G d <= 0``, :func:`.rows.linear_rows`): each step is the small quadratic program
+  ``min |beta + d|^2`` s.t. ``J d = -h`` and the rows, solved by quadprog inside a box trust
+  region, accepted when the merit ``|beta|^2 / 2 + mu (|h|_1 + sum max(g, 0))`` falls (``mu``
+  above the step's multipliers). When the result honours the rows but not the dense check
+  between them, the path's tightest instants are added and the steps go on (at most
+  :data:`ROUNDS` times).
+
+Each result is polished onto ``h = 0`` by minimum-norm Newton steps. Budgets are counts.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import quadprog
+
+from ..problem.constraints import DEFAULT_INSTANTS, Constraint
+from ..problem.residual import Problem
+from .newton import polish
+from .options import SolveOptions
+from .restore import broken_constraint
+from .rows import RowCache, linear_rows, with_critical
+
+__all__ = ["ITERATIONS", "ROUNDS", "LeastNorm", "least_norm_root", "least_norm_root_within"]
+
+#: SQP steps per call (per round within the constraints).
+ITERATIONS = 30
+#: Rounds of steps within the constraints, each adding the instants the last result broke.
+ROUNDS = 4
+#: First half-width of the box trust region of a step within the constraints (rad or m per
+#: free coefficient) and its largest.
+TRUST = 0.25
+TRUST_MAX = 4.0
+#: Rows held this far inside their limit (their unit), as the continuation corrector's.
+MARGIN = 1e-7
+#: Steps stop once one lowers ``|beta|^2`` by less than this fraction.
+SETTLED = 1e-7
+#: A kept step may break a row by this much (its unit): the dense check of each constraint,
+#: with its own tolerance, judges the result.
+ROW_SLACK = 1e-6
+#: Rows further inside than this (their unit) cannot become active in one step: left out.
+FAR = 0.5
+
+
+@dataclass(frozen=True)
+class LeastNorm:
+    """A root of least norm found from a start, within the constraints.
+
+    Attributes:
+        beta: the root (free coefficients, rad or m), polished onto ``h = 0``.
+        steps: SQP steps spent.
+        honoured: whether its path honours every constraint everywhere (the dense check).
+    """
+
+    beta: np.ndarray
+    steps: int
+    honoured: bool
+
+
+def least_norm_root(problem: Problem, beta: np.ndarray, options: SolveOptions) -> np.ndarray:
+    """SQP on ``min |beta|^2 s.t. h(beta) = 0`` from ``beta``, no path constraint (rad or m)."""
+    r, jac = problem.residual_and_jacobian(beta)
+    for _ in range(ITERATIONS):
+        pinv = np.linalg.pinv(jac)
+        step = pinv @ (jac @ beta - r) - beta
+        multiplier = -2.0 * pinv.T @ beta  # from 2 beta + J^T lambda = 0
+        mu = 2.0 * float(np.abs(multiplier).max()) + 1e-12
+        merit = float(beta @ beta) + mu * float(np.abs(r).sum())
+        slope = 2.0 * float(beta @ step) - mu * float(np.abs(r).sum())
+        t = 1.0
+        while t > 1e-3:
+            trial = beta + t * step
+            r_trial, jac_trial = problem.residual_and_jacobian(trial)
+            value = float(trial @ trial) + mu * float(np.abs(r_trial).sum())
+            if np.all(np.isfinite(r_trial)) and value <= merit + 1e-4 * t * min(slope, 0.0):
+                break
+            t *= 0.5
+        else:
+            break
+        beta, r, jac = trial, r_trial, jac_trial
+        if t * float(np.linalg.norm(step)) <= 1e-9 * max(1.0, float(np.linalg.norm(beta))):
+            break
+    return polish(problem, beta, options.tolerance)[0]
+
+
+def least_norm_root_within(
+    problem: Problem, beta: np.ndarray, constraints: Sequence[Constraint], options: SolveOptions
+) -> LeastNorm:
+    """The least-norm root from the root ``beta`` whose path keeps every constraint.
+
+    Args:
+        problem: the problem (not changed).
+        beta: a root whose path honours the constraints (rad or m).
+        constraints: the path constraints.
+        options: solver settings (attitude tolerance, rad).
+    """
+    active = [c for c in constraints if c.applies_to(problem.robot)]
+    cache: RowCache = {}
+    instants = with_critical(problem, active, beta, DEFAULT_INSTANTS)
+    spent = 0
+    for _ in range(ROUNDS):
+        beta, steps = _steps(
+            problem, active, np.asarray(beta, dtype=float), instants, cache, options.tolerance
+        )
+        spent += steps
+        beta = polish(problem, beta, options.tolerance)[0]
+        if not broken_constraint(problem, active, beta):
+            return LeastNorm(beta, spent, True)
+        instants = with_critical(problem, active, beta, instants)
+    return LeastNorm(beta, spent, False)
+
+
+def _steps(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    beta: np.ndarray,
+    instants: np.ndarray,
+    cache: RowCache,
+    tolerance: float,
+) -> tuple[np.ndarray, int]:
+    """Feasible trust-region SQP steps at fixed instants: (beta, steps).
+
+    Each step (the quadratic program of :func:`_step`) is corrected at its end by the
+    least-norm step back onto the root set and inside the rows linearised there, then polished
+    onto ``h = 0`` (:func:`.newton.polish`); it is kept when that path is a root within
+    :data:`ROW_SLACK` of every row and deviates less. Otherwise the trust region halves. A
+    start outside rows added since the last round is first corrected the same way.
+    """
+    here = _Point.at(problem, constraints, beta, instants, cache)
+    if here.finite and float(here.g.max(initial=-1.0)) > ROW_SLACK:  # rows added since
+        inside = _corrected(problem, constraints, beta, instants, cache, tolerance)
+        here = here if inside is None else inside
+    trust = TRUST
+    steps = 0
+    while steps < ITERATIONS and trust > 1e-9:
+        steps += 1
+        found = _step(here.beta, here, trust)
+        if found is None:
+            break
+        d = found[0]
+        new = _corrected(problem, constraints, here.beta + d, instants, cache, tolerance)
+        before = float(here.beta @ here.beta)
+        if new is not None and float(new.beta @ new.beta) < before:
+            here, trust = new, min(2.0 * trust, TRUST_MAX)
+            if before - float(here.beta @ here.beta) <= SETTLED * before:
+                break
+            continue
+        trust = 0.5 * float(np.abs(d).max())
+    return here.beta, steps
+
+
+def _corrected(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    beta: np.ndarray,
+    instants: np.ndarray,
+    cache: RowCache,
+    tolerance: float,
+) -> _Point | None:
+    """The root nearest ``beta`` within the rows, by one linearised correction, or None."""
+    trial = _Point.at(problem, constraints, beta, instants, cache)
+    if not trial.finite:
+        return None
+    correction = _step(np.zeros_like(beta), trial, TRUST_MAX)
+    if correction is None:
+        return None
+    moved, r = polish(problem, beta + correction[0], tolerance)
+    if not (np.all(np.isfinite(moved)) and float(np.linalg.norm(r)) < tolerance):
+        return None
+    new = _Point.at(problem, constraints, moved, instants, cache)
+    return new if new.finite and float(new.g.max(initial=-1.0)) <= ROW_SLACK else None
+
+
+@dataclass(frozen=True)
+class _Point:
+    """An SQP iterate: ``beta``, the residual (rad) and rows (their units) with Jacobians."""
+
+    beta: np.ndarray
+    r: np.ndarray
+    jac: np.ndarray
+    g: np.ndarray
+    g_mat: np.ndarray
+
+    @classmethod
+    def at(
+        cls,
+        problem: Problem,
+        constraints: Sequence[Constraint],
+        beta: np.ndarray,
+        instants: np.ndarray,
+        cache: RowCache,
+    ) -> _Point:
+        r, jac = problem.residual_and_jacobian(beta)
+        if not (np.all(np.isfinite(r)) and np.all(np.isfinite(jac))):
+            return cls(beta, r, jac, np.full(1, np.inf), np.zeros((1, len(beta))))
+        g, g_mat = linear_rows(problem, constraints, beta, instants, cache)
+        return cls(beta, r, jac, g, g_mat)
+
+    @property
+    def finite(self) -> bool:
+        return bool(np.all(np.isfinite(self.r)) and np.all(np.isfinite(self.g)))
+
+
+def _step(centre: np.ndarray, point: _Point, trust: float) -> tuple[np.ndarray, float] | None:
+    """The step ``d`` from ``point`` and its largest multiplier, or None if no step meets the rows.
+
+    ``d`` minimises ``|centre + d|^2`` with ``J d = -r``, ``g + G d <= -MARGIN`` and
+    ``|d|_inf <= trust`` (rad or m): ``centre`` is the point itself for a step towards the
+    least norm, zero for the least-norm correction.
+    """
+    n = len(centre)
+    near = point.g > -FAR
+    eye = np.eye(n)
+    c_mat = np.vstack([point.jac, -point.g_mat[near], eye, -eye]).T
+    b = np.concatenate([-point.r, point.g[near] + MARGIN, np.full(2 * n, -trust)])
+    try:
+        solution = quadprog.solve_qp(eye, -centre, c_mat, b, len(point.r))
+    except ValueError:
+        return None
+    return np.asarray(solution[0]), float(np.abs(solution[4]).max(initial=0.0))
