@@ -35,7 +35,14 @@ from .options import SolveOptions
 from .restore import broken_constraint
 from .rows import RowCache, linear_rows, with_critical
 
-__all__ = ["ITERATIONS", "ROUNDS", "LeastNorm", "least_norm_root", "least_norm_root_within"]
+__all__ = [
+    "ITERATIONS",
+    "ROUNDS",
+    "LeastNorm",
+    "least_norm_root",
+    "least_norm_root_within",
+    "nearest_root_within",
+]
 
 #: SQP steps per call (per round within the constraints).
 ITERATIONS = 30
@@ -122,6 +129,27 @@ def least_norm_root_within(
             return LeastNorm(beta, spent, True)
         instants = with_critical(problem, active, beta, instants)
     return LeastNorm(beta, spent, False)
+
+
+def nearest_root_within(
+    problem: Problem,
+    beta: np.ndarray,
+    constraints: Sequence[Constraint],
+    instants: np.ndarray,
+    options: SolveOptions,
+) -> LeastNorm:
+    """The root nearest ``beta`` within the constraints' rows at ``instants``.
+
+    One least-norm correction onto the root set and inside the rows linearised at ``beta``,
+    then polished onto ``h = 0``: for a root just outside a constraint between the instants
+    of the rows that held it (rad or m). ``honoured`` says whether the dense check passes.
+    """
+    active = [c for c in constraints if c.applies_to(problem.robot)]
+    start = np.asarray(beta, dtype=float)
+    found = _corrected(problem, active, start, instants, {}, options.tolerance)
+    if found is None:
+        return LeastNorm(start, 1, False)
+    return LeastNorm(found.beta, 1, not broken_constraint(problem, active, found.beta))
 
 
 def _steps(

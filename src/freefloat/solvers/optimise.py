@@ -15,8 +15,9 @@ only if a result breaks it. Rows sit at fixed instants during one run:
 :data:`COARSE_INSTANTS` evenly spaced ones and those where the path is tightest (each joint's
 extremes, say), and are held :data:`BACKOFF` tolerances inside the limit, so that a limit
 reached at a row is not broken between rows by more than its tolerance. When a result still
-breaks an imposed constraint, the run is repeated from there with its tightest instants added
-(at most :data:`ROUNDS` runs).
+breaks an imposed constraint, its tightest instants are added and the nearest root within
+them is tried (one least-norm correction, :func:`.least_norm.nearest_root_within`); if that
+fails, the run is repeated from there (at most :data:`ROUNDS` runs).
 
 The result is polished back onto ``h = 0`` by minimum-norm Newton steps and kept only if it
 honours every constraint and lowers the objective (or ``beta_0`` broke a constraint);
@@ -37,6 +38,7 @@ from ..problem.constraints import Constraint
 from ..problem.objectives import Objective, gauss_legendre
 from ..problem.residual import Problem
 from ..progress import heartbeat
+from .least_norm import nearest_root_within
 from .newton import polish
 from .options import SolveOptions
 from .restore import broken_constraint
@@ -48,9 +50,11 @@ __all__ = ["ROUNDS", "Optimised", "optimise"]
 #: beyond its budget the start stands.
 MAX_EVALUATIONS = 400
 #: Rows are held this many of their constraint's tolerances inside the limit.
-BACKOFF = 100.0
+BACKOFF = 1000.0
 #: Evenly spaced normalised instants of the rows, to which the path's tightest are added.
 COARSE_INSTANTS = 25
+#: Least-norm corrections tried on a result that breaks an imposed constraint between rows.
+CORRECTIONS = 3
 #: SLSQP runs at most, each adding what the last one broke: a left-out constraint, or the
 #: instants where it broke an imposed one.
 ROUNDS = 8
@@ -171,7 +175,7 @@ def optimise(
 
     active = [c for c in constraints if c.applies_to(problem.robot)]
     imposed = [c for c in active if c.affine or broken_constraint(problem, [c], beta0)]
-    instants = _tightest(problem, active, beta0, np.linspace(0.0, 1.0, COARSE_INSTANTS))
+    instants = _tightest(problem, imposed, beta0, np.linspace(0.0, 1.0, COARSE_INSTANTS))
     z = np.zeros(problem.n_free)
     iterations = 0
 
@@ -220,14 +224,40 @@ def optimise(
             imposed += missing  # impose it, from the start (whose path honours every one)
             z = np.zeros(problem.n_free)
             continue
-        # Rows hold at the instants but not between them: add the path's tightest instants.
-        instants = _tightest(problem, active, candidate, instants)
+        # Rows hold at the instants but not between them: add the path's tightest instants,
+        # and first try the nearest root within them (one small correction, no new run).
+        instants = _tightest(problem, imposed, candidate, instants)
+        inside = _within(problem, candidate, imposed, instants, options)
+        if inside is not None and not broken_constraint(problem, constraints, inside):
+            candidate = inside
+            break
     else:
         return kept(f"breaks {broken}")
     value = objective.evaluate(unit, candidate).value
     if not value < start.value and not broken_constraint(problem, constraints, beta0):
         return kept("no lower value")
     return Optimised(candidate, value * at_t, start_value, iterations, True, "", ev.spent)
+
+
+def _within(
+    problem: Problem,
+    beta: np.ndarray,
+    imposed: Sequence[Constraint],
+    instants: np.ndarray,
+    options: SolveOptions,
+) -> np.ndarray | None:
+    """The nearest root within the imposed constraints, or None if none is found.
+
+    Up to :data:`CORRECTIONS` least-norm corrections, each with the tightest instants of the
+    last one's path added.
+    """
+    for _ in range(CORRECTIONS):
+        inside = nearest_root_within(problem, beta, imposed, instants, options)
+        if inside.honoured:
+            return inside.beta
+        beta = inside.beta
+        instants = _tightest(problem, imposed, beta, instants)
+    return None
 
 
 class _Evaluations:
