@@ -8,8 +8,13 @@ import numpy as np
 from scipy.optimize import minimize
 
 import freefloat as ff
+from freefloat.problem.constraints import DEFAULT_INSTANTS
 from freefloat.problem.constraints.joint_position import JointPositionLimits
-from freefloat.solvers.least_norm import least_norm_root, least_norm_root_within
+from freefloat.solvers.least_norm import (
+    least_norm_root,
+    least_norm_root_within,
+    nearest_root_within,
+)
 from freefloat.solvers.newton import polish
 
 from conftest import worked_problem
@@ -83,3 +88,43 @@ def test_least_norm_root_within_a_binding_limit_matches_slsqp_on_a_dense_grid(wo
     assert other.success
     assert beta @ beta < start @ start
     np.testing.assert_allclose(beta @ beta, other.x @ other.x, rtol=1e-5)
+
+
+def test_corrections_bring_a_root_inside_a_cap_it_breaks(worked_scenario):
+    """The free least-norm root breaks the 1.45 rad cap on q1 by 0.066 rad: least-norm
+    corrections with the rows at its tightest instants give a root within the cap everywhere
+    (exact polynomial extremes), moved about as little as the nearest such root SciPy's SLSQP
+    finds with the cap at 401 instants."""
+    scenario = worked_scenario.resolved()
+    joints = list(scenario.robot.joints)
+    joints[0] = dataclasses.replace(joints[0], upper=1.45)
+    robot = dataclasses.replace(scenario.robot, joints=tuple(joints))
+    problem = worked_problem(dataclasses.replace(scenario, robot=robot), {"q1": 3, "q2": 3})
+    options = ff.SolveOptions()
+    start = ff.solve(problem, options, []).beta
+    limits = JointPositionLimits()
+    found = nearest_root_within(problem, start, [limits], DEFAULT_INSTANTS, options)
+    assert found.honoured
+    assert np.linalg.norm(problem.residual(found.beta)) < 1e-10
+    assert limits.violation(problem, found.beta).value <= limits.tolerance
+    dense = np.linspace(0.0, 1.0, 401)
+    rows = limits.rows(problem, np.zeros(problem.n_free), dense)
+    cap = [
+        {
+            "type": "ineq",
+            "fun": lambda b: -(rows.values + rows.jacobian @ b),
+            "jac": lambda b: -rows.jacobian,
+        },
+        {"type": "eq", "fun": problem.residual, "jac": problem.jacobian},
+    ]
+    nearest = minimize(
+        lambda b: (b - start) @ (b - start),
+        start,
+        jac=lambda b: 2 * (b - start),
+        method="SLSQP",
+        constraints=cap,
+        options={"ftol": 1e-14, "maxiter": 500},
+    )
+    assert nearest.success
+    moved, least = np.linalg.norm(found.beta - start), np.linalg.norm(nearest.x - start)
+    assert least <= moved <= 1.1 * least

@@ -36,6 +36,7 @@ from .restore import broken_constraint
 from .rows import RowCache, linear_rows, with_critical
 
 __all__ = [
+    "CORRECTIONS",
     "ITERATIONS",
     "ROUNDS",
     "LeastNorm",
@@ -48,14 +49,20 @@ __all__ = [
 ITERATIONS = 30
 #: Rounds of steps within the constraints, each adding the instants the last result broke.
 ROUNDS = 4
+#: Least-norm steps of one correction onto the root set within the rows.
+CORRECTOR_STEPS = 4
+#: Least-norm corrections :func:`nearest_root_within` tries.
+CORRECTIONS = 3
 #: First half-width of the box trust region of a step within the constraints (rad or m per
 #: free coefficient) and its largest.
 TRUST = 0.25
 TRUST_MAX = 4.0
 #: Rows held this far inside their limit (their unit), as the continuation corrector's.
 MARGIN = 1e-7
-#: Steps stop once one lowers ``|beta|^2`` by less than this fraction.
-SETTLED = 1e-7
+#: Steps within the constraints stop once one lowers ``|beta|^2`` by less than this fraction
+#: (a natural path is the aim: the last per cent of deviation costs many steps where clearance
+#: binds).
+SETTLED = 0.01
 #: A kept step may break a row by this much (its unit): the dense check of each constraint,
 #: with its own tolerance, judges the result.
 ROW_SLACK = 1e-6
@@ -105,7 +112,11 @@ def least_norm_root(problem: Problem, beta: np.ndarray, options: SolveOptions) -
 
 
 def least_norm_root_within(
-    problem: Problem, beta: np.ndarray, constraints: Sequence[Constraint], options: SolveOptions
+    problem: Problem,
+    beta: np.ndarray,
+    constraints: Sequence[Constraint],
+    options: SolveOptions,
+    free: np.ndarray | None = None,
 ) -> LeastNorm:
     """The least-norm root from the root ``beta`` whose path keeps every constraint.
 
@@ -114,8 +125,15 @@ def least_norm_root_within(
         beta: a root whose path honours the constraints (rad or m).
         constraints: the path constraints.
         options: solver settings (attitude tolerance, rad).
+        free: the least-norm root without constraints, when known: brought inside them
+            (:func:`nearest_root_within`), it is the start when it deviates less than ``beta``.
     """
     active = [c for c in constraints if c.applies_to(problem.robot)]
+    beta = np.asarray(beta, dtype=float)
+    if free is not None:
+        inside = nearest_root_within(problem, free, active, DEFAULT_INSTANTS, options)
+        if inside.honoured and float(inside.beta @ inside.beta) < float(beta @ beta):
+            beta = inside.beta
     cache: RowCache = {}
     instants = with_critical(problem, active, beta, DEFAULT_INSTANTS)
     spent = 0
@@ -138,18 +156,24 @@ def nearest_root_within(
     instants: np.ndarray,
     options: SolveOptions,
 ) -> LeastNorm:
-    """The root nearest ``beta`` within the constraints' rows at ``instants``.
+    """A root near ``beta`` within the constraints, for a root just outside one between rows.
 
-    One least-norm correction onto the root set and inside the rows linearised at ``beta``,
-    then polished onto ``h = 0``: for a root just outside a constraint between the instants
-    of the rows that held it (rad or m). ``honoured`` says whether the dense check passes.
+    Least-norm corrections onto the root set and inside the rows linearised at the last path
+    (each polished onto ``h = 0``), the rows at ``instants`` and at the last path's tightest
+    instants, at most :data:`CORRECTIONS` times (rad or m). ``honoured`` says whether the
+    dense check of every constraint passes.
     """
     active = [c for c in constraints if c.applies_to(problem.robot)]
-    start = np.asarray(beta, dtype=float)
-    found = _corrected(problem, active, start, instants, {}, options.tolerance)
-    if found is None:
-        return LeastNorm(start, 1, False)
-    return LeastNorm(found.beta, 1, not broken_constraint(problem, active, found.beta))
+    beta = np.asarray(beta, dtype=float)
+    for count in range(1, CORRECTIONS + 1):
+        instants = with_critical(problem, active, beta, instants)
+        found = _corrected(problem, active, beta, instants, {}, options.tolerance)
+        if found is None:
+            return LeastNorm(beta, count, False)
+        beta = found.beta
+        if not broken_constraint(problem, active, beta):
+            return LeastNorm(beta, count, True)
+    return LeastNorm(beta, CORRECTIONS, False)
 
 
 def _steps(
@@ -199,18 +223,24 @@ def _corrected(
     cache: RowCache,
     tolerance: float,
 ) -> _Point | None:
-    """The root nearest ``beta`` within the rows, by one linearised correction, or None."""
-    trial = _Point.at(problem, constraints, beta, instants, cache)
-    if not trial.finite:
-        return None
-    correction = _step(np.zeros_like(beta), trial, TRUST_MAX)
-    if correction is None:
-        return None
-    moved, r = polish(problem, beta + correction[0], tolerance)
-    if not (np.all(np.isfinite(moved)) and float(np.linalg.norm(r)) < tolerance):
-        return None
-    new = _Point.at(problem, constraints, moved, instants, cache)
-    return new if new.finite and float(new.g.max(initial=-1.0)) <= ROW_SLACK else None
+    """The root near ``beta`` within the rows, or None.
+
+    Up to :data:`CORRECTOR_STEPS` least-norm steps onto the root set and inside the rows
+    linearised at the last point, each polished onto ``h = 0``.
+    """
+    for _ in range(CORRECTOR_STEPS):
+        point = _Point.at(problem, constraints, beta, instants, cache)
+        if not point.finite:
+            return None
+        if np.linalg.norm(point.r) < tolerance and point.g.max(initial=-1.0) <= ROW_SLACK:
+            return point
+        correction = _step(np.zeros_like(beta), point, TRUST_MAX)
+        if correction is None:
+            return None
+        beta = polish(problem, beta + correction[0], tolerance)[0]
+        if not np.all(np.isfinite(beta)):
+            return None
+    return None
 
 
 @dataclass(frozen=True)

@@ -98,7 +98,8 @@ def nearest_root(
             break
         candidate, how = least_norm_root(level, start, options), "least-norm SQP"
         if broken_constraint(level, constraints, candidate):  # the constraints bind
-            candidate = least_norm_root_within(level, start, constraints, options).beta
+            within = least_norm_root_within(level, start, constraints, options, candidate)
+            candidate = within.beta
             how = "least-norm SQP within the constraints"
         residual = float(np.linalg.norm(level.residual(candidate)))
         checked = certify(level, candidate, residual, options.tolerance)

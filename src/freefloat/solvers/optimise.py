@@ -16,7 +16,7 @@ only if a result breaks it. Rows sit at fixed instants during one run:
 extremes, say), and are held :data:`BACKOFF` tolerances inside the limit, so that a limit
 reached at a row is not broken between rows by more than its tolerance. When a result still
 breaks an imposed constraint, its tightest instants are added and the nearest root within
-them is tried (one least-norm correction, :func:`.least_norm.nearest_root_within`); if that
+them is tried (least-norm corrections, :func:`.least_norm.nearest_root_within`); if that
 fails, the run is repeated from there (at most :data:`ROUNDS` runs).
 
 The result is polished back onto ``h = 0`` by minimum-norm Newton steps and kept only if it
@@ -53,8 +53,6 @@ MAX_EVALUATIONS = 400
 BACKOFF = 1000.0
 #: Evenly spaced normalised instants of the rows, to which the path's tightest are added.
 COARSE_INSTANTS = 25
-#: Least-norm corrections tried on a result that breaks an imposed constraint between rows.
-CORRECTIONS = 3
 #: SLSQP runs at most, each adding what the last one broke: a left-out constraint, or the
 #: instants where it broke an imposed one.
 ROUNDS = 8
@@ -227,9 +225,9 @@ def optimise(
         # Rows hold at the instants but not between them: add the path's tightest instants,
         # and first try the nearest root within them (one small correction, no new run).
         instants = _tightest(problem, imposed, candidate, instants)
-        inside = _within(problem, candidate, imposed, instants, options)
-        if inside is not None and not broken_constraint(problem, constraints, inside):
-            candidate = inside
+        inside = nearest_root_within(problem, candidate, imposed, instants, options)
+        if inside.honoured and not broken_constraint(problem, constraints, inside.beta):
+            candidate = inside.beta
             break
     else:
         return kept(f"breaks {broken}")
@@ -237,27 +235,6 @@ def optimise(
     if not value < start.value and not broken_constraint(problem, constraints, beta0):
         return kept("no lower value")
     return Optimised(candidate, value * at_t, start_value, iterations, True, "", ev.spent)
-
-
-def _within(
-    problem: Problem,
-    beta: np.ndarray,
-    imposed: Sequence[Constraint],
-    instants: np.ndarray,
-    options: SolveOptions,
-) -> np.ndarray | None:
-    """The nearest root within the imposed constraints, or None if none is found.
-
-    Up to :data:`CORRECTIONS` least-norm corrections, each with the tightest instants of the
-    last one's path added.
-    """
-    for _ in range(CORRECTIONS):
-        inside = nearest_root_within(problem, beta, imposed, instants, options)
-        if inside.honoured:
-            return inside.beta
-        beta = inside.beta
-        instants = _tightest(problem, imposed, beta, instants)
-    return None
 
 
 class _Evaluations:
