@@ -61,7 +61,7 @@ def test_least_norm_root_within_a_binding_limit_matches_slsqp_on_a_dense_grid(wo
     null = np.linalg.svd(problem.jacobian(least))[2][3:]
     start = polish(problem, least + 0.5 * null[0], 1e-10)[0]
     assert limits.violation(problem, start).value < 0.0
-    found = least_norm_root_within(problem, start, [limits], options)
+    found = least_norm_root_within(problem, start, [limits], options, settled=1e-9)
     assert found.honoured
     beta = found.beta
     assert np.linalg.norm(problem.residual(beta)) < 1e-10
@@ -88,6 +88,9 @@ def test_least_norm_root_within_a_binding_limit_matches_slsqp_on_a_dense_grid(wo
     assert other.success
     assert beta @ beta < start @ start
     np.testing.assert_allclose(beta @ beta, other.x @ other.x, rtol=1e-5)
+    # with the planner's default, steps stop once one gains less than 1 %: about as low
+    default = least_norm_root_within(problem, start, [limits], options).beta
+    assert other.x @ other.x * (1 - 1e-6) <= default @ default <= 1.05 * (other.x @ other.x)
 
 
 def test_corrections_bring_a_root_inside_a_cap_it_breaks(worked_scenario):

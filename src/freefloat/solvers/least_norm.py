@@ -117,6 +117,7 @@ def least_norm_root_within(
     constraints: Sequence[Constraint],
     options: SolveOptions,
     free: np.ndarray | None = None,
+    settled: float = SETTLED,
 ) -> LeastNorm:
     """The least-norm root from the root ``beta`` whose path keeps every constraint.
 
@@ -127,6 +128,7 @@ def least_norm_root_within(
         options: solver settings (attitude tolerance, rad).
         free: the least-norm root without constraints, when known: brought inside them
             (:func:`nearest_root_within`), it is the start when it deviates less than ``beta``.
+        settled: steps stop once one lowers ``|beta|^2`` by less than this fraction.
     """
     active = [c for c in constraints if c.applies_to(problem.robot)]
     beta = np.asarray(beta, dtype=float)
@@ -138,9 +140,7 @@ def least_norm_root_within(
     instants = with_critical(problem, active, beta, DEFAULT_INSTANTS)
     spent = 0
     for _ in range(ROUNDS):
-        beta, steps = _steps(
-            problem, active, np.asarray(beta, dtype=float), instants, cache, options.tolerance
-        )
+        beta, steps = _steps(problem, active, beta, instants, cache, options.tolerance, settled)
         spent += steps
         beta = polish(problem, beta, options.tolerance)[0]
         if not broken_constraint(problem, active, beta):
@@ -183,6 +183,7 @@ def _steps(
     instants: np.ndarray,
     cache: RowCache,
     tolerance: float,
+    settled: float,
 ) -> tuple[np.ndarray, int]:
     """Feasible trust-region SQP steps at fixed instants: (beta, steps).
 
@@ -208,7 +209,7 @@ def _steps(
         before = float(here.beta @ here.beta)
         if new is not None and float(new.beta @ new.beta) < before:
             here, trust = new, min(2.0 * trust, TRUST_MAX)
-            if before - float(here.beta @ here.beta) <= SETTLED * before:
+            if before - float(here.beta @ here.beta) <= settled * before:
                 break
             continue
         trust = 0.5 * float(np.abs(d).max())
