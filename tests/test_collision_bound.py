@@ -125,7 +125,7 @@ def test_each_caller_gets_its_own_geometry():
 def test_rate_bounds_hold_and_are_tight_against_dense_samples():
     """Every |qd_j| sampled densely inside each interval is within its bound, and the bound
     of a short interval is within a few per cent of the largest sample."""
-    from freefloat.problem.constraints.clearance import rate_bounds
+    from freefloat.problem.rate_bounds import rate_bounds
 
     scenario = ff.Scenario.from_toml(PANDA)
     problem = ff.problem_from_scenario(scenario, extra=[2] * scenario.robot.n)

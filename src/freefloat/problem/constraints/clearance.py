@@ -26,6 +26,7 @@ from ...robot.collision import CollisionModel
 from ...robot.model import Robot
 from ...robot.motion_bound import BOUND_SLACK
 from ..paths import JointPolynomials, PathFamily
+from ..rate_bounds import rate_bounds
 from ..residual import Problem
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 
@@ -37,7 +38,6 @@ __all__ = [
     "WINDOW",
     "Clearance",
     "clearance_at",
-    "rate_bounds",
 ]
 
 #: Extra clearance the solvers ask for beyond the margin, between constraint instants (m).
@@ -45,6 +45,10 @@ SOLVER_SLACK = 2e-3
 #: A row whose instant a bound keeps this far beyond the margin and slack (m) is not measured:
 #: its value is that bound's (never below the true row) and its gradient zero.
 WINDOW = 0.05
+#: The solvers' dense check halves an interval a bound cannot clear down to this fraction of
+#: the duration, measuring at most HALVINGS middles per path, before a scalar search.
+FINEST = 1e-4
+HALVINGS = 400
 #: Samples of the dense verification check (every near-minimum is then refined in time).
 VERIFY_SAMPLES = 401
 #: Extra instants per grid interval next to a local minimum of clearance.
@@ -167,8 +171,6 @@ class Clearance(Constraint):
         refined by a bounded scalar search between its neighbouring samples. The last few
         answers are remembered (solvers ask several times about one path).
         """
-        from scipy.optimize import minimize_scalar  # when needed: it costs start-up time
-
         key = (path.coefficients.tobytes(), path.duration, samples, every)
         if key in self._smallest_memo:
             return self._smallest_memo[key]
@@ -179,20 +181,37 @@ class Clearance(Constraint):
             sampled_all = self._sampled(path, t_all)
         t, sampled = t_all[::every], sampled_all[::every]
 
+        left = np.concatenate([[np.inf], sampled[:-1]])
+        right = np.concatenate([sampled[1:], [np.inf]])
+        minima = np.flatnonzero((sampled <= left) & (sampled <= right))
+        best, best_t, best_pair = self._refined(
+            path, t, sampled, minima[sampled[minima] <= float(sampled.min()) + NEAR]
+        )
+        answer = (best, best_t, best_pair)
+        if len(self._smallest_memo) >= 16:
+            self._smallest_memo.pop(next(iter(self._smallest_memo)))
+        self._smallest_memo[key] = answer
+        return answer
+
+    def _refined(
+        self, path: JointPolynomials, t: np.ndarray, sampled: np.ndarray, minima: np.ndarray
+    ) -> tuple[float, float, int]:
+        """The smallest sampled clearance (m), its time (s) and pair, minima refined.
+
+        The sampled local minima at ``minima`` are refined by a bounded scalar search between
+        their neighbouring samples.
+        """
+        from scipy.optimize import minimize_scalar  # when needed: it costs start-up time
+
         def lowest(joints: np.ndarray) -> tuple[float, int]:
             return self.model.closest_value(joints)
 
         count = len(t)
-        best = float(sampled.min())
         k_best = int(np.argmin(sampled))
-        best_t = float(t[k_best])
+        best, best_t = float(sampled[k_best]), float(t[k_best])
         best_pair = lowest(path.evaluate(np.array([best_t])).q[0])[1]
-        left = np.concatenate([[np.inf], sampled[:-1]])
-        right = np.concatenate([sampled[1:], [np.inf]])
-        for index in np.flatnonzero((sampled <= left) & (sampled <= right)):
+        for index in minima:
             k = int(index)
-            if sampled[k] > best + NEAR:
-                continue
             lo, hi = float(t[max(k - 1, 0)]), float(t[min(k + 1, count - 1)])
             result = minimize_scalar(
                 lambda s: lowest(path.evaluate(np.array([s])).q[0])[0],
@@ -203,11 +222,17 @@ class Clearance(Constraint):
             if float(result.fun) < best:
                 best, best_t = float(result.fun), float(result.x)
                 best_pair = lowest(path.evaluate(np.array([best_t])).q[0])[1]
-        answer = (best, best_t, best_pair)
-        if len(self._smallest_memo) >= 16:
-            self._smallest_memo.pop(next(iter(self._smallest_memo)))
-        self._smallest_memo[key] = answer
-        return answer
+        return best, best_t, best_pair
+
+    def _between(self, path: JointPolynomials, t: np.ndarray, known: np.ndarray) -> np.ndarray:
+        """Lower bounds (m) of the clearance between consecutive times of ``t`` (all measured).
+
+        Their mean less half the time between them times how fast any pair's distance can
+        change there (the pairs' motion weights times bounds of the joint rates).
+        """
+        assert self.model.weights is not None
+        speed = np.max(rate_bounds(path, t[:-1], t[1:]) @ self.model.weights.T, axis=1)
+        return 0.5 * (known[:-1] + known[1:] - speed * np.diff(t)) - BOUND_SLACK
 
     def _sampled(self, path: JointPolynomials, t: np.ndarray) -> np.ndarray:
         """Smallest distance over the pairs at each time of ``t`` (m), remembered per path."""
@@ -252,8 +277,7 @@ class Clearance(Constraint):
             known[todo] = [self.model.closest_value(q[k], k / (samples - 1))[0] for k in todo]
             nodes = np.flatnonzero(~np.isnan(known))
             a, b = nodes[:-1], nodes[1:]
-            speed = np.max(rate_bounds(path, t[a], t[b]) @ weights.T, axis=1)
-            lower = 0.5 * (known[a] + known[b] - speed * (t[b] - t[a])) - BOUND_SLACK
+            lower = self._between(path, t[nodes], known[nodes])
             floor = float(np.nanmin(known)) + NEAR if limit is None else limit
             short = (lower < floor) & (b - a >= 2)
             if not np.any(short):
@@ -262,6 +286,42 @@ class Clearance(Constraint):
             todo = (a[short] + b[short]) // 2
         self._measured_memo = (key, known, bound)
         return known, bound
+
+    def _below(
+        self, path: JointPolynomials, known: np.ndarray, limit: float
+    ) -> tuple[float, float, int]:
+        """The smallest clearance (m), its time (s) and pair, for a path a bound cannot clear.
+
+        ``known``: :meth:`_measured` with ``limit`` (m; NaN where spared: above it). Each
+        interval between samples where the bound falls below ``limit`` is halved, measuring
+        its middle, until the bound clears ``limit`` on each half (those cannot dip below it)
+        or a half is :data:`FINEST` of the duration wide; the lowest sampled local minimum and
+        any such unresolved half are then refined by a bounded scalar search. At most
+        :data:`HALVINGS` middles are measured; the rest is refined as in :meth:`smallest`.
+        """
+        t = np.linspace(0.0, path.duration, len(known))
+        lower = np.nan_to_num(self._between(path, t, known), nan=math.inf)
+        todo = [(t[k], t[k + 1], known[k], known[k + 1]) for k in np.flatnonzero(lower < limit)]
+        times, values, unresolved = list(t), list(np.nan_to_num(known, nan=math.inf)), []
+        while todo and len(times) < len(t) + HALVINGS:
+            a, b, va, vb = todo.pop()
+            mid = 0.5 * (a + b)
+            vm = self.model.closest_value(path.evaluate(np.array([mid])).q[0])[0]
+            times.append(mid)
+            values.append(vm)
+            for lo, hi, v0, v1 in ((a, mid, va, vm), (mid, b, vm, vb)):
+                bound = self._between(path, np.array([lo, hi]), np.array([v0, v1]))[0]
+                if bound < limit:
+                    wide = hi - lo > FINEST * path.duration
+                    (todo if wide else unresolved).append((lo, hi, v0, v1))
+        unresolved += todo
+        order = np.argsort(times, kind="stable")
+        t_all, v_all = np.asarray(times)[order], np.asarray(values)[order]
+        left = np.concatenate([[np.inf], v_all[:-1]])
+        right = np.concatenate([v_all[1:], [np.inf]])
+        minima = np.flatnonzero((v_all <= left) & (v_all <= right) & (v_all < limit))
+        spans = [int(np.searchsorted(t_all, 0.5 * (lo + hi))) for lo, hi, _, _ in unresolved]
+        return self._refined(path, t_all, v_all, np.unique(np.append(minima, spans)))
 
     @staticmethod
     def _key(path: JointPolynomials, t: np.ndarray) -> tuple[bytes, float, int]:
@@ -289,35 +349,19 @@ class Clearance(Constraint):
         if self.model.n_pairs == 0:
             return Excess(-math.inf, 0.0, "no pairs to check")
         path = problem.polynomials(beta)
-        bound = self._measured(path, 201, self.margin)[1]
+        known, bound = self._measured(path, 201, self.margin)
         if bound >= self.margin:  # clear everywhere: the refined minimum is not needed
             detail = f"min clearance >= {bound:.6g} m everywhere, margin {self.margin:g} m"
             return Excess(self.margin - bound, 0.0, detail)
-        clearance, when, pair = self.smallest(path, 201)
+        if self.model.weights is None:
+            clearance, when, pair = self.smallest(path, 201)
+        else:
+            clearance, when, pair = self._below(path, known, self.margin)
         detail = (
             f"min clearance {clearance:.6g} m ({self.model.names[pair]}) at t = {when:.4g} s, "
             f"margin {self.margin:g} m"
         )
         return Excess(self.margin - clearance, 0.0, detail)
-
-
-def rate_bounds(path: JointPolynomials, t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
-    """(K, N) bounds of every ``|qd_j|`` over each ``[t0, t1]`` (rad/s or m/s).
-
-    The Taylor series of a polynomial about the interval's middle is finite: ``|qd(mid + s)|``
-    is at most the sum over the orders ``o >= 1`` of ``|q^(o)(mid)| h^(o-1) / (o-1)!``, ``h``
-    half the interval; padded by a relative 1e-9 for rounding.
-    """
-    half = 0.5 * (t1 - t0)
-    x = (t0 + t1) / path.duration - 1.0
-    width = path.coefficients.shape[1]
-    vander = np.polynomial.chebyshev.chebvander(x, width - 1)
-    bound = np.zeros((len(x), path.coefficients.shape[0]))
-    factor = np.ones(len(x))
-    for order in range(1, width):
-        bound += np.abs(vander @ path.derivative(order).T) * factor[:, None]
-        factor = factor * half / order
-    return bound * (1.0 + 1e-9)
 
 
 def _lowest(values: np.ndarray) -> list[int]:
