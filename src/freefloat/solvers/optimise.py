@@ -195,8 +195,7 @@ def optimise(
                     options={"ftol": 1e-12, "maxiter": int(max_iterations)},
                 )
         except _BudgetSpentError:
-            note = f"evaluation budget ({max_evaluations}) spent"
-            return kept(note)
+            return kept(f"evaluation budget ({max_evaluations}) spent")
         iterations += int(result.nit)
         z = np.asarray(result.x, dtype=float)
         candidate = to_beta(z)
@@ -211,13 +210,11 @@ def optimise(
         broken = broken_constraint(problem, constraints, candidate)
         if not broken:
             break
-        if not result.success and not any(
-            c not in imposed and broken_constraint(problem, [c], candidate) for c in active
-        ):  # SLSQP found no point within the imposed rows: more instants will not help
-            return kept(f"breaks {broken}")
         missing = [
             c for c in active if c not in imposed and broken_constraint(problem, [c], candidate)
         ]
+        if not result.success and not missing:  # no point within the imposed rows
+            return kept(f"breaks {broken}")  # more instants will not help
         if missing:  # a constraint left out because it was slack at the start now binds:
             imposed += missing  # impose it, from the start (whose path honours every one)
             z = np.zeros(problem.n_free)
