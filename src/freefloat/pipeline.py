@@ -47,13 +47,13 @@ from .problem.constraints import (
     default_constraints,
     scenario_constraints,
 )
-from .problem.constraints.clearance import clearance_at
 from .problem.limits import check_samples
 from .problem.objectives import DEFAULT_OBJECTIVE, Objective, objective_named
 from .problem.paths import boundary_errors
 from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .progress import stage
+from .robot.collision import clearance_at
 from .solvers.minimise import minimise
 from .solvers.nearest import nearest_root
 from .solvers.options import DEFAULT_TOLERANCE, Solution, SolveOptions

@@ -65,6 +65,7 @@ __all__ = [
     "Distances",
     "Obstacle",
     "checked_distance",
+    "clearance_at",
     "collision_model",
     "known_srdf",
 ]
@@ -372,3 +373,10 @@ def collision_model(
 ) -> CollisionModel:
     """The collision model of ``robot`` (see :class:`CollisionModel`)."""
     return CollisionModel(robot, srdf, obstacles)
+
+
+def clearance_at(model: CollisionModel, joints: Sequence[float] | np.ndarray) -> tuple[float, str]:
+    """Smallest clearance (m) at one configuration and the pair that has it."""
+    values = model.distances(np.asarray(joints, dtype=float)).values
+    k = int(np.argmin(values))
+    return float(values[k]), model.names[k]

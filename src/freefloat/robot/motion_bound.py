@@ -10,6 +10,7 @@ lower bound exceeds another pair's upper bound cannot be the closest, and need n
 
 from __future__ import annotations
 
+import bisect
 from collections.abc import Sequence
 
 import numpy as np
@@ -74,7 +75,8 @@ class PairBounds:
     A slot names a place where queries come back (a normalised instant of a path, say): a
     pair's bound from its last measurement *at that slot* is tight when the joints there
     moved little since (a solver's iterates), where the last query elsewhere on the path may
-    be far. A new slot starts from the bounds of the last slot used. Bounds are valid whatever
+    be far. A new slot starts from the bounds of the nearest slot kept (the last used, for
+    ``None``). Bounds are valid whatever
     their slot, so the slot changes which pairs are measured, never a distance. At most
     :data:`SLOTS` slots are kept.
 
@@ -89,6 +91,7 @@ class PairBounds:
         self.weights = weights
         self._slots: dict[float | None, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._recent: float | None = None
+        self._keys: list[float] = []  # the numeric slots, sorted
 
     def _arrays(self, slot: float | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(joints, lower, upper)`` of the slot, NaN bounds when new."""
@@ -96,15 +99,26 @@ class PairBounds:
         if found is None:
             if len(self._slots) >= self.SLOTS:
                 self._slots.clear()
-            recent = self._slots.get(self._recent)
-            if recent is not None:  # a new slot starts from the last one used
-                found = (recent[0].copy(), recent[1].copy(), recent[2].copy())
+                self._keys.clear()
+            near = self._slots.get(self._nearest(slot))
+            if near is not None:  # a new slot starts from the nearest one, or the last used
+                found = (near[0].copy(), near[1].copy(), near[2].copy())
             else:
                 p, n = self.weights.shape
                 found = (np.zeros((p, n)), np.full(p, np.nan), np.full(p, np.nan))
             self._slots[slot] = found
+            if slot is not None:
+                bisect.insort(self._keys, slot)
         self._recent = slot
         return found
+
+    def _nearest(self, slot: float | None) -> float | None:
+        """The kept slot nearest ``slot`` (the last used for None, or when none is kept)."""
+        if slot is None or not self._keys:
+            return self._recent
+        k = bisect.bisect_left(self._keys, slot)
+        around = self._keys[max(k - 1, 0) : k + 1]
+        return min(around, key=lambda key: abs(key - slot))
 
     def floor(self, slot: float | None, joints: np.ndarray) -> float:
         """A lower bound (m) of the smallest distance over the pairs at ``joints``.

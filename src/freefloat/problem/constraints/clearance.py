@@ -18,7 +18,6 @@ on every other sample).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 
 import numpy as np
 
@@ -37,7 +36,6 @@ __all__ = [
     "SOLVER_SLACK",
     "WINDOW",
     "Clearance",
-    "clearance_at",
 ]
 
 #: Extra clearance the solvers ask for beyond the margin, between constraint instants (m).
@@ -45,10 +43,8 @@ SOLVER_SLACK = 2e-3
 #: A row whose instant a bound keeps this far beyond the margin and slack (m) is not measured:
 #: its value is that bound's (never below the true row) and its gradient zero.
 WINDOW = 0.05
-#: The solvers' dense check halves an interval a bound cannot clear down to this fraction of
-#: the duration, measuring at most HALVINGS middles per path, before a scalar search.
-FINEST = 1e-4
-HALVINGS = 400
+#: Halvings of the intervals a bound cannot clear (the solvers' dense check).
+HALVINGS = 12
 #: Samples of the dense verification check (every near-minimum is then refined in time).
 VERIFY_SAMPLES = 401
 #: Extra instants per grid interval next to a local minimum of clearance.
@@ -181,9 +177,7 @@ class Clearance(Constraint):
             sampled_all = self._sampled(path, t_all)
         t, sampled = t_all[::every], sampled_all[::every]
 
-        left = np.concatenate([[np.inf], sampled[:-1]])
-        right = np.concatenate([sampled[1:], [np.inf]])
-        minima = np.flatnonzero((sampled <= left) & (sampled <= right))
+        minima = _local_minima(sampled)
         best, best_t, best_pair = self._refined(
             path, t, sampled, minima[sampled[minima] <= float(sampled.min()) + NEAR]
         )
@@ -203,36 +197,38 @@ class Clearance(Constraint):
         """
         from scipy.optimize import minimize_scalar  # when needed: it costs start-up time
 
-        def lowest(joints: np.ndarray) -> tuple[float, int]:
-            return self.model.closest_value(joints)
+        def lowest(s: float) -> tuple[float, int]:
+            return self.model.closest_value(path.evaluate(np.array([s])).q[0], s / path.duration)
 
         count = len(t)
         k_best = int(np.argmin(sampled))
         best, best_t = float(sampled[k_best]), float(t[k_best])
-        best_pair = lowest(path.evaluate(np.array([best_t])).q[0])[1]
+        best_pair = lowest(best_t)[1]
         for index in minima:
             k = int(index)
             lo, hi = float(t[max(k - 1, 0)]), float(t[min(k + 1, count - 1)])
             result = minimize_scalar(
-                lambda s: lowest(path.evaluate(np.array([s])).q[0])[0],
+                lambda s: lowest(s)[0],
                 bounds=(lo, hi),
                 method="bounded",
                 options={"xatol": 1e-9 * max(1.0, path.duration)},
             )
             if float(result.fun) < best:
                 best, best_t = float(result.fun), float(result.x)
-                best_pair = lowest(path.evaluate(np.array([best_t])).q[0])[1]
+                best_pair = lowest(best_t)[1]
         return best, best_t, best_pair
 
-    def _between(self, path: JointPolynomials, t: np.ndarray, known: np.ndarray) -> np.ndarray:
-        """Lower bounds (m) of the clearance between consecutive times of ``t`` (all measured).
+    def _between(
+        self, path: JointPolynomials, t0: np.ndarray, t1: np.ndarray, v0: np.ndarray, v1: np.ndarray
+    ) -> np.ndarray:
+        """Lower bounds (m) of the clearance over ``[t0, t1]`` (s), measured ``v0``, ``v1`` there.
 
         Their mean less half the time between them times how fast any pair's distance can
         change there (the pairs' motion weights times bounds of the joint rates).
         """
         assert self.model.weights is not None
-        speed = np.max(rate_bounds(path, t[:-1], t[1:]) @ self.model.weights.T, axis=1)
-        return 0.5 * (known[:-1] + known[1:] - speed * np.diff(t)) - BOUND_SLACK
+        speed = np.max(rate_bounds(path, t0, t1) @ self.model.weights.T, axis=1)
+        return 0.5 * (v0 + v1 - speed * (t1 - t0)) - BOUND_SLACK
 
     def _sampled(self, path: JointPolynomials, t: np.ndarray) -> np.ndarray:
         """Smallest distance over the pairs at each time of ``t`` (m), remembered per path."""
@@ -277,7 +273,7 @@ class Clearance(Constraint):
             known[todo] = [self.model.closest_value(q[k], k / (samples - 1))[0] for k in todo]
             nodes = np.flatnonzero(~np.isnan(known))
             a, b = nodes[:-1], nodes[1:]
-            lower = self._between(path, t[nodes], known[nodes])
+            lower = self._between(path, t[a], t[b], known[a], known[b])
             floor = float(np.nanmin(known)) + NEAR if limit is None else limit
             short = (lower < floor) & (b - a >= 2)
             if not np.any(short):
@@ -292,36 +288,55 @@ class Clearance(Constraint):
     ) -> tuple[float, float, int]:
         """The smallest clearance (m), its time (s) and pair, for a path a bound cannot clear.
 
-        ``known``: :meth:`_measured` with ``limit`` (m; NaN where spared: above it). Each
-        interval between samples where the bound falls below ``limit`` is halved, measuring
-        its middle, until the bound clears ``limit`` on each half (those cannot dip below it)
-        or a half is :data:`FINEST` of the duration wide; the lowest sampled local minimum and
-        any such unresolved half are then refined by a bounded scalar search. At most
-        :data:`HALVINGS` middles are measured; the rest is refined as in :meth:`smallest`.
+        ``known``: :meth:`_measured` with ``limit`` (m; NaN where spared: above it). An
+        interval between samples both above ``limit`` where the bound falls below it is
+        halved, measuring its middle, until the bound clears ``limit`` on each half or a
+        sample falls below it, at most :data:`HALVINGS` times; the sampled local minima below
+        ``limit``, and the middles of halves left undecided, are then refined by a bounded
+        scalar search.
         """
         t = np.linspace(0.0, path.duration, len(known))
-        lower = np.nan_to_num(self._between(path, t, known), nan=math.inf)
-        todo = [(t[k], t[k + 1], known[k], known[k + 1]) for k in np.flatnonzero(lower < limit)]
-        times, values, unresolved = list(t), list(np.nan_to_num(known, nan=math.inf)), []
-        while todo and len(times) < len(t) + HALVINGS:
-            a, b, va, vb = todo.pop()
-            mid = 0.5 * (a + b)
-            vm = self.model.closest_value(path.evaluate(np.array([mid])).q[0])[0]
+        times, values = [t], [np.nan_to_num(known, nan=math.inf)]
+        ends = np.stack([t[:-1], t[1:], known[:-1], known[1:]])  # rows: t0, t1, v0, v1
+        for _ in range(HALVINGS):
+            open_ = self._undecided(path, ends, limit)
+            ends = ends[:, open_]
+            if ends.shape[1] == 0:
+                break
+            mid = 0.5 * (ends[0] + ends[1])
+            joints = path.evaluate(mid).q
+            slots = mid / path.duration
+            vm = np.array(
+                [self.model.closest_value(x, s)[0] for x, s in zip(joints, slots, strict=True)]
+            )
             times.append(mid)
             values.append(vm)
-            for lo, hi, v0, v1 in ((a, mid, va, vm), (mid, b, vm, vb)):
-                bound = self._between(path, np.array([lo, hi]), np.array([v0, v1]))[0]
-                if bound < limit:
-                    wide = hi - lo > FINEST * path.duration
-                    (todo if wide else unresolved).append((lo, hi, v0, v1))
-        unresolved += todo
-        order = np.argsort(times, kind="stable")
-        t_all, v_all = np.asarray(times)[order], np.asarray(values)[order]
-        left = np.concatenate([[np.inf], v_all[:-1]])
-        right = np.concatenate([v_all[1:], [np.inf]])
-        minima = np.flatnonzero((v_all <= left) & (v_all <= right) & (v_all < limit))
-        spans = [int(np.searchsorted(t_all, 0.5 * (lo + hi))) for lo, hi, _, _ in unresolved]
+            ends = np.concatenate(
+                [np.stack([ends[0], mid, ends[2], vm]), np.stack([mid, ends[1], vm, ends[3]])],
+                axis=1,
+            )
+        undecided = ends[:, self._undecided(path, ends, limit)] if ends.shape[1] else ends
+        t_all, v_all = np.concatenate(times), np.concatenate(values)
+        order = np.argsort(t_all, kind="stable")
+        t_all, v_all = t_all[order], v_all[order]
+        minima = _local_minima(v_all)
+        minima = minima[v_all[minima] < limit]
+        spans = np.searchsorted(t_all, 0.5 * (undecided[0] + undecided[1]))
         return self._refined(path, t_all, v_all, np.unique(np.append(minima, spans)))
+
+    def _undecided(self, path: JointPolynomials, ends: np.ndarray, limit: float) -> np.ndarray:
+        """Which intervals (rows t0, t1, v0, v1; s and m) may dip below ``limit`` unseen.
+
+        Both ends measured and above ``limit`` (a sample below it is a dip seen), and the
+        bound between them below it.
+        """
+        seen = ~np.isnan(ends[2]) & ~np.isnan(ends[3]) & (ends[2] >= limit) & (ends[3] >= limit)
+        bound = np.full(ends.shape[1], math.inf)
+        if np.any(seen):
+            bound[seen] = self._between(
+                path, ends[0, seen], ends[1, seen], ends[2, seen], ends[3, seen]
+            )
+        return bound < limit
 
     @staticmethod
     def _key(path: JointPolynomials, t: np.ndarray) -> tuple[bytes, float, int]:
@@ -367,9 +382,7 @@ class Clearance(Constraint):
 def _lowest(values: np.ndarray) -> list[int]:
     """Indices of the two lowest local minima of ``values`` (or the two lowest apart)."""
     n = len(values)
-    left = np.concatenate([[np.inf], values[:-1]])
-    right = np.concatenate([values[1:], [np.inf]])
-    minima = np.flatnonzero((values <= left) & (values <= right))
+    minima = _local_minima(values)
     order = [int(k) for k in minima[np.argsort(np.asarray(values)[minima], kind="stable")]]
     if len(order) < 2:
         far = [int(k) for k in np.argsort(values, kind="stable") if abs(int(k) - order[0]) > 2]
@@ -377,8 +390,8 @@ def _lowest(values: np.ndarray) -> list[int]:
     return order[:2]
 
 
-def clearance_at(model: CollisionModel, joints: Sequence[float] | np.ndarray) -> tuple[float, str]:
-    """Smallest clearance (m) at one configuration and the pair that has it."""
-    values = model.distances(np.asarray(joints, dtype=float)).values
-    k = int(np.argmin(values))
-    return float(values[k]), model.names[k]
+def _local_minima(values: np.ndarray) -> np.ndarray:
+    """Indices of the local minima of ``values`` (an end counts against its one neighbour)."""
+    left = np.concatenate([[np.inf], values[:-1]])
+    right = np.concatenate([values[1:], [np.inf]])
+    return np.flatnonzero((values <= left) & (values <= right))
