@@ -198,7 +198,7 @@ def _search_lazily(
     eager = [c for c in constraints if not c.lazy]
     lazy = [c for c in constraints if c.lazy]
     try:
-        found = search(scenario, options, eager)
+        found = _search_proxy_first(scenario, options, eager)
     except SolverError as exc:
         _explain_duration_limits(scenario, options, constraints, exc)
         raise
@@ -211,6 +211,25 @@ def _search_lazily(
             return found, eager
         _explain_duration_limits(scenario, options, constraints, exc)
         raise
+
+
+def _search_proxy_first(
+    scenario: Scenario, options: SolveOptions, eager: list[Constraint]
+) -> SearchResult:
+    """The search within the affine constraints alone, kept when its path honours the others.
+
+    The costly constraints (clearance) are imposed only where they bind: when the path found
+    within the cheap ones (joint limits) breaks one, or that search fails, the search runs
+    again with every constraint (so no plan the full search finds is refused).
+    """
+    cheap = [c for c in eager if c.affine]
+    if len(cheap) == len(eager):
+        return search(scenario, options, eager)
+    try:
+        found = search(scenario, options, cheap)
+    except SolverError:
+        return search(scenario, options, eager)
+    return search(scenario, options, eager) if _broken(found, eager) else found
 
 
 def _check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> None:
