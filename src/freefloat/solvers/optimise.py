@@ -88,11 +88,15 @@ class _BudgetSpentError(Exception):
 def _tightest(
     problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray, instants: np.ndarray
 ) -> np.ndarray:
-    """``instants`` with the normalised instants where the path at ``beta`` is tightest."""
+    """``instants`` with the normalised instants where the path at ``beta`` is tightest.
+
+    Constraints that pick their own instants (clearance) are left out.
+    """
     path = problem.polynomials(beta)
     extra = [
         np.asarray(c.critical_times(problem.robot, path), dtype=float) / problem.duration
         for c in constraints
+        if not c.own_instants
     ]
     return np.unique(np.clip(np.concatenate([instants, *extra]), 0.0, 1.0))
 

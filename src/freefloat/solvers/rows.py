@@ -62,8 +62,15 @@ def linear_rows(
 def with_critical(
     problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray, instants: np.ndarray
 ) -> np.ndarray:
-    """``instants`` and the normalised times where each constraint is tightest at ``beta``."""
+    """``instants`` and the normalised times where each constraint is tightest at ``beta``.
+
+    Constraints that pick their own instants (clearance) are left out.
+    """
     path = problem.polynomials(beta)
-    extra = [c.critical_times(problem.robot, path) / problem.duration for c in constraints]
+    extra = [
+        c.critical_times(problem.robot, path) / problem.duration
+        for c in constraints
+        if not c.own_instants
+    ]
     added = np.setdiff1d(instants, DEFAULT_INSTANTS)[-MAX_ADDED_INSTANTS:]
     return np.unique(np.concatenate([DEFAULT_INSTANTS, added, *extra]).clip(0.0, 1.0))

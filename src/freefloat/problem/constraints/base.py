@@ -83,6 +83,8 @@ class Constraint(abc.ABC):
         affine: whether ``g`` is affine in ``beta`` (then its Jacobian is constant).
         lazy: whether planning first ignores it and imposes it only when the path found
             breaks it (for constraints whose rows are costly and rarely bind).
+        own_instants: whether its rows sit at instants it picks itself (the instants the
+            solvers pass are ignored): its tightest instants then say nothing to the solvers.
     """
 
     name: str = "constraint"
@@ -90,6 +92,7 @@ class Constraint(abc.ABC):
     tolerance: float = 1e-9
     affine: bool = False
     lazy: bool = False
+    own_instants: bool = False
 
     @abc.abstractmethod
     def rows(

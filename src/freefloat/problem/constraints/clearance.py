@@ -68,6 +68,7 @@ class Clearance(Constraint):
     unit = "m"
     tolerance = 1e-6
     affine = False
+    own_instants = True
 
     def __init__(self, model: CollisionModel, margin: float = 0.01) -> None:
         if not (math.isfinite(margin) and margin >= 0.0):
