@@ -2,7 +2,7 @@
 
 :class:`Plan` gathers the records of :mod:`freefloat.plans.records` (the motion) and
 :mod:`freefloat.plans.guarantees` (what it honours and how that was checked); it evaluates its
-joint paths and reads and writes its file (``freefloat.plan/4``, :mod:`freefloat.plans.io`;
+joint paths and writes its file, and reads it (``freefloat.plan/4``, :mod:`freefloat.plans.io`;
 older versions, :mod:`freefloat.plans.versions`). Planning a scenario into a plan lives in
 :mod:`freefloat.pipeline`; checking a plan lives in :mod:`freefloat.verify`.
 
@@ -13,8 +13,9 @@ prismatic joints and positions); Euler angles, marked ``_deg``, in degrees.
 
 from __future__ import annotations
 
+import copy
 import json
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -30,8 +31,9 @@ from .guarantees import (
     SafetyReport,
     Verification,
 )
-from .io import plan_fields, plan_record, read_plan_json
+from .io import plan_fields, read_plan_json
 from .records import (
+    SAMPLE_ARRAYS,
     BaseReport,
     Feasibility,
     PathQuality,
@@ -40,7 +42,7 @@ from .records import (
     Samples,
     SolverReport,
 )
-from .versions import FORMAT, MONOMIAL_BASIS
+from .versions import FORMAT, MONOMIAL_BASIS, as_written_in
 
 __all__ = ["Plan"]
 
@@ -91,11 +93,44 @@ class Plan:
 
     # -- file -------------------------------------------------------------------------------
 
-    # -- file -------------------------------------------------------------------------------
-
     def to_dict(self) -> dict[str, Any]:
         """The plan as the JSON-ready dictionary of its file format (a deep copy)."""
-        return plan_record(self)
+        robot = asdict(self.robot)
+        if not self.robot.urdf_text:
+            del robot["urdf_text"], robot["urdf_sha256"]
+        samples: dict[str, Any] = {
+            name: getattr(self.samples, name).tolist() for name in SAMPLE_ARRAYS
+        }
+        samples["end_effector_paths"] = {
+            k: v.tolist() for k, v in self.samples.end_effector_paths.items()
+        }
+        checks = self.verification.checks
+        record = {
+            "format": self.format,
+            "robot": robot,
+            "duration": self.duration,
+            "path": {
+                "family": "polynomial",
+                **({} if self.basis == MONOMIAL_BASIS else {"basis": self.basis}),
+                "coefficients": self.coefficients,
+            },
+            "free_parameters": self.free_parameters,
+            "base": asdict(self.base),
+            "feasibility": asdict(self.feasibility),
+            "samples": samples,
+            "solver": asdict(self.solver),
+            "request": asdict(self.request),
+            "verification": {
+                "passed": self.verification.passed,
+                "checks": [{**asdict(c), "passed": c.passed} for c in checks],
+            },
+            "safety": asdict(self.safety),
+            "objective": asdict(self.objective),
+            "constraints": [asdict(c) for c in self.constraints],
+            **({} if self.robustness is None else {"robustness": asdict(self.robustness)}),
+            **({} if self.quality is None else {"path_quality": asdict(self.quality)}),
+        }
+        return copy.deepcopy(as_written_in(record, self.format))
 
     def to_json(self) -> str:
         """The plan file's text (JSON, no NaN)."""

@@ -1,21 +1,19 @@
-"""Reading and writing plan files: JSON text to typed records and back.
+"""Reading plan files: JSON text to typed records.
 
 :func:`read_plan_json` reads a file's JSON (size-checked, duplicate keys refused);
 :func:`plan_fields` turns it into the keyword arguments of a
 :class:`~freefloat.plans.format.Plan`, checking the format, the limits
-(:mod:`freefloat.plans.limits`) and the URDF copy; :func:`plan_record` is the reverse, the
-plan's JSON-ready dictionary in the plan's format. Older formats are read and written through
-:mod:`freefloat.plans.versions`.
+(:mod:`freefloat.plans.limits`) and the URDF copy. The reverse, the plan's JSON-ready
+dictionary in its format, is :meth:`Plan.to_dict <freefloat.plans.format.Plan.to_dict>`. Older
+formats are read and written through :mod:`freefloat.plans.versions`.
 """
 
 from __future__ import annotations
 
-import copy
 import json
 from collections.abc import Mapping
-from dataclasses import asdict
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from ..errors import PlanFileError, excerpt
 from ..files import other_kind_hint
@@ -31,7 +29,6 @@ from .guarantees import (
 )
 from .limits import MAX_PLAN_BYTES, check_plan_file_kind, check_plan_values
 from .records import (
-    SAMPLE_ARRAYS,
     BaseReport,
     Feasibility,
     PathQuality,
@@ -45,57 +42,14 @@ from .records import (
 from .versions import (
     FORMAT,
     FORMAT_1,
-    MONOMIAL_BASIS,
     READABLE_FORMATS,
-    as_written_in,
     path_basis,
     promised_constraints,
     read_as,
     with_every_end_effector,
 )
 
-if TYPE_CHECKING:
-    from .format import Plan
-
-__all__ = ["plan_fields", "plan_record", "read_plan_json"]
-
-
-def plan_record(plan: Plan) -> dict[str, Any]:
-    """The plan as the JSON-ready dictionary of its file format (a deep copy)."""
-    robot = asdict(plan.robot)
-    if not plan.robot.urdf_text:
-        del robot["urdf_text"], robot["urdf_sha256"]
-    samples: dict[str, Any] = {name: getattr(plan.samples, name).tolist() for name in SAMPLE_ARRAYS}
-    samples["end_effector_paths"] = {
-        k: v.tolist() for k, v in plan.samples.end_effector_paths.items()
-    }
-    checks = plan.verification.checks
-    record = {
-        "format": plan.format,
-        "robot": robot,
-        "duration": plan.duration,
-        "path": {
-            "family": "polynomial",
-            **({} if plan.basis == MONOMIAL_BASIS else {"basis": plan.basis}),
-            "coefficients": plan.coefficients,
-        },
-        "free_parameters": plan.free_parameters,
-        "base": asdict(plan.base),
-        "feasibility": asdict(plan.feasibility),
-        "samples": samples,
-        "solver": asdict(plan.solver),
-        "request": asdict(plan.request),
-        "verification": {
-            "passed": plan.verification.passed,
-            "checks": [{**asdict(c), "passed": c.passed} for c in checks],
-        },
-        "safety": asdict(plan.safety),
-        "objective": asdict(plan.objective),
-        "constraints": [asdict(c) for c in plan.constraints],
-        **({} if plan.robustness is None else {"robustness": asdict(plan.robustness)}),
-        **({} if plan.quality is None else {"path_quality": asdict(plan.quality)}),
-    }
-    return copy.deepcopy(as_written_in(record, plan.format))
+__all__ = ["plan_fields", "read_plan_json"]
 
 
 def plan_fields(data: Any, where: str = "plan", folder: Path | None = None) -> dict[str, Any]:
