@@ -217,19 +217,19 @@ def optimise(
         missing = [
             c for c in active if c not in imposed and broken_constraint(problem, [c], candidate)
         ]
-        if not result.success and not missing:  # no point within the imposed rows
-            return kept(f"breaks {broken}")  # more instants will not help
         if missing:  # a constraint left out because it was slack at the start now binds:
             imposed += missing  # impose it, from the start (whose path honours every one)
             z = np.zeros(problem.n_free)
             continue
-        # Rows hold at the instants but not between them: add the path's tightest instants,
-        # and first try the nearest root within them (one small correction, no new run).
+        # Rows hold at the instants but not between them (or the run stopped short of them):
+        # add the path's tightest instants and first try the nearest root within them.
         instants = _tightest(problem, imposed, candidate, instants)
         inside = nearest_root_within(problem, candidate, imposed, instants, options)
         if inside.honoured and not broken_constraint(problem, constraints, inside.beta):
             candidate = inside.beta
             break
+        if not result.success:  # no point within the imposed rows: more instants will not help
+            return kept(f"breaks {broken}")
     else:
         return kept(f"breaks {broken}")
     value = objective.evaluate(unit, candidate).value
