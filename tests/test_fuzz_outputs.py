@@ -35,6 +35,7 @@ SIGNALLED = (KeyboardInterrupt, Terminated, HungUp)
 stop, ended = [], [0]
 signal.signal(signal.SIGUSR1, lambda *_: stop.append(1))
 target, text = sys.argv[1], "x" * 200_000
+handle_signals()  # before "ready": the parent's first signal may come at once
 print("ready", flush=True)
 
 def writes():
