@@ -12,10 +12,14 @@ Both solvers are sequential quadratic programming with the exact Hessian of the 
 - :func:`least_norm_root_within`, with every path constraint linearised at fixed instants
   (``g + G d <= 0``, :func:`.rows.linear_rows`): each step is the small quadratic program
   ``min |beta + d|^2`` s.t. ``J d = -h`` and the rows, solved by quadprog inside a box trust
-  region, accepted when the merit ``|beta|^2 / 2 + mu (|h|_1 + sum max(g, 0))`` falls (``mu``
-  above the step's multipliers). When the result honours the rows but not the dense check
-  between them, the path's tightest instants are added and the steps go on (at most
-  :data:`ROUNDS` times).
+  region, then corrected back onto the root set within the rows (:func:`nearest_root_within`'s
+  least-norm steps); it is kept when that root deviates less, else the trust region halves.
+  It starts from the free least-norm root brought inside the constraints when that deviates
+  less than the given root, and stops once a step gains less than :data:`SETTLED`. When the
+  result honours the rows but not the dense check between them, the path's tightest instants
+  are added and the steps go on (at most :data:`ROUNDS` times).
+- :func:`nearest_root_within`: a root just outside a constraint (between the instants of the
+  rows that held it) brought inside by least-norm corrections.
 
 Each result is polished onto ``h = 0`` by minimum-norm Newton steps. Budgets are counts.
 """
