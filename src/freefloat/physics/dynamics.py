@@ -209,13 +209,10 @@ class _Embedded:
         x, y, z, w = q[3:7]
         norm = math.sqrt(x * x + y * y + z * z + w * w) or math.nan  # nan, as numpy's 0 / 0
         q[3:7] = x / norm, y / norm, z / norm, w / norm
-        if self.turning:
-            cos = [q[iq] for iq, _ in self.turning]
-            sin = [q[iq + 1] for iq, _ in self.turning]
-            # numpy's hypot, as the array form of this projection used: the same bits
-            norms = np.hypot(cos, sin).tolist()
-            for (iq, _), c, s, n in zip(self.turning, cos, sin, norms, strict=True):
-                q[iq], q[iq + 1] = c / (n or math.nan), s / (n or math.nan)
+        for iq, _ in self.turning:
+            c, s = q[iq], q[iq + 1]
+            n = float(np.hypot(c, s)) or math.nan  # numpy's hypot, as the array form used
+            q[iq], q[iq + 1] = c / n, s / n
         return q
 
     def stage(self, q: list[float], h: float, r: list[float]) -> list[float]:
