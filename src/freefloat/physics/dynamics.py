@@ -219,9 +219,7 @@ class _Embedded:
         """``project(q + h r)``."""
         return self.project([a + h * b for a, b in zip(q, r, strict=True)])
 
-    def step(
-        self, q: list[float], dt: float, rates: tuple[list[float], ...]
-    ) -> list[float]:
+    def step(self, q: list[float], dt: float, rates: tuple[list[float], ...]) -> list[float]:
         """RK4's combination ``project(q + dt / 6 (r1 + 2 r2 + 2 r3 + r4))``."""
         sixth = dt / 6.0
         r1, r2, r3, r4 = rates

@@ -93,6 +93,8 @@ def certify(
     lipschitz = _speeds(mesh, motion, times[:-1], times[1:])
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
     settled = lbs >= measured - _tolerance(measured, margin)
+    _tighten(mesh, store, times, bounds, lipschitz, lbs, settled)
+    settled = lbs >= measured - _tolerance(measured, margin)
     lower = float(lbs[settled].min()) if settled.any() else math.inf
     heap: list[tuple[float, float, float, int, bool, float]] = [
         (
@@ -157,6 +159,39 @@ def certify(
         exhausted=exhausted,
         hull_excess=agreement[0],
         hull_detail=agreement[1],
+    )
+
+
+def _tighten(
+    mesh: MeshClearance,
+    store: _Instants,
+    times: np.ndarray,
+    bounds: np.ndarray,
+    lipschitz: np.ndarray,
+    lbs: np.ndarray,
+    settled: np.ndarray,
+) -> None:
+    """Raise the bounds of the intervals not settled by the single spheres, in place.
+
+    At both ends of every such (interval, pair) the pair's leaf-sphere bound
+    (:mod:`.sphere_tree`) replaces the single-sphere one where it is larger; ``lbs`` is
+    recomputed for those intervals. Both are lower bounds of the distance, so the interval
+    bound stays one.
+    """
+    rows, pairs = np.nonzero(~settled)
+    if len(rows) == 0:
+        return
+    ends = np.unique(
+        np.concatenate([rows * len(mesh.pairs) + pairs, (rows + 1) * len(mesh.pairs) + pairs])
+    )
+    cells, cell_pairs = np.divmod(ends, len(mesh.pairs))
+    placements = np.array([store.at(float(t)) for t in times])
+    better = mesh.leaves.bounds(placements, cells, cell_pairs)
+    tight = bounds.copy()
+    tight[cells, cell_pairs] = np.maximum(bounds[cells, cell_pairs], better)
+    widths = times[rows + 1] - times[rows]
+    lbs[rows, pairs] = 0.5 * (
+        tight[rows, pairs] + tight[rows + 1, pairs] - lipschitz[rows, pairs] * widths
     )
 
 

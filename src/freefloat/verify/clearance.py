@@ -54,6 +54,7 @@ from ..robot.geometry import (
 )
 from ..robot.model import Robot
 from .motion import reach_coefficients
+from .sphere_tree import LeafSpheres
 
 __all__ = [
     "ACCURACY",
@@ -152,6 +153,15 @@ class MeshClearance:
             i: object_triangles(objects[i]) for i, s in enumerate(self.shapes) if _is_mesh(s)
         }
         self.centres, self.radii = _bounding_spheres(self.shapes, self.meshes)
+        #: Leaf spheres of every body: tighter lower bounds than the single spheres.
+        boxes = {
+            i: np.asarray(s.halfSide, float)
+            for i, s in enumerate(self.shapes)
+            if isinstance(s, coal.Box)
+        }
+        self.leaves = LeafSpheres(
+            self.centres, self.radii, self.meshes, np.array(self.pairs), boxes
+        )
         reach = reach_coefficients(robot, geometry, self.centres, self.radii)
         pairs = np.array(self.pairs, dtype=int).reshape(-1, 2)
         #: First and second geometry index of every pair.
