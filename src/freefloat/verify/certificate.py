@@ -131,8 +131,8 @@ def certify(
         dm = store.distance(mid, k)
         if dm < measured:
             measured, when, pair = dm, mid, k
-        for a, b in ((t0, mid), (mid, t1)):
-            speed = float(_speeds(mesh, motion, a, b)[0, k])
+        halves = _speeds(mesh, motion, [t0, mid], [mid, t1])[:, k]  # both in one evaluation
+        for (a, b), speed in zip(((t0, mid), (mid, t1)), halves.tolist(), strict=True):
             value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
             heapq.heappush(heap, (value, a, b, k, True, speed))
     if heap:
