@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import heapq
 import math
-from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -31,32 +31,41 @@ __all__ = ["certify"]
 
 
 class _Instants:
-    """Placements, bounding-sphere bounds and exact distances per instant, computed once."""
+    """Placements, joint speeds and exact distances per instant, each computed once.
+
+    The joint values and rates of an instant come from one evaluation of the paths; the
+    rates' absolute values give the ends of the speed bound of every interval that ends there.
+    """
 
     def __init__(self, mesh: MeshClearance, motion: PolynomialMotion) -> None:
         self.mesh, self.motion = mesh, motion
         self.placements: dict[float, np.ndarray] = {}
+        self.speeds: dict[float, np.ndarray] = {}
         self.exact: dict[tuple[float, int], float] = {}
 
     def load(self, times: np.ndarray) -> None:
-        """Placements at many instants (s), their joints evaluated in one call."""
-        for t, joints in zip(times, self.motion.path(times)[0], strict=True):
-            self.placements.setdefault(float(t), self.mesh.placements(joints))
+        """Placements and joint speeds at many instants (s), evaluated in one call."""
+        joints, rates, _ = self.motion.path(np.asarray(times, dtype=float))
+        for t, q, qd in zip(times.tolist(), joints, np.abs(rates), strict=True):
+            if t not in self.placements:
+                self.placements[t], self.speeds[t] = self.mesh.placements(q), qd
 
     def at(self, t: float) -> np.ndarray:
         if t not in self.placements:
-            self.placements[t] = self.mesh.placements(self.motion.joints(t))
+            self.load(np.array([t]))
         return self.placements[t]
+
+    def bounds(self, t0: Sequence[float], t1: Sequence[float]) -> np.ndarray:
+        """(K, P) Lipschitz constants of every pair's distance on each ``[t0, t1]`` (m/s)."""
+        for t in (*t0, *t1):
+            self.at(t)
+        ends = np.array([self.speeds[t] for t in (*t0, *t1)])
+        return self.motion.rate_bounds(t0, t1, ends) @ self.mesh.pair_reach
 
     def distance(self, t: float, k: int) -> float:
         if (t, k) not in self.exact:
             self.exact[(t, k)] = self.mesh.exact(self.at(t), k)
         return self.exact[(t, k)]
-
-
-def _speeds(mesh: MeshClearance, motion: PolynomialMotion, t0: Any, t1: Any) -> np.ndarray:
-    """(K, P) Lipschitz constants of every pair's distance on each ``[t0, t1]`` (m/s)."""
-    return motion.rate_bounds(t0, t1) @ mesh.pair_reach
 
 
 def _tolerance(measured: float, margin: float) -> float:
@@ -90,7 +99,7 @@ def certify(
     bounds = np.array([mesh.sphere_bounds(store.at(float(t))) for t in times])
     k0, p0 = np.unravel_index(int(np.argmin(bounds)), bounds.shape)
     measured, when, pair = store.distance(float(times[k0]), int(p0)), float(times[k0]), int(p0)
-    lipschitz = _speeds(mesh, motion, times[:-1], times[1:])
+    lipschitz = store.bounds(times[:-1].tolist(), times[1:].tolist())
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
     settled = lbs >= measured - _tolerance(measured, margin)
     _tighten(mesh, store, times, bounds, lipschitz, lbs, settled)
@@ -131,7 +140,7 @@ def certify(
         dm = store.distance(mid, k)
         if dm < measured:
             measured, when, pair = dm, mid, k
-        halves = _speeds(mesh, motion, [t0, mid], [mid, t1])[:, k]  # both in one evaluation
+        halves = store.bounds([t0, mid], [mid, t1])[:, k]
         for (a, b), speed in zip(((t0, mid), (mid, t1)), halves.tolist(), strict=True):
             value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
             heapq.heappush(heap, (value, a, b, k, True, speed))

@@ -98,14 +98,18 @@ class PolynomialMotion:
         """(K, N) joint rates (rad/s or m/s) at the times ``t`` (s)."""
         return self.path(np.atleast_1d(np.asarray(t, dtype=float)))[1]
 
-    def rate_bounds(self, t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
+    def rate_bounds(
+        self, t0: np.ndarray, t1: np.ndarray, ends: np.ndarray | None = None
+    ) -> np.ndarray:
         """(K, N) largest ``|qd_j|`` over each ``[t0, t1]`` (rad/s or m/s), exact up to rounding.
 
         A root found slightly off (rounding) can only move an interior extremum by a tiny
-        amount, so the bounds are padded by a relative 1e-9.
+        amount, so the bounds are padded by a relative 1e-9. ``ends``: the (2 K, N) ``|qd|``
+        at the ``t0`` then at the ``t1``, if already evaluated.
         """
         t0, t1 = np.atleast_1d(np.asarray(t0, float)), np.atleast_1d(np.asarray(t1, float))
-        ends = np.abs(self.rates(np.concatenate([t0, t1])))
+        if ends is None:
+            ends = np.abs(self.rates(np.concatenate([t0, t1])))
         bound = np.maximum(ends[: len(t0)], ends[len(t0) :])
         lo = np.searchsorted(self._root_times, t0)
         hi = np.searchsorted(self._root_times, t1)
