@@ -22,11 +22,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+import weakref
+from dataclasses import dataclass, fields
 
 import numpy as np
 import pinocchio as pin
 
+from ..robot.model import Robot
 from .momentum import MomentumMap
 
 __all__ = [
@@ -116,7 +118,8 @@ def inverse_dynamics_batch(
     The motion is evaluated with the base at the origin and identity attitude: without gravity
     the torques do not depend on the base pose, and the CM and end effector of any other base
     pose follow by one rotation and translation. Three Pinocchio calls per instant, no other
-    per-instant Python work.
+    per-instant Python work. The last batch per robot is kept: asked again for the very same
+    instants (a plan's samples, by sampling then by its check), it is returned again (copies).
 
     Args:
         mmap: momentum map of the robot.
@@ -124,10 +127,35 @@ def inverse_dynamics_batch(
         rates: (K, N) joint rates (rad/s or m/s).
         accelerations: (K, N) joint accelerations (rad/s^2 or m/s^2).
     """
-    model, data = mmap.model, mmap.data
     joints = np.atleast_2d(np.asarray(joints, dtype=float))
     rates = np.atleast_2d(np.asarray(rates, dtype=float))
     accelerations = np.atleast_2d(np.asarray(accelerations, dtype=float))
+    key = b"".join(
+        np.asarray(a.shape, dtype=np.int64).tobytes() + np.ascontiguousarray(a).tobytes()
+        for a in (joints, rates, accelerations)
+    )
+    kept = _LAST_BATCH.get(mmap.robot)
+    if kept is None or kept[0] != key:
+        kept = (key, _inverse_dynamics_batch(mmap, joints, rates, accelerations))
+        _LAST_BATCH[mmap.robot] = kept
+    return InverseDynamicsBatch(*(np.array(a) for a in _arrays(kept[1])))
+
+
+def _arrays(batch: InverseDynamicsBatch) -> tuple[np.ndarray, ...]:
+    """The batch's arrays in field order (not copied)."""
+    return tuple(getattr(batch, f.name) for f in fields(batch))
+
+
+#: The last batch per robot: sampling and verification ask for the same samples' dynamics.
+_LAST_BATCH: weakref.WeakKeyDictionary[Robot, tuple[bytes, InverseDynamicsBatch]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _inverse_dynamics_batch(
+    mmap: MomentumMap, joints: np.ndarray, rates: np.ndarray, accelerations: np.ndarray
+) -> InverseDynamicsBatch:
+    model, data = mmap.model, mmap.data
     configs = mmap.configurations(joints)
     k_count, nv = len(configs), model.nv
     ag = np.empty((k_count, 6, nv))
