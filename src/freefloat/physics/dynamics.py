@@ -21,8 +21,8 @@ doubles the steps to estimate the replay's own error.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 import weakref
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 
 import numpy as np
