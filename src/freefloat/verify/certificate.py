@@ -60,7 +60,8 @@ class _Instants:
         for t in (*t0, *t1):
             self.at(t)
         ends = np.array([self.speeds[t] for t in (*t0, *t1)])
-        return self.motion.rate_bounds(t0, t1, ends) @ self.mesh.pair_reach
+        rates = self.motion.rate_bounds(np.array(t0), np.array(t1), ends)
+        return rates @ self.mesh.pair_reach
 
     def distance(self, t: float, k: int) -> float:
         if (t, k) not in self.exact:

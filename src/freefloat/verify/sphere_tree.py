@@ -94,8 +94,10 @@ class LeafSpheres:
         pairs: np.ndarray,
         boxes: dict[int, np.ndarray] | None = None,
     ) -> None:
-        local, size, owner = [], [], []
-        first_leaf = []
+        local: list[np.ndarray] = []
+        size: list[np.ndarray] = []
+        owner: list[int] = []
+        first_leaf: list[int] = []
         for g in range(len(centres)):
             if g in meshes and len(meshes[g][1]):
                 c, r = _cached_leaves(*meshes[g])
