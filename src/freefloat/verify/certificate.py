@@ -42,6 +42,7 @@ class _Instants:
         self.placements: dict[float, np.ndarray] = {}
         self.speeds: dict[float, np.ndarray] = {}
         self.exact: dict[tuple[float, int], float] = {}
+        self.leaf_gaps: dict[tuple[float, int], np.ndarray] = {}
 
     def load(self, times: np.ndarray) -> None:
         """Placements and joint speeds at many instants (s), evaluated in one call."""
@@ -55,13 +56,24 @@ class _Instants:
             self.load(np.array([t]))
         return self.placements[t]
 
-    def bounds(self, t0: Sequence[float], t1: Sequence[float]) -> np.ndarray:
-        """(K, P) Lipschitz constants of every pair's distance on each ``[t0, t1]`` (m/s)."""
+    def rates(self, t0: Sequence[float], t1: Sequence[float]) -> np.ndarray:
+        """(K, N) largest ``|qd_j|`` over each ``[t0, t1]`` (rad/s or m/s)."""
         for t in (*t0, *t1):
             self.at(t)
         ends = np.array([self.speeds[t] for t in (*t0, *t1)])
-        rates = self.motion.rate_bounds(np.array(t0), np.array(t1), ends)
-        return rates @ self.mesh.pair_reach
+        return self.motion.rate_bounds(np.array(t0), np.array(t1), ends)
+
+    def bounds(self, t0: Sequence[float], t1: Sequence[float]) -> np.ndarray:
+        """(K, P) Lipschitz constants of every pair's distance on each ``[t0, t1]`` (m/s)."""
+        return self.rates(t0, t1) @ self.mesh.pair_reach
+
+    def gaps(self, t: float, k: int) -> np.ndarray:
+        """Lower bounds (m) of the distance between the leaves of each of pair k's leaf pairs."""
+        if (t, k) not in self.leaf_gaps:
+            rows = self.mesh.leaves.rows_of(k)
+            instants = np.zeros(len(rows), dtype=int)
+            self.leaf_gaps[(t, k)] = self.mesh.leaves.row_gaps(self.at(t)[None], instants, rows)
+        return self.leaf_gaps[(t, k)]
 
     def distance(self, t: float, k: int) -> float:
         if (t, k) not in self.exact:
@@ -100,10 +112,11 @@ def certify(
     bounds = np.array([mesh.sphere_bounds(store.at(float(t))) for t in times])
     k0, p0 = np.unravel_index(int(np.argmin(bounds)), bounds.shape)
     measured, when, pair = store.distance(float(times[k0]), int(p0)), float(times[k0]), int(p0)
-    lipschitz = store.bounds(times[:-1].tolist(), times[1:].tolist())
+    rates = store.rates(times[:-1].tolist(), times[1:].tolist())
+    lipschitz = rates @ mesh.pair_reach
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
     settled = lbs >= measured - _tolerance(measured, margin)
-    _tighten(mesh, store, times, bounds, lipschitz, lbs, settled)
+    _tighten(mesh, store, times, bounds, rates, lbs, settled)
     settled = lbs >= measured - _tolerance(measured, margin)
     lower = float(lbs[settled].min()) if settled.any() else math.inf
     heap: list[tuple[float, float, float, int, bool, float]] = [
@@ -130,7 +143,11 @@ def certify(
             for d, t in ((d0, t0), (d1, t1)):
                 if d < measured:
                     measured, when, pair = d, t, k
-            heapq.heappush(heap, (0.5 * (d0 + d1 - speed * (t1 - t0)), t0, t1, k, True, speed))
+            value = max(
+                0.5 * (d0 + d1 - speed * (t1 - t0)),
+                _leaf_value(store, k, t0, t1, store.rates([t0], [t1])[0]),
+            )
+            heapq.heappush(heap, (value, t0, t1, k, True, speed))
             continue
         if bisections >= MAX_BISECTIONS:
             exhausted = True
@@ -141,9 +158,11 @@ def certify(
         dm = store.distance(mid, k)
         if dm < measured:
             measured, when, pair = dm, mid, k
-        halves = store.bounds([t0, mid], [mid, t1])[:, k]
-        for (a, b), speed in zip(((t0, mid), (mid, t1)), halves.tolist(), strict=True):
+        rates = store.rates([t0, mid], [mid, t1])
+        for (a, b), rate in zip(((t0, mid), (mid, t1)), rates, strict=True):
+            speed = float(rate @ mesh.pair_reach[:, k])
             value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
+            value = max(value, _leaf_value(store, k, a, b, rate))
             heapq.heappush(heap, (value, a, b, k, True, speed))
     if heap:
         lower = min(lower, heap[0][0])
@@ -172,37 +191,72 @@ def certify(
     )
 
 
+def _leaf_value(store: _Instants, k: int, a: float, b: float, rates: np.ndarray) -> float:
+    """A lower bound (m) of pair k's distance on ``[a, b]`` from its leaf pairs' own motion.
+
+    The distance of two bodies clear of each other is the least of the distances between
+    their leaves' triangles. Each of those is at least the exact distance at an end and at
+    least its leaf pair's bound there, and moves no faster than the leaf pair's own speed
+    bound (``rates``: the joint-rate bounds on the interval, rad/s or m/s), which for a leaf
+    near a joint's axis is far below the whole body's. With a penetration at an end, -inf
+    (the whole body's bound stands alone).
+    """
+    da, db = store.distance(a, k), store.distance(b, k)
+    if da <= 0.0 or db <= 0.0:
+        return -math.inf
+    leaves = store.mesh.leaves
+    speed = rates @ leaves.row_reach[:, leaves.rows_of(k)]
+    ends = np.maximum(da, store.gaps(a, k)) + np.maximum(db, store.gaps(b, k))
+    return float(np.min(0.5 * (ends - speed * (b - a))))
+
+
 def _tighten(
     mesh: MeshClearance,
     store: _Instants,
     times: np.ndarray,
     bounds: np.ndarray,
-    lipschitz: np.ndarray,
+    rates: np.ndarray,
     lbs: np.ndarray,
     settled: np.ndarray,
 ) -> None:
     """Raise the bounds of the intervals not settled by the single spheres, in place.
 
-    At both ends of every such (interval, pair) the pair's leaf-sphere bound
-    (:mod:`.sphere_tree`) replaces the single-sphere one where it is larger; ``lbs`` is
-    recomputed for those intervals. Both are lower bounds of the distance, so the interval
-    bound stays one.
+    For every such (interval, pair), the larger of two lower bounds: the pair's leaf-sphere
+    bound (:mod:`.sphere_tree`) at both ends where it beats the single spheres', with the
+    whole bodies' speed bound; and the least over the pair's leaf pairs of their own bounds at
+    both ends with their own speed bounds (``rates``: (K - 1, N) joint-rate bounds per
+    interval). Both hold for the distance, so the interval bound stays one.
     """
     rows, pairs = np.nonzero(~settled)
     if len(rows) == 0:
         return
+    leaves = mesh.leaves
     ends = np.unique(
         np.concatenate([rows * len(mesh.pairs) + pairs, (rows + 1) * len(mesh.pairs) + pairs])
     )
     cells, cell_pairs = np.divmod(ends, len(mesh.pairs))
     placements = np.array([store.at(float(t)) for t in times])
-    better = mesh.leaves.bounds(placements, cells, cell_pairs)
+    better = leaves.bounds(placements, cells, cell_pairs)
     tight = bounds.copy()
     tight[cells, cell_pairs] = np.maximum(bounds[cells, cell_pairs], better)
     widths = times[rows + 1] - times[rows]
-    lbs[rows, pairs] = 0.5 * (
-        tight[rows, pairs] + tight[rows + 1, pairs] - lipschitz[rows, pairs] * widths
+    lipschitz = np.einsum("in,ni->i", rates[rows], mesh.pair_reach[:, pairs])
+    whole = 0.5 * (tight[rows, pairs] + tight[rows + 1, pairs] - lipschitz * widths)
+    # every item's leaf pairs, one run per item
+    counts = leaves.count[pairs]
+    starts = np.cumsum(counts) - counts
+    leaf_rows = (
+        np.repeat(leaves.start[pairs], counts)
+        + np.arange(int(counts.sum()))
+        - np.repeat(starts, counts)
     )
+    item = np.repeat(np.arange(len(rows)), counts)
+    gaps = leaves.row_gaps(placements, rows[item], leaf_rows) + leaves.row_gaps(
+        placements, rows[item] + 1, leaf_rows
+    )
+    speed = np.einsum("rn,nr->r", rates[rows[item]], leaves.row_reach[:, leaf_rows])
+    own = np.minimum.reduceat(0.5 * (gaps - speed * widths[item]), starts)
+    lbs[rows, pairs] = np.maximum(whole, own)
 
 
 def _contained_at_start(mesh: MeshClearance, store: _Instants) -> int | None:

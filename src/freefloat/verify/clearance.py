@@ -163,6 +163,10 @@ class MeshClearance:
             self.centres, self.radii, self.meshes, np.array(self.pairs), boxes
         )
         reach = reach_coefficients(robot, geometry, self.centres, self.radii)
+        leaves = self.leaves
+        leaves.set_reach(
+            reach_coefficients(robot, geometry, leaves.local, leaves.radii, leaves.owner)
+        )
         pairs = np.array(self.pairs, dtype=int).reshape(-1, 2)
         #: First and second geometry index of every pair.
         self.first, self.second = pairs[:, 0], pairs[:, 1]

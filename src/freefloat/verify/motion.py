@@ -121,7 +121,11 @@ class PolynomialMotion:
 
 
 def reach_coefficients(
-    robot: Robot, geometry: pin.GeometryModel, centres: np.ndarray, radii: np.ndarray
+    robot: Robot,
+    geometry: pin.GeometryModel,
+    centres: np.ndarray,
+    radii: np.ndarray,
+    owners: np.ndarray | None = None,
 ) -> np.ndarray:
     """(N, G): how fast geometry ``g`` can move per unit rate of joint ``j`` (m/s per rad/s).
 
@@ -133,8 +137,12 @@ def reach_coefficients(
     Args:
         robot: the robot.
         geometry: its geometry model (object placements in their joint's frame).
-        centres: (G, 3) bounding-sphere centres in each geometry's own frame (m).
-        radii: (G,) bounding-sphere radii (m).
+        centres: (S, 3) bounding-sphere centres in their geometry's own frame (m).
+        radii: (S,) bounding-sphere radii (m).
+        owners: (S,) the geometry each sphere bounds (part of); default one per geometry.
+
+    Returns:
+        (N, S) for each sphere (G columns by default).
     """
     model = robot.model
     column = {j.index: k for k, j in enumerate(robot.joints)}
@@ -143,8 +151,11 @@ def reach_coefficients(
         j.index: max(abs(j.lower), abs(j.upper)) if np.isfinite(j.lower + j.upper) else 0.0
         for j in robot.joints
     }
-    out = np.zeros((robot.n, len(geometry.geometryObjects)))
-    for g, obj in enumerate(geometry.geometryObjects):
+    objects = list(geometry.geometryObjects)
+    owners = np.arange(len(objects)) if owners is None else np.asarray(owners, dtype=int)
+    out = np.zeros((robot.n, len(owners)))
+    for g, owner in enumerate(owners.tolist()):
+        obj = objects[owner]
         reach = float(np.linalg.norm(obj.placement.act(centres[g]))) + float(radii[g])
         joint = int(obj.parentJoint)
         while joint > 1:  # up the chain to the free flyer

@@ -146,14 +146,30 @@ class LeafSpheres:
         """
         if len(cells) == 0:
             return np.zeros(0)
-        poses = placements[:, self.owner]  # (K, L, 4, 4)
-        world = np.einsum("klij,lj->kli", poses[..., :3, :3], self.local) + poses[..., :3, 3]
         counts = self.count[pairs]
         ends = np.cumsum(counts)
         # every asked cell's leaf pairs, one run per cell
         offsets = np.arange(int(ends[-1])) - np.repeat(ends - counts, counts)
         rows = np.repeat(self.start[pairs], counts) + offsets
-        instants = np.repeat(cells, counts)
+        gap = self.row_gaps(placements, np.repeat(cells, counts), rows)
+        return np.minimum.reduceat(gap, ends - counts)
+
+    def rows_of(self, pair: int) -> np.ndarray:
+        """The leaf pairs (rows) of one pair."""
+        return np.arange(self.start[pair], self.start[pair] + self.count[pair])
+
+    def row_gaps(
+        self, placements: np.ndarray, instants: np.ndarray, rows: np.ndarray
+    ) -> np.ndarray:
+        """(R,) lower bounds (m) of the distance between the two leaves of each leaf pair.
+
+        Args:
+            placements: (K, G, 4, 4) body poses at K instants (spacecraft frame).
+            instants: (R,) index into the K instants for each row.
+            rows: (R,) leaf pairs.
+        """
+        poses = placements[:, self.owner]  # (K, L, 4, 4)
+        world = np.einsum("klij,lj->kli", poses[..., :3, :3], self.local) + poses[..., :3, 3]
         gap = np.linalg.norm(
             world[instants, self.left[rows]] - world[instants, self.right[rows]], axis=1
         )
@@ -169,4 +185,14 @@ class LeafSpheres:
             local = np.einsum("bji,bj->bi", pose[:, :3, :3], offset)  # R^T (c - p)
             outside = np.maximum(np.abs(local) - self.half[box], 0.0)
             gap[boxed] = np.linalg.norm(outside, axis=1) - self.radii[other]
-        return np.minimum.reduceat(gap, ends - counts)
+        return gap
+
+    def set_reach(self, leaf_reach: np.ndarray) -> None:
+        """Take each leaf's reach from every joint, (N, L) (m per rad; 1 for prismatic joints).
+
+        Sets :attr:`row_reach`, (N, R): how fast the distance between the two leaves of each
+        leaf pair can change per unit rate of each joint; a joint that moves both leaves moves
+        them as one rigid whole and does not count.
+        """
+        a, b = leaf_reach[:, self.left], leaf_reach[:, self.right]
+        self.row_reach = np.where((a > 0.0) & (b > 0.0), 0.0, a + b)
