@@ -2,9 +2,12 @@
 
 Work goes to the (interval, pair) with the lowest lower bound first (a heap), so the smallest
 measured clearance is found early and every interval whose bound lies within
-:func:`_tolerance` of it is settled without more queries. Each item
-is refined in two steps: exact distances at its two ends (in place of the bounding-sphere
-bounds it starts from), then halving.
+:func:`_tolerance` of it is settled without more queries. Before any query, the intervals the
+single bounding spheres leave open are bounded again from the meshes' leaf spheres
+(:mod:`.sphere_tree`): their gaps, and the least over leaf pairs of each leaf pair's own
+Lipschitz bound. Each item is refined in two steps: exact distances at its two ends (in place
+of the sphere bounds it starts from), then halving; each new interval's bound is the larger of
+the whole bodies' and the leaf pairs' (:func:`_leaf_value`).
 """
 
 from __future__ import annotations

@@ -20,7 +20,10 @@ slack above the margin, if larger) below the smallest measured clearance are hal
 budget, :data:`MAX_BISECTIONS`), so the reported lower bound holds for every instant and, once
 refined, lies that close to the measured minimum: within 0.1 mm near the margin. Pairs whose
 bounding spheres are far apart are bounded by the spheres alone (a valid lower bound) and never
-queried.
+queried; the intervals those leave open are bounded again from each mesh's leaf spheres, whose
+gaps and own speed bounds (a leaf near a joint's axis moves slowly) often settle them without
+a query or with fewer halvings (:mod:`freefloat.verify.sphere_tree`,
+:mod:`freefloat.verify.certificate`).
 
 **Penetration** is reported as such, with a depth: coal's signed distance for a mesh against a
 primitive, the deepest triangle contact for two meshes (whose distance query stops at 0), and a
