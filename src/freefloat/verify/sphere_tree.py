@@ -78,6 +78,9 @@ def _cached_leaves(vertices: np.ndarray, triangles: np.ndarray) -> tuple[np.ndar
 class LeafSpheres:
     """Every body's leaf spheres, and the lower bound of a pair's distance at given placements.
 
+    The leaf pairs' speed coefficients (:attr:`row_reach`) need the robot's kinematics: they are
+    set by :meth:`set_reach` (:class:`~freefloat.verify.clearance.MeshClearance` does).
+
     Args:
         centres: (G, 3) each body's single bounding-sphere centre (its own frame, m).
         radii: (G,) their radii (m).
