@@ -110,30 +110,9 @@ def certify(
         instants: instants of the first, uniform pass (>= 2).
     """
     store = _Instants(mesh, motion)
-    times = np.linspace(0.0, motion.duration, instants)
-    store.load(times)
-    bounds = np.array([mesh.sphere_bounds(store.at(float(t))) for t in times])
-    k0, p0 = np.unravel_index(int(np.argmin(bounds)), bounds.shape)
-    measured, when, pair = store.distance(float(times[k0]), int(p0)), float(times[k0]), int(p0)
-    rates = store.rates(times[:-1].tolist(), times[1:].tolist())
-    lipschitz = rates @ mesh.pair_reach
-    lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
-    settled = lbs >= measured - _tolerance(measured, margin)
-    _tighten(mesh, store, times, bounds, rates, lbs, settled)
-    settled = lbs >= measured - _tolerance(measured, margin)
-    lower = float(lbs[settled].min()) if settled.any() else math.inf
-    heap: list[tuple[float, float, float, int, bool, float]] = [
-        (
-            float(lbs[i, k]),
-            float(times[i]),
-            float(times[i + 1]),
-            int(k),
-            False,
-            float(lipschitz[i, k]),
-        )
-        for i, k in zip(*np.nonzero(~settled), strict=True)
-    ]
-    heapq.heapify(heap)
+    measured, when, pair, lower, heap = _first_pass(
+        mesh, store, np.linspace(0.0, motion.duration, instants), margin
+    )
     bisections = 0
     exhausted = False
     while heap:
@@ -192,6 +171,45 @@ def certify(
         hull_excess=agreement[0],
         hull_detail=agreement[1],
     )
+
+
+#: A heap item: lower bound (m), interval ends (s), pair, whether its ends are exact, speed (m/s).
+_Item = tuple[float, float, float, int, bool, float]
+
+
+def _first_pass(
+    mesh: MeshClearance, store: _Instants, times: np.ndarray, margin: float
+) -> tuple[float, float, int, float, list[_Item]]:
+    """The uniform first pass at ``times`` (s): sphere bounds, then leaf bounds where open.
+
+    One exact query where the sphere bounds are least. Returns the smallest measured
+    clearance (m), its time (s) and pair, the least bound of the intervals settled (m; inf if
+    none), and the heap of the others.
+    """
+    store.load(times)
+    bounds = np.array([mesh.sphere_bounds(store.at(float(t))) for t in times])
+    k0, p0 = np.unravel_index(int(np.argmin(bounds)), bounds.shape)
+    measured, when, pair = store.distance(float(times[k0]), int(p0)), float(times[k0]), int(p0)
+    rates = store.rates(times[:-1].tolist(), times[1:].tolist())
+    lipschitz = rates @ mesh.pair_reach
+    lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
+    settled = lbs >= measured - _tolerance(measured, margin)
+    _tighten(mesh, store, times, bounds, rates, lbs, settled)
+    settled = lbs >= measured - _tolerance(measured, margin)
+    lower = float(lbs[settled].min()) if settled.any() else math.inf
+    heap: list[_Item] = [
+        (
+            float(lbs[i, k]),
+            float(times[i]),
+            float(times[i + 1]),
+            int(k),
+            False,
+            float(lipschitz[i, k]),
+        )
+        for i, k in zip(*np.nonzero(~settled), strict=True)
+    ]
+    heapq.heapify(heap)
+    return measured, when, pair, lower, heap
 
 
 def _leaf_value(store: _Instants, k: int, a: float, b: float, rates: np.ndarray) -> float:
