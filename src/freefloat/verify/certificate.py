@@ -125,10 +125,9 @@ def certify(
             for d, t in ((d0, t0), (d1, t1)):
                 if d < measured:
                     measured, when, pair = d, t, k
-            value = max(
-                0.5 * (d0 + d1 - speed * (t1 - t0)),
-                _leaf_value(store, k, t0, t1, store.rates([t0], [t1])[0]),
-            )
+            value = 0.5 * (d0 + d1 - speed * (t1 - t0))
+            if value < measured - _tolerance(measured, margin):  # the leaf pairs may settle it
+                value = max(value, _leaf_value(store, k, t0, t1, store.rates([t0], [t1])[0]))
             heapq.heappush(heap, (value, t0, t1, k, True, speed))
             continue
         if bisections >= MAX_BISECTIONS:
@@ -144,7 +143,8 @@ def certify(
         for (a, b), rate in zip(((t0, mid), (mid, t1)), rates, strict=True):
             speed = float(rate @ mesh.pair_reach[:, k])
             value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
-            value = max(value, _leaf_value(store, k, a, b, rate))
+            if value < measured - _tolerance(measured, margin):
+                value = max(value, _leaf_value(store, k, a, b, rate))
             heapq.heappush(heap, (value, a, b, k, True, speed))
     if heap:
         lower = min(lower, heap[0][0])
@@ -194,7 +194,9 @@ def _first_pass(
     lipschitz = rates @ mesh.pair_reach
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
     settled = lbs >= measured - _tolerance(measured, margin)
-    _tighten(mesh, store, times, bounds, rates, lbs, settled)
+    _tighten(
+        mesh, store, times, bounds, rates, lbs, settled, measured - _tolerance(measured, margin)
+    )
     settled = lbs >= measured - _tolerance(measured, margin)
     lower = float(lbs[settled].min()) if settled.any() else math.inf
     heap: list[_Item] = [
@@ -239,6 +241,7 @@ def _tighten(
     rates: np.ndarray,
     lbs: np.ndarray,
     settled: np.ndarray,
+    threshold: float,
 ) -> None:
     """Raise the bounds of the intervals not settled by the single spheres, in place.
 
@@ -246,37 +249,45 @@ def _tighten(
     bound (:mod:`.sphere_tree`) at both ends where it beats the single spheres', with the
     whole bodies' speed bound; and the least over the pair's leaf pairs of their own bounds at
     both ends with their own speed bounds (``rates``: (K - 1, N) joint-rate bounds per
-    interval). Both hold for the distance, so the interval bound stays one.
+    interval), the latter only for the items the former leaves below ``threshold`` (m). Both
+    hold for the distance, so the interval bound stays one.
     """
     rows, pairs = np.nonzero(~settled)
     if len(rows) == 0:
         return
-    leaves = mesh.leaves
-    ends = np.unique(
-        np.concatenate([rows * len(mesh.pairs) + pairs, (rows + 1) * len(mesh.pairs) + pairs])
-    )
-    cells, cell_pairs = np.divmod(ends, len(mesh.pairs))
+    leaves, count = mesh.leaves, len(mesh.pairs)
+    # the (instant, pair) cells at the items' ends, each with its leaf pairs' gaps, once
+    codes = np.unique(np.concatenate([rows * count + pairs, (rows + 1) * count + pairs]))
+    cells, cell_pairs = np.divmod(codes, count)
+    runs = leaves.count[cell_pairs]
+    starts = np.cumsum(runs) - runs
+    offsets = np.arange(int(runs.sum())) - np.repeat(starts, runs)
     placements = np.array([store.at(float(t)) for t in times])
-    better = leaves.bounds(placements, cells, cell_pairs)
+    gaps = leaves.row_gaps(
+        placements, np.repeat(cells, runs), np.repeat(leaves.start[cell_pairs], runs) + offsets
+    )
     tight = bounds.copy()
-    tight[cells, cell_pairs] = np.maximum(bounds[cells, cell_pairs], better)
+    tight[cells, cell_pairs] = np.maximum(
+        bounds[cells, cell_pairs], np.minimum.reduceat(gaps, starts)
+    )
     widths = times[rows + 1] - times[rows]
     lipschitz = np.einsum("in,ni->i", rates[rows], mesh.pair_reach[:, pairs])
     whole = 0.5 * (tight[rows, pairs] + tight[rows + 1, pairs] - lipschitz * widths)
-    # every item's leaf pairs, one run per item
-    counts = leaves.count[pairs]
-    starts = np.cumsum(counts) - counts
-    leaf_rows = (
-        np.repeat(leaves.start[pairs], counts)
-        + np.arange(int(counts.sum()))
-        - np.repeat(starts, counts)
-    )
-    item = np.repeat(np.arange(len(rows)), counts)
-    gaps = leaves.row_gaps(placements, rows[item], leaf_rows) + leaves.row_gaps(
-        placements, rows[item] + 1, leaf_rows
-    )
+    lbs[rows, pairs] = whole
+    # the leaf pairs' own bounds, for the items still open: one run of leaf pairs per item
+    still = whole < threshold
+    rows, pairs, widths, whole = rows[still], pairs[still], widths[still], whole[still]
+    if len(rows) == 0:
+        return
+    first = starts[np.searchsorted(codes, rows * count + pairs)]
+    second = starts[np.searchsorted(codes, (rows + 1) * count + pairs)]
+    runs = leaves.count[pairs]
+    item = np.repeat(np.arange(len(rows)), runs)
+    offsets = np.arange(int(runs.sum())) - np.repeat(np.cumsum(runs) - runs, runs)
+    ends = gaps[first[item] + offsets] + gaps[second[item] + offsets]
+    leaf_rows = leaves.start[pairs][item] + offsets
     speed = np.einsum("rn,nr->r", rates[rows[item]], leaves.row_reach[:, leaf_rows])
-    own = np.minimum.reduceat(0.5 * (gaps - speed * widths[item]), starts)
+    own = np.minimum.reduceat(0.5 * (ends - speed * widths[item]), np.cumsum(runs) - runs)
     lbs[rows, pairs] = np.maximum(whole, own)
 
 

@@ -138,6 +138,9 @@ class LeafSpheres:
         in_left = box_leaf[self.left[self.box_rows]]
         self.box_leaf = np.where(in_left, self.left[self.box_rows], self.right[self.box_rows])
         self.sphere_leaf = np.where(in_left, self.right[self.box_rows], self.left[self.box_rows])
+        #: Per leaf pair, its index in the three arrays above, or -1.
+        self.box_of_row = np.full(len(self.left), -1, dtype=int)
+        self.box_of_row[self.box_rows] = np.arange(len(self.box_rows))
 
     def bounds(self, placements: np.ndarray, cells: np.ndarray, pairs: np.ndarray) -> np.ndarray:
         """Lower bounds (m) of pair ``pairs[c]``'s distance at placement set ``cells[c]``.
@@ -171,20 +174,22 @@ class LeafSpheres:
             instants: (R,) index into the K instants for each row.
             rows: (R,) leaf pairs.
         """
-        poses = placements[:, self.owner]  # (K, L, 4, 4)
-        world = np.einsum("klij,lj->kli", poses[..., :3, :3], self.local) + poses[..., :3, 3]
+        # every leaf's centre at the instants asked for, once
+        used, which_instant = np.unique(instants, return_inverse=True)
+        poses = placements[used][:, self.owner]  # (U, L, 4, 4)
+        world = np.einsum("ulij,lj->uli", poses[..., :3, :3], self.local) + poses[..., :3, 3]
         gap = np.linalg.norm(
-            world[instants, self.left[rows]] - world[instants, self.right[rows]], axis=1
+            world[which_instant, self.left[rows]] - world[which_instant, self.right[rows]], axis=1
         )
         gap -= self.reach[rows]
         # leaf pairs with a box: the sphere's centre to the box itself
-        boxed = np.flatnonzero(np.isin(rows, self.box_rows))
+        boxed = np.flatnonzero(self.box_of_row[rows] >= 0)
         if len(boxed):
-            which = np.searchsorted(self.box_rows, rows[boxed])
+            which = self.box_of_row[rows[boxed]]
             box = self.owner[self.box_leaf[which]]
             other = self.sphere_leaf[which]
             pose = placements[instants[boxed], box]  # (B, 4, 4)
-            offset = world[instants[boxed], other] - pose[:, :3, 3]
+            offset = world[which_instant[boxed], other] - pose[:, :3, 3]
             local = np.einsum("bji,bj->bi", pose[:, :3, :3], offset)  # R^T (c - p)
             outside = np.maximum(np.abs(local) - self.half[box], 0.0)
             gap[boxed] = np.linalg.norm(outside, axis=1) - self.radii[other]
