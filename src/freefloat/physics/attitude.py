@@ -35,6 +35,7 @@ __all__ = [
     "so3_right_jacobian",
     "step_nodes",
     "zyx_from_quat",
+    "zyx_from_quats",
 ]
 
 #: Identity quaternion ``[x, y, z, w]``.
@@ -146,7 +147,16 @@ def zyx_from_quat(q: Sequence[float] | np.ndarray) -> np.ndarray:
     own pair: near pitch = +-pi/2 the ill-determined one is scaled by M (or P) in the
     rotation, so the angles returned give back the attitude to about 1e-15 rad.
     """
-    x, y, z, w = (float(c) for c in q)
+    return np.array(_zyx(*(float(c) for c in q)))
+
+
+def zyx_from_quats(quats: np.ndarray) -> np.ndarray:
+    """(K, 3) :func:`zyx_from_quat` of K unit quaternions (rad), the same numbers, row by row."""
+    return np.array([_zyx(*row) for row in np.asarray(quats, dtype=float).tolist()]).reshape(-1, 3)
+
+
+def _zyx(x: float, y: float, z: float, w: float) -> tuple[float, float, float]:
+    """:func:`zyx_from_quat` on plain floats."""
     plus, minus = math.hypot(w + y, z - x), math.hypot(w - y, z + x)
     pitch = 2.0 * math.atan2(plus - minus, plus + minus)
     difference = math.atan2(z - x, w + y)  # a - c
@@ -156,7 +166,7 @@ def zyx_from_quat(q: Sequence[float] | np.ndarray) -> np.ndarray:
     elif plus < _LOCKED:  # pitch = -pi/2: only a + c matters; roll 0
         difference = total
     yaw, roll = total + difference, total - difference
-    return np.array([_wrap(yaw), pitch, _wrap(roll)])
+    return _wrap(yaw), pitch, _wrap(roll)
 
 
 def _wrap(angle: float) -> float:

@@ -21,12 +21,14 @@ doubles the steps to estimate the replay's own error.
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 import pinocchio as pin
 
+from ..robot.model import Robot
 from .momentum import MomentumMap
 
 __all__ = [
@@ -116,7 +118,8 @@ def inverse_dynamics_batch(
     The motion is evaluated with the base at the origin and identity attitude: without gravity
     the torques do not depend on the base pose, and the CM and end effector of any other base
     pose follow by one rotation and translation. Three Pinocchio calls per instant, no other
-    per-instant Python work.
+    per-instant Python work. The last batch per robot is kept: asked again for the very same
+    instants (a plan's samples, by sampling then by its check), it is returned again (copies).
 
     Args:
         mmap: momentum map of the robot.
@@ -124,10 +127,35 @@ def inverse_dynamics_batch(
         rates: (K, N) joint rates (rad/s or m/s).
         accelerations: (K, N) joint accelerations (rad/s^2 or m/s^2).
     """
-    model, data = mmap.model, mmap.data
     joints = np.atleast_2d(np.asarray(joints, dtype=float))
     rates = np.atleast_2d(np.asarray(rates, dtype=float))
     accelerations = np.atleast_2d(np.asarray(accelerations, dtype=float))
+    key = b"".join(
+        np.asarray(a.shape, dtype=np.int64).tobytes() + np.ascontiguousarray(a).tobytes()
+        for a in (joints, rates, accelerations)
+    )
+    kept = _LAST_BATCH.get(mmap.robot)
+    if kept is None or kept[0] != key:
+        kept = (key, _inverse_dynamics_batch(mmap, joints, rates, accelerations))
+        _LAST_BATCH[mmap.robot] = kept
+    return InverseDynamicsBatch(*(np.array(a) for a in _arrays(kept[1])))
+
+
+def _arrays(batch: InverseDynamicsBatch) -> tuple[np.ndarray, ...]:
+    """The batch's arrays in field order (not copied)."""
+    return tuple(getattr(batch, f.name) for f in fields(batch))
+
+
+#: The last batch per robot: sampling and verification ask for the same samples' dynamics.
+_LAST_BATCH: weakref.WeakKeyDictionary[Robot, tuple[bytes, InverseDynamicsBatch]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _inverse_dynamics_batch(
+    mmap: MomentumMap, joints: np.ndarray, rates: np.ndarray, accelerations: np.ndarray
+) -> InverseDynamicsBatch:
+    model, data = mmap.model, mmap.data
     configs = mmap.configurations(joints)
     k_count, nv = len(configs), model.nv
     ag = np.empty((k_count, 6, nv))
@@ -162,29 +190,32 @@ def inverse_dynamics_batch(
     )
 
 
-def _configuration_rate(
-    mmap: MomentumMap,
-) -> tuple[Callable[[np.ndarray, np.ndarray], np.ndarray], Callable[[np.ndarray], np.ndarray]]:
+class _Embedded:
     """``dq/dt`` of the embedded configuration from the velocity, and the projection back.
 
     The root joint is Pinocchio's free flyer: position (m) with rate ``R v_linear``, quaternion
     ``[x, y, z, w]`` with rate ``q (x) [omega, 0] / 2`` (``v`` in the base frame). A continuous
     joint's ``(cos, sin)`` turns at its rate; other joints' values move at their rates.
+    Configurations are lists of plain floats (the replay's steps do a few dozen operations on
+    a dozen numbers: cheaper than numpy's per-call cost); every operation is the one numpy
+    would do element-wise, so results are the same to the bit.
     """
-    joints = mmap.robot.joints
-    plain_q = np.array([j.idx_q for j in joints if j.kind != "continuous"], dtype=int)
-    plain_v = np.array([j.idx_v for j in joints if j.kind != "continuous"], dtype=int)
-    cos_q = np.array([j.idx_q for j in joints if j.kind == "continuous"], dtype=int)
-    turn_v = np.array([j.idx_v for j in joints if j.kind == "continuous"], dtype=int)
-    nq = mmap.model.nq
 
-    def rate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        out = np.empty(nq)
-        x, y, z, w = q[3:7].tolist()  # plain floats: cheaper than numpy scalars
-        vx, vy, vz, wx, wy, wz = v[:6].tolist()
+    def __init__(self, mmap: MomentumMap) -> None:
+        joints = mmap.robot.joints
+        self.nq = mmap.model.nq
+        #: (q index, v index) of joints whose value moves at their rate.
+        self.plain = [(j.idx_q, j.idx_v) for j in joints if j.kind != "continuous"]
+        #: (cos index, v index) of continuous joints (their sin follows the cos).
+        self.turning = [(j.idx_q, j.idx_v) for j in joints if j.kind == "continuous"]
+
+    def rate(self, q: list[float], v: list[float]) -> list[float]:
+        """``dq/dt`` at configuration ``q`` and velocity ``v`` (plain floats)."""
+        x, y, z, w = q[3:7]
+        vx, vy, vz, wx, wy, wz = v[:6]
         # R v_linear, with R of the quaternion
         tx, ty, tz = 2.0 * (y * vz - z * vy), 2.0 * (z * vx - x * vz), 2.0 * (x * vy - y * vx)
-        out[:7] = (
+        out = [
             vx + w * tx + y * tz - z * ty,
             vy + w * ty + z * tx - x * tz,
             vz + w * tz + x * ty - y * tx,
@@ -192,22 +223,40 @@ def _configuration_rate(
             0.5 * (w * wy + z * wx - x * wz),
             0.5 * (w * wz + x * wy - y * wx),
             -0.5 * (x * wx + y * wy + z * wz),
-        )
-        out[plain_q] = v[plain_v]
-        out[cos_q] = -q[cos_q + 1] * v[turn_v]
-        out[cos_q + 1] = q[cos_q] * v[turn_v]
+        ]
+        out.extend([0.0] * (self.nq - 7))
+        for iq, iv in self.plain:
+            out[iq] = v[iv]
+        for iq, iv in self.turning:
+            out[iq] = -q[iq + 1] * v[iv]
+            out[iq + 1] = q[iq] * v[iv]
         return out
 
-    def project(q: np.ndarray) -> np.ndarray:
-        x, y, z, w = q[3:7].tolist()
-        q[3:7] /= math.sqrt(x * x + y * y + z * z + w * w)
-        if len(cos_q):
-            norm = np.hypot(q[cos_q], q[cos_q + 1])
-            q[cos_q] /= norm
-            q[cos_q + 1] /= norm
+    def project(self, q: list[float]) -> list[float]:
+        """Unit quaternion and unit (cos, sin) pairs again, in place."""
+        x, y, z, w = q[3:7]
+        norm = math.sqrt(x * x + y * y + z * z + w * w) or math.nan  # nan, as numpy's 0 / 0
+        q[3:7] = x / norm, y / norm, z / norm, w / norm
+        for iq, _ in self.turning:
+            c, s = q[iq], q[iq + 1]
+            n = float(np.hypot(c, s)) or math.nan  # numpy's hypot, as the array form used
+            q[iq], q[iq + 1] = c / n, s / n
         return q
 
-    return rate, project
+    def stage(self, q: list[float], h: float, r: list[float]) -> list[float]:
+        """``project(q + h r)``."""
+        return self.project([a + h * b for a, b in zip(q, r, strict=True)])
+
+    def step(self, q: list[float], dt: float, rates: tuple[list[float], ...]) -> list[float]:
+        """RK4's combination ``project(q + dt / 6 (r1 + 2 r2 + 2 r3 + r4))``."""
+        sixth = dt / 6.0
+        r1, r2, r3, r4 = rates
+        return self.project(
+            [
+                a + sixth * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
+                for a, b1, b2, b3, b4 in zip(q, r1, r2, r3, r4, strict=True)
+            ]
+        )
 
 
 @dataclass(frozen=True)
@@ -277,25 +326,28 @@ def replay(
     forces[:, [j.idx_v for j in mmap.robot.joints]] = table
     aba = pin.aba
 
-    rate, project = _configuration_rate(mmap)
+    embedded = _Embedded(mmap)
+    rate, stage, array = embedded.rate, embedded.stage, np.array
     momentum_max = 0.0 if track_momentum else math.nan
+    x = q.tolist()
     # A step too long for the motion can blow up; the caller sees non-finite results.
     with np.errstate(over="ignore", invalid="ignore"):
         for k in range(steps):
             dt = float(widths[k])
             half = 0.5 * dt
             f0, fh, f1 = forces[2 * k], forces[2 * k + 1], forces[2 * k + 2]
-            a1, r1 = aba(model, data, q, v, f0), rate(q, v)
-            q2, v2 = project(q + half * r1), v + half * a1
-            a2, r2 = aba(model, data, q2, v2, fh), rate(q2, v2)
-            q3, v3 = project(q + half * r2), v + half * a2
-            a3, r3 = aba(model, data, q3, v3, fh), rate(q3, v3)
-            q4, v4 = project(q + dt * r3), v + dt * a3
-            a4, r4 = aba(model, data, q4, v4, f1), rate(q4, v4)
-            q = project(q + dt / 6.0 * (r1 + 2.0 * r2 + 2.0 * r3 + r4))
+            a1, r1 = aba(model, data, array(x), v, f0), rate(x, v.tolist())
+            x2, v2 = stage(x, half, r1), v + half * a1
+            a2, r2 = aba(model, data, array(x2), v2, fh), rate(x2, v2.tolist())
+            x3, v3 = stage(x, half, r2), v + half * a2
+            a3, r3 = aba(model, data, array(x3), v3, fh), rate(x3, v3.tolist())
+            x4, v4 = stage(x, dt, r3), v + dt * a3
+            a4, r4 = aba(model, data, array(x4), v4, f1), rate(x4, v4.tolist())
+            x = embedded.step(x, dt, (r1, r2, r3, r4))
             v = v + dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
             if track_momentum:
-                momentum_max = max(momentum_max, float(np.linalg.norm(mmap.momentum(q, v))))
+                momentum_max = max(momentum_max, float(np.linalg.norm(mmap.momentum(array(x), v))))
+    q = array(x)
     joints = mmap.robot.joint_values(q)
     rates = np.array([v[j.idx_v] for j in mmap.robot.joints])
     return ReplayResult(

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..physics.attitude import geodesic_angle, quat_rotate, zyx_from_quat
+from ..physics.attitude import geodesic_angle, quat_rotate, zyx_from_quat, zyx_from_quats
 from ..physics.dynamics import inverse_dynamics_batch
 from ..problem.paths import excursions
 from ..problem.residual import Problem
@@ -37,6 +37,8 @@ __all__ = [
 
 def degrees(values: Sequence[float] | np.ndarray) -> list[float]:
     """Angles in rad as a list of degrees."""
+    if isinstance(values, np.ndarray):
+        values = values.tolist()
     return [math.degrees(float(v)) for v in values]
 
 
@@ -63,7 +65,7 @@ def sample_solution(problem: Problem, beta: np.ndarray, count: int) -> Samples:
         qdd=np.array(path.qdd, dtype=float),
         base_position=quat_rotate(quats, -dyn.com),
         base_quaternion_xyzw=np.array(quats, dtype=float),
-        base_zyx_deg=np.array([degrees(zyx_from_quat(qt)) for qt in quats], dtype=float),
+        base_zyx_deg=np.array([degrees(row) for row in zyx_from_quats(quats).tolist()]),
         end_effector_position=paths[0],
         base_angular_velocity=np.array(dyn.base_twist[:, 3:], dtype=float),
         tau=np.array(dyn.tau, dtype=float),

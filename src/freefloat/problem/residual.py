@@ -336,9 +336,12 @@ class Problem:
         edges = np.concatenate([(s[:-1, None] + np.diff(s)[:, None] * fractions).ravel(), s[-1:]])
         nodes, h = step_nodes(edges)
         path = self.family.evaluate(beta, nodes)
-        omega = self.mmap.base_rates(path.q, path.qd).omega
-        if self.planar:
-            omega = np.outer(omega @ self.axis, self.axis)
+        if self.planar and self.planar_map is not None:  # the yaw rate the residual integrates
+            omega = np.outer(np.sum(self.planar_map.gains(path.q) * path.qd, axis=-1), self.axis)
+        else:
+            omega = self.mmap.base_rates(path.q, path.qd).omega
+            if self.planar:
+                omega = np.outer(omega @ self.axis, self.axis)
         quats = propagate(self.start_quaternion, magnus_increments(omega.reshape(-1, 3, 3), h))
         return quats[::sub]
 

@@ -2,16 +2,19 @@
 
 Work goes to the (interval, pair) with the lowest lower bound first (a heap), so the smallest
 measured clearance is found early and every interval whose bound lies within
-:func:`_tolerance` of it is settled without more queries. Each item
-is refined in two steps: exact distances at its two ends (in place of the bounding-sphere
-bounds it starts from), then halving.
+:func:`_tolerance` of it is settled without more queries. Before any query, the intervals the
+single bounding spheres leave open are bounded again from the meshes' leaf spheres
+(:mod:`.sphere_tree`): their gaps, and the least over leaf pairs of each leaf pair's own
+Lipschitz bound. Each item is refined in two steps: exact distances at its two ends (in place
+of the sphere bounds it starts from), then halving; each new interval's bound is the larger of
+the whole bodies' and the leaf pairs' (:func:`_leaf_value`).
 """
 
 from __future__ import annotations
 
 import heapq
 import math
-from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -31,32 +34,54 @@ __all__ = ["certify"]
 
 
 class _Instants:
-    """Placements, bounding-sphere bounds and exact distances per instant, computed once."""
+    """Placements, joint speeds and exact distances per instant, each computed once.
+
+    The joint values and rates of an instant come from one evaluation of the paths; the
+    rates' absolute values give the ends of the speed bound of every interval that ends there.
+    """
 
     def __init__(self, mesh: MeshClearance, motion: PolynomialMotion) -> None:
         self.mesh, self.motion = mesh, motion
         self.placements: dict[float, np.ndarray] = {}
+        self.speeds: dict[float, np.ndarray] = {}
         self.exact: dict[tuple[float, int], float] = {}
+        self.leaf_gaps: dict[tuple[float, int], np.ndarray] = {}
 
     def load(self, times: np.ndarray) -> None:
-        """Placements at many instants (s), their joints evaluated in one call."""
-        for t, joints in zip(times, self.motion.path(times)[0], strict=True):
-            self.placements.setdefault(float(t), self.mesh.placements(joints))
+        """Placements and joint speeds at many instants (s), evaluated in one call."""
+        joints, rates, _ = self.motion.path(np.asarray(times, dtype=float))
+        for t, q, qd in zip(times.tolist(), joints, np.abs(rates), strict=True):
+            if t not in self.placements:
+                self.placements[t], self.speeds[t] = self.mesh.placements(q), qd
 
     def at(self, t: float) -> np.ndarray:
         if t not in self.placements:
-            self.placements[t] = self.mesh.placements(self.motion.joints(t))
+            self.load(np.array([t]))
         return self.placements[t]
+
+    def rates(self, t0: Sequence[float], t1: Sequence[float]) -> np.ndarray:
+        """(K, N) largest ``|qd_j|`` over each ``[t0, t1]`` (rad/s or m/s)."""
+        for t in (*t0, *t1):
+            self.at(t)
+        ends = np.array([self.speeds[t] for t in (*t0, *t1)])
+        return self.motion.rate_bounds(np.array(t0), np.array(t1), ends)
+
+    def bounds(self, t0: Sequence[float], t1: Sequence[float]) -> np.ndarray:
+        """(K, P) Lipschitz constants of every pair's distance on each ``[t0, t1]`` (m/s)."""
+        return self.rates(t0, t1) @ self.mesh.pair_reach
+
+    def gaps(self, t: float, k: int) -> np.ndarray:
+        """Lower bounds (m) of the distance between the leaves of each of pair k's leaf pairs."""
+        if (t, k) not in self.leaf_gaps:
+            rows = self.mesh.leaves.rows_of(k)
+            instants = np.zeros(len(rows), dtype=int)
+            self.leaf_gaps[(t, k)] = self.mesh.leaves.row_gaps(self.at(t)[None], instants, rows)
+        return self.leaf_gaps[(t, k)]
 
     def distance(self, t: float, k: int) -> float:
         if (t, k) not in self.exact:
             self.exact[(t, k)] = self.mesh.exact(self.at(t), k)
         return self.exact[(t, k)]
-
-
-def _speeds(mesh: MeshClearance, motion: PolynomialMotion, t0: Any, t1: Any) -> np.ndarray:
-    """(K, P) Lipschitz constants of every pair's distance on each ``[t0, t1]`` (m/s)."""
-    return motion.rate_bounds(t0, t1) @ mesh.pair_reach
 
 
 def _tolerance(measured: float, margin: float) -> float:
@@ -85,27 +110,9 @@ def certify(
         instants: instants of the first, uniform pass (>= 2).
     """
     store = _Instants(mesh, motion)
-    times = np.linspace(0.0, motion.duration, instants)
-    store.load(times)
-    bounds = np.array([mesh.sphere_bounds(store.at(float(t))) for t in times])
-    k0, p0 = np.unravel_index(int(np.argmin(bounds)), bounds.shape)
-    measured, when, pair = store.distance(float(times[k0]), int(p0)), float(times[k0]), int(p0)
-    lipschitz = _speeds(mesh, motion, times[:-1], times[1:])
-    lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
-    settled = lbs >= measured - _tolerance(measured, margin)
-    lower = float(lbs[settled].min()) if settled.any() else math.inf
-    heap: list[tuple[float, float, float, int, bool, float]] = [
-        (
-            float(lbs[i, k]),
-            float(times[i]),
-            float(times[i + 1]),
-            int(k),
-            False,
-            float(lipschitz[i, k]),
-        )
-        for i, k in zip(*np.nonzero(~settled), strict=True)
-    ]
-    heapq.heapify(heap)
+    measured, when, pair, lower, heap = _first_pass(
+        mesh, store, np.linspace(0.0, motion.duration, instants), margin
+    )
     bisections = 0
     exhausted = False
     while heap:
@@ -118,7 +125,10 @@ def certify(
             for d, t in ((d0, t0), (d1, t1)):
                 if d < measured:
                     measured, when, pair = d, t, k
-            heapq.heappush(heap, (0.5 * (d0 + d1 - speed * (t1 - t0)), t0, t1, k, True, speed))
+            value = 0.5 * (d0 + d1 - speed * (t1 - t0))
+            if value < measured - _tolerance(measured, margin):  # the leaf pairs may settle it
+                value = max(value, _leaf_value(store, k, t0, t1, store.rates([t0], [t1])[0]))
+            heapq.heappush(heap, (value, t0, t1, k, True, speed))
             continue
         if bisections >= MAX_BISECTIONS:
             exhausted = True
@@ -129,9 +139,12 @@ def certify(
         dm = store.distance(mid, k)
         if dm < measured:
             measured, when, pair = dm, mid, k
-        for a, b in ((t0, mid), (mid, t1)):
-            speed = float(_speeds(mesh, motion, a, b)[0, k])
+        rates = store.rates([t0, mid], [mid, t1])
+        for (a, b), rate in zip(((t0, mid), (mid, t1)), rates, strict=True):
+            speed = float(rate @ mesh.pair_reach[:, k])
             value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
+            if value < measured - _tolerance(measured, margin):
+                value = max(value, _leaf_value(store, k, a, b, rate))
             heapq.heappush(heap, (value, a, b, k, True, speed))
     if heap:
         lower = min(lower, heap[0][0])
@@ -158,6 +171,124 @@ def certify(
         hull_excess=agreement[0],
         hull_detail=agreement[1],
     )
+
+
+#: A heap item: lower bound (m), interval ends (s), pair, whether its ends are exact, speed (m/s).
+_Item = tuple[float, float, float, int, bool, float]
+
+
+def _first_pass(
+    mesh: MeshClearance, store: _Instants, times: np.ndarray, margin: float
+) -> tuple[float, float, int, float, list[_Item]]:
+    """The uniform first pass at ``times`` (s): sphere bounds, then leaf bounds where open.
+
+    One exact query where the sphere bounds are least. Returns the smallest measured
+    clearance (m), its time (s) and pair, the least bound of the intervals settled (m; inf if
+    none), and the heap of the others.
+    """
+    store.load(times)
+    bounds = np.array([mesh.sphere_bounds(store.at(float(t))) for t in times])
+    k0, p0 = np.unravel_index(int(np.argmin(bounds)), bounds.shape)
+    measured, when, pair = store.distance(float(times[k0]), int(p0)), float(times[k0]), int(p0)
+    rates = store.rates(times[:-1].tolist(), times[1:].tolist())
+    lipschitz = rates @ mesh.pair_reach
+    lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
+    settled = lbs >= measured - _tolerance(measured, margin)
+    _tighten(
+        mesh, store, times, bounds, rates, lbs, settled, measured - _tolerance(measured, margin)
+    )
+    settled = lbs >= measured - _tolerance(measured, margin)
+    lower = float(lbs[settled].min()) if settled.any() else math.inf
+    heap: list[_Item] = [
+        (
+            float(lbs[i, k]),
+            float(times[i]),
+            float(times[i + 1]),
+            int(k),
+            False,
+            float(lipschitz[i, k]),
+        )
+        for i, k in zip(*np.nonzero(~settled), strict=True)
+    ]
+    heapq.heapify(heap)
+    return measured, when, pair, lower, heap
+
+
+def _leaf_value(store: _Instants, k: int, a: float, b: float, rates: np.ndarray) -> float:
+    """A lower bound (m) of pair k's distance on ``[a, b]`` from its leaf pairs' own motion.
+
+    The distance of two bodies clear of each other is the least of the distances between
+    their leaves' triangles. Each of those is at least the exact distance at an end and at
+    least its leaf pair's bound there, and moves no faster than the leaf pair's own speed
+    bound (``rates``: the joint-rate bounds on the interval, rad/s or m/s), which for a leaf
+    near a joint's axis is far below the whole body's. With a penetration at an end, -inf
+    (the whole body's bound stands alone).
+    """
+    da, db = store.distance(a, k), store.distance(b, k)
+    if da <= 0.0 or db <= 0.0:
+        return -math.inf
+    leaves = store.mesh.leaves
+    speed = rates @ leaves.row_reach[:, leaves.rows_of(k)]
+    ends = np.maximum(da, store.gaps(a, k)) + np.maximum(db, store.gaps(b, k))
+    return float(np.min(0.5 * (ends - speed * (b - a))))
+
+
+def _tighten(
+    mesh: MeshClearance,
+    store: _Instants,
+    times: np.ndarray,
+    bounds: np.ndarray,
+    rates: np.ndarray,
+    lbs: np.ndarray,
+    settled: np.ndarray,
+    threshold: float,
+) -> None:
+    """Raise the bounds of the intervals not settled by the single spheres, in place.
+
+    For every such (interval, pair), the larger of two lower bounds: the pair's leaf-sphere
+    bound (:mod:`.sphere_tree`) at both ends where it beats the single spheres', with the
+    whole bodies' speed bound; and the least over the pair's leaf pairs of their own bounds at
+    both ends with their own speed bounds (``rates``: (K - 1, N) joint-rate bounds per
+    interval), the latter only for the items the former leaves below ``threshold`` (m). Both
+    hold for the distance, so the interval bound stays one.
+    """
+    rows, pairs = np.nonzero(~settled)
+    if len(rows) == 0:
+        return
+    leaves, count = mesh.leaves, len(mesh.pairs)
+    # the (instant, pair) cells at the items' ends, each with its leaf pairs' gaps, once
+    codes = np.unique(np.concatenate([rows * count + pairs, (rows + 1) * count + pairs]))
+    cells, cell_pairs = np.divmod(codes, count)
+    runs = leaves.count[cell_pairs]
+    starts = np.cumsum(runs) - runs
+    offsets = np.arange(int(runs.sum())) - np.repeat(starts, runs)
+    placements = np.array([store.at(float(t)) for t in times])
+    gaps = leaves.row_gaps(
+        placements, np.repeat(cells, runs), np.repeat(leaves.start[cell_pairs], runs) + offsets
+    )
+    tight = bounds.copy()
+    tight[cells, cell_pairs] = np.maximum(
+        bounds[cells, cell_pairs], np.minimum.reduceat(gaps, starts)
+    )
+    widths = times[rows + 1] - times[rows]
+    lipschitz = np.einsum("in,ni->i", rates[rows], mesh.pair_reach[:, pairs])
+    whole = 0.5 * (tight[rows, pairs] + tight[rows + 1, pairs] - lipschitz * widths)
+    lbs[rows, pairs] = whole
+    # the leaf pairs' own bounds, for the items still open: one run of leaf pairs per item
+    still = whole < threshold
+    rows, pairs, widths, whole = rows[still], pairs[still], widths[still], whole[still]
+    if len(rows) == 0:
+        return
+    first = starts[np.searchsorted(codes, rows * count + pairs)]
+    second = starts[np.searchsorted(codes, (rows + 1) * count + pairs)]
+    runs = leaves.count[pairs]
+    item = np.repeat(np.arange(len(rows)), runs)
+    offsets = np.arange(int(runs.sum())) - np.repeat(np.cumsum(runs) - runs, runs)
+    ends = gaps[first[item] + offsets] + gaps[second[item] + offsets]
+    leaf_rows = leaves.start[pairs][item] + offsets
+    speed = np.einsum("rn,nr->r", rates[rows[item]], leaves.row_reach[:, leaf_rows])
+    own = np.minimum.reduceat(0.5 * (ends - speed * widths[item]), np.cumsum(runs) - runs)
+    lbs[rows, pairs] = np.maximum(whole, own)
 
 
 def _contained_at_start(mesh: MeshClearance, store: _Instants) -> int | None:

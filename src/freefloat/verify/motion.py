@@ -98,14 +98,18 @@ class PolynomialMotion:
         """(K, N) joint rates (rad/s or m/s) at the times ``t`` (s)."""
         return self.path(np.atleast_1d(np.asarray(t, dtype=float)))[1]
 
-    def rate_bounds(self, t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
+    def rate_bounds(
+        self, t0: np.ndarray, t1: np.ndarray, ends: np.ndarray | None = None
+    ) -> np.ndarray:
         """(K, N) largest ``|qd_j|`` over each ``[t0, t1]`` (rad/s or m/s), exact up to rounding.
 
         A root found slightly off (rounding) can only move an interior extremum by a tiny
-        amount, so the bounds are padded by a relative 1e-9.
+        amount, so the bounds are padded by a relative 1e-9. ``ends``: the (2 K, N) ``|qd|``
+        at the ``t0`` then at the ``t1``, if already evaluated.
         """
         t0, t1 = np.atleast_1d(np.asarray(t0, float)), np.atleast_1d(np.asarray(t1, float))
-        ends = np.abs(self.rates(np.concatenate([t0, t1])))
+        if ends is None:
+            ends = np.abs(self.rates(np.concatenate([t0, t1])))
         bound = np.maximum(ends[: len(t0)], ends[len(t0) :])
         lo = np.searchsorted(self._root_times, t0)
         hi = np.searchsorted(self._root_times, t1)
@@ -117,7 +121,11 @@ class PolynomialMotion:
 
 
 def reach_coefficients(
-    robot: Robot, geometry: pin.GeometryModel, centres: np.ndarray, radii: np.ndarray
+    robot: Robot,
+    geometry: pin.GeometryModel,
+    centres: np.ndarray,
+    radii: np.ndarray,
+    owners: np.ndarray | None = None,
 ) -> np.ndarray:
     """(N, G): how fast geometry ``g`` can move per unit rate of joint ``j`` (m/s per rad/s).
 
@@ -129,8 +137,12 @@ def reach_coefficients(
     Args:
         robot: the robot.
         geometry: its geometry model (object placements in their joint's frame).
-        centres: (G, 3) bounding-sphere centres in each geometry's own frame (m).
-        radii: (G,) bounding-sphere radii (m).
+        centres: (S, 3) bounding-sphere centres in their geometry's own frame (m).
+        radii: (S,) bounding-sphere radii (m).
+        owners: (S,) the geometry each sphere bounds (part of); default one per geometry.
+
+    Returns:
+        (N, S) for each sphere (G columns by default).
     """
     model = robot.model
     column = {j.index: k for k, j in enumerate(robot.joints)}
@@ -139,8 +151,11 @@ def reach_coefficients(
         j.index: max(abs(j.lower), abs(j.upper)) if np.isfinite(j.lower + j.upper) else 0.0
         for j in robot.joints
     }
-    out = np.zeros((robot.n, len(geometry.geometryObjects)))
-    for g, obj in enumerate(geometry.geometryObjects):
+    objects = list(geometry.geometryObjects)
+    owners = np.arange(len(objects)) if owners is None else np.asarray(owners, dtype=int)
+    out = np.zeros((robot.n, len(owners)))
+    for g, owner in enumerate(owners.tolist()):
+        obj = objects[owner]
         reach = float(np.linalg.norm(obj.placement.act(centres[g]))) + float(radii[g])
         joint = int(obj.parentJoint)
         while joint > 1:  # up the chain to the free flyer

@@ -15,6 +15,7 @@ Units: t in s; positions rad (m), rates per s, accelerations per s^2.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -27,17 +28,25 @@ from ..plans.versions import MONOMIAL_BASIS
 __all__ = ["FilePath", "file_path"]
 
 
-def _scale(n: np.ndarray) -> np.ndarray:
-    """``c_n = sqrt((2 n + 13) (n + 12)! n!) / (n + 6)!`` for each n."""
-    return np.array(
+@functools.cache
+def _scales(count: int) -> np.ndarray:
+    """``c_n = sqrt((2 n + 13) (n + 12)! n!) / (n + 6)!`` for n = 0 .. count - 1 (read-only)."""
+    out = np.array(
         [
             math.exp(
                 0.5 * (math.log(2 * k + 13) + math.lgamma(k + 13) + math.lgamma(k + 1))
                 - math.lgamma(k + 7)
             )
-            for k in n
+            for k in range(count)
         ]
     )
+    out.setflags(write=False)
+    return out
+
+
+def _scale(n: np.ndarray) -> np.ndarray:
+    """``c_n`` (see :func:`_scales`) for n = 0 .. len(n) - 1."""
+    return _scales(len(n))
 
 
 def _jacobi(n: np.ndarray, shift: int, x: np.ndarray) -> np.ndarray:
@@ -104,17 +113,29 @@ class FilePath:
         b = s**3 * (1 - s) ** 3
         b1 = 3 * s**2 * (1 - s) ** 3 - 3 * s**3 * (1 - s) ** 2
         b2 = 6 * s * (1 - s) ** 3 - 18 * s**2 * (1 - s) ** 2 + 6 * s**3 * (1 - s)
+        # The polynomials depend on n alone: evaluated once for the longest joint, with their
+        # weights; each joint takes its first columns (element-wise values, the same numbers
+        # as its own), copied contiguous so that its products run as before.
+        longest = np.arange(max(len(beta) for beta in self.beta))
+        p0 = _jacobi(longest, 0, x)
+        p1 = (longest + 13) * _jacobi(longest, 1, x)  # d/ds = 2 d/dx
+        p2 = (longest + 13) * (longest + 14) * _jacobi(longest, 2, x)
+        weighted = (
+            b[:, None] * p0,
+            b1[:, None] * p0 + b[:, None] * p1,
+            b2[:, None] * p0 + 2 * b1[:, None] * p1 + b[:, None] * p2,
+        )
         for i, beta in enumerate(self.beta):
             if not len(beta):
                 continue
-            n = np.arange(len(beta))
-            c = _scale(n) * beta
-            p0 = _jacobi(n, 0, x)
-            p1 = (n + 13) * _jacobi(n, 1, x)  # d/ds = 2 d/dx
-            p2 = (n + 13) * (n + 14) * _jacobi(n, 2, x)
-            q[:, i] += (b[:, None] * p0) @ c
-            qd[:, i] += ((b1[:, None] * p0 + b[:, None] * p1) @ c) / T
-            qdd[:, i] += ((b2[:, None] * p0 + 2 * b1[:, None] * p1 + b[:, None] * p2) @ c) / T**2
+            c = _scales(len(beta)) * beta
+            w0, w1, w2 = (
+                w if len(beta) == len(longest) else np.ascontiguousarray(w[:, : len(beta)])
+                for w in weighted
+            )
+            q[:, i] += w0 @ c
+            qd[:, i] += (w1 @ c) / T
+            qdd[:, i] += (w2 @ c) / T**2
         return q, qd, qdd
 
 

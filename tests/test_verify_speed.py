@@ -1,0 +1,281 @@
+"""The faster sampling and verification paths against the computations they replace.
+
+Truth here never comes from the faster code: an RK4 replay written out on numpy arrays (the
+replay's former form), Pinocchio's per-instant inverse dynamics, the quaternion rebuilt from
+the Euler angles by SciPy, Pinocchio's momentum map for the planar yaw rate, STL triangles
+read without coal (:mod:`geometry_truth`) for the leaf spheres' coverage, coal's exact mesh
+distances for their bounds, and a certificate that measures every pair at many instants.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from scipy.spatial.transform import Rotation
+
+import freefloat as ff
+from freefloat.physics.attitude import zyx_from_quat, zyx_from_quats
+from freefloat.physics.dynamics import inverse_dynamics, inverse_dynamics_batch, replay
+from freefloat.physics.momentum import MomentumMap
+from freefloat.robot.collision import CollisionModel, known_srdf
+from freefloat.verify import certificate
+from freefloat.verify.certificate import certify
+from freefloat.verify.clearance import ACCURACY, SLACK_FRACTION, MeshClearance
+from freefloat.verify.motion import PolynomialMotion, reach_coefficients
+from freefloat.verify.sphere_tree import leaf_spheres
+
+from conftest import ROOT
+from geometry_truth import world_meshes
+
+UR5 = ROOT / "robots" / "ur5_servicer.urdf"
+UR5_START = np.radians([0.0, -90.0, 90.0, -90.0, -90.0, 0.0])
+UR5_GOAL = np.radians([57.3, -57.3, 68.8, -68.8, -57.3, 28.6])
+
+
+def _array_replay(mmap, start, quat, table, duration, steps):
+    """Classical RK4 on the embedded configuration with numpy arrays, renormalised per stage."""
+    model, data = mmap.model, mmap.model.createData()
+    joints = mmap.robot.joints
+    plain = [(j.idx_q, j.idx_v) for j in joints if j.kind != "continuous"]
+    turning = [(j.idx_q, j.idx_v) for j in joints if j.kind == "continuous"]
+    q = mmap.configuration(np.asarray(start, float), np.asarray(quat, float))
+    v = np.zeros(model.nv)
+    forces = np.zeros((len(table), model.nv))
+    forces[:, [j.idx_v for j in joints]] = table
+
+    def rate(q, v):
+        out = np.zeros(model.nq)
+        x, y, z, w = q[3:7]
+        vx, vy, vz, wx, wy, wz = v[:6]
+        tx, ty, tz = 2.0 * (y * vz - z * vy), 2.0 * (z * vx - x * vz), 2.0 * (x * vy - y * vx)
+        out[:7] = (
+            vx + w * tx + y * tz - z * ty,
+            vy + w * ty + z * tx - x * tz,
+            vz + w * tz + x * ty - y * tx,
+            0.5 * (w * wx + y * wz - z * wy),
+            0.5 * (w * wy + z * wx - x * wz),
+            0.5 * (w * wz + x * wy - y * wx),
+            -0.5 * (x * wx + y * wy + z * wz),
+        )
+        for iq, iv in plain:
+            out[iq] = v[iv]
+        for iq, iv in turning:
+            out[iq], out[iq + 1] = -q[iq + 1] * v[iv], q[iq] * v[iv]
+        return out
+
+    def project(q):
+        x, y, z, w = q[3:7].tolist()
+        q[3:7] /= math.sqrt(x * x + y * y + z * z + w * w)
+        for iq, _ in turning:
+            q[iq : iq + 2] /= np.hypot(q[iq], q[iq + 1])
+        return q
+
+    for k, dt in enumerate(np.diff(np.linspace(0.0, duration, steps + 1)).tolist()):
+        f0, fh, f1 = forces[2 * k], forces[2 * k + 1], forces[2 * k + 2]
+        a1, r1 = pin.aba(model, data, q, v, f0), rate(q, v)
+        q2, v2 = project(q + 0.5 * dt * r1), v + 0.5 * dt * a1
+        a2, r2 = pin.aba(model, data, q2, v2, fh), rate(q2, v2)
+        q3, v3 = project(q + 0.5 * dt * r2), v + 0.5 * dt * a2
+        a3, r3 = pin.aba(model, data, q3, v3, fh), rate(q3, v3)
+        q4, v4 = project(q + dt * r3), v + dt * a3
+        a4, r4 = pin.aba(model, data, q4, v4, f1), rate(q4, v4)
+        q = project(q + dt / 6.0 * (r1 + 2.0 * r2 + 2.0 * r3 + r4))
+        v = v + dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+    return q, v
+
+
+@pytest.mark.parametrize("urdf", ["planar_2dof.urdf", "ur5_servicer.urdf"])
+def test_the_replay_on_plain_floats_is_the_array_rk4_to_the_bit(urdf):
+    """Continuous joints (the planar arm) and revolute ones (UR5): same final state, every bit."""
+    robot = ff.load_robot(ROOT / "robots" / urdf)
+    mmap = MomentumMap(robot)
+    rng = np.random.default_rng(3)
+    steps, duration = 12, 2.0
+    t = np.linspace(0.0, duration, 2 * steps + 1)[:, None]
+    table = np.sin(t * rng.uniform(0.5, 2.0, robot.n) + rng.uniform(0, 3, robot.n))
+    start = rng.uniform(-1.0, 1.0, robot.n)
+    quat = np.array([0.1, -0.2, 0.3, 0.9]) / np.linalg.norm([0.1, -0.2, 0.3, 0.9])
+    got = replay(mmap, start, quat, table, duration, steps, track_momentum=False)
+    q, v = _array_replay(mmap, start, quat, table, duration, steps)
+    assert np.array_equal(got.quaternion_xyzw, q[3:7])
+    assert np.array_equal(got.joints, robot.joint_values(q))
+    assert np.array_equal(got.rates, np.array([v[j.idx_v] for j in robot.joints]))
+
+
+def test_kept_inverse_dynamics_are_pinocchios_per_instant_and_never_stale():
+    """Asked twice, changed in place by a caller, then asked with other accelerations: every
+    answer is Pinocchio's single-instant inverse dynamics of its own inputs."""
+    robot = ff.load_robot(UR5)
+    mmap = MomentumMap(robot)
+    rng = np.random.default_rng(5)
+    q, qd, qdd = (rng.uniform(-1.0, 1.0, (7, robot.n)) for _ in range(3))
+
+    def truth(accelerations):
+        return np.array(
+            [inverse_dynamics(mmap, q[k], qd[k], accelerations[k]).tau for k in range(len(q))]
+        )
+
+    first = inverse_dynamics_batch(mmap, q, qd, qdd)
+    np.testing.assert_allclose(first.tau, truth(qdd), rtol=1e-12, atol=1e-12)
+    first.tau[:] = 0.0  # a caller writing into its answer
+    again = inverse_dynamics_batch(mmap, q, qd, qdd)
+    np.testing.assert_allclose(again.tau, truth(qdd), rtol=1e-12, atol=1e-12)
+    other = qdd.copy()
+    other[3, 2] += 0.5
+    changed = inverse_dynamics_batch(mmap, q, qd, other)
+    np.testing.assert_allclose(changed.tau, truth(other), rtol=1e-12, atol=1e-12)
+    assert not np.allclose(changed.tau[3], again.tau[3])
+
+
+def test_euler_angles_of_many_quaternions_rebuild_them():
+    """SciPy's intrinsic ZYX rotation of the angles is the quaternion (up to sign), gimbal
+    lock included; and each row is the single-quaternion function's, to the bit."""
+    rng = np.random.default_rng(11)
+    quats = rng.normal(size=(50, 4))
+    half = math.sqrt(0.5)
+    quats = np.vstack([quats, [[0.0, half, 0.0, half], [0.0, -half, 0.0, half], [0, 0, 0, 1]]])
+    quats /= np.linalg.norm(quats, axis=1, keepdims=True)
+    angles = zyx_from_quats(quats)
+    rebuilt = Rotation.from_euler("ZYX", angles).as_quat()
+    sign = np.sign(np.sum(rebuilt * quats, axis=1))[:, None]
+    np.testing.assert_allclose(rebuilt * sign, quats, atol=1e-12)
+    assert np.array_equal(angles, np.array([zyx_from_quat(q) for q in quats]))
+
+
+def test_planar_sampled_attitudes_follow_pinocchios_momentum_map(worked_scenario):
+    """The worked example's sampled attitudes (the identified planar map) against the same
+    integration on Pinocchio's centroidal map at every node: equal to rounding."""
+    problem = ff.problem_from_scenario(worked_scenario)
+    assert problem.planar_map is not None
+    beta = np.full(problem.n_free, 0.3)
+    s = np.linspace(0.0, 1.0, 41)
+    fast = problem.attitudes(beta, s)
+    problem.planar_map, kept = None, problem.planar_map
+    try:
+        reference = problem.attitudes(beta, s)
+    finally:
+        problem.planar_map = kept
+    np.testing.assert_allclose(fast, reference, atol=1e-13)
+    assert not np.allclose(reference[0], reference[-1])  # the base does turn
+
+
+def test_leaf_spheres_hold_every_triangle_of_the_stl_files():
+    """Each triangle of every UR5 mesh, read from its STL file without coal, lies with its
+    three corners in one leaf sphere (so in their union), placed by Pinocchio's kinematics."""
+    robot = ff.load_robot(UR5)
+    mesh = MeshClearance(robot, known_srdf(robot))
+    solver = CollisionModel(robot, known_srdf(robot))
+    joints = UR5_START + 0.3 * (UR5_GOAL - UR5_START)
+    placements = mesh.placements(joints)
+    triangles = world_meshes(solver, joints)
+    assert triangles
+    for g, corners in triangles.items():
+        centres, radii = leaf_spheres(*mesh.meshes[g])
+        world = centres @ placements[g, :3, :3].T + placements[g, :3, 3]
+        # (F, 3 corners, L spheres): corner's distance to each centre
+        gap = np.linalg.norm(corners[:, :, None, :] - world[None, None], axis=-1)
+        inside = np.all(gap <= radii[None, None, :] + 1e-9, axis=1)
+        assert inside.any(axis=1).all(), mesh.names
+
+
+@pytest.mark.parametrize("name", ["ur5_servicer", "panda_servicer"])
+def test_leaf_bounds_never_exceed_coals_mesh_distances(name):
+    """At configurations along the shipped scenario's motion, every pair's leaf-sphere (and
+    box) bound is at most coal's exact distance on the original geometry, and tighter than the
+    single spheres' bound for some pairs (the certificate takes the larger of the two)."""
+    s = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / f"{name}.toml")
+    mesh = MeshClearance(s.robot, s.safety.srdf or known_srdf(s.robot))
+    pairs = np.arange(len(mesh.pairs))
+    tighter = 0
+    for u in np.linspace(0.0, 1.0, 3):
+        joints = np.asarray(s.start) + u * (np.asarray(s.goal) - np.asarray(s.start))
+        placements = mesh.placements(joints)
+        bound = mesh.leaves.bounds(placements[None], np.zeros_like(pairs), pairs)
+        single = mesh.sphere_bounds(placements)
+        exact = np.array([mesh.exact(placements, int(k)) for k in pairs])
+        assert np.all(bound <= exact + 1e-9), [mesh.names[k] for k in np.flatnonzero(bound > exact)]
+        tighter += int(np.sum(bound > single + 1e-3))
+    assert tighter > 0
+
+
+def _quintic(start: np.ndarray, goal: np.ndarray, duration: float) -> PolynomialMotion:
+    d = goal - start
+    return PolynomialMotion.from_monomials(
+        [
+            [a, 0, 0, 10 * x / duration**3, -15 * x / duration**4, 6 * x / duration**5]
+            for a, x in zip(start, d, strict=True)
+        ],
+        duration,
+    )
+
+
+@pytest.mark.parametrize(("name", "instants"), [("panda_servicer", 101), ("ur5_servicer", 121)])
+def test_the_culled_certificate_holds_against_every_pair_measured_densely(
+    name, instants, monkeypatch
+):
+    """A shipped servicer's quintic motion: the certificate (leaf spheres cull pairs before any
+    exact query, leaf pairs bound their own motion) bounds the smallest distance of every pair
+    measured at many instants, agrees with the certificate of single spheres and whole-body
+    speeds, and queries less or as much (the UR5's halvings: fewer)."""
+    s = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / f"{name}.toml")
+    mesh = MeshClearance(s.robot, s.safety.srdf or known_srdf(s.robot))
+    motion = _quintic(np.asarray(s.start), np.asarray(s.goal), s.duration)
+    counted = {"exact": 0}
+    exact = mesh.exact
+
+    def counting(placements, k):
+        counted["exact"] += 1
+        return exact(placements, k)
+
+    mesh.exact = counting  # type: ignore[method-assign]
+    culled = certify(mesh, motion, 0.01)
+    culled_queries = counted["exact"]
+    counted["exact"] = 0
+    with monkeypatch.context() as patch:  # the certificate as it was: whole bodies only
+        patch.setattr(certificate, "_tighten", lambda *args: None)
+        patch.setattr(certificate, "_leaf_value", lambda *args: -math.inf)
+        plain = certify(mesh, motion, 0.01)
+    plain_queries = counted["exact"]
+    mesh.exact = exact  # type: ignore[method-assign]
+    dense = min(
+        exact(mesh.placements(joints), k)
+        for joints in motion.path(np.linspace(0.0, motion.duration, instants))[0]
+        for k in range(len(mesh.pairs))
+    )
+    assert culled.lower_bound <= dense + 1e-12
+    accuracy = max(ACCURACY, SLACK_FRACTION * (culled.measured - 0.01))
+    assert culled.measured - culled.lower_bound <= accuracy + 1e-12
+    assert culled.certified == plain.certified
+    assert culled.pair == plain.pair
+    assert culled.measured == pytest.approx(plain.measured, abs=1e-4)
+    assert culled_queries <= plain_queries
+    assert culled.bisections <= plain.bisections
+
+
+def test_leaf_speed_bounds_hold_for_every_vertex_they_hold():
+    """UR5: every mesh vertex inside a leaf sphere moves (finite differences of Pinocchio's
+    kinematics) no faster than that leaf's reach times the joint rates."""
+    robot = ff.load_robot(UR5)
+    mesh = MeshClearance(robot, known_srdf(robot))
+    leaves = mesh.leaves
+    reach = reach_coefficients(robot, mesh.geometry, leaves.local, leaves.radii, leaves.owner)
+    rng = np.random.default_rng(7)
+    checked = 0
+    for _ in range(4):
+        joints, rates = rng.uniform(-2.0, 2.0, robot.n), rng.uniform(-1.0, 1.0, robot.n)
+        dt = 1e-7
+        before, after = mesh.placements(joints), mesh.placements(joints + dt * rates)
+        for leaf, g in enumerate(leaves.owner.tolist()):
+            if g not in mesh.meshes:
+                continue
+            vertices = mesh.meshes[g][0]
+            near = np.linalg.norm(vertices - leaves.local[leaf], axis=1) <= leaves.radii[leaf]
+            points = vertices[near]
+            moved = [p[g, :3, :3] @ points.T + p[g, :3, 3:] for p in (before, after)]
+            speed = np.linalg.norm(moved[1] - moved[0], axis=0).max() / dt
+            assert speed <= reach[:, leaf] @ np.abs(rates) * (1 + 1e-5) + 1e-9
+            checked += 1
+    assert checked > 20
