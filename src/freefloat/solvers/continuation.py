@@ -35,7 +35,7 @@ from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
 from .restore import broken_constraint
 from .rows import RowCache, linear_rows, with_critical
-from .tracked import ContinuationResult
+from .tracked import BranchPoint, ContinuationResult
 
 __all__ = ["ContinuationResult", "continuation", "track"]
 
@@ -168,6 +168,7 @@ def track(
     options: SolveOptions,
     origin: np.ndarray | None = None,
     stall: bool = True,
+    trace: list[BranchPoint] | None = None,
 ) -> ContinuationResult:
     """Continue from ``origin`` (default ``beta = 0``) at its own attitude towards the goal.
 
@@ -177,6 +178,8 @@ def track(
     it stops once the pace of its last :data:`PACE_WINDOW` steps cannot reach the goal within
     the step budget; without, it goes on until a budget or the step floor stops it (the reach
     estimate of ``freefloat bounds``, which wants the furthest point within its budget).
+    With ``trace``, the start and every accepted point are appended to it (the reach
+    estimate resumes from them).
     """
     zero = np.zeros(problem.n_free) if origin is None else np.asarray(origin, dtype=float)
     start = problem.achieved(zero)
@@ -210,6 +213,8 @@ def track(
             )
         beta = solved
     dl = min(1.0, FIRST_STEP / angle) if angle > 0 else 1.0
+    if trace is not None:
+        trace.append(BranchPoint(0.0, beta, dl * angle))
     stopped_by = ""
     reached = [0.0]  # lam after each step: the pace check's history
     while lam < 1.0:
@@ -257,6 +262,8 @@ def track(
         beta, lam, r, jac = solved, 1.0 if last else lam + step, r_new, jac_new
         reached.append(lam)
         dl = step * (2.0 if its <= 4 else 1.0 if its <= 5 else 0.5)
+        if trace is not None:
+            trace.append(BranchPoint(lam * angle, beta, dl * angle))
     return ContinuationResult(beta, lam, angle, axis, r, steps, iterations, stopped_by)
 
 

@@ -22,6 +22,7 @@ from ..problem.residual import Problem
 from .continuation import ContinuationResult, track
 from .options import SolveOptions
 from .restore import broken_constraint
+from .tracked import BranchPoint
 
 __all__ = ["DirectionReach", "ReachEstimate", "default_directions", "describe", "reach_set"]
 
@@ -78,8 +79,6 @@ def default_directions() -> np.ndarray:
 DEFAULT_MAX_ANGLE = math.radians(60.0)
 #: Tries to confirm a direction's furthest turn as the planner would solve it (a count).
 CONFIRM_TRIES = 3
-#: After a failed confirmation, the next try asks for this share of where it stopped.
-CONFIRM_SHRINK = 0.9
 
 
 def _furthest(
@@ -90,10 +89,30 @@ def _furthest(
     constraints: Sequence[Constraint],
     options: SolveOptions,
     stall: bool,
+    trace: list[BranchPoint] | None = None,
+    origin: np.ndarray | None = None,
 ) -> ContinuationResult:
-    """Continuation towards ``angle`` about ``axis`` (rad) within ``constraints``."""
+    """Continuation towards ``angle`` about ``axis`` (rad) within ``constraints``.
+
+    From ``origin`` (a path on the branch towards that axis; default the quintic path),
+    accepted points appended to ``trace``.
+    """
     target = problem.with_goal(quat_multiply(quintic, quat_exp(angle * axis)))
-    return track(target, constraints, options, stall=stall)
+    return track(target, constraints, options, origin, stall=stall, trace=trace)
+
+
+def _parting(trace: Sequence[BranchPoint], turn: float) -> BranchPoint:
+    """Where a continuation towards ``turn`` (rad) leaves the traced branch.
+
+    The continuation's steps are angles, so one heading for a nearer goal about the same
+    axis tries the same targets as the traced one until a step would reach its goal: the
+    first traced point whose next step reaches ``turn``. From there on it takes a shorter
+    last step of its own.
+    """
+    for point in trace:
+        if point.turn + point.next_step >= turn:
+            return point
+    return trace[-1]
 
 
 def _confirmed(
@@ -103,30 +122,63 @@ def _confirmed(
     reached: float,
     constraints: Sequence[Constraint],
     options: SolveOptions,
-    step: float = 0.0,
-) -> tuple[float, np.ndarray, str]:
+    step: float,
+    trace: Sequence[BranchPoint],
+) -> tuple[float, np.ndarray]:
     """The largest turn up to ``reached`` that the planner's own continuation solves.
 
-    Tracking towards a farther goal solves the points on the way only to the intermediate
-    tolerance, along steps of its own; the planner heads for the goal itself, with its
-    final tolerance and the stall check. The turn is asked as the planner would ask it (at
-    most :data:`CONFIRM_TRIES` times, each a share of where the last one stopped), so the
-    reported turn is one the planner reaches; with ``step`` (rad) the turn asked is rounded
-    down to a multiple of it first. Returns the turn (rad), its path and why the first try
-    stopped short ("" when it did not).
+    Tracking towards a farther goal (``trace``, within ``constraints``) solves the points
+    on the way only to the intermediate tolerance; the planner heads for the goal itself,
+    with its final tolerance and the stall check. Its run towards a nearer goal takes the
+    traced steps up to where it parts from the branch (:func:`_parting`), so it is resumed
+    from there, not repeated. The turn is asked as the planner would ask it, rounded down to
+    a multiple of ``step`` (rad; 0: not rounded), so the reported turn is one the planner
+    reaches; when the planner stops short, the next try (at most :data:`CONFIRM_TRIES` in
+    all) asks for the traced point before it, which the branch reached in one step from
+    where they part. Returns the turn (rad) and its path.
     """
-    beta, why = np.zeros(problem.n_free), ""
     for _ in range(CONFIRM_TRIES):
         if step > 0.0:  # the turn reported, so that the goal printed is the one confirmed
             reached = math.floor(reached / step + 1e-9) * step
         if reached <= 0.0:
             break
-        result = _furthest(problem, quintic, axis, reached, constraints, options, True)
+        part = _parting(trace, reached)
+        origin = part.beta if part.turn > 0.0 else None
+        result = _furthest(
+            problem, quintic, axis, reached, constraints, options, True, None, origin
+        )
         if result.reached:
-            return reached, result.beta, why
-        why = why or result.stopped_by
-        reached *= CONFIRM_SHRINK * result.fraction
-    return 0.0, beta, why
+            return reached, result.beta
+        reached = max((b.turn for b in trace if b.turn < reached - step), default=0.0)
+    return 0.0, np.zeros(problem.n_free)
+
+
+def _imposed(
+    problem: Problem,
+    quintic: np.ndarray,
+    axis: np.ndarray,
+    angle: float,
+    constraints: Sequence[Constraint],
+    options: SolveOptions,
+    step: float,
+) -> tuple[float, str, np.ndarray]:
+    """The planner's continuation within ``constraints`` towards ``angle`` (rad), rounded.
+
+    Where it stops short, the turn it reached is confirmed (:func:`_confirmed`). Returns the
+    turn (rad), why it stopped short ("" when it did not) and its path.
+    """
+    if step > 0.0:
+        angle = math.floor(angle / step + 1e-9) * step
+    if angle <= 0.0:
+        return 0.0, "", np.zeros(problem.n_free)
+    trace: list[BranchPoint] = []
+    result = _furthest(problem, quintic, axis, angle, constraints, options, True, trace)
+    if result.reached:
+        return angle, "", result.beta
+    turn, beta = _confirmed(
+        problem, quintic, axis, result.fraction * angle, constraints, options, step, trace
+    )
+    return turn, result.stopped_by, beta
 
 
 def _direction(
@@ -143,12 +195,13 @@ def _direction(
     """How far one direction goes: the turn (rad), why it stopped short, its path.
 
     The deferred constraints (``eager`` but not ``tracked``) are checked on the path where
-    the direction ends; only when that path breaks one is the turn confirmed with every
-    eager constraint imposed, as the planner imposes them (one continuation per try, from
-    the turn reached without them: never farther), and the confirmation without them is
+    the direction ends; only when that path breaks one is the direction tracked again with
+    every eager constraint imposed, as the planner imposes them (:func:`_imposed`, from the
+    turn reached without them: never farther), and the confirmation without them is
     skipped.
     """
-    result = _furthest(problem, quintic, axis, angle, tracked, options, confirm)
+    trace: list[BranchPoint] = []
+    result = _furthest(problem, quintic, axis, angle, tracked, options, confirm, trace)
     reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
     deferred = len(tracked) < len(eager)
     if not confirm:  # the bounds estimate: as far as the budget goes
@@ -158,10 +211,10 @@ def _direction(
         return reached, stopped_by, beta
     broken = broken_constraint(problem, eager, beta) if deferred else ""
     if not result.reached and not broken:  # solved only to the intermediate tolerance
-        reached, beta, _ = _confirmed(problem, quintic, axis, reached, tracked, options, step)
+        reached, beta = _confirmed(problem, quintic, axis, reached, tracked, options, step, trace)
         broken = broken_constraint(problem, eager, beta) if deferred and reached > 0.0 else ""
-    if broken:  # confirmed as the planner solves it, with every eager constraint imposed
-        reached, beta, why = _confirmed(problem, quintic, axis, reached, eager, options, step)
+    if broken:  # as the planner solves it, with every eager constraint imposed
+        reached, why, beta = _imposed(problem, quintic, axis, reached, eager, options, step)
         stopped_by = why or stopped_by
     return reached, stopped_by, beta
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ContinuationResult"]
+__all__ = ["BranchPoint", "ContinuationResult"]
 
 
 @dataclass(frozen=True)
@@ -37,3 +37,18 @@ class ContinuationResult:
     def reached(self) -> bool:
         """Whether the goal itself was reached."""
         return not self.stopped_by
+
+
+@dataclass(frozen=True)
+class BranchPoint:
+    """One accepted point of a continuation's branch (see ``track``'s ``trace``).
+
+    Attributes:
+        turn: angle from the start attitude along the geodesic to the goal (rad).
+        beta: free coefficients of the solved path there (rad or m).
+        next_step: the step the continuation tries next from here, as an angle (rad).
+    """
+
+    turn: float
+    beta: np.ndarray
+    next_step: float
