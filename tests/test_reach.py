@@ -184,6 +184,22 @@ def test_goals_sampled_inside_the_inner_set_plan() -> None:
         assert ff.geodesic_angle(np.array(plan.base.achieved_quaternion_xyzw), goal) < 1e-9
 
 
+def test_goals_inside_the_inner_set_plan_with_clearance_imposed() -> None:
+    """The shipped UR5 servicer as it stands (clearance on): in a direction where clearance
+    stops the arm, the printed goal and one nearer about the same axis plan; the truth is
+    each plan's own verification (its clearance and attitude checked apart from the
+    planner)."""
+    scenario = ff.Scenario.from_toml(SCENARIOS / "ur5_servicer.toml")
+    report = ff.reachable(scenario, budget=8, directions=np.array([[1.0, -1.0, -1.0]]))
+    (direction,) = report.directions
+    assert 0.0 < direction.inner < direction.outer and direction.stopped_by
+    for share in (1.0, 0.45):
+        goal = _turned(report, direction, share)
+        plan = ff.plan(replace(scenario, goal_attitude=goal), samples=41)
+        assert plan.verification.passed
+        assert ff.geodesic_angle(np.array(plan.base.achieved_quaternion_xyzw), goal) < 1e-9
+
+
 def _turned(report, direction, fraction):
     from freefloat.physics.attitude import quat_exp, quat_multiply
 
