@@ -43,7 +43,7 @@ from .solvers.reach import DirectionReach, ReachEstimate, default_directions, re
 __all__ = ["DEFAULT_BUDGET", "SMALL_REACH_DEG", "DirectionLimits", "ReachReport", "reachable"]
 
 #: Residual evaluations per direction of the inner estimate (a count; ``--budget``).
-DEFAULT_BUDGET = 20
+DEFAULT_BUDGET = 30
 #: Below this largest outer turn (deg) the report says the reach is small.
 SMALL_REACH_DEG = 5.0
 #: ``stopped_by`` of a direction whose inner turn was not estimated (budget 0).
