@@ -70,3 +70,25 @@ def test_parting_is_the_first_point_whose_next_step_reaches_the_turn() -> None:
     assert _parting(trace, 9.5).turn == 9.0
     assert _parting(trace, 11.0).turn == 9.0
     assert _parting(trace, 50.0).turn == 9.0  # beyond the branch: its last point
+
+
+def test_rows_that_show_a_break_agree_with_the_dense_check() -> None:
+    """The shortcut (a clearance row beyond its slack) against the dense check of the path,
+    on the shipped UR5 servicer: a path tracked within the joint limits alone sweeps the arm
+    through the spacecraft; the quintic path is clear."""
+    from freefloat.problem.constraints import Clearance, scenario_constraints
+    from freefloat.solvers.reach import _broken
+    from freefloat.solvers.restore import broken_constraint
+
+    scenario = ff.Scenario.from_toml(SCENARIOS / "ur5_servicer.toml").resolved()
+    problem = problem_from_scenario(scenario, extra=[2] * scenario.robot.n, check_bounds=False)
+    eager = [c for c in scenario_constraints(scenario) if not c.lazy]
+    limits = [c for c in eager if not isinstance(c, Clearance)]
+    axis = np.array([0.0, 1.0, 0.0])
+    through = track(_towards(problem, axis, math.radians(9.0)), limits, SolveOptions())
+    assert through.reached
+    said = _broken(problem, eager, limits, through.beta)
+    assert said.startswith("clearance (a solver row")
+    assert broken_constraint(problem, eager, through.beta).startswith("clearance")
+    zero = np.zeros(problem.n_free)
+    assert _broken(problem, eager, limits, zero) == broken_constraint(problem, eager, zero) == ""
