@@ -55,6 +55,8 @@ CORRECTOR_ITERATIONS = 8
 #: Constraints are imposed at the instants this far inside (their unit: rad, rad/s, m...),
 #: so that the path between instants stays inside too.
 MARGIN = 1e-7
+#: Why a continuation stops when no path within the constraints is found at its start.
+NO_START = "no path within the constraints reaches even the quintic path's own attitude"
 #: Singular-value ratio below which dh/dbeta counts as singular.
 SINGULAR = 1e-9
 
@@ -201,16 +203,7 @@ def track(
         )
         iterations += its
         if solved is None:
-            return ContinuationResult(
-                beta,
-                0.0,
-                angle,
-                axis,
-                r,
-                0,
-                iterations,
-                "no path within the constraints reaches even the quintic path's own attitude",
-            )
+            return ContinuationResult(beta, 0.0, angle, axis, r, 0, iterations, NO_START)
         beta = solved
     dl = min(1.0, FIRST_STEP / angle) if angle > 0 else 1.0
     if trace is not None:
