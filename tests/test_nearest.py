@@ -44,16 +44,34 @@ def test_least_norm_root_is_a_kkt_point_and_matches_slsqp(worked_scenario):
     np.testing.assert_allclose(beta @ beta, other.x @ other.x, rtol=1e-6)
 
 
+def _capped(worked_scenario):  # type: ignore[no-untyped-def]
+    """The worked example with 3 free coefficients per joint and q1 capped at 1.45 rad."""
+    scenario = worked_scenario.resolved()
+    joints = list(scenario.robot.joints)
+    joints[0] = dataclasses.replace(joints[0], upper=1.45)
+    robot = dataclasses.replace(scenario.robot, joints=tuple(joints))
+    return worked_problem(dataclasses.replace(scenario, robot=robot), {"q1": 3, "q2": 3})
+
+
+def _slsqp_rows(problem, limits):  # type: ignore[no-untyped-def]
+    """SciPy's rows: the cap at 401 instants and the attitude residual."""
+    rows = limits.rows(problem, np.zeros(problem.n_free), np.linspace(0.0, 1.0, 401))
+    return [
+        {
+            "type": "ineq",
+            "fun": lambda b: -(rows.values + rows.jacobian @ b),
+            "jac": lambda b: -rows.jacobian,
+        },
+        {"type": "eq", "fun": problem.residual, "jac": problem.jacobian},
+    ]
+
+
 def test_least_norm_root_within_a_binding_limit_matches_slsqp_on_a_dense_grid(worked_scenario):
     """Joint q1 capped at 1.45 rad, below the least-norm root's 1.516 rad: from a feasible root
     further out, the root found honours the cap everywhere (the polynomial's exact extremes),
     has the least norm SciPy's SLSQP finds with the cap imposed at 401 instants (another
     optimiser, another grid), and touches the cap (the constraint binds)."""
-    scenario = worked_scenario.resolved()
-    joints = list(scenario.robot.joints)
-    joints[0] = dataclasses.replace(joints[0], upper=1.45)
-    robot = dataclasses.replace(scenario.robot, joints=tuple(joints))
-    problem = worked_problem(dataclasses.replace(scenario, robot=robot), {"q1": 3, "q2": 3})
+    problem = _capped(worked_scenario)
     options = ff.SolveOptions()
     least = ff.solve(problem, options, []).beta
     limits = JointPositionLimits()
@@ -67,16 +85,7 @@ def test_least_norm_root_within_a_binding_limit_matches_slsqp_on_a_dense_grid(wo
     assert np.linalg.norm(problem.residual(beta)) < 1e-10
     excess = limits.violation(problem, beta).value
     assert -1e-6 < excess <= limits.tolerance
-    dense = np.linspace(0.0, 1.0, 401)
-    rows = limits.rows(problem, np.zeros(problem.n_free), dense)
-    cap = [
-        {
-            "type": "ineq",
-            "fun": lambda b: -(rows.values + rows.jacobian @ b),
-            "jac": lambda b: -rows.jacobian,
-        },
-        {"type": "eq", "fun": problem.residual, "jac": problem.jacobian},
-    ]
+    cap = _slsqp_rows(problem, limits)
     other = minimize(
         lambda b: b @ b,
         start,
@@ -98,11 +107,7 @@ def test_corrections_bring_a_root_inside_a_cap_it_breaks(worked_scenario):
     corrections with the rows at its tightest instants give a root within the cap everywhere
     (exact polynomial extremes), moved about as little as the nearest such root SciPy's SLSQP
     finds with the cap at 401 instants."""
-    scenario = worked_scenario.resolved()
-    joints = list(scenario.robot.joints)
-    joints[0] = dataclasses.replace(joints[0], upper=1.45)
-    robot = dataclasses.replace(scenario.robot, joints=tuple(joints))
-    problem = worked_problem(dataclasses.replace(scenario, robot=robot), {"q1": 3, "q2": 3})
+    problem = _capped(worked_scenario)
     options = ff.SolveOptions()
     start = ff.solve(problem, options, []).beta
     limits = JointPositionLimits()
@@ -110,16 +115,7 @@ def test_corrections_bring_a_root_inside_a_cap_it_breaks(worked_scenario):
     assert found.honoured
     assert np.linalg.norm(problem.residual(found.beta)) < 1e-10
     assert limits.violation(problem, found.beta).value <= limits.tolerance
-    dense = np.linspace(0.0, 1.0, 401)
-    rows = limits.rows(problem, np.zeros(problem.n_free), dense)
-    cap = [
-        {
-            "type": "ineq",
-            "fun": lambda b: -(rows.values + rows.jacobian @ b),
-            "jac": lambda b: -rows.jacobian,
-        },
-        {"type": "eq", "fun": problem.residual, "jac": problem.jacobian},
-    ]
+    cap = _slsqp_rows(problem, limits)
     nearest = minimize(
         lambda b: (b - start) @ (b - start),
         start,

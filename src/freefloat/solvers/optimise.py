@@ -42,6 +42,7 @@ from .least_norm import nearest_root_within
 from .newton import polish
 from .options import SolveOptions
 from .restore import broken_constraint
+from .rows import tightest_instants
 from .sqp import constraint_functions
 
 __all__ = ["ROUNDS", "Optimised", "optimise"]
@@ -88,17 +89,9 @@ class _BudgetSpentError(Exception):
 def _tightest(
     problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray, instants: np.ndarray
 ) -> np.ndarray:
-    """``instants`` with the normalised instants where the path at ``beta`` is tightest.
-
-    Constraints that pick their own instants (clearance) are left out.
-    """
-    path = problem.polynomials(beta)
-    extra = [
-        np.asarray(c.critical_times(problem.robot, path), dtype=float) / problem.duration
-        for c in constraints
-        if not c.own_instants
-    ]
-    return np.unique(np.clip(np.concatenate([instants, *extra]), 0.0, 1.0))
+    """``instants`` with the normalised instants where the path at ``beta`` is tightest."""
+    extra = tightest_instants(problem, constraints, beta)
+    return np.unique(np.clip(np.concatenate([instants, extra]), 0.0, 1.0))
 
 
 def scaled_coordinates(

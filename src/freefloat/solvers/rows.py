@@ -16,7 +16,13 @@ import numpy as np
 from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.residual import Problem
 
-__all__ = ["MAX_ADDED_INSTANTS", "RowCache", "linear_rows", "with_critical"]
+__all__ = [
+    "MAX_ADDED_INSTANTS",
+    "RowCache",
+    "linear_rows",
+    "tightest_instants",
+    "with_critical",
+]
 
 #: Most instants kept besides the default ones (the tightest instants found on the way).
 MAX_ADDED_INSTANTS = 256
@@ -59,18 +65,30 @@ def linear_rows(
     return np.concatenate(values), np.concatenate(rows)
 
 
-def with_critical(
-    problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray, instants: np.ndarray
+def tightest_instants(
+    problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray
 ) -> np.ndarray:
-    """``instants`` and the normalised times where each constraint is tightest at ``beta``.
+    """The normalised times where each constraint is tightest on the path at ``beta``.
 
     Constraints that pick their own instants (clearance) are left out.
     """
     path = problem.polynomials(beta)
     extra = [
-        c.critical_times(problem.robot, path) / problem.duration
+        np.asarray(c.critical_times(problem.robot, path), dtype=float) / problem.duration
         for c in constraints
         if not c.own_instants
     ]
+    return np.concatenate([np.zeros(0), *extra])
+
+
+def with_critical(
+    problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray, instants: np.ndarray
+) -> np.ndarray:
+    """``instants`` kept to the defaults and their last added, with the path's tightest.
+
+    The default instants, the last :data:`MAX_ADDED_INSTANTS` others of ``instants``, and the
+    tightest instants of the path at ``beta`` (:func:`tightest_instants`).
+    """
+    extra = tightest_instants(problem, constraints, beta)
     added = np.setdiff1d(instants, DEFAULT_INSTANTS)[-MAX_ADDED_INSTANTS:]
-    return np.unique(np.concatenate([DEFAULT_INSTANTS, added, *extra]).clip(0.0, 1.0))
+    return np.unique(np.concatenate([DEFAULT_INSTANTS, added, extra]).clip(0.0, 1.0))
