@@ -7,7 +7,8 @@ that reaches the goal; on some robots (a heavy satellite whose small arm must tu
 still swings a joint far beyond its start-goal span. When the largest such excursion exceeds
 :data:`NATURAL_EXCURSION`, the default objective (the smallest deviation from the quintic,
 ``|beta|^2``) is minimised over the roots with more freedom: at each level of
-:data:`LEVELS` free coefficients per joint, from the previous path embedded in the larger family,
+:data:`LEVELS` free coefficients per joint (a joint the search gave none, one a scenario's
+``[path] extra`` holds, keeps none), from the previous path embedded in the larger family,
 by sequential quadratic programming with the exact Hessian of the objective
 (:func:`.least_norm.least_norm_root`); when that root breaks a constraint, by the same steps
 with the constraints linearised as rows of a small quadratic program, from the previous path,
@@ -87,7 +88,7 @@ def nearest_root(
     best = found
     tried: list[str] = []
     for k in LEVELS:
-        counts = [max(b, k) for b in base]
+        counts = [max(b, k) if b > 0 else 0 for b in base]  # a held joint stays held
         if counts == [best.freedom[n] for n in names]:
             continue
         level = problem_from_scenario(
