@@ -205,16 +205,6 @@ class CollisionModel:
         k = int(np.argmin(values)) if len(values) else -1
         return (float(values[k]) if k >= 0 else math.inf), k
 
-    def floor(self, joints: np.ndarray, slot: float) -> float:
-        """A lower bound (m) of the smallest distance at ``joints``, without measuring.
-
-        From each pair's last bounds at ``slot`` and how far its bodies can have moved since
-        (:meth:`PairBounds.floor`); ``-inf`` when the slot is new or nothing bounds the motion.
-        """
-        if self._bounds is None:
-            return -math.inf
-        return self._bounds.floor(slot, np.asarray(joints, dtype=float))
-
     def closest(
         self, joints: np.ndarray, slot: float | None = None
     ) -> tuple[float, np.ndarray, int]:
@@ -234,10 +224,9 @@ class CollisionModel:
         """Signed distances (m) of the pairs, each by Pinocchio's ``computeDistance``.
 
         With ``nearest``, only the pairs that can be the closest are measured (the others are
-        ``inf``; see :meth:`_may_be_closest`). A value outside its pair's bounds (its motion
-        bounds, else its bounding spheres) is checked against the spheres as
-        :func:`checked_distance` does, and an impossible one is asked again alone at looser
-        tolerances (counted in :attr:`retries`). Every query starts from coal's default
+        ``inf``; see :meth:`_may_be_closest`). Each value is checked against its bounding
+        spheres as :func:`checked_distance` does, and an impossible one is asked again alone at
+        looser tolerances (counted in :attr:`retries`). Every query starts from coal's default
         guesses (the requests keep none from the last query), so a distance does not depend,
         to the last bit, on what was asked before.
         """
@@ -246,19 +235,18 @@ class CollisionModel:
         pin.forwardKinematics(model, data, self._configuration(joints))
         pin.updateGeometryPlacements(model, data, self.geometry, gdata)
         if nearest and len(self.pairs):
-            measured, lower, upper = self._may_be_closest(joints, slot)
+            measured = self._may_be_closest(joints, slot)
         else:
             measured = np.arange(len(self.pairs))
-            gap, reach = self._spheres(measured)
-            lower, upper = gap - reach, gap + reach
+        gap, reach = self._spheres(measured)
         found = np.array(
             [pin.computeDistance(self.geometry, gdata, int(k)).min_distance for k in measured]
         )
         with np.errstate(invalid="ignore"):
-            suspect = ~((found >= lower - 1e-9) & (found <= upper + 1e-9))
+            possible = (found >= gap - reach - 1e-9) & (found <= gap + reach + 1e-9)
         self._retried = {}
-        for i in np.flatnonzero(suspect).tolist():
-            found[i] = self._recheck(int(measured[i]), float(found[i]))
+        for i in np.flatnonzero(~(np.isfinite(found) & possible)).tolist():
+            found[i] = self._retry(int(measured[i]), float(gap[i]), float(reach[i]))
         if self._bounds is not None:  # a retried value is no reference: forgotten
             known = np.where(np.isin(measured, list(self._retried)), math.nan, found)
             self._bounds.record(slot, measured, joints, known, known)
@@ -266,19 +254,16 @@ class CollisionModel:
         values[measured] = found
         return values
 
-    def _recheck(self, k: int, value: float) -> float:
-        """Pair ``k``'s distance (m) when ``value`` lies outside its bounds: checked again.
+    def _retry(self, k: int, gap: float, reach: float) -> float:
+        """Pair ``k``'s distance (m) asked again alone at looser tolerances.
 
-        Kept when its bounding spheres allow it; otherwise asked again alone at looser
-        tolerances (:func:`checked_distance`, counted in :attr:`retries`).
+        For a value impossible by its bounding spheres (``gap +- reach``, m):
+        :func:`checked_distance`, counted in :attr:`retries`.
         """
-        gap, reach = self._spheres(np.array([k]))
-        spheres = (float(gap[0] - reach[0]), float(gap[0] + reach[0]))
-        if math.isfinite(value) and spheres[0] - 1e-9 <= value <= spheres[1] + 1e-9:
-            return value
         a, b = self.pairs[k]
         placements = self._geometry_data.oMg
         shapes = (self._shapes[a], _transform(placements[a]), self._shapes[b])
+        spheres = (gap - reach, gap + reach)
         answer = checked_distance(*shapes, _transform(placements[b]), spheres, self.names[k])
         self.retries += max(1, answer.retries)
         self._retried[k] = answer.result
@@ -309,17 +294,14 @@ class CollisionModel:
             gap[i] = math.dist(centres[a], centres[b])
         return gap, self._reach[pairs]
 
-    def _may_be_closest(
-        self, joints: np.ndarray, slot: float | None
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The pairs that may have the smallest distance at ``joints``, with their bounds (m).
+    def _may_be_closest(self, joints: np.ndarray, slot: float | None) -> np.ndarray:
+        """Indices of the pairs that may have the smallest distance at ``joints``.
 
         Each pair is bounded from its last bounds at ``slot`` (:class:`PairBounds`: its
         measured distance; or, for a pair never measured there, its bounding spheres, which are
         then kept); with no motion bound (a prismatic joint), by its bounding spheres. A pair
         that cannot be the closest is not measured, so the smallest distance and its pair are
-        the same bits as with every pair measured. Returns the pairs' indices and their lower
-        and upper bounds.
+        the same bits as with every pair measured.
         """
         if self._bounds is None:
             gap, reach = self._spheres(np.arange(len(self.pairs)))
@@ -330,8 +312,7 @@ class CollisionModel:
                 gap, reach = self._spheres(unknown)
                 self._bounds.record(slot, unknown, joints, gap - reach, gap + reach)
             lower, upper = self._bounds.widened(slot, joints)
-        measured = np.flatnonzero(lower <= float(upper.min()) + 1e-9)
-        return measured, lower[measured], upper[measured]
+        return np.flatnonzero(lower <= float(upper.min()) + 1e-9)
 
     def hulls(self) -> list[HullInfo]:
         """Per mesh, the volume it encloses and that of its hull (m^3), for reports."""

@@ -120,16 +120,6 @@ class PairBounds:
         around = self._keys[max(k - 1, 0) : k + 1]
         return min(around, key=lambda key: abs(key - slot))
 
-    def floor(self, slot: float | None, joints: np.ndarray) -> float:
-        """A lower bound (m) of the smallest distance over the pairs at ``joints``.
-
-        ``-inf`` when some pair has no bounds at the slot.
-        """
-        if slot not in self._slots:
-            return -np.inf
-        lower = self.widened(slot, joints)[0]
-        return -np.inf if np.isnan(lower).any() else float(lower.min())
-
     def unknown(self, slot: float | None) -> np.ndarray:
         """Indices of the pairs with no bounds at the slot."""
         return np.flatnonzero(np.isnan(self._arrays(slot)[1]))

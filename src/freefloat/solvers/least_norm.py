@@ -208,7 +208,7 @@ def _steps(
         found = _step(here.beta, here, trust)
         if found is None:
             break
-        d = found[0]
+        d = found
         new = _corrected(problem, constraints, here.beta + d, instants, cache, tolerance)
         before = float(here.beta @ here.beta)
         if new is not None and float(new.beta @ new.beta) < before:
@@ -242,7 +242,7 @@ def _corrected(
         correction = _step(np.zeros_like(beta), point, TRUST_MAX)
         if correction is None:
             return None
-        beta = polish(problem, beta + correction[0], tolerance)[0]
+        beta = polish(problem, beta + correction, tolerance)[0]
         if not np.all(np.isfinite(beta)):
             return None
     return None
@@ -278,8 +278,8 @@ class _Point:
         return bool(np.all(np.isfinite(self.r)) and np.all(np.isfinite(self.g)))
 
 
-def _step(centre: np.ndarray, point: _Point, trust: float) -> tuple[np.ndarray, float] | None:
-    """The step ``d`` from ``point`` and its largest multiplier, or None if no step meets the rows.
+def _step(centre: np.ndarray, point: _Point, trust: float) -> np.ndarray | None:
+    """The step ``d`` from ``point``, or None if no step meets the rows.
 
     ``d`` minimises ``|centre + d|^2`` with ``J d = -r``, ``g + G d <= -MARGIN`` and
     ``|d|_inf <= trust`` (rad or m): ``centre`` is the point itself for a step towards the
@@ -294,4 +294,4 @@ def _step(centre: np.ndarray, point: _Point, trust: float) -> tuple[np.ndarray, 
         solution = quadprog.solve_qp(eye, -centre, c_mat, b, len(point.r))
     except ValueError:
         return None
-    return np.asarray(solution[0]), float(np.abs(solution[4]).max(initial=0.0))
+    return np.asarray(solution[0])

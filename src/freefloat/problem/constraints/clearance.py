@@ -31,18 +31,15 @@ from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 
 __all__ = [
     "COARSE_EVERY",
+    "HALVINGS",
     "NEAR",
     "REFINE",
     "SOLVER_SLACK",
-    "WINDOW",
     "Clearance",
 ]
 
 #: Extra clearance the solvers ask for beyond the margin, between constraint instants (m).
 SOLVER_SLACK = 2e-3
-#: A row whose instant a bound keeps this far beyond the margin and slack (m) is not measured:
-#: its value is that bound's (never below the true row) and its gradient zero.
-WINDOW = 0.05
 #: Halvings of the intervals a bound cannot clear (the solvers' dense check).
 HALVINGS = 12
 #: Samples of the dense verification check (every near-minimum is then refined in time).
@@ -120,25 +117,13 @@ class Clearance(Constraint):
     def _rows_at(
         self, problem: Problem, beta: np.ndarray, instants: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Row values (m) and Jacobian at normalised ``instants`` (one closest pair each).
-
-        An instant whose clearance a bound from its last measurement there keeps more than
-        :data:`WINDOW` beyond the margin and slack is not measured: its row is that bound,
-        which the true row never exceeds, with a zero gradient (a step that would make it
-        bind moves the joints enough for the bound to fall, and then it is measured).
-        """
+        """Row values (m) and Jacobian at normalised ``instants`` (one closest pair each)."""
         base, dq, _ = problem.family.linear_map(instants)
         q = base.q + dq @ beta
         values = np.empty(len(instants))
         jacobian = np.zeros((len(instants), problem.n_free))
-        far = self.margin + SOLVER_SLACK + WINDOW
         for k, joints in enumerate(q):
-            slot = float(instants[k])
-            floor = self.model.floor(joints, slot)
-            if floor > far:  # a bound keeps it WINDOW clear: its row cannot bind in one step
-                values[k] = self.margin + SOLVER_SLACK - floor
-                continue
-            distance, gradient, _ = self.model.closest(joints, slot)
+            distance, gradient, _ = self.model.closest(joints, float(instants[k]))
             values[k] = self.margin + SOLVER_SLACK - distance
             jacobian[k] = -gradient @ dq[k]
         return values, jacobian
