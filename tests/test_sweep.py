@@ -179,17 +179,22 @@ def test_output_of_another_sweep_is_refused(tmp_path):
     assert out.read_text() == "index,duration,status\n"
 
 
+def _loopback_cluster(distributed, workers: int, threads: int):  # type: ignore[no-untyped-def]
+    """A Dask LocalCluster of worker processes on loopback, no dashboard."""
+    return distributed.LocalCluster(
+        processes=True,
+        n_workers=workers,
+        threads_per_worker=threads,
+        host="127.0.0.1",
+        dashboard_address=None,
+    )
+
+
 def test_dask_local_cluster_gives_the_local_rows(tmp_path, yaw_sweep):
     distributed = pytest.importorskip("distributed")
     path = _subset_file(tmp_path)
     with (
-        distributed.LocalCluster(
-            processes=True,
-            n_workers=2,
-            threads_per_worker=1,
-            host="127.0.0.1",
-            dashboard_address=None,
-        ) as cluster,
+        _loopback_cluster(distributed, workers=2, threads=1) as cluster,
         distributed.Client(cluster) as client,
     ):
         remote = ff.sweep(path, client=client, output=tmp_path / "dask.csv", progress=False)
@@ -265,13 +270,7 @@ def test_a_dask_worker_with_several_threads_is_refused_before_any_job(tmp_path, 
     distributed = pytest.importorskip("distributed")
     path = _subset_file(tmp_path)
     with (
-        distributed.LocalCluster(
-            processes=True,
-            n_workers=1,
-            threads_per_worker=2,
-            host="127.0.0.1",
-            dashboard_address=None,
-        ) as cluster,
+        _loopback_cluster(distributed, workers=1, threads=2) as cluster,
         distributed.Client(cluster) as client,
         pytest.raises(ff.InputError, match=r"runs 2 threads; freefloat needs one thread"),
     ):

@@ -76,9 +76,8 @@ class PairBounds:
     pair's bound from its last measurement *at that slot* is tight when the joints there
     moved little since (a solver's iterates), where the last query elsewhere on the path may
     be far. A new slot starts from the bounds of the nearest slot kept (the last used, for
-    ``None``). Bounds are valid whatever
-    their slot, so the slot changes which pairs are measured, never a distance. At most
-    :data:`SLOTS` slots are kept.
+    ``None``). Bounds are valid whatever their slot, so the slot changes which pairs are
+    measured, never a distance. At most :data:`SLOTS` slots are kept.
 
     Args:
         weights: (P, N) :func:`motion_weights` of the pairs (m per rad).
