@@ -268,6 +268,13 @@ class _Dip:
         dip = abs(float(joints[0]) - 100.5 / 200)
         return self.margin - 1e-3 + min(dip, self.cap), 0
 
+    def closest_many(self, joints: np.ndarray, slots=None):
+        from freefloat.robot.collision import Closest
+
+        dip = np.abs(np.asarray(joints, float)[:, 0] - 100.5 / 200)
+        values = self.margin - 1e-3 + np.minimum(dip, self.cap)
+        return Closest(values, np.zeros(len(values), dtype=int))
+
 
 class _OnePath:
     def __init__(self, path) -> None:

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
 import coal
@@ -37,6 +36,8 @@ from .distance_query import (
     GJK_TOLERANCE,
     RETRY_TOLERANCES,
     CheckedDistance,
+    Closest,
+    Distances,
     checked_distance,
     configure,
 )
@@ -51,9 +52,11 @@ from .geometry import (
     object_triangles,
     true_hull,
 )
-from .model import Robot, example_robot_data_dir
+from .model import Robot
 from .motion_bound import PairBounds, motion_weights
 from .obstacle import SHAPES, Obstacle
+from .sphere_kinematics import SphereKinematics
+from .srdf import ARM_SRDFS, known_srdf
 
 __all__ = [
     "ARM_SRDFS",
@@ -61,6 +64,7 @@ __all__ = [
     "RETRY_TOLERANCES",
     "SHAPES",
     "CheckedDistance",
+    "Closest",
     "CollisionModel",
     "Distances",
     "Obstacle",
@@ -70,41 +74,8 @@ __all__ = [
     "known_srdf",
 ]
 
-#: SRDF files of example-robot-data arms (below ``example-robot-data/robots``).
-ARM_SRDFS = {
-    "panda": "panda_description/srdf/panda.srdf",
-    "ur5": "ur_description/srdf/ur5.srdf",
-    "kinova": "kinova_description/srdf/kinova.srdf",
-    "xarm7": "xarm_description/srdf/xarm7.srdf",
-    "z1": "z1_description/srdf/z1.srdf",
-}
-
-
-def known_srdf(robot: Robot) -> Path | None:
-    """The SRDF of a servicer composed from an example-robot-data arm (named ``ARM_servicer``).
-
-    None for any other robot, or when example-robot-data is not installed.
-    """
-    arm = robot.name.removesuffix("_servicer")
-    share = example_robot_data_dir()
-    if arm == robot.name or arm not in ARM_SRDFS or share is None:
-        return None
-    path = share / "example-robot-data" / "robots" / ARM_SRDFS[arm]
-    return path if path.is_file() else None
-
-
-@dataclass(frozen=True)
-class Distances:
-    """Signed distances of every checked pair at one configuration.
-
-    Attributes:
-        values: (P,) signed distances (m), negative when the shapes overlap.
-        gradients: (P, N) derivatives with respect to the N joints (m per rad or m per m),
-            when asked for.
-    """
-
-    values: np.ndarray
-    gradients: np.ndarray | None = None
+#: Rows from which :meth:`CollisionModel.closest_many` places a batch's spheres at once.
+BATCH = 8
 
 
 class CollisionModel:
@@ -159,8 +130,9 @@ class CollisionModel:
             radii.append(float(obj.geometry.aabb_radius))
         self._centres, self._radii = np.array(centres), np.array(radii)
         self._shapes = [obj.geometry for obj in geometry.geometryObjects]
-        pairs = np.array(self.pairs, dtype=int).reshape(-1, 2)
-        self._reach = self._radii[pairs[:, 0]] + self._radii[pairs[:, 1]]
+        self._pair_array = np.array(self.pairs, dtype=int).reshape(-1, 2)
+        self._reach = self._radii[self._pair_array[:, 0]] + self._radii[self._pair_array[:, 1]]
+        self._kinematics = SphereKinematics(robot, geometry, self._centres)
         self._neutral = pin.neutral(robot.model)  # joint values go into a copy (no continuous)
         plain = all(j.kind != "continuous" for j in robot.joints)
         self._slots = np.array([j.idx_q for j in robot.joints]) if plain else None
@@ -218,8 +190,50 @@ class CollisionModel:
         pin.computeJointJacobians(self.robot.model, self._data)  # at closest_value's pose
         return value, self._gradient(k), k
 
+    def closest_many(
+        self, joints: np.ndarray, slots: Sequence[float] | None = None, gradients: bool = False
+    ) -> Closest:
+        """:meth:`closest_value` (with ``gradients``: :meth:`closest`) at many joint vectors.
+
+        The same values, pairs and gradients as those calls one after the other, in order
+        (``slots``: one per row, or None); the bounding spheres of the whole batch are placed
+        at once (:class:`~freefloat.robot.sphere_kinematics.SphereKinematics`) when it is
+        large enough for that to pay.
+
+        Args:
+            joints: (B, N) joint values (rad or m).
+            slots: a normalised instant per row (see :meth:`closest_value`), or None.
+            gradients: also each smallest distance's gradient over the joints (m per rad or m).
+        """
+        joints = np.atleast_2d(np.asarray(joints, dtype=float))
+        count = len(joints)
+        at = [None] * count if slots is None else [float(s) for s in slots]
+        values, pairs = np.full(count, math.inf), np.full(count, -1)
+        grads = np.zeros((count, self.robot.n)) if gradients else None
+        if not len(self.pairs):
+            return Closest(values, pairs, grads)
+        gaps = self._batch_gaps(joints) if count >= BATCH else None
+        for i in range(count):
+            found = self._bulk(joints[i], True, at[i], None if gaps is None else gaps[i])
+            k = int(np.argmin(found))
+            values[i], pairs[i] = found[k], k
+            if grads is not None:
+                pin.computeJointJacobians(self.robot.model, self._data)  # at _bulk's pose
+                grads[i] = self._gradient(k)
+        return Closest(values, pairs, grads)
+
+    def _batch_gaps(self, joints: np.ndarray) -> np.ndarray:
+        """(B, P) distances (m) between each pair's bounding-sphere centres, rows of ``joints``."""
+        centres = self._kinematics.centres(joints)
+        first, second = self._pair_array[:, 0], self._pair_array[:, 1]
+        return np.linalg.norm(centres[:, first] - centres[:, second], axis=2)
+
     def _bulk(
-        self, joints: np.ndarray, nearest: bool = False, slot: float | None = None
+        self,
+        joints: np.ndarray,
+        nearest: bool = False,
+        slot: float | None = None,
+        gaps: np.ndarray | None = None,
     ) -> np.ndarray:
         """Signed distances (m) of the pairs, each by Pinocchio's ``computeDistance``.
 
@@ -228,27 +242,31 @@ class CollisionModel:
         spheres as :func:`checked_distance` does, and an impossible one is asked again alone at
         looser tolerances (counted in :attr:`retries`). Every query starts from coal's default
         guesses (the requests keep none from the last query), so a distance does not depend,
-        to the last bit, on what was asked before.
+        to the last bit, on what was asked before. ``gaps``: the (P,) distances between the
+        pairs' sphere centres at ``joints`` (m), when already known.
         """
         model, data, gdata = self.robot.model, self._data, self._geometry_data
         joints = np.asarray(joints, dtype=float)
         pin.forwardKinematics(model, data, self._configuration(joints))
         pin.updateGeometryPlacements(model, data, self.geometry, gdata)
         if nearest and len(self.pairs):
-            measured = self._may_be_closest(joints, slot)
+            measured = self._may_be_closest(joints, slot, gaps)
         else:
             measured = np.arange(len(self.pairs))
-        gap, reach = self._spheres(measured)
-        found = np.array(
-            [pin.computeDistance(self.geometry, gdata, int(k)).min_distance for k in measured]
-        )
+        gap = self._spheres(measured) if gaps is None else gaps[measured]
+        reach = self._reach[measured]
+        compute, geometry = pin.computeDistance, self.geometry
+        found = np.array([compute(geometry, gdata, k).min_distance for k in measured.tolist()])
         with np.errstate(invalid="ignore"):
             possible = (found >= gap - reach - 1e-9) & (found <= gap + reach + 1e-9)
         self._retried = {}
-        for i in np.flatnonzero(~(np.isfinite(found) & possible)).tolist():
-            found[i] = self._retry(int(measured[i]), float(gap[i]), float(reach[i]))
+        if not possible.all():
+            for i in np.flatnonzero(~(np.isfinite(found) & possible)).tolist():
+                found[i] = self._retry(int(measured[i]), float(gap[i]), float(reach[i]))
         if self._bounds is not None:  # a retried value is no reference: forgotten
-            known = np.where(np.isin(measured, list(self._retried)), math.nan, found)
+            known = found
+            if self._retried:
+                known = np.where(np.isin(measured, list(self._retried)), math.nan, found)
             self._bounds.record(slot, measured, joints, known, known)
         values = np.full(len(self.pairs), math.inf)
         values[measured] = found
@@ -277,39 +295,40 @@ class CollisionModel:
         q[self._slots] = joints
         return q
 
-    def _spheres(self, pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Per pair (indices), the distance of its bounding spheres' centres and their radii (m).
+    def _spheres(self, pairs: np.ndarray) -> np.ndarray:
+        """Per pair (indices), the distance of its bounding spheres' centres (m).
 
-        The distance is within ``gap +- reach``; at the placements of the last
-        ``updateGeometryPlacements``.
+        At the placements of the last ``updateGeometryPlacements``; the distance of the
+        shapes is within this +- the pairs' :attr:`_reach`.
         """
         placements = self._geometry_data.oMg
-        centres: dict[int, np.ndarray] = {}
-        gap = np.empty(len(pairs))
-        for i, k in enumerate(pairs.tolist()):
-            a, b = self.pairs[k]
-            for g in (a, b):
-                if g not in centres:
-                    centres[g] = placements[g].act(self._centres[g])
-            gap[i] = math.dist(centres[a], centres[b])
-        return gap, self._reach[pairs]
+        involved = np.unique(self._pair_array[pairs])
+        centres = np.zeros((len(self._centres), 3))
+        for g in involved.tolist():
+            centres[g] = placements[g].act(self._centres[g])
+        first, second = self._pair_array[pairs, 0], self._pair_array[pairs, 1]
+        return np.linalg.norm(centres[first] - centres[second], axis=1)
 
-    def _may_be_closest(self, joints: np.ndarray, slot: float | None) -> np.ndarray:
+    def _may_be_closest(
+        self, joints: np.ndarray, slot: float | None, gaps: np.ndarray | None = None
+    ) -> np.ndarray:
         """Indices of the pairs that may have the smallest distance at ``joints``.
 
         Each pair is bounded from its last bounds at ``slot`` (:class:`PairBounds`: its
         measured distance; or, for a pair never measured there, its bounding spheres, which are
-        then kept); with no motion bound (a prismatic joint), by its bounding spheres. A pair
-        that cannot be the closest is not measured, so the smallest distance and its pair are
-        the same bits as with every pair measured.
+        then kept); with no motion bound (a prismatic joint), by its bounding spheres
+        (``gaps``: their centres' distances when already known, m). A pair that cannot be the
+        closest is not measured, so the smallest distance and its pair are the same bits as
+        with every pair measured.
         """
         if self._bounds is None:
-            gap, reach = self._spheres(np.arange(len(self.pairs)))
-            lower, upper = gap - reach, gap + reach
+            gap = self._spheres(np.arange(len(self.pairs))) if gaps is None else gaps
+            lower, upper = gap - self._reach, gap + self._reach
         else:
             unknown = self._bounds.unknown(slot)
             if len(unknown):
-                gap, reach = self._spheres(unknown)
+                gap = self._spheres(unknown) if gaps is None else gaps[unknown]
+                reach = self._reach[unknown]
                 self._bounds.record(slot, unknown, joints, gap - reach, gap + reach)
             lower, upper = self._bounds.widened(slot, joints)
         return np.flatnonzero(lower <= float(upper.min()) + 1e-9)

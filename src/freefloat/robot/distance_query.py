@@ -23,6 +23,8 @@ __all__ = [
     "GJK_TOLERANCE",
     "RETRY_TOLERANCES",
     "CheckedDistance",
+    "Closest",
+    "Distances",
     "checked_distance",
     "configure",
 ]
@@ -46,6 +48,36 @@ class CheckedDistance:
     value: float
     result: coal.DistanceResult
     retries: int
+
+
+@dataclass(frozen=True)
+class Closest:
+    """The smallest signed distance over the pairs at each of B joint vectors.
+
+    Attributes:
+        values: (B,) smallest signed distances (m; inf when there are no pairs).
+        pairs: (B,) their pair indices (-1 when there are no pairs).
+        gradients: (B, N) their derivatives with respect to the joints (m per rad or m per
+            m), when asked for.
+    """
+
+    values: np.ndarray
+    pairs: np.ndarray
+    gradients: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class Distances:
+    """Signed distances of every checked pair at one configuration.
+
+    Attributes:
+        values: (P,) signed distances (m), negative when the shapes overlap.
+        gradients: (P, N) derivatives with respect to the N joints (m per rad or m per m),
+            when asked for.
+    """
+
+    values: np.ndarray
+    gradients: np.ndarray | None = None
 
 
 #: A request as coal makes it: its guesses are where every query starts.

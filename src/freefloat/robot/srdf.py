@@ -13,10 +13,32 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..errors import ModelError
-from .collision import ARM_SRDFS
-from .model import MAX_URDF_BYTES, example_robot_data_dir
+from .model import MAX_URDF_BYTES, Robot, example_robot_data_dir
 
-__all__ = ["arm_srdf", "disabled_pairs", "merged_srdf"]
+__all__ = ["ARM_SRDFS", "arm_srdf", "disabled_pairs", "known_srdf", "merged_srdf"]
+
+
+#: SRDF files of example-robot-data arms (below ``example-robot-data/robots``).
+ARM_SRDFS = {
+    "panda": "panda_description/srdf/panda.srdf",
+    "ur5": "ur_description/srdf/ur5.srdf",
+    "kinova": "kinova_description/srdf/kinova.srdf",
+    "xarm7": "xarm_description/srdf/xarm7.srdf",
+    "z1": "z1_description/srdf/z1.srdf",
+}
+
+
+def known_srdf(robot: Robot) -> Path | None:
+    """The SRDF of a servicer composed from an example-robot-data arm (named ``ARM_servicer``).
+
+    None for any other robot, or when example-robot-data is not installed.
+    """
+    arm = robot.name.removesuffix("_servicer")
+    share = example_robot_data_dir()
+    if arm == robot.name or arm not in ARM_SRDFS or share is None:
+        return None
+    path = share / "example-robot-data" / "robots" / ARM_SRDFS[arm]
+    return path if path.is_file() else None
 
 
 def arm_srdf(arm: str) -> Path | None:

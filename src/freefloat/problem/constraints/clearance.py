@@ -120,12 +120,10 @@ class Clearance(Constraint):
         """Row values (m) and Jacobian at normalised ``instants`` (one closest pair each)."""
         base, dq, _ = problem.family.linear_map(instants)
         q = base.q + dq @ beta
-        values = np.empty(len(instants))
-        jacobian = np.zeros((len(instants), problem.n_free))
-        for k, joints in enumerate(q):
-            distance, gradient, _ = self.model.closest(joints, float(instants[k]))
-            values[k] = self.margin + SOLVER_SLACK - distance
-            jacobian[k] = -gradient @ dq[k]
+        closest = self.model.closest_many(q, instants, gradients=True)
+        assert closest.gradients is not None
+        values = self.margin + SOLVER_SLACK - closest.values
+        jacobian = -np.einsum("kn,knf->kf", closest.gradients, dq)
         return values, jacobian
 
     @staticmethod
@@ -221,7 +219,7 @@ class Clearance(Constraint):
         key = self._key(path, t)
         if self._sampled_memo is None or self._sampled_memo[0] != key:
             q = path.evaluate(t).q
-            self._sampled_memo = (key, np.array([self.model.closest_value(x)[0] for x in q]))
+            self._sampled_memo = (key, self.model.closest_many(q).values)
         return self._sampled_memo[1]
 
     def _measured(
@@ -251,12 +249,12 @@ class Clearance(Constraint):
         todo = np.unique(np.append(np.arange(0, samples, COARSE_EVERY), samples - 1))
         weights = self.model.weights
         if weights is None:  # no bound between samples: every sample, and no lower bound
-            known[:] = [self.model.closest_value(x)[0] for x in q]
+            known[:] = self.model.closest_many(q).values
             self._measured_memo = (key, known, -math.inf)
             return known, -math.inf
         while True:
             todo = todo[np.isnan(known[todo])]
-            known[todo] = [self.model.closest_value(q[k], k / (samples - 1))[0] for k in todo]
+            known[todo] = self.model.closest_many(q[todo], todo / (samples - 1)).values
             nodes = np.flatnonzero(~np.isnan(known))
             a, b = nodes[:-1], nodes[1:]
             lower = self._between(path, t[a], t[b], known[a], known[b])
@@ -292,9 +290,7 @@ class Clearance(Constraint):
             mid = 0.5 * (ends[0] + ends[1])
             joints = path.evaluate(mid).q
             slots = mid / path.duration
-            vm = np.array(
-                [self.model.closest_value(x, s)[0] for x, s in zip(joints, slots, strict=True)]
-            )
+            vm = self.model.closest_many(joints, slots).values
             times.append(mid)
             values.append(vm)
             ends = np.concatenate(

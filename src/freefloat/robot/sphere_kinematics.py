@@ -1,0 +1,93 @@
+"""Where the collision shapes' bounding spheres are, at many joint vectors in one call.
+
+The collision model bounds every pair's distance by its shapes' bounding spheres before it asks
+coal for exact distances (:mod:`freefloat.robot.collision`). Pinocchio places the shapes one
+configuration at a time, and reading each placement back into Python costs more than the
+exact query it spares; here the sphere centres of a whole batch of configurations come from one
+forward pass of array operations over the kinematic tree: per joint, its parent's placement,
+its fixed placement in the parent, and its own motion (a rotation about, or a translation
+along, its axis by the joint value). The spacecraft is at the identity, as in the collision
+model; joints that are not the robot's (the free flyer) keep their neutral placement.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from .model import Robot
+
+__all__ = ["SphereKinematics"]
+
+
+class SphereKinematics:
+    """Bounding-sphere centres of a geometry model's shapes, batched over joint vectors.
+
+    Args:
+        robot: the robot (its Pinocchio model and 1-DoF joints).
+        geometry: the collision geometry model.
+        centres: (G, 3) each shape's bounding-sphere centre in the shape's own frame (m).
+    """
+
+    def __init__(self, robot: Robot, geometry: pin.GeometryModel, centres: np.ndarray) -> None:
+        model = robot.model
+        data = model.createData()
+        pin.forwardKinematics(model, data, pin.neutral(model))
+        column = {joint.index: k for k, joint in enumerate(robot.joints)}
+        # Per joint (after the universe): parent, fixed rotation and offset in the parent (the
+        # neutral placement for a joint that is not the robot's), and for the robot's joints
+        # the column of its value, whether it turns, and its unit axis.
+        self._steps: list[tuple[int, np.ndarray, np.ndarray, int, bool, np.ndarray]] = []
+        for j in range(1, model.njoints):
+            k = column.get(j, -1)
+            fixed = model.jointPlacements[j] if k >= 0 else data.liMi[j]
+            motion = np.asarray(data.joints[j].S, dtype=float).ravel()
+            turning = k >= 0 and bool(np.any(motion[3:6]))
+            axis = motion[3:6] if turning else motion[0:3]
+            self._steps.append(
+                (
+                    int(model.parents[j]),
+                    fixed.rotation.copy(),
+                    fixed.translation.copy(),
+                    k,
+                    turning,
+                    axis / (np.linalg.norm(axis) or 1.0),
+                )
+            )
+        objects = list(geometry.geometryObjects)
+        self._parents = np.array([int(obj.parentJoint) for obj in objects], dtype=int)
+        self._local = np.array(
+            [
+                obj.placement.act(np.asarray(c, dtype=float))
+                for obj, c in zip(objects, centres, strict=True)
+            ]
+        ).reshape(-1, 3)
+        self._njoints = model.njoints
+
+    def centres(self, joints: np.ndarray) -> np.ndarray:
+        """(B, G, 3) the sphere centres (m, spacecraft frame) at (B, N) joint values (rad or m)."""
+        joints = np.atleast_2d(np.asarray(joints, dtype=float))
+        count = len(joints)
+        rotations = np.empty((self._njoints, count, 3, 3))
+        offsets = np.empty((self._njoints, count, 3))
+        rotations[0], offsets[0] = np.eye(3), 0.0
+        for j, (parent, fixed_r, fixed_t, k, turning, axis) in enumerate(self._steps, start=1):
+            r_parent, t_parent = rotations[parent], offsets[parent]
+            offsets[j] = t_parent + r_parent @ fixed_t
+            rotation = r_parent @ fixed_r
+            if k >= 0 and turning:
+                rotation = rotation @ _rotations(axis, joints[:, k])
+            elif k >= 0:  # a prismatic joint: along its axis, in its own (fixed) frame
+                offsets[j] += (rotation @ axis) * joints[:, k, None]
+            rotations[j] = rotation
+        r, t = rotations[self._parents], offsets[self._parents]  # (G, B, 3, 3), (G, B, 3)
+        world = np.einsum("gbij,gj->gbi", r, self._local) + t
+        return world.transpose(1, 0, 2)
+
+
+def _rotations(axis: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """(B, 3, 3) rotations by ``angles`` (rad) about the unit ``axis`` (Rodrigues)."""
+    skew = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    square = skew @ skew
+    s, c = np.sin(angles)[:, None, None], np.cos(angles)[:, None, None]
+    return np.eye(3) + s * skew + (1.0 - c) * square

@@ -1,0 +1,100 @@
+"""Clearance queries in batches: sphere centres placed at once, and the same closest pairs.
+
+Truth here: the sphere arm's closed-form sphere centre, Pinocchio's own placements of every
+shape (one configuration at a time) for joints of every kind, and a fresh model that measures
+every pair at every configuration.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import freefloat as ff
+from freefloat.robot.collision import CollisionModel, known_srdf
+from freefloat.robot.sphere_kinematics import SphereKinematics
+
+from conftest import ROOT
+from test_collision import SPHERE_ARM, _sphere_centre, sphere_arm  # noqa: F401 (fixture)
+
+PANDA = ROOT / "robots" / "scenarios" / "panda_servicer.toml"
+DUAL = ROOT / "robots" / "scenarios" / "dual_ur5_servicer.toml"
+
+
+def test_the_sphere_arms_centre_is_its_closed_form(sphere_arm):  # noqa: F811
+    model = CollisionModel(sphere_arm)
+    objects = [obj.name for obj in model.geometry.geometryObjects]
+    kinematics = SphereKinematics(sphere_arm, model.geometry, model._centres)
+    rng = np.random.default_rng(5)
+    joints = rng.uniform(-3.0, 3.0, (40, 2))
+    centres = kinematics.centres(joints)[:, objects.index("l2_0")]
+    want = np.array([_sphere_centre(*q) for q in joints])
+    assert np.allclose(centres, want, atol=1e-13, rtol=0.0)
+
+
+#: The sphere arm with a continuous first joint about a slanted axis and a prismatic second.
+MIXED_ARM = (
+    SPHERE_ARM.replace('name="q1" type="revolute"', 'name="q1" type="continuous"')
+    .replace(
+        '<axis xyz="0 0 1"/>\n    <limit lower="-3.1"',
+        '<axis xyz="0 0.6 0.8"/>\n    <limit lower="-3.1"',
+        1,
+    )
+    .replace('name="q2" type="revolute"', 'name="q2" type="prismatic"')
+    .replace(
+        '<axis xyz="0 0 1"/>\n    <limit lower="-3.1" upper="3.1"',
+        '<axis xyz="1 0 0"/>\n    <limit lower="-0.5" upper="0.5"',
+        1,
+    )
+)
+
+
+@pytest.mark.parametrize("which", ["mixed", "panda", "dual"])
+def test_sphere_centres_are_pinocchios_placements(which, tmp_path):
+    """Every shape's sphere centre, batched, against Pinocchio placing the shapes one
+    configuration at a time (continuous, slanted, prismatic and revolute joints)."""
+    if which == "mixed":
+        path = tmp_path / "mixed.urdf"
+        path.write_text(MIXED_ARM)
+        robot = ff.load_robot(path)
+        kinds = {j.kind for j in robot.joints}
+        assert kinds == {"continuous", "prismatic"}
+    else:
+        robot = ff.Scenario.from_toml(PANDA if which == "panda" else DUAL).robot
+    model = CollisionModel(robot)
+    kinematics = SphereKinematics(robot, model.geometry, model._centres)
+    rng = np.random.default_rng(11)
+    lower = np.array([max(j.lower, -3.0) for j in robot.joints])
+    upper = np.array([min(j.upper, 3.0) for j in robot.joints])
+    joints = rng.uniform(lower, upper, (25, robot.n))
+    batched = kinematics.centres(joints)
+    data, gdata = robot.model.createData(), pin.GeometryData(model.geometry)
+    for b, q in enumerate(joints):
+        pin.updateGeometryPlacements(
+            robot.model, data, model.geometry, gdata, robot.configuration(q)
+        )
+        for g, placement in enumerate(gdata.oMg):
+            assert np.allclose(batched[b, g], placement.act(model._centres[g]), atol=1e-12)
+
+
+@pytest.mark.parametrize("path", [PANDA, DUAL])
+def test_a_batch_gives_the_closest_pair_of_every_pair_measured(path):
+    """Along a path and around it, slotted as the solvers ask, after earlier batches: each
+    row's smallest distance, pair and gradient are those of a fresh model measuring every
+    pair (brute force)."""
+    scenario = ff.Scenario.from_toml(path)
+    robot = scenario.robot
+    walked = CollisionModel(robot, known_srdf(robot))
+    start, goal = np.asarray(scenario.start), np.asarray(scenario.goal)
+    rng = np.random.default_rng(4)
+    u = np.linspace(0.0, 1.0, 24)
+    fresh = CollisionModel(robot, known_srdf(robot))
+    for round_ in range(3):  # the second and third batches start from the bounds kept
+        joints = start + u[:, None] * (goal - start) + rng.normal(0.0, 0.05 * round_, (24, robot.n))
+        got = walked.closest_many(joints, u, gradients=True)
+        for i, q in enumerate(joints):
+            every = fresh.distances(q, gradients=True)
+            k = int(np.argmin(every.values))
+            assert (float(got.values[i]), int(got.pairs[i])) == (float(every.values[k]), k)
+            assert np.array_equal(got.gradients[i], every.gradients[k])
