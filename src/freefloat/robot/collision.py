@@ -130,6 +130,7 @@ class CollisionModel:
             radii.append(float(obj.geometry.aabb_radius))
         self._centres, self._radii = np.array(centres), np.array(radii)
         self._shapes = [obj.geometry for obj in geometry.geometryObjects]
+        self._parent_joints = [int(obj.parentJoint) for obj in geometry.geometryObjects]
         self._pair_array = np.array(self.pairs, dtype=int).reshape(-1, 2)
         self._reach = self._radii[self._pair_array[:, 0]] + self._radii[self._pair_array[:, 1]]
         self._kinematics = SphereKinematics(robot, geometry, self._centres)
@@ -346,14 +347,13 @@ class CollisionModel:
         model, data = self.robot.model, self._data
         result = self._retried.get(k, self._pair_results[k])
         normal = np.asarray(result.normal)
-        objects = self.geometry.geometryObjects
         a, b = self.pairs[k]
         grad = np.zeros(self.robot.n)
         for index, point, sign in (
             (a, result.getNearestPoint1(), -1.0),
             (b, result.getNearestPoint2(), 1.0),
         ):
-            joint = objects[index].parentJoint
+            joint = self._parent_joints[index]
             if joint <= 1:
                 continue  # fixed to the spacecraft: does not move with the joints
             jac = pin.getJointJacobian(model, data, joint, pin.LOCAL_WORLD_ALIGNED)
