@@ -12,7 +12,8 @@ the tables give medians over the rounds and the median of the per-round ratios.
 - the worked example: the whole verified plan against its solve (target <= 2x);
 - the Panda servicer's goal turned 1, 3 and 10 deg about each axis from the quintic path's
   attitude, with clearance (target: median <= 0.1 s, worst <= 0.5 s);
-- the Panda servicer's goal rolled 65 deg, with clearance (target: refused in <= 1 s);
+- the Panda servicer's goal rolled 65 deg, with clearance (target: refused in <= 1 s; it is
+  reachable, so it plans), and rolled 180 deg (beyond the arm's reach: refused);
 - ``min_effort`` on the Panda servicer (target <= 0.5 s).
 """
 
@@ -154,9 +155,10 @@ def bench_reach_goals() -> list[dict[str, object]]:
     return rows
 
 
-def bench_roll() -> dict[str, object]:
-    """The Panda servicer's goal rolled 65 deg (about x, from its stated goal), with clearance."""
-    elapsed, out = _time(lambda: ff.plan(turned("panda_servicer", np.radians([65.0, 0, 0]), False)))
+def bench_roll(degrees: float = 65.0) -> dict[str, object]:
+    """The Panda servicer's goal rolled ``degrees`` about x from its stated goal, clearance on."""
+    rotvec = np.radians([degrees, 0, 0])
+    elapsed, out = _time(lambda: ff.plan(turned("panda_servicer", rotvec, False)))
     outcome = "planned" if isinstance(out, ff.Plan) else f"{type(out).__name__}"
     return {"time_s": elapsed, "outcome": outcome}
 
@@ -208,6 +210,11 @@ def print_speed(found: dict[str, object]) -> None:
     print(
         f"| rolled 65 deg from the stated goal (target: refused in <= 1 s) | "
         f"{roll['time_s']:.2f} | {roll['outcome']} |"
+    )
+    far = found["roll_far"]
+    print(
+        f"| rolled 180 deg from the stated goal (out of reach) | "
+        f"{far['time_s']:.2f} | {far['outcome']} |"
     )  # type: ignore[index]
     effort = found["min_effort"]
     print("\n| Panda servicer, with clearance | min_effort s (target <= 0.5) | min_norm s |")
@@ -222,6 +229,7 @@ def bench_speed(rounds: int, roll: bool = True) -> dict[str, object]:
         "worked": bench_worked(rounds),
         "reach": bench_reach_goals(),
         "roll": bench_roll() if roll else {"time_s": float("nan"), "outcome": "not run"},
+        "roll_far": bench_roll(180.0),
         "min_effort": bench_min_effort(max(1, rounds // 3)),
     }
 

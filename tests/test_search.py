@@ -116,3 +116,27 @@ def test_spatial_failure_reports_the_residual_per_axis_and_what_was_tried():
     # Continuation says how far it got along the way and why it stopped.
     assert 0.0 < err.reached_fraction < 1.0 and err.stopped_by
     assert message.startswith("reachable up to ")
+
+
+def test_a_goal_out_of_reach_within_the_limits_is_refused_without_clearance_rows(monkeypatch):
+    """The Panda servicer's goal rolled 180 deg: the search within the joint limits alone stops
+    against a limit, so the goal is refused at once; clearance only takes paths away, and its
+    rows are never asked for. The refusal says which constraint was left out and why."""
+    from freefloat.physics import attitude as att
+    from freefloat.problem.constraints.clearance import Clearance
+
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "panda_servicer.toml")
+    rolled = att.quat_multiply(scenario.goal_attitude, att.quat_exp(np.array([math.pi, 0, 0])))
+    asked = []
+    original = Clearance.rows
+    monkeypatch.setattr(
+        Clearance, "rows", lambda self, *a, **k: asked.append(1) or original(self, *a, **k)
+    )
+    with pytest.raises(ff.UnreachableGoalError) as info:
+        ff.plan(ff.Scenario(**{**scenario.__dict__, "goal_attitude": rolled}))
+    err = info.value
+    assert not asked
+    assert str(err).startswith("reachable up to ")
+    assert "searched within the joint limits alone (clearance not imposed" in str(err)
+    assert err.stopped_by.startswith("joint_position_limits")
+    assert 0.0 < err.reached < err.asked

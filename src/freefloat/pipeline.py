@@ -17,6 +17,7 @@ import numpy as np
 from .errors import (
     CollisionError,
     SolverError,
+    UnreachableAttitudeError,
     VerificationError,
 )
 from .physics.attitude import geodesic_angle
@@ -219,17 +220,41 @@ def _search_proxy_first(
     """The search within the affine constraints alone, kept when its path honours the others.
 
     The costly constraints (clearance) are imposed only where they bind: when the path found
-    within the cheap ones (joint limits) breaks one, or that search fails, the search runs
-    again with every constraint (so no plan the full search finds is refused).
+    within the cheap ones (joint limits) breaks one, or that search fails for another reason
+    than the goal's being out of its reach, the search runs again with every constraint. A
+    goal out of reach within the cheap constraints alone is refused at once: the others only
+    take paths away (:func:`_out_of_reach`).
     """
     cheap = [c for c in eager if c.affine]
     if len(cheap) == len(eager):
         return search(scenario, options, eager)
     try:
         found = search(scenario, options, cheap)
+    except UnreachableAttitudeError as exc:
+        raise _out_of_reach(exc, [c for c in eager if not c.affine]) from None
     except SolverError:
         return search(scenario, options, eager)
     return search(scenario, options, eager) if _broken(found, eager) else found
+
+
+def _out_of_reach(
+    error: UnreachableAttitudeError, left_out: Sequence[Constraint]
+) -> UnreachableAttitudeError:
+    """The refusal of the search within the cheap constraints, saying which were left out."""
+    names = ", ".join(c.name for c in left_out)
+    return UnreachableAttitudeError(
+        f"{error.headline}; searched within the joint limits alone ({names} not imposed: it "
+        "would only take paths away)",
+        error.best_residual,
+        reached=error.reached,
+        asked=error.asked,
+        tried=error.tried,
+        per_axis=error.per_axis,
+        hint=error.hint,
+        stopped_by=error.stopped_by,
+        last_beta=error.last_beta,
+        axis=error.axis,
+    )
 
 
 def _check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> None:

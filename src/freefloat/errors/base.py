@@ -148,6 +148,7 @@ class SolverError(FreeFloatError):
         reached_fraction: how far along the way from the quintic attitude to the goal the
             planner got (0-1; continuation only, else 0).
         last_beta: the free coefficients where continuation stopped (rad or m), if it did.
+        hint: what to try instead ("" when none).
     """
 
     def __init__(
@@ -162,6 +163,7 @@ class SolverError(FreeFloatError):
         last_beta: Sequence[float] | None = None,
     ) -> None:
         self.headline = message
+        self.hint = hint
         self.stopped_by = stopped_by
         self.last_beta = None if last_beta is None else tuple(float(b) for b in last_beta)
         self.reached_fraction = float(reached_fraction)
