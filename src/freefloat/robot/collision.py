@@ -205,23 +205,26 @@ class CollisionModel:
             joints: (B, N) joint values (rad or m).
             slots: a normalised instant per row (see :meth:`closest_value`), or None.
             gradients: also each smallest distance's gradient over the joints (m per rad or m).
+
+        The result also holds each row's lower bounds of every pair's distance (``lower``).
         """
         joints = np.atleast_2d(np.asarray(joints, dtype=float))
         count = len(joints)
         at = [None] * count if slots is None else [float(s) for s in slots]
         values, pairs = np.full(count, math.inf), np.full(count, -1)
         grads = np.zeros((count, self.robot.n)) if gradients else None
+        lower = np.full((count, len(self.pairs)), math.inf)
         if not len(self.pairs):
-            return Closest(values, pairs, grads)
+            return Closest(values, pairs, grads, lower)
         gaps = self._batch_gaps(joints) if count >= BATCH else None
         for i in range(count):
-            found = self._bulk(joints[i], True, at[i], None if gaps is None else gaps[i])
+            found = self._bulk(joints[i], True, at[i], None if gaps is None else gaps[i], lower[i])
             k = int(np.argmin(found))
             values[i], pairs[i] = found[k], k
             if grads is not None:
                 pin.computeJointJacobians(self.robot.model, self._data)  # at _bulk's pose
                 grads[i] = self._gradient(k)
-        return Closest(values, pairs, grads)
+        return Closest(values, pairs, grads, lower)
 
     def _batch_gaps(self, joints: np.ndarray) -> np.ndarray:
         """(B, P) distances (m) between each pair's bounding-sphere centres, rows of ``joints``."""
@@ -235,6 +238,7 @@ class CollisionModel:
         nearest: bool = False,
         slot: float | None = None,
         gaps: np.ndarray | None = None,
+        lower: np.ndarray | None = None,
     ) -> np.ndarray:
         """Signed distances (m) of the pairs, each by Pinocchio's ``computeDistance``.
 
@@ -244,14 +248,16 @@ class CollisionModel:
         looser tolerances (counted in :attr:`retries`). Every query starts from coal's default
         guesses (the requests keep none from the last query), so a distance does not depend,
         to the last bit, on what was asked before. ``gaps``: the (P,) distances between the
-        pairs' sphere centres at ``joints`` (m), when already known.
+        pairs' sphere centres at ``joints`` (m), when already known. ``lower``: a (P,) array
+        that receives a lower bound of every pair's distance (m): the measured value, or for a
+        pair not measured, its bound.
         """
         model, data, gdata = self.robot.model, self._data, self._geometry_data
         joints = np.asarray(joints, dtype=float)
         pin.forwardKinematics(model, data, self._configuration(joints))
         pin.updateGeometryPlacements(model, data, self.geometry, gdata)
         if nearest and len(self.pairs):
-            measured = self._may_be_closest(joints, slot, gaps)
+            measured = self._may_be_closest(joints, slot, gaps, lower)
         else:
             measured = np.arange(len(self.pairs))
         gap = self._spheres(measured) if gaps is None else gaps[measured]
@@ -271,6 +277,8 @@ class CollisionModel:
             self._bounds.record(slot, measured, joints, known, known)
         values = np.full(len(self.pairs), math.inf)
         values[measured] = found
+        if lower is not None:
+            lower[measured] = found
         return values
 
     def _retry(self, k: int, gap: float, reach: float) -> float:
@@ -311,7 +319,11 @@ class CollisionModel:
         return np.linalg.norm(centres[first] - centres[second], axis=1)
 
     def _may_be_closest(
-        self, joints: np.ndarray, slot: float | None, gaps: np.ndarray | None = None
+        self,
+        joints: np.ndarray,
+        slot: float | None,
+        gaps: np.ndarray | None = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """Indices of the pairs that may have the smallest distance at ``joints``.
 
@@ -320,7 +332,7 @@ class CollisionModel:
         then kept); with no motion bound (a prismatic joint), by its bounding spheres
         (``gaps``: their centres' distances when already known, m). A pair that cannot be the
         closest is not measured, so the smallest distance and its pair are the same bits as
-        with every pair measured.
+        with every pair measured. ``out`` receives every pair's lower bound (m).
         """
         if self._bounds is None:
             gap = self._spheres(np.arange(len(self.pairs))) if gaps is None else gaps
@@ -332,6 +344,8 @@ class CollisionModel:
                 reach = self._reach[unknown]
                 self._bounds.record(slot, unknown, joints, gap - reach, gap + reach)
             lower, upper = self._bounds.widened(slot, joints)
+        if out is not None:
+            out[:] = lower
         return np.flatnonzero(lower <= float(upper.min()) + 1e-9)
 
     def hulls(self) -> list[HullInfo]:

@@ -59,11 +59,14 @@ class Closest:
         pairs: (B,) their pair indices (-1 when there are no pairs).
         gradients: (B, N) their derivatives with respect to the joints (m per rad or m per
             m), when asked for.
+        lower: (B, P) a lower bound of every pair's distance at each row (m): its measured
+            value, or the bound that spared its query.
     """
 
     values: np.ndarray
     pairs: np.ndarray
     gradients: np.ndarray | None = None
+    lower: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

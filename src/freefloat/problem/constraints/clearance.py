@@ -18,10 +18,11 @@ on every other sample).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
-from ...robot.collision import CollisionModel
+from ...robot.collision import Closest, CollisionModel
 from ...robot.model import Robot
 from ...robot.motion_bound import BOUND_SLACK
 from ..paths import JointPolynomials, PathFamily
@@ -75,9 +76,7 @@ class Clearance(Constraint):
         self._memo: tuple[PathFamily, bytes, ConstraintRows] | None = None
         self._smallest_memo: dict[tuple[bytes, float, int, int], tuple[float, float, int]] = {}
         self._sampled_memo: tuple[tuple[bytes, float, int], np.ndarray] | None = None
-        self._measured_memo: (
-            tuple[tuple[bytes, float, int, float | None], np.ndarray, float] | None
-        ) = None
+        self._measured_memo: tuple[tuple[bytes, float, int, float | None], _Measured] | None = None
 
     def __repr__(self) -> str:
         return f"Clearance(margin={self.margin:g} m, {self.model.n_pairs} pairs)"
@@ -156,7 +155,7 @@ class Clearance(Constraint):
             return self._smallest_memo[key]
         t_all = np.linspace(0.0, path.duration, samples)
         if every == 1:  # the samples a bound cannot spare: the rest are above best + NEAR
-            sampled_all = np.nan_to_num(self._measured(path, samples, None)[0], nan=math.inf)
+            sampled_all = np.nan_to_num(self._measured(path, samples, None).known, nan=math.inf)
         else:
             sampled_all = self._sampled(path, t_all)
         t, sampled = t_all[::every], sampled_all[::every]
@@ -203,16 +202,24 @@ class Clearance(Constraint):
         return best, best_t, best_pair
 
     def _between(
-        self, path: JointPolynomials, t0: np.ndarray, t1: np.ndarray, v0: np.ndarray, v1: np.ndarray
+        self,
+        path: JointPolynomials,
+        t0: np.ndarray,
+        t1: np.ndarray,
+        lower0: np.ndarray,
+        lower1: np.ndarray,
     ) -> np.ndarray:
-        """Lower bounds (m) of the clearance over ``[t0, t1]`` (s), measured ``v0``, ``v1`` there.
+        """Lower bounds (m) of the clearance over ``[t0, t1]`` (s), from bounds at both ends.
 
-        Their mean less half the time between them times how fast any pair's distance can
-        change there (the pairs' motion weights times bounds of the joint rates).
+        ``lower0``, ``lower1``: (I, P) lower bounds of every pair's distance at ``t0`` and
+        ``t1`` (m; the measured distance where measured). Per pair: their mean less half the
+        time between them times how fast that pair's distance can change there (its motion
+        weights times bounds of the joint rates); the clearance's bound is the smallest.
         """
         assert self.model.weights is not None
-        speed = np.max(rate_bounds(path, t0, t1) @ self.model.weights.T, axis=1)
-        return 0.5 * (v0 + v1 - speed * (t1 - t0)) - BOUND_SLACK
+        speed = rate_bounds(path, t0, t1) @ self.model.weights.T  # (I, P), m/s
+        per_pair = 0.5 * (lower0 + lower1 - speed * (t1 - t0)[:, None])
+        return np.min(per_pair, axis=1) - BOUND_SLACK
 
     def _sampled(self, path: JointPolynomials, t: np.ndarray) -> np.ndarray:
         """Smallest distance over the pairs at each time of ``t`` (m), remembered per path."""
@@ -222,19 +229,19 @@ class Clearance(Constraint):
             self._sampled_memo = (key, self.model.closest_many(q).values)
         return self._sampled_memo[1]
 
-    def _measured(
-        self, path: JointPolynomials, samples: int, limit: float | None
-    ) -> tuple[np.ndarray, float]:
+    def _measured(self, path: JointPolynomials, samples: int, limit: float | None) -> _Measured:
         """The smallest distance (m) at the samples a bound cannot spare, and a lower bound.
 
         Coarse then exact, a count: the smallest distance over the pairs at every
         :data:`COARSE_EVERY`-th of ``samples`` instants (those of :meth:`smallest`, the same
-        bits); between two measured instants the clearance is at least their mean less half
-        the time between them times how fast any pair's distance can change there (the pairs'
-        motion weights times bounds of the joint rates, :func:`rate_bounds`). Where that falls
+        bits); between two measured instants each pair's distance is at least the mean of its
+        bounds there less half the time between them times how fast its distance can change
+        there (its motion weights times bounds of the joint rates, :func:`rate_bounds`), and
+        the clearance at least the smallest of these. Where that falls
         below ``limit`` (the margin; or, with None, :data:`NEAR` above the smallest measured),
         the sample halfway is measured too, down to neighbouring samples. Returns the
-        distances (NaN where spared: every such sample is above the limit) and the lower bound
+        distances (NaN where spared: every such sample is above the limit), the pairs' bounds
+        at the samples measured, and the lower bound
         of the clearance along the whole path (m; -inf when the model has no motion weights,
         a prismatic joint say: then nothing bounds the clearance between samples). Remembered
         for the last path and limit only, so that the answer never depends on earlier calls.
@@ -242,81 +249,94 @@ class Clearance(Constraint):
         key = (*self._key(path, np.zeros(samples)), limit)
         memo = self._measured_memo
         if memo is not None and memo[0] == key:  # the same path and limit: the same answer
-            return memo[1], memo[2]
+            return memo[1]
         t = np.linspace(0.0, path.duration, samples)
         q = path.evaluate(t).q
         known = np.full(samples, math.nan)
+        lower = np.full((samples, self.model.n_pairs), math.nan)
         todo = np.unique(np.append(np.arange(0, samples, COARSE_EVERY), samples - 1))
-        weights = self.model.weights
-        if weights is None:  # no bound between samples: every sample, and no lower bound
+        if self.model.weights is None:  # no bound between samples: every sample, no bound
             known[:] = self.model.closest_many(q).values
-            self._measured_memo = (key, known, -math.inf)
-            return known, -math.inf
+            answer = _Measured(known, lower, -math.inf)
+            self._measured_memo = (key, answer)
+            return answer
         while True:
             todo = todo[np.isnan(known[todo])]
-            known[todo] = self.model.closest_many(q[todo], todo / (samples - 1)).values
+            found = self.model.closest_many(q[todo], todo / (samples - 1))
+            known[todo], lower[todo] = found.values, _pair_bounds(found)
             nodes = np.flatnonzero(~np.isnan(known))
             a, b = nodes[:-1], nodes[1:]
-            lower = self._between(path, t[a], t[b], known[a], known[b])
+            between = self._between(path, t[a], t[b], lower[a], lower[b])
             floor = float(np.nanmin(known)) + NEAR if limit is None else limit
-            short = (lower < floor) & (b - a >= 2)
+            short = (between < floor) & (b - a >= 2)
             if not np.any(short):
-                bound = float(min(lower.min(), np.nanmin(known)))
+                bound = float(min(between.min(), np.nanmin(known)))
                 break
             todo = (a[short] + b[short]) // 2
-        self._measured_memo = (key, known, bound)
-        return known, bound
+        answer = _Measured(known, lower, bound)
+        self._measured_memo = (key, answer)
+        return answer
 
     def _below(
-        self, path: JointPolynomials, known: np.ndarray, limit: float
+        self, path: JointPolynomials, measured: _Measured, limit: float
     ) -> tuple[float, float, int]:
         """The smallest clearance (m), its time (s) and pair, for a path a bound cannot clear.
 
-        ``known``: :meth:`_measured` with ``limit`` (m; NaN where spared: above it). An
+        ``measured``: :meth:`_measured` with ``limit`` (m; NaN where spared: above it). An
         interval between samples both above ``limit`` where the bound falls below it is
         halved, measuring its middle, until the bound clears ``limit`` on each half or a
         sample falls below it, at most :data:`HALVINGS` times; the sampled local minima below
         ``limit``, and the middles of halves left undecided, are then refined by a bounded
         scalar search.
         """
+        known, table = measured.known, measured.lower
         t = np.linspace(0.0, path.duration, len(known))
         times, values = [t], [np.nan_to_num(known, nan=math.inf)]
-        ends = np.stack([t[:-1], t[1:], known[:-1], known[1:]])  # rows: t0, t1, v0, v1
+        rows = np.arange(len(known), dtype=float)
+        # Rows: t0, t1 (s), v0, v1 (m), and the rows of ``table`` (pair bounds) at t0 and t1.
+        ends = np.stack([t[:-1], t[1:], known[:-1], known[1:], rows[:-1], rows[1:]])
         for _ in range(HALVINGS):
-            open_ = self._undecided(path, ends, limit)
-            ends = ends[:, open_]
+            ends = ends[:, self._undecided(path, ends, table, limit)]
             if ends.shape[1] == 0:
                 break
             mid = 0.5 * (ends[0] + ends[1])
-            joints = path.evaluate(mid).q
-            slots = mid / path.duration
-            vm = self.model.closest_many(joints, slots).values
+            found = self.model.closest_many(path.evaluate(mid).q, mid / path.duration)
+            vm, at = found.values, np.arange(len(table), len(table) + len(mid), dtype=float)
+            table = np.concatenate([table, _pair_bounds(found)])
             times.append(mid)
             values.append(vm)
             ends = np.concatenate(
-                [np.stack([ends[0], mid, ends[2], vm]), np.stack([mid, ends[1], vm, ends[3]])],
+                [
+                    np.stack([ends[0], mid, ends[2], vm, ends[4], at]),
+                    np.stack([mid, ends[1], vm, ends[3], at, ends[5]]),
+                ],
                 axis=1,
             )
-        undecided = ends[:, self._undecided(path, ends, limit)] if ends.shape[1] else ends
+        if ends.shape[1]:
+            ends = ends[:, self._undecided(path, ends, table, limit)]
         t_all, v_all = np.concatenate(times), np.concatenate(values)
         order = np.argsort(t_all, kind="stable")
         t_all, v_all = t_all[order], v_all[order]
         minima = _local_minima(v_all)
         minima = minima[v_all[minima] < limit]
-        spans = np.searchsorted(t_all, 0.5 * (undecided[0] + undecided[1]))
+        spans = np.searchsorted(t_all, 0.5 * (ends[0] + ends[1]))
         return self._refined(path, t_all, v_all, np.unique(np.append(minima, spans)))
 
-    def _undecided(self, path: JointPolynomials, ends: np.ndarray, limit: float) -> np.ndarray:
-        """Which intervals (rows t0, t1, v0, v1; s and m) may dip below ``limit`` unseen.
+    def _undecided(
+        self, path: JointPolynomials, ends: np.ndarray, table: np.ndarray, limit: float
+    ) -> np.ndarray:
+        """Which intervals may dip below ``limit`` (m) unseen.
 
-        Both ends measured and above ``limit`` (a sample below it is a dip seen), and the
-        bound between them below it.
+        ``ends``: rows t0, t1 (s), v0, v1 (m), and the rows of ``table`` at both ends. Both
+        ends measured and above ``limit`` (a sample below it is a dip seen), and the bound
+        between them (from the pairs' bounds in ``table``, m) below it.
         """
         seen = ~np.isnan(ends[2]) & ~np.isnan(ends[3]) & (ends[2] >= limit) & (ends[3] >= limit)
         bound = np.full(ends.shape[1], math.inf)
         if np.any(seen):
+            first, second = ends[4, seen].astype(int), ends[5, seen].astype(int)
             bound[seen] = self._between(
-                path, ends[0, seen], ends[1, seen], ends[2, seen], ends[3, seen]
+                path, ends[0, seen], ends[1, seen], table[first], table[second]
             )
         return bound < limit
 
@@ -346,19 +366,41 @@ class Clearance(Constraint):
         if self.model.n_pairs == 0:
             return Excess(-math.inf, 0.0, "no pairs to check")
         path = problem.polynomials(beta)
-        known, bound = self._measured(path, 201, self.margin)
+        measured = self._measured(path, 201, self.margin)
+        bound = measured.bound
         if bound >= self.margin:  # clear everywhere: the refined minimum is not needed
             detail = f"min clearance >= {bound:.6g} m everywhere, margin {self.margin:g} m"
             return Excess(self.margin - bound, 0.0, detail)
         if self.model.weights is None:
             clearance, when, pair = self.smallest(path, 201)
         else:
-            clearance, when, pair = self._below(path, known, self.margin)
+            clearance, when, pair = self._below(path, measured, self.margin)
         detail = (
             f"min clearance {clearance:.6g} m ({self.model.names[pair]}) at t = {when:.4g} s, "
             f"margin {self.margin:g} m"
         )
         return Excess(self.margin - clearance, 0.0, detail)
+
+
+@dataclass(frozen=True)
+class _Measured:
+    """The samples of a path a bound could not spare (:meth:`Clearance._measured`).
+
+    Attributes:
+        known: (S,) smallest distance over the pairs per sample (m; NaN where spared).
+        lower: (S, P) lower bounds of every pair's distance per sample (m; NaN where spared).
+        bound: a lower bound of the clearance along the whole path (m).
+    """
+
+    known: np.ndarray
+    lower: np.ndarray
+    bound: float
+
+
+def _pair_bounds(found: Closest) -> np.ndarray:
+    """(B, P) the pairs' lower bounds (m) of a batch of queries."""
+    assert found.lower is not None
+    return found.lower
 
 
 def _lowest(values: np.ndarray) -> list[int]:
