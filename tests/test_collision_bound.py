@@ -138,6 +138,40 @@ def test_rate_bounds_hold_and_are_tight_against_dense_samples():
         assert np.all(bounds[k] <= 1.25 * sampled + 0.02 * sampled.max())
 
 
+@pytest.mark.parametrize("path", [PANDA, UR5])
+def test_the_per_pair_bound_between_samples_holds_against_every_pair_measured_densely(path):
+    """Between two samples, the clearance is at least the per-pair bound (each pair from its
+    own bounds at both ends and its own motion): checked against every pair measured by a
+    fresh model at 40 instants inside each interval (brute force). It is never looser than
+    the bound from the smallest distances and the fastest pair, and tighter on some."""
+    from freefloat.problem.constraints.clearance import Clearance
+    from freefloat.problem.rate_bounds import rate_bounds
+
+    scenario = ff.Scenario.from_toml(path)
+    robot = scenario.robot
+    problem = ff.problem_from_scenario(scenario, extra=[2] * robot.n)
+    model = CollisionModel(robot, known_srdf(robot))
+    fresh = CollisionModel(robot, known_srdf(robot))
+    check = Clearance(model)
+    rng = np.random.default_rng(21)
+    tighter = 0
+    for scale in (0.0, 0.3):
+        poly = problem.polynomials(rng.normal(0.0, scale, problem.n_free))
+        edges = np.linspace(0.0, poly.duration, 21)
+        found = model.closest_many(poly.evaluate(edges).q, edges / poly.duration)
+        t0, t1 = edges[:-1], edges[1:]
+        bound = check._between(poly, t0, t1, found.lower[:-1], found.lower[1:])
+        speed = np.max(rate_bounds(poly, t0, t1) @ model.weights.T, axis=1)
+        former = 0.5 * (found.values[:-1] + found.values[1:] - speed * (t1 - t0)) - BOUND_SLACK
+        assert np.all(bound >= former)
+        tighter += int(np.sum(bound > former + 1e-3))
+        for k in range(20):
+            inside = poly.evaluate(np.linspace(t0[k], t1[k], 40)).q
+            dense = min(float(fresh.distances(q).values.min()) for q in inside)
+            assert dense >= bound[k]
+    assert tighter > 0
+
+
 def test_the_dense_checks_decision_is_that_of_the_refined_minimum():
     """The solvers' check decides from a bound where it can: on paths near and far from the
     margin, it breaks exactly when the refined smallest clearance (every sample measured,
