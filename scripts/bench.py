@@ -915,7 +915,10 @@ def run() -> None:
     if args.speed_only:
         from bench_speed import bench_speed, print_speed
 
-        speed = bench_speed(max(3, args.runs // 2), roll=not args.no_roll)
+        worked = cases()[0]
+        speed = bench_speed(
+            max(3, args.runs // 2), roll=not args.no_roll, baseline=Baseline(worked).solve
+        )
         print_speed(speed)
         if args.json:
             args.json.write_text(

@@ -9,7 +9,8 @@ the tables give medians over the rounds and the median of the per-round ratios.
 
 - the shipped servicers with clearance against the same plan without (target <= 1.5x), with
   the stage times of the plan with clearance (solve, sample, verify; from the plan's record);
-- the worked example: the whole verified plan against its solve (target <= 2x);
+- the worked example: the whole verified plan against its solve (target <= 2x), and against
+  the bare solve of ``scripts/bench.py``'s baseline in the same rounds (target >= 10x faster);
 - the Panda servicer's goal turned 1, 3 and 10 deg about each axis from the quintic path's
   attitude, with clearance (target: median <= 0.1 s, worst <= 0.5 s);
 - the Panda servicer's goal rolled 65 deg, with clearance (target: refused in <= 1 s; it is
@@ -100,9 +101,13 @@ def bench_servicers(rounds: int) -> list[dict[str, object]]:
     return rows
 
 
-def bench_worked(rounds: int) -> dict[str, float]:
-    """The worked example: whole verified plan, and its stages from the plan's record (ms)."""
-    whole, solve, sample, verify = [], [], [], []
+def bench_worked(rounds: int, baseline: Callable[[], object] | None = None) -> dict[str, float]:
+    """The worked example: whole verified plan, and its stages from the plan's record (ms).
+
+    With ``baseline`` (the bare solve of ``scripts/bench.py``'s baseline: SciPy's secant on
+    ``solve_ivp``), that solve is timed in the same rounds, after each plan.
+    """
+    whole, solve, sample, verify, bare = [], [], [], [], []
     for _ in range(rounds):
         elapsed, plan = _time(lambda: ff.plan(fresh("worked_example")))
         assert isinstance(plan, ff.Plan)
@@ -110,12 +115,15 @@ def bench_worked(rounds: int) -> dict[str, float]:
         solve.append(plan.solver.solve_time_s)
         sample.append(plan.solver.sample_time_s)
         verify.append(plan.solver.verify_time_s)
+        if baseline is not None:
+            bare.append(_time(baseline)[0])
     med = statistics.median
     return {
         "whole_ms": 1e3 * med(whole),
         "solve_ms": 1e3 * med(solve),
         "sample_ms": 1e3 * med(sample),
         "verify_ms": 1e3 * med(verify),
+        "baseline_ms": 1e3 * med(bare) if bare else float("nan"),
     }
 
 
@@ -189,12 +197,14 @@ def print_speed(found: dict[str, object]) -> None:
     w = found["worked"]
     print(
         "\n| worked example | whole verified plan ms | solve ms | sample ms | verify ms | "
-        "whole / solve (target <= 2) |"
+        "whole / solve (target <= 2) | baseline bare solve ms | baseline / whole "
+        "(target >= 10) |"
     )
-    print("|---|---:|---:|---:|---:|---:|")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
     print(
         f"| worked_example | {w['whole_ms']:.1f} | {w['solve_ms']:.1f} | {w['sample_ms']:.1f} | "  # type: ignore[index]
-        f"{w['verify_ms']:.1f} | {w['whole_ms'] / w['solve_ms']:.1f}x |"  # type: ignore[index]
+        f"{w['verify_ms']:.1f} | {w['whole_ms'] / w['solve_ms']:.1f}x | "  # type: ignore[index]
+        f"{w['baseline_ms']:.0f} | {w['baseline_ms'] / w['whole_ms']:.1f}x |"  # type: ignore[index]
     )
     reach = found["reach"]
     times = [r["time_s"] for r in reach]  # type: ignore[attr-defined]
@@ -222,11 +232,13 @@ def print_speed(found: dict[str, object]) -> None:
     print(f"| panda_servicer | {effort['min_effort_s']:.2f} | {effort['min_norm_s']:.2f} |")  # type: ignore[index]
 
 
-def bench_speed(rounds: int, roll: bool = True) -> dict[str, object]:
-    """Every table of the section."""
+def bench_speed(
+    rounds: int, roll: bool = True, baseline: Callable[[], object] | None = None
+) -> dict[str, object]:
+    """Every table of the section (``baseline``: the worked example's bare baseline solve)."""
     return {
         "servicers": bench_servicers(rounds),
-        "worked": bench_worked(rounds),
+        "worked": bench_worked(rounds, baseline),
         "reach": bench_reach_goals(),
         "roll": bench_roll() if roll else {"time_s": float("nan"), "outcome": "not run"},
         "roll_far": bench_roll(180.0),
