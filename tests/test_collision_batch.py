@@ -98,3 +98,33 @@ def test_a_batch_gives_the_closest_pair_of_every_pair_measured(path):
             k = int(np.argmin(every.values))
             assert (float(got.values[i]), int(got.pairs[i])) == (float(every.values[k]), k)
             assert np.array_equal(got.gradients[i], every.gradients[k])
+
+
+def test_gradients_of_a_batch_against_finite_differences():
+    """Each row's gradient against central differences of that pair's distance (a fresh
+    model, every pair measured), on the Panda servicer: pairs between two arm links (only
+    some joints move both) and between an arm link and the spacecraft."""
+    scenario = ff.Scenario.from_toml(PANDA)
+    robot = scenario.robot
+    model = CollisionModel(robot, known_srdf(robot))
+    fresh = CollisionModel(robot, known_srdf(robot))
+    start, goal = np.asarray(scenario.start), np.asarray(scenario.goal)
+    rng = np.random.default_rng(8)
+    joints = start + rng.uniform(0.0, 1.0, (12, 1)) * (goal - start) + rng.normal(0, 0.3, (12, 7))
+    got = model.closest_many(joints, np.linspace(0.0, 1.0, 12), gradients=True)
+    kinds = set()
+    h = 1e-6
+    for i, q in enumerate(joints):
+        k = int(got.pairs[i])
+        a, b = model.pairs[k]
+        moving = [int(model.geometry.geometryObjects[g].parentJoint) > 1 for g in (a, b)]
+        kinds.add(tuple(moving))
+        numeric = np.array(
+            [
+                (fresh.distances(q + h * e).values[k] - fresh.distances(q - h * e).values[k])
+                / (2 * h)
+                for e in np.eye(robot.n)
+            ]
+        )
+        assert np.allclose(got.gradients[i], numeric, atol=2e-6, rtol=1e-4), (i, k)
+    assert kinds == {(True, True), (False, True)}  # arm / arm and spacecraft / arm

@@ -130,7 +130,9 @@ class CollisionModel:
             radii.append(float(obj.geometry.aabb_radius))
         self._centres, self._radii = np.array(centres), np.array(radii)
         self._shapes = [obj.geometry for obj in geometry.geometryObjects]
-        self._parent_joints = [int(obj.parentJoint) for obj in geometry.geometryObjects]
+        # Per shape, which of the robot's joints carry it (1.0 or 0.0 per joint), or None
+        # for a shape fixed to the spacecraft.
+        self._carried = [self._carriers(int(obj.parentJoint)) for obj in geometry.geometryObjects]
         self._pair_array = np.array(self.pairs, dtype=int).reshape(-1, 2)
         self._reach = self._radii[self._pair_array[:, 0]] + self._radii[self._pair_array[:, 1]]
         self._kinematics = SphereKinematics(robot, geometry, self._centres)
@@ -348,6 +350,13 @@ class CollisionModel:
             out[:] = lower
         return np.flatnonzero(lower <= float(upper.min()) + 1e-9)
 
+    def _carriers(self, joint: int) -> np.ndarray | None:
+        """1.0 for each of the robot's joints that moves Pinocchio joint ``joint``, else 0.0."""
+        if joint <= 1:  # the universe or the spacecraft
+            return None
+        support = set(self.robot.model.supports[joint])
+        return np.array([1.0 if j.index in support else 0.0 for j in self.robot.joints])
+
     def hulls(self) -> list[HullInfo]:
         """Per mesh, the volume it encloses and that of its hull (m^3), for reports."""
         objects = self.geometry.geometryObjects
@@ -357,24 +366,30 @@ class CollisionModel:
         ]
 
     def _gradient(self, k: int) -> np.ndarray:
-        """d(distance of pair k)/d(joints), after distances and joint Jacobians are computed."""
-        model, data = self.robot.model, self._data
+        """d(distance of pair k)/d(joints), after distances and joint Jacobians are computed.
+
+        A witness point ``p`` on a body moves at ``v + w x p`` (``v, w``: the body's spatial
+        velocity at the world origin, Pinocchio's world-frame Jacobian over the joints that
+        carry it), so the distance changes by ``n . v + (p x n) . w`` per unit joint rate.
+        """
         result = self._retried.get(k, self._pair_results[k])
-        normal = np.asarray(result.normal)
+        nx, ny, nz = result.normal
         a, b = self.pairs[k]
-        grad = np.zeros(self.robot.n)
+        rows, weights = [], []
         for index, point, sign in (
             (a, result.getNearestPoint1(), -1.0),
             (b, result.getNearestPoint2(), 1.0),
         ):
-            joint = self._parent_joints[index]
-            if joint <= 1:
+            carried = self._carried[index]
+            if carried is None:
                 continue  # fixed to the spacecraft: does not move with the joints
-            jac = pin.getJointJacobian(model, data, joint, pin.LOCAL_WORLD_ALIGNED)
-            offset = np.asarray(point) - data.oMi[joint].translation
-            linear = jac[:3] - pin.skew(offset) @ jac[3:]
-            grad += sign * (normal @ linear[:, self._columns])
-        return grad
+            px, py, pz = point
+            rows.append((nx, ny, nz, py * nz - pz * ny, pz * nx - px * nz, px * ny - py * nx))
+            weights.append(sign * carried)
+        if not rows:
+            return np.zeros(self.robot.n)
+        rates = np.array(rows) @ self._data.J[:, self._columns]  # per point, m/s per joint rate
+        return np.einsum("pn,pn->n", np.array(weights), rates)
 
 
 def _transform(placement: pin.SE3) -> coal.Transform3s:
