@@ -346,6 +346,9 @@ class CollisionModel:
                 reach = self._reach[unknown]
                 self._bounds.record(slot, unknown, joints, gap - reach, gap + reach)
             lower, upper = self._bounds.widened(slot, joints)
+            if gaps is not None:  # the spheres bound every pair too: the tighter of both
+                lower = np.maximum(lower, gaps - self._reach)
+                upper = np.minimum(upper, gaps + self._reach)
         if out is not None:
             out[:] = lower
         return np.flatnonzero(lower <= float(upper.min()) + 1e-9)
