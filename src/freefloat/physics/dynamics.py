@@ -206,14 +206,13 @@ class _Configurations:
         joints = mmap.robot.joints
         self.q = pin.neutral(mmap.model)
         self.q[0:7] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]
-        plain = [(i, j.idx_q) for i, j in enumerate(joints) if j.kind != "continuous"]
-        turning = [(i, j.idx_q) for i, j in enumerate(joints) if j.kind == "continuous"]
-        self.plain_i = np.array([i for i, _ in plain], dtype=int)
-        self.plain_q = np.array([q for _, q in plain], dtype=int)
-        self.turning_i = np.array([i for i, _ in turning], dtype=int)
-        self.turning_q = np.array([q for _, q in turning], dtype=int)
+        #: (joint, q index) of joints stored as their value, and of continuous joints
+        self.plain = [(i, j.idx_q) for i, j in enumerate(joints) if j.kind != "continuous"]
+        self.turning = [(i, j.idx_q) for i, j in enumerate(joints) if j.kind == "continuous"]
         #: all joints plain, stored in order from index 7: one slice assignment
-        self.contiguous = not turning and self.plain_q.tolist() == list(range(7, 7 + len(plain)))
+        self.contiguous = not self.turning and [q for _, q in self.plain] == list(
+            range(7, 7 + len(self.plain))
+        )
 
     def __call__(self, values: np.ndarray) -> np.ndarray:
         """The configuration of N joint values (rad or m)."""
@@ -221,10 +220,11 @@ class _Configurations:
         if self.contiguous:
             q[7:] = values
             return q
-        q[self.plain_q] = values[self.plain_i]
-        angles = values[self.turning_i]
-        q[self.turning_q] = np.cos(angles)
-        q[self.turning_q + 1] = np.sin(angles)
+        listed = values.tolist()  # a dozen entries: cheaper one by one than by numpy indexing
+        for i, iq in self.plain:
+            q[iq] = listed[i]
+        for i, iq in self.turning:
+            q[iq], q[iq + 1] = math.cos(listed[i]), math.sin(listed[i])
         return q
 
 

@@ -71,13 +71,6 @@ def _finite(x: float) -> float:
     return x if not math.isnan(x) else math.inf
 
 
-def _with_midpoints(ends: np.ndarray) -> np.ndarray:
-    """Ascending instants with the midpoint of every interval inserted (2 K - 1 values)."""
-    out = np.empty(2 * len(ends) - 1)
-    out[0::2], out[1::2] = ends, 0.5 * (ends[:-1] + ends[1:])
-    return out
-
-
 def _rk4_attitude(start: np.ndarray, omega: np.ndarray, duration: float) -> np.ndarray:
     """Final attitude of ``y' = 0.5 y (x) omega(t)`` by classical RK4 on a uniform grid.
 
