@@ -37,7 +37,17 @@ from .stepping import (
     attitude_by_doubling,
 )
 
-__all__ = ["attitude_check", "replay_checks"]
+__all__ = ["attitude_check", "integrating_checks", "replay_checks"]
+
+
+def integrating_checks(subject: Subject) -> list[Check]:
+    """``attitude_independent``, ``replay_attitude``, ``replay_joints``, in that order.
+
+    The replay runs first: the base angular velocity its torques come with
+    (:class:`~freefloat.verify.along.PathDynamics`) serves the attitude check at those instants.
+    """
+    replayed = replay_checks(subject)
+    return attitude_check(subject) + replayed
 
 
 def attitude_check(subject: Subject) -> list[Check]:
