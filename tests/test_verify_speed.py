@@ -305,3 +305,24 @@ def test_leaf_speed_bounds_hold_for_every_vertex_they_hold():
             assert speed <= reach[:, leaf] @ np.abs(rates) * (1 + 1e-5) + 1e-9
             checked += 1
     assert checked > 20
+
+
+def test_shared_path_dynamics_are_pinocchios_per_instant(worked_scenario, worked_plan):
+    """The replay's torques and the attitude check's base rates, shared per instant, are
+    Pinocchio's single-instant inverse dynamics and the momentum map's base rate of the file's
+    paths, whichever check asked first; instants asked again are the very rows kept."""
+    from freefloat.verify.along import PathDynamics
+    from freefloat.verify.path_eval import file_path
+
+    mmap = MomentumMap(worked_scenario.robot)
+    path = file_path(worked_plan)
+    shared = PathDynamics(mmap, path)
+    coarse = np.linspace(0.0, worked_plan.duration, 9)
+    fine = np.linspace(0.0, worked_plan.duration, 17)  # holds every coarse instant, to the bit
+    tau = shared.torques(coarse)
+    omega = shared.omega(fine)  # the coarse ones from the torques' batch, the rest anew
+    q, qd, qdd = path(fine)
+    truth_tau = np.array([inverse_dynamics(mmap, q[k], qd[k], qdd[k]).tau for k in range(0, 17, 2)])
+    np.testing.assert_allclose(tau, truth_tau, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(omega, mmap.base_rates(q, qd).omega, rtol=1e-12, atol=1e-13)
+    assert np.array_equal(shared.torques(fine[::2]), tau)

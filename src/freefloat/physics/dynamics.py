@@ -300,7 +300,7 @@ def replay(
     if rate_index.tolist() == list(range(6, model.nv)):
         rates_of_y = slice(n + 6, n + model.nv)  # a view, not a copy
     y = join([np.asarray(start_joints, dtype=float), np.zeros(model.nv)])
-    stages = []  # the state at every RK4 stage, for the base angular velocity
+    stages: list[np.ndarray] = []  # the state at every RK4 stage, for the base angular rate
     momentum_max = 0.0 if track_momentum else math.nan
     # A step too long for the motion can blow up; the caller sees non-finite results.
     with np.errstate(over="ignore", invalid="ignore"):
