@@ -24,12 +24,14 @@ __all__ = [
     "geodesic_angle",
     "magnus_increment_jacobian",
     "magnus_increments",
+    "ordered_product",
     "propagate",
     "quat_conjugate",
     "quat_exp",
     "quat_from_zyx",
     "quat_log",
     "quat_multiply",
+    "quat_rate_matrices",
     "quat_to_matrix",
     "rotation_matrices",
     "so3_right_jacobian",
@@ -277,3 +279,30 @@ def propagate(quat0: np.ndarray, increments: np.ndarray) -> np.ndarray:
     result = np.array(out)
     result /= np.linalg.norm(result, axis=1, keepdims=True)
     return result
+
+
+def quat_rate_matrices(omega: np.ndarray) -> np.ndarray:
+    """(..., 4, 4) matrices ``A`` with ``A y = 0.5 y (x) [omega, 0]`` for ``[x, y, z, w]`` y.
+
+    ``omega``: (..., 3) base angular velocities (rad/s, base frame); ``A`` is in 1/s.
+    """
+    omega = np.asarray(omega, dtype=float)
+    a = np.zeros((*omega.shape[:-1], 4, 4))
+    x, y, z = omega[..., 0], omega[..., 1], omega[..., 2]
+    # vector part: w omega - omega x v ; scalar part: -omega . v
+    a[..., 0, 1], a[..., 0, 2], a[..., 0, 3] = z, -y, x
+    a[..., 1, 0], a[..., 1, 2], a[..., 1, 3] = -z, x, y
+    a[..., 2, 0], a[..., 2, 1], a[..., 2, 3] = y, -x, z
+    a[..., 3, 0], a[..., 3, 1], a[..., 3, 2] = -x, -y, -z
+    return 0.5 * a
+
+
+def ordered_product(factors: np.ndarray) -> np.ndarray:
+    """``F[K-1] ... F[1] F[0]`` of (K, 4, 4) matrices (K >= 1), by pairwise reduction."""
+    phi = np.asarray(factors, dtype=float)
+    eye = np.eye(phi.shape[-1])
+    while len(phi) > 1:
+        if len(phi) % 2:
+            phi = np.concatenate([phi, eye[None]])
+        phi = phi[1::2] @ phi[0::2]
+    return phi[0]

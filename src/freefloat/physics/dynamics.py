@@ -8,14 +8,18 @@ or N for prismatic joints). The six base entries of the RNEA result are the wren
 would need: zero up to rounding, a consistency check of its own. Gravity is zero.
 
 The replay runs Pinocchio's articulated-body algorithm (ABA) on the full system, base free,
-driven only by the joint torques, with a fixed-step fourth-order Runge-Kutta scheme whose
-configuration is integrated as a vector in R^nq: the base position, the base quaternion (its
-rate ``q (x) [omega, 0] / 2``) and the (cos, sin) pairs of continuous joints, renormalised after
-every stage. Classical RK4 keeps its fourth order that way; chaining ``pin.integrate`` over the
-stages' velocities would drop the base attitude to second order. The torques come
-either from a function of time or from a table at the half-step instants ``k dt / 2``, which
-lets a caller compute them in one batch (:func:`inverse_dynamics_batch`) and reuse them when it
-doubles the steps to estimate the replay's own error.
+driven only by the joint torques, with the classical fourth-order Runge-Kutta scheme on the
+whole state: the joint values (continuous joints as angles), the velocity ``[v_base; qdot]``
+(base twist in the base frame) and the base quaternion (its rate ``q (x) [omega, 0] / 2``).
+Without gravity ABA does not depend on the base pose (velocities are in the base frame), so the
+joint values and velocity are integrated first with the base held at the identity, and the
+quaternion, whose rate is linear in it, follows from the same RK4 stages afterwards as a
+product of one 4 x 4 step matrix per step (normalised once at the end: the linear map only
+scales it between steps). The base position enters nothing the replay reports and is not
+integrated. The torques come either from a function of time or from a table at the half-step
+instants ``k dt / 2``, which lets a caller compute them in one batch
+(:func:`inverse_dynamics_batch`) and reuse them when it doubles the steps to estimate the
+replay's own error.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..robot.model import Robot
+from .attitude import ordered_product, quat_rate_matrices
 from .momentum import MomentumMap
 
 __all__ = [
@@ -190,73 +195,37 @@ def _inverse_dynamics_batch(
     )
 
 
-class _Embedded:
-    """``dq/dt`` of the embedded configuration from the velocity, and the projection back.
+class _Configurations:
+    """Pinocchio configurations from joint values, the base at the origin with identity attitude.
 
-    The root joint is Pinocchio's free flyer: position (m) with rate ``R v_linear``, quaternion
-    ``[x, y, z, w]`` with rate ``q (x) [omega, 0] / 2`` (``v`` in the base frame). A continuous
-    joint's ``(cos, sin)`` turns at its rate; other joints' values move at their rates.
-    Configurations are lists of plain floats (the replay's steps do a few dozen operations on
-    a dozen numbers: cheaper than numpy's per-call cost); every operation is the one numpy
-    would do element-wise, so results are the same to the bit.
+    Continuous joints take their (cos, sin) pair; other joints their value (rad or m). One
+    buffer is filled and returned each call (ABA reads it at once).
     """
 
     def __init__(self, mmap: MomentumMap) -> None:
         joints = mmap.robot.joints
-        self.nq = mmap.model.nq
-        #: (q index, v index) of joints whose value moves at their rate.
-        self.plain = [(j.idx_q, j.idx_v) for j in joints if j.kind != "continuous"]
-        #: (cos index, v index) of continuous joints (their sin follows the cos).
-        self.turning = [(j.idx_q, j.idx_v) for j in joints if j.kind == "continuous"]
-
-    def rate(self, q: list[float], v: list[float]) -> list[float]:
-        """``dq/dt`` at configuration ``q`` and velocity ``v`` (plain floats)."""
-        x, y, z, w = q[3:7]
-        vx, vy, vz, wx, wy, wz = v[:6]
-        # R v_linear, with R of the quaternion
-        tx, ty, tz = 2.0 * (y * vz - z * vy), 2.0 * (z * vx - x * vz), 2.0 * (x * vy - y * vx)
-        out = [
-            vx + w * tx + y * tz - z * ty,
-            vy + w * ty + z * tx - x * tz,
-            vz + w * tz + x * ty - y * tx,
-            0.5 * (w * wx + y * wz - z * wy),
-            0.5 * (w * wy + z * wx - x * wz),
-            0.5 * (w * wz + x * wy - y * wx),
-            -0.5 * (x * wx + y * wy + z * wz),
-        ]
-        out.extend([0.0] * (self.nq - 7))
-        for iq, iv in self.plain:
-            out[iq] = v[iv]
-        for iq, iv in self.turning:
-            out[iq] = -q[iq + 1] * v[iv]
-            out[iq + 1] = q[iq] * v[iv]
-        return out
-
-    def project(self, q: list[float]) -> list[float]:
-        """Unit quaternion and unit (cos, sin) pairs again, in place."""
-        x, y, z, w = q[3:7]
-        norm = math.sqrt(x * x + y * y + z * z + w * w) or math.nan  # nan, as numpy's 0 / 0
-        q[3:7] = x / norm, y / norm, z / norm, w / norm
-        for iq, _ in self.turning:
-            c, s = q[iq], q[iq + 1]
-            n = float(np.hypot(c, s)) or math.nan  # numpy's hypot, as the array form used
-            q[iq], q[iq + 1] = c / n, s / n
-        return q
-
-    def stage(self, q: list[float], h: float, r: list[float]) -> list[float]:
-        """``project(q + h r)``."""
-        return self.project([a + h * b for a, b in zip(q, r, strict=True)])
-
-    def step(self, q: list[float], dt: float, rates: tuple[list[float], ...]) -> list[float]:
-        """RK4's combination ``project(q + dt / 6 (r1 + 2 r2 + 2 r3 + r4))``."""
-        sixth = dt / 6.0
-        r1, r2, r3, r4 = rates
-        return self.project(
-            [
-                a + sixth * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
-                for a, b1, b2, b3, b4 in zip(q, r1, r2, r3, r4, strict=True)
-            ]
+        self.q = pin.neutral(mmap.model)
+        self.q[0:7] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]
+        #: (joint, q index) of joints stored as their value, and of continuous joints
+        self.plain = [(i, j.idx_q) for i, j in enumerate(joints) if j.kind != "continuous"]
+        self.turning = [(i, j.idx_q) for i, j in enumerate(joints) if j.kind == "continuous"]
+        #: all joints plain, stored in order from index 7: one slice assignment
+        self.contiguous = not self.turning and [q for _, q in self.plain] == list(
+            range(7, 7 + len(self.plain))
         )
+
+    def __call__(self, values: np.ndarray) -> np.ndarray:
+        """The configuration of N joint values (rad or m)."""
+        q = self.q
+        if self.contiguous:
+            q[7:] = values
+            return q
+        listed = values.tolist()  # a dozen entries: cheaper one by one than by numpy indexing
+        for i, iq in self.plain:
+            q[iq] = listed[i]
+        for i, iq in self.turning:
+            q[iq], q[iq + 1] = math.cos(listed[i]), math.sin(listed[i])
+        return q
 
 
 @dataclass(frozen=True)
@@ -307,53 +276,72 @@ def replay(
     if steps < 1:
         raise ValueError(f"the replay needs at least one step, got {steps}")
     model, data = mmap.model, mmap.model.createData()
-    q = mmap.configuration(np.asarray(start_joints, float), np.asarray(start_quaternion_xyzw))
-    v = np.zeros(model.nv)
     ends = np.linspace(0.0, duration, steps + 1) if nodes is None else np.asarray(nodes, float)
     if ends.shape != (steps + 1,):
         raise ValueError(f"{len(ends)} step ends for {steps} steps")
     times = np.empty(2 * steps + 1)
     times[0::2], times[1::2] = ends, 0.5 * (ends[:-1] + ends[1:])
     widths = np.diff(ends)
-    n = mmap.robot.n
+    robot = mmap.robot
     if callable(torque):
         table = np.array([torque(float(t)) for t in times])
     else:
         table = np.asarray(torque, dtype=float)
-        if table.shape != (2 * steps + 1, n):
-            raise ValueError(f"torque table of shape {table.shape}, need {(2 * steps + 1, n)}")
+        if table.shape != (2 * steps + 1, robot.n):
+            raise ValueError(
+                f"torque table of shape {table.shape}, need {(2 * steps + 1, robot.n)}"
+            )
+    rate_index = np.array([j.idx_v for j in robot.joints], dtype=int)
     forces = np.zeros((len(table), model.nv))
-    forces[:, [j.idx_v for j in mmap.robot.joints]] = table
-    aba = pin.aba
-
-    embedded = _Embedded(mmap)
-    rate, stage, array = embedded.rate, embedded.stage, np.array
+    forces[:, rate_index] = table
+    n, config, aba, join = robot.n, _Configurations(mmap), pin.aba, np.concatenate
+    # The state y = [joint values (N); velocity (nv)], its rate [joint rates; ABA].
+    rates_of_y: slice | np.ndarray = n + rate_index
+    if rate_index.tolist() == list(range(6, model.nv)):
+        rates_of_y = slice(n + 6, n + model.nv)  # a view, not a copy
+    y = join([np.asarray(start_joints, dtype=float), np.zeros(model.nv)])
+    stages: list[np.ndarray] = []  # the state at every RK4 stage, for the base angular rate
     momentum_max = 0.0 if track_momentum else math.nan
-    x = q.tolist()
     # A step too long for the motion can blow up; the caller sees non-finite results.
     with np.errstate(over="ignore", invalid="ignore"):
-        for k in range(steps):
-            dt = float(widths[k])
+        for k, dt in enumerate(widths.tolist()):
             half = 0.5 * dt
             f0, fh, f1 = forces[2 * k], forces[2 * k + 1], forces[2 * k + 2]
-            a1, r1 = aba(model, data, array(x), v, f0), rate(x, v.tolist())
-            x2, v2 = stage(x, half, r1), v + half * a1
-            a2, r2 = aba(model, data, array(x2), v2, fh), rate(x2, v2.tolist())
-            x3, v3 = stage(x, half, r2), v + half * a2
-            a3, r3 = aba(model, data, array(x3), v3, fh), rate(x3, v3.tolist())
-            x4, v4 = stage(x, dt, r3), v + dt * a3
-            a4, r4 = aba(model, data, array(x4), v4, f1), rate(x4, v4.tolist())
-            x = embedded.step(x, dt, (r1, r2, r3, r4))
-            v = v + dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+            r1 = join([y[rates_of_y], aba(model, data, config(y[:n]), y[n:], f0)])
+            y2 = y + half * r1
+            r2 = join([y2[rates_of_y], aba(model, data, config(y2[:n]), y2[n:], fh)])
+            y3 = y + half * r2
+            r3 = join([y3[rates_of_y], aba(model, data, config(y3[:n]), y3[n:], fh)])
+            y4 = y + dt * r3
+            r4 = join([y4[rates_of_y], aba(model, data, config(y4[:n]), y4[n:], f1)])
+            stages += (y, y2, y3, y4)
+            y = y + dt / 6.0 * (r1 + 2.0 * (r2 + r3) + r4)
             if track_momentum:
-                momentum_max = max(momentum_max, float(np.linalg.norm(mmap.momentum(array(x), v))))
-    q = array(x)
-    joints = mmap.robot.joint_values(q)
-    rates = np.array([v[j.idx_v] for j in mmap.robot.joints])
+                momentum = mmap.momentum(config(y[:n]), y[n:])
+                momentum_max = max(momentum_max, float(np.linalg.norm(momentum)))
+    stage_omega = np.array(stages)[:, n + 3 : n + 6].reshape(steps, 4, 3)
+    quaternion = _rk4_quaternion(np.asarray(start_quaternion_xyzw, float), stage_omega, widths)
     return ReplayResult(
-        joints=joints,
-        rates=rates,
-        quaternion_xyzw=q[3:7].copy(),
+        joints=robot.joint_values(config(y[:n])),
+        rates=y[n:][rate_index].copy(),
+        quaternion_xyzw=quaternion,
         momentum_max=momentum_max,
         steps=steps,
     )
+
+
+def _rk4_quaternion(start: np.ndarray, stage_omega: np.ndarray, widths: np.ndarray) -> np.ndarray:
+    """Final attitude of ``y' = 0.5 y (x) [omega, 0]`` by RK4 given each stage's ``omega``.
+
+    Classical RK4 on this linear equation makes every step a 4 x 4 matrix, built in one batch
+    from the stages' angular velocities (M, 4, 3; rad/s) and the step widths (M; s).
+    """
+    a = quat_rate_matrices(stage_omega)
+    h = widths[:, None, None]
+    k1 = a[:, 0]
+    k2 = a[:, 1] + 0.5 * h * (a[:, 1] @ k1)
+    k3 = a[:, 2] + 0.5 * h * (a[:, 2] @ k2)
+    k4 = a[:, 3] + h * (a[:, 3] @ k3)
+    phi = np.eye(4) + h / 6.0 * (k1 + 2.0 * (k2 + k3) + k4)
+    end = ordered_product(phi) @ start
+    return end / np.linalg.norm(end)

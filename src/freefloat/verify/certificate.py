@@ -26,6 +26,7 @@ from .clearance import (
     SLACK_FRACTION,
     ClearanceCertificate,
     MeshClearance,
+    Placed,
     hull_slack,
 )
 from .motion import PolynomialMotion
@@ -43,6 +44,7 @@ class _Instants:
     def __init__(self, mesh: MeshClearance, motion: PolynomialMotion) -> None:
         self.mesh, self.motion = mesh, motion
         self.placements: dict[float, np.ndarray] = {}
+        self.placed: dict[float, Placed] = {}
         self.speeds: dict[float, np.ndarray] = {}
         self.exact: dict[tuple[float, int], float] = {}
         self.leaf_gaps: dict[tuple[float, int], np.ndarray] = {}
@@ -80,7 +82,9 @@ class _Instants:
 
     def distance(self, t: float, k: int) -> float:
         if (t, k) not in self.exact:
-            self.exact[(t, k)] = self.mesh.exact(self.at(t), k)
+            if t not in self.placed:
+                self.placed[t] = Placed(self.mesh, self.at(t))
+            self.exact[(t, k)] = self.mesh.exact_placed(self.placed[t], k)
         return self.exact[(t, k)]
 
 

@@ -35,7 +35,7 @@ from ..problem.constraints.clearance import Clearance
 from ..problem.constraints.registry import clearance_constraint
 from ..robot.model import Robot
 from .clearance_check import clearance_checks
-from .integrating import attitude_check, replay_checks
+from .integrating import integrating_checks
 from .path_eval import file_path
 from .plan_checks import (
     PlanCheck,
@@ -65,8 +65,7 @@ REPLAY_STEPS_LIMIT = 1 << 16
 PLAN_CHECKS: tuple[PlanCheck, ...] = (
     momentum_checks,  # momentum, cm_offset
     base_wrench_check,
-    attitude_check,  # attitude_independent
-    replay_checks,  # replay_attitude, replay_joints
+    integrating_checks,  # attitude_independent, replay_attitude, replay_joints
     boundary_check,
     samples_check,
 )

@@ -66,6 +66,7 @@ __all__ = [
     "SLACK_FRACTION",
     "ClearanceCertificate",
     "MeshClearance",
+    "Placed",
     "hull_slack",
 ]
 
@@ -201,10 +202,13 @@ class MeshClearance:
 
         Two meshes that touch or cross report the deepest of their triangle contacts.
         """
+        return self.exact_placed(Placed(self, placements), k)
+
+    def exact_placed(self, placed: Placed, k: int) -> float:
+        """:meth:`exact` at one instant's :class:`Placed` (its coal transforms kept)."""
         a, b = self.pairs[k]
-        ta, tb = (coal.Transform3s(placements[i, :3, :3], placements[i, :3, 3]) for i in (a, b))
-        ca, cb = (placements[i, :3, :3] @ self.centres[i] + placements[i, :3, 3] for i in (a, b))
-        gap = float(np.linalg.norm(ca - cb))
+        ta, tb = placed.transform(a), placed.transform(b)
+        gap = math.dist(placed.centres[a], placed.centres[b])
         spheres = (gap - self.radii[a] - self.radii[b], gap + self.radii[a] + self.radii[b])
         value = checked_distance(
             self.shapes[a], ta, self.shapes[b], tb, spheres, self.names[k]
@@ -232,6 +236,30 @@ class MeshClearance:
             if abs(_winding_number(vertices, triangles, local)) > 0.5:
                 return True
         return False
+
+
+class Placed:
+    """One instant of a :class:`MeshClearance`, for its exact queries.
+
+    Its placements, bounding-sphere centres (m, spacecraft frame) and each object's coal
+    transform, the latter built when first asked for.
+
+    Args:
+        mesh: the model.
+        placements: (G, 4, 4) pose of every geometry object (:meth:`MeshClearance.placements`).
+    """
+
+    def __init__(self, mesh: MeshClearance, placements: np.ndarray) -> None:
+        self.placements = placements
+        self.centres = _centres(placements, mesh.centres).tolist()
+        self._transforms: dict[int, coal.Transform3s] = {}
+
+    def transform(self, i: int) -> coal.Transform3s:
+        """Object ``i``'s pose as coal takes it."""
+        if i not in self._transforms:
+            pose = self.placements[i]
+            self._transforms[i] = coal.Transform3s(pose[:3, :3], pose[:3, 3])
+        return self._transforms[i]
 
 
 def _centres(placements: np.ndarray, local: np.ndarray) -> np.ndarray:

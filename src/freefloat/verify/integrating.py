@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.attitude import geodesic_angle
-from ..physics.dynamics import inverse_dynamics_batch, replay
+from ..physics.dynamics import replay
 from ..plans.guarantees import Check
 from ..robot.model import Robot
 from .plan_checks import TOLERANCES, Subject
@@ -33,31 +33,42 @@ from .stepping import (
     AttitudeLevel,
     _decided,
     _finite,
-    _with_midpoints,
+    _refine,
     attitude_by_doubling,
 )
 
-__all__ = ["attitude_check", "replay_checks"]
+__all__ = ["attitude_check", "integrating_checks", "replay_checks"]
+
+
+def integrating_checks(subject: Subject) -> list[Check]:
+    """``attitude_independent``, ``replay_attitude``, ``replay_joints``, in that order.
+
+    The replay runs first: the base angular velocity its torques come with
+    (:class:`~freefloat.verify.along.PathDynamics`) serves the attitude check at those instants.
+    """
+    replayed = replay_checks(subject)
+    return attitude_check(subject) + replayed
 
 
 def attitude_check(subject: Subject) -> list[Check]:
     """``attitude_independent``: RK4 on the quaternion ODE in seconds, step doubling."""
-    plan, mmap, path = subject.plan, subject.mmap, subject.path
+    plan = subject.plan
     duration = plan.duration
     start_quat = np.asarray(plan.base.start_quaternion_xyzw, dtype=float)
     target = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
     tolerance = TOLERANCES["attitude_independent_rad"]
-
-    def omega_at(t: np.ndarray) -> np.ndarray:
-        q, qd, _ = path(np.asarray(t, dtype=float))
-        return mmap.base_rates(q, qd).omega
 
     def settled(level: AttitudeLevel) -> bool:
         value = geodesic_angle(level.attitude, target)
         return _decided(value, level.estimate, level.previous, tolerance, level.turn)
 
     level = attitude_by_doubling(
-        start_quat, omega_at, duration, _FIRST_ATTITUDE_STEPS, _MAX_ATTITUDE_STEPS, settled
+        start_quat,
+        subject.dynamics.omega,
+        duration,
+        _FIRST_ATTITUDE_STEPS,
+        _MAX_ATTITUDE_STEPS,
+        settled,
     )
     value, estimate = geodesic_angle(level.attitude, target), level.estimate
     detail = f"RK4, {level.steps} steps"
@@ -115,23 +126,19 @@ def replay_checks(subject: Subject) -> list[Check]:
 
 def _replay(subject: Subject) -> _Replay:
     """Replay on doubling steps until both verdicts stand or the steps allowed run out."""
-    plan, mmap, robot, path = subject.plan, subject.mmap, subject.robot, subject.path
+    plan, mmap, robot = subject.plan, subject.mmap, subject.robot
     duration, start, goal = plan.duration, subject.start, subject.goal
     start_quat = np.asarray(plan.base.start_quaternion_xyzw, dtype=float)
     target = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
 
-    def torque_at(t: np.ndarray) -> np.ndarray:
-        q, qd, qdd = path(np.asarray(t, dtype=float))
-        return inverse_dynamics_batch(mmap, q, qd, qdd).tau
-
-    def run(ends: np.ndarray, table: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        result = replay(mmap, start, start_quat, table, duration, len(ends) - 1, False, nodes=ends)
+    def run(steps: int, table: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        result = replay(mmap, start, start_quat, table, duration, steps, False)
         return result.quaternion_xyzw, result.joints
 
+    # the torques at k duration / (2 steps), each level reusing the instants of the last
     steps = min(_FIRST_REPLAY_STEPS, subject.replay_steps)
-    ends = np.linspace(0.0, duration, steps + 1)
-    torques = torque_at(_with_midpoints(ends))
-    coarse_q, coarse_j = run(ends, torques)
+    torques = _refine(None, steps, duration, subject.dynamics.torques)
+    coarse_q, coarse_j = run(steps, torques)
     replay_att = geodesic_angle(coarse_q, target)
     replay_joint = float(np.abs(_wrap_joints(robot, coarse_j - goal)).max())
     samples = plan.samples
@@ -144,13 +151,8 @@ def _replay(subject: Subject) -> _Replay:
     previous = earlier = (math.inf, math.inf)  # the last two differences (attitude, joints)
     while 2 * steps <= subject.replay_steps:
         steps *= 2
-        ends = _with_midpoints(ends)
-        fine_times = _with_midpoints(ends)
-        table = np.empty((len(fine_times), robot.n))
-        table[0::2] = torques
-        table[1::2] = torque_at(fine_times[1::2])
-        torques = table
-        fine_q, fine_j = run(ends, torques)
+        torques = _refine(torques, steps, duration, subject.dynamics.torques)
+        fine_q, fine_j = run(steps, torques)
         replay_att = geodesic_angle(fine_q, target)
         replay_joint = float(np.abs(_wrap_joints(robot, fine_j - goal)).max())
         att_estimate = _finite(geodesic_angle(coarse_q, fine_q))

@@ -153,16 +153,21 @@ def reach_coefficients(
     }
     objects = list(geometry.geometryObjects)
     owners = np.arange(len(objects)) if owners is None else np.asarray(owners, dtype=int)
+    rotations = np.array([obj.placement.rotation for obj in objects]).reshape(-1, 3, 3)
+    offsets = np.array([obj.placement.translation for obj in objects]).reshape(-1, 3)
+    local = np.einsum("sij,sj->si", rotations[owners], centres) + offsets[owners]
+    # the reach from the geometry's own joint: its offset plus bounding radius
+    own = np.linalg.norm(local, axis=1) + np.asarray(radii, dtype=float)
+    parents = np.array([int(obj.parentJoint) for obj in objects], dtype=int)[owners]
     out = np.zeros((robot.n, len(owners)))
-    for g, owner in enumerate(owners.tolist()):
-        obj = objects[owner]
-        reach = float(np.linalg.norm(obj.placement.act(centres[g]))) + float(radii[g])
-        joint = int(obj.parentJoint)
+    for start in np.unique(parents).tolist():
+        spheres = parents == start
+        added, joint = 0.0, start
         while joint > 1:  # up the chain to the free flyer
             if joint in column:
-                out[column[joint], g] = 1.0 if joint in prismatic else reach
-            reach += float(np.linalg.norm(model.jointPlacements[joint].translation))
+                out[column[joint], spheres] = 1.0 if joint in prismatic else own[spheres] + added
+            added += float(np.linalg.norm(model.jointPlacements[joint].translation))
             if joint in prismatic:
-                reach += travel[joint]
+                added += travel[joint]
             joint = int(model.parents[joint])
     return out

@@ -21,6 +21,7 @@ The integrating checks are in :mod:`freefloat.verify.integrating`; the list of a
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -32,6 +33,7 @@ from ..physics.momentum import MomentumMap
 from ..plans.format import Plan
 from ..plans.guarantees import Check
 from ..robot.model import Robot
+from .along import PathDynamics
 from .path_eval import FilePath
 
 __all__ = [
@@ -74,6 +76,11 @@ class Subject:
     mmap: MomentumMap
     path: FilePath
     replay_steps: int
+
+    @functools.cached_property
+    def dynamics(self) -> PathDynamics:
+        """Torques and base angular velocity of the file's paths, shared by the checks."""
+        return PathDynamics(self.mmap, self.path)
 
     @property
     def start(self) -> np.ndarray:

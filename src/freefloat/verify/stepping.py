@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.attitude import geodesic_angle
+from ..physics.attitude import geodesic_angle, ordered_product, quat_rate_matrices
 
 __all__ = ["CONVERGED_FRACTION", "MAX_REPLAY_STEPS", "AttitudeLevel", "attitude_by_doubling"]
 
@@ -71,25 +71,6 @@ def _finite(x: float) -> float:
     return x if not math.isnan(x) else math.inf
 
 
-def _with_midpoints(ends: np.ndarray) -> np.ndarray:
-    """Ascending instants with the midpoint of every interval inserted (2 K - 1 values)."""
-    out = np.empty(2 * len(ends) - 1)
-    out[0::2], out[1::2] = ends, 0.5 * (ends[:-1] + ends[1:])
-    return out
-
-
-def _quaternion_rate_matrices(omega: np.ndarray) -> np.ndarray:
-    """(K, 4, 4) matrices ``A`` with ``A y = 0.5 y (x) [omega, 0]`` for ``[x, y, z, w]`` y."""
-    a = np.zeros((len(omega), 4, 4))
-    x, y, z = omega[:, 0], omega[:, 1], omega[:, 2]
-    # vector part: w omega - omega x v ; scalar part: -omega . v
-    a[:, 0, 1], a[:, 0, 2], a[:, 0, 3] = z, -y, x
-    a[:, 1, 0], a[:, 1, 2], a[:, 1, 3] = -z, x, y
-    a[:, 2, 0], a[:, 2, 1], a[:, 2, 3] = y, -x, z
-    a[:, 3, 0], a[:, 3, 1], a[:, 3, 2] = -x, -y, -z
-    return 0.5 * a
-
-
 def _rk4_attitude(start: np.ndarray, omega: np.ndarray, duration: float) -> np.ndarray:
     """Final attitude of ``y' = 0.5 y (x) omega(t)`` by classical RK4 on a uniform grid.
 
@@ -103,18 +84,14 @@ def _rk4_attitude(start: np.ndarray, omega: np.ndarray, duration: float) -> np.n
     """
     steps = (len(omega) - 1) // 2
     h = duration / steps
-    a = _quaternion_rate_matrices(omega)
+    a = quat_rate_matrices(omega)
     a1, a2, a3 = a[0:-1:2], a[1::2], a[2::2]
     eye = np.eye(4)
     k2 = a2 @ (eye + 0.5 * h * a1)
     k3 = a2 @ (eye + 0.5 * h * k2)
     k4 = a3 @ (eye + h * k3)
     phi = eye + h / 6.0 * (a1 + 2.0 * k2 + 2.0 * k3 + k4)
-    while len(phi) > 1:
-        if len(phi) % 2:
-            phi = np.concatenate([phi, eye[None]])
-        phi = phi[1::2] @ phi[0::2]
-    end = phi[0] @ start
+    end = ordered_product(phi) @ start
     return end / np.linalg.norm(end)
 
 

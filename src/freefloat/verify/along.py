@@ -1,0 +1,62 @@
+"""The torques and base angular velocity of a plan's paths, each instant computed once.
+
+The attitude check and the forward-dynamics replay (:mod:`freefloat.verify.integrating`) both
+refine on the grids ``k T / 2^m`` of the plan's duration ``T``; on those grids the instants of
+a coarse level are, to the bit, instants of every finer one (``numpy.linspace`` of a dyadic
+count). The replay's torques come from one inverse-dynamics batch
+(:func:`~freefloat.physics.dynamics.inverse_dynamics_batch`), which also gives the
+zero-momentum base twist at those instants; the attitude check reads the base angular velocity
+there, and asks the momentum map (:meth:`~freefloat.physics.momentum.MomentumMap.base_rates`,
+one Pinocchio call per instant) only at the instants the replay did not need.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..physics.dynamics import inverse_dynamics_batch
+from ..physics.momentum import MomentumMap
+from .path_eval import FilePath
+
+__all__ = ["PathDynamics"]
+
+
+class PathDynamics:
+    """Joint torques (N m or N) and base angular velocity (rad/s, base frame) along a path.
+
+    Args:
+        mmap: the robot's momentum map.
+        path: the file's joint paths.
+    """
+
+    def __init__(self, mmap: MomentumMap, path: FilePath) -> None:
+        self.mmap, self.path = mmap, path
+        self._torques: dict[float, np.ndarray] = {}
+        self._omega: dict[float, np.ndarray] = {}
+
+    def torques(self, t: np.ndarray) -> np.ndarray:
+        """(len(t), N) joint torques at times ``t`` (s)."""
+        times = np.asarray(t, dtype=float).tolist()
+        missing = _missing(times, self._torques)
+        if len(missing):
+            q, qd, qdd = self.path(missing)
+            dyn = inverse_dynamics_batch(self.mmap, q, qd, qdd)
+            for x, tau, omega in zip(missing.tolist(), dyn.tau, dyn.base_twist, strict=True):
+                self._torques[x] = tau
+                self._omega.setdefault(x, omega[3:])
+        return np.array([self._torques[x] for x in times])
+
+    def omega(self, t: np.ndarray) -> np.ndarray:
+        """(len(t), 3) base angular velocity at times ``t`` (s)."""
+        times = np.asarray(t, dtype=float).tolist()
+        missing = _missing(times, self._omega)
+        if len(missing):
+            q, qd, _ = self.path(missing)
+            rates = self.mmap.base_rates(q, qd)
+            self._omega.update(zip(missing.tolist(), rates.omega, strict=True))
+        return np.array([self._omega[x] for x in times])
+
+
+def _missing(times: list[float], known: dict[float, np.ndarray]) -> np.ndarray:
+    """The instants (s) of ``times`` not in ``known``, ascending, each once."""
+    return np.array(sorted({x for x in times if x not in known}), dtype=float)
