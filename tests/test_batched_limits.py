@@ -117,3 +117,24 @@ def test_scaled_coordinates_make_a_quadratic_objective_s_hessian_the_identity():
     eye = np.eye(problem.n_free)
     hessian = np.column_stack([(gradient(h * e) - gradient(-h * e)) / (2 * h) for e in eye])
     np.testing.assert_allclose(hessian, eye, atol=1e-5)
+
+
+def test_rate_rows_left_out_while_far_do_not_change_the_least_effort_path(tmp_path, monkeypatch):
+    import freefloat.solvers.optimise as optimise_module
+
+    urdf = (ROOT / "robots" / "planar_2dof.urdf").read_text()
+    limit = '<limit effort="100" velocity="1.0" lower="-3.1" upper="3.1"/>'
+    (tmp_path / "arm.urdf").write_text(
+        urdf.replace('<axis xyz="0 0 1"/>', '<axis xyz="0 0 1"/>' + limit)
+    )
+    text = (SCENARIOS / "worked_example.toml").read_text()
+    (tmp_path / "s.toml").write_text(text.replace('robot = "planar_2dof"', 'robot = "arm.urdf"'))
+    scenario = ff.Scenario.from_toml(tmp_path / "s.toml")
+    left_out = ff.plan(scenario, objective="min_effort")  # peak rate 0.46 of 1 rad/s: far
+    monkeypatch.setattr(optimise_module, "FAR_FRACTION", 0.0)  # every rate row imposed
+    imposed = ff.plan(scenario, objective="min_effort")
+    assert left_out.objective.value < 0.7 * left_out.objective.start_value
+    assert left_out.objective.value == pytest.approx(imposed.objective.value, rel=1e-12)
+    path = left_out.path()
+    rates = path.evaluate(np.linspace(0.0, path.duration, 4001)).qd
+    assert np.abs(rates).max() < 1.0

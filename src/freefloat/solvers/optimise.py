@@ -138,6 +138,18 @@ def _far(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
     return peak is not None and peak.fraction < FAR_FRACTION
 
 
+def _reaches(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
+    """Whether a constraint left out of a run must be imposed after it.
+
+    A costly one: when the path at ``beta`` breaks it. An affine one: when the path comes
+    within its rows' back-off of the limit, so that a result kept without its rows honours
+    every row it would have had (they are all slack there).
+    """
+    if not constraint.affine:
+        return bool(broken_constraint(problem, [constraint], beta))
+    return constraint.violation(problem, beta).value > -BACKOFF * constraint.tolerance
+
+
 def _norm2(matrix: np.ndarray) -> float:
     """Squared Frobenius norm."""
     return float(np.sum(matrix * matrix))
@@ -232,9 +244,7 @@ def optimise(
         broken = broken_constraint(problem, constraints, candidate)
         if not broken:
             break
-        missing = [
-            c for c in active if c not in imposed and broken_constraint(problem, [c], candidate)
-        ]
+        missing = [c for c in active if c not in imposed and _reaches(problem, c, candidate)]
         if missing:  # a constraint left out because it was slack at the start now binds:
             imposed += missing  # impose it, from the start (whose path honours every one)
             z = np.zeros(problem.n_free)
