@@ -205,18 +205,14 @@ class JointPolynomials:
     ) -> tuple[tuple[float, float], tuple[float, float]]:
         """Exact ``((min, t_min), (max, t_max))`` of a joint's ``order``-th derivative on [0, T].
 
-        Extremes of a polynomial on an interval are at its ends or at real roots of its
-        derivative inside (found as eigenvalues of the Chebyshev colleague matrix, then
-        evaluated). Every joint's are found at once and kept per order.
+        At its ends or at real roots of its derivative inside (:func:`.series_extremes`);
+        every joint's are found at once and kept per order.
         """
         if order not in self._extreme_table:
             self._extreme_table[order] = series_extremes(self.derivative(order))
         lo, x_lo, hi, x_hi = self._extreme_table[order][joint]
-        to_time = 0.5 * self.duration
-        return (float(lo), float(to_time * (x_lo + 1.0))), (
-            float(hi),
-            float(to_time * (x_hi + 1.0)),
-        )
+        t_lo, t_hi = 0.5 * self.duration * (np.array([x_lo, x_hi]) + 1.0)
+        return (float(lo), float(t_lo)), (float(hi), float(t_hi))
 
     @cached_property
     def _extreme_table(self) -> dict[int, np.ndarray]:
