@@ -126,6 +126,22 @@ def scaled_coordinates(
     return np.linalg.solve(r, np.eye(problem.n_free))
 
 
+def _imposed_first(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
+    """Whether the first run imposes a constraint: affine and not far, or broken at ``beta``."""
+    if constraint.affine and not _far(problem, constraint, beta):
+        return True
+    return bool(broken_constraint(problem, [constraint], beta))
+
+
+def _placed(active: Sequence[Constraint], imposed: Sequence[Constraint]) -> list[Constraint]:
+    """The constraints whose tightest instants carry rows.
+
+    Every affine one, imposed or not (so that the rows of the imposed ones do not depend on
+    which are left out), and the imposed others.
+    """
+    return [c for c in active if c.affine or c in imposed]
+
+
 def _far(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
     """Whether a duration-scaled limit is far from binding on the path at ``beta``.
 
@@ -199,15 +215,9 @@ def optimise(
     to_beta = ev.to_beta
 
     active = [c for c in constraints if c.applies_to(problem.robot)]
-    imposed = [
-        c
-        for c in active
-        if (c.affine and not _far(problem, c, beta0)) or broken_constraint(problem, [c], beta0)
-    ]
-    # the rows' instants: those of every affine constraint, imposed or not, so that the rows
-    # of the imposed ones do not depend on which are left out
-    placed = [c for c in active if c.affine or c in imposed]
-    instants = _tightest(problem, placed, beta0, np.linspace(0.0, 1.0, COARSE_INSTANTS))
+    imposed = [c for c in active if _imposed_first(problem, c, beta0)]
+    coarse = np.linspace(0.0, 1.0, COARSE_INSTANTS)
+    instants = _tightest(problem, _placed(active, imposed), beta0, coarse)
     z = np.zeros(problem.n_free)
     iterations = 0
 
@@ -251,8 +261,7 @@ def optimise(
             continue
         # Rows hold at the instants but not between them (or the run stopped short of them):
         # add the path's tightest instants and first try the nearest root within them.
-        placed = [c for c in active if c.affine or c in imposed]
-        instants = _tightest(problem, placed, candidate, instants)
+        instants = _tightest(problem, _placed(active, imposed), candidate, instants)
         inside = nearest_root_within(problem, candidate, imposed, instants, options)
         if inside.honoured and not broken_constraint(problem, constraints, inside.beta):
             candidate = inside.beta
