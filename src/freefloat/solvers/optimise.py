@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from functools import partial
+from functools import lru_cache, partial
 from typing import Any
 
 import numpy as np
@@ -124,6 +124,23 @@ def scaled_coordinates(
         stacked = np.vstack([metric, weight * accel]) / np.sqrt(max(0.5 * value, 1e-300))
     r = np.linalg.qr(stacked, mode="r")
     return np.linalg.solve(r, np.eye(problem.n_free))
+
+
+@lru_cache(maxsize=1)
+def _blas() -> Any:
+    """The process's BLAS thread pools (found once, when SciPy's and NumPy's are loaded)."""
+    from threadpoolctl import ThreadpoolController  # imported when first used
+
+    return ThreadpoolController()
+
+
+def _one_blas_thread() -> Any:
+    """A context in which BLAS runs on one thread.
+
+    SLSQP's subproblems and the callbacks' products are tiny: threaded BLAS only adds thread
+    wake-ups, and on a busy machine waits for cores (the run took 2 to 20 times longer).
+    """
+    return _blas().limit(limits=1, user_api="blas")
 
 
 def _imposed_first(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
@@ -229,7 +246,7 @@ def optimise(
         cons = [{"type": "eq", "fun": ev.h, "jac": ev.dh}]
         cons += _inequalities(problem, imposed, instants, ev)
         try:
-            with np.errstate(all="ignore"):
+            with np.errstate(all="ignore"), _one_blas_thread():
                 result = minimize(
                     ev.fun,
                     z,
