@@ -22,6 +22,7 @@ import numpy as np
 
 from ..errors import InputError
 from .basis import basis_chebyshev, quintic_chebyshev
+from .chebyshev_extremes import series_extremes
 
 __all__ = [
     "AffineSamples",
@@ -204,22 +205,19 @@ class JointPolynomials:
     ) -> tuple[tuple[float, float], tuple[float, float]]:
         """Exact ``((min, t_min), (max, t_max))`` of a joint's ``order``-th derivative on [0, T].
 
-        Extremes of a polynomial on an interval are at its ends or at real roots of its
-        derivative inside (found as eigenvalues of the Chebyshev colleague matrix, then
-        evaluated).
+        At its ends or at real roots of its derivative inside (:func:`.series_extremes`);
+        every joint's are found at once and kept per order.
         """
-        c = self.derivative(order)[joint]
-        dc = np.trim_zeros(_CHEB.chebder(c), "b") if len(c) > 1 else np.zeros(0)
-        candidates = [-1.0, 1.0]
-        if len(dc) > 1:
-            for root in _CHEB.chebroots(dc):
-                if abs(root.imag) <= 1e-9 and -1.0 < root.real < 1.0:
-                    candidates.append(float(root.real))
-        x = np.array(candidates)
-        values = _CHEB.chebval(x, c)
-        times = 0.5 * (x + 1.0) * self.duration
-        lo, hi = int(np.argmin(values)), int(np.argmax(values))
-        return (float(values[lo]), float(times[lo])), (float(values[hi]), float(times[hi]))
+        if order not in self._extreme_table:
+            self._extreme_table[order] = series_extremes(self.derivative(order))
+        lo, x_lo, hi, x_hi = self._extreme_table[order][joint]
+        t_lo, t_hi = 0.5 * self.duration * (np.array([x_lo, x_hi]) + 1.0)
+        return (float(lo), float(t_lo)), (float(hi), float(t_hi))
+
+    @cached_property
+    def _extreme_table(self) -> dict[int, np.ndarray]:
+        """Every joint's extremes per derivative order (see :func:`.series_extremes`)."""
+        return {}
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,9 @@ Panda's wrist joints, whose torques are tiny, leave directions almost flat and S
 
 Constraints: the first run imposes the affine constraints (cheap rows) and those ``beta_0``
 breaks; a costly constraint that is slack there (clearance far from its margin, say) is imposed
-only if a result breaks it. Rows sit at fixed instants during one run:
+only if a result breaks it, and so is an affine duration-scaled limit whose peaks at ``beta_0``
+stay below :data:`FAR_FRACTION` of its limits (joint rates, typically: their hundreds of rows
+would only slow SLSQP's subproblems down). Rows sit at fixed instants during one run:
 :data:`COARSE_INSTANTS` evenly spaced ones and those where the path is tightest (each joint's
 extremes, say), and are held :data:`BACKOFF` tolerances inside the limit, so that a limit
 reached at a row is not broken between rows by more than its tolerance. When a result still
@@ -29,12 +31,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from functools import partial
+from functools import lru_cache, partial
 from typing import Any
 
 import numpy as np
 
-from ..problem.constraints import Constraint
+from ..problem.constraints import Constraint, DurationScaledLimit
 from ..problem.objectives import Objective, gauss_legendre
 from ..problem.residual import Problem
 from ..progress import heartbeat
@@ -54,6 +56,9 @@ MAX_EVALUATIONS = 400
 BACKOFF = 1000.0
 #: Evenly spaced normalised instants of the rows, to which the path's tightest are added.
 COARSE_INSTANTS = 25
+#: An affine duration-scaled limit whose peaks at the start stay below this fraction of their
+#: limits is left out of the first run, like a costly constraint slack at the start.
+FAR_FRACTION = 0.5
 #: SLSQP runs at most, each adding what the last one broke: a left-out constraint, or the
 #: instants where it broke an imposed one.
 ROUNDS = 8
@@ -99,13 +104,14 @@ def scaled_coordinates(
 ) -> np.ndarray:
     """``S`` in which the objective divided by ``value`` has a Hessian near the identity.
 
-    With the objective's metric ``M`` at ``beta`` (its Gauss-Newton factor),
-    ``S^T (M^T M + r^2 A^T A) S = value I``, where ``A`` is the weighted second-derivative map
-    of the basis (exact Gauss-Legendre integration) and ``r`` a small multiple that keeps the
-    matrix positive definite where ``M`` is rank deficient. Without a metric (``min_length``),
-    ``S^T A^T A S`` is ``value / |A|^2 I``: the acceleration norm, scaled to the value. Built
-    from the QR factors of the stacked matrices, not from a Cholesky factor of the product:
-    that squares the condition number of a high-degree monomial basis.
+    With the objective's metric ``M`` at ``beta`` (its Gauss-Newton factor: ``2 M^T M`` is
+    close to the Hessian), ``S^T (M^T M + r^2 A^T A) S = value / 2 I``, where ``A`` is the
+    weighted second-derivative map of the basis (exact Gauss-Legendre integration) and ``r`` a
+    small multiple that keeps the matrix positive definite where ``M`` is rank deficient.
+    Without a metric (``min_length``), ``S^T A^T A S`` is ``value / |A|^2 I``: the acceleration
+    norm, scaled to the value. Built from the QR factors of the stacked matrices, not from a
+    Cholesky factor of the product: that squares the condition number of a high-degree
+    monomial basis.
     """
     s, w = gauss_legendre(max(problem.family.degrees))
     dqss = problem.family.affine_samples(s).dqss
@@ -115,9 +121,66 @@ def scaled_coordinates(
         stacked = accel * np.sqrt(max(value, 1e-300) / max(_norm2(accel), 1e-300))
     else:
         weight = 1e-3 * np.sqrt(_norm2(metric) / max(_norm2(accel), 1e-300))
-        stacked = np.vstack([metric, weight * accel]) / np.sqrt(max(value, 1e-300))
+        stacked = np.vstack([metric, weight * accel]) / np.sqrt(max(0.5 * value, 1e-300))
     r = np.linalg.qr(stacked, mode="r")
     return np.linalg.solve(r, np.eye(problem.n_free))
+
+
+@lru_cache(maxsize=1)
+def _blas() -> Any:
+    """The process's BLAS thread pools (found once, when SciPy's and NumPy's are loaded)."""
+    from threadpoolctl import ThreadpoolController  # imported when first used
+
+    return ThreadpoolController()
+
+
+def _one_blas_thread() -> Any:
+    """A context in which BLAS runs on one thread.
+
+    SLSQP's subproblems and the callbacks' products are tiny: threaded BLAS only adds thread
+    wake-ups, and on a busy machine waits for cores (the run took 2 to 20 times longer).
+    """
+    return _blas().limit(limits=1, user_api="blas")
+
+
+def _imposed_first(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
+    """Whether the first run imposes a constraint: affine and not far, or broken at ``beta``."""
+    if constraint.affine and not _far(problem, constraint, beta):
+        return True
+    return bool(broken_constraint(problem, [constraint], beta))
+
+
+def _placed(active: Sequence[Constraint], imposed: Sequence[Constraint]) -> list[Constraint]:
+    """The constraints whose tightest instants carry rows.
+
+    Every affine one, imposed or not (so that the rows of the imposed ones do not depend on
+    which are left out), and the imposed others.
+    """
+    return [c for c in active if c.affine or c in imposed]
+
+
+def _far(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
+    """Whether a duration-scaled limit is far from binding on the path at ``beta``.
+
+    Far: every peak (joint rates, say) is below :data:`FAR_FRACTION` of its limit. Its rows
+    are then left out of the first run.
+    """
+    if not isinstance(constraint, DurationScaledLimit):
+        return False
+    peak = constraint.worst(problem.robot, problem.polynomials(beta))
+    return peak is not None and peak.fraction < FAR_FRACTION
+
+
+def _reaches(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
+    """Whether a constraint left out of a run must be imposed after it.
+
+    A costly one: when the path at ``beta`` breaks it. An affine one: when the path comes
+    within its rows' back-off of the limit, so that a result kept without its rows honours
+    every row it would have had (they are all slack there).
+    """
+    if not constraint.affine:
+        return bool(broken_constraint(problem, [constraint], beta))
+    return constraint.violation(problem, beta).value > -BACKOFF * constraint.tolerance
 
 
 def _norm2(matrix: np.ndarray) -> float:
@@ -169,8 +232,9 @@ def optimise(
     to_beta = ev.to_beta
 
     active = [c for c in constraints if c.applies_to(problem.robot)]
-    imposed = [c for c in active if c.affine or broken_constraint(problem, [c], beta0)]
-    instants = _tightest(problem, imposed, beta0, np.linspace(0.0, 1.0, COARSE_INSTANTS))
+    imposed = [c for c in active if _imposed_first(problem, c, beta0)]
+    coarse = np.linspace(0.0, 1.0, COARSE_INSTANTS)
+    instants = _tightest(problem, _placed(active, imposed), beta0, coarse)
     z = np.zeros(problem.n_free)
     iterations = 0
 
@@ -182,7 +246,7 @@ def optimise(
         cons = [{"type": "eq", "fun": ev.h, "jac": ev.dh}]
         cons += _inequalities(problem, imposed, instants, ev)
         try:
-            with np.errstate(all="ignore"):
+            with np.errstate(all="ignore"), _one_blas_thread():
                 result = minimize(
                     ev.fun,
                     z,
@@ -207,16 +271,14 @@ def optimise(
         broken = broken_constraint(problem, constraints, candidate)
         if not broken:
             break
-        missing = [
-            c for c in active if c not in imposed and broken_constraint(problem, [c], candidate)
-        ]
+        missing = [c for c in active if c not in imposed and _reaches(problem, c, candidate)]
         if missing:  # a constraint left out because it was slack at the start now binds:
             imposed += missing  # impose it, from the start (whose path honours every one)
             z = np.zeros(problem.n_free)
             continue
         # Rows hold at the instants but not between them (or the run stopped short of them):
         # add the path's tightest instants and first try the nearest root within them.
-        instants = _tightest(problem, imposed, candidate, instants)
+        instants = _tightest(problem, _placed(active, imposed), candidate, instants)
         inside = nearest_root_within(problem, candidate, imposed, instants, options)
         if inside.honoured and not broken_constraint(problem, constraints, inside.beta):
             candidate = inside.beta

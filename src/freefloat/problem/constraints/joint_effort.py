@@ -11,19 +11,22 @@ derivatives): first without them, then with them only if the path found breaks t
 solvers, the limits are rows ``+-tau_i(s) - limit_i`` at the instants, with their exact
 Jacobian by the chain rule through Pinocchio's RNEA derivatives. The dense check samples the
 torques on :data:`DENSE_SAMPLES` instants and refines every sampled local maximum that could hold
-a joint's peak by a golden-section search between its neighbours; its error estimate is what
-remains of the search (the spread of the torque over the final brackets).
+a joint's peak by a bracket search between its neighbours (every bracket cut into
+:data:`SECTIONS` sections per round, all brackets of all joints in one batch per round); its
+error estimate is what remains of the search (the rise of the torque from the final brackets'
+ends to their best sample).
 """
 
 from __future__ import annotations
 
 import math
 import weakref
+from collections.abc import Callable
 
 import numpy as np
 
 from ...errors import EffortLimitError
-from ...physics.dynamics import inverse_dynamics_batch
+from ...physics.joint_torques import joint_torques_batch
 from ...physics.momentum import MomentumMap
 from ...physics.torque_derivatives import torques_and_derivatives
 from ...robot.model import Joint, Robot
@@ -35,7 +38,11 @@ __all__ = ["DENSE_SAMPLES", "JointEffortLimits"]
 
 #: Instants of the dense check on [0, T].
 DENSE_SAMPLES = 401
-_GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+#: Sections each refinement round splits a candidate peak's bracket into.
+SECTIONS = 8
+#: Refinement rounds: the brackets shrink to (2 / SECTIONS)^REFINE_ROUNDS of two sample
+#: steps (1.5e-5; about 1e-6 s on a 20 s path), where a torque's rise is ~1e-12 of its scale.
+REFINE_ROUNDS = 8
 
 
 class JointEffortLimits(DurationScaledLimit):
@@ -92,10 +99,14 @@ class JointEffortLimits(DurationScaledLimit):
 
         The torques are sampled at :data:`DENSE_SAMPLES` instants; every sampled local maximum
         that could hold the peak (within four of the joint's largest second differences of its
-        top sample, a bound on what the grid can miss) is refined by a golden-section search
-        between its neighbours, all brackets in one batch per step. The error estimate is the
-        largest spread of ``|tau|`` over a final bracket. The last few paths' results are kept
-        (copies are returned): planning and verification look at the same path.
+        top sample, a bound on what the grid can miss) is refined by a bracket search between
+        its neighbours: each round samples every bracket at :data:`SECTIONS` - 1 interior
+        instants (all brackets in one batch) and keeps the two sections about the largest
+        sample, :data:`REFINE_ROUNDS` rounds. The error estimate is the largest rise of
+        ``|tau|`` from a final bracket's ends to its best sample: at least four times what a
+        torque that is locally quadratic can still rise between the samples. The last few
+        paths' results are kept (copies are returned): planning and verification look at the
+        same path.
         """
         shape = np.asarray(path.coefficients.shape, dtype=np.int64).tobytes()
         key = shape + np.float64(path.duration).tobytes() + path.coefficients.tobytes()
@@ -115,7 +126,7 @@ class JointEffortLimits(DurationScaledLimit):
 
         def torques(times: np.ndarray) -> np.ndarray:
             s = path.evaluate(times)
-            return np.abs(inverse_dynamics_batch(mmap, s.q, s.qd, s.qdd).tau)
+            return np.abs(joint_torques_batch(mmap, s.q, s.qd, s.qdd))
 
         sampled = torques(t)
         peak = sampled.max(axis=0)
@@ -123,24 +134,23 @@ class JointEffortLimits(DurationScaledLimit):
         padded = np.vstack([sampled[:1] - 1.0, sampled, sampled[-1:] - 1.0])
         local = (padded[1:-1] >= padded[:-2]) & (padded[1:-1] >= padded[2:])
         reach = 4.0 * np.abs(np.diff(sampled, 2, axis=0)).max(axis=0)
-        rows, joints = np.nonzero(local & (sampled >= peak - reach))
-        step = t[1] - t[0]
-        lo = np.maximum(0.0, t[rows] - step)
-        hi = np.minimum(path.duration, t[rows] + step)
-        spread = 0.0
-        for _ in range(40):  # each step keeps 0.618 of every bracket: ~1e-8 of a step at the end
-            a = hi - _GOLDEN * (hi - lo)
-            b = lo + _GOLDEN * (hi - lo)
-            values = torques(np.concatenate([a, b]))
-            fa = values[np.arange(len(a)), joints]
-            fb = values[len(a) + np.arange(len(b)), joints]
-            keep_left = fa >= fb
-            hi = np.where(keep_left, b, hi)
-            lo = np.where(keep_left, lo, a)
-            spread = float(np.abs(fa - fb).max(initial=0.0))
-        middle = 0.5 * (lo + hi)
-        refined = torques(middle)[np.arange(len(middle)), joints]
-        for value, time, i in zip(refined, middle, joints, strict=True):
+        rows, joints = np.nonzero(local & (sampled >= peak - reach))  # each joint's top one too
+        grid, values = _refined(
+            torques,
+            joints,
+            t[np.maximum(rows - 1, 0)],
+            t[np.minimum(rows + 1, len(t) - 1)],
+            sampled[np.maximum(rows - 1, 0), joints],
+            sampled[np.minimum(rows + 1, len(t) - 1), joints],
+        )
+        best = values.argmax(axis=1)
+        found = values[np.arange(len(best)), best]
+        # the bracket's best sample against its lower neighbour: at least four times what a
+        # locally quadratic torque can still rise between the samples
+        left = values[np.arange(len(best)), np.maximum(best - 1, 0)]
+        right = values[np.arange(len(best)), np.minimum(best + 1, SECTIONS)]
+        spread = float(np.max(found - np.minimum(left, right)))
+        for value, time, i in zip(found, grid[np.arange(len(best)), best], joints, strict=True):
             if value > peak[i]:
                 peak[i], where[i] = value, time
         return peak, where, spread
@@ -183,3 +193,31 @@ class JointEffortLimits(DurationScaledLimit):
 
 def _limited(joint: Joint) -> bool:
     return math.isfinite(joint.effort_limit)
+
+
+def _refined(
+    torques: Callable[[np.ndarray], np.ndarray],
+    joints: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    f_lo: np.ndarray,
+    f_hi: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Brackets ``[lo, hi]`` (s) shrunk about the largest ``|tau|`` of their joint.
+
+    Each round samples :data:`SECTIONS` - 1 evenly spaced interior instants of every bracket,
+    all brackets in one batch, and keeps the two sections on either side of the largest
+    sample: the bracket shrinks by ``2 / SECTIONS`` per round. Returns the last round's
+    (B, SECTIONS + 1) instants (s) and ``|tau|`` of each bracket's joint there (N m or N).
+    """
+    fraction = np.linspace(0.0, 1.0, SECTIONS + 1)
+    index = np.arange(len(joints))
+    for _ in range(REFINE_ROUNDS):
+        grid = lo[:, None] + (hi - lo)[:, None] * fraction[None, :]
+        inner = torques(grid[:, 1:-1].ravel()).reshape(len(joints), SECTIONS - 1, -1)
+        values = np.column_stack([f_lo, inner[index, :, joints], f_hi])
+        best = values.argmax(axis=1)
+        below, above = np.maximum(best - 1, 0), np.minimum(best + 1, SECTIONS)
+        lo, hi = grid[index, below], grid[index, above]
+        f_lo, f_hi = values[index, below], values[index, above]
+    return grid, values

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...physics.dynamics import inverse_dynamics_batch
+from ...physics.joint_torques import joint_torques_batch
 from ...physics.torque_derivatives import torques_and_derivatives
 from ..residual import Problem
 from .base import Objective, ObjectiveValue, gauss_legendre
@@ -61,7 +61,7 @@ class MinEffort(Objective):
         if not gradient:
             s, w = gauss_legendre(nodes)
             path = problem.family.affine_samples(s).at(beta)
-            tau = inverse_dynamics_batch(problem.mmap, path.q, path.qd, path.qdd).tau
+            tau = joint_torques_batch(problem.mmap, path.q, path.qd, path.qdd)
             return ObjectiveValue(
                 scale * float(np.einsum("k,ki,ki->", w, tau, tau)), np.zeros(problem.n_free)
             )

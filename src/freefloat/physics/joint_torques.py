@@ -1,0 +1,66 @@
+"""Joint torques alone of a zero-momentum motion at many instants (two Pinocchio calls each).
+
+For checks that need only the torques (the dense effort-peak search, an effort value without
+its gradient), at about a third of the cost of :func:`~freefloat.physics.dynamics.
+inverse_dynamics_batch` (which also gives the base wrench, CM and end effectors). In the base
+frame, base at the origin with identity attitude (without gravity the torques do not depend on
+the base pose), with ``M`` the joint-space inertia and ``r(q, v, a)`` Pinocchio's RNEA:
+
+- the centroidal map ``A_g = [A_b | A_j]`` gives the zero-momentum base twist
+  ``v_b = -A_b^-1 A_j qdot``;
+- the base rows of ``M`` are the whole system's momentum about the base origin, so they are
+  ``A_g`` shifted from the CM ``c`` to the base origin: ``M_b = X A_g`` with
+  ``X = [[I, 0], [[c]x, I]]``; ``c`` is read from ``A_g`` itself (its linear rows are
+  ``m [I | -[c]x | ...]``);
+- the base acceleration makes the base wrench zero: ``a_b = -M_bb^-1 r_b(q, v, [0; qddot])``,
+  and the joint torques are ``tau = r_j(q, v, [0; qddot]) + M_jb a_b`` (``M_jb = M_bj^T``).
+
+Units: joint values rad (or m), rates per unit time, torques N m (or N) for that time unit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from .momentum import MomentumMap
+
+__all__ = ["joint_torques_batch"]
+
+
+def joint_torques_batch(
+    mmap: MomentumMap, joints: np.ndarray, rates: np.ndarray, accelerations: np.ndarray
+) -> np.ndarray:
+    """(K, N) joint torques (N m or N) of a zero-momentum motion at K instants.
+
+    Args:
+        mmap: momentum map of the robot (its Pinocchio model has no gravity).
+        joints: (K, N) joint values (rad or m).
+        rates: (K, N) joint rates (rad/s or m/s).
+        accelerations: (K, N) joint accelerations (rad/s^2 or m/s^2).
+    """
+    model, data = mmap.model, mmap.data
+    joints = np.atleast_2d(np.asarray(joints, dtype=float))
+    rates = np.atleast_2d(np.asarray(rates, dtype=float))
+    accelerations = np.atleast_2d(np.asarray(accelerations, dtype=float))
+    configs = mmap.configurations(joints)
+    k_count, nv = len(configs), model.nv
+    jv = np.array([j.idx_v for j in mmap.robot.joints], dtype=int)
+    ag = np.empty((k_count, 6, nv))
+    for k in range(k_count):
+        ag[k] = pin.computeCentroidalMap(model, data, configs[k])
+    v = np.zeros((k_count, nv))
+    v[:, jv] = rates
+    v[:, :6] = -np.linalg.solve(ag[:, :, :6], np.einsum("kij,kj->ki", ag, v)[..., None])[..., 0]
+    a = np.zeros((k_count, nv))
+    a[:, jv] = accelerations
+    partial = np.empty((k_count, nv))
+    for k in range(k_count):
+        partial[k] = pin.rnea(model, data, configs[k], v[k], a[k])  # base acceleration 0
+    mmap.evaluations += k_count
+    # M_b = X A_g: the angular rows gain c x (linear rows); c from A_g's linear rows
+    cross = -ag[:, :3, 3:6] / ag[:, :1, :1]  # [c]x
+    rows = ag.copy()
+    rows[:, 3:] += cross @ ag[:, :3]
+    a_base = -np.linalg.solve(rows[:, :, :6], partial[:, :6, None])[..., 0]
+    return partial[:, jv] + np.einsum("kbj,kb->kj", rows[:, :, jv], a_base)
