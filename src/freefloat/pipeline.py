@@ -14,6 +14,7 @@ from dataclasses import asdict, replace
 
 import numpy as np
 
+from ._blas import one_blas_thread
 from .errors import (
     CollisionError,
     SolverError,
@@ -75,7 +76,7 @@ def plan(
     constraints: Sequence[Constraint] | None = None,
     objective: str | Objective | None = None,
 ) -> Plan:
-    """Plan the scenario's motion and sample it.
+    """Plan the scenario's motion and sample it (BLAS on one thread meanwhile: :mod:`._blas`).
 
     Args:
         scenario: what to plan.
@@ -97,6 +98,18 @@ def plan(
             shortest duration at which the path found without them respects them.
         EffortLimitError: the same for the effort limits.
     """
+    with one_blas_thread():
+        return _plan(scenario, options, samples, constraints, objective)
+
+
+def _plan(
+    scenario: Scenario,
+    options: SolveOptions | None,
+    samples: int,
+    constraints: Sequence[Constraint] | None,
+    objective: str | Objective | None,
+) -> Plan:
+    """:func:`plan`'s work."""
     check_samples(samples)
     options = options or SolveOptions()
     if scenario.max_deviation is not None:

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._blas import one_blas_thread
 from .physics.attitude import (
     quat_conjugate,
     quat_exp,
@@ -179,16 +180,17 @@ def reachable(
     before = problem.evaluations
     constraints = scenario_constraints(scenario)
     if budget > 0:
-        estimate = reach_set(
-            problem,
-            axes,
-            outer,
-            constraints,
-            SolveOptions(max_evaluations=budget),
-            progress,
-            deferred=[c for c in constraints if isinstance(c, Clearance)],
-            step=math.radians(REPORT_STEP_DEG),
-        )
+        with one_blas_thread():  # many tiny products: see freefloat._blas
+            estimate = reach_set(
+                problem,
+                axes,
+                outer,
+                constraints,
+                SolveOptions(max_evaluations=budget),
+                progress,
+                deferred=[c for c in constraints if isinstance(c, Clearance)],
+                step=math.radians(REPORT_STEP_DEG),
+            )
     else:  # the drift attitude and the outer bound only
         skipped = DirectionReach(np.zeros(3), 0.0, 0.0, NOT_ESTIMATED, 0)
         freedom = tuple(d - 5 for d in problem.family.degrees)

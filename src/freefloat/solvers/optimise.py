@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from .._blas import one_blas_thread
 from ..problem.constraints import Constraint, DurationScaledLimit
 from ..problem.objectives import Objective, gauss_legendre
 from ..problem.residual import Problem
@@ -127,22 +128,6 @@ def scaled_coordinates(
 
 
 @lru_cache(maxsize=1)
-def _blas() -> Any:
-    """The process's BLAS thread pools (found once, when SciPy's and NumPy's are loaded)."""
-    from threadpoolctl import ThreadpoolController  # imported when first used
-
-    return ThreadpoolController()
-
-
-def _one_blas_thread() -> Any:
-    """A context in which BLAS runs on one thread.
-
-    SLSQP's subproblems and the callbacks' products are tiny: threaded BLAS only adds thread
-    wake-ups, and on a busy machine waits for cores (the run took 2 to 20 times longer).
-    """
-    return _blas().limit(limits=1, user_api="blas")
-
-
 def _imposed_first(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
     """Whether the first run imposes a constraint: affine and not far, or broken at ``beta``."""
     if constraint.affine and not _far(problem, constraint, beta):
@@ -246,7 +231,7 @@ def optimise(
         cons = [{"type": "eq", "fun": ev.h, "jac": ev.dh}]
         cons += _inequalities(problem, imposed, instants, ev)
         try:
-            with np.errstate(all="ignore"), _one_blas_thread():
+            with np.errstate(all="ignore"), one_blas_thread():
                 result = minimize(
                     ev.fun,
                     z,
