@@ -9,13 +9,24 @@ the process's BLAS pools to one thread for the duration of a call and restores t
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Any
 
 __all__ = ["one_blas_thread"]
 
 
-def one_blas_thread() -> Any:
-    """A context in which BLAS runs on one thread (the pools found when it is entered)."""
-    from threadpoolctl import threadpool_limits  # imported when first used
+@lru_cache(maxsize=1)
+def _pools() -> Any:
+    """The process's thread pools, found once.
 
-    return threadpool_limits(limits=1, user_api="blas")
+    NumPy's and SciPy's BLAS are loaded with freefloat; looking them up again would cost
+    about a millisecond per call.
+    """
+    from threadpoolctl import ThreadpoolController  # imported when first used
+
+    return ThreadpoolController()
+
+
+def one_blas_thread() -> Any:
+    """A context in which BLAS runs on one thread."""
+    return _pools().limit(limits=1, user_api="blas")

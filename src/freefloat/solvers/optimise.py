@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from functools import lru_cache, partial
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -127,7 +127,6 @@ def scaled_coordinates(
     return np.linalg.solve(r, np.eye(problem.n_free))
 
 
-@lru_cache(maxsize=1)
 def _imposed_first(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
     """Whether the first run imposes a constraint: affine and not far, or broken at ``beta``."""
     if constraint.affine and not _far(problem, constraint, beta):
