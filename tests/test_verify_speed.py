@@ -131,6 +131,23 @@ def test_the_replay_is_fourth_order_rk4_of_the_array_form(urdf, newton_metres):
         np.testing.assert_allclose(got.rates, rates, rtol=0, atol=1e-12)
 
 
+def test_a_replay_that_blows_up_says_so_quietly():
+    """Torques far too large for the steps: the replay's state and attitude blow up to
+    non-finite values (the verification then reports no verdict), without a warning on the
+    user's terminal."""
+    import warnings
+
+    robot = ff.load_robot(ROOT / "robots" / "ur5_servicer.urdf")
+    mmap = MomentumMap(robot)
+    steps, duration = 2, 10.0
+    table = np.full((2 * steps + 1, robot.n), 1e6)
+    quat = np.array([0.0, 0.0, 0.0, 1.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = replay(mmap, np.zeros(robot.n), quat, table, duration, steps, track_momentum=False)
+    assert not np.all(np.isfinite(got.quaternion_xyzw)) or not np.all(np.isfinite(got.joints))
+
+
 def test_kept_inverse_dynamics_are_pinocchios_per_instant_and_never_stale():
     """Asked twice, changed in place by a caller, then asked with other accelerations: every
     answer is Pinocchio's single-instant inverse dynamics of its own inputs."""

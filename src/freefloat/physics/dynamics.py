@@ -320,7 +320,8 @@ def replay(
                 momentum = mmap.momentum(config(y[:n]), y[n:])
                 momentum_max = max(momentum_max, float(np.linalg.norm(momentum)))
     stage_omega = np.array(stages)[:, n + 3 : n + 6].reshape(steps, 4, 3)
-    quaternion = _rk4_quaternion(np.asarray(start_quaternion_xyzw, float), stage_omega, widths)
+    with np.errstate(over="ignore", invalid="ignore"):  # a blown-up replay: non-finite, quietly
+        quaternion = _rk4_quaternion(np.asarray(start_quaternion_xyzw, float), stage_omega, widths)
     return ReplayResult(
         joints=robot.joint_values(config(y[:n])),
         rates=y[n:][rate_index].copy(),
