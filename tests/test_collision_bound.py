@@ -172,6 +172,33 @@ def test_the_per_pair_bound_between_samples_holds_against_every_pair_measured_de
     assert tighter > 0
 
 
+@pytest.mark.parametrize("path", [PANDA, UR5])
+def test_the_dense_check_does_not_depend_on_earlier_queries(path):
+    """The same path checked by a fresh model and by one that answered other queries first
+    (at the same instants, on other paths): the same samples, pair bounds, lower bound and
+    verdict, to the bit."""
+    from freefloat.problem.constraints.clearance import Clearance
+
+    scenario = ff.Scenario.from_toml(path)
+    robot = scenario.robot
+    problem = ff.problem_from_scenario(scenario, extra=[2] * robot.n)
+    rng = np.random.default_rng(17)
+    beta = rng.normal(0.0, 0.3, problem.n_free)
+    walked = CollisionModel(robot, known_srdf(robot))
+    for _ in range(3):
+        other = problem.polynomials(beta + rng.normal(0.0, 0.1, problem.n_free))
+        t = np.linspace(0.0, other.duration, 201)
+        walked.closest_many(other.evaluate(t).q, t / other.duration)
+    answers = []
+    for model in (CollisionModel(robot, known_srdf(robot)), walked):
+        check = Clearance(model, 0.0)
+        measured = check._measured(problem.polynomials(beta), 201, 0.0)
+        violation = check.violation(problem, beta)
+        answers.append((measured.known.tobytes(), measured.lower.tobytes(), measured.bound))
+        answers[-1] += (violation.value, violation.detail)
+    assert answers[0] == answers[1]
+
+
 def test_the_dense_checks_decision_is_that_of_the_refined_minimum():
     """The solvers' check decides from a bound where it can: on paths near and far from the
     margin, it breaks exactly when the refined smallest clearance (every sample measured,
@@ -301,6 +328,11 @@ class _Dip:
     def closest_value(self, joints: np.ndarray, slot: float | None = None) -> tuple[float, int]:
         dip = abs(float(joints[0]) - 100.5 / 200)
         return self.margin - 1e-3 + min(dip, self.cap), 0
+
+    def own_bounds(self):
+        import contextlib
+
+        return contextlib.nullcontext()
 
     def closest_many(self, joints: np.ndarray, slots=None):
         from freefloat.robot.collision import Closest

@@ -25,7 +25,8 @@ from the witness points and the joint Jacobians (``n . (J_2(p_2) - J_1(p_1))``).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 import coal
@@ -143,6 +144,21 @@ class CollisionModel:
         # Each pair's last bounds of its distance per slot: see _may_be_closest.
         self._weights = motion_weights(robot, geometry, self.pairs, self._centres, self._radii)
         self._bounds = None if self._weights is None else PairBounds(self._weights)
+
+    @contextmanager
+    def own_bounds(self) -> Iterator[None]:
+        """Queries within bound pairs from each other only, not from earlier queries.
+
+        Which pairs a query measures, and the bounds it reports for the others
+        (:attr:`Closest.lower`), then depend on the queries within alone: a check built on
+        those bounds gives the same answer whatever was asked before.
+        """
+        kept = self._bounds
+        self._bounds = None if self._weights is None else PairBounds(self._weights)
+        try:
+            yield
+        finally:
+            self._bounds = kept
 
     @property
     def weights(self) -> np.ndarray | None:
@@ -281,6 +297,8 @@ class CollisionModel:
         values[measured] = found
         if lower is not None:
             lower[measured] = found
+            if self._retried:  # asked again at a looser EPA tolerance: a bound that allows it
+                lower[list(self._retried)] -= RETRY_TOLERANCES[-1]
         return values
 
     def _retry(self, k: int, gap: float, reach: float) -> float:

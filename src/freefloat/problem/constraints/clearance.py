@@ -219,6 +219,7 @@ class Clearance(Constraint):
         assert self.model.weights is not None
         speed = rate_bounds(path, t0, t1) @ self.model.weights.T  # (I, P), m/s
         per_pair = 0.5 * (lower0 + lower1 - speed * (t1 - t0)[:, None])
+        per_pair = np.nan_to_num(per_pair, nan=-math.inf)  # no bound: nothing spared
         return np.min(per_pair, axis=1) - BOUND_SLACK
 
     def _sampled(self, path: JointPolynomials, t: np.ndarray) -> np.ndarray:
@@ -260,19 +261,20 @@ class Clearance(Constraint):
             answer = _Measured(known, lower, -math.inf)
             self._measured_memo = (key, answer)
             return answer
-        while True:
-            todo = todo[np.isnan(known[todo])]
-            found = self.model.closest_many(q[todo], todo / (samples - 1))
-            known[todo], lower[todo] = found.values, _pair_bounds(found)
-            nodes = np.flatnonzero(~np.isnan(known))
-            a, b = nodes[:-1], nodes[1:]
-            between = self._between(path, t[a], t[b], lower[a], lower[b])
-            floor = float(np.nanmin(known)) + NEAR if limit is None else limit
-            short = (between < floor) & (b - a >= 2)
-            if not np.any(short):
-                bound = float(min(between.min(), np.nanmin(known)))
-                break
-            todo = (a[short] + b[short]) // 2
+        with self.model.own_bounds():  # pair bounds from this path's samples alone
+            while True:
+                todo = todo[np.isnan(known[todo])]
+                found = self.model.closest_many(q[todo], todo / (samples - 1))
+                known[todo], lower[todo] = found.values, _pair_bounds(found)
+                nodes = np.flatnonzero(~np.isnan(known))
+                a, b = nodes[:-1], nodes[1:]
+                between = self._between(path, t[a], t[b], lower[a], lower[b])
+                floor = float(np.nanmin(known)) + NEAR if limit is None else limit
+                short = (between < floor) & (b - a >= 2)
+                if not np.any(short):
+                    bound = float(min(between.min(), np.nanmin(known)))
+                    break
+                todo = (a[short] + b[short]) // 2
         answer = _Measured(known, lower, bound)
         self._measured_memo = (key, answer)
         return answer
@@ -295,23 +297,24 @@ class Clearance(Constraint):
         rows = np.arange(len(known), dtype=float)
         # Rows: t0, t1 (s), v0, v1 (m), and the rows of ``table`` (pair bounds) at t0 and t1.
         ends = np.stack([t[:-1], t[1:], known[:-1], known[1:], rows[:-1], rows[1:]])
-        for _ in range(HALVINGS):
-            ends = ends[:, self._undecided(path, ends, table, limit)]
-            if ends.shape[1] == 0:
-                break
-            mid = 0.5 * (ends[0] + ends[1])
-            found = self.model.closest_many(path.evaluate(mid).q, mid / path.duration)
-            vm, at = found.values, np.arange(len(table), len(table) + len(mid), dtype=float)
-            table = np.concatenate([table, _pair_bounds(found)])
-            times.append(mid)
-            values.append(vm)
-            ends = np.concatenate(
-                [
-                    np.stack([ends[0], mid, ends[2], vm, ends[4], at]),
-                    np.stack([mid, ends[1], vm, ends[3], at, ends[5]]),
-                ],
-                axis=1,
-            )
+        with self.model.own_bounds():  # pair bounds from this path's samples alone
+            for _ in range(HALVINGS):
+                ends = ends[:, self._undecided(path, ends, table, limit)]
+                if ends.shape[1] == 0:
+                    break
+                mid = 0.5 * (ends[0] + ends[1])
+                found = self.model.closest_many(path.evaluate(mid).q, mid / path.duration)
+                vm, at = found.values, np.arange(len(table), len(table) + len(mid), dtype=float)
+                table = np.concatenate([table, _pair_bounds(found)])
+                times.append(mid)
+                values.append(vm)
+                ends = np.concatenate(
+                    [
+                        np.stack([ends[0], mid, ends[2], vm, ends[4], at]),
+                        np.stack([mid, ends[1], vm, ends[3], at, ends[5]]),
+                    ],
+                    axis=1,
+                )
         if ends.shape[1]:
             ends = ends[:, self._undecided(path, ends, table, limit)]
         t_all, v_all = np.concatenate(times), np.concatenate(values)
