@@ -18,7 +18,6 @@ from ._blas import one_blas_thread
 from .errors import (
     CollisionError,
     SolverError,
-    UnreachableAttitudeError,
     VerificationError,
 )
 from .physics.attitude import geodesic_angle
@@ -44,8 +43,6 @@ from .problem.build import check_joint_limits
 from .problem.constraints import (
     Clearance,
     Constraint,
-    DurationScaledLimit,
-    LimitPeak,
     default_constraints,
     scenario_constraints,
 )
@@ -56,11 +53,10 @@ from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .progress import stage
 from .robot.collision import clearance_at
+from .solvers.lazy_search import broken_by, explain_lazy_breaks, search_lazily
 from .solvers.minimise import minimise
 from .solvers.nearest import nearest_root
 from .solvers.options import DEFAULT_TOLERANCE, Solution, SolveOptions
-from .solvers.restore import broken_constraint
-from .solvers.search import SearchResult, search
 from .verify.checks import verify_plan
 
 __all__ = ["BOUNDARY_TOLERANCE", "plan", "plan_from_solution"]
@@ -127,7 +123,7 @@ def _plan(
     clock = time.perf_counter()
     with stage("solve"):
         # another objective's freedom may find a path within limits the search's path breaks
-        found, imposed = _search_lazily(
+        found, imposed = search_lazily(
             scenario, options, constraints, keep_broken=chosen.name != DEFAULT_OBJECTIVE
         )
     searched_norm = float(found.solution.beta @ found.solution.beta)
@@ -140,9 +136,9 @@ def _plan(
         with stage(f"minimise {chosen.name}"):
             minimised = minimise(scenario, found, chosen, options, imposed)
             left_out = [c for c in constraints if c not in imposed]
-            if left_out and _broken(minimised.found, left_out):
+            if left_out and broken_by(minimised.found, left_out):
                 again = minimise(scenario, minimised.found, chosen, options, constraints)
-                if _broken(again.found, left_out):  # from the search's own path instead
+                if broken_by(again.found, left_out):  # from the search's own path instead
                     again = minimise(scenario, found, chosen, options, constraints)
                 minimised = replace(
                     again,
@@ -150,7 +146,7 @@ def _plan(
                     levels=minimised.levels + again.levels,
                 )
         found = minimised.found
-        _explain_lazy_breaks(found, [c for c in constraints if c.lazy])
+        explain_lazy_breaks(found, [c for c in constraints if c.lazy])
         report = objective_report(minimised)
     else:
         report = replace(norm_report(found.problem, found.solution.beta), start_value=searched_norm)
@@ -176,100 +172,6 @@ def _plan(
     return replace(result, solver=solver)
 
 
-def _broken(found: SearchResult, constraints: Sequence[Constraint]) -> str:
-    return broken_constraint(found.problem, constraints, found.solution.beta)
-
-
-def _explain_lazy_breaks(found: SearchResult, constraints: Sequence[Constraint]) -> None:
-    """Refuse a path that still breaks a lazy constraint, naming the shortest duration if it can.
-
-    The others were imposed by the search and kept by the minimisation: not checked again.
-    """
-    broken = _broken(found, constraints)
-    if not broken:
-        return
-    path = found.problem.polynomials(found.solution.beta)
-    for limit in constraints:
-        if isinstance(limit, DurationScaledLimit) and limit.name in broken:
-            peak = limit.worst(found.problem.robot, path)
-            if peak is not None and peak.fraction > 1.0:
-                raise limit.error(peak)
-    raise SolverError(f"the path found breaks {broken}", 0.0)
-
-
-def _search_lazily(
-    scenario: Scenario,
-    options: SolveOptions,
-    constraints: list[Constraint],
-    keep_broken: bool = False,
-) -> tuple[SearchResult, list[Constraint]]:
-    """Search without the lazy constraints, then with them if the path found breaks one.
-
-    Returns the result and the constraints the solvers imposed. With ``keep_broken``, when no
-    path within the lazy constraints is found, the first path (which breaks them) is returned
-    with the constraints it honours, for an objective to improve on.
-    """
-    eager = [c for c in constraints if not c.lazy]
-    lazy = [c for c in constraints if c.lazy]
-    try:
-        found = _search_proxy_first(scenario, options, eager)
-    except SolverError as exc:
-        _explain_duration_limits(scenario, options, constraints, exc)
-        raise
-    if not lazy or not _broken(found, lazy):  # the search honoured the eager ones
-        return found, eager
-    try:
-        return search(scenario, options, constraints), constraints
-    except SolverError as exc:
-        if keep_broken:
-            return found, eager
-        _explain_duration_limits(scenario, options, constraints, exc)
-        raise
-
-
-def _search_proxy_first(
-    scenario: Scenario, options: SolveOptions, eager: list[Constraint]
-) -> SearchResult:
-    """The search within the affine constraints alone, kept when its path honours the others.
-
-    The costly constraints (clearance) are imposed only where they bind: when the path found
-    within the cheap ones (joint limits) breaks one, or that search fails for another reason
-    than the goal's being out of its reach, the search runs again with every constraint. A
-    goal out of reach within the cheap constraints alone is refused at once: the others only
-    take paths away (:func:`_out_of_reach`).
-    """
-    cheap = [c for c in eager if c.affine]
-    if len(cheap) == len(eager):
-        return search(scenario, options, eager)
-    try:
-        found = search(scenario, options, cheap)
-    except UnreachableAttitudeError as exc:
-        raise _out_of_reach(exc, [c for c in eager if not c.affine]) from None
-    except SolverError:
-        return search(scenario, options, eager)
-    return search(scenario, options, eager) if _broken(found, eager) else found
-
-
-def _out_of_reach(
-    error: UnreachableAttitudeError, left_out: Sequence[Constraint]
-) -> UnreachableAttitudeError:
-    """The refusal of the search within the cheap constraints, saying which were left out."""
-    names = ", ".join(c.name for c in left_out)
-    return UnreachableAttitudeError(
-        f"{error.headline}; searched within the joint limits alone ({names} not imposed: it "
-        "would only take paths away)",
-        error.best_residual,
-        reached=error.reached,
-        asked=error.asked,
-        tried=error.tried,
-        per_axis=error.per_axis,
-        hint=error.hint,
-        stopped_by=error.stopped_by,
-        last_beta=error.last_beta,
-        axis=error.axis,
-    )
-
-
 def _check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> None:
     """Refuse a start or goal outside the joint limits, then one too close to a collision.
 
@@ -284,39 +186,6 @@ def _check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> N
                 clearance, pair = clearance_at(constraint.model, joints)
                 if clearance < constraint.margin:
                     raise CollisionError(where, pair, clearance, constraint.margin)
-
-
-def _explain_duration_limits(
-    scenario: Scenario,
-    options: SolveOptions,
-    constraints: list[Constraint],
-    error: SolverError,
-) -> None:
-    """Name the shortest duration when only the velocity or effort limits stood in the way.
-
-    Raises :class:`VelocityLimitError` or :class:`EffortLimitError` (the one that needs the
-    longer duration), with the shortest duration that respects both. Rates scale as 1/T and
-    torques as 1/T^2, and the path shape does not depend on T, so the shortest duration at
-    which the path found without these limits respects them is exact.
-    """
-    timed = [c for c in constraints if isinstance(c, DurationScaledLimit)]
-    relaxed = [c for c in constraints if c not in timed]
-    if not timed or not any(c.name in str(error) for c in timed):
-        return  # the velocity and effort limits did not stand in the way
-    try:
-        found = search(scenario, options, relaxed)
-    except SolverError:
-        return
-    path = found.problem.polynomials(found.solution.beta)
-    worst: tuple[DurationScaledLimit, LimitPeak] | None = None
-    for limit in timed:
-        peak = limit.worst(scenario.robot, path)
-        if peak is None or peak.fraction <= 1.0:
-            continue
-        if worst is None or peak.shortest_duration > worst[1].shortest_duration:
-            worst = (limit, peak)
-    if worst is not None:
-        raise worst[0].error(worst[1]) from error
 
 
 def plan_from_solution(

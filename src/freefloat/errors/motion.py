@@ -96,6 +96,9 @@ class UnreachableAttitudeError(SolverError, UnreachableGoalError):
         reached: the largest turn towards the goal reached by a solved path (rad).
         asked: the turn the goal asks for, from where the search started (rad).
         axis: the unit axis of that turn (base frame at the search's starting attitude).
+        problem: the planning problem of the search level that stopped there (a
+            :class:`~freefloat.Problem`; with ``last_beta``, the path it stopped on), when
+            known.
     """
 
     def __init__(
@@ -110,8 +113,10 @@ class UnreachableAttitudeError(SolverError, UnreachableGoalError):
         stopped_by: str = "",
         last_beta: Sequence[float] | None = None,
         axis: Sequence[float] = (0.0, 0.0, 1.0),
+        problem: object | None = None,
     ) -> None:
         self.reached = float(reached)
+        self.problem = problem
         self.asked = float(asked)
         self.axis = tuple(float(a) for a in axis)
         SolverError.__init__(

@@ -186,6 +186,7 @@ def _refuse(
             stopped_by=attempt.stopped_by,
             last_beta=attempt.last_beta.tolist(),
             axis=(turn / max(asked, 1e-300)).tolist(),
+            problem=problem,
         )
     raise SolverError(
         attempt.message or "no path within the constraints reaches the goal attitude",

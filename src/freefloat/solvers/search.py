@@ -297,6 +297,7 @@ def _refuse(
             stopped_by=closest.stopped_by,
             last_beta=closest.last_beta,
             axis=origin.axis,
+            problem=closest.problem,
         )
     headline = "no path reaches the goal attitude"
     if best_error is not None and best_error.stopped_by:

@@ -1,0 +1,166 @@
+"""The search as ``plan`` runs it: the costly and the lazy constraints imposed only where needed.
+
+The search first runs within the affine constraints alone (joint limits: cheap rows), and
+imposes the costly ones (clearance) only when the path it finds breaks one
+(:func:`search_lazily`); the lazy ones (velocity and effort limits, checked on the result)
+only when the path breaks them. A goal the cheap search stops short of, on a path the costly
+constraints do not bind, is refused without a second search. When only the velocity or effort
+limits stood in the way, the refusal names the shortest duration that respects them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..errors import SolverError, UnreachableAttitudeError
+from ..problem.constraints import Constraint, DurationScaledLimit, LimitPeak
+from ..problem.residual import Problem
+from ..problem.scenario import Scenario
+from .options import SolveOptions
+from .restore import broken_constraint
+from .search import SearchResult, search
+
+__all__ = ["broken_by", "explain_lazy_breaks", "search_lazily"]
+
+
+def broken_by(found: SearchResult, constraints: Sequence[Constraint]) -> str:
+    """``"name (where)"`` of the first constraint the path found breaks, or ``""``."""
+    return broken_constraint(found.problem, constraints, found.solution.beta)
+
+
+def explain_lazy_breaks(found: SearchResult, constraints: Sequence[Constraint]) -> None:
+    """Refuse a path that still breaks a lazy constraint, naming the shortest duration if it can.
+
+    The others were imposed by the search and kept by the minimisation: not checked again.
+    """
+    broken = broken_by(found, constraints)
+    if not broken:
+        return
+    path = found.problem.polynomials(found.solution.beta)
+    for limit in constraints:
+        if isinstance(limit, DurationScaledLimit) and limit.name in broken:
+            peak = limit.worst(found.problem.robot, path)
+            if peak is not None and peak.fraction > 1.0:
+                raise limit.error(peak)
+    raise SolverError(f"the path found breaks {broken}", 0.0)
+
+
+def search_lazily(
+    scenario: Scenario,
+    options: SolveOptions,
+    constraints: list[Constraint],
+    keep_broken: bool = False,
+) -> tuple[SearchResult, list[Constraint]]:
+    """Search without the lazy constraints, then with them if the path found breaks one.
+
+    Returns the result and the constraints the solvers imposed. With ``keep_broken``, when no
+    path within the lazy constraints is found, the first path (which breaks them) is returned
+    with the constraints it honours, for an objective to improve on.
+    """
+    eager = [c for c in constraints if not c.lazy]
+    lazy = [c for c in constraints if c.lazy]
+    try:
+        found = _search_proxy_first(scenario, options, eager)
+    except SolverError as exc:
+        _explain_duration_limits(scenario, options, constraints, exc)
+        raise
+    if not lazy or not broken_by(found, lazy):  # the search honoured the eager ones
+        return found, eager
+    try:
+        return search(scenario, options, constraints), constraints
+    except SolverError as exc:
+        if keep_broken:
+            return found, eager
+        _explain_duration_limits(scenario, options, constraints, exc)
+        raise
+
+
+def _search_proxy_first(
+    scenario: Scenario, options: SolveOptions, eager: list[Constraint]
+) -> SearchResult:
+    """The search within the affine constraints alone, kept when its path honours the others.
+
+    The costly constraints (clearance) are imposed only where they bind: when the path found
+    within the cheap ones (joint limits) breaks one, or that search fails, the search runs
+    again with every constraint. Except when the cheap search stopped short of the goal on a
+    path that honours the costly ones too: they do not bind where it stopped, and the goal is
+    refused at once (:func:`_out_of_reach`). Both searches are local, so this is not a proof
+    that the search with every constraint would stop there too; it stopped there on every goal
+    compared (docs/clearance.md).
+    """
+    cheap = [c for c in eager if c.affine]
+    if len(cheap) == len(eager):
+        return search(scenario, options, eager)
+    costly = [c for c in eager if not c.affine]
+    try:
+        found = search(scenario, options, cheap)
+    except UnreachableAttitudeError as exc:
+        if _stopped_within(exc, costly):
+            raise _out_of_reach(exc, costly) from None
+        return search(scenario, options, eager)
+    except SolverError:
+        return search(scenario, options, eager)
+    return search(scenario, options, eager) if broken_by(found, eager) else found
+
+
+def _stopped_within(error: UnreachableAttitudeError, costly: Sequence[Constraint]) -> bool:
+    """Whether the path a search stopped on (``error``'s) honours the ``costly`` constraints."""
+    if not isinstance(error.problem, Problem) or error.last_beta is None:
+        return False
+    return not broken_constraint(error.problem, costly, np.asarray(error.last_beta, dtype=float))
+
+
+def _out_of_reach(
+    error: UnreachableAttitudeError, left_out: Sequence[Constraint]
+) -> UnreachableAttitudeError:
+    """The refusal of the search within the cheap constraints, saying which were left out."""
+    names = ", ".join(c.name for c in left_out)
+    return UnreachableAttitudeError(
+        f"{error.headline}; searched within the joint limits alone, and the path it stopped on "
+        f"honours {names} too",
+        error.best_residual,
+        reached=error.reached,
+        asked=error.asked,
+        tried=error.tried,
+        per_axis=error.per_axis,
+        hint=error.hint,
+        stopped_by=error.stopped_by,
+        last_beta=error.last_beta,
+        axis=error.axis,
+        problem=error.problem,
+    )
+
+
+def _explain_duration_limits(
+    scenario: Scenario,
+    options: SolveOptions,
+    constraints: list[Constraint],
+    error: SolverError,
+) -> None:
+    """Name the shortest duration when only the velocity or effort limits stood in the way.
+
+    Raises :class:`VelocityLimitError` or :class:`EffortLimitError` (the one that needs the
+    longer duration), with the shortest duration that respects both. Rates scale as 1/T and
+    torques as 1/T^2, and the path shape does not depend on T, so the shortest duration at
+    which the path found without these limits respects them is exact.
+    """
+    timed = [c for c in constraints if isinstance(c, DurationScaledLimit)]
+    relaxed = [c for c in constraints if c not in timed]
+    if not timed or not any(c.name in str(error) for c in timed):
+        return  # the velocity and effort limits did not stand in the way
+    try:
+        found = search(scenario, options, relaxed)
+    except SolverError:
+        return
+    path = found.problem.polynomials(found.solution.beta)
+    worst: tuple[DurationScaledLimit, LimitPeak] | None = None
+    for limit in timed:
+        peak = limit.worst(scenario.robot, path)
+        if peak is None or peak.fraction <= 1.0:
+            continue
+        if worst is None or peak.shortest_duration > worst[1].shortest_duration:
+            worst = (limit, peak)
+    if worst is not None:
+        raise worst[0].error(worst[1]) from error
