@@ -18,8 +18,8 @@ at looser tolerances (:data:`RETRY_TOLERANCES`) and counted in
 
 The base is free-floating, but every collision geometry here is fixed either to the spacecraft
 or to an arm link, so distances depend on the joints alone: they are computed with the
-spacecraft at the identity pose, in its frame (m). Gradients with respect to the joints come
-from the witness points and the joint Jacobians (``n . (J_2(p_2) - J_1(p_1))``).
+spacecraft at the identity pose, in its frame (m); their gradients come from the witness
+points (:mod:`freefloat.robot.witness_gradient`).
 """
 
 from __future__ import annotations
@@ -57,10 +57,10 @@ from .model import Robot
 from .motion_bound import PairBounds, motion_weights
 from .obstacle import SHAPES, Obstacle
 from .sphere_kinematics import SphereKinematics
-from .srdf import ARM_SRDFS, known_srdf
+from .srdf import known_srdf
+from .witness_gradient import carriers, witness_gradient
 
 __all__ = [
-    "ARM_SRDFS",
     "GJK_TOLERANCE",
     "RETRY_TOLERANCES",
     "SHAPES",
@@ -133,7 +133,7 @@ class CollisionModel:
         self._shapes = [obj.geometry for obj in geometry.geometryObjects]
         # Per shape, which of the robot's joints carry it (1.0 or 0.0 per joint), or None
         # for a shape fixed to the spacecraft.
-        self._carried = [self._carriers(int(obj.parentJoint)) for obj in geometry.geometryObjects]
+        self._carried = [carriers(robot, int(obj.parentJoint)) for obj in geometry.geometryObjects]
         self._pair_array = np.array(self.pairs, dtype=int).reshape(-1, 2)
         self._reach = self._radii[self._pair_array[:, 0]] + self._radii[self._pair_array[:, 1]]
         self._kinematics = SphereKinematics(robot, geometry, self._centres)
@@ -234,7 +234,7 @@ class CollisionModel:
         lower = np.full((count, len(self.pairs)), math.inf)
         if not len(self.pairs):
             return Closest(values, pairs, grads, lower)
-        gaps = self._batch_gaps(joints) if count >= BATCH else None
+        gaps = self._kinematics.gaps(joints, self._pair_array) if count >= BATCH else None
         for i in range(count):
             found = self._bulk(joints[i], True, at[i], None if gaps is None else gaps[i], lower[i])
             k = int(np.argmin(found))
@@ -243,12 +243,6 @@ class CollisionModel:
                 pin.computeJointJacobians(self.robot.model, self._data)  # at _bulk's pose
                 grads[i] = self._gradient(k)
         return Closest(values, pairs, grads, lower)
-
-    def _batch_gaps(self, joints: np.ndarray) -> np.ndarray:
-        """(B, P) distances (m) between each pair's bounding-sphere centres, rows of ``joints``."""
-        centres = self._kinematics.centres(joints)
-        first, second = self._pair_array[:, 0], self._pair_array[:, 1]
-        return np.linalg.norm(centres[:, first] - centres[:, second], axis=2)
 
     def _bulk(
         self,
@@ -371,13 +365,6 @@ class CollisionModel:
             out[:] = lower
         return np.flatnonzero(lower <= float(upper.min()) + 1e-9)
 
-    def _carriers(self, joint: int) -> np.ndarray | None:
-        """1.0 for each of the robot's joints that moves Pinocchio joint ``joint``, else 0.0."""
-        if joint <= 1:  # the universe or the spacecraft
-            return None
-        support = set(self.robot.model.supports[joint])
-        return np.array([1.0 if j.index in support else 0.0 for j in self.robot.joints])
-
     def hulls(self) -> list[HullInfo]:
         """Per mesh, the volume it encloses and that of its hull (m^3), for reports."""
         objects = self.geometry.geometryObjects
@@ -387,30 +374,11 @@ class CollisionModel:
         ]
 
     def _gradient(self, k: int) -> np.ndarray:
-        """d(distance of pair k)/d(joints), after distances and joint Jacobians are computed.
-
-        A witness point ``p`` on a body moves at ``v + w x p`` (``v, w``: the body's spatial
-        velocity at the world origin, Pinocchio's world-frame Jacobian over the joints that
-        carry it), so the distance changes by ``n . v + (p x n) . w`` per unit joint rate.
-        """
+        """d(distance of pair k)/d(joints), after distances and joint Jacobians are computed."""
         result = self._retried.get(k, self._pair_results[k])
-        nx, ny, nz = result.normal
         a, b = self.pairs[k]
-        rows, weights = [], []
-        for index, point, sign in (
-            (a, result.getNearestPoint1(), -1.0),
-            (b, result.getNearestPoint2(), 1.0),
-        ):
-            carried = self._carried[index]
-            if carried is None:
-                continue  # fixed to the spacecraft: does not move with the joints
-            px, py, pz = point
-            rows.append((nx, ny, nz, py * nz - pz * ny, pz * nx - px * nz, px * ny - py * nx))
-            weights.append(sign * carried)
-        if not rows:
-            return np.zeros(self.robot.n)
-        rates = np.array(rows) @ self._data.J[:, self._columns]  # per point, m/s per joint rate
-        return np.einsum("pn,pn->n", np.array(weights), rates)
+        carried = (self._carried[a], self._carried[b])
+        return witness_gradient(result, carried, self._data.J[:, self._columns], self.robot.n)
 
 
 def _transform(placement: pin.SE3) -> coal.Transform3s:

@@ -84,6 +84,11 @@ class SphereKinematics:
         world = np.einsum("gbij,gj->gbi", r, self._local) + t
         return world.transpose(1, 0, 2)
 
+    def gaps(self, joints: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+        """(B, P) distances (m) between the sphere centres of each pair (P, 2; shape indices)."""
+        centres = self.centres(joints)
+        return np.linalg.norm(centres[:, pairs[:, 0]] - centres[:, pairs[:, 1]], axis=2)
+
 
 def _rotations(axis: np.ndarray, angles: np.ndarray) -> np.ndarray:
     """(B, 3, 3) rotations by ``angles`` (rad) about the unit ``axis`` (Rodrigues)."""

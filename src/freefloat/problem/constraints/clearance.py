@@ -18,17 +18,17 @@ on every other sample).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from ...robot.collision import Closest, CollisionModel
+from ...robot.collision import CollisionModel
 from ...robot.model import Robot
 from ...robot.motion_bound import BOUND_SLACK
 from ..paths import JointPolynomials, PathFamily
 from ..rate_bounds import rate_bounds
 from ..residual import Problem
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
+from .clearance_samples import Measured, local_minima, lowest_minima, pair_bounds
 
 __all__ = [
     "COARSE_EVERY",
@@ -76,7 +76,7 @@ class Clearance(Constraint):
         self._memo: tuple[PathFamily, bytes, ConstraintRows] | None = None
         self._smallest_memo: dict[tuple[bytes, float, int, int], tuple[float, float, int]] = {}
         self._sampled_memo: tuple[tuple[bytes, float, int], np.ndarray] | None = None
-        self._measured_memo: tuple[tuple[bytes, float, int, float | None], _Measured] | None = None
+        self._measured_memo: tuple[tuple[bytes, float, int, float | None], Measured] | None = None
 
     def __repr__(self) -> str:
         return f"Clearance(margin={self.margin:g} m, {self.model.n_pairs} pairs)"
@@ -105,7 +105,7 @@ class Clearance(Constraint):
         grid = DEFAULT_INSTANTS
         values_grid, jacobian_grid = self._rows_at(problem, beta, grid)
         coarse = self.margin + SOLVER_SLACK - values_grid  # the smallest distance there
-        extra = np.concatenate([self._refinement(grid, k) for k in _lowest(coarse)])
+        extra = np.concatenate([self._refinement(grid, k) for k in lowest_minima(coarse)])
         values_extra, jacobian_extra = self._rows_at(problem, beta, extra)
         values = np.concatenate([values_grid, values_extra])
         jacobian = np.concatenate([jacobian_grid, jacobian_extra])
@@ -160,7 +160,7 @@ class Clearance(Constraint):
             sampled_all = self._sampled(path, t_all)
         t, sampled = t_all[::every], sampled_all[::every]
 
-        minima = _local_minima(sampled)
+        minima = local_minima(sampled)
         best, best_t, best_pair = self._refined(
             path, t, sampled, minima[sampled[minima] <= float(sampled.min()) + NEAR]
         )
@@ -230,7 +230,7 @@ class Clearance(Constraint):
             self._sampled_memo = (key, self.model.closest_many(q).values)
         return self._sampled_memo[1]
 
-    def _measured(self, path: JointPolynomials, samples: int, limit: float | None) -> _Measured:
+    def _measured(self, path: JointPolynomials, samples: int, limit: float | None) -> Measured:
         """The smallest distance (m) at the samples a bound cannot spare, and a lower bound.
 
         Coarse then exact, a count: the smallest distance over the pairs at every
@@ -258,14 +258,14 @@ class Clearance(Constraint):
         todo = np.unique(np.append(np.arange(0, samples, COARSE_EVERY), samples - 1))
         if self.model.weights is None:  # no bound between samples: every sample, no bound
             known[:] = self.model.closest_many(q).values
-            answer = _Measured(known, lower, -math.inf)
+            answer = Measured(known, lower, -math.inf)
             self._measured_memo = (key, answer)
             return answer
         with self.model.own_bounds():  # pair bounds from this path's samples alone
             while True:
                 todo = todo[np.isnan(known[todo])]
                 found = self.model.closest_many(q[todo], todo / (samples - 1))
-                known[todo], lower[todo] = found.values, _pair_bounds(found)
+                known[todo], lower[todo] = found.values, pair_bounds(found)
                 nodes = np.flatnonzero(~np.isnan(known))
                 a, b = nodes[:-1], nodes[1:]
                 between = self._between(path, t[a], t[b], lower[a], lower[b])
@@ -275,12 +275,12 @@ class Clearance(Constraint):
                     bound = float(min(between.min(), np.nanmin(known)))
                     break
                 todo = (a[short] + b[short]) // 2
-        answer = _Measured(known, lower, bound)
+        answer = Measured(known, lower, bound)
         self._measured_memo = (key, answer)
         return answer
 
     def _below(
-        self, path: JointPolynomials, measured: _Measured, limit: float
+        self, path: JointPolynomials, measured: Measured, limit: float
     ) -> tuple[float, float, int]:
         """The smallest clearance (m), its time (s) and pair, for a path a bound cannot clear.
 
@@ -305,7 +305,7 @@ class Clearance(Constraint):
                 mid = 0.5 * (ends[0] + ends[1])
                 found = self.model.closest_many(path.evaluate(mid).q, mid / path.duration)
                 vm, at = found.values, np.arange(len(table), len(table) + len(mid), dtype=float)
-                table = np.concatenate([table, _pair_bounds(found)])
+                table = np.concatenate([table, pair_bounds(found)])
                 times.append(mid)
                 values.append(vm)
                 ends = np.concatenate(
@@ -320,7 +320,7 @@ class Clearance(Constraint):
         t_all, v_all = np.concatenate(times), np.concatenate(values)
         order = np.argsort(t_all, kind="stable")
         t_all, v_all = t_all[order], v_all[order]
-        minima = _local_minima(v_all)
+        minima = local_minima(v_all)
         minima = minima[v_all[minima] < limit]
         spans = np.searchsorted(t_all, 0.5 * (ends[0] + ends[1]))
         return self._refined(path, t_all, v_all, np.unique(np.append(minima, spans)))
@@ -383,42 +383,3 @@ class Clearance(Constraint):
             f"margin {self.margin:g} m"
         )
         return Excess(self.margin - clearance, 0.0, detail)
-
-
-@dataclass(frozen=True)
-class _Measured:
-    """The samples of a path a bound could not spare (:meth:`Clearance._measured`).
-
-    Attributes:
-        known: (S,) smallest distance over the pairs per sample (m; NaN where spared).
-        lower: (S, P) lower bounds of every pair's distance per sample (m; NaN where spared).
-        bound: a lower bound of the clearance along the whole path (m).
-    """
-
-    known: np.ndarray
-    lower: np.ndarray
-    bound: float
-
-
-def _pair_bounds(found: Closest) -> np.ndarray:
-    """(B, P) the pairs' lower bounds (m) of a batch of queries."""
-    assert found.lower is not None
-    return found.lower
-
-
-def _lowest(values: np.ndarray) -> list[int]:
-    """Indices of the two lowest local minima of ``values`` (or the two lowest apart)."""
-    n = len(values)
-    minima = _local_minima(values)
-    order = [int(k) for k in minima[np.argsort(np.asarray(values)[minima], kind="stable")]]
-    if len(order) < 2:
-        far = [int(k) for k in np.argsort(values, kind="stable") if abs(int(k) - order[0]) > 2]
-        order.append(far[0] if far else (order[0] + n // 2) % n)
-    return order[:2]
-
-
-def _local_minima(values: np.ndarray) -> np.ndarray:
-    """Indices of the local minima of ``values`` (an end counts against its one neighbour)."""
-    left = np.concatenate([[np.inf], values[:-1]])
-    right = np.concatenate([values[1:], [np.inf]])
-    return np.flatnonzero((values <= left) & (values <= right))
