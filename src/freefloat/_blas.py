@@ -4,7 +4,8 @@ freefloat's linear algebra is many tiny products and solves (a few joints, a few
 threaded BLAS only adds thread wake-ups, and on a busy machine waits for a free core (an
 SLSQP run took 2 to 20 times longer on a loaded 2-core machine). :func:`one_blas_thread` limits
 the process's BLAS pools to one thread for the duration of a call and restores them after
-(threadpoolctl); the sweep's worker processes get the same through their environment.
+(threadpoolctl); the sweep's worker processes get the same through their environment. The
+limit is process-wide: calls made concurrently from several threads share it.
 """
 
 from __future__ import annotations

@@ -149,7 +149,7 @@ class JointEffortLimits(DurationScaledLimit):
         # locally quadratic torque can still rise between the samples
         left = values[np.arange(len(best)), np.maximum(best - 1, 0)]
         right = values[np.arange(len(best)), np.minimum(best + 1, SECTIONS)]
-        spread = float(np.max(found - np.minimum(left, right)))
+        spread = float(np.max(found - np.minimum(left, right), initial=0.0))  # none: no bracket
         for value, time, i in zip(found, grid[np.arange(len(best)), best], joints, strict=True):
             if value > peak[i]:
                 peak[i], where[i] = value, time
