@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._blas import one_blas_thread
+from .parallel import check_jobs, default_jobs, serial_reason
 from .physics.attitude import (
     quat_conjugate,
     quat_exp,
@@ -38,6 +39,7 @@ from .problem.constraints import Clearance, scenario_constraints
 from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .problem.simple_bound import SimpleMotionBound, inertia_ratio, simple_motion_bound, turn_limit
+from .progress import LOGGER
 from .solvers.options import SolveOptions
 from .solvers.reach import DirectionReach, ReachEstimate, default_directions, reach_set
 
@@ -147,6 +149,7 @@ def reachable(
     budget: int = DEFAULT_BUDGET,
     directions: np.ndarray | None = None,
     progress: Callable[[int, int, DirectionReach], None] | None = None,
+    jobs: int | None = None,
 ) -> ReachReport:
     """Drift attitude, outer bound and inner estimate of the scenario's reachable attitudes.
 
@@ -159,8 +162,17 @@ def reachable(
         budget: residual evaluations per direction of the inner estimate (a count); 0: the
             drift attitude and the outer bound only (every ``inner`` is 0).
         directions: rotation axes (rows, base frame); default the six axes and eight diagonals.
-        progress: called after each direction of the inner estimate.
+        progress: called after each direction of the inner estimate (with several jobs, in
+            the order the directions finish).
+        jobs: worker processes for the inner estimate's directions (1: in this process);
+            default the usable cores, at most one per direction. The report is the same, bit
+            for bit, whatever the jobs (:func:`freefloat.parallel.run_tasks`).
+
+    Raises:
+        InputLimitError: ``jobs`` is not a whole number from 1 to
+            :data:`~freefloat.parallel.MAX_JOBS`.
     """
+    check_jobs(jobs, "jobs")
     scenario = scenario.resolved()
     scenario.write_robot()
     probe = problem_from_scenario(scenario, check_bounds=False)
@@ -178,23 +190,7 @@ def reachable(
     axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
     outer = np.array([turn_limit(moved, axis, bound.bound) for axis in axes])
     before = problem.evaluations
-    constraints = scenario_constraints(scenario)
-    if budget > 0:
-        with one_blas_thread():  # many tiny products: see freefloat._blas
-            estimate = reach_set(
-                problem,
-                axes,
-                outer,
-                constraints,
-                SolveOptions(max_evaluations=budget),
-                progress,
-                deferred=[c for c in constraints if isinstance(c, Clearance)],
-                step=math.radians(REPORT_STEP_DEG),
-            )
-    else:  # the drift attitude and the outer bound only
-        skipped = DirectionReach(np.zeros(3), 0.0, 0.0, NOT_ESTIMATED, 0)
-        freedom = tuple(d - 5 for d in problem.family.degrees)
-        estimate = ReachEstimate(drift, (skipped,) * len(axes), freedom)
+    estimate = _inner(scenario, problem, drift, axes, outer, budget, progress, jobs)
     return ReachReport(
         robot=scenario.robot.name,
         planar=False,
@@ -211,6 +207,40 @@ def reachable(
         evaluations=problem.evaluations - before,
         budget=budget,
     )
+
+
+def _inner(
+    scenario: Scenario,
+    problem: Problem,
+    drift: np.ndarray,
+    axes: np.ndarray,
+    outer: np.ndarray,
+    budget: int,
+    progress: Callable[[int, int, DirectionReach], None] | None,
+    jobs: int | None,
+) -> ReachEstimate:
+    """The inner estimate towards the outer turns ``outer`` (rad) about ``axes``."""
+    if budget <= 0:  # the drift attitude and the outer bound only
+        skipped = DirectionReach(np.zeros(3), 0.0, 0.0, NOT_ESTIMATED, 0)
+        freedom = tuple(d - 5 for d in problem.family.degrees)
+        return ReachEstimate(drift, (skipped,) * len(axes), freedom)
+    constraints = scenario_constraints(scenario)
+    workers = default_jobs(len(axes)) if jobs is None else jobs
+    why = serial_reason(workers, len(axes))
+    where = f"serially ({why})" if why else f"on {workers} worker processes"
+    LOGGER.info("reach: %d directions %s", len(axes), where)
+    with one_blas_thread():  # many tiny products: see freefloat._blas
+        return reach_set(
+            problem,
+            axes,
+            outer,
+            constraints,
+            SolveOptions(max_evaluations=budget),
+            progress,
+            deferred=[c for c in constraints if isinstance(c, Clearance)],
+            step=math.radians(REPORT_STEP_DEG),
+            jobs=workers,
+        )
 
 
 def _planar_report(scenario: Scenario, problem: Problem, ratio: float) -> ReachReport:

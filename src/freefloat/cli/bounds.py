@@ -6,10 +6,12 @@ import argparse
 import math
 
 from ..errors import InputLimitError
+from ..parallel import check_jobs
 from ..problem.build import planar_yaw_branch, problem_from_scenario
 from ..problem.scenario import Scenario
 from ..solvers.options import SolveOptions
 from .common import MAX_BUDGET, Commands, check_outputs, load_scenario, positive
+from .reach import add_jobs, direction_line
 
 __all__ = ["add_parser", "check", "run"]
 
@@ -41,6 +43,7 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
         default=300,
         help="spatial: residual evaluations per direction (default 300)",
     )
+    add_jobs(p_bounds)
     p_bounds.add_argument(
         "scenario", nargs="?", help="scenario TOML file (default: worked example)"
     )
@@ -53,6 +56,7 @@ def check(args: argparse.Namespace) -> None:
     positive(args.max_angle, "--max-angle", 180.0, "deg")
     if not 1 <= args.budget <= MAX_BUDGET:
         raise InputLimitError("--budget", args.budget, 1, MAX_BUDGET)
+    check_jobs(args.jobs, "--jobs")
     check_outputs(args, ("--plot", "plot"))
 
 
@@ -87,13 +91,28 @@ def run(args: argparse.Namespace) -> int:
 
 def spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
     """A spatial robot's inner estimate of its reachable attitudes (and its figure)."""
-    from ..solvers.reach import describe, reach_set
+    from .._blas import one_blas_thread
+    from ..parallel import default_jobs
+    from ..progress import counted
+    from ..solvers.reach import default_directions, describe, reach_set
 
     extra = scenario.extra if scenario.extra is not None else [2] * scenario.robot.n
     problem = problem_from_scenario(scenario.resolved(), extra=extra, check_bounds=False)
     angle = math.radians(args.max_angle)
     options = SolveOptions(max_evaluations=args.budget)
-    estimate = reach_set(problem, None, angle, None, options, confirm=False)
+    count = len(default_directions())
+    jobs = default_jobs(count) if args.jobs is None else args.jobs
+    with counted("bounds", count) as advance, one_blas_thread():
+        estimate = reach_set(
+            problem,
+            None,
+            angle,
+            None,
+            options,
+            lambda i, n, d: advance(direction_line(d)),
+            confirm=False,
+            jobs=jobs,
+        )
     print(f"freefloat bounds: {scenario.robot.name} (spatial) -- INNER ESTIMATE")
     for line in describe(estimate, scenario.robot.joint_names, angle, problem.goal_quaternion):
         print(f"  {line}")

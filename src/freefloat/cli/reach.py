@@ -6,11 +6,13 @@ import argparse
 import math
 
 from ..errors import InputLimitError
+from ..parallel import MAX_JOBS, check_jobs
 from ..problem.limits import check_number
 from ..reachable import DEFAULT_BUDGET as DEFAULT_REACH_BUDGET
+from ..solvers.reach import DirectionReach
 from .common import MAX_BUDGET, Commands, check_outputs, load_scenario
 
-__all__ = ["MAX_TRAVEL", "add_parser", "check", "run"]
+__all__ = ["MAX_TRAVEL", "add_jobs", "add_parser", "check", "direction_line", "run"]
 
 #: Largest ``reach --travel`` (joint travel over the start-goal span).
 MAX_TRAVEL = 100.0
@@ -43,9 +45,28 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
         f"(default {DEFAULT_REACH_BUDGET}; a count); 0: the drift attitude and the outer bound "
         "only (well under a second)",
     )
+    add_jobs(p_reach)
     p_reach.add_argument("--plot", metavar="FILE", help="also draw it (PNG, SVG or PDF)")
     p_reach.set_defaults(func=run, check=check)
     return p_reach
+
+
+def add_jobs(parser: argparse.ArgumentParser) -> None:
+    """``--jobs N`` of reach and bounds: worker processes for the directions."""
+    parser.add_argument(
+        "--jobs",
+        type=int,
+        metavar="N",
+        help="worker processes for the directions (default: the usable cores, at most one per "
+        f"direction; 1: in this process; at most {MAX_JOBS}). The numbers printed are the same, "
+        "bit for bit, whatever N; forked on Linux, serial where fork is not available",
+    )
+
+
+def direction_line(d: DirectionReach) -> str:
+    """One direction done, for the progress lines: its axis, turn (deg) and evaluations."""
+    axis = " ".join(f"{x:+.2f}" for x in d.axis)
+    return f"axis {axis}: {math.degrees(d.reached):.3f} deg ({d.evaluations} evaluations)"
 
 
 def check(args: argparse.Namespace) -> None:
@@ -53,6 +74,7 @@ def check(args: argparse.Namespace) -> None:
     check_number(args.travel, "--travel", MAX_TRAVEL, low=1.0)
     if not 0 <= args.budget <= MAX_BUDGET:
         raise InputLimitError("--budget", args.budget, 0, MAX_BUDGET)
+    check_jobs(args.jobs, "--jobs")
     check_outputs(args, ("--plot", "plot"))
 
 
@@ -69,10 +91,8 @@ def run(args: argparse.Namespace) -> int:
             scenario,
             travel_factor=args.travel,
             budget=args.budget,
-            progress=lambda i, n, d: advance(
-                f"axis {' '.join(f'{x:+.2f}' for x in d.axis)}: {math.degrees(d.reached):.3f} deg"
-                f" ({d.evaluations} evaluations)"
-            ),
+            progress=lambda i, n, d: advance(direction_line(d)),
+            jobs=args.jobs,
         )
     print("\n".join(reach_lines(report)))
     if args.plot:

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..parallel import run_tasks
 from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.constraints.clearance import SOLVER_SLACK
@@ -244,8 +245,17 @@ def _direction(
     return reached, stopped_by, beta
 
 
-#: Called after each direction with (directions done, directions in all, its reach).
+#: Called after each direction with (directions done, directions in all, its reach); with
+#: several jobs, in the order the directions finish.
 ReachProgress = Callable[[int, int, DirectionReach], None]
+
+
+@dataclass(frozen=True)
+class _Spent:
+    """One direction's reach and the momentum-map evaluations it spent (a count)."""
+
+    reach: DirectionReach
+    map_evaluations: int
 
 
 def reach_set(
@@ -258,6 +268,7 @@ def reach_set(
     deferred: Sequence[Constraint] = (),
     confirm: bool = True,
     step: float = 0.0,
+    jobs: int = 1,
 ) -> ReachEstimate:
     """Continue as far as possible from the quintic attitude in each direction.
 
@@ -271,6 +282,11 @@ def reach_set(
     would find them. Constraints in ``deferred`` (costly ones such as clearance) are checked
     on that furthest path too, and only when it breaks one is the direction tracked again with
     it imposed. Every budget is a count (``options.max_evaluations`` per direction and pass).
+
+    The directions are independent: each one's result depends on the problem, its axis and
+    angle and the constraints alone, so ``jobs`` worker processes
+    (:func:`freefloat.parallel.run_tasks`) give the same estimate, bit for bit, in the same
+    order; the problem's evaluation counter then counts the workers' evaluations too.
 
     Args:
         problem: a spatial problem (its goal is ignored; not changed).
@@ -287,6 +303,7 @@ def reach_set(
             got, solved to the intermediate tolerance (``freefloat bounds``).
         step: a turn that stops short is confirmed rounded down to a multiple of this (rad;
             0: not rounded), the precision it is reported at.
+        jobs: worker processes (1: every direction in this process).
     """
     if problem.planar:
         raise ValueError("reach_set is for spatial problems; planar ones have exact bounds")
@@ -298,29 +315,36 @@ def reach_set(
     directions = default_directions() if directions is None else np.atleast_2d(directions)
     angles = np.broadcast_to(np.asarray(max_angle, dtype=float), (len(directions),))
     quintic = problem.achieved(np.zeros(problem.n_free))
-    out: list[DirectionReach] = []
-    for axis, angle in zip(directions, angles, strict=True):
-        axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-        before = problem.evaluations
+
+    def one(index: int) -> _Spent:
+        axis = np.asarray(directions[index], dtype=float)
+        axis = axis / np.linalg.norm(axis)
+        angle = float(angles[index])
+        before, maps = problem.evaluations, problem.map_evaluations
         reached, stopped_by, beta = 0.0, "", np.zeros(problem.n_free)
         if angle > 0.0:
             reached, stopped_by, beta = _direction(
-                problem, quintic, axis, float(angle), tracked, eager, options, confirm, step
+                problem, quintic, axis, angle, tracked, eager, options, confirm, step
             )
-        direction = DirectionReach(
-            axis=axis,
-            reached=reached,
-            asked=float(angle),
-            stopped_by=stopped_by,
-            evaluations=problem.evaluations - before,
-            beta=beta,
-            breaks=broken_constraint(problem, lazy, beta) if lazy else "",
-        )
-        out.append(direction)
+        breaks = broken_constraint(problem, lazy, beta) if lazy else ""
+        evaluations = problem.evaluations - before
+        direction = DirectionReach(axis, reached, angle, stopped_by, evaluations, beta, breaks)
+        return _Spent(direction, problem.map_evaluations - maps)
+
+    finished = [0]
+
+    def done(index: int, spent: _Spent) -> None:
+        finished[0] += 1
         if progress is not None:
-            progress(len(out), len(directions), direction)
+            progress(finished[0], len(directions), spent.reach)
+
+    before, maps = problem.evaluations, problem.map_evaluations
+    found = run_tasks(one, len(directions), jobs, done)
+    # Work done in worker processes did not move this process's counter: counted here.
+    problem.counter.evaluations = before + sum(f.reach.evaluations for f in found)
+    problem.counter.map_evaluations = maps + sum(f.map_evaluations for f in found)
     freedom = tuple(d - 5 for d in problem.family.degrees)
-    return ReachEstimate(quintic, tuple(out), freedom)
+    return ReachEstimate(quintic, tuple(f.reach for f in found), freedom)
 
 
 def describe(
