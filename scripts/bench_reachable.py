@@ -1,13 +1,18 @@
 """Benchmark section of ``freefloat reach`` (issue 28).
 
 Run alone (``python scripts/bench_reachable.py [--runs N] [--goals N] [--kinova-goals N]
-[--no-panda] [--markdown FILE]``) or from ``scripts/bench.py --reachable-only``.
+[--no-panda] [--jobs N [N ...]] [--markdown FILE]``) or from ``scripts/bench.py
+--reachable-only``.
 
 - Time of :func:`freefloat.reachable` on the shipped servicers as they stand (Panda, UR5 and
   dual UR5, clearance on) and on a composed Kinova servicer on a 500 kg, 2 m cube (no
   clearance): the median over ``runs`` fresh calls (a new scenario each, after one loading
   call) of wall and CPU time (s), for the drift attitude and outer bound alone (``budget 0``,
-  median of three) and with the inner set (the default budget); residual evaluations.
+  median of three) and with the inner set (the default budget); residual evaluations. CPU
+  time includes the worker processes' (reaped children). Each scenario is timed with each of
+  ``jobs`` worker processes (default: the default jobs, then 1), side by side, with the
+  speed-up over one job, the 1-minute load average when the timing started, and whether the
+  report is the same as the first one's (it must be: the directions are independent).
 - Agreement of the inner set with ``plan``: goals sampled inside the reported inner set
   (seeded: a direction with a positive inner turn, a share 0.2-1 of that turn), each planned
   with ``ff.plan`` on the scenario as it stands (the UR5 servicer with its clearance
@@ -19,6 +24,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import os
 import statistics
 import sys
 import tempfile
@@ -28,8 +34,10 @@ from pathlib import Path
 import numpy as np
 
 import freefloat as ff
+from freefloat.parallel import default_jobs
 from freefloat.physics.attitude import quat_exp, quat_multiply
 from freefloat.reachable import DEFAULT_BUDGET
+from freefloat.solvers.reach import default_directions
 
 ROBOTS = Path(ff.default_scenario_path()).parent
 SHIPPED = ("panda_servicer", "ur5_servicer", "dual_ur5_servicer")
@@ -73,12 +81,32 @@ def _loaders(folder: Path, panda: bool) -> dict[str, Path]:
     return files
 
 
-def _timed(path: Path, budget: int) -> tuple[float, float, ff.ReachReport, ff.Scenario]:
+def _cpu() -> float:
+    """CPU time (s) of this process and of its reaped children (the reach's workers)."""
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system
+
+
+def _timed(
+    path: Path, budget: int, jobs: int | None = None
+) -> tuple[float, float, ff.ReachReport, ff.Scenario]:
     """Wall and CPU time (s) of one fresh ``reachable`` call, its report and scenario."""
     scenario = ff.Scenario.from_toml(path)
-    clock, cpu = time.perf_counter(), time.process_time()
-    report = ff.reachable(scenario, budget=budget)
-    return time.perf_counter() - clock, time.process_time() - cpu, report, scenario
+    clock, cpu = time.perf_counter(), _cpu()
+    report = ff.reachable(scenario, budget=budget, jobs=jobs)
+    return time.perf_counter() - clock, _cpu() - cpu, report, scenario
+
+
+def _same(a: ff.ReachReport, b: ff.ReachReport) -> bool:
+    """Whether two reports give the same numbers (inner, outer, goals, evaluations)."""
+    return a.evaluations == b.evaluations and all(
+        x.inner == y.inner
+        and x.outer == y.outer
+        and x.stopped_by == y.stopped_by
+        and x.breaks == y.breaks
+        and np.array_equal(x.goal_quaternion, y.goal_quaternion)
+        for x, y in zip(a.directions, b.directions, strict=True)
+    )
 
 
 def bench_reachable(
@@ -87,36 +115,51 @@ def bench_reachable(
     panda: bool = True,
     runs: int = 1,
     kinova_goals: int = 20,
+    jobs: tuple[int, ...] | None = None,
 ) -> dict[str, object]:
     """Reach times (medians of ``runs`` fresh calls) and the inner set's agreement with plan.
 
     ``goals`` goals inside the UR5 servicer's inner set and ``kinova_goals`` inside the Kinova
     servicer's are planned. ``panda``: also time the Panda servicer (minutes with clearance).
+    ``jobs``: the worker processes to time each scenario with (default: the default, then 1).
     """
+    if jobs is None:
+        jobs = tuple(dict.fromkeys((default_jobs(len(default_directions())), 1)))
     rows, reports = [], {}
     with tempfile.TemporaryDirectory() as tmp:
         for name, path in _loaders(Path(tmp), panda).items():
             _timed(path, 0)  # loads the model and the collision geometry
             drift = [_timed(path, 0)[:2] for _ in range(3)]
-            runs_done = [_timed(path, budget) for _ in range(max(1, runs))]
-            report, scenario = runs_done[0][2], runs_done[0][3]
-            reports[name] = (scenario, report)
-            rows.append(
-                {
-                    "scenario": name,
-                    "runs": len(runs_done),
-                    "wall_s": statistics.median(r[0] for r in runs_done),
-                    "cpu_s": statistics.median(r[1] for r in runs_done),
-                    "drift_bound_wall_s": statistics.median(d[0] for d in drift),
-                    "drift_bound_cpu_s": statistics.median(d[1] for d in drift),
-                    "evaluations": report.evaluations,
-                    "bound_deg": math.degrees(report.bound.bound) if report.bound else None,
-                    "largest_inner_deg": max(math.degrees(d.inner) for d in report.directions),
-                    "directions_with_reach": sum(d.inner > 0 for d in report.directions),
-                    "directions": len(report.directions),
-                }
-            )
-            print(rows[-1], flush=True)
+            serial_wall = None
+            for workers in jobs:
+                load = os.getloadavg()[0]
+                runs_done = [_timed(path, budget, workers) for _ in range(max(1, runs))]
+                report, scenario = runs_done[0][2], runs_done[0][3]
+                reports.setdefault(name, (scenario, report))
+                wall = statistics.median(r[0] for r in runs_done)
+                serial_wall = wall if workers == 1 else serial_wall
+                rows.append(
+                    {
+                        "scenario": name,
+                        "jobs": workers,
+                        "load_1min": load,
+                        "runs": len(runs_done),
+                        "wall_s": wall,
+                        "cpu_s": statistics.median(r[1] for r in runs_done),
+                        "drift_bound_wall_s": statistics.median(d[0] for d in drift),
+                        "drift_bound_cpu_s": statistics.median(d[1] for d in drift),
+                        "evaluations": report.evaluations,
+                        "bound_deg": math.degrees(report.bound.bound) if report.bound else None,
+                        "largest_inner_deg": max(math.degrees(d.inner) for d in report.directions),
+                        "directions_with_reach": sum(d.inner > 0 for d in report.directions),
+                        "directions": len(report.directions),
+                        "same_report": all(_same(r[2], reports[name][1]) for r in runs_done),
+                    }
+                )
+                print(rows[-1], flush=True)
+            for row in rows:
+                if row["scenario"] == name and serial_wall is not None:
+                    row["speedup"] = serial_wall / row["wall_s"]
         agreement = [
             _agreement(*reports["ur5 servicer (shipped, clearance)"], goals, "ur5 servicer"),
             _agreement(*reports["kinova on 500 kg (no clearance)"], kinova_goals, "kinova"),
@@ -157,17 +200,20 @@ def _agreement(
 
 def print_reachable(found: dict[str, object]) -> None:
     print(
-        "\n| scenario | reach wall [s] | reach CPU [s] | drift + bound wall [s] | "
-        "drift + bound CPU [s] | evaluations | bound [deg] | largest inner [deg] | "
-        "directions with reach |"
+        "\n| scenario | jobs | load (1 min) | reach wall [s] | speed-up | reach CPU [s] | "
+        "drift + bound wall [s] | drift + bound CPU [s] | evaluations | bound [deg] | "
+        "largest inner [deg] | directions with reach | same report |"
     )
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
     for r in found["reach"]:  # type: ignore[union-attr]
+        speedup = f"{r['speedup']:.2f}x" if "speedup" in r else "-"
         print(
-            f"| {r['scenario']} | {r['wall_s']:.2f} | {r['cpu_s']:.2f} | "
+            f"| {r['scenario']} | {r['jobs']} | {r['load_1min']:.2f} | {r['wall_s']:.2f} | "
+            f"{speedup} | {r['cpu_s']:.2f} | "
             f"{r['drift_bound_wall_s']:.2f} | {r['drift_bound_cpu_s']:.2f} | "
             f"{r['evaluations']} | {r['bound_deg']:.3g} | {r['largest_inner_deg']:.3g} | "
-            f"{r['directions_with_reach']}/{r['directions']} |"
+            f"{r['directions_with_reach']}/{r['directions']} | "
+            f"{'yes' if r['same_report'] else 'NO'} |"
         )
     print("\n| inner set against plan | goals | planned | refused | median plan [s] |")
     print("|---|---:|---:|---:|---:|")
@@ -187,10 +233,20 @@ def main() -> None:
     parser.add_argument("--goals", type=int, default=50, help="UR5 goals planned")
     parser.add_argument("--kinova-goals", type=int, default=20, help="Kinova goals planned")
     parser.add_argument("--no-panda", action="store_true", help="skip the Panda servicer")
+    parser.add_argument(
+        "--jobs",
+        type=int,
+        nargs="+",
+        help="worker processes to time each scenario with (default: the default jobs, then 1)",
+    )
     parser.add_argument("--markdown", type=Path, help="also write the tables, stamped")
     args = parser.parse_args()
     found = bench_reachable(
-        args.goals, panda=not args.no_panda, runs=args.runs, kinova_goals=args.kinova_goals
+        args.goals,
+        panda=not args.no_panda,
+        runs=args.runs,
+        kinova_goals=args.kinova_goals,
+        jobs=None if args.jobs is None else tuple(args.jobs),
     )
     print_reachable(found)
     if args.markdown:

@@ -169,6 +169,7 @@ def test_layers_flow_one_way_and_no_circle():
         "files",
         "_exits",
         "progress",
+        "parallel",
         "robot",
         "physics",
         "problem",
