@@ -93,7 +93,8 @@ class ReachReport:
         inertia_ratio: spacecraft over arm rotational inertia about the system CM at the start.
         directions: per direction, the outer and inner reach.
         freedom: free coefficients per joint of the inner estimate's path family.
-        evaluations: residual evaluations spent on the inner estimate.
+        evaluations: residual evaluations spent on the inner estimate (those of worker
+            processes included: the same count whatever the jobs).
         budget: the evaluation budget per direction.
     """
 
@@ -225,7 +226,7 @@ def _inner(
         freedom = tuple(d - 5 for d in problem.family.degrees)
         return ReachEstimate(drift, (skipped,) * len(axes), freedom)
     constraints = scenario_constraints(scenario)
-    workers = default_jobs(len(axes)) if jobs is None else jobs
+    workers = default_jobs(len(axes)) if jobs is None else min(jobs, len(axes))
     why = serial_reason(workers, len(axes))
     where = f"serially ({why})" if why else f"on {workers} worker processes"
     LOGGER.info("reach: %d directions %s", len(axes), where)
