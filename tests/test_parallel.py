@@ -32,6 +32,13 @@ def _children() -> list[tuple[int, str]]:
     return found
 
 
+@pytest.fixture
+def new_children():
+    """A function listing the children (pid, state) started since the test began."""
+    before = {pid for pid, _ in _children()}
+    return lambda: [(pid, state) for pid, state in _children() if pid not in before]
+
+
 needs_fork = pytest.mark.skipif(
     "fork" not in mp.get_all_start_methods() or not Path("/proc").is_dir(),
     reason="forked workers and /proc (Linux)",
@@ -39,7 +46,7 @@ needs_fork = pytest.mark.skipif(
 
 
 @needs_fork
-def test_results_come_in_task_order_from_other_processes() -> None:
+def test_results_come_in_task_order_from_other_processes(new_children) -> None:
     finished: list[int] = []
 
     def task(i: int) -> tuple[int, int]:
@@ -51,7 +58,7 @@ def test_results_come_in_task_order_from_other_processes() -> None:
     pids = {r[1] for r in results}
     assert os.getpid() not in pids and len(pids) == 2  # two workers, none of them us
     assert sorted(finished) == list(range(7))
-    assert not _children()
+    assert not new_children()
 
 
 def test_one_job_runs_in_this_process_in_order() -> None:
@@ -61,7 +68,7 @@ def test_one_job_runs_in_this_process_in_order() -> None:
 
 
 @needs_fork
-def test_the_lowest_failing_task_raises_its_own_error_and_no_worker_is_left() -> None:
+def test_the_lowest_failing_task_raises_its_own_error_and_no_worker_is_left(new_children) -> None:
     """Tasks 1 and 4 raise; 4 finishes first, yet task 1's error is raised, as serially."""
 
     def task(i: int) -> int:
@@ -79,11 +86,11 @@ def test_the_lowest_failing_task_raises_its_own_error_and_no_worker_is_left() ->
     assert str(info.value) == str(serial.value) and "t = 1 s" in str(info.value)
     assert vars(info.value) == {**vars(serial.value), "__notes__": info.value.__notes__}
     assert "raised in a worker process" in info.value.__notes__[0]
-    assert not _children()
+    assert not new_children()
 
 
 @needs_fork
-def test_an_error_that_cannot_cross_becomes_a_runtime_error_with_its_text() -> None:
+def test_an_error_that_cannot_cross_becomes_a_runtime_error_with_its_text(new_children) -> None:
     class LocalError(Exception):  # a local class does not pickle
         pass
 
@@ -97,11 +104,11 @@ def test_an_error_that_cannot_cross_becomes_a_runtime_error_with_its_text() -> N
     assert str(info.value) == "LocalError: only here"
     with pytest.raises(Exception, match="pickle"):  # a result that does not pickle
         run_tasks(lambda i: lambda: i, 3, jobs=2)
-    assert not _children()
+    assert not new_children()
 
 
 @needs_fork
-def test_a_worker_that_dies_is_a_worker_error_and_the_others_are_reaped() -> None:
+def test_a_worker_that_dies_is_a_worker_error_and_the_others_are_reaped(new_children) -> None:
     def task(i: int) -> int:
         if i == 3:
             os.kill(os.getpid(), signal.SIGKILL)
@@ -112,11 +119,11 @@ def test_a_worker_that_dies_is_a_worker_error_and_the_others_are_reaped() -> Non
         run_tasks(task, 10, jobs=2)
     assert info.value.task == 3 and info.value.exitcode == -signal.SIGKILL
     assert isinstance(info.value, ff.FreeFloatError)
-    assert not _children()
+    assert not new_children()
 
 
 @needs_fork
-def test_ctrl_c_in_the_caller_ends_every_worker_and_workers_ignore_it() -> None:
+def test_ctrl_c_in_the_caller_ends_every_worker_and_workers_ignore_it(new_children) -> None:
     handlers = run_tasks(lambda i: signal.getsignal(signal.SIGINT) is signal.SIG_IGN, 2, jobs=2)
     assert handlers == [True, True]
 
@@ -131,7 +138,7 @@ def test_ctrl_c_in_the_caller_ends_every_worker_and_workers_ignore_it() -> None:
     with pytest.raises(KeyboardInterrupt):
         run_tasks(slow, 4, jobs=2, done=interrupted)
     assert time.perf_counter() - clock < 10.0  # the busy worker was terminated, not awaited
-    assert not _children()
+    assert not new_children()
 
 
 @needs_fork
