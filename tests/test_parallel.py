@@ -40,7 +40,7 @@ def new_children():
 
 
 needs_fork = pytest.mark.skipif(
-    "fork" not in mp.get_all_start_methods() or not Path("/proc").is_dir(),
+    parallel.serial_reason(2, 2) != "" or not Path("/proc").is_dir(),
     reason="forked workers and /proc (Linux)",
 )
 
@@ -157,8 +157,8 @@ def test_serial_where_workers_cannot_be_forked(monkeypatch) -> None:
     why, in_itself = answer.get(timeout=60)
     daemon.join()
     assert why == "a daemonic process cannot start workers" and in_itself
-    monkeypatch.setattr(parallel.mp, "get_all_start_methods", lambda: ["spawn"])
-    assert serial_reason(2, 3) == "no fork start method on this platform"
+    monkeypatch.setattr(parallel.sys, "platform", "darwin")
+    assert serial_reason(2, 3) == "workers are forked on Linux only"
     assert {pid for pid in run_tasks(lambda i: os.getpid(), 3, jobs=2)} == {os.getpid()}
 
 

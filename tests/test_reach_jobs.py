@@ -7,7 +7,6 @@ freshly loaded robot (its own collision model, no bounds cached from other direc
 
 from __future__ import annotations
 
-import multiprocessing as mp
 import re
 from dataclasses import fields, is_dataclass, replace
 from pathlib import Path
@@ -17,6 +16,7 @@ import pytest
 
 import freefloat as ff
 from freefloat.cli import main
+from freefloat.parallel import serial_reason
 from freefloat.solvers.reach import DirectionReach
 from test_reach import KINOVA  # the servicer: a Kinova arm on a 500 kg cube
 
@@ -30,7 +30,7 @@ AXES = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [1.0, -1.0, -1.0]])
 BUDGET = 8
 
 needs_fork = pytest.mark.skipif(
-    "fork" not in mp.get_all_start_methods(), reason="worker processes are forked (Linux)"
+    serial_reason(2, 2) != "", reason="worker processes are forked (Linux)"
 )
 
 
@@ -101,7 +101,7 @@ def test_evaluations_are_the_directions_sum_whatever_the_jobs(serial) -> None:
     quintic = problem.evaluations - before
     assert report.evaluations == sum(d.evaluations for d in reached) + quintic
     assert all(d.evaluations > 0 for d in reached)
-    if "fork" in mp.get_all_start_methods():
+    if not serial_reason(2, 2):
         shipped = replace(scenario, safety=replace(scenario.safety, check=False))
         one, _ = _run(shipped, AXES[:2], jobs=1)
         two, two_reached = _run(shipped, AXES[:2], jobs=2)

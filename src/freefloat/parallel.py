@@ -9,7 +9,9 @@ must therefore depend on its index and that state alone, not on what the other t
 the results to be the same as a serial run's (the callers test this).
 
 The work runs serially, in the calling process, when ``jobs`` is 1, when there is one task,
-where the ``fork`` start method does not exist (not Linux-like), and inside a daemonic process
+on a platform other than Linux (no ``fork``; on macOS forking a process that has loaded
+system frameworks is unsafe, and spawned workers would rebuild everything), and inside a
+daemonic process
 (a ``multiprocessing`` or Dask worker may not start children). Each child runs BLAS on one
 thread, ignores Ctrl-C (the caller handles it) and dies with SIGTERM. Whatever happens to the
 caller (a task that raises, Ctrl-C, SIGTERM), every child is terminated and reaped before
@@ -111,8 +113,8 @@ def serial_reason(jobs: int, count: int) -> str:
         return "one job asked"
     if count <= 1:
         return "one task"
-    if "fork" not in mp.get_all_start_methods():
-        return "no fork start method on this platform"
+    if not sys.platform.startswith("linux") or "fork" not in mp.get_all_start_methods():
+        return "workers are forked on Linux only"
     if mp.current_process().daemon:
         return "a daemonic process cannot start workers"
     return ""
