@@ -10,9 +10,10 @@ Run alone (``python scripts/bench_reachable.py [--runs N] [--goals N] [--kinova-
   call) of wall and CPU time (s), for the drift attitude and outer bound alone (``budget 0``,
   median of three) and with the inner set (the default budget); residual evaluations. CPU
   time includes the worker processes' (reaped children). Each scenario is timed with each of
-  ``jobs`` worker processes (default: the default jobs, then 1), side by side, with the
-  speed-up over one job, the 1-minute load average when the timing started, and whether the
-  report is the same as the first one's (it must be: the directions are independent).
+  ``jobs`` worker processes (default: the default jobs, then 1), side by side (the runs
+  interleaved: one of each jobs in turn), with the speed-up over one job, the median 1-minute
+  load average when each timing started, and whether every report is the same as the first
+  one's (it must be: the directions are independent).
 - Agreement of the inner set with ``plan``: goals sampled inside the reported inner set
   (seeded: a direction with a positive inner turn, a share 0.2-1 of that turn), each planned
   with ``ff.plan`` on the scenario as it stands (the UR5 servicer with its clearance
@@ -130,41 +131,47 @@ def bench_reachable(
         for name, path in _loaders(Path(tmp), panda).items():
             _timed(path, 0)  # loads the model and the collision geometry
             drift = [_timed(path, 0)[:2] for _ in range(3)]
-            serial_wall = None
-            for workers in jobs:
-                load = os.getloadavg()[0]
-                runs_done = [_timed(path, budget, workers) for _ in range(max(1, runs))]
-                report, scenario = runs_done[0][2], runs_done[0][3]
-                reports.setdefault(name, (scenario, report))
-                wall = statistics.median(r[0] for r in runs_done)
-                serial_wall = wall if workers == 1 else serial_wall
-                rows.append(
-                    {
-                        "scenario": name,
-                        "jobs": workers,
-                        "load_1min": load,
-                        "runs": len(runs_done),
-                        "wall_s": wall,
-                        "cpu_s": statistics.median(r[1] for r in runs_done),
-                        "drift_bound_wall_s": statistics.median(d[0] for d in drift),
-                        "drift_bound_cpu_s": statistics.median(d[1] for d in drift),
-                        "evaluations": report.evaluations,
-                        "bound_deg": math.degrees(report.bound.bound) if report.bound else None,
-                        "largest_inner_deg": max(math.degrees(d.inner) for d in report.directions),
-                        "directions_with_reach": sum(d.inner > 0 for d in report.directions),
-                        "directions": len(report.directions),
-                        "same_report": all(_same(r[2], reports[name][1]) for r in runs_done),
-                    }
-                )
+            timed: dict[int, list] = {workers: [] for workers in jobs}
+            for _ in range(max(1, runs)):  # interleaved: the jobs see the same load drift
+                for workers in jobs:
+                    load = os.getloadavg()[0]
+                    timed[workers].append((*_timed(path, budget, workers), load))
+            first = timed[jobs[0]][0]
+            reports[name] = (first[3], first[2])
+            for workers, runs_done in timed.items():
+                rows.append(_row(name, workers, runs_done, drift, first[2]))
                 print(rows[-1], flush=True)
-            for row in rows:
-                if row["scenario"] == name and serial_wall is not None:
-                    row["speedup"] = serial_wall / row["wall_s"]
+            if 1 in timed:
+                for row in rows[-len(timed) :]:
+                    row["speedup"] = statistics.median(r[0] for r in timed[1]) / row["wall_s"]
         agreement = [
             _agreement(*reports["ur5 servicer (shipped, clearance)"], goals, "ur5 servicer"),
             _agreement(*reports["kinova on 500 kg (no clearance)"], kinova_goals, "kinova"),
         ]
     return {"reach": rows, "agreement": agreement}
+
+
+def _row(
+    name: str, workers: int, runs_done: list, drift: list, first: ff.ReachReport
+) -> dict[str, object]:
+    """One table row: medians over the runs of (wall, CPU, report, scenario, load)."""
+    report = runs_done[0][2]
+    return {
+        "scenario": name,
+        "jobs": workers,
+        "load_1min": statistics.median(r[4] for r in runs_done),
+        "runs": len(runs_done),
+        "wall_s": statistics.median(r[0] for r in runs_done),
+        "cpu_s": statistics.median(r[1] for r in runs_done),
+        "drift_bound_wall_s": statistics.median(d[0] for d in drift),
+        "drift_bound_cpu_s": statistics.median(d[1] for d in drift),
+        "evaluations": report.evaluations,
+        "bound_deg": math.degrees(report.bound.bound) if report.bound else None,
+        "largest_inner_deg": max(math.degrees(d.inner) for d in report.directions),
+        "directions_with_reach": sum(d.inner > 0 for d in report.directions),
+        "directions": len(report.directions),
+        "same_report": all(_same(r[2], first) for r in runs_done),
+    }
 
 
 def _agreement(
