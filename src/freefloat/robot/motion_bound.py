@@ -147,3 +147,38 @@ class PairBounds:
         moved = np.einsum("pn,pn->p", self.weights, np.abs(joints - last_joints))
         moved += BOUND_SLACK
         return last_lower - moved, last_upper + moved
+
+    def widened_many(
+        self, slots: Sequence[float | None], joints: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`widened` at many slots at once: (B, P) lower and upper bounds (m).
+
+        ``joints``: (B, N), one row per slot (rad or m). A pair with no bounds at its slot
+        gets NaN (the caller bounds it otherwise). Rows share no bounds with each other: each
+        is widened from its slot as it stood before the call (a new slot from the nearest
+        one kept then, or created by an earlier row of the call).
+        """
+        arrays = [self._arrays(slot) for slot in slots]
+        last_joints = np.stack([a[0] for a in arrays])
+        moved = np.einsum("pn,bpn->bp", self.weights, np.abs(joints[:, None, :] - last_joints))
+        moved += BOUND_SLACK
+        return np.stack([a[1] for a in arrays]) - moved, np.stack([a[2] for a in arrays]) + moved
+
+    def record_rows(
+        self,
+        slots: Sequence[float | None],
+        pairs: np.ndarray,
+        joints: np.ndarray,
+        lower: np.ndarray,
+        upper: np.ndarray,
+    ) -> None:
+        """:meth:`record` at many slots, in order: (B, P) ``pairs`` mask, bounds (m).
+
+        ``joints``: (B, N), one row per slot (rad or m); NaN bounds forget a pair.
+        """
+        for i, slot in enumerate(slots):
+            chosen = pairs[i]
+            if chosen.any():
+                last_joints, last_lower, last_upper = self._arrays(slot)
+                last_joints[chosen] = joints[i]
+                last_lower[chosen], last_upper[chosen] = lower[i, chosen], upper[i, chosen]
