@@ -108,3 +108,20 @@ def test_the_command_line_prints_it_as_one_warning_line(tmp_path, capsys):
     assert err == f"freefloat: warning: {ROS_START_MESSAGE}\n"
     assert main(["check", "-q", str(path)]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_a_sweep_says_it_once_and_its_workers_stay_quiet(tmp_path, capfd):
+    shipped = (ROOT / "robots" / "scenarios" / "worked_example.toml").read_text()
+    assert shipped.count("q1 = 80.0, q2 = 30.0") == 1
+    (tmp_path / "s.toml").write_text(shipped.replace("q1 = 80.0, q2 = 30.0", "q1 = 1.4, q2 = 0.5"))
+    (tmp_path / "sweep.toml").write_text(
+        'scenario = "s.toml"\nsamples = 51\n\n[[axis]]\nkey = "goal.base_zyx_deg.0"\n'
+        "values = [-10.0, -5.0, 0.0]\n"
+    )
+    argv = ["sweep", str(tmp_path / "sweep.toml"), "-o", str(tmp_path / "r.csv")]
+    assert main([*argv, "--workers", "1"]) == 0
+    # 1.4 rad = 1.4 * 180 / pi deg; the worker processes' stderr is captured too
+    assert capfd.readouterr().err == (
+        "freefloat: warning: [start] joints look like radians (every value within +-6.28, "
+        "q1 = 1.4); scenario joints are in degrees (1.4 rad is 80.21 deg)\n"
+    )
