@@ -4,10 +4,11 @@ Run alone (``python scripts/bench_reachable.py [--runs N] [--goals N] [--kinova-
 [--no-panda] [--markdown FILE]``) or from ``scripts/bench.py --reachable-only``.
 
 - Time of :func:`freefloat.reachable` on the shipped servicers as they stand (Panda, UR5 and
-  dual UR5, clearance on) and on a composed Kinova servicer on a 500 kg, 2 m cube (no
-  clearance): the median over ``runs`` fresh calls (a new scenario each, after one loading
-  call) of wall and CPU time (s), for the drift attitude and outer bound alone (``budget 0``,
-  median of three) and with the inner set (the default budget); residual evaluations.
+  dual UR5, clearance on) and on a composed Kinova servicer on a 500 kg, 2 m cube
+  (``examples/kinova_servicer.toml``, no clearance): the median over ``runs`` fresh calls (a
+  new scenario each, after one loading call) of wall and CPU time (s), for the drift attitude
+  and outer bound alone (``budget 0``, median of three) and with the inner set (the default
+  budget); residual evaluations.
 - Agreement of the inner set with ``plan``: goals sampled inside the reported inner set
   (seeded: a direction with a positive inner turn, a share 0.2-1 of that turn), each planned
   with ``ff.plan`` on the scenario as it stands (the UR5 servicer with its clearance
@@ -21,7 +22,6 @@ import dataclasses
 import math
 import statistics
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -34,42 +34,17 @@ from freefloat.reachable import DEFAULT_BUDGET
 ROBOTS = Path(ff.default_scenario_path()).parent
 SHIPPED = ("panda_servicer", "ur5_servicer", "dual_ur5_servicer")
 
-KINOVA = """
-duration = 20.0
-[robot]
-arm = "kinova"
-base_mass = 500.0
-base_size = [2.0, 2.0, 2.0]
-mount = [1.0, 0.0, 0.0]
-mount_rpy_deg = [0.0, 90.0, 0.0]
-[start]
-joints = START
-[goal]
-joints = GOALJOINTS
-[safety]
-check = false
-""".replace(
-    "START",
-    "{ "
-    + ", ".join(f"j2s6s200_joint_{i} = {v}" for i, v in enumerate((0, 180, 180, 0, 180, 0), 1))
-    + " }",
-).replace(
-    "GOALJOINTS",
-    "{ "
-    + ", ".join(f"j2s6s200_joint_{i} = {v}" for i, v in enumerate((40, 150, 200, 30, 150, 20), 1))
-    + " }",
-)
+#: The composed Kinova servicer on a 500 kg, 2 m cube (no clearance), shipped as an example.
+KINOVA = Path(__file__).resolve().parents[1] / "examples" / "kinova_servicer.toml"
 
 
-def _loaders(folder: Path, panda: bool) -> dict[str, Path]:
-    kinova = folder / "kinova.toml"
-    kinova.write_text(KINOVA)
+def _loaders(panda: bool) -> dict[str, Path]:
     files = {
         f"{name.replace('_', ' ')} (shipped, clearance)": ROBOTS / f"{name}.toml"
         for name in SHIPPED
         if panda or name != "panda_servicer"
     }
-    files["kinova on 500 kg (no clearance)"] = kinova
+    files["kinova on 500 kg (no clearance)"] = KINOVA
     return files
 
 
@@ -94,33 +69,32 @@ def bench_reachable(
     servicer's are planned. ``panda``: also time the Panda servicer (minutes with clearance).
     """
     rows, reports = [], {}
-    with tempfile.TemporaryDirectory() as tmp:
-        for name, path in _loaders(Path(tmp), panda).items():
-            _timed(path, 0)  # loads the model and the collision geometry
-            drift = [_timed(path, 0)[:2] for _ in range(3)]
-            runs_done = [_timed(path, budget) for _ in range(max(1, runs))]
-            report, scenario = runs_done[0][2], runs_done[0][3]
-            reports[name] = (scenario, report)
-            rows.append(
-                {
-                    "scenario": name,
-                    "runs": len(runs_done),
-                    "wall_s": statistics.median(r[0] for r in runs_done),
-                    "cpu_s": statistics.median(r[1] for r in runs_done),
-                    "drift_bound_wall_s": statistics.median(d[0] for d in drift),
-                    "drift_bound_cpu_s": statistics.median(d[1] for d in drift),
-                    "evaluations": report.evaluations,
-                    "bound_deg": math.degrees(report.bound.bound) if report.bound else None,
-                    "largest_inner_deg": max(math.degrees(d.inner) for d in report.directions),
-                    "directions_with_reach": sum(d.inner > 0 for d in report.directions),
-                    "directions": len(report.directions),
-                }
-            )
-            print(rows[-1], flush=True)
-        agreement = [
-            _agreement(*reports["ur5 servicer (shipped, clearance)"], goals, "ur5 servicer"),
-            _agreement(*reports["kinova on 500 kg (no clearance)"], kinova_goals, "kinova"),
-        ]
+    for name, path in _loaders(panda).items():
+        _timed(path, 0)  # loads the model and the collision geometry
+        drift = [_timed(path, 0)[:2] for _ in range(3)]
+        runs_done = [_timed(path, budget) for _ in range(max(1, runs))]
+        report, scenario = runs_done[0][2], runs_done[0][3]
+        reports[name] = (scenario, report)
+        rows.append(
+            {
+                "scenario": name,
+                "runs": len(runs_done),
+                "wall_s": statistics.median(r[0] for r in runs_done),
+                "cpu_s": statistics.median(r[1] for r in runs_done),
+                "drift_bound_wall_s": statistics.median(d[0] for d in drift),
+                "drift_bound_cpu_s": statistics.median(d[1] for d in drift),
+                "evaluations": report.evaluations,
+                "bound_deg": math.degrees(report.bound.bound) if report.bound else None,
+                "largest_inner_deg": max(math.degrees(d.inner) for d in report.directions),
+                "directions_with_reach": sum(d.inner > 0 for d in report.directions),
+                "directions": len(report.directions),
+            }
+        )
+        print(rows[-1], flush=True)
+    agreement = [
+        _agreement(*reports["ur5 servicer (shipped, clearance)"], goals, "ur5 servicer"),
+        _agreement(*reports["kinova on 500 kg (no clearance)"], kinova_goals, "kinova"),
+    ]
     return {"reach": rows, "agreement": agreement}
 
 
