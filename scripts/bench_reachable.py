@@ -5,15 +5,15 @@ Run alone (``python scripts/bench_reachable.py [--runs N] [--goals N] [--kinova-
 --reachable-only``.
 
 - Time of :func:`freefloat.reachable` on the shipped servicers as they stand (Panda, UR5 and
-  dual UR5, clearance on) and on a composed Kinova servicer on a 500 kg, 2 m cube (no
-  clearance): the median over ``runs`` fresh calls (a new scenario each, after one loading
-  call) of wall and CPU time (s), for the drift attitude and outer bound alone (``budget 0``,
-  median of three) and with the inner set (the default budget); residual evaluations. CPU
-  time includes the worker processes' (reaped children). Each scenario is timed with each of
-  ``jobs`` worker processes (default: the default jobs, then 1), side by side (the runs
-  interleaved: one of each jobs in turn), with the speed-up over one job, the median 1-minute
-  load average when each timing started, and whether every report is the same as the first
-  one's (it must be: the directions are independent).
+  dual UR5, clearance on) and on a composed Kinova servicer on a 500 kg, 2 m cube
+  (``examples/kinova_servicer.toml``, no clearance): the median over ``runs`` fresh calls (a
+  new scenario each, after one loading call) of wall and CPU time (s), for the drift attitude
+  and outer bound alone (``budget 0``, median of three) and with the inner set (the default
+  budget); residual evaluations. CPU time includes the worker processes' (reaped children).
+  Each scenario is timed with each of ``jobs`` worker processes (default: the default jobs,
+  then 1), side by side (the runs interleaved: one of each jobs in turn), with the speed-up
+  over one job, the median 1-minute load average when each timing started, and whether every
+  report is the same as the first one's (it must be: the directions are independent).
 - Agreement of the inner set with ``plan``: goals sampled inside the reported inner set
   (seeded: a direction with a positive inner turn, a share 0.2-1 of that turn), each planned
   with ``ff.plan`` on the scenario as it stands (the UR5 servicer with its clearance
@@ -28,7 +28,6 @@ import math
 import os
 import statistics
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -43,42 +42,17 @@ from freefloat.solvers.reach import default_directions
 ROBOTS = Path(ff.default_scenario_path()).parent
 SHIPPED = ("panda_servicer", "ur5_servicer", "dual_ur5_servicer")
 
-KINOVA = """
-duration = 20.0
-[robot]
-arm = "kinova"
-base_mass = 500.0
-base_size = [2.0, 2.0, 2.0]
-mount = [1.0, 0.0, 0.0]
-mount_rpy_deg = [0.0, 90.0, 0.0]
-[start]
-joints = START
-[goal]
-joints = GOALJOINTS
-[safety]
-check = false
-""".replace(
-    "START",
-    "{ "
-    + ", ".join(f"j2s6s200_joint_{i} = {v}" for i, v in enumerate((0, 180, 180, 0, 180, 0), 1))
-    + " }",
-).replace(
-    "GOALJOINTS",
-    "{ "
-    + ", ".join(f"j2s6s200_joint_{i} = {v}" for i, v in enumerate((40, 150, 200, 30, 150, 20), 1))
-    + " }",
-)
+#: The composed Kinova servicer on a 500 kg, 2 m cube (no clearance), shipped as an example.
+KINOVA = Path(__file__).resolve().parents[1] / "examples" / "kinova_servicer.toml"
 
 
-def _loaders(folder: Path, panda: bool) -> dict[str, Path]:
-    kinova = folder / "kinova.toml"
-    kinova.write_text(KINOVA)
+def _loaders(panda: bool) -> dict[str, Path]:
     files = {
         f"{name.replace('_', ' ')} (shipped, clearance)": ROBOTS / f"{name}.toml"
         for name in SHIPPED
         if panda or name != "panda_servicer"
     }
-    files["kinova on 500 kg (no clearance)"] = kinova
+    files["kinova on 500 kg (no clearance)"] = KINOVA
     return files
 
 
@@ -127,27 +101,26 @@ def bench_reachable(
     if jobs is None:
         jobs = tuple(dict.fromkeys((default_jobs(len(default_directions())), 1)))
     rows, reports = [], {}
-    with tempfile.TemporaryDirectory() as tmp:
-        for name, path in _loaders(Path(tmp), panda).items():
-            _timed(path, 0)  # loads the model and the collision geometry
-            drift = [_timed(path, 0)[:2] for _ in range(3)]
-            timed: dict[int, list] = {workers: [] for workers in jobs}
-            for _ in range(max(1, runs)):  # interleaved: the jobs see the same load drift
-                for workers in jobs:
-                    load = os.getloadavg()[0]
-                    timed[workers].append((*_timed(path, budget, workers), load))
-            first = timed[jobs[0]][0]
-            reports[name] = (first[3], first[2])
-            for workers, runs_done in timed.items():
-                rows.append(_row(name, workers, runs_done, drift, first[2]))
-                print(rows[-1], flush=True)
-            if 1 in timed:
-                for row in rows[-len(timed) :]:
-                    row["speedup"] = statistics.median(r[0] for r in timed[1]) / row["wall_s"]
-        agreement = [
-            _agreement(*reports["ur5 servicer (shipped, clearance)"], goals, "ur5 servicer"),
-            _agreement(*reports["kinova on 500 kg (no clearance)"], kinova_goals, "kinova"),
-        ]
+    for name, path in _loaders(panda).items():
+        _timed(path, 0)  # loads the model and the collision geometry
+        drift = [_timed(path, 0)[:2] for _ in range(3)]
+        timed: dict[int, list] = {workers: [] for workers in jobs}
+        for _ in range(max(1, runs)):  # interleaved: the jobs see the same load drift
+            for workers in jobs:
+                load = os.getloadavg()[0]
+                timed[workers].append((*_timed(path, budget, workers), load))
+        first = timed[jobs[0]][0]
+        reports[name] = (first[3], first[2])
+        for workers, runs_done in timed.items():
+            rows.append(_row(name, workers, runs_done, drift, first[2]))
+            print(rows[-1], flush=True)
+        if 1 in timed:
+            for row in rows[-len(timed) :]:
+                row["speedup"] = statistics.median(r[0] for r in timed[1]) / row["wall_s"]
+    agreement = [
+        _agreement(*reports["ur5 servicer (shipped, clearance)"], goals, "ur5 servicer"),
+        _agreement(*reports["kinova on 500 kg (no clearance)"], kinova_goals, "kinova"),
+    ]
     return {"reach": rows, "agreement": agreement}
 
 

@@ -82,7 +82,7 @@ def test_sphere_centres_are_pinocchios_placements(which, tmp_path):
 def test_a_batch_gives_the_closest_pair_of_every_pair_measured(path):
     """Along a path and around it, slotted as the solvers ask, after earlier batches: each
     row's smallest distance, pair and gradient are those of a fresh model measuring every
-    pair (brute force)."""
+    pair (brute force), and every pair's reported lower bound holds against its distance."""
     scenario = ff.Scenario.from_toml(path)
     robot = scenario.robot
     walked = CollisionModel(robot, known_srdf(robot))
@@ -98,6 +98,7 @@ def test_a_batch_gives_the_closest_pair_of_every_pair_measured(path):
             k = int(np.argmin(every.values))
             assert (float(got.values[i]), int(got.pairs[i])) == (float(every.values[k]), k)
             assert np.array_equal(got.gradients[i], every.gradients[k])
+            assert np.all(got.lower[i] <= every.values + 1e-9)
 
 
 def test_gradients_of_a_batch_against_finite_differences():

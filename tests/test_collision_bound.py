@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import freefloat as ff
-import freefloat.robot.collision as collision
+import freefloat.robot.pair_queries as pair_queries
 from freefloat.robot.collision import CollisionModel, known_srdf
 from freefloat.robot.motion_bound import BOUND_SLACK
 
@@ -74,7 +74,7 @@ def test_the_closest_pair_is_the_same_bits_as_with_every_pair_measured(path, slo
 
 def _everything(monkeypatch: pytest.MonkeyPatch) -> None:
     """No bound: pairs spared by their bounding spheres alone (the model before the bound)."""
-    monkeypatch.setattr(collision, "motion_weights", lambda *args: None)
+    monkeypatch.setattr(pair_queries, "motion_weights", lambda *args: None)
 
 
 def _pan(tmp_path):  # type: ignore[no-untyped-def]

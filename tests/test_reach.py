@@ -19,33 +19,9 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "robots" / "scenarios"
 
 #: The issue's servicer: a Kinova arm on a heavy 2 m cube (the reach is about a degree), no
-#: clearance constraint so that the test stays fast.
-KINOVA = """
-duration = 20.0
-[robot]
-arm = "kinova"
-base_mass = 500.0
-base_size = [2.0, 2.0, 2.0]
-mount = [1.0, 0.0, 0.0]
-mount_rpy_deg = [0.0, 90.0, 0.0]
-[start]
-joints = START
-[goal]
-joints = GOALJOINTS
-base_zyx_deg = GOAL
-[safety]
-check = false
-""".replace(
-    "START",
-    "{ "
-    + ", ".join(f"j2s6s200_joint_{i} = {v}" for i, v in enumerate((0, 180, 180, 0, 180, 0), 1))
-    + " }",
-).replace(
-    "GOALJOINTS",
-    "{ "
-    + ", ".join(f"j2s6s200_joint_{i} = {v}" for i, v in enumerate((40, 150, 200, 30, 150, 20), 1))
-    + " }",
-)
+#: clearance constraint so that the test stays fast; its goal keeps the attitude.
+KINOVA = ROOT / "examples" / "kinova_servicer.toml"
+KEEP_ATTITUDE = "base_zyx_deg = [0.0, 0.0, 0.0]"
 
 ROW = re.compile(
     r"^\s+([+-]\d\.\d\d) ([+-]\d\.\d\d) ([+-]\d\.\d\d)\s+(\d+\.\d+)\s+(\d+\.\d+)\s+"
@@ -128,10 +104,8 @@ def test_drift_lies_within_the_bound_and_turn_limits_have_closed_forms() -> None
 
 @pytest.fixture(scope="module")
 def kinova_reach(tmp_path_factory) -> tuple[Path, str]:
-    folder = tmp_path_factory.mktemp("kinova")
-    path = folder / "kinova.toml"
-    path.write_text(KINOVA.replace("GOAL", "[0.0, 0.0, 0.0]"))
-    return path, folder
+    assert KINOVA.read_text().count(KEEP_ATTITUDE) == 1  # the goal's, replaced below
+    return KINOVA, tmp_path_factory.mktemp("kinova")
 
 
 def test_a_goal_read_from_reach_output_plans_first_try(kinova_reach, capsys) -> None:
@@ -150,7 +124,7 @@ def test_a_goal_read_from_reach_output_plans_first_try(kinova_reach, capsys) -> 
     assert diagonal[3] > 0.0
     goal = diagonal[5:8]
     scenario = folder / "goal.toml"
-    scenario.write_text(KINOVA.replace("GOAL", str(goal)))
+    scenario.write_text(KINOVA.read_text().replace(KEEP_ATTITUDE, f"base_zyx_deg = {goal}"))
     plan = ff.plan(ff.Scenario.from_toml(scenario))
     assert plan.verification.passed
     np.testing.assert_allclose(plan.base.achieved_zyx_deg, goal, atol=1e-6)

@@ -18,10 +18,11 @@ import freefloat as ff
 from freefloat.cli import main
 from freefloat.parallel import serial_reason
 from freefloat.solvers.reach import DirectionReach
-from test_reach import KINOVA  # the issue's servicer: a Kinova arm on a 500 kg cube
 
 ROOT = Path(__file__).resolve().parents[1]
 UR5 = ROOT / "robots" / "scenarios" / "ur5_servicer.toml"
+#: The issue's servicer: a Kinova arm on a 500 kg cube, no clearance.
+KINOVA = ROOT / "examples" / "kinova_servicer.toml"
 
 #: The UR5 servicer as shipped (clearance on): about each of these axes the path found without
 #: clearance breaks it, so the direction is run again with clearance imposed: all three query
@@ -123,15 +124,13 @@ def test_reach_refuses_bad_jobs_in_one_line(capsys) -> None:
 
 @needs_fork
 @pytest.mark.parametrize("command", ["reach", "bounds"])
-def test_the_printed_table_is_the_same_with_workers(command, tmp_path, capsys) -> None:
+def test_the_printed_table_is_the_same_with_workers(command, capsys) -> None:
     """-v: one line per direction as each finishes (any order); the table in direction order,
     the same text with two jobs as with one."""
-    path = tmp_path / "kinova.toml"
-    path.write_text(KINOVA.replace("GOAL", "[0.0, 0.0, 0.0]"))
     options = ["--budget", "3"] + (["--max-angle", "2"] if command == "bounds" else [])
     outs, lines = [], []
     for jobs in ("1", "2"):
-        assert main(["-v", command, str(path), *options, "--jobs", jobs]) == 0
+        assert main(["-v", command, str(KINOVA), *options, "--jobs", jobs]) == 0
         out, err = capsys.readouterr()
         outs.append(out)
         lines.append(sorted(re.findall(rf"{command} \d+/14: (axis .*)", err)))

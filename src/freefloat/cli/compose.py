@@ -19,6 +19,114 @@ if TYPE_CHECKING:
 __all__ = ["add_parser", "check", "run"]
 
 
+@dataclasses.dataclass(frozen=True)
+class _Numbers:
+    """A numeric option: its numbers' names, its limit and unit, and how it is given.
+
+    Attributes:
+        option: the option (``--base-size``).
+        names: one metavar per number (``("X", "Y", "Z")``); one name: a single number.
+        high: the largest magnitude accepted (in ``unit``).
+        unit: the unit of the numbers (``m``, ``kg``, ``kg m^2``, ``deg``).
+        help: the option's help, or None.
+        required: the option must be given.
+        append: given once per ``--arm`` (a list of lists).
+    """
+
+    option: str
+    names: tuple[str, ...]
+    high: float
+    unit: str
+    help: str | None = None
+    required: bool = False
+    append: bool = False
+
+    def add(self, parser: argparse.ArgumentParser) -> None:
+        """Add the option to ``parser``."""
+        shape: dict[str, Any] = {"metavar": self.names[0]}
+        if len(self.names) > 1:
+            shape = {"nargs": len(self.names), "metavar": self.names}
+        if self.required:
+            shape["required"] = True
+        if self.append:
+            shape["action"] = "append"
+        parser.add_argument(self.option, type=float, help=self.help, **shape)
+
+    def check(self, args: argparse.Namespace) -> None:
+        """Refuse a number beyond the limit (:class:`InputLimitError` naming the option)."""
+        given = getattr(args, self.option.lstrip("-").replace("-", "_"))
+        if given is None:
+            return
+        values = [given] if len(self.names) == 1 else given
+        if self.append:
+            values = [x for each in values for x in each]
+        for value in values:
+            check_number(value, self.option, self.high, self.unit)
+
+
+_XYZ = ("X", "Y", "Z")
+#: The spacecraft's and the mounts' numbers, in the order of ``--help``.
+_BASE = (
+    _Numbers("--base-mass", ("KG",), MAX_MAGNITUDE, "kg", required=True),
+    _Numbers("--base-size", _XYZ, MAX_LENGTH_M, "m", "box edges [m]", required=True),
+    _Numbers(
+        "--base-inertia",
+        ("IXX", "IYY", "IZZ"),
+        MAX_MAGNITUDE,
+        "kg m^2",
+        "principal moments [kg m^2] (default: uniform box)",
+    ),
+    _Numbers(
+        "--mount",
+        _XYZ,
+        MAX_LENGTH_M,
+        "m",
+        "arm root in the spacecraft frame [m] (once per --arm)",
+        required=True,
+        append=True,
+    ),
+    _Numbers(
+        "--mount-rpy",
+        ("R", "P", "Y"),
+        MAX_ANGLE_DEG,
+        "deg",
+        "arm root roll, pitch, yaw [deg] (once per --arm; default 0 0 0)",
+        append=True,
+    ),
+)
+#: The ``--payload-*`` options: a captured payload fixed to the end effector.
+_PAYLOAD = (
+    _Numbers(
+        "--payload-mass",
+        ("KG",),
+        MAX_MAGNITUDE,
+        "kg",
+        "captured payload fixed to the end effector",
+    ),
+    _Numbers(
+        "--payload-com",
+        _XYZ,
+        MAX_LENGTH_M,
+        "m",
+        "payload centre of mass in the end-effector frame [m] (default: 0 0 0)",
+    ),
+    _Numbers(
+        "--payload-inertia",
+        ("IXX", "IYY", "IZZ", "IXY", "IXZ", "IYZ"),
+        MAX_MAGNITUDE,
+        "kg m^2",
+        "payload inertia about its centre of mass [kg m^2] (default: the uniform --payload-box's)",
+    ),
+    _Numbers(
+        "--payload-box",
+        _XYZ,
+        MAX_LENGTH_M,
+        "m",
+        "payload box (visual and collision), centred on its centre of mass [m]",
+    ),
+)
+
+
 def add_parser(commands: Commands) -> argparse.ArgumentParser:
     """Add this command's sub-parser to ``commands``."""
     p_compose = commands.add_parser(
@@ -35,39 +143,8 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
         action="append",
         help="arm name or URDF path; repeat for more arms, each with its --mount",
     )
-    p_compose.add_argument("--base-mass", type=float, required=True, metavar="KG")
-    p_compose.add_argument(
-        "--base-size",
-        type=float,
-        nargs=3,
-        required=True,
-        metavar=("X", "Y", "Z"),
-        help="box edges [m]",
-    )
-    p_compose.add_argument(
-        "--base-inertia",
-        type=float,
-        nargs=3,
-        metavar=("IXX", "IYY", "IZZ"),
-        help="principal moments [kg m^2] (default: uniform box)",
-    )
-    p_compose.add_argument(
-        "--mount",
-        type=float,
-        nargs=3,
-        required=True,
-        action="append",
-        metavar=("X", "Y", "Z"),
-        help="arm root in the spacecraft frame [m] (once per --arm)",
-    )
-    p_compose.add_argument(
-        "--mount-rpy",
-        type=float,
-        nargs=3,
-        action="append",
-        metavar=("R", "P", "Y"),
-        help="arm root roll, pitch, yaw [deg] (once per --arm; default 0 0 0)",
-    )
+    for numbers in _BASE:
+        numbers.add(p_compose)
     p_compose.add_argument(
         "--prefix",
         action="append",
@@ -83,61 +160,17 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
     p_compose.add_argument(
         "--keep-gripper", action="store_true", help="keep gripper and finger joints movable"
     )
-    _add_payload_options(p_compose)
+    for numbers in _PAYLOAD:
+        numbers.add(p_compose)
     p_compose.add_argument("-o", "--output", required=True, help="URDF file to write")
     p_compose.set_defaults(func=run, check=check)
     return p_compose
 
 
-def _add_payload_options(parser: argparse.ArgumentParser) -> None:
-    """The ``--payload-*`` options: a captured payload fixed to the end effector."""
-    parser.add_argument(
-        "--payload-mass",
-        type=float,
-        metavar="KG",
-        help="captured payload fixed to the end effector",
-    )
-    parser.add_argument(
-        "--payload-com",
-        type=float,
-        nargs=3,
-        metavar=("X", "Y", "Z"),
-        help="payload centre of mass in the end-effector frame [m] (default: 0 0 0)",
-    )
-    parser.add_argument(
-        "--payload-inertia",
-        type=float,
-        nargs=6,
-        metavar=("IXX", "IYY", "IZZ", "IXY", "IXZ", "IYZ"),
-        help="payload inertia about its centre of mass [kg m^2] "
-        "(default: the uniform --payload-box's)",
-    )
-    parser.add_argument(
-        "--payload-box",
-        type=float,
-        nargs=3,
-        metavar=("X", "Y", "Z"),
-        help="payload box (visual and collision), centred on its centre of mass [m]",
-    )
-
-
 def check(args: argparse.Namespace) -> None:
     """Refuse numbers beyond the limits and an unwritable output before any work."""
-    numbers: list[tuple[str, Any, float, str]] = [
-        ("--base-mass", [args.base_mass], MAX_MAGNITUDE, "kg"),
-        ("--base-size", args.base_size, MAX_LENGTH_M, "m"),
-        ("--base-inertia", args.base_inertia, MAX_MAGNITUDE, "kg m^2"),
-        ("--mount", [x for m in args.mount for x in m], MAX_LENGTH_M, "m"),
-        ("--mount-rpy", [x for m in args.mount_rpy or [] for x in m], MAX_ANGLE_DEG, "deg"),
-        ("--payload-mass", [args.payload_mass], MAX_MAGNITUDE, "kg"),
-        ("--payload-com", args.payload_com, MAX_LENGTH_M, "m"),
-        ("--payload-inertia", args.payload_inertia, MAX_MAGNITUDE, "kg m^2"),
-        ("--payload-box", args.payload_box, MAX_LENGTH_M, "m"),
-    ]
-    for name, values, high, unit in numbers:
-        for value in values or ():
-            if value is not None:
-                check_number(value, name, high, unit)
+    for numbers in (*_BASE, *_PAYLOAD):
+        numbers.check(args)
     check_outputs(args, ("-o", "output"))
 
 

@@ -11,14 +11,15 @@ from __future__ import annotations
 
 import argparse
 import time
-from collections.abc import Sequence
+import warnings
+from collections.abc import Callable, Sequence
 from types import ModuleType
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from .. import __version__
 from .._exits import HungUp, Terminated, error_line, flush_output, handle_signals, silence_output
-from ..errors import FreeFloatError
-from ..progress import configure
+from ..errors import FreeFloatError, UnitsWarning
+from ..progress import LOGGER, configure
 from . import (
     bounds,
     check,
@@ -104,8 +105,28 @@ def main(argv: Sequence[str] | None = None) -> int:
     0: success; 1: ``verify`` found a failing check; 2: bad input, infeasible request, no
     plan, or standard output cannot be written (one line ``freefloat: error: ...`` on
     stderr); 130: interrupted by Ctrl-C; 143: terminated by SIGTERM; 129: SIGHUP (one line
-    each, no partial file left); 141: standard output was closed (silently).
+    each, no partial file left); 141: standard output was closed (silently). The package's
+    :class:`UnitsWarning` is one line ``freefloat: warning: ...`` (none with ``-q``).
     """
+    with warnings.catch_warnings():
+        warnings.showwarning = _one_line_warnings(warnings.showwarning)
+        return _main(argv)
+
+
+def _one_line_warnings(show: Callable[..., None]) -> Callable[..., None]:
+    """``warnings.showwarning`` printing a :class:`UnitsWarning` as the package's warning line."""
+
+    def showwarning(message: Warning | str, category: type[Warning], *rest: Any) -> None:
+        if issubclass(category, UnitsWarning):
+            LOGGER.warning("%s", message)
+        else:
+            show(message, category, *rest)
+
+    return showwarning
+
+
+def _main(argv: Sequence[str] | None) -> int:
+    """:func:`main` under its warning display."""
     undo = handle_signals()
     try:
         parser = build_parser()

@@ -4,19 +4,26 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import time
 from pathlib import Path
 
-from ..errors import InputLimitError
+from ..errors import InputError, InputLimitError
 from ..pipeline import plan
 from ..problem.limits import check_samples
 from ..problem.objectives import OBJECTIVES
-from ..progress import TIMINGS, stage
+from ..progress import LOGGER, TIMINGS, stage
 from ..solvers.options import DEFAULT_TOLERANCE, TOLERANCE_RANGE_RAD, SolveOptions
 from ..viz.summary import cartesian_report, robot_label, summary
 from .common import DEFAULT_OUT_DIR, Commands, check_outputs, load_scenario
 
-__all__ = ["add_parser", "check", "run"]
+__all__ = ["add_parser", "check", "run", "tolerance_rad"]
+
+#: Why the attitude tolerance has its range (in the unit of the option the user gave).
+_WHY = (
+    "the attitude integration certifies plans to {:g} {unit} and verification holds them "
+    "to {:g} {unit}"
+)
 
 
 def add_parser(commands: Commands) -> argparse.ArgumentParser:
@@ -49,10 +56,16 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
     )
     p_plan.add_argument("--samples", type=int, default=201, help="samples in [0, T] (default 201)")
     p_plan.add_argument(
+        "--tolerance-deg",
+        type=float,
+        metavar="DEG",
+        help=f"attitude tolerance in deg (default {math.degrees(DEFAULT_TOLERANCE):g})",
+    )
+    p_plan.add_argument(
         "--tolerance",
         type=float,
-        default=DEFAULT_TOLERANCE,
-        help=f"attitude tolerance in rad (default {DEFAULT_TOLERANCE:g})",
+        metavar="RAD",
+        help="attitude tolerance in rad (deprecated: use --tolerance-deg)",
     )
     p_plan.set_defaults(func=run, check=check)
     return p_plan
@@ -61,18 +74,47 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
 def check(args: argparse.Namespace) -> None:
     """Refuse bad numbers and an unwritable output before any work (docs/limits.md)."""
     check_samples(args.samples, "--samples")
-    low, high = TOLERANCE_RANGE_RAD
-    if not low <= args.tolerance <= high:  # NaN fails too
-        raise InputLimitError(
-            "--tolerance",
-            args.tolerance,
-            low,
-            high,
-            "rad",
-            why="the attitude integration certifies plans to 1e-12 rad and verification "
-            "holds them to 1e-7 rad",
+    tolerance_rad(args)
+    if args.tolerance is not None:
+        LOGGER.warning(
+            "--tolerance is in rad and deprecated; give --tolerance-deg %g instead",
+            math.degrees(args.tolerance),
         )
     check_outputs(args, ("-o", "output"))
+
+
+def tolerance_rad(args: argparse.Namespace) -> float:
+    """The attitude tolerance (rad) of ``--tolerance-deg`` (deg) or ``--tolerance`` (rad).
+
+    Without either, :data:`DEFAULT_TOLERANCE`; a degree value within printing precision of
+    an end of the range is held to that end.
+
+    Raises:
+        InputError: both options are given.
+        InputLimitError: the value is outside :data:`TOLERANCE_RANGE_RAD`, named in the unit
+            of the option given.
+    """
+    low, high = TOLERANCE_RANGE_RAD
+    if args.tolerance_deg is None:
+        if args.tolerance is None:
+            return DEFAULT_TOLERANCE
+        if not low <= args.tolerance <= high:  # NaN fails too
+            why = _WHY.format(1e-12, high, unit="rad")
+            raise InputLimitError("--tolerance", args.tolerance, low, high, "rad", why=why)
+        return float(args.tolerance)
+    if args.tolerance is not None:
+        raise InputError(
+            "give the attitude tolerance once: --tolerance-deg DEG (or the deprecated "
+            "--tolerance RAD), not both"
+        )
+    low_deg, high_deg = math.degrees(low), math.degrees(high)
+    slack = 1e-5  # the range printed with six digits is accepted at both ends
+    if not low_deg * (1 - slack) <= args.tolerance_deg <= high_deg * (1 + slack):
+        why = _WHY.format(math.degrees(1e-12), high_deg, unit="deg")
+        raise InputLimitError(
+            "--tolerance-deg", args.tolerance_deg, low_deg, high_deg, "deg", why=why
+        )
+    return min(max(math.radians(args.tolerance_deg), low), high)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -84,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
         scenario = dataclasses.replace(scenario, allow_full_turns=True)
     result = plan(
         scenario,
-        SolveOptions(tolerance=args.tolerance),
+        SolveOptions(tolerance=tolerance_rad(args)),
         samples=args.samples,
         objective=args.objective,
     )

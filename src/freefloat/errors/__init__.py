@@ -2,7 +2,9 @@
 
 Every message is a single line that names the problem and says what would be valid, so that
 the command line can print it as it is (exit code 2) and a caller can test it. The motion
-errors (limits needing a longer duration, goals out of reach) are in :mod:`.motion`.
+errors (limits needing a longer duration, goals out of reach) are in :mod:`.motion`. One
+warning class, :class:`UnitsWarning`, is issued through :mod:`warnings` for a value accepted but
+likely written in the wrong unit.
 """
 
 from ..excerpts import EXCERPT_CHARS, excerpt
@@ -22,6 +24,7 @@ from .base import (
     PluginError,
     ScenarioError,
     SolverError,
+    UnitsWarning,
     UnknownNameError,
     VerificationError,
     ViewerError,
@@ -53,6 +56,7 @@ __all__ = [
     "PluginError",
     "ScenarioError",
     "SolverError",
+    "UnitsWarning",
     "UnknownNameError",
     "UnreachableAttitudeError",
     "UnreachableGoalError",

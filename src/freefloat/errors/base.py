@@ -316,3 +316,12 @@ class PluginError(FreeFloatError):
         self.group, self.name, self.distribution = group, name, distribution
         where = f"plug-in {name!r} of package {distribution!r} (entry point group {group!r})"
         super().__init__(f"{where}: {reason}")
+
+
+class UnitsWarning(UserWarning):
+    """A value that is accepted but looks like it was written in the wrong unit.
+
+    Issued through :mod:`warnings` (the command line prints it as one line
+    ``freefloat: warning: ...``): scenario joint values that look like radians, where scenario
+    files are in degrees.
+    """

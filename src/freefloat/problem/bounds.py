@@ -122,13 +122,11 @@ def planar_bounds(
         if planar_map is not None:
             # Exact gradients of the cosine-polynomial gains: a projected gradient search
             # (no SciPy: it is slow to import, and the gains are smooth and cheap).
-            value = _projected_descent(
-                lambda q: sign * planar_map.gains_and_derivatives(q)[0][i],
-                lambda q: sign * planar_map.gains_and_derivatives(q)[1][i],
-                start,
-                lower,
-                upper,
-            )
+            def signed(q: np.ndarray) -> tuple[float, np.ndarray]:
+                values, slopes = planar_map.gains_and_derivatives(q)
+                return sign * values[i], sign * slopes[i]
+
+            value = _projected_descent(signed, start, lower, upper)
             return float(min(sign * gains[:, i].min(), value) * sign)
         from scipy import optimize  # imported when first used
 
@@ -147,8 +145,7 @@ def planar_bounds(
 
 
 def _projected_descent(
-    value: Callable[[np.ndarray], float],
-    gradient: Callable[[np.ndarray], np.ndarray],
+    function: Callable[[np.ndarray], tuple[float, np.ndarray]],
     start: np.ndarray,
     lower: np.ndarray,
     upper: np.ndarray,
@@ -156,23 +153,22 @@ def _projected_descent(
 ) -> float:
     """Smallest value of a smooth function in a box, from ``start``.
 
-    Projected gradient steps with Barzilai-Borwein lengths and backtracking; stops when a step
-    changes the value by less than 1e-15 (a fixed count of iterations at most, so the answer is
-    deterministic).
+    ``function`` gives the value and its gradient at a point. Projected gradient steps with
+    Barzilai-Borwein lengths and backtracking; stops when a step changes the value by less than
+    1e-15 (a fixed count of iterations at most, so the answer is deterministic).
     """
     x = np.clip(np.asarray(start, dtype=float), lower, upper)
-    f, g = value(x), gradient(x)
+    f, g = function(x)
     step = 1e-2
     for _ in range(iterations):
         while True:
             trial = np.clip(x - step * g, lower, upper)
-            f_trial = value(trial)
+            f_trial, g_trial = function(trial)
             if f_trial <= f - 1e-4 * float(g @ (x - trial)) or step < 1e-14:
                 break
             step *= 0.5
         if step < 1e-14:
             break
-        g_trial = gradient(trial)
         s, y = trial - x, g_trial - g
         done = abs(f - f_trial) < 1e-15 and float(np.abs(s).max()) < 1e-9
         x, f, g = trial, f_trial, g_trial

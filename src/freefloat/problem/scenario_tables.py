@@ -26,6 +26,7 @@ from ..robot.model import Robot
 from ..robot.payload import Payload
 from .limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, MAX_SCENARIO_BYTES, check_extra
 from .objectives.registry import DEFAULT_OBJECTIVE, OBJECTIVES
+from .radians_hint import warn_if_radians
 from .robot_table import RobotSource, check_keys, number, numbers, scenario_errors, triple
 
 if sys.version_info >= (3, 11):
@@ -270,6 +271,7 @@ def _joint_table(
             f"(joints: {', '.join(robot.joint_names)})"
         )
     joints: dict[str, float] = {}
+    written: dict[str, float] = {}  # the revolute joints' values as written (deg)
     for joint_name, value in raw.items():
         if joint_name in locked:
             _check_locked(joint_name, value, locked[joint_name], name)
@@ -278,8 +280,11 @@ def _joint_table(
         limit, unit = (MAX_ANGLE_DEG, "deg") if joint.angular else (MAX_LENGTH_M, "m")
         amount = number(value, f"[{name}] joint {joint_name!r}", limit, unit)
         joints[joint_name] = math.radians(amount) if joint.angular else amount
+        if joint.angular:
+            written[joint_name] = amount
     if not partial:
         robot.vector(joints, f"[{name}] joints")  # every joint given
+    warn_if_radians(written, f"[{name}]")
     return joints
 
 

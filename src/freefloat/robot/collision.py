@@ -8,7 +8,8 @@ changes smoothly with the joints; a hull contains its mesh, so a clearance on hu
 clearance on the meshes. Verification measures the original meshes with a separately built
 model (:mod:`freefloat.verify.clearance`).
 
-Only the pairs that can be the closest are measured when only the closest is asked for
+The queries themselves are :class:`~freefloat.robot.pair_queries.PairQueries`. Only the pairs
+that can be the closest are measured when only the closest is asked for
 (:mod:`freefloat.robot.motion_bound` bounds the others from their last measurement). Every
 query is checked (:mod:`freefloat.robot.distance_query`): a non-finite or impossible distance
 (coal's EPA can return -DBL_MAX for some penetrating pairs at tight tolerances) is asked again
@@ -25,8 +26,7 @@ points (:mod:`freefloat.robot.witness_gradient`).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from pathlib import Path
 
 import coal
@@ -40,7 +40,6 @@ from .distance_query import (
     Closest,
     Distances,
     checked_distance,
-    configure,
 )
 from .geometry import (
     HullInfo,
@@ -54,11 +53,9 @@ from .geometry import (
     true_hull,
 )
 from .model import Robot
-from .motion_bound import PairBounds, motion_weights
 from .obstacle import SHAPES, Obstacle
-from .sphere_kinematics import SphereKinematics
+from .pair_queries import PairQueries
 from .srdf import known_srdf
-from .witness_gradient import carriers, witness_gradient
 
 __all__ = [
     "GJK_TOLERANCE",
@@ -79,7 +76,7 @@ __all__ = [
 BATCH = 8
 
 
-class CollisionModel:
+class CollisionModel(PairQueries):
     """The checked pairs of a robot's collision geometry and their signed distances.
 
     Attributes:
@@ -95,7 +92,6 @@ class CollisionModel:
         srdf: str | Path | None = None,
         obstacles: Sequence[Obstacle] = (),
     ) -> None:
-        self.robot = robot
         self.obstacles = tuple(obstacles)
         self.srdf = None if srdf is None else Path(srdf).expanduser().resolve()
         geometry = load_collision_geometry(robot)
@@ -107,71 +103,10 @@ class CollisionModel:
                 self._meshes[index] = object_triangles(obj)
                 obj.geometry = true_hull(obj)
         add_obstacles(robot, geometry, self.obstacles)
-        self.pairs = checked_pairs(robot, geometry, srdf)
+        pairs = checked_pairs(robot, geometry, srdf)
         objects = list(geometry.geometryObjects)
-        self.geometry = geometry
-        self.names = [f"{objects[a].name} / {objects[b].name}" for a, b in self.pairs]
-        self._data = robot.model.createData()
-        self._geometry_data = pin.GeometryData(geometry)
-        requests = self._geometry_data.distanceRequests
-        for k in range(len(requests)):  # coal's own requests: no guess kept from the last query
-            requests[k] = configure(coal.DistanceRequest(), GJK_TOLERANCE)
-        #: Queries asked again at a looser EPA tolerance since the model was built.
-        self.retries = 0
-        # Views of Pinocchio's per-pair results (valid: the vector never resizes), and the
-        # results of pairs asked again alone in the last call.
-        self._pair_results = list(self._geometry_data.distanceResults)
-        self._retried: dict[int, coal.DistanceResult] = {}
-        # Bounding spheres (centre in the shape's frame, radius; m): a distance outside what
-        # they allow is impossible (see checked_distance).
-        centres, radii = [], []
-        for obj in geometry.geometryObjects:
-            obj.geometry.computeLocalAABB()
-            centres.append(np.asarray(obj.geometry.aabb_center, dtype=float))
-            radii.append(float(obj.geometry.aabb_radius))
-        self._centres, self._radii = np.array(centres), np.array(radii)
-        self._shapes = [obj.geometry for obj in geometry.geometryObjects]
-        # Per shape, which of the robot's joints carry it (1.0 or 0.0 per joint), or None
-        # for a shape fixed to the spacecraft.
-        self._carried = [carriers(robot, int(obj.parentJoint)) for obj in geometry.geometryObjects]
-        self._pair_array = np.array(self.pairs, dtype=int).reshape(-1, 2)
-        self._reach = self._radii[self._pair_array[:, 0]] + self._radii[self._pair_array[:, 1]]
-        self._kinematics = SphereKinematics(robot, geometry, self._centres)
-        self._neutral = pin.neutral(robot.model)  # joint values go into a copy (no continuous)
-        plain = all(j.kind != "continuous" for j in robot.joints)
-        self._slots = np.array([j.idx_q for j in robot.joints]) if plain else None
-        self._columns = np.array([j.idx_v for j in robot.joints])
-        # Each pair's last bounds of its distance per slot: see _may_be_closest.
-        self._weights = motion_weights(robot, geometry, self.pairs, self._centres, self._radii)
-        self._bounds = None if self._weights is None else PairBounds(self._weights)
-
-    @contextmanager
-    def own_bounds(self) -> Iterator[None]:
-        """Queries within bound pairs from each other only, not from earlier queries.
-
-        Which pairs a query measures, and the bounds it reports for the others
-        (:attr:`Closest.lower`), then depend on the queries within alone: a check built on
-        those bounds gives the same answer whatever was asked before.
-        """
-        kept = self._bounds
-        self._bounds = None if self._weights is None else PairBounds(self._weights)
-        try:
-            yield
-        finally:
-            self._bounds = kept
-
-    @property
-    def weights(self) -> np.ndarray | None:
-        """(P, N) how fast each pair's distance can change per joint (m per rad), or None.
-
-        See :func:`~freefloat.robot.motion_bound.motion_weights` (None: no bound).
-        """
-        return self._weights
-
-    @property
-    def n_pairs(self) -> int:
-        """Number of checked pairs."""
-        return len(self.pairs)
+        names = [f"{objects[a].name} / {objects[b].name}" for a, b in pairs]
+        super().__init__(robot, geometry, pairs, names)
 
     def distances(self, joints: np.ndarray, gradients: bool = False) -> Distances:
         """Signed distances (m) of every pair at the joint values (rad or m).
@@ -215,9 +150,13 @@ class CollisionModel:
         """:meth:`closest_value` (with ``gradients``: :meth:`closest`) at many joint vectors.
 
         The same values, pairs and gradients as those calls one after the other, in order
-        (``slots``: one per row, or None); the bounding spheres of the whole batch are placed
-        at once (:class:`~freefloat.robot.sphere_kinematics.SphereKinematics`) when it is
-        large enough for that to pay.
+        (``slots``: one per row, or None). A batch of at least :data:`BATCH` rows is bounded
+        at once: its bounding spheres are placed in one pass
+        (:class:`~freefloat.robot.sphere_kinematics.SphereKinematics`) and every row's pairs
+        are bounded from the bounds kept before the call (:meth:`PairBounds.widened_many`),
+        so which pairs a row measures may differ from one call per row; the smallest
+        distance and its pair cannot (a pair that can be the smallest is always measured).
+        Its gradients come from one array product (:func:`witness_gradients`).
 
         Args:
             joints: (B, N) joint values (rad or m).
@@ -229,141 +168,39 @@ class CollisionModel:
         joints = np.atleast_2d(np.asarray(joints, dtype=float))
         count = len(joints)
         at = [None] * count if slots is None else [float(s) for s in slots]
-        values, pairs = np.full(count, math.inf), np.full(count, -1)
-        grads = np.zeros((count, self.robot.n)) if gradients else None
         lower = np.full((count, len(self.pairs)), math.inf)
-        if not len(self.pairs):
-            return Closest(values, pairs, grads, lower)
-        gaps = self._kinematics.gaps(joints, self._pair_array) if count >= BATCH else None
-        for i in range(count):
-            found = self._bulk(joints[i], True, at[i], None if gaps is None else gaps[i], lower[i])
-            k = int(np.argmin(found))
-            values[i], pairs[i] = found[k], k
-            if grads is not None:
-                pin.computeJointJacobians(self.robot.model, self._data)  # at _bulk's pose
-                grads[i] = self._gradient(k)
-        return Closest(values, pairs, grads, lower)
-
-    def _bulk(
-        self,
-        joints: np.ndarray,
-        nearest: bool = False,
-        slot: float | None = None,
-        gaps: np.ndarray | None = None,
-        lower: np.ndarray | None = None,
-    ) -> np.ndarray:
-        """Signed distances (m) of the pairs, each by Pinocchio's ``computeDistance``.
-
-        With ``nearest``, only the pairs that can be the closest are measured (the others are
-        ``inf``; see :meth:`_may_be_closest`). Each value is checked against its bounding
-        spheres as :func:`checked_distance` does, and an impossible one is asked again alone at
-        looser tolerances (counted in :attr:`retries`). Every query starts from coal's default
-        guesses (the requests keep none from the last query), so a distance does not depend,
-        to the last bit, on what was asked before. ``gaps``: the (P,) distances between the
-        pairs' sphere centres at ``joints`` (m), when already known. ``lower``: a (P,) array
-        that receives a lower bound of every pair's distance (m): the measured value, or for a
-        pair not measured, its bound.
-        """
-        model, data, gdata = self.robot.model, self._data, self._geometry_data
-        joints = np.asarray(joints, dtype=float)
-        pin.forwardKinematics(model, data, self._configuration(joints))
-        pin.updateGeometryPlacements(model, data, self.geometry, gdata)
-        if nearest and len(self.pairs):
-            measured = self._may_be_closest(joints, slot, gaps, lower)
-        else:
-            measured = np.arange(len(self.pairs))
-        gap = self._spheres(measured) if gaps is None else gaps[measured]
-        reach = self._reach[measured]
-        compute, geometry = pin.computeDistance, self.geometry
-        found = np.array([compute(geometry, gdata, k).min_distance for k in measured.tolist()])
-        with np.errstate(invalid="ignore"):
-            possible = (found >= gap - reach - 1e-9) & (found <= gap + reach + 1e-9)
-        self._retried = {}
-        if not possible.all():
-            for i in np.flatnonzero(~(np.isfinite(found) & possible)).tolist():
-                found[i] = self._retry(int(measured[i]), float(gap[i]), float(reach[i]))
-        if self._bounds is not None:  # a retried value is no reference: forgotten
-            known = found
-            if self._retried:
-                known = np.where(np.isin(measured, list(self._retried)), math.nan, found)
-            self._bounds.record(slot, measured, joints, known, known)
-        values = np.full(len(self.pairs), math.inf)
-        values[measured] = found
-        if lower is not None:
-            lower[measured] = found
-            if self._retried:  # asked again at a looser EPA tolerance: a bound that allows it
-                lower[list(self._retried)] -= RETRY_TOLERANCES[-1]
-        return values
-
-    def _retry(self, k: int, gap: float, reach: float) -> float:
-        """Pair ``k``'s distance (m) asked again alone at looser tolerances.
-
-        For a value impossible by its bounding spheres (``gap +- reach``, m):
-        :func:`checked_distance`, counted in :attr:`retries`.
-        """
-        a, b = self.pairs[k]
-        placements = self._geometry_data.oMg
-        shapes = (self._shapes[a], _transform(placements[a]), self._shapes[b])
-        spheres = (gap - reach, gap + reach)
-        answer = checked_distance(*shapes, _transform(placements[b]), spheres, self.names[k])
-        self.retries += max(1, answer.retries)
-        self._retried[k] = answer.result
-        return answer.value
-
-    def _configuration(self, joints: np.ndarray) -> np.ndarray:
-        """Pinocchio's configuration at the joint values, spacecraft at the identity."""
-        if self._slots is None:
-            return self.robot.configuration(joints)
-        q = self._neutral.copy()
-        q[self._slots] = joints
-        return q
-
-    def _spheres(self, pairs: np.ndarray) -> np.ndarray:
-        """Per pair (indices), the distance of its bounding spheres' centres (m).
-
-        At the placements of the last ``updateGeometryPlacements``; the distance of the
-        shapes is within this +- the pairs' :attr:`_reach`.
-        """
-        placements = self._geometry_data.oMg
-        involved = np.unique(self._pair_array[pairs])
-        centres = np.zeros((len(self._centres), 3))
-        for g in involved.tolist():
-            centres[g] = placements[g].act(self._centres[g])
-        first, second = self._pair_array[pairs, 0], self._pair_array[pairs, 1]
-        return np.linalg.norm(centres[first] - centres[second], axis=1)
-
-    def _may_be_closest(
-        self,
-        joints: np.ndarray,
-        slot: float | None,
-        gaps: np.ndarray | None = None,
-        out: np.ndarray | None = None,
-    ) -> np.ndarray:
-        """Indices of the pairs that may have the smallest distance at ``joints``.
-
-        Each pair is bounded from its last bounds at ``slot`` (:class:`PairBounds`: its
-        measured distance; or, for a pair never measured there, its bounding spheres, which are
-        then kept); with no motion bound (a prismatic joint), by its bounding spheres
-        (``gaps``: their centres' distances when already known, m). A pair that cannot be the
-        closest is not measured, so the smallest distance and its pair are the same bits as
-        with every pair measured. ``out`` receives every pair's lower bound (m).
-        """
-        if self._bounds is None:
-            gap = self._spheres(np.arange(len(self.pairs))) if gaps is None else gaps
-            lower, upper = gap - self._reach, gap + self._reach
-        else:
-            unknown = self._bounds.unknown(slot)
-            if len(unknown):
-                gap = self._spheres(unknown) if gaps is None else gaps[unknown]
-                reach = self._reach[unknown]
-                self._bounds.record(slot, unknown, joints, gap - reach, gap + reach)
-            lower, upper = self._bounds.widened(slot, joints)
-            if gaps is not None:  # the spheres bound every pair too: the tighter of both
-                lower = np.maximum(lower, gaps - self._reach)
-                upper = np.minimum(upper, gaps + self._reach)
-        if out is not None:
-            out[:] = lower
-        return np.flatnonzero(lower <= float(upper.min()) + 1e-9)
+        if not len(self.pairs) or count < BATCH:
+            return self._closest_each(joints, at, gradients, lower)
+        gaps = self._kinematics.gaps(joints, self._pair_array)
+        low, high = gaps - self._reach, gaps + self._reach
+        unknown = np.zeros(low.shape, dtype=bool)
+        if self._bounds is not None:  # the tighter of the kept bounds and the spheres
+            kept_low, kept_high = self._bounds.widened_many(at, joints)
+            unknown = np.isnan(kept_low)
+            low, high = np.fmax(low, kept_low), np.fmin(high, kept_high)
+        candidates = low <= high.min(axis=1, keepdims=True) + 1e-9
+        found = self._measure_rows(joints, candidates, low, gaps, gradients)
+        measure = found.measured
+        lower[:] = np.where(measure, found.values, low)
+        for i, k in found.retried:  # asked again at a looser EPA tolerance
+            lower[i, k] -= RETRY_TOLERANCES[-1]
+        if self._bounds is not None:  # measured values, and new pairs' sphere bounds
+            known = np.where(measure, found.values, 0.0)
+            for i, k in found.retried:  # a retried value is no reference: forgotten
+                known[i, k] = math.nan
+            self._bounds.record_rows(
+                at,
+                measure | unknown,
+                joints,
+                np.where(measure, known, low),
+                np.where(measure, known, high),
+            )
+        best = found.values.argmin(axis=1)
+        values = found.values[np.arange(count), best]
+        grads = None
+        if found.witnesses is not None:
+            grads = found.witnesses.gradients(self._carried_array, self._pair_array[best])
+        return Closest(values, best, grads, lower)
 
     def hulls(self) -> list[HullInfo]:
         """Per mesh, the volume it encloses and that of its hull (m^3), for reports."""
@@ -372,18 +209,6 @@ class CollisionModel:
             HullInfo(objects[i].name, mesh_volume(*mesh), hull_volume(objects[i].geometry))
             for i, mesh in self._meshes.items()
         ]
-
-    def _gradient(self, k: int) -> np.ndarray:
-        """d(distance of pair k)/d(joints), after distances and joint Jacobians are computed."""
-        result = self._retried.get(k, self._pair_results[k])
-        a, b = self.pairs[k]
-        carried = (self._carried[a], self._carried[b])
-        return witness_gradient(result, carried, self._data.J[:, self._columns], self.robot.n)
-
-
-def _transform(placement: pin.SE3) -> coal.Transform3s:
-    """The coal transform of a Pinocchio placement."""
-    return coal.Transform3s(placement.rotation, placement.translation)
 
 
 def collision_model(

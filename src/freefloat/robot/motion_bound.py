@@ -88,24 +88,34 @@ class PairBounds:
 
     def __init__(self, weights: np.ndarray) -> None:
         self.weights = weights
-        self._slots: dict[float | None, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        pairs, joints = weights.shape
+        # Row r of the arrays holds a slot's (joints, lower, upper); rows are used in order.
+        self._rows: dict[float | None, int] = {}
+        self._joints = np.zeros((16, pairs, joints))
+        self._lower = np.full((16, pairs), np.nan)
+        self._upper = np.full((16, pairs), np.nan)
         self._recent: float | None = None
         self._keys: list[float] = []  # the numeric slots, sorted
 
-    def _arrays(self, slot: float | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(joints, lower, upper)`` of the slot, NaN bounds when new."""
-        found = self._slots.get(slot)
+    def _row(self, slot: float | None) -> int:
+        """The slot's row of the arrays, a new one (NaN bounds, or the nearest slot's) if new."""
+        found = self._rows.get(slot)
         if found is None:
-            if len(self._slots) >= self.SLOTS:
-                self._slots.clear()
+            if len(self._rows) >= self.SLOTS:
+                self._rows.clear()
                 self._keys.clear()
-            near = self._slots.get(self._nearest(slot))
+            near = self._rows.get(self._nearest(slot))
+            found = len(self._rows)
+            if found == len(self._lower):  # full: twice the rows
+                self._joints = np.concatenate([self._joints, np.zeros_like(self._joints)])
+                self._lower = np.concatenate([self._lower, np.full_like(self._lower, np.nan)])
+                self._upper = np.concatenate([self._upper, np.full_like(self._upper, np.nan)])
             if near is not None:  # a new slot starts from the nearest one, or the last used
-                found = (near[0].copy(), near[1].copy(), near[2].copy())
+                self._joints[found] = self._joints[near]
+                self._lower[found], self._upper[found] = self._lower[near], self._upper[near]
             else:
-                p, n = self.weights.shape
-                found = (np.zeros((p, n)), np.full(p, np.nan), np.full(p, np.nan))
-            self._slots[slot] = found
+                self._lower[found], self._upper[found] = np.nan, np.nan
+            self._rows[slot] = found
             if slot is not None:
                 bisect.insort(self._keys, slot)
         self._recent = slot
@@ -121,7 +131,8 @@ class PairBounds:
 
     def unknown(self, slot: float | None) -> np.ndarray:
         """Indices of the pairs with no bounds at the slot."""
-        return np.flatnonzero(np.isnan(self._arrays(slot)[1]))
+        row = self._row(slot)  # first: a new row may grow the arrays
+        return np.flatnonzero(np.isnan(self._lower[row]))
 
     def record(
         self,
@@ -132,9 +143,9 @@ class PairBounds:
         upper: np.ndarray,
     ) -> None:
         """Bounds (m) of ``pairs`` at ``joints`` (rad or m); NaN to forget them."""
-        last_joints, last_lower, last_upper = self._arrays(slot)
-        last_joints[pairs] = joints
-        last_lower[pairs], last_upper[pairs] = lower, upper
+        row = self._row(slot)
+        self._joints[row, pairs] = joints
+        self._lower[row, pairs], self._upper[row, pairs] = lower, upper
 
     def widened(self, slot: float | None, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper bounds (m) of every pair's distance at ``joints``.
@@ -143,7 +154,51 @@ class PairBounds:
         have moved relative to each other since (weights times the joint change, m) and
         :data:`BOUND_SLACK`.
         """
-        last_joints, last_lower, last_upper = self._arrays(slot)
-        moved = np.einsum("pn,pn->p", self.weights, np.abs(joints - last_joints))
+        row = self._row(slot)
+        moved = np.einsum("pn,pn->p", self.weights, np.abs(joints - self._joints[row]))
         moved += BOUND_SLACK
-        return last_lower - moved, last_upper + moved
+        return self._lower[row] - moved, self._upper[row] + moved
+
+    def widened_many(
+        self, slots: Sequence[float | None], joints: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`widened` at many slots at once: (B, P) lower and upper bounds (m).
+
+        ``joints``: (B, N), one row per slot (rad or m). A pair with no bounds at its slot
+        gets NaN (the caller bounds it otherwise). Rows share no bounds with each other: each
+        is widened from its slot as it stood before the call (a new slot from the nearest
+        one kept then, or created by an earlier row of the call).
+        """
+        rows = np.array([self._row(slot) for slot in slots], dtype=int)
+        moved = np.einsum(
+            "pn,bpn->bp", self.weights, np.abs(joints[:, None, :] - self._joints[rows])
+        )
+        moved += BOUND_SLACK
+        return self._lower[rows] - moved, self._upper[rows] + moved
+
+    def record_rows(
+        self,
+        slots: Sequence[float | None],
+        pairs: np.ndarray,
+        joints: np.ndarray,
+        lower: np.ndarray,
+        upper: np.ndarray,
+    ) -> None:
+        """:meth:`record` at many slots, in order: (B, P) ``pairs`` mask, bounds (m).
+
+        ``joints``: (B, N), one row per slot (rad or m); NaN bounds forget a pair.
+        """
+        rows = [self._row(slot) for slot in slots]
+        if len(set(rows)) < len(rows):  # a slot twice: one after the other, as asked
+            for i, row in enumerate(rows):
+                chosen = pairs[i]
+                self._joints[row, chosen] = joints[i]
+                self._lower[row, chosen] = lower[i, chosen]
+                self._upper[row, chosen] = upper[i, chosen]
+            return
+        index = np.array(rows, dtype=int)
+        kept = self._joints[index]
+        kept[pairs] = np.broadcast_to(joints[:, None, :], kept.shape)[pairs]
+        self._joints[index] = kept
+        self._lower[index] = np.where(pairs, lower, self._lower[index])
+        self._upper[index] = np.where(pairs, upper, self._upper[index])

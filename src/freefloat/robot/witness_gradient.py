@@ -15,7 +15,7 @@ import numpy as np
 
 from .model import Robot
 
-__all__ = ["carriers", "witness_gradient"]
+__all__ = ["WitnessBatch", "carriers", "witness_gradient", "witness_gradients"]
 
 
 def carriers(robot: Robot, joint: int) -> np.ndarray | None:
@@ -44,18 +44,60 @@ def witness_gradient(
             joint columns, after ``computeJointJacobians`` at the pair's configuration.
         n: number of joints N.
     """
-    nx, ny, nz = result.normal
-    rows, weights = [], []
-    for point, sign, moved in (
-        (result.getNearestPoint1(), -1.0, carried[0]),
-        (result.getNearestPoint2(), 1.0, carried[1]),
-    ):
-        if moved is None:
-            continue
-        px, py, pz = point
-        rows.append((nx, ny, nz, py * nz - pz * ny, pz * nx - px * nz, px * ny - py * nx))
-        weights.append(sign * moved)
-    if not rows:
-        return np.zeros(n)
-    rates = np.array(rows) @ jacobian  # per witness point, m/s per unit joint rate
-    return np.einsum("pn,pn->n", np.array(weights), rates)
+    batch = WitnessBatch(1, n)
+    batch.take(0, result, jacobian)
+    moved = np.array([[np.zeros(n) if c is None else c for c in carried]])
+    return witness_gradients(batch.normals, batch.points, moved, batch.jacobians)[0]
+
+
+def witness_gradients(
+    normals: np.ndarray,
+    points: np.ndarray,
+    carried: np.ndarray,
+    jacobians: np.ndarray,
+) -> np.ndarray:
+    """:func:`witness_gradient` of B pairs at once, one per configuration (B, N; m per rad or m).
+
+    Args:
+        normals: (B, 3) unit normals from each pair's first shape to its second (world frame).
+        points: (B, 2, 3) the witness points on the first and on the second shape (m).
+        carried: (B, 2, N) :func:`carriers` of the two shapes' bodies (zeros for a shape fixed
+            to the spacecraft).
+        jacobians: (B, 6, N) world-frame joint Jacobians (``data.J`` at the robot's columns),
+            each at its pair's configuration.
+    """
+    moments = np.cross(points, normals[:, None, :])  # p x n, per witness point
+    rows = np.concatenate([np.broadcast_to(normals[:, None, :], moments.shape), moments], axis=2)
+    rates = np.einsum("bks,bsn->bkn", rows, jacobians)  # m/s per unit joint rate, per point
+    return (rates[:, 1] * carried[:, 1]) - (rates[:, 0] * carried[:, 0])
+
+
+class WitnessBatch:
+    """Normals, witness points and joint Jacobians of B pair queries, taken one at a time.
+
+    Args:
+        count: B, the number of queries.
+        n: number of joints N.
+    """
+
+    def __init__(self, count: int, n: int) -> None:
+        self.normals = np.zeros((count, 3))
+        self.points = np.zeros((count, 2, 3))
+        self.jacobians = np.zeros((count, 6, n))
+
+    def take(self, i: int, result: coal.DistanceResult, jacobian: np.ndarray) -> None:
+        """Query ``i``'s result (world frame, m) and (6, N) world-frame joint Jacobian."""
+        self.normals[i] = result.normal
+        self.points[i, 0] = result.getNearestPoint1()
+        self.points[i, 1] = result.getNearestPoint2()
+        self.jacobians[i] = jacobian
+
+    def gradients(self, carried: np.ndarray, shapes: np.ndarray) -> np.ndarray:
+        """(B, N) each query's distance gradient (m per rad or m).
+
+        Args:
+            carried: (G, N) :func:`carriers` of every shape's body (zeros: fixed to the
+                spacecraft).
+            shapes: (B, 2) the two shapes (indices) of each query's pair.
+        """
+        return witness_gradients(self.normals, self.points, carried[shapes], self.jacobians)

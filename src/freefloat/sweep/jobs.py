@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import FreeFloatError, InfeasibleError
+from ..errors import FreeFloatError, InfeasibleError, UnitsWarning
 from ..pipeline import plan
 from ..plans.format import Plan
 from ..problem.scenario import Scenario
@@ -180,6 +180,8 @@ def run_job(job: Job) -> SweepRow | ReplayRow:
     with warnings.catch_warnings():
         # a diverging solver attempt may overflow; its outcome is in the row, not a warning
         warnings.simplefilter("ignore", RuntimeWarning)
+        # said once per axis value when the sweep is read, not once per job
+        warnings.simplefilter("ignore", UnitsWarning)
         return _run(job, started)
 
 

@@ -1,0 +1,56 @@
+"""``freefloat compose``: every numeric option is held to its documented limit (docs/limits.md)."""
+
+from __future__ import annotations
+
+import pytest
+
+from freefloat.cli import main
+
+#: A valid two-arm command, each option's numbers in one place (replaced one at a time below).
+VALID = {
+    "--base-mass": ["100"],
+    "--base-size": ["1", "1", "1"],
+    "--base-inertia": ["10", "10", "10"],
+    "--mount": ["0.5", "0", "0", "-0.5", "0", "0"],
+    "--mount-rpy": ["0", "90", "0", "0", "-90", "0"],
+    "--payload-mass": ["5"],
+    "--payload-com": ["0", "0", "0.1"],
+    "--payload-inertia": ["1", "1", "1", "0", "0", "0"],
+    "--payload-box": ["0.2", "0.2", "0.2"],
+}
+#: docs/limits.md: angles at most 3600 deg, lengths 1000 m, any other number 1e9.
+BEYOND = {
+    "--base-mass": ("2e9", "kg", "1e+09"),
+    "--base-size": ("1001", "m", "1000"),
+    "--base-inertia": ("2e9", "kg m^2", "1e+09"),
+    "--mount": ("1001", "m", "1000"),
+    "--mount-rpy": ("3601", "deg", "3600"),
+    "--payload-mass": ("2e9", "kg", "1e+09"),
+    "--payload-com": ("1001", "m", "1000"),
+    "--payload-inertia": ("2e9", "kg m^2", "1e+09"),
+    "--payload-box": ("1001", "m", "1000"),
+}
+
+
+def _argv(options, output):
+    argv = ["compose", "--arm", "ur5", "--arm", "panda"]
+    for option, numbers in options.items():
+        per_arm = 2 if option in ("--mount", "--mount-rpy") else 1
+        size = len(numbers) // per_arm
+        for k in range(per_arm):
+            argv += [option, *numbers[k * size : (k + 1) * size]]
+    return [*argv, "-o", str(output)]
+
+
+@pytest.mark.parametrize("option", list(BEYOND))
+def test_each_number_beyond_its_limit_is_refused_naming_option_and_unit(tmp_path, capsys, option):
+    value, unit, high = BEYOND[option]
+    numbers = list(VALID[option])
+    numbers[-1] = value  # the last number (of the second arm for per-arm options)
+    output = tmp_path / "s.urdf"
+    assert main(_argv({**VALID, option: numbers}, output)) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and not output.exists()
+    shown = f"{float(value):g}"
+    assert err.startswith(f"freefloat: error: {option} = {shown} {unit} is ")
+    assert err.endswith(f"is outside the supported range [-{high}, {high}] {unit}\n")

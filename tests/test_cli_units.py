@@ -1,0 +1,126 @@
+"""Degrees at the command line's edge: ``plan --tolerance-deg`` and the deprecated rad option."""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import freefloat.cli.plan as plan_command
+from freefloat.cli import main
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+
+
+class _StopError(Exception):
+    """Raised by the stand-in planner once it has seen its options."""
+
+
+@pytest.fixture
+def seen(monkeypatch):
+    """The SolveOptions ``freefloat plan`` hands the planner (which then stops the run)."""
+    options = []
+
+    def fake_plan(scenario, solve_options, **kwargs):
+        options.append(solve_options)
+        raise _StopError
+
+    monkeypatch.setattr(plan_command, "plan", fake_plan)
+    return options
+
+
+def _planned_tolerance(seen, capsys, *argv):
+    with pytest.raises(_StopError):
+        main(["plan", *argv])
+    (options,) = seen
+    return options.tolerance, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("degrees", [5.72958e-10, 1e-8, 5.72958e-8, 1e-6, 5.72958e-6])
+def test_tolerance_deg_is_converted_to_rad(seen, capsys, degrees):
+    tolerance, err = _planned_tolerance(seen, capsys, "--tolerance-deg", str(degrees))
+    # the printed ends of the range (six digits) are held to the range's ends
+    truth = min(max(degrees * math.pi / 180.0, 1e-11), 1e-7)
+    assert tolerance == pytest.approx(truth, rel=1e-15) and err == ""
+
+
+def test_degree_and_rad_options_give_the_same_tolerance(seen, capsys):
+    by_degrees, _ = _planned_tolerance(seen, capsys, "--tolerance-deg", "2e-7")
+    seen.clear()
+    by_radians, _ = _planned_tolerance(seen, capsys, "--tolerance", str(math.radians(2e-7)))
+    assert by_degrees == pytest.approx(by_radians, rel=1e-15)
+
+
+def test_default_tolerance_is_unchanged(seen, capsys):
+    tolerance, err = _planned_tolerance(seen, capsys)
+    assert tolerance == 1e-9 and err == ""
+
+
+def test_rad_option_still_works_and_says_it_is_deprecated(seen, capsys):
+    tolerance, err = _planned_tolerance(seen, capsys, "--tolerance", "3e-9")
+    assert tolerance == 3e-9  # what an old call computed, exactly
+    assert err == (
+        f"freefloat: warning: --tolerance is in rad and deprecated; give --tolerance-deg "
+        f"{3e-9 * 180 / math.pi:g} instead\n"
+    )
+
+
+def test_rad_option_deprecation_is_quiet_with_q(seen, capsys):
+    tolerance, err = _planned_tolerance(seen, capsys, "-q", "--tolerance", "3e-9")
+    assert tolerance == 3e-9 and err == ""
+
+
+def _refusal(capsys, *argv):
+    code = main(["plan", *argv])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and err.startswith("freefloat: error: "), err
+    return err.strip()
+
+
+def test_both_tolerance_options_are_refused(seen, capsys):
+    line = _refusal(capsys, "--tolerance-deg", "1e-7", "--tolerance", "1e-9")
+    assert line == (
+        "freefloat: error: give the attitude tolerance once: --tolerance-deg DEG (or the "
+        "deprecated --tolerance RAD), not both"
+    )
+    assert seen == []
+
+
+def test_both_tolerance_options_exit_2_without_traceback_from_the_console(tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(SRC)}
+    argv = ["plan", "--tolerance", "1e-9", "--tolerance-deg", "1e-7"]
+    done = subprocess.run(
+        [sys.executable, "-m", "freefloat.cli", *argv],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+    )
+    assert done.returncode == 2 and "Traceback" not in done.stderr and not any(tmp_path.iterdir())
+    assert done.stderr.startswith("freefloat: error: give the attitude tolerance once")
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (
+            ["--tolerance-deg", "1e-3"],
+            "--tolerance-deg = 0.001 deg is outside the supported range "
+            f"[{1e-11 * 180 / math.pi:g}, {1e-7 * 180 / math.pi:g}] deg",
+        ),
+        (["--tolerance-deg", "nan"], "--tolerance-deg = nan deg is outside"),
+        (["--tolerance-deg", "5.8e-6"], "--tolerance-deg = 5.8e-06 deg is outside"),
+        (
+            ["--tolerance", "1e-3"],
+            "--tolerance = 0.001 rad is outside the supported range [1e-11, 1e-07] rad",
+        ),
+    ],
+)
+def test_range_errors_are_in_the_unit_typed(seen, capsys, argv, needle):
+    assert needle in _refusal(capsys, *argv)
+    assert seen == []
