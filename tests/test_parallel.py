@@ -145,6 +145,8 @@ def test_ctrl_c_in_the_caller_ends_every_worker_and_workers_ignore_it(new_childr
 def test_serial_where_workers_cannot_be_forked(monkeypatch) -> None:
     assert serial_reason(2, 1) == "one task" and serial_reason(1, 5) == "one job asked"
     assert serial_reason(2, 5) == ""
+    assert parallel.where_run(8, 3) == "on 3 worker processes"  # at most one per task
+    assert parallel.where_run(1, 3) == "serially (one job asked)"
     context = mp.get_context("fork")
     answer = context.Queue()
 

@@ -134,4 +134,6 @@ def test_the_printed_table_is_the_same_with_workers(command, capsys) -> None:
         out, err = capsys.readouterr()
         outs.append(out)
         lines.append(sorted(re.findall(rf"{command} \d+/14: (axis .*)", err)))
+        where = "serially (one job asked)" if jobs == "1" else "on 2 worker processes"
+        assert f"{command}: 14 directions {where}" in err
     assert outs[0] == outs[1] and len(lines[0]) == 14 and lines[0] == lines[1]

@@ -48,6 +48,7 @@ __all__ = [
     "run_tasks",
     "serial_reason",
     "usable_cores",
+    "where_run",
 ]
 
 #: Most worker processes a caller may ask for (``--jobs``).
@@ -118,6 +119,15 @@ def serial_reason(jobs: int, count: int) -> str:
     if mp.current_process().daemon:
         return "a daemonic process cannot start workers"
     return ""
+
+
+def where_run(jobs: int, count: int) -> str:
+    """How :func:`run_tasks` runs ``count`` tasks with ``jobs``, for a log line.
+
+    ``"on 2 worker processes"`` or ``"serially (one job asked)"``.
+    """
+    why = serial_reason(jobs, count)
+    return f"serially ({why})" if why else f"on {min(jobs, count)} worker processes"
 
 
 def run_tasks(

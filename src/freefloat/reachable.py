@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._blas import one_blas_thread
-from .parallel import check_jobs, default_jobs, serial_reason
+from .parallel import check_jobs, default_jobs, where_run
 from .physics.attitude import (
     quat_conjugate,
     quat_exp,
@@ -226,10 +226,8 @@ def _inner(
         freedom = tuple(d - 5 for d in problem.family.degrees)
         return ReachEstimate(drift, (skipped,) * len(axes), freedom)
     constraints = scenario_constraints(scenario)
-    workers = default_jobs(len(axes)) if jobs is None else min(jobs, len(axes))
-    why = serial_reason(workers, len(axes))
-    where = f"serially ({why})" if why else f"on {workers} worker processes"
-    LOGGER.info("reach: %d directions %s", len(axes), where)
+    workers = default_jobs(len(axes)) if jobs is None else jobs
+    LOGGER.info("reach: %d directions %s", len(axes), where_run(workers, len(axes)))
     with one_blas_thread():  # many tiny products: see freefloat._blas
         return reach_set(
             problem,

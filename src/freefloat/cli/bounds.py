@@ -92,8 +92,8 @@ def run(args: argparse.Namespace) -> int:
 def spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
     """A spatial robot's inner estimate of its reachable attitudes (and its figure)."""
     from .._blas import one_blas_thread
-    from ..parallel import default_jobs
-    from ..progress import counted
+    from ..parallel import default_jobs, where_run
+    from ..progress import LOGGER, counted
     from ..solvers.reach import default_directions, describe, reach_set
 
     extra = scenario.extra if scenario.extra is not None else [2] * scenario.robot.n
@@ -102,6 +102,7 @@ def spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
     options = SolveOptions(max_evaluations=args.budget)
     count = len(default_directions())
     jobs = default_jobs(count) if args.jobs is None else args.jobs
+    LOGGER.info("bounds: %d directions %s", count, where_run(jobs, count))
     with counted("bounds", count) as advance, one_blas_thread():
         estimate = reach_set(
             problem,
