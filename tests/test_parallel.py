@@ -164,6 +164,21 @@ def test_serial_where_workers_cannot_be_forked(monkeypatch) -> None:
     assert {pid for pid in run_tasks(lambda i: os.getpid(), 3, jobs=2)} == {os.getpid()}
 
 
+@needs_fork
+def test_when_no_worker_can_start_the_tasks_run_here(monkeypatch, new_children) -> None:
+    def refused(context):
+        raise OSError(11, "Resource temporarily unavailable")
+
+    warned: list[str] = []
+    monkeypatch.setattr(parallel, "_started", refused)
+    monkeypatch.setattr(parallel.LOGGER, "warning", lambda text, *args: warned.append(text % args))
+    assert run_tasks(lambda i: (i, os.getpid()), 3, jobs=2) == [(i, os.getpid()) for i in range(3)]
+    assert warned == [
+        "0 worker processes started of 2: [Errno 11] Resource temporarily unavailable"
+    ]
+    assert not new_children()
+
+
 def test_jobs_are_checked_in_one_line() -> None:
     check_jobs(None)
     check_jobs(1)

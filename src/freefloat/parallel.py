@@ -9,10 +9,11 @@ must therefore depend on its index and that state alone, not on what the other t
 the results to be the same as a serial run's (the callers test this).
 
 The work runs serially, in the calling process, when ``jobs`` is 1, when there is one task,
-on a platform other than Linux (no ``fork``; on macOS forking a process that has loaded
-system frameworks is unsafe, and spawned workers would rebuild everything), and inside a
-daemonic process
-(a ``multiprocessing`` or Dask worker may not start children). Each child runs BLAS on one
+on a platform other than Linux (no ``fork``; on macOS forking a process that has loaded system
+frameworks is unsafe, and spawned workers would rebuild everything), inside a daemonic process
+(a ``multiprocessing`` or Dask worker may not start children), and when not a single worker
+can be started (out of processes or file descriptors: a warning is logged; fewer workers
+than asked when some can). Each child runs BLAS on one
 thread, ignores Ctrl-C (the caller handles it) and dies with SIGTERM. Whatever happens to the
 caller (a task that raises, Ctrl-C, SIGTERM), every child is terminated and reaped before
 :func:`run_tasks` returns or raises: none is left running or as a zombie.
@@ -39,6 +40,7 @@ from typing import Any, TypeVar
 
 from ._blas import one_blas_thread
 from .errors import FreeFloatError, InputLimitError
+from .progress import LOGGER
 
 __all__ = [
     "MAX_JOBS",
@@ -150,12 +152,7 @@ def run_tasks(
         Exception: what the task with the lowest index among those that raised raised.
     """
     if serial_reason(jobs, count):
-        results = []
-        for index in range(count):
-            results.append(task(index))
-            if done is not None:
-                done(index, results[-1])
-        return results
+        return _serially(task, count, done)
     if _TASK:
         raise RuntimeError("run_tasks is already running in this process")
     _TASK.append(task)
@@ -166,15 +163,43 @@ def run_tasks(
     workers: list[tuple[Any, Connection]] = []
     try:
         for _ in range(min(jobs, count)):
-            ours, theirs = context.Pipe()
-            process = context.Process(target=_serve, args=(theirs,), daemon=True)
-            process.start()
-            theirs.close()
-            workers.append((process, ours))
-        return _collect(workers, count, done)
+            try:
+                workers.append(_started(context))
+            except OSError as exc:  # out of processes or file descriptors: fewer workers
+                LOGGER.warning("%d worker processes started of %d: %s", len(workers), jobs, exc)
+                break
+        if workers:
+            return _collect(workers, count, done)
     finally:
         _TASK.clear()
         _stop(workers)
+    return _serially(task, count, done)
+
+
+def _serially(
+    task: Callable[[int], T], count: int, done: Callable[[int, T], None] | None
+) -> list[T]:
+    """The tasks one after the other in this process."""
+    results = []
+    for index in range(count):
+        results.append(task(index))
+        if done is not None:
+            done(index, results[-1])
+    return results
+
+
+def _started(context: Any) -> tuple[Any, Connection]:
+    """A forked worker and our end of its pipe."""
+    ours, theirs = context.Pipe()
+    try:
+        process = context.Process(target=_serve, args=(theirs,), daemon=True)
+        process.start()
+    except OSError:
+        ours.close()
+        raise
+    finally:
+        theirs.close()
+    return process, ours
 
 
 def _collect(
