@@ -79,11 +79,14 @@ BATCH = 8
 class CollisionModel(PairQueries):
     """The checked pairs of a robot's collision geometry and their signed distances.
 
-    Attributes:
+    The geometry's meshes are replaced by their true hulls and the obstacles added; the pairs
+    checked are :func:`~freefloat.robot.geometry.checked_pairs`. The queries are those of
+    :class:`~freefloat.robot.pair_queries.PairQueries`.
+
+    Args:
         robot: the robot.
-        geometry: Pinocchio geometry model (convex hulls; body = parent joint).
-        pairs: the checked pairs, as indices into ``geometry.geometryObjects``.
-        names: ``"a / b"`` per pair, for messages.
+        srdf: an SRDF whose disabled pairs are not checked (None: no pair disabled).
+        obstacles: keep-out shapes fixed to the spacecraft, checked against every arm body.
     """
 
     def __init__(

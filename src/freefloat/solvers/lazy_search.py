@@ -115,11 +115,14 @@ def _stopped_within(error: UnreachableAttitudeError, costly: Sequence[Constraint
 def _out_of_reach(
     error: UnreachableAttitudeError, left_out: Sequence[Constraint]
 ) -> UnreachableAttitudeError:
-    """The refusal of the search within the cheap constraints, saying which were left out."""
+    """The refusal of the search within the cheap constraints, naming those left out.
+
+    The message names only the constraints left out: the duration check reads the names of
+    the constraints that stood in the way from it.
+    """
     names = ", ".join(c.name for c in left_out)
     return UnreachableAttitudeError(
-        f"{error.headline}; searched within the joint limits alone, and the path it stopped on "
-        f"honours {names} too",
+        f"{error.headline}; the search without {names} stopped on a path that honours {names} too",
         error.best_residual,
         reached=error.reached,
         asked=error.asked,
