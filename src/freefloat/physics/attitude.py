@@ -94,15 +94,19 @@ def quat_log(q: np.ndarray) -> np.ndarray:
 
 
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
-    """3 x 3 rotation matrix (base frame to inertial frame) of a unit quaternion."""
-    x, y, z, w = q
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
+    """Rotation matrix (base frame to inertial frame) of a unit quaternion ``[x, y, z, w]``.
+
+    Broadcasts: (..., 4) quaternions give (..., 3, 3) matrices.
+    """
+    q = np.asarray(q, dtype=float)
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    out = np.empty((*q.shape[:-1], 3, 3))
+    out[..., 0, 0], out[..., 0, 1] = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w)
+    out[..., 0, 2], out[..., 1, 0] = 2 * (x * z + y * w), 2 * (x * y + z * w)
+    out[..., 1, 1], out[..., 1, 2] = 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
+    out[..., 2, 0], out[..., 2, 1] = 2 * (x * z - y * w), 2 * (y * z + x * w)
+    out[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return out
 
 
 def quat_rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -216,8 +220,7 @@ def so3_right_jacobian(phi: np.ndarray) -> np.ndarray:
 
 def rotation_matrices(rotvec: np.ndarray) -> np.ndarray:
     """(M, 3, 3) rotation matrices of rotation vectors (rad)."""
-    quats = quat_exp(np.atleast_2d(rotvec))
-    return np.stack([quat_to_matrix(q) for q in quats])
+    return quat_to_matrix(quat_exp(np.atleast_2d(rotvec)))
 
 
 def magnus_increment_jacobian(omega: np.ndarray, h: np.ndarray) -> np.ndarray:
@@ -228,13 +231,12 @@ def magnus_increment_jacobian(omega: np.ndarray, h: np.ndarray) -> np.ndarray:
     to rounding.
     """
     eps = 1e-30
-    out = np.empty((len(h), 3, 9))
-    for node in range(3):
-        for axis in range(3):
-            shifted = omega.astype(complex)
-            shifted[:, node, axis] += 1j * eps
-            out[:, :, 3 * node + axis] = magnus_increments(shifted, h).imag / eps
-    return out
+    steps = len(h)
+    shifted = np.repeat(omega.astype(complex)[None], 9, axis=0)  # (9, M, 3, 3): one per column
+    for column in range(9):
+        shifted[column, :, column // 3, column % 3] += 1j * eps
+    moved = magnus_increments(shifted.reshape(9 * steps, 3, 3), np.tile(h, 9)).imag / eps
+    return moved.reshape(9, steps, 3).transpose(1, 2, 0)
 
 
 def magnus_increments(omega: np.ndarray, h: np.ndarray) -> np.ndarray:
