@@ -123,6 +123,46 @@ def test_a_worker_that_dies_is_a_worker_error_and_the_others_are_reaped(new_chil
 
 
 @needs_fork
+def test_a_worker_that_dies_between_tasks_is_a_worker_error(new_children) -> None:
+    """A worker killed after its answer, before it is handed the next task: the hand-out
+    fails, and that is a WorkerError naming the task (not a broken pipe)."""
+    import threading
+
+    def task(i: int) -> int:
+        if i == 0:  # answer, then die while the caller is still busy with the answer
+            threading.Timer(0.1, lambda: os.kill(os.getpid(), signal.SIGKILL)).start()
+        return i
+
+    with pytest.raises(WorkerError) as info:
+        run_tasks(task, 4, jobs=2, done=lambda i, r: time.sleep(0.3))
+    assert info.value.exitcode == -signal.SIGKILL
+    assert info.value.task in (2, 3)  # the task it would have been handed next
+    assert str(info.value) == (
+        f"a worker process ended (exit code -9) at task {info.value.task}; --jobs 1 runs "
+        "every task in this process"
+    )
+    assert not new_children()
+
+
+@needs_fork
+def test_a_lower_task_error_wins_over_a_later_worker_death(new_children) -> None:
+    """Task 0 raises slowly while task 1's worker dies at once: task 0's error is raised, as
+    a serial run would raise it."""
+
+    def task(i: int) -> int:
+        if i == 0:
+            time.sleep(0.3)
+            raise CollisionError("start", "a / b", 0.001, 0.01)
+        if i == 1:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return i
+
+    with pytest.raises(CollisionError):
+        run_tasks(task, 4, jobs=2)
+    assert not new_children()
+
+
+@needs_fork
 def test_ctrl_c_in_the_caller_ends_every_worker_and_workers_ignore_it(new_children) -> None:
     handlers = run_tasks(lambda i: signal.getsignal(signal.SIGINT) is signal.SIG_IGN, 2, jobs=2)
     assert handlers == [True, True]

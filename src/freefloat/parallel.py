@@ -20,12 +20,17 @@ caller (a task that raises, Ctrl-C, SIGTERM), every child is terminated and reap
 
 A task that raises in a child raises the same exception type, message and attributes in the
 caller (rebuilt without calling its ``__init__``; the child's traceback is added as a note).
-When several tasks raise, the one with the lowest index is raised, as a serial run would.
+A worker that dies (killed, or a crash in a library), while running a task or before it is
+handed the next, is a :class:`WorkerError` of that task. When several tasks fail, the one
+with the lowest index is raised, as a serial run would. On a terminal the children log
+warnings only: their progress lines would break into the caller's progress bar (the caller
+reports each task as it completes).
 """
 
 from __future__ import annotations
 
 import contextlib
+import logging
 import multiprocessing as mp
 import numbers
 import os
@@ -78,7 +83,7 @@ class WorkerError(FreeFloatError):
         self.task = task
         self.exitcode = exitcode
         super().__init__(
-            f"a worker process ended (exit code {exitcode}) while running task {task}; "
+            f"a worker process ended (exit code {exitcode}) at task {task}; "
             "--jobs 1 runs every task in this process"
         )
 
@@ -207,15 +212,30 @@ def _collect(
     count: int,
     done: Callable[[int, Any], None] | None,
 ) -> list[Any]:
-    """Hand out the task indices in order, one at a time per worker; gather the answers."""
+    """Hand out the task indices in order, one at a time per worker; gather the answers.
+
+    A worker that dies (while running a task, or before it is handed the next) counts as a
+    failure of that task, under the same lowest-index rule as a task that raises.
+    """
     results: list[Any] = [None] * count
     running: dict[int, int] = {}  # worker number -> task index
     failed: tuple[int, BaseException] | None = None
     following = 0
-    for number, (_, connection) in enumerate(workers):
-        connection.send(following)
-        running[number] = following
-        following += 1
+
+    def hand_out(number: int) -> tuple[int, BaseException] | None:
+        nonlocal following
+        process, connection = workers[number]
+        index, following = following, following + 1
+        try:
+            connection.send(index)
+        except OSError:  # it died after its last answer
+            process.join()
+            return _first(failed, index, WorkerError(index, process.exitcode))
+        running[number] = index
+        return failed
+
+    for number in range(len(workers)):
+        failed = hand_out(number)
     while running:
         ready = set(wait([o for n in running for o in (workers[n][1], workers[n][0].sentinel)]))
         for number in [n for n in running if ready & {workers[n][1], workers[n][0].sentinel}]:
@@ -225,21 +245,28 @@ def _collect(
                 ok, payload = connection.recv()
             except (EOFError, OSError):
                 process.join()
-                raise WorkerError(index, process.exitcode) from None
+                failed = _first(failed, index, WorkerError(index, process.exitcode))
+                continue
             if not ok:
-                if failed is None or index < failed[0]:
-                    failed = (index, _rebuilt(payload))
+                failed = _first(failed, index, _rebuilt(payload))
             elif failed is None:
                 results[index] = payload
                 if done is not None:
                     done(index, payload)
             if following < count and failed is None:
-                connection.send(following)
-                running[number] = following
-                following += 1
+                failed = hand_out(number)
         if failed is not None and all(i > failed[0] for i in running.values()):
             raise failed[1]  # the tasks still running come after it: a serial run never ran them
+    if failed is not None:
+        raise failed[1]
     return results
+
+
+def _first(
+    failed: tuple[int, BaseException] | None, index: int, error: BaseException
+) -> tuple[int, BaseException]:
+    """The failure with the lower task index: ``failed`` or task ``index``'s ``error``."""
+    return (index, error) if failed is None or index < failed[0] else failed
 
 
 def _stop(workers: Sequence[tuple[Any, Connection]]) -> None:
@@ -270,6 +297,8 @@ def _serve(connection: Connection) -> None:
     # inherited ones' locks at the fork.
     sys.stdout = open(1, "w", buffering=1, closefd=False)  # noqa: SIM115
     sys.stderr = open(2, "w", buffering=1, closefd=False)  # noqa: SIM115
+    if sys.stderr.isatty():  # the caller's progress bar owns the terminal: warnings only
+        LOGGER.setLevel(max(LOGGER.getEffectiveLevel(), logging.WARNING))
     (task,) = _TASK
     with one_blas_thread():
         while True:
