@@ -7,6 +7,8 @@ every pair at every configuration.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -129,3 +131,97 @@ def test_gradients_of_a_batch_against_finite_differences():
         )
         assert np.allclose(got.gradients[i], numeric, atol=2e-6, rtol=1e-4), (i, k)
     assert kinds == {(True, True), (False, True)}  # arm / arm and spacecraft / arm
+
+
+@pytest.mark.parametrize("rows", [10, 3])
+def test_a_row_with_a_non_finite_joint_is_never_reported_clear(rows):
+    """No bound holds for a joint vector with a NaN: every pair is asked, and the query is
+    refused as a single configuration's is (a batch and a small batch alike), instead of the
+    row reading as infinitely clear."""
+    scenario = ff.Scenario.from_toml(PANDA)
+    model = CollisionModel(scenario.robot, known_srdf(scenario.robot))
+    joints = np.tile(np.asarray(scenario.start, dtype=float), (rows, 1))
+    joints[1, 2] = math.nan
+    with pytest.raises(ff.FreeFloatError):
+        model.distances(joints[1])
+    with pytest.raises(ff.FreeFloatError):
+        model.closest_many(joints, np.linspace(0.0, 1.0, rows))
+
+
+def _against_brute_force(model, fresh, joints, slots, gradients):
+    """Every row's smallest distance and pair against a fresh model measuring every pair, and
+    every reported lower bound against its pair's distance."""
+    got = model.closest_many(joints, slots, gradients=gradients)
+    for i, q in enumerate(joints):
+        every = fresh.distances(q, gradients=gradients)
+        k = int(np.argmin(every.values))
+        assert (float(got.values[i]), int(got.pairs[i])) == (float(every.values[k]), k)
+        if gradients:
+            assert np.allclose(got.gradients[i], every.gradients[k], atol=1e-12)
+        assert np.all(got.lower[i] <= every.values + 1e-9)
+
+
+def test_impossible_coal_values_in_a_batch_are_asked_again(monkeypatch):
+    """coal made to return impossible values (-DBL_MAX, NaN, -inf, 1e6) for one query in
+    twenty: the batch places those rows again and asks again, and every row still gives the
+    smallest distance, pair and gradient of every pair measured, with valid lower bounds."""
+    import sys
+
+    import freefloat.robot.pair_queries as pair_queries
+
+    scenario = ff.Scenario.from_toml(PANDA)
+    robot = scenario.robot
+    model = CollisionModel(robot, known_srdf(robot))
+    fresh = CollisionModel(robot, known_srdf(robot))
+    rng = np.random.default_rng(11)
+    real = pin.computeDistance
+
+    class Wrong:
+        def __init__(self, value: float) -> None:
+            self.min_distance = value
+
+    def faulty(geometry, data, k):
+        result = real(geometry, data, k)
+        if rng.uniform() < 0.05:
+            return Wrong(float(rng.choice([-sys.float_info.max, math.nan, -math.inf, 1e6])))
+        return result
+
+    class Pinocchio:
+        def __getattr__(self, name):
+            return faulty if name == "computeDistance" else getattr(pin, name)
+
+    start, goal = np.asarray(scenario.start), np.asarray(scenario.goal)
+    for round_ in range(4):
+        u = rng.uniform(0.0, 1.0, (16, 1))
+        joints = start + u * (goal - start) + rng.normal(0.0, 0.3, (16, robot.n))
+        before = model.retries
+        with monkeypatch.context() as faults:  # only the batch under test meets the faults
+            faults.setattr(pair_queries, "pin", Pinocchio())
+            got = model.closest_many(joints, None if round_ == 0 else u[:, 0], bool(round_ % 2))
+        assert model.retries > before  # the faults were met and asked again
+        for i, q in enumerate(joints):
+            every = fresh.distances(q, gradients=bool(round_ % 2))
+            k = int(np.argmin(every.values))
+            assert (float(got.values[i]), int(got.pairs[i])) == (float(every.values[k]), k)
+            assert np.all(got.lower[i] <= every.values + 1e-9)
+            if round_ % 2:
+                assert np.allclose(got.gradients[i], every.gradients[k], atol=1e-9)
+
+
+def test_slots_repeated_in_a_batch_and_forgotten_between_batches(monkeypatch):
+    """Slots repeated within one batch (recorded one after the other) and a store of five
+    slots that forgets them all between batches: the answers are those of every pair."""
+    from freefloat.robot.motion_bound import PairBounds
+
+    monkeypatch.setattr(PairBounds, "SLOTS", 5)
+    scenario = ff.Scenario.from_toml(PANDA)
+    robot = scenario.robot
+    model = CollisionModel(robot, known_srdf(robot))
+    fresh = CollisionModel(robot, known_srdf(robot))
+    rng = np.random.default_rng(5)
+    start, goal = np.asarray(scenario.start), np.asarray(scenario.goal)
+    for round_ in range(6):
+        u = rng.uniform(0.0, 1.0, (12, 1))
+        joints = start + u * (goal - start) + rng.normal(0.0, 0.05 * (1 + round_ % 3), (12, 7))
+        slots = rng.choice([0.0, 0.5, 1.0], 12) if round_ % 2 else np.round(u[:, 0], 1)
+        _against_brute_force(model, fresh, joints, slots, gradients=bool(round_ % 2))

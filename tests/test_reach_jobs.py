@@ -93,7 +93,9 @@ def test_a_direction_gives_the_same_alone_as_after_others(serial) -> None:
 
 def test_evaluations_are_the_directions_sum_whatever_the_jobs(serial) -> None:
     """The report counts every direction's evaluations, also those spent in workers; beyond
-    them only the quintic path's attitude, whose cost is measured on a problem of its own."""
+    them only the quintic path's attitude, whose cost is measured on a problem of its own.
+    Serially the report's count is the problem's own counter, which the directions' counts
+    (each measured around its direction) must add up to; with workers, the same figure."""
     scenario, report, reached = serial
     extra = [2] * scenario.resolved().robot.n
     problem = ff.problem_from_scenario(scenario.resolved(), extra=extra, check_bounds=False)

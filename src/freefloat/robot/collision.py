@@ -182,6 +182,7 @@ class CollisionModel(PairQueries):
             unknown = np.isnan(kept_low)
             low, high = np.fmax(low, kept_low), np.fmin(high, kept_high)
         candidates = low <= high.min(axis=1, keepdims=True) + 1e-9
+        candidates[~np.isfinite(joints).all(axis=1)] = True  # no bound holds: every pair asked
         found = self._measure_rows(joints, candidates, low, gaps, gradients)
         measure = found.measured
         lower[:] = np.where(measure, found.values, low)

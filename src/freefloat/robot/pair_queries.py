@@ -355,6 +355,8 @@ class PairQueries:
                 upper = np.minimum(upper, gaps + self._reach)
         if out is not None:
             out[:] = lower
+        if not np.isfinite(joints).all():  # no bound holds: every pair is asked (and refused)
+            return np.arange(len(self.pairs))
         return np.flatnonzero(lower <= float(upper.min()) + 1e-9)
 
     def _gradient(self, k: int) -> np.ndarray:

@@ -340,9 +340,9 @@ def reach_set(
 
     before, maps = problem.evaluations, problem.map_evaluations
     found = run_tasks(one, len(directions), jobs, done)
-    # Work done in worker processes did not move this process's counter: counted here.
-    problem.counter.evaluations = before + sum(f.reach.evaluations for f in found)
-    problem.counter.map_evaluations = maps + sum(f.map_evaluations for f in found)
+    if problem.evaluations == before:  # worker processes did the work: counted here
+        problem.counter.evaluations = before + sum(f.reach.evaluations for f in found)
+        problem.counter.map_evaluations = maps + sum(f.map_evaluations for f in found)
     freedom = tuple(d - 5 for d in problem.family.degrees)
     return ReachEstimate(quintic, tuple(f.reach for f in found), freedom)
 
