@@ -203,7 +203,7 @@ class CollisionModel(PairQueries):
         values = found.values[np.arange(count), best]
         grads = None
         if found.witnesses is not None:
-            grads = found.witnesses.gradients(self._carried_array, self._pair_array[best])
+            grads = found.witnesses.gradients(self._carried, self._pair_array[best])
         return Closest(values, best, grads, lower)
 
     def hulls(self) -> list[HullInfo]:

@@ -24,7 +24,7 @@ from .distance_query import GJK_TOLERANCE, RETRY_TOLERANCES, Closest, checked_di
 from .model import Robot
 from .motion_bound import PairBounds, motion_weights
 from .sphere_kinematics import SphereKinematics
-from .witness_gradient import WitnessBatch, carriers, witness_gradient
+from .witness_gradient import WitnessBatch, carriers
 
 __all__ = ["PairQueries"]
 
@@ -84,11 +84,10 @@ class PairQueries:
             radii.append(float(obj.geometry.aabb_radius))
         self._centres, self._radii = np.array(centres), np.array(radii)
         self._shapes = [obj.geometry for obj in geometry.geometryObjects]
-        # Per shape, which of the robot's joints carry it (1.0 or 0.0 per joint), or None
-        # for a shape fixed to the spacecraft.
-        self._carried = [carriers(robot, int(obj.parentJoint)) for obj in geometry.geometryObjects]
-        self._carried_array = np.array(
-            [np.zeros(robot.n) if c is None else c for c in self._carried]
+        # (G, N) per shape, which of the robot's joints carry it (1.0 or 0.0 per joint; all
+        # zeros for a shape fixed to the spacecraft).
+        self._carried = np.array(
+            [carriers(robot, int(obj.parentJoint)) for obj in geometry.geometryObjects]
         ).reshape(-1, robot.n)
         self._pair_array = np.array(pairs, dtype=int).reshape(-1, 2)
         self._reach = self._radii[self._pair_array[:, 0]] + self._radii[self._pair_array[:, 1]]
@@ -195,7 +194,7 @@ class PairQueries:
         if not len(self.pairs):
             return Closest(values, pairs, grads, lower)
         for i in range(count):
-            found = self._bulk(joints[i], True, at[i], None, lower[i])
+            found = self._bulk(joints[i], True, at[i], lower[i])
             k = int(np.argmin(found))
             values[i], pairs[i] = found[k], k
             if grads is not None:
@@ -208,25 +207,22 @@ class PairQueries:
         joints: np.ndarray,
         nearest: bool = False,
         slot: float | None = None,
-        gaps: np.ndarray | None = None,
         lower: np.ndarray | None = None,
     ) -> np.ndarray:
         """Signed distances (m) of the pairs, each by Pinocchio's ``computeDistance``.
 
         With ``nearest``, only the pairs that can be the closest are measured (the others are
-        ``inf``; see :meth:`_may_be_closest`), each checked by :meth:`_measure`. ``gaps``: the
-        (P,) distances between the pairs' sphere centres at ``joints`` (m), when already known.
-        ``lower``: a (P,) array that receives a lower bound of every pair's distance (m): the
-        measured value, or for a pair not measured, its bound.
+        ``inf``; see :meth:`_may_be_closest`), each checked by :meth:`_measure`. ``lower``: a
+        (P,) array that receives a lower bound of every pair's distance (m): the measured
+        value, or for a pair not measured, its bound.
         """
         joints = np.asarray(joints, dtype=float)
         self._place(joints)
         if nearest and len(self.pairs):
-            measured = self._may_be_closest(joints, slot, gaps, lower)
+            measured = self._may_be_closest(joints, slot, lower)
         else:
             measured = np.arange(len(self.pairs))
-        gap = self._spheres(measured) if gaps is None else gaps[measured]
-        found = self._measure(measured, gap)
+        found = self._measure(measured, self._spheres(measured))
         self._remember(slot, joints, measured, found, lower)
         values = np.full(len(self.pairs), math.inf)
         values[measured] = found
@@ -328,31 +324,25 @@ class PairQueries:
         self,
         joints: np.ndarray,
         slot: float | None,
-        gaps: np.ndarray | None = None,
         out: np.ndarray | None = None,
     ) -> np.ndarray:
         """Indices of the pairs that may have the smallest distance at ``joints``.
 
         Each pair is bounded from its last bounds at ``slot`` (:class:`PairBounds`: its
         measured distance; or, for a pair never measured there, its bounding spheres, which are
-        then kept); with no motion bound (a prismatic joint), by its bounding spheres
-        (``gaps``: their centres' distances when already known, m). A pair that cannot be the
-        closest is not measured, so the smallest distance and its pair are the same bits as
-        with every pair measured. ``out`` receives every pair's lower bound (m).
+        then kept); with no motion bound (a prismatic joint), by its bounding spheres. A pair
+        that cannot be the closest is not measured, so the smallest distance and its pair are
+        the same bits as with every pair measured. ``out`` receives every pair's lower bound (m).
         """
         if self._bounds is None:
-            gap = self._spheres(np.arange(len(self.pairs))) if gaps is None else gaps
+            gap = self._spheres(np.arange(len(self.pairs)))
             lower, upper = gap - self._reach, gap + self._reach
         else:
             unknown = self._bounds.unknown(slot)
             if len(unknown):
-                gap = self._spheres(unknown) if gaps is None else gaps[unknown]
-                reach = self._reach[unknown]
+                gap, reach = self._spheres(unknown), self._reach[unknown]
                 self._bounds.record(slot, unknown, joints, gap - reach, gap + reach)
             lower, upper = self._bounds.widened(slot, joints)
-            if gaps is not None:  # the spheres bound every pair too: the tighter of both
-                lower = np.maximum(lower, gaps - self._reach)
-                upper = np.minimum(upper, gaps + self._reach)
         if out is not None:
             out[:] = lower
         if not np.isfinite(joints).all():  # no bound holds: every pair is asked (and refused)
@@ -361,10 +351,9 @@ class PairQueries:
 
     def _gradient(self, k: int) -> np.ndarray:
         """d(distance of pair k)/d(joints), after distances and joint Jacobians are computed."""
-        result = self._result(k)
-        a, b = self.pairs[k]
-        carried = (self._carried[a], self._carried[b])
-        return witness_gradient(result, carried, self._data.J[:, self._columns], self.robot.n)
+        batch = WitnessBatch(1, self.robot.n)
+        batch.take(0, self._result(k), self._data.J[:, self._columns])
+        return batch.gradients(self._carried, self._pair_array[k : k + 1])[0]
 
 
 def _transform(placement: pin.SE3) -> coal.Transform3s:

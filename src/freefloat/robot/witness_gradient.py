@@ -15,39 +15,16 @@ import numpy as np
 
 from .model import Robot
 
-__all__ = ["WitnessBatch", "carriers", "witness_gradient", "witness_gradients"]
+__all__ = ["WitnessBatch", "carriers", "witness_gradients"]
 
 
-def carriers(robot: Robot, joint: int) -> np.ndarray | None:
+def carriers(robot: Robot, joint: int) -> np.ndarray:
     """1.0 for each of the robot's joints that moves Pinocchio joint ``joint``, else 0.0.
 
-    None for the universe and the spacecraft (joints 0 and 1), which no joint moves.
+    All zeros for the universe and the spacecraft (joints 0 and 1), which no joint moves.
     """
-    if joint <= 1:
-        return None
-    support = set(robot.model.supports[joint])
+    support = set(robot.model.supports[joint]) if joint > 1 else set()
     return np.array([1.0 if j.index in support else 0.0 for j in robot.joints])
-
-
-def witness_gradient(
-    result: coal.DistanceResult,
-    carried: tuple[np.ndarray | None, np.ndarray | None],
-    jacobian: np.ndarray,
-    n: int,
-) -> np.ndarray:
-    """d(distance)/d(joints) of one pair (m per rad or m per m).
-
-    Args:
-        result: coal's result for the pair (witness points and normal, world frame).
-        carried: :func:`carriers` of the pair's two shapes' bodies.
-        jacobian: (6, N) Pinocchio's world-frame joint Jacobian (``data.J``) at the robot's
-            joint columns, after ``computeJointJacobians`` at the pair's configuration.
-        n: number of joints N.
-    """
-    batch = WitnessBatch(1, n)
-    batch.take(0, result, jacobian)
-    moved = np.array([[np.zeros(n) if c is None else c for c in carried]])
-    return witness_gradients(batch.normals, batch.points, moved, batch.jacobians)[0]
 
 
 def witness_gradients(
@@ -56,13 +33,12 @@ def witness_gradients(
     carried: np.ndarray,
     jacobians: np.ndarray,
 ) -> np.ndarray:
-    """:func:`witness_gradient` of B pairs at once, one per configuration (B, N; m per rad or m).
+    """d(distance)/d(joints) of B pairs, one per configuration (B, N; m per rad or m per m).
 
     Args:
         normals: (B, 3) unit normals from each pair's first shape to its second (world frame).
         points: (B, 2, 3) the witness points on the first and on the second shape (m).
-        carried: (B, 2, N) :func:`carriers` of the two shapes' bodies (zeros for a shape fixed
-            to the spacecraft).
+        carried: (B, 2, N) :func:`carriers` of the two shapes' bodies.
         jacobians: (B, 6, N) world-frame joint Jacobians (``data.J`` at the robot's columns),
             each at its pair's configuration.
     """
