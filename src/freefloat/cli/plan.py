@@ -12,6 +12,7 @@ from ..errors import InputError, InputLimitError
 from ..pipeline import plan
 from ..problem.limits import check_samples
 from ..problem.objectives import OBJECTIVES
+from ..problem.residual import INTEGRATION_TOLERANCE
 from ..progress import LOGGER, TIMINGS, stage
 from ..solvers.options import DEFAULT_TOLERANCE, TOLERANCE_RANGE_RAD, SolveOptions
 from ..viz.summary import cartesian_report, robot_label, summary
@@ -99,7 +100,7 @@ def tolerance_rad(args: argparse.Namespace) -> float:
         if args.tolerance is None:
             return DEFAULT_TOLERANCE
         if not low <= args.tolerance <= high:  # NaN fails too
-            why = _WHY.format(1e-12, high, unit="rad")
+            why = _WHY.format(INTEGRATION_TOLERANCE, high, unit="rad")
             raise InputLimitError("--tolerance", args.tolerance, low, high, "rad", why=why)
         return float(args.tolerance)
     if args.tolerance is not None:
@@ -110,7 +111,7 @@ def tolerance_rad(args: argparse.Namespace) -> float:
     low_deg, high_deg = math.degrees(low), math.degrees(high)
     slack = 1e-5  # the range printed with six digits is accepted at both ends
     if not low_deg * (1 - slack) <= args.tolerance_deg <= high_deg * (1 + slack):
-        why = _WHY.format(math.degrees(1e-12), high_deg, unit="deg")
+        why = _WHY.format(math.degrees(INTEGRATION_TOLERANCE), high_deg, unit="deg")
         raise InputLimitError(
             "--tolerance-deg", args.tolerance_deg, low_deg, high_deg, "deg", why=why
         )

@@ -170,8 +170,7 @@ class PairQueries:
                     best, best_k = value, k
             if witnesses is not None and best_k >= 0:
                 witnesses.take(i, self._pair_results[best_k], jacobian[:, self._columns])
-        with np.errstate(invalid="ignore"):  # NaN or infinite values are impossible too
-            sane = (values >= gaps - self._reach - 1e-9) & (values <= gaps + self._reach + 1e-9)
+        sane = _possible(values, gaps, self._reach)
         retried: list[tuple[int, int]] = []
         for i in np.flatnonzero(np.any(measured & ~sane, axis=1)).tolist():
             pairs = np.flatnonzero(candidates[i])
@@ -249,10 +248,10 @@ class PairQueries:
         compute, geometry, gdata = pin.computeDistance, self.geometry, self._geometry_data
         reach = self._reach[measured]
         found = np.array([compute(geometry, gdata, k).min_distance for k in measured.tolist()])
-        possible = (found >= gap - reach - 1e-9) & (found <= gap + reach + 1e-9)  # NaN: False
+        possible = _possible(found, gap, reach)
         self._retried = {}
         if not possible.all():
-            for i in np.flatnonzero(~(np.isfinite(found) & possible)).tolist():
+            for i in np.flatnonzero(~possible).tolist():
                 found[i] = self._retry(int(measured[i]), float(gap[i]), float(reach[i]))
         return found
 
@@ -354,6 +353,16 @@ class PairQueries:
         batch = WitnessBatch(1, self.robot.n)
         batch.take(0, self._result(k), self._data.J[:, self._columns])
         return batch.gradients(self._carried, self._pair_array[k : k + 1])[0]
+
+
+def _possible(values: np.ndarray, gaps: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """Which distances (m) their bounding spheres allow: within ``gaps +- reach`` (m).
+
+    NaN and infinite values are not.
+    """
+    with np.errstate(invalid="ignore"):
+        inside = (values >= gaps - reach - 1e-9) & (values <= gaps + reach + 1e-9)
+    return np.isfinite(values) & inside
 
 
 def _transform(placement: pin.SE3) -> coal.Transform3s:
