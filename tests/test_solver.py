@@ -202,3 +202,16 @@ def test_polishing_a_diverged_candidate_never_reaches_least_squares():
     beta = np.array([1e200, -3.0, 2.0])
     out, r = polish(Diverged(), beta, 1e-9)
     assert out is beta and np.isnan(r[0])
+
+
+def test_broyden_steps_past_a_start_where_the_map_loses_rank(spatial_robot):
+    """At the quintic path the three-axis problem's Jacobian has rank 2 (a symmetric path):
+    the full inverse would step ~1e10 rad away; Broyden must land on the known root."""
+    from freefloat.solvers.newton import broyden
+
+    problem = _spatial_problem(spatial_robot, [1, 1, 1])
+    singular = np.linalg.svd(problem.jacobian(np.zeros(3)), compute_uv=False)
+    assert singular[-1] < 1e-12 * singular[0]  # the start is singular indeed
+    beta, _ = broyden(problem, np.zeros(3), ff.SolveOptions())
+    assert np.linalg.norm(problem.residual(beta)) < 1e-9
+    np.testing.assert_allclose(beta, [0.06, -0.04, 0.08], atol=1e-7)

@@ -7,7 +7,11 @@ import numpy as np
 from ..problem.residual import Problem
 from .options import POLISH, SolveOptions
 
-__all__ = ["broyden", "levenberg_marquardt", "polish", "starts"]
+__all__ = ["SINGULAR", "broyden", "levenberg_marquardt", "polish", "starts"]
+
+#: Singular values below this fraction of the largest are left out of a Broyden step: a start
+#: where the map loses rank (an exactly symmetric path) would otherwise step ~1e10 rad away.
+SINGULAR = 1e-10
 
 
 def polish(
@@ -42,7 +46,7 @@ def broyden(problem: Problem, beta: np.ndarray, options: SolveOptions) -> tuple[
     for iteration in range(1, options.max_iterations + 1):
         if np.linalg.norm(r) < POLISH * options.tolerance:
             return beta, iteration
-        step = -np.linalg.lstsq(jac, r, rcond=None)[0]
+        step = -np.linalg.lstsq(jac, r, rcond=SINGULAR)[0]
         t = 1.0
         while t > 1e-4:
             trial = beta + t * step
