@@ -123,3 +123,28 @@ def test_planar_bounds_contain_every_monotone_motion(tmp_path):
             check_bounds=False,
         )
         assert lo < problem.yaw_change_of(np.zeros(1)) < hi
+
+
+def test_batched_rates_and_their_derivative_against_the_full_solve_and_differences(tmp_path):
+    """The batch's 3 x 3 shortcut (the base block is triangular) against the full 6 x 6 solve
+    of ``A_g v = 0`` done by LAPACK, and ``d omega / d q`` against central differences."""
+    path = tmp_path / "arm.urdf"
+    path.write_text(urdfs.spatial_arm())
+    mmap = ff.MomentumMap(ff.load_robot(path))
+    rng = np.random.default_rng(3)
+    joints, rates = rng.uniform(-1.5, 1.5, (5, 3)), rng.normal(size=(5, 3))
+    batch = mmap.base_rates(joints, rates, derivatives=True)
+    q = mmap.configurations(joints)
+    for k in range(5):
+        ag = pin.computeCentroidalMap(mmap.model, mmap.model.createData(), q[k])
+        full = -np.linalg.solve(ag[:, :6], ag[:, 6:])
+        np.testing.assert_allclose(batch.f1[k], full[3:], rtol=0, atol=1e-13)
+        np.testing.assert_allclose(batch.omega[k], full[3:] @ rates[k], rtol=0, atol=1e-13)
+    eps = 1e-6
+    for i in range(3):
+        step = np.zeros(3)
+        step[i] = eps
+        ahead = mmap.base_rates(joints + step, rates).omega
+        behind = mmap.base_rates(joints - step, rates).omega
+        fd = (ahead - behind) / (2 * eps)
+        assert np.abs(batch.domega_dq[:, :, i] - fd).max() <= 1e-7 * np.abs(fd).max()

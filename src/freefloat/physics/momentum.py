@@ -85,6 +85,10 @@ class MomentumMap:
     ) -> NodeRates:
         """Base angular velocity at K instants (batched; one Pinocchio call per instant).
 
+        The base block of the centroidal map is ``[[m I, -m [c]x], [0, I_c]]`` (base at the
+        origin with identity attitude; ``c`` the CM, ``I_c`` the locked inertia about it, kg
+        m^2), so the angular rows need only ``I_c^-1``: ``F1 = -I_c^-1 A_q[3:6]``.
+
         Args:
             joints: (K, N) joint values (rad or m).
             rates: (K, N) joint rates (per unit of any time variable).
@@ -96,19 +100,24 @@ class MomentumMap:
         for k in range(k_count):
             ag[k] = pin.computeCentroidalMap(self.model, self.data, configs[k])
         self.evaluations += k_count
-        twist_map = -np.linalg.solve(ag[:, :, :6], ag[:, :, 6:])
-        f1 = twist_map[:, 3:]
+        inertia_inverse = _inverse_3x3(ag[:, 3:6, 3:6])
+        f1 = -(inertia_inverse @ ag[:, 3:6, 6:])
         omega = np.einsum("kij,kj->ki", f1, rates)
         domega = None
         if derivatives:
-            v = np.concatenate([np.einsum("kij,kj->ki", twist_map, rates), rates], axis=1)
+            # the base's linear velocity: m v = -(A_q qdot)[0:3] + m [c]x omega
+            linear = np.einsum("kij,kj->ki", ag[:, 0:3, 6:], rates) + np.einsum(
+                "kij,kj->ki", ag[:, 0:3, 3:6], omega
+            )
+            velocity = -np.linalg.solve(ag[:, 0:3, 0:3], linear[..., None])[..., 0]
+            v = np.concatenate([velocity, omega, rates], axis=1)
             zero = np.zeros(self.model.nv)
-            dh = np.empty((k_count, 6, self.robot.n))
+            dh = np.empty((k_count, 3, self.robot.n))
             for k in range(k_count):
                 dh[k] = pin.computeCentroidalDynamicsDerivatives(
                     self.model, self.data, configs[k], v[k], zero
-                )[0][:, 6:]
-            domega = -np.linalg.solve(ag[:, :, :6], dh)[:, 3:]
+                )[0][3:6, 6:]
+            domega = -(inertia_inverse @ dh)
         return NodeRates(omega=omega, f1=f1, domega_dq=domega)
 
     def f1(self, joints: np.ndarray) -> np.ndarray:
@@ -145,6 +154,21 @@ class MomentumMap:
     def momentum(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Total momentum ``[linear (kg m/s); angular about the CM (kg m^2/s)]``, inertial frame."""
         return np.asarray(pin.computeCentroidalMomentum(self.model, self.data, q, v).vector)
+
+
+def _inverse_3x3(a: np.ndarray) -> np.ndarray:
+    """Inverses of (K, 3, 3) invertible matrices, by their adjugates.
+
+    Cheaper than LAPACK's batched solve for 3 x 3 blocks, with rounding of the same order.
+    """
+    cof = np.empty_like(a)
+    for i in range(3):
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        for j in range(3):
+            j1, j2 = (j + 1) % 3, (j + 2) % 3
+            cof[:, j, i] = a[:, i1, j1] * a[:, i2, j2] - a[:, i1, j2] * a[:, i2, j1]
+    det = np.einsum("kj,kj->k", a[:, 0, :], cof[:, :, 0])
+    return cof / det[:, None, None]
 
 
 def planar_axis(robot: Robot, samples: int = 16, seed: int = 0) -> np.ndarray | None:
