@@ -26,7 +26,6 @@ from ..physics.attitude import (
     quat_log,
     quat_multiply,
     quat_to_matrix,
-    rotation_matrices,
     so3_right_jacobian,
     step_nodes,
 )
@@ -292,16 +291,13 @@ class Problem:
         increments = magnus_increments(omega, h)
         dw_domega = magnus_increment_jacobian(omega, h)  # (M, 3, 9)
         dw = np.einsum("mck,mkf->mcf", dw_domega, domega.reshape(self.steps, 9, self.n_free))
-        rotations = rotation_matrices(increments)
-        # after[m] = E_{m+1} ... E_{M}: the rotation that follows step m.
-        after = np.empty_like(rotations)
-        after[-1] = np.eye(3)
-        for m in range(self.steps - 1, 0, -1):
-            after[m - 1] = rotations[m] @ after[m]
+        quaternions = propagate(self.start_quaternion, increments)
+        attitudes = quat_to_matrix(quaternions)
+        # after[m] = E_{m+1} ... E_{M} = R_m^T R_M: the rotation that follows step m.
+        after = np.einsum("mji,jk->mik", attitudes[1:], attitudes[-1])
         right = so3_right_jacobian(increments)
         dtheta = np.einsum("mji,mjk,mkf->if", after, right, dw)  # body frame at the end
-        reached = propagate(self.start_quaternion, increments)[-1]
-        relative = quat_multiply(quat_conjugate(self.goal_quaternion), reached)
+        relative = quat_multiply(quat_conjugate(self.goal_quaternion), quaternions[-1])
         value = quat_log(relative)
         jac = np.asarray(pin.Jlog3(quat_to_matrix(relative))) @ dtheta
         return value, jac
