@@ -173,26 +173,24 @@ class JointPolynomials:
         return out
 
     def derivative(self, order: int) -> np.ndarray:
-        """(N, K) Chebyshev coefficients in x of the ``order``-th time derivative (per s^order)."""
-        if order == 0:
-            return self.coefficients
-        if order <= 2:
-            return self._derivatives[order - 1]
-        return self._derived(order)
+        """(N, K) Chebyshev coefficients in x of the ``order``-th time derivative (per s^order).
 
-    def _derived(self, order: int) -> np.ndarray:
-        width = self.coefficients.shape[1]
-        out = np.zeros_like(self.coefficients)
-        if width > order:
-            out[:, : width - order] = _CHEB.chebder(
-                self.coefficients.T, order, scl=2.0 / self.duration
-            ).T
-        return out
+        Each order is derived once from the one below and kept (rate bounds ask for them all).
+        """
+        table = self._derivative_table
+        while len(table) <= order:
+            below = table[-1]
+            width = below.shape[1]
+            out = np.zeros_like(below)
+            if width > 1:
+                out[:, : width - 1] = _CHEB.chebder(below.T, 1, scl=2.0 / self.duration).T
+            table.append(out)
+        return table[order]
 
     @cached_property
-    def _derivatives(self) -> tuple[np.ndarray, np.ndarray]:
-        """The first two derivatives' coefficients, computed once per path."""
-        return self._derived(1), self._derived(2)
+    def _derivative_table(self) -> list[np.ndarray]:
+        """The coefficients of the derivatives derived so far, by order (0: the path)."""
+        return [self.coefficients]
 
     def evaluate(self, t: np.ndarray) -> PathSamples:
         """Positions (rad or m), rates (per s) and accelerations (per s^2) at times ``t`` (s)."""
