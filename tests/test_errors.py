@@ -335,3 +335,28 @@ def test_cli_rejects_too_few_samples(capsys, tmp_path):
     assert main(["plan", "--samples", "1", "-o", str(tmp_path / "p.json")]) == 2
     assert "--samples must be at least 2, got 1" in capsys.readouterr().err
     assert not (tmp_path / "p.json").exists()
+
+
+def test_a_refusal_under_another_headline_keeps_every_figure():
+    error = ff.UnreachableAttitudeError(
+        "reachable up to 1 deg",
+        0.02,
+        reached=0.01,
+        asked=0.03,
+        tried=("continuation",),
+        per_axis=(0.01, -0.015, 0.005),
+        hint="try a longer path",
+        stopped_by="joint 'j1' limit",
+        last_beta=(0.1, 0.2),
+        axis=(0.0, 1.0, 0.0),
+        problem="a problem",
+    )
+    renamed = error.with_headline("reachable up to 1 deg; clearance too")
+    assert renamed.headline == "reachable up to 1 deg; clearance too"
+    assert str(renamed).startswith("reachable up to 1 deg; clearance too (the path it stopped")
+    assert str(renamed).endswith("; tried: continuation; try a longer path")
+    for name in ("best_residual", "reached", "asked", "tried", "per_axis", "hint"):
+        assert getattr(renamed, name) == getattr(error, name), name
+    for name in ("stopped_by", "last_beta", "axis", "problem", "reached_fraction"):
+        assert getattr(renamed, name) == getattr(error, name), name
+    assert renamed.reached_fraction == pytest.approx(1 / 3)

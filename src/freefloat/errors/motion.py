@@ -131,3 +131,19 @@ class UnreachableAttitudeError(SolverError, UnreachableGoalError):
             last_beta=last_beta,
         )
         self.distance = self.radius = float("nan")
+
+    def with_headline(self, headline: str) -> UnreachableAttitudeError:
+        """The same refusal under another headline: every figure and attribute kept."""
+        return UnreachableAttitudeError(
+            headline,
+            self.best_residual,
+            reached=self.reached,
+            asked=self.asked,
+            tried=self.tried,
+            per_axis=self.per_axis,
+            hint=self.hint,
+            stopped_by=self.stopped_by,
+            last_beta=self.last_beta,
+            axis=self.axis,
+            problem=self.problem,
+        )

@@ -121,18 +121,8 @@ def _out_of_reach(
     the constraints that stood in the way from it.
     """
     names = ", ".join(c.name for c in left_out)
-    return UnreachableAttitudeError(
-        f"{error.headline}; the search without {names} stopped on a path that honours {names} too",
-        error.best_residual,
-        reached=error.reached,
-        asked=error.asked,
-        tried=error.tried,
-        per_axis=error.per_axis,
-        hint=error.hint,
-        stopped_by=error.stopped_by,
-        last_beta=error.last_beta,
-        axis=error.axis,
-        problem=error.problem,
+    return error.with_headline(
+        f"{error.headline}; the search without {names} stopped on a path that honours {names} too"
     )
 
 
