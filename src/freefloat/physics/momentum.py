@@ -160,6 +160,9 @@ def _inverse_3x3(a: np.ndarray) -> np.ndarray:
     """Inverses of (K, 3, 3) invertible matrices, by their adjugates.
 
     Cheaper than LAPACK's batched solve for 3 x 3 blocks, with rounding of the same order.
+
+    Raises:
+        numpy.linalg.LinAlgError: a matrix is exactly singular, as a solve would.
     """
     cof = np.empty_like(a)
     for i in range(3):
@@ -168,6 +171,8 @@ def _inverse_3x3(a: np.ndarray) -> np.ndarray:
             j1, j2 = (j + 1) % 3, (j + 2) % 3
             cof[:, j, i] = a[:, i1, j1] * a[:, i2, j2] - a[:, i1, j2] * a[:, i2, j1]
     det = np.einsum("kj,kj->k", a[:, 0, :], cof[:, :, 0])
+    if np.any(det == 0.0):  # as LAPACK's solve would; non-finite entries give NaN, as there
+        raise np.linalg.LinAlgError("Singular matrix")
     return cof / det[:, None, None]
 
 
