@@ -33,6 +33,22 @@ def _monomials_in_s(start: float, goal: float, beta: list[float]) -> np.ndarray:
     return coef
 
 
+def _sample_monomials(old: dict, names: list[str]) -> None:
+    """The joint samples as a format-3 planner took them: from its monomials in t (s).
+
+    A format-3 file's samples agree with its own paths to the rounding of their monomials,
+    not with the format-4 series they were converted from.
+    """
+    t = np.asarray(old["samples"]["t"], dtype=float)
+    polynomial = np.polynomial.polynomial
+    for key, order in (("q", 0), ("qd", 1), ("qdd", 2)):
+        columns = [
+            polynomial.polyval(t, polynomial.polyder(old["path"]["coefficients"][n], order))
+            for n in names
+        ]
+        old["samples"][key] = np.column_stack(columns).tolist()
+
+
 def as_format_3(doc: dict) -> dict:
     """A format-4 plan dictionary as the same plan in format 3."""
     old = copy.deepcopy(doc)
@@ -51,6 +67,7 @@ def as_format_3(doc: dict) -> dict:
         "coefficients": {n: in_t(n, doc["path"]["coefficients"][n]) for n in names},
     }
     old["free_parameters"] = {n: old["path"]["coefficients"][n][6:] for n in names}
+    _sample_monomials(old, names)
     for root in old["solver"]["solutions"]:
         root["free_parameters"] = {n: in_t(n, root["free_parameters"][n])[6:] for n in names}
     old.pop("path_quality", None)
