@@ -26,16 +26,17 @@ def polish(
     r = problem.residual(beta)
     if np.linalg.norm(r) < POLISH * tol or not np.all(np.isfinite(r)):
         return beta, r
-    jac = problem.jacobian(beta)
     for _ in range(iterations):
-        if np.linalg.norm(r) < POLISH * tol or not np.all(np.isfinite(jac)):
+        jac = problem.jacobian(beta)  # only while a step is still to be taken
+        if not np.all(np.isfinite(jac)):
             break
         trial = beta - np.linalg.lstsq(jac, r, rcond=None)[0]
         r_trial = problem.residual(trial)
         if np.linalg.norm(r_trial) >= np.linalg.norm(r):
             break
-        beta = trial
-        r, jac = problem.residual_and_jacobian(beta)
+        beta, r = trial, r_trial
+        if np.linalg.norm(r) < POLISH * tol:
+            break
     return beta, r
 
 
