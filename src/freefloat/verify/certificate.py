@@ -97,6 +97,17 @@ def _tolerance(measured: float, margin: float) -> float:
     return max(ACCURACY, SLACK_FRACTION * (measured - margin))
 
 
+class _Least:
+    """The smallest clearance measured so far (m), its instant (s) and pair."""
+
+    def __init__(self, value: float, time: float, pair: int) -> None:
+        self.value, self.time, self.pair = value, time, pair
+
+    def note(self, value: float, time: float, pair: int) -> None:
+        if value < self.value:
+            self.value, self.time, self.pair = value, time, pair
+
+
 def certify(
     mesh: MeshClearance,
     motion: PolynomialMotion,
@@ -114,24 +125,19 @@ def certify(
         instants: instants of the first, uniform pass (>= 2).
     """
     store = _Instants(mesh, motion)
-    measured, when, pair, lower, heap = _first_pass(
-        mesh, store, np.linspace(0.0, motion.duration, instants), margin
-    )
+    times = np.linspace(0.0, motion.duration, instants)
+    # the first pass's instants of even index: its intervals measure these ends first
+    even = {float(t) for t in times[::2]}
+    least, lower, heap = _first_pass(mesh, store, times, margin)
     bisections = 0
     exhausted = False
     while heap:
         lb, t0, t1, k, exact, speed = heap[0]
-        if lb >= measured - _tolerance(measured, margin):
+        if lb >= least.value - _tolerance(least.value, margin):
             break  # this and every later item is within the accuracy of the minimum
         heapq.heappop(heap)
         if not exact:
-            d0, d1 = store.distance(t0, k), store.distance(t1, k)
-            for d, t in ((d0, t0), (d1, t1)):
-                if d < measured:
-                    measured, when, pair = d, t, k
-            value = 0.5 * (d0 + d1 - speed * (t1 - t0))
-            if value < measured - _tolerance(measured, margin):  # the leaf pairs may settle it
-                value = max(value, _leaf_value(store, k, t0, t1, store.rates([t0], [t1])[0]))
+            value = _measure_ends(store, least, margin, t0 in even, (t0, t1, k, speed))
             heapq.heappush(heap, (value, t0, t1, k, True, speed))
             continue
         if bisections >= MAX_BISECTIONS:
@@ -140,34 +146,32 @@ def certify(
             break
         bisections += 1
         mid = 0.5 * (t0 + t1)
-        dm = store.distance(mid, k)
-        if dm < measured:
-            measured, when, pair = dm, mid, k
+        least.note(store.distance(mid, k), mid, k)
         rates = store.rates([t0, mid], [mid, t1])
         for (a, b), rate in zip(((t0, mid), (mid, t1)), rates, strict=True):
             speed = float(rate @ mesh.pair_reach[:, k])
             value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
-            if value < measured - _tolerance(measured, margin):
+            if value < least.value - _tolerance(least.value, margin):
                 value = max(value, _leaf_value(store, k, a, b, rate))
             heapq.heappush(heap, (value, a, b, k, True, speed))
     if heap:
         lower = min(lower, heap[0][0])
     contained = _contained_at_start(mesh, store)
     if contained is not None:
-        measured, when, pair = min(measured, -store.distance(0.0, contained)), 0.0, contained
-        lower = min(lower, measured)
-    lower = min(lower, measured)
+        least = _Least(min(least.value, -store.distance(0.0, contained)), 0.0, contained)
+        lower = min(lower, least.value)
+    lower = min(lower, least.value)
     agreement = (
-        (-math.inf, "") if solver is None else _disagreement(mesh, solver, store, {0.0, when})
+        (-math.inf, "") if solver is None else _disagreement(mesh, solver, store, least.time)
     )
     return ClearanceCertificate(
         margin=margin,
         lower_bound=lower,
-        measured=measured,
-        time=when,
-        pair=mesh.names[pair],
-        kind=mesh.kinds[pair] + (", contained" if contained == pair else ""),
-        penetration=measured < 0.0,
+        measured=least.value,
+        time=least.time,
+        pair=mesh.names[least.pair],
+        kind=mesh.kinds[least.pair] + (", contained" if contained == least.pair else ""),
+        penetration=least.value < 0.0,
         instants=len(store.placements),
         bisections=bisections,
         certified=lower >= margin,
@@ -177,17 +181,52 @@ def certify(
     )
 
 
+def _measure_ends(
+    store: _Instants,
+    least: _Least,
+    margin: float,
+    start_first: bool,
+    item: tuple[float, float, int, float],
+) -> float:
+    """A first-pass item's bound (m) from exact distances at its ends.
+
+    ``item``: its ends (s), pair and speed bound (m/s). One end first: one already measured,
+    else the start when ``start_first`` (the grid's even instants, each shared by two
+    intervals). The distance there less the pair's speed over the whole interval bounds it;
+    when that settles it, the other end is not measured. Otherwise the mean of both ends
+    less half the speed times the width, raised by the leaf pairs' bound
+    (:func:`_leaf_value`) when still below the settling threshold.
+    """
+    t0, t1, k, speed = item
+    if (t0, k) in store.exact or ((t1, k) not in store.exact and start_first):
+        first, other = t0, t1
+    else:
+        first, other = t1, t0
+    d = store.distance(first, k)
+    least.note(d, first, k)
+    one_end = d - speed * (t1 - t0)
+    if (other, k) not in store.exact and one_end >= least.value - _tolerance(least.value, margin):
+        return one_end
+    d0, d1 = store.distance(t0, k), store.distance(t1, k)
+    least.note(d0, t0, k)
+    least.note(d1, t1, k)
+    value = 0.5 * (d0 + d1 - speed * (t1 - t0))
+    if value < least.value - _tolerance(least.value, margin):  # the leaf pairs may settle it
+        value = max(value, _leaf_value(store, k, t0, t1, store.rates([t0], [t1])[0]))
+    return value
+
+
 #: A heap item: lower bound (m), interval ends (s), pair, whether its ends are exact, speed (m/s).
 _Item = tuple[float, float, float, int, bool, float]
 
 
 def _first_pass(
     mesh: MeshClearance, store: _Instants, times: np.ndarray, margin: float
-) -> tuple[float, float, int, float, list[_Item]]:
+) -> tuple[_Least, float, list[_Item]]:
     """The uniform first pass at ``times`` (s): sphere bounds, then leaf bounds where open.
 
     One exact query where the sphere bounds are least. Returns the smallest measured
-    clearance (m), its time (s) and pair, the least bound of the intervals settled (m; inf if
+    clearance (m) with its time (s) and pair, the least bound of the intervals settled (m; inf if
     none), and the heap of the others.
     """
     store.load(times)
@@ -215,7 +254,7 @@ def _first_pass(
         for i, k in zip(*np.nonzero(~settled), strict=True)
     ]
     heapq.heapify(heap)
-    return measured, when, pair, lower, heap
+    return _Least(measured, when, pair), lower, heap
 
 
 def _leaf_value(store: _Instants, k: int, a: float, b: float, rates: np.ndarray) -> float:
@@ -306,28 +345,46 @@ def _contained_at_start(mesh: MeshClearance, store: _Instants) -> int | None:
 
 
 def _disagreement(
-    mesh: MeshClearance, solver: CollisionModel, store: _Instants, times: set[float]
+    mesh: MeshClearance, solver: CollisionModel, store: _Instants, when: float
 ) -> tuple[float, str]:
     """How far the solver's hull distances stray outside what their meshes allow (m).
 
     A hull contains its mesh, so its distance is at most the mesh's and at least the mesh's
-    minus the two hulls' slack. Returns the worst excess over those bounds (negative or within
-    :data:`HULL_TOLERANCE` when every pair agrees) and where it occurs.
+    minus the two hulls' slack. Compared at ``when`` (s; the smallest clearance's instant), for
+    every pair the certificate measured there, and for every body the pair in which it lies
+    nearest another by its leaf spheres: every hull is compared with its mesh at least once,
+    and the pairs that bind are all compared. Returns the worst excess over those bounds
+    (negative or within :data:`HULL_TOLERANCE` when every pair compared agrees) and where.
     """
     if solver.names != mesh.names:
         return math.inf, "the solver checks other pairs than the URDF states"
     slack = [hull_slack(solver, i) for i in range(len(mesh.shapes))]
+    hull = solver.distances(store.motion.joints(when)).values
     worst, where = -math.inf, ""
-    for t in sorted(times):
-        hull = solver.distances(store.motion.joints(t)).values
-        for k, (a, b) in enumerate(mesh.pairs):
-            true = store.distance(t, k)
-            farther = hull[k] - true
-            nearer = true - hull[k] - slack[a] - slack[b] if true > 0.0 else -math.inf
-            if max(farther, nearer) > worst:
-                worst = max(farther, nearer)
-                where = (
-                    f"{mesh.names[k]} at t = {t:.4g} s: hull {hull[k]:.6g} m, mesh {true:.6g} m, "
-                    f"hull slack {slack[a] + slack[b]:.3g} m"
-                )
+    for k in _compared(mesh, store, when):
+        a, b = mesh.pairs[k]
+        true = store.distance(when, k)
+        farther = hull[k] - true
+        nearer = true - hull[k] - slack[a] - slack[b] if true > 0.0 else -math.inf
+        if max(farther, nearer) > worst:
+            worst = max(farther, nearer)
+            where = (
+                f"{mesh.names[k]} at t = {when:.4g} s: hull {hull[k]:.6g} m, mesh {true:.6g} m, "
+                f"hull slack {slack[a] + slack[b]:.3g} m"
+            )
     return worst, where
+
+
+def _compared(mesh: MeshClearance, store: _Instants, when: float) -> list[int]:
+    """The pairs the hull agreement compares at ``when`` (s), in pair order (see above)."""
+    count = len(mesh.pairs)
+    chosen = {k for (t, k) in store.exact if t == when}
+    if count == 0:
+        return []
+    every = np.arange(count)
+    bounds = mesh.leaves.bounds(store.at(when)[None], np.zeros(count, dtype=int), every)
+    for body in range(len(mesh.shapes)):
+        mine = np.flatnonzero((mesh.first == body) | (mesh.second == body))
+        if len(mine):
+            chosen.add(int(mine[np.argmin(bounds[mine])]))
+    return sorted(chosen)
