@@ -48,6 +48,7 @@ class _Instants:
         self.speeds: dict[float, np.ndarray] = {}
         self.exact: dict[tuple[float, int], float] = {}
         self.leaf_gaps: dict[tuple[float, int], np.ndarray] = {}
+        self.leaf_centres: dict[float, np.ndarray] = {}
 
     def load(self, times: np.ndarray) -> None:
         """Placements and joint speeds at many instants (s), evaluated in one call."""
@@ -75,9 +76,12 @@ class _Instants:
     def gaps(self, t: float, k: int) -> np.ndarray:
         """Lower bounds (m) of the distance between the leaves of each of pair k's leaf pairs."""
         if (t, k) not in self.leaf_gaps:
-            rows = self.mesh.leaves.rows_of(k)
+            leaves, poses = self.mesh.leaves, self.at(t)[None]
+            if t not in self.leaf_centres:  # every leaf placed once per instant
+                self.leaf_centres[t] = leaves.centres_at(poses)
+            rows = leaves.rows_of(k)
             instants = np.zeros(len(rows), dtype=int)
-            self.leaf_gaps[(t, k)] = self.mesh.leaves.row_gaps(self.at(t)[None], instants, rows)
+            self.leaf_gaps[(t, k)] = leaves.gaps_at(self.leaf_centres[t], poses, instants, rows)
         return self.leaf_gaps[(t, k)]
 
     def distance(self, t: float, k: int) -> float:
@@ -376,15 +380,23 @@ def _disagreement(
 
 
 def _compared(mesh: MeshClearance, store: _Instants, when: float) -> list[int]:
-    """The pairs the hull agreement compares at ``when`` (s), in pair order (see above)."""
+    """The pairs the hull agreement compares at ``when`` (s), in pair order.
+
+    Every pair measured there; then each body no chosen pair holds gets the pair in which it
+    lies nearest another body by its leaf spheres (which covers that other body too).
+    """
     count = len(mesh.pairs)
-    chosen = {k for (t, k) in store.exact if t == when}
     if count == 0:
         return []
+    chosen = {k for (t, k) in store.exact if t == when}
     every = np.arange(count)
     bounds = mesh.leaves.bounds(store.at(when)[None], np.zeros(count, dtype=int), every)
+    covered = {int(g) for k in chosen for g in mesh.pairs[k]}
     for body in range(len(mesh.shapes)):
         mine = np.flatnonzero((mesh.first == body) | (mesh.second == body))
-        if len(mine):
-            chosen.add(int(mine[np.argmin(bounds[mine])]))
+        if body in covered or len(mine) == 0:
+            continue
+        nearest = int(mine[np.argmin(bounds[mine])])
+        chosen.add(nearest)
+        covered.update(int(g) for g in mesh.pairs[nearest])
     return sorted(chosen)
