@@ -37,12 +37,15 @@ __all__ = ["certify"]
 class _Instants:
     """Placements, joint speeds and exact distances per instant, each computed once.
 
-    The joint values and rates of an instant come from one evaluation of the paths; the
-    rates' absolute values give the ends of the speed bound of every interval that ends there.
+    The joint values and rates of an instant come from one evaluation of the paths (several
+    instants per evaluation when they are asked for together); the rates' absolute values
+    give the ends of the speed bound of every interval that ends there. An instant's
+    placements are computed when first used.
     """
 
     def __init__(self, mesh: MeshClearance, motion: PolynomialMotion) -> None:
         self.mesh, self.motion = mesh, motion
+        self.joints: dict[float, np.ndarray] = {}
         self.placements: dict[float, np.ndarray] = {}
         self.placed: dict[float, Placed] = {}
         self.speeds: dict[float, np.ndarray] = {}
@@ -51,15 +54,18 @@ class _Instants:
         self.leaf_centres: dict[float, np.ndarray] = {}
 
     def load(self, times: np.ndarray) -> None:
-        """Placements and joint speeds at many instants (s), evaluated in one call."""
+        """Joint values and speeds at many instants (s), evaluated in one call."""
         joints, rates, _ = self.motion.path(np.asarray(times, dtype=float))
         for t, q, qd in zip(times.tolist(), joints, np.abs(rates), strict=True):
-            if t not in self.placements:
-                self.placements[t], self.speeds[t] = self.mesh.placements(q), qd
+            if t not in self.joints:
+                self.joints[t], self.speeds[t] = q, qd
 
     def at(self, t: float) -> np.ndarray:
+        """(G, 4, 4) placements at ``t`` (s)."""
         if t not in self.placements:
-            self.load(np.array([t]))
+            if t not in self.joints:
+                self.load(np.array([t]))
+            self.placements[t] = self.mesh.placements(self.joints[t])
         return self.placements[t]
 
     def rates(self, t0: Sequence[float], t1: Sequence[float]) -> np.ndarray:
@@ -150,6 +156,8 @@ def certify(
             break
         bisections += 1
         mid = 0.5 * (t0 + t1)
+        if mid not in store.joints:  # with the middles of its halves, likely halved next
+            store.load(np.array([mid, 0.5 * (t0 + mid), 0.5 * (mid + t1)]))
         least.note(store.distance(mid, k), mid, k)
         rates = store.rates([t0, mid], [mid, t1])
         for (a, b), rate in zip(((t0, mid), (mid, t1)), rates, strict=True):
