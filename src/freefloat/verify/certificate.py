@@ -6,8 +6,9 @@ measured clearance is found early and every interval whose bound lies within
 single bounding spheres leave open are bounded again from the meshes' leaf spheres
 (:mod:`.sphere_tree`): their gaps, and the least over leaf pairs of each leaf pair's own
 Lipschitz bound. Each item is refined in two steps: exact distances at its two ends (in place
-of the sphere bounds it starts from), then halving; each new interval's bound is the larger of
-the whole bodies' and the leaf pairs' (:func:`_leaf_value`).
+of the sphere bounds it starts from; one end first, whose distance less the pair's speed over
+the whole interval may settle it without the other), then halving; each new interval's bound
+is the larger of the whole bodies' and the leaf pairs' (:func:`_leaf_value`).
 """
 
 from __future__ import annotations
