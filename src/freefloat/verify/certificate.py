@@ -28,8 +28,8 @@ from .clearance import (
     ClearanceCertificate,
     MeshClearance,
     Placed,
-    hull_slack,
 )
+from .hull_agreement import hull_agreement
 from .motion import PolynomialMotion
 
 __all__ = ["certify"]
@@ -174,9 +174,18 @@ def certify(
         least = _Least(min(least.value, -store.distance(0.0, contained)), 0.0, contained)
         lower = min(lower, least.value)
     lower = min(lower, least.value)
-    agreement = (
-        (-math.inf, "") if solver is None else _disagreement(mesh, solver, store, least.time)
-    )
+    agreement = (-math.inf, "")
+    if solver is not None:
+        when = least.time
+        agreement = hull_agreement(
+            mesh,
+            solver,
+            when,
+            motion.joints(when),
+            store.at(when),
+            {k for (t, k) in store.exact if t == when},
+            lambda k: store.distance(when, k),
+        )
     return ClearanceCertificate(
         margin=margin,
         lower_bound=lower,
@@ -217,9 +226,14 @@ def _measure_ends(
         first, other = t1, t0
     d = store.distance(first, k)
     least.note(d, first, k)
-    one_end = d - speed * (t1 - t0)
-    if (other, k) not in store.exact and one_end >= least.value - _tolerance(least.value, margin):
-        return one_end
+    if (other, k) not in store.exact:
+        threshold = least.value - _tolerance(least.value, margin)
+        one_end = d - speed * (t1 - t0)
+        if one_end < threshold:  # the leaf pairs' own speeds may settle it
+            rates = store.rates([t0], [t1])[0]
+            one_end = max(one_end, _leaf_value(store, k, first, other, rates, one_end=True))
+        if one_end >= threshold:
+            return one_end
     d0, d1 = store.distance(t0, k), store.distance(t1, k)
     least.note(d0, t0, k)
     least.note(d1, t1, k)
@@ -270,23 +284,30 @@ def _first_pass(
     return _Least(measured, when, pair), lower, heap
 
 
-def _leaf_value(store: _Instants, k: int, a: float, b: float, rates: np.ndarray) -> float:
-    """A lower bound (m) of pair k's distance on ``[a, b]`` from its leaf pairs' own motion.
+def _leaf_value(
+    store: _Instants, k: int, a: float, b: float, rates: np.ndarray, one_end: bool = False
+) -> float:
+    """A lower bound (m) of pair k's distance between ``a`` and ``b`` (s) from its leaf pairs.
 
     The distance of two bodies clear of each other is the least of the distances between
     their leaves' triangles. Each of those is at least the exact distance at an end and at
     least its leaf pair's bound there, and moves no faster than the leaf pair's own speed
     bound (``rates``: the joint-rate bounds on the interval, rad/s or m/s), which for a leaf
-    near a joint's axis is far below the whole body's. With a penetration at an end, -inf
+    near a joint's axis is far below the whole body's. With ``one_end``, only ``a`` is
+    measured: at ``b`` each leaf pair's distance is at least its bound there and at least its
+    value at ``a`` less its speed times the width. With a penetration at a measured end, -inf
     (the whole body's bound stands alone).
     """
-    da, db = store.distance(a, k), store.distance(b, k)
-    if da <= 0.0 or db <= 0.0:
+    width = abs(b - a)
+    da = store.distance(a, k)
+    db = -math.inf if one_end else store.distance(b, k)
+    if da <= 0.0 or (db <= 0.0 and not one_end):
         return -math.inf
     leaves = store.mesh.leaves
     speed = rates @ leaves.row_reach[:, leaves.rows_of(k)]
-    ends = np.maximum(da, store.gaps(a, k)) + np.maximum(db, store.gaps(b, k))
-    return float(np.min(0.5 * (ends - speed * (b - a))))
+    start = np.maximum(da, store.gaps(a, k))
+    end = np.maximum.reduce([np.full_like(start, db), store.gaps(b, k), start - speed * width])
+    return float(np.min(0.5 * (start + end - speed * width)))
 
 
 def _tighten(
@@ -355,57 +376,3 @@ def _contained_at_start(mesh: MeshClearance, store: _Instants) -> int | None:
         if store.distance(0.0, int(k)) > 0.0 and mesh.contained(placements, int(k)):
             return int(k)
     return None
-
-
-def _disagreement(
-    mesh: MeshClearance, solver: CollisionModel, store: _Instants, when: float
-) -> tuple[float, str]:
-    """How far the solver's hull distances stray outside what their meshes allow (m).
-
-    A hull contains its mesh, so its distance is at most the mesh's and at least the mesh's
-    minus the two hulls' slack. Compared at ``when`` (s; the smallest clearance's instant), for
-    every pair the certificate measured there, and for every body the pair in which it lies
-    nearest another by its leaf spheres: every hull is compared with its mesh at least once,
-    and the pairs that bind are all compared. Returns the worst excess over those bounds
-    (negative or within :data:`HULL_TOLERANCE` when every pair compared agrees) and where.
-    """
-    if solver.names != mesh.names:
-        return math.inf, "the solver checks other pairs than the URDF states"
-    slack = [hull_slack(solver, i) for i in range(len(mesh.shapes))]
-    hull = solver.distances(store.motion.joints(when)).values
-    worst, where = -math.inf, ""
-    for k in _compared(mesh, store, when):
-        a, b = mesh.pairs[k]
-        true = store.distance(when, k)
-        farther = hull[k] - true
-        nearer = true - hull[k] - slack[a] - slack[b] if true > 0.0 else -math.inf
-        if max(farther, nearer) > worst:
-            worst = max(farther, nearer)
-            where = (
-                f"{mesh.names[k]} at t = {when:.4g} s: hull {hull[k]:.6g} m, mesh {true:.6g} m, "
-                f"hull slack {slack[a] + slack[b]:.3g} m"
-            )
-    return worst, where
-
-
-def _compared(mesh: MeshClearance, store: _Instants, when: float) -> list[int]:
-    """The pairs the hull agreement compares at ``when`` (s), in pair order.
-
-    Every pair measured there; then each body no chosen pair holds gets the pair in which it
-    lies nearest another body by its leaf spheres (which covers that other body too).
-    """
-    count = len(mesh.pairs)
-    if count == 0:
-        return []
-    chosen = {k for (t, k) in store.exact if t == when}
-    every = np.arange(count)
-    bounds = mesh.leaves.bounds(store.at(when)[None], np.zeros(count, dtype=int), every)
-    covered = {int(g) for k in chosen for g in mesh.pairs[k]}
-    for body in range(len(mesh.shapes)):
-        mine = np.flatnonzero((mesh.first == body) | (mesh.second == body))
-        if body in covered or len(mine) == 0:
-            continue
-        nearest = int(mine[np.argmin(bounds[mine])])
-        chosen.add(nearest)
-        covered.update(int(g) for g in mesh.pairs[nearest])
-    return sorted(chosen)

@@ -8,7 +8,7 @@ Two checks for a plan kept clear (:mod:`freefloat.verify.clearance`):
   meshes allow (m; passes at <= 1e-6 m, GJK's tolerance): a hull reporting more clearance
   than its mesh, or less than the mesh minus the hull's slack, fails it. Compared at the
   smallest clearance's instant, every body's hull at least once
-  (:func:`freefloat.verify.certificate.certify`).
+  (:mod:`freefloat.verify.hull_agreement`).
 """
 
 from __future__ import annotations
