@@ -115,6 +115,7 @@ class _Least:
         self.value, self.time, self.pair = value, time, pair
 
     def note(self, value: float, time: float, pair: int) -> None:
+        """Keep a clearance ``value`` (m) at ``time`` (s) of ``pair`` if it is the least yet."""
         if value < self.value:
             self.value, self.time, self.pair = value, time, pair
 
