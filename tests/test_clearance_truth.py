@@ -23,6 +23,7 @@ from freefloat.robot.collision import (
     checked_distance,
     known_srdf,
 )
+from freefloat.robot.distance_query import Distances
 from freefloat.verify.certificate import certify
 from freefloat.verify.clearance import MeshClearance, hull_slack
 from freefloat.verify.motion import PolynomialMotion
@@ -295,3 +296,41 @@ def test_a_mesh_file_changed_in_place_is_measured_anew(tmp_path):
         assert solver == pytest.approx(truth, abs=1e-7)
         mesh = MeshClearance(robot, None, [ball])
         assert mesh.exact(mesh.placements(np.zeros(1)), k) == pytest.approx(truth, abs=1e-7)
+
+
+@pytest.mark.parametrize("direction", ["farther", "nearer"])
+def test_the_hull_agreement_catches_a_wrong_hull_on_any_body(direction):
+    """UR5 servicer, quintic motion: the solver's figures of every pair holding one body are
+    made 5 mm too large (a fake hull: more clearance than its mesh) or 5 mm beyond its slack
+    too small (a hull of the wrong mesh), one body at a time; the agreement, which compares a
+    few pairs at the smallest clearance's instant, catches every body's error (known by
+    construction: the honest hull lies at most its slack below the mesh, never above) and
+    passes the honest model."""
+    robot = ff.load_robot(UR5)
+    srdf = known_srdf(robot)
+    mesh = MeshClearance(robot, srdf)
+    solver = CollisionModel(robot, srdf)
+    motion = _quintic(UR5_START, UR5_GOAL, 12.0)
+    honest = certify(mesh, motion, 0.01, solver)
+    assert honest.hull_excess <= 1e-6, honest.hull_detail
+    slack = np.array([hull_slack(solver, i) for i in range(len(mesh.shapes))])
+    first, second = mesh.first, mesh.second
+    distances = solver.distances
+    bodies = sorted(set(first) | set(second))
+    assert len(bodies) > 5
+    for body in bodies:
+        held = (first == body) | (second == body)
+        error = 0.005 if direction == "farther" else -(slack[first] + slack[second] + 0.005)
+
+        def wrong(joints, gradients=False, held=held, error=error):
+            values = distances(joints).values.copy()
+            values[held] += np.broadcast_to(error, values.shape)[held]
+            return Distances(values)
+
+        solver.distances = wrong  # type: ignore[method-assign]
+        try:
+            cert = certify(mesh, motion, 0.01, solver)
+        finally:
+            del solver.distances
+        assert cert.hull_excess > 1e-3, (direction, body, cert.hull_detail)  # fails its 1e-6 m
+        assert cert.lower_bound == honest.lower_bound  # the mesh certificate is the solver's

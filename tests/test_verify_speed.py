@@ -303,7 +303,7 @@ def test_the_culled_certificate_holds_against_every_pair_measured_densely(
     counted["exact"] = 0
     with monkeypatch.context() as patch:  # the certificate as it was: whole bodies only
         patch.setattr(certificate, "_tighten", lambda *args: None)
-        patch.setattr(certificate, "_leaf_value", lambda *args: -math.inf)
+        patch.setattr(certificate, "_leaf_value", lambda *args, **kwargs: -math.inf)
         plain = certify(mesh, motion, 0.01)
     plain_queries = counted["exact"]
     mesh.exact = exact  # type: ignore[method-assign]

@@ -6,8 +6,9 @@ measured clearance is found early and every interval whose bound lies within
 single bounding spheres leave open are bounded again from the meshes' leaf spheres
 (:mod:`.sphere_tree`): their gaps, and the least over leaf pairs of each leaf pair's own
 Lipschitz bound. Each item is refined in two steps: exact distances at its two ends (in place
-of the sphere bounds it starts from), then halving; each new interval's bound is the larger of
-the whole bodies' and the leaf pairs' (:func:`_leaf_value`).
+of the sphere bounds it starts from; one end first, whose distance less the pair's speed over
+the whole interval may settle it without the other), then halving; each new interval's bound
+is the larger of the whole bodies' and the leaf pairs' (:func:`_leaf_value`).
 """
 
 from __future__ import annotations
@@ -27,8 +28,8 @@ from .clearance import (
     ClearanceCertificate,
     MeshClearance,
     Placed,
-    hull_slack,
 )
+from .hull_agreement import hull_agreement
 from .motion import PolynomialMotion
 
 __all__ = ["certify"]
@@ -37,28 +38,35 @@ __all__ = ["certify"]
 class _Instants:
     """Placements, joint speeds and exact distances per instant, each computed once.
 
-    The joint values and rates of an instant come from one evaluation of the paths; the
-    rates' absolute values give the ends of the speed bound of every interval that ends there.
+    The joint values and rates of an instant come from one evaluation of the paths (several
+    instants per evaluation when they are asked for together); the rates' absolute values
+    give the ends of the speed bound of every interval that ends there. An instant's
+    placements are computed when first used.
     """
 
     def __init__(self, mesh: MeshClearance, motion: PolynomialMotion) -> None:
         self.mesh, self.motion = mesh, motion
+        self.joints: dict[float, np.ndarray] = {}
         self.placements: dict[float, np.ndarray] = {}
         self.placed: dict[float, Placed] = {}
         self.speeds: dict[float, np.ndarray] = {}
         self.exact: dict[tuple[float, int], float] = {}
         self.leaf_gaps: dict[tuple[float, int], np.ndarray] = {}
+        self.leaf_centres: dict[float, np.ndarray] = {}
 
     def load(self, times: np.ndarray) -> None:
-        """Placements and joint speeds at many instants (s), evaluated in one call."""
+        """Joint values and speeds at many instants (s), evaluated in one call."""
         joints, rates, _ = self.motion.path(np.asarray(times, dtype=float))
         for t, q, qd in zip(times.tolist(), joints, np.abs(rates), strict=True):
-            if t not in self.placements:
-                self.placements[t], self.speeds[t] = self.mesh.placements(q), qd
+            if t not in self.joints:
+                self.joints[t], self.speeds[t] = q, qd
 
     def at(self, t: float) -> np.ndarray:
+        """(G, 4, 4) placements at ``t`` (s)."""
         if t not in self.placements:
-            self.load(np.array([t]))
+            if t not in self.joints:
+                self.load(np.array([t]))
+            self.placements[t] = self.mesh.placements(self.joints[t])
         return self.placements[t]
 
     def rates(self, t0: Sequence[float], t1: Sequence[float]) -> np.ndarray:
@@ -75,9 +83,12 @@ class _Instants:
     def gaps(self, t: float, k: int) -> np.ndarray:
         """Lower bounds (m) of the distance between the leaves of each of pair k's leaf pairs."""
         if (t, k) not in self.leaf_gaps:
-            rows = self.mesh.leaves.rows_of(k)
+            leaves, poses = self.mesh.leaves, self.at(t)[None]
+            if t not in self.leaf_centres:  # every leaf placed once per instant
+                self.leaf_centres[t] = leaves.centres_at(poses)
+            rows = leaves.rows_of(k)
             instants = np.zeros(len(rows), dtype=int)
-            self.leaf_gaps[(t, k)] = self.mesh.leaves.row_gaps(self.at(t)[None], instants, rows)
+            self.leaf_gaps[(t, k)] = leaves.gaps_at(self.leaf_centres[t], poses, instants, rows)
         return self.leaf_gaps[(t, k)]
 
     def distance(self, t: float, k: int) -> float:
@@ -97,6 +108,18 @@ def _tolerance(measured: float, margin: float) -> float:
     return max(ACCURACY, SLACK_FRACTION * (measured - margin))
 
 
+class _Least:
+    """The smallest clearance measured so far (m), its instant (s) and pair."""
+
+    def __init__(self, value: float, time: float, pair: int) -> None:
+        self.value, self.time, self.pair = value, time, pair
+
+    def note(self, value: float, time: float, pair: int) -> None:
+        """Keep a clearance ``value`` (m) at ``time`` (s) of ``pair`` if it is the least yet."""
+        if value < self.value:
+            self.value, self.time, self.pair = value, time, pair
+
+
 def certify(
     mesh: MeshClearance,
     motion: PolynomialMotion,
@@ -114,24 +137,19 @@ def certify(
         instants: instants of the first, uniform pass (>= 2).
     """
     store = _Instants(mesh, motion)
-    measured, when, pair, lower, heap = _first_pass(
-        mesh, store, np.linspace(0.0, motion.duration, instants), margin
-    )
+    times = np.linspace(0.0, motion.duration, instants)
+    # the first pass's instants of even index: its intervals measure these ends first
+    even = {float(t) for t in times[::2]}
+    least, lower, heap = _first_pass(mesh, store, times, margin)
     bisections = 0
     exhausted = False
     while heap:
         lb, t0, t1, k, exact, speed = heap[0]
-        if lb >= measured - _tolerance(measured, margin):
+        if lb >= least.value - _tolerance(least.value, margin):
             break  # this and every later item is within the accuracy of the minimum
         heapq.heappop(heap)
         if not exact:
-            d0, d1 = store.distance(t0, k), store.distance(t1, k)
-            for d, t in ((d0, t0), (d1, t1)):
-                if d < measured:
-                    measured, when, pair = d, t, k
-            value = 0.5 * (d0 + d1 - speed * (t1 - t0))
-            if value < measured - _tolerance(measured, margin):  # the leaf pairs may settle it
-                value = max(value, _leaf_value(store, k, t0, t1, store.rates([t0], [t1])[0]))
+            value = _measure_ends(store, least, margin, t0 in even, (t0, t1, k, speed))
             heapq.heappush(heap, (value, t0, t1, k, True, speed))
             continue
         if bisections >= MAX_BISECTIONS:
@@ -140,34 +158,43 @@ def certify(
             break
         bisections += 1
         mid = 0.5 * (t0 + t1)
-        dm = store.distance(mid, k)
-        if dm < measured:
-            measured, when, pair = dm, mid, k
+        if mid not in store.joints:  # with the middles of its halves, likely halved next
+            store.load(np.array([mid, 0.5 * (t0 + mid), 0.5 * (mid + t1)]))
+        least.note(store.distance(mid, k), mid, k)
         rates = store.rates([t0, mid], [mid, t1])
         for (a, b), rate in zip(((t0, mid), (mid, t1)), rates, strict=True):
             speed = float(rate @ mesh.pair_reach[:, k])
             value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
-            if value < measured - _tolerance(measured, margin):
+            if value < least.value - _tolerance(least.value, margin):
                 value = max(value, _leaf_value(store, k, a, b, rate))
             heapq.heappush(heap, (value, a, b, k, True, speed))
     if heap:
         lower = min(lower, heap[0][0])
     contained = _contained_at_start(mesh, store)
     if contained is not None:
-        measured, when, pair = min(measured, -store.distance(0.0, contained)), 0.0, contained
-        lower = min(lower, measured)
-    lower = min(lower, measured)
-    agreement = (
-        (-math.inf, "") if solver is None else _disagreement(mesh, solver, store, {0.0, when})
-    )
+        least = _Least(min(least.value, -store.distance(0.0, contained)), 0.0, contained)
+        lower = min(lower, least.value)
+    lower = min(lower, least.value)
+    agreement = (-math.inf, "")
+    if solver is not None:
+        when = least.time
+        agreement = hull_agreement(
+            mesh,
+            solver,
+            when,
+            motion.joints(when),
+            store.at(when),
+            {k for (t, k) in store.exact if t == when},
+            lambda k: store.distance(when, k),
+        )
     return ClearanceCertificate(
         margin=margin,
         lower_bound=lower,
-        measured=measured,
-        time=when,
-        pair=mesh.names[pair],
-        kind=mesh.kinds[pair] + (", contained" if contained == pair else ""),
-        penetration=measured < 0.0,
+        measured=least.value,
+        time=least.time,
+        pair=mesh.names[least.pair],
+        kind=mesh.kinds[least.pair] + (", contained" if contained == least.pair else ""),
+        penetration=least.value < 0.0,
         instants=len(store.placements),
         bisections=bisections,
         certified=lower >= margin,
@@ -177,17 +204,57 @@ def certify(
     )
 
 
+def _measure_ends(
+    store: _Instants,
+    least: _Least,
+    margin: float,
+    start_first: bool,
+    item: tuple[float, float, int, float],
+) -> float:
+    """A first-pass item's bound (m) from exact distances at its ends.
+
+    ``item``: its ends (s), pair and speed bound (m/s). One end first: one already measured,
+    else the start when ``start_first`` (the grid's even instants, each shared by two
+    intervals). The distance there less the pair's speed over the whole interval bounds it;
+    when that settles it, the other end is not measured. Otherwise the mean of both ends
+    less half the speed times the width, raised by the leaf pairs' bound
+    (:func:`_leaf_value`) when still below the settling threshold.
+    """
+    t0, t1, k, speed = item
+    if (t0, k) in store.exact or ((t1, k) not in store.exact and start_first):
+        first, other = t0, t1
+    else:
+        first, other = t1, t0
+    d = store.distance(first, k)
+    least.note(d, first, k)
+    if (other, k) not in store.exact:
+        threshold = least.value - _tolerance(least.value, margin)
+        one_end = d - speed * (t1 - t0)
+        if one_end < threshold:  # the leaf pairs' own speeds may settle it
+            rates = store.rates([t0], [t1])[0]
+            one_end = max(one_end, _leaf_value(store, k, first, other, rates, one_end=True))
+        if one_end >= threshold:
+            return one_end
+    d0, d1 = store.distance(t0, k), store.distance(t1, k)
+    least.note(d0, t0, k)
+    least.note(d1, t1, k)
+    value = 0.5 * (d0 + d1 - speed * (t1 - t0))
+    if value < least.value - _tolerance(least.value, margin):  # the leaf pairs may settle it
+        value = max(value, _leaf_value(store, k, t0, t1, store.rates([t0], [t1])[0]))
+    return value
+
+
 #: A heap item: lower bound (m), interval ends (s), pair, whether its ends are exact, speed (m/s).
 _Item = tuple[float, float, float, int, bool, float]
 
 
 def _first_pass(
     mesh: MeshClearance, store: _Instants, times: np.ndarray, margin: float
-) -> tuple[float, float, int, float, list[_Item]]:
+) -> tuple[_Least, float, list[_Item]]:
     """The uniform first pass at ``times`` (s): sphere bounds, then leaf bounds where open.
 
     One exact query where the sphere bounds are least. Returns the smallest measured
-    clearance (m), its time (s) and pair, the least bound of the intervals settled (m; inf if
+    clearance (m) with its time (s) and pair, the least bound of the intervals settled (m; inf if
     none), and the heap of the others.
     """
     store.load(times)
@@ -215,26 +282,33 @@ def _first_pass(
         for i, k in zip(*np.nonzero(~settled), strict=True)
     ]
     heapq.heapify(heap)
-    return measured, when, pair, lower, heap
+    return _Least(measured, when, pair), lower, heap
 
 
-def _leaf_value(store: _Instants, k: int, a: float, b: float, rates: np.ndarray) -> float:
-    """A lower bound (m) of pair k's distance on ``[a, b]`` from its leaf pairs' own motion.
+def _leaf_value(
+    store: _Instants, k: int, a: float, b: float, rates: np.ndarray, one_end: bool = False
+) -> float:
+    """A lower bound (m) of pair k's distance between ``a`` and ``b`` (s) from its leaf pairs.
 
     The distance of two bodies clear of each other is the least of the distances between
     their leaves' triangles. Each of those is at least the exact distance at an end and at
     least its leaf pair's bound there, and moves no faster than the leaf pair's own speed
     bound (``rates``: the joint-rate bounds on the interval, rad/s or m/s), which for a leaf
-    near a joint's axis is far below the whole body's. With a penetration at an end, -inf
+    near a joint's axis is far below the whole body's. With ``one_end``, only ``a`` is
+    measured: at ``b`` each leaf pair's distance is at least its bound there and at least its
+    value at ``a`` less its speed times the width. With a penetration at a measured end, -inf
     (the whole body's bound stands alone).
     """
-    da, db = store.distance(a, k), store.distance(b, k)
-    if da <= 0.0 or db <= 0.0:
+    width = abs(b - a)
+    da = store.distance(a, k)
+    db = -math.inf if one_end else store.distance(b, k)
+    if da <= 0.0 or (db <= 0.0 and not one_end):
         return -math.inf
     leaves = store.mesh.leaves
     speed = rates @ leaves.row_reach[:, leaves.rows_of(k)]
-    ends = np.maximum(da, store.gaps(a, k)) + np.maximum(db, store.gaps(b, k))
-    return float(np.min(0.5 * (ends - speed * (b - a))))
+    start = np.maximum(da, store.gaps(a, k))
+    end = np.maximum.reduce([np.full_like(start, db), store.gaps(b, k), start - speed * width])
+    return float(np.min(0.5 * (start + end - speed * width)))
 
 
 def _tighten(
@@ -303,31 +377,3 @@ def _contained_at_start(mesh: MeshClearance, store: _Instants) -> int | None:
         if store.distance(0.0, int(k)) > 0.0 and mesh.contained(placements, int(k)):
             return int(k)
     return None
-
-
-def _disagreement(
-    mesh: MeshClearance, solver: CollisionModel, store: _Instants, times: set[float]
-) -> tuple[float, str]:
-    """How far the solver's hull distances stray outside what their meshes allow (m).
-
-    A hull contains its mesh, so its distance is at most the mesh's and at least the mesh's
-    minus the two hulls' slack. Returns the worst excess over those bounds (negative or within
-    :data:`HULL_TOLERANCE` when every pair agrees) and where it occurs.
-    """
-    if solver.names != mesh.names:
-        return math.inf, "the solver checks other pairs than the URDF states"
-    slack = [hull_slack(solver, i) for i in range(len(mesh.shapes))]
-    worst, where = -math.inf, ""
-    for t in sorted(times):
-        hull = solver.distances(store.motion.joints(t)).values
-        for k, (a, b) in enumerate(mesh.pairs):
-            true = store.distance(t, k)
-            farther = hull[k] - true
-            nearer = true - hull[k] - slack[a] - slack[b] if true > 0.0 else -math.inf
-            if max(farther, nearer) > worst:
-                worst = max(farther, nearer)
-                where = (
-                    f"{mesh.names[k]} at t = {t:.4g} s: hull {hull[k]:.6g} m, mesh {true:.6g} m, "
-                    f"hull slack {slack[a] + slack[b]:.3g} m"
-                )
-    return worst, where

@@ -31,10 +31,11 @@ body found inside a closed mesh at the start (winding number) counts its surface
 depth. A body cannot enter a mesh later without crossing its surface, which the certificate
 would see.
 
-**Agreement with the solver.** At the instants of the smallest clearance the solver's hull
-distances are compared pair by pair: a hull may never report more clearance than its mesh
-(:data:`HULL_TOLERANCE`), nor less than the mesh minus the hulls' slack (for each hull face,
-every point lies within the longest edge over sqrt(3) of a mesh vertex).
+**Agreement with the solver.** At the instant of the smallest clearance the solver's hull
+distances are compared pair by pair (the pairs measured there, and each other body's nearest
+pair): a hull may never report more clearance than its mesh (:data:`HULL_TOLERANCE`), nor
+less than the mesh minus the hulls' slack (for each hull face, every point lies within the
+longest edge over sqrt(3) of a mesh vertex).
 """
 
 from __future__ import annotations

@@ -6,7 +6,9 @@ Two checks for a plan kept clear (:mod:`freefloat.verify.clearance`):
   measured on the URDF's own meshes and primitives (m; passes at <= 0 within 1e-6 m);
 - ``clearance_hull_agreement``: how far the solver's hull distances stray outside what the
   meshes allow (m; passes at <= 1e-6 m, GJK's tolerance): a hull reporting more clearance
-  than its mesh, or less than the mesh minus the hull's slack, fails it.
+  than its mesh, or less than the mesh minus the hull's slack, fails it. Compared at the
+  smallest clearance's instant, every body's hull at least once
+  (:mod:`freefloat.verify.hull_agreement`).
 """
 
 from __future__ import annotations

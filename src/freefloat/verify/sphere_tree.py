@@ -176,10 +176,27 @@ class LeafSpheres:
         """
         # every leaf's centre at the instants asked for, once
         used, which_instant = np.unique(instants, return_inverse=True)
-        poses = placements[used][:, self.owner]  # (U, L, 4, 4)
-        world = np.einsum("ulij,lj->uli", poses[..., :3, :3], self.local) + poses[..., :3, 3]
+        poses = placements[used]
+        return self.gaps_at(self.centres_at(poses), poses, which_instant, rows)
+
+    def centres_at(self, placements: np.ndarray) -> np.ndarray:
+        """(K, L, 3) every leaf's centre (m, spacecraft frame) at K sets of body poses."""
+        poses = placements[:, self.owner]  # (K, L, 4, 4)
+        return np.einsum("kLij,Lj->kLi", poses[..., :3, :3], self.local) + poses[..., :3, 3]
+
+    def gaps_at(
+        self, world: np.ndarray, placements: np.ndarray, instants: np.ndarray, rows: np.ndarray
+    ) -> np.ndarray:
+        """:meth:`row_gaps` from the leaves' centres already placed.
+
+        Args:
+            world: (K, L, 3) leaf centres at K instants (:meth:`centres_at`).
+            placements: (K, G, 4, 4) body poses at the same instants.
+            instants: (R,) index into the K instants for each row.
+            rows: (R,) leaf pairs.
+        """
         gap = np.linalg.norm(
-            world[which_instant, self.left[rows]] - world[which_instant, self.right[rows]], axis=1
+            world[instants, self.left[rows]] - world[instants, self.right[rows]], axis=1
         )
         gap -= self.reach[rows]
         # leaf pairs with a box: the sphere's centre to the box itself
@@ -189,7 +206,7 @@ class LeafSpheres:
             box = self.owner[self.box_leaf[which]]
             other = self.sphere_leaf[which]
             pose = placements[instants[boxed], box]  # (B, 4, 4)
-            offset = world[which_instant[boxed], other] - pose[:, :3, 3]
+            offset = world[instants[boxed], other] - pose[:, :3, 3]
             local = np.einsum("bji,bj->bi", pose[:, :3, :3], offset)  # R^T (c - p)
             outside = np.maximum(np.abs(local) - self.half[box], 0.0)
             gap[boxed] = np.linalg.norm(outside, axis=1) - self.radii[other]
