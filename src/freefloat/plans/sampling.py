@@ -65,7 +65,7 @@ def sample_solution(problem: Problem, beta: np.ndarray, count: int) -> Samples:
         qdd=np.array(path.qdd, dtype=float),
         base_position=quat_rotate(quats, -dyn.com),
         base_quaternion_xyzw=np.array(quats, dtype=float),
-        base_zyx_deg=np.array([degrees(row) for row in zyx_from_quats(quats).tolist()]),
+        base_zyx_deg=np.degrees(zyx_from_quats(quats)),  # math.degrees' product, batched
         end_effector_position=paths[0],
         base_angular_velocity=np.array(dyn.base_twist[:, 3:], dtype=float),
         tau=np.array(dyn.tau, dtype=float),
