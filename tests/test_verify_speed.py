@@ -27,6 +27,7 @@ from freefloat.verify.clearance import ACCURACY, SLACK_FRACTION, MeshClearance
 from freefloat.verify.motion import PolynomialMotion, reach_coefficients
 from freefloat.verify.sphere_tree import leaf_spheres
 
+import urdfs
 from conftest import ROOT
 from geometry_truth import world_meshes
 
@@ -374,3 +375,30 @@ def test_shared_path_dynamics_are_pinocchios_per_instant(worked_scenario, worked
         twist = -np.linalg.lstsq(ag[:, :6], ag[:, 6:] @ qd[k], rcond=None)[0]
         np.testing.assert_allclose(omega[k], twist[3:], rtol=1e-10, atol=1e-12)
     assert np.array_equal(shared.torques(fine[::2]), tau)
+
+
+def test_batched_torques_are_pinocchios_rnea_per_instant_for_every_joint_kind(tmp_path):
+    """The batch's one RNEA call over all instants gives, to rounding, Pinocchio's single-instant
+    RNEA at each instant's configuration, velocity and acceleration, rebuilt here: the base
+    twist and acceleration of zero momentum solved from Pinocchio's centroidal map and its
+    time variation, on an arm whose joints are continuous (cos, sin in the configuration),
+    prismatic and revolute."""
+    path = tmp_path / "mixed.urdf"
+    path.write_text(urdfs.spatial_arm(kinds=("continuous", "prismatic", "revolute")))
+    robot = ff.load_robot(path)
+    mmap = MomentumMap(robot)
+    rng = np.random.default_rng(11)
+    q, qd, qdd = (rng.uniform(-0.2, 0.2, (9, robot.n)) for _ in range(3))
+    batch = inverse_dynamics_batch(mmap, q, qd, qdd)
+    model, data = mmap.model, mmap.model.createData()
+    for k in range(len(q)):
+        config = robot.configuration(q[k])
+        ag = pin.computeCentroidalMap(model, data, config).copy()
+        twist = -np.linalg.solve(ag[:, :6], ag[:, 6:] @ qd[k])
+        v = np.concatenate([twist, qd[k]])
+        d_ag = pin.computeCentroidalMapTimeVariation(model, data, config, v)
+        a_base = -np.linalg.solve(ag[:, :6], ag[:, 6:] @ qdd[k] + d_ag @ v)
+        full = pin.rnea(model, data, config, v, np.concatenate([a_base, qdd[k]]))
+        np.testing.assert_allclose(batch.tau[k], full[6:], rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(batch.base_wrench[k], full[:6], rtol=0, atol=1e-9)
+    assert np.abs(batch.base_wrench).max() < 1e-9 * max(1.0, np.abs(batch.tau).max())
