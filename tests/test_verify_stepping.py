@@ -60,10 +60,13 @@ def test_an_erratic_sequence_that_shrinks_once_gives_no_verdict() -> None:
     assert _decided(2.05, 0.15, 1.2, TOLERANCE, 0.01)
 
 
-def test_a_first_chance_agreement_never_refuses() -> None:
+def test_a_first_chance_agreement_decides_nothing() -> None:
     # The first doubling (nothing before it) agreeing to 1e-6 on a value far over the
-    # tolerance: no convergence is shown yet, so no refusal; an acceptance needs none.
+    # tolerance: no convergence is shown yet, so no refusal; nor an acceptance, whose estimate
+    # bounds the error only once the differences shrink (unless it is below rounding).
     assert not _decided(1.0, 1e-6, math.inf, TOLERANCE, 0.01, math.inf)
-    assert _decided(1e-6, 1e-7, math.inf, TOLERANCE, 0.01, math.inf)
+    assert not _decided(1e-6, 1e-7, math.inf, TOLERANCE, 0.01, math.inf)
+    assert _decided(1e-6, 1e-7, 2e-6, TOLERANCE, 0.01, math.inf)  # shrunk 20-fold
+    assert _decided(1e-6, 1e-9, math.inf, TOLERANCE, 0.01, math.inf)  # below 1e-5 of it
     # A value over the tolerance by less than a small estimate is not refused either.
     assert not _decided(1.05 * TOLERANCE, 0.1 * TOLERANCE, 1.0, TOLERANCE, 0.01, 8.0)

@@ -49,14 +49,17 @@ def _decided(
     converges at its order (RK4: the difference shrinks about 16-fold per doubling), so the
     verdict is trusted only once the steps resolve the motion (``turn``, the largest rotation
     in one step, rad, at most :data:`_MAX_TURN`) and the difference has shrunk at least
-    8-fold (or is already below rounding); then the check is decided when the estimate is
+    8-fold since the doubling before (a first difference, with nothing before it, never
+    suffices) or is already below rounding; then the check is decided when the estimate is
     small against the tolerance (and the value within it) or the value is clear of the
     tolerance by more than the estimate. To refuse, the value must exceed the tolerance by
     more than the estimate, the estimate must also be small against the value, and the
     difference must have shrunk 8-fold over the doubling before as well: an erratic sequence
     (an open-loop replay whose error grows without bound, say) can shrink once by chance.
     """
-    converging = estimate <= previous / 8.0 or estimate <= 1e-3 * CONVERGED_FRACTION * tolerance
+    # a first difference (``previous`` inf) has not shrunk yet: it bounds nothing on its own
+    shrunk = math.isfinite(previous) and estimate <= previous / 8.0
+    converging = shrunk or estimate <= 1e-3 * CONVERGED_FRACTION * tolerance
     if turn > _MAX_TURN or not converging:
         return False
     small = estimate <= CONVERGED_FRACTION * tolerance
