@@ -16,6 +16,7 @@ import pinocchio as pin
 import pytest
 
 import freefloat as ff
+from freefloat.robot import collision, geometry
 from freefloat.robot.collision import (
     RETRY_TOLERANCES,
     CollisionModel,
@@ -26,6 +27,7 @@ from freefloat.robot.collision import (
 from freefloat.robot.distance_query import Distances
 from freefloat.verify.certificate import certify
 from freefloat.verify.clearance import MeshClearance, hull_slack
+from freefloat.verify.hull_agreement import shape_excess
 from freefloat.verify.motion import PolynomialMotion
 
 from conftest import ROOT
@@ -334,3 +336,50 @@ def test_the_hull_agreement_catches_a_wrong_hull_on_any_body(direction):
             del solver.distances
         assert cert.hull_excess > 1e-3, (direction, body, cert.hull_detail)  # fails its 1e-6 m
         assert cert.lower_bound == honest.lower_bound  # the mesh certificate is the solver's
+
+
+def _moved_hull(obj: pin.GeometryObject, axis: int, move: float) -> coal.ConvexBase:
+    """The true hull of ``obj``'s mesh with its vertices on the side facing +``axis`` (within
+    8 mm of it) moved ``move`` (m) along that axis: in (negative) or out (positive)."""
+    vertices, triangles = geometry.object_triangles(obj)
+    vertices = vertices.copy()
+    top = vertices[:, axis].max()
+    vertices[vertices[:, axis] > top - 0.008, axis] += move
+    model = coal.BVHModelOBBRSS()
+    model.beginModel(len(triangles), len(vertices))
+    model.addVertices(vertices)
+    model.addTriangles(triangles)
+    model.endModel()
+    model.buildConvexHull(True, "Qt")
+    return model.convex
+
+
+@pytest.mark.parametrize("move", [-0.005, 0.005])
+def test_a_hull_of_the_wrong_shape_is_caught_on_every_mesh_body(monkeypatch, move):
+    """UR5 servicer: each mesh body's solver hull in turn is built with one side moved 5 mm in
+    (a hull that misses part of its mesh) or out (a hull of more than its mesh). By
+    construction a vertex then lies 5 mm from the other model's hull along the axis, so its
+    distance outside it is in (0, 5 mm]; the shape comparison reports that much on that body
+    whatever the configuration, and the honest hulls agree to rounding. One certificate shows
+    the figure reaching the check."""
+    robot = ff.load_robot(UR5)
+    srdf = known_srdf(robot)
+    mesh = MeshClearance(robot, srdf)
+    assert shape_excess(mesh, CollisionModel(robot, srdf))[0] <= 1e-12
+    bodies = [mesh.geometry.geometryObjects[i].name for i in mesh.meshes]
+    assert len(bodies) >= 6
+    honest = geometry.true_hull
+    for body in bodies:
+        for axis in range(3):
+
+            def wrong(obj, body=body, axis=axis):
+                return _moved_hull(obj, axis, move) if obj.name == body else honest(obj)
+
+            monkeypatch.setattr(collision, "true_hull", wrong)
+            excess, where = shape_excess(mesh, CollisionModel(robot, srdf))
+            assert 0.5 * abs(move) < excess <= abs(move) + 1e-9, (body, axis, excess)
+            assert where.startswith(body)
+    motion = _quintic(UR5_START, UR5_GOAL, 12.0)
+    cert = certify(mesh, motion, 0.01, CollisionModel(robot, srdf))  # the last body's
+    assert 0.5 * abs(move) < cert.hull_excess <= abs(move) + 1e-9
+    assert cert.hull_detail.startswith(bodies[-1])

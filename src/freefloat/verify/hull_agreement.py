@@ -1,25 +1,34 @@
-"""The solver's hull distances against the original meshes at one instant (a cross-check).
+"""The solver's hulls against the original meshes (a cross-check of the solver's model).
 
-A true hull contains its mesh, so a pair's hull distance is at most its mesh distance (within
-:data:`~freefloat.verify.clearance.HULL_TOLERANCE`, GJK's) and at least the mesh distance
-minus the two hulls' slack (:func:`~freefloat.verify.clearance.hull_slack`). The certificate
-(:mod:`freefloat.verify.certificate`) asks this at the instant of the smallest clearance, for
-the pairs it measured there (the closest ones, where a wrong hull would matter) and, for each
-body none of those holds, the pair in which it lies nearest another body by its leaf spheres:
-every hull is compared with its own mesh at least once without measuring every pair.
+A true hull is the convex hull of its mesh. Two comparisons, neither sharing the solver's
+geometry code:
+
+- **shapes**, once per mesh and independent of any configuration: every mesh vertex lies
+  inside the solver's hull, and every hull vertex inside the convex hull of the mesh's
+  vertices (SciPy's qhull, each face plane's signed distance), both to
+  :data:`~freefloat.verify.clearance.HULL_TOLERANCE` (:func:`shape_excess`);
+- **placements**, at the instant of the smallest clearance: a pair's hull distance is at most
+  its mesh distance (within ``HULL_TOLERANCE``, GJK's) and at least the mesh distance minus the
+  two hulls' slack (:func:`~freefloat.verify.clearance.hull_slack`), for the pairs the
+  certificate measured there (the closest ones) and, for each body none of those holds, the
+  pair in which it lies nearest another body by its leaf spheres: every body's placement is
+  compared at least once where clearance binds.
 """
 
 from __future__ import annotations
 
+import hashlib
 import math
 from collections.abc import Callable
 
+import coal
 import numpy as np
+from scipy.spatial import ConvexHull, QhullError
 
 from ..robot.collision import CollisionModel
 from .clearance import MeshClearance, hull_slack
 
-__all__ = ["hull_agreement"]
+__all__ = ["hull_agreement", "shape_excess"]
 
 
 def hull_agreement(
@@ -42,14 +51,15 @@ def hull_agreement(
         measured: the pairs whose mesh distance is known there.
         distance: pair -> its signed mesh distance there (m).
 
-    Returns the worst excess over the bounds (negative or within ``HULL_TOLERANCE`` when
-    every pair compared agrees) and where it occurs.
+    Returns the worst excess over the bounds, the shapes' (:func:`shape_excess`) included
+    (negative or within ``HULL_TOLERANCE`` when everything compared agrees), and where it
+    occurs.
     """
     if solver.names != mesh.names:
         return math.inf, "the solver checks other pairs than the URDF states"
+    worst, where = shape_excess(mesh, solver)
     slack = [hull_slack(solver, i) for i in range(len(mesh.shapes))]
     hull = solver.distances(joints).values
-    worst, where = -math.inf, ""
     for k in compared(mesh, placements, measured):
         a, b = mesh.pairs[k]
         true = distance(k)
@@ -85,3 +95,52 @@ def compared(mesh: MeshClearance, placements: np.ndarray, measured: set[int]) ->
         chosen.add(nearest)
         covered.update(int(g) for g in mesh.pairs[nearest])
     return sorted(chosen)
+
+
+def shape_excess(mesh: MeshClearance, solver: CollisionModel) -> tuple[float, str]:
+    """How far the solver's hull shapes stray from their meshes' convex hulls (m), and where.
+
+    In each body's own frame: the largest distance of a mesh vertex outside the solver's hull
+    (a hull that misses part of its mesh) or of a hull vertex outside the convex hull of the
+    mesh's vertices (a hull of more than its mesh), by face planes. Remembered per pair of
+    vertex sets (the shapes do not change with the configuration). ``-inf`` when no mesh has a
+    hull.
+    """
+    objects = solver.geometry.geometryObjects
+    worst, where = -math.inf, ""
+    for index, (vertices, _) in mesh.meshes.items():
+        if objects[index].name != mesh.geometry.geometryObjects[index].name:
+            return math.inf, "the solver's bodies are not the URDF's, in its order"
+        shape = objects[index].geometry
+        if not isinstance(shape, coal.ConvexBase):
+            continue
+        points = np.array(shape.points(), dtype=float).reshape(-1, 3)
+        key = (_digest(points), _digest(vertices))
+        if key not in _SHAPES:
+            _SHAPES[key] = max(_outside(vertices, points), _outside(points, vertices))
+        if _SHAPES[key] > worst:
+            worst = _SHAPES[key]
+            where = f"{objects[index].name}: hull and mesh vertices {worst:.3g} m apart"
+    return worst, where
+
+
+def _outside(points: np.ndarray, around: np.ndarray) -> float:
+    """Largest signed distance (m) of ``points`` outside the convex hull of ``around``.
+
+    By the hull's face planes (unit normals): negative when every point is inside. A flat
+    vertex set (no volume) is joggled (qhull's ``QJ``), which moves it by ~1e-11 of its size.
+    """
+    try:
+        hull = ConvexHull(around, qhull_options="Qt")
+    except QhullError:
+        hull = ConvexHull(around, qhull_options="QJ")
+    planes = hull.equations
+    return float((points @ planes[:, :3].T + planes[:, 3]).max())
+
+
+def _digest(array: np.ndarray) -> bytes:
+    return hashlib.blake2b(np.ascontiguousarray(array).tobytes(), digest_size=16).digest()
+
+
+#: Shape excess (m) per pair of vertex sets (hull's, mesh's), computed once per process.
+_SHAPES: dict[tuple[bytes, bytes], float] = {}
