@@ -100,7 +100,7 @@ class MomentumMap:
         for k in range(k_count):
             ag[k] = pin.computeCentroidalMap(self.model, self.data, configs[k])
         self.evaluations += k_count
-        inertia_inverse = _inverse_3x3(ag[:, 3:6, 3:6])
+        inertia_inverse = np.linalg.inv(ag[:, 3:6, 3:6])  # LAPACK: any conditioning
         f1 = -(inertia_inverse @ ag[:, 3:6, 6:])
         omega = np.einsum("kij,kj->ki", f1, rates)
         domega = None
@@ -154,26 +154,6 @@ class MomentumMap:
     def momentum(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Total momentum ``[linear (kg m/s); angular about the CM (kg m^2/s)]``, inertial frame."""
         return np.asarray(pin.computeCentroidalMomentum(self.model, self.data, q, v).vector)
-
-
-def _inverse_3x3(a: np.ndarray) -> np.ndarray:
-    """Inverses of (K, 3, 3) invertible matrices, by their adjugates.
-
-    Cheaper than LAPACK's batched solve for 3 x 3 blocks, with rounding of the same order.
-
-    Raises:
-        numpy.linalg.LinAlgError: a matrix is exactly singular, as a solve would.
-    """
-    cof = np.empty_like(a)
-    for i in range(3):
-        i1, i2 = (i + 1) % 3, (i + 2) % 3
-        for j in range(3):
-            j1, j2 = (j + 1) % 3, (j + 2) % 3
-            cof[:, j, i] = a[:, i1, j1] * a[:, i2, j2] - a[:, i1, j2] * a[:, i2, j1]
-    det = np.einsum("kj,kj->k", a[:, 0, :], cof[:, :, 0])
-    if np.any(det == 0.0):  # as LAPACK's solve would; non-finite entries give NaN, as there
-        raise np.linalg.LinAlgError("Singular matrix")
-    return cof / det[:, None, None]
 
 
 def planar_axis(robot: Robot, samples: int = 16, seed: int = 0) -> np.ndarray | None:
