@@ -178,19 +178,24 @@ class JointPolynomials:
         Each order is derived once from the one below and kept (rate bounds ask for them all).
         """
         table = self._derivative_table
-        while len(table) <= order:
-            below = table[-1]
+        if order < len(table):
+            return table[order]
+        grown = list(table)
+        while len(grown) <= order:
+            below = grown[-1]
             width = below.shape[1]
             out = np.zeros_like(below)
             if width > 1:
                 out[:, : width - 1] = _CHEB.chebder(below.T, 1, scl=2.0 / self.duration).T
-            table.append(out)
-        return table[order]
+            grown.append(out)
+        # replaced whole, never appended to: threads sharing a path each see a complete table
+        self.__dict__["_derivative_table"] = tuple(grown)
+        return grown[order]
 
     @cached_property
-    def _derivative_table(self) -> list[np.ndarray]:
+    def _derivative_table(self) -> tuple[np.ndarray, ...]:
         """The coefficients of the derivatives derived so far, by order (0: the path)."""
-        return [self.coefficients]
+        return (self.coefficients,)
 
     def evaluate(self, t: np.ndarray) -> PathSamples:
         """Positions (rad or m), rates (per s) and accelerations (per s^2) at times ``t`` (s)."""
