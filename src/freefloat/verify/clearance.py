@@ -122,9 +122,13 @@ class ClearanceCertificate:
     def detail(self) -> str:
         """One line for the check's detail and the summary."""
         what = "penetration" if self.penetration else "min clearance"
+        # a depth is not Lipschitz in the motion (coal's mesh depth): no bound is claimed then
+        bound = (
+            "" if self.penetration else f"certified >= {self.lower_bound:.6g} m at every instant "
+        )
         text = (
             f"{what} {self.measured:.6g} m ({self.pair}, {self.kind}) at t = {self.time:.4g} s, "
-            f"margin {self.margin:g} m; certified >= {self.lower_bound:.6g} m at every instant "
+            f"margin {self.margin:g} m; {bound}"
             f"({self.instants} instants, {self.bisections} halvings)"
         )
         if not self.certified:
