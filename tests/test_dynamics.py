@@ -132,3 +132,25 @@ def test_a_plan_failing_verification_is_never_written(tmp_path, monkeypatch, cap
     err = capsys.readouterr().err
     assert "the plan fails verification (replay_attitude)" in err
     assert not out.exists()
+
+
+def test_a_blown_up_state_on_a_continuous_joint_gives_nan_not_a_traceback(tmp_path):
+    """A replay whose state overflowed to inf on a continuous joint: ``math.cos(inf)`` raises
+    where numpy would give NaN. The replay's configurations must hold NaN there (the
+    step-doubling checks read such a level as differing by inf), the other joints as given."""
+    import urdfs
+    from freefloat.physics.dynamics import _Configurations
+
+    path = tmp_path / "arm.urdf"
+    path.write_text(urdfs.spatial_arm(kinds=("continuous", "revolute", "prismatic")))
+    robot = ff.load_robot(path)
+    configuration = _Configurations(ff.MomentumMap(robot))
+    for blown in (np.inf, -np.inf, np.nan):
+        q = configuration(np.array([blown, 0.25, 0.1]))
+        assert np.isnan(q[robot.joints[0].idx_q : robot.joints[0].idx_q + 2]).all()
+        assert q[robot.joints[1].idx_q] == 0.25 and q[robot.joints[2].idx_q] == 0.1
+    q = configuration(np.array([0.5, 0.25, 0.1]))
+    assert q[robot.joints[0].idx_q : robot.joints[0].idx_q + 2].tolist() == [
+        np.cos(0.5),
+        np.sin(0.5),
+    ]

@@ -224,7 +224,10 @@ class _Configurations:
         for i, iq in self.plain:
             q[iq] = listed[i]
         for i, iq in self.turning:
-            q[iq], q[iq + 1] = math.cos(listed[i]), math.sin(listed[i])
+            value = listed[i]
+            if math.isinf(value):  # a replay that blew up: NaN, as numpy gives (math raises)
+                value = math.nan
+            q[iq], q[iq + 1] = math.cos(value), math.sin(value)
         return q
 
 
