@@ -218,8 +218,9 @@ class Robot:
         """Write N joint values (rad or m) into a Pinocchio configuration vector in place."""
         for joint, value in zip(self.joints, joints, strict=True):
             if joint.kind == "continuous":
-                q[joint.idx_q] = math.cos(value)
-                q[joint.idx_q + 1] = math.sin(value)
+                angle = math.nan if math.isinf(value) else value  # math.cos(inf) raises
+                q[joint.idx_q] = math.cos(angle)
+                q[joint.idx_q + 1] = math.sin(angle)
             else:
                 q[joint.idx_q] = value
 
