@@ -1,7 +1,9 @@
 """Batched limit checks and the scaled minimisation, against truth computed another way.
 
 - joint torques alone (base rows of the inertia from the centroidal map) against the
-  centroidal-rate inverse dynamics;
+  centroidal-rate inverse dynamics, their base twist too, and against Pinocchio's forward
+  dynamics (ABA), which they must drive along the motion;
+- the CM read from the centroidal maps against Pinocchio's, at any base pose;
 - the effort peaks of a 7-joint servicer against dense per-instant inverse dynamics and
   SciPy's bounded Brent search about each dense peak;
 - every joint's polynomial extremes at once against brute-force dense evaluation;
@@ -14,12 +16,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 import pytest
 from scipy.optimize import minimize_scalar
 
 import freefloat as ff
-from freefloat.physics.dynamics import inverse_dynamics, inverse_dynamics_batch
-from freefloat.physics.joint_torques import joint_torques_batch
+from freefloat.physics.attitude import quat_to_matrix
+from freefloat.physics.dynamics import centre_of_mass, inverse_dynamics, inverse_dynamics_batch
+from freefloat.physics.joint_torques import joint_torques_and_twist, joint_torques_batch
 from freefloat.problem.objectives import objective_named
 from freefloat.problem.paths import JointPolynomials
 from freefloat.solvers.optimise import scaled_coordinates
@@ -46,6 +50,53 @@ def test_joint_torques_alone_agree_with_the_centroidal_inverse_dynamics():
     scale = np.abs(other.tau).max()
     assert scale > 0.0
     np.testing.assert_allclose(fast, other.tau, rtol=0.0, atol=1e-12 * scale)
+
+
+@pytest.mark.parametrize("name", ["worked_example", "dual_ur5_servicer"])
+def test_joint_torques_come_with_the_base_twist_and_drive_the_forward_dynamics(name):
+    """The twist equals the inverse dynamics' to rounding; ABA driven by the torques (base
+    unforced) gives back the joint accelerations and a momentum rate of zero."""
+    scenario = ff.Scenario.from_toml(SCENARIOS / f"{name}.toml")
+    problem = ff.problem_from_scenario(scenario, extra=[2] * scenario.robot.n)
+    beta = 0.3 * np.random.default_rng(5).standard_normal(problem.n_free)
+    samples = problem.polynomials(beta).evaluate(np.linspace(0.0, problem.duration, 23))
+    mmap = ff.MomentumMap(scenario.robot)
+    tau, twist = joint_torques_and_twist(mmap, samples.q, samples.qd, samples.qdd)
+    other = inverse_dynamics_batch(mmap, samples.q, samples.qd, samples.qdd)
+    np.testing.assert_allclose(tau, joint_torques_batch(mmap, samples.q, samples.qd, samples.qdd))
+    np.testing.assert_allclose(twist, other.base_twist, rtol=0.0, atol=1e-13)
+    model, data = mmap.model, mmap.model.createData()
+    jv = [j.idx_v for j in scenario.robot.joints]
+    for k, config in enumerate(mmap.configurations(samples.q)):
+        v = np.zeros(model.nv)
+        v[:6], v[jv] = twist[k], samples.qd[k]
+        force = np.zeros(model.nv)
+        force[jv] = tau[k]
+        a = pin.aba(model, data, config, v, force)
+        scale = 1.0 + np.abs(samples.qdd[k]).max()
+        np.testing.assert_allclose(a[jv], samples.qdd[k], rtol=0.0, atol=1e-10 * scale)
+        rate = pin.computeCentroidalMomentumTimeVariation(model, data, config, v, a)
+        assert np.abs(rate.vector).max() < 1e-10 * scale
+
+
+def test_the_cm_read_from_the_centroidal_maps_is_pinocchios():
+    """At random joints and base poses (turned, moved), to rounding."""
+    robot = ff.Scenario.from_toml(SCENARIOS / "panda_servicer.toml").robot
+    model, data = robot.model, robot.model.createData()
+    rng = np.random.default_rng(8)
+    maps, truth, origins = [], [], []
+    for _ in range(12):
+        quat = rng.standard_normal(4)
+        quat /= np.linalg.norm(quat)
+        origin = rng.uniform(-2.0, 2.0, 3)
+        config = robot.configuration(rng.uniform(-1.5, 1.5, robot.n), None, quat)
+        config[0:3] = origin
+        maps.append(pin.computeCentroidalMap(model, data, config).copy())
+        truth.append(pin.centerOfMass(model, data, config).copy())
+        origins.append(origin)
+        assert np.allclose(maps[-1][0:3, 0:3], robot.total_mass * quat_to_matrix(quat))
+    got = np.array(origins) + centre_of_mass(np.array(maps))
+    np.testing.assert_allclose(got, np.array(truth), rtol=0.0, atol=1e-14)
 
 
 def test_servicer_effort_peaks_match_a_dense_independent_search(panda_plan):

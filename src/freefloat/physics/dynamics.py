@@ -163,36 +163,53 @@ def _inverse_dynamics_batch(
     model, data = mmap.model, mmap.data
     configs = mmap.configurations(joints)
     k_count, nv = len(configs), model.nv
-    ag = np.empty((k_count, 6, nv))
-    com = np.empty((k_count, 3))
-    for k in range(k_count):
-        ag[k] = pin.computeCentroidalMap(model, data, configs[k])
-        com[k] = data.com[0]
+    cmap, dmap, place, rnea = (
+        pin.computeCentroidalMap,
+        pin.computeCentroidalMapTimeVariation,
+        pin.updateFramePlacement,
+        pin.rnea,
+    )
+    ag = np.array([cmap(model, data, q) for q in configs]).reshape(k_count, 6, nv)
     twist = -np.linalg.solve(ag[:, :, :6], np.einsum("kij,kj->ki", ag[:, :, 6:], rates)[..., None])
     twist = twist[..., 0]
     v = np.concatenate([twist, rates], axis=1)
     d_ag = np.empty((k_count, 6, nv))
     frames = mmap.robot.end_effector_frames
     ee = np.empty((len(frames), k_count, 3))
-    for k in range(k_count):
-        d_ag[k] = pin.computeCentroidalMapTimeVariation(model, data, configs[k], v[k])
-        for e, frame in enumerate(frames):
-            ee[e, k] = pin.updateFramePlacement(model, data, frame).translation
+    for q, velocity, slot, *positions in zip(configs, v, d_ag, *ee, strict=True):
+        slot[...] = dmap(model, data, q, velocity)  # also places the joints
+        for position, frame in zip(positions, frames, strict=True):
+            position[...] = place(model, data, frame).translation
     rhs = np.einsum("kij,kj->ki", ag[:, :, 6:], accelerations) + np.einsum("kij,kj->ki", d_ag, v)
     a_base = -np.linalg.solve(ag[:, :, :6], rhs[..., None])[..., 0]
     a = np.concatenate([a_base, accelerations], axis=1)
-    full = np.empty((k_count, nv))
-    for k in range(k_count):
-        full[k] = pin.rnea(model, data, configs[k], v[k], a[k])
+    full = np.array([rnea(model, data, *qva) for qva in zip(configs, v, a, strict=True)])
+    full = full.reshape(k_count, nv)
     mmap.evaluations += k_count
     return InverseDynamicsBatch(
         tau=full[:, 6:],
         base_wrench=full[:, :6],
         base_twist=twist,
-        com=com,
+        com=centre_of_mass(ag),
         end_effector=ee[0],
         end_effectors=ee,
     )
+
+
+def centre_of_mass(ag: np.ndarray) -> np.ndarray:
+    """(K, 3) system CM relative to the base origin (m) from K centroidal maps (K, 6, nv).
+
+    The base twist's share of the linear momentum is ``m R v - m [c - p]x R omega`` (``R``
+    the base rotation, ``m`` the mass in kg, ``c`` the CM and ``p`` the base origin, both in
+    the frame of the maps): ``ag[:, 0:3, 0:3] = m R`` and ``ag[:, 0:3, 3:6] = -m [c - p]x R``,
+    so ``-[c - p]x = ag[:, 0:3, 3:6] ag[:, 0:3, 0:3]^T / m^2``. No Pinocchio call: the CM
+    comes with the maps.
+    """
+    linear = ag[:, 0:3, 0:6]
+    mass = ag[:, 0, 0:3]
+    cross = linear[:, :, 3:6] @ np.swapaxes(linear[:, :, 0:3], 1, 2)
+    cross /= np.einsum("ki,ki->k", mass, mass)[:, None, None]  # m^2: the first row of m R
+    return np.stack([cross[:, 1, 2], cross[:, 2, 0], cross[:, 0, 1]], axis=1)
 
 
 class _Configurations:

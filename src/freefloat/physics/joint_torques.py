@@ -1,10 +1,11 @@
 """Joint torques alone of a zero-momentum motion at many instants (two Pinocchio calls each).
 
 For checks that need only the torques (the dense effort-peak search, an effort value without
-its gradient), at about a third of the cost of :func:`~freefloat.physics.dynamics.
-inverse_dynamics_batch` (which also gives the base wrench, CM and end effectors). In the base
-frame, base at the origin with identity attitude (without gravity the torques do not depend on
-the base pose), with ``M`` the joint-space inertia and ``r(q, v, a)`` Pinocchio's RNEA:
+its gradient, the torques that drive the verification's forward-dynamics replay), at about a
+third of the cost of :func:`~freefloat.physics.dynamics.inverse_dynamics_batch` (which also
+gives the base wrench, CM and end effectors). In the base frame, base at the origin with
+identity attitude (without gravity the torques do not depend on the base pose), with ``M``
+the joint-space inertia and ``r(q, v, a)`` Pinocchio's RNEA:
 
 - the centroidal map ``A_g = [A_b | A_j]`` gives the zero-momentum base twist
   ``v_b = -A_b^-1 A_j qdot``;
@@ -25,7 +26,7 @@ import pinocchio as pin
 
 from .momentum import MomentumMap
 
-__all__ = ["joint_torques_batch"]
+__all__ = ["joint_torques_and_twist", "joint_torques_batch"]
 
 
 def joint_torques_batch(
@@ -39,6 +40,17 @@ def joint_torques_batch(
         rates: (K, N) joint rates (rad/s or m/s).
         accelerations: (K, N) joint accelerations (rad/s^2 or m/s^2).
     """
+    return joint_torques_and_twist(mmap, joints, rates, accelerations)[0]
+
+
+def joint_torques_and_twist(
+    mmap: MomentumMap, joints: np.ndarray, rates: np.ndarray, accelerations: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`joint_torques_batch` and the (K, 6) zero-momentum base twist it comes with.
+
+    The twist is ``[linear (m/s); angular (rad/s)]`` in the base frame (base at the origin).
+    Arguments as :func:`joint_torques_batch`.
+    """
     model, data = mmap.model, mmap.data
     joints = np.atleast_2d(np.asarray(joints, dtype=float))
     rates = np.atleast_2d(np.asarray(rates, dtype=float))
@@ -46,21 +58,21 @@ def joint_torques_batch(
     configs = mmap.configurations(joints)
     k_count, nv = len(configs), model.nv
     jv = np.array([j.idx_v for j in mmap.robot.joints], dtype=int)
-    ag = np.empty((k_count, 6, nv))
-    for k in range(k_count):
-        ag[k] = pin.computeCentroidalMap(model, data, configs[k])
+    cmap, rnea = pin.computeCentroidalMap, pin.rnea
+    ag = np.array([cmap(model, data, q) for q in configs]).reshape(k_count, 6, nv)
     v = np.zeros((k_count, nv))
     v[:, jv] = rates
     v[:, :6] = -np.linalg.solve(ag[:, :, :6], np.einsum("kij,kj->ki", ag, v)[..., None])[..., 0]
     a = np.zeros((k_count, nv))
     a[:, jv] = accelerations
-    partial = np.empty((k_count, nv))
-    for k in range(k_count):
-        partial[k] = pin.rnea(model, data, configs[k], v[k], a[k])  # base acceleration 0
+    # base acceleration 0
+    partial = np.array([rnea(model, data, *qva) for qva in zip(configs, v, a, strict=True)])
+    partial = partial.reshape(k_count, nv)
     mmap.evaluations += k_count
     # M_b = X A_g: the angular rows gain c x (linear rows); c from A_g's linear rows
     cross = -ag[:, :3, 3:6] / ag[:, :1, :1]  # [c]x
     rows = ag.copy()
     rows[:, 3:] += cross @ ag[:, :3]
     a_base = -np.linalg.solve(rows[:, :, :6], partial[:, :6, None])[..., 0]
-    return partial[:, jv] + np.einsum("kbj,kb->kj", rows[:, :, jv], a_base)
+    tau = partial[:, jv] + np.einsum("kbj,kb->kj", rows[:, :, jv], a_base)
+    return tau, v[:, :6].copy()

@@ -95,10 +95,8 @@ class MomentumMap:
             derivatives: also return ``d omega / d q`` (analytic, Pinocchio).
         """
         configs = self.configurations(joints)
-        k_count = len(configs)
-        ag = np.empty((k_count, 6, self.model.nv))
-        for k in range(k_count):
-            ag[k] = pin.computeCentroidalMap(self.model, self.data, configs[k])
+        k_count, model, data, cmap = len(configs), self.model, self.data, pin.computeCentroidalMap
+        ag = np.array([cmap(model, data, q) for q in configs]).reshape(k_count, 6, model.nv)
         self.evaluations += k_count
         inertia_inverse = np.linalg.inv(ag[:, 3:6, 3:6])  # LAPACK: any conditioning
         f1 = -(inertia_inverse @ ag[:, 3:6, 6:])

@@ -3,8 +3,9 @@
 The attitude check and the forward-dynamics replay (:mod:`freefloat.verify.integrating`) both
 refine on the grids ``k T / 2^m`` of the plan's duration ``T``; on those grids the instants of
 a coarse level are, to the bit, instants of every finer one (``numpy.linspace`` of a dyadic
-count). The replay's torques come from one inverse-dynamics batch
-(:func:`~freefloat.physics.dynamics.inverse_dynamics_batch`), which also gives the
+count). The replay's torques come from one batch per level
+(:func:`~freefloat.physics.joint_torques.joint_torques_and_twist`: the centroidal map and RNEA
+at base acceleration zero, not the sampling's inverse dynamics), which also gives the
 zero-momentum base twist at those instants; the attitude check reads the base angular velocity
 there, and asks the momentum map (:meth:`~freefloat.physics.momentum.MomentumMap.base_rates`,
 one Pinocchio call per instant) only at the instants the replay did not need.
@@ -14,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..physics.dynamics import inverse_dynamics_batch
+from ..physics.joint_torques import joint_torques_and_twist
 from ..physics.momentum import MomentumMap
 from .path_eval import FilePath
 
@@ -40,8 +41,8 @@ class PathDynamics:
         missing = _missing(times, self._torques)
         if len(missing):
             q, qd, qdd = self.path(missing)
-            dyn = inverse_dynamics_batch(self.mmap, q, qd, qdd)
-            for x, tau, omega in zip(missing.tolist(), dyn.tau, dyn.base_twist, strict=True):
+            torques, twist = joint_torques_and_twist(self.mmap, q, qd, qdd)
+            for x, tau, omega in zip(missing.tolist(), torques, twist, strict=True):
                 self._torques[x] = tau
                 self._omega.setdefault(x, omega[3:])
         return np.array([self._torques[x] for x in times])

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..physics.dynamics import inverse_dynamics_batch
+from ..physics.dynamics import centre_of_mass, inverse_dynamics_batch
 from ..physics.momentum import MomentumMap
 from ..plans.format import Plan
 from ..plans.guarantees import Check
@@ -109,11 +109,10 @@ def momentum_checks(subject: Subject) -> list[Check]:
     configs = subject.mmap.configurations(np.asarray(samples.q, float))
     configs[:, 0:3] = np.asarray(samples.base_position, float)
     configs[:, 3:7] = np.asarray(samples.base_quaternion_xyzw, float)
-    ag = np.empty((len(configs), 6, model.nv))
-    com = np.empty((len(configs), 3))
-    for k, config in enumerate(configs):
-        ag[k] = pin.computeCentroidalMap(model, data, config)
-        com[k] = data.com[0]
+    cmap = pin.computeCentroidalMap
+    ag = np.array([cmap(model, data, config) for config in configs])
+    ag = ag.reshape(len(configs), 6, model.nv)
+    com = configs[:, 0:3] + centre_of_mass(ag)
     arm = np.einsum("kij,kj->ki", ag[:, :, 6:], np.asarray(samples.qd, float))
     linear = -np.linalg.solve(ag[:, :, :6], arm[..., None])[:, :3, 0]
     v_base = np.concatenate([linear, np.asarray(samples.base_angular_velocity, float)], axis=1)
