@@ -31,6 +31,27 @@ def test_gimbal_lock_round_trip_keeps_the_attitude(pitch):
     assert att.geodesic_angle(att.quat_from_zyx(*angles), quat) < 1e-7
 
 
+def test_geodesic_angle_on_floats_is_the_quaternion_products():
+    """Against the angle of ``conj(a) (x) b`` by the batched numpy product and SciPy's
+    rotation magnitude, on random attitudes (lists too), tiny and near-pi rotations."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(4)
+    a = rng.standard_normal((40, 4))
+    a /= np.linalg.norm(a, axis=1, keepdims=True)
+    turns = np.vstack([rng.standard_normal((20, 3)), 1e-9 * rng.standard_normal((10, 3))])
+    turns[:10] *= 3.1 / np.linalg.norm(turns[:10], axis=1, keepdims=True)  # near pi
+    b = np.vstack([att.quat_multiply(a[:30], att.quat_exp(turns)), -a[30:]])
+    rel = att.quat_multiply(att.quat_conjugate(a), b)
+    products = 2.0 * np.arctan2(np.linalg.norm(rel[:, :3], axis=1), np.abs(rel[:, 3]))
+    scipy = (Rotation.from_quat(a).inv() * Rotation.from_quat(b)).magnitude()
+    got = np.array([att.geodesic_angle(x, y) for x, y in zip(a, b, strict=True)])
+    np.testing.assert_allclose(got, products, rtol=1e-15, atol=1e-16)
+    np.testing.assert_allclose(got, scipy, rtol=1e-12, atol=1e-15)
+    assert got[30:].max() < 1e-15  # the same attitude, the other sign
+    assert att.geodesic_angle(a[0].tolist(), b[0].tolist()) == got[0]
+
+
 def test_geodesic_angle_and_log_exp():
     a = att.quat_from_zyx(0.1, 0.2, 0.3)
     rotvec = np.array([0.3, -0.2, 0.5])

@@ -182,9 +182,25 @@ def _wrap(angle: float) -> float:
 
 
 def geodesic_angle(a: np.ndarray, b: np.ndarray) -> float:
-    """Angle (rad, in [0, pi]) of the rotation taking attitude ``a`` to attitude ``b``."""
-    rel = quat_multiply(quat_conjugate(np.asarray(a, float)), np.asarray(b, float))
-    return float(2.0 * math.atan2(np.linalg.norm(rel[:3]), abs(rel[3])))
+    """Angle (rad, in [0, pi]) of the rotation taking attitude ``a`` to attitude ``b``.
+
+    ``conj(a) (x) b`` on plain floats (cheaper than numpy for two 4-vectors), the products in
+    :func:`quat_multiply`'s order.
+    """
+    ax, ay, az, aw = _floats(a)
+    bx, by, bz, bw = _floats(b)
+    x = aw * bx - bw * ax - (ay * bz - az * by)
+    y = aw * by - bw * ay - (az * bx - ax * bz)
+    z = aw * bz - bw * az - (ax * by - ay * bx)
+    w = aw * bw + (ax * bx + ay * by + az * bz)
+    return 2.0 * math.atan2(math.hypot(x, y, z), abs(w))
+
+
+def _floats(q: Sequence[float] | np.ndarray) -> list[float]:
+    """The entries of a quaternion as Python floats."""
+    if isinstance(q, list):
+        return [float(c) for c in q]
+    return np.asarray(q, dtype=float).tolist()
 
 
 def step_nodes(edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
