@@ -135,8 +135,11 @@ def _replay(subject: Subject) -> _Replay:
         result = replay(mmap, start, start_quat, table, duration, steps, False)
         return result.quaternion_xyzw, result.joints
 
-    # the torques at k duration / (2 steps), each level reusing the instants of the last
+    # the torques at k duration / (2 steps), each level reusing the instants of the last;
+    # the first two levels' in one batch (the second always runs when the steps allow it)
     steps = min(_FIRST_REPLAY_STEPS, subject.replay_steps)
+    second = 2 * steps if 2 * steps <= subject.replay_steps else steps
+    subject.dynamics.torques(np.linspace(0.0, duration, 2 * second + 1))
     torques = _refine(None, steps, duration, subject.dynamics.torques)
     coarse_q, coarse_j = run(steps, torques)
     replay_att = geodesic_angle(coarse_q, target)

@@ -114,28 +114,17 @@ class FilePath:
         b1 = 3 * s**2 * (1 - s) ** 3 - 3 * s**3 * (1 - s) ** 2
         b2 = 6 * s * (1 - s) ** 3 - 18 * s**2 * (1 - s) ** 2 + 6 * s**3 * (1 - s)
         # The polynomials depend on n alone: evaluated once for the longest joint, with their
-        # weights; each joint takes its first columns (element-wise values, the same numbers
-        # as its own), copied contiguous so that its products run as before.
+        # weights; each joint's column of coefficients is zero beyond its own.
         longest = np.arange(max(len(beta) for beta in self.beta))
         p0 = _jacobi(longest, 0, x)
         p1 = (longest + 13) * _jacobi(longest, 1, x)  # d/ds = 2 d/dx
         p2 = (longest + 13) * (longest + 14) * _jacobi(longest, 2, x)
-        weighted = (
-            b[:, None] * p0,
-            b1[:, None] * p0 + b[:, None] * p1,
-            b2[:, None] * p0 + 2 * b1[:, None] * p1 + b[:, None] * p2,
-        )
+        coefficients = np.zeros((len(longest), len(self.beta)))
         for i, beta in enumerate(self.beta):
-            if not len(beta):
-                continue
-            c = _scales(len(beta)) * beta
-            w0, w1, w2 = (
-                w if len(beta) == len(longest) else np.ascontiguousarray(w[:, : len(beta)])
-                for w in weighted
-            )
-            q[:, i] += w0 @ c
-            qd[:, i] += (w1 @ c) / T
-            qdd[:, i] += (w2 @ c) / T**2
+            coefficients[: len(beta), i] = _scales(len(beta)) * beta
+        q += (b[:, None] * p0) @ coefficients
+        qd += ((b1[:, None] * p0 + b[:, None] * p1) @ coefficients) / T
+        qdd += ((b2[:, None] * p0 + 2 * b1[:, None] * p1 + b[:, None] * p2) @ coefficients) / T**2
         return q, qd, qdd
 
 
