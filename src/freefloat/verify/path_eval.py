@@ -44,11 +44,6 @@ def _scales(count: int) -> np.ndarray:
     return out
 
 
-def _scale(n: np.ndarray) -> np.ndarray:
-    """``c_n`` (see :func:`_scales`) for n = 0 .. len(n) - 1."""
-    return _scales(len(n))
-
-
 def _jacobi(n: np.ndarray, shift: int, x: np.ndarray) -> np.ndarray:
     """``P_{n - shift}^(6 + shift, 6 + shift)(x)`` (zero where ``n < shift``), (len(x), len(n))."""
     m = n - shift
@@ -85,11 +80,21 @@ class FilePath:
         x = 2.0 * s - 1.0
         q = self.start + np.outer(10 * s**3 - 15 * s**4 + 6 * s**5, self.goal - self.start)
         b = s**3 * (1 - s) ** 3
-        for i, beta in enumerate(self.beta):
-            if len(beta):
-                n = np.arange(len(beta))
-                q[:, i] += (b[:, None] * _jacobi(n, 0, x)) @ (_scale(n) * beta)
+        longest = np.arange(len(self.jacobi_weights))
+        q += (b[:, None] * _jacobi(longest, 0, x)) @ self.jacobi_weights
         return q
+
+    @functools.cached_property
+    def jacobi_weights(self) -> np.ndarray:
+        """(L, N) weights of the Jacobi terms (rad or m), L the most terms of any joint.
+
+        Joint i's ``c_n beta_n`` in column i, zero beyond its own terms.
+        """
+        assert self.beta is not None
+        out = np.zeros((max(len(beta) for beta in self.beta), len(self.beta)))
+        for i, beta in enumerate(self.beta):
+            out[: len(beta), i] = _scales(len(beta)) * beta
+        return out
 
     def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Joint values, rates and accelerations, each (len(t), N), at times ``t`` (s)."""
@@ -113,18 +118,16 @@ class FilePath:
         b = s**3 * (1 - s) ** 3
         b1 = 3 * s**2 * (1 - s) ** 3 - 3 * s**3 * (1 - s) ** 2
         b2 = 6 * s * (1 - s) ** 3 - 18 * s**2 * (1 - s) ** 2 + 6 * s**3 * (1 - s)
-        # The polynomials depend on n alone: evaluated once for the longest joint, with their
-        # weights; each joint's column of coefficients is zero beyond its own.
-        longest = np.arange(max(len(beta) for beta in self.beta))
+        # The polynomials depend on n alone: evaluated once for the longest joint, every joint
+        # weighting them by its column of coefficients (zero beyond its own).
+        weights = self.jacobi_weights
+        longest = np.arange(len(weights))
         p0 = _jacobi(longest, 0, x)
         p1 = (longest + 13) * _jacobi(longest, 1, x)  # d/ds = 2 d/dx
         p2 = (longest + 13) * (longest + 14) * _jacobi(longest, 2, x)
-        coefficients = np.zeros((len(longest), len(self.beta)))
-        for i, beta in enumerate(self.beta):
-            coefficients[: len(beta), i] = _scales(len(beta)) * beta
-        q += (b[:, None] * p0) @ coefficients
-        qd += ((b1[:, None] * p0 + b[:, None] * p1) @ coefficients) / T
-        qdd += ((b2[:, None] * p0 + 2 * b1[:, None] * p1 + b[:, None] * p2) @ coefficients) / T**2
+        q += (b[:, None] * p0) @ weights
+        qd += ((b1[:, None] * p0 + b[:, None] * p1) @ weights) / T
+        qdd += ((b2[:, None] * p0 + 2 * b1[:, None] * p1 + b[:, None] * p2) @ weights) / T**2
         return q, qd, qdd
 
 
