@@ -3,7 +3,7 @@
 The attitude check and the forward-dynamics replay (:mod:`freefloat.verify.integrating`) both
 refine on the grids ``k T / 2^m`` of the plan's duration ``T``; on those grids the instants of
 a coarse level are, to the bit, instants of every finer one (``numpy.linspace`` of a dyadic
-count). The replay's torques come from one batch per level
+count). The replay's torques come in batches of instants
 (:func:`~freefloat.physics.joint_torques.joint_torques_and_twist`: the centroidal map and RNEA
 at base acceleration zero, not the sampling's inverse dynamics), which also gives the
 zero-momentum base twist at those instants; the attitude check reads the base angular velocity
