@@ -61,7 +61,8 @@ def test_joint_torques_come_with_the_base_twist_and_drive_the_forward_dynamics(n
     beta = 0.3 * np.random.default_rng(5).standard_normal(problem.n_free)
     samples = problem.polynomials(beta).evaluate(np.linspace(0.0, problem.duration, 23))
     mmap = ff.MomentumMap(scenario.robot)
-    tau, twist = joint_torques_and_twist(mmap, samples.q, samples.qd, samples.qdd)
+    found = joint_torques_and_twist(mmap, samples.q, samples.qd, samples.qdd)
+    tau, twist = found.tau, found.twist
     other = inverse_dynamics_batch(mmap, samples.q, samples.qd, samples.qdd)
     np.testing.assert_allclose(tau, joint_torques_batch(mmap, samples.q, samples.qd, samples.qdd))
     np.testing.assert_allclose(twist, other.base_twist, rtol=0.0, atol=1e-13)

@@ -21,12 +21,14 @@ Units: joint values rad (or m), rates per unit time, torques N m (or N) for that
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pinocchio as pin
 
 from .momentum import MomentumMap
 
-__all__ = ["joint_torques_and_twist", "joint_torques_batch"]
+__all__ = ["TorquesAndTwist", "joint_torques_and_twist", "joint_torques_batch"]
 
 
 def joint_torques_batch(
@@ -40,15 +42,28 @@ def joint_torques_batch(
         rates: (K, N) joint rates (rad/s or m/s).
         accelerations: (K, N) joint accelerations (rad/s^2 or m/s^2).
     """
-    return joint_torques_and_twist(mmap, joints, rates, accelerations)[0]
+    return joint_torques_and_twist(mmap, joints, rates, accelerations).tau
+
+
+@dataclass(frozen=True)
+class TorquesAndTwist:
+    """Joint torques of a zero-momentum motion and the base twist they come with.
+
+    Attributes:
+        tau: (K, N) joint torques (N m, or N for prismatic joints).
+        twist: (K, 6) zero-momentum base twist ``[linear (m/s); angular (rad/s)]`` in the base
+            frame, base at the origin.
+    """
+
+    tau: np.ndarray
+    twist: np.ndarray
 
 
 def joint_torques_and_twist(
     mmap: MomentumMap, joints: np.ndarray, rates: np.ndarray, accelerations: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`joint_torques_batch` and the (K, 6) zero-momentum base twist it comes with.
+) -> TorquesAndTwist:
+    """:func:`joint_torques_batch` and the zero-momentum base twist it comes with.
 
-    The twist is ``[linear (m/s); angular (rad/s)]`` in the base frame (base at the origin).
     Arguments as :func:`joint_torques_batch`.
     """
     model, data = mmap.model, mmap.data
@@ -75,4 +90,4 @@ def joint_torques_and_twist(
     rows[:, 3:] += cross @ ag[:, :3]
     a_base = -np.linalg.solve(rows[:, :, :6], partial[:, :6, None])[..., 0]
     tau = partial[:, jv] + np.einsum("kbj,kb->kj", rows[:, :, jv], a_base)
-    return tau, v[:, :6].copy()
+    return TorquesAndTwist(tau, v[:, :6].copy())

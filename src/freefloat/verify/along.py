@@ -41,8 +41,8 @@ class PathDynamics:
         missing = _missing(times, self._torques)
         if len(missing):
             q, qd, qdd = self.path(missing)
-            torques, twist = joint_torques_and_twist(self.mmap, q, qd, qdd)
-            for x, tau, omega in zip(missing.tolist(), torques, twist, strict=True):
+            found = joint_torques_and_twist(self.mmap, q, qd, qdd)
+            for x, tau, omega in zip(missing.tolist(), found.tau, found.twist, strict=True):
                 self._torques[x] = tau
                 self._omega.setdefault(x, omega[3:])
         return np.array([self._torques[x] for x in times])
