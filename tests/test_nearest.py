@@ -17,7 +17,7 @@ from freefloat.solvers.least_norm import (
 )
 from freefloat.solvers.newton import polish
 
-from conftest import worked_problem
+from conftest import ROOT, worked_problem
 
 
 def test_least_norm_root_is_a_kkt_point_and_matches_slsqp(worked_scenario):
@@ -127,3 +127,33 @@ def test_corrections_bring_a_root_inside_a_cap_it_breaks(worked_scenario):
     assert nearest.success
     moved, least = np.linalg.norm(found.beta - start), np.linalg.norm(nearest.x - start)
     assert least <= moved <= 1.1 * least
+
+
+def test_a_level_whose_rounds_press_past_a_limit_keeps_the_root_brought_inside():
+    """The Panda servicer's goal rolled 65 deg: at each freedom level the steps within the
+    joint limits end just past a limit between their instants (1e-5 rad), while the free
+    least-norm root brought inside passed the dense check. That root is kept: the plan
+    deviates far less from the quintic than the search's root (|beta|^2 below half of it),
+    and its samples stay within the URDF's limits (read from the file here, not from the
+    planner's robot) and its verification passed."""
+    import dataclasses as dc
+    import xml.etree.ElementTree as ET
+
+    from freefloat.physics import attitude as att
+
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "panda_servicer.toml")
+    rolled = att.quat_multiply(scenario.goal_attitude, att.quat_exp(np.radians([65.0, 0, 0])))
+    plan = ff.plan(dc.replace(scenario, goal_attitude=rolled))
+    levels = [t for t in plan.solver.tried if t.startswith("nearest root")]
+    assert levels and all("deviation" in t for t in levels), levels
+    assert plan.objective.value < 0.5 * plan.objective.start_value
+    assert all(c.passed for c in plan.verification.checks)
+    limits = {
+        j.get("name"): (float(j.find("limit").get("lower")), float(j.find("limit").get("upper")))
+        for j in ET.parse(scenario.robot.urdf).getroot().iter("joint")
+        if j.find("limit") is not None and j.get("type") == "revolute"
+    }
+    q = np.asarray(plan.samples.q, dtype=float)
+    for i, name in enumerate(plan.robot.joints):
+        lower, upper = limits[name]
+        assert lower - 1e-9 <= q[:, i].min() and q[:, i].max() <= upper + 1e-9, name

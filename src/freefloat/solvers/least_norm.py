@@ -133,13 +133,19 @@ def least_norm_root_within(
         free: the least-norm root without constraints, when known: brought inside them
             (:func:`nearest_root_within`), it is the start when it deviates less than ``beta``.
         settled: steps stop once one lowers ``|beta|^2`` by less than this fraction.
+
+    When every round's result breaks a constraint between its instants (the steps press
+    against a limit and its peak moves), the free root brought inside is returned if the
+    dense check passed it: a root that deviates less than ``beta`` and honours every
+    constraint, rather than none.
     """
     active = [c for c in constraints if c.applies_to(problem.robot)]
     beta = np.asarray(beta, dtype=float)
+    honoured: np.ndarray | None = None  # a root below beta's norm that the dense check passed
     if free is not None:
         inside = nearest_root_within(problem, free, active, DEFAULT_INSTANTS, options)
         if inside.honoured and float(inside.beta @ inside.beta) < float(beta @ beta):
-            beta = inside.beta
+            beta = honoured = inside.beta
     cache: RowCache = {}
     instants = with_critical(problem, active, beta, DEFAULT_INSTANTS)
     spent = 0
@@ -150,6 +156,8 @@ def least_norm_root_within(
         if not broken_constraint(problem, active, beta):
             return LeastNorm(beta, spent, True)
         instants = with_critical(problem, active, beta, instants)
+    if honoured is not None:  # the rounds pressed past a limit between their instants
+        return LeastNorm(honoured, spent, True)
     return LeastNorm(beta, spent, False)
 
 
