@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 from scipy.optimize import minimize
@@ -44,13 +45,46 @@ def test_least_norm_root_is_a_kkt_point_and_matches_slsqp(worked_scenario):
     np.testing.assert_allclose(beta @ beta, other.x @ other.x, rtol=1e-6)
 
 
-def _capped(worked_scenario):  # type: ignore[no-untyped-def]
-    """The worked example with 3 free coefficients per joint and q1 capped at 1.45 rad."""
+def _capped(worked_scenario, effort: float = math.inf):  # type: ignore[no-untyped-def]
+    """The worked example with 3 free coefficients per joint and q1 capped at 1.45 rad.
+
+    ``effort``: q1's effort limit (N m).
+    """
     scenario = worked_scenario.resolved()
     joints = list(scenario.robot.joints)
-    joints[0] = dataclasses.replace(joints[0], upper=1.45)
+    joints[0] = dataclasses.replace(joints[0], upper=1.45, effort_limit=effort)
     robot = dataclasses.replace(scenario.robot, joints=tuple(joints))
     return worked_problem(dataclasses.replace(scenario, robot=robot), {"q1": 3, "q2": 3})
+
+
+def test_effort_limits_the_eager_steps_break_are_imposed_in_a_second_pass(worked_scenario):
+    """Capped q1 (1.45 rad), then an effort limit on q1 at 0.9 of the torque peak of the root
+    found within the position limits alone: the nearest root's steps keep the eager limits
+    first, find that root breaks the (lazy) effort limit and take the steps again with it.
+    The root returned is on h = 0, within the cap, and its torques, by inverse dynamics at
+    4001 instants (another algorithm than the effort rows' torque derivatives), stay within
+    the limit, while it deviates less than the start."""
+    from freefloat.physics.dynamics import inverse_dynamics_batch
+    from freefloat.problem.constraints.joint_effort import JointEffortLimits
+    from freefloat.solvers.nearest import _within
+
+    def peaks(problem, beta):  # type: ignore[no-untyped-def]
+        samples = problem.polynomials(beta).evaluate(np.linspace(0.0, problem.duration, 4001))
+        batch = inverse_dynamics_batch(problem.mmap, samples.q, samples.qd, samples.qdd)
+        return np.abs(batch.tau).max(axis=0)
+
+    problem, options, limits = _capped(worked_scenario), ff.SolveOptions(), JointPositionLimits()
+    least = ff.solve(problem, options, []).beta
+    null = np.linalg.svd(problem.jacobian(least))[2][3:]
+    start = polish(problem, least + 0.5 * null[0], 1e-10)[0]
+    eager = least_norm_root_within(problem, start, [limits], options, least).beta
+    cap = 0.9 * peaks(problem, eager)[0]
+    capped = _capped(worked_scenario, effort=cap)
+    found = _within(capped, start, [limits, JointEffortLimits()], options, least)
+    assert np.linalg.norm(capped.residual(found)) < 1e-10
+    assert limits.violation(capped, found).value <= limits.tolerance
+    assert peaks(capped, found)[0] <= cap
+    assert found @ found < start @ start
 
 
 def _slsqp_rows(problem, limits):  # type: ignore[no-untyped-def]
