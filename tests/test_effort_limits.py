@@ -166,3 +166,27 @@ def test_a_plan_of_an_older_format_is_held_to_every_limit_of_its_urdf(tmp_path, 
     capsys.readouterr()
     assert main(["verify", str(tampered)]) == 2
     assert "verification.checks" in capsys.readouterr().err
+
+
+def test_the_shortest_duration_is_named_only_when_a_timed_limit_stood_in_the_way(tmp_path):
+    """Which limits stood in the way is read from the error's ``blocked_by`` (filled where a
+    continuation stopped at a constraint or a root broke one), not from its text: an error
+    that merely mentions the effort limits explains nothing; one blocked by them names the
+    shortest duration, the same as planning reports."""
+    from freefloat.problem.constraints import scenario_constraints
+    from freefloat.solvers.lazy_search import _explain_duration_limits
+
+    scenario = ff.Scenario.from_toml(_limited_example(tmp_path, 2.8)).resolved()
+    constraints = scenario_constraints(scenario)
+    options = ff.SolveOptions()
+    with pytest.raises(EffortLimitError) as planned:
+        ff.plan(scenario)
+    assert "joint_effort_limits" in planned.value.__cause__.blocked_by
+    mention = ff.SolverError("a message that names joint_effort_limits in passing", 0.1)
+    _explain_duration_limits(scenario, options, constraints, mention)  # nothing raised
+    blocked = ff.SolverError("no root", 0.1, blocked_by=("joint_effort_limits",))
+    with pytest.raises(EffortLimitError) as explained:
+        _explain_duration_limits(scenario, options, constraints, blocked)
+    assert explained.value.shortest_duration == pytest.approx(
+        planned.value.shortest_duration, rel=1e-12
+    )

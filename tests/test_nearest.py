@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 from scipy.optimize import minimize
@@ -17,7 +18,7 @@ from freefloat.solvers.least_norm import (
 )
 from freefloat.solvers.newton import polish
 
-from conftest import worked_problem
+from conftest import ROOT, worked_problem
 
 
 def test_least_norm_root_is_a_kkt_point_and_matches_slsqp(worked_scenario):
@@ -44,13 +45,46 @@ def test_least_norm_root_is_a_kkt_point_and_matches_slsqp(worked_scenario):
     np.testing.assert_allclose(beta @ beta, other.x @ other.x, rtol=1e-6)
 
 
-def _capped(worked_scenario):  # type: ignore[no-untyped-def]
-    """The worked example with 3 free coefficients per joint and q1 capped at 1.45 rad."""
+def _capped(worked_scenario, effort: float = math.inf):  # type: ignore[no-untyped-def]
+    """The worked example with 3 free coefficients per joint and q1 capped at 1.45 rad.
+
+    ``effort``: q1's effort limit (N m).
+    """
     scenario = worked_scenario.resolved()
     joints = list(scenario.robot.joints)
-    joints[0] = dataclasses.replace(joints[0], upper=1.45)
+    joints[0] = dataclasses.replace(joints[0], upper=1.45, effort_limit=effort)
     robot = dataclasses.replace(scenario.robot, joints=tuple(joints))
     return worked_problem(dataclasses.replace(scenario, robot=robot), {"q1": 3, "q2": 3})
+
+
+def test_effort_limits_the_eager_steps_break_are_imposed_in_a_second_pass(worked_scenario):
+    """Capped q1 (1.45 rad), then an effort limit on q1 at 0.9 of the torque peak of the root
+    found within the position limits alone: the nearest root's steps keep the eager limits
+    first, find that root breaks the (lazy) effort limit and take the steps again with it.
+    The root returned is on h = 0, within the cap, and its torques, by inverse dynamics at
+    4001 instants (another algorithm than the effort rows' torque derivatives), stay within
+    the limit, while it deviates less than the start."""
+    from freefloat.physics.dynamics import inverse_dynamics_batch
+    from freefloat.problem.constraints.joint_effort import JointEffortLimits
+    from freefloat.solvers.nearest import _within
+
+    def peaks(problem, beta):  # type: ignore[no-untyped-def]
+        samples = problem.polynomials(beta).evaluate(np.linspace(0.0, problem.duration, 4001))
+        batch = inverse_dynamics_batch(problem.mmap, samples.q, samples.qd, samples.qdd)
+        return np.abs(batch.tau).max(axis=0)
+
+    problem, options, limits = _capped(worked_scenario), ff.SolveOptions(), JointPositionLimits()
+    least = ff.solve(problem, options, []).beta
+    null = np.linalg.svd(problem.jacobian(least))[2][3:]
+    start = polish(problem, least + 0.5 * null[0], 1e-10)[0]
+    eager = least_norm_root_within(problem, start, [limits], options, least).beta
+    cap = 0.9 * peaks(problem, eager)[0]
+    capped = _capped(worked_scenario, effort=cap)
+    found = _within(capped, start, [limits, JointEffortLimits()], options, least)
+    assert np.linalg.norm(capped.residual(found)) < 1e-10
+    assert limits.violation(capped, found).value <= limits.tolerance
+    assert peaks(capped, found)[0] <= cap
+    assert found @ found < start @ start
 
 
 def _slsqp_rows(problem, limits):  # type: ignore[no-untyped-def]
@@ -127,3 +161,33 @@ def test_corrections_bring_a_root_inside_a_cap_it_breaks(worked_scenario):
     assert nearest.success
     moved, least = np.linalg.norm(found.beta - start), np.linalg.norm(nearest.x - start)
     assert least <= moved <= 1.1 * least
+
+
+def test_a_level_whose_rounds_press_past_a_limit_keeps_the_root_brought_inside():
+    """The Panda servicer's goal rolled 65 deg: at each freedom level the steps within the
+    joint limits end just past a limit between their instants (1e-5 rad), while the free
+    least-norm root brought inside passed the dense check. That root is kept: the plan
+    deviates far less from the quintic than the search's root (|beta|^2 below half of it),
+    and its samples stay within the URDF's limits (read from the file here, not from the
+    planner's robot) and its verification passed."""
+    import dataclasses as dc
+    import xml.etree.ElementTree as ET
+
+    from freefloat.physics import attitude as att
+
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "panda_servicer.toml")
+    rolled = att.quat_multiply(scenario.goal_attitude, att.quat_exp(np.radians([65.0, 0, 0])))
+    plan = ff.plan(dc.replace(scenario, goal_attitude=rolled))
+    levels = [t for t in plan.solver.tried if t.startswith("nearest root")]
+    assert levels and all("deviation" in t for t in levels), levels
+    assert plan.objective.value < 0.5 * plan.objective.start_value
+    assert all(c.passed for c in plan.verification.checks)
+    limits = {
+        j.get("name"): (float(j.find("limit").get("lower")), float(j.find("limit").get("upper")))
+        for j in ET.parse(scenario.robot.urdf).getroot().iter("joint")
+        if j.find("limit") is not None and j.get("type") == "revolute"
+    }
+    q = np.asarray(plan.samples.q, dtype=float)
+    for i, name in enumerate(plan.robot.joints):
+        lower, upper = limits[name]
+        assert lower - 1e-9 <= q[:, i].min() and q[:, i].max() <= upper + 1e-9, name

@@ -149,6 +149,8 @@ class SolverError(FreeFloatError):
             planner got (0-1; continuation only, else 0).
         last_beta: the free coefficients where continuation stopped (rad or m), if it did.
         hint: what to try instead ("" when none).
+        blocked_by: the names of the constraints that stood in the way: one that stopped a
+            continuation, or that a root found broke (empty when none did).
     """
 
     def __init__(
@@ -161,8 +163,10 @@ class SolverError(FreeFloatError):
         stopped_by: str = "",
         reached_fraction: float = 0.0,
         last_beta: Sequence[float] | None = None,
+        blocked_by: Sequence[str] = (),
     ) -> None:
         self.headline = message
+        self.blocked_by = tuple(blocked_by)
         self.hint = hint
         self.stopped_by = stopped_by
         self.last_beta = None if last_beta is None else tuple(float(b) for b in last_beta)

@@ -114,6 +114,7 @@ class UnreachableAttitudeError(SolverError, UnreachableGoalError):
         last_beta: Sequence[float] | None = None,
         axis: Sequence[float] = (0.0, 0.0, 1.0),
         problem: object | None = None,
+        blocked_by: Sequence[str] = (),
     ) -> None:
         self.reached = float(reached)
         self.problem = problem
@@ -129,6 +130,7 @@ class UnreachableAttitudeError(SolverError, UnreachableGoalError):
             stopped_by=stopped_by,
             reached_fraction=self.reached / self.asked if self.asked > 0.0 else 0.0,
             last_beta=last_beta,
+            blocked_by=blocked_by,
         )
         self.distance = self.radius = float("nan")
 
@@ -146,4 +148,5 @@ class UnreachableAttitudeError(SolverError, UnreachableGoalError):
             last_beta=self.last_beta,
             axis=self.axis,
             problem=self.problem,
+            blocked_by=self.blocked_by,
         )

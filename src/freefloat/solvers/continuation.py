@@ -33,7 +33,7 @@ from ..problem.residual import Problem
 from ..progress import heartbeat
 from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
-from .restore import broken_constraint
+from .restore import Broken, broken_constraint
 from .rows import RowCache, linear_rows, with_critical
 from .tracked import BranchPoint, ContinuationResult
 
@@ -136,20 +136,23 @@ def _dense_ok(problem: Problem, constraints: Sequence[Constraint], beta: np.ndar
     return not broken_constraint(problem, constraints, beta)
 
 
-def _why(
-    problem: Problem,
-    constraints: Sequence[Constraint],
-    beta: np.ndarray,
-    tangent: np.ndarray,
-    jac: np.ndarray,
-) -> str:
-    """Why the branch cannot go on from ``beta``: a constraint, a singular map, or freedom."""
+def _ahead(
+    problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray, tangent: np.ndarray
+) -> Broken | None:
+    """The first constraint a short step along ``tangent`` from ``beta`` would break, or None."""
     ahead = beta + tangent * 0.05
     for constraint in constraints:
         if constraint.applies_to(problem.robot):
             excess = constraint.violation(problem, ahead)
             if excess.value > 0.0:
-                return f"{constraint.name}: {excess.detail}"
+                return Broken(constraint.name, excess.detail)
+    return None
+
+
+def _why(blocked: Broken | None, jac: np.ndarray) -> str:
+    """Why the branch cannot go on: a constraint ahead, a singular map, or freedom."""
+    if blocked is not None:
+        return f"{blocked.name}: {blocked.detail}"
     sigma = np.linalg.svd(jac, compute_uv=False)
     if sigma[-1] < SINGULAR * max(sigma[0], 1e-300) or sigma[-1] < 1e-9:
         return "a singular map (dh/dbeta loses rank)"
@@ -209,6 +212,7 @@ def track(
     if trace is not None:
         trace.append(BranchPoint(0.0, beta, dl * angle))
     stopped_by = ""
+    blocked: Broken | None = None  # the constraint that stopped the branch, if one did
     reached = [0.0]  # lam after each step: the pace check's history
     while lam < 1.0:
         if steps >= MAX_STEPS:
@@ -220,8 +224,9 @@ def track(
                 # At the pace of the last steps the step budget ends short of the goal: stop
                 # now rather than spend the budget on the same refusal.
                 tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache)
+                blocked = _ahead(problem, constraints, beta, tangent)
                 stopped_by = (
-                    f"{_why(problem, constraints, beta, tangent, jac)} (stalled: "
+                    f"{_why(blocked, jac)} (stalled: "
                     f"{math.degrees(gain * angle):.2g} deg in the last {PACE_WINDOW} steps)"
                 )
                 break
@@ -249,7 +254,8 @@ def track(
             reached.append(lam)
             dl = 0.5 * step
             if dl * angle < MIN_STEP:
-                stopped_by = _why(problem, constraints, beta, tangent, jac)
+                blocked = _ahead(problem, constraints, beta, tangent)
+                stopped_by = _why(blocked, jac)
                 break
             continue
         beta, lam, r, jac = solved, 1.0 if last else lam + step, r_new, jac_new
@@ -257,7 +263,9 @@ def track(
         dl = step * (2.0 if its <= 4 else 1.0 if its <= 5 else 0.5)
         if trace is not None:
             trace.append(BranchPoint(lam * angle, beta, dl * angle))
-    return ContinuationResult(beta, lam, angle, axis, r, steps, iterations, stopped_by)
+    return ContinuationResult(
+        beta, lam, angle, axis, r, steps, iterations, stopped_by, blocked.name if blocked else ""
+    )
 
 
 def _densely(
@@ -318,6 +326,7 @@ def continuation(
             fallback.tried = attempt.tried
             return fallback
     attempt.stopped_by = result.stopped_by
+    attempt.blocked_by = (result.blocked_by,) if result.blocked_by else ()
     attempt.last_beta = result.beta if result.fraction > 0.0 else None
     axis = ", ".join(f"{x:.3f}" for x in result.axis)
     attempt.message = (

@@ -29,7 +29,7 @@ from .continuation import continuation
 from .multistart import multistart
 from .newton import polish
 from .options import Attempt, Root, Solution, SolveOptions, Strategy
-from .restore import broken_constraint, feasible_start
+from .restore import broken_constraint, feasible_start, first_broken
 from .scan import scan
 
 __all__ = ["STRATEGIES", "choose_strategy", "solve"]
@@ -92,10 +92,11 @@ def solve(
     strategy, attempt, start, restored = _attempt(problem, constraints, options, start)
     tried = restored + list(attempt.tried)
 
-    roots, best_vector = _roots(problem, attempt, constraints, tol, tried)
+    blocked = list(attempt.blocked_by)
+    roots, best_vector = _roots(problem, attempt, constraints, tol, tried, blocked)
     roots.sort(key=lambda r: float(r.beta @ r.beta))
     if not roots:
-        _refuse(problem, attempt, start, tried, best_vector)
+        _refuse(problem, attempt, start, tried, best_vector, tuple(dict.fromkeys(blocked)))
 
     # Certify the integration at the chosen root; refine the grid and polish when needed.
     chosen = roots[0]
@@ -134,7 +135,8 @@ def _attempt(
     # Restoration serves the constraints every path must meet from the start; a lazy one
     # (imposed only once a path broke it) is left to the strategy and the root filter.
     eager = [c for c in constraints if not c.lazy]
-    quintic_breaks = broken_constraint(problem, eager, zero)
+    quintic = first_broken(problem, eager, zero)
+    quintic_breaks = "" if quintic is None else str(quintic)
     start, restored = _start(problem, constraints, quintic_breaks, given, options)
     if np.linalg.norm(problem.residual(zero)) < 0.01 * options.tolerance and not quintic_breaks:
         attempt = Attempt(candidates=[zero], method="none (the quintic path already reaches it)")
@@ -151,6 +153,8 @@ def _attempt(
         # A numerical breakdown (an SVD that does not converge on non-finite values) is a
         # failed attempt with a reason, never a crash.
         attempt = Attempt(tried=[f"{strategy}: numerical failure ({exc})"])
+    if quintic is not None and not np.any(start):  # no path within it to start from
+        attempt.blocked_by = (*attempt.blocked_by, quintic.name)
     return strategy, attempt, start, restored
 
 
@@ -160,8 +164,12 @@ def _refuse(
     start: np.ndarray,
     tried: list[str],
     best_vector: np.ndarray,
+    blocked: tuple[str, ...],
 ) -> NoReturn:
     """Raise the refusal of an attempt with no root (``best_vector``: its best residual, rad).
+
+    ``blocked``: the names of the constraints that stood in the way (the error's
+    ``blocked_by``).
 
     Raises:
         UnreachableAttitudeError: the strategy stopped on the way (out of reach); every
@@ -187,6 +195,7 @@ def _refuse(
             last_beta=attempt.last_beta.tolist(),
             axis=(turn / max(asked, 1e-300)).tolist(),
             problem=problem,
+            blocked_by=blocked,
         )
     raise SolverError(
         attempt.message or "no path within the constraints reaches the goal attitude",
@@ -196,6 +205,7 @@ def _refuse(
         stopped_by=attempt.stopped_by,
         reached_fraction=attempt.reached_fraction,
         last_beta=None if attempt.last_beta is None else attempt.last_beta.tolist(),
+        blocked_by=blocked,
     )
 
 
@@ -241,11 +251,12 @@ def _roots(
     constraints: Sequence[Constraint],
     tol: float,
     tried: list[str],
+    blocked: list[str],
 ) -> tuple[list[Root], np.ndarray]:
     """The attempt's candidates, polished, that are roots within the constraints.
 
     Returns them with the residual vector (rad) closest to zero; appends what was dropped to
-    ``tried``.
+    ``tried``, and the name of each constraint a dropped root broke to ``blocked``.
     """
     zero = np.zeros(problem.n_free)
     roots = []
@@ -260,9 +271,10 @@ def _roots(
                 tried.append("a candidate could not be polished (numerical failure)")
                 continue
         residual = float(np.linalg.norm(vector))
-        broken = broken_constraint(problem, constraints, beta)
-        if broken:
+        broken = first_broken(problem, constraints, beta)
+        if broken is not None:
             tried.append(f"a root breaks {broken}")
+            blocked.append(broken.name)
             continue
         if residual < np.linalg.norm(best_vector):
             best_vector = vector

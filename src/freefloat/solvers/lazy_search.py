@@ -19,7 +19,7 @@ from ..problem.constraints import Constraint, DurationScaledLimit, LimitPeak
 from ..problem.residual import Problem
 from ..problem.scenario import Scenario
 from .options import SolveOptions
-from .restore import broken_constraint
+from .restore import broken_constraint, first_broken
 from .search import SearchResult, search
 
 __all__ = ["broken_by", "explain_lazy_breaks", "search_lazily"]
@@ -35,16 +35,16 @@ def explain_lazy_breaks(found: SearchResult, constraints: Sequence[Constraint]) 
 
     The others were imposed by the search and kept by the minimisation: not checked again.
     """
-    broken = broken_by(found, constraints)
-    if not broken:
+    broken = first_broken(found.problem, constraints, found.solution.beta)
+    if broken is None:
         return
     path = found.problem.polynomials(found.solution.beta)
     for limit in constraints:
-        if isinstance(limit, DurationScaledLimit) and limit.name in broken:
+        if isinstance(limit, DurationScaledLimit) and limit.name == broken.name:
             peak = limit.worst(found.problem.robot, path)
             if peak is not None and peak.fraction > 1.0:
                 raise limit.error(peak)
-    raise SolverError(f"the path found breaks {broken}", 0.0)
+    raise SolverError(f"the path found breaks {broken}", 0.0, blocked_by=(broken.name,))
 
 
 def search_lazily(
@@ -117,8 +117,7 @@ def _out_of_reach(
 ) -> UnreachableAttitudeError:
     """The refusal of the search within the cheap constraints, naming those left out.
 
-    The message names only the constraints left out: the duration check reads the names of
-    the constraints that stood in the way from it.
+    Every figure and the constraints that stood in the way (``blocked_by``) are kept.
     """
     names = ", ".join(c.name for c in left_out)
     return error.with_headline(
@@ -141,7 +140,7 @@ def _explain_duration_limits(
     """
     timed = [c for c in constraints if isinstance(c, DurationScaledLimit)]
     relaxed = [c for c in constraints if c not in timed]
-    if not timed or not any(c.name in str(error) for c in timed):
+    if not any(c.name in error.blocked_by for c in timed):
         return  # the velocity and effort limits did not stand in the way
     try:
         found = search(scenario, options, relaxed)

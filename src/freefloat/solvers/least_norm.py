@@ -16,8 +16,9 @@ Both solvers are sequential quadratic programming with the exact Hessian of the 
   least-norm steps); it is kept when that root deviates less, else the trust region halves.
   It starts from the free least-norm root brought inside the constraints when that deviates
   less than the given root, and stops once a step gains less than :data:`SETTLED`. When the
-  result honours the rows but not the dense check between them, the path's tightest instants
-  are added and the steps go on (at most :data:`ROUNDS` times).
+  result honours the rows but not the dense check between them, it is brought back inside by
+  least-norm corrections at its tightest instants (kept when the dense check passes it), else
+  those instants are added and the steps go on (at most :data:`ROUNDS` times).
 - :func:`nearest_root_within`: a root just outside a constraint (between the instants of the
   rows that held it) brought inside by least-norm corrections.
 
@@ -133,13 +134,20 @@ def least_norm_root_within(
         free: the least-norm root without constraints, when known: brought inside them
             (:func:`nearest_root_within`), it is the start when it deviates less than ``beta``.
         settled: steps stop once one lowers ``|beta|^2`` by less than this fraction.
+
+    A round's result that breaks a constraint between its instants (the steps press against
+    a limit and its peak moves) is brought back inside by least-norm corrections
+    (:func:`nearest_root_within`) and returned once the dense check passes it; when none can
+    be, the free root brought inside is returned if the dense check passed it: a root that
+    deviates less than ``beta`` and honours every constraint, rather than none.
     """
     active = [c for c in constraints if c.applies_to(problem.robot)]
     beta = np.asarray(beta, dtype=float)
+    honoured: np.ndarray | None = None  # a root below beta's norm that the dense check passed
     if free is not None:
         inside = nearest_root_within(problem, free, active, DEFAULT_INSTANTS, options)
         if inside.honoured and float(inside.beta @ inside.beta) < float(beta @ beta):
-            beta = inside.beta
+            beta = honoured = inside.beta
     cache: RowCache = {}
     instants = with_critical(problem, active, beta, DEFAULT_INSTANTS)
     spent = 0
@@ -150,7 +158,18 @@ def least_norm_root_within(
         if not broken_constraint(problem, active, beta):
             return LeastNorm(beta, spent, True)
         instants = with_critical(problem, active, beta, instants)
+        # pressed past a limit between the instants: brought back inside, least-norm
+        inside = nearest_root_within(problem, beta, active, instants, options)
+        if inside.honoured and (honoured is None or _norm(inside.beta) < _norm(honoured)):
+            return LeastNorm(inside.beta, spent, True)
+    if honoured is not None:  # the rounds pressed past a limit between their instants
+        return LeastNorm(honoured, spent, True)
     return LeastNorm(beta, spent, False)
+
+
+def _norm(beta: np.ndarray) -> float:
+    """``|beta|^2``, the deviation from the quintic (rad^2 or m^2)."""
+    return float(beta @ beta)
 
 
 def nearest_root_within(

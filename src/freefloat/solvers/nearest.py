@@ -12,7 +12,8 @@ still swings a joint far beyond its start-goal span. When the largest such excur
 by sequential quadratic programming with the exact Hessian of the objective
 (:func:`.least_norm.least_norm_root`); when that root breaks a constraint, by the same steps
 with the constraints linearised as rows of a small quadratic program, from the previous path,
-which honours them (:func:`.least_norm.least_norm_root_within`). A level
+which honours them (:func:`.least_norm.least_norm_root_within`; the lazy ones, effort limits,
+only when the root found without them breaks them, as the search imposes them). A level
 is kept only if its path is certified (integration refined, :func:`.certify.certify`), honours
 every constraint and deviates less; the levels stop once the excursion is natural. Planar
 problems keep the search's root (the paper's examples and their roots are unchanged). Budgets
@@ -63,6 +64,27 @@ def _largest_excursion(problem: Problem, beta: np.ndarray) -> float:
     return float(excursions(problem.polynomials(beta), family.start, family.goal).max())
 
 
+def _within(
+    problem: Problem,
+    start: np.ndarray,
+    constraints: Sequence[Constraint],
+    options: SolveOptions,
+    free: np.ndarray,
+) -> np.ndarray:
+    """:func:`.least_norm.least_norm_root_within`, the lazy constraints imposed when broken.
+
+    As the search does, the steps first keep the eager constraints alone (the effort limits'
+    rows cost a torque derivative per instant); only when their root breaks a lazy one are
+    the steps taken again with every constraint (rad or m).
+    """
+    eager = [c for c in constraints if not c.lazy]
+    if len(eager) < len(constraints):
+        found = least_norm_root_within(problem, start, eager, options, free).beta
+        if not broken_constraint(problem, [c for c in constraints if c.lazy], found):
+            return found
+    return least_norm_root_within(problem, start, constraints, options, free).beta
+
+
 def nearest_root(
     scenario: Scenario,
     found: SearchResult,
@@ -99,8 +121,7 @@ def nearest_root(
             break
         candidate, how = least_norm_root(level, start, options), "least-norm SQP"
         if broken_constraint(level, constraints, candidate):  # the constraints bind
-            within = least_norm_root_within(level, start, constraints, options, candidate)
-            candidate = within.beta
+            candidate = _within(level, start, constraints, options, candidate)
             how = "least-norm SQP within the constraints"
         residual = float(np.linalg.norm(level.residual(candidate)))
         checked = certify(level, candidate, residual, options.tolerance)

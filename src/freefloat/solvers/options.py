@@ -151,6 +151,7 @@ class Attempt:
         residuals: per candidate index, its residual vector when already known exactly.
         tried: what was attempted, in order.
         stopped_by: why the strategy stopped short, when it did (for error messages).
+        blocked_by: the names of the constraints that stopped it, when any did.
         reached_fraction: for continuation, how far along the way to the goal it got (0-1).
         message: a one-line account of a failure for the error message ("" for the default).
         last_beta: where a strategy that stopped short got to (continuation), so that a
@@ -163,6 +164,7 @@ class Attempt:
     residuals: dict[int, np.ndarray] = field(default_factory=dict)
     tried: list[str] = field(default_factory=list)
     stopped_by: str = ""
+    blocked_by: tuple[str, ...] = ()
     reached_fraction: float = 0.0
     message: str = ""
     last_beta: np.ndarray | None = None

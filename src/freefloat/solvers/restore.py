@@ -9,6 +9,7 @@ that feasible path.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -17,17 +18,41 @@ from ..problem.residual import Problem
 from .options import SolveOptions
 from .sqp import constraint_functions
 
-__all__ = ["broken_constraint", "feasible_start"]
+__all__ = ["Broken", "broken_constraint", "feasible_start", "first_broken"]
 
 
-def broken_constraint(problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray) -> str:
-    """``"name (where)"`` of the first constraint the path at ``beta`` breaks, or ``""``."""
+@dataclass(frozen=True)
+class Broken:
+    """A constraint a path breaks.
+
+    Attributes:
+        name: the constraint's name.
+        detail: where (a joint, a pair, a time), for people.
+    """
+
+    name: str
+    detail: str
+
+    def __str__(self) -> str:
+        return f"{self.name} ({self.detail})"
+
+
+def first_broken(
+    problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray
+) -> Broken | None:
+    """The first constraint the path at ``beta`` breaks beyond its tolerance, or None."""
     for constraint in constraints:
         if constraint.applies_to(problem.robot):
             excess = constraint.violation(problem, beta)
             if excess.value > constraint.tolerance + excess.error_estimate:
-                return f"{constraint.name} ({excess.detail})"
-    return ""
+                return Broken(constraint.name, excess.detail)
+    return None
+
+
+def broken_constraint(problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray) -> str:
+    """``"name (where)"`` of the first constraint the path at ``beta`` breaks, or ``""``."""
+    broken = first_broken(problem, constraints, beta)
+    return "" if broken is None else str(broken)
 
 
 def feasible_start(

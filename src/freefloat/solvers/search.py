@@ -190,6 +190,7 @@ def search(
         (record.best, record.best_axes, record.best_error),
         record.tried,
         (record.origin, record.closest),
+        tuple(dict.fromkeys(record.blocked)),
     )
 
 
@@ -204,6 +205,7 @@ class _Record:
             ``best_error`` its error (or the level that got furthest along its way).
         origin: the first level's unreachable-attitude error (the turn asked from the quintic
             path's attitude); ``closest`` the one that got closest.
+        blocked: the names of the constraints that stood in the way of some level.
     """
 
     tried: list[str] = field(default_factory=list)
@@ -213,9 +215,11 @@ class _Record:
     best_error: SolverError | None = None
     origin: UnreachableAttitudeError | None = None
     closest: UnreachableAttitudeError | None = None
+    blocked: list[str] = field(default_factory=list)
 
     def failed(self, exc: SolverError, freedom: str, continued: bool) -> None:
         """Record a level (``freedom``: its label) that stopped with ``exc``."""
+        self.blocked += exc.blocked_by
         if isinstance(exc, UnreachableAttitudeError):
             if not continued:
                 self.origin = exc  # the turn asked from the quintic path's attitude
@@ -252,12 +256,13 @@ def _refuse(
     nearest: tuple[float, tuple[float, ...] | None, SolverError | None],
     tried: list[str],
     turns: tuple[UnreachableAttitudeError | None, UnreachableAttitudeError | None],
+    blocked: tuple[str, ...],
 ) -> NoReturn:
     """Raise the refusal of a search that found no root (``attempts`` goal offsets tried).
 
     ``nearest``: the best residual (rad), its axes and error; ``turns``: the first level's
     unreachable-attitude error (the turn asked from the quintic path's attitude) and the one
-    that got closest.
+    that got closest; ``blocked``: the constraints that stood in the way of some level.
 
     Raises:
         InfeasibleError: the planar bounds refused the only goal tried.
@@ -298,6 +303,7 @@ def _refuse(
             last_beta=closest.last_beta,
             axis=origin.axis,
             problem=closest.problem,
+            blocked_by=blocked,
         )
     headline = "no path reaches the goal attitude"
     if best_error is not None and best_error.stopped_by:
@@ -310,6 +316,7 @@ def _refuse(
         hint=hint,
         stopped_by=best_error.stopped_by if best_error else "",
         reached_fraction=best_error.reached_fraction if best_error else 0.0,
+        blocked_by=blocked,
     )
 
 

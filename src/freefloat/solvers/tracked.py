@@ -22,6 +22,7 @@ class ContinuationResult:
         steps: continuation steps taken.
         iterations: Newton iterations in all correctors.
         stopped_by: why it stopped short ("" when it reached the goal).
+        blocked_by: the name of the constraint that stopped it ("" when none did).
     """
 
     beta: np.ndarray
@@ -32,6 +33,7 @@ class ContinuationResult:
     steps: int
     iterations: int
     stopped_by: str = ""
+    blocked_by: str = ""
 
     @property
     def reached(self) -> bool:
