@@ -53,6 +53,11 @@ class _Instants:
         self.exact: dict[tuple[float, int], float] = {}
         self.leaf_gaps: dict[tuple[float, int], np.ndarray] = {}
         self.leaf_centres: dict[float, np.ndarray] = {}
+        self.interval_rates: dict[tuple[float, float], np.ndarray] = {}
+        self.leaf_speeds: dict[int, np.ndarray] = {}
+        #: The first pass's leaf-pair gaps (see :meth:`keep_gaps`), looked up when asked for.
+        self.grid: dict[float, int] = {}
+        self.grid_gaps: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def load(self, times: np.ndarray) -> None:
         """Joint values and speeds at many instants (s), evaluated in one call."""
@@ -70,18 +75,69 @@ class _Instants:
         return self.placements[t]
 
     def rates(self, t0: Sequence[float], t1: Sequence[float]) -> np.ndarray:
-        """(K, N) largest ``|qd_j|`` over each ``[t0, t1]`` (rad/s or m/s)."""
+        """(K, N) largest ``|qd_j|`` over each ``[t0, t1]`` (rad/s or m/s), each kept.
+
+        Row by row the bound of one interval alone (:meth:`PolynomialMotion.rate_bounds`
+        works row by row), so an interval asked for again gets the same figures.
+        """
+        rates = self.interval_rates
+        if len(t0) == 1 and (t0[0], t1[0]) in rates:
+            return rates[(t0[0], t1[0])][None]
         for t in (*t0, *t1):
             self.at(t)
         ends = np.array([self.speeds[t] for t in (*t0, *t1)])
-        return self.motion.rate_bounds(np.array(t0), np.array(t1), ends)
+        found = self.motion.rate_bounds(np.array(t0), np.array(t1), ends)
+        for a, b, row in zip(t0, t1, found, strict=True):
+            rates[(a, b)] = row
+        return found
+
+    def leaf_reach(self, k: int) -> np.ndarray:
+        """(N, R) the speed coefficients of pair k's leaf pairs (:attr:`LeafSpheres.row_reach`)."""
+        if k not in self.leaf_speeds:
+            leaves = self.mesh.leaves
+            self.leaf_speeds[k] = leaves.row_reach[:, leaves.rows_of(k)]
+        return self.leaf_speeds[k]
 
     def bounds(self, t0: Sequence[float], t1: Sequence[float]) -> np.ndarray:
         """(K, P) Lipschitz constants of every pair's distance on each ``[t0, t1]`` (m/s)."""
         return self.rates(t0, t1) @ self.mesh.pair_reach
 
+    def keep_gaps(
+        self,
+        times: np.ndarray,
+        codes: np.ndarray,
+        starts: np.ndarray,
+        gaps: np.ndarray,
+    ) -> None:
+        """Keep the leaf-pair gaps the first pass computed, for :meth:`gaps` to look up.
+
+        ``codes``: sorted ``instant * P + pair`` of each (instant of ``times``, pair) cell;
+        ``starts``: where each cell's run of leaf pairs begins in ``gaps`` (m), the cell's
+        pair's leaf pairs in order, as :meth:`gaps` gives them.
+        """
+        self.grid = {t: i for i, t in enumerate(times.tolist())}
+        self.grid_gaps = (
+            codes,
+            starts,
+            starts + self.mesh.leaves.count[codes % len(self.mesh.pairs)],
+            gaps,
+        )
+
+    def _kept_gaps(self, t: float, k: int) -> np.ndarray | None:
+        """Pair k's leaf-pair gaps at ``t`` (m) if the first pass computed them."""
+        if self.grid_gaps is None or t not in self.grid:
+            return None
+        codes, starts, ends, gaps = self.grid_gaps
+        code = self.grid[t] * len(self.mesh.pairs) + k
+        at = int(np.searchsorted(codes, code))
+        if at == len(codes) or codes[at] != code:
+            return None
+        return gaps[starts[at] : ends[at]]
+
     def gaps(self, t: float, k: int) -> np.ndarray:
         """Lower bounds (m) of the distance between the leaves of each of pair k's leaf pairs."""
+        if (t, k) not in self.leaf_gaps and (kept := self._kept_gaps(t, k)) is not None:
+            self.leaf_gaps[(t, k)] = kept
         if (t, k) not in self.leaf_gaps:
             leaves, poses = self.mesh.leaves, self.at(t)[None]
             if t not in self.leaf_centres:  # every leaf placed once per instant
@@ -158,8 +214,8 @@ def certify(
             break
         bisections += 1
         mid = 0.5 * (t0 + t1)
-        if mid not in store.joints:  # with the middles of its halves, likely halved next
-            store.load(np.array([mid, 0.5 * (t0 + mid), 0.5 * (mid + t1)]))
+        if mid not in store.joints:  # with the middles of its halves and of other intervals
+            store.load(_middles(store, heap, t0, t1))
         least.note(store.distance(mid, k), mid, k)
         rates = store.rates([t0, mid], [mid, t1])
         for (a, b), rate in zip(((t0, mid), (mid, t1)), rates, strict=True):
@@ -248,6 +304,22 @@ def _measure_ends(
 _Item = tuple[float, float, float, int, bool, float]
 
 
+def _middles(store: _Instants, heap: list[_Item], t0: float, t1: float) -> np.ndarray:
+    """Instants (s) likely needed next: ``[t0, t1]``'s middle and those of its halves.
+
+    And the same for every interval in ``heap`` whose middle is not loaded yet: all loaded
+    in one evaluation of the paths, whose cost is mostly per call.
+    """
+    out: list[float] = []
+    seen: set[float] = set()
+    for a, b in ((t0, t1), *((item[1], item[2]) for item in heap)):
+        mid = 0.5 * (a + b)
+        if mid not in seen and mid not in store.joints:
+            seen.add(mid)
+            out += [mid, 0.5 * (a + mid), 0.5 * (mid + b)]
+    return np.array(out)
+
+
 def _first_pass(
     mesh: MeshClearance, store: _Instants, times: np.ndarray, margin: float
 ) -> tuple[_Least, float, list[_Item]]:
@@ -258,7 +330,8 @@ def _first_pass(
     none), and the heap of the others.
     """
     store.load(times)
-    bounds = np.array([mesh.sphere_bounds(store.at(float(t))) for t in times])
+    placements = np.array([store.at(t) for t in times.tolist()])
+    bounds = mesh.sphere_bounds(placements)
     k0, p0 = np.unravel_index(int(np.argmin(bounds)), bounds.shape)
     measured, when, pair = store.distance(float(times[k0]), int(p0)), float(times[k0]), int(p0)
     rates = store.rates(times[:-1].tolist(), times[1:].tolist())
@@ -266,7 +339,13 @@ def _first_pass(
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
     settled = lbs >= measured - _tolerance(measured, margin)
     _tighten(
-        mesh, store, times, bounds, rates, lbs, settled, measured - _tolerance(measured, margin)
+        store,
+        placements,
+        times,
+        (bounds, rates),
+        lbs,
+        settled,
+        measured - _tolerance(measured, margin),
     )
     settled = lbs >= measured - _tolerance(measured, margin)
     lower = float(lbs[settled].min()) if settled.any() else math.inf
@@ -304,19 +383,19 @@ def _leaf_value(
     db = -math.inf if one_end else store.distance(b, k)
     if da <= 0.0 or (db <= 0.0 and not one_end):
         return -math.inf
-    leaves = store.mesh.leaves
-    speed = rates @ leaves.row_reach[:, leaves.rows_of(k)]
+    travel = (rates @ store.leaf_reach(k)) * width
     start = np.maximum(da, store.gaps(a, k))
-    end = np.maximum.reduce([np.full_like(start, db), store.gaps(b, k), start - speed * width])
-    return float(np.min(0.5 * (start + end - speed * width)))
+    end = np.maximum(store.gaps(b, k), start - travel)
+    if not one_end:
+        end = np.maximum(end, db)
+    return float(np.min(0.5 * (start + end - travel)))
 
 
 def _tighten(
-    mesh: MeshClearance,
     store: _Instants,
+    placements: np.ndarray,
     times: np.ndarray,
-    bounds: np.ndarray,
-    rates: np.ndarray,
+    spheres: tuple[np.ndarray, np.ndarray],
     lbs: np.ndarray,
     settled: np.ndarray,
     threshold: float,
@@ -326,10 +405,12 @@ def _tighten(
     For every such (interval, pair), the larger of two lower bounds: the pair's leaf-sphere
     bound (:mod:`.sphere_tree`) at both ends where it beats the single spheres', with the
     whole bodies' speed bound; and the least over the pair's leaf pairs of their own bounds at
-    both ends with their own speed bounds (``rates``: (K - 1, N) joint-rate bounds per
-    interval), the latter only for the items the former leaves below ``threshold`` (m). Both
-    hold for the distance, so the interval bound stays one.
+    both ends with their own speed bounds, the latter only for the items the former leaves
+    below ``threshold`` (m). Both hold for the distance, so the interval bound stays one.
+    ``placements``: (K, G, 4, 4) the body poses at ``times``; ``spheres``: the single spheres'
+    bounds (K, P) (m) and the joint-rate bounds per interval (K - 1, N) (rad/s or m/s).
     """
+    mesh, (bounds, rates) = store.mesh, spheres
     rows, pairs = np.nonzero(~settled)
     if len(rows) == 0:
         return
@@ -340,10 +421,13 @@ def _tighten(
     runs = leaves.count[cell_pairs]
     starts = np.cumsum(runs) - runs
     offsets = np.arange(int(runs.sum())) - np.repeat(starts, runs)
-    placements = np.array([store.at(float(t)) for t in times])
-    gaps = leaves.row_gaps(
-        placements, np.repeat(cells, runs), np.repeat(leaves.start[cell_pairs], runs) + offsets
+    gaps = leaves.gaps_at(
+        leaves.centres_at(placements),
+        placements,
+        np.repeat(cells, runs),
+        np.repeat(leaves.start[cell_pairs], runs) + offsets,
     )
+    store.keep_gaps(times, codes, starts, gaps)
     tight = bounds.copy()
     tight[cells, cell_pairs] = np.maximum(
         bounds[cells, cell_pairs], np.minimum.reduceat(gaps, starts)
@@ -364,7 +448,11 @@ def _tighten(
     offsets = np.arange(int(runs.sum())) - np.repeat(np.cumsum(runs) - runs, runs)
     ends = gaps[first[item] + offsets] + gaps[second[item] + offsets]
     leaf_rows = leaves.start[pairs][item] + offsets
-    speed = np.einsum("rn,nr->r", rates[rows[item]], leaves.row_reach[:, leaf_rows])
+    speed = np.einsum(
+        "rn,rn->r",
+        np.take(rates, rows[item], axis=0),
+        np.take(leaves.row_reach_t, leaf_rows, axis=0),
+    )
     own = np.minimum.reduceat(0.5 * (ends - speed * widths[item]), np.cumsum(runs) - runs)
     lbs[rows, pairs] = np.maximum(whole, own)
 

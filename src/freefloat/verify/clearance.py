@@ -197,9 +197,12 @@ class MeshClearance:
         return np.array([m.homogeneous for m in self._gdata.oMg])
 
     def sphere_bounds(self, placements: np.ndarray) -> np.ndarray:
-        """(P,) lower bounds of every pair's distance from bounding spheres (m)."""
+        """(P,) lower bounds of every pair's distance from bounding spheres (m).
+
+        ``placements``: (G, 4, 4); or (K, G, 4, 4) for K instants at once, giving (K, P).
+        """
         centres = _centres(placements, self.centres)
-        gap = np.linalg.norm(centres[self.first] - centres[self.second], axis=1)
+        gap = np.linalg.norm(centres[..., self.first, :] - centres[..., self.second, :], axis=-1)
         return gap - self.radii[self.first] - self.radii[self.second]
 
     def exact(self, placements: np.ndarray, k: int) -> float:
@@ -268,8 +271,11 @@ class Placed:
 
 
 def _centres(placements: np.ndarray, local: np.ndarray) -> np.ndarray:
-    """(G, 3) points given in each object's frame, in the spacecraft frame (m)."""
-    return np.einsum("gij,gj->gi", placements[:, :3, :3], local) + placements[:, :3, 3]
+    """(..., G, 3) points given in each object's frame, in the spacecraft frame (m).
+
+    ``placements``: (..., G, 4, 4) poses of the G objects (one set, or one per instant).
+    """
+    return np.einsum("...gij,gj->...gi", placements[..., :3, :3], local) + placements[..., :3, 3]
 
 
 def _is_mesh(shape: coal.CollisionGeometry) -> bool:
