@@ -133,15 +133,17 @@ def checked_pairs(
         ModelError: the SRDF file does not exist.
     """
     model = robot.model
-    parent = {j: int(model.parents[j]) for j in range(model.njoints)}
+    parent = [int(j) for j in model.parents]
     objects = list(geometry.geometryObjects)
+    joints = [int(obj.parentJoint) for obj in objects]
+    obstacle = [obj.name.startswith(OBSTACLE_PREFIX) for obj in objects]
     geometry.removeAllCollisionPairs()
     for a in range(len(objects)):
         for b in range(a + 1, len(objects)):
-            ja, jb = objects[a].parentJoint, objects[b].parentJoint
+            ja, jb = joints[a], joints[b]
             if ja == jb:
                 continue  # one body
-            kept_out = any(objects[i].name.startswith(OBSTACLE_PREFIX) for i in (a, b))
+            kept_out = obstacle[a] or obstacle[b]
             if not kept_out and (parent[ja] == jb or parent[jb] == ja):
                 continue  # parent and child touch by design (a keep-out object never does)
             geometry.addCollisionPair(pin.CollisionPair(a, b))

@@ -349,16 +349,17 @@ def _first_pass(
     )
     settled = lbs >= measured - _tolerance(measured, margin)
     lower = float(lbs[settled].min()) if settled.any() else math.inf
+    rows, pairs = np.nonzero(~settled)
     heap: list[_Item] = [
-        (
-            float(lbs[i, k]),
-            float(times[i]),
-            float(times[i + 1]),
-            int(k),
-            False,
-            float(lipschitz[i, k]),
+        (value, t0, t1, k, False, speed)
+        for value, t0, t1, k, speed in zip(
+            lbs[rows, pairs].tolist(),
+            times[rows].tolist(),
+            times[rows + 1].tolist(),
+            pairs.tolist(),
+            lipschitz[rows, pairs].tolist(),
+            strict=True,
         )
-        for i, k in zip(*np.nonzero(~settled), strict=True)
     ]
     heapq.heapify(heap)
     return _Least(measured, when, pair), lower, heap

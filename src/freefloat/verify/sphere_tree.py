@@ -114,16 +114,19 @@ class LeafSpheres:
         #: (L, 3) leaf centres in their body's frame, (L,) radii, (L,) owning body.
         self.local, self.radii = np.concatenate(local), np.concatenate(size)
         self.owner = np.array(owner, dtype=int)
-        left, right, count = [], [], []
-        for a, b in np.asarray(pairs, dtype=int).reshape(-1, 2):
-            la = np.arange(first_leaf[a], first_leaf[a + 1])
-            lb = np.arange(first_leaf[b], first_leaf[b + 1])
-            left.append(np.repeat(la, len(lb)))
-            right.append(np.tile(lb, len(la)))
+        left: list[int] = []
+        right: list[int] = []
+        count: list[int] = []
+        for a, b in np.asarray(pairs, dtype=int).reshape(-1, 2).tolist():
+            la = range(first_leaf[a], first_leaf[a + 1])
+            lb = list(range(first_leaf[b], first_leaf[b + 1]))
+            for i in la:  # every leaf of a against every leaf of b, a's leaf the slower index
+                left += [i] * len(lb)
+                right += lb
             count.append(len(la) * len(lb))
         #: Every pair's leaf pairs, pair after pair: first and second leaf, and their count.
-        self.left = np.concatenate(left) if left else np.zeros(0, dtype=int)
-        self.right = np.concatenate(right) if right else np.zeros(0, dtype=int)
+        self.left = np.array(left, dtype=int)
+        self.right = np.array(right, dtype=int)
         self.count = np.array(count, dtype=int)
         self.start = np.concatenate([[0], np.cumsum(self.count)[:-1]]).astype(int)
         self.reach = self.radii[self.left] + self.radii[self.right]
