@@ -123,6 +123,15 @@ class CollisionModel(PairQueries):
         grads = np.stack([self._gradient(k) for k in range(len(self.pairs))])
         return Distances(values, grads)
 
+    def pair_distances(self, joints: np.ndarray, pairs: Sequence[int]) -> np.ndarray:
+        """Signed distances (m) of the listed pairs (indices) at the joint values, in order.
+
+        The same figures as :meth:`distances` gives them, the other pairs not measured.
+        """
+        self._place(np.asarray(joints, dtype=float))
+        measured = np.asarray(pairs, dtype=int).reshape(-1)
+        return self._measure(measured, self._spheres(measured))
+
     def closest_value(self, joints: np.ndarray, slot: float | None = None) -> tuple[float, int]:
         """The smallest signed distance over the pairs (m) and its pair index.
 
@@ -223,7 +232,11 @@ def collision_model(
 
 
 def clearance_at(model: CollisionModel, joints: Sequence[float] | np.ndarray) -> tuple[float, str]:
-    """Smallest clearance (m) at one configuration and the pair that has it."""
-    values = model.distances(np.asarray(joints, dtype=float)).values
-    k = int(np.argmin(values))
-    return float(values[k]), model.names[k]
+    """Smallest clearance (m) at one configuration and the pair that has it.
+
+    Only the pairs that can be the closest are measured (:meth:`CollisionModel.closest_value`,
+    bounded by this query alone), so the figure and the pair are those of every pair measured.
+    """
+    with model.own_bounds():
+        value, k = model.closest_value(np.asarray(joints, dtype=float))
+    return value, (model.names[k] if k >= 0 else "")
