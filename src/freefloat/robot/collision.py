@@ -47,7 +47,7 @@ from .geometry import (
     bodies_without_geometry,
     checked_pairs,
     hull_volume,
-    load_collision_geometry,
+    load_shared_geometry,
     mesh_volume,
     object_triangles,
     true_hull,
@@ -97,7 +97,7 @@ class CollisionModel(PairQueries):
     ) -> None:
         self.obstacles = tuple(obstacles)
         self.srdf = None if srdf is None else Path(srdf).expanduser().resolve()
-        geometry = load_collision_geometry(robot)
+        geometry = load_shared_geometry(robot)  # each mesh replaced below
         #: Movable bodies with no collision geometry (their clearance cannot be checked).
         self.uncovered = bodies_without_geometry(robot, geometry)
         self._meshes: dict[int, tuple[np.ndarray, np.ndarray]] = {}

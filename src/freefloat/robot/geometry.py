@@ -15,9 +15,11 @@ two arm bodies that are not parent and child; pairs an SRDF disables (MoveIt's
 ``<disable_collisions>``) are removed.
 
 The URDF's geometry is parsed once per URDF in a process (each caller gets its own deep copy,
-:func:`load_collision_geometry`), a mesh's triangles read once per file
-(:func:`object_triangles`), and hulls are built once per mesh file and scale in a process
-(:func:`true_hull` keeps them), so a second plan of the same robot pays nothing for them.
+:func:`load_collision_geometry`; or, for the two models above, which never change a shape,
+its own objects and primitives around the parsed meshes, :func:`load_shared_geometry`), a
+mesh's triangles read once per file (:func:`object_triangles`), and hulls are built once per
+mesh file and scale in a process (:func:`true_hull` keeps them), so a second plan of the same
+robot pays nothing for them.
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ __all__ = [
     "bodies_without_geometry",
     "checked_pairs",
     "load_collision_geometry",
+    "load_shared_geometry",
     "mesh_volume",
     "object_triangles",
     "true_hull",
@@ -62,6 +65,31 @@ def load_collision_geometry(robot: Robot) -> pin.GeometryModel:
     Raises:
         ModelError: the URDF's collision geometry cannot be read (a missing or broken mesh).
     """
+    return _parsed(robot).clone()
+
+
+def load_shared_geometry(robot: Robot) -> pin.GeometryModel:
+    """:func:`load_collision_geometry` without copying the meshes (callers never change one).
+
+    Its objects are copies of the parsed ones and primitives deep copies, but each mesh is
+    the parsed shape, shared by every such caller in the process: it may be read (coal's
+    queries, :func:`object_triangles`, :func:`true_hull`) or replaced in the model, never
+    changed.
+
+    Raises:
+        ModelError: as :func:`load_collision_geometry`.
+    """
+    geometry = pin.GeometryModel()
+    for obj in _parsed(robot).geometryObjects:
+        copy = pin.GeometryObject(obj)  # the same shape
+        if not isinstance(obj.geometry, coal.BVHModelBase):
+            copy.geometry = obj.geometry.clone()
+        geometry.addGeometryObject(copy)
+    return geometry
+
+
+def _parsed(robot: Robot) -> pin.GeometryModel:
+    """The parsed collision geometry of the URDF, kept (see :func:`load_collision_geometry`)."""
     key = (
         robot.urdf_text,
         str(robot.urdf),
@@ -85,7 +113,7 @@ def load_collision_geometry(robot: Robot) -> pin.GeometryModel:
         if len(_PARSED) >= 16:
             _PARSED.pop(next(iter(_PARSED)))
         parsed = _PARSED[key] = (geometry, _stamps(geometry))
-    return parsed[0].clone()
+    return parsed[0]
 
 
 def _stamps(geometry: pin.GeometryModel) -> tuple[tuple[str, int, int], ...]:
@@ -220,7 +248,7 @@ def true_hull(obj: pin.GeometryObject) -> coal.ConvexBase:
     """
     key = _mesh_key(obj)
     if key not in _HULLS:
-        shape = obj.geometry
+        shape = obj.geometry.clone()  # the object's own shape is left as it is
         shape.buildConvexHull(True, "Qt")
         _HULLS[key] = shape.convex
     return _HULLS[key]

@@ -1,8 +1,8 @@
 """Clearance verified on the URDF's original geometry, certified between samples.
 
 The solvers keep clearance on true convex hulls (:mod:`freefloat.robot.collision`). This check
-shares none of their shapes: it parses the URDF's collision elements again
-(:func:`~freefloat.robot.geometry.load_collision_geometry`) and measures the **original**
+shares none of their shapes: it takes the URDF's collision elements as parsed
+(:func:`~freefloat.robot.geometry.load_shared_geometry`) and measures the **original**
 geometry, meshes as bounding-volume hierarchies of their own triangles and primitives as
 themselves (coal). Only the list of checked pairs is common, since it defines what is checked.
 
@@ -53,7 +53,7 @@ from ..robot.collision import CollisionModel, Obstacle, checked_distance
 from ..robot.geometry import (
     add_obstacles,
     checked_pairs,
-    load_collision_geometry,
+    load_shared_geometry,
     object_triangles,
 )
 from ..robot.model import Robot
@@ -151,7 +151,7 @@ class MeshClearance:
         self, robot: Robot, srdf: str | Path | None = None, obstacles: Sequence[Obstacle] = ()
     ) -> None:
         self.robot = robot
-        geometry = load_collision_geometry(robot)
+        geometry = load_shared_geometry(robot)  # its meshes only read
         add_obstacles(robot, geometry, obstacles)
         self.pairs = checked_pairs(robot, geometry, srdf)
         self.geometry = geometry
