@@ -187,12 +187,20 @@ class MeshClearance:
         self.pair_reach = np.where(shared, 0.0, ra + rb)
         self._data = robot.model.createData()
         self._gdata = pin.GeometryData(geometry)
+        self._neutral = pin.neutral(robot.model)
+        plain = all(j.kind != "continuous" for j in robot.joints)
+        self._slots = np.array([j.idx_q for j in robot.joints]) if plain else None
         self.kinds = [f"{_kind(self.shapes[a])} / {_kind(self.shapes[b])}" for a, b in self.pairs]
 
     def placements(self, joints: np.ndarray) -> np.ndarray:
         """(G, 4, 4) pose of every geometry object in the spacecraft frame at ``joints``."""
         model = self.robot.model
-        pin.forwardKinematics(model, self._data, self.robot.configuration(joints))
+        if self._slots is None:
+            q = self.robot.configuration(joints)
+        else:  # no continuous joint: the values themselves, written into the neutral pose
+            q = self._neutral.copy()
+            q[self._slots] = joints
+        pin.forwardKinematics(model, self._data, q)
         pin.updateGeometryPlacements(model, self._data, self.geometry, self._gdata)
         return np.array([m.homogeneous for m in self._gdata.oMg])
 
