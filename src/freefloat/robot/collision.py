@@ -232,11 +232,7 @@ def collision_model(
 
 
 def clearance_at(model: CollisionModel, joints: Sequence[float] | np.ndarray) -> tuple[float, str]:
-    """Smallest clearance (m) at one configuration and the pair that has it.
-
-    Only the pairs that can be the closest are measured (:meth:`CollisionModel.closest_value`,
-    bounded by this query alone), so the figure and the pair are those of every pair measured.
-    """
-    with model.own_bounds():
-        value, k = model.closest_value(np.asarray(joints, dtype=float))
-    return value, (model.names[k] if k >= 0 else "")
+    """Smallest clearance (m) at one configuration and the pair that has it."""
+    values = model.distances(np.asarray(joints, dtype=float)).values
+    k = int(np.argmin(values))
+    return float(values[k]), model.names[k]
