@@ -3,7 +3,7 @@
 The certificate keeps what its first pass computed (leaf-pair gaps, interval rate bounds),
 loads the instants halving will ask for in one evaluation, bounds every instant's spheres at
 once and gathers leaf pairs by flat index; the solver's model measures only the pairs asked
-for; both models share the parsed meshes. Each is
+for; both models share the parsed meshes and the checked pairs worked out once. Each is
 compared here with the plain computation (numpy's own norm, one instant at a time, the old
 construction, every pair measured), and a certificate with each shortcut undone must be the
 same certificate.
@@ -12,6 +12,8 @@ same certificate.
 from __future__ import annotations
 
 import dataclasses
+import os
+from pathlib import Path
 
 import coal
 import numpy as np
@@ -170,3 +172,34 @@ def test_shared_geometry_copies_objects_and_primitives_never_changes_a_mesh(monk
     assert not np.allclose(second.geometryObjects[box].geometry.halfSide, 9.0)
     first.addGeometryObject(first.geometryObjects[0].copy())
     assert len(second.geometryObjects) == len(first.geometryObjects) - 1
+
+
+def test_checked_pairs_kept_are_those_worked_out_and_follow_an_edited_srdf(monkeypatch, tmp_path):
+    """Panda servicer: the pairs (and the geometry's collision pairs) from the kept list are
+    those worked out afresh; an SRDF rewritten with one more disabled pair drops that pair."""
+    s = ff.Scenario.from_toml(SCENARIOS / "panda_servicer.toml")
+    robot = s.robot
+    srdf = tmp_path / "robot.srdf"
+    original = Path(known_srdf(robot)).read_text()
+    srdf.write_text(original)
+
+    def pairs() -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
+        model = geometry.load_shared_geometry(robot)
+        found = geometry.checked_pairs(robot, model, srdf)
+        return found, [(int(p.first), int(p.second)) for p in model.collisionPairs]
+
+    monkeypatch.setattr(geometry, "_PAIRS", {})
+    fresh = pairs()
+    assert fresh[0] == fresh[1] and len(geometry._PAIRS) == 1
+    assert pairs() == fresh  # kept
+    model = geometry.load_shared_geometry(robot)
+    frames = robot.model.frames
+    a, b = fresh[0][0]
+    link_a = frames[model.geometryObjects[a].parentFrame].name
+    link_b = frames[model.geometryObjects[b].parentFrame].name
+    extra = f'<disable_collisions link1="{link_a}" link2="{link_b}" reason="test"/>'
+    srdf.write_text(original.replace("</robot>", extra + "\n</robot>"))
+    os.utime(srdf, ns=(srdf.stat().st_atime_ns, srdf.stat().st_mtime_ns + 10**9))
+    edited = pairs()
+    assert (a, b) not in edited[0] and set(edited[0]) < set(fresh[0])
+    assert edited[0] == edited[1]

@@ -155,12 +155,41 @@ def checked_pairs(
 ) -> list[tuple[int, int]]:
     """The pairs of ``geometry`` whose clearance is checked, as index pairs (see module doc).
 
-    Adds them to ``geometry`` as its collision pairs too.
+    Adds them to ``geometry`` as its collision pairs too. Worked out once per set of objects
+    (names, joints, links), kinematic tree and SRDF file (path, modification time, size) in a
+    process, and again when any of them changes.
 
     Raises:
         ModelError: the SRDF file does not exist.
     """
     model = robot.model
+    path = None
+    if srdf is not None:
+        path = Path(srdf).expanduser().resolve()
+        if not path.is_file():
+            raise ModelError(f"SRDF file not found: {path}")
+    objects = list(geometry.geometryObjects)
+    key = (
+        tuple((o.name, int(o.parentJoint), model.frames[o.parentFrame].name) for o in objects),
+        tuple(int(j) for j in model.parents),
+        None if path is None else (str(path), path.stat().st_mtime_ns, path.stat().st_size),
+    )
+    pairs = _PAIRS.get(key)
+    if pairs is None:
+        pairs = _PAIRS[key] = _pairs_of(model, geometry, path)
+        if len(_PAIRS) > 32:
+            _PAIRS.pop(next(iter(_PAIRS)))
+    else:
+        geometry.removeAllCollisionPairs()
+        for a, b in pairs:
+            geometry.addCollisionPair(pin.CollisionPair(a, b))
+    return list(pairs)
+
+
+def _pairs_of(
+    model: pin.Model, geometry: pin.GeometryModel, srdf: Path | None
+) -> list[tuple[int, int]]:
+    """:func:`checked_pairs` worked out: every pair the rules keep, less the SRDF's."""
     parent = [int(j) for j in model.parents]
     objects = list(geometry.geometryObjects)
     joints = [int(obj.parentJoint) for obj in objects]
@@ -176,11 +205,12 @@ def checked_pairs(
                 continue  # parent and child touch by design (a keep-out object never does)
             geometry.addCollisionPair(pin.CollisionPair(a, b))
     if srdf is not None:
-        path = Path(srdf).expanduser().resolve()
-        if not path.is_file():
-            raise ModelError(f"SRDF file not found: {path}")
-        pin.removeCollisionPairs(model, geometry, str(path))
+        pin.removeCollisionPairs(model, geometry, str(srdf))
     return [(int(p.first), int(p.second)) for p in geometry.collisionPairs]
+
+
+#: Checked pairs per set of objects, kinematic tree and SRDF file (see checked_pairs).
+_PAIRS: dict[tuple, list[tuple[int, int]]] = {}
 
 
 def bodies_without_geometry(robot: Robot, geometry: pin.GeometryModel) -> list[str]:
