@@ -2,7 +2,8 @@
 
 The certificate keeps what its first pass computed (leaf-pair gaps, interval rate bounds),
 loads the instants halving will ask for in one evaluation, bounds every instant's spheres at
-once and gathers leaf pairs by flat index; the solver's model measures only the pairs asked
+once, gathers leaf pairs by flat index and places only one pair's leaves at a new instant;
+the solver's model measures only the pairs asked
 for; both models share the parsed meshes and the checked pairs worked out once. Each is
 compared here with the plain computation (numpy's own norm, one instant at a time, the old
 construction, every pair measured), and a certificate with each shortcut undone must be the
@@ -203,3 +204,15 @@ def test_checked_pairs_kept_are_those_worked_out_and_follow_an_edited_srdf(monke
     edited = pairs()
     assert (a, b) not in edited[0] and set(edited[0]) < set(fresh[0])
     assert edited[0] == edited[1]
+
+
+@pytest.mark.parametrize("name", ["panda_servicer", "ur5_servicer"])
+def test_one_pairs_leaf_gaps_are_those_of_every_leaf_placed(name):
+    s, mesh, _ = _models(name)
+    leaves = mesh.leaves
+    for q in _configurations(s, 6, 4):
+        placements = mesh.placements(q)
+        for k in range(len(mesh.pairs)):
+            rows = leaves.rows_of(k)
+            plain = leaves.row_gaps(placements[None], np.zeros(len(rows), dtype=int), rows)
+            assert np.array_equal(leaves.pair_gaps(placements, k), plain), mesh.names[k]

@@ -33,7 +33,6 @@ class Instants:
         self.speeds: dict[float, np.ndarray] = {}
         self.exact: dict[tuple[float, int], float] = {}
         self.leaf_gaps: dict[tuple[float, int], np.ndarray] = {}
-        self.leaf_centres: dict[float, np.ndarray] = {}
         self.interval_rates: dict[tuple[float, float], np.ndarray] = {}
         self.leaf_speeds: dict[int, np.ndarray] = {}
         #: The first pass's leaf-pair gaps (see :meth:`keep_gaps`), looked up when asked for.
@@ -116,12 +115,7 @@ class Instants:
         if (t, k) not in self.leaf_gaps and (kept := self._kept_gaps(t, k)) is not None:
             self.leaf_gaps[(t, k)] = kept
         if (t, k) not in self.leaf_gaps:
-            leaves, poses = self.mesh.leaves, self.at(t)[None]
-            if t not in self.leaf_centres:  # every leaf placed once per instant
-                self.leaf_centres[t] = leaves.centres_at(poses)
-            rows = leaves.rows_of(k)
-            instants = np.zeros(len(rows), dtype=int)
-            self.leaf_gaps[(t, k)] = leaves.gaps_at(self.leaf_centres[t], poses, instants, rows)
+            self.leaf_gaps[(t, k)] = self.mesh.leaves.pair_gaps(self.at(t), k)
         return self.leaf_gaps[(t, k)]
 
     def distance(self, t: float, k: int) -> float:

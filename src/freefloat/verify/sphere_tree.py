@@ -144,6 +144,8 @@ class LeafSpheres:
         #: Per leaf pair, its index in the three arrays above, or -1.
         self.box_of_row = np.full(len(self.left), -1, dtype=int)
         self.box_of_row[self.box_rows] = np.arange(len(self.box_rows))
+        #: Per pair, what :meth:`pair_gaps` needs of its leaf pairs, worked out when first asked.
+        self._pair_parts: dict[int, tuple[np.ndarray, ...]] = {}
 
     def bounds(self, placements: np.ndarray, cells: np.ndarray, pairs: np.ndarray) -> np.ndarray:
         """Lower bounds (m) of pair ``pairs[c]``'s distance at placement set ``cells[c]``.
@@ -216,6 +218,36 @@ class LeafSpheres:
             local = np.einsum("bji,bj->bi", pose[:, :3, :3], offset)  # R^T (c - p)
             outside = np.maximum(np.abs(local) - self.half[box], 0.0)
             gap[boxed] = _norms(outside) - self.radii[other]
+        return gap
+
+    def pair_gaps(self, placements: np.ndarray, pair: int) -> np.ndarray:
+        """:meth:`row_gaps` of one pair's leaf pairs at one instant (the same figures).
+
+        Only that pair's leaves are placed. ``placements``: (G, 4, 4) body poses.
+        """
+        if pair not in self._pair_parts:
+            rows = self.rows_of(pair)
+            leaves, where = np.unique(
+                np.concatenate([self.left[rows], self.right[rows]]), return_inverse=True
+            )
+            boxed = np.flatnonzero(self.box_of_row[rows] >= 0)
+            which = self.box_of_row[rows[boxed]]
+            other = np.searchsorted(leaves, self.sphere_leaf[which])
+            self._pair_parts[pair] = (rows, leaves, where, boxed, which, other)
+        rows, leaves, where, boxed, which, other = self._pair_parts[pair]
+        poses = placements[None, self.owner[leaves]]  # (1, l, 4, 4)
+        world = np.einsum("kLij,Lj->kLi", poses[..., :3, :3], self.local[leaves])[0]
+        world += poses[0, :, :3, 3]
+        half = len(rows)
+        gap = _norms(world[where[:half]] - world[where[half:]])
+        gap -= self.reach[rows]
+        if len(boxed):
+            box = self.owner[self.box_leaf[which]]
+            pose = placements[box]  # (B, 4, 4)
+            offset = world[other] - pose[:, :3, 3]
+            local = np.einsum("bji,bj->bi", pose[:, :3, :3], offset)  # R^T (c - p)
+            outside = np.maximum(np.abs(local) - self.half[box], 0.0)
+            gap[boxed] = _norms(outside) - self.radii[self.sphere_leaf[which]]
         return gap
 
     def set_reach(self, leaf_reach: np.ndarray) -> None:
