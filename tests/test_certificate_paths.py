@@ -154,10 +154,18 @@ def test_pair_distances_are_those_of_every_pair(name):
         assert np.array_equal(solver.pair_distances(q, pairs), values[pairs])
 
 
-def test_shared_geometry_copies_objects_and_primitives_never_changes_a_mesh(monkeypatch):
+def test_shared_geometry_copies_objects_and_primitives_keeps_keys_never_changes_a_mesh(
+    monkeypatch,
+):
     robot = ff.Scenario.from_toml(SCENARIOS / "ur5_servicer.toml").robot
-    first, second = geometry.load_shared_geometry(robot), geometry.load_shared_geometry(robot)
+    (first, keys), (second, _) = (geometry.load_shared_geometry(robot) for _ in range(2))
     objects = list(first.geometryObjects)
+    # each mesh's key, kept from parsing, is the one its vertices give now
+    assert keys == {
+        i: geometry._mesh_key(o)
+        for i, o in enumerate(objects)
+        if isinstance(o.geometry, coal.BVHModelBase)
+    }
     mesh = next(i for i, o in enumerate(objects) if isinstance(o.geometry, coal.BVHModelBase))
     box = next(i for i, o in enumerate(objects) if isinstance(o.geometry, coal.Box))
     # a hull built anew (none kept) leaves the shared mesh as it was
@@ -185,7 +193,7 @@ def test_checked_pairs_kept_are_those_worked_out_and_follow_an_edited_srdf(monke
     srdf.write_text(original)
 
     def pairs() -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
-        model = geometry.load_shared_geometry(robot)
+        model = geometry.load_shared_geometry(robot)[0]
         found = geometry.checked_pairs(robot, model, srdf)
         return found, [(int(p.first), int(p.second)) for p in model.collisionPairs]
 
@@ -193,7 +201,7 @@ def test_checked_pairs_kept_are_those_worked_out_and_follow_an_edited_srdf(monke
     fresh = pairs()
     assert fresh[0] == fresh[1] and len(geometry._PAIRS) == 1
     assert pairs() == fresh  # kept
-    model = geometry.load_shared_geometry(robot)
+    model = geometry.load_shared_geometry(robot)[0]
     frames = robot.model.frames
     a, b = fresh[0][0]
     link_a = frames[model.geometryObjects[a].parentFrame].name

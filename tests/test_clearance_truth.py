@@ -373,8 +373,8 @@ def test_a_hull_of_the_wrong_shape_is_caught_on_every_mesh_body(monkeypatch, mov
     for body in bodies:
         for axis in range(3):
 
-            def wrong(obj, body=body, axis=axis):
-                return _moved_hull(obj, axis, move) if obj.name == body else honest(obj)
+            def wrong(obj, key=None, body=body, axis=axis):
+                return _moved_hull(obj, axis, move) if obj.name == body else honest(obj, key)
 
             monkeypatch.setattr(collision, "true_hull", wrong)
             excess, where = shape_excess(mesh, CollisionModel(robot, srdf))

@@ -97,14 +97,14 @@ class CollisionModel(PairQueries):
     ) -> None:
         self.obstacles = tuple(obstacles)
         self.srdf = None if srdf is None else Path(srdf).expanduser().resolve()
-        geometry = load_shared_geometry(robot)  # each mesh replaced below
+        geometry, keys = load_shared_geometry(robot)  # each mesh replaced below
         #: Movable bodies with no collision geometry (their clearance cannot be checked).
         self.uncovered = bodies_without_geometry(robot, geometry)
         self._meshes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         for index, obj in enumerate(geometry.geometryObjects):
             if isinstance(obj.geometry, coal.BVHModelBase):
-                self._meshes[index] = object_triangles(obj)
-                obj.geometry = true_hull(obj)
+                self._meshes[index] = object_triangles(obj, keys[index])
+                obj.geometry = true_hull(obj, keys[index])
         add_obstacles(robot, geometry, self.obstacles)
         pairs = checked_pairs(robot, geometry, srdf)
         objects = list(geometry.geometryObjects)

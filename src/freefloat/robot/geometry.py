@@ -40,6 +40,7 @@ from .model import Robot
 __all__ = [
     "OBSTACLE_PREFIX",
     "HullInfo",
+    "MeshKey",
     "add_obstacles",
     "bodies_without_geometry",
     "checked_pairs",
@@ -65,31 +66,39 @@ def load_collision_geometry(robot: Robot) -> pin.GeometryModel:
     Raises:
         ModelError: the URDF's collision geometry cannot be read (a missing or broken mesh).
     """
-    return _parsed(robot).clone()
+    return _parsed(robot)[0].clone()
 
 
-def load_shared_geometry(robot: Robot) -> pin.GeometryModel:
+def load_shared_geometry(robot: Robot) -> tuple[pin.GeometryModel, dict[int, MeshKey]]:
     """:func:`load_collision_geometry` without copying the meshes (callers never change one).
 
     Its objects are copies of the parsed ones and primitives deep copies, but each mesh is
     the parsed shape, shared by every such caller in the process: it may be read (coal's
     queries, :func:`object_triangles`, :func:`true_hull`) or replaced in the model, never
-    changed.
+    changed. Returned with each mesh object's key (by index), worked out when it was parsed.
 
     Raises:
         ModelError: as :func:`load_collision_geometry`.
     """
+    parsed, keys = _parsed(robot)
     geometry = pin.GeometryModel()
-    for obj in _parsed(robot).geometryObjects:
+    for obj in parsed.geometryObjects:
         copy = pin.GeometryObject(obj)  # the same shape
         if not isinstance(obj.geometry, coal.BVHModelBase):
             copy.geometry = obj.geometry.clone()
         geometry.addGeometryObject(copy)
-    return geometry
+    return geometry, dict(keys)
 
 
-def _parsed(robot: Robot) -> pin.GeometryModel:
-    """The parsed collision geometry of the URDF, kept (see :func:`load_collision_geometry`)."""
+#: A mesh object's file, scale and a digest of its vertices (see _mesh_key).
+MeshKey = tuple[str, tuple[float, ...], str]
+
+
+def _parsed(robot: Robot) -> tuple[pin.GeometryModel, dict[int, MeshKey]]:
+    """The parsed collision geometry of the URDF, kept (see :func:`load_collision_geometry`).
+
+    With each mesh object's key (by index): the parsed shapes never change.
+    """
     key = (
         robot.urdf_text,
         str(robot.urdf),
@@ -112,8 +121,13 @@ def _parsed(robot: Robot) -> pin.GeometryModel:
             ) from None
         if len(_PARSED) >= 16:
             _PARSED.pop(next(iter(_PARSED)))
-        parsed = _PARSED[key] = (geometry, _stamps(geometry))
-    return parsed[0]
+        keys = {
+            i: _mesh_key(obj)
+            for i, obj in enumerate(geometry.geometryObjects)
+            if isinstance(obj.geometry, coal.BVHModelBase)
+        }
+        parsed = _PARSED[key] = (geometry, _stamps(geometry), keys)
+    return parsed[0], parsed[2]
 
 
 def _stamps(geometry: pin.GeometryModel) -> tuple[tuple[str, int, int], ...]:
@@ -131,7 +145,9 @@ def _stamps(geometry: pin.GeometryModel) -> tuple[tuple[str, int, int], ...]:
 
 
 #: Parsed collision geometry per URDF (see load_collision_geometry), with its mesh files' stamps.
-_PARSED: dict[tuple, tuple[pin.GeometryModel, tuple[tuple[str, int, int], ...]]] = {}
+_PARSED: dict[
+    tuple, tuple[pin.GeometryModel, tuple[tuple[str, int, int], ...], dict[int, MeshKey]]
+] = {}
 
 
 def add_obstacles(robot: Robot, geometry: pin.GeometryModel, obstacles: Sequence) -> None:
@@ -255,10 +271,10 @@ class HullInfo:
 
 
 #: True hulls by mesh file, scale and vertices, built once in a process.
-_HULLS: dict[tuple[str, tuple[float, ...], str], coal.ConvexBase] = {}
+_HULLS: dict[MeshKey, coal.ConvexBase] = {}
 
 
-def _mesh_key(obj: pin.GeometryObject) -> tuple[str, tuple[float, ...], str]:
+def _mesh_key(obj: pin.GeometryObject) -> MeshKey:
     """A mesh object's file, scale and a digest of the vertices it was read with.
 
     A mesh file changed on disk (between two plans, or while one is made) never meets the
@@ -269,14 +285,15 @@ def _mesh_key(obj: pin.GeometryObject) -> tuple[str, tuple[float, ...], str]:
     return str(obj.meshPath), tuple(float(s) for s in obj.meshScale), digest
 
 
-def true_hull(obj: pin.GeometryObject) -> coal.ConvexBase:
+def true_hull(obj: pin.GeometryObject, key: MeshKey | None = None) -> coal.ConvexBase:
     """The real convex hull (qhull, coal ``buildConvexHull(True, "Qt")``) of a mesh object.
 
-    Remembered per mesh file, scale and vertices. Never ``buildConvexRepresentation``: for a
+    Remembered per mesh file, scale and vertices (``key``: the object's, if known, as
+    :func:`load_shared_geometry` gives it). Never ``buildConvexRepresentation``: for a
     non-convex mesh that keeps the mesh's own faces, and GJK's support search on it stops at
     local maxima.
     """
-    key = _mesh_key(obj)
+    key = _mesh_key(obj) if key is None else key
     if key not in _HULLS:
         shape = obj.geometry.clone()  # the object's own shape is left as it is
         shape.buildConvexHull(True, "Qt")
@@ -294,12 +311,15 @@ def mesh_triangles(shape: coal.BVHModelBase) -> tuple[np.ndarray, np.ndarray]:
     return vertices, triangles
 
 
-def object_triangles(obj: pin.GeometryObject) -> tuple[np.ndarray, np.ndarray]:
+def object_triangles(
+    obj: pin.GeometryObject, key: MeshKey | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """:func:`mesh_triangles` of a mesh object, read once per mesh file, scale and vertices.
 
-    The arrays are shared between callers, so they are read-only.
+    ``key``: as for :func:`true_hull`. The arrays are shared between callers, so they are
+    read-only.
     """
-    key = _mesh_key(obj)
+    key = _mesh_key(obj) if key is None else key
     if key not in _TRIANGLES:
         vertices, triangles = mesh_triangles(obj.geometry)
         vertices.setflags(write=False)
@@ -309,7 +329,7 @@ def object_triangles(obj: pin.GeometryObject) -> tuple[np.ndarray, np.ndarray]:
 
 
 #: Triangles per mesh file, scale and vertices (see object_triangles).
-_TRIANGLES: dict[tuple[str, tuple[float, ...], str], tuple[np.ndarray, np.ndarray]] = {}
+_TRIANGLES: dict[MeshKey, tuple[np.ndarray, np.ndarray]] = {}
 
 
 def mesh_volume(vertices: np.ndarray, triangles: np.ndarray) -> float:

@@ -151,7 +151,7 @@ class MeshClearance:
         self, robot: Robot, srdf: str | Path | None = None, obstacles: Sequence[Obstacle] = ()
     ) -> None:
         self.robot = robot
-        geometry = load_shared_geometry(robot)  # its meshes only read
+        geometry, keys = load_shared_geometry(robot)  # its meshes only read
         add_obstacles(robot, geometry, obstacles)
         self.pairs = checked_pairs(robot, geometry, srdf)
         self.geometry = geometry
@@ -159,7 +159,9 @@ class MeshClearance:
         self.shapes = [obj.geometry for obj in objects]
         self.names = [f"{objects[a].name} / {objects[b].name}" for a, b in self.pairs]
         self.meshes = {
-            i: object_triangles(objects[i]) for i, s in enumerate(self.shapes) if _is_mesh(s)
+            i: object_triangles(objects[i], keys.get(i))
+            for i, s in enumerate(self.shapes)
+            if _is_mesh(s)
         }
         self.centres, self.radii = _bounding_spheres(self.shapes, self.meshes)
         #: Leaf spheres of every body: tighter lower bounds than the single spheres.
