@@ -27,7 +27,7 @@ from freefloat.verify import certificate
 from freefloat.verify.certificate import certify
 from freefloat.verify.clearance import MeshClearance
 from freefloat.verify.instants import Instants
-from freefloat.verify.motion import PolynomialMotion
+from freefloat.verify.motion import PolynomialMotion, reach_coefficients
 from freefloat.verify.path_eval import file_path
 from freefloat.verify.sphere_tree import _norms
 
@@ -224,3 +224,21 @@ def test_one_pairs_leaf_gaps_are_those_of_every_leaf_placed(name):
             rows = leaves.rows_of(k)
             plain = leaves.row_gaps(placements[None], np.zeros(len(rows), dtype=int), rows)
             assert np.array_equal(leaves.pair_gaps(placements, k), plain), mesh.names[k]
+
+
+def test_spheres_and_reaches_are_those_worked_out_apart():
+    """The single spheres of the meshes (kept per vertex array) and the speed coefficients of
+    the bodies and of the leaves (one pass) against each worked out on its own."""
+    s, mesh, _ = _models("panda_servicer")
+    again = MeshClearance(s.robot, s.safety.srdf or known_srdf(s.robot), s.safety.obstacles)
+    for i, (vertices, _) in mesh.meshes.items():
+        centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
+        assert np.array_equal(mesh.centres[i], centre) and np.array_equal(again.centres[i], centre)
+        assert mesh.radii[i] == float(np.linalg.norm(vertices - centre, axis=1).max())
+    leaves = mesh.leaves
+    bodies = reach_coefficients(s.robot, mesh.geometry, mesh.centres, mesh.radii)
+    own = reach_coefficients(s.robot, mesh.geometry, leaves.local, leaves.radii, leaves.owner)
+    ra, rb = bodies[:, mesh.first], bodies[:, mesh.second]
+    assert np.array_equal(mesh.pair_reach, np.where((ra > 0.0) & (rb > 0.0), 0.0, ra + rb))
+    la, lb = own[:, leaves.left], own[:, leaves.right]
+    assert np.array_equal(leaves.row_reach, np.where((la > 0.0) & (lb > 0.0), 0.0, la + lb))

@@ -173,11 +173,16 @@ class MeshClearance:
         self.leaves = LeafSpheres(
             self.centres, self.radii, self.meshes, np.array(self.pairs), boxes
         )
-        reach = reach_coefficients(robot, geometry, self.centres, self.radii)
-        leaves = self.leaves
-        leaves.set_reach(
-            reach_coefficients(robot, geometry, leaves.local, leaves.radii, leaves.owner)
+        leaves, count = self.leaves, len(self.centres)
+        reach = reach_coefficients(  # the single spheres', then the leaves' (one pass)
+            robot,
+            geometry,
+            np.concatenate([self.centres, leaves.local]),
+            np.concatenate([self.radii, leaves.radii]),
+            np.concatenate([np.arange(count), leaves.owner]),
         )
+        leaves.set_reach(reach[:, count:])
+        reach = reach[:, :count]
         pairs = np.array(self.pairs, dtype=int).reshape(-1, 2)
         #: First and second geometry index of every pair.
         self.first, self.second = pairs[:, 0], pairs[:, 1]
@@ -307,15 +312,33 @@ def _bounding_spheres(
     centres, radii = [], []
     for i, shape in enumerate(shapes):
         if i in meshes:
-            vertices = meshes[i][0]
-            centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
-            radius = float(np.linalg.norm(vertices - centre, axis=1).max())
+            centre, radius = _mesh_sphere(meshes[i][0])
         else:
             shape.computeLocalAABB()
             centre, radius = np.asarray(shape.aabb_center, float), float(shape.aabb_radius)
         centres.append(centre)
         radii.append(radius)
     return np.array(centres), np.array(radii)
+
+
+def _mesh_sphere(vertices: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre of a mesh's vertex box and its farthest vertex's distance (m).
+
+    Kept per vertex array when the array is shared and never written
+    (:func:`~freefloat.robot.geometry.object_triangles`'s).
+    """
+    kept = _SPHERES.get(id(vertices))
+    if kept is not None and kept[0] is vertices:
+        return kept[1]
+    centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
+    sphere = centre, float(np.linalg.norm(vertices - centre, axis=1).max())
+    if not vertices.flags.writeable:
+        _SPHERES[id(vertices)] = (vertices, sphere)
+    return sphere
+
+
+#: Bounding sphere per shared mesh vertex array (see _mesh_sphere), the array kept alive.
+_SPHERES: dict[int, tuple[np.ndarray, tuple[np.ndarray, float]]] = {}
 
 
 def _winding_number(vertices: np.ndarray, triangles: np.ndarray, point: np.ndarray) -> float:
