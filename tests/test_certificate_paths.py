@@ -75,6 +75,11 @@ def test_leaf_pairs_are_every_leaf_of_one_against_every_leaf_of_the_other():
         assert np.array_equal(leaves.left[rows], np.repeat(la, len(lb)))
         assert np.array_equal(leaves.right[rows], np.tile(lb, len(la)))
     assert np.array_equal(leaves.row_reach_t, leaves.row_reach.T)
+    s = ff.Scenario.from_toml(SCENARIOS / "panda_servicer.toml")
+    placements = np.array([mesh.placements(q) for q in _configurations(s, 7, 5)])
+    poses = placements[:, leaves.owner]  # every leaf's body pose, gathered whole
+    whole = np.einsum("kLij,Lj->kLi", poses[..., :3, :3], leaves.local) + poses[..., :3, 3]
+    assert np.array_equal(leaves.centres_at(placements), whole)
 
 
 def _plain_rates(self: Instants, t0: list[float], t1: list[float]) -> np.ndarray:

@@ -186,8 +186,11 @@ class LeafSpheres:
 
     def centres_at(self, placements: np.ndarray) -> np.ndarray:
         """(K, L, 3) every leaf's centre (m, spacecraft frame) at K sets of body poses."""
-        poses = placements[:, self.owner]  # (K, L, 4, 4)
-        return np.einsum("kLij,Lj->kLi", poses[..., :3, :3], self.local) + poses[..., :3, 3]
+        rotations = placements[:, :, :3, :3][:, self.owner]  # (K, L, 3, 3)
+        return (
+            np.einsum("kLij,Lj->kLi", rotations, self.local)
+            + placements[:, :, :3, 3][:, self.owner]
+        )
 
     def gaps_at(
         self, world: np.ndarray, placements: np.ndarray, instants: np.ndarray, rows: np.ndarray
