@@ -216,8 +216,9 @@ class LeafSpheres:
             which = self.box_of_row[rows[boxed]]
             box = self.owner[self.box_leaf[which]]
             other = self.sphere_leaf[which]
-            pose = placements[instants[boxed], box]  # (B, 4, 4)
-            offset = world[instants[boxed], other] - pose[:, :3, 3]
+            at = instants[boxed]  # flat gathers, as above
+            pose = np.take(placements.reshape(-1, 4, 4), at * placements.shape[1] + box, axis=0)
+            offset = np.take(flat, at * world.shape[1] + other, axis=0) - pose[:, :3, 3]
             local = np.einsum("bji,bj->bi", pose[:, :3, :3], offset)  # R^T (c - p)
             outside = np.maximum(np.abs(local) - self.half[box], 0.0)
             gap[boxed] = _norms(outside) - self.radii[other]
