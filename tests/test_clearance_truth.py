@@ -24,7 +24,6 @@ from freefloat.robot.collision import (
     checked_distance,
     known_srdf,
 )
-from freefloat.robot.distance_query import Distances
 from freefloat.verify.certificate import certify
 from freefloat.verify.clearance import MeshClearance, hull_slack
 from freefloat.verify.hull_agreement import shape_excess
@@ -317,23 +316,25 @@ def test_the_hull_agreement_catches_a_wrong_hull_on_any_body(direction):
     assert honest.hull_excess <= 1e-6, honest.hull_detail
     slack = np.array([hull_slack(solver, i) for i in range(len(mesh.shapes))])
     first, second = mesh.first, mesh.second
-    distances = solver.distances
+    distances = solver.pair_distances
     bodies = sorted(set(first) | set(second))
     assert len(bodies) > 5
     for body in bodies:
         held = (first == body) | (second == body)
         error = 0.005 if direction == "farther" else -(slack[first] + slack[second] + 0.005)
 
-        def wrong(joints, gradients=False, held=held, error=error):
-            values = distances(joints).values.copy()
-            values[held] += np.broadcast_to(error, values.shape)[held]
-            return Distances(values)
+        def wrong(joints, pairs, held=held, error=error):
+            pairs = np.asarray(pairs, dtype=int)
+            values = distances(joints, pairs).copy()
+            wrong_pairs = held[pairs]
+            values[wrong_pairs] += np.broadcast_to(error, held.shape)[pairs][wrong_pairs]
+            return values
 
-        solver.distances = wrong  # type: ignore[method-assign]
+        solver.pair_distances = wrong  # type: ignore[method-assign]
         try:
             cert = certify(mesh, motion, 0.01, solver)
         finally:
-            del solver.distances
+            del solver.pair_distances
         assert cert.hull_excess > 1e-3, (direction, body, cert.hull_detail)  # fails its 1e-6 m
         assert cert.lower_bound == honest.lower_bound  # the mesh certificate is the solver's
 
@@ -372,8 +373,8 @@ def test_a_hull_of_the_wrong_shape_is_caught_on_every_mesh_body(monkeypatch, mov
     for body in bodies:
         for axis in range(3):
 
-            def wrong(obj, body=body, axis=axis):
-                return _moved_hull(obj, axis, move) if obj.name == body else honest(obj)
+            def wrong(obj, key=None, body=body, axis=axis):
+                return _moved_hull(obj, axis, move) if obj.name == body else honest(obj, key)
 
             monkeypatch.setattr(collision, "true_hull", wrong)
             excess, where = shape_excess(mesh, CollisionModel(robot, srdf))

@@ -47,7 +47,7 @@ from .geometry import (
     bodies_without_geometry,
     checked_pairs,
     hull_volume,
-    load_collision_geometry,
+    load_shared_geometry,
     mesh_volume,
     object_triangles,
     true_hull,
@@ -97,14 +97,14 @@ class CollisionModel(PairQueries):
     ) -> None:
         self.obstacles = tuple(obstacles)
         self.srdf = None if srdf is None else Path(srdf).expanduser().resolve()
-        geometry = load_collision_geometry(robot)
+        geometry, keys = load_shared_geometry(robot)  # each mesh replaced below
         #: Movable bodies with no collision geometry (their clearance cannot be checked).
         self.uncovered = bodies_without_geometry(robot, geometry)
         self._meshes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         for index, obj in enumerate(geometry.geometryObjects):
             if isinstance(obj.geometry, coal.BVHModelBase):
-                self._meshes[index] = object_triangles(obj)
-                obj.geometry = true_hull(obj)
+                self._meshes[index] = object_triangles(obj, keys[index])
+                obj.geometry = true_hull(obj, keys[index])
         add_obstacles(robot, geometry, self.obstacles)
         pairs = checked_pairs(robot, geometry, srdf)
         objects = list(geometry.geometryObjects)
@@ -122,6 +122,15 @@ class CollisionModel(PairQueries):
         pin.computeJointJacobians(self.robot.model, self._data)  # at _bulk's configuration
         grads = np.stack([self._gradient(k) for k in range(len(self.pairs))])
         return Distances(values, grads)
+
+    def pair_distances(self, joints: np.ndarray, pairs: Sequence[int]) -> np.ndarray:
+        """Signed distances (m) of the listed pairs (indices) at the joint values, in order.
+
+        The same figures as :meth:`distances` gives them, the other pairs not measured.
+        """
+        self._place(np.asarray(joints, dtype=float))
+        measured = np.asarray(pairs, dtype=int).reshape(-1)
+        return self._measure(measured, self._spheres(measured))
 
     def closest_value(self, joints: np.ndarray, slot: float | None = None) -> tuple[float, int]:
         """The smallest signed distance over the pairs (m) and its pair index.

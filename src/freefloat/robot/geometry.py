@@ -15,9 +15,11 @@ two arm bodies that are not parent and child; pairs an SRDF disables (MoveIt's
 ``<disable_collisions>``) are removed.
 
 The URDF's geometry is parsed once per URDF in a process (each caller gets its own deep copy,
-:func:`load_collision_geometry`), a mesh's triangles read once per file
-(:func:`object_triangles`), and hulls are built once per mesh file and scale in a process
-(:func:`true_hull` keeps them), so a second plan of the same robot pays nothing for them.
+:func:`load_collision_geometry`; or, for the two models above, which never change a shape,
+its own objects and primitives around the parsed meshes, :func:`load_shared_geometry`), a
+mesh's triangles read once per file (:func:`object_triangles`), and hulls are built once per
+mesh file and scale in a process (:func:`true_hull` keeps them), so a second plan of the same
+robot pays nothing for them.
 """
 
 from __future__ import annotations
@@ -38,10 +40,12 @@ from .model import Robot
 __all__ = [
     "OBSTACLE_PREFIX",
     "HullInfo",
+    "MeshKey",
     "add_obstacles",
     "bodies_without_geometry",
     "checked_pairs",
     "load_collision_geometry",
+    "load_shared_geometry",
     "mesh_volume",
     "object_triangles",
     "true_hull",
@@ -61,6 +65,39 @@ def load_collision_geometry(robot: Robot) -> pin.GeometryModel:
 
     Raises:
         ModelError: the URDF's collision geometry cannot be read (a missing or broken mesh).
+    """
+    return _parsed(robot)[0].clone()
+
+
+def load_shared_geometry(robot: Robot) -> tuple[pin.GeometryModel, dict[int, MeshKey]]:
+    """:func:`load_collision_geometry` without copying the meshes (callers never change one).
+
+    Its objects are copies of the parsed ones and primitives deep copies, but each mesh is
+    the parsed shape, shared by every such caller in the process: it may be read (coal's
+    queries, :func:`object_triangles`, :func:`true_hull`) or replaced in the model, never
+    changed. Returned with each mesh object's key (by index), worked out when it was parsed.
+
+    Raises:
+        ModelError: as :func:`load_collision_geometry`.
+    """
+    parsed, keys = _parsed(robot)
+    geometry = pin.GeometryModel()
+    for obj in parsed.geometryObjects:
+        copy = pin.GeometryObject(obj)  # the same shape
+        if not isinstance(obj.geometry, coal.BVHModelBase):
+            copy.geometry = obj.geometry.clone()
+        geometry.addGeometryObject(copy)
+    return geometry, dict(keys)
+
+
+#: A mesh object's file, scale and a digest of its vertices (see _mesh_key).
+MeshKey = tuple[str, tuple[float, ...], str]
+
+
+def _parsed(robot: Robot) -> tuple[pin.GeometryModel, dict[int, MeshKey]]:
+    """The parsed collision geometry of the URDF, kept (see :func:`load_collision_geometry`).
+
+    With each mesh object's key (by index): the parsed shapes never change.
     """
     key = (
         robot.urdf_text,
@@ -84,8 +121,13 @@ def load_collision_geometry(robot: Robot) -> pin.GeometryModel:
             ) from None
         if len(_PARSED) >= 16:
             _PARSED.pop(next(iter(_PARSED)))
-        parsed = _PARSED[key] = (geometry, _stamps(geometry))
-    return parsed[0].clone()
+        keys = {
+            i: _mesh_key(obj)
+            for i, obj in enumerate(geometry.geometryObjects)
+            if isinstance(obj.geometry, coal.BVHModelBase)
+        }
+        parsed = _PARSED[key] = (geometry, _stamps(geometry), keys)
+    return parsed[0], parsed[2]
 
 
 def _stamps(geometry: pin.GeometryModel) -> tuple[tuple[str, int, int], ...]:
@@ -103,7 +145,9 @@ def _stamps(geometry: pin.GeometryModel) -> tuple[tuple[str, int, int], ...]:
 
 
 #: Parsed collision geometry per URDF (see load_collision_geometry), with its mesh files' stamps.
-_PARSED: dict[tuple, tuple[pin.GeometryModel, tuple[tuple[str, int, int], ...]]] = {}
+_PARSED: dict[
+    tuple, tuple[pin.GeometryModel, tuple[tuple[str, int, int], ...], dict[int, MeshKey]]
+] = {}
 
 
 def add_obstacles(robot: Robot, geometry: pin.GeometryModel, obstacles: Sequence) -> None:
@@ -127,30 +171,62 @@ def checked_pairs(
 ) -> list[tuple[int, int]]:
     """The pairs of ``geometry`` whose clearance is checked, as index pairs (see module doc).
 
-    Adds them to ``geometry`` as its collision pairs too.
+    Adds them to ``geometry`` as its collision pairs too. Worked out once per set of objects
+    (names, joints, links), kinematic tree and SRDF file (path, modification time, size) in a
+    process, and again when any of them changes.
 
     Raises:
         ModelError: the SRDF file does not exist.
     """
     model = robot.model
-    parent = {j: int(model.parents[j]) for j in range(model.njoints)}
-    objects = list(geometry.geometryObjects)
-    geometry.removeAllCollisionPairs()
-    for a in range(len(objects)):
-        for b in range(a + 1, len(objects)):
-            ja, jb = objects[a].parentJoint, objects[b].parentJoint
-            if ja == jb:
-                continue  # one body
-            kept_out = any(objects[i].name.startswith(OBSTACLE_PREFIX) for i in (a, b))
-            if not kept_out and (parent[ja] == jb or parent[jb] == ja):
-                continue  # parent and child touch by design (a keep-out object never does)
-            geometry.addCollisionPair(pin.CollisionPair(a, b))
+    path = None
     if srdf is not None:
         path = Path(srdf).expanduser().resolve()
         if not path.is_file():
             raise ModelError(f"SRDF file not found: {path}")
-        pin.removeCollisionPairs(model, geometry, str(path))
+    objects = list(geometry.geometryObjects)
+    key = (
+        tuple((o.name, int(o.parentJoint), model.frames[o.parentFrame].name) for o in objects),
+        tuple(int(j) for j in model.parents),
+        None if path is None else (str(path), path.stat().st_mtime_ns, path.stat().st_size),
+    )
+    pairs = _PAIRS.get(key)
+    if pairs is None:
+        pairs = _PAIRS[key] = _pairs_of(model, geometry, path)
+        if len(_PAIRS) > 32:
+            _PAIRS.pop(next(iter(_PAIRS)))
+    else:
+        geometry.removeAllCollisionPairs()
+        for a, b in pairs:
+            geometry.addCollisionPair(pin.CollisionPair(a, b))
+    return list(pairs)
+
+
+def _pairs_of(
+    model: pin.Model, geometry: pin.GeometryModel, srdf: Path | None
+) -> list[tuple[int, int]]:
+    """:func:`checked_pairs` worked out: every pair the rules keep, less the SRDF's."""
+    parent = [int(j) for j in model.parents]
+    objects = list(geometry.geometryObjects)
+    joints = [int(obj.parentJoint) for obj in objects]
+    obstacle = [obj.name.startswith(OBSTACLE_PREFIX) for obj in objects]
+    geometry.removeAllCollisionPairs()
+    for a in range(len(objects)):
+        for b in range(a + 1, len(objects)):
+            ja, jb = joints[a], joints[b]
+            if ja == jb:
+                continue  # one body
+            kept_out = obstacle[a] or obstacle[b]
+            if not kept_out and (parent[ja] == jb or parent[jb] == ja):
+                continue  # parent and child touch by design (a keep-out object never does)
+            geometry.addCollisionPair(pin.CollisionPair(a, b))
+    if srdf is not None:
+        pin.removeCollisionPairs(model, geometry, str(srdf))
     return [(int(p.first), int(p.second)) for p in geometry.collisionPairs]
+
+
+#: Checked pairs per set of objects, kinematic tree and SRDF file (see checked_pairs).
+_PAIRS: dict[tuple, list[tuple[int, int]]] = {}
 
 
 def bodies_without_geometry(robot: Robot, geometry: pin.GeometryModel) -> list[str]:
@@ -195,10 +271,10 @@ class HullInfo:
 
 
 #: True hulls by mesh file, scale and vertices, built once in a process.
-_HULLS: dict[tuple[str, tuple[float, ...], str], coal.ConvexBase] = {}
+_HULLS: dict[MeshKey, coal.ConvexBase] = {}
 
 
-def _mesh_key(obj: pin.GeometryObject) -> tuple[str, tuple[float, ...], str]:
+def _mesh_key(obj: pin.GeometryObject) -> MeshKey:
     """A mesh object's file, scale and a digest of the vertices it was read with.
 
     A mesh file changed on disk (between two plans, or while one is made) never meets the
@@ -209,16 +285,17 @@ def _mesh_key(obj: pin.GeometryObject) -> tuple[str, tuple[float, ...], str]:
     return str(obj.meshPath), tuple(float(s) for s in obj.meshScale), digest
 
 
-def true_hull(obj: pin.GeometryObject) -> coal.ConvexBase:
+def true_hull(obj: pin.GeometryObject, key: MeshKey | None = None) -> coal.ConvexBase:
     """The real convex hull (qhull, coal ``buildConvexHull(True, "Qt")``) of a mesh object.
 
-    Remembered per mesh file, scale and vertices. Never ``buildConvexRepresentation``: for a
+    Remembered per mesh file, scale and vertices (``key``: the object's, if known, as
+    :func:`load_shared_geometry` gives it). Never ``buildConvexRepresentation``: for a
     non-convex mesh that keeps the mesh's own faces, and GJK's support search on it stops at
     local maxima.
     """
-    key = _mesh_key(obj)
+    key = _mesh_key(obj) if key is None else key
     if key not in _HULLS:
-        shape = obj.geometry
+        shape = obj.geometry.clone()  # the object's own shape is left as it is
         shape.buildConvexHull(True, "Qt")
         _HULLS[key] = shape.convex
     return _HULLS[key]
@@ -234,12 +311,15 @@ def mesh_triangles(shape: coal.BVHModelBase) -> tuple[np.ndarray, np.ndarray]:
     return vertices, triangles
 
 
-def object_triangles(obj: pin.GeometryObject) -> tuple[np.ndarray, np.ndarray]:
+def object_triangles(
+    obj: pin.GeometryObject, key: MeshKey | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """:func:`mesh_triangles` of a mesh object, read once per mesh file, scale and vertices.
 
-    The arrays are shared between callers, so they are read-only.
+    ``key``: as for :func:`true_hull`. The arrays are shared between callers, so they are
+    read-only.
     """
-    key = _mesh_key(obj)
+    key = _mesh_key(obj) if key is None else key
     if key not in _TRIANGLES:
         vertices, triangles = mesh_triangles(obj.geometry)
         vertices.setflags(write=False)
@@ -249,7 +329,7 @@ def object_triangles(obj: pin.GeometryObject) -> tuple[np.ndarray, np.ndarray]:
 
 
 #: Triangles per mesh file, scale and vertices (see object_triangles).
-_TRIANGLES: dict[tuple[str, tuple[float, ...], str], tuple[np.ndarray, np.ndarray]] = {}
+_TRIANGLES: dict[MeshKey, tuple[np.ndarray, np.ndarray]] = {}
 
 
 def mesh_volume(vertices: np.ndarray, triangles: np.ndarray) -> float:

@@ -49,6 +49,8 @@ def motion_weights(
     model = robot.model
     column = {joint.index: k for k, joint in enumerate(robot.joints)}
     objects = list(geometry.geometryObjects)
+    parents = [int(j) for j in model.parents]
+    offsets = {j: float(np.linalg.norm(model.jointPlacements[j].translation)) for j in column}
 
     def reach(index: int) -> dict[int, float]:
         obj = objects[index]
@@ -56,8 +58,8 @@ def motion_weights(
         out, joint = {}, int(obj.parentJoint)
         while joint in column:  # arm joints; the spacecraft (free flyer) and the world end it
             out[column[joint]] = length
-            length += float(np.linalg.norm(model.jointPlacements[joint].translation))
-            joint = int(model.parents[joint])
+            length += offsets[joint]
+            joint = parents[joint]
         return out
 
     reaches = [reach(i) for i in range(len(objects))]

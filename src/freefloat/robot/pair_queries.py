@@ -67,8 +67,9 @@ class PairQueries:
         self._data = robot.model.createData()
         self._geometry_data = pin.GeometryData(geometry)
         requests = self._geometry_data.distanceRequests
+        request = configure(coal.DistanceRequest(), GJK_TOLERANCE)
         for k in range(len(requests)):  # coal's own requests: no guess kept from the last query
-            requests[k] = configure(coal.DistanceRequest(), GJK_TOLERANCE)
+            requests[k] = request  # (a copy each)
         #: Queries asked again at a looser EPA tolerance since the model was built.
         self.retries = 0
         # Views of Pinocchio's per-pair results (valid: the vector never resizes), and the

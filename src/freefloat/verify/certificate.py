@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import heapq
 import math
-from collections.abc import Sequence
 
 import numpy as np
 
@@ -27,76 +26,12 @@ from .clearance import (
     SLACK_FRACTION,
     ClearanceCertificate,
     MeshClearance,
-    Placed,
 )
 from .hull_agreement import hull_agreement
+from .instants import Instants
 from .motion import PolynomialMotion
 
 __all__ = ["certify"]
-
-
-class _Instants:
-    """Placements, joint speeds and exact distances per instant, each computed once.
-
-    The joint values and rates of an instant come from one evaluation of the paths (several
-    instants per evaluation when they are asked for together); the rates' absolute values
-    give the ends of the speed bound of every interval that ends there. An instant's
-    placements are computed when first used.
-    """
-
-    def __init__(self, mesh: MeshClearance, motion: PolynomialMotion) -> None:
-        self.mesh, self.motion = mesh, motion
-        self.joints: dict[float, np.ndarray] = {}
-        self.placements: dict[float, np.ndarray] = {}
-        self.placed: dict[float, Placed] = {}
-        self.speeds: dict[float, np.ndarray] = {}
-        self.exact: dict[tuple[float, int], float] = {}
-        self.leaf_gaps: dict[tuple[float, int], np.ndarray] = {}
-        self.leaf_centres: dict[float, np.ndarray] = {}
-
-    def load(self, times: np.ndarray) -> None:
-        """Joint values and speeds at many instants (s), evaluated in one call."""
-        joints, rates, _ = self.motion.path(np.asarray(times, dtype=float))
-        for t, q, qd in zip(times.tolist(), joints, np.abs(rates), strict=True):
-            if t not in self.joints:
-                self.joints[t], self.speeds[t] = q, qd
-
-    def at(self, t: float) -> np.ndarray:
-        """(G, 4, 4) placements at ``t`` (s)."""
-        if t not in self.placements:
-            if t not in self.joints:
-                self.load(np.array([t]))
-            self.placements[t] = self.mesh.placements(self.joints[t])
-        return self.placements[t]
-
-    def rates(self, t0: Sequence[float], t1: Sequence[float]) -> np.ndarray:
-        """(K, N) largest ``|qd_j|`` over each ``[t0, t1]`` (rad/s or m/s)."""
-        for t in (*t0, *t1):
-            self.at(t)
-        ends = np.array([self.speeds[t] for t in (*t0, *t1)])
-        return self.motion.rate_bounds(np.array(t0), np.array(t1), ends)
-
-    def bounds(self, t0: Sequence[float], t1: Sequence[float]) -> np.ndarray:
-        """(K, P) Lipschitz constants of every pair's distance on each ``[t0, t1]`` (m/s)."""
-        return self.rates(t0, t1) @ self.mesh.pair_reach
-
-    def gaps(self, t: float, k: int) -> np.ndarray:
-        """Lower bounds (m) of the distance between the leaves of each of pair k's leaf pairs."""
-        if (t, k) not in self.leaf_gaps:
-            leaves, poses = self.mesh.leaves, self.at(t)[None]
-            if t not in self.leaf_centres:  # every leaf placed once per instant
-                self.leaf_centres[t] = leaves.centres_at(poses)
-            rows = leaves.rows_of(k)
-            instants = np.zeros(len(rows), dtype=int)
-            self.leaf_gaps[(t, k)] = leaves.gaps_at(self.leaf_centres[t], poses, instants, rows)
-        return self.leaf_gaps[(t, k)]
-
-    def distance(self, t: float, k: int) -> float:
-        if (t, k) not in self.exact:
-            if t not in self.placed:
-                self.placed[t] = Placed(self.mesh, self.at(t))
-            self.exact[(t, k)] = self.mesh.exact_placed(self.placed[t], k)
-        return self.exact[(t, k)]
 
 
 def _tolerance(measured: float, margin: float) -> float:
@@ -136,7 +71,7 @@ def certify(
         solver: the solvers' hull model, to compare its figures with the mesh's.
         instants: instants of the first, uniform pass (>= 2).
     """
-    store = _Instants(mesh, motion)
+    store = Instants(mesh, motion)
     times = np.linspace(0.0, motion.duration, instants)
     # the first pass's instants of even index: its intervals measure these ends first
     even = {float(t) for t in times[::2]}
@@ -158,8 +93,8 @@ def certify(
             break
         bisections += 1
         mid = 0.5 * (t0 + t1)
-        if mid not in store.joints:  # with the middles of its halves, likely halved next
-            store.load(np.array([mid, 0.5 * (t0 + mid), 0.5 * (mid + t1)]))
+        if mid not in store.joints:  # with the middles of its halves and of other intervals
+            store.load(_middles(store, heap, t0, t1))
         least.note(store.distance(mid, k), mid, k)
         rates = store.rates([t0, mid], [mid, t1])
         for (a, b), rate in zip(((t0, mid), (mid, t1)), rates, strict=True):
@@ -205,7 +140,7 @@ def certify(
 
 
 def _measure_ends(
-    store: _Instants,
+    store: Instants,
     least: _Least,
     margin: float,
     start_first: bool,
@@ -248,8 +183,24 @@ def _measure_ends(
 _Item = tuple[float, float, float, int, bool, float]
 
 
+def _middles(store: Instants, heap: list[_Item], t0: float, t1: float) -> np.ndarray:
+    """Instants (s) likely needed next: ``[t0, t1]``'s middle and those of its halves.
+
+    And the same for every interval in ``heap`` whose middle is not loaded yet: all loaded
+    in one evaluation of the paths, whose cost is mostly per call.
+    """
+    out: list[float] = []
+    seen: set[float] = set()
+    for a, b in ((t0, t1), *((item[1], item[2]) for item in heap)):
+        mid = 0.5 * (a + b)
+        if mid not in seen and mid not in store.joints:
+            seen.add(mid)
+            out += [mid, 0.5 * (a + mid), 0.5 * (mid + b)]
+    return np.array(out)
+
+
 def _first_pass(
-    mesh: MeshClearance, store: _Instants, times: np.ndarray, margin: float
+    mesh: MeshClearance, store: Instants, times: np.ndarray, margin: float
 ) -> tuple[_Least, float, list[_Item]]:
     """The uniform first pass at ``times`` (s): sphere bounds, then leaf bounds where open.
 
@@ -258,7 +209,8 @@ def _first_pass(
     none), and the heap of the others.
     """
     store.load(times)
-    bounds = np.array([mesh.sphere_bounds(store.at(float(t))) for t in times])
+    placements = np.array([store.at(t) for t in times.tolist()])
+    bounds = mesh.sphere_bounds(placements)
     k0, p0 = np.unravel_index(int(np.argmin(bounds)), bounds.shape)
     measured, when, pair = store.distance(float(times[k0]), int(p0)), float(times[k0]), int(p0)
     rates = store.rates(times[:-1].tolist(), times[1:].tolist())
@@ -266,27 +218,34 @@ def _first_pass(
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
     settled = lbs >= measured - _tolerance(measured, margin)
     _tighten(
-        mesh, store, times, bounds, rates, lbs, settled, measured - _tolerance(measured, margin)
+        store,
+        placements,
+        times,
+        (bounds, rates),
+        lbs,
+        settled,
+        measured - _tolerance(measured, margin),
     )
     settled = lbs >= measured - _tolerance(measured, margin)
     lower = float(lbs[settled].min()) if settled.any() else math.inf
+    rows, pairs = np.nonzero(~settled)
     heap: list[_Item] = [
-        (
-            float(lbs[i, k]),
-            float(times[i]),
-            float(times[i + 1]),
-            int(k),
-            False,
-            float(lipschitz[i, k]),
+        (value, t0, t1, k, False, speed)
+        for value, t0, t1, k, speed in zip(
+            lbs[rows, pairs].tolist(),
+            times[rows].tolist(),
+            times[rows + 1].tolist(),
+            pairs.tolist(),
+            lipschitz[rows, pairs].tolist(),
+            strict=True,
         )
-        for i, k in zip(*np.nonzero(~settled), strict=True)
     ]
     heapq.heapify(heap)
     return _Least(measured, when, pair), lower, heap
 
 
 def _leaf_value(
-    store: _Instants, k: int, a: float, b: float, rates: np.ndarray, one_end: bool = False
+    store: Instants, k: int, a: float, b: float, rates: np.ndarray, one_end: bool = False
 ) -> float:
     """A lower bound (m) of pair k's distance between ``a`` and ``b`` (s) from its leaf pairs.
 
@@ -304,19 +263,19 @@ def _leaf_value(
     db = -math.inf if one_end else store.distance(b, k)
     if da <= 0.0 or (db <= 0.0 and not one_end):
         return -math.inf
-    leaves = store.mesh.leaves
-    speed = rates @ leaves.row_reach[:, leaves.rows_of(k)]
+    travel = (rates @ store.leaf_reach(k)) * width
     start = np.maximum(da, store.gaps(a, k))
-    end = np.maximum.reduce([np.full_like(start, db), store.gaps(b, k), start - speed * width])
-    return float(np.min(0.5 * (start + end - speed * width)))
+    end = np.maximum(store.gaps(b, k), start - travel)
+    if not one_end:
+        end = np.maximum(end, db)
+    return float(np.min(0.5 * (start + end - travel)))
 
 
 def _tighten(
-    mesh: MeshClearance,
-    store: _Instants,
+    store: Instants,
+    placements: np.ndarray,
     times: np.ndarray,
-    bounds: np.ndarray,
-    rates: np.ndarray,
+    spheres: tuple[np.ndarray, np.ndarray],
     lbs: np.ndarray,
     settled: np.ndarray,
     threshold: float,
@@ -326,10 +285,12 @@ def _tighten(
     For every such (interval, pair), the larger of two lower bounds: the pair's leaf-sphere
     bound (:mod:`.sphere_tree`) at both ends where it beats the single spheres', with the
     whole bodies' speed bound; and the least over the pair's leaf pairs of their own bounds at
-    both ends with their own speed bounds (``rates``: (K - 1, N) joint-rate bounds per
-    interval), the latter only for the items the former leaves below ``threshold`` (m). Both
-    hold for the distance, so the interval bound stays one.
+    both ends with their own speed bounds, the latter only for the items the former leaves
+    below ``threshold`` (m). Both hold for the distance, so the interval bound stays one.
+    ``placements``: (K, G, 4, 4) the body poses at ``times``; ``spheres``: the single spheres'
+    bounds (K, P) (m) and the joint-rate bounds per interval (K - 1, N) (rad/s or m/s).
     """
+    mesh, (bounds, rates) = store.mesh, spheres
     rows, pairs = np.nonzero(~settled)
     if len(rows) == 0:
         return
@@ -340,10 +301,13 @@ def _tighten(
     runs = leaves.count[cell_pairs]
     starts = np.cumsum(runs) - runs
     offsets = np.arange(int(runs.sum())) - np.repeat(starts, runs)
-    placements = np.array([store.at(float(t)) for t in times])
-    gaps = leaves.row_gaps(
-        placements, np.repeat(cells, runs), np.repeat(leaves.start[cell_pairs], runs) + offsets
+    gaps = leaves.gaps_at(
+        leaves.centres_at(placements),
+        placements,
+        np.repeat(cells, runs),
+        np.repeat(leaves.start[cell_pairs], runs) + offsets,
     )
+    store.keep_gaps(times, codes, starts, gaps)
     tight = bounds.copy()
     tight[cells, cell_pairs] = np.maximum(
         bounds[cells, cell_pairs], np.minimum.reduceat(gaps, starts)
@@ -364,12 +328,16 @@ def _tighten(
     offsets = np.arange(int(runs.sum())) - np.repeat(np.cumsum(runs) - runs, runs)
     ends = gaps[first[item] + offsets] + gaps[second[item] + offsets]
     leaf_rows = leaves.start[pairs][item] + offsets
-    speed = np.einsum("rn,nr->r", rates[rows[item]], leaves.row_reach[:, leaf_rows])
+    speed = np.einsum(
+        "rn,rn->r",
+        np.take(rates, rows[item], axis=0),
+        np.take(leaves.row_reach_t, leaf_rows, axis=0),
+    )
     own = np.minimum.reduceat(0.5 * (ends - speed * widths[item]), np.cumsum(runs) - runs)
     lbs[rows, pairs] = np.maximum(whole, own)
 
 
-def _contained_at_start(mesh: MeshClearance, store: _Instants) -> int | None:
+def _contained_at_start(mesh: MeshClearance, store: Instants) -> int | None:
     """A pair one of whose bodies starts inside the other's closed mesh, if any."""
     placements = store.at(0.0)
     near = np.flatnonzero(mesh.sphere_bounds(placements) < 0.0)

@@ -1,8 +1,8 @@
 """Clearance verified on the URDF's original geometry, certified between samples.
 
 The solvers keep clearance on true convex hulls (:mod:`freefloat.robot.collision`). This check
-shares none of their shapes: it parses the URDF's collision elements again
-(:func:`~freefloat.robot.geometry.load_collision_geometry`) and measures the **original**
+shares none of their shapes: it takes the URDF's collision elements as parsed
+(:func:`~freefloat.robot.geometry.load_shared_geometry`) and measures the **original**
 geometry, meshes as bounding-volume hierarchies of their own triangles and primitives as
 themselves (coal). Only the list of checked pairs is common, since it defines what is checked.
 
@@ -53,7 +53,7 @@ from ..robot.collision import CollisionModel, Obstacle, checked_distance
 from ..robot.geometry import (
     add_obstacles,
     checked_pairs,
-    load_collision_geometry,
+    load_shared_geometry,
     object_triangles,
 )
 from ..robot.model import Robot
@@ -151,7 +151,7 @@ class MeshClearance:
         self, robot: Robot, srdf: str | Path | None = None, obstacles: Sequence[Obstacle] = ()
     ) -> None:
         self.robot = robot
-        geometry = load_collision_geometry(robot)
+        geometry, keys = load_shared_geometry(robot)  # its meshes only read
         add_obstacles(robot, geometry, obstacles)
         self.pairs = checked_pairs(robot, geometry, srdf)
         self.geometry = geometry
@@ -159,7 +159,9 @@ class MeshClearance:
         self.shapes = [obj.geometry for obj in objects]
         self.names = [f"{objects[a].name} / {objects[b].name}" for a, b in self.pairs]
         self.meshes = {
-            i: object_triangles(objects[i]) for i, s in enumerate(self.shapes) if _is_mesh(s)
+            i: object_triangles(objects[i], keys.get(i))
+            for i, s in enumerate(self.shapes)
+            if _is_mesh(s)
         }
         self.centres, self.radii = _bounding_spheres(self.shapes, self.meshes)
         #: Leaf spheres of every body: tighter lower bounds than the single spheres.
@@ -171,11 +173,16 @@ class MeshClearance:
         self.leaves = LeafSpheres(
             self.centres, self.radii, self.meshes, np.array(self.pairs), boxes
         )
-        reach = reach_coefficients(robot, geometry, self.centres, self.radii)
-        leaves = self.leaves
-        leaves.set_reach(
-            reach_coefficients(robot, geometry, leaves.local, leaves.radii, leaves.owner)
+        leaves, count = self.leaves, len(self.centres)
+        reach = reach_coefficients(  # the single spheres', then the leaves' (one pass)
+            robot,
+            geometry,
+            np.concatenate([self.centres, leaves.local]),
+            np.concatenate([self.radii, leaves.radii]),
+            np.concatenate([np.arange(count), leaves.owner]),
         )
+        leaves.set_reach(reach[:, count:])
+        reach = reach[:, :count]
         pairs = np.array(self.pairs, dtype=int).reshape(-1, 2)
         #: First and second geometry index of every pair.
         self.first, self.second = pairs[:, 0], pairs[:, 1]
@@ -187,19 +194,30 @@ class MeshClearance:
         self.pair_reach = np.where(shared, 0.0, ra + rb)
         self._data = robot.model.createData()
         self._gdata = pin.GeometryData(geometry)
+        self._neutral = pin.neutral(robot.model)
+        plain = all(j.kind != "continuous" for j in robot.joints)
+        self._slots = np.array([j.idx_q for j in robot.joints]) if plain else None
         self.kinds = [f"{_kind(self.shapes[a])} / {_kind(self.shapes[b])}" for a, b in self.pairs]
 
     def placements(self, joints: np.ndarray) -> np.ndarray:
         """(G, 4, 4) pose of every geometry object in the spacecraft frame at ``joints``."""
         model = self.robot.model
-        pin.forwardKinematics(model, self._data, self.robot.configuration(joints))
+        if self._slots is None:
+            q = self.robot.configuration(joints)
+        else:  # no continuous joint: the values themselves, written into the neutral pose
+            q = self._neutral.copy()
+            q[self._slots] = joints
+        pin.forwardKinematics(model, self._data, q)
         pin.updateGeometryPlacements(model, self._data, self.geometry, self._gdata)
         return np.array([m.homogeneous for m in self._gdata.oMg])
 
     def sphere_bounds(self, placements: np.ndarray) -> np.ndarray:
-        """(P,) lower bounds of every pair's distance from bounding spheres (m)."""
+        """(P,) lower bounds of every pair's distance from bounding spheres (m).
+
+        ``placements``: (G, 4, 4); or (K, G, 4, 4) for K instants at once, giving (K, P).
+        """
         centres = _centres(placements, self.centres)
-        gap = np.linalg.norm(centres[self.first] - centres[self.second], axis=1)
+        gap = np.linalg.norm(centres[..., self.first, :] - centres[..., self.second, :], axis=-1)
         return gap - self.radii[self.first] - self.radii[self.second]
 
     def exact(self, placements: np.ndarray, k: int) -> float:
@@ -268,8 +286,11 @@ class Placed:
 
 
 def _centres(placements: np.ndarray, local: np.ndarray) -> np.ndarray:
-    """(G, 3) points given in each object's frame, in the spacecraft frame (m)."""
-    return np.einsum("gij,gj->gi", placements[:, :3, :3], local) + placements[:, :3, 3]
+    """(..., G, 3) points given in each object's frame, in the spacecraft frame (m).
+
+    ``placements``: (..., G, 4, 4) poses of the G objects (one set, or one per instant).
+    """
+    return np.einsum("...gij,gj->...gi", placements[..., :3, :3], local) + placements[..., :3, 3]
 
 
 def _is_mesh(shape: coal.CollisionGeometry) -> bool:
@@ -291,15 +312,33 @@ def _bounding_spheres(
     centres, radii = [], []
     for i, shape in enumerate(shapes):
         if i in meshes:
-            vertices = meshes[i][0]
-            centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
-            radius = float(np.linalg.norm(vertices - centre, axis=1).max())
+            centre, radius = _mesh_sphere(meshes[i][0])
         else:
             shape.computeLocalAABB()
             centre, radius = np.asarray(shape.aabb_center, float), float(shape.aabb_radius)
         centres.append(centre)
         radii.append(radius)
     return np.array(centres), np.array(radii)
+
+
+def _mesh_sphere(vertices: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre of a mesh's vertex box and its farthest vertex's distance (m).
+
+    Kept per vertex array when the array is shared and never written
+    (:func:`~freefloat.robot.geometry.object_triangles`'s).
+    """
+    kept = _SPHERES.get(id(vertices))
+    if kept is not None and kept[0] is vertices:
+        return kept[1]
+    centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
+    sphere = centre, float(np.linalg.norm(vertices - centre, axis=1).max())
+    if not vertices.flags.writeable:
+        _SPHERES[id(vertices)] = (vertices, sphere)
+    return sphere
+
+
+#: Bounding sphere per shared mesh vertex array (see _mesh_sphere), the array kept alive.
+_SPHERES: dict[int, tuple[np.ndarray, tuple[np.ndarray, float]]] = {}
 
 
 def _winding_number(vertices: np.ndarray, triangles: np.ndarray, point: np.ndarray) -> float:

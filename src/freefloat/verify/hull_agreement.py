@@ -59,16 +59,16 @@ def hull_agreement(
         return math.inf, "the solver checks other pairs than the URDF states"
     worst, where = shape_excess(mesh, solver)
     slack = [hull_slack(solver, i) for i in range(len(mesh.shapes))]
-    hull = solver.distances(joints).values
-    for k in compared(mesh, placements, measured):
+    pairs = compared(mesh, placements, measured)
+    for k, hull in zip(pairs, solver.pair_distances(joints, pairs).tolist(), strict=True):
         a, b = mesh.pairs[k]
         true = distance(k)
-        farther = hull[k] - true
-        nearer = true - hull[k] - slack[a] - slack[b] if true > 0.0 else -math.inf
+        farther = hull - true
+        nearer = true - hull - slack[a] - slack[b] if true > 0.0 else -math.inf
         if max(farther, nearer) > worst:
             worst = max(farther, nearer)
             where = (
-                f"{mesh.names[k]} at t = {time:.4g} s: hull {hull[k]:.6g} m, mesh {true:.6g} m, "
+                f"{mesh.names[k]} at t = {time:.4g} s: hull {hull:.6g} m, mesh {true:.6g} m, "
                 f"hull slack {slack[a] + slack[b]:.3g} m"
             )
     return worst, where

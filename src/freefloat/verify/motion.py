@@ -53,16 +53,17 @@ class PolynomialMotion:
         # Each joint's acceleration is a polynomial of degree <= degree - 2: interpolated at
         # that many Chebyshev points it is exact up to rounding, and its real roots in (0, T)
         # are where the rates peak.
+        # (chebfit and chebroots: what Chebyshev.fit on [-1, 1] and its roots() compute)
         points = max(degree - 1, 1)
-        chebyshev = np.polynomial.Chebyshev
+        chebyshev = np.polynomial.chebyshev
         x = np.cos(np.pi * (np.arange(points) + 0.5) / points)
         acceleration = path(0.5 * (x + 1.0) * self.duration)[2]
         roots: list[tuple[float, int]] = []
         for j in range(acceleration.shape[1]):
-            series = chebyshev.fit(x, acceleration[:, j], points - 1, domain=[-1, 1])
-            if not np.any(np.abs(series.coef[1:]) > 0.0):
+            coef = chebyshev.chebfit(x, acceleration[:, j], points - 1)
+            if not np.any(np.abs(coef[1:]) > 0.0):
                 continue
-            for r in np.atleast_1d(series.roots()):
+            for r in np.atleast_1d(chebyshev.chebroots(coef)):
                 if abs(r.imag) <= 1e-9 and -1.0 < r.real < 1.0:
                     roots.append((0.5 * (float(r.real) + 1.0) * self.duration, j))
         roots.sort()

@@ -114,16 +114,19 @@ class LeafSpheres:
         #: (L, 3) leaf centres in their body's frame, (L,) radii, (L,) owning body.
         self.local, self.radii = np.concatenate(local), np.concatenate(size)
         self.owner = np.array(owner, dtype=int)
-        left, right, count = [], [], []
-        for a, b in np.asarray(pairs, dtype=int).reshape(-1, 2):
-            la = np.arange(first_leaf[a], first_leaf[a + 1])
-            lb = np.arange(first_leaf[b], first_leaf[b + 1])
-            left.append(np.repeat(la, len(lb)))
-            right.append(np.tile(lb, len(la)))
+        left: list[int] = []
+        right: list[int] = []
+        count: list[int] = []
+        for a, b in np.asarray(pairs, dtype=int).reshape(-1, 2).tolist():
+            la = range(first_leaf[a], first_leaf[a + 1])
+            lb = list(range(first_leaf[b], first_leaf[b + 1]))
+            for i in la:  # every leaf of a against every leaf of b, a's leaf the slower index
+                left += [i] * len(lb)
+                right += lb
             count.append(len(la) * len(lb))
         #: Every pair's leaf pairs, pair after pair: first and second leaf, and their count.
-        self.left = np.concatenate(left) if left else np.zeros(0, dtype=int)
-        self.right = np.concatenate(right) if right else np.zeros(0, dtype=int)
+        self.left = np.array(left, dtype=int)
+        self.right = np.array(right, dtype=int)
         self.count = np.array(count, dtype=int)
         self.start = np.concatenate([[0], np.cumsum(self.count)[:-1]]).astype(int)
         self.reach = self.radii[self.left] + self.radii[self.right]
@@ -141,6 +144,8 @@ class LeafSpheres:
         #: Per leaf pair, its index in the three arrays above, or -1.
         self.box_of_row = np.full(len(self.left), -1, dtype=int)
         self.box_of_row[self.box_rows] = np.arange(len(self.box_rows))
+        #: Per pair, what :meth:`pair_gaps` needs of its leaf pairs, worked out when first asked.
+        self._pair_parts: dict[int, tuple[np.ndarray, ...]] = {}
 
     def bounds(self, placements: np.ndarray, cells: np.ndarray, pairs: np.ndarray) -> np.ndarray:
         """Lower bounds (m) of pair ``pairs[c]``'s distance at placement set ``cells[c]``.
@@ -181,8 +186,11 @@ class LeafSpheres:
 
     def centres_at(self, placements: np.ndarray) -> np.ndarray:
         """(K, L, 3) every leaf's centre (m, spacecraft frame) at K sets of body poses."""
-        poses = placements[:, self.owner]  # (K, L, 4, 4)
-        return np.einsum("kLij,Lj->kLi", poses[..., :3, :3], self.local) + poses[..., :3, 3]
+        rotations = placements[:, :, :3, :3][:, self.owner]  # (K, L, 3, 3)
+        return (
+            np.einsum("kLij,Lj->kLi", rotations, self.local)
+            + placements[:, :, :3, 3][:, self.owner]
+        )
 
     def gaps_at(
         self, world: np.ndarray, placements: np.ndarray, instants: np.ndarray, rows: np.ndarray
@@ -195,8 +203,11 @@ class LeafSpheres:
             instants: (R,) index into the K instants for each row.
             rows: (R,) leaf pairs.
         """
-        gap = np.linalg.norm(
-            world[instants, self.left[rows]] - world[instants, self.right[rows]], axis=1
+        # rows of the (K L, 3) centres by one flat index each (numpy's 2-D gather is slower)
+        flat, base = world.reshape(-1, 3), instants * world.shape[1]
+        gap = _norms(
+            np.take(flat, base + self.left[rows], axis=0)
+            - np.take(flat, base + self.right[rows], axis=0)
         )
         gap -= self.reach[rows]
         # leaf pairs with a box: the sphere's centre to the box itself
@@ -205,11 +216,42 @@ class LeafSpheres:
             which = self.box_of_row[rows[boxed]]
             box = self.owner[self.box_leaf[which]]
             other = self.sphere_leaf[which]
-            pose = placements[instants[boxed], box]  # (B, 4, 4)
-            offset = world[instants[boxed], other] - pose[:, :3, 3]
+            at = instants[boxed]  # flat gathers, as above
+            pose = np.take(placements.reshape(-1, 4, 4), at * placements.shape[1] + box, axis=0)
+            offset = np.take(flat, at * world.shape[1] + other, axis=0) - pose[:, :3, 3]
             local = np.einsum("bji,bj->bi", pose[:, :3, :3], offset)  # R^T (c - p)
             outside = np.maximum(np.abs(local) - self.half[box], 0.0)
-            gap[boxed] = np.linalg.norm(outside, axis=1) - self.radii[other]
+            gap[boxed] = _norms(outside) - self.radii[other]
+        return gap
+
+    def pair_gaps(self, placements: np.ndarray, pair: int) -> np.ndarray:
+        """:meth:`row_gaps` of one pair's leaf pairs at one instant (the same figures).
+
+        Only that pair's leaves are placed. ``placements``: (G, 4, 4) body poses.
+        """
+        if pair not in self._pair_parts:
+            rows = self.rows_of(pair)
+            leaves, where = np.unique(
+                np.concatenate([self.left[rows], self.right[rows]]), return_inverse=True
+            )
+            boxed = np.flatnonzero(self.box_of_row[rows] >= 0)
+            which = self.box_of_row[rows[boxed]]
+            other = np.searchsorted(leaves, self.sphere_leaf[which])
+            self._pair_parts[pair] = (rows, leaves, where, boxed, which, other)
+        rows, leaves, where, boxed, which, other = self._pair_parts[pair]
+        poses = placements[None, self.owner[leaves]]  # (1, l, 4, 4)
+        world = np.einsum("kLij,Lj->kLi", poses[..., :3, :3], self.local[leaves])[0]
+        world += poses[0, :, :3, 3]
+        half = len(rows)
+        gap = _norms(world[where[:half]] - world[where[half:]])
+        gap -= self.reach[rows]
+        if len(boxed):
+            box = self.owner[self.box_leaf[which]]
+            pose = placements[box]  # (B, 4, 4)
+            offset = world[other] - pose[:, :3, 3]
+            local = np.einsum("bji,bj->bi", pose[:, :3, :3], offset)  # R^T (c - p)
+            outside = np.maximum(np.abs(local) - self.half[box], 0.0)
+            gap[boxed] = _norms(outside) - self.radii[self.sphere_leaf[which]]
         return gap
 
     def set_reach(self, leaf_reach: np.ndarray) -> None:
@@ -221,3 +263,15 @@ class LeafSpheres:
         """
         a, b = leaf_reach[:, self.left], leaf_reach[:, self.right]
         self.row_reach = np.where((a > 0.0) & (b > 0.0), 0.0, a + b)
+        #: (R, N) the same, one leaf pair a row (contiguous: rows are gathered from it).
+        self.row_reach_t = np.ascontiguousarray(self.row_reach.T)
+
+
+def _norms(vectors: np.ndarray) -> np.ndarray:
+    """(R,) Euclidean lengths of (R, 3) vectors: ``np.linalg.norm(vectors, axis=1)``'s figures.
+
+    The same sums in the same order, ``(x^2 + y^2) + z^2``, without its reduction machinery.
+    ``vectors`` is overwritten.
+    """
+    vectors *= vectors
+    return np.sqrt(vectors[:, 0] + vectors[:, 1] + vectors[:, 2])
