@@ -155,3 +155,17 @@ def test_a_blown_up_state_on_a_continuous_joint_gives_nan_not_a_traceback(tmp_pa
         np.cos(0.5),
         np.sin(0.5),
     ]
+
+
+def test_the_cm_check_does_not_share_the_planners_cm(worked_scenario, monkeypatch):
+    """The planner reads the CM off the centroidal maps (``centre_of_mass``) to place the base;
+    verification takes Pinocchio's own CM at each sample. A CM formula gone wrong on the
+    planner's side (here scaled by 1.5) moves the base, and the ``cm_offset`` check sees the
+    CM drift and refuses the plan."""
+    import freefloat.physics.dynamics as dynamics
+
+    right = dynamics.centre_of_mass
+    monkeypatch.setattr(dynamics, "centre_of_mass", lambda ag: 1.5 * right(ag))
+    with pytest.raises(ff.VerificationError) as info:
+        ff.plan(worked_scenario)
+    assert "cm_offset" in info.value.failures

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..physics.dynamics import centre_of_mass, inverse_dynamics_batch
+from ..physics.dynamics import inverse_dynamics_batch
 from ..physics.momentum import MomentumMap
 from ..plans.format import Plan
 from ..plans.guarantees import Check
@@ -109,10 +109,13 @@ def momentum_checks(subject: Subject) -> list[Check]:
     configs = subject.mmap.configurations(np.asarray(samples.q, float))
     configs[:, 0:3] = np.asarray(samples.base_position, float)
     configs[:, 3:7] = np.asarray(samples.base_quaternion_xyzw, float)
-    cmap = pin.computeCentroidalMap
-    ag = np.array([cmap(model, data, config) for config in configs])
-    ag = ag.reshape(len(configs), 6, model.nv)
-    com = configs[:, 0:3] + centre_of_mass(ag)
+    # The CM from Pinocchio's own computation at each sample (data.com, which the map
+    # computes on the way), not from the map's entries as the planner reads it.
+    ag = np.empty((len(configs), 6, model.nv))
+    com = np.empty((len(configs), 3))
+    for k, config in enumerate(configs):
+        ag[k] = pin.computeCentroidalMap(model, data, config)
+        com[k] = data.com[0]
     arm = np.einsum("kij,kj->ki", ag[:, :, 6:], np.asarray(samples.qd, float))
     linear = -np.linalg.solve(ag[:, :, :6], arm[..., None])[:, :3, 0]
     v_base = np.concatenate([linear, np.asarray(samples.base_angular_velocity, float)], axis=1)
