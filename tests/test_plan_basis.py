@@ -138,34 +138,3 @@ def test_min_effort_reaches_within_two_percent_of_optimal_control(worked_scenari
     assert effort == pytest.approx(plan.objective.value, rel=1e-9)
     assert effort <= 26.6 * 1.02
     assert plan.verification.passed
-
-
-def test_a_format_3_plan_of_higher_degree_verifies_within_its_rounding(
-    worked_scenario, tmp_path, capsys
-):
-    """Three free coefficients per joint: the monomials in t of a format-3 file round at
-    t = T by about 1e-12 of the joint travel, beyond the boundary figure's 1e-12 slack, so
-    the boundary check reports a bound of that rounding as its estimate and the file
-    verifies. The bound holds against exact rational arithmetic on the file's coefficients
-    (position, rate x T and acceleration x T^2 at T, each joint)."""
-    import dataclasses
-    from fractions import Fraction
-
-    from freefloat.verify.plan_checks import _monomial_rounding
-
-    plan = ff.plan(dataclasses.replace(worked_scenario, extra={"q1": 3, "q2": 3}))
-    doc = as_format_3(json.loads(plan.to_json()))
-    old = tmp_path / "old.json"
-    old.write_text(json.dumps(doc))
-    assert main(["verify", str(old)]) == 0, capsys.readouterr().err
-    T = doc["duration"]
-    coefficients = [np.asarray(doc["path"]["coefficients"][n]) for n in doc["robot"]["joints"]]
-    poly = np.polynomial.polynomial
-    for c, bound in zip(coefficients, _monomial_rounding(coefficients, T), strict=True):
-        for order in range(3):
-            rounded = float(poly.polyval(T, poly.polyder(c, order))) * T**order
-            exact = sum(
-                Fraction(math.perm(k, order)) * Fraction(float(ck)) * Fraction(T) ** k
-                for k, ck in enumerate(c)
-            )
-            assert abs(Fraction(rounded) - exact) <= Fraction(bound)

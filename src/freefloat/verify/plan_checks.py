@@ -158,28 +158,7 @@ def boundary_check(subject: Subject) -> list[Check]:
     rates = np.abs(qd).max(axis=0) * T
     accelerations = np.abs(qdd).max(axis=0) * T**2
     worst = np.maximum.reduce([position, rates, accelerations]) / subject.travel
-    estimate = 0.0  # the file's own basis: evaluated as its planner wrote the figure
-    if path.monomials is not None:
-        estimate = float((_monomial_rounding(path.monomials, T) / subject.travel).max())
-    return [Check("boundary", float(worst.max()), TOLERANCES["boundary_relative"], "1", estimate)]
-
-
-def _monomial_rounding(monomials: list[np.ndarray], duration: float) -> np.ndarray:
-    """Per joint, a bound on the rounding of a monomial path's end values (rad or m).
-
-    Files before format 4 give each joint as monomials in t (s). Evaluating ``sum c_k t^k``
-    by Horner's rule at ``t = T`` rounds by at most ``2 n eps sum |c_k| T^k`` (n terms); the
-    rate times T and the acceleration times T^2 weight the terms by ``k`` and ``k (k - 1)``,
-    and the boundary figure is the largest of the three. High-degree paths on long durations
-    round by 1e-11 of the joint travel and more.
-    """
-    bounds = []
-    for c in monomials:
-        k = np.arange(len(c), dtype=float)
-        terms = np.abs(np.asarray(c, dtype=float)) * duration**k
-        weights = np.maximum.reduce([np.ones_like(k), k, k * (k - 1.0)])
-        bounds.append(2.0 * len(c) * np.finfo(float).eps * float(weights @ terms))
-    return np.array(bounds)
+    return [Check("boundary", float(worst.max()), TOLERANCES["boundary_relative"], "1")]
 
 
 def samples_check(subject: Subject) -> list[Check]:
