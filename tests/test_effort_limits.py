@@ -190,3 +190,25 @@ def test_the_shortest_duration_is_named_only_when_a_timed_limit_stood_in_the_way
     assert explained.value.shortest_duration == pytest.approx(
         planned.value.shortest_duration, rel=1e-12
     )
+
+
+def test_a_start_no_path_brings_within_the_effort_limits_names_the_shortest_duration():
+    """The UR5 servicer with effort limits a thousandth of its URDF's, in 3 s: no path within
+    them reaches even the quintic path's own attitude, so the continuation stops at its start.
+    The refusal says the effort limits stood in the way and names the shortest duration (it
+    was a plain SolverError); planned 1 % slower than that, the plan's sampled torques (the
+    sampling's inverse dynamics, not the limit's torque formula) stay within the limits."""
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
+    joints = tuple(
+        dataclasses.replace(j, effort_limit=1e-3 * j.effort_limit) for j in scenario.robot.joints
+    )
+    robot = dataclasses.replace(scenario.robot, joints=joints)
+    scenario = dataclasses.replace(scenario, robot=robot, duration=3.0)
+    with pytest.raises(EffortLimitError) as info:
+        ff.plan(scenario)
+    assert "joint_effort_limits" in info.value.__cause__.blocked_by
+    shortest = info.value.shortest_duration
+    assert 3.0 < shortest < 60.0
+    plan = ff.plan(dataclasses.replace(scenario, duration=1.01 * shortest))
+    peaks = np.abs(np.asarray(plan.samples.tau, dtype=float)).max(axis=0)
+    assert np.all(peaks <= np.array([j.effort_limit for j in joints]))

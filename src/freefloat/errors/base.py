@@ -149,8 +149,10 @@ class SolverError(FreeFloatError):
             planner got (0-1; continuation only, else 0).
         last_beta: the free coefficients where continuation stopped (rad or m), if it did.
         hint: what to try instead ("" when none).
-        blocked_by: the names of the constraints that stood in the way: one that stopped a
-            continuation, or that a root found broke (empty when none did).
+        blocked_by: the names of the constraints that stood in the way: one a continuation
+            stopped at or could not bring its start within, one a root found broke, one no
+            start within could be found for (empty when none did). A constraint the quintic
+            path breaks but a start was found within did not stand in the way.
     """
 
     def __init__(

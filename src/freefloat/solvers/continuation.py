@@ -33,7 +33,7 @@ from ..problem.residual import Problem
 from ..progress import heartbeat
 from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
-from .restore import Broken, broken_constraint
+from .restore import Broken, broken_constraint, first_broken
 from .rows import RowCache, linear_rows, with_critical
 from .tracked import BranchPoint, ContinuationResult
 
@@ -200,13 +200,16 @@ def track(
     here = _target(problem, start, delta, 0.0)
     r, jac = here.residual_and_jacobian(beta)
     # The quintic may break a constraint: bring it inside at lam = 0 first.
-    if not _dense_ok(problem, constraints, beta):
+    outside = first_broken(problem, constraints, beta)
+    if outside is not None:
         solved, r, jac, its = _correct(
             here, constraints, beta, INTERMEDIATE_TOLERANCE, instants, cache
         )
         iterations += its
-        if solved is None:
-            return ContinuationResult(beta, 0.0, angle, axis, r, 0, iterations, NO_START)
+        if solved is None:  # the start could not be brought within ``outside``
+            return ContinuationResult(
+                beta, 0.0, angle, axis, r, 0, iterations, NO_START, outside.name
+            )
         beta = solved
     dl = min(1.0, FIRST_STEP / angle) if angle > 0 else 1.0
     if trace is not None:
@@ -322,8 +325,9 @@ def continuation(
         fallback = multistart(problem, constraints, options, start)
         attempt.tried += [f"continuation stopped at {result.fraction:.3g} of the way"]
         attempt.tried += fallback.tried
+        attempt.blocked_by = tuple(dict.fromkeys(attempt.blocked_by + fallback.blocked_by))
         if fallback.candidates:
-            fallback.tried = attempt.tried
+            fallback.tried, fallback.blocked_by = attempt.tried, attempt.blocked_by
             return fallback
     attempt.stopped_by = result.stopped_by
     attempt.blocked_by = (result.blocked_by,) if result.blocked_by else ()

@@ -143,6 +143,7 @@ def least_norm_root_within(
     """
     active = [c for c in constraints if c.applies_to(problem.robot)]
     beta = np.asarray(beta, dtype=float)
+    given = _norm(beta)
     honoured: np.ndarray | None = None  # a root below beta's norm that the dense check passed
     if free is not None:
         inside = nearest_root_within(problem, free, active, DEFAULT_INSTANTS, options)
@@ -160,7 +161,8 @@ def least_norm_root_within(
         instants = with_critical(problem, active, beta, instants)
         # pressed past a limit between the instants: brought back inside, least-norm
         inside = nearest_root_within(problem, beta, active, instants, options)
-        if inside.honoured and (honoured is None or _norm(inside.beta) < _norm(honoured)):
+        bar = given if honoured is None else _norm(honoured)  # deviate less than these
+        if inside.honoured and _norm(inside.beta) < bar:
             return LeastNorm(inside.beta, spent, True)
     if honoured is not None:  # the rounds pressed past a limit between their instants
         return LeastNorm(honoured, spent, True)

@@ -18,7 +18,7 @@ from ..problem.constraints import Constraint
 from ..problem.residual import Problem
 from .newton import broyden, levenberg_marquardt, starts
 from .options import Attempt, SolveOptions
-from .restore import broken_constraint
+from .restore import first_broken
 from .sqp import minimum_norm_sqp
 
 __all__ = ["multistart"]
@@ -56,10 +56,12 @@ def multistart(
                 if np.linalg.norm(problem.residual(beta)) > tol:
                     beta, its = levenberg_marquardt(problem, begin, options)
                     name = "Broyden, then Levenberg-Marquardt"
-                broken = broken_constraint(problem, constraints, beta)
-                if np.linalg.norm(problem.residual(beta)) > tol or broken:
-                    note = f" (a root breaks {broken})" if broken else ""
+                broken = first_broken(problem, constraints, beta)
+                if np.linalg.norm(problem.residual(beta)) > tol or broken is not None:
+                    note = f" (a root breaks {broken})" if broken is not None else ""
                     attempt.tried.append(f"{name} from {label}{note}")
+                    if broken is not None:
+                        attempt.blocked_by = (*attempt.blocked_by, broken.name)
                     beta = None
                     name = "SQP with constraints"
             if beta is None:

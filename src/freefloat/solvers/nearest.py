@@ -79,9 +79,10 @@ def _within(
     """
     eager = [c for c in constraints if not c.lazy]
     if len(eager) < len(constraints):
-        found = least_norm_root_within(problem, start, eager, options, free).beta
-        if not broken_constraint(problem, [c for c in constraints if c.lazy], found):
-            return found
+        found = least_norm_root_within(problem, start, eager, options, free)
+        lazy = [c for c in constraints if c.lazy]
+        if found.honoured and not broken_constraint(problem, lazy, found.beta):
+            return found.beta
     return least_norm_root_within(problem, start, constraints, options, free).beta
 
 
