@@ -199,17 +199,13 @@ def track(
     beta, lam, iterations, steps = zero, 0.0, 0, 0
     here = _target(problem, start, delta, 0.0)
     r, jac = here.residual_and_jacobian(beta)
-    # The quintic may break a constraint: bring it inside at lam = 0 first.
-    outside = first_broken(problem, constraints, beta)
-    if outside is not None:
-        solved, r, jac, its = _correct(
+    broke = first_broken(problem, constraints, beta)  # the quintic's: brought inside first
+    if broke is not None:
+        solved, r, jac, iterations = _correct(
             here, constraints, beta, INTERMEDIATE_TOLERANCE, instants, cache
         )
-        iterations += its
-        if solved is None:  # the start could not be brought within ``outside``
-            return ContinuationResult(
-                beta, 0.0, angle, axis, r, 0, iterations, NO_START, outside.name
-            )
+        if solved is None:  # the start could not be brought within what it broke
+            return ContinuationResult(beta, 0, angle, axis, r, 0, iterations, NO_START, broke.name)
         beta = solved
     dl = min(1.0, FIRST_STEP / angle) if angle > 0 else 1.0
     if trace is not None:
