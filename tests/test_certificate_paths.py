@@ -163,7 +163,8 @@ def test_shared_geometry_copies_objects_and_primitives_keeps_keys_never_changes_
     monkeypatch,
 ):
     robot = ff.Scenario.from_toml(SCENARIOS / "ur5_servicer.toml").robot
-    (first, keys), (second, _) = (geometry.load_shared_geometry(robot) for _ in range(2))
+    shared, again = (geometry.load_shared_geometry(robot) for _ in range(2))
+    first, keys, second = shared.model, shared.keys, again.model
     objects = list(first.geometryObjects)
     # each mesh's key, kept from parsing, is the one its vertices give now
     assert keys == {
@@ -198,7 +199,7 @@ def test_checked_pairs_kept_are_those_worked_out_and_follow_an_edited_srdf(monke
     srdf.write_text(original)
 
     def pairs() -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
-        model = geometry.load_shared_geometry(robot)[0]
+        model = geometry.load_shared_geometry(robot).model
         found = geometry.checked_pairs(robot, model, srdf)
         return found, [(int(p.first), int(p.second)) for p in model.collisionPairs]
 
@@ -206,7 +207,7 @@ def test_checked_pairs_kept_are_those_worked_out_and_follow_an_edited_srdf(monke
     fresh = pairs()
     assert fresh[0] == fresh[1] and len(geometry._PAIRS) == 1
     assert pairs() == fresh  # kept
-    model = geometry.load_shared_geometry(robot)[0]
+    model = geometry.load_shared_geometry(robot).model
     frames = robot.model.frames
     a, b = fresh[0][0]
     link_a = frames[model.geometryObjects[a].parentFrame].name

@@ -97,7 +97,8 @@ class CollisionModel(PairQueries):
     ) -> None:
         self.obstacles = tuple(obstacles)
         self.srdf = None if srdf is None else Path(srdf).expanduser().resolve()
-        geometry, keys = load_shared_geometry(robot)  # each mesh replaced below
+        shared = load_shared_geometry(robot)
+        geometry, keys = shared.model, shared.keys  # each mesh replaced below
         #: Movable bodies with no collision geometry (their clearance cannot be checked).
         self.uncovered = bodies_without_geometry(robot, geometry)
         self._meshes: dict[int, tuple[np.ndarray, np.ndarray]] = {}

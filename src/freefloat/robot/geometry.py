@@ -41,6 +41,7 @@ __all__ = [
     "OBSTACLE_PREFIX",
     "HullInfo",
     "MeshKey",
+    "SharedGeometry",
     "add_obstacles",
     "bodies_without_geometry",
     "checked_pairs",
@@ -69,13 +70,30 @@ def load_collision_geometry(robot: Robot) -> pin.GeometryModel:
     return _parsed(robot)[0].clone()
 
 
-def load_shared_geometry(robot: Robot) -> tuple[pin.GeometryModel, dict[int, MeshKey]]:
+#: A mesh object's file, scale and a digest of its vertices (see _mesh_key).
+MeshKey = tuple[str, tuple[float, ...], str]
+
+
+@dataclass(frozen=True)
+class SharedGeometry:
+    """A geometry model around the parsed meshes (see :func:`load_shared_geometry`).
+
+    Attributes:
+        model: the geometry model (its objects its own; its meshes the parsed ones).
+        keys: each mesh object's key, by object index, worked out when it was parsed.
+    """
+
+    model: pin.GeometryModel
+    keys: dict[int, MeshKey]
+
+
+def load_shared_geometry(robot: Robot) -> SharedGeometry:
     """:func:`load_collision_geometry` without copying the meshes (callers never change one).
 
     Its objects are copies of the parsed ones and primitives deep copies, but each mesh is
     the parsed shape, shared by every such caller in the process: it may be read (coal's
     queries, :func:`object_triangles`, :func:`true_hull`) or replaced in the model, never
-    changed. Returned with each mesh object's key (by index), worked out when it was parsed.
+    changed.
 
     Raises:
         ModelError: as :func:`load_collision_geometry`.
@@ -87,11 +105,7 @@ def load_shared_geometry(robot: Robot) -> tuple[pin.GeometryModel, dict[int, Mes
         if not isinstance(obj.geometry, coal.BVHModelBase):
             copy.geometry = obj.geometry.clone()
         geometry.addGeometryObject(copy)
-    return geometry, dict(keys)
-
-
-#: A mesh object's file, scale and a digest of its vertices (see _mesh_key).
-MeshKey = tuple[str, tuple[float, ...], str]
+    return SharedGeometry(geometry, dict(keys))
 
 
 def _parsed(robot: Robot) -> tuple[pin.GeometryModel, dict[int, MeshKey]]:

@@ -151,7 +151,8 @@ class MeshClearance:
         self, robot: Robot, srdf: str | Path | None = None, obstacles: Sequence[Obstacle] = ()
     ) -> None:
         self.robot = robot
-        geometry, keys = load_shared_geometry(robot)  # its meshes only read
+        shared = load_shared_geometry(robot)
+        geometry, keys = shared.model, shared.keys  # its meshes only read
         add_obstacles(robot, geometry, obstacles)
         self.pairs = checked_pairs(robot, geometry, srdf)
         self.geometry = geometry
