@@ -193,16 +193,18 @@ def checked_pairs(
         ModelError: the SRDF file does not exist.
     """
     model = robot.model
-    path = None
+    path, stamp = None, None
     if srdf is not None:
         path = Path(srdf).expanduser().resolve()
         if not path.is_file():
             raise ModelError(f"SRDF file not found: {path}")
+        stat = path.stat()
+        stamp = (str(path), stat.st_mtime_ns, stat.st_size)
     objects = list(geometry.geometryObjects)
     key = (
         tuple((o.name, int(o.parentJoint), model.frames[o.parentFrame].name) for o in objects),
         tuple(int(j) for j in model.parents),
-        None if path is None else (str(path), path.stat().st_mtime_ns, path.stat().st_size),
+        stamp,
     )
     pairs = _PAIRS.get(key)
     if pairs is None:
