@@ -14,6 +14,8 @@ import freefloat as ff
 from freefloat.physics import attitude as att
 from freefloat.problem.build import problem_from_scenario
 from freefloat.problem.constraints import default_constraints
+from freefloat.solvers.continuation import INTERMEDIATE_TOLERANCE, track
+from freefloat.solvers.tracked import BranchPoint
 from test_solver import _independent_final_attitude
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -75,6 +77,24 @@ def test_ten_degrees_about_each_axis_within_the_limits_along_the_dense_path(
     for constraint in default_constraints():
         excess = constraint.excess(problem.robot, path)
         assert excess.value <= constraint.tolerance, (constraint.name, excess)
+
+
+def test_points_on_the_way_are_solved_to_their_tolerance_by_an_independent_integrator(
+    panda_problem: ff.Problem,
+) -> None:
+    """The targets on the way are solved on half the integration steps (their tolerance allows
+    it): SciPy's DOP853 finds each traced path within that tolerance of its target (plus a
+    micro-radian), and the goal's within 1e-9 rad."""
+    problem = _turned(panda_problem, [0.0, 0.0, math.radians(10.0)])
+    trace: list[BranchPoint] = []
+    result = track(problem, default_constraints(), ff.SolveOptions(), trace=trace)
+    assert result.reached and len(trace) >= 4  # the start, two points on the way, the goal
+    start = problem.achieved(np.zeros(problem.n_free))
+    for point in trace[1:-1]:
+        target = att.quat_multiply(start, att.quat_exp(point.turn * result.axis))
+        found = _independent_final_attitude(problem, point.beta)
+        assert att.geodesic_angle(found, target) < INTERMEDIATE_TOLERANCE + 1e-6
+    assert _independent_residual(problem, trace[-1].beta) < 1e-9
 
 
 def test_a_limit_met_on_the_way_is_kept_along_the_dense_path(panda_problem: ff.Problem) -> None:
