@@ -172,9 +172,11 @@ class PairBounds:
         one kept then, or created by an earlier row of the call).
         """
         rows = np.array([self._row(slot) for slot in slots], dtype=int)
-        moved = np.einsum(
-            "pn,bpn->bp", self.weights, np.abs(joints[:, None, :] - self._joints[rows])
-        )
+        change = self._joints[rows]  # (B, P, N): each pair's joints when last bounded
+        np.subtract(joints[:, None, :], change, out=change)
+        np.abs(change, out=change)
+        # per pair, its weights times the joints' change: one product per pair, all rows
+        moved = np.matmul(change.transpose(1, 0, 2), self.weights[:, :, None])[..., 0].T
         moved += BOUND_SLACK
         return self._lower[rows] - moved, self._upper[rows] + moved
 
@@ -198,9 +200,8 @@ class PairBounds:
                 self._lower[row, chosen] = lower[i, chosen]
                 self._upper[row, chosen] = upper[i, chosen]
             return
-        index = np.array(rows, dtype=int)
-        kept = self._joints[index]
-        kept[pairs] = np.broadcast_to(joints[:, None, :], kept.shape)[pairs]
-        self._joints[index] = kept
-        self._lower[index] = np.where(pairs, lower, self._lower[index])
-        self._upper[index] = np.where(pairs, upper, self._upper[index])
+        at, chosen = np.nonzero(pairs)  # each slot once: written in place, whatever the order
+        kept = np.array(rows, dtype=int)[at]
+        self._joints[kept, chosen] = joints[at]
+        self._lower[kept, chosen] = lower[at, chosen]
+        self._upper[kept, chosen] = upper[at, chosen]

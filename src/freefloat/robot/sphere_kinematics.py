@@ -36,7 +36,8 @@ class SphereKinematics:
         column = {joint.index: k for k, joint in enumerate(robot.joints)}
         # Per joint (after the universe): parent, fixed rotation and offset in the parent (the
         # neutral placement for a joint that is not the robot's), and for the robot's joints
-        # the column of its value, whether it turns, and its unit axis.
+        # the column of its value, whether it turns, and its unit axis; for a turning joint,
+        # the fixed rotation times the terms of Rodrigues' formula (see :meth:`centres`).
         self._steps: list[tuple[int, np.ndarray, np.ndarray, int, bool, np.ndarray]] = []
         for j in range(1, model.njoints):
             k = column.get(j, -1)
@@ -44,15 +45,13 @@ class SphereKinematics:
             motion = np.asarray(data.joints[j].S, dtype=float).ravel()
             turning = k >= 0 and bool(np.any(motion[3:6]))
             axis = motion[3:6] if turning else motion[0:3]
+            axis = axis / (np.linalg.norm(axis) or 1.0)
+            rotation = fixed.rotation.copy()
+            if turning:  # R_fixed (I + sin(a) K + (1 - cos(a)) K^2), K the axis' cross matrix
+                skew = _skew(axis)
+                rotation = np.stack([rotation, rotation @ skew, rotation @ skew @ skew])
             self._steps.append(
-                (
-                    int(model.parents[j]),
-                    fixed.rotation.copy(),
-                    fixed.translation.copy(),
-                    k,
-                    turning,
-                    axis / (np.linalg.norm(axis) or 1.0),
-                )
+                (int(model.parents[j]), rotation, fixed.translation.copy(), k, turning, axis)
             )
         objects = list(geometry.geometryObjects)
         self._parents = np.array([int(obj.parentJoint) for obj in objects], dtype=int)
@@ -74,10 +73,13 @@ class SphereKinematics:
         for j, (parent, fixed_r, fixed_t, k, turning, axis) in enumerate(self._steps, start=1):
             r_parent, t_parent = rotations[parent], offsets[parent]
             offsets[j] = t_parent + r_parent @ fixed_t
+            if turning:
+                angle = joints[:, k, None, None]
+                local = fixed_r[0] + np.sin(angle) * fixed_r[1] + (1.0 - np.cos(angle)) * fixed_r[2]
+                np.matmul(r_parent, local, out=rotations[j])
+                continue
             rotation = r_parent @ fixed_r
-            if k >= 0 and turning:
-                rotation = rotation @ _rotations(axis, joints[:, k])
-            elif k >= 0:  # a prismatic joint: along its axis, in its own (fixed) frame
+            if k >= 0:  # a prismatic joint: along its axis, in its own (fixed) frame
                 offsets[j] += (rotation @ axis) * joints[:, k, None]
             rotations[j] = rotation
         r, t = rotations[self._parents], offsets[self._parents]  # (G, B, 3, 3), (G, B, 3)
@@ -90,9 +92,6 @@ class SphereKinematics:
         return np.linalg.norm(centres[:, pairs[:, 0]] - centres[:, pairs[:, 1]], axis=2)
 
 
-def _rotations(axis: np.ndarray, angles: np.ndarray) -> np.ndarray:
-    """(B, 3, 3) rotations by ``angles`` (rad) about the unit ``axis`` (Rodrigues)."""
-    skew = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
-    square = skew @ skew
-    s, c = np.sin(angles)[:, None, None], np.cos(angles)[:, None, None]
-    return np.eye(3) + s * skew + (1.0 - c) * square
+def _skew(axis: np.ndarray) -> np.ndarray:
+    """The cross-product matrix of ``axis``: ``_skew(a) @ v == a x v``."""
+    return np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
