@@ -75,3 +75,25 @@ def test_end_effectors_are_asked_of_every_load():
     assert ff.load_robot(PLANAR).end_effector == "ee"
     with pytest.raises(ff.UnknownNameError):
         ff.load_robot(PLANAR, "nowhere")
+
+
+#: A second two-joint chain on the base: two longest chains, no default end effector.
+SECOND_ARM = """
+  <joint name="q3" type="continuous"><parent link="base"/><child link="link3"/>
+    <origin xyz="-0.5 0 0"/><axis xyz="0 0 1"/></joint>
+  <link name="link3"><inertial><origin xyz="-0.5 0 0"/><mass value="10.0"/>
+    <inertia ixx="0.01" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="q4" type="continuous"><parent link="link3"/><child link="link4"/>
+    <origin xyz="-1.0 0 0"/><axis xyz="0 0 1"/></joint>
+  <link name="link4"><inertial><origin xyz="-0.5 0 0"/><mass value="10.0"/>
+    <inertia ixx="0.01" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+</robot>"""
+
+
+def test_an_ambiguous_default_is_refused_at_every_load_and_a_named_one_taken(tmp_path):
+    path = tmp_path / "two_arms.urdf"
+    path.write_text(PLANAR.read_text().replace("</robot>", SECOND_ARM))
+    for _ in range(2):
+        with pytest.raises(ff.AmbiguousEndEffectorError):
+            ff.load_robot(path)
+    assert ff.load_robot(path, ["ee", "link4"]).end_effectors == ("ee", "link4")

@@ -10,6 +10,7 @@ perturbed inertia, say) changes no other robot. Parser messages are logged at th
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -94,15 +95,17 @@ class ParsedUrdf:
         model: the Pinocchio model with a free-flyer root joint, no gravity (kept: copy it).
         joints: the movable joints, in Pinocchio's (depth-first) order.
         frames: names of the body frames, in model order.
-        candidates: the default end effectors (:func:`end_effector_candidates`); more than
-            one is ambiguous.
     """
 
     checked: CheckedUrdf
     model: pin.Model
     joints: tuple[Joint, ...]
     frames: tuple[str, ...]
-    candidates: tuple[str, ...]
+
+    @functools.cached_property
+    def candidates(self) -> tuple[str, ...]:
+        """The default end effectors (:func:`end_effector_candidates`); several: ambiguous."""
+        return tuple(end_effector_candidates(self.model))
 
     def default_end_effector(self, path: Path) -> str:
         """The one default end effector (``path`` names the file in the error).
@@ -159,7 +162,6 @@ def _parse(text: str, path: Path) -> ParsedUrdf:
         model=model,
         joints=tuple(joints),
         frames=tuple(f.name for f in model.frames if f.type == pin.FrameType.BODY),
-        candidates=tuple(end_effector_candidates(model)),
     )
 
 
