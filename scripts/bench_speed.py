@@ -3,11 +3,11 @@
 Run through ``scripts/bench.py --speed-only`` (or alone: ``python scripts/bench_speed.py``).
 Every timed case is one ``ff.plan`` of a scenario read afresh from its TOML file (new robot,
 constraints, collision model; only what a user's process keeps between calls is kept: the
-parsed collision geometry and mesh keys per URDF, the hulls and triangles per mesh file, the
-checked pairs per SRDF file and kinematic tree, and the imported modules). Rounds are paired:
-with and without clearance one after the other in each round (the order alternating), so that
-both see the same load; the tables give medians over the rounds and the median of the per-round
-ratios.
+checked and built model per URDF text (each robot gets its own copy), the parsed collision
+geometry and mesh keys per URDF, the hulls and triangles per mesh file, the checked pairs per
+SRDF file and kinematic tree, and the imported modules). Rounds are paired: with and without
+clearance one after the other in each round (the order alternating), so that both see the same
+load; the tables give medians over the rounds and the median of the per-round ratios.
 
 - the shipped servicers with clearance against the same plan without (target <= 1.5x), with
   the stage times of the plan with clearance (solve, sample, verify; from the plan's record);

@@ -23,12 +23,10 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import AmbiguousEndEffectorError, ModelError, UnknownNameError
+from ..errors import ModelError, UnknownNameError
 from ..files import absolute_path, read_text_file
-from .built_model import check_built_model
-from .end_effectors import end_effector_candidates
 from .locations import example_robot_data_dir, resolve_robot, robots_dir, shipped_robots
-from .urdf_checks import check_urdf_xml, parser_messages
+from .parsed_urdf import Joint, parsed_urdf
 
 __all__ = [
     "MAX_URDF_BYTES",
@@ -44,64 +42,6 @@ __all__ = [
 #: Largest URDF file read (bytes); meshes are separate files, so a URDF is text of a few
 #: hundred kilobytes at most (the composed Panda servicer: 20 kB).
 MAX_URDF_BYTES = 50_000_000
-
-#: Pinocchio joint model short names, by the kind of joint freefloat exposes.
-_KINDS = {
-    "JointModelRX": "revolute",
-    "JointModelRY": "revolute",
-    "JointModelRZ": "revolute",
-    "JointModelRevoluteUnaligned": "revolute",
-    "JointModelRUBX": "continuous",
-    "JointModelRUBY": "continuous",
-    "JointModelRUBZ": "continuous",
-    "JointModelRevoluteUnboundedUnaligned": "continuous",
-    "JointModelPX": "prismatic",
-    "JointModelPY": "prismatic",
-    "JointModelPZ": "prismatic",
-    "JointModelPrismaticUnaligned": "prismatic",
-}
-
-
-@dataclass(frozen=True)
-class Joint:
-    """One movable joint, as the API sees it.
-
-    Attributes:
-        name: URDF joint name.
-        kind: ``"revolute"``, ``"continuous"`` or ``"prismatic"``.
-        index: Pinocchio joint index.
-        idx_q: first index of the joint in Pinocchio's configuration vector.
-        idx_v: index of the joint in Pinocchio's velocity vector.
-        lower: lower position limit (rad or m; ``-inf`` for a continuous joint).
-        upper: upper position limit (rad or m; ``+inf`` for a continuous joint).
-        velocity_limit: URDF velocity limit (rad/s or m/s; ``inf`` when not given).
-        effort_limit: URDF effort limit (N m or N; ``inf`` when not given).
-    """
-
-    name: str
-    kind: str
-    index: int
-    idx_q: int
-    idx_v: int
-    lower: float
-    upper: float
-    velocity_limit: float
-    effort_limit: float
-
-    @property
-    def unit(self) -> str:
-        """Unit of the joint's position: ``"rad"`` or ``"m"``."""
-        return "m" if self.kind == "prismatic" else "rad"
-
-    @property
-    def effort_unit(self) -> str:
-        """Unit of the joint's effort: ``"N m"`` (torque) or ``"N"`` (force, prismatic)."""
-        return "N" if self.kind == "prismatic" else "N m"
-
-    @property
-    def angular(self) -> bool:
-        """True for revolute and continuous joints (positions in rad)."""
-        return self.kind != "prismatic"
 
 
 @dataclass(eq=False)
@@ -262,101 +202,28 @@ def load_robot(
     path = absolute_path(urdf, "URDF", ModelError)
     if text is None:
         text = read_text_file(path, "URDF", MAX_URDF_BYTES, ModelError)
-    try:
-        checked = check_urdf_xml(text)
-    except ModelError as exc:
-        raise ModelError(str(exc), urdf=str(path)) from None
-    error: RuntimeError | ValueError | None
-    with parser_messages() as messages:
-        try:  # the checked tree, written out again: Pinocchio loads what was checked
-            model = pin.buildModelFromXML(checked.text, pin.JointModelFreeFlyer())
-        except (RuntimeError, ValueError) as exc:
-            error = exc
-        else:
-            error = None
-    if error is not None:
-        said = next((m for m in messages if m.startswith("Error:")), "")
-        said = f"; urdfdom: {said.removeprefix('Error:').strip()}" if said else ""
-        raise ModelError(f"Pinocchio cannot parse it ({error}{said})", urdf=str(path)) from None
-
-    model.gravity = pin.Motion.Zero()  # free flight: no gravity acts on the system
-    joints = _joints(model, path)
-    try:
-        check_built_model(model, checked)
-    except ModelError as exc:
-        raise ModelError(str(exc), urdf=str(path)) from None
-
-    frames = [f.name for f in model.frames if f.type == pin.FrameType.BODY]
+    parsed = parsed_urdf(text, path)
     if end_effector is None:
-        candidates = end_effector_candidates(model)
-        if len(candidates) > 1:
-            raise AmbiguousEndEffectorError(candidates, str(path))
-        names: tuple[str, ...] = (candidates[0],)
+        names: tuple[str, ...] = (parsed.default_end_effector(path),)
     else:
         names = (end_effector,) if isinstance(end_effector, str) else tuple(end_effector)
     if not names or len(set(names)) != len(names):
         raise ModelError(f"end effectors must be distinct frame names, got {list(names)}")
     for name in names:
-        if name not in frames:
-            raise UnknownNameError("end-effector frame", name, frames)
+        if name not in parsed.frames:
+            raise UnknownNameError("end-effector frame", name, list(parsed.frames))
 
     share = example_robot_data_dir()
     dirs = (path.parent, *(Path(d).resolve() for d in package_dirs), *([share] if share else []))
     return Robot(
         urdf=path,
-        name=checked.name or path.stem,
-        model=model,
-        joints=tuple(joints),
-        base_link=checked.root_link,
+        name=parsed.checked.name or path.stem,
+        model=parsed.model.copy(),  # the kept model is never handed out
+        joints=parsed.joints,
+        base_link=parsed.checked.root_link,
         end_effector=names[0],
         package_dirs=dirs,
-        link_names=checked.links,
+        link_names=parsed.checked.links,
         end_effectors=names,
         urdf_text=text,
     )
-
-
-def _joints(model: pin.Model, path: Path) -> list[Joint]:
-    """The movable joints of a free-flyer model, with their limits (rad or m, per s, N m or N).
-
-    Raises:
-        ModelError: a joint of unsupported type, inverted limits, or no movable joint.
-    """
-    joints = []
-    for index in range(2, model.njoints):
-        jm = model.joints[index]
-        kind = _KINDS.get(jm.shortname())
-        if kind is None:  # pragma: no cover - filtered by the XML check above
-            raise ModelError(f"joint {model.names[index]!r} of unsupported type", urdf=str(path))
-        lower, upper = -math.inf, math.inf
-        if kind != "continuous":
-            lower = float(model.lowerPositionLimit[jm.idx_q])
-            upper = float(model.upperPositionLimit[jm.idx_q])
-            if not lower < upper:
-                raise ModelError(
-                    f"joint {model.names[index]!r} has limits [{lower}, {upper}]; lower must "
-                    "be below upper",
-                    urdf=str(path),
-                )
-        vel = float(model.velocityLimit[jm.idx_v])
-        eff = float(model.effortLimit[jm.idx_v])
-        joints.append(
-            Joint(
-                name=model.names[index],
-                kind=kind,
-                index=index,
-                idx_q=jm.idx_q,
-                idx_v=jm.idx_v,
-                lower=lower,
-                upper=upper,
-                velocity_limit=vel if vel > 0 else math.inf,
-                effort_limit=eff if eff > 0 else math.inf,
-            )
-        )
-    if not joints:
-        raise ModelError(
-            "no movable joint (revolute, continuous or prismatic); a manipulator needs at least "
-            "one",
-            urdf=str(path),
-        )
-    return joints
