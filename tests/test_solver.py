@@ -204,6 +204,71 @@ def test_polishing_a_diverged_candidate_never_reaches_least_squares():
     assert out is beta and np.isnan(r[0])
 
 
+def test_polish_at_takes_polish_steps_and_brings_the_jacobian_at_its_result(spatial_robot):
+    """From a point 0.05 rad RMS off a root of a three-axis goal with six unknowns,
+    :func:`polish_at` (h and its Jacobian evaluated together) lands on the same point as
+    :func:`polish` bit for bit, with the same residual; the Jacobian it brings is the one at
+    that point, against central differences; it integrates fewer paths than polish and the
+    Jacobian a caller then asks for; given ``(h, J)`` at its start, it evaluates none there."""
+    from freefloat.solvers.newton import polish, polish_at
+
+    problem = _spatial_problem(spatial_robot, [2, 2, 2])
+    root = ff.solve(problem).beta
+    direction = np.random.default_rng(5).normal(size=problem.n_free)
+    start = root + 0.05 * np.sqrt(problem.n_free) * direction / np.linalg.norm(direction)
+    before = problem.evaluations
+    beta, r = polish(problem, start, 1e-9)
+    problem.jacobian(beta)
+    old_cost, before = problem.evaluations - before, problem.evaluations
+    found = polish_at(problem, start, 1e-9)
+    new_cost = problem.evaluations - before
+    assert new_cost < old_cost
+    assert np.linalg.norm(r) < 1e-13 < np.linalg.norm(problem.residual(start))
+    assert np.array_equal(found.beta, beta) and np.array_equal(found.residual, r)
+    fd = ref.central_jacobian(problem.residual, found.beta, 1e-5)
+    assert np.abs(found.jacobian - fd).max() <= 1e-6 * np.abs(fd).max()
+    h, jac = problem.residual_and_jacobian(start)
+    before = problem.evaluations
+    again = polish_at(problem, start, 1e-9, evaluated=(h, jac))
+    assert np.array_equal(again.beta, beta)
+    assert problem.evaluations - before == new_cost - 1
+
+
+def test_remembered_residuals_and_jacobians_are_those_computed_afresh(spatial_robot):
+    """A problem remembers the last point's residual and Jacobian, and residuals shared with
+    its copies at other step counts: every value it gives back equals that of a problem built
+    afresh (nothing remembered), including after the caller changed a returned array, on a
+    copy at another step count and on a copy with another goal (which must not reuse them);
+    and a repeated point costs no evaluation."""
+
+    def afresh(steps: int = 64) -> ff.Problem:
+        return _spatial_problem(spatial_robot, [2, 2, 2]).with_steps(steps)
+
+    problem = afresh()
+    beta = np.linspace(-0.1, 0.1, problem.n_free)
+    h, jac = problem.residual_and_jacobian(beta)
+    h[:] = 7.0
+    jac[:] = 7.0
+    before = problem.evaluations
+    again, jac_again = problem.residual_and_jacobian(beta)
+    value = problem.residual(beta)
+    assert problem.evaluations == before
+    h_fresh, jac_fresh = afresh().residual_and_jacobian(beta)
+    assert np.array_equal(again, h_fresh) and np.array_equal(jac_again, jac_fresh)
+    assert np.array_equal(value, afresh().residual(beta))
+    fine = problem.with_steps(256)
+    assert np.array_equal(fine.residual(beta), afresh(256).residual(beta))
+    assert np.array_equal(fine.jacobian(beta), afresh(256).jacobian(beta))
+    before = problem.evaluations
+    assert np.array_equal(problem.with_steps(256).residual(beta), afresh(256).residual(beta))
+    assert problem.evaluations == before  # the copy's value, remembered
+    goal = att.quat_multiply(problem.goal_quaternion, att.quat_exp(np.array([0.0, 0.0, 0.1])))
+    turned = problem.with_goal(goal)
+    assert not np.allclose(turned.residual(beta), value)
+    assert np.array_equal(turned.residual(beta), afresh().with_goal(goal).residual(beta))
+    assert np.array_equal(turned.jacobian(beta), afresh().with_goal(goal).jacobian(beta))
+
+
 def test_broyden_steps_past_a_start_where_the_map_loses_rank(spatial_robot):
     """At the quintic path the three-axis problem's Jacobian has rank 2 (a symmetric path):
     the full inverse would step ~1e10 rad away; Broyden must land on the known root."""

@@ -40,6 +40,8 @@ __all__ = ["EvaluationCounter", "Problem", "wrap_angle"]
 #: Target of the integration error estimate (rad) when choosing the number of steps.
 INTEGRATION_TOLERANCE = 1e-12
 _MIN_STEPS, _MAX_STEPS = 16, 4096
+#: Residual values a problem and its copies at other step counts remember.
+MEMO_SIZE = 16
 
 
 def wrap_angle(angle: float) -> float:
@@ -88,6 +90,9 @@ class Problem:
         default_factory=dict, init=False, repr=False
     )
     _memo: dict[tuple[int, bytes], np.ndarray] = field(default_factory=dict, init=False, repr=False)
+    _evaluated: tuple[tuple[int, bytes], np.ndarray, np.ndarray] | None = field(
+        default=None, init=False, repr=False
+    )
 
     def __post_init__(self) -> None:
         self._use_steps(self.steps)
@@ -105,12 +110,12 @@ class Problem:
     def with_steps(self, steps: int) -> Problem:
         """The same problem on ``steps`` integration steps (a copy; this one is unchanged).
 
-        The copy shares the immutable integration grids and the evaluation counter.
+        The copy shares the immutable integration grids, the evaluation counter and the
+        remembered residuals (kept by step count).
         """
         if int(steps) == self.steps:
             return self
         other = copy.copy(self)
-        other._memo = {}
         other._use_steps(int(steps))
         return other
 
@@ -137,7 +142,7 @@ class Problem:
         goal = np.asarray(goal_quaternion, dtype=float)
         other = copy.copy(self)
         other.goal_quaternion = goal / np.linalg.norm(goal)
-        other._memo = {}
+        other._memo, other._evaluated = {}, None
         return other
 
     @property
@@ -237,14 +242,19 @@ class Problem:
     def residual(self, beta: np.ndarray) -> np.ndarray:
         """``h(beta)`` (rad): 1 equation (planar) or 3 (rotation vector in the goal frame).
 
-        The last few values are remembered (by step count and ``beta``), since the solver asks
-        again for some of them (the quintic path's, the chosen root's).
+        The last few values are remembered (by step count and ``beta``, with those of this
+        problem's copies at other step counts), since the solver asks again for some of them
+        (the quintic path's, the chosen root's, a root's on the grids that certify it). A
+        spatial problem's value at the last point :meth:`residual_and_jacobian` evaluated is
+        taken from there (the same computation).
         """
         key = (self.steps, np.asarray(beta, dtype=float).tobytes())
         if key not in self._memo:
-            if len(self._memo) >= 8:
+            if len(self._memo) >= MEMO_SIZE:
                 self._memo.pop(next(iter(self._memo)))
-            self._memo[key] = self._residual(beta)
+            last = self._evaluated
+            known = last is not None and last[0] == key and not self.planar
+            self._memo[key] = last[1] if known else self._residual(beta)
         return self._memo[key].copy()
 
     def _residual(self, beta: np.ndarray) -> np.ndarray:
@@ -260,8 +270,17 @@ class Problem:
         The Jacobian differentiates the discrete scheme itself: node rates through Pinocchio's
         analytic centroidal derivatives and the path's linear dependence on ``beta``; each
         step's Magnus vector by complex steps; the chain of step rotations with SO(3) right
-        Jacobians; the residual's logarithm with ``pin.Jlog3``.
+        Jacobians; the residual's logarithm with ``pin.Jlog3``. The last point's are
+        remembered (solvers evaluate a root they found again where their next pass starts).
         """
+        key = (self.steps, np.asarray(beta, dtype=float).tobytes())
+        last = self._evaluated
+        if last is None or last[0] != key:
+            last = (key, *self._residual_and_jacobian(beta))
+            self._evaluated = last
+        return last[1].copy(), last[2].copy()
+
+    def _residual_and_jacobian(self, beta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         h, q0, qs0, dq, dqs = self._grid
         if self.planar and self.planar_map is not None:
             assert self.yaw_change is not None

@@ -35,7 +35,7 @@ import quadprog
 
 from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.residual import Problem
-from .newton import polish
+from .newton import polish_at
 from .options import SolveOptions
 from .restore import broken_constraint
 from .rows import RowCache, linear_rows, with_critical
@@ -54,7 +54,8 @@ __all__ = [
 ITERATIONS = 30
 #: Rounds of steps within the constraints, each adding the instants the last result broke.
 ROUNDS = 4
-#: Least-norm steps of one correction onto the root set within the rows.
+#: Points one correction onto the root set within the rows checks: the one it starts from
+#: and those of its least-norm steps.
 CORRECTOR_STEPS = 4
 #: Least-norm corrections :func:`nearest_root_within` tries.
 CORRECTIONS = 3
@@ -113,7 +114,7 @@ def least_norm_root(problem: Problem, beta: np.ndarray, options: SolveOptions) -
         beta, r, jac = trial, r_trial, jac_trial
         if t * float(np.linalg.norm(step)) <= 1e-9 * max(1.0, float(np.linalg.norm(beta))):
             break
-    return polish(problem, beta, options.tolerance)[0]
+    return polish_at(problem, beta, options.tolerance, evaluated=(r, jac)).beta
 
 
 def least_norm_root_within(
@@ -153,9 +154,9 @@ def least_norm_root_within(
     instants = with_critical(problem, active, beta, DEFAULT_INSTANTS)
     spent = 0
     for _ in range(ROUNDS):
-        beta, steps = _steps(problem, active, beta, instants, cache, options.tolerance, settled)
+        point, steps = _steps(problem, active, beta, instants, cache, options.tolerance, settled)
         spent += steps
-        beta = polish(problem, beta, options.tolerance)[0]
+        beta = polish_at(problem, point.beta, options.tolerance, evaluated=point.evaluated).beta
         if not broken_constraint(problem, active, beta):
             return LeastNorm(beta, spent, True)
         instants = with_critical(problem, active, beta, instants)
@@ -192,7 +193,9 @@ def nearest_root_within(
     beta = np.asarray(beta, dtype=float)
     for count in range(1, CORRECTIONS + 1):
         instants = with_critical(problem, active, beta, instants)
-        found = _corrected(problem, active, beta, instants, {}, options.tolerance)
+        cache: RowCache = {}
+        point = _Point.at(problem, active, beta, instants, cache)
+        found = _corrected(problem, active, point, instants, cache, options.tolerance)
         if found is None:
             return LeastNorm(beta, count, False)
         beta = found.beta
@@ -209,8 +212,8 @@ def _steps(
     cache: RowCache,
     tolerance: float,
     settled: float,
-) -> tuple[np.ndarray, int]:
-    """Feasible trust-region SQP steps at fixed instants: (beta, steps).
+) -> tuple[_Point, int]:
+    """Feasible trust-region SQP steps at fixed instants: (the last point, steps).
 
     Each step (the quadratic program of :func:`_step`) is corrected at its end by the
     least-norm step back onto the root set and inside the rows linearised there, then polished
@@ -220,7 +223,7 @@ def _steps(
     """
     here = _Point.at(problem, constraints, beta, instants, cache)
     if here.finite and float(here.g.max(initial=-1.0)) > ROW_SLACK:  # rows added since
-        inside = _corrected(problem, constraints, beta, instants, cache, tolerance)
+        inside = _corrected(problem, constraints, here, instants, cache, tolerance)
         here = here if inside is None else inside
     trust = TRUST
     steps = 0
@@ -230,7 +233,8 @@ def _steps(
         if found is None:
             break
         d = found
-        new = _corrected(problem, constraints, here.beta + d, instants, cache, tolerance)
+        trial = _Point.at(problem, constraints, here.beta + d, instants, cache)
+        new = _corrected(problem, constraints, trial, instants, cache, tolerance)
         before = float(here.beta @ here.beta)
         if new is not None and float(new.beta @ new.beta) < before:
             here, trust = new, min(2.0 * trust, TRUST_MAX)
@@ -238,34 +242,38 @@ def _steps(
                 break
             continue
         trust = 0.5 * float(np.abs(d).max())
-    return here.beta, steps
+    return here, steps
 
 
 def _corrected(
     problem: Problem,
     constraints: Sequence[Constraint],
-    beta: np.ndarray,
+    point: _Point,
     instants: np.ndarray,
     cache: RowCache,
     tolerance: float,
 ) -> _Point | None:
-    """The root near ``beta`` within the rows, or None.
+    """The root near ``point`` (evaluated at ``instants``) within the rows, or None.
 
-    Up to :data:`CORRECTOR_STEPS` least-norm steps onto the root set and inside the rows
-    linearised at the last point, each polished onto ``h = 0``.
+    Least-norm steps onto the root set and inside the rows linearised at the last point, each
+    polished onto ``h = 0``, until a point is a root within the rows; at most
+    :data:`CORRECTOR_STEPS` points are checked (the given one and its steps').
     """
-    for _ in range(CORRECTOR_STEPS):
-        point = _Point.at(problem, constraints, beta, instants, cache)
+    for count in range(1, CORRECTOR_STEPS + 1):
         if not point.finite:
             return None
         if np.linalg.norm(point.r) < tolerance and point.g.max(initial=-1.0) <= ROW_SLACK:
             return point
-        correction = _step(np.zeros_like(beta), point, TRUST_MAX)
+        if count == CORRECTOR_STEPS:
+            return None  # a further step would not be checked
+        correction = _step(np.zeros_like(point.beta), point, TRUST_MAX)
         if correction is None:
             return None
-        beta = polish(problem, beta + correction, tolerance)[0]
-        if not np.all(np.isfinite(beta)):
+        found = polish_at(problem, point.beta + correction, tolerance)
+        if not np.all(np.isfinite(found.beta)):
             return None
+        evaluated = (found.residual, found.jacobian)
+        point = _Point.at(problem, constraints, found.beta, instants, cache, evaluated)
     return None
 
 
@@ -287,12 +295,19 @@ class _Point:
         beta: np.ndarray,
         instants: np.ndarray,
         cache: RowCache,
+        evaluated: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> _Point:
-        r, jac = problem.residual_and_jacobian(beta)
+        """The point at ``beta``; ``evaluated``: ``(h, dh/dbeta)`` there when known."""
+        r, jac = evaluated if evaluated is not None else problem.residual_and_jacobian(beta)
         if not (np.all(np.isfinite(r)) and np.all(np.isfinite(jac))):
             return cls(beta, r, jac, np.full(1, np.inf), np.zeros((1, len(beta))))
         g, g_mat = linear_rows(problem, constraints, beta, instants, cache)
         return cls(beta, r, jac, g, g_mat)
+
+    @property
+    def evaluated(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(h, dh/dbeta)`` at ``beta`` (rad, rad per unit of beta)."""
+        return self.r, self.jac
 
     @property
     def finite(self) -> bool:

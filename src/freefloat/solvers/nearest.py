@@ -108,6 +108,8 @@ def nearest_root(
     names = scenario.robot.joint_names
     offset = np.array([2.0 * np.pi * found.full_turns.get(n, 0) for n in names], dtype=float)
     base = [found.freedom[n] for n in names]
+    # whether the constraints bind: the eager ones, the likelier to, checked first
+    eager_first = sorted(constraints, key=lambda c: c.lazy)
     best = found
     tried: list[str] = []
     for k in LEVELS:
@@ -121,7 +123,7 @@ def nearest_root(
         if start is None:
             break
         candidate, how = least_norm_root(level, start, options), "least-norm SQP"
-        if broken_constraint(level, constraints, candidate):  # the constraints bind
+        if broken_constraint(level, eager_first, candidate):  # the constraints bind
             candidate = _within(level, start, constraints, options, candidate)
             how = "least-norm SQP within the constraints"
         residual = float(np.linalg.norm(level.residual(candidate)))

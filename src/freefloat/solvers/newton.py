@@ -2,12 +2,22 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..problem.residual import Problem
 from .options import POLISH, SolveOptions
 
-__all__ = ["SINGULAR", "broyden", "levenberg_marquardt", "polish", "starts"]
+__all__ = [
+    "SINGULAR",
+    "Polished",
+    "broyden",
+    "levenberg_marquardt",
+    "polish",
+    "polish_at",
+    "starts",
+]
 
 #: Singular values below this fraction of the largest are left out of a Broyden step: a start
 #: where the map loses rank (an exactly symmetric path) would otherwise step ~1e10 rad away.
@@ -38,6 +48,47 @@ def polish(
         if np.linalg.norm(r) < POLISH * tol:
             break
     return beta, r
+
+
+@dataclass(frozen=True)
+class Polished:
+    """A root polished by :func:`polish_at`.
+
+    Attributes:
+        beta: the polished free coefficients (rad or m).
+        residual: ``h(beta)`` (rad).
+        jacobian: ``dh/dbeta`` at ``beta`` (rad per unit of beta).
+    """
+
+    beta: np.ndarray
+    residual: np.ndarray
+    jacobian: np.ndarray
+
+
+def polish_at(
+    problem: Problem,
+    beta: np.ndarray,
+    tol: float,
+    iterations: int = 8,
+    evaluated: tuple[np.ndarray, np.ndarray] | None = None,
+) -> Polished:
+    """:func:`polish`'s iterates, with ``h`` and its Jacobian evaluated together at each.
+
+    For a caller that takes its next step from the result: the Jacobian there comes with it,
+    and no point's residual is integrated twice (once alone, once with the Jacobian).
+    ``evaluated``: ``(h, dh/dbeta)`` at ``beta`` when the caller has them (rad, rad per unit).
+    """
+    r, jac = evaluated if evaluated is not None else problem.residual_and_jacobian(beta)
+    for _ in range(iterations):
+        small = np.linalg.norm(r) < POLISH * tol
+        if small or not np.all(np.isfinite(r)) or not np.all(np.isfinite(jac)):
+            break
+        trial = beta - np.linalg.lstsq(jac, r, rcond=None)[0]
+        r_trial, jac_trial = problem.residual_and_jacobian(trial)
+        if np.linalg.norm(r_trial) >= np.linalg.norm(r):
+            break
+        beta, r, jac = trial, r_trial, jac_trial
+    return Polished(beta, r, jac)
 
 
 def broyden(problem: Problem, beta: np.ndarray, options: SolveOptions) -> tuple[np.ndarray, int]:
