@@ -1,0 +1,155 @@
+"""Speed bounds of the certificate's pairs and leaf pairs from lever arms (:mod:`.levers`).
+
+The certificate (:mod:`freefloat.verify.certificate`) bounds each (interval, pair) from the
+pair's speed. Here that speed comes from the bodies' (or leaves') lever arms about the joints'
+axes instead of their reach: for each interval of the first, uniform pass and each pair, the
+arms that hold over the whole interval are worked out once (from the arms at its two ends)
+and kept as weights ``w`` (N,), so that the pair's speed on the interval, or on any part of it
+with joint-rate bounds ``m`` there, is at most ``m @ w``: a part of an interval has its lever
+arms within the whole interval's, and its rates within its own bounds. The same per leaf pair,
+``W`` (R, N). Both are never above the reach's (``pair_reach``, ``row_reach``).
+"""
+
+from __future__ import annotations
+
+import bisect
+
+import numpy as np
+
+from .instants import Instants
+
+__all__ = ["IntervalLevers"]
+
+
+class IntervalLevers:
+    """Lever-arm speed weights per interval of the first pass and pair, each worked out once.
+
+    Args:
+        store: the certificate's instants (placements, rates).
+        times: the first pass's instants (s), ascending.
+    """
+
+    def __init__(self, store: Instants, times: np.ndarray) -> None:
+        self.store, self.mesh = store, store.mesh
+        self.times = times.tolist()
+        self._axes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._bodies: dict[int, np.ndarray] = {}
+        self._pairs: dict[tuple[int, int], np.ndarray] = {}
+        self._leaves: dict[tuple[int, int], np.ndarray] = {}
+        self._leaf_kept: dict[tuple[int, int], np.ndarray] = {}
+
+    def interval(self, t: float) -> int:
+        """The first pass's interval that holds ``[t, t + dt]`` for a later ``t + dt`` (s)."""
+        return min(bisect.bisect_right(self.times, t) - 1, len(self.times) - 2)
+
+    def first_pass(self, rates: np.ndarray, rows: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+        """(X,) each pair ``pairs[x]``'s speed bound on interval ``rows[x]`` (m/s), at once.
+
+        ``rates``: (K - 1, N) the joint-rate bounds on every interval (rad/s or m/s).
+        """
+        if len(rows) == 0:
+            return np.zeros(0)
+        mesh, levers = self.mesh, self.mesh.levers
+        arms = np.zeros((len(self.times), len(mesh.centres), len(levers.joints)))
+        needed = np.unique(np.concatenate([rows, rows + 1]))
+        arms[needed] = self._all_body_arms(needed)
+        widths = np.diff(np.asarray(self.times))[rows]
+        both = sum(
+            levers.lever(
+                widths,
+                rates[rows],
+                (arms[rows, body][:, None], arms[rows + 1, body][:, None]),
+                levers.centre_t[body][:, None],
+                levers.reach_t[body][:, None],
+            )[:, 0]
+            for body in (mesh.first[pairs], mesh.second[pairs])
+        )
+        weights = both * mesh.free[pairs]
+        for i, k, row in zip(rows.tolist(), pairs.tolist(), weights, strict=True):
+            self._pairs[(i, k)] = row
+        return np.einsum("xn,xn->x", weights, rates[rows])
+
+    def pair(self, i: int, k: int) -> np.ndarray:
+        """(N,) pair k's speed weights on interval i and its parts (m per rad, or 1)."""
+        if (i, k) not in self._pairs:
+            levers, bodies = self.mesh.levers, self.mesh.pair_bodies[k]
+            lever = levers.lever(
+                self._widths(i),
+                self._rates(i),
+                (self._body_arms(i)[bodies][None], self._body_arms(i + 1)[bodies][None]),
+                levers.centre_t[bodies],
+                levers.reach_t[bodies],
+            )[0]
+            self._pairs[(i, k)] = (lever[0] + lever[1]) * self.mesh.free[k]
+        return self._pairs[(i, k)]
+
+    def leaves(self, i: int, k: int) -> np.ndarray:
+        """(R, N) pair k's leaf pairs' speed weights on interval i and its parts."""
+        if (i, k) not in self._leaves:
+            mesh, levers = self.mesh, self.mesh.levers
+            ids, where = mesh.leaves.pair_leaves(k)
+            spheres = len(mesh.centres) + ids
+            ends = tuple(self._leaf_arms(j, k, spheres)[None] for j in (i, i + 1))
+            lever = levers.lever(
+                self._widths(i),
+                self._rates(i),
+                (ends[0], ends[1]),
+                levers.centre_t[spheres],
+                levers.reach_t[spheres],
+            )[0]
+            half = len(where) // 2
+            free = mesh.leaves.row_free[mesh.leaves.rows_of(k)]
+            self._leaves[(i, k)] = (lever[where[:half]] + lever[where[half:]]) * free
+        return self._leaves[(i, k)]
+
+    def _widths(self, i: int) -> np.ndarray:
+        return np.array([self.times[i + 1] - self.times[i]])
+
+    def _rates(self, i: int) -> np.ndarray:
+        """(1, N) the joint-rate bounds on interval i (kept by the store)."""
+        return self.store.rates([self.times[i]], [self.times[i + 1]])
+
+    def _axis(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """The joints' origins and unit axes (N, 3) at the first pass's instant i."""
+        if i not in self._axes:
+            levers, t = self.mesh.levers, self.times[i]
+            found = levers.axes_from(self.store.at(t))
+            if found is None:
+                found = levers.axes_at(self.mesh.frames(self.store.joints[t]))
+            self._axes[i] = found
+        return self._axes[i]
+
+    def _body_arms(self, i: int) -> np.ndarray:
+        """(G, N) every body's lever arms at the first pass's instant i (m)."""
+        if i not in self._bodies:
+            mesh, placements = self.mesh, self.store.at(self.times[i])
+            centres = np.einsum("gij,gj->gi", placements[:, :3, :3], mesh.centres)
+            centres += placements[:, :3, 3]
+            bodies = np.arange(len(centres))
+            self._bodies[i] = mesh.levers.arms(*self._axis(i), centres, bodies)
+        return self._bodies[i]
+
+    def _all_body_arms(self, instants: np.ndarray) -> np.ndarray:
+        """(I, G, N) every body's lever arms at the first pass's ``instants`` (m), kept."""
+        mesh = self.mesh
+        placements = np.array([self.store.at(self.times[i]) for i in instants.tolist()])
+        found = mesh.levers.axes_from(placements)
+        if found is not None:
+            for i, origin, axis in zip(instants.tolist(), *found, strict=True):
+                self._axes[i] = (origin, axis)
+        origins = np.array([self._axis(i)[0] for i in instants.tolist()])[:, None]
+        axes = np.array([self._axis(i)[1] for i in instants.tolist()])[:, None]
+        centres = np.einsum("kgij,gj->kgi", placements[..., :3, :3], mesh.centres)
+        centres += placements[..., :3, 3]
+        bodies = np.arange(len(mesh.centres))[None]
+        arms = mesh.levers.arms(origins, axes, centres, bodies)
+        for i, row in zip(instants.tolist(), arms, strict=True):
+            self._bodies[i] = row
+        return arms
+
+    def _leaf_arms(self, i: int, k: int, spheres: np.ndarray) -> np.ndarray:
+        """(l, N) pair k's leaves' lever arms at the first pass's instant i (m), kept."""
+        if (i, k) not in self._leaf_kept:
+            centres = self.mesh.leaves.pair_centres(self.store.at(self.times[i]), k)
+            self._leaf_kept[(i, k)] = self.mesh.levers.arms(*self._axis(i), centres, spheres)
+        return self._leaf_kept[(i, k)]
