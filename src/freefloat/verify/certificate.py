@@ -8,7 +8,10 @@ single bounding spheres leave open are bounded again from the meshes' leaf spher
 Lipschitz bound. Each item is refined in two steps: exact distances at its two ends (in place
 of the sphere bounds it starts from; one end first, whose distance less the pair's speed over
 the whole interval may settle it without the other), then halving; each new interval's bound
-is the larger of the whole bodies' and the leaf pairs' (:func:`~.interval_bounds.leaf_value`).
+is the larger of the whole bodies' and the leaf pairs' (:func:`_leaf_value`). A pair's speed
+comes from its bodies' reach from the joints, and where that leaves an interval open from
+their lever arms about the joints' axes over the first-pass interval that holds it
+(:mod:`.interval_levers`: never faster).
 """
 
 from __future__ import annotations
@@ -29,7 +32,6 @@ from .clearance import (
 )
 from .hull_agreement import hull_agreement
 from .instants import Instants
-from .interval_bounds import halves, leaf_value
 from .interval_levers import IntervalLevers
 from .motion import PolynomialMotion
 
@@ -87,7 +89,7 @@ def certify(
             break  # this and every later item is within the accuracy of the minimum
         heapq.heappop(heap)
         if not exact:
-            value = _measure_ends((store, levers), least, margin, t0 in even, (t0, t1, k, speed))
+            value = _measure_ends(store, least, margin, t0 in even, (t0, t1, k, speed))
             heapq.heappush(heap, (value, t0, t1, k, True, speed))
             continue
         if bisections >= MAX_BISECTIONS:
@@ -101,9 +103,15 @@ def certify(
         least.note(store.distance(mid, k), mid, k)
         rates = store.rates([t0, mid], [mid, t1])
         threshold = least.value - _tolerance(least.value, margin)
-        values = halves((store, levers), k, (t0, mid, t1), rates, threshold)
-        for a, b, value in ((t0, mid, values[0]), (mid, t1, values[1])):
-            heapq.heappush(heap, (value, a, b, k, True, 0.0))
+        for (a, b), rate in zip(((t0, mid), (mid, t1)), rates, strict=True):
+            speed = float(rate @ mesh.pair_reach[:, k])
+            value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
+            if value < threshold:  # the lever arms' speed (never above the reach's)
+                speed = float(rate @ levers.pair(levers.interval(a), k))
+                value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
+            if value < threshold:
+                value = max(value, _leaf_value(store, k, a, b, rate))
+            heapq.heappush(heap, (value, a, b, k, True, speed))
     if heap:
         lower = min(lower, heap[0][0])
     contained = _contained_at_start(mesh, store)
@@ -141,7 +149,7 @@ def certify(
 
 
 def _measure_ends(
-    work: tuple[Instants, IntervalLevers],
+    store: Instants,
     least: _Least,
     margin: float,
     start_first: bool,
@@ -154,9 +162,8 @@ def _measure_ends(
     intervals). The distance there less the pair's speed over the whole interval bounds it;
     when that settles it, the other end is not measured. Otherwise the mean of both ends
     less half the speed times the width, raised by the leaf pairs' bound
-    (:func:`~.interval_bounds.leaf_value`) when still below the settling threshold.
+    (:func:`_leaf_value`) when still below the settling threshold.
     """
-    store = work[0]
     t0, t1, k, speed = item
     if (t0, k) in store.exact or ((t1, k) not in store.exact and start_first):
         first, other = t0, t1
@@ -169,19 +176,15 @@ def _measure_ends(
         one_end = d - speed * (t1 - t0)
         if one_end < threshold:  # the leaf pairs' own speeds may settle it
             rates = store.rates([t0], [t1])[0]
-            one_end = max(
-                one_end, leaf_value(work, k, (first, other), rates, threshold, one_end=True)
-            )
+            one_end = max(one_end, _leaf_value(store, k, first, other, rates, one_end=True))
         if one_end >= threshold:
             return one_end
     d0, d1 = store.distance(t0, k), store.distance(t1, k)
     least.note(d0, t0, k)
     least.note(d1, t1, k)
     value = 0.5 * (d0 + d1 - speed * (t1 - t0))
-    threshold = least.value - _tolerance(least.value, margin)
-    if value < threshold:  # the leaf pairs may settle it
-        rates = store.rates([t0], [t1])[0]
-        value = max(value, leaf_value(work, k, (t0, t1), rates, threshold))
+    if value < least.value - _tolerance(least.value, margin):  # the leaf pairs may settle it
+        value = max(value, _leaf_value(store, k, t0, t1, store.rates([t0], [t1])[0]))
     return value
 
 
@@ -213,9 +216,10 @@ def _first_pass(
 ) -> tuple[_Least, float, list[_Item]]:
     """The uniform first pass at ``times`` (s): sphere bounds, then leaf bounds where open.
 
-    One exact query where the sphere bounds are least. Returns the smallest measured
-    clearance (m) with its time (s) and pair, the least bound of the intervals settled (m; inf if
-    none), and the heap of the others.
+    One exact query where the sphere bounds are least. The pairs' speeds from their reach,
+    then from their lever arms where the former leave an interval open. Returns the smallest
+    measured clearance (m) with its time (s) and pair, the least bound of the intervals
+    settled (m; inf if none), and the heap of the others.
     """
     store, levers = work
     store.load(times)
@@ -227,7 +231,7 @@ def _first_pass(
     lipschitz = rates @ mesh.pair_reach
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
     settled = lbs >= measured - _tolerance(measured, margin)
-    rows, pairs = np.nonzero(~settled)  # their speeds from lever arms (never higher)
+    rows, pairs = np.nonzero(~settled)  # the lever arms' speeds (never above the reach's)
     lipschitz[rows, pairs] = levers.first_pass(rates, rows, pairs)
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
     settled = lbs >= measured - _tolerance(measured, margin)
@@ -258,6 +262,33 @@ def _first_pass(
     return _Least(measured, when, pair), lower, heap
 
 
+def _leaf_value(
+    store: Instants, k: int, a: float, b: float, rates: np.ndarray, one_end: bool = False
+) -> float:
+    """A lower bound (m) of pair k's distance between ``a`` and ``b`` (s) from its leaf pairs.
+
+    The distance of two bodies clear of each other is the least of the distances between
+    their leaves' triangles. Each of those is at least the exact distance at an end and at
+    least its leaf pair's bound there, and moves no faster than the leaf pair's own speed
+    bound (``rates``: the joint-rate bounds on the interval, rad/s or m/s), which for a leaf
+    near a joint's axis is far below the whole body's. With ``one_end``, only ``a`` is
+    measured: at ``b`` each leaf pair's distance is at least its bound there and at least its
+    value at ``a`` less its speed times the width. With a penetration at a measured end, -inf
+    (the whole body's bound stands alone).
+    """
+    width = abs(b - a)
+    da = store.distance(a, k)
+    db = -math.inf if one_end else store.distance(b, k)
+    if da <= 0.0 or (db <= 0.0 and not one_end):
+        return -math.inf
+    travel = (rates @ store.leaf_reach(k)) * width
+    start = np.maximum(da, store.gaps(a, k))
+    end = np.maximum(store.gaps(b, k), start - travel)
+    if not one_end:
+        end = np.maximum(end, db)
+    return float(np.min(0.5 * (start + end - travel)))
+
+
 def _tighten(
     store: Instants,
     placements: np.ndarray,
@@ -275,7 +306,8 @@ def _tighten(
     both ends with their own speed bounds, the latter only for the items the former leaves
     below ``threshold`` (m). Both hold for the distance, so the interval bound stays one.
     ``placements``: (K, G, 4, 4) the body poses at ``times``; ``spheres``: the single spheres'
-    bounds (K, P) (m) and the joint-rate bounds per interval (K - 1, N) (rad/s or m/s).
+    bounds (K, P) (m), the joint-rate bounds per interval (K - 1, N) (rad/s or m/s) and the
+    pairs' speed bounds per interval (K - 1, P) (m/s).
     """
     mesh, (bounds, rates, lipschitz) = store.mesh, spheres
     rows, pairs = np.nonzero(~settled)

@@ -184,9 +184,9 @@ class MeshClearance:
             np.concatenate([np.arange(count), leaves.owner]),
         )
         leaves.set_reach(reach[:, count:])
-        #: Lever arms of the single spheres (0 to G - 1), then of the leaves (G on).
-        self.levers = Levers(robot, geometry, reach, np.concatenate([self.radii, leaves.radii]))
         reach = reach[:, :count]
+        #: Lever arms of the single spheres about the joints' axes.
+        self.levers = Levers(robot, geometry, reach, self.radii)
         pairs = np.array(self.pairs, dtype=int).reshape(-1, 2)
         #: First and second geometry index of every pair.
         self.first, self.second = pairs[:, 0], pairs[:, 1]

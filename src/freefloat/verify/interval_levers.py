@@ -1,13 +1,13 @@
-"""Speed bounds of the certificate's pairs and leaf pairs from lever arms (:mod:`.levers`).
+"""Speed bounds of the certificate's pairs from their bodies' lever arms (:mod:`.levers`).
 
 The certificate (:mod:`freefloat.verify.certificate`) bounds each (interval, pair) from the
-pair's speed. Here that speed comes from the bodies' (or leaves') lever arms about the joints'
-axes instead of their reach: for each interval of the first, uniform pass and each pair, the
-arms that hold over the whole interval are worked out once (from the arms at its two ends)
-and kept as weights ``w`` (N,), so that the pair's speed on the interval, or on any part of it
-with joint-rate bounds ``m`` there, is at most ``m @ w``: a part of an interval has its lever
-arms within the whole interval's, and its rates within its own bounds. The same per leaf pair,
-``W`` (R, N). Both are never above the reach's (``pair_reach``, ``row_reach``).
+pair's speed. Where the bodies' reach from the joints leaves an interval open, that speed
+comes from their lever arms about the joints' axes instead: for each interval of the first,
+uniform pass and each pair, the arms that hold over the whole interval are worked out once
+(from the arms at its two ends) and kept as weights ``w`` (N,), so that the pair's speed on
+the interval, or on any part of it with joint-rate bounds ``m`` there, is at most ``m @ w``:
+a part of an interval has its lever arms within the whole interval's, and its rates within
+its own bounds. Never above the reach's (``pair_reach``).
 """
 
 from __future__ import annotations
@@ -35,8 +35,6 @@ class IntervalLevers:
         self._axes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._bodies: dict[int, np.ndarray] = {}
         self._pairs: dict[tuple[int, int], np.ndarray] = {}
-        self._leaves: dict[tuple[int, int], np.ndarray] = {}
-        self._leaf_kept: dict[tuple[int, int], np.ndarray] = {}
 
     def interval(self, t: float) -> int:
         """The first pass's interval that holds ``[t, t + dt]`` for a later ``t + dt`` (s)."""
@@ -64,10 +62,7 @@ class IntervalLevers:
             )[:, 0]
             for body in (mesh.first[pairs], mesh.second[pairs])
         )
-        weights = both * mesh.free[pairs]
-        for i, k, row in zip(rows.tolist(), pairs.tolist(), weights, strict=True):
-            self._pairs[(i, k)] = row
-        return np.einsum("xn,xn->x", weights, rates[rows])
+        return np.einsum("xn,xn->x", both * mesh.free[pairs], rates[rows])
 
     def pair(self, i: int, k: int) -> np.ndarray:
         """(N,) pair k's speed weights on interval i and its parts (m per rad, or 1)."""
@@ -82,25 +77,6 @@ class IntervalLevers:
             )[0]
             self._pairs[(i, k)] = (lever[0] + lever[1]) * self.mesh.free[k]
         return self._pairs[(i, k)]
-
-    def leaves(self, i: int, k: int) -> np.ndarray:
-        """(R, N) pair k's leaf pairs' speed weights on interval i and its parts."""
-        if (i, k) not in self._leaves:
-            mesh, levers = self.mesh, self.mesh.levers
-            ids, where = mesh.leaves.pair_leaves(k)
-            spheres = len(mesh.centres) + ids
-            ends = tuple(self._leaf_arms(j, k, spheres)[None] for j in (i, i + 1))
-            lever = levers.lever(
-                self._widths(i),
-                self._rates(i),
-                (ends[0], ends[1]),
-                levers.centre_t[spheres],
-                levers.reach_t[spheres],
-            )[0]
-            half = len(where) // 2
-            free = mesh.leaves.row_free[mesh.leaves.rows_of(k)]
-            self._leaves[(i, k)] = (lever[where[:half]] + lever[where[half:]]) * free
-        return self._leaves[(i, k)]
 
     def _widths(self, i: int) -> np.ndarray:
         return np.array([self.times[i + 1] - self.times[i]])
@@ -146,10 +122,3 @@ class IntervalLevers:
         for i, row in zip(instants.tolist(), arms, strict=True):
             self._bodies[i] = row
         return arms
-
-    def _leaf_arms(self, i: int, k: int, spheres: np.ndarray) -> np.ndarray:
-        """(l, N) pair k's leaves' lever arms at the first pass's instant i (m), kept."""
-        if (i, k) not in self._leaf_kept:
-            centres = self.mesh.leaves.pair_centres(self.store.at(self.times[i]), k)
-            self._leaf_kept[(i, k)] = self.mesh.levers.arms(*self._axis(i), centres, spheres)
-        return self._leaf_kept[(i, k)]

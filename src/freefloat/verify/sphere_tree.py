@@ -229,8 +229,19 @@ class LeafSpheres:
 
         Only that pair's leaves are placed. ``placements``: (G, 4, 4) body poses.
         """
-        rows, _, where, boxed, which, other = self._parts(pair)
-        world = self.pair_centres(placements, pair)
+        if pair not in self._pair_parts:
+            rows = self.rows_of(pair)
+            leaves, where = np.unique(
+                np.concatenate([self.left[rows], self.right[rows]]), return_inverse=True
+            )
+            boxed = np.flatnonzero(self.box_of_row[rows] >= 0)
+            which = self.box_of_row[rows[boxed]]
+            other = np.searchsorted(leaves, self.sphere_leaf[which])
+            self._pair_parts[pair] = (rows, leaves, where, boxed, which, other)
+        rows, leaves, where, boxed, which, other = self._pair_parts[pair]
+        poses = placements[None, self.owner[leaves]]  # (1, l, 4, 4)
+        world = np.einsum("kLij,Lj->kLi", poses[..., :3, :3], self.local[leaves])[0]
+        world += poses[0, :, :3, 3]
         half = len(rows)
         gap = _norms(world[where[:half]] - world[where[half:]])
         gap -= self.reach[rows]
@@ -243,39 +254,6 @@ class LeafSpheres:
             gap[boxed] = _norms(outside) - self.radii[self.sphere_leaf[which]]
         return gap
 
-    def _parts(self, pair: int) -> tuple[np.ndarray, ...]:
-        """What :meth:`pair_gaps` needs of a pair's leaf pairs, worked out when first asked.
-
-        Its rows; its leaves (sorted) and where each row's first then second leaf is among
-        them; the rows with a box, their index in :attr:`box_rows`, and where their other leaf is.
-        """
-        if pair not in self._pair_parts:
-            rows = self.rows_of(pair)
-            leaves, where = np.unique(
-                np.concatenate([self.left[rows], self.right[rows]]), return_inverse=True
-            )
-            boxed = np.flatnonzero(self.box_of_row[rows] >= 0)
-            which = self.box_of_row[rows[boxed]]
-            other = np.searchsorted(leaves, self.sphere_leaf[which])
-            self._pair_parts[pair] = (rows, leaves, where, boxed, which, other)
-        return self._pair_parts[pair]
-
-    def pair_leaves(self, pair: int) -> tuple[np.ndarray, np.ndarray]:
-        """A pair's leaves (sorted), and where each of its rows' first then second leaf is."""
-        parts = self._parts(pair)
-        return parts[1], parts[2]
-
-    def pair_centres(self, placements: np.ndarray, pair: int) -> np.ndarray:
-        """(l, 3) the centres (m, spacecraft frame) of a pair's leaves (:meth:`pair_leaves`).
-
-        ``placements``: (G, 4, 4) body poses.
-        """
-        leaves = self._parts(pair)[1]
-        poses = placements[None, self.owner[leaves]]  # (1, l, 4, 4)
-        world = np.einsum("kLij,Lj->kLi", poses[..., :3, :3], self.local[leaves])[0]
-        world += poses[0, :, :3, 3]
-        return world
-
     def set_reach(self, leaf_reach: np.ndarray) -> None:
         """Take each leaf's reach from every joint, (N, L) (m per rad; 1 for prismatic joints).
 
@@ -284,12 +262,9 @@ class LeafSpheres:
         them as one rigid whole and does not count.
         """
         a, b = leaf_reach[:, self.left], leaf_reach[:, self.right]
-        shared = (a > 0.0) & (b > 0.0)
-        self.row_reach = np.where(shared, 0.0, a + b)
+        self.row_reach = np.where((a > 0.0) & (b > 0.0), 0.0, a + b)
         #: (R, N) the same, one leaf pair a row (contiguous: rows are gathered from it).
         self.row_reach_t = np.ascontiguousarray(self.row_reach.T)
-        #: (R, N) 1 for the joints that count in each leaf pair's speed, else 0.
-        self.row_free = np.ascontiguousarray(1.0 - shared.T)
 
 
 def _norms(vectors: np.ndarray) -> np.ndarray:
