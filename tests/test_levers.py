@@ -17,6 +17,7 @@ import pytest
 
 import freefloat as ff
 from freefloat.robot.collision import known_srdf
+from freefloat.verify.certificate import certify
 from freefloat.verify.clearance import MeshClearance
 from freefloat.verify.instants import Instants
 from freefloat.verify.interval_levers import IntervalLevers
@@ -204,3 +205,19 @@ def test_lever_arms_hold_every_vertex_over_the_interval(name):
                     assert off <= lever[leaf, n] + 1e-12, (name, leaf, n, t)
                     worst = max(worst, off / lever[leaf, n])
     assert worst > 0.98
+
+
+def test_a_joint_without_objects_takes_its_axes_from_pinocchios_frames():
+    """A robot one of whose joints' links carries no object gets its joints' axes from
+    Pinocchio's frames: the same certificate, to rounding, as from the objects' poses."""
+    s, mesh = _scenario("ur5_servicer")
+    motion = _motion(s)
+    with_objects = certify(mesh, motion, 0.01)
+    mesh.levers.carriers = None  # this model only
+    from_frames = certify(mesh, motion, 0.01)
+    assert from_frames.lower_bound == pytest.approx(with_objects.lower_bound, abs=1e-12)
+    assert from_frames.measured == with_objects.measured
+    assert (from_frames.instants, from_frames.bisections) == (
+        with_objects.instants,
+        with_objects.bisections,
+    )

@@ -232,7 +232,7 @@ def _first_pass(
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
     settled = lbs >= measured - _tolerance(measured, margin)
     rows, pairs = np.nonzero(~settled)  # the lever arms' speeds (never above the reach's)
-    lipschitz[rows, pairs] = levers.first_pass(rates, rows, pairs)
+    lipschitz[rows, pairs] = levers.first_pass(rates, (rows, pairs), placements)
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
     settled = lbs >= measured - _tolerance(measured, margin)
     _tighten(

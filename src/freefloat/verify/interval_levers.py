@@ -35,22 +35,35 @@ class IntervalLevers:
         self._axes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._bodies: dict[int, np.ndarray] = {}
         self._pairs: dict[tuple[int, int], np.ndarray] = {}
+        #: (K, G, N) every body's lever arms at every instant, once the first pass asked.
+        self._grid: np.ndarray | None = None
 
     def interval(self, t: float) -> int:
         """The first pass's interval that holds ``[t, t + dt]`` for a later ``t + dt`` (s)."""
         return min(bisect.bisect_right(self.times, t) - 1, len(self.times) - 2)
 
-    def first_pass(self, rates: np.ndarray, rows: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    def first_pass(
+        self, rates: np.ndarray, items: tuple[np.ndarray, np.ndarray], placements: np.ndarray
+    ) -> np.ndarray:
         """(X,) each pair ``pairs[x]``'s speed bound on interval ``rows[x]`` (m/s), at once.
 
-        ``rates``: (K - 1, N) the joint-rate bounds on every interval (rad/s or m/s).
+        ``rates``: (K - 1, N) the joint-rate bounds on every interval (rad/s or m/s);
+        ``items``: (rows, pairs); ``placements``: (K, G, 4, 4) the body poses at the first
+        pass's instants.
         """
+        rows, pairs = items
         if len(rows) == 0:
             return np.zeros(0)
         mesh, levers = self.mesh, self.mesh.levers
-        arms = np.zeros((len(self.times), len(mesh.centres), len(levers.joints)))
-        needed = np.unique(np.concatenate([rows, rows + 1]))
-        arms[needed] = self._all_body_arms(needed)
+        found = levers.axes_from(placements)
+        if found is None:  # a joint's link carries no object: from the joints' frames
+            each = [self._axis(i) for i in range(len(self.times))]
+            found = (np.array([a[0] for a in each]), np.array([a[1] for a in each]))
+        centres = np.einsum("kgij,gj->kgi", placements[..., :3, :3], mesh.centres)
+        centres += placements[..., :3, 3]
+        bodies = np.arange(len(mesh.centres))[None]
+        arms = levers.arms(found[0][:, None], found[1][:, None], centres, bodies)  # (K, G, N)
+        self._grid = arms
         widths = np.diff(np.asarray(self.times))[rows]
         both = sum(
             levers.lever(
@@ -97,6 +110,8 @@ class IntervalLevers:
 
     def _body_arms(self, i: int) -> np.ndarray:
         """(G, N) every body's lever arms at the first pass's instant i (m)."""
+        if self._grid is not None:
+            return self._grid[i]
         if i not in self._bodies:
             mesh, placements = self.mesh, self.store.at(self.times[i])
             centres = np.einsum("gij,gj->gi", placements[:, :3, :3], mesh.centres)
@@ -104,21 +119,3 @@ class IntervalLevers:
             bodies = np.arange(len(centres))
             self._bodies[i] = mesh.levers.arms(*self._axis(i), centres, bodies)
         return self._bodies[i]
-
-    def _all_body_arms(self, instants: np.ndarray) -> np.ndarray:
-        """(I, G, N) every body's lever arms at the first pass's ``instants`` (m), kept."""
-        mesh = self.mesh
-        placements = np.array([self.store.at(self.times[i]) for i in instants.tolist()])
-        found = mesh.levers.axes_from(placements)
-        if found is not None:
-            for i, origin, axis in zip(instants.tolist(), *found, strict=True):
-                self._axes[i] = (origin, axis)
-        origins = np.array([self._axis(i)[0] for i in instants.tolist()])[:, None]
-        axes = np.array([self._axis(i)[1] for i in instants.tolist()])[:, None]
-        centres = np.einsum("kgij,gj->kgi", placements[..., :3, :3], mesh.centres)
-        centres += placements[..., :3, 3]
-        bodies = np.arange(len(mesh.centres))[None]
-        arms = mesh.levers.arms(origins, axes, centres, bodies)
-        for i, row in zip(instants.tolist(), arms, strict=True):
-            self._bodies[i] = row
-        return arms
