@@ -120,8 +120,9 @@ def test_joint_axes_from_the_objects_are_pinocchios(name):
 
 @pytest.mark.parametrize("name", SERVICERS)
 def test_lever_speed_weights_bound_vertex_speeds_and_coal_distance_rates(name):
-    """Along a path, on parts of first-pass intervals: every pair's coal distance changes no
-    faster (finite differences) than its lever-arm bound, and for a pair with a body fixed to
+    """The first pass's speeds at once are those of each pair one by one. Along a path, on parts
+    of first-pass intervals: every pair's coal distance changes no faster (finite
+    differences) than its lever-arm bound, and for a pair with a body fixed to
     the spacecraft every vertex of the other body moves no faster (finite differences of
     Pinocchio's placements); never above the reach's bound, and well below it somewhere."""
     s, mesh = _scenario(name)
@@ -130,6 +131,12 @@ def test_lever_speed_weights_bound_vertex_speeds_and_coal_distance_rates(name):
     times = np.linspace(0.0, motion.duration, 11)
     store.load(times)
     levers, h = IntervalLevers(store, times), 1e-6
+    rates_all = store.rates(times[:-1].tolist(), times[1:].tolist())
+    rows, pairs = np.nonzero(np.ones((len(times) - 1, len(mesh.pairs)), dtype=bool))
+    placements = np.array([store.at(t) for t in times.tolist()])
+    batch = levers.first_pass(rates_all, (rows, pairs), placements)
+    one = [float(rates_all[i] @ levers.pair(i, k)) for i, k in zip(rows, pairs, strict=True)]
+    assert np.allclose(batch, one, rtol=1e-12, atol=1e-15)  # all at once, or one by one
     own = reach_coefficients(s.robot, mesh.geometry, mesh.centres, mesh.radii)
     still = {g for g in range(len(mesh.centres)) if not own[:, g].any()}
     ratios = []

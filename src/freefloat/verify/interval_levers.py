@@ -33,7 +33,6 @@ class IntervalLevers:
         self.store, self.mesh = store, store.mesh
         self.times = times.tolist()
         self._axes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-        self._bodies: dict[int, np.ndarray] = {}
         self._pairs: dict[tuple[int, int], np.ndarray] = {}
         #: (K, G, N) every body's lever arms at every instant, once the first pass asked.
         self._grid: np.ndarray | None = None
@@ -109,13 +108,7 @@ class IntervalLevers:
         return self._axes[i]
 
     def _body_arms(self, i: int) -> np.ndarray:
-        """(G, N) every body's lever arms at the first pass's instant i (m)."""
-        if self._grid is not None:
-            return self._grid[i]
-        if i not in self._bodies:
-            mesh, placements = self.mesh, self.store.at(self.times[i])
-            centres = np.einsum("gij,gj->gi", placements[:, :3, :3], mesh.centres)
-            centres += placements[:, :3, 3]
-            bodies = np.arange(len(centres))
-            self._bodies[i] = mesh.levers.arms(*self._axis(i), centres, bodies)
-        return self._bodies[i]
+        """(G, N) every body's lever arms at the first pass's instant i (m; :meth:`first_pass`)."""
+        if self._grid is None:
+            raise RuntimeError("lever arms asked for before the first pass")
+        return self._grid[i]
