@@ -8,7 +8,10 @@ single bounding spheres leave open are bounded again from the meshes' leaf spher
 Lipschitz bound. Each item is refined in two steps: exact distances at its two ends (in place
 of the sphere bounds it starts from; one end first, whose distance less the pair's speed over
 the whole interval may settle it without the other), then halving; each new interval's bound
-is the larger of the whole bodies' and the leaf pairs' (:func:`_leaf_value`).
+is the larger of the whole bodies' and the leaf pairs' (:func:`_leaf_value`). A pair's speed
+comes from its bodies' reach from the joints, and where that leaves an interval open from
+their lever arms about the joints' axes over the first-pass interval that holds it
+(:mod:`.interval_levers`: never faster).
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from .clearance import (
 )
 from .hull_agreement import hull_agreement
 from .instants import Instants
+from .interval_levers import IntervalLevers
 from .motion import PolynomialMotion
 
 __all__ = ["certify"]
@@ -75,7 +79,8 @@ def certify(
     times = np.linspace(0.0, motion.duration, instants)
     # the first pass's instants of even index: its intervals measure these ends first
     even = {float(t) for t in times[::2]}
-    least, lower, heap = _first_pass(mesh, store, times, margin)
+    levers = IntervalLevers(store, times)
+    least, lower, heap = _first_pass(mesh, (store, levers), times, margin)
     bisections = 0
     exhausted = False
     while heap:
@@ -97,10 +102,14 @@ def certify(
             store.load(_middles(store, heap, t0, t1))
         least.note(store.distance(mid, k), mid, k)
         rates = store.rates([t0, mid], [mid, t1])
+        threshold = least.value - _tolerance(least.value, margin)
         for (a, b), rate in zip(((t0, mid), (mid, t1)), rates, strict=True):
             speed = float(rate @ mesh.pair_reach[:, k])
             value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
-            if value < least.value - _tolerance(least.value, margin):
+            if value < threshold:  # the lever arms' speed (never above the reach's)
+                speed = float(rate @ levers.pair(levers.interval(a), k))
+                value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
+            if value < threshold:
                 value = max(value, _leaf_value(store, k, a, b, rate))
             heapq.heappush(heap, (value, a, b, k, True, speed))
     if heap:
@@ -200,14 +209,19 @@ def _middles(store: Instants, heap: list[_Item], t0: float, t1: float) -> np.nda
 
 
 def _first_pass(
-    mesh: MeshClearance, store: Instants, times: np.ndarray, margin: float
+    mesh: MeshClearance,
+    work: tuple[Instants, IntervalLevers],
+    times: np.ndarray,
+    margin: float,
 ) -> tuple[_Least, float, list[_Item]]:
     """The uniform first pass at ``times`` (s): sphere bounds, then leaf bounds where open.
 
-    One exact query where the sphere bounds are least. Returns the smallest measured
-    clearance (m) with its time (s) and pair, the least bound of the intervals settled (m; inf if
-    none), and the heap of the others.
+    One exact query where the sphere bounds are least. The pairs' speeds from their reach,
+    then from their lever arms where the former leave an interval open. Returns the smallest
+    measured clearance (m) with its time (s) and pair, the least bound of the intervals
+    settled (m; inf if none), and the heap of the others.
     """
+    store, levers = work
     store.load(times)
     placements = np.array([store.at(t) for t in times.tolist()])
     bounds = mesh.sphere_bounds(placements)
@@ -217,11 +231,15 @@ def _first_pass(
     lipschitz = rates @ mesh.pair_reach
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
     settled = lbs >= measured - _tolerance(measured, margin)
+    rows, pairs = np.nonzero(~settled)  # the lever arms' speeds (never above the reach's)
+    lipschitz[rows, pairs] = levers.first_pass(rates, (rows, pairs), placements)
+    lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
+    settled = lbs >= measured - _tolerance(measured, margin)
     _tighten(
         store,
         placements,
         times,
-        (bounds, rates),
+        (bounds, rates, lipschitz),
         lbs,
         settled,
         measured - _tolerance(measured, margin),
@@ -275,7 +293,7 @@ def _tighten(
     store: Instants,
     placements: np.ndarray,
     times: np.ndarray,
-    spheres: tuple[np.ndarray, np.ndarray],
+    spheres: tuple[np.ndarray, np.ndarray, np.ndarray],
     lbs: np.ndarray,
     settled: np.ndarray,
     threshold: float,
@@ -288,9 +306,10 @@ def _tighten(
     both ends with their own speed bounds, the latter only for the items the former leaves
     below ``threshold`` (m). Both hold for the distance, so the interval bound stays one.
     ``placements``: (K, G, 4, 4) the body poses at ``times``; ``spheres``: the single spheres'
-    bounds (K, P) (m) and the joint-rate bounds per interval (K - 1, N) (rad/s or m/s).
+    bounds (K, P) (m), the joint-rate bounds per interval (K - 1, N) (rad/s or m/s) and the
+    pairs' speed bounds per interval (K - 1, P) (m/s).
     """
-    mesh, (bounds, rates) = store.mesh, spheres
+    mesh, (bounds, rates, lipschitz) = store.mesh, spheres
     rows, pairs = np.nonzero(~settled)
     if len(rows) == 0:
         return
@@ -313,8 +332,7 @@ def _tighten(
         bounds[cells, cell_pairs], np.minimum.reduceat(gaps, starts)
     )
     widths = times[rows + 1] - times[rows]
-    lipschitz = np.einsum("in,ni->i", rates[rows], mesh.pair_reach[:, pairs])
-    whole = 0.5 * (tight[rows, pairs] + tight[rows + 1, pairs] - lipschitz * widths)
+    whole = 0.5 * (tight[rows, pairs] + tight[rows + 1, pairs] - lipschitz[rows, pairs] * widths)
     lbs[rows, pairs] = whole
     # the leaf pairs' own bounds, for the items still open: one run of leaf pairs per item
     still = whole < threshold
@@ -338,10 +356,15 @@ def _tighten(
 
 
 def _contained_at_start(mesh: MeshClearance, store: Instants) -> int | None:
-    """A pair one of whose bodies starts inside the other's closed mesh, if any."""
+    """A pair one of whose bodies starts inside the other's closed mesh, if any.
+
+    Inside by the winding number, and clear of the mesh's surface (positive distance: coal
+    measures a mesh's triangles, not its inside). The winding number first: the exact query
+    only for a pair found inside.
+    """
     placements = store.at(0.0)
     near = np.flatnonzero(mesh.sphere_bounds(placements) < 0.0)
     for k in near:
-        if store.distance(0.0, int(k)) > 0.0 and mesh.contained(placements, int(k)):
+        if mesh.contained(placements, int(k)) and store.distance(0.0, int(k)) > 0.0:
             return int(k)
     return None

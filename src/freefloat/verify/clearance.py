@@ -57,6 +57,7 @@ from ..robot.geometry import (
     object_triangles,
 )
 from ..robot.model import Robot
+from .levers import Levers
 from .motion import reach_coefficients
 from .sphere_tree import LeafSpheres
 
@@ -184,6 +185,8 @@ class MeshClearance:
         )
         leaves.set_reach(reach[:, count:])
         reach = reach[:, :count]
+        #: Lever arms of the single spheres about the joints' axes.
+        self.levers = Levers(robot, geometry, reach, self.radii)
         pairs = np.array(self.pairs, dtype=int).reshape(-1, 2)
         #: First and second geometry index of every pair.
         self.first, self.second = pairs[:, 0], pairs[:, 1]
@@ -193,6 +196,9 @@ class MeshClearance:
         shared = (ra > 0.0) & (rb > 0.0)
         #: (N, P): how fast pair p's distance can change per unit rate of joint j (m per rad).
         self.pair_reach = np.where(shared, 0.0, ra + rb)
+        #: (P, 2) each pair's bodies; (P, N) 1 for the joints that count in its speed, else 0.
+        self.pair_bodies = pairs
+        self.free = np.ascontiguousarray(1.0 - shared.T)
         self._data = robot.model.createData()
         self._gdata = pin.GeometryData(geometry)
         self._neutral = pin.neutral(robot.model)
@@ -203,14 +209,24 @@ class MeshClearance:
     def placements(self, joints: np.ndarray) -> np.ndarray:
         """(G, 4, 4) pose of every geometry object in the spacecraft frame at ``joints``."""
         model = self.robot.model
-        if self._slots is None:
-            q = self.robot.configuration(joints)
-        else:  # no continuous joint: the values themselves, written into the neutral pose
-            q = self._neutral.copy()
-            q[self._slots] = joints
-        pin.forwardKinematics(model, self._data, q)
+        pin.forwardKinematics(model, self._data, self._configuration(joints))
         pin.updateGeometryPlacements(model, self._data, self.geometry, self._gdata)
         return np.array([m.homogeneous for m in self._gdata.oMg])
+
+    def _configuration(self, joints: np.ndarray) -> np.ndarray:
+        """Pinocchio's configuration of joint values (rad or m), the spacecraft at the origin."""
+        if self._slots is None:
+            return self.robot.configuration(joints)
+        q = self._neutral.copy()  # no continuous joint: the values themselves, written in
+        q[self._slots] = joints
+        return q
+
+    def frames(self, joints: np.ndarray) -> np.ndarray:
+        """(N, 4, 4) the arm joints' frames in the spacecraft frame at ``joints``."""
+        model = self.robot.model
+        pin.forwardKinematics(model, self._data, self._configuration(joints))
+        oMi = self._data.oMi
+        return np.array([oMi[j].homogeneous for j in self.levers.joints])
 
     def sphere_bounds(self, placements: np.ndarray) -> np.ndarray:
         """(P,) lower bounds of every pair's distance from bounding spheres (m).

@@ -21,7 +21,7 @@ import pinocchio as pin
 
 from ..robot.model import Robot
 
-__all__ = ["PathFunction", "PolynomialMotion", "reach_coefficients"]
+__all__ = ["PathFunction", "PolynomialMotion", "joint_axes", "reach_coefficients"]
 
 #: ``path(t)``: joint values, rates and accelerations, each (K, N), at K times t (s).
 PathFunction = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
@@ -130,10 +130,14 @@ def reach_coefficients(
 ) -> np.ndarray:
     """(N, G): how fast geometry ``g`` can move per unit rate of joint ``j`` (m/s per rad/s).
 
-    Revolute joint: the farthest any point of the geometry can be from the joint's origin (on
-    its axis), whatever the joints between: the sum of the joint offsets down the chain, the
-    travel of prismatic joints on it, and the geometry's offset plus bounding radius.
-    Prismatic joint: 1. Joints that do not move the geometry: 0.
+    Revolute joint: the farthest any point of the geometry can be from the joint's axis,
+    whatever the joints between. For the geometry's own joint, the distance of its
+    bounding-sphere centre from the axis plus the radius (fixed in that joint's frame). For a
+    joint further up the chain, the distance from its axis of the next joint's origin down the
+    chain (fixed in its frame), plus the farthest the geometry can be from that origin: the
+    sum of the joint offsets further down, the travel of prismatic joints on it, and the
+    geometry's offset plus bounding radius. Prismatic joint: 1. Joints that do not move the
+    geometry: 0.
 
     Args:
         robot: the robot.
@@ -152,23 +156,57 @@ def reach_coefficients(
         j.index: max(abs(j.lower), abs(j.upper)) if np.isfinite(j.lower + j.upper) else 0.0
         for j in robot.joints
     }
+    axes = joint_axes(robot)
     objects = list(geometry.geometryObjects)
     owners = np.arange(len(objects)) if owners is None else np.asarray(owners, dtype=int)
     rotations = np.array([obj.placement.rotation for obj in objects]).reshape(-1, 3, 3)
     offsets = np.array([obj.placement.translation for obj in objects]).reshape(-1, 3)
     local = np.einsum("sij,sj->si", rotations[owners], centres) + offsets[owners]
-    # the reach from the geometry's own joint: its offset plus bounding radius
-    own = np.linalg.norm(local, axis=1) + np.asarray(radii, dtype=float)
+    radii = np.asarray(radii, dtype=float)
+    # the farthest from the geometry's own joint's origin: its offset plus bounding radius
+    own = np.linalg.norm(local, axis=1) + radii
     parents = np.array([int(obj.parentJoint) for obj in objects], dtype=int)[owners]
     out = np.zeros((robot.n, len(owners)))
     for start in np.unique(parents).tolist():
         spheres = parents == start
-        added, joint = 0.0, start
+        if start in column and start not in prismatic:  # its own joint: from the axis
+            out[column[start], spheres] = _off_axis(local[spheres], axes[start]) + radii[spheres]
+        elif start in column:
+            out[column[start], spheres] = 1.0
+        added, joint = 0.0, start  # added: the offsets from ``joint``'s origin down the chain
         while joint > 1:  # up the chain to the free flyer
-            if joint in column:
-                out[column[joint], spheres] = 1.0 if joint in prismatic else own[spheres] + added
-            added += float(np.linalg.norm(model.jointPlacements[joint].translation))
-            if joint in prismatic:
-                added += travel[joint]
-            joint = int(model.parents[joint])
+            parent = int(model.parents[joint])
+            step = model.jointPlacements[joint].translation  # joint's origin in parent's frame
+            if parent in column and parent not in prismatic:
+                lever = float(_off_axis(step[None], axes[parent])[0])
+                out[column[parent], spheres] = (
+                    lever + own[spheres] + added + (travel[joint] if joint in prismatic else 0.0)
+                )
+            elif parent in column:
+                out[column[parent], spheres] = 1.0
+            added += float(np.linalg.norm(step)) + (travel[joint] if joint in prismatic else 0.0)
+            joint = parent
     return out
+
+
+def joint_axes(robot: Robot) -> dict[int, np.ndarray]:
+    """Each joint's unit axis in its own frame, by Pinocchio joint index.
+
+    The angular (revolute) or linear (prismatic) part of the joint's motion subspace, read from
+    its local Jacobian column at the neutral configuration (the same at any configuration for
+    one-degree-of-freedom joints).
+    """
+    model = robot.model
+    data, q = model.createData(), pin.neutral(model)
+    out = {}
+    for joint in robot.joints:
+        column = pin.computeJointJacobian(model, data, q, joint.index)[:, joint.idx_v]
+        axis = column[:3] if joint.kind == "prismatic" else column[3:]
+        out[joint.index] = axis / np.linalg.norm(axis)
+    return out
+
+
+def _off_axis(points: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """(S,) distances (m) of points (S, 3) from the line through the origin along unit ``axis``."""
+    along = points @ axis
+    return np.sqrt(np.maximum(np.einsum("si,si->s", points, points) - along * along, 0.0))
