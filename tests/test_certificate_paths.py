@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 import freefloat as ff
-from freefloat.robot import geometry
+from freefloat.robot import geometry, meshes
 from freefloat.robot.collision import CollisionModel, known_srdf
 from freefloat.verify import certificate
 from freefloat.verify.certificate import certify
@@ -168,15 +168,15 @@ def test_shared_geometry_copies_objects_and_primitives_keeps_keys_never_changes_
     objects = list(first.geometryObjects)
     # each mesh's key, kept from parsing, is the one its vertices give now
     assert keys == {
-        i: geometry._mesh_key(o)
+        i: meshes.mesh_key(o)
         for i, o in enumerate(objects)
         if isinstance(o.geometry, coal.BVHModelBase)
     }
     mesh = next(i for i, o in enumerate(objects) if isinstance(o.geometry, coal.BVHModelBase))
     box = next(i for i, o in enumerate(objects) if isinstance(o.geometry, coal.Box))
     # a hull built anew (none kept) leaves the shared mesh as it was
-    monkeypatch.setattr(geometry, "_HULLS", {})
-    hull = geometry.true_hull(objects[mesh])
+    monkeypatch.setattr(meshes, "_HULLS", {})
+    hull = meshes.true_hull(objects[mesh])
     assert hull.num_points > 3
     assert first.geometryObjects[mesh].geometry.convex is None
     assert second.geometryObjects[mesh].geometry.convex is None

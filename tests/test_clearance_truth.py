@@ -16,7 +16,7 @@ import pinocchio as pin
 import pytest
 
 import freefloat as ff
-from freefloat.robot import collision, geometry
+from freefloat.robot import collision, meshes
 from freefloat.robot.collision import (
     RETRY_TOLERANCES,
     CollisionModel,
@@ -342,7 +342,7 @@ def test_the_hull_agreement_catches_a_wrong_hull_on_any_body(direction):
 def _moved_hull(obj: pin.GeometryObject, axis: int, move: float) -> coal.ConvexBase:
     """The true hull of ``obj``'s mesh with its vertices on the side facing +``axis`` (within
     8 mm of it) moved ``move`` (m) along that axis: in (negative) or out (positive)."""
-    vertices, triangles = geometry.object_triangles(obj)
+    vertices, triangles = meshes.object_triangles(obj)
     vertices = vertices.copy()
     top = vertices[:, axis].max()
     vertices[vertices[:, axis] > top - 0.008, axis] += move
@@ -369,7 +369,7 @@ def test_a_hull_of_the_wrong_shape_is_caught_on_every_mesh_body(monkeypatch, mov
     assert shape_excess(mesh, CollisionModel(robot, srdf))[0] <= 1e-12
     bodies = [mesh.geometry.geometryObjects[i].name for i in mesh.meshes]
     assert len(bodies) >= 6
-    honest = geometry.true_hull
+    honest = meshes.true_hull
     for body in bodies:
         for axis in range(3):
 

@@ -42,16 +42,12 @@ from .distance_query import (
     checked_distance,
 )
 from .geometry import (
-    HullInfo,
     add_obstacles,
     bodies_without_geometry,
     checked_pairs,
-    hull_volume,
     load_shared_geometry,
-    mesh_volume,
-    object_triangles,
-    true_hull,
 )
+from .meshes import HullInfo, hull_volume, mesh_volume, object_triangles, true_hull
 from .model import Robot
 from .obstacle import SHAPES, Obstacle
 from .pair_queries import PairQueries

@@ -1,9 +1,9 @@
-"""Collision geometry of a robot as its URDF states it: loading, checked pairs, true hulls.
+"""Collision geometry of a robot as its URDF states it: loading and checked pairs.
 
 Two distance models read the same URDF through this module and nothing else in common:
 
 - the solvers' :class:`~freefloat.robot.collision.CollisionModel`, where every mesh is replaced
-  by its **true convex hull** (qhull through coal, :func:`true_hull`); a hull contains its
+  by its **true convex hull** (qhull through coal, :func:`.meshes.true_hull`); a hull contains its
   mesh, so a clearance measured on hulls is a clearance on the meshes;
 - verification's :class:`~freefloat.verify.clearance.MeshClearance`, on the **original**
   geometry (meshes as bounding-volume hierarchies of their own triangles, primitives as
@@ -17,39 +17,35 @@ two arm bodies that are not parent and child; pairs an SRDF disables (MoveIt's
 The URDF's geometry is parsed once per URDF in a process (each caller gets its own deep copy,
 :func:`load_collision_geometry`; or, for the two models above, which never change a shape,
 its own objects and primitives around the parsed meshes, :func:`load_shared_geometry`), a
-mesh's triangles read once per file (:func:`object_triangles`), and hulls are built once per
-mesh file and scale in a process (:func:`true_hull` keeps them), so a second plan of the same
-robot pays nothing for them.
+mesh's triangles read once per file and hulls built once per mesh file and scale in a process
+(:mod:`.meshes`), so a second plan of the same robot pays nothing for them.
 """
 
 from __future__ import annotations
 
-import hashlib
-import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Generic, TypeVar
 
 import coal
 import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelError
+from .meshes import MeshKey, mesh_key
 from .model import Robot
 
 __all__ = [
     "OBSTACLE_PREFIX",
-    "HullInfo",
-    "MeshKey",
+    "BuiltPerSource",
     "SharedGeometry",
     "add_obstacles",
     "bodies_without_geometry",
     "checked_pairs",
+    "geometry_source",
     "load_collision_geometry",
     "load_shared_geometry",
-    "mesh_volume",
-    "object_triangles",
-    "true_hull",
 ]
 
 
@@ -68,10 +64,6 @@ def load_collision_geometry(robot: Robot) -> pin.GeometryModel:
         ModelError: the URDF's collision geometry cannot be read (a missing or broken mesh).
     """
     return _parsed(robot)[0].clone()
-
-
-#: A mesh object's file, scale and a digest of its vertices (see _mesh_key).
-MeshKey = tuple[str, tuple[float, ...], str]
 
 
 @dataclass(frozen=True)
@@ -108,10 +100,85 @@ def load_shared_geometry(robot: Robot) -> SharedGeometry:
     return SharedGeometry(geometry, dict(keys))
 
 
+def geometry_source(robot: Robot, srdf: str | Path | None) -> tuple:
+    """What ``robot``'s collision models are built from, as a key (hashable).
+
+    The URDF (text, path, package folders), the kinematic tree, and the stamps (path,
+    modification time, size) of its mesh files and of the SRDF. Fresh loads of one unchanged
+    file, and a robot with other masses only, have the same key: the same geometry and pairs.
+    """
+    parsed = _parsed_entry(robot)
+    model = robot.model
+    tree = (
+        tuple(model.names),
+        tuple(int(j) for j in model.parents),
+        tuple(j.shortname() for j in model.joints),
+        b"".join(np.asarray(p.homogeneous).tobytes() for p in model.jointPlacements),
+    )
+    dirs = tuple(str(d) for d in robot.package_dirs)
+    return (robot.urdf_text, str(robot.urdf), dirs, tree, parsed[1], _srdf_stamp(srdf, False))
+
+
+Built = TypeVar("Built")
+
+
+class BuiltPerSource(Generic[Built]):
+    """Models built from a robot's collision geometry, an SRDF and obstacles, kept per source.
+
+    The key is :func:`geometry_source` and the obstacles: a fresh load of an unchanged URDF
+    gets the model built for an earlier load, and a changed URDF, mesh file or SRDF a new
+    one. At most :data:`KEPT` are kept (the oldest goes first).
+
+    Args:
+        build: ``build(robot, srdf, obstacles)``, the model.
+    """
+
+    KEPT = 16
+
+    def __init__(self, build: Callable[[Robot, str | Path | None, Sequence], Built]) -> None:
+        self._build = build
+        self._kept: dict[tuple, Built] = {}
+
+    def get(self, robot: Robot, srdf: str | Path | None, obstacles: Sequence) -> Built:
+        """The model for ``robot`` with ``srdf`` and ``obstacles``, built when not kept."""
+        key = (geometry_source(robot, srdf), tuple(obstacles))
+        if key not in self._kept:
+            if len(self._kept) >= self.KEPT:
+                self._kept.pop(next(iter(self._kept)))
+            self._kept[key] = self._build(robot, srdf, obstacles)
+        return self._kept[key]
+
+
+def _srdf_stamp(srdf: str | Path | None, strict: bool = True) -> tuple[str, int, int] | None:
+    """(path, modification time in ns, size in bytes) of the SRDF file, or None for none.
+
+    Raises:
+        ModelError: with ``strict``, the file does not exist (else its stamp holds -1s).
+    """
+    if srdf is None:
+        return None
+    path = Path(srdf).expanduser().resolve()
+    if not path.is_file():
+        if strict:
+            raise ModelError(f"SRDF file not found: {path}")
+        return (str(path), -1, -1)
+    stat = path.stat()
+    return (str(path), stat.st_mtime_ns, stat.st_size)
+
+
 def _parsed(robot: Robot) -> tuple[pin.GeometryModel, dict[int, MeshKey]]:
+    """The parsed collision geometry of the URDF, kept, with each mesh object's key."""
+    entry = _parsed_entry(robot)
+    return entry[0], entry[2]
+
+
+def _parsed_entry(
+    robot: Robot,
+) -> tuple[pin.GeometryModel, tuple[tuple[str, int, int], ...], dict[int, MeshKey]]:
     """The parsed collision geometry of the URDF, kept (see :func:`load_collision_geometry`).
 
-    With each mesh object's key (by index): the parsed shapes never change.
+    With its mesh files' stamps and each mesh object's key (by index): the parsed shapes
+    never change.
     """
     key = (
         robot.urdf_text,
@@ -136,12 +203,12 @@ def _parsed(robot: Robot) -> tuple[pin.GeometryModel, dict[int, MeshKey]]:
         if len(_PARSED) >= 16:
             _PARSED.pop(next(iter(_PARSED)))
         keys = {
-            i: _mesh_key(obj)
+            i: mesh_key(obj)
             for i, obj in enumerate(geometry.geometryObjects)
             if isinstance(obj.geometry, coal.BVHModelBase)
         }
         parsed = _PARSED[key] = (geometry, _stamps(geometry), keys)
-    return parsed[0], parsed[2]
+    return parsed
 
 
 def _stamps(geometry: pin.GeometryModel) -> tuple[tuple[str, int, int], ...]:
@@ -193,13 +260,8 @@ def checked_pairs(
         ModelError: the SRDF file does not exist.
     """
     model = robot.model
-    path, stamp = None, None
-    if srdf is not None:
-        path = Path(srdf).expanduser().resolve()
-        if not path.is_file():
-            raise ModelError(f"SRDF file not found: {path}")
-        stat = path.stat()
-        stamp = (str(path), stat.st_mtime_ns, stat.st_size)
+    stamp = _srdf_stamp(srdf)
+    path = None if stamp is None else Path(stamp[0])
     objects = list(geometry.geometryObjects)
     key = (
         tuple((o.name, int(o.parentJoint), model.frames[o.parentFrame].name) for o in objects),
@@ -262,109 +324,3 @@ def bodies_without_geometry(robot: Robot, geometry: pin.GeometryModel) -> list[s
         body = bodies[owners.index(joint)] if joint in owners else model.names[joint]
         missing.append(body)
     return missing
-
-
-@dataclass(frozen=True)
-class HullInfo:
-    """How much a link's convex hull adds to its mesh.
-
-    Attributes:
-        name: the geometry object's name.
-        mesh_volume: volume the mesh encloses (m^3); NaN when the mesh is not closed.
-        hull_volume: volume of its convex hull (m^3).
-    """
-
-    name: str
-    mesh_volume: float
-    hull_volume: float
-
-    @property
-    def extra_fraction(self) -> float:
-        """The hull's extra volume as a fraction of the mesh's (1), NaN when unknown."""
-        if not (math.isfinite(self.mesh_volume) and self.mesh_volume > 0.0):
-            return math.nan
-        return self.hull_volume / self.mesh_volume - 1.0
-
-
-#: True hulls by mesh file, scale and vertices, built once in a process.
-_HULLS: dict[MeshKey, coal.ConvexBase] = {}
-
-
-def _mesh_key(obj: pin.GeometryObject) -> MeshKey:
-    """A mesh object's file, scale and a digest of the vertices it was read with.
-
-    A mesh file changed on disk (between two plans, or while one is made) never meets the
-    cached hull or triangles of its former content.
-    """
-    vertices = np.ascontiguousarray(np.array(obj.geometry.vertices(), dtype=float))
-    digest = hashlib.sha256(vertices.tobytes()).hexdigest()
-    return str(obj.meshPath), tuple(float(s) for s in obj.meshScale), digest
-
-
-def true_hull(obj: pin.GeometryObject, key: MeshKey | None = None) -> coal.ConvexBase:
-    """The real convex hull (qhull, coal ``buildConvexHull(True, "Qt")``) of a mesh object.
-
-    Remembered per mesh file, scale and vertices (``key``: the object's, if known, as
-    :func:`load_shared_geometry` gives it). Never ``buildConvexRepresentation``: for a
-    non-convex mesh that keeps the mesh's own faces, and GJK's support search on it stops at
-    local maxima.
-    """
-    key = _mesh_key(obj) if key is None else key
-    if key not in _HULLS:
-        shape = obj.geometry.clone()  # the object's own shape is left as it is
-        shape.buildConvexHull(True, "Qt")
-        _HULLS[key] = shape.convex
-    return _HULLS[key]
-
-
-def mesh_triangles(shape: coal.BVHModelBase) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (V, 3) (m) and triangles (F, 3) (vertex indices) of a coal mesh."""
-    vertices = np.array(shape.vertices(), dtype=float).reshape(-1, 3)
-    triangles = np.array(
-        [[t[0], t[1], t[2]] for t in (shape.tri_indices(i) for i in range(shape.num_tris))],
-        dtype=int,
-    ).reshape(-1, 3)
-    return vertices, triangles
-
-
-def object_triangles(
-    obj: pin.GeometryObject, key: MeshKey | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`mesh_triangles` of a mesh object, read once per mesh file, scale and vertices.
-
-    ``key``: as for :func:`true_hull`. The arrays are shared between callers, so they are
-    read-only.
-    """
-    key = _mesh_key(obj) if key is None else key
-    if key not in _TRIANGLES:
-        vertices, triangles = mesh_triangles(obj.geometry)
-        vertices.setflags(write=False)
-        triangles.setflags(write=False)
-        _TRIANGLES[key] = (vertices, triangles)
-    return _TRIANGLES[key]
-
-
-#: Triangles per mesh file, scale and vertices (see object_triangles).
-_TRIANGLES: dict[MeshKey, tuple[np.ndarray, np.ndarray]] = {}
-
-
-def mesh_volume(vertices: np.ndarray, triangles: np.ndarray) -> float:
-    """Volume (m^3) a closed triangle mesh encloses (divergence theorem); NaN if not closed.
-
-    A mesh is closed when every edge is shared by exactly two triangles.
-    """
-    pairs = (triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]])
-    edges = np.sort(np.concatenate(pairs), axis=1)
-    _, counts = np.unique(edges, axis=0, return_counts=True)
-    if len(counts) == 0 or not np.all(counts == 2):
-        return math.nan
-    a, b, c = (vertices[triangles[:, k]] for k in range(3))
-    return abs(float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6.0)
-
-
-def hull_volume(hull: coal.ConvexBase) -> float:
-    """Volume of a coal convex hull (m^3), from its points (qhull through scipy)."""
-    from scipy.spatial import ConvexHull  # when needed: it costs start-up time
-
-    points = np.array(hull.points(), dtype=float).reshape(-1, 3)
-    return float(ConvexHull(points).volume)

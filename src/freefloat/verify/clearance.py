@@ -50,12 +50,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..robot.collision import CollisionModel, Obstacle, checked_distance
-from ..robot.geometry import (
-    add_obstacles,
-    checked_pairs,
-    load_shared_geometry,
-    object_triangles,
-)
+from ..robot.geometry import add_obstacles, checked_pairs, load_shared_geometry
+from ..robot.meshes import object_triangles
 from ..robot.model import Robot
 from .levers import Levers
 from .motion import reach_coefficients
@@ -342,7 +338,7 @@ def _mesh_sphere(vertices: np.ndarray) -> tuple[np.ndarray, float]:
     """Centre of a mesh's vertex box and its farthest vertex's distance (m).
 
     Kept per vertex array when the array is shared and never written
-    (:func:`~freefloat.robot.geometry.object_triangles`'s).
+    (:func:`~freefloat.robot.meshes.object_triangles`'s).
     """
     kept = _SPHERES.get(id(vertices))
     if kept is not None and kept[0] is vertices:

@@ -13,10 +13,9 @@ Two checks for a plan kept clear (:mod:`freefloat.verify.clearance`):
 
 from __future__ import annotations
 
-import weakref
-
 from ..plans.guarantees import Check
 from ..problem.constraints.clearance import Clearance
+from ..robot.geometry import BuiltPerSource
 from ..robot.model import Robot
 from .certificate import certify
 from .clearance import HULL_TOLERANCE, ClearanceCertificate, MeshClearance
@@ -30,15 +29,11 @@ TOLERANCE = 1e-6
 
 
 def mesh_clearance(robot: Robot, constraint: Clearance) -> MeshClearance:
-    """The original-geometry model of the pairs a clearance constraint checks (built once)."""
-    models = _MODELS.setdefault(robot, {})
-    key = (
-        None if constraint.model.srdf is None else str(constraint.model.srdf),
-        constraint.model.obstacles,
-    )
-    if key not in models:
-        models[key] = MeshClearance(robot, constraint.model.srdf, constraint.model.obstacles)
-    return models[key]
+    """The original-geometry model of the pairs a clearance constraint checks.
+
+    Built once per source in a process (:class:`~freefloat.robot.geometry.BuiltPerSource`).
+    """
+    return _MODELS.get(robot, constraint.model.srdf, constraint.model.obstacles)
 
 
 def clearance_certificate(
@@ -67,4 +62,5 @@ def clearance_checks(robot: Robot, constraint: Clearance, path: FilePath) -> lis
     ]
 
 
-_MODELS: weakref.WeakKeyDictionary[Robot, dict[tuple, MeshClearance]] = weakref.WeakKeyDictionary()
+#: Original-geometry models per source (URDF, kinematic tree, mesh files, SRDF, obstacles).
+_MODELS: BuiltPerSource[MeshClearance] = BuiltPerSource(MeshClearance)

@@ -13,7 +13,6 @@ record (:data:`SAFETY_RECORDED`), not by a constraint record.
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Protocol
@@ -21,6 +20,7 @@ from typing import Any, Protocol
 from ...errors import InputError, UnknownNameError
 from ...plugins import Registry, plugin_class
 from ...robot.collision import CollisionModel, Obstacle, collision_model, known_srdf
+from ...robot.geometry import BuiltPerSource
 from ...robot.model import Robot
 from .base import Constraint
 from .clearance import Clearance
@@ -136,7 +136,7 @@ def clearance_constraint(
 ) -> Clearance | None:
     """Clearance of ``margin`` (m) on the robot's collision model; None when it has no pairs.
 
-    The collision model (SRDF pairs removed, obstacles added) is built once per robot.
+    The collision model (SRDF pairs removed, obstacles added) is built once per source.
     """
     model = cached_collision_model(robot, srdf, obstacles)
     return Clearance(model, margin) if model.n_pairs else None
@@ -145,15 +145,14 @@ def clearance_constraint(
 def cached_collision_model(
     robot: Robot, srdf: str | Path | None, obstacles: Sequence[Obstacle]
 ) -> CollisionModel:
-    """The robot's collision model with an SRDF's pairs removed and obstacles added, built once."""
-    models = _MODELS.setdefault(robot, {})
-    key = (None if srdf is None else str(srdf), tuple(obstacles))
-    if key not in models:
-        models[key] = collision_model(robot, srdf, obstacles)
-    return models[key]
+    """The robot's collision model with an SRDF's pairs removed and obstacles added.
+
+    Built once per source in a process (:class:`~freefloat.robot.geometry.BuiltPerSource`):
+    fresh loads of one unchanged URDF share it. Its distances do not depend on what was asked
+    before (its kept bounds change only which pairs a query measures).
+    """
+    return _MODELS.get(robot, srdf, obstacles)
 
 
-#: Collision models per robot (by SRDF and obstacles), built once; entries go with the robot.
-_MODELS: weakref.WeakKeyDictionary[
-    Robot, dict[tuple[str | None, tuple[Obstacle, ...]], CollisionModel]
-] = weakref.WeakKeyDictionary()
+#: Collision models per source (URDF, kinematic tree, mesh files, SRDF, obstacles).
+_MODELS: BuiltPerSource[CollisionModel] = BuiltPerSource(collision_model)

@@ -1,0 +1,137 @@
+"""Meshes of collision geometry: their true convex hulls, triangles and volumes.
+
+A mesh object is known by its file, scale and a digest of its vertices (:func:`mesh_key`):
+hulls (qhull through coal, :func:`true_hull`) and triangles (:func:`object_triangles`) are
+worked out once per key in a process, so a mesh file changed on disk never meets the hull or
+triangles of its former content.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from dataclasses import dataclass
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+__all__ = [
+    "HullInfo",
+    "MeshKey",
+    "hull_volume",
+    "mesh_key",
+    "mesh_triangles",
+    "mesh_volume",
+    "object_triangles",
+    "true_hull",
+]
+
+#: A mesh object's file, scale and a digest of its vertices (see mesh_key).
+MeshKey = tuple[str, tuple[float, ...], str]
+
+
+@dataclass(frozen=True)
+class HullInfo:
+    """How much a link's convex hull adds to its mesh.
+
+    Attributes:
+        name: the geometry object's name.
+        mesh_volume: volume the mesh encloses (m^3); NaN when the mesh is not closed.
+        hull_volume: volume of its convex hull (m^3).
+    """
+
+    name: str
+    mesh_volume: float
+    hull_volume: float
+
+    @property
+    def extra_fraction(self) -> float:
+        """The hull's extra volume as a fraction of the mesh's (1), NaN when unknown."""
+        if not (math.isfinite(self.mesh_volume) and self.mesh_volume > 0.0):
+            return math.nan
+        return self.hull_volume / self.mesh_volume - 1.0
+
+
+#: True hulls by mesh file, scale and vertices, built once in a process.
+_HULLS: dict[MeshKey, coal.ConvexBase] = {}
+
+
+def mesh_key(obj: pin.GeometryObject) -> MeshKey:
+    """A mesh object's file, scale and a digest of the vertices it was read with.
+
+    A mesh file changed on disk (between two plans, or while one is made) never meets the
+    cached hull or triangles of its former content.
+    """
+    vertices = np.ascontiguousarray(np.array(obj.geometry.vertices(), dtype=float))
+    digest = hashlib.sha256(vertices.tobytes()).hexdigest()
+    return str(obj.meshPath), tuple(float(s) for s in obj.meshScale), digest
+
+
+def true_hull(obj: pin.GeometryObject, key: MeshKey | None = None) -> coal.ConvexBase:
+    """The real convex hull (qhull, coal ``buildConvexHull(True, "Qt")``) of a mesh object.
+
+    Remembered per mesh file, scale and vertices (``key``: the object's, if known, as
+    :func:`.geometry.load_shared_geometry` gives it). Never ``buildConvexRepresentation``: for a
+    non-convex mesh that keeps the mesh's own faces, and GJK's support search on it stops at
+    local maxima.
+    """
+    key = mesh_key(obj) if key is None else key
+    if key not in _HULLS:
+        shape = obj.geometry.clone()  # the object's own shape is left as it is
+        shape.buildConvexHull(True, "Qt")
+        _HULLS[key] = shape.convex
+    return _HULLS[key]
+
+
+def mesh_triangles(shape: coal.BVHModelBase) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (V, 3) (m) and triangles (F, 3) (vertex indices) of a coal mesh."""
+    vertices = np.array(shape.vertices(), dtype=float).reshape(-1, 3)
+    triangles = np.array(
+        [[t[0], t[1], t[2]] for t in (shape.tri_indices(i) for i in range(shape.num_tris))],
+        dtype=int,
+    ).reshape(-1, 3)
+    return vertices, triangles
+
+
+def object_triangles(
+    obj: pin.GeometryObject, key: MeshKey | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`mesh_triangles` of a mesh object, read once per mesh file, scale and vertices.
+
+    ``key``: as for :func:`true_hull`. The arrays are shared between callers, so they are
+    read-only.
+    """
+    key = mesh_key(obj) if key is None else key
+    if key not in _TRIANGLES:
+        vertices, triangles = mesh_triangles(obj.geometry)
+        vertices.setflags(write=False)
+        triangles.setflags(write=False)
+        _TRIANGLES[key] = (vertices, triangles)
+    return _TRIANGLES[key]
+
+
+#: Triangles per mesh file, scale and vertices (see object_triangles).
+_TRIANGLES: dict[MeshKey, tuple[np.ndarray, np.ndarray]] = {}
+
+
+def mesh_volume(vertices: np.ndarray, triangles: np.ndarray) -> float:
+    """Volume (m^3) a closed triangle mesh encloses (divergence theorem); NaN if not closed.
+
+    A mesh is closed when every edge is shared by exactly two triangles.
+    """
+    pairs = (triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]])
+    edges = np.sort(np.concatenate(pairs), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    if len(counts) == 0 or not np.all(counts == 2):
+        return math.nan
+    a, b, c = (vertices[triangles[:, k]] for k in range(3))
+    return abs(float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6.0)
+
+
+def hull_volume(hull: coal.ConvexBase) -> float:
+    """Volume of a coal convex hull (m^3), from its points (qhull through scipy)."""
+    from scipy.spatial import ConvexHull  # when needed: it costs start-up time
+
+    points = np.array(hull.points(), dtype=float).reshape(-1, 3)
+    return float(ConvexHull(points).volume)

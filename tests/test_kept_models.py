@@ -1,0 +1,95 @@
+"""Collision models kept per source: shared by fresh loads, rebuilt on a change, history-free."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+from pathlib import Path
+
+import freefloat as ff
+from freefloat.physics import attitude as att
+from freefloat.problem.constraints import Clearance, registry
+from freefloat.problem.constraints.registry import cached_collision_model, scenario_constraints
+from freefloat.robot.collision import known_srdf
+from freefloat.robot.geometry import BuiltPerSource
+from freefloat.robust.inertial import perturbed_robot
+from freefloat.verify import clearance_check
+
+from conftest import ROOT
+
+PANDA = ROOT / "robots" / "scenarios" / "panda_servicer.toml"
+
+
+def _fresh() -> ff.Scenario:
+    return ff.Scenario.from_toml(PANDA)
+
+
+def _models(scenario: ff.Scenario, srdf: Path | None = None):
+    robot = scenario.robot
+    srdf = srdf or known_srdf(robot)
+    model = cached_collision_model(robot, srdf, scenario.safety.obstacles)
+    return model, clearance_check.mesh_clearance(robot, Clearance(model, scenario.safety.margin))
+
+
+def test_fresh_loads_of_one_file_share_the_models_and_a_mass_change_keeps_them():
+    first, second = _fresh(), _fresh()
+    assert first.robot is not second.robot and first.robot.model is not second.robot.model
+    assert _models(first)[0] is _models(second)[0]
+    assert _models(first)[1] is _models(second)[1]
+    link = first.robot.link_names[-1]
+    heavier = perturbed_robot(first.robot, {link: {"mass": 1.1}})  # the same geometry
+    assert heavier.model is not first.robot.model
+    assert cached_collision_model(heavier, known_srdf(first.robot), ()) is (
+        cached_collision_model(first.robot, known_srdf(first.robot), ())
+    )
+
+
+def test_an_edited_srdf_or_another_tree_gets_its_own_models(tmp_path):
+    scenario = _fresh()
+    srdf = tmp_path / "robot.srdf"
+    original = Path(known_srdf(scenario.robot)).read_text()
+    srdf.write_text(original)
+    before = _models(scenario, srdf)
+    assert _models(_fresh(), srdf)[0] is before[0]
+    model = before[0]
+    a, b = model.pairs[0]
+    frames, objects = scenario.robot.model.frames, model.geometry.geometryObjects
+    links = frames[objects[a].parentFrame].name, frames[objects[b].parentFrame].name
+    extra = f'<disable_collisions link1="{links[0]}" link2="{links[1]}" reason="test"/>'
+    srdf.write_text(original.replace("</robot>", extra + "\n</robot>"))
+    os.utime(srdf, ns=(srdf.stat().st_atime_ns, srdf.stat().st_mtime_ns + 10**9))
+    after = _models(_fresh(), srdf)
+    assert after[0] is not before[0] and after[1] is not before[1]
+    assert after[0].n_pairs == before[0].n_pairs - 1 and (a, b) not in after[0].pairs
+    # another kinematic tree from the same text: a joint moved 1 cm
+    moved = _fresh().robot
+    moved.model.jointPlacements[3].translation = moved.model.jointPlacements[3].translation + 0.01
+    assert cached_collision_model(moved, srdf, ()) is not cached_collision_model(
+        _fresh().robot, srdf, ()
+    )
+
+
+def _untimed(plan: ff.Plan) -> str:
+    data = json.loads(plan.to_json())
+    for timing in ("wall_time_s", "solve_time_s", "sample_time_s", "verify_time_s"):
+        data["solver"].pop(timing)
+    return json.dumps(data, sort_keys=True)
+
+
+def test_a_plan_with_the_kept_models_is_the_plan_with_models_built_afresh(monkeypatch):
+    """The kept models carry bounds from earlier plans: which pairs a query measures may
+    differ, never a figure of the plan (byte for byte, timings aside)."""
+    turned = dataclasses.replace(
+        _fresh(),
+        goal_attitude=att.quat_multiply(_fresh().goal_attitude, att.quat_exp([0.0, 0.05, 0.0])),
+    )
+    ff.plan(turned)  # the kept models now carry that plan's bounds
+    kept = _untimed(ff.plan(_fresh()))
+    monkeypatch.setattr(registry, "_MODELS", BuiltPerSource(registry._MODELS._build))
+    monkeypatch.setattr(clearance_check, "_MODELS", BuiltPerSource(clearance_check._MODELS._build))
+    scenario = _fresh()
+    assert any(c.name == "clearance" for c in scenario_constraints(scenario.resolved()))
+    assert _untimed(ff.plan(scenario)) == kept
+    assert math.isfinite(json.loads(kept)["verification"]["checks"][0]["value"])
