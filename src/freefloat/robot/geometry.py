@@ -23,6 +23,7 @@ mesh's triangles read once per file and hulls built once per mesh file and scale
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -217,7 +218,7 @@ def _stamps(geometry: pin.GeometryModel) -> tuple[tuple[str, int, int], ...]:
     for obj in geometry.geometryObjects:
         if obj.meshPath:
             try:
-                stat = Path(obj.meshPath).stat()
+                stat = os.stat(obj.meshPath)
             except OSError:
                 out.append((obj.meshPath, -1, -1))
                 continue
