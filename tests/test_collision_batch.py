@@ -225,3 +225,21 @@ def test_slots_repeated_in_a_batch_and_forgotten_between_batches(monkeypatch):
         joints = start + u * (goal - start) + rng.normal(0.0, 0.05 * (1 + round_ % 3), (12, 7))
         slots = rng.choice([0.0, 0.5, 1.0], 12) if round_ % 2 else np.round(u[:, 0], 1)
         _against_brute_force(model, fresh, joints, slots, gradients=bool(round_ % 2))
+
+
+def test_clearance_at_is_the_smallest_of_every_pair_measured():
+    """The endpoint check measures only the pairs that can be the closest: the same figure and
+    pair as every pair's distance, whatever the model was asked before."""
+    from freefloat.robot.collision import clearance_at
+
+    scenario = ff.Scenario.from_toml(PANDA)
+    robot = scenario.robot
+    model = CollisionModel(robot, known_srdf(robot))
+    rng = np.random.default_rng(11)
+    start, goal = np.asarray(scenario.start), np.asarray(scenario.goal)
+    for _ in range(12):
+        joints = start + rng.uniform(0.0, 1.0) * (goal - start) + rng.normal(0.0, 0.3, 7)
+        model.closest_many(np.repeat(joints[None], 9, axis=0) + 0.05)  # some history
+        every = model.distances(joints).values
+        k = int(np.argmin(every))
+        assert clearance_at(model, joints) == (float(every[k]), model.names[k])

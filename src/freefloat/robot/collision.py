@@ -229,7 +229,11 @@ def collision_model(
 
 
 def clearance_at(model: CollisionModel, joints: Sequence[float] | np.ndarray) -> tuple[float, str]:
-    """Smallest clearance (m) at one configuration and the pair that has it."""
-    values = model.distances(np.asarray(joints, dtype=float)).values
-    k = int(np.argmin(values))
-    return float(values[k]), model.names[k]
+    """Smallest clearance (m) at one configuration and the pair that has it.
+
+    Only the pairs that can be the closest are measured (:meth:`CollisionModel.closest_value`,
+    bounded from their spheres alone): the same figure and pair as with every pair measured.
+    """
+    with model.own_bounds():  # not from the model's earlier queries
+        value, k = model.closest_value(np.asarray(joints, dtype=float))
+    return value, model.names[k]
