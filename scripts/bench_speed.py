@@ -1,11 +1,12 @@
 """Benchmark section (issue 25): speed where users wait, each case a fresh call as a user makes it.
 
 Run through ``scripts/bench.py --speed-only`` (or alone: ``python scripts/bench_speed.py``).
-Every timed case is one ``ff.plan`` of a scenario read afresh from its TOML file (new robot,
-constraints, collision model; only what a user's process keeps between calls is kept: the
-checked and built model per URDF text (each robot gets its own copy), the parsed collision
-geometry and mesh keys per URDF, the hulls and triangles per mesh file, the checked pairs per
-SRDF file and kinematic tree, and the imported modules). Rounds are paired: with and without
+Every timed case is one ``ff.plan`` of a scenario read afresh from its TOML file (new robot
+and constraints; only what a user's process keeps between calls is kept: the checked and built
+model per URDF text (each robot gets its own copy), the parsed collision geometry and mesh keys
+per URDF, the hulls and triangles per mesh file, the checked pairs per SRDF file and kinematic
+tree, the solvers' and verification's collision models per source (URDF, tree, mesh and SRDF
+files, obstacles), and the imported modules). Rounds are paired: with and without
 clearance one after the other in each round (the order alternating), so that both see the same
 load; the tables give medians over the rounds and the median of the per-round ratios.
 

@@ -8,6 +8,8 @@ import math
 import os
 from pathlib import Path
 
+import numpy as np
+
 import freefloat as ff
 from freefloat.physics import attitude as att
 from freefloat.problem.constraints import Clearance, registry
@@ -16,6 +18,7 @@ from freefloat.robot.collision import known_srdf
 from freefloat.robot.geometry import BuiltPerSource
 from freefloat.robust.inertial import perturbed_robot
 from freefloat.verify import clearance_check
+from freefloat.verify.clearance import MeshClearance
 
 from conftest import ROOT
 
@@ -93,3 +96,22 @@ def test_a_plan_with_the_kept_models_is_the_plan_with_models_built_afresh(monkey
     assert any(c.name == "clearance" for c in scenario_constraints(scenario.resolved()))
     assert _untimed(ff.plan(scenario)) == kept
     assert math.isfinite(json.loads(kept)["verification"]["checks"][0]["value"])
+
+
+def test_a_robot_changed_after_its_models_were_kept_changes_no_kept_model(monkeypatch):
+    """The models are built on a copy of the first caller's Pinocchio model: a joint of that
+    robot moved afterwards leaves a fresh load's distances those of models built afresh."""
+    monkeypatch.setattr(registry, "_MODELS", BuiltPerSource(registry._MODELS._build))
+    monkeypatch.setattr(clearance_check, "_MODELS", BuiltPerSource(MeshClearance))
+    first = _fresh()
+    kept, kept_mesh = _models(first)
+    placement = first.robot.model.jointPlacements[3]
+    placement.translation = placement.translation + 0.2
+    first.robot.model.jointPlacements[3] = placement
+    fresh = _fresh().robot
+    assert _models(_fresh()) == (kept, kept_mesh)
+    built = registry.collision_model(fresh, known_srdf(fresh), first.safety.obstacles)
+    joints = np.asarray(_fresh().start, dtype=float)
+    assert np.array_equal(kept.distances(joints).values, built.distances(joints).values)
+    again = MeshClearance(fresh, known_srdf(fresh), first.safety.obstacles)
+    assert np.array_equal(kept_mesh.placements(joints), again.placements(joints))

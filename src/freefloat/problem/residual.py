@@ -253,8 +253,10 @@ class Problem:
             if len(self._memo) >= MEMO_SIZE:
                 self._memo.pop(next(iter(self._memo)))
             last = self._evaluated
-            known = last is not None and last[0] == key and not self.planar
-            self._memo[key] = last[1] if known else self._residual(beta)
+            if last is not None and last[0] == key and not self.planar:
+                self._memo[key] = last[1]
+            else:
+                self._memo[key] = self._residual(beta)
         return self._memo[key].copy()
 
     def _residual(self, beta: np.ndarray) -> np.ndarray:

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Generic, TypeVar
 
@@ -141,12 +141,17 @@ class BuiltPerSource(Generic[Built]):
         self._kept: dict[tuple, Built] = {}
 
     def get(self, robot: Robot, srdf: str | Path | None, obstacles: Sequence) -> Built:
-        """The model for ``robot`` with ``srdf`` and ``obstacles``, built when not kept."""
+        """The model for ``robot`` with ``srdf`` and ``obstacles``, built when not kept.
+
+        A model is built on a copy of the robot's Pinocchio model: the caller may change its
+        own robot afterwards (then it has another source) without touching a kept model.
+        """
         key = (geometry_source(robot, srdf), tuple(obstacles))
         if key not in self._kept:
             if len(self._kept) >= self.KEPT:
                 self._kept.pop(next(iter(self._kept)))
-            self._kept[key] = self._build(robot, srdf, obstacles)
+            own = replace(robot, model=robot.model.copy())
+            self._kept[key] = self._build(own, srdf, obstacles)
         return self._kept[key]
 
 

@@ -300,7 +300,8 @@ def reach_set(
             rather than track.
         confirm: track as the planner does and confirm where it stops (see above); False
             tracks each direction to its budget without the stall check and reports where it
-            got, solved to the intermediate tolerance (``freefloat bounds``).
+            got, solved to the intermediate tolerance on the intermediate grid (``freefloat
+            bounds``; :mod:`.continuation`).
         step: a turn that stops short is confirmed rounded down to a multiple of this (rad;
             0: not rounded), the precision it is reported at.
         jobs: worker processes (1: every direction in this process).

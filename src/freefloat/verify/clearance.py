@@ -189,12 +189,12 @@ class MeshClearance:
         # A joint that moves both bodies of a pair moves them as one rigid whole: it does not
         # change their distance. Only the others count in the pair's speed bound.
         ra, rb = reach[:, self.first], reach[:, self.second]
-        shared = (ra > 0.0) & (rb > 0.0)
+        both = (ra > 0.0) & (rb > 0.0)
         #: (N, P): how fast pair p's distance can change per unit rate of joint j (m per rad).
-        self.pair_reach = np.where(shared, 0.0, ra + rb)
+        self.pair_reach = np.where(both, 0.0, ra + rb)
         #: (P, 2) each pair's bodies; (P, N) 1 for the joints that count in its speed, else 0.
         self.pair_bodies = pairs
-        self.free = np.ascontiguousarray(1.0 - shared.T)
+        self.free = np.ascontiguousarray(1.0 - both.T)
         self._data = robot.model.createData()
         self._gdata = pin.GeometryData(geometry)
         self._neutral = pin.neutral(robot.model)
