@@ -97,3 +97,22 @@ def test_an_ambiguous_default_is_refused_at_every_load_and_a_named_one_taken(tmp
         with pytest.raises(ff.AmbiguousEndEffectorError):
             ff.load_robot(path)
     assert ff.load_robot(path, ["ee", "link4"]).end_effectors == ("ee", "link4")
+
+
+def test_the_parsers_messages_are_logged_at_every_load(caplog, monkeypatch):
+    """A kept parse logs what the parser printed again at each load, as the first parse did."""
+    import dataclasses
+    import logging
+
+    from freefloat.robot import parsed_urdf as kept
+
+    text = PLANAR.read_text()
+    first = parsed_urdf(text, PLANAR)
+    monkeypatch.setitem(
+        kept._PARSED, text, dataclasses.replace(first, messages=("Warning: a line",))
+    )
+    with caplog.at_level(logging.DEBUG, logger="freefloat"):
+        for _ in range(2):
+            caplog.clear()
+            ff.load_robot(PLANAR)
+            assert "URDF parser: Warning: a line" in caplog.text

@@ -5,7 +5,8 @@ model built, the default end effectors): a process that loads the same unchanged
 fresh scenario naming the same file) takes the parsed robot kept for that text. A text that
 fails is parsed (and refused) again each time. The model kept is never handed out: every load
 gets its own copy (:meth:`pinocchio.Model.copy`), so a caller that changes its model (a
-perturbed inertia, say) changes no other robot. Parser messages are logged at the first parse.
+perturbed inertia, say) changes no other robot. The parser's messages are kept with it and
+logged (at DEBUG level) at every load, as at the first.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from pathlib import Path
 import pinocchio as pin
 
 from ..errors import AmbiguousEndEffectorError, ModelError
+from ..progress import LOGGER
 from .built_model import check_built_model
 from .end_effectors import end_effector_candidates
 from .urdf_checks import CheckedUrdf, check_urdf_xml, parser_messages
@@ -95,12 +97,14 @@ class ParsedUrdf:
         model: the Pinocchio model with a free-flyer root joint, no gravity (kept: copy it).
         joints: the movable joints, in Pinocchio's (depth-first) order.
         frames: names of the body frames, in model order.
+        messages: what the parser printed (urdfdom's lines).
     """
 
     checked: CheckedUrdf
     model: pin.Model
     joints: tuple[Joint, ...]
     frames: tuple[str, ...]
+    messages: tuple[str, ...] = ()
 
     @functools.cached_property
     def candidates(self) -> tuple[str, ...]:
@@ -126,10 +130,13 @@ def parsed_urdf(text: str, path: Path) -> ParsedUrdf:
     """
     parsed = _PARSED.get(text)
     if parsed is None:
-        parsed = _parse(text, path)
+        parsed = _parse(text, path)  # its messages logged as the parser printed them
         if len(_PARSED) >= _KEPT:
             _PARSED.pop(next(iter(_PARSED)))
         _PARSED[text] = parsed
+    else:
+        for line in parsed.messages:
+            LOGGER.debug("URDF parser: %s", line)
     return parsed
 
 
@@ -162,6 +169,7 @@ def _parse(text: str, path: Path) -> ParsedUrdf:
         model=model,
         joints=tuple(joints),
         frames=tuple(f.name for f in model.frames if f.type == pin.FrameType.BODY),
+        messages=tuple(messages),
     )
 
 
