@@ -164,12 +164,18 @@ def _srdf_stamp(srdf: str | Path | None, strict: bool = True) -> tuple[str, int,
     if srdf is None:
         return None
     path = Path(srdf).expanduser().resolve()
-    if not path.is_file():
-        if strict:
-            raise ModelError(f"SRDF file not found: {path}")
-        return (str(path), -1, -1)
-    stat = path.stat()
-    return (str(path), stat.st_mtime_ns, stat.st_size)
+    if strict and not path.is_file():
+        raise ModelError(f"SRDF file not found: {path}")
+    return _file_stamp(str(path))
+
+
+def _file_stamp(path: str) -> tuple[str, int, int]:
+    """(path, modification time in ns, size in bytes) of a file; -1s when it cannot be read."""
+    try:
+        stat = os.stat(path)
+    except OSError:
+        return (path, -1, -1)
+    return (path, stat.st_mtime_ns, stat.st_size)
 
 
 def _parsed(robot: Robot) -> tuple[pin.GeometryModel, dict[int, MeshKey]]:
@@ -219,16 +225,7 @@ def _parsed_entry(
 
 def _stamps(geometry: pin.GeometryModel) -> tuple[tuple[str, int, int], ...]:
     """(path, modification time in ns, size in bytes) of every mesh file the model read."""
-    out = []
-    for obj in geometry.geometryObjects:
-        if obj.meshPath:
-            try:
-                stat = os.stat(obj.meshPath)
-            except OSError:
-                out.append((obj.meshPath, -1, -1))
-                continue
-            out.append((obj.meshPath, stat.st_mtime_ns, stat.st_size))
-    return tuple(out)
+    return tuple(_file_stamp(obj.meshPath) for obj in geometry.geometryObjects if obj.meshPath)
 
 
 #: Parsed collision geometry per URDF (see load_collision_geometry), with its mesh files' stamps.
