@@ -153,6 +153,9 @@ def _arrays(batch: InverseDynamicsBatch) -> tuple[np.ndarray, ...]:
     return tuple(getattr(batch, f.name) for f in fields(batch))
 
 
+#: Classical RK4's weights of its four stage slopes (times the step over 6).
+_RK4_WEIGHTS = np.array([1.0, 2.0, 2.0, 1.0])
+
 #: The last batch per robot: sampling and verification ask for the same samples' dynamics.
 _LAST_BATCH: weakref.WeakKeyDictionary[Robot, tuple[bytes, InverseDynamicsBatch]] = (
     weakref.WeakKeyDictionary()
@@ -316,32 +319,35 @@ def replay(
     rate_index = np.array([j.idx_v for j in robot.joints], dtype=int)
     forces = np.zeros((len(table), model.nv))
     forces[:, rate_index] = table
-    n, config, aba, join = robot.n, _Configurations(mmap), pin.aba, np.concatenate
-    # The state y = [joint values (N); velocity (nv)], its rate [joint rates; ABA].
+    n, config, aba = robot.n, _Configurations(mmap), pin.aba
+    # The state y = [joint values (N); velocity (nv)], its rate [joint rates; ABA]; every
+    # stage's state is kept (the base angular rate) and each stage's rate written in place.
     rates_of_y: slice | np.ndarray = n + rate_index
     if rate_index.tolist() == list(range(6, model.nv)):
         rates_of_y = slice(n + 6, n + model.nv)  # a view, not a copy
-    y = join([np.asarray(start_joints, dtype=float), np.zeros(model.nv)])
-    stages: list[np.ndarray] = []  # the state at every RK4 stage, for the base angular rate
+    states = np.empty((steps, 4, n + model.nv))
+    slopes = np.empty((4, n + model.nv))
+    y = np.concatenate([np.asarray(start_joints, dtype=float), np.zeros(model.nv)])
     momentum_max = 0.0 if track_momentum else math.nan
     # A step too long for the motion can blow up; the caller sees non-finite results.
     with np.errstate(over="ignore", invalid="ignore"):
         for k, dt in enumerate(widths.tolist()):
-            half = 0.5 * dt
-            f0, fh, f1 = forces[2 * k], forces[2 * k + 1], forces[2 * k + 2]
-            r1 = join([y[rates_of_y], aba(model, data, config(y[:n]), y[n:], f0)])
-            y2 = y + half * r1
-            r2 = join([y2[rates_of_y], aba(model, data, config(y2[:n]), y2[n:], fh)])
-            y3 = y + half * r2
-            r3 = join([y3[rates_of_y], aba(model, data, config(y3[:n]), y3[n:], fh)])
-            y4 = y + dt * r3
-            r4 = join([y4[rates_of_y], aba(model, data, config(y4[:n]), y4[n:], f1)])
-            stages += (y, y2, y3, y4)
-            y = y + dt / 6.0 * (r1 + 2.0 * (r2 + r3) + r4)
+            stage, f0, fh = states[k], forces[2 * k], forces[2 * k + 1]
+            stage[0] = y
+            for i, (width, force) in enumerate(((0.5 * dt, f0), (0.5 * dt, fh), (dt, fh))):
+                here, slope = stage[i], slopes[i]
+                slope[:n] = here[rates_of_y]
+                slope[n:] = aba(model, data, config(here[:n]), here[n:], force)
+                np.multiply(slope, width, out=stage[i + 1])
+                stage[i + 1] += y
+            here, slope = stage[3], slopes[3]
+            slope[:n] = here[rates_of_y]
+            slope[n:] = aba(model, data, config(here[:n]), here[n:], forces[2 * k + 2])
+            y = y + (dt / 6.0 * _RK4_WEIGHTS) @ slopes
             if track_momentum:
                 momentum = mmap.momentum(config(y[:n]), y[n:])
                 momentum_max = max(momentum_max, float(np.linalg.norm(momentum)))
-    stage_omega = np.array(stages)[:, n + 3 : n + 6].reshape(steps, 4, 3)
+    stage_omega = states[:, :, n + 3 : n + 6]
     with np.errstate(over="ignore", invalid="ignore"):  # a blown-up replay: non-finite, quietly
         quaternion = _rk4_quaternion(np.asarray(start_quaternion_xyzw, float), stage_omega, widths)
     return ReplayResult(
