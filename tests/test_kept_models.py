@@ -115,3 +115,28 @@ def test_a_robot_changed_after_its_models_were_kept_changes_no_kept_model(monkey
     assert np.array_equal(kept.distances(joints).values, built.distances(joints).values)
     again = MeshClearance(fresh, known_srdf(fresh), first.safety.obstacles)
     assert np.array_equal(kept_mesh.placements(joints), again.placements(joints))
+
+
+def test_collision_geometry_is_the_loaded_texts_when_the_file_changes_on_disk(tmp_path):
+    """A robot loaded from a file that is rewritten afterwards keeps the collision geometry of
+    the text it was loaded from (what its models are kept under and its plans carry): the box
+    the original text states, not the one now on disk; a fresh load gets the new box."""
+    from freefloat.robot.geometry import load_collision_geometry
+
+    text = (ROOT / "robots" / "planar_2dof.urdf").read_text()
+    link = ff.load_robot(ROOT / "robots" / "planar_2dof.urdf").link_names[-1]
+    box = '<collision><geometry><box size="{} 0.1 0.1"/></geometry></collision>'
+    marker = f'<link name="{link}">'
+    assert marker in text
+    path = tmp_path / "two_link.urdf"
+    path.write_text(text.replace(marker, marker + box.format(0.3)))
+    loaded = ff.load_robot(path)
+    path.write_text(text.replace(marker, marker + box.format(0.7)))
+    os.utime(path, ns=(path.stat().st_atime_ns, path.stat().st_mtime_ns + 10**9))
+
+    def sizes(robot: ff.Robot) -> list[float]:
+        objects = load_collision_geometry(robot).geometryObjects
+        return [float(2.0 * obj.geometry.halfSide[0]) for obj in objects]
+
+    assert sizes(loaded) == [0.3]
+    assert sizes(ff.load_robot(path)) == [0.7]

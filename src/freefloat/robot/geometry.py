@@ -200,13 +200,18 @@ def _parsed_entry(
     )
     parsed = _PARSED.get(key)
     if parsed is None or parsed[1] != _stamps(parsed[0]):
+        dirs = [str(d) for d in robot.package_dirs]
         try:
-            geometry = pin.buildGeomFromUrdf(
-                robot.model,
-                str(robot.urdf),
-                pin.GeometryType.COLLISION,
-                None,
-                [str(d) for d in robot.package_dirs],
+            # from the text the robot was loaded from, the one the models are kept under (the
+            # file may have changed on disk since); the file for a robot without one
+            geometry = (
+                pin.buildGeomFromUrdfString(
+                    robot.model, robot.urdf_text, pin.GeometryType.COLLISION, None, dirs
+                )
+                if robot.urdf_text
+                else pin.buildGeomFromUrdf(
+                    robot.model, str(robot.urdf), pin.GeometryType.COLLISION, None, dirs
+                )
             )
         except (RuntimeError, ValueError) as exc:
             raise ModelError(
