@@ -154,7 +154,10 @@ class CollisionModel(PairQueries):
         return value, self._gradient(k), k
 
     def closest_many(
-        self, joints: np.ndarray, slots: Sequence[float] | None = None, gradients: bool = False
+        self,
+        joints: np.ndarray,
+        slots: Sequence[float] | np.ndarray | None = None,
+        gradients: bool = False,
     ) -> Closest:
         """:meth:`closest_value` (with ``gradients``: :meth:`closest`) at many joint vectors.
 
