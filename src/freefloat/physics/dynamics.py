@@ -308,17 +308,8 @@ def replay(
     times[0::2], times[1::2] = ends, 0.5 * (ends[:-1] + ends[1:])
     widths = np.diff(ends)
     robot = mmap.robot
-    if callable(torque):
-        table = np.array([torque(float(t)) for t in times])
-    else:
-        table = np.asarray(torque, dtype=float)
-        if table.shape != (2 * steps + 1, robot.n):
-            raise ValueError(
-                f"torque table of shape {table.shape}, need {(2 * steps + 1, robot.n)}"
-            )
     rate_index = np.array([j.idx_v for j in robot.joints], dtype=int)
-    forces = np.zeros((len(table), model.nv))
-    forces[:, rate_index] = table
+    forces = _generalised_forces(mmap, torque, times, rate_index)
     n, config, aba = robot.n, _Configurations(mmap), pin.aba
     # The state y = [joint values (N); velocity (nv)], its rate [joint rates; ABA]; every
     # stage's state is kept (the base angular rate) and each stage's rate written in place.
@@ -357,6 +348,29 @@ def replay(
         momentum_max=momentum_max,
         steps=steps,
     )
+
+
+def _generalised_forces(
+    mmap: MomentumMap,
+    torque: Callable[[float], np.ndarray] | np.ndarray,
+    times: np.ndarray,
+    rate_index: np.ndarray,
+) -> np.ndarray:
+    """(len(times), nv) generalised forces of :func:`replay`'s ``torque`` at ``times`` (s).
+
+    The joint torques (N m or N) in the joints' velocity slots, zero on the base.
+    """
+    if callable(torque):
+        table = np.array([torque(float(t)) for t in times])
+    else:
+        table = np.asarray(torque, dtype=float)
+        if table.shape != (len(times), mmap.robot.n):
+            raise ValueError(
+                f"torque table of shape {table.shape}, need {(len(times), mmap.robot.n)}"
+            )
+    forces = np.zeros((len(table), mmap.model.nv))
+    forces[:, rate_index] = table
+    return forces
 
 
 def _rk4_quaternion(start: np.ndarray, stage_omega: np.ndarray, widths: np.ndarray) -> np.ndarray:
