@@ -45,3 +45,20 @@ def test_no_hint_for_a_file_of_neither_kind(tmp_path, capsys):
     assert main(["verify", str(path)]) == 2
     assert main(["plan", str(path)]) == 2
     assert "looks like" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("name", "text"),
+    [
+        ("README.md", "# freefloat\n\nPlans motions.\n"),
+        ("pyproject.toml", '[project]\nname = "demo"\nversion = "0.1"\n'),
+    ],
+)
+def test_verify_of_markdown_or_other_toml_suggests_no_scenario(tmp_path, capsys, name, text):
+    """Only TOML with a ``robot`` key is called a scenario: a README or a project file that
+    ``freefloat plan`` could not read gets no hint to plan it."""
+    path = tmp_path / name
+    path.write_text(text)
+    assert main(["verify", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "not a plan file, corrupt JSON" in err and "looks like" not in err

@@ -20,6 +20,7 @@ import errno
 import os
 import re
 import stat
+import sys
 import tempfile
 import threading
 from collections.abc import Callable, Iterator
@@ -27,6 +28,11 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from .errors import FileError, FreeFloatError, excerpt
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
 
 __all__ = [
     "absolute_path",
@@ -320,16 +326,26 @@ _TOML_START = re.compile(r"\s*(#|\[\[?\s*[A-Za-z_]|[A-Za-z_][\w.-]*\s*=)")
 def other_kind_hint(path: str | Path, text: str, expected: str) -> str:
     """A hint for a file that failed to parse as ``expected`` but looks like the other kind.
 
-    ``expected``: ``"plan"`` (JSON) or ``"toml"`` (a scenario or sweep file). The file's
-    suffix or its first characters decide; the hint names the command that reads the other
-    kind (``"; it looks like ..."``), or is empty.
+    ``expected``: ``"plan"`` (JSON; ``text`` the whole file) or ``"toml"`` (a scenario or
+    sweep file; ``text`` its start). A would-be plan is called a scenario only when it is
+    TOML with a ``robot`` key (a Markdown or ``pyproject.toml`` file is not); a would-be
+    scenario is called a plan by its suffix or first characters. The hint names the command
+    that reads the other kind (``"; it looks like ..."``), or is empty.
     """
-    suffix = Path(path).suffix.lower()
-    if expected == "plan" and (suffix == ".toml" or _TOML_START.match(text)):
+    if expected == "plan" and _TOML_START.match(text) and _has_robot_key(text):
         return f"; it looks like a scenario file (TOML): freefloat plan {path} plans it"
+    suffix = Path(path).suffix.lower()
     if expected == "toml" and (suffix == ".json" or text.lstrip().startswith("{")):
         return (
             f"; it looks like a plan file (JSON): freefloat verify {path} checks it "
             "(show, plot and export read plans too)"
         )
     return ""
+
+
+def _has_robot_key(text: str) -> bool:
+    """Whether ``text`` is TOML with a top-level ``robot`` key, as every scenario has."""
+    try:
+        return "robot" in tomllib.loads(text)
+    except (tomllib.TOMLDecodeError, ValueError):
+        return False

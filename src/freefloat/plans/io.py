@@ -270,7 +270,7 @@ def read_plan_json(path: str | Path) -> Any:
     except (OSError, UnicodeDecodeError) as exc:
         raise PlanFileError(f"cannot read plan file {path}: {exc}") from None
     except json.JSONDecodeError as exc:
-        hint = other_kind_hint(path, exc.doc[:200], "plan")
+        hint = other_kind_hint(path, exc.doc, "plan")
         raise PlanFileError(f"{path}: not a plan file, corrupt JSON ({exc}){hint}") from None
     except RecursionError:
         raise PlanFileError(f"{path}: not a plan file, JSON nested too deeply") from None
