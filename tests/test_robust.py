@@ -281,7 +281,9 @@ def test_cli_sensitivity_and_correct(tmp_path, worked, capsys):
     measured = np.degrees(zyx_from_quat(replay_attitude(plan, true).quaternion))
     output = tmp_path / "c.json"
     argv = ["correct", str(plan_path), "--base-zyx-deg", *map(str, measured), "-o", str(output)]
+    capsys.readouterr()
     assert main(argv) == 0
+    assert capsys.readouterr().out.startswith("freefloat correct: ")  # not "freefloat plan"
     assert ff.Plan.load(output).base.attitude_error_rad <= 1e-9
     assert main(["correct", str(plan_path), "--base-zyx-deg", "0", "3", "0"]) == 2
     assert "this robot is planar" in capsys.readouterr().err

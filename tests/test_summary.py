@@ -109,3 +109,26 @@ def test_velocity_limit_error_is_printed_in_degrees_per_second():
     assert "rad" not in text and "2.812 s" in text
     metres = ff.VelocityLimitError("slide", 0.5, 0.2, 3.0, "m")
     assert in_degrees(metres) == str(metres)
+
+
+def test_rounding_level_figures_print_as_zero():
+    """An achieved angle of -1e-12 deg prints as 0.000000 (no minus sign), and an excursion
+    beyond a span of 2.5e-14 deg (the extremes' rounding) as 0; a real one as itself."""
+    import dataclasses
+
+    from freefloat.viz.summary import _attitude_table, quality_line
+
+    plan = ff.plan(ff.Scenario.from_toml(ff.default_scenario_path()))
+    base = dataclasses.replace(plan.base, achieved_zyx_deg=[-1e-12, 0.0, -0.0])
+    achieved = _attitude_table(dataclasses.replace(plan, base=base))[-1]
+    assert "-0.000000" not in achieved and achieved.split()[1:] == ["0.000000"] * 3
+    joint = plan.robot.joints[0]
+    for excursion, shown in ((2.54e-14, "0 deg"), (0.25, "0.25 deg")):
+        quality = dataclasses.replace(
+            plan.quality,
+            largest_joint=joint,
+            largest_excursion=excursion,
+            excursion_beyond_span={joint: excursion},
+        )
+        line = quality_line(dataclasses.replace(plan, quality=quality))
+        assert f"span {shown} ({joint}); {joint} {shown}" in line

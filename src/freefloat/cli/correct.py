@@ -55,5 +55,7 @@ def run(args: argparse.Namespace) -> int:
     output = Path(args.output) if args.output else Path(args.plan).with_suffix(".correct.json")
     written = result.save(output)
     print(f"freefloat correct: turns the spacecraft back by {math.degrees(residual):.4g} deg")
-    print(summary(result, written, wall_time_s=time.perf_counter() - args.started))
+    print(
+        summary(result, written, wall_time_s=time.perf_counter() - args.started, command="correct")
+    )
     return 0

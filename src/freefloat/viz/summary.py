@@ -23,6 +23,9 @@ __all__ = ["cartesian_report", "clearance_line", "robot_label", "summary"]
 #: Paths with at most this many free parameters in all also show them as the paper's
 #: monomial coefficients in t (higher degrees would print large cancelling numbers).
 OLD_UNITS_MAX_FREE = 3
+#: Excursions beyond a start-goal span smaller than this (deg or m) are the extremes' rounding
+#: (a path that stays within its spans gives 1e-14 deg or so): printed as 0.
+_RESOLVED_EXCURSION = 1e-9
 
 
 def _attitude_table(p: Plan) -> list[str]:
@@ -32,7 +35,8 @@ def _attitude_table(p: Plan) -> list[str]:
         ("target", p.base.target_zyx_deg),
         ("achieved", p.base.achieved_zyx_deg),
     ):
-        rows.append(f"  {label:<16}" + "".join(f"{a:>14.6f}" for a in angles))
+        # rounded first, so a rounding-level negative prints as 0.000000, not -0.000000
+        rows.append(f"  {label:<16}" + "".join(f"{round(a, 6) + 0.0:>14.6f}" for a in angles))
     return rows
 
 
@@ -53,6 +57,7 @@ def summary(
     wall_time_s: float | None = None,
     timings: dict[str, float] | None = None,
     extra_lines: Sequence[str] = (),
+    command: str = "plan",
 ) -> str:
     """The text summary ``freefloat plan`` prints (angles in degrees, units on every figure).
 
@@ -63,8 +68,9 @@ def summary(
         wall_time_s: the whole command's wall time (s).
         timings: wall time (s) per stage (``solve``, ``sample and verify``...).
         extra_lines: more lines (a Cartesian goal's report), printed after the attitude.
+        command: the command that made the plan, named in the header (``plan``, ``correct``).
     """
-    lines = [f"freefloat plan: {robot_label or Path(p.robot.urdf).name}, T = {p.duration:g} s"]
+    lines = [f"freefloat {command}: {robot_label or Path(p.robot.urdf).name}, T = {p.duration:g} s"]
     lines += _attitude_table(p)
     lines.append(f"  attitude error  {p.base.attitude_error_rad:.3e} rad")
     if p.robustness is not None:
@@ -177,6 +183,7 @@ def quality_line(p: Plan) -> str:
     kinds = dict(zip(p.robot.joints, _kinds(p), strict=True))
 
     def shown(name: str, value: float) -> str:
+        value = value if abs(value) >= _RESOLVED_EXCURSION else 0.0  # rounding, not a swing
         return f"{value:.3g} {'m' if kinds.get(name) == 'prismatic' else 'deg'}"
 
     q = p.quality
