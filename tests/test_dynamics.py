@@ -13,6 +13,8 @@ import freefloat as ff
 from freefloat.cli import main
 from freefloat.verify.checks import joint_torque_function
 
+from conftest import ROOT
+
 
 def test_torques_balance_kinetic_energy(worked_plan, planar_robot):
     """Independent truth: with no external force, dE/dt = tau . qdot (E from Pinocchio's M)."""
@@ -77,6 +79,19 @@ def test_verify_cli_passes_a_good_plan(tmp_path, worked_plan, capsys):
     assert main(["verify", str(path)]) == 0
     out = capsys.readouterr().out
     assert "verification                            passed" in out
+    assert "negative where" not in out  # no path constraint: no note on how to read one
+
+
+def test_verify_cli_says_how_to_read_a_path_constraints_row(tmp_path, capsys):
+    """The UR5 servicer's limits and clearance hold, so their rows are negative (the worst
+    excess over the limit): the table ends with a note that says so."""
+    plan = ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml"))
+    path = plan.save(tmp_path / "p.json")
+    assert main(["verify", str(path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    rows = {line.split()[0]: line.split() for line in lines[2:-3]}
+    assert float(rows["joint_position_limits"][2]) < 0.0 and float(rows["clearance"][2]) < 0.0
+    assert "negative where" in lines[-2] and "beyond the margin" in lines[-1]
 
 
 def test_verify_cli_fails_a_tampered_free_parameter(tmp_path, worked_plan, capsys):

@@ -63,4 +63,9 @@ def run(args: argparse.Namespace) -> int:
             f"{check.error_estimate:>12.1e}  {'ok' if check.passed else 'FAILED'}"
         )
     print(f"  {'verification':<34}{'passed' if result.passed else 'FAILED':>12}")
+    from ..problem.constraints import CONSTRAINTS
+
+    if any(check.name in CONSTRAINTS for check in result.checks):
+        print("  a path constraint's value is its worst excess over its limit, negative where")
+        print("  it holds (clearance -0.09 m: the smallest distance is 0.09 m beyond the margin)")
     return 0 if result.passed else 1
