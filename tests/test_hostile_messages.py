@@ -43,9 +43,11 @@ def test_a_goal_outside_its_limit_is_reported_as_a_limit_not_an_overlap(
     )
     line = _refused(capfd, "plan", scenario, "-o", tmp_path / "p.json")
     assert "goal: joint 'joint2' = 150 deg is outside its limits [-117.972, 120] deg" in line
+    assert line.startswith(f"freefloat: error: {scenario}: goal: ")  # the file, named first
     # the same pose within its limits is an overlap, named as such
     scenario.write_text(scenario.read_text().replace("joint2 = 150.0", "joint2 = 119.0"))
-    assert "overlap" in _refused(capfd, "plan", scenario, "-o", tmp_path / "p.json")
+    overlap = _refused(capfd, "plan", scenario, "-o", tmp_path / "p.json")
+    assert "overlap" in overlap and overlap.startswith(f"freefloat: error: {scenario}: goal")
 
 
 def test_a_scenario_with_a_byte_order_mark_is_read(tmp_path):

@@ -8,7 +8,7 @@ import math
 import time
 from pathlib import Path
 
-from ..errors import InputError, InputLimitError
+from ..errors import CollisionError, InputError, InputLimitError, JointLimitError
 from ..pipeline import plan
 from ..problem.limits import check_samples
 from ..problem.objectives import OBJECTIVES
@@ -125,12 +125,17 @@ def run(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.scenario)
     if args.allow_full_turns:
         scenario = dataclasses.replace(scenario, allow_full_turns=True)
-    result = plan(
-        scenario,
-        SolveOptions(tolerance=tolerance_rad(args)),
-        samples=args.samples,
-        objective=args.objective,
-    )
+    try:
+        result = plan(
+            scenario,
+            SolveOptions(tolerance=tolerance_rad(args)),
+            samples=args.samples,
+            objective=args.objective,
+        )
+    except (JointLimitError, CollisionError) as exc:  # the file's start or goal: named first
+        if scenario.source is not None and str(scenario.source) not in str(exc):
+            exc.args = (f"{scenario.source}: {exc}",)
+        raise
     cartesian = cartesian_report(scenario, result)
     with stage("sensitivity"):
         result = with_robustness(result, scenario.robot)
