@@ -132,3 +132,21 @@ def test_rounding_level_figures_print_as_zero():
         )
         line = quality_line(dataclasses.replace(plan, quality=quality))
         assert f"span {shown} ({joint}); {joint} {shown}" in line
+
+
+def test_the_summary_names_each_path_constraint_and_its_margin(tmp_path, capsys):
+    """A scenario with an end-effector cone: the printed summary lists the cone beside the
+    joint limits, each with the margin verification measured (minus its check's value)."""
+    text = (ROOT / "robots" / "scenarios" / "ur5_servicer.toml").read_text()
+    cone = (
+        "\n[constraints.end_effector_cone]\naxis = [1.0, 0.0, 0.0]\n"
+        "direction = [1.0, 0.0, 0.0]\nhalf_angle_deg = 179.0\n"
+    )
+    scenario = tmp_path / "cone.toml"
+    scenario.write_text(text + cone)
+    out = _plan(tmp_path, capsys, scenario)
+    line = next(x for x in out.splitlines() if x.startswith("  constraints "))
+    plan = ff.Plan.load(tmp_path / "p.json")
+    for name in ("joint_position_limits", "end_effector_cone"):
+        check = next(c for c in plan.verification.checks if c.name == name)
+        assert f"{name} {-check.value:.3g} {check.unit}" in line

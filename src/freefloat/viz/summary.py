@@ -15,6 +15,7 @@ import numpy as np
 
 from ..plans.format import Plan
 from ..plans.versions import MONOMIAL_BASIS
+from ..problem.constraints import CONSTRAINTS
 from ..problem.scenario import Scenario
 from .robustness import robustness_line
 
@@ -83,6 +84,8 @@ def summary(
             f"{v['attitude_independent'].value:.1e} rad, replay "
             f"{v['replay_attitude'].value:.1e} rad, momentum {v['momentum'].value:.1e} kg m^2/s"
         )
+    if constraints := constraints_line(p):
+        lines.append(constraints)
     lines.append(clearance_line(p))
     lines += free_parameter_lines(p)
     if p.feasibility.planar and p.feasibility.yaw_change_bounds_deg is not None:
@@ -125,6 +128,20 @@ def summary(
     if output is not None:
         lines.append(f"  plan            {output}")
     return "\n".join(lines)
+
+
+def constraints_line(p: Plan) -> str:
+    """The path constraints verification checked, with how far inside its limit each stays.
+
+    Clearance has its own line; each margin is in its check's unit. Empty when there are none.
+    """
+    checks = [c for c in p.verification.checks if c.name in CONSTRAINTS and c.name != "clearance"]
+    if not checks:
+        return ""
+    each = ", ".join(
+        f"{c.name} {-c.value:.3g} {c.unit}" if c.passed else f"{c.name} BROKEN" for c in checks
+    )
+    return f"  constraints     held, margin to the limit: {each}"
 
 
 def clearance_line(p: Plan) -> str:
