@@ -40,7 +40,7 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
     p_plan.add_argument(
         "-o",
         "--output",
-        help="plan file to write (default: SCENARIO.plan.json,"
+        help="plan file to write, its folder made if missing (default: SCENARIO.plan.json,"
         " or freefloat-out/plan.json for the worked example)",
     )
     p_plan.add_argument(
