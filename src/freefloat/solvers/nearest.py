@@ -17,7 +17,8 @@ only when the root found without them breaks them, as the search imposes them). 
 is kept only if its path is certified (integration refined, :func:`.certify.certify`), honours
 every constraint and deviates less; the levels stop once the excursion is natural. Planar
 problems keep the search's root (the paper's examples and their roots are unchanged). Budgets
-are counts (:data:`.least_norm.ITERATIONS` steps per level and round).
+are counts (:data:`.least_norm.FREE_ITERATIONS` steps without the constraints per level,
+:data:`.least_norm.ITERATIONS` per round within them).
 """
 
 from __future__ import annotations
