@@ -62,3 +62,20 @@ def test_verify_of_markdown_or_other_toml_suggests_no_scenario(tmp_path, capsys,
     assert main(["verify", str(path)]) == 2
     err = capsys.readouterr().err
     assert "not a plan file, corrupt JSON" in err and "looks like" not in err
+
+
+@pytest.mark.parametrize(
+    ("name", "text"),
+    [
+        ("deep.toml", "a = " + "[" * 100_000 + "]" * 100_000 + "\n"),  # nested past recursion
+        ("big.toml", 'robot = "planar_2dof"\n' + "# padding\n" * 110_000),  # > 1 MB
+    ],
+)
+def test_a_hostile_would_be_scenario_gets_one_line_and_no_hint(tmp_path, capsys, name, text):
+    """A file nested too deeply for the TOML parser, or larger than any scenario may be: the
+    hint is left out (nothing parsed), and the refusal is one line with exit code 2."""
+    path = tmp_path / name
+    path.write_text(text)
+    assert main(["verify", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and "not a plan file" in err and "looks like" not in err

@@ -283,7 +283,12 @@ def test_cli_sensitivity_and_correct(tmp_path, worked, capsys):
     argv = ["correct", str(plan_path), "--base-zyx-deg", *map(str, measured), "-o", str(output)]
     capsys.readouterr()
     assert main(argv) == 0
-    assert capsys.readouterr().out.startswith("freefloat correct: ")  # not "freefloat plan"
+    printed = capsys.readouterr().out
+    assert "freefloat plan:" not in printed  # the summary's header names its own command
+    assert any(
+        line.startswith("freefloat correct: planar_2dof.urdf, T = ")
+        for line in printed.splitlines()
+    )
     assert ff.Plan.load(output).base.attitude_error_rad <= 1e-9
     assert main(["correct", str(plan_path), "--base-zyx-deg", "0", "3", "0"]) == 2
     assert "this robot is planar" in capsys.readouterr().err

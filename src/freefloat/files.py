@@ -343,9 +343,17 @@ def other_kind_hint(path: str | Path, text: str, expected: str) -> str:
     return ""
 
 
+#: Text longer than this (characters) is not parsed for a hint: a scenario file is at most
+#: 1 MB (:data:`~freefloat.problem.limits.MAX_SCENARIO_BYTES`), and a corrupt plan file can be
+#: 200 times that.
+_HINT_PARSE_CHARS = 1_000_000
+
+
 def _has_robot_key(text: str) -> bool:
     """Whether ``text`` is TOML with a top-level ``robot`` key, as every scenario has."""
+    if len(text) > _HINT_PARSE_CHARS:
+        return False
     try:
         return "robot" in tomllib.loads(text)
-    except (tomllib.TOMLDecodeError, ValueError):
+    except (tomllib.TOMLDecodeError, ValueError, RecursionError):  # nested too deeply
         return False

@@ -73,7 +73,7 @@ def plan_robot(plan: Plan) -> Robot:
                 "for it, or move it away to check the plan against the copy it carries"
             )
         robot = load_robot(ref.urdf, ref.frames, text=ref.urdf_text)
-        if text is None:  # gone: collision geometry is read from a file, so give it one
+        if text is None:  # gone: readers that take a path (the page's mesh check) get one
             robot = replace(robot, urdf=_materialised(ref.urdf_text, Path(ref.urdf)))
     else:
         LOGGER.warning(

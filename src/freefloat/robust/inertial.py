@@ -200,8 +200,11 @@ def with_inertials(text: str, changes: Mapping[str, Mapping[str, float]]) -> str
 
 
 def robot_text(robot: Robot) -> str:
-    """The URDF text of a loaded robot (read again from its file)."""
-    return read_text_file(robot.urdf, "URDF", MAX_URDF_BYTES, ModelError)
+    """The URDF text a robot was loaded from (read from its file for one loaded without it).
+
+    The text, not the file as it is now: the file may have changed since.
+    """
+    return robot.urdf_text or read_text_file(robot.urdf, "URDF", MAX_URDF_BYTES, ModelError)
 
 
 def _spatial_inertia(inertial: LinkInertial) -> pin.Inertia:

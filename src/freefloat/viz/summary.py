@@ -133,15 +133,30 @@ def summary(
 def constraints_line(p: Plan) -> str:
     """The path constraints verification checked, with how far inside its limit each stays.
 
-    Clearance has its own line; each margin is in its check's unit. Empty when there are none.
+    Clearance has its own line. Margins in degrees for angles (rad or rad/s checks; ``a|b``
+    units take the revolute one when no joint is prismatic); a check without a physical unit
+    (a cosine gap) is named without a figure. Empty when there are none.
     """
     checks = [c for c in p.verification.checks if c.name in CONSTRAINTS and c.name != "clearance"]
     if not checks:
         return ""
+    prismatic = "prismatic" in _kinds(p)
     each = ", ".join(
-        f"{c.name} {-c.value:.3g} {c.unit}" if c.passed else f"{c.name} BROKEN" for c in checks
+        c.name + (_margin(c.value, c.unit, prismatic) if c.passed else " BROKEN") for c in checks
     )
     return f"  constraints     held, margin to the limit: {each}"
+
+
+def _margin(value: float, unit: str, prismatic: bool) -> str:
+    """`` 41 deg``: a held check's margin (``-value``, at least 0) in readable units, or ``""``."""
+    if unit == "1":
+        return ""
+    if "|" in unit and not prismatic:
+        unit = unit.split("|")[0]
+    margin = max(-value, 0.0) + 0.0
+    if unit.startswith("rad"):
+        margin, unit = math.degrees(margin), "deg" + unit[3:]
+    return f" {margin:.3g} {unit}"
 
 
 def clearance_line(p: Plan) -> str:
@@ -200,7 +215,7 @@ def quality_line(p: Plan) -> str:
     kinds = dict(zip(p.robot.joints, _kinds(p), strict=True))
 
     def shown(name: str, value: float) -> str:
-        value = value if abs(value) >= _RESOLVED_EXCURSION else 0.0  # rounding, not a swing
+        value = 0.0 if abs(value) < _RESOLVED_EXCURSION else value  # rounding, not a swing
         return f"{value:.3g} {'m' if kinds.get(name) == 'prismatic' else 'deg'}"
 
     q = p.quality
