@@ -133,9 +133,9 @@ def run(args: argparse.Namespace) -> int:
             objective=args.objective,
         )
     except (JointLimitError, CollisionError) as exc:  # the file's start or goal: named first
-        if scenario.source is not None and str(scenario.source) not in str(exc):
-            exc.args = (f"{scenario.source}: {exc}",)
-        raise
+        if scenario.source is None:
+            raise
+        raise exc.naming(scenario.source) from None
     cartesian = cartesian_report(scenario, result)
     with stage("sensitivity"):
         result = with_robustness(result, scenario.robot)

@@ -16,6 +16,15 @@ from ..excerpts import excerpt
 class FreeFloatError(Exception):
     """Root of every error freefloat raises on purpose."""
 
+    def naming(self, path: object) -> FreeFloatError:
+        """This error with the file ``path`` named first, unless its message names it already.
+
+        Changed in place (its data kept) and returned, to be raised again.
+        """
+        if str(path) not in str(self):
+            self.args = (f"{path}: {self}",)
+        return self
+
 
 class FileError(FreeFloatError):
     """A file or folder that cannot be read or written; carries the path.

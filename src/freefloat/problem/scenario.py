@@ -186,9 +186,7 @@ class Scenario:
         try:
             return cls.from_dict(data, relative_to=path.parent, source=path)
         except FreeFloatError as exc:
-            if str(path) in str(exc):
-                raise
-            raise _prefixed(exc, path) from None
+            raise exc.naming(path) from None
 
     @classmethod
     def from_dict(
@@ -301,9 +299,3 @@ def _with_payload(
     decorated = attach_payload(text, link, payload, Path(urdf).resolve().parent)
     digest = hashlib.sha256(decorated.encode()).hexdigest()[:16]
     return servicer_cache_dir() / f"{Path(urdf).stem}-payload-{digest}.urdf", decorated
-
-
-def _prefixed(exc: FreeFloatError, path: Path) -> FreeFloatError:
-    """The same error with the scenario file named in front of its message."""
-    exc.args = (f"{path}: {exc}",)
-    return exc

@@ -194,7 +194,7 @@ def plan_source(name: str, folder: Path) -> tuple[Path, dict[str, Any], str]:
 def scenario_urdf(base: Mapping[str, Any], path: Path) -> str:
     """The URDF text of the base scenario's robot (for inertial axes), written or not yet."""
     scenario = Scenario.from_dict(base, relative_to=path.parent, source=path)
-    return scenario.robot_text or robot_text(scenario.robot)
+    return robot_text(scenario.robot)  # the text it was loaded from, inline or read
 
 
 def check_inertial_value(urdf: str, key: str, inertial: tuple[str, str], value: Any) -> None:
