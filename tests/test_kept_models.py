@@ -6,6 +6,7 @@ import dataclasses
 import json
 import math
 import os
+import time
 from pathlib import Path
 
 import numpy as np
@@ -72,6 +73,62 @@ def test_an_edited_srdf_or_another_tree_gets_its_own_models(tmp_path):
     assert cached_collision_model(moved, srdf, ()) is not cached_collision_model(
         _fresh().robot, srdf, ()
     )
+
+
+def _same_size_rewrite(path: Path, text: str) -> None:
+    """Write ``text`` (as long as the file's content) and set the modification time back."""
+    info = path.stat()
+    assert len(text.encode()) == info.st_size
+    path.write_text(text)
+    os.utime(path, ns=(info.st_atime_ns, info.st_mtime_ns))
+    assert path.stat().st_mtime_ns == info.st_mtime_ns and path.stat().st_size == info.st_size
+
+
+def test_an_srdf_rewritten_at_the_same_size_and_time_gets_its_own_models(tmp_path):
+    """Path, modification time and size all stay: the pairs follow the file's new content."""
+    scenario = _fresh()
+    srdf = tmp_path / "robot.srdf"
+    original = Path(known_srdf(scenario.robot)).read_text()
+    srdf.write_text(original)
+    model = _models(scenario, srdf)[0]
+    a, b = model.pairs[0]
+    frames, objects = scenario.robot.model.frames, model.geometry.geometryObjects
+    links = frames[objects[a].parentFrame].name, frames[objects[b].parentFrame].name
+    line = f'<disable_collisions link1="{links[0]}" link2="{links[1]}" reason="test"/>'
+    comment = "<!--" + line[4:-3] + "-->"  # the same length, disabling nothing
+    srdf.write_text(original.replace("</robot>", comment + "\n</robot>"))
+    checked = _models(_fresh(), srdf)[0]
+    assert (a, b) in checked.pairs
+    _same_size_rewrite(srdf, original.replace("</robot>", line + "\n</robot>"))
+    disabled = _models(_fresh(), srdf)[0]
+    assert (a, b) not in disabled.pairs and disabled.n_pairs == checked.n_pairs - 1
+    _same_size_rewrite(srdf, original.replace("</robot>", comment + "\n</robot>"))
+    assert (a, b) in _models(_fresh(), srdf)[0].pairs
+
+
+def test_a_file_stamp_changes_with_the_content_fresh_or_still(tmp_path, monkeypatch):
+    """A fresh file is told by its digest; a still one by its change time (every write sets
+    it; setting the modification time back does not)."""
+    from freefloat.robot import file_stamp
+
+    path = tmp_path / "mesh.stl"
+    path.write_bytes(b"solid a\nendsolid a\n")
+    fresh = file_stamp.file_stamp(str(path))
+    assert fresh[-1] and fresh == file_stamp.file_stamp(str(path))
+    _same_size_rewrite(path, "solid b\nendsolid b\n")
+    assert file_stamp.file_stamp(str(path)) != fresh
+    monkeypatch.setattr(file_stamp, "FRESH_S", -1.0)  # as if every file had been still
+    still = file_stamp.file_stamp(str(path))
+    assert still[-1] == "" and still == file_stamp.file_stamp(str(path))
+    for _ in range(200):  # a write in a later tick of the file system's clock
+        _same_size_rewrite(path, "solid c\nendsolid c\n")
+        if path.stat().st_ctime_ns != still[2]:
+            break
+        time.sleep(0.01)
+    again = file_stamp.file_stamp(str(path))
+    assert again[1] == still[1] and again[4] == still[4]  # the same modification time, size
+    assert again != still
+    assert file_stamp.file_stamp(str(tmp_path / "gone"))[1:5] == (-1, -1, -1, -1)
 
 
 def _untimed(plan: ff.Plan) -> str:

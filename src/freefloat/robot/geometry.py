@@ -23,7 +23,6 @@ mesh's triangles read once per file and hulls built once per mesh file and scale
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -34,6 +33,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelError
+from .file_stamp import FileStamp, file_stamp
 from .meshes import MeshKey, mesh_key
 from .model import Robot
 
@@ -104,8 +104,8 @@ def load_shared_geometry(robot: Robot) -> SharedGeometry:
 def geometry_source(robot: Robot, srdf: str | Path | None) -> tuple:
     """What ``robot``'s collision models are built from, as a key (hashable).
 
-    The URDF (text, path, package folders), the kinematic tree, and the stamps (path,
-    modification time, size) of its mesh files and of the SRDF. Fresh loads of one unchanged
+    The URDF (text, path, package folders), the kinematic tree, and the stamps of its mesh
+    files and of the SRDF (:func:`.file_stamp.file_stamp`: they change with the content). Fresh loads of one unchanged
     file, and a robot with other masses only, have the same key: the same geometry and pairs.
     """
     parsed = _parsed_entry(robot)
@@ -155,8 +155,8 @@ class BuiltPerSource(Generic[Built]):
         return self._kept[key]
 
 
-def _srdf_stamp(srdf: str | Path | None, strict: bool = True) -> tuple[str, int, int] | None:
-    """(path, modification time in ns, size in bytes) of the SRDF file, or None for none.
+def _srdf_stamp(srdf: str | Path | None, strict: bool = True) -> FileStamp | None:
+    """The SRDF file's stamp (:func:`.file_stamp.file_stamp`), or None for none.
 
     Raises:
         ModelError: with ``strict``, the file does not exist (else its stamp holds -1s).
@@ -166,16 +166,7 @@ def _srdf_stamp(srdf: str | Path | None, strict: bool = True) -> tuple[str, int,
     path = Path(srdf).expanduser().resolve()
     if strict and not path.is_file():
         raise ModelError(f"SRDF file not found: {path}")
-    return _file_stamp(str(path))
-
-
-def _file_stamp(path: str) -> tuple[str, int, int]:
-    """(path, modification time in ns, size in bytes) of a file; -1s when it cannot be read."""
-    try:
-        stat = os.stat(path)
-    except OSError:
-        return (path, -1, -1)
-    return (path, stat.st_mtime_ns, stat.st_size)
+    return file_stamp(str(path))
 
 
 def _parsed(robot: Robot) -> tuple[pin.GeometryModel, dict[int, MeshKey]]:
@@ -186,7 +177,7 @@ def _parsed(robot: Robot) -> tuple[pin.GeometryModel, dict[int, MeshKey]]:
 
 def _parsed_entry(
     robot: Robot,
-) -> tuple[pin.GeometryModel, tuple[tuple[str, int, int], ...], dict[int, MeshKey]]:
+) -> tuple[pin.GeometryModel, tuple[FileStamp, ...], dict[int, MeshKey]]:
     """The parsed collision geometry of the URDF, kept (see :func:`load_collision_geometry`).
 
     With its mesh files' stamps and each mesh object's key (by index): the parsed shapes
@@ -228,15 +219,13 @@ def _parsed_entry(
     return parsed
 
 
-def _stamps(geometry: pin.GeometryModel) -> tuple[tuple[str, int, int], ...]:
-    """(path, modification time in ns, size in bytes) of every mesh file the model read."""
-    return tuple(_file_stamp(obj.meshPath) for obj in geometry.geometryObjects if obj.meshPath)
+def _stamps(geometry: pin.GeometryModel) -> tuple[FileStamp, ...]:
+    """The stamp (:func:`.file_stamp.file_stamp`) of every mesh file the model read."""
+    return tuple(file_stamp(obj.meshPath) for obj in geometry.geometryObjects if obj.meshPath)
 
 
 #: Parsed collision geometry per URDF (see load_collision_geometry), with its mesh files' stamps.
-_PARSED: dict[
-    tuple, tuple[pin.GeometryModel, tuple[tuple[str, int, int], ...], dict[int, MeshKey]]
-] = {}
+_PARSED: dict[tuple, tuple[pin.GeometryModel, tuple[FileStamp, ...], dict[int, MeshKey]]] = {}
 
 
 def add_obstacles(robot: Robot, geometry: pin.GeometryModel, obstacles: Sequence) -> None:
@@ -261,8 +250,8 @@ def checked_pairs(
     """The pairs of ``geometry`` whose clearance is checked, as index pairs (see module doc).
 
     Adds them to ``geometry`` as its collision pairs too. Worked out once per set of objects
-    (names, joints, links), kinematic tree and SRDF file (path, modification time, size) in a
-    process, and again when any of them changes.
+    (names, joints, links), kinematic tree and SRDF file (its stamp,
+    :func:`.file_stamp.file_stamp`) in a process, and again when any of them changes.
 
     Raises:
         ModelError: the SRDF file does not exist.
