@@ -23,7 +23,7 @@ from .errors import (
 from .physics.attitude import geodesic_angle
 from .plans.format import Plan
 from .plans.guarantees import ObjectiveReport, SafetyReport
-from .plans.records import Request, RobotRef, SolverReport, sha256_hex
+from .plans.records import Request, RobotRef, Samples, SolverReport, sha256_hex
 from .plans.reports import (
     as_rebuilt,
     check_registered,
@@ -53,6 +53,7 @@ from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .progress import stage
 from .robot.collision import clearance_at
+from .robot.model import Robot
 from .solvers.lazy_search import broken_by, explain_lazy_breaks, search_lazily
 from .solvers.minimise import minimise
 from .solvers.nearest import nearest_root
@@ -217,61 +218,22 @@ def plan_from_solution(
             farther than ``tolerance`` (rad) from the goal, or a boundary condition fails.
         VerificationError: an independent check fails.
     """
-    robot, family, T = problem.robot, problem.family, problem.duration
-    names = robot.joint_names
+    robot, family = problem.robot, problem.family
     clock = time.perf_counter()
     sampled = sample_solution(problem, solution.beta, samples)
     sample_time = time.perf_counter() - clock
-
     base = base_report(problem, solution.beta)
-    error = base.attitude_error_rad
-    sampled_error = geodesic_angle(
-        np.asarray(sampled.base_quaternion_xyzw[-1]), problem.goal_quaternion
-    )
-    boundary = boundary_errors(problem.polynomials(solution.beta), family.start, family.goal)[
-        "relative_max"
-    ]
-    if max(error, sampled_error) > tolerance or boundary > BOUNDARY_TOLERANCE:
-        raise SolverError(
-            "the planned path misses its target (attitude error "
-            f"{max(error, sampled_error):.3g} rad, boundary error {boundary:.3g})",
-            max(error, sampled_error),
-        )
-
+    _check_reached(problem, solution.beta, base.attitude_error_rad, sampled, tolerance)
     chosen = solution_record(problem, solution.beta, solution.residual, 0.0)
-    solutions = [
-        solution_record(problem, root.beta, root.residual, root.path_length)
-        for root in solution.roots
-    ]
     unverified = Plan(
-        robot=RobotRef(
-            urdf=str(robot.urdf),
-            joints=names,
-            end_effector=robot.end_effector,
-            joint_kinds=[j.kind for j in robot.joints],
-            end_effectors=list(robot.end_effectors),
-            urdf_text=robot.urdf_text,
-            urdf_sha256=sha256_hex(robot.urdf_text),
-        ),
-        duration=T,
+        robot=_robot_ref(robot),
+        duration=problem.duration,
         coefficients={name: list(values) for name, values in chosen.free_parameters.items()},
         free_parameters=chosen.free_parameters,
         base=base,
         feasibility=feasibility_report(problem),
         samples=sampled,
-        solver=SolverReport(
-            method=solution.method,
-            iterations=solution.iterations,
-            evaluations=solution.evaluations,
-            residual_rad=solution.residual,
-            wall_time_s=solution.wall_time,
-            solutions=solutions,
-            integration_steps=problem.steps,
-            integration_error_rad=solution.integration_error,
-            strategy=solution.strategy,
-            solve_time_s=solution.wall_time,
-            sample_time_s=sample_time,
-        ),
+        solver=_solver_report(problem, solution, sample_time),
         request=Request(start_joints=family.start.tolist(), goal_joints=family.goal.tolist()),
         safety=safety or SafetyReport(),
         objective=objective or norm_report(problem, solution.beta),
@@ -293,3 +255,57 @@ def plan_from_solution(
         raise VerificationError(verification.failures)
     report = replace(unverified.solver, verify_time_s=time.perf_counter() - clock)
     return replace(unverified, verification=verification, solver=report)
+
+
+def _check_reached(
+    problem: Problem, beta: np.ndarray, error: float, sampled: Samples, tolerance: float
+) -> None:
+    """Raise :class:`SolverError` when the path misses its target.
+
+    ``error``: the attitude error on the solver's grid (rad); the sampling grid's last
+    attitude must be within ``tolerance`` (rad) too, and the boundary conditions hold.
+    """
+    sampled_error = geodesic_angle(
+        np.asarray(sampled.base_quaternion_xyzw[-1]), problem.goal_quaternion
+    )
+    family = problem.family
+    boundary = boundary_errors(problem.polynomials(beta), family.start, family.goal)["relative_max"]
+    if max(error, sampled_error) > tolerance or boundary > BOUNDARY_TOLERANCE:
+        raise SolverError(
+            "the planned path misses its target (attitude error "
+            f"{max(error, sampled_error):.3g} rad, boundary error {boundary:.3g})",
+            max(error, sampled_error),
+        )
+
+
+def _robot_ref(robot: Robot) -> RobotRef:
+    """The plan's record of its robot (the URDF text and its digest included)."""
+    return RobotRef(
+        urdf=str(robot.urdf),
+        joints=robot.joint_names,
+        end_effector=robot.end_effector,
+        joint_kinds=[j.kind for j in robot.joints],
+        end_effectors=list(robot.end_effectors),
+        urdf_text=robot.urdf_text,
+        urdf_sha256=sha256_hex(robot.urdf_text),
+    )
+
+
+def _solver_report(problem: Problem, solution: Solution, sample_time: float) -> SolverReport:
+    """The plan's record of the solve (``sample_time``: the sampling's wall time, s)."""
+    return SolverReport(
+        method=solution.method,
+        iterations=solution.iterations,
+        evaluations=solution.evaluations,
+        residual_rad=solution.residual,
+        wall_time_s=solution.wall_time,
+        solutions=[
+            solution_record(problem, root.beta, root.residual, root.path_length)
+            for root in solution.roots
+        ],
+        integration_steps=problem.steps,
+        integration_error_rad=solution.integration_error,
+        strategy=solution.strategy,
+        solve_time_s=solution.wall_time,
+        sample_time_s=sample_time,
+    )

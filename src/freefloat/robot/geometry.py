@@ -105,8 +105,9 @@ def geometry_source(robot: Robot, srdf: str | Path | None) -> tuple:
     """What ``robot``'s collision models are built from, as a key (hashable).
 
     The URDF (text, path, package folders), the kinematic tree, and the stamps of its mesh
-    files and of the SRDF (:func:`.file_stamp.file_stamp`: they change with the content). Fresh loads of one unchanged
-    file, and a robot with other masses only, have the same key: the same geometry and pairs.
+    files and of the SRDF (:func:`.file_stamp.file_stamp`: they change with the content).
+    Fresh loads of one unchanged file, and a robot with other masses only, have the same key:
+    the same geometry and pairs.
     """
     parsed = _parsed_entry(robot)
     model = robot.model
