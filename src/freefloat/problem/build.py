@@ -102,23 +102,7 @@ def build_problem(
     """
     start = np.asarray(start, dtype=float)
     goal = np.asarray(goal, dtype=float)
-    for name, arr in (("start joints", start), ("goal joints", goal)):
-        _check_finite(name, arr)
-    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0.0):
-        raise InputError(f"duration must be a finite number of seconds > 0, got {duration!r}")
-    check_duration(duration)
-    check_joint_count(robot.n, repr(robot.name))
-    quats = []
-    for name, quat in (("start attitude", start_quaternion), ("goal attitude", goal_quaternion)):
-        quat = np.asarray(quat, dtype=float)
-        _check_finite(name, quat)
-        norm = float(np.linalg.norm(quat))
-        if quat.shape != (4,) or norm < 1e-9:
-            raise InputError(f"{name} must be a non-zero quaternion [x, y, z, w]")
-        quats.append(quat / norm)
-    check_joint_limits(robot, start, "start")
-    check_joint_limits(robot, goal, "goal")
-
+    quats = _checked_inputs(robot, start, goal, start_quaternion, goal_quaternion, duration)
     mmap = mmap or MomentumMap(robot)
     axis = cached_planar_axis(robot)
     planar = axis is not None
@@ -129,22 +113,8 @@ def build_problem(
     family = PathFamily.with_extra(start, goal, counts)
 
     bounds = yaw_change = None
-    if planar:
-        relative = quat_log(quat_multiply(quat_conjugate(quats[0]), quats[1]))
-        assert axis is not None
-        off_axis = float(np.linalg.norm(relative - (relative @ axis) * axis))
-        if off_axis > 1e-9:
-            raise InfeasibleError(
-                math.degrees(off_axis),
-                (0.0, 0.0),
-                message=(
-                    f"this robot is planar: its base turns only about {_axis_name(axis)}, but the "
-                    "goal "
-                    f"attitude is {math.degrees(off_axis):.6g} deg away from the start about "
-                    "other axes; give the goal the start's pitch and roll"
-                ),
-            )
-        yaw_change = wrap_angle(float(relative @ axis))
+    if axis is not None:
+        yaw_change = _planar_yaw_change(quats, axis)
         bounds = cached_planar_bounds(mmap, axis, planar_map)
         lo, hi = bounds.interval(goal - start)
         if check_bounds:
@@ -173,6 +143,59 @@ def build_problem(
             "[path] extra"
         )
     return problem.with_steps(problem.steps_for())
+
+
+def _checked_inputs(
+    robot: Robot,
+    start: np.ndarray,
+    goal: np.ndarray,
+    start_quaternion: np.ndarray,
+    goal_quaternion: np.ndarray,
+    duration: float,
+) -> list[np.ndarray]:
+    """Check :func:`build_problem`'s numbers; return the two attitudes as unit quaternions.
+
+    Raises the errors :func:`build_problem` lists for them (joints in rad or m, duration in s).
+    """
+    for name, arr in (("start joints", start), ("goal joints", goal)):
+        _check_finite(name, arr)
+    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0.0):
+        raise InputError(f"duration must be a finite number of seconds > 0, got {duration!r}")
+    check_duration(duration)
+    check_joint_count(robot.n, repr(robot.name))
+    quats = []
+    for name, quat in (("start attitude", start_quaternion), ("goal attitude", goal_quaternion)):
+        quat = np.asarray(quat, dtype=float)
+        _check_finite(name, quat)
+        norm = float(np.linalg.norm(quat))
+        if quat.shape != (4,) or norm < 1e-9:
+            raise InputError(f"{name} must be a non-zero quaternion [x, y, z, w]")
+        quats.append(quat / norm)
+    check_joint_limits(robot, start, "start")
+    check_joint_limits(robot, goal, "goal")
+    return quats
+
+
+def _planar_yaw_change(quats: Sequence[np.ndarray], axis: np.ndarray) -> float:
+    """The turn from the start to the goal attitude about the planar ``axis`` (rad, wrapped).
+
+    Raises:
+        InfeasibleError: the goal is turned about other axes too (a planar base cannot).
+    """
+    relative = quat_log(quat_multiply(quat_conjugate(quats[0]), quats[1]))
+    off_axis = float(np.linalg.norm(relative - (relative @ axis) * axis))
+    if off_axis > 1e-9:
+        raise InfeasibleError(
+            math.degrees(off_axis),
+            (0.0, 0.0),
+            message=(
+                f"this robot is planar: its base turns only about {_axis_name(axis)}, but the "
+                "goal "
+                f"attitude is {math.degrees(off_axis):.6g} deg away from the start about "
+                "other axes; give the goal the start's pitch and roll"
+            ),
+        )
+    return wrap_angle(float(relative @ axis))
 
 
 def _free_counts(
