@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
@@ -226,18 +227,17 @@ def track(
         if steps >= MAX_STEPS:
             stopped_by = f"step budget ({MAX_STEPS} continuation steps)"
             break
-        if stall and steps >= PACE_WINDOW:
+        if stall and _stalled(lam, reached, steps):
+            # At the pace of the last steps the step budget ends short of the goal: stop now
+            # rather than spend the budget on the same refusal.
+            tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache)
+            blocked = _ahead(problem, constraints, beta, tangent)
             gain = lam - reached[steps - PACE_WINDOW]
-            if lam + gain * (MAX_STEPS - steps) / PACE_WINDOW < 1.0:
-                # At the pace of the last steps the step budget ends short of the goal: stop
-                # now rather than spend the budget on the same refusal.
-                tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache)
-                blocked = _ahead(problem, constraints, beta, tangent)
-                stopped_by = (
-                    f"{_why(blocked, jac)} (stalled: "
-                    f"{math.degrees(gain * angle):.2g} deg in the last {PACE_WINDOW} steps)"
-                )
-                break
+            stopped_by = (
+                f"{_why(blocked, jac)} (stalled: "
+                f"{math.degrees(gain * angle):.2g} deg in the last {PACE_WINDOW} steps)"
+            )
+            break
         if problem.evaluations - first_evaluation > options.max_evaluations:
             stopped_by = f"evaluation budget ({options.max_evaluations} residual evaluations)"
             break
@@ -250,15 +250,9 @@ def track(
         last = lam + step >= 1.0
         target = _target(problem if last else coarse, start, delta, 1.0 if last else lam + step)
         tol = final_tol if last else INTERMEDIATE_TOLERANCE
-        predicted = beta + step * tangent
-        solved, r_new, jac_new, its = _correct(target, constraints, predicted, tol, instants, cache)
-        iterations += its
-        if solved is not None and not _dense_ok(problem, constraints, solved):
-            solved, r_new, jac_new, more, instants = _densely(
-                problem, target, constraints, solved, tol, instants, cache
-            )
-            iterations += more
-        if solved is None:
+        done = _step(problem, target, constraints, beta + step * tangent, tol, instants, cache)
+        iterations, instants = iterations + done.spent, done.instants
+        if done.beta is None:
             reached.append(lam)
             dl = 0.5 * step
             if dl * angle < MIN_STEP:
@@ -266,14 +260,67 @@ def track(
                 stopped_by = _why(blocked, jac)
                 break
             continue
-        beta, lam, r, jac = solved, 1.0 if last else lam + step, r_new, jac_new
+        beta, lam, r, jac = done.beta, 1.0 if last else lam + step, done.residual, done.jacobian
         reached.append(lam)
+        its = done.iterations
         dl = step * (2.0 if its <= 4 else 1.0 if its <= 5 else 0.5)
         if trace is not None:
             trace.append(BranchPoint(lam * angle, beta, dl * angle))
     return ContinuationResult(
         beta, lam, angle, axis, r, steps, iterations, stopped_by, blocked.name if blocked else ""
     )
+
+
+@dataclass(frozen=True)
+class _Step:
+    """One continuation step's corrected path (:func:`_step`).
+
+    Attributes:
+        beta: the corrected path's free coefficients (rad or m), None when none was found.
+        residual: its residual (rad).
+        jacobian: the residual's Jacobian there.
+        iterations: the first corrector's Newton iterations (they set the next step).
+        spent: every corrector's iterations.
+        instants: the instants now imposed (normalised).
+    """
+
+    beta: np.ndarray | None
+    residual: np.ndarray
+    jacobian: np.ndarray
+    iterations: int
+    spent: int
+    instants: np.ndarray
+
+
+def _step(
+    problem: Problem,
+    target: Problem,
+    constraints: Sequence[Constraint],
+    predicted: np.ndarray,
+    tol: float,
+    instants: np.ndarray,
+    cache: RowCache,
+) -> _Step:
+    """Correct the ``predicted`` path onto ``target`` (``tol``, rad), then densely inside."""
+    solved, r, jac, its = _correct(target, constraints, predicted, tol, instants, cache)
+    spent = its
+    if solved is not None and not _dense_ok(problem, constraints, solved):
+        solved, r, jac, more, instants = _densely(
+            problem, target, constraints, solved, tol, instants, cache
+        )
+        spent += more
+    return _Step(solved, r, jac, its, spent, instants)
+
+
+def _stalled(lam: float, reached: Sequence[float], steps: int) -> bool:
+    """Whether, at the pace of the last :data:`PACE_WINDOW` steps, the goal is out of reach.
+
+    ``lam``: the fraction of the way reached (0-1); ``reached``: ``lam`` after each step.
+    """
+    if steps < PACE_WINDOW:
+        return False
+    gain = lam - reached[steps - PACE_WINDOW]
+    return lam + gain * (MAX_STEPS - steps) / PACE_WINDOW < 1.0
 
 
 def _densely(
