@@ -198,8 +198,6 @@ def optimise(
         max_iterations: SLSQP iteration budget per run.
         max_evaluations: objective evaluation budget of the call.
     """
-    from scipy.optimize import minimize  # imported when first used
-
     beta0 = np.asarray(beta, dtype=float)
     # The objective scales as T^-p: minimise it at T = 1 s, so that the path found does not
     # depend on the duration to the last bit (the constraints keep the real duration).
@@ -213,7 +211,6 @@ def optimise(
     s_mat = scaled_coordinates(unit, objective, beta0, scale)
 
     ev = _Evaluations(problem, unit, objective, beta0, s_mat, scale, max_evaluations)
-    to_beta = ev.to_beta
 
     active = [c for c in constraints if c.applies_to(problem.robot)]
     imposed = [c for c in active if _imposed_first(problem, c, beta0)]
@@ -227,31 +224,11 @@ def optimise(
         return Optimised(beta0, start_value, start_value, iterations, False, note, ev.spent)
 
     for _ in range(ROUNDS):
-        cons = [{"type": "eq", "fun": ev.h, "jac": ev.dh}]
-        cons += _inequalities(problem, imposed, instants, ev)
-        try:
-            with np.errstate(all="ignore"), one_blas_thread():
-                result = minimize(
-                    ev.fun,
-                    z,
-                    jac=ev.grad,
-                    method="SLSQP",
-                    constraints=cons,
-                    options={"ftol": 1e-12, "maxiter": int(max_iterations)},
-                )
-        except _BudgetSpentError:
-            return kept(f"evaluation budget ({max_evaluations}) spent")
-        iterations += int(result.nit)
-        z = np.asarray(result.x, dtype=float)
-        candidate = to_beta(z)
-        if not np.all(np.isfinite(candidate)):
-            return kept("diverged")
-        try:
-            candidate, vector = polish(problem, candidate, options.tolerance)
-        except (np.linalg.LinAlgError, FloatingPointError, ValueError):
-            return kept("polish failed")
-        if float(np.linalg.norm(vector)) >= options.tolerance:
-            return kept("left the goal")
+        run = _run(problem, ev, imposed, instants, z, max_iterations, options.tolerance)
+        iterations += run.iterations
+        if run.candidate is None:
+            return kept(run.note)
+        candidate, z = run.candidate, run.z
         broken = broken_constraint(problem, constraints, candidate)
         if not broken:
             break
@@ -267,7 +244,7 @@ def optimise(
         if inside.honoured and not broken_constraint(problem, constraints, inside.beta):
             candidate = inside.beta
             break
-        if not result.success:  # no point within the imposed rows: more instants will not help
+        if not run.success:  # no point within the imposed rows: more instants will not help
             return kept(f"breaks {broken}")
     else:
         return kept(f"breaks {broken}")
@@ -275,6 +252,64 @@ def optimise(
     if not value < start.value and not broken_constraint(problem, constraints, beta0):
         return kept("no lower value")
     return Optimised(candidate, value * at_t, start_value, iterations, True, "", ev.spent)
+
+
+@dataclass(frozen=True)
+class _Run:
+    """One SLSQP run (:func:`_run`).
+
+    Attributes:
+        candidate: its end point polished onto the goal (rad or m), None when it has none.
+        z: its end point in scaled coordinates.
+        iterations: SLSQP iterations spent.
+        success: whether SLSQP says it converged.
+        note: why there is no candidate ("" when there is one).
+    """
+
+    candidate: np.ndarray | None
+    z: np.ndarray
+    iterations: int
+    success: bool = False
+    note: str = ""
+
+
+def _run(
+    problem: Problem,
+    ev: _Evaluations,
+    imposed: Sequence[Constraint],
+    instants: np.ndarray,
+    z: np.ndarray,
+    max_iterations: int,
+    tolerance: float,
+) -> _Run:
+    """SLSQP from ``z`` within the ``imposed`` rows at ``instants``, polished (rad)."""
+    from scipy.optimize import minimize  # imported when first used
+
+    cons = [{"type": "eq", "fun": ev.h, "jac": ev.dh}]
+    cons += _inequalities(problem, imposed, instants, ev)
+    try:
+        with np.errstate(all="ignore"), one_blas_thread():
+            result = minimize(
+                ev.fun,
+                z,
+                jac=ev.grad,
+                method="SLSQP",
+                constraints=cons,
+                options={"ftol": 1e-12, "maxiter": int(max_iterations)},
+            )
+    except _BudgetSpentError:
+        return _Run(None, z, 0, note=f"evaluation budget ({ev.budget}) spent")
+    nit, z = int(result.nit), np.asarray(result.x, dtype=float)
+    candidate = ev.to_beta(z)
+    if not np.all(np.isfinite(candidate)):
+        return _Run(None, z, nit, note="diverged")
+    try:
+        candidate, vector = polish(problem, candidate, tolerance)
+    except (np.linalg.LinAlgError, FloatingPointError, ValueError):
+        return _Run(None, z, nit, note="polish failed")
+    if float(np.linalg.norm(vector)) >= tolerance:
+        return _Run(None, z, nit, note="left the goal")
+    return _Run(candidate, z, nit, bool(result.success))
 
 
 class _Evaluations:
