@@ -93,83 +93,74 @@ def _ns(t: float) -> int:
 
 def messages(traj: Trajectory, child_frame: str) -> Iterator[Message]:
     """Every message of the export in time order (the trajectory first)."""
-    ts = typestore()
-    types = ts.types
-    Time = types["builtin_interfaces/msg/Time"]
-    Duration = types["builtin_interfaces/msg/Duration"]
-    Header = types["std_msgs/msg/Header"]
+    types = typestore().types
+    yield Message(*JOINT_TRAJECTORY, 0, _trajectory(traj, types))
+    for k in range(len(traj.t)):
+        yield from _instant(traj, k, child_frame, types)
 
-    def stamp(ns: int) -> Any:
-        return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
 
-    def header(ns: int, frame: str = "") -> Any:
-        return Header(stamp=stamp(ns), frame_id=frame)
+def _stamp(ns: int, types: Any) -> Any:
+    """``builtin_interfaces/msg/Time`` of ``ns`` nanoseconds."""
+    return types["builtin_interfaces/msg/Time"](sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
 
+
+def _header(ns: int, types: Any, frame: str = "") -> Any:
+    """``std_msgs/msg/Header`` stamped ``ns`` nanoseconds, in ``frame``."""
+    return types["std_msgs/msg/Header"](stamp=_stamp(ns, types), frame_id=frame)
+
+
+def _trajectory(traj: Trajectory, types: Any) -> Any:
+    """The ``trajectory_msgs/msg/JointTrajectory`` of every sample (SI units, rad)."""
     f64 = np.float64
-    Point = types["trajectory_msgs/msg/JointTrajectoryPoint"]
+    point = types["trajectory_msgs/msg/JointTrajectoryPoint"]
+    duration = types["builtin_interfaces/msg/Duration"]
     points = [
-        Point(
+        point(
             positions=traj.q[k].astype(f64),
             velocities=traj.qd[k].astype(f64),
             accelerations=traj.qdd[k].astype(f64),
             effort=traj.tau[k].astype(f64),
-            time_from_start=Duration(sec=_ns(t) // 1_000_000_000, nanosec=_ns(t) % 1_000_000_000),
+            time_from_start=duration(sec=_ns(t) // 1_000_000_000, nanosec=_ns(t) % 1_000_000_000),
         )
         for k, t in enumerate(traj.t)
     ]
+    return types[JOINT_TRAJECTORY[1]](
+        header=_header(0, types, WORLD_FRAME), joint_names=list(traj.joints), points=points
+    )
+
+
+def _instant(traj: Trajectory, k: int, child_frame: str, types: Any) -> Iterator[Message]:
+    """Sample ``k``'s joint state, base pose and end-effector points."""
+    f64, ns = np.float64, _ns(traj.t[k])
     yield Message(
-        *JOINT_TRAJECTORY,
-        0,
-        types[JOINT_TRAJECTORY[1]](
-            header=header(0, WORLD_FRAME), joint_names=list(traj.joints), points=points
+        *JOINT_STATES,
+        ns,
+        types[JOINT_STATES[1]](
+            header=_header(ns, types),
+            name=list(traj.joints),
+            position=traj.q[k].astype(f64),
+            velocity=traj.qd[k].astype(f64),
+            effort=traj.tau[k].astype(f64),
         ),
     )
-    JointState = types[JOINT_STATES[1]]
-    TFMessage = types[TF[1]]
-    TransformStamped = types["geometry_msgs/msg/TransformStamped"]
-    Transform = types["geometry_msgs/msg/Transform"]
-    Vector3 = types["geometry_msgs/msg/Vector3"]
-    Quaternion = types["geometry_msgs/msg/Quaternion"]
-    PointStamped = types[END_EFFECTOR[1]]
-    GeoPoint = types["geometry_msgs/msg/Point"]
-    for k, t in enumerate(traj.t):
-        ns = _ns(t)
+    x, y, z = (float(v) for v in traj.base_position[k])
+    qx, qy, qz, qw = (float(v) for v in traj.base_quaternion_xyzw[k])
+    transform = types["geometry_msgs/msg/Transform"](
+        translation=types["geometry_msgs/msg/Vector3"](x=x, y=y, z=z),
+        rotation=types["geometry_msgs/msg/Quaternion"](x=qx, y=qy, z=qz, w=qw),
+    )
+    stamped = types["geometry_msgs/msg/TransformStamped"](
+        header=_header(ns, types, WORLD_FRAME), child_frame_id=child_frame, transform=transform
+    )
+    yield Message(*TF, ns, types[TF[1]](transforms=[stamped]))
+    paths = traj.end_effector_paths[1:]
+    for number, point in enumerate([traj.end_effector_position[k], *(p[k] for p in paths)]):
+        ex, ey, ez = (float(v) for v in point)
+        topic = END_EFFECTOR[0] + ("" if number == 0 else f"_{number + 1}")
+        position = types["geometry_msgs/msg/Point"](x=ex, y=ey, z=ez)
         yield Message(
-            *JOINT_STATES,
+            topic,
+            END_EFFECTOR[1],
             ns,
-            JointState(
-                header=header(ns),
-                name=list(traj.joints),
-                position=traj.q[k].astype(f64),
-                velocity=traj.qd[k].astype(f64),
-                effort=traj.tau[k].astype(f64),
-            ),
+            types[END_EFFECTOR[1]](header=_header(ns, types, WORLD_FRAME), point=position),
         )
-        x, y, z = (float(v) for v in traj.base_position[k])
-        qx, qy, qz, qw = (float(v) for v in traj.base_quaternion_xyzw[k])
-        yield Message(
-            *TF,
-            ns,
-            TFMessage(
-                transforms=[
-                    TransformStamped(
-                        header=header(ns, WORLD_FRAME),
-                        child_frame_id=child_frame,
-                        transform=Transform(
-                            translation=Vector3(x=x, y=y, z=z),
-                            rotation=Quaternion(x=qx, y=qy, z=qz, w=qw),
-                        ),
-                    )
-                ]
-            ),
-        )
-        paths = traj.end_effector_paths[1:]
-        for number, point in enumerate([traj.end_effector_position[k], *(p[k] for p in paths)]):
-            ex, ey, ez = (float(v) for v in point)
-            topic = END_EFFECTOR[0] + ("" if number == 0 else f"_{number + 1}")
-            yield Message(
-                topic,
-                END_EFFECTOR[1],
-                ns,
-                PointStamped(header=header(ns, WORLD_FRAME), point=GeoPoint(x=ex, y=ey, z=ez)),
-            )
