@@ -147,7 +147,7 @@ class SweepSpec:
         try:
             return cls.from_dict(data, relative_to=path.parent, source=path)
         except FreeFloatError as exc:
-            exc.args = (f"{path}: {exc}",)
+            exc.naming(path)  # the sweep file first, unless the message names it already
             raise
 
     @classmethod
