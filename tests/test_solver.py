@@ -145,6 +145,23 @@ def test_spatial_three_axis_goal(spatial_robot, extra, method):
     assert not plan.feasibility.planar and plan.feasibility.yaw_change_bounds_deg is None
 
 
+def test_a_root_polished_on_a_finer_grid_records_its_own_path_length(spatial_robot, tmp_path):
+    """Solved on a grid too coarse for it, the root is certified on a finer one and polished
+    there: the path length recorded is that of the polished path (summed joint travel of
+    its polynomials at 401 instants), and the plan written passes verification, which
+    recomputes every solution's length from its coefficients."""
+    problem = _spatial_problem(spatial_robot, [2, 1, 1]).with_steps(4)
+    assert problem.integration_error(np.zeros(problem.n_free)) > 1e-10  # too coarse
+    solution = ff.solve(problem)
+    path = problem.polynomials(solution.beta)
+    travel = float(np.abs(np.diff(path.evaluate(np.linspace(0.0, 8.0, 401)).q, axis=0)).sum())
+    assert solution.roots[0].path_length == pytest.approx(travel, rel=1e-12)
+    assert solution.steps > problem.steps  # certified on a finer grid
+    plan = ff.plan_from_solution(problem.with_steps(solution.steps), solution)
+    plan.save(tmp_path / "polished.plan.json")
+    assert ff.verify_plan(ff.Plan.load(tmp_path / "polished.plan.json")).passed
+
+
 def test_too_few_free_coefficients_is_refused(spatial_robot):
     with pytest.raises(ff.InputError, match=r"1 free path coefficient\(s\) for 3 attitude"):
         _spatial_problem(spatial_robot, [1, 0, 0])

@@ -101,7 +101,7 @@ def solve(
     # Certify the integration at the chosen root; refine the grid and polish when needed.
     chosen = roots[0]
     certified = certify(problem, chosen.beta, chosen.residual, tol)
-    chosen = Root(certified.beta, certified.residual, chosen.path_length)
+    chosen = Root(certified.beta, certified.residual, problem.path_length(certified.beta))
     error = certified.integration_error
     if not certified.passed:
         raise SolverError(
