@@ -2,8 +2,11 @@
 
 coal's GJK/EPA answers to :data:`GJK_TOLERANCE`; an impossible answer (non-finite, or outside
 what the bounding spheres allow: EPA can return -DBL_MAX for some penetrating pairs at tight
-tolerances) is asked again at looser EPA tolerances (:data:`RETRY_TOLERANCES`), and one still
-impossible raises :class:`~freefloat.errors.ModelError`. Every request starts from coal's
+tolerances) is asked again at looser EPA tolerances (:data:`RETRY_TOLERANCES`); a sphere
+against a sphere, box, cylinder or capsule still impossible is measured in closed form
+(:mod:`.sphere_distance`: coal's sphere-cylinder routine takes the radial way out of a deep
+overlap even when a cap's is shorter), and any other still impossible raises
+:class:`~freefloat.errors.ModelError`. Every request starts from coal's
 default guesses (:func:`configure`), never from the last query's.
 """
 
@@ -16,6 +19,7 @@ import coal
 import numpy as np
 
 from ..errors import ModelError
+from .sphere_distance import SphereWitness, sphere_distance
 
 __all__ = [
     "DEFAULT_GUESS",
@@ -41,12 +45,12 @@ class CheckedDistance:
 
     Attributes:
         value: signed distance (m), negative when the shapes overlap.
-        result: coal's result (witness points, normal).
-        retries: queries asked again at a looser EPA tolerance to get it.
+        result: coal's result (witness points, normal), or the closed form's.
+        retries: queries asked again (at a looser EPA tolerance, or in closed form) to get it.
     """
 
     value: float
-    result: coal.DistanceResult
+    result: coal.DistanceResult | SphereWitness
     retries: int
 
 
@@ -106,10 +110,12 @@ def checked_distance(
 
     Impossible: not finite, or outside what the bounding spheres allow (``spheres``: their
     lower and upper bounds of the distance, m; a translation separating the spheres separates
-    the shapes, so a depth never exceeds theirs).
+    the shapes, so a depth never exceeds theirs). A sphere against a sphere, box, cylinder or
+    capsule that no tolerance answers is measured in closed form (:func:`sphere_distance`).
 
     Raises:
-        ModelError: no tolerance of :data:`RETRY_TOLERANCES` gives a possible value.
+        ModelError: no tolerance of :data:`RETRY_TOLERANCES` gives a possible value, and
+            no closed form applies.
     """
     if not _REQUESTS:
         _REQUESTS.extend(_distance_request(t) for t in (GJK_TOLERANCE, *RETRY_TOLERANCES))
@@ -120,6 +126,9 @@ def checked_distance(
         value = float(coal.distance(shape_a, place_a, shape_b, place_b, request, result))
         if math.isfinite(value) and least - 1e-9 <= value <= most + 1e-9:
             return CheckedDistance(value, result, retries)
+    exact = sphere_distance(shape_a, place_a, shape_b, place_b)
+    if exact is not None:
+        return CheckedDistance(exact.min_distance, exact, len(_REQUESTS))
     raise ModelError(
         f"coal returned an impossible distance {value:.6g} m for {name} at every EPA "
         "tolerance tried ("

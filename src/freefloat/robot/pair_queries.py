@@ -23,6 +23,7 @@ import pinocchio as pin
 from .distance_query import GJK_TOLERANCE, RETRY_TOLERANCES, Closest, checked_distance, configure
 from .model import Robot
 from .motion_bound import PairBounds, motion_weights
+from .sphere_distance import SphereWitness
 from .sphere_kinematics import SphereKinematics
 from .witness_gradient import WitnessBatch, carriers
 
@@ -75,7 +76,7 @@ class PairQueries:
         # Views of Pinocchio's per-pair results (valid: the vector never resizes), and the
         # results of pairs asked again alone in the last call.
         self._pair_results = list(self._geometry_data.distanceResults)
-        self._retried: dict[int, coal.DistanceResult] = {}
+        self._retried: dict[int, coal.DistanceResult | SphereWitness] = {}
         # Bounding spheres (centre in the shape's frame, radius; m): a distance outside what
         # they allow is impossible (see checked_distance).
         centres, radii = [], []
@@ -279,7 +280,7 @@ class PairQueries:
             if self._retried:  # asked again at a looser EPA tolerance: a bound that allows it
                 lower[list(self._retried)] -= RETRY_TOLERANCES[-1]
 
-    def _result(self, k: int) -> coal.DistanceResult:
+    def _result(self, k: int) -> coal.DistanceResult | SphereWitness:
         """Pair ``k``'s result of the last query (the retried one when it was asked again)."""
         return self._retried.get(k, self._pair_results[k])
 

@@ -14,6 +14,7 @@ import coal
 import numpy as np
 
 from .model import Robot
+from .sphere_distance import SphereWitness
 
 __all__ = ["WitnessBatch", "carriers", "witness_gradients"]
 
@@ -61,8 +62,13 @@ class WitnessBatch:
         self.points = np.zeros((count, 2, 3))
         self.jacobians = np.zeros((count, 6, n))
 
-    def take(self, i: int, result: coal.DistanceResult, jacobian: np.ndarray) -> None:
-        """Query ``i``'s result (world frame, m) and (6, N) world-frame joint Jacobian."""
+    def take(
+        self, i: int, result: coal.DistanceResult | SphereWitness, jacobian: np.ndarray
+    ) -> None:
+        """Query ``i``'s result (coal's or a closed form's; world frame, m) and Jacobian.
+
+        ``jacobian``: the (6, N) world-frame joint Jacobian at the query's configuration.
+        """
         self.normals[i] = result.normal
         self.points[i, 0] = result.getNearestPoint1()
         self.points[i, 1] = result.getNearestPoint2()
