@@ -87,7 +87,12 @@ def test_velocity_limit_reports_the_shortest_duration(tmp_path):
     assert err.joint == "q1" and err.limit == 2.0
     assert err.peak == pytest.approx(3.0 * 15 / 8, rel=1e-6)  # quintic peak rate 15/8 dq/T
     assert err.shortest_duration == pytest.approx(3.0 * 15 / 8 / 2.0, rel=1e-6)
-    assert "the shortest duration that respects every velocity limit is 2.812 s" in str(err)
+    # q1 travels 3 rad: at 2 rad/s no path does it in under 1.5 s
+    assert err.least_duration == pytest.approx(3.0 / 2.0, rel=1e-12)
+    assert (
+        "the path found keeps every velocity limit from 2.812 s on, no path can in under 1.5 s"
+        in str(err)
+    )
     slow = ff.Scenario(
         robot, err.shortest_duration * 1.001, start, goal, goal_attitude=reached, extra={"q1": 1}
     )

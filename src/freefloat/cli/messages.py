@@ -11,10 +11,6 @@ __all__ = ["in_degrees"]
 
 def in_degrees(exc: FreeFloatError) -> str:
     """The error's message, with angular rates in deg/s where the library speaks rad/s."""
-    if isinstance(exc, VelocityLimitError) and "rad/s" in str(exc):
-        return (
-            f"joint {exc.joint!r} reaches {math.degrees(exc.peak):.4g} deg/s, above its "
-            f"velocity limit {math.degrees(exc.limit):.4g} deg/s; the shortest duration that "
-            f"respects every velocity limit is {exc.shortest_duration:.4g} s"
-        )
+    if isinstance(exc, VelocityLimitError) and exc.unit == "rad":
+        return exc.message_in(math.degrees(1.0), "deg")
     return str(exc)

@@ -17,50 +17,91 @@ class DurationLimitError(FreeFloatError):
         joint: the joint's name.
         peak: its largest value along the path (the limit's unit).
         limit: the URDF limit.
-        shortest_duration: the shortest duration (s) at which the path respects the limits.
+        shortest_duration: the shortest duration (s) at which the path found respects the
+            limits (its shape does not depend on the duration; another path may respect them
+            at a shorter one).
+        least_duration: no path with the same start and goal respects the limits in less (s;
+            0 when not known).
+        unit: the unit of the joint's value (rad or m).
     """
 
+    #: What is limited ("velocity", "effort").
+    kind = ""
+
     def __init__(
-        self, joint: str, peak: float, limit: float, shortest_duration: float, message: str
+        self,
+        joint: str,
+        peak: float,
+        limit: float,
+        shortest_duration: float,
+        unit: str,
+        least_duration: float = 0.0,
     ) -> None:
         self.joint = joint
         self.peak = float(peak)
         self.limit = float(limit)
         self.shortest_duration = float(shortest_duration)
-        super().__init__(message)
+        self.least_duration = float(least_duration)
+        self.unit = unit
+        super().__init__(self.message_in(1.0, unit))
+
+    def _exceeds(self, scale: float, unit: str) -> str:
+        """The joint's peak against its limit, values times ``scale`` in ``unit``."""
+        return f"joint {self.joint!r} at {scale * self.peak:.4g} {unit}, beyond {self.limit:.4g}"
+
+    def message_in(self, scale: float, unit: str) -> str:
+        """The message with the joint's values times ``scale``, in ``unit`` (deg, say)."""
+        message = (
+            f"{self._exceeds(scale, unit)}; the path found keeps every {self.kind} limit from "
+            f"{self.shortest_duration:.4g} s on"
+        )
+        if self.least_duration > 0.0:
+            return (
+                f"{message}, no path can in under {self.least_duration:.4g} s (each joint's "
+                "travel at its limit), and a duration between may plan with another path"
+            )
+        return f"{message}; a shorter duration may plan with another path"
 
 
 class VelocityLimitError(DurationLimitError):
     """Joint rates above a URDF velocity limit; carries the shortest admissible duration."""
 
+    kind = "velocity"
+
     def __init__(
-        self, joint: str, peak: float, limit: float, shortest_duration: float, unit: str = "rad"
+        self,
+        joint: str,
+        peak: float,
+        limit: float,
+        shortest_duration: float,
+        unit: str = "rad",
+        least_duration: float = 0.0,
     ) -> None:
-        super().__init__(
-            joint,
-            peak,
-            limit,
-            shortest_duration,
-            f"joint {joint!r} reaches {peak:.4g} {unit}/s, above its velocity limit "
-            f"{limit:.4g} {unit}/s; the shortest duration that respects every velocity limit "
-            f"is {shortest_duration:.4g} s",
+        super().__init__(joint, peak, limit, shortest_duration, unit, least_duration)
+
+    def _exceeds(self, scale: float, unit: str) -> str:
+        """The joint's peak rate against its limit, times ``scale`` in ``unit`` per second."""
+        return (
+            f"joint {self.joint!r} reaches {scale * self.peak:.4g} {unit}/s, above its "
+            f"velocity limit {scale * self.limit:.4g} {unit}/s"
         )
 
 
 class EffortLimitError(DurationLimitError):
     """Joint torques above a URDF effort limit; carries the shortest admissible duration."""
 
+    kind = "effort"
+
     def __init__(
         self, joint: str, peak: float, limit: float, shortest_duration: float, unit: str = "N m"
     ) -> None:
-        super().__init__(
-            joint,
-            peak,
-            limit,
-            shortest_duration,
-            f"joint {joint!r} needs {peak:.4g} {unit}, above its effort limit {limit:.4g} "
-            f"{unit}; the shortest duration that respects every effort limit is "
-            f"{shortest_duration:.4g} s",
+        super().__init__(joint, peak, limit, shortest_duration, unit)
+
+    def _exceeds(self, scale: float, unit: str) -> str:
+        """Torques and forces are not converted (``scale`` and ``unit`` are for angles)."""
+        return (
+            f"joint {self.joint!r} needs {self.peak:.4g} {self.unit}, above its effort limit "
+            f"{self.limit:.4g} {self.unit}"
         )
 
 

@@ -5,7 +5,8 @@ imposes the costly ones (clearance) only when the path it finds breaks one
 (:func:`search_lazily`); the lazy ones (velocity and effort limits, checked on the result)
 only when the path breaks them. A goal the cheap search stops short of, on a path the costly
 constraints do not bind, is refused without a second search. When only the velocity or effort
-limits stood in the way, the refusal names the shortest duration that respects them.
+limits stood in the way, the refusal names the shortest duration at which the path found
+without them respects them (another path may at a shorter one).
 """
 
 from __future__ import annotations
@@ -134,9 +135,10 @@ def _explain_duration_limits(
     """Name the shortest duration when only the velocity or effort limits stood in the way.
 
     Raises :class:`VelocityLimitError` or :class:`EffortLimitError` (the one that needs the
-    longer duration), with the shortest duration that respects both. Rates scale as 1/T and
-    torques as 1/T^2, and the path shape does not depend on T, so the shortest duration at
-    which the path found without these limits respects them is exact.
+    longer duration), with the shortest duration at which the path found without these
+    limits respects both. Rates scale as 1/T and torques as 1/T^2, and the path shape does
+    not depend on T, so that duration is exact for that path (a sufficient one: another path
+    may respect the limits at a shorter one).
     """
     timed = [c for c in constraints if isinstance(c, DurationScaledLimit)]
     relaxed = [c for c in constraints if c not in timed]

@@ -156,6 +156,8 @@ class LimitPeak:
         fraction: ``peak / limit`` (above 1: beyond the limit).
         shortest_duration: the shortest duration (s) at which the same path shape respects
             every limit of this kind.
+        least_duration: no path between the same start and goal respects every limit of
+            this kind in less (s; 0 when not known).
     """
 
     joint: Joint
@@ -163,6 +165,7 @@ class LimitPeak:
     limit: float
     fraction: float
     shortest_duration: float
+    least_duration: float = 0.0
 
 
 class DurationScaledLimit(Constraint):

@@ -8,6 +8,7 @@ rate polynomial are at the ends or at real roots of the acceleration (rad/s, or 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -76,19 +77,27 @@ class JointVelocityLimits(DurationScaledLimit):
     def worst(self, robot: Robot, path: JointPolynomials) -> LimitPeak | None:
         """The joint whose exact peak rate (rad/s or m/s) is the largest fraction of its limit."""
         worst: LimitPeak | None = None
+        ends = path.evaluate(np.array([0.0, path.duration])).q
+        least = 0.0  # each joint travels at least its span: at its limit, this long (s)
         for i, joint in enumerate(robot.joints):
             if math.isfinite(joint.velocity_limit):
                 (lo, _), (hi, _) = path.extremes(i, 1)
                 rate = max(abs(lo), abs(hi))
                 fraction = rate / joint.velocity_limit
+                least = max(least, abs(float(ends[1, i] - ends[0, i])) / joint.velocity_limit)
                 if worst is None or fraction > worst.fraction:
                     worst = LimitPeak(
                         joint, rate, joint.velocity_limit, fraction, path.duration * fraction
                     )
-        return worst
+        return None if worst is None else replace(worst, least_duration=least)
 
     def error(self, peak: LimitPeak) -> VelocityLimitError:
         """:class:`VelocityLimitError` naming the joint, its rate and the shortest duration."""
         return VelocityLimitError(
-            peak.joint.name, peak.peak, peak.limit, peak.shortest_duration, peak.joint.unit
+            peak.joint.name,
+            peak.peak,
+            peak.limit,
+            peak.shortest_duration,
+            peak.joint.unit,
+            peak.least_duration,
         )
