@@ -208,3 +208,28 @@ def test_reach_without_an_inner_estimate_offers_no_goal_to_paste(capsys) -> None
     for row in rows:
         inner, outer, goal = row.split()[3:6]
         assert inner == "-" and goal == "-" and float(outer) > 0.0
+
+
+def test_a_start_closer_than_the_margin_is_refused_as_plan_refuses_it(tmp_path, capsys) -> None:
+    """A margin wider than the start pose's smallest gap (measured here over every pair): no
+    goal of this scenario plans, so reach refuses it as plan does, naming the pair and the
+    file, rather than printing rows of zero turns."""
+    from freefloat.robot.collision import collision_model, known_srdf
+
+    scenario = ff.Scenario.from_toml(SCENARIOS / "ur5_servicer.toml")
+    model = collision_model(scenario.robot, known_srdf(scenario.robot))
+    gap = float(model.distances(np.asarray(scenario.start, dtype=float)).values.min())
+    text = (SCENARIOS / "ur5_servicer.toml").read_text()
+    assert "[safety]" not in text  # the default margin: a wider one added
+    path = tmp_path / "wide_margin.toml"
+    path.write_text(f"{text}\n[safety]\nmargin_m = {gap + 0.01:.4f}\n")
+    wider = ff.Scenario.from_toml(path)
+    with pytest.raises(ff.CollisionError) as planned:
+        ff.plan(wider)
+    with pytest.raises(ff.CollisionError) as reached:
+        ff.reachable(wider, jobs=1)
+    assert str(reached.value) == str(planned.value)
+    assert str(reached.value).startswith("start configuration: ")
+    assert main(["reach", str(path), "--jobs", "1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"freefloat: error: {path}: start configuration: ") and "\n" not in err

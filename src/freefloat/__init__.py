@@ -12,6 +12,7 @@ _guard_startup()  # the command line only: Ctrl-C while importing is one line, e
 
 from .errors import (
     AmbiguousEndEffectorError,
+    CollisionError,
     DurationLimitError,
     EffortLimitError,
     FileError,
@@ -33,6 +34,7 @@ from .errors import (
     UnreachableGoalError,
     VelocityLimitError,
     VerificationError,
+    ViewerError,
 )
 from .physics.attitude import geodesic_angle, quat_from_zyx, zyx_from_quat
 from .physics.dynamics import InverseDynamics, ReplayResult, inverse_dynamics, replay
@@ -76,6 +78,7 @@ __all__ = [
     "OBJECTIVES",
     "AmbiguousEndEffectorError",
     "Check",
+    "CollisionError",
     "Constraint",
     "ConstraintRows",
     "DurationLimitError",
@@ -127,6 +130,7 @@ __all__ = [
     "VelocityLimitError",
     "Verification",
     "VerificationError",
+    "ViewerError",
     "__version__",
     "build_problem",
     "default_constraints",

@@ -16,7 +16,6 @@ import numpy as np
 
 from ._blas import one_blas_thread
 from .errors import (
-    CollisionError,
     SolverError,
     VerificationError,
 )
@@ -39,20 +38,18 @@ from .plans.sampling import (
     sample_solution,
     solution_record,
 )
-from .problem.build import check_joint_limits
 from .problem.constraints import (
-    Clearance,
     Constraint,
     default_constraints,
     scenario_constraints,
 )
+from .problem.endpoints import check_endpoints
 from .problem.limits import check_samples
 from .problem.objectives import DEFAULT_OBJECTIVE, Objective, objective_named
 from .problem.paths import boundary_errors
 from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .progress import stage
-from .robot.collision import clearance_at
 from .robot.model import Robot
 from .solvers.lazy_search import broken_by, explain_lazy_breaks, search_lazily
 from .solvers.minimise import minimise
@@ -120,7 +117,7 @@ def _plan(
         else objective_named(objective or scenario.objective)
     )
     check_registered(chosen, constraints)  # what verify could not rebuild: before any work
-    _check_endpoints(scenario, constraints)
+    check_endpoints(scenario, constraints)
     clock = time.perf_counter()
     with stage("solve"):
         # another objective's freedom may find a path within limits the search's path breaks
@@ -171,22 +168,6 @@ def _plan(
         solve_time_s=solve_time,
     )
     return replace(result, solver=solver)
-
-
-def _check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> None:
-    """Refuse a start or goal outside the joint limits, then one too close to a collision.
-
-    Limits first: an overlap of a pose the arm cannot take says nothing useful. Each refusal
-    names the joint or the pair.
-    """
-    for where, values in (("start", scenario.start), ("goal", scenario.goal)):
-        check_joint_limits(scenario.robot, np.asarray(values, dtype=float), where)
-    for constraint in constraints:
-        if isinstance(constraint, Clearance) and constraint.applies_to(scenario.robot):
-            for where, joints in (("start", scenario.start), ("goal", scenario.goal)):
-                clearance, pair = clearance_at(constraint.model, joints)
-                if clearance < constraint.margin:
-                    raise CollisionError(where, pair, clearance, constraint.margin)
 
 
 def plan_from_solution(

@@ -36,6 +36,7 @@ from .physics.attitude import (
 from .physics.momentum import MomentumMap
 from .problem.build import problem_from_scenario
 from .problem.constraints import Clearance, scenario_constraints
+from .problem.endpoints import check_endpoints
 from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .problem.simple_bound import SimpleMotionBound, inertia_ratio, simple_motion_bound, turn_limit
@@ -172,6 +173,8 @@ def reachable(
     Raises:
         InputLimitError: ``jobs`` is not a whole number from 1 to
             :data:`~freefloat.parallel.MAX_JOBS`.
+        JointLimitError, CollisionError: with a budget, the start or goal joints outside
+            their limits or closer than the clearance margin, as ``plan`` refuses them.
     """
     check_jobs(jobs, "jobs")
     scenario = scenario.resolved()
@@ -226,6 +229,7 @@ def _inner(
         freedom = tuple(d - 5 for d in problem.family.degrees)
         return ReachEstimate(drift, (skipped,) * len(axes), freedom)
     constraints = scenario_constraints(scenario)
+    check_endpoints(scenario, constraints)  # as plan refuses them: no goal of this one plans
     workers = default_jobs(len(axes)) if jobs is None else jobs
     LOGGER.info("reach: %d directions %s", len(axes), where_run(workers, len(axes)))
     with one_blas_thread():  # many tiny products: see freefloat._blas

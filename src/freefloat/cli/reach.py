@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from ..errors import InputLimitError
+from ..errors import CollisionError, InputLimitError, JointLimitError
 from ..parallel import MAX_JOBS, check_jobs
 from ..problem.limits import check_number
 from ..reachable import DEFAULT_BUDGET as DEFAULT_REACH_BUDGET
@@ -86,14 +86,19 @@ def run(args: argparse.Namespace) -> int:
     from ..viz.reach_text import reach_lines
 
     scenario = load_scenario(args.scenario)
-    with counted("reach", len(default_directions())) as advance:
-        report = reachable(
-            scenario,
-            travel_factor=args.travel,
-            budget=args.budget,
-            progress=lambda i, n, d: advance(direction_line(d)),
-            jobs=args.jobs,
-        )
+    try:
+        with counted("reach", len(default_directions())) as advance:
+            report = reachable(
+                scenario,
+                travel_factor=args.travel,
+                budget=args.budget,
+                progress=lambda i, n, d: advance(direction_line(d)),
+                jobs=args.jobs,
+            )
+    except (JointLimitError, CollisionError) as exc:  # the file's start or goal: named first
+        if scenario.source is None:
+            raise
+        raise exc.naming(scenario.source) from None
     print("\n".join(reach_lines(report)))
     if args.plot:
         from ..viz.reach_plot import save_reach_figure

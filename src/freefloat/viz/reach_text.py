@@ -27,7 +27,8 @@ def verdict(report: ReachReport) -> str:
         what = f"at most {largest:.2g} deg from the drift attitude per simple motion"
     return (
         f"this spacecraft is {report.inertia_ratio:.3g}x the arm's inertia: {what}; "
-        "a goal farther away needs cyclic joint motions, which freefloat does not plan"
+        "a goal farther away needs joints that go back and forth, which plan may find (with "
+        "larger joint excursions) or refuse"
     )
 
 
@@ -53,7 +54,8 @@ def reach_lines(report: ReachReport) -> list[str]:
             f"outer bound for simple motions ({travel}):",
             f"  the base turns at most {math.degrees(bound.bound):.4g} deg from the start "
             "attitude (sum over joints of the largest |F1 column| over the",
-            "  configurations such a path visits, sampled and refined, times the joint's travel)",
+            "  configurations such a path visits, sampled and refined, times the joint's travel);",
+            "  a path whose joints go back and forth is not bounded by it: plan may turn further",
         ]
         if report.budget > 0:
             lines += [
