@@ -274,6 +274,15 @@ def test_outputs_onto_a_directory_are_refused(tmp_path, capsys, plan_file, comma
     assert list(folder.iterdir()) == []
 
 
+@pytest.mark.parametrize("command", ["plan", "show", "export", "compose", "sweep"])
+def test_outputs_named_as_a_folder_not_there_yet_are_refused(tmp_path, capsys, plan_file, command):
+    """``-o out/`` with no ``out`` yet: a folder was meant, not a file called ``out``."""
+    folder = tmp_path / "out"
+    line = _refused(capsys, *_outputs(plan_file, f"{folder}{os.sep}")[command], within=5.0)
+    assert "names a folder; give a file name" in line
+    assert not folder.exists()
+
+
 @pytest.mark.parametrize("command", ["plan", "plot", "show", "export", "compose", "sweep"])
 def test_outputs_into_a_read_only_folder_are_refused(tmp_path, capsys, plan_file, command):
     folder = tmp_path / "ro"

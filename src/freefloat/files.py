@@ -169,6 +169,10 @@ def check_output(path: str | Path, what: str = "output", folder: bool = False) -
     shown = os.fspath(path)
     if target.is_dir() and not folder:
         raise FileError(f"{what} {excerpt(shown)} is a directory; give a file name", shown)
+    if not folder and shown.endswith((os.sep, "/")):  # a folder meant, even one not there yet
+        raise FileError(
+            f"{what} {excerpt(shown)} names a folder; give a file name (in it, say)", shown
+        )
     if not folder and target.exists() and not target.is_file():
         raise FileError(
             f"{what} {excerpt(shown)} is {_kind(target.stat().st_mode)}; freefloat replaces "
