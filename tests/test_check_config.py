@@ -42,6 +42,17 @@ def test_check_reports_limits_and_exit_code(capsys) -> None:
     assert "configuration: NOT OK" in out
 
 
+def test_a_joint_a_hair_beyond_its_limit_shows_a_room_that_is_not_zero(capsys) -> None:
+    """0.0004 deg beyond the elbow's URDF limit: the row prints the room with the decimals
+    that show it (-0.0004, not -0.000), and the value and limit apart."""
+    limits = _urdf_limits(ROOT / "robots" / "ur5_servicer.urdf")
+    beyond = math.degrees(limits["elbow_joint"][1]) + 0.0004
+    assert main(["check", str(UR5), "--at", f"0,-90,{beyond!r},-90,-90,0"]) == 1
+    row = next(line for line in capsys.readouterr().out.splitlines() if "elbow_joint" in line)
+    value, _, upper, room = row.split()[1:5]
+    assert room == "-0.0004" and float(value) > float(upper) and "OUTSIDE" in row
+
+
 def test_check_names_the_closest_pair_at_the_goal(capsys) -> None:
     assert main(["check", str(UR5), "--at", "goal"]) == 0
     out = capsys.readouterr().out

@@ -39,14 +39,17 @@ def run(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.scenario)
     report = check_configuration(scenario, parse_joints(args.at, scenario))
     print(f"freefloat check: {scenario.robot.name} at {args.at}")
-    print(f"  {'joint':<24}{'value':>12}{'lower':>12}{'upper':>12}{'room':>12}")
+    width = max([24, *(len(j.name) + 2 for j in report.joints)])
+    print(f"  {'joint':<{width}}{'value':>12}{'lower':>12}{'upper':>12}{'room':>12}")
     for j in report.joints:
         scale, unit = (math.degrees, "deg") if j.angular else (float, "m")
-        cells = "".join(f"{scale(v):>12.3f}" for v in (j.value, j.lower, j.upper, j.room))
+        digits = _digits(scale(j.room))
+        cells = "".join(f"{scale(v):>12.{digits}f}" for v in (j.value, j.lower, j.upper, j.room))
         flag = "" if j.room >= 0.0 else "  OUTSIDE"
-        print(f"  {j.name:<24}{cells}  {unit}{flag}")
+        print(f"  {j.name:<{width}}{cells}  {unit}{flag}")
     if report.margin is None:
-        print("  clearance: not checked (no collision pairs, or [safety] check = false)")
+        why = "[safety] check = false" if not scenario.safety.check else "no collision pairs"
+        print(f"  clearance: not checked ({why})")
     else:
         print(f"  closest pairs (signed distance; margin {report.margin:g} m):")
         for name, distance in report.pairs:
@@ -56,3 +59,11 @@ def run(args: argparse.Namespace) -> int:
     verdict = "ok" if report.within_limits and report.clear else "NOT OK"
     print(f"  configuration: {verdict}")
     return 0 if verdict == "ok" else 1
+
+
+def _digits(room: float) -> int:
+    """Decimals that show a joint's room (deg or m): 3, more when it would print as 0."""
+    digits = 3
+    while room != 0.0 and round(room, digits) == 0.0 and digits < 9:
+        digits += 1
+    return digits
