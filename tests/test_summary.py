@@ -168,3 +168,22 @@ def test_the_summary_names_each_path_constraint_and_its_margin(tmp_path, capsys)
     )
     assert 0.0 < printed <= math.degrees(sampled) * 1.005 + 1e-9
     assert printed >= 0.99 * math.degrees(sampled)
+
+
+def test_verify_reads_a_constraint_row_with_the_plans_own_figure(tmp_path, capsys):
+    """The note under verify's table explains a constraint row with that row's own value
+    (the clearance the plan file records), not a made-up one."""
+    out = tmp_path / "p.json"
+    assert (
+        main(["plan", str(ROOT / "robots" / "scenarios" / "ur5_servicer.toml"), "-o", str(out)])
+        == 0
+    )
+    capsys.readouterr()
+    assert main(["verify", str(out)]) == 0
+    note = capsys.readouterr().out.strip().splitlines()[-1]
+    clearance = next(c for c in ff.Plan.load(out).verification.checks if c.name == "clearance")
+    assert clearance.value < 0.0
+    assert note == (
+        f"  it holds (clearance {clearance.value:.3g} m: the smallest distance is "
+        f"{-clearance.value:.3g} m beyond the margin)"
+    )

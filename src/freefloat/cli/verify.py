@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..plans.guarantees import Check
 from ..verify.checks import REPLAY_STEPS_LIMIT, check_replay_steps, verify_plan
 from ..verify.stepping import MAX_REPLAY_STEPS
 from .common import Commands
@@ -65,12 +66,23 @@ def run(args: argparse.Namespace) -> int:
     print(f"  {'verification':<34}{'passed' if result.passed else 'FAILED':>12}")
     from ..problem.constraints import CONSTRAINTS
 
-    names = {check.name for check in result.checks}
-    if names & set(CONSTRAINTS):
+    rows = [check for check in result.checks if check.name in CONSTRAINTS]
+    if rows:
         print("  a path constraint's value is its worst excess over its limit, negative where")
-        print(
-            "  it holds (clearance -0.09 m: the smallest distance is 0.09 m beyond the margin)"
-            if "clearance" in names
-            else "  it holds (joint_position_limits -0.1: every joint 0.1 rad or m inside)"
-        )
+        chosen = next((c for c in rows if c.name == "clearance"), rows[0])  # the most read
+        print(f"  it holds ({_reading(chosen)})")
     return 0 if result.passed else 1
+
+
+def _reading(check: Check) -> str:
+    """How to read one constraint row, with its own figure (its unit, as printed)."""
+    value, unit = check.value, check.unit
+    if check.name == "clearance":
+        where = "beyond" if value <= 0.0 else "short of"
+        return (
+            f"clearance {value:.3g} m: the smallest distance is {abs(value):.3g} m {where} the "
+            "margin"
+        )
+    if value <= 0.0:
+        return f"{check.name} {value:.3g} {unit}: the tightest is {-value:.3g} {unit} inside it"
+    return f"{check.name} {value:.3g} {unit}: the worst goes {value:.3g} {unit} beyond it"
