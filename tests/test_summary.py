@@ -187,3 +187,40 @@ def test_verify_reads_a_constraint_row_with_the_plans_own_figure(tmp_path, capsy
         f"  it holds (clearance {clearance.value:.3g} m: the smallest distance is "
         f"{-clearance.value:.3g} m beyond the margin)"
     )
+
+
+def test_a_spacecraft_lighter_than_what_it_carries_is_warned_about(tmp_path, caplog):
+    """A 1 kg root carrying two 5 kg links (the URDF of an arm alone, say): plan says so, with
+    the masses read from the file; the shipped servicer (104 kg under a 17 kg arm) says
+    nothing of the kind."""
+    import logging
+
+    import numpy as np
+
+    import urdfs
+
+    body = urdfs.BASE.format(mass=1.0, i=0.05)
+    body += urdfs.joint("q1", "base", "l1") + urdfs.link("l1")
+    body += urdfs.joint("q2", "l1", "l2") + urdfs.link("l2")
+    urdf = tmp_path / "arm_alone.urdf"
+    urdf.write_text(urdfs.robot(body))
+    robot = ff.load_robot(urdf)
+    problem = ff.build_problem(
+        robot, [0.2, 0.3], [0.6, -0.2], ff.quat_from_zyx(0.0), ff.quat_from_zyx(0.0), 4.0
+    )
+    reached = problem.achieved(np.zeros(problem.n_free))
+    scenario = ff.Scenario(
+        robot, 4.0, {"q1": 0.2, "q2": 0.3}, {"q1": 0.6, "q2": -0.2}, goal_attitude=reached
+    )
+    with caplog.at_level(logging.WARNING, logger="freefloat"):
+        ff.plan(scenario)
+    said = [r.getMessage() for r in caplog.records if "lighter than" in r.getMessage()]
+    assert said == [
+        "the spacecraft (the URDF's root link 'base', 1 kg) is lighter than the bodies it "
+        "carries (10 kg); if the URDF describes an arm alone, add a spacecraft with freefloat "
+        "compose or an inline [robot] table"
+    ]
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="freefloat"):
+        ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml"))
+    assert not any("lighter than" in r.getMessage() for r in caplog.records)
