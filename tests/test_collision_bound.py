@@ -144,7 +144,7 @@ def test_the_per_pair_bound_between_samples_holds_against_every_pair_measured_de
     own bounds at both ends and its own motion): checked against every pair measured by a
     fresh model at 40 instants inside each interval (brute force). It is never looser than
     the bound from the smallest distances and the fastest pair, and tighter on some."""
-    from freefloat.problem.constraints.clearance_samples import bound_between
+    from freefloat.problem.constraints.clearance import Clearance
     from freefloat.problem.rate_bounds import rate_bounds
 
     scenario = ff.Scenario.from_toml(path)
@@ -152,6 +152,7 @@ def test_the_per_pair_bound_between_samples_holds_against_every_pair_measured_de
     problem = ff.problem_from_scenario(scenario, extra=[2] * robot.n)
     model = CollisionModel(robot, known_srdf(robot))
     fresh = CollisionModel(robot, known_srdf(robot))
+    check = Clearance(model)
     rng = np.random.default_rng(21)
     tighter = 0
     for scale in (0.0, 0.3):
@@ -159,7 +160,7 @@ def test_the_per_pair_bound_between_samples_holds_against_every_pair_measured_de
         edges = np.linspace(0.0, poly.duration, 21)
         found = model.closest_many(poly.evaluate(edges).q, edges / poly.duration)
         t0, t1 = edges[:-1], edges[1:]
-        bound = bound_between(poly, model.weights, t0, t1, found.lower[:-1], found.lower[1:])
+        bound = check._between(poly, t0, t1, found.lower[:-1], found.lower[1:])
         speed = np.max(rate_bounds(poly, t0, t1) @ model.weights.T, axis=1)
         former = 0.5 * (found.values[:-1] + found.values[1:] - speed * (t1 - t0)) - BOUND_SLACK
         assert np.all(bound >= former)
@@ -211,31 +212,18 @@ def test_the_dense_checks_decision_is_that_of_the_refined_minimum():
     everything = CollisionModel(robot, known_srdf(robot))
     everything._weights = None  # the truth: every sample measured, no bound between them
     rng = np.random.default_rng(9)
-    decided = sampled = 0
+    decided = 0
     for scale in (0.0, 0.2, 0.5, 1.0, 2.0):
         beta = rng.normal(0.0, scale, problem.n_free)
-        path = problem.polynomials(beta)
-        smallest = Clearance(everything, 0.01).smallest(path, 201)[0]
-        for margin in (0.005, 0.01, smallest - 1e-3, smallest + 1e-3, smallest + 0.05):
+        smallest = Clearance(everything, 0.01).smallest(problem.polynomials(beta), 201)[0]
+        for margin in (0.005, 0.01, smallest - 1e-3, smallest + 1e-3):
             if margin < 0.0:
                 continue
             check = Clearance(model, margin)
             excess = check.violation(problem, beta)
             assert (excess.value > check.tolerance) == (smallest < margin - check.tolerance)
             decided += excess.detail.startswith("min clearance >=")
-            if excess.detail.startswith("clearance "):  # broken at a sample: its figure
-                sampled += 1
-                when = float(excess.detail.split(" at t = ")[1].split(" s")[0])
-                assert excess.value <= margin - smallest + 1e-12  # at most the largest excess
-                # that sample's clearance, every pair measured (printed to 4 digits in time)
-                near = [
-                    float(np.min(everything.distances(path.evaluate(np.array([t])).q[0]).values))
-                    for t in np.linspace(0.0, path.duration, 201)
-                    if abs(t - when) <= 5e-4 * max(abs(when), 1.0)
-                ]
-                assert any(abs(margin - v - excess.value) < 1e-12 for v in near)
     assert decided > 0  # the bound decided some, without the refined minimum
-    assert sampled > 0  # and a sample below the margin some, without the refined minimum
 
 
 @pytest.mark.parametrize("path", [PANDA, UR5])

@@ -23,17 +23,12 @@ import numpy as np
 
 from ...robot.collision import CollisionModel
 from ...robot.model import Robot
+from ...robot.motion_bound import BOUND_SLACK
 from ..paths import JointPolynomials, PathFamily
+from ..rate_bounds import rate_bounds
 from ..residual import Problem
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
-from .clearance_samples import (
-    Measured,
-    bound_between,
-    local_minima,
-    lowest_minima,
-    pair_bounds,
-    undecided,
-)
+from .clearance_samples import Measured, local_minima, lowest_minima, pair_bounds
 
 __all__ = [
     "COARSE_EVERY",
@@ -81,9 +76,7 @@ class Clearance(Constraint):
         self._memo: tuple[PathFamily, bytes, ConstraintRows] | None = None
         self._smallest_memo: dict[tuple[bytes, float, int, int], tuple[float, float, int]] = {}
         self._sampled_memo: tuple[tuple[bytes, float, int], np.ndarray] | None = None
-        self._measured_memo: (
-            tuple[tuple[bytes, float, int, float | None, float], Measured] | None
-        ) = None
+        self._measured_memo: tuple[tuple[bytes, float, int, float | None], Measured] | None = None
 
     def __repr__(self) -> str:
         return f"Clearance(margin={self.margin:g} m, {self.model.n_pairs} pairs)"
@@ -208,6 +201,27 @@ class Clearance(Constraint):
                 best_pair = lowest(best_t)[1]
         return best, best_t, best_pair
 
+    def _between(
+        self,
+        path: JointPolynomials,
+        t0: np.ndarray,
+        t1: np.ndarray,
+        lower0: np.ndarray,
+        lower1: np.ndarray,
+    ) -> np.ndarray:
+        """Lower bounds (m) of the clearance over ``[t0, t1]`` (s), from bounds at both ends.
+
+        ``lower0``, ``lower1``: (I, P) lower bounds of every pair's distance at ``t0`` and
+        ``t1`` (m; the measured distance where measured). Per pair: their mean less half the
+        time between them times how fast that pair's distance can change there (its motion
+        weights times bounds of the joint rates); the clearance's bound is the smallest.
+        """
+        assert self.model.weights is not None
+        speed = rate_bounds(path, t0, t1) @ self.model.weights.T  # (I, P), m/s
+        per_pair = 0.5 * (lower0 + lower1 - speed * (t1 - t0)[:, None])
+        per_pair = np.nan_to_num(per_pair, nan=-math.inf)  # no bound: nothing spared
+        return np.min(per_pair, axis=1) - BOUND_SLACK
+
     def _sampled(self, path: JointPolynomials, t: np.ndarray) -> np.ndarray:
         """Smallest distance over the pairs at each time of ``t`` (m), remembered per path."""
         key = self._key(path, t)
@@ -216,13 +230,7 @@ class Clearance(Constraint):
             self._sampled_memo = (key, self.model.closest_many(q).values)
         return self._sampled_memo[1]
 
-    def _measured(
-        self,
-        path: JointPolynomials,
-        samples: int,
-        limit: float | None,
-        stop: float = -math.inf,
-    ) -> Measured:
+    def _measured(self, path: JointPolynomials, samples: int, limit: float | None) -> Measured:
         """The smallest distance (m) at the samples a bound cannot spare, and a lower bound.
 
         Coarse then exact, a count: the smallest distance over the pairs at every
@@ -236,12 +244,10 @@ class Clearance(Constraint):
         distances (NaN where spared: every such sample is above the limit), the pairs' bounds
         at the samples measured, and the lower bound
         of the clearance along the whole path (m; -inf when the model has no motion weights,
-        a prismatic joint say: then nothing bounds the clearance between samples). Once a
-        measured sample is below ``stop`` (m) the path is known to break it: nothing more is
-        measured, and the bound is -inf. Remembered for the last path, limit and stop only,
-        so that the answer never depends on earlier calls.
+        a prismatic joint say: then nothing bounds the clearance between samples). Remembered
+        for the last path and limit only, so that the answer never depends on earlier calls.
         """
-        key = (*self._key(path, np.zeros(samples)), limit, stop)
+        key = (*self._key(path, np.zeros(samples)), limit)
         memo = self._measured_memo
         if memo is not None and memo[0] == key:  # the same path and limit: the same answer
             return memo[1]
@@ -249,36 +255,27 @@ class Clearance(Constraint):
         q = path.evaluate(t).q
         known = np.full(samples, math.nan)
         lower = np.full((samples, self.model.n_pairs), math.nan)
-        pairs = np.full(samples, -1)
         todo = np.unique(np.append(np.arange(0, samples, COARSE_EVERY), samples - 1))
         if self.model.weights is None:  # no bound between samples: every sample, no bound
-            found = self.model.closest_many(q)
-            known[:], pairs[:] = found.values, found.pairs
-            answer = Measured(known, lower, -math.inf, pairs)
+            known[:] = self.model.closest_many(q).values
+            answer = Measured(known, lower, -math.inf)
             self._measured_memo = (key, answer)
             return answer
         with self.model.own_bounds():  # pair bounds from this path's samples alone
             while True:
                 todo = todo[np.isnan(known[todo])]
                 found = self.model.closest_many(q[todo], todo / (samples - 1))
-                known[todo], lower[todo], pairs[todo] = (
-                    found.values,
-                    pair_bounds(found),
-                    found.pairs,
-                )
-                if float(np.nanmin(known)) < stop:  # broken at a sample: no bound sought
-                    bound = -math.inf
-                    break
+                known[todo], lower[todo] = found.values, pair_bounds(found)
                 nodes = np.flatnonzero(~np.isnan(known))
                 a, b = nodes[:-1], nodes[1:]
-                between = bound_between(path, self.model.weights, t[a], t[b], lower[a], lower[b])
+                between = self._between(path, t[a], t[b], lower[a], lower[b])
                 floor = float(np.nanmin(known)) + NEAR if limit is None else limit
                 short = (between < floor) & (b - a >= 2)
                 if not np.any(short):
                     bound = float(min(between.min(), np.nanmin(known)))
                     break
                 todo = (a[short] + b[short]) // 2
-        answer = Measured(known, lower, bound, pairs)
+        answer = Measured(known, lower, bound)
         self._measured_memo = (key, answer)
         return answer
 
@@ -294,8 +291,7 @@ class Clearance(Constraint):
         ``limit``, and the middles of halves left undecided, are then refined by a bounded
         scalar search.
         """
-        known, table, weights = measured.known, measured.lower, self.model.weights
-        assert weights is not None  # the caller's: a path with no bound is sampled densely
+        known, table = measured.known, measured.lower
         t = np.linspace(0.0, path.duration, len(known))
         times, values = [t], [np.nan_to_num(known, nan=math.inf)]
         rows = np.arange(len(known), dtype=float)
@@ -303,7 +299,7 @@ class Clearance(Constraint):
         ends = np.stack([t[:-1], t[1:], known[:-1], known[1:], rows[:-1], rows[1:]])
         with self.model.own_bounds():  # pair bounds from this path's samples alone
             for _ in range(HALVINGS):
-                ends = ends[:, undecided(path, weights, ends, table, limit)]
+                ends = ends[:, self._undecided(path, ends, table, limit)]
                 if ends.shape[1] == 0:
                     break
                 mid = 0.5 * (ends[0] + ends[1])
@@ -320,7 +316,7 @@ class Clearance(Constraint):
                     axis=1,
                 )
         if ends.shape[1]:
-            ends = ends[:, undecided(path, weights, ends, table, limit)]
+            ends = ends[:, self._undecided(path, ends, table, limit)]
         t_all, v_all = np.concatenate(times), np.concatenate(values)
         order = np.argsort(t_all, kind="stable")
         t_all, v_all = t_all[order], v_all[order]
@@ -328,6 +324,24 @@ class Clearance(Constraint):
         minima = minima[v_all[minima] < limit]
         spans = np.searchsorted(t_all, 0.5 * (ends[0] + ends[1]))
         return self._refined(path, t_all, v_all, np.unique(np.append(minima, spans)))
+
+    def _undecided(
+        self, path: JointPolynomials, ends: np.ndarray, table: np.ndarray, limit: float
+    ) -> np.ndarray:
+        """Which intervals may dip below ``limit`` (m) unseen.
+
+        ``ends``: rows t0, t1 (s), v0, v1 (m), and the rows of ``table`` at both ends. Both
+        ends measured and above ``limit`` (a sample below it is a dip seen), and the bound
+        between them (from the pairs' bounds in ``table``, m) below it.
+        """
+        seen = ~np.isnan(ends[2]) & ~np.isnan(ends[3]) & (ends[2] >= limit) & (ends[3] >= limit)
+        bound = np.full(ends.shape[1], math.inf)
+        if np.any(seen):
+            first, second = ends[4, seen].astype(int), ends[5, seen].astype(int)
+            bound[seen] = self._between(
+                path, ends[0, seen], ends[1, seen], table[first], table[second]
+            )
+        return bound < limit
 
     @staticmethod
     def _key(path: JointPolynomials, t: np.ndarray) -> tuple[bytes, float, int]:
@@ -350,28 +364,16 @@ class Clearance(Constraint):
     def violation(self, problem: Problem, beta: np.ndarray) -> Excess:
         """The excess of the problem's path at ``beta`` for solvers (201 samples, refined).
 
-        A path a sample shows beyond the margin by more than the tolerance breaks it, as the
-        refined minimum would say: its excess is then that sample's (a lower bound of the
-        largest; "clearance ... below the margin" in the detail), and no more is measured.
         Verification uses :meth:`excess` (twice as dense, with its error estimate).
         """
         if self.model.n_pairs == 0:
             return Excess(-math.inf, 0.0, "no pairs to check")
         path = problem.polynomials(beta)
-        measured = self._measured(path, 201, self.margin, self.margin - self.tolerance)
+        measured = self._measured(path, 201, self.margin)
         bound = measured.bound
         if bound >= self.margin:  # clear everywhere: the refined minimum is not needed
             detail = f"min clearance >= {bound:.6g} m everywhere, margin {self.margin:g} m"
             return Excess(self.margin - bound, 0.0, detail)
-        sampled = np.nan_to_num(measured.known, nan=math.inf)
-        k = int(np.argmin(sampled))
-        if sampled[k] < self.margin - self.tolerance:  # broken at a sample: decided
-            when = path.duration * k / (len(sampled) - 1)
-            detail = (
-                f"clearance {sampled[k]:.6g} m ({self.model.names[measured.pairs[k]]}) at "
-                f"t = {when:.4g} s, below the margin {self.margin:g} m"
-            )
-            return Excess(self.margin - float(sampled[k]), 0.0, detail)
         if self.model.weights is None:
             clearance, when, pair = self.smallest(path, 201)
         else:
