@@ -162,3 +162,57 @@ def test_a_sphere_deep_in_a_cylinder_leaves_through_the_nearer_cap():
     assert answer.value == pytest.approx(-cap, abs=1e-9)
     assert answer.value >= gap - reach
     assert sphere_distance(cylinder, place_a, coal.Box(0.1, 0.1, 0.1), place_b) is None
+
+
+CYLINDER_ARM = """<?xml version="1.0"?>
+<robot name="cylinder_arm">
+  <link name="base">
+    <inertial><mass value="100.0"/><inertia ixx="16.7" iyy="16.7" izz="16.7" ixy="0" ixz="0"
+      iyz="0"/></inertial>
+    <collision><geometry><box size="1.0 1.0 1.0"/></geometry></collision>
+    <collision><origin xyz="2.12 0.005 0.15"/>
+      <geometry><cylinder radius="0.2" length="0.5"/></geometry></collision>
+  </link>
+  <joint name="q1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0.5 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3.1" upper="3.1" effort="10" velocity="2"/></joint>
+  <link name="l1"><inertial><origin xyz="0.5 0 0"/><mass value="5.0"/>
+    <inertia ixx="0.01" iyy="0.4" izz="0.4" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="q2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="1.0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3.1" upper="3.1" effort="10" velocity="2"/></joint>
+  <link name="l2"><inertial><origin xyz="0.3 0 0"/><mass value="3.0"/>
+    <inertia ixx="0.01" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0.6 0 0"/><geometry><sphere radius="0.1"/></geometry></collision>
+  </link>
+</robot>
+"""
+
+
+def test_a_sphere_in_a_cylinder_is_measured_in_closed_form_by_the_collision_model(tmp_path):
+    """The arm's 0.1 m ball (centre at x = 0.5 + cos q1 + 0.6 cos(q1 + q2)) inside a 0.2 m,
+    0.5 m long upright cylinder on the spacecraft: its way out through the top cap (hand
+    computed below) is shorter than through the side, and the model's distance, in a batch
+    or alone, is that one; its gradient is the central differences' of the distance."""
+    import freefloat as ff
+    from freefloat.robot.collision import CollisionModel
+
+    path = tmp_path / "cylinder_arm.urdf"
+    path.write_text(CYLINDER_ARM)
+    model = CollisionModel(ff.load_robot(path))
+    k = next(i for i, name in enumerate(model.names) if "base_1" in name and "l2" in name)
+    for q1 in (0.0, 0.01, -0.02):
+        centre = np.array([0.5 + math.cos(q1) + 0.6 * math.cos(q1), 1.6 * math.sin(q1), 0.0])
+        rel = centre - np.array([2.12, 0.005, 0.15])
+        side, cap = 0.2 - math.hypot(rel[0], rel[1]), 0.25 - abs(rel[2])
+        assert cap < side  # out through the cap
+        q = np.array([q1, 0.0])
+        assert model.distances(q).values[k] == pytest.approx(-cap - 0.1, abs=1e-12)
+        batch = model.closest_many(np.repeat(q[None], 20, axis=0), gradients=True)
+        assert batch.pairs[0] == k and batch.values[0] == pytest.approx(-cap - 0.1, abs=1e-12)
+        h = 1e-6
+        slopes = [
+            (model.distances(q + h * e).values[k] - model.distances(q - h * e).values[k]) / (2 * h)
+            for e in np.eye(2)
+        ]
+        assert batch.gradients[0] == pytest.approx(slopes, abs=1e-6)

@@ -3,9 +3,9 @@
 coal's GJK/EPA answers to :data:`GJK_TOLERANCE`; an impossible answer (non-finite, or outside
 what the bounding spheres allow: EPA can return -DBL_MAX for some penetrating pairs at tight
 tolerances) is asked again at looser EPA tolerances (:data:`RETRY_TOLERANCES`); a sphere
-against a sphere, box, cylinder or capsule still impossible is measured in closed form
-(:mod:`.sphere_distance`: coal's sphere-cylinder routine takes the radial way out of a deep
-overlap even when a cap's is shorter), and any other still impossible raises
+against a sphere, box or capsule still impossible is measured in closed form
+(:mod:`.sphere_distance`), as is every sphere-cylinder pair (coal's routine takes the radial
+way out of an overlap even when a cap's is shorter), and any other still impossible raises
 :class:`~freefloat.errors.ModelError`. Every request starts from coal's
 default guesses (:func:`configure`), never from the last query's.
 """
@@ -19,7 +19,7 @@ import coal
 import numpy as np
 
 from ..errors import ModelError
-from .sphere_distance import SphereWitness, sphere_distance
+from .sphere_distance import SphereWitness, closed_form_first, sphere_distance
 
 __all__ = [
     "DEFAULT_GUESS",
@@ -110,13 +110,18 @@ def checked_distance(
 
     Impossible: not finite, or outside what the bounding spheres allow (``spheres``: their
     lower and upper bounds of the distance, m; a translation separating the spheres separates
-    the shapes, so a depth never exceeds theirs). A sphere against a sphere, box, cylinder or
-    capsule that no tolerance answers is measured in closed form (:func:`sphere_distance`).
+    the shapes, so a depth never exceeds theirs). A sphere and a cylinder are measured in
+    closed form (:func:`sphere_distance`: coal's depths for them are wrong within those
+    bounds), as is a sphere against a sphere, box or capsule that no tolerance answers.
 
     Raises:
         ModelError: no tolerance of :data:`RETRY_TOLERANCES` gives a possible value, and
             no closed form applies.
     """
+    if closed_form_first(shape_a, shape_b):
+        exact = sphere_distance(shape_a, place_a, shape_b, place_b)
+        assert exact is not None  # a sphere and a cylinder have a closed form
+        return CheckedDistance(exact.min_distance, exact, 0)
     if not _REQUESTS:
         _REQUESTS.extend(_distance_request(t) for t in (GJK_TOLERANCE, *RETRY_TOLERANCES))
     least, most = spheres

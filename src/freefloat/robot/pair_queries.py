@@ -23,7 +23,7 @@ import pinocchio as pin
 from .distance_query import GJK_TOLERANCE, RETRY_TOLERANCES, Closest, checked_distance, configure
 from .model import Robot
 from .motion_bound import PairBounds, motion_weights
-from .sphere_distance import SphereWitness
+from .sphere_distance import SphereWitness, closed_form_first, sphere_distance
 from .sphere_kinematics import SphereKinematics
 from .witness_gradient import WitnessBatch, carriers
 
@@ -77,6 +77,13 @@ class PairQueries:
         # results of pairs asked again alone in the last call.
         self._pair_results = list(self._geometry_data.distanceResults)
         self._retried: dict[int, coal.DistanceResult | SphereWitness] = {}
+        # Pairs measured in closed form, not by coal (a sphere and a cylinder), and their
+        # results of the last query.
+        shapes = [obj.geometry for obj in geometry.geometryObjects]
+        self._closed = {
+            k for k, (a, b) in enumerate(pairs) if closed_form_first(shapes[a], shapes[b])
+        }
+        self._closed_results: dict[int, SphereWitness] = {}
         # Bounding spheres (centre in the shape's frame, radius; m): a distance outside what
         # they allow is impossible (see checked_distance).
         centres, radii = [], []
@@ -158,7 +165,7 @@ class PairQueries:
         bounds = low[rows, columns].tolist()
         columns_list = columns.tolist()
         witnesses = WitnessBatch(count, self.robot.n) if gradients else None
-        jacobian = self._data.J
+        jacobian, closed = self._data.J, self._closed
         for i in range(count):
             self._place(joints[i], jacobians=gradients)
             best, best_k = math.inf, -1
@@ -166,12 +173,16 @@ class PairQueries:
                 k = columns_list[j]
                 if bounds[j] > best + 1e-9:
                     break
-                value = compute(geometry, gdata, k).min_distance
+                if k in closed:
+                    value = self._closed_form(k)
+                else:
+                    value = compute(geometry, gdata, k).min_distance
                 values[i, k], measured[i, k] = value, True
                 if value < best or (value == best and k < best_k):
                     best, best_k = value, k
             if witnesses is not None and best_k >= 0:
-                witnesses.take(i, self._pair_results[best_k], jacobian[:, self._columns])
+                result = self._closed_results[best_k] if best_k in closed else None
+                witnesses.take(i, result or self._pair_results[best_k], jacobian[:, self._columns])
         sane = _possible(values, gaps, self._reach)
         retried: list[tuple[int, int]] = []
         for i in np.flatnonzero(np.any(measured & ~sane, axis=1)).tolist():
@@ -249,7 +260,14 @@ class PairQueries:
         """
         compute, geometry, gdata = pin.computeDistance, self.geometry, self._geometry_data
         reach = self._reach[measured]
-        found = np.array([compute(geometry, gdata, k).min_distance for k in measured.tolist()])
+        found = np.array(
+            [
+                self._closed_form(k)
+                if k in self._closed
+                else compute(geometry, gdata, k).min_distance
+                for k in measured.tolist()
+            ]
+        )
         possible = _possible(found, gap, reach)
         self._retried = {}
         if not possible.all():
@@ -282,7 +300,20 @@ class PairQueries:
 
     def _result(self, k: int) -> coal.DistanceResult | SphereWitness:
         """Pair ``k``'s result of the last query (the retried one when it was asked again)."""
+        if k in self._closed:
+            return self._closed_results[k]
         return self._retried.get(k, self._pair_results[k])
+
+    def _closed_form(self, k: int) -> float:
+        """Pair ``k``'s distance (m) in closed form at the placed shapes, its result kept."""
+        a, b = self.pairs[k]
+        placements = self._geometry_data.oMg
+        found = sphere_distance(
+            self._shapes[a], _transform(placements[a]), self._shapes[b], _transform(placements[b])
+        )
+        assert found is not None  # a pair of closed_form_first
+        self._closed_results[k] = found
+        return found.min_distance
 
     def _retry(self, k: int, gap: float, reach: float) -> float:
         """Pair ``k``'s distance (m) asked again alone at looser tolerances.

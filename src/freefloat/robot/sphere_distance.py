@@ -8,7 +8,8 @@ sphere against such a primitive the signed distance is that of the sphere's cent
 other shape less the sphere's radius, and the centre's signed distance has a closed form:
 outside, the distance to the nearest point of the shape; inside, minus the distance to the
 nearest point of its surface. :func:`sphere_distance` gives it with its witness points and
-normal, as coal's result does, for the queries coal gets wrong.
+normal, as coal's result does: always for a sphere and a cylinder
+(:func:`closed_form_first`), and for the other shapes where coal's answer is impossible.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from dataclasses import dataclass
 import coal
 import numpy as np
 
-__all__ = ["SphereWitness", "sphere_distance"]
+__all__ = ["SphereWitness", "closed_form_first", "sphere_distance"]
 
 
 @dataclass(frozen=True)
@@ -43,6 +44,17 @@ class SphereWitness:
     def getNearestPoint2(self) -> np.ndarray:  # noqa: N802 - coal's name, read alike
         """The witness point on the second shape (world frame, m)."""
         return self.points[1]
+
+
+def closed_form_first(shape_a: coal.CollisionGeometry, shape_b: coal.CollisionGeometry) -> bool:
+    """Whether the pair is measured in closed form rather than by coal: a sphere and a cylinder.
+
+    coal's routine for them takes the radial way out of an overlap whatever the cap's: its
+    depths are wrong (and jump where its way out changes) well inside what the bounding
+    spheres allow, so no check could catch them.
+    """
+    kinds = {type(shape_a), type(shape_b)}
+    return kinds == {coal.Sphere, coal.Cylinder}
 
 
 def sphere_distance(
