@@ -105,3 +105,15 @@ def test_samples_are_arrays_and_survive_the_file(tmp_path) -> None:
     np.testing.assert_allclose(plan.samples.q[-1], plan.request.goal_joints, atol=1e-12)
     again = ff.Plan.load(plan.save(tmp_path / "p.json"))
     assert again == plan and isinstance(again.samples.tau, np.ndarray)
+
+
+def test_check_says_why_clearance_was_not_checked(tmp_path, capsys) -> None:
+    """`[safety] check = false` is named as the reason, not a guess between two."""
+    text = UR5.read_text()
+    assert "[safety]" not in text
+    path = tmp_path / "unchecked.toml"
+    path.write_text(f"{text}\n[safety]\ncheck = false\n")
+    assert main(["check", str(path)]) == 0
+    assert (
+        "  clearance: not checked ([safety] check = false)" in capsys.readouterr().out.splitlines()
+    )

@@ -152,6 +152,9 @@ def test_ros2_bag_round_trip_resampled(worked_plan, plan_file, tmp_path):
     assert main(args) == 0
     assert main(args) == 0  # an existing bag is replaced
     assert "version: 8" in (out / "metadata.yaml").read_text()  # rosbag2 metadata format
+    slashed = tmp_path / "bag2"  # a bag is a folder: named with a trailing slash, it is one
+    assert main([*args[:-1], f"{slashed}{os.sep}"]) == 0
+    assert "version: 8" in (slashed / "metadata.yaml").read_text()
     # Truth evaluated here from the plan's coefficients (NumPy) and Pinocchio's inverse
     # dynamics, not by the exporter's resample(): instants every 1/4 s, and T.
     poly = np.polynomial.polynomial

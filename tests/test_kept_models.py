@@ -107,19 +107,29 @@ def test_an_srdf_rewritten_at_the_same_size_and_time_gets_its_own_models(tmp_pat
 
 
 def test_a_file_stamp_changes_with_the_content_fresh_or_still(tmp_path, monkeypatch):
-    """A fresh file is told by its digest; a still one by its change time (every write sets
-    it; setting the modification time back does not)."""
+    """A fresh file is told by its digest alone (every time the file system reports kept the
+    same); a still one by its change time (every write sets it; setting the modification time
+    back does not); a stamp compared with one that holds a digest holds one too."""
+    import types
+
     from freefloat.robot import file_stamp
 
     path = tmp_path / "mesh.stl"
     path.write_bytes(b"solid a\nendsolid a\n")
-    fresh = file_stamp.file_stamp(str(path))
-    assert fresh[-1] and fresh == file_stamp.file_stamp(str(path))
-    _same_size_rewrite(path, "solid b\nendsolid b\n")
-    assert file_stamp.file_stamp(str(path)) != fresh
+    info = path.stat()
+    frozen = types.SimpleNamespace(  # what os.stat reports, whatever is written
+        st_mtime_ns=time.time_ns(), st_ctime_ns=time.time_ns(), st_ino=7, st_size=info.st_size
+    )
+    with monkeypatch.context() as patched:
+        patched.setattr(file_stamp.os, "stat", lambda _: frozen)
+        fresh = file_stamp.file_stamp(str(path))
+        assert fresh[-1] and fresh == file_stamp.file_stamp(str(path))
+        path.write_bytes(b"solid b\nendsolid b\n")  # the same size, the same reported times
+        assert file_stamp.file_stamp(str(path)) != fresh  # the digest alone tells
     monkeypatch.setattr(file_stamp, "FRESH_S", -1.0)  # as if every file had been still
     still = file_stamp.file_stamp(str(path))
     assert still[-1] == "" and still == file_stamp.file_stamp(str(path))
+    assert file_stamp.file_stamp(str(path), like=fresh)[-1]  # compared with a digest: one
     for _ in range(200):  # a write in a later tick of the file system's clock
         _same_size_rewrite(path, "solid c\nendsolid c\n")
         if path.stat().st_ctime_ns != still[2]:

@@ -66,6 +66,26 @@ def test_full_turns_make_an_unreachable_request_a_verified_plan(tmp_path):
     assert lo < -40.0 < hi
 
 
+def test_no_path_is_faster_than_each_joints_shortest_way_at_its_limit(tmp_path):
+    """The least duration: a revolute joint's span over its limit; a continuous joint also
+    reaches its goal the other way round (0 to 5 rad is 2 pi - 5 rad back)."""
+    from freefloat.problem.constraints.joint_velocity import JointVelocityLimits
+
+    for kind, span in (("revolute", 2.5), ("continuous", 2.0 * math.pi - 5.0)):
+        body = urdfs.BASE.format(mass=100.0, i=10.0)
+        body += urdfs.joint("q1", "base", "l1", kind, limits=(-6.0, 6.0)) + urdfs.link("l1")
+        body += urdfs.joint("q2", "l1", "l2", "revolute") + urdfs.link("l2")
+        urdf = tmp_path / f"{kind}.urdf"
+        urdf.write_text(urdfs.robot(body))  # velocity limits 2 rad/s
+        robot = ff.load_robot(urdf)
+        goal = [2.5 if kind == "revolute" else 5.0, -1.0]
+        problem = ff.build_problem(
+            robot, [0, 0], goal, ff.quat_from_zyx(0.0), ff.quat_from_zyx(0.0), 1.0
+        )
+        peak = JointVelocityLimits().worst(robot, problem.polynomials(np.zeros(problem.n_free)))
+        assert peak is not None and peak.least_duration == pytest.approx(span / 2.0, rel=1e-12)
+
+
 def test_velocity_limit_reports_the_shortest_duration(tmp_path):
     body = urdfs.BASE.format(mass=100.0, i=10.0)
     body += urdfs.joint("q1", "base", "l1", "continuous") + urdfs.link("l1")

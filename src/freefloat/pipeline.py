@@ -180,14 +180,11 @@ def _warn_light_base(robot: Robot) -> None:
     masses = [float(inertia.mass) for inertia in robot.model.inertias[1:]]
     base, carried = masses[0], sum(masses[1:])
     if base < carried:
-        from .robot.urdf_checks import check_urdf_xml
-
-        root = check_urdf_xml(robot.urdf_text).root_link if robot.urdf_text else "the root"
         LOGGER.warning(
             "the spacecraft (the URDF's root link %r, %.3g kg) is lighter than the bodies it "
             "carries (%.3g kg); if the URDF describes an arm alone, add a spacecraft with "
             "freefloat compose or an inline [robot] table",
-            root,
+            robot.base_link,
             base,
             carried,
         )

@@ -173,8 +173,9 @@ def reachable(
     Raises:
         InputLimitError: ``jobs`` is not a whole number from 1 to
             :data:`~freefloat.parallel.MAX_JOBS`.
-        JointLimitError, CollisionError: with a budget, the start or goal joints outside
-            their limits or closer than the clearance margin, as ``plan`` refuses them.
+        JointLimitError: the start or goal joints outside their limits.
+        CollisionError: the start or goal closer than the clearance margin, as ``plan``
+            refuses it (a spatial robot's only with a budget: the inner estimate's claim).
     """
     check_jobs(jobs, "jobs")
     scenario = scenario.resolved()
@@ -183,6 +184,7 @@ def reachable(
     mmap = MomentumMap(scenario.robot)
     ratio = inertia_ratio(mmap, probe.family.start)
     if probe.planar:
+        check_endpoints(scenario, scenario_constraints(scenario))  # as plan refuses them
         return _planar_report(scenario, probe, ratio)
     extra = scenario.extra if scenario.extra is not None else [2] * scenario.robot.n
     problem = problem_from_scenario(scenario, extra=extra, check_bounds=False)

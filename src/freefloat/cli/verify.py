@@ -75,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _reading(check: Check) -> str:
-    """How to read one constraint row, with its own figure (its unit, as printed)."""
+    """How to read one constraint row, with its own figure (to 3 digits) in its unit."""
     value, unit = check.value, check.unit
     if check.name == "clearance":
         where = "beyond" if value <= 0.0 else "short of"

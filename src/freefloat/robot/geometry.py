@@ -167,7 +167,7 @@ def _srdf_stamp(srdf: str | Path | None, strict: bool = True) -> FileStamp | Non
     path = Path(srdf).expanduser().resolve()
     if strict and not path.is_file():
         raise ModelError(f"SRDF file not found: {path}")
-    return file_stamp(str(path))
+    return file_stamp(str(path), digest=True)  # a small text file: its content, always
 
 
 def _parsed(robot: Robot) -> tuple[pin.GeometryModel, dict[int, MeshKey]]:
@@ -191,7 +191,7 @@ def _parsed_entry(
         tuple(robot.model.names),
     )
     parsed = _PARSED.get(key)
-    if parsed is None or parsed[1] != _stamps(parsed[0]):
+    if parsed is None or parsed[1] != _stamps(parsed[0], parsed[1]):
         dirs = [str(d) for d in robot.package_dirs]
         try:
             # from the text the robot was loaded from, the one the models are kept under (the
@@ -220,9 +220,14 @@ def _parsed_entry(
     return parsed
 
 
-def _stamps(geometry: pin.GeometryModel) -> tuple[FileStamp, ...]:
-    """The stamp (:func:`.file_stamp.file_stamp`) of every mesh file the model read."""
-    return tuple(file_stamp(obj.meshPath) for obj in geometry.geometryObjects if obj.meshPath)
+def _stamps(geometry: pin.GeometryModel, like: tuple[FileStamp, ...] = ()) -> tuple[FileStamp, ...]:
+    """The stamp (:func:`.file_stamp.file_stamp`) of every mesh file the model read.
+
+    ``like``: the stamps to compare with (a digest where they hold one).
+    """
+    paths = [obj.meshPath for obj in geometry.geometryObjects if obj.meshPath]
+    earlier = list(like) if len(like) == len(paths) else [None] * len(paths)
+    return tuple(file_stamp(p, e) for p, e in zip(paths, earlier, strict=True))
 
 
 #: Parsed collision geometry per URDF (see load_collision_geometry), with its mesh files' stamps.

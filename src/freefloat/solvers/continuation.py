@@ -278,7 +278,7 @@ class _Step:
     Attributes:
         beta: the corrected path's free coefficients (rad or m), None when none was found.
         residual: its residual (rad).
-        jacobian: the residual's Jacobian there.
+        jacobian: the residual's Jacobian there (rad per unit of ``beta``).
         iterations: the first corrector's Newton iterations (they set the next step).
         spent: every corrector's iterations.
         instants: the instants now imposed (normalised).

@@ -260,7 +260,7 @@ class _Run:
 
     Attributes:
         candidate: its end point polished onto the goal (rad or m), None when it has none.
-        z: its end point in scaled coordinates.
+        z: its end point in scaled coordinates (unitless: ``beta = beta0 + S z``).
         iterations: SLSQP iterations spent.
         success: whether SLSQP says it converged.
         note: why there is no candidate ("" when there is one).

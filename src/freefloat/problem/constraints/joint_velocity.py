@@ -84,7 +84,10 @@ class JointVelocityLimits(DurationScaledLimit):
                 (lo, _), (hi, _) = path.extremes(i, 1)
                 rate = max(abs(lo), abs(hi))
                 fraction = rate / joint.velocity_limit
-                least = max(least, abs(float(ends[1, i] - ends[0, i])) / joint.velocity_limit)
+                span = float(ends[1, i] - ends[0, i])
+                if joint.kind == "continuous":  # the goal is also reached the other way round
+                    span = math.remainder(span, 2.0 * math.pi)
+                least = max(least, abs(span) / joint.velocity_limit)
                 if worst is None or fraction > worst.fraction:
                     worst = LimitPeak(
                         joint, rate, joint.velocity_limit, fraction, path.duration * fraction
