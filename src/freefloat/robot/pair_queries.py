@@ -77,8 +77,7 @@ class PairQueries:
         # results of pairs asked again alone in the last call.
         self._pair_results = list(self._geometry_data.distanceResults)
         self._retried: dict[int, coal.DistanceResult | SphereWitness] = {}
-        # Pairs measured in closed form, not by coal (a sphere and a cylinder), and their
-        # results of the last query.
+        # Pairs measured in closed form (a sphere and a cylinder), their last query's results.
         shapes = [obj.geometry for obj in geometry.geometryObjects]
         self._closed = {
             k for k, (a, b) in enumerate(pairs) if closed_form_first(shapes[a], shapes[b])
@@ -165,7 +164,7 @@ class PairQueries:
         bounds = low[rows, columns].tolist()
         columns_list = columns.tolist()
         witnesses = WitnessBatch(count, self.robot.n) if gradients else None
-        jacobian, closed = self._data.J, self._closed
+        jacobian, closed, exact = self._data.J, self._closed, self._closed_form
         for i in range(count):
             self._place(joints[i], jacobians=gradients)
             best, best_k = math.inf, -1
@@ -173,10 +172,7 @@ class PairQueries:
                 k = columns_list[j]
                 if bounds[j] > best + 1e-9:
                     break
-                if k in closed:
-                    value = self._closed_form(k)
-                else:
-                    value = compute(geometry, gdata, k).min_distance
+                value = exact(k) if k in closed else compute(geometry, gdata, k).min_distance
                 values[i, k], measured[i, k] = value, True
                 if value < best or (value == best and k < best_k):
                     best, best_k = value, k
@@ -259,14 +255,10 @@ class PairQueries:
         to the last bit, on what was asked before.
         """
         compute, geometry, gdata = pin.computeDistance, self.geometry, self._geometry_data
-        reach = self._reach[measured]
+        reach, closed, exact = self._reach[measured], self._closed, self._closed_form
+        listed = measured.tolist()
         found = np.array(
-            [
-                self._closed_form(k)
-                if k in self._closed
-                else compute(geometry, gdata, k).min_distance
-                for k in measured.tolist()
-            ]
+            [exact(k) if k in closed else compute(geometry, gdata, k).min_distance for k in listed]
         )
         possible = _possible(found, gap, reach)
         self._retried = {}
