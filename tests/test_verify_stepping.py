@@ -12,6 +12,7 @@ from __future__ import annotations
 import itertools
 import math
 
+import freefloat as ff
 from freefloat.verify.stepping import _decided
 
 TOLERANCE = 1e-4
@@ -70,3 +71,32 @@ def test_a_first_chance_agreement_decides_nothing() -> None:
     assert _decided(1e-6, 1e-9, math.inf, TOLERANCE, 0.01, math.inf)  # below 1e-5 of it
     # A value over the tolerance by less than a small estimate is not refused either.
     assert not _decided(1.05 * TOLERANCE, 0.1 * TOLERANCE, 1.0, TOLERANCE, 0.01, 8.0)
+
+
+def test_a_check_within_its_own_error_of_the_tolerance_gives_no_verdict() -> None:
+    """Within the tolerance whatever its own error: ok; within its own error of it, either
+    side: no verdict (not refused); beyond both: FAILED."""
+    from freefloat.plans.guarantees import Check
+
+    assert Check("replay_attitude", 5e-5, 1e-4, "rad", 2e-5).verdict == "ok"
+    assert Check("replay_attitude", 5e-5, 1e-4, "rad", 2e-3).verdict == "no verdict"
+    undecided = Check("replay_attitude", 2.7, 1e-4, "rad", 2.7)
+    assert undecided.verdict == "no verdict" and undecided.passed
+    assert Check("replay_attitude", 3e-4, 1e-4, "rad", 1e-5).verdict == "FAILED"
+    assert Check("replay_attitude", math.nan, 1e-4, "rad", 1.0).verdict == "FAILED"
+
+
+def test_a_replay_allowed_other_steps_is_judged_not_compared(worked_plan, tmp_path, capsys):
+    """The worked example's replay needs 64 steps; allowed 32 it cannot converge: its
+    figures differ from the file's (made with the default cap), which is no mismatch. The
+    table says 'no verdict' for it, and the plan is not refused."""
+    from freefloat.cli import main
+
+    path = worked_plan.save(tmp_path / "worked.plan.json")
+    result = ff.verify_plan(ff.Plan.load(path), replay_steps=32)
+    replay = result["replay_attitude"]
+    assert "not converged" in replay.detail and replay.verdict == "no verdict" and result.passed
+    assert replay.value != worked_plan.verification["replay_attitude"].value
+    assert main(["verify", str(path), "--replay-steps", "32"]) == 0
+    row = next(x for x in capsys.readouterr().out.splitlines() if "replay_attitude" in x)
+    assert row.endswith("no verdict")

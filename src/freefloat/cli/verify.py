@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         label = f"{check.name} [{check.unit}]"
         print(
             f"  {label:<34}{check.value:>12.3e}{check.tolerance:>12.1e}"
-            f"{check.error_estimate:>12.1e}  {'ok' if check.passed else 'FAILED'}"
+            f"{check.error_estimate:>12.1e}  {check.verdict}"
         )
     print(f"  {'verification':<34}{'passed' if result.passed else 'FAILED':>12}")
     from ..problem.constraints import CONSTRAINTS

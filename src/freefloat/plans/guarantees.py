@@ -52,6 +52,20 @@ class Check:
         """Whether ``value <= tolerance + error_estimate`` (NaN never passes)."""
         return math.isfinite(self.value) and self.value <= self.tolerance + self.error_estimate
 
+    @property
+    def verdict(self) -> str:
+        """``"ok"``, ``"FAILED"``, or ``"no verdict"``.
+
+        Ok: within the tolerance whatever the check's own error (``value + error_estimate <=
+        tolerance``). No verdict: within its own error of the tolerance, on either side, so
+        the check cannot tell (a forward-dynamics replay whose steps do not resolve a long
+        motion, say); the plan is not refused for it (:attr:`passed`), and says so rather
+        than "ok". FAILED: beyond the tolerance by more than its error.
+        """
+        if not self.passed:
+            return "FAILED"
+        return "ok" if self.value + self.error_estimate <= self.tolerance else "no verdict"
+
 
 @dataclass(frozen=True)
 class Verification:

@@ -96,12 +96,17 @@ def replay_checks(subject: Subject) -> list[Check]:
         # The steps allowed do not resolve this motion (a long, fast or sensitive one): the
         # difference bounds nothing, and the replay cannot tell its error from the value.
         # A level that blew up (a long chain's open-loop replay diverges) differs by inf: the
-        # value itself is then the bound, so the file holds finite numbers.
-        att_estimate = (
-            max(att_estimate, level.attitude) if math.isfinite(att_estimate) else level.attitude
+        # value itself is then the bound, so the file holds finite numbers. At least the
+        # tolerance too: the check's verdict is then "no verdict", never "ok".
+        att_tolerance, joint_tolerance = (
+            TOLERANCES["replay_attitude_rad"],
+            TOLERANCES["replay_joint"],
         )
-        joint_estimate = (
-            max(joint_estimate, level.joints) if math.isfinite(joint_estimate) else level.joints
+        att_estimate = max(
+            att_estimate if math.isfinite(att_estimate) else 0.0, level.attitude, att_tolerance
+        )
+        joint_estimate = max(
+            joint_estimate if math.isfinite(joint_estimate) else 0.0, level.joints, joint_tolerance
         )
         detail += ", not converged: no verdict"
     return [

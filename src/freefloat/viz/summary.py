@@ -79,11 +79,23 @@ def summary(
     lines += list(extra_lines)
     v = p.verification
     if v.checks:
+        replay = v["replay_attitude"]
+        replayed = (
+            f"replay {replay.value:.1e} rad"
+            if replay.verdict != "no verdict"
+            else f"replay no verdict ({replay.detail})"
+        )
         lines.append(
             f"  verification    {'passed' if v.passed else 'FAILED'}: independent attitude "
-            f"{v['attitude_independent'].value:.1e} rad, replay "
-            f"{v['replay_attitude'].value:.1e} rad, momentum {v['momentum'].value:.1e} kg m^2/s"
+            f"{v['attitude_independent'].value:.1e} rad, {replayed}, momentum "
+            f"{v['momentum'].value:.1e} kg m^2/s"
         )
+        undecided = [c.name for c in v.checks if c.verdict == "no verdict"]
+        if undecided:
+            lines.append(
+                f"  no verdict      {', '.join(undecided)}: above the tolerance but within the "
+                "check's own error; not refused for it (freefloat verify --replay-steps)"
+            )
     if constraints := constraints_line(p):
         lines.append(constraints)
     lines.append(clearance_line(p))
