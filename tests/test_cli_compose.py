@@ -54,3 +54,20 @@ def test_each_number_beyond_its_limit_is_refused_naming_option_and_unit(tmp_path
     shown = f"{float(value):g}"
     assert err.startswith(f"freefloat: error: {option} = {shown} {unit} is ")
     assert err.endswith(f"is outside the supported range [-{high}, {high}] {unit}\n")
+
+
+def test_a_servicer_freefloat_refuses_is_never_written(tmp_path, capsys):
+    """A 2e7 kg box passes compose's own limit (1e9 kg) but not the URDF reader's (1e7 per
+    mass): the command refuses it in one line and writes nothing, and an earlier servicer of
+    that name stays as it was, byte for byte."""
+    output = tmp_path / "keep.urdf"
+    assert main(_argv(VALID, output)) == 0
+    kept = output.read_bytes()
+    capsys.readouterr()
+    assert main(_argv({**VALID, "--base-mass": ["2e7"]}, output)) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "beyond the largest magnitude" in err
+    assert output.read_bytes() == kept
+    fresh = tmp_path / "new.urdf"
+    assert main(_argv({**VALID, "--base-mass": ["2e7"]}, fresh)) == 2
+    assert not fresh.exists() and not fresh.with_suffix(".srdf").exists()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import InputError
@@ -182,8 +183,10 @@ def run(args: argparse.Namespace) -> int:
     spec = _servicer_spec(args, _payload(args))
     with stage("compose servicer"):
         composed = compose(spec)
+        # loaded from its text first: a servicer freefloat refuses is never written (and an
+        # earlier file of that name stays as it was)
+        robot = load_robot(Path(args.output), composed.end_effectors, text=composed.text)
         path = write_composed(composed, args.output)
-        robot = load_robot(path, composed.end_effectors)
     print(f"freefloat compose: wrote {path}")
     if composed.srdf is not None:
         print(f"  with {path.with_suffix('.srdf').name}: each arm's SRDF pairs, prefixed")
