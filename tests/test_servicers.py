@@ -160,7 +160,9 @@ def test_compose_cli_and_its_errors(tmp_path, capsys):
         )
         == 2
     )
-    assert "unknown joint to lock 'elbow'" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "unknown movable joint to lock 'elbow'; valid: panda_joint1, " in err
+    assert "panda_joint8" not in err  # a fixed joint (the Panda's flange) is not offered
     assert not (tmp_path / "x.urdf").exists() and not (tmp_path / "y.urdf").exists()
 
 

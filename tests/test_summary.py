@@ -184,7 +184,7 @@ def test_verify_reads_a_constraint_row_with_the_plans_own_figure(tmp_path, capsy
     clearance = next(c for c in ff.Plan.load(out).verification.checks if c.name == "clearance")
     assert clearance.value < 0.0
     assert note == (
-        f"  it holds (clearance {clearance.value:.3g} m: the smallest distance is "
+        f"  it holds (clearance {clearance.value:.3g} m: the smallest distance is at least "
         f"{-clearance.value:.3g} m beyond the margin)"
     )
 

@@ -78,11 +78,12 @@ def _reading(check: Check) -> str:
     """How to read one constraint row, with its own figure (to 3 digits) in its unit."""
     value, unit = check.value, check.unit
     if check.name == "clearance":
-        where = "beyond" if value <= 0.0 else "short of"
-        return (
-            f"clearance {value:.3g} m: the smallest distance is {abs(value):.3g} m {where} the "
-            "margin"
-        )
+        if value <= 0.0:  # the certificate's lower bound of the smallest distance
+            return (
+                f"clearance {value:.3g} m: the smallest distance is at least {-value:.3g} m "
+                "beyond the margin"
+            )
+        return f"clearance {value:.3g} m: the smallest distance may be {value:.3g} m short of it"
     if value <= 0.0:
         return f"{check.name} {value:.3g} {unit}: the tightest is {-value:.3g} {unit} inside it"
     return f"{check.name} {value:.3g} {unit}: the worst goes {value:.3g} {unit} beyond it"

@@ -193,8 +193,8 @@ def _lock_values(arm: ArmSpec, joints: Sequence[Any]) -> tuple[dict[str, float],
     values: dict[str, float] = {}
     notes: list[str] = []
     for name, value in asked.items():
-        if name not in movable:
-            raise UnknownNameError("joint to lock", name, [j.name for j in joints])
+        if name not in movable:  # a fixed joint is no joint to lock: only movable ones listed
+            raise UnknownNameError("movable joint to lock", name, list(movable))
         joint = movable[name]
         if joint.type != "continuous" and joint.limit is not None:
             low, high = float(joint.limit.lower), float(joint.limit.upper)
