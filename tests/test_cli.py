@@ -144,6 +144,16 @@ def test_bounds_command(capsys):
     assert "requested yaw change: 50.000 deg -> feasible" in out
 
 
+def test_bounds_plot_of_a_planar_robot_is_refused_not_dropped(tmp_path, capsys):
+    """A planar robot has no estimate to draw: --plot is refused in one line (exit 2, nothing
+    printed, nothing written) rather than silently ignored."""
+    figure = tmp_path / "bounds.png"
+    assert main(["bounds", "--plot", str(figure)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "freefloat reach --plot" in err
+    assert not figure.exists()
+
+
 def test_bounds_of_an_infeasible_request_reports_it(tmp_path, capsys):
     scenario = tmp_path / "s.toml"
     scenario.write_text(scenario_text(yaw="40.0"))

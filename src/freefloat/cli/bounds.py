@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from ..errors import InputLimitError
+from ..errors import InputError, InputLimitError
 from ..parallel import check_jobs
 from ..problem.build import planar_yaw_branch, problem_from_scenario
 from ..problem.scenario import Scenario
@@ -66,6 +66,11 @@ def run(args: argparse.Namespace) -> int:
     problem = problem_from_scenario(scenario.resolved(), check_bounds=False)
     if problem.bounds is None or problem.yaw_change is None:
         return spatial_bounds(scenario, args)
+    if args.plot:  # before any line is printed: nothing drawn would be silently dropped
+        raise InputError(
+            f"--plot draws a spatial robot's estimate; {scenario.robot.name} is planar: its "
+            "bounds are the interval printed here, and freefloat reach --plot draws them"
+        )
     bounds = problem.bounds
     delta = problem.family.goal - problem.family.start
     print(f"freefloat bounds: {scenario.robot.name} (planar), simple point-to-point motion")
