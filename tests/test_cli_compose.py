@@ -71,3 +71,14 @@ def test_a_servicer_freefloat_refuses_is_never_written(tmp_path, capsys):
     fresh = tmp_path / "new.urdf"
     assert main(_argv({**VALID, "--base-mass": ["2e7"]}, fresh)) == 2
     assert not fresh.exists() and not fresh.with_suffix(".srdf").exists()
+
+
+def test_a_payload_mass_of_zero_is_named_before_what_it_would_need(tmp_path, capsys):
+    """`--payload-mass 0` alone: the mass is the problem, not a missing inertia."""
+    argv = _argv(
+        {k: VALID[k] for k in ("--base-mass", "--base-size", "--mount")}, tmp_path / "p.urdf"
+    )
+    assert main([*argv[:-2], "--payload-mass", "0", *argv[-2:]]) == 2
+    assert capsys.readouterr().err == (
+        "freefloat: error: --payload-mass must be a finite number > 0 kg, got 0.0\n"
+    )

@@ -218,6 +218,10 @@ def _payload(args: argparse.Namespace) -> Payload | None:
                 "--payload-com, --payload-inertia and --payload-box need --payload-mass"
             )
         return None
+    if not (math.isfinite(args.payload_mass) and args.payload_mass > 0.0):  # the mass first
+        raise InputError(
+            f"--payload-mass must be a finite number > 0 kg, got {args.payload_mass!r}"
+        )
     com = tuple(args.payload_com or (0.0, 0.0, 0.0))
     box = tuple(args.payload_box) if args.payload_box is not None else None
     if args.payload_inertia is not None:
