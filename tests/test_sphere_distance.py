@@ -164,29 +164,17 @@ def test_a_sphere_deep_in_a_cylinder_leaves_through_the_nearer_cap():
     assert sphere_distance(cylinder, place_a, coal.Box(0.1, 0.1, 0.1), place_b) is None
 
 
-CYLINDER_ARM = """<?xml version="1.0"?>
-<robot name="cylinder_arm">
-  <link name="base">
-    <inertial><mass value="100.0"/><inertia ixx="16.7" iyy="16.7" izz="16.7" ixy="0" ixz="0"
-      iyz="0"/></inertial>
-    <collision><geometry><box size="1.0 1.0 1.0"/></geometry></collision>
-    <collision><origin xyz="2.12 0.005 0.15"/>
-      <geometry><cylinder radius="0.2" length="0.5"/></geometry></collision>
-  </link>
-  <joint name="q1" type="revolute"><parent link="base"/><child link="l1"/>
-    <origin xyz="0.5 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-3.1" upper="3.1" effort="10" velocity="2"/></joint>
-  <link name="l1"><inertial><origin xyz="0.5 0 0"/><mass value="5.0"/>
-    <inertia ixx="0.01" iyy="0.4" izz="0.4" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <joint name="q2" type="revolute"><parent link="l1"/><child link="l2"/>
-    <origin xyz="1.0 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-3.1" upper="3.1" effort="10" velocity="2"/></joint>
-  <link name="l2"><inertial><origin xyz="0.3 0 0"/><mass value="3.0"/>
-    <inertia ixx="0.01" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial>
-    <collision><origin xyz="0.6 0 0"/><geometry><sphere radius="0.1"/></geometry></collision>
-  </link>
-</robot>
-"""
+def _cylinder_arm() -> str:
+    """The sphere arm of test_collision with an upright cylinder on its spacecraft."""
+    from test_collision import SPHERE_ARM
+
+    box = '<collision><geometry><box size="1.0 1.0 1.0"/></geometry></collision>'
+    cylinder = (
+        '<collision><origin xyz="2.12 0.005 0.15"/>'
+        '<geometry><cylinder radius="0.2" length="0.5"/></geometry></collision>'
+    )
+    assert box in SPHERE_ARM
+    return SPHERE_ARM.replace(box, box + cylinder)
 
 
 def test_a_sphere_in_a_cylinder_is_measured_in_closed_form_by_the_collision_model(tmp_path):
@@ -198,7 +186,7 @@ def test_a_sphere_in_a_cylinder_is_measured_in_closed_form_by_the_collision_mode
     from freefloat.robot.collision import CollisionModel
 
     path = tmp_path / "cylinder_arm.urdf"
-    path.write_text(CYLINDER_ARM)
+    path.write_text(_cylinder_arm())
     model = CollisionModel(ff.load_robot(path))
     k = next(i for i, name in enumerate(model.names) if "base_1" in name and "l2" in name)
     for q1 in (0.0, 0.01, -0.02):
