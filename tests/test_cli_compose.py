@@ -67,6 +67,7 @@ def test_a_servicer_freefloat_refuses_is_never_written(tmp_path, capsys):
     assert main(_argv({**VALID, "--base-mass": ["2e7"]}, output)) == 2
     out, err = capsys.readouterr()
     assert out == "" and err.count("\n") == 1 and "beyond the largest magnitude" in err
+    assert err.startswith("freefloat: error: the composed servicer is refused, nothing written: ")
     assert output.read_bytes() == kept
     fresh = tmp_path / "new.urdf"
     assert main(_argv({**VALID, "--base-mass": ["2e7"]}, fresh)) == 2

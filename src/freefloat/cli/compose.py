@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import InputError
+from ..errors import InputError, ModelError
 from ..problem.limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, check_number
 from ..progress import stage
 from .common import Commands, check_outputs
@@ -185,7 +185,13 @@ def run(args: argparse.Namespace) -> int:
         composed = compose(spec)
         # loaded from its text first: a servicer freefloat refuses is never written (and an
         # earlier file of that name stays as it was)
-        robot = load_robot(Path(args.output), composed.end_effectors, text=composed.text)
+        try:
+            robot = load_robot(Path(args.output), composed.end_effectors, text=composed.text)
+        except ModelError as exc:  # named as the servicer composed, not as a file read
+            reason = str(exc).removeprefix(f"{exc.urdf}: ") if exc.urdf else str(exc)
+            raise ModelError(
+                f"the composed servicer is refused, nothing written: {reason}"
+            ) from None
         path = write_composed(composed, args.output)
     print(f"freefloat compose: wrote {path}")
     if composed.srdf is not None:
