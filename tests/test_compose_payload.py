@@ -83,7 +83,7 @@ def test_payload_with_com_and_inertia(tmp_path):
 @pytest.mark.parametrize(
     "args, message",
     [
-        (["--payload-mass", "-1", "--payload-box", "1", "1", "1"], "payload mass must be"),
+        (["--payload-mass", "-1", "--payload-box", "1", "1", "1"], "--payload-mass must be"),
         (
             ["--payload-mass", "10", "--payload-inertia", "1", "1", "5", "0", "0", "0"],
             "triangle inequality",
