@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -73,6 +74,15 @@ def test_plot_cli_writes_valid_images(tmp_path, worked_plan, capsys):
     assert all(p.read_text().lstrip().startswith("<?xml") for p in svgs)
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporaries left
     assert "16 files" in capsys.readouterr().out
+
+
+def test_plot_into_a_folder_named_with_a_trailing_slash(tmp_path, worked_plan, capsys):
+    """Figures go into a folder: `-o figs/` (not there yet) is that folder, not refused."""
+    plan_path = worked_plan.save(tmp_path / "p.json")
+    out = tmp_path / "figs"
+    assert main(["plot", str(plan_path), "-o", f"{out}{os.sep}"]) == 0
+    assert {p.stem for p in out.glob("*.png")} == {*TOPICS, "overview"}
+    capsys.readouterr()
 
 
 def test_broken_matplotlib_gives_a_clear_error(tmp_path, worked_plan):

@@ -114,6 +114,10 @@ def test_a_sphere_outside_is_coals_distance_and_inside_the_brute_force_depth(nam
             result = coal.DistanceResult()
             truth = coal.distance(ball, place_a, shape, place_b, request, result)
             assert found.min_distance == pytest.approx(truth, abs=1e-8)
+            # coal's witnesses and normal: the same points, the same direction (ball to shape)
+            assert np.allclose(found.normal, result.normal, atol=1e-6)
+            assert np.allclose(p1, result.getNearestPoint1(), atol=1e-6)
+            assert np.allclose(p2, result.getNearestPoint2(), atol=1e-6)
 
 
 @pytest.mark.parametrize("name", sorted(SHAPES))

@@ -224,3 +224,24 @@ def test_a_spacecraft_lighter_than_what_it_carries_is_warned_about(tmp_path, cap
     with caplog.at_level(logging.WARNING, logger="freefloat"):
         ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml"))
     assert not any("lighter than" in r.getMessage() for r in caplog.records)
+
+
+def test_verify_reads_a_limit_row_when_there_is_no_clearance(tmp_path, capsys):
+    """The UR5 servicer with clearance turned off: the note reads its first constraint row,
+    the joint position limits, with that row's figure, inside its limits."""
+    text = (ROOT / "robots" / "scenarios" / "ur5_servicer.toml").read_text()
+    scenario = tmp_path / "unchecked.toml"
+    scenario.write_text(f"{text}\n[safety]\ncheck = false\n")
+    out = tmp_path / "p.json"
+    assert main(["plan", str(scenario), "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["verify", str(out)]) == 0
+    note = capsys.readouterr().out.strip().splitlines()[-1]
+    checks = ff.Plan.load(out).verification.checks
+    assert not any(c.name == "clearance" for c in checks)
+    row = next(c for c in checks if c.name == "joint_position_limits")
+    assert row.value < 0.0
+    assert note == (
+        f"  it holds (joint_position_limits {row.value:.3g} {row.unit}: the tightest is "
+        f"{-row.value:.3g} {row.unit} inside it)"
+    )
