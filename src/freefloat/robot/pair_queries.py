@@ -77,12 +77,6 @@ class PairQueries:
         # results of pairs asked again alone in the last call.
         self._pair_results = list(self._geometry_data.distanceResults)
         self._retried: dict[int, coal.DistanceResult | SphereWitness] = {}
-        # Pairs measured in closed form (a sphere and a cylinder), their last query's results.
-        shapes = [obj.geometry for obj in geometry.geometryObjects]
-        self._closed = {
-            k for k, (a, b) in enumerate(pairs) if closed_form_first(shapes[a], shapes[b])
-        }
-        self._closed_results: dict[int, SphereWitness] = {}
         # Bounding spheres (centre in the shape's frame, radius; m): a distance outside what
         # they allow is impossible (see checked_distance).
         centres, radii = [], []
@@ -92,6 +86,12 @@ class PairQueries:
             radii.append(float(obj.geometry.aabb_radius))
         self._centres, self._radii = np.array(centres), np.array(radii)
         self._shapes = [obj.geometry for obj in geometry.geometryObjects]
+        # Pairs measured in closed form (a sphere and a cylinder), their last query's results.
+        shapes = self._shapes
+        self._closed = {
+            k for k, (a, b) in enumerate(pairs) if closed_form_first(shapes[a], shapes[b])
+        }
+        self._closed_results: dict[int, SphereWitness] = {}
         # (G, N) per shape, which of the robot's joints carry it (1.0 or 0.0 per joint; all
         # zeros for a shape fixed to the spacecraft).
         self._carried = np.array(
@@ -177,8 +177,8 @@ class PairQueries:
                 if value < best or (value == best and k < best_k):
                     best, best_k = value, k
             if witnesses is not None and best_k >= 0:
-                result = self._closed_results[best_k] if best_k in closed else None
-                witnesses.take(i, result or self._pair_results[best_k], jacobian[:, self._columns])
+                results = self._closed_results if best_k in closed else self._pair_results
+                witnesses.take(i, results[best_k], jacobian[:, self._columns])
         sane = _possible(values, gaps, self._reach)
         retried: list[tuple[int, int]] = []
         for i in np.flatnonzero(np.any(measured & ~sane, axis=1)).tolist():

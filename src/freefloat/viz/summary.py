@@ -92,9 +92,14 @@ def summary(
         )
         undecided = [c.name for c in v.checks if c.verdict == "no verdict"]
         if undecided:
+            settle = (
+                " (more steps: freefloat verify --replay-steps)"
+                if any(name.startswith("replay") for name in undecided)
+                else ""
+            )
             lines.append(
-                f"  no verdict      {', '.join(undecided)}: above the tolerance but within the "
-                "check's own error; not refused for it (freefloat verify --replay-steps)"
+                f"  no verdict      {', '.join(undecided)}: within its own error of the "
+                f"tolerance, either side; not refused for it{settle}"
             )
     if constraints := constraints_line(p):
         lines.append(constraints)
