@@ -19,6 +19,7 @@ import numpy as np
 from ..physics.momentum import MomentumMap
 from ..physics.planar_map import PlanarMap
 from ..robot.model import Robot
+from .quasi_random import unit_points
 
 __all__ = ["PlanarBounds", "joint_ranges", "planar_bounds"]
 
@@ -75,14 +76,15 @@ def planar_bounds(
 ) -> PlanarBounds:
     """Extremes of each gain ``g_i(q)`` for a planar robot.
 
-    The gains are sampled on a grid (up to two joints) or a scrambled Sobol set, and the best
-    samples are refined with bounded quasi-Newton searches, so the extremes are accurate to
-    the optimiser's tolerance (about 1e-10).
+    The gains are sampled on a grid (up to two joints) or at evenly spread points
+    (:func:`.quasi_random.unit_points`), and the best samples are refined with bounded
+    quasi-Newton searches, so the extremes are accurate to the optimiser's tolerance (about
+    1e-10).
 
     Args:
         mmap: momentum map of a planar robot.
         samples: number of configurations sampled before refinement.
-        seed: seed of the Sobol scrambling (the result is deterministic for a seed).
+        seed: shift of the evenly spread points (:func:`.quasi_random.unit_points`).
         axis: the planar axis (base frame); default base z.
         planar_map: the robot's cosine-polynomial gains, to evaluate them vectorised.
     """
@@ -93,9 +95,7 @@ def planar_bounds(
         axes = [np.linspace(lo, hi, per_axis) for lo, hi in ranges]
         points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, n)
     else:
-        from scipy.stats import qmc  # slow to import: only for three joints and more
-
-        unit = qmc.Sobol(n, scramble=True, seed=seed).random(samples)
+        unit = unit_points(samples, n, seed)
         points = ranges[:, 0] + unit * (ranges[:, 1] - ranges[:, 0])
     n_axis = np.array([0.0, 0.0, 1.0]) if axis is None else np.asarray(axis, dtype=float)
 

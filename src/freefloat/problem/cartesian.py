@@ -18,11 +18,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 from scipy.optimize import least_squares, minimize
-from scipy.stats import qmc
 
 from ..errors import InputError, UnreachableGoalError
 from ..physics.momentum import MomentumMap
 from .bounds import joint_ranges
+from .quasi_random import unit_points
 
 __all__ = ["FrameGoal", "solve_cartesian_goal", "solve_frame_goals", "workspace_radius"]
 
@@ -46,7 +46,7 @@ def workspace_radius(
     robot's first).
     """
     ranges = joint_ranges(mmap)
-    unit = qmc.Sobol(len(ranges), scramble=True, seed=1).random(samples)
+    unit = unit_points(samples, len(ranges), 1)
     points = ranges[:, 0] + unit * (ranges[:, 1] - ranges[:, 0])
     index_of = mmap.model.getFrameId(frame or mmap.robot.end_effector)
 

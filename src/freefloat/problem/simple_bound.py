@@ -11,11 +11,11 @@ may leave that box by ``(k - 1) |goal_i - start_i| / 2`` on either side (within 
 
 The geodesic angle between the start attitude and the end attitude is at most the length of
 the attitude's path, so ``B = sum_i G_i L_i`` bounds how far from the start attitude any simple
-motion leaves the spacecraft. ``G_i`` is the largest value found by sampling the box (a
-scrambled Sobol set) and refining the best samples by bounded quasi-Newton searches: a
-maximum estimated, not certified (a narrow peak between samples could be missed), so the bound
-is as good as that search. Cyclic back-and-forth motions (``k`` large) can turn the base
-further; the bound says nothing about them.
+motion leaves the spacecraft. ``G_i`` is the largest value found by sampling the box (evenly
+spread points, :func:`.quasi_random.unit_points`) and refining the best samples by bounded
+quasi-Newton searches: a maximum estimated, not certified (a narrow peak between samples
+could be missed), so the bound is as good as that search. Cyclic back-and-forth motions
+(``k`` large) can turn the base further; the bound says nothing about them.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ import pinocchio as pin
 
 from ..physics.attitude import quat_exp, quat_log, quat_multiply
 from ..physics.momentum import MomentumMap
+from .quasi_random import unit_points
 
 __all__ = ["SimpleMotionBound", "inertia_ratio", "simple_motion_bound", "turn_limit"]
 
@@ -87,7 +88,7 @@ def simple_motion_bound(
         goal: goal joint values (rad or m).
         travel_factor: ``k >= 1`` (1: every joint monotone between start and goal).
         samples: configurations sampled in the box before refinement.
-        seed: seed of the Sobol scrambling (deterministic for a seed).
+        seed: shift of the evenly spread points (:func:`.quasi_random.unit_points`).
     """
     if not travel_factor >= 1.0:
         raise ValueError(f"travel_factor must be at least 1, got {travel_factor}")
@@ -96,9 +97,8 @@ def simple_motion_bound(
     travel = travel_factor * np.abs(goal - start)
     n = len(start)
     from scipy import optimize
-    from scipy.stats import qmc
 
-    unit = qmc.Sobol(n, scramble=True, seed=seed).random(samples)
+    unit = unit_points(samples, n, seed)
     points = np.vstack([start, goal, box[:, 0] + unit * (box[:, 1] - box[:, 0])])
     norms = np.array([np.linalg.norm(mmap.f1(p), axis=0) for p in points])  # (K, N)
     gains = norms.max(axis=0)
