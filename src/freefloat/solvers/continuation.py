@@ -4,8 +4,9 @@ The quintic path (``beta = 0``) reaches its own attitude ``q_0`` exactly. The ta
 along the geodesic from ``q_0`` to the goal, ``q(lam) = q_0 exp(lam delta)`` with ``lam`` from
 0 to 1 (``delta``: rotation vector, rad), and the solution ``beta(lam)`` is tracked:
 
-- predictor: the tangent ``dbeta/dlam = J^+ delta`` (minimum norm; at a solution the residual
-  moves by ``-delta`` per unit ``lam``);
+- predictor: the minimum-norm tangent ``dbeta/dlam`` with ``J t = delta`` (at a solution the
+  residual moves by ``-delta`` per unit ``lam``) whose predicted path keeps every linearised
+  constraint inside over the step (:func:`.predictor.tangent`);
 - corrector: Newton steps with the exact Jacobian, each the minimum-norm correction ``d`` with
   ``J d = -h`` and every constraint linearised, ``g + G d <= 0`` (a small QP, quadprog);
 - step size: doubled after an easy correction, halved after a failed one;
@@ -31,7 +32,6 @@ from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
-import quadprog
 
 from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
 from ..problem.constraints import DEFAULT_INSTANTS, Constraint
@@ -39,6 +39,7 @@ from ..problem.residual import Problem
 from ..progress import heartbeat
 from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
+from .predictor import newton_correction, tangent
 from .restore import Broken, broken_constraint, first_broken
 from .rows import RowCache, linear_rows, with_critical
 from .tracked import BranchPoint, ContinuationResult
@@ -61,27 +62,10 @@ INTERMEDIATE_TOLERANCE = 1e-4
 INTERMEDIATE_STEPS = 2
 #: Newton iterations per corrector.
 CORRECTOR_ITERATIONS = 8
-#: Constraints are imposed at the instants this far inside (their unit: rad, rad/s, m...),
-#: so that the path between instants stays inside too.
-MARGIN = 1e-7
 #: Why a continuation stops when no path within the constraints is found at its start.
 NO_START = "no path within the constraints reaches even the quintic path's own attitude"
 #: Singular-value ratio below which dh/dbeta counts as singular.
 SINGULAR = 1e-9
-
-
-def _correction(
-    jac: np.ndarray, r: np.ndarray, g: np.ndarray, g_mat: np.ndarray
-) -> np.ndarray | None:
-    """Minimum-norm ``d`` with ``J d = -r`` and ``g + G d <= 0``; None when infeasible."""
-    n = jac.shape[1]
-    near = g > -0.5  # rows far inside cannot become active in one Newton step of a few rad
-    c_mat = np.vstack([jac, -g_mat[near]]).T
-    b = np.concatenate([-r, g[near] + MARGIN])
-    try:
-        return np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, len(r))[0])
-    except ValueError:
-        return None
 
 
 def _tangent(
@@ -92,19 +76,11 @@ def _tangent(
     delta: np.ndarray,
     instants: np.ndarray,
     cache: RowCache,
+    step: float | None = None,
 ) -> np.ndarray:
-    """Minimum-norm ``dbeta/dlam`` with ``J t = delta`` that slides along active constraints."""
+    """:func:`.predictor.tangent` with the constraints' rows at ``beta`` (``step``: see there)."""
     g, g_mat = linear_rows(problem, constraints, beta, instants, cache)
-    active = g > -10.0 * MARGIN
-    n = jac.shape[1]
-    if np.any(active):
-        c_mat = np.vstack([jac, -g_mat[active]]).T
-        b = np.concatenate([delta, np.zeros(int(active.sum()))])
-        try:
-            return np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, 3)[0])
-        except ValueError:
-            pass  # no tangent keeps every active row: predict freely, the corrector decides
-    return np.asarray(np.linalg.lstsq(jac, delta, rcond=None)[0])
+    return tangent(jac, delta, g, g_mat, step)
 
 
 def _target(problem: Problem, start: np.ndarray, delta: np.ndarray, lam: float) -> Problem:
@@ -129,7 +105,7 @@ def _correct(
             return beta, r, jac, iteration
         if iteration > 2 and norm > 0.5 * previous and norm > 1e3 * tol:
             break  # not contracting: the step was too long
-        d = _correction(jac, r, g, g_mat)
+        d = newton_correction(jac, r, g, g_mat)
         if d is None:
             break
         beta, previous = beta + d, norm
@@ -245,8 +221,8 @@ def track(
         heartbeat(
             partial(_where, lam * angle, angle, steps, problem.evaluations - first_evaluation)
         )
-        tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache)
         step = min(dl, 1.0 - lam)
+        tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache, step)
         last = lam + step >= 1.0
         target = _target(problem if last else coarse, start, delta, 1.0 if last else lam + step)
         tol = final_tol if last else INTERMEDIATE_TOLERANCE

@@ -1,0 +1,72 @@
+"""The continuation's two small quadratic programs: the predictor's tangent, the corrector's step.
+
+Both are minimum-norm changes of the free coefficients ``beta`` (rad or m) with the attitude
+residual's Jacobian ``J`` (rad per unit of ``beta``) as equality rows and the constraints
+linearised as inequality rows ``g + G d <= 0`` (``g`` in each constraint's unit), solved by
+quadprog. Rows far inside (``g <= -0.5``) are left out: they cannot become active in one step of
+a few rad.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import quadprog
+
+__all__ = ["MARGIN", "newton_correction", "tangent"]
+
+#: Constraints are imposed at the instants this far inside (their unit: rad, rad/s, m...),
+#: so that the path between instants stays inside too.
+MARGIN = 1e-7
+#: Rows with ``g`` at most this far inside are left out of the programs (each row's unit).
+FAR_INSIDE = -0.5
+
+
+def newton_correction(
+    jac: np.ndarray, r: np.ndarray, g: np.ndarray, g_mat: np.ndarray
+) -> np.ndarray | None:
+    """Minimum-norm ``d`` with ``J d = -r`` and ``g + G d <= 0``; None when infeasible."""
+    n = jac.shape[1]
+    near = g > FAR_INSIDE
+    c_mat = np.vstack([jac, -g_mat[near]]).T
+    b = np.concatenate([-r, g[near] + MARGIN])
+    try:
+        return np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, len(r))[0])
+    except ValueError:
+        return None
+
+
+def tangent(
+    jac: np.ndarray,
+    delta: np.ndarray,
+    g: np.ndarray,
+    g_mat: np.ndarray,
+    step: float | None = None,
+) -> np.ndarray:
+    """Minimum-norm ``t = dbeta/dlam`` with ``J t = delta`` that slides along active rows.
+
+    ``delta``: the residual's change per unit of the continuation parameter (rad). With
+    ``step`` (the fraction of the way the next step takes), the predicted path
+    ``beta + step t`` also keeps every linearised row inside (``g + step G t <= 0``), so that a
+    long step does not predict a path deep through a constraint that is near but not yet
+    active (a clearance row a few millimetres from its margin, say): the corrector then
+    starts inside. When no such tangent exists, the rows active now only; when none keeps
+    those, the least-squares tangent (the corrector decides).
+    """
+    n = jac.shape[1]
+    near = g > FAR_INSIDE
+    if step is not None and step > 0.0 and np.any(near):
+        c_mat = np.vstack([jac, -step * g_mat[near]]).T
+        b = np.concatenate([delta, g[near] + MARGIN])
+        try:
+            return np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, len(delta))[0])
+        except ValueError:
+            pass  # no predicted path keeps every row: slide along the active ones
+    active = g > -10.0 * MARGIN
+    if np.any(active):
+        c_mat = np.vstack([jac, -g_mat[active]]).T
+        b = np.concatenate([delta, np.zeros(int(active.sum()))])
+        try:
+            return np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, len(delta))[0])
+        except ValueError:
+            pass  # no tangent keeps every active row: predict freely, the corrector decides
+    return np.asarray(np.linalg.lstsq(jac, delta, rcond=None)[0])

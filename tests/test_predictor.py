@@ -1,0 +1,80 @@
+"""The continuation's predictor and corrector programs against SciPy's SLSQP on the same data."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize
+
+from freefloat.solvers.predictor import MARGIN, newton_correction, tangent
+
+
+def _slsqp(jac: np.ndarray, rhs: np.ndarray, g: np.ndarray, g_mat: np.ndarray) -> np.ndarray:
+    """min |x|^2 with jac x = rhs and g + g_mat x <= -MARGIN, by SciPy's SLSQP (its own code)."""
+    found = minimize(
+        lambda x: x @ x,
+        np.zeros(jac.shape[1]),
+        jac=lambda x: 2.0 * x,
+        method="SLSQP",
+        constraints=[
+            {"type": "eq", "fun": lambda x: jac @ x - rhs, "jac": lambda x: jac},
+            {"type": "ineq", "fun": lambda x: -(g + g_mat @ x) - MARGIN, "jac": lambda x: -g_mat},
+        ],
+        options={"ftol": 1e-14, "maxiter": 500},
+    )
+    assert found.success, found.message
+    return np.asarray(found.x)
+
+
+def _data(seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    jac = rng.normal(size=(3, 10))
+    delta = rng.normal(size=3)
+    g_mat = rng.normal(size=(6, 10))
+    g = -np.abs(rng.normal(scale=0.05, size=6))  # inside, some rows nearly active
+    g[:2] = 0.0  # two rows active now
+    return jac, delta, g, g_mat
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_the_predicted_path_keeps_every_row_inside_as_slsqp_finds(seed: int) -> None:
+    jac, delta, g, g_mat = _data(seed)
+    step = 0.5
+    t = tangent(jac, delta, g, g_mat, step)
+    np.testing.assert_allclose(jac @ t, delta, atol=1e-10)
+    assert np.all(g + step * g_mat @ t <= -MARGIN + 1e-12)
+    # the same program solved by another library: the same smallest norm
+    reference = _slsqp(jac, delta, g, step * g_mat)
+    assert np.linalg.norm(t) == pytest.approx(np.linalg.norm(reference), rel=1e-6)
+    np.testing.assert_allclose(t, reference, atol=1e-6)
+
+
+def test_without_a_step_the_tangent_slides_along_the_active_rows_only() -> None:
+    jac, delta, g, g_mat = _data(7)
+    t = tangent(jac, delta, g, g_mat)
+    np.testing.assert_allclose(jac @ t, delta, atol=1e-10)
+    assert np.all(g_mat[:2] @ t <= 1e-12)  # the active rows are not crossed
+    # a long step along it would cross a row that is near but not active: the step's
+    # tangent does not
+    assert np.any(g + 5.0 * g_mat @ t > 0.0)
+    assert np.all(g + 5.0 * g_mat @ tangent(jac, delta, g, g_mat, 5.0) <= 0.0)
+
+
+def test_an_impossible_step_falls_back_to_the_active_rows() -> None:
+    jac = np.array([[1.0, 0.0]])
+    delta = np.array([1.0])
+    g_mat = np.array([[1.0, 0.0]])  # the row forbids the very direction J asks for
+    t = tangent(jac, delta, np.array([-0.01]), g_mat, 1.0)
+    np.testing.assert_allclose(t, [1.0, 0.0])  # the row is not active now: predicted freely
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_newton_correction_is_slsqps_minimum_norm_step(seed: int) -> None:
+    jac, delta, g, g_mat = _data(seed)
+    r = 0.1 * delta
+    d = newton_correction(jac, r, g, g_mat)
+    assert d is not None
+    np.testing.assert_allclose(d, _slsqp(jac, -r, g, g_mat), atol=1e-6)
+    assert (
+        newton_correction(np.array([[1.0]]), np.array([-1.0]), np.array([0.0]), np.eye(1)) is None
+    )
