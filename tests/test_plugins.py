@@ -157,6 +157,26 @@ def test_constraint_jacobian_matches_finite_differences(ur5_scenario, name):
 
 
 @pytest.mark.parametrize("name", sorted(CONSTRAINT_EXAMPLES))
+def test_tight_instants_find_the_tightest_value_the_dense_check_finds(ur5_scenario, name):
+    # The solvers add rows at a constraint's tight instants: where given, the largest row
+    # there is the exact excess of the dense check (for joint limits, the polynomials'
+    # extremes from the roots of their derivatives: another method).
+    constraint = CONSTRAINT_EXAMPLES[name](ur5_scenario)
+    problem = ff.problem_from_scenario(ur5_scenario, extra=[2] * ur5_scenario.robot.n)
+    for seed in range(4):
+        beta = 0.8 * np.random.default_rng(seed).normal(size=problem.n_free)
+        tight = constraint.tight_instants(problem, beta)
+        assert tight.ndim == 1 and np.all((tight >= 0.0) & (tight <= 1.0))
+        assert len(tight) or name != "joint_position_limits"
+        if not len(tight):
+            continue
+        excess = constraint.violation(problem, beta).value
+        assert float(constraint.rows(problem, beta, tight).values.max()) == pytest.approx(
+            excess, abs=1e-9
+        )
+
+
+@pytest.mark.parametrize("name", sorted(CONSTRAINT_EXAMPLES))
 def test_constraint_record_round_trips(ur5_scenario, name):
     constraint = CONSTRAINT_EXAMPLES[name](ur5_scenario)
     if name in SAFETY_RECORDED:  # recorded by the plan's safety section (test_collision)

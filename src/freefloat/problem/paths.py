@@ -335,16 +335,15 @@ class PathFamily:
     def affine_samples(self, s: np.ndarray) -> AffineSamples:
         """The path and both its s-derivatives at instants ``s`` as affine functions of beta.
 
-        Kept for the last few instant sets asked for (objectives ask for the same nodes often).
+        The last few instant sets asked for are kept, the least recently used forgotten first.
         """
         s = np.asarray(s, dtype=float)
         key = s.tobytes()
-        if key in self._affine:
-            return self._affine[key]
-        if len(self._affine) >= 8:
-            self._affine.clear()
-        self._affine[key] = self._affine_samples(s)
-        return self._affine[key]
+        found = self._affine.pop(key, None)
+        if found is None and len(self._affine) >= 8:
+            self._affine.pop(next(iter(self._affine)))
+        self._affine[key] = found = self._affine_samples(s) if found is None else found
+        return found
 
     def _affine_samples(self, s: np.ndarray) -> AffineSamples:
         powers, first, second = self._powers(np.asarray(s, dtype=float))

@@ -41,12 +41,19 @@ def linear_rows(
     """Stacked constraint values ``g`` and Jacobian ``G`` at ``beta`` (g <= 0 feasible).
 
     Affine constraints are evaluated once per instants (``cache``, one path family), then
-    ``g = g0 + G beta``.
+    ``g = g0 + G beta``, and at the path's own tight instants
+    (:meth:`~freefloat.problem.constraints.Constraint.tight_instants`, a joint's extremes),
+    so that a path these rows hold inside stays inside between the instants too.
     """
     values, rows = [np.zeros(0)], [np.zeros((0, problem.n_free))]
     for index, constraint in enumerate(constraints):
         if not constraint.applies_to(problem.robot):
             continue
+        tight = constraint.tight_instants(problem, beta)
+        if len(tight):
+            at_tight = constraint.rows(problem, beta, tight)
+            values.append(at_tight.values)
+            rows.append(at_tight.jacobian)
         if constraint.affine:
             key = (index, instants.tobytes())
             cached = cache.get(key)

@@ -112,6 +112,14 @@ class Constraint(abc.ABC):
         """
         return np.zeros(0)
 
+    def tight_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
+        """Normalised instants near where the path at ``beta`` is tightest, found cheaply.
+
+        Solvers impose the rows there too at every step, so that the path they correct is
+        inside between their instants as well. Default: none.
+        """
+        return np.zeros(0)
+
     def violation(self, problem: Problem, beta: np.ndarray) -> Excess:
         """:meth:`excess` of the problem's path at ``beta`` (for solvers filtering roots)."""
         return self.excess(problem.robot, problem.polynomials(beta))
