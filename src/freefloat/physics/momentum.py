@@ -13,30 +13,14 @@ identity attitude. The system centre of mass (CM) is the inertial origin.
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from ..robot.model import Robot
+from .centroidal_batch import BatchedCentroidal, NodeRates
 
 __all__ = ["MomentumMap", "NodeRates", "is_planar", "planar_axis"]
-
-
-@dataclass(frozen=True)
-class NodeRates:
-    """Base angular velocity at K instants, and its sensitivities.
-
-    Attributes:
-        omega: (K, 3) base angular velocity, base frame (rad per unit time of ``rates``).
-        f1: (K, 3, N) the map ``F1`` at each instant.
-        domega_dq: (K, 3, N) derivative of ``omega`` with respect to the joint values at fixed
-            joint rates, from Pinocchio's analytic centroidal derivatives; None unless asked.
-    """
-
-    omega: np.ndarray
-    f1: np.ndarray
-    domega_dq: np.ndarray | None = None
 
 
 class MomentumMap:
@@ -52,6 +36,7 @@ class MomentumMap:
         self.data = robot.model.createData()
         self._q = robot.configuration(np.zeros(robot.n))
         self.evaluations = 0
+        self._batched: BatchedCentroidal | None = None  # built when base rates are first asked
 
     def base_twist_map(self, joints: np.ndarray) -> np.ndarray:
         """The 6 x N map from joint rates to the base twist (base frame).
@@ -83,40 +68,43 @@ class MomentumMap:
     def base_rates(
         self, joints: np.ndarray, rates: np.ndarray, derivatives: bool = False
     ) -> NodeRates:
-        """Base angular velocity at K instants (batched; one Pinocchio call per instant).
+        """Base angular velocity at K instants, every instant at once.
 
         The base block of the centroidal map is ``[[m I, -m [c]x], [0, I_c]]`` (base at the
         origin with identity attitude; ``c`` the CM, ``I_c`` the locked inertia about it, kg
-        m^2), so the angular rows need only ``I_c^-1``: ``F1 = -I_c^-1 A_q[3:6]``.
+        m^2), so the angular rows need only ``I_c^-1``: ``F1 = -I_c^-1 A_q[3:6]``. In array
+        operations over the instants (:class:`~.centroidal_batch.BatchedCentroidal`; with the
+        derivatives about 2.5 times faster than Pinocchio's centroidal derivatives one
+        instant at a time, and the same to 1e-15 relative); ``omega`` and ``f1`` are the same
+        bits with or without the derivatives.
 
         Args:
             joints: (K, N) joint values (rad or m).
             rates: (K, N) joint rates (per unit of any time variable).
-            derivatives: also return ``d omega / d q`` (analytic, Pinocchio).
+            derivatives: also return ``d omega / d q`` (analytic).
+        """
+        if self._batched is None:
+            self._batched = BatchedCentroidal(self.robot)
+        found = self._batched.base_rates(joints, rates, derivatives)
+        self.evaluations += len(found.omega)
+        return found
+
+    def pinocchio_rates(self, joints: np.ndarray, rates: np.ndarray) -> np.ndarray:
+        """(K, 3) base angular velocity from Pinocchio's centroidal map, one instant at a time.
+
+        The same quantity as :meth:`base_rates` by another formula (Pinocchio's, not the
+        planner's): the verification's.
+
+        Args:
+            joints: (K, N) joint values (rad or m).
+            rates: (K, N) joint rates (per unit of any time variable).
         """
         configs = self.configurations(joints)
         k_count, model, data, cmap = len(configs), self.model, self.data, pin.computeCentroidalMap
         ag = np.array([cmap(model, data, q) for q in configs]).reshape(k_count, 6, model.nv)
         self.evaluations += k_count
-        inertia_inverse = np.linalg.inv(ag[:, 3:6, 3:6])  # LAPACK: any conditioning
-        f1 = -(inertia_inverse @ ag[:, 3:6, 6:])
-        omega = np.einsum("kij,kj->ki", f1, rates)
-        domega = None
-        if derivatives:
-            # the base's linear velocity: m v = -(A_q qdot)[0:3] + m [c]x omega
-            linear = np.einsum("kij,kj->ki", ag[:, 0:3, 6:], rates) + np.einsum(
-                "kij,kj->ki", ag[:, 0:3, 3:6], omega
-            )
-            velocity = -np.linalg.solve(ag[:, 0:3, 0:3], linear[..., None])[..., 0]
-            v = np.concatenate([velocity, omega, rates], axis=1)
-            zero = np.zeros(self.model.nv)
-            dh = np.empty((k_count, 3, self.robot.n))
-            for k in range(k_count):
-                dh[k] = pin.computeCentroidalDynamicsDerivatives(
-                    self.model, self.data, configs[k], v[k], zero
-                )[0][3:6, 6:]
-            domega = -(inertia_inverse @ dh)
-        return NodeRates(omega=omega, f1=f1, domega_dq=domega)
+        f1 = -np.linalg.solve(ag[:, 3:6, 3:6], ag[:, 3:6, 6:])  # LAPACK: any conditioning
+        return np.einsum("kij,kj->ki", f1, np.atleast_2d(rates))
 
     def f1(self, joints: np.ndarray) -> np.ndarray:
         """``F1(q)``: 3 x N map from joint rates to the base angular velocity (base frame)."""

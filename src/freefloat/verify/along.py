@@ -7,8 +7,9 @@ count). The replay's torques come in batches of instants
 (:func:`~freefloat.physics.joint_torques.joint_torques_and_twist`: the centroidal map and RNEA
 at base acceleration zero, not the sampling's inverse dynamics), which also gives the
 zero-momentum base twist at those instants; the attitude check reads the base angular velocity
-there, and asks the momentum map (:meth:`~freefloat.physics.momentum.MomentumMap.base_rates`,
-one Pinocchio call per instant) only at the instants the replay did not need.
+there, and asks Pinocchio's centroidal map
+(:meth:`~freefloat.physics.momentum.MomentumMap.pinocchio_rates`, one call per instant, not the
+planner's batched formula) only at the instants the replay did not need.
 """
 
 from __future__ import annotations
@@ -53,8 +54,8 @@ class PathDynamics:
         missing = _missing(times, self._omega)
         if len(missing):
             q, qd, _ = self.path(missing)
-            rates = self.mmap.base_rates(q, qd)
-            self._omega.update(zip(missing.tolist(), rates.omega, strict=True))
+            omega = self.mmap.pinocchio_rates(q, qd)
+            self._omega.update(zip(missing.tolist(), omega, strict=True))
         return np.array([self._omega[x] for x in times])
 
 
