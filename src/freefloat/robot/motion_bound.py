@@ -123,6 +123,15 @@ class PairBounds:
         self._recent = slot
         return found
 
+    def _rows_of(self, slots: Sequence[float | None]) -> list[int]:
+        """:meth:`_row` of each slot in turn (one lookup each when every slot is kept)."""
+        known = list(map(self._rows.get, slots))
+        if None in known:  # new slots: made one after the other, each from those before it
+            return [self._row(slot) for slot in slots]
+        if slots:
+            self._recent = slots[-1]
+        return known  # type: ignore[return-value]
+
     def _nearest(self, slot: float | None) -> float | None:
         """The kept slot nearest ``slot`` (the last used for None, or when none is kept)."""
         if slot is None or not self._keys:
@@ -171,7 +180,7 @@ class PairBounds:
         is widened from its slot as it stood before the call (a new slot from the nearest
         one kept then, or created by an earlier row of the call).
         """
-        rows = np.array([self._row(slot) for slot in slots], dtype=int)
+        rows = np.array(self._rows_of(slots), dtype=int)
         change = self._joints[rows]  # (B, P, N): each pair's joints when last bounded
         np.subtract(joints[:, None, :], change, out=change)
         np.abs(change, out=change)
@@ -192,7 +201,7 @@ class PairBounds:
 
         ``joints``: (B, N), one row per slot (rad or m); NaN bounds forget a pair.
         """
-        rows = [self._row(slot) for slot in slots]
+        rows = self._rows_of(slots)
         if len(set(rows)) < len(rows):  # a slot twice: one after the other, as asked
             for i, row in enumerate(rows):
                 chosen = pairs[i]
