@@ -117,3 +117,16 @@ def test_payload_is_in_the_cache_key():
     assert len({spec.key(), held.key(), heavier.key()}) == 3
     assert PAYLOAD_LINK in compose_servicer_text(held)
     assert PAYLOAD_LINK not in compose_servicer_text(spec)
+
+
+def test_an_arm_without_collision_geometry_is_composed_with_a_warning(plain_arm, tmp_path, caplog):
+    # the plain arm has no <collision> element: nothing can keep it out of the box
+    out = tmp_path / "bare.urdf"
+    with caplog.at_level("WARNING"):
+        assert main(["compose", "--arm", plain_arm, *BASE, "-o", str(out)]) == 0
+    assert "no link of the arm has collision geometry" in caplog.text
+    assert ET.parse(out).getroot().find("link/collision") is not None  # the box's own
+    caplog.clear()
+    with caplog.at_level("WARNING"):  # an arm with collision meshes: no such warning
+        assert main(["compose", "--arm", "panda", *BASE, "-o", str(tmp_path / "p.urdf")]) == 0
+    assert "collision geometry" not in caplog.text
