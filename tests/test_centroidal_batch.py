@@ -140,3 +140,22 @@ def test_one_configuration_and_the_shipped_grid():
     single = batch.base_rates(joints[5], rates[5], True)
     assert single.omega.shape == (1, 3) and single.f1.shape == (1, 3, scenario.robot.n)
     np.testing.assert_allclose(single.omega[0], got.omega[5], rtol=1e-14, atol=1e-16)
+
+
+def test_a_heavy_spacecraft_and_a_badly_conditioned_inertia(tmp_path):
+    """A 1e6 kg base under a light arm agrees with Pinocchio; an inertia whose principal
+    moments span 1e8 is inverted by LAPACK (the cofactors would lose six digits)."""
+    from freefloat.physics.centroidal_batch import _inverse
+
+    path = tmp_path / "heavy.urdf"
+    path.write_text(urdfs.spatial_arm(base_mass=1e6))
+    robot = ff.load_robot(path)
+    joints, rates = _samples(robot, 10, 8)
+    got = BatchedCentroidal(robot).base_rates(joints, rates, derivatives=True)
+    assert got.domega_dq is not None
+    _close(got.omega, _pinocchio_rates(robot, joints, rates)[0], 1e-11)
+    _close(got.domega_dq, _pinocchio_derivative(robot, joints, rates), 1e-9)
+    rotation = np.linalg.qr(np.random.default_rng(9).normal(size=(3, 3)))[0]
+    matrix = rotation @ np.diag([1e4, 1.0, 1e-4]) @ rotation.T
+    inverse = _inverse(np.repeat(matrix[:, :, None], 4, axis=2))[:, :, 0]
+    np.testing.assert_allclose(matrix @ inverse, np.eye(3), rtol=0.0, atol=1e-9)

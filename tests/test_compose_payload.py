@@ -119,14 +119,17 @@ def test_payload_is_in_the_cache_key():
     assert PAYLOAD_LINK not in compose_servicer_text(spec)
 
 
-def test_an_arm_without_collision_geometry_is_composed_with_a_warning(plain_arm, tmp_path, caplog):
+def test_an_arm_without_collision_geometry_is_composed_with_a_warning(plain_arm, tmp_path, capsys):
     # the plain arm has no <collision> element: nothing can keep it out of the box
     out = tmp_path / "bare.urdf"
-    with caplog.at_level("WARNING"):
-        assert main(["compose", "--arm", plain_arm, *BASE, "-o", str(out)]) == 0
-    assert "no link of the arm has collision geometry" in caplog.text
+    assert main(["compose", "--arm", plain_arm, *BASE, "-o", str(out)]) == 0
+    assert f"no link of the arm {plain_arm!r} has collision geometry" in capsys.readouterr().err
     assert ET.parse(out).getroot().find("link/collision") is not None  # the box's own
-    caplog.clear()
-    with caplog.at_level("WARNING"):  # an arm with collision meshes: no such warning
-        assert main(["compose", "--arm", "panda", *BASE, "-o", str(tmp_path / "p.urdf")]) == 0
-    assert "collision geometry" not in caplog.text
+    # an arm with collision meshes: no such warning
+    assert main(["compose", "--arm", "panda", *BASE, "-o", str(tmp_path / "p.urdf")]) == 0
+    assert "collision geometry" not in capsys.readouterr().err
+    two = ["--arm", "panda", "--mount", "0.5", "0", "0", "--arm", plain_arm, "--mount", "-0.5"]
+    two += ["0", "0", "--base-mass", "500", "--base-size", "1", "1", "1"]
+    assert main(["compose", *two, "-o", str(tmp_path / "d.urdf")]) == 0
+    err = capsys.readouterr().err  # two arms, one without: that one is named
+    assert err.count("has collision geometry") == 1 and repr(plain_arm) in err

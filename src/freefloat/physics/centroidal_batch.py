@@ -56,6 +56,8 @@ class NodeRates:
 
 
 _NEXT, _AFTER = np.array([1, 2, 0]), np.array([2, 0, 1])
+#: Below this determinant over the cube of the mean principal moment, inverses are LAPACK's.
+CONDITION_FLOOR = 1e-6
 
 
 class BatchedCentroidal:
@@ -283,14 +285,22 @@ def _apply(matrices: np.ndarray, vectors: np.ndarray) -> np.ndarray:
 
 
 def _inverse(matrix: np.ndarray) -> np.ndarray:
-    """(3, 3, K) inverses of (3, 3, K) matrices, by cofactors.
+    """(3, 3, K) inverses of (3, 3, K) symmetric positive definite matrices (kg m^2 -> 1/...).
 
-    The rows of the inverse are ``c1 x c2, c2 x c0, c0 x c1`` over the determinant (``c`` the
-    columns): accurate for a well-conditioned matrix such as the locked inertia.
+    By cofactors: the rows of the inverse are ``c1 x c2, c2 x c0, c0 x c1`` over the
+    determinant (``c`` the columns), accurate for a well-conditioned matrix such as a locked
+    inertia (a 20 m x 1 m x 1 m box: principal moments 1 : 200 : 200). A batch with a
+    determinant below :data:`CONDITION_FLOOR` times the cube of its mean principal moment
+    (moments spread over about three orders of magnitude or more, where the cofactors lose
+    digits) is inverted by LAPACK instead.
     """
     columns = matrix.transpose(1, 0, 2)  # [c]: column c
     rows = _cross(columns.take(_NEXT, 0), columns.take(_AFTER, 0))
-    return rows / (rows[0] * columns[0]).sum(axis=0)
+    determinant = (rows[0] * columns[0]).sum(axis=0)
+    scale = (matrix[0, 0] + matrix[1, 1] + matrix[2, 2]) / 3.0
+    if not np.all(determinant > CONDITION_FLOOR * scale**3):
+        return np.ascontiguousarray(np.linalg.inv(matrix.transpose(2, 0, 1)).transpose(1, 2, 0))
+    return rows / determinant
 
 
 def _skew(axis: np.ndarray) -> np.ndarray:

@@ -32,12 +32,24 @@ def unit_points(count: int, dimensions: int, seed: int = 0) -> np.ndarray:
     Args:
         count: number of points (>= 0).
         dimensions: dimension of the cube (>= 1).
-        seed: shifts the sequence (another seed, other points of the same quality); the
-            points are a function of the three arguments alone.
+        seed: shifts the sequence (another seed, of either sign, other points of the same
+            quality in every dimension); the points are a function of the three arguments
+            alone.
     """
     if count < 0 or dimensions < 1:
         raise ValueError(f"need count >= 0 and dimensions >= 1, got {count}, {dimensions}")
     alpha = _golden(dimensions) ** -np.arange(1, dimensions + 1, dtype=float)
-    offset = np.modf(0.5 + seed * np.sqrt(np.arange(2, dimensions + 2, dtype=float)))[0]
+    offset = np.mod(0.5 + seed * np.sqrt(_primes(dimensions)), 1.0)  # irrational per dimension
     k = np.arange(count, dtype=float)[:, None]
-    return np.modf(offset + k * alpha)[0]
+    return np.mod(offset + k * alpha, 1.0)
+
+
+def _primes(count: int) -> np.ndarray:
+    """The first ``count`` primes (as floats)."""
+    found: list[int] = []
+    candidate = 2
+    while len(found) < count:
+        if all(candidate % p for p in found if p * p <= candidate):
+            found.append(candidate)
+        candidate += 1
+    return np.array(found, dtype=float)

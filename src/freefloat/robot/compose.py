@@ -219,6 +219,13 @@ def compose(spec: ServicerSpec) -> Composed:
     prismatic: set[str] = set()
     for arm in arms:
         part = arm_part(arm)
+        if not any(link.collisions for link in part.links):  # nothing for clearance to measure
+            LOGGER.warning(
+                "no link of the arm %r has collision geometry: clearance between it and the "
+                "spacecraft cannot be checked, and plans may pass it through the box; add "
+                "<collision> elements to its URDF",
+                arm.arm,
+            )
         links += part.links
         joints += part.joints
         for material in part.materials:
@@ -226,12 +233,6 @@ def compose(spec: ServicerSpec) -> Composed:
         locked.update(part.locked)
         notes += part.notes
         prismatic |= part.prismatic
-    if not any(link.collisions for link in links):  # nothing for clearance to measure
-        LOGGER.warning(
-            "no link of the arm has collision geometry: clearance between the arm and the "
-            "spacecraft cannot be checked, and plans may pass through the box; add "
-            "<collision> elements to the arm's URDF"
-        )
     spacecraft, hull = _spacecraft(spec)
     names = [a.arm if a.arm in ARMS else Path(a.arm).stem for a in arms]
     composed = yourdfpy.Robot(

@@ -37,6 +37,7 @@ from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.residual import Problem
 from .newton import polish_at
 from .options import SolveOptions
+from .predictor import FAR_INSIDE, MARGIN
 from .restore import broken_constraint
 from .rows import RowCache, linear_rows, with_critical
 
@@ -75,8 +76,6 @@ CORRECTIONS = 3
 #: free coefficient) and its largest.
 TRUST = 0.25
 TRUST_MAX = 4.0
-#: Rows held this far inside their limit (their unit), as the continuation corrector's.
-MARGIN = 1e-7
 #: Steps within the constraints stop once one lowers ``|beta|^2`` by less than this fraction
 #: (a natural path is the aim: the last per cent of deviation costs many steps where clearance
 #: binds).
@@ -84,8 +83,6 @@ SETTLED = 0.01
 #: A kept step may break a row by this much (its unit): the dense check of each constraint,
 #: with its own tolerance, judges the result.
 ROW_SLACK = 1e-6
-#: Rows further inside than this (their unit) cannot become active in one step: left out.
-FAR = 0.5
 
 
 @dataclass(frozen=True)
@@ -340,7 +337,7 @@ def _step(centre: np.ndarray, point: _Point, trust: float) -> np.ndarray | None:
     least norm, zero for the least-norm correction.
     """
     n = len(centre)
-    near = point.g > -FAR
+    near = point.g > FAR_INSIDE
     eye = np.eye(n)
     c_mat = np.vstack([point.jac, -point.g_mat[near], eye, -eye]).T
     b = np.concatenate([-point.r, point.g[near] + MARGIN, np.full(2 * n, -trust)])

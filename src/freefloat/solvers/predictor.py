@@ -3,8 +3,8 @@
 Both are minimum-norm changes of the free coefficients ``beta`` (rad or m) with the attitude
 residual's Jacobian ``J`` (rad per unit of ``beta``) as equality rows and the constraints
 linearised as inequality rows ``g + G d <= 0`` (``g`` in each constraint's unit), solved by
-quadprog. Rows far inside (``g <= -0.5``) are left out: they cannot become active in one step of
-a few rad.
+quadprog. Rows far inside (``g <= -0.5``) are left out of the corrector's program: they cannot
+become active in one Newton step of a few rad; the predictor checks them after its program.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import quadprog
 
-__all__ = ["MARGIN", "newton_correction", "tangent"]
+__all__ = ["FAR_INSIDE", "MARGIN", "newton_correction", "tangent"]
 
 #: Constraints are imposed at the instants this far inside (their unit: rad, rad/s, m...),
 #: so that the path between instants stays inside too.
@@ -53,14 +53,19 @@ def tangent(
     those, the least-squares tangent (the corrector decides).
     """
     n = jac.shape[1]
-    near = g > FAR_INSIDE
-    if step is not None and step > 0.0 and np.any(near):
-        c_mat = np.vstack([jac, -step * g_mat[near]]).T
-        b = np.concatenate([delta, g[near] + MARGIN])
-        try:
-            return np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, len(delta))[0])
-        except ValueError:
-            pass  # no predicted path keeps every row: slide along the active ones
+    if step is not None and step > 0.0 and len(g):
+        near = g > FAR_INSIDE
+        for _ in range(2):  # rows left out as far inside are checked, and taken in if crossed
+            c_mat = np.vstack([jac, -step * g_mat[near]]).T
+            b = np.concatenate([delta, g[near] + MARGIN])
+            try:
+                t = np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, len(delta))[0])
+            except ValueError:
+                break  # no predicted path keeps every row: slide along the active ones
+            crossed = g + step * (g_mat @ t) > 0.0
+            if not np.any(crossed & ~near):
+                return t
+            near |= crossed
     active = g > -10.0 * MARGIN
     if np.any(active):
         c_mat = np.vstack([jac, -g_mat[active]]).T
