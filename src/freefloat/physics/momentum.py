@@ -27,7 +27,9 @@ class MomentumMap:
     """Evaluate the momentum map and related kinematics for one robot.
 
     Reuses one Pinocchio ``Data`` and one configuration buffer across calls, so an instance is
-    not thread-safe; make one per thread.
+    not thread-safe; make one per thread. :meth:`base_rates` reads the model's tree and
+    inertias once, at its first call: a model changed in place afterwards (masses, say) needs a
+    new instance (:mod:`freefloat.robust` copies the model for that).
     """
 
     def __init__(self, robot: Robot) -> None:

@@ -6,7 +6,7 @@ along the geodesic from ``q_0`` to the goal, ``q(lam) = q_0 exp(lam delta)`` wit
 
 - predictor: the minimum-norm tangent ``dbeta/dlam`` with ``J t = delta`` (at a solution the
   residual moves by ``-delta`` per unit ``lam``) whose predicted path keeps every linearised
-  constraint inside over the step (:func:`.predictor.tangent`);
+  constraint row near its limit inside over the step (:func:`.predictor.tangent`);
 - corrector: Newton steps with the exact Jacobian, each the minimum-norm correction ``d`` with
   ``J d = -h`` and every constraint linearised, ``g + G d <= 0`` (a small QP, quadprog);
 - step size: doubled after an easy correction, halved after a failed one;

@@ -3,8 +3,10 @@
 Both are minimum-norm changes of the free coefficients ``beta`` (rad or m) with the attitude
 residual's Jacobian ``J`` (rad per unit of ``beta``) as equality rows and the constraints
 linearised as inequality rows ``g + G d <= 0`` (``g`` in each constraint's unit), solved by
-quadprog. Rows far inside (``g <= -0.5``) are left out of the corrector's program: they cannot
-become active in one Newton step of a few rad; the predictor checks them after its program.
+quadprog. Rows far inside (``g <= -0.5``, :data:`FAR_INSIDE`) are left out of both programs:
+they cannot become active in one step of a few rad. (Taking in those a predicted path would
+cross, checked after the program, made the Panda servicer's 10 deg y goal 0.80 -> 1.18 s for
+no gain: left out.)
 """
 
 from __future__ import annotations
@@ -17,7 +19,8 @@ __all__ = ["FAR_INSIDE", "MARGIN", "newton_correction", "tangent"]
 #: Constraints are imposed at the instants this far inside (their unit: rad, rad/s, m...),
 #: so that the path between instants stays inside too.
 MARGIN = 1e-7
-#: Rows with ``g`` at most this far inside are left out of the programs (each row's unit).
+#: Rows with ``g`` at most this far inside are left out of the programs (each row's unit: rad,
+#: rad/s, m).
 FAR_INSIDE = -0.5
 
 
@@ -46,26 +49,22 @@ def tangent(
 
     ``delta``: the residual's change per unit of the continuation parameter (rad). With
     ``step`` (the fraction of the way the next step takes), the predicted path
-    ``beta + step t`` also keeps every linearised row inside (``g + step G t <= 0``), so that a
-    long step does not predict a path deep through a constraint that is near but not yet
-    active (a clearance row a few millimetres from its margin, say): the corrector then
-    starts inside. When no such tangent exists, the rows active now only; when none keeps
-    those, the least-squares tangent (the corrector decides).
+    ``beta + step t`` also keeps every linearised row near its limit inside
+    (``g + step G t <= 0`` for ``g > FAR_INSIDE``), so that a long step does not predict a path
+    deep through a constraint that is near but not yet active (a clearance row a few
+    millimetres from its margin, say): the corrector then starts inside. When no such
+    tangent exists, the rows active now only; when none keeps those, the least-squares
+    tangent (the corrector decides).
     """
     n = jac.shape[1]
-    if step is not None and step > 0.0 and len(g):
-        near = g > FAR_INSIDE
-        for _ in range(2):  # rows left out as far inside are checked, and taken in if crossed
-            c_mat = np.vstack([jac, -step * g_mat[near]]).T
-            b = np.concatenate([delta, g[near] + MARGIN])
-            try:
-                t = np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, len(delta))[0])
-            except ValueError:
-                break  # no predicted path keeps every row: slide along the active ones
-            crossed = g + step * (g_mat @ t) > 0.0
-            if not np.any(crossed & ~near):
-                return t
-            near |= crossed
+    near = g > FAR_INSIDE
+    if step is not None and step > 0.0 and np.any(near):
+        c_mat = np.vstack([jac, -step * g_mat[near]]).T
+        b = np.concatenate([delta, g[near] + MARGIN])
+        try:
+            return np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, len(delta))[0])
+        except ValueError:
+            pass  # no predicted path keeps every near row: slide along the active ones
     active = g > -10.0 * MARGIN
     if np.any(active):
         c_mat = np.vstack([jac, -g_mat[active]]).T
