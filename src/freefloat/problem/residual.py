@@ -269,8 +269,9 @@ class Problem:
     def residual_and_jacobian(self, beta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``h(beta)`` and its exact Jacobian ``dh/dbeta`` (rad per unit of beta).
 
-        The Jacobian differentiates the discrete scheme itself: node rates through Pinocchio's
-        analytic centroidal derivatives and the path's linear dependence on ``beta``; each
+        The Jacobian differentiates the discrete scheme itself: node rates through their
+        analytic joint derivatives (:class:`~freefloat.physics.centroidal_batch.BatchedCentroidal`)
+        and the path's linear dependence on ``beta``; each
         step's Magnus vector by complex steps; the chain of step rotations with SO(3) right
         Jacobians; the residual's logarithm with ``pin.Jlog3``. The last point's are
         remembered (solvers evaluate a root they found again where their next pass starts).
