@@ -245,3 +245,30 @@ def test_verify_reads_a_limit_row_when_there_is_no_clearance(tmp_path, capsys):
         f"  it holds (joint_position_limits {row.value:.3g} {row.unit}: the tightest is "
         f"{-row.value:.3g} {row.unit} inside it)"
     )
+
+
+def test_a_joint_turned_a_full_turn_beyond_its_span_is_warned_of(tmp_path, caplog):
+    """min_effort on ETS-VII turned its continuous wrist 16 turns beyond its span: legal for the
+    model, seldom for the real joint. A turn or more beyond the span of a turning joint is
+    named with its count of turns; a prismatic joint's metres and smaller swings are not."""
+    import logging
+
+    from freefloat.pipeline import _warn_spinning
+    from freefloat.plans.records import PathQuality
+
+    import urdfs
+
+    urdf = tmp_path / "mixed.urdf"
+    urdf.write_text(urdfs.spatial_arm(kinds=("continuous", "prismatic", "revolute")))
+    robot = ff.load_robot(urdf)
+    a, b, c = robot.joint_names
+    quality = PathQuality({a: 900.0, b: 720.0, c: 359.0}, 900.0, a, 10.0)
+    with caplog.at_level(logging.WARNING, logger="freefloat"):
+        _warn_spinning(quality, robot, "min_effort")
+    said = [r.getMessage() for r in caplog.records if "full turn" in r.getMessage()]
+    assert len(said) == 1 and f"({a!r} 2.5 turns)" in said[0] and "min_effort" in said[0]
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="freefloat"):
+        plan = ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml"))
+    assert plan.quality is not None and plan.quality.largest_excursion < 360.0
+    assert not any("full turn" in r.getMessage() for r in caplog.records)

@@ -22,7 +22,7 @@ from .errors import (
 from .physics.attitude import geodesic_angle
 from .plans.format import Plan
 from .plans.guarantees import ObjectiveReport, SafetyReport
-from .plans.records import Request, RobotRef, Samples, SolverReport, sha256_hex
+from .plans.records import PathQuality, Request, RobotRef, Samples, SolverReport, sha256_hex
 from .plans.reports import (
     as_rebuilt,
     check_registered,
@@ -168,6 +168,8 @@ def _plan(
         tried=found.tried,
         solve_time_s=solve_time,
     )
+    if result.quality is not None:
+        _warn_spinning(result.quality, scenario.robot, chosen.name)
     return replace(result, solver=solver)
 
 
@@ -187,6 +189,30 @@ def _warn_light_base(robot: Robot) -> None:
             robot.base_link,
             base,
             carried,
+        )
+
+
+def _warn_spinning(quality: PathQuality, robot: Robot, objective: str) -> None:
+    """Warn when a turning joint goes a full turn or more beyond its start-goal span (deg).
+
+    Legal for a joint without limits (``continuous``, or limits wider than a turn), and what an
+    objective may find cheapest (``min_effort`` on ETS-VII spun its wrist 16 turns); a real
+    joint's cables seldom allow it.
+    """
+    kinds = {joint.name: joint.kind for joint in robot.joints}
+    spun = {
+        name: beyond / 360.0
+        for name, beyond in quality.excursion_beyond_span.items()
+        if kinds.get(name) != "prismatic" and beyond >= 360.0
+    }
+    if spun:
+        turns = ", ".join(f"{name!r} {value:.3g}" for name, value in spun.items())
+        LOGGER.warning(
+            "the path (objective %s) turns a joint a full turn or more beyond its start-goal "
+            "span (%s turns): if the real joint cannot turn freely (cables, hard stops), give "
+            "it limits in the URDF, or plan with the default objective",
+            objective,
+            turns,
         )
 
 
