@@ -153,7 +153,7 @@ def test_a_blown_up_state_on_a_continuous_joint_gives_nan_not_a_traceback(tmp_pa
     """A replay whose state overflowed to inf on a continuous joint: ``math.cos(inf)`` raises
     where numpy would give NaN. The replay's configurations must hold NaN there (the
     step-doubling checks read such a level as differing by inf), the other joints as given."""
-    from freefloat.physics.dynamics import _Configurations
+    from freefloat.physics.replay import _Configurations
 
     import urdfs
 

@@ -18,8 +18,9 @@ from scipy.spatial.transform import Rotation
 
 import freefloat as ff
 from freefloat.physics.attitude import zyx_from_quat, zyx_from_quats
-from freefloat.physics.dynamics import inverse_dynamics, inverse_dynamics_batch, replay
+from freefloat.physics.dynamics import inverse_dynamics, inverse_dynamics_batch
 from freefloat.physics.momentum import MomentumMap
+from freefloat.physics.replay import replay
 from freefloat.robot.collision import CollisionModel, known_srdf
 from freefloat.verify import certificate
 from freefloat.verify.certificate import certify

@@ -37,8 +37,9 @@ from .errors import (
     ViewerError,
 )
 from .physics.attitude import geodesic_angle, quat_from_zyx, zyx_from_quat
-from .physics.dynamics import InverseDynamics, ReplayResult, inverse_dynamics, replay
+from .physics.dynamics import InverseDynamics, inverse_dynamics
 from .physics.momentum import MomentumMap, is_planar, planar_axis
+from .physics.replay import ReplayResult, replay
 from .pipeline import plan, plan_from_solution
 from .plans.format import Plan
 from .plans.guarantees import Check, Verification

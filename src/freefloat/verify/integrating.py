@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.attitude import geodesic_angle
-from ..physics.dynamics import replay
+from ..physics.replay import replay
 from ..plans.guarantees import Check
 from ..robot.model import Robot
 from .plan_checks import TOLERANCES, Subject
