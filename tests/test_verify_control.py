@@ -115,11 +115,12 @@ def test_light_wrist_plan_refused_by_the_fixed_step_replay_now_passes(light_wris
     arm, p = light_wrist
     mmap = ff.MomentumMap(arm)
     start, goal = np.array(p.request.start_joints), np.array(p.request.goal_joints)
-    t = np.linspace(0.0, p.duration, 1001)
+    t = np.linspace(0.0, p.duration, 2001)
     table = inverse_dynamics_batch(mmap, *_path(p, t)).tau
     coarse = ff.replay(mmap, start, np.array(p.base.start_quaternion_xyzw), table, p.duration, 500)
-    # what the old fixed 500 steps judged: far from the goal, or diverged (NaN)
-    assert not np.abs(coarse.joints - goal).max() <= 1e-2
+    # what a fixed 500 steps judges: farther from the goal than the check's tolerance (1e-4),
+    # or diverged (NaN); the old fixed-step replay refused the plan so
+    assert not np.abs(coarse.joints - goal).max() <= 1e-4
     v = p.verification
     assert v.passed
     joints = v["replay_joints"]
@@ -164,7 +165,7 @@ def test_error_estimates_bound_the_difference_to_a_tighter_integration(worked_sc
     assert abs(att.value - _tight_attitude(p, mmap)) <= att.error_estimate + 1e-12
     # The replay on 4 times the steps it settled on.
     steps = 4 * int(v["replay_joints"].detail.split()[1])
-    t = np.linspace(0.0, p.duration, 2 * steps + 1)
+    t = np.linspace(0.0, p.duration, 4 * steps + 1)
     table = inverse_dynamics_batch(mmap, *_path(p, t)).tau
     tight = ff.replay(
         mmap,

@@ -303,3 +303,36 @@ def test_show_catches_a_urdf_changed_after_planning(original, tmp_path, capsys):
     data = as_older_format(data)
     line = _refused(capsys, "show", _write(tmp_path, data), "--html", page, "-q")
     assert "disagrees with the recomputation" in line and not page.exists()
+
+
+def _replay_joints(data: dict) -> dict:
+    (check,) = [c for c in data["verification"]["checks"] if c["name"] == "replay_joints"]
+    return check
+
+
+def test_integrating_figures_of_another_integrator_are_judged_not_compared(
+    original, tmp_path, capsys
+):
+    """A file made before the fifth-order checks states their figures as RK4 found them (its
+    ``detail`` names the integrator): those figures are not this version's and are not
+    compared, while the checks made now still decide; the same figure stated as this
+    version's is a mismatch."""
+
+    def older(d):
+        check = _replay_joints(d)
+        check["detail"] = "RK4, 64 steps"
+        check["value"] = 0.5 * check["tolerance"]  # what another integrator found
+
+    path = _changed(original, tmp_path, older)
+    code, _, err, _ = _run(capsys, "verify", path)
+    assert code == 0, err
+    made = ff.verify_plan(ff.Plan.load(path))
+    assert made.passed and made["replay_joints"].detail.startswith("RK5, ")
+    assert made["replay_joints"].value < 0.1 * made["replay_joints"].tolerance
+
+    def tampered(d):
+        check = _replay_joints(d)
+        check["value"] = 0.5 * check["tolerance"]
+
+    line = _refused(capsys, "verify", _changed(original, tmp_path, tampered))
+    assert "disagrees with the recomputation" in line and "verification.checks[" in line, line

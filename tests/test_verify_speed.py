@@ -1,7 +1,8 @@
 """The faster sampling and verification paths against the computations they replace.
 
-Truth here never comes from the faster code: an RK4 replay written out on numpy arrays (the
-replay's former form), Pinocchio's per-instant inverse dynamics, the quaternion rebuilt from
+Truth here never comes from the faster code: SciPy's DOP853 on the embedded configuration, the
+replay's fifth-order method written out on numpy arrays (renormalised per stage), Pinocchio's
+per-instant inverse dynamics, the quaternion rebuilt from
 the Euler angles by SciPy, Pinocchio's momentum map for the planar yaw rate, STL triangles
 read without coal (:mod:`geometry_truth`) for the leaf spheres' coverage, coal's exact mesh
 distances for their bounds, and a certificate that measures every pair at many instants.
@@ -14,6 +15,7 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
+from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
 import freefloat as ff
@@ -37,16 +39,19 @@ UR5_START = np.radians([0.0, -90.0, 90.0, -90.0, -90.0, 0.0])
 UR5_GOAL = np.radians([57.3, -57.3, 68.8, -68.8, -57.3, 28.6])
 
 
-def _array_replay(mmap, start, quat, table, duration, steps):
-    """Classical RK4 on the embedded configuration with numpy arrays, renormalised per stage."""
-    model, data = mmap.model, mmap.model.createData()
-    joints = mmap.robot.joints
+#: Butcher's six-stage fifth-order method, written out here: a_ij, b_i, and each stage's
+#: instant in quarters of the step.
+_A = [[], [1 / 4], [1 / 8, 1 / 8], [0, -1 / 2, 1], [3 / 16, 0, 0, 9 / 16]]
+_A.append([-3 / 7, 2 / 7, 12 / 7, -12 / 7, 8 / 7])
+_B = [7 / 90, 0, 32 / 90, 12 / 90, 32 / 90, 7 / 90]
+_QUARTER = [0, 1, 1, 2, 3, 4]
+
+
+def _embedded(mmap):
+    """``rate(q, v)`` of the embedded configuration and ``project(q)`` (unit quaternions)."""
+    model, joints = mmap.model, mmap.robot.joints
     plain = [(j.idx_q, j.idx_v) for j in joints if j.kind != "continuous"]
     turning = [(j.idx_q, j.idx_v) for j in joints if j.kind == "continuous"]
-    q = mmap.configuration(np.asarray(start, float), np.asarray(quat, float))
-    v = np.zeros(model.nv)
-    forces = np.zeros((len(table), model.nv))
-    forces[:, [j.idx_v for j in joints]] = table
 
     def rate(q, v):
         out = np.zeros(model.nq)
@@ -69,51 +74,86 @@ def _array_replay(mmap, start, quat, table, duration, steps):
         return out
 
     def project(q):
+        q = np.array(q, dtype=float)
         x, y, z, w = q[3:7].tolist()
         q[3:7] /= math.sqrt(x * x + y * y + z * z + w * w)
         for iq, _ in turning:
             q[iq : iq + 2] /= np.hypot(q[iq], q[iq + 1])
         return q
 
+    return rate, project
+
+
+def _array_replay(mmap, start, quat, table, duration, steps):
+    """The fifth-order method on the embedded configuration with numpy arrays, renormalised
+    per stage; ``table``: torques at the quarters of the steps."""
+    model, data = mmap.model, mmap.model.createData()
+    rate, project = _embedded(mmap)
+    q = mmap.configuration(np.asarray(start, float), np.asarray(quat, float))
+    v = np.zeros(model.nv)
+    forces = np.zeros((len(table), model.nv))
+    forces[:, [j.idx_v for j in mmap.robot.joints]] = table
     for k, dt in enumerate(np.diff(np.linspace(0.0, duration, steps + 1)).tolist()):
-        f0, fh, f1 = forces[2 * k], forces[2 * k + 1], forces[2 * k + 2]
-        a1, r1 = pin.aba(model, data, q, v, f0), rate(q, v)
-        q2, v2 = project(q + 0.5 * dt * r1), v + 0.5 * dt * a1
-        a2, r2 = pin.aba(model, data, q2, v2, fh), rate(q2, v2)
-        q3, v3 = project(q + 0.5 * dt * r2), v + 0.5 * dt * a2
-        a3, r3 = pin.aba(model, data, q3, v3, fh), rate(q3, v3)
-        q4, v4 = project(q + dt * r3), v + dt * a3
-        a4, r4 = pin.aba(model, data, q4, v4, f1), rate(q4, v4)
-        q = project(q + dt / 6.0 * (r1 + 2.0 * r2 + 2.0 * r3 + r4))
-        v = v + dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+        rates, accelerations = [], []
+        for i, row in enumerate(_A):
+            qi = project(q + dt * sum(a * r for a, r in zip(row, rates, strict=True)))
+            vi = v + dt * sum(a * acc for a, acc in zip(row, accelerations, strict=True))
+            accelerations.append(pin.aba(model, data, qi, vi, forces[4 * k + _QUARTER[i]]))
+            rates.append(rate(qi, vi))
+        q = project(q + dt * sum(b * r for b, r in zip(_B, rates, strict=True)))
+        v = v + dt * sum(b * a for b, a in zip(_B, accelerations, strict=True))
+    return q, v
+
+
+def _dop853_replay(mmap, start, quat, torque, duration):
+    """SciPy's DOP853 (rtol 1e-12) on the embedded configuration under ``torque(t)``."""
+    model, data = mmap.model, mmap.model.createData()
+    rate, _ = _embedded(mmap)
+    columns = [j.idx_v for j in mmap.robot.joints]
+
+    def rhs(t, y):
+        q, v = y[: model.nq], y[model.nq :]
+        force = np.zeros(model.nv)
+        force[columns] = torque(t)
+        return np.concatenate([rate(q, v), pin.aba(model, data, q, v, force)])
+
+    q0 = mmap.configuration(np.asarray(start, float), np.asarray(quat, float))
+    y0 = np.concatenate([q0, np.zeros(model.nv)])
+    end = solve_ivp(rhs, (0.0, duration), y0, method="DOP853", rtol=1e-12, atol=1e-12).y[:, -1]
+    q, v = end[: model.nq], end[model.nq :]
+    q[3:7] /= np.linalg.norm(q[3:7])
     return q, v
 
 
 @pytest.mark.parametrize(
-    ("urdf", "newton_metres"), [("planar_2dof.urdf", 1.0), ("ur5_servicer.urdf", 0.1)]
+    ("urdf", "newton_metres", "first"),
+    [("planar_2dof.urdf", 1.0, 12), ("ur5_servicer.urdf", 0.1, 24)],
 )
-def test_the_replay_is_fourth_order_rk4_of_the_array_form(urdf, newton_metres):
-    """Against RK4 on the embedded configuration written out on numpy arrays (renormalised per
-    stage; the replay's former form) on 40 times the steps: the replay's error falls about
-    16-fold per doubling (fourth order) for the attitude, joints and rates alike; with revolute
-    joints only (UR5) its joints and rates are the array form's on the same steps to rounding
-    (the base pose does not enter ABA, and no renormalisation touches them)."""
+def test_the_replay_is_fifth_order_against_another_integrator(urdf, newton_metres, first):
+    """Against SciPy's DOP853 (rtol 1e-12) on the embedded configuration: once the steps
+    resolve the motion, the replay's error falls more than 20-fold per doubling (fifth order:
+    32; fourth order would give 16) for the attitude, joints and rates alike;
+    with revolute joints only (UR5) its joints and rates are those of the method written out
+    on the embedded configuration with numpy arrays on the same steps, to rounding (the base
+    pose does not enter ABA, and no renormalisation touches them)."""
     robot = ff.load_robot(ROOT / "robots" / urdf)
     mmap = MomentumMap(robot)
     rng = np.random.default_rng(3)
     duration = 2.0
     freq, phase = rng.uniform(0.5, 2.0, robot.n), rng.uniform(0, 3, robot.n)
 
+    def torque(t):
+        return newton_metres * np.sin(np.asarray(t)[..., None] * freq + phase)
+
     def table(steps):
-        t = np.linspace(0.0, duration, 2 * steps + 1)[:, None]
-        return newton_metres * np.sin(t * freq + phase)
+        return torque(np.linspace(0.0, duration, 4 * steps + 1))
 
     start = rng.uniform(-1.0, 1.0, robot.n)
     quat = np.array([0.1, -0.2, 0.3, 0.9]) / np.linalg.norm([0.1, -0.2, 0.3, 0.9])
-    q_ref, v_ref = _array_replay(mmap, start, quat, table(960), duration, 960)
+    q_ref, v_ref = _dop853_replay(mmap, start, quat, torque, duration)
     rates_ref = np.array([v_ref[j.idx_v] for j in robot.joints])
     errors = []
-    for steps in (12, 24):
+    for steps in (first, 2 * first):
         got = replay(mmap, start, quat, table(steps), duration, steps, track_momentum=False)
         errors.append(
             [
@@ -123,19 +163,20 @@ def test_the_replay_is_fourth_order_rk4_of_the_array_form(urdf, newton_metres):
             ]
         )
     coarse, fine = np.array(errors)
-    assert np.all(coarse > 1e-9) and np.all(coarse < 1e-3)
-    assert np.all(fine < coarse / 10.0)
+    assert np.all(coarse > 1e-11) and np.all(coarse < 1e-5)
+    assert np.all(fine < coarse / 20.0)
     if urdf == "ur5_servicer.urdf":
         q, v = _array_replay(mmap, start, quat, table(12), duration, 12)
         got = replay(mmap, start, quat, table(12), duration, 12, track_momentum=False)
         np.testing.assert_allclose(got.joints, robot.joint_values(q), rtol=0, atol=1e-12)
         rates = np.array([v[j.idx_v] for j in robot.joints])
         np.testing.assert_allclose(got.rates, rates, rtol=0, atol=1e-12)
+        assert ff.geodesic_angle(got.quaternion_xyzw, q[3:7]) < 1e-10
 
 
 def test_a_replay_on_uneven_steps_agrees_with_even_steps():
     """``nodes`` (the public replay's uneven step ends, denser at the start): on 300 steps the
-    same final state as 300 even steps, to what fourth order leaves (both against 2400)."""
+    same final state as 300 even steps, to what fifth order leaves (both against 2400)."""
     robot = ff.load_robot(ROOT / "robots" / "ur5_servicer.urdf")
     mmap = MomentumMap(robot)
     duration = 2.0
@@ -166,7 +207,7 @@ def test_a_replay_that_blows_up_says_so_quietly():
     robot = ff.load_robot(ROOT / "robots" / "ur5_servicer.urdf")
     mmap = MomentumMap(robot)
     steps, duration = 2, 10.0
-    table = np.full((2 * steps + 1, robot.n), 1e6)
+    table = np.full((4 * steps + 1, robot.n), 1e6)
     quat = np.array([0.0, 0.0, 0.0, 1.0])
     with warnings.catch_warnings():
         warnings.simplefilter("error")

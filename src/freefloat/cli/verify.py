@@ -34,8 +34,8 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
         "--replay-steps",
         type=int,
         default=MAX_REPLAY_STEPS,
-        help="most RK4 steps the replay may take, 1 to "
-        f"{REPLAY_STEPS_LIMIT}; it doubles its steps from 16 until its own "
+        help="most Runge-Kutta steps the replay may take, 1 to "
+        f"{REPLAY_STEPS_LIMIT}; it doubles its steps from 8 until its own "
         f"error estimate settles the verdict (default {MAX_REPLAY_STEPS})",
     )
     p_verify.set_defaults(func=run, check=check)

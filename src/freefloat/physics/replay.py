@@ -1,22 +1,23 @@
 """Forward-dynamics replay of the free-floating system under given joint torques.
 
 The replay runs Pinocchio's articulated-body algorithm (ABA) on the full system, base free,
-driven only by the joint torques, with the classical fourth-order Runge-Kutta scheme on the
-whole state: the joint values (continuous joints as angles), the velocity ``[v_base; qdot]``
-(base twist in the base frame) and the base quaternion (its rate ``q (x) [omega, 0] / 2``).
-Without gravity ABA does not depend on the base pose (velocities are in the base frame), so the
-joint values and velocity are integrated first with the base held at the identity, and the
-quaternion, whose rate is linear in it, follows from the same RK4 stages afterwards as a
-product of one 4 x 4 step matrix per step (normalised once at the end: the linear map only
-scales it between steps). The base position enters nothing the replay reports and is not
-integrated. The torques come either from a function of time or from a table at the half-step
-instants ``k dt / 2``, which lets a caller compute them in one batch and reuse them when it
-doubles the steps to estimate the replay's own error.
+driven only by the joint torques, with Butcher's fifth-order Runge-Kutta method
+(:mod:`freefloat.physics.runge_kutta`; six stages on the quarters of each step) on the whole
+state: the joint values (continuous joints as angles), the velocity ``[v_base; qdot]`` (base
+twist in the base frame) and the base quaternion (its rate ``q (x) [omega, 0] / 2``). Without
+gravity ABA does not depend on the base pose (velocities are in the base frame), so the joint
+values and velocity are integrated first with the base held at the identity, and the
+quaternion, whose rate is linear in it, follows from the same stages afterwards as a product of
+one 4 x 4 step matrix per step (normalised once at the end: the linear map only scales it
+between steps). The base position enters nothing the replay reports and is not integrated.
+The torques come either from a function of time or from a table at the quarter-step instants
+``k dt / 4``, which lets a caller compute them in one batch and reuse them when it doubles the
+steps to estimate the replay's own error.
 
-The joint values' rate is the joints' share of the velocity, so each RK4 stage is written in
-its second-order form: the stage's joint values ``x + w v_i[joints]`` and velocity
-``v + w a_i`` (``w`` the stage's width), with one ABA call per stage and the stage velocities
-kept for the quaternion.
+The joint values' rate is the joints' share of the velocity, so each stage is written in its
+second-order form: the stage's joint values ``x + h sum_j a_ij v_j[joints]`` and velocity
+``v + h sum_j a_ij a_j`` (``a_j`` the stages' accelerations), with one ABA call per stage and
+the stage velocities kept for the quaternion.
 """
 
 from __future__ import annotations
@@ -28,13 +29,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .attitude import ordered_product, quat_rate_matrices
+from .attitude import ordered_product
 from .momentum import MomentumMap
+from .runge_kutta import QUARTERS, STAGE_MATRIX, WEIGHTS, step_matrices
 
 __all__ = ["ReplayResult", "replay"]
-
-#: Classical RK4's weights of its four stage slopes (times the step over 6).
-_RK4_WEIGHTS = np.array([1.0, 2.0, 2.0, 1.0])
 
 
 class _Configurations:
@@ -71,23 +70,6 @@ class _Configurations:
             q[iq], q[iq + 1] = math.cos(value), math.sin(value)
         return q
 
-    def stage(self, x: np.ndarray) -> Callable[[float, np.ndarray], np.ndarray]:
-        """``place(w, rates)``: the configuration of the joint values ``x + w rates`` (rad or m).
-
-        ``x`` (N,) is read at each call (the caller updates it in place). All joints plain and
-        in order: written straight into the configuration, no intermediate array.
-        """
-        if self.contiguous:
-            joints = self.q[7:]
-
-            def place(width: float, rates: np.ndarray) -> np.ndarray:
-                np.multiply(rates, width, out=joints)
-                joints.__iadd__(x)  # in place: ``joints += x`` would rebind the closure's name
-                return self.q
-
-            return place
-        return lambda width, rates: self(rates * width + x)
-
 
 @dataclass(frozen=True)
 class ReplayResult:
@@ -99,7 +81,7 @@ class ReplayResult:
         quaternion_xyzw: final base attitude.
         momentum_max: largest total momentum norm met along the replay (kg m/s, kg m^2/s);
             NaN unless asked for.
-        steps: number of RK4 steps taken.
+        steps: number of Runge-Kutta steps taken.
     """
 
     joints: np.ndarray
@@ -126,10 +108,10 @@ def replay(
         start_joints: N joint values at t = 0 (rad or m); the system starts at rest with its CM
             at the origin.
         start_quaternion_xyzw: base attitude at t = 0.
-        torque: joint torques (N m or N): a function of time (s), or a (2 steps + 1, N) table
-            at the step ends and midpoints (``k duration / (2 steps)`` for uniform steps).
+        torque: joint torques (N m or N): a function of time (s), or a (4 steps + 1, N) table
+            at the quarters of the steps (``k duration / (4 steps)`` for uniform steps).
         duration: simulated time (s).
-        steps: number of RK4 steps (>= 1).
+        steps: number of Runge-Kutta steps (>= 1).
         track_momentum: record the largest total momentum along the replay.
         nodes: the steps' ends, ``steps + 1`` ascending instants from 0 to ``duration`` (s);
             default uniform.
@@ -139,9 +121,8 @@ def replay(
     ends = np.linspace(0.0, duration, steps + 1) if nodes is None else np.asarray(nodes, float)
     if ends.shape != (steps + 1,):
         raise ValueError(f"{len(ends)} step ends for {steps} steps")
-    times = np.empty(2 * steps + 1)
-    times[0::2], times[1::2] = ends, 0.5 * (ends[:-1] + ends[1:])
     widths = np.diff(ends)
+    times = np.append(ends[:-1, None] + widths[:, None] * np.arange(4) / 4.0, ends[-1])
     robot = mmap.robot
     rate_index = np.array([j.idx_v for j in robot.joints], dtype=int)
     forces = _generalised_forces(mmap, torque, times, rate_index)
@@ -149,10 +130,12 @@ def replay(
     x = np.array(start_joints, dtype=float)
     # A step too long for the motion can blow up; the caller sees non-finite results.
     with np.errstate(over="ignore", invalid="ignore"):
-        stages, v, momentum_max = _rk4(mmap, config, x, forces, widths, rate_index, track_momentum)
-        quaternion = _rk4_quaternion(
-            np.asarray(start_quaternion_xyzw, float), stages[:, :, 3:6], widths
+        stages, v, momentum_max = _stages(
+            mmap, config, x, forces, widths, rate_index, track_momentum
         )
+        end = ordered_product(step_matrices(stages[:, :, 3:6], widths))
+        quaternion = end @ np.asarray(start_quaternion_xyzw, float)
+        quaternion /= np.linalg.norm(quaternion)
     return ReplayResult(
         joints=robot.joint_values(config(x)),
         rates=v[rate_index].copy(),
@@ -162,7 +145,7 @@ def replay(
     )
 
 
-def _rk4(
+def _stages(
     mmap: MomentumMap,
     config: _Configurations,
     x: np.ndarray,
@@ -171,42 +154,40 @@ def _rk4(
     rate_index: np.ndarray,
     track_momentum: bool,
 ) -> tuple[np.ndarray, np.ndarray, float]:
-    """RK4 steps of the joints and velocity from rest: (steps, 4, nv) stage velocities.
+    """Runge-Kutta steps of the joints and velocity from rest: (steps, 6, nv) stage velocities.
 
     ``x`` (N joint values, rad or m) is advanced in place; returns the stages' velocities
     (base twist in the base frame, joint rates), the final velocity and the largest momentum
-    norm met (NaN unless ``track_momentum``). ``forces``: generalised forces at the step ends
-    and midpoints (N m or N).
+    norm met (NaN unless ``track_momentum``). ``forces``: generalised forces at the quarters of
+    the steps (N m or N).
     """
-    model = mmap.model
+    model, nv = mmap.model, mmap.model.nv
     data, aba = model.createData(), pin.aba
-    place = config.stage(x)
     joint_rates: slice | np.ndarray = rate_index
-    if rate_index.tolist() == list(range(6, model.nv)):
-        joint_rates = slice(6, model.nv)  # a view, not a copy
-    stages = np.empty((len(widths), 4, model.nv))
-    accelerations = np.empty((4, model.nv))
-    v = np.zeros(model.nv)
-    a0, a1, a2, a3 = accelerations  # views, each stage's written in place
+    if rate_index.tolist() == list(range(6, nv)):
+        joint_rates = slice(6, nv)  # a view, not a copy
+    count = len(WEIGHTS)
+    stages = np.empty((len(widths), count, nv))
+    # per stage [velocity; acceleration]: one product of a row of a_ij gives both increments
+    slopes = np.empty((count, 2 * nv))
+    velocities, accelerations = slopes[:, :nv], slopes[:, nv:]
+    before = [slopes[:i] for i in range(count)]  # the stages before each one
+    v = np.zeros(nv)
     momentum_max = 0.0 if track_momentum else math.nan
     for k, dt in enumerate(widths.tolist()):
-        half = 0.5 * dt
-        v0, v1, v2, v3 = stages[k]
-        f0, fh, f1 = forces[2 * k], forces[2 * k + 1], forces[2 * k + 2]
-        v0[...] = v
-        a0[...] = aba(model, data, config(x), v, f0)
-        np.multiply(a0, half, out=v1)
-        v1 += v
-        a1[...] = aba(model, data, place(half, v[joint_rates]), v1, fh)
-        np.multiply(a1, half, out=v2)
-        v2 += v
-        a2[...] = aba(model, data, place(half, v1[joint_rates]), v2, fh)
-        np.multiply(a2, dt, out=v3)
-        v3 += v
-        a3[...] = aba(model, data, place(dt, v2[joint_rates]), v3, f1)
-        weights = dt / 6.0 * _RK4_WEIGHTS
-        x += (weights @ stages[k])[joint_rates]
-        v = v + weights @ accelerations
+        rows = dt * STAGE_MATRIX
+        velocities[0] = v
+        accelerations[0] = aba(model, data, config(x), v, forces[4 * k])
+        for i in range(1, count):
+            change = rows[i, :i] @ before[i]
+            here = velocities[i]
+            np.add(v, change[nv:], out=here)
+            joints = x + change[:nv][joint_rates]
+            accelerations[i] = aba(model, data, config(joints), here, forces[4 * k + QUARTERS[i]])
+        stages[k] = velocities
+        change = (dt * WEIGHTS) @ slopes
+        x += change[:nv][joint_rates]
+        v = v + change[nv:]
         if track_momentum:
             momentum = mmap.momentum(config(x), v)
             momentum_max = max(momentum_max, float(np.linalg.norm(momentum)))
@@ -234,20 +215,3 @@ def _generalised_forces(
     forces = np.zeros((len(table), mmap.model.nv))
     forces[:, rate_index] = table
     return forces
-
-
-def _rk4_quaternion(start: np.ndarray, stage_omega: np.ndarray, widths: np.ndarray) -> np.ndarray:
-    """Final attitude of ``y' = 0.5 y (x) [omega, 0]`` by RK4 given each stage's ``omega``.
-
-    Classical RK4 on this linear equation makes every step a 4 x 4 matrix, built in one batch
-    from the stages' angular velocities (M, 4, 3; rad/s) and the step widths (M; s).
-    """
-    a = quat_rate_matrices(stage_omega)
-    h = widths[:, None, None]
-    k1 = a[:, 0]
-    k2 = a[:, 1] + 0.5 * h * (a[:, 1] @ k1)
-    k3 = a[:, 2] + 0.5 * h * (a[:, 2] @ k2)
-    k4 = a[:, 3] + h * (a[:, 3] @ k3)
-    phi = np.eye(4) + h / 6.0 * (k1 + 2.0 * (k2 + k3) + k4)
-    end = ordered_product(phi) @ start
-    return end / np.linalg.norm(end)

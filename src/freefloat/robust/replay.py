@@ -2,9 +2,10 @@
 
 The joints follow the plan's polynomials exactly (the arm's servos track them); the base
 turns as the model's momentum map says. The attitude is integrated with the verifier's
-classical RK4 on the quaternion equation in seconds (:mod:`freefloat.verify.stepping`), not
-with the planner's Magnus scheme, and its step count doubles until its own estimate (the
-change on doubling) is small against the error it measures.
+fifth-order Runge-Kutta method on the quaternion equation in seconds
+(:mod:`freefloat.verify.stepping`), not with the planner's Magnus scheme, and its step count
+doubles until its own estimate (the change on doubling) is small against the error it
+measures.
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ class ReplayOutcome:
         error_rotvec: rotation vector from the goal to the reached attitude (rad, goal frame).
         error_rad: its angle (rad).
         estimate_rad: the integration's own error estimate (rad): the change on doubling.
-        steps: RK4 steps of the result.
+        steps: Runge-Kutta steps of the result.
     """
 
     quaternion: np.ndarray

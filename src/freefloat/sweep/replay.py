@@ -2,7 +2,7 @@
 
 The plan's joint paths are kept (the arm's servos track them); the job's inertial values are
 put into the plan's URDF and the base attitude is integrated along those paths
-(:func:`freefloat.robust.replay.replay_attitude`, RK4, not the planner's scheme). The row
+(:func:`freefloat.robust.replay.replay_attitude`, Runge-Kutta, not the planner's scheme). The row
 holds the final attitude error (rad) and its rotation vector (goal frame), so that a sweep of
 random draws gives the error's distribution. Each worker process keeps the plans it has read.
 """

@@ -35,7 +35,7 @@ from ..problem.constraints.clearance import Clearance
 from ..problem.constraints.registry import clearance_constraint
 from ..robot.model import Robot
 from .clearance_check import clearance_checks
-from .integrating import integrating_checks
+from .integrating import INTEGRATING_CHECKS, METHOD, integrating_checks
 from .path_eval import file_path
 from .plan_checks import (
     PlanCheck,
@@ -58,7 +58,7 @@ __all__ = [
     "verify_plan",
 ]
 
-#: The most replay steps a caller may allow (``--replay-steps``): 65536 RK4 steps.
+#: The most replay steps a caller may allow (``--replay-steps``): 65536 Runge-Kutta steps.
 REPLAY_STEPS_LIMIT = 1 << 16
 
 #: Every check of a plan, in the order its file lists them (before one per constraint).
@@ -151,7 +151,7 @@ def verify_plan(
     Args:
         plan: the plan (for example from :meth:`Plan.load`).
         robot: the loaded robot, to skip reloading the URDF.
-        replay_steps: the most RK4 steps the forward-dynamics replay may take (>= 1); with
+        replay_steps: the most Runge-Kutta steps the forward-dynamics replay may take (>= 1); with
             other than the default, the replay's figures are not compared with the file's
             (made with the default), only judged.
         constraints: path constraints to check densely; default those the plan records
@@ -174,16 +174,30 @@ def verify_plan(
     checks.extend(constraint_checks(subject, constraints))
     verification = Verification(tuple(checks))
     if recompute:
-        # An older file states some checks as they were made then (_PREDATED), and a replay
+        # An older file states some checks as they were made then (_PREDATED; integrating
+        # checks made by another integrator), and a replay
         # allowed other steps than the file's (the default) gives other figures: the figures
         # it states otherwise are compared; every check made now decides whether it passes.
-        predated = _PREDATED.get(plan.format, ())
+        predated = (*_PREDATED.get(plan.format, ()), *_other_integrator(plan.verification))
         if replay_steps != MAX_REPLAY_STEPS:
             predated = (*predated, "replay_attitude", "replay_joints")
         stated = Verification(tuple(c for c in checks if c.name not in predated))
         on_file = Verification(tuple(c for c in plan.verification.checks if c.name not in predated))
         compare_verification(on_file, stated)
     return verification
+
+
+def _other_integrator(stated: Verification) -> tuple[str, ...]:
+    """The integrating checks a file states as made by another integrator than :data:`METHOD`.
+
+    Their ``detail`` names the integrator (``"RK4, 64 steps"`` before fifth-order checks):
+    such figures are what that integrator found, not what this one finds.
+    """
+    return tuple(
+        c.name
+        for c in stated.checks
+        if c.name in INTEGRATING_CHECKS and c.detail.split(",")[0] != METHOD
+    )
 
 
 def constraint_checks(subject: Subject, constraints: list[Constraint]) -> list[Check]:

@@ -68,7 +68,7 @@ class Subject:
         robot: its robot, loaded from its URDF.
         mmap: the robot's momentum map.
         path: the plan's joint paths as its file defines them (:mod:`.path_eval`).
-        replay_steps: the most RK4 steps the forward-dynamics replay may take.
+        replay_steps: the most Runge-Kutta steps the forward-dynamics replay may take.
     """
 
     plan: Plan

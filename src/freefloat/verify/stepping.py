@@ -2,8 +2,9 @@
 
 A check integrates on M and 2 M steps and takes the difference of the two results as the
 error estimate of the finer one; :func:`_decided` says when that estimate can be trusted and
-the verdict stands. :func:`_rk4_attitude` is the attitude check's integrator (classical RK4,
-batched, independent of the planner's Magnus scheme).
+the verdict stands. :func:`_rk5_attitude` is the attitude check's integrator (Butcher's
+fifth-order Runge-Kutta method, :mod:`freefloat.physics.runge_kutta`, batched, independent of
+the planner's Magnus scheme).
 """
 
 from __future__ import annotations
@@ -14,7 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.attitude import geodesic_angle, ordered_product, quat_rate_matrices
+from ..physics.attitude import geodesic_angle, ordered_product
+from ..physics.runge_kutta import QUARTERS, step_matrices
 
 __all__ = ["CONVERGED_FRACTION", "MAX_REPLAY_STEPS", "AttitudeLevel", "attitude_by_doubling"]
 
@@ -22,12 +24,12 @@ __all__ = ["CONVERGED_FRACTION", "MAX_REPLAY_STEPS", "AttitudeLevel", "attitude_
 #: error, or until its error estimate is below this fraction of its tolerance.
 CONVERGED_FRACTION = 0.1
 
-#: Default cap on the replay's RK4 steps (see :func:`verify_plan`).
+#: Default cap on the replay's Runge-Kutta steps (see :func:`verify_plan`).
 MAX_REPLAY_STEPS = 8192
 
 #: Steps of the first, coarsest level of the step-doubling checks.
-_FIRST_REPLAY_STEPS = 16
-_FIRST_ATTITUDE_STEPS = 16
+_FIRST_REPLAY_STEPS = 8
+_FIRST_ATTITUDE_STEPS = 8
 _MAX_ATTITUDE_STEPS = 1 << 14
 #: Largest rotation (rad) of a joint or the base in one step before a check trusts its steps.
 _MAX_TURN = 0.25
@@ -46,7 +48,7 @@ def _decided(
     ``estimate`` is the difference between the results on M and 2 M steps, ``previous`` the
     one between M / 2 and M, ``earlier`` the one between M / 4 and M / 2 (inf while not
     known; None: not asked for). It bounds the error of the finer result only once the scheme
-    converges at its order (RK4: the difference shrinks about 16-fold per doubling), so the
+    converges at its order (fifth: the difference shrinks about 32-fold per doubling), so the
     verdict is trusted only once the steps resolve the motion (``turn``, the largest rotation
     in one step, rad, at most :data:`_MAX_TURN`) and the difference has shrunk at least
     8-fold since the doubling before (a first difference, with nothing before it, never
@@ -74,26 +76,20 @@ def _finite(x: float) -> float:
     return x if not math.isnan(x) else math.inf
 
 
-def _rk4_attitude(start: np.ndarray, omega: np.ndarray, duration: float) -> np.ndarray:
-    """Final attitude of ``y' = 0.5 y (x) omega(t)`` by classical RK4 on a uniform grid.
+def _rk5_attitude(start: np.ndarray, omega: np.ndarray, duration: float) -> np.ndarray:
+    """Final attitude of ``y' = 0.5 y (x) omega(t)`` by Butcher's fifth-order method, uniform grid.
 
     The equation is linear in ``y`` and ``omega(t)`` is known beforehand, so every step is a
     4 x 4 matrix (built in one batch) and their product is taken by pairwise reduction.
 
     Args:
         start: attitude ``[x, y, z, w]`` at t = 0.
-        omega: (2 M + 1, 3) base angular velocity (rad/s) at ``k duration / (2 M)``.
+        omega: (4 M + 1, 3) base angular velocity (rad/s) at ``k duration / (4 M)``.
         duration: time span (s).
     """
-    steps = (len(omega) - 1) // 2
-    h = duration / steps
-    a = quat_rate_matrices(omega)
-    a1, a2, a3 = a[0:-1:2], a[1::2], a[2::2]
-    eye = np.eye(4)
-    k2 = a2 @ (eye + 0.5 * h * a1)
-    k3 = a2 @ (eye + 0.5 * h * k2)
-    k4 = a3 @ (eye + h * k3)
-    phi = eye + h / 6.0 * (a1 + 2.0 * k2 + 2.0 * k3 + k4)
+    steps = (len(omega) - 1) // 4
+    stage_omega = omega[4 * np.arange(steps)[:, None] + np.array(QUARTERS)[None, :]]
+    phi = step_matrices(stage_omega, np.full(steps, duration / steps))
     end = ordered_product(phi) @ start
     return end / np.linalg.norm(end)
 
@@ -101,8 +97,8 @@ def _rk4_attitude(start: np.ndarray, omega: np.ndarray, duration: float) -> np.n
 def _refine(
     table: np.ndarray | None, steps: int, duration: float, fill: Callable[[np.ndarray], np.ndarray]
 ) -> np.ndarray:
-    """Values at ``k duration / (2 steps)``, k = 0..2 steps, reusing a table of half as many."""
-    t = np.linspace(0.0, duration, 2 * steps + 1)
+    """Values at ``k duration / (4 steps)``, k = 0..4 steps, reusing a table of half as many."""
+    t = np.linspace(0.0, duration, 4 * steps + 1)
     if table is None:
         return fill(t)
     out = np.empty((len(t), table.shape[1]))
@@ -119,7 +115,7 @@ class AttitudeLevel:
         attitude: final attitude ``[x, y, z, w]`` on ``steps`` steps.
         estimate: geodesic angle between it and the level of half as many steps (rad).
         previous: the same difference one level before (rad; inf at the first).
-        steps: RK4 steps of the last level.
+        steps: Runge-Kutta steps of the last level.
         turn: largest base rotation in one step (rad).
     """
 
@@ -138,7 +134,7 @@ def attitude_by_doubling(
     max_steps: int,
     done: Callable[[AttitudeLevel], bool],
 ) -> AttitudeLevel:
-    """Integrate the base attitude by RK4 (:func:`_rk4_attitude`), doubling the steps.
+    """Integrate the base attitude (:func:`_rk5_attitude`), doubling the steps.
 
     Starts on ``first_steps`` steps and doubles (reusing every rate already computed) until
     ``done`` accepts a level or ``max_steps`` is reached.
@@ -153,12 +149,12 @@ def attitude_by_doubling(
     """
     steps = first_steps
     omega = _refine(None, steps, duration, omega_at)
-    coarse = _rk4_attitude(start, omega, duration)
+    coarse = _rk5_attitude(start, omega, duration)
     previous = math.inf
     while True:
         steps *= 2
         omega = _refine(omega, steps, duration, omega_at)
-        fine = _rk4_attitude(start, omega, duration)
+        fine = _rk5_attitude(start, omega, duration)
         turn = float(np.abs(omega).max()) * duration / steps
         level = AttitudeLevel(fine, geodesic_angle(coarse, fine), previous, steps, turn)
         if steps >= max_steps or done(level):
