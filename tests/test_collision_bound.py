@@ -144,7 +144,7 @@ def test_the_per_pair_bound_between_samples_holds_against_every_pair_measured_de
     own bounds at both ends and its own motion): checked against every pair measured by a
     fresh model at 40 instants inside each interval (brute force). It is never looser than
     the bound from the smallest distances and the fastest pair, and tighter on some."""
-    from freefloat.problem.constraints.clearance import Clearance
+    from freefloat.problem.constraints.clearance_samples import bounds_between, lever_arms
     from freefloat.problem.rate_bounds import rate_bounds
 
     scenario = ff.Scenario.from_toml(path)
@@ -152,15 +152,16 @@ def test_the_per_pair_bound_between_samples_holds_against_every_pair_measured_de
     problem = ff.problem_from_scenario(scenario, extra=[2] * robot.n)
     model = CollisionModel(robot, known_srdf(robot))
     fresh = CollisionModel(robot, known_srdf(robot))
-    check = Clearance(model)
     rng = np.random.default_rng(21)
     tighter = 0
     for scale in (0.0, 0.3):
         poly = problem.polynomials(rng.normal(0.0, scale, problem.n_free))
         edges = np.linspace(0.0, poly.duration, 21)
-        found = model.closest_many(poly.evaluate(edges).q, edges / poly.duration)
+        q = poly.evaluate(edges).q
+        found, arms = model.closest_many(q, edges / poly.duration), lever_arms(model, q)
         t0, t1 = edges[:-1], edges[1:]
-        bound = check._between(poly, t0, t1, found.lower[:-1], found.lower[1:])
+        ends = (found.lower[:-1], found.lower[1:])
+        bound = bounds_between(model, poly, (t0, t1), ends, (arms[:-1], arms[1:]))
         speed = np.max(rate_bounds(poly, t0, t1) @ model.weights.T, axis=1)
         former = 0.5 * (found.values[:-1] + found.values[1:] - speed * (t1 - t0)) - BOUND_SLACK
         assert np.all(bound >= former)
@@ -320,7 +321,7 @@ class _Dip:
     a weight of 1 m/rad the clearance changes at most 1 m per rad (true: slope 0 or 1).
     """
 
-    n_pairs, names = 1, ["a-b"]
+    n_pairs, names, levers = 1, ["a-b"], None
 
     def __init__(self, margin: float, cap: float, weights: np.ndarray | None) -> None:
         self.margin, self.cap, self.weights = margin, cap, weights

@@ -50,6 +50,7 @@ from .geometry import (
 from .meshes import HullInfo, hull_volume, mesh_volume, object_triangles, true_hull
 from .model import Robot
 from .obstacle import SHAPES, Obstacle
+from .pair_levers import PairLevers
 from .pair_queries import PairQueries
 from .srdf import known_srdf
 
@@ -107,6 +108,20 @@ class CollisionModel(PairQueries):
         objects = list(geometry.geometryObjects)
         names = [f"{objects[a].name} / {objects[b].name}" for a, b in pairs]
         super().__init__(robot, geometry, pairs, names)
+        self._levers: PairLevers | None = None
+        if self._weights is not None:
+            self._levers = PairLevers(
+                robot, geometry, pairs, self._centres, self._radii, self._kinematics
+            )
+
+    @property
+    def levers(self) -> PairLevers | None:
+        """The spheres' lever arms about the joint axes: tighter speed bounds, or None.
+
+        See :class:`~freefloat.robot.pair_levers.PairLevers` (None: no motion weights, with a
+        prismatic joint say).
+        """
+        return self._levers
 
     def distances(self, joints: np.ndarray, gradients: bool = False) -> Distances:
         """Signed distances (m) of every pair at the joint values (rad or m).

@@ -18,11 +18,41 @@ import pinocchio as pin
 
 from .model import Robot
 
-__all__ = ["BOUND_SLACK", "PairBounds", "motion_weights"]
+__all__ = ["BOUND_SLACK", "PairBounds", "alone", "motion_weights", "sphere_reach"]
 
 #: Allowance (m) for the error of a measured distance, in the bound of a pair not measured
 #: (a thousand times coal's GJK and EPA tolerance).
 BOUND_SLACK = 1e-6
+
+
+def sphere_reach(
+    robot: Robot, geometry: pin.GeometryModel, centres: np.ndarray, radii: np.ndarray
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """How far each object's bounding sphere reaches from each joint (G x N, m per rad).
+
+    ``reach[g, k]``: the distance from joint k's origin (on its axis) to the farthest point of
+    object g's bounding sphere (``centres`` in the objects' frames, ``radii``; m), at most the
+    lengths of the joint offsets down the chain plus the sphere's centre offset and radius
+    (rotations keep lengths); ``carried[g, k]``: whether joint k moves object g (reach 0 when
+    it does not). None with a prismatic joint (the lengths change with it).
+    """
+    if any(not joint.angular for joint in robot.joints):
+        return None
+    model = robot.model
+    column = {joint.index: k for k, joint in enumerate(robot.joints)}
+    objects = list(geometry.geometryObjects)
+    parents = [int(j) for j in model.parents]
+    offsets = {j: float(np.linalg.norm(model.jointPlacements[j].translation)) for j in column}
+    reach = np.zeros((len(objects), robot.n))
+    carried = np.zeros((len(objects), robot.n), dtype=bool)
+    for g, obj in enumerate(objects):
+        length = float(np.linalg.norm(obj.placement.act(centres[g]))) + float(radii[g])
+        joint = int(obj.parentJoint)
+        while joint in column:  # arm joints; the spacecraft (free flyer) and the world end it
+            reach[g, column[joint]], carried[g, column[joint]] = length, True
+            length += offsets[joint]
+            joint = parents[joint]
+    return reach, carried
 
 
 def motion_weights(
@@ -37,38 +67,33 @@ def motion_weights(
     A joint that moves both bodies of a pair (an ancestor of both) moves them as one rigid
     body and leaves their distance unchanged; a revolute joint that moves one of them moves
     each of its points at most ``rho`` per rad, ``rho`` the distance from the joint's origin
-    (on its axis) to the farthest point of the body's bounding sphere: at most the lengths of
-    the joint offsets down the chain, plus the sphere's centre offset and radius (rotations
-    keep lengths). A signed distance changes no more than its two shapes' points move, so
+    (on its axis) to the farthest point of the body's bounding sphere (:func:`sphere_reach`).
+    A signed distance changes no more than its two shapes' points move, so
     ``|d(q) - d(q')| <= weights[p] @ |q - q'|`` along the straight line between any two
     joint vectors. With a prismatic joint the lengths change with it: None (no bound).
     """
-    if any(not joint.angular for joint in robot.joints):
+    found = sphere_reach(robot, geometry, centres, radii)
+    if found is None:
         return None
-    weights = np.zeros((len(pairs), robot.n))
-    model = robot.model
-    column = {joint.index: k for k, joint in enumerate(robot.joints)}
-    objects = list(geometry.geometryObjects)
-    parents = [int(j) for j in model.parents]
-    offsets = {j: float(np.linalg.norm(model.jointPlacements[j].translation)) for j in column}
+    reach, carried = found
+    first, second = alone(carried, pairs)
+    pair_array = np.array(pairs, dtype=int).reshape(-1, 2)
+    return np.where(first, reach[pair_array[:, 0]], 0.0) + np.where(
+        second, reach[pair_array[:, 1]], 0.0
+    )
 
-    def reach(index: int) -> dict[int, float]:
-        obj = objects[index]
-        length = float(np.linalg.norm(obj.placement.act(centres[index]))) + float(radii[index])
-        out, joint = {}, int(obj.parentJoint)
-        while joint in column:  # arm joints; the spacecraft (free flyer) and the world end it
-            out[column[joint]] = length
-            length += offsets[joint]
-            joint = parents[joint]
-        return out
 
-    reaches = [reach(i) for i in range(len(objects))]
-    for p, (a, b) in enumerate(pairs):
-        for one, other in ((reaches[a], reaches[b]), (reaches[b], reaches[a])):
-            for k, rho in one.items():
-                if k not in other:
-                    weights[p, k] = rho
-    return weights
+def alone(
+    carried: np.ndarray, pairs: Sequence[tuple[int, int]] | np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(P, N) each pair's joints that move its first object alone, and its second alone.
+
+    ``carried``: (G, N) which joints move each object (:func:`sphere_reach`). A joint that
+    moves both moves them as one rigid body: their distance does not change with it.
+    """
+    pair_array = np.array(pairs, dtype=int).reshape(-1, 2)
+    a, b = carried[pair_array[:, 0]], carried[pair_array[:, 1]]
+    return a & ~b, b & ~a
 
 
 class PairBounds:

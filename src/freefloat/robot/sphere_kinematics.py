@@ -62,10 +62,37 @@ class SphereKinematics:
             ]
         ).reshape(-1, 3)
         self._njoints = model.njoints
+        #: The robot's joints (Pinocchio indices, in column order) and their unit axes.
+        self._joints = np.array([joint.index for joint in robot.joints], dtype=int)
+        self._axes = np.array([self._steps[j - 1][5] for j in self._joints]).reshape(-1, 3)
+        self._last: tuple[tuple[tuple[int, ...], bytes], tuple[np.ndarray, np.ndarray]] | None
+        self._last = None
 
     def centres(self, joints: np.ndarray) -> np.ndarray:
         """(B, G, 3) the sphere centres (m, spacecraft frame) at (B, N) joint values (rad or m)."""
+        return self._centres(*self._forward(joints))
+
+    def placed(self, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The sphere centres and the robot's joint axes at (B, N) joint values (rad or m).
+
+        Returns (B, G, 3) the centres (m), (B, N, 3) each joint's origin (m) and (B, N, 3) its
+        unit axis, in the spacecraft's frame (a revolute joint's origin lies on its axis).
+        """
+        rotations, offsets = self._forward(joints)
+        axes = np.einsum("nbij,nj->bni", rotations[self._joints], self._axes)
+        origins = offsets[self._joints].transpose(1, 0, 2)
+        return self._centres(rotations, offsets), origins, axes
+
+    def _forward(self, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Every Pinocchio joint's rotation (J, B, 3, 3) and origin (J, B, 3; m) at the joints.
+
+        The last batch's are kept: the collision model's sphere bounds and the lever arms
+        (:mod:`freefloat.robot.pair_levers`) ask about the same joints in turn.
+        """
         joints = np.atleast_2d(np.asarray(joints, dtype=float))
+        key = (joints.shape, joints.tobytes())
+        if self._last is not None and self._last[0] == key:
+            return self._last[1]
         count = len(joints)
         rotations = np.empty((self._njoints, count, 3, 3))
         offsets = np.empty((self._njoints, count, 3))
@@ -82,6 +109,11 @@ class SphereKinematics:
             if k >= 0:  # a prismatic joint: along its axis, in its own (fixed) frame
                 offsets[j] += (rotation @ axis) * joints[:, k, None]
             rotations[j] = rotation
+        self._last = (key, (rotations, offsets))
+        return rotations, offsets
+
+    def _centres(self, rotations: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+        """(B, G, 3) the sphere centres (m) from :meth:`_forward`'s joint placements."""
         r, t = rotations[self._parents], offsets[self._parents]  # (G, B, 3, 3), (G, B, 3)
         world = np.einsum("gbij,gj->gbi", r, self._local) + t
         return world.transpose(1, 0, 2)

@@ -23,12 +23,18 @@ import numpy as np
 
 from ...robot.collision import CollisionModel
 from ...robot.model import Robot
-from ...robot.motion_bound import BOUND_SLACK
 from ..paths import JointPolynomials, PathFamily
-from ..rate_bounds import rate_bounds
 from ..residual import Problem
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
-from .clearance_samples import Measured, local_minima, lowest_minima, pair_bounds
+from .clearance_samples import (
+    Measured,
+    arms_table,
+    bounds_between,
+    lever_arms,
+    local_minima,
+    lowest_minima,
+    pair_bounds,
+)
 
 __all__ = [
     "COARSE_EVERY",
@@ -201,27 +207,6 @@ class Clearance(Constraint):
                 best_pair = lowest(best_t)[1]
         return best, best_t, best_pair
 
-    def _between(
-        self,
-        path: JointPolynomials,
-        t0: np.ndarray,
-        t1: np.ndarray,
-        lower0: np.ndarray,
-        lower1: np.ndarray,
-    ) -> np.ndarray:
-        """Lower bounds (m) of the clearance over ``[t0, t1]`` (s), from bounds at both ends.
-
-        ``lower0``, ``lower1``: (I, P) lower bounds of every pair's distance at ``t0`` and
-        ``t1`` (m; the measured distance where measured). Per pair: their mean less half the
-        time between them times how fast that pair's distance can change there (its motion
-        weights times bounds of the joint rates); the clearance's bound is the smallest.
-        """
-        assert self.model.weights is not None
-        speed = rate_bounds(path, t0, t1) @ self.model.weights.T  # (I, P), m/s
-        per_pair = 0.5 * (lower0 + lower1 - speed * (t1 - t0)[:, None])
-        per_pair = np.nan_to_num(per_pair, nan=-math.inf)  # no bound: nothing spared
-        return np.min(per_pair, axis=1) - BOUND_SLACK
-
     def _sampled(self, path: JointPolynomials, t: np.ndarray) -> np.ndarray:
         """Smallest distance over the pairs at each time of ``t`` (m), remembered per path."""
         key = self._key(path, t)
@@ -237,14 +222,14 @@ class Clearance(Constraint):
         :data:`COARSE_EVERY`-th of ``samples`` instants (those of :meth:`smallest`, the same
         bits); between two measured instants each pair's distance is at least the mean of its
         bounds there less half the time between them times how fast its distance can change
-        there (its motion weights times bounds of the joint rates, :func:`rate_bounds`), and
-        the clearance at least the smallest of these. Where that falls
-        below ``limit`` (the margin; or, with None, :data:`NEAR` above the smallest measured),
-        the sample halfway is measured too, down to neighbouring samples. Returns the
-        distances (NaN where spared: every such sample is above the limit), the pairs' bounds
-        at the samples measured, and the lower bound
-        of the clearance along the whole path (m; -inf when the model has no motion weights,
-        a prismatic joint say: then nothing bounds the clearance between samples). Remembered
+        there (bounds of the joint rates times its bodies' lever arms about the joint axes,
+        :func:`bounds_between`), and the clearance at least the smallest of these. Where that
+        falls below ``limit`` (the margin; or, with None, :data:`NEAR` above the smallest
+        measured), the sample halfway is measured too, down to neighbouring samples. Returns
+        the distances (NaN where spared: every such sample is above the limit), the pairs'
+        bounds and the spheres' lever arms at the samples measured, and the lower bound of the
+        clearance along the whole path (m; -inf when the model has no motion weights, a
+        prismatic joint say: then nothing bounds the clearance between samples). Remembered
         for the last path and limit only, so that the answer never depends on earlier calls.
         """
         key = (*self._key(path, np.zeros(samples)), limit)
@@ -258,24 +243,28 @@ class Clearance(Constraint):
         todo = np.unique(np.append(np.arange(0, samples, COARSE_EVERY), samples - 1))
         if self.model.weights is None:  # no bound between samples: every sample, no bound
             known[:] = self.model.closest_many(q).values
-            answer = Measured(known, lower, -math.inf)
+            answer = Measured(known, lower, -math.inf, arms_table(self.model, samples))
             self._measured_memo = (key, answer)
             return answer
+        arms = arms_table(self.model, samples)
         with self.model.own_bounds():  # pair bounds from this path's samples alone
             while True:
                 todo = todo[np.isnan(known[todo])]
                 found = self.model.closest_many(q[todo], todo / (samples - 1))
                 known[todo], lower[todo] = found.values, pair_bounds(found)
+                arms[todo] = lever_arms(self.model, q[todo])
                 nodes = np.flatnonzero(~np.isnan(known))
                 a, b = nodes[:-1], nodes[1:]
-                between = self._between(path, t[a], t[b], lower[a], lower[b])
+                between = bounds_between(
+                    self.model, path, (t[a], t[b]), (lower[a], lower[b]), (arms[a], arms[b])
+                )
                 floor = float(np.nanmin(known)) + NEAR if limit is None else limit
                 short = (between < floor) & (b - a >= 2)
                 if not np.any(short):
                     bound = float(min(between.min(), np.nanmin(known)))
                     break
                 todo = (a[short] + b[short]) // 2
-        answer = Measured(known, lower, bound)
+        answer = Measured(known, lower, bound, arms)
         self._measured_memo = (key, answer)
         return answer
 
@@ -291,7 +280,7 @@ class Clearance(Constraint):
         ``limit``, and the middles of halves left undecided, are then refined by a bounded
         scalar search.
         """
-        known, table = measured.known, measured.lower
+        known, table, arms = measured.known, measured.lower, measured.arms
         t = np.linspace(0.0, path.duration, len(known))
         times, values = [t], [np.nan_to_num(known, nan=math.inf)]
         rows = np.arange(len(known), dtype=float)
@@ -299,13 +288,15 @@ class Clearance(Constraint):
         ends = np.stack([t[:-1], t[1:], known[:-1], known[1:], rows[:-1], rows[1:]])
         with self.model.own_bounds():  # pair bounds from this path's samples alone
             for _ in range(HALVINGS):
-                ends = ends[:, self._undecided(path, ends, table, limit)]
+                ends = ends[:, self._undecided(path, ends, (table, arms), limit)]
                 if ends.shape[1] == 0:
                     break
                 mid = 0.5 * (ends[0] + ends[1])
-                found = self.model.closest_many(path.evaluate(mid).q, mid / path.duration)
+                q_mid = path.evaluate(mid).q
+                found = self.model.closest_many(q_mid, mid / path.duration)
                 vm, at = found.values, np.arange(len(table), len(table) + len(mid), dtype=float)
                 table = np.concatenate([table, pair_bounds(found)])
+                arms = np.concatenate([arms, lever_arms(self.model, q_mid)])
                 times.append(mid)
                 values.append(vm)
                 ends = np.concatenate(
@@ -316,7 +307,7 @@ class Clearance(Constraint):
                     axis=1,
                 )
         if ends.shape[1]:
-            ends = ends[:, self._undecided(path, ends, table, limit)]
+            ends = ends[:, self._undecided(path, ends, (table, arms), limit)]
         t_all, v_all = np.concatenate(times), np.concatenate(values)
         order = np.argsort(t_all, kind="stable")
         t_all, v_all = t_all[order], v_all[order]
@@ -326,20 +317,30 @@ class Clearance(Constraint):
         return self._refined(path, t_all, v_all, np.unique(np.append(minima, spans)))
 
     def _undecided(
-        self, path: JointPolynomials, ends: np.ndarray, table: np.ndarray, limit: float
+        self,
+        path: JointPolynomials,
+        ends: np.ndarray,
+        tables: tuple[np.ndarray, np.ndarray],
+        limit: float,
     ) -> np.ndarray:
         """Which intervals may dip below ``limit`` (m) unseen.
 
-        ``ends``: rows t0, t1 (s), v0, v1 (m), and the rows of ``table`` at both ends. Both
+        ``ends``: rows t0, t1 (s), v0, v1 (m), and the rows of ``tables`` at both ends. Both
         ends measured and above ``limit`` (a sample below it is a dip seen), and the bound
-        between them (from the pairs' bounds in ``table``, m) below it.
+        between them (from the pairs' bounds and the spheres' lever arms in ``tables``, m)
+        below it.
         """
         seen = ~np.isnan(ends[2]) & ~np.isnan(ends[3]) & (ends[2] >= limit) & (ends[3] >= limit)
         bound = np.full(ends.shape[1], math.inf)
         if np.any(seen):
             first, second = ends[4, seen].astype(int), ends[5, seen].astype(int)
-            bound[seen] = self._between(
-                path, ends[0, seen], ends[1, seen], table[first], table[second]
+            table, arms = tables
+            bound[seen] = bounds_between(
+                self.model,
+                path,
+                (ends[0, seen], ends[1, seen]),
+                (table[first], table[second]),
+                (arms[first], arms[second]),
             )
         return bound < limit
 

@@ -1,19 +1,32 @@
 """Samples of clearance along a path: what the dense check measured, and its minima.
 
 Helpers of :mod:`freefloat.problem.constraints.clearance` (the constraint's module stays a
-readable size): the record of a path's measured samples with each pair's bounds there, and
-the local minima of sampled values.
+readable size): the record of a path's measured samples with each pair's bounds and the
+spheres' lever arms there, the bound of the clearance between two samples, and the local
+minima of sampled values.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from ...robot.collision import Closest
+from ...robot.collision import Closest, CollisionModel
+from ...robot.motion_bound import BOUND_SLACK
+from ..paths import JointPolynomials
+from ..rate_bounds import rate_bounds
 
-__all__ = ["Measured", "local_minima", "lowest_minima", "pair_bounds"]
+__all__ = [
+    "Measured",
+    "arms_table",
+    "bounds_between",
+    "lever_arms",
+    "local_minima",
+    "lowest_minima",
+    "pair_bounds",
+]
 
 
 @dataclass(frozen=True)
@@ -24,17 +37,63 @@ class Measured:
         known: (S,) smallest distance over the pairs per sample (m; NaN where spared).
         lower: (S, P) lower bounds of every pair's distance per sample (m; NaN where spared).
         bound: a lower bound of the clearance along the whole path (m).
+        arms: (S, G, N) the bounding spheres' lever arms about the joint axes per sample (m;
+            NaN where spared; (S, 0) for a model without lever arms).
     """
 
     known: np.ndarray
     lower: np.ndarray
     bound: float
+    arms: np.ndarray
 
 
 def pair_bounds(found: Closest) -> np.ndarray:
     """(B, P) the pairs' lower bounds (m) of a batch of queries."""
     assert found.lower is not None
     return found.lower
+
+
+def bounds_between(
+    model: CollisionModel,
+    path: JointPolynomials,
+    times: tuple[np.ndarray, np.ndarray],
+    lower: tuple[np.ndarray, np.ndarray],
+    arms: tuple[np.ndarray, np.ndarray],
+) -> np.ndarray:
+    """(I,) lower bounds (m) of the clearance over I intervals, from bounds at both ends.
+
+    ``times``: (I,) the intervals' starts and ends (s); ``lower``: (I, P) lower bounds of
+    every pair's distance there (m; the measured distance where measured); ``arms``: the
+    spheres' :func:`lever_arms` there (m). Per pair: the mean of its bounds less half the
+    interval times how fast that pair's distance can change on it (bounds of the joint rates
+    times the bodies' lever arms about the joints' axes, never above their motion weights:
+    :meth:`~freefloat.robot.pair_levers.PairLevers.speeds`); the clearance's bound is the
+    smallest, less :data:`BOUND_SLACK`. The model must have motion weights.
+    """
+    assert model.weights is not None
+    t0, t1 = times
+    rates = rate_bounds(path, t0, t1)
+    if model.levers is None:  # a model with motion weights alone
+        speed = rates @ model.weights.T  # (I, P), m/s
+    else:
+        speed = model.levers.speeds(rates, t1 - t0, arms)
+    per_pair = 0.5 * (lower[0] + lower[1] - speed * (t1 - t0)[:, None])
+    per_pair = np.nan_to_num(per_pair, nan=-math.inf)  # no bound: nothing spared
+    return np.min(per_pair, axis=1) - BOUND_SLACK
+
+
+def lever_arms(model: CollisionModel, q: np.ndarray) -> np.ndarray:
+    """(B, G, N) the spheres' lever arms about the joint axes at (B, N) joints ``q`` (m).
+
+    :meth:`~freefloat.robot.pair_levers.PairLevers.arms`; (B, 0) for a model without them.
+    """
+    return np.zeros((len(q), 0)) if model.levers is None else model.levers.arms(q)
+
+
+def arms_table(model: CollisionModel, count: int) -> np.ndarray:
+    """(count, G, N) lever arms (m) all NaN, to be filled by :func:`lever_arms` as measured."""
+    shape = (0,) if model.levers is None else model.levers.reach.shape
+    return np.full((count, *shape), math.nan)
 
 
 def lowest_minima(values: np.ndarray) -> list[int]:
