@@ -14,8 +14,11 @@ import freefloat as ff
 from freefloat.cli import main
 from freefloat.physics.attitude import quat_multiply
 from freefloat.physics.dynamics import inverse_dynamics_batch
+from freefloat.verify.along import PathDynamics
+from freefloat.verify.path_eval import file_path
 
 import reference as ref
+from conftest import ROOT
 from urdfs import BASE, joint, link, robot
 
 
@@ -190,3 +193,56 @@ def test_verify_rejects_a_replay_cap_below_one(worked_plan, tmp_path, capsys):
     assert err == "freefloat: error: --replay-steps must be at least 1, got 0"
     with pytest.raises(ff.InputError, match=r"^replay_steps must be at least 1, got 0$"):
         ff.verify_plan(worked_plan, replay_steps=0)
+
+
+#: A goal inside the Kinova example's reach (its report's inner set, 0.63 of the way along the
+#: (-1, -1, 1) diagonal): the plan is valid, its open-loop replay amplifies rounding.
+KINOVA_GOAL = np.array(
+    [-0.0009972513302887454, -0.0037811641372579997, -0.001714387780936619, 0.9999908845394981]
+)
+
+
+def test_a_replay_that_amplifies_its_torques_rounding_does_not_refuse():
+    """A light arm on a 500 kg spacecraft for 20 s. Its torques, computed from two evaluations
+    of the file's path (NumPy monomials here, the verifier's basis there), differ by more
+    than 1e-13 of their largest; scaled by 1 + 1e-13 they drive the open-loop replay's end
+    more than the tolerance away: no replay can tell the plan's error from its inputs'. Its
+    converged replay ends 5e-4 rad from the goal; with the torques perturbed by 1e-12 of
+    their largest moving the end by far more, the check says no verdict instead of refusing
+    the plan."""
+    scenario = ff.Scenario.from_toml(ROOT / "examples" / "kinova_servicer.toml")
+    p = ff.plan(dataclasses.replace(scenario, goal_attitude=KINOVA_GOAL), samples=41)
+    joints = p.verification["replay_joints"]
+    assert joints.verdict == "no verdict" and "torques perturbed by 1e-12" in joints.detail
+    assert joints.value > joints.tolerance and joints.error_estimate >= joints.value
+    arm = ff.load_robot(p.robot.urdf)
+    mmap = ff.MomentumMap(arm)
+    steps = 4096
+    t = np.linspace(0.0, p.duration, 4 * steps + 1)
+    table = inverse_dynamics_batch(mmap, *_path(p, t)).tau
+    theirs = PathDynamics(mmap, file_path(p)).torques(t)
+    assert float(np.abs(table - theirs).max()) > 1e-13 * float(np.abs(table).max())
+    start, quat = np.array(p.request.start_joints), np.array(p.base.start_quaternion_xyzw)
+    ends = [
+        ff.replay(mmap, start, quat, torques, p.duration, steps, track_momentum=False).joints
+        for torques in (table, table * (1.0 + 1e-13))
+    ]
+    assert float(np.abs(_wrapped(arm, ends[0] - ends[1])).max()) > joints.tolerance
+
+
+def test_a_replay_under_wrong_torques_still_refuses(worked_plan, monkeypatch):
+    """The same perturbation before a refusal does not excuse a real miss: with every replay
+    torque 1 % too large (a model the plan was not made with), the worked example's replay
+    ends far from the goal, the perturbed torques move that end by a tiny fraction of the miss,
+    and the plan fails."""
+    true_torques = PathDynamics.torques
+
+    def wrong(self, t):
+        return 1.01 * true_torques(self, t)
+
+    monkeypatch.setattr(PathDynamics, "torques", wrong)
+    verdict = ff.verify_plan(worked_plan, recompute=False)
+    joints = verdict["replay_joints"]
+    assert joints.verdict == "FAILED" and not verdict.passed
+    assert "torques perturbed by 1e-12" in joints.detail
+    assert joints.error_estimate < 1e-3 * joints.value

@@ -19,6 +19,7 @@ is below :data:`~freefloat.verify.stepping.CONVERGED_FRACTION` of the tolerance
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,6 +47,9 @@ __all__ = ["INTEGRATING_CHECKS", "METHOD", "attitude_check", "integrating_checks
 METHOD = "RK5"
 #: The checks this module makes.
 INTEGRATING_CHECKS = ("attitude_independent", "replay_attitude", "replay_joints")
+#: Before a replay refuses a plan, its torques are offset by this fraction of each joint's
+#: largest and the replay run again: how far its end moves joins its error estimate.
+TORQUE_PERTURBATION = 1e-12
 
 
 def integrating_checks(subject: Subject) -> list[Check]:
@@ -85,7 +89,11 @@ def attitude_check(subject: Subject) -> list[Check]:
 
 @dataclass(frozen=True)
 class _Replay:
-    """The last level of a replay: its figures, estimates, steps and whether it converged."""
+    """The last level of a replay: its figures, estimates, steps and whether it converged.
+
+    ``moved``: how far its end moved with the torques perturbed (attitude rad, joints rad or
+    m; included in the estimates), when it was asked (before a refusal), else None.
+    """
 
     attitude: float
     joints: float
@@ -93,6 +101,7 @@ class _Replay:
     joint_estimate: float
     steps: int
     converged: bool
+    moved: tuple[float, float] | None = None
 
 
 def replay_checks(subject: Subject) -> list[Check]:
@@ -117,6 +126,11 @@ def replay_checks(subject: Subject) -> list[Check]:
             joint_estimate if math.isfinite(joint_estimate) else 0.0, level.joints, joint_tolerance
         )
         detail += ", not converged: no verdict"
+    if level.moved is not None:
+        detail += (
+            f", torques perturbed by {TORQUE_PERTURBATION:g} of their largest move its end by "
+            f"{level.moved[0]:.2g} rad, {level.moved[1]:.2g} (joints)"
+        )
     return [
         Check(
             "replay_attitude",
@@ -188,10 +202,43 @@ def _replay(subject: Subject) -> _Replay:
         if attitude_settled and _decided(
             replay_joint, joint_estimate, previous[1], TOLERANCES["replay_joint"], turn, earlier[1]
         ):
-            return _Replay(replay_att, replay_joint, att_estimate, joint_estimate, steps, True)
+            moved = None
+            if (
+                replay_att - att_estimate > TOLERANCES["replay_attitude_rad"]
+                or replay_joint - joint_estimate > TOLERANCES["replay_joint"]
+            ):  # a refusal: unless the inputs' own error could move the end that far
+                moved = _moved(run, steps, torques, (fine_q, fine_j), robot)
+                att_estimate, joint_estimate = att_estimate + moved[0], joint_estimate + moved[1]
+            return _Replay(
+                replay_att, replay_joint, att_estimate, joint_estimate, steps, True, moved
+            )
         coarse_q, coarse_j = fine_q, fine_j
         earlier, previous = previous, (att_estimate, joint_estimate)
     return _Replay(replay_att, replay_joint, att_estimate, joint_estimate, steps, False)
+
+
+def _moved(
+    run: Callable[[int, np.ndarray], tuple[np.ndarray, np.ndarray]],
+    steps: int,
+    torques: np.ndarray,
+    end: tuple[np.ndarray, np.ndarray],
+    robot: Robot,
+) -> tuple[float, float]:
+    """How far the replay's ``end`` (attitude, joints) moves when its torques are perturbed.
+
+    Each joint's torques are offset by :data:`TORQUE_PERTURBATION` of its largest (N m or N;
+    alternate joints in opposite senses): about a thousand times their own rounding. A motion
+    whose open-loop replay amplifies that much (a light wrist on a heavy spacecraft over a
+    long time) cannot tell a plan's error from its inputs' rounding. Returns the attitude's
+    move (rad) and the largest joint's (rad or m).
+    """
+    signs = np.where(np.arange(torques.shape[1]) % 2 == 0, 1.0, -1.0)
+    offset = TORQUE_PERTURBATION * np.abs(torques).max(axis=0) * signs
+    attitude, joints = run(steps, torques + offset)
+    return (
+        _finite(geodesic_angle(attitude, end[0])),
+        _finite(float(np.abs(_wrap_joints(robot, joints - end[1])).max())),
+    )
 
 
 def _wrap_joints(robot: Robot, delta: np.ndarray) -> np.ndarray:
