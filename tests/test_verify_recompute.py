@@ -15,6 +15,7 @@ import freefloat as ff
 import freefloat.verify.agreement as agreement
 from freefloat.cli import main
 from freefloat.plans.limits import MAX_PLAN_BYTES
+from freefloat.verify.recompute import compare_verification
 
 from conftest import ROOT, as_older_format
 
@@ -305,33 +306,47 @@ def test_show_catches_a_urdf_changed_after_planning(original, tmp_path, capsys):
     assert "disagrees with the recomputation" in line and not page.exists()
 
 
-def _replay_joints(data: dict) -> dict:
-    (check,) = [c for c in data["verification"]["checks"] if c["name"] == "replay_joints"]
-    return check
+#: The worked example's integrating checks as the version before the fifth-order checks
+#: (ba3c91d) wrote them into this very plan (the same path, bit for bit): name, detail,
+#: value, error estimate.
+RK4_FIGURES = (
+    ("attitude_independent", "RK4, 128 steps", 7.195773976647053e-10, 1.0785548119811619e-08),
+    ("replay_attitude", "RK4, 64 steps", 2.8788997249781203e-07, 4.373921684398019e-06),
+    ("replay_joints", "RK4, 64 steps", 1.8774653669506591e-06, 2.8834068599881135e-05),
+)
 
 
-def test_integrating_figures_of_another_integrator_are_judged_not_compared(
-    original, tmp_path, capsys
-):
+def _as_rk4(data: dict, value_of=lambda name, value, tolerance: value) -> None:
+    """The integrating checks replaced by :data:`RK4_FIGURES` (``value_of`` may change one)."""
+    checks = {c["name"]: c for c in data["verification"]["checks"]}
+    for name, detail, value, estimate in RK4_FIGURES:
+        check = checks[name]
+        check.update(detail=detail, error_estimate=estimate)
+        check["value"] = value_of(name, value, check["tolerance"])
+
+
+def test_integrating_figures_of_rk4_are_compared_within_both_estimates(original, tmp_path, capsys):
     """A file made before the fifth-order checks states their figures as RK4 found them (its
-    ``detail`` names the integrator): those figures are not this version's and are not
-    compared, while the checks made now still decide; the same figure stated as this
-    version's is a mismatch."""
-
-    def older(d):
-        check = _replay_joints(d)
-        check["detail"] = "RK4, 64 steps"
-        check["value"] = 0.5 * check["tolerance"]  # what another integrator found
-
-    path = _changed(original, tmp_path, older)
+    ``detail`` says so): they differ from this version's by more than this version's
+    estimates allow (the RK4 error estimates were larger), yet lie within both estimates of
+    them, and the plan verifies. A figure stated as RK4's but moved beyond both estimates
+    is named; so is one moved while stated as this version's."""
+    path = _changed(original, tmp_path, _as_rk4)
     code, _, err, _ = _run(capsys, "verify", path)
     assert code == 0, err
     made = ff.verify_plan(ff.Plan.load(path))
     assert made.passed and made["replay_joints"].detail.startswith("RK5, ")
-    assert made["replay_joints"].value < 0.1 * made["replay_joints"].tolerance
+    with pytest.raises(ff.PlanMismatchError, match="error_estimate"):  # as this version's
+        compare_verification(ff.Plan.load(path).verification, made)
+
+    def moved(name, value, tolerance):
+        return 0.5 * tolerance if name == "replay_joints" else value
+
+    line = _refused(capsys, "verify", _changed(original, tmp_path, lambda d: _as_rk4(d, moved)))
+    assert "disagrees with the recomputation" in line and "verification.checks[" in line, line
 
     def tampered(d):
-        check = _replay_joints(d)
+        (check,) = [c for c in d["verification"]["checks"] if c["name"] == "replay_joints"]
         check["value"] = 0.5 * check["tolerance"]
 
     line = _refused(capsys, "verify", _changed(original, tmp_path, tampered))

@@ -19,11 +19,10 @@ import numpy as np
 
 from .attitude import quat_rate_matrices
 
-__all__ = ["NODES", "QUARTERS", "STAGE_MATRIX", "WEIGHTS", "step_matrices"]
+__all__ = ["QUARTERS", "STAGE_MATRIX", "WEIGHTS", "step_matrices"]
 
-#: The stages' instants as fractions of the step.
-NODES = np.array([0.0, 0.25, 0.25, 0.5, 0.75, 1.0])
-#: The stages' instants in quarters of the step (indices into a table at the quarters).
+#: The stages' instants in quarters of the step (indices into a table at the quarters):
+#: 0, 1/4, 1/4, 1/2, 3/4, 1 of the step, each row of :data:`STAGE_MATRIX` summing to its own.
 QUARTERS = (0, 1, 1, 2, 3, 4)
 #: Butcher's ``a_ij``: stage i's state is ``y + h sum_j a_ij k_j`` (strictly lower triangular).
 STAGE_MATRIX = np.array(

@@ -10,6 +10,7 @@ measures.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +25,7 @@ from ..verify.stepping import AttitudeLevel, attitude_by_doubling
 __all__ = ["ReplayOutcome", "replay_attitude"]
 
 #: Steps of the first level, and the cap, of the replay's step doubling.
-FIRST_STEPS, MAX_STEPS = 32, 1 << 14
+FIRST_STEPS, MAX_STEPS = 16, 1 << 14
 #: The replay stops doubling once its estimate is below this fraction of the error (or below
 #: :data:`ABSOLUTE_FLOOR` rad) and shrank at least 8-fold on the last doubling.
 RELATIVE_ACCURACY = 1e-4
@@ -77,7 +78,8 @@ def replay_attitude(
     def accurate(level: AttitudeLevel) -> bool:
         error = geodesic_angle(level.attitude, goal)
         small = level.estimate <= max(ABSOLUTE_FLOOR, RELATIVE_ACCURACY * error)
-        return small and level.estimate <= level.previous / 8.0
+        shrunk = math.isfinite(level.previous) and level.estimate <= level.previous / 8.0
+        return small and shrunk  # a first difference, with none before it, never suffices
 
     level = attitude_by_doubling(start, omega_at, duration, FIRST_STEPS, MAX_STEPS, accurate)
     fine = level.attitude

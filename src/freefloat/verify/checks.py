@@ -35,7 +35,7 @@ from ..problem.constraints.clearance import Clearance
 from ..problem.constraints.registry import clearance_constraint
 from ..robot.model import Robot
 from .clearance_check import clearance_checks
-from .integrating import INTEGRATING_CHECKS, METHOD, integrating_checks
+from .integrating import INTEGRATING_CHECKS, integrating_checks
 from .path_eval import file_path
 from .plan_checks import (
     PlanCheck,
@@ -175,28 +175,28 @@ def verify_plan(
     verification = Verification(tuple(checks))
     if recompute:
         # An older file states some checks as they were made then (_PREDATED; integrating
-        # checks made by another integrator), and a replay
+        # checks made by RK4: compared within both estimates), and a replay
         # allowed other steps than the file's (the default) gives other figures: the figures
         # it states otherwise are compared; every check made now decides whether it passes.
-        predated = (*_PREDATED.get(plan.format, ()), *_other_integrator(plan.verification))
+        predated = _PREDATED.get(plan.format, ())
         if replay_steps != MAX_REPLAY_STEPS:
             predated = (*predated, "replay_attitude", "replay_joints")
         stated = Verification(tuple(c for c in checks if c.name not in predated))
         on_file = Verification(tuple(c for c in plan.verification.checks if c.name not in predated))
-        compare_verification(on_file, stated)
+        compare_verification(on_file, stated, _made_by_rk4(plan.verification))
     return verification
 
 
-def _other_integrator(stated: Verification) -> tuple[str, ...]:
-    """The integrating checks a file states as made by another integrator than :data:`METHOD`.
+def _made_by_rk4(stated: Verification) -> frozenset[str]:
+    """The integrating checks a file states as classical RK4 found them (an earlier version).
 
-    Their ``detail`` names the integrator (``"RK4, 64 steps"`` before fifth-order checks):
-    such figures are what that integrator found, not what this one finds.
+    Their ``detail`` starts ``"RK4, "``: their values are compared within both versions'
+    error estimates, not the estimates themselves (:func:`compare_verification`).
     """
-    return tuple(
+    return frozenset(
         c.name
         for c in stated.checks
-        if c.name in INTEGRATING_CHECKS and c.detail.split(",")[0] != METHOD
+        if c.name in INTEGRATING_CHECKS and c.detail.startswith("RK4, ")
     )
 
 

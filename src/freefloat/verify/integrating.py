@@ -177,7 +177,7 @@ def _replay(subject: Subject) -> _Replay:
     samples = plan.samples
     speed = max(
         float(np.abs(np.asarray(samples.qd, float)).max()),
-        float(np.abs(samples.base_angular_velocity).max()),
+        float(np.linalg.norm(np.asarray(samples.base_angular_velocity, float), axis=1).max()),
         0.0,
     )
     att_estimate = joint_estimate = math.inf

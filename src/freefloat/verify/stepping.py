@@ -155,7 +155,7 @@ def attitude_by_doubling(
         steps *= 2
         omega = _refine(omega, steps, duration, omega_at)
         fine = _rk5_attitude(start, omega, duration)
-        turn = float(np.abs(omega).max()) * duration / steps
+        turn = float(np.linalg.norm(omega, axis=1).max()) * duration / steps  # rad a step
         level = AttitudeLevel(fine, geodesic_angle(coarse, fine), previous, steps, turn)
         if steps >= max_steps or done(level):
             return level
