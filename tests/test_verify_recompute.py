@@ -330,7 +330,8 @@ def test_integrating_figures_of_rk4_are_compared_within_both_estimates(original,
     ``detail`` says so): they differ from this version's by more than this version's
     estimates allow (the RK4 error estimates were larger), yet lie within both estimates of
     them, and the plan verifies. A figure stated as RK4's but moved beyond both estimates
-    is named; so is one moved while stated as this version's."""
+    is named; so is one moved while stated as this version's. An RK4 replay that said no
+    verdict (an estimate covering its value) is no figure to hold this version's to."""
     path = _changed(original, tmp_path, _as_rk4)
     code, _, err, _ = _run(capsys, "verify", path)
     assert code == 0, err
@@ -344,6 +345,15 @@ def test_integrating_figures_of_rk4_are_compared_within_both_estimates(original,
 
     line = _refused(capsys, "verify", _changed(original, tmp_path, lambda d: _as_rk4(d, moved)))
     assert "disagrees with the recomputation" in line and "verification.checks[" in line, line
+
+    def unresolved(d):  # an RK4 replay that could not tell: its estimate covers its value
+        _as_rk4(d)
+        (check,) = [c for c in d["verification"]["checks"] if c["name"] == "replay_joints"]
+        check.update(detail="RK4, 8192 steps, not converged: no verdict", value=3e-4)
+        check["error_estimate"] = 5e-4
+
+    code, _, err, _ = _run(capsys, "verify", _changed(original, tmp_path, unresolved))
+    assert code == 0, err
 
     def tampered(d):
         (check,) = [c for c in d["verification"]["checks"] if c["name"] == "replay_joints"]
