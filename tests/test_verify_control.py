@@ -16,6 +16,7 @@ from freefloat.physics.attitude import quat_multiply
 from freefloat.physics.dynamics import inverse_dynamics_batch
 from freefloat.verify.along import PathDynamics
 from freefloat.verify.path_eval import file_path
+from freefloat.viz.summary import summary
 
 import reference as ref
 from conftest import ROOT
@@ -215,6 +216,8 @@ def test_a_replay_that_amplifies_its_torques_rounding_does_not_refuse():
     joints = p.verification["replay_joints"]
     assert joints.verdict == "no verdict" and "torques perturbed by 1e-12" in joints.detail
     assert joints.value > joints.tolerance and joints.error_estimate >= joints.value
+    said = summary(p)
+    assert "more steps will not settle it" in said and "--replay-steps" not in said
     arm = ff.load_robot(p.robot.urdf)
     mmap = ff.MomentumMap(arm)
     steps = 4096
