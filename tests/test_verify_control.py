@@ -249,3 +249,20 @@ def test_a_replay_under_wrong_torques_still_refuses(worked_plan, monkeypatch):
     assert joints.verdict == "FAILED" and not verdict.passed
     assert "torques perturbed by 1e-12" in joints.detail
     assert joints.error_estimate < 1e-3 * joints.value
+
+
+def test_a_replay_that_blows_up_at_every_level_fails_and_says_why(worked_plan, monkeypatch):
+    """Torques a billion times too large: every level of the replay overflows to not a number.
+    A check without a figure never passes (``Check.passed``), and its detail says it blew up
+    rather than claiming a verdict it does not have."""
+    true_torques = PathDynamics.torques
+
+    def huge(self, t):
+        return 1e9 * true_torques(self, t)
+
+    monkeypatch.setattr(PathDynamics, "torques", huge)
+    verdict = ff.verify_plan(worked_plan, recompute=False)
+    for name in ("replay_attitude", "replay_joints"):
+        check = verdict[name]
+        assert math.isnan(check.value) and check.verdict == "FAILED", check
+        assert "blew up (not a number)" in check.detail and "no verdict" not in check.detail

@@ -125,7 +125,10 @@ def replay_checks(subject: Subject) -> list[Check]:
         joint_estimate = max(
             joint_estimate if math.isfinite(joint_estimate) else 0.0, level.joints, joint_tolerance
         )
-        detail += ", not converged: no verdict"
+        if math.isfinite(level.attitude) and math.isfinite(level.joints):
+            detail += ", not converged: no verdict"
+        else:  # no figure at all: not a number fails (Check.passed), and says why
+            detail += ", not converged: its last level blew up (not a number)"
     if level.moved is not None:
         detail += (
             f", torques perturbed by {TORQUE_PERTURBATION:g} of their largest move its end by "
