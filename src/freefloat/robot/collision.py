@@ -111,7 +111,7 @@ class CollisionModel(PairQueries):
         self._levers: PairLevers | None = None
         if self._weights is not None:
             self._levers = PairLevers(
-                robot, geometry, pairs, self._centres, self._radii, self._kinematics
+                robot, geometry, pairs, self._centres, self._radii, self._kinematics, self._weights
             )
 
     @property

@@ -30,7 +30,7 @@ import numpy as np
 import pinocchio as pin
 
 from .model import Robot
-from .motion_bound import alone, motion_weights, sphere_reach
+from .motion_bound import alone, sphere_reach
 from .sphere_kinematics import SphereKinematics
 
 __all__ = ["PairLevers"]
@@ -46,6 +46,8 @@ class PairLevers:
         centres: (G, 3) each object's bounding-sphere centre in its own frame (m).
         radii: (G,) their radii (m).
         kinematics: places the spheres and the joint axes (built with the same centres).
+        weights: (P, N) the pairs' :func:`~freefloat.robot.motion_bound.motion_weights`
+            (m per rad), as the collision model holds them.
     """
 
     def __init__(
@@ -56,10 +58,10 @@ class PairLevers:
         centres: np.ndarray,
         radii: np.ndarray,
         kinematics: SphereKinematics,
+        weights: np.ndarray,
     ) -> None:
         found = sphere_reach(robot, geometry, centres, radii)
-        weights = motion_weights(robot, geometry, pairs, centres, radii)
-        if found is None or weights is None:
+        if found is None:
             raise ValueError("lever arms need revolute joints only (a prismatic joint has none)")
         reach, carried = found
         self.kinematics = kinematics

@@ -112,9 +112,9 @@ def replay_checks(subject: Subject) -> list[Check]:
     if not level.converged:
         # The steps allowed do not resolve this motion (a long, fast or sensitive one): the
         # difference bounds nothing, and the replay cannot tell its error from the value.
-        # A level that blew up (a long chain's open-loop replay diverges) differs by inf: the
-        # value itself is then the bound, so the file holds finite numbers. At least the
-        # tolerance too: the check's verdict is then "no verdict", never "ok".
+        # A coarser level that blew up differs by inf: the value itself is then the bound,
+        # so the file holds finite numbers. At least the tolerance too: the check's verdict
+        # is then "no verdict", never "ok" (a last level that blew up has no value: it fails).
         att_tolerance, joint_tolerance = (
             TOLERANCES["replay_attitude_rad"],
             TOLERANCES["replay_joint"],
