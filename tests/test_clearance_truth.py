@@ -26,7 +26,7 @@ from freefloat.robot.collision import (
 )
 from freefloat.verify.certificate import certify
 from freefloat.verify.clearance import MeshClearance, hull_slack
-from freefloat.verify.hull_agreement import shape_excess
+from freefloat.verify.hull_agreement import compared, shape_excess
 from freefloat.verify.motion import PolynomialMotion
 
 from conftest import ROOT
@@ -337,6 +337,26 @@ def test_the_hull_agreement_catches_a_wrong_hull_on_any_body(direction):
             del solver.pair_distances
         assert cert.hull_excess > 1e-3, (direction, body, cert.hull_detail)  # fails its 1e-6 m
         assert cert.lower_bound == honest.lower_bound  # the mesh certificate is the solver's
+
+
+def test_the_hull_agreement_compares_every_body_preferring_a_primitive_partner():
+    """UR5 servicer at its start: with no pair measured, the pairs compared hold every body of
+    a checked pair, and each mesh body that has a pair with a primitive (the spacecraft's box,
+    the end-effector box; told here by the shapes' coal types) is compared through one."""
+    robot = ff.load_robot(UR5)
+    mesh = MeshClearance(robot, known_srdf(robot))
+    placements = mesh.placements(UR5_START)
+    pairs = compared(mesh, placements, set())
+    held = {int(g) for k in pairs for g in mesh.pairs[k]}
+    assert held == set(mesh.first.tolist()) | set(mesh.second.tolist())
+    objects = mesh.geometry.geometryObjects
+    primitive = {i for i, o in enumerate(objects) if not isinstance(o.geometry, coal.BVHModelBase)}
+    assert primitive  # the box spacecraft and end effector
+    for body in held - primitive:
+        partners = {a if b == body else b for a, b in mesh.pairs if body in (a, b)}
+        if partners & primitive:
+            through = [mesh.pairs[k] for k in pairs if body in mesh.pairs[k]]
+            assert any(set(p) & primitive for p in through), (objects[body].name, through)
 
 
 def _moved_hull(obj: pin.GeometryObject, axis: int, move: float) -> coal.ConvexBase:

@@ -12,7 +12,8 @@ geometry code:
   two hulls' slack (:func:`~freefloat.verify.clearance.hull_slack`), for the pairs the
   certificate measured there (the closest ones) and, for each body none of those holds, the
   pair in which it lies nearest another body by its leaf spheres: every body's placement is
-  compared at least once where clearance binds.
+  compared at least once where clearance binds (a pair with a primitive where the body has
+  one: cheaper to measure exactly than two meshes).
 """
 
 from __future__ import annotations
@@ -75,10 +76,13 @@ def hull_agreement(
 
 
 def compared(mesh: MeshClearance, placements: np.ndarray, measured: set[int]) -> list[int]:
-    """The pairs compared, in pair order: ``measured``, then each other body's nearest pair.
+    """The pairs compared, in pair order: ``measured``, then one more pair per other body.
 
     A body no chosen pair holds gets the pair in which it lies nearest another body by its
-    leaf spheres at ``placements`` (which covers that other body too).
+    leaf spheres at ``placements`` (which covers that other body too), among its pairs with
+    at most one mesh when it has any: a mesh against a primitive is one traversal of one
+    mesh's bounding volumes, mesh against mesh a traversal of both (on the UR5 servicer about
+    60 us against 0.6-1.1 ms), and either compares the body's hull with its mesh.
     """
     count = len(mesh.pairs)
     if count == 0:
@@ -87,10 +91,13 @@ def compared(mesh: MeshClearance, placements: np.ndarray, measured: set[int]) ->
     every = np.arange(count)
     bounds = mesh.leaves.bounds(placements[None], np.zeros(count, dtype=int), every)
     covered = {int(g) for k in chosen for g in mesh.pairs[k]}
+    both_meshes = np.array([a in mesh.meshes and b in mesh.meshes for a, b in mesh.pairs])
     for body in range(len(mesh.shapes)):
         mine = np.flatnonzero((mesh.first == body) | (mesh.second == body))
         if body in covered or len(mine) == 0:
             continue
+        cheap = mine[~both_meshes[mine]]
+        mine = cheap if len(cheap) else mine
         nearest = int(mine[np.argmin(bounds[mine])])
         chosen.add(nearest)
         covered.update(int(g) for g in mesh.pairs[nearest])
