@@ -179,8 +179,10 @@ class CollisionModel(PairQueries):
         The same values, pairs and gradients as those calls one after the other, in order
         (``slots``: one per row, or None). A batch of at least :data:`BATCH` rows is bounded
         at once: its bounding spheres are placed in one pass
-        (:class:`~freefloat.robot.sphere_kinematics.SphereKinematics`) and every row's pairs
-        are bounded from the bounds kept before the call (:meth:`PairBounds.widened_many`),
+        (:class:`~freefloat.robot.sphere_kinematics.SphereKinematics`), a box fixed to the
+        spacecraft bounds its pairs by its faces too
+        (:class:`~freefloat.robot.fixed_boxes.FixedBoxes`), and every row's pairs are bounded
+        from the bounds kept before the call (:meth:`PairBounds.widened_many`),
         so which pairs a row measures may differ from one call per row; the smallest
         distance and its pair cannot (a pair that can be the smallest is always measured).
         Its gradients come from one array product (:func:`witness_gradients`).
@@ -198,8 +200,11 @@ class CollisionModel(PairQueries):
         lower = np.full((count, len(self.pairs)), math.inf)
         if not len(self.pairs) or count < BATCH:
             return self._closest_each(joints, at, gradients, lower)
-        gaps = self._kinematics.gaps(joints, self._pair_array)
+        centres = self._kinematics.centres(joints)
+        gaps = self._kinematics.gaps_at(centres, self._pair_array)
         low, high = gaps - self._reach, gaps + self._reach
+        boxed = self._boxes.pairs  # the faces of boxes fixed to the spacecraft bound these too
+        low[:, boxed] = np.fmax(low[:, boxed], self._boxes.lower(centres))
         unknown = np.zeros(low.shape, dtype=bool)
         if self._bounds is not None:  # the tighter of the kept bounds and the spheres
             kept_low, kept_high = self._bounds.widened_many(at, joints)

@@ -21,6 +21,7 @@ import numpy as np
 import pinocchio as pin
 
 from .distance_query import GJK_TOLERANCE, RETRY_TOLERANCES, Closest, checked_distance, configure
+from .fixed_boxes import FixedBoxes
 from .model import Robot
 from .motion_bound import PairBounds, motion_weights
 from .sphere_distance import SphereWitness, closed_form_first, sphere_distance
@@ -100,6 +101,7 @@ class PairQueries:
         self._pair_array = np.array(pairs, dtype=int).reshape(-1, 2)
         self._reach = self._radii[self._pair_array[:, 0]] + self._radii[self._pair_array[:, 1]]
         self._kinematics = SphereKinematics(robot, geometry, self._centres)
+        self._boxes = FixedBoxes(robot, geometry, self._pair_array, self._radii)
         self._neutral = pin.neutral(robot.model)  # joint values go into a copy (no continuous)
         plain = all(j.kind != "continuous" for j in robot.joints)
         self._slots = np.array([j.idx_q for j in robot.joints]) if plain else None

@@ -120,7 +120,11 @@ class SphereKinematics:
 
     def gaps(self, joints: np.ndarray, pairs: np.ndarray) -> np.ndarray:
         """(B, P) distances (m) between the sphere centres of each pair (P, 2; shape indices)."""
-        centres = self.centres(joints)
+        return self.gaps_at(self.centres(joints), pairs)
+
+    @staticmethod
+    def gaps_at(centres: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+        """:meth:`gaps` from the (B, G, 3) centres (m)."""
         return np.linalg.norm(centres[:, pairs[:, 0]] - centres[:, pairs[:, 1]], axis=2)
 
 
