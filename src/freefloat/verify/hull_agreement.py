@@ -24,7 +24,6 @@ from collections.abc import Callable
 
 import coal
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
 
 from ..robot.collision import CollisionModel
 from .clearance import MeshClearance, hull_slack
@@ -137,6 +136,8 @@ def _outside(points: np.ndarray, around: np.ndarray) -> float:
     By the hull's face planes (unit normals): negative when every point is inside. A flat
     vertex set (no volume) is joggled (qhull's ``QJ``), which moves it by ~1e-11 of its size.
     """
+    from scipy.spatial import ConvexHull, QhullError  # when needed: it costs start-up time
+
     try:
         hull = ConvexHull(around, qhull_options="Qt")
     except QhullError:

@@ -20,7 +20,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import eval_jacobi
 
 from ..plans.format import Plan
 from ..plans.versions import MONOMIAL_BASIS
@@ -46,6 +45,8 @@ def _scales(count: int) -> np.ndarray:
 
 def _jacobi(n: np.ndarray, shift: int, x: np.ndarray) -> np.ndarray:
     """``P_{n - shift}^(6 + shift, 6 + shift)(x)`` (zero where ``n < shift``), (len(x), len(n))."""
+    from scipy.special import eval_jacobi  # when needed: it costs start-up time
+
     m = n - shift
     values = eval_jacobi(np.maximum(m, 0)[None, :], 6 + shift, 6 + shift, x[:, None])
     return np.where(m[None, :] >= 0, values, 0.0)
