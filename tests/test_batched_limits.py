@@ -190,3 +190,30 @@ def test_rate_rows_left_out_while_far_do_not_change_the_least_effort_path(tmp_pa
     path = left_out.path()
     rates = path.evaluate(np.linspace(0.0, path.duration, 4001)).qd
     assert np.abs(rates).max() < 1.0
+
+
+@pytest.mark.parametrize("name", ["worked_example", "dual_ur5_servicer"])
+def test_the_batch_takes_the_map_rate_at_the_joint_rates_alone(name):
+    """Along a zero-momentum motion (base at the identity) the rate term of the centroidal
+    map at the whole velocity equals the one at the joint rates alone (Pinocchio at both),
+    and the batch agrees with the one-instant inverse dynamics, which uses the whole."""
+    scenario = ff.Scenario.from_toml(SCENARIOS / f"{name}.toml")
+    problem = ff.problem_from_scenario(scenario, extra=[2] * scenario.robot.n)
+    beta = 0.3 * np.random.default_rng(7).standard_normal(problem.n_free)
+    inside = np.linspace(0.05, 0.95, 19) * problem.duration  # moving: not at rest
+    samples = problem.polynomials(beta).evaluate(inside)
+    mmap = ff.MomentumMap(scenario.robot)
+    model, data = mmap.model, mmap.model.createData()
+    batch = inverse_dynamics_batch(mmap, samples.q, samples.qd, samples.qdd)
+    for k, config in enumerate(mmap.configurations(samples.q)):
+        whole = mmap.velocity(samples.q[k], samples.qd[k])
+        alone = whole.copy()
+        alone[:6] = 0.0
+        assert np.abs(whole[:6]).max() > 1e-6  # the base does move
+        rate_whole = pin.computeCentroidalMapTimeVariation(model, data, config, whole) @ whole
+        rate_alone = pin.computeCentroidalMapTimeVariation(model, data, config, alone) @ whole
+        scale = 1.0 + np.abs(rate_whole).max()
+        np.testing.assert_allclose(rate_alone, rate_whole, rtol=0.0, atol=1e-12 * scale)
+        one = inverse_dynamics(mmap, samples.q[k], samples.qd[k], samples.qdd[k])
+        scale = 1.0 + np.abs(one.tau).max()
+        np.testing.assert_allclose(batch.tau[k], one.tau, rtol=0.0, atol=1e-11 * scale)

@@ -144,26 +144,32 @@ _LAST_BATCH: weakref.WeakKeyDictionary[Robot, tuple[bytes, InverseDynamicsBatch]
 def _inverse_dynamics_batch(
     mmap: MomentumMap, joints: np.ndarray, rates: np.ndarray, accelerations: np.ndarray
 ) -> InverseDynamicsBatch:
+    """:func:`inverse_dynamics_batch`'s work: two Pinocchio calls per instant (and the frames).
+
+    ``dA_g`` is linear in the velocity, and a base twist ``[v_b; w]`` (the base at the identity)
+    moves the whole system rigidly: the momentum at the CM turns with ``w`` and does not shift
+    with ``v_b``, so ``dA_g(q, [v_b; w; qdot]) = dA_g(q, [0; qdot]) + diag([w]x, [w]x) A_g``.
+    Along a zero-momentum motion ``A_g v = 0``, hence ``dA_g(q, v) v = dA_g(q, [0; qdot]) v``:
+    one ``computeCentroidalMapTimeVariation`` at the joint rates alone gives both ``A_g`` (for
+    the twist) and the rate term, with no separate ``computeCentroidalMap``.
+    """
     model, data = mmap.model, mmap.data
     configs = mmap.configurations(joints)
     k_count, nv = len(configs), model.nv
-    cmap, dmap, place, rnea = (
-        pin.computeCentroidalMap,
-        pin.computeCentroidalMapTimeVariation,
-        pin.updateFramePlacement,
-        pin.rnea,
-    )
-    ag = np.array([cmap(model, data, q) for q in configs]).reshape(k_count, 6, nv)
-    twist = -np.linalg.solve(ag[:, :, :6], np.einsum("kij,kj->ki", ag[:, :, 6:], rates)[..., None])
-    twist = twist[..., 0]
-    v = np.concatenate([twist, rates], axis=1)
-    d_ag = np.empty((k_count, 6, nv))
+    dmap, place, rnea = pin.computeCentroidalMapTimeVariation, pin.updateFramePlacement, pin.rnea
+    ag, d_ag = np.empty((k_count, 6, nv)), np.empty((k_count, 6, nv))
     frames = mmap.robot.end_effector_frames
     ee = np.empty((len(frames), k_count, 3))
-    for q, velocity, slot, *positions in zip(configs, v, d_ag, *ee, strict=True):
+    v = np.zeros((k_count, nv))
+    v[:, 6:] = rates
+    for q, velocity, slot, map_slot, *positions in zip(configs, v, d_ag, ag, *ee, strict=True):
         slot[...] = dmap(model, data, q, velocity)  # also places the joints
+        map_slot[...] = data.Ag
         for position, frame in zip(positions, frames, strict=True):
             position[...] = place(model, data, frame).translation
+    twist = -np.linalg.solve(ag[:, :, :6], np.einsum("kij,kj->ki", ag[:, :, 6:], rates)[..., None])
+    twist = twist[..., 0]
+    v[:, :6] = twist
     rhs = np.einsum("kij,kj->ki", ag[:, :, 6:], accelerations) + np.einsum("kij,kj->ki", d_ag, v)
     a_base = -np.linalg.solve(ag[:, :, :6], rhs[..., None])[..., 0]
     a = np.concatenate([a_base, accelerations], axis=1)
