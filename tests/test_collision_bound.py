@@ -375,3 +375,55 @@ def test_a_dip_below_the_margin_between_samples_is_found_whatever_was_asked_befo
         for _ in range(2):
             value = check.violation(_OnePath(path), np.zeros(1)).value
             assert value == pytest.approx(1e-3, abs=1e-8), (first, value)
+
+
+@pytest.mark.parametrize("weights", [None, np.array([[1.0]])], ids=["no-bound", "bound"])
+def test_a_dip_below_the_margin_is_the_instant_a_solver_adds(weights):
+    """Closed form (:class:`_Dip`): the path dips 1 mm below the margin at t = 100.5 / 200 s,
+    between two of the dense check's samples; that is the clearance's critical time, and a
+    margin 2 mm lower, which the path keeps, has none."""
+    from freefloat.problem.constraints.clearance import Clearance
+    from freefloat.problem.paths import JointPolynomials
+
+    margin = 0.01
+    path = JointPolynomials.from_monomials([[0.0, 1.0]], 1.0)
+    broken = Clearance(_Dip(margin, 0.5, weights), margin)
+    assert broken.violation(_OnePath(path), np.zeros(1)).value == pytest.approx(1e-3, abs=1e-8)
+    times = broken.critical_times(None, path)
+    assert times.shape == (1,) and times[0] == pytest.approx(100.5 / 200, abs=1e-6)
+    kept = Clearance(_Dip(margin, 0.5, weights), margin - 2e-3)
+    assert kept.critical_times(None, path).shape == (0,)
+
+
+def test_clearance_rows_sit_at_the_instants_a_solver_adds():
+    """A row at an instant off the grid: its value is the margin and slack less the smallest
+    distance of every pair measured in one pass (no pair spared), and its gradient that of
+    this distance by central differences in beta."""
+    from freefloat.problem.constraints import DEFAULT_INSTANTS
+    from freefloat.problem.constraints.clearance import SOLVER_SLACK, Clearance
+
+    scenario = ff.Scenario.from_toml(UR5)
+    robot = scenario.robot
+    problem = ff.problem_from_scenario(scenario, extra=[2] * robot.n)
+    model = CollisionModel(robot, known_srdf(robot))
+    check = Clearance(model, 0.01)
+    beta = np.random.default_rng(21).normal(0.0, 0.3, problem.n_free)
+    added = 0.4937
+    assert not np.any(np.isclose(DEFAULT_INSTANTS, added))
+    plain = check.rows(problem, beta)
+    more = check.rows(problem, beta, np.append(DEFAULT_INSTANTS, added))
+    assert len(more.values) == len(plain.values) + 1
+    np.testing.assert_array_equal(more.values[:-1], plain.values)
+
+    truth = CollisionModel(robot, known_srdf(robot))
+
+    def smallest(b: np.ndarray) -> float:
+        q = problem.polynomials(b).evaluate(np.array([added * problem.duration])).q[0]
+        return float(truth.distances(q).values.min())
+
+    assert more.values[-1] == pytest.approx(0.01 + SOLVER_SLACK - smallest(beta), abs=1e-9)
+    h = 1e-6
+    steps = np.eye(problem.n_free) * h
+    numeric = [-(smallest(beta + e) - smallest(beta - e)) / (2 * h) for e in steps]
+    scale = max(1.0, float(np.abs(numeric).max()))
+    np.testing.assert_allclose(more.jacobian[-1], numeric, rtol=0.0, atol=1e-5 * scale)

@@ -93,9 +93,18 @@ def with_critical(
 ) -> np.ndarray:
     """``instants`` kept to the defaults and their last added, with the path's tightest.
 
-    The default instants, the last :data:`MAX_ADDED_INSTANTS` others of ``instants``, and the
-    tightest instants of the path at ``beta`` (:func:`tightest_instants`).
+    The default instants, the last :data:`MAX_ADDED_INSTANTS` others of ``instants``, the
+    tightest instants of the path at ``beta`` (:func:`tightest_instants`), and those where a
+    constraint with its own instants (clearance) finds the path beyond its limit
+    (:meth:`~freefloat.problem.constraints.Constraint.critical_times`): its rows there let
+    the corrector take the path back inside at the dip.
     """
-    extra = tightest_instants(problem, constraints, beta)
+    path = problem.polynomials(beta)
+    dips = [
+        np.asarray(c.critical_times(problem.robot, path), dtype=float) / problem.duration
+        for c in constraints
+        if c.own_instants
+    ]
+    extra = np.concatenate([tightest_instants(problem, constraints, beta), *dips])
     added = np.setdiff1d(instants, DEFAULT_INSTANTS)[-MAX_ADDED_INSTANTS:]
     return np.unique(np.concatenate([DEFAULT_INSTANTS, added, extra]).clip(0.0, 1.0))

@@ -7,8 +7,10 @@ so clearance is a function of the joints alone.
 For the solvers, each instant contributes one row: the margin minus the smallest distance over
 the pairs there (m), with its gradient from the witness points of that pair and the joint
 Jacobians, chained with the path's linear dependence on ``beta``. The instants are a uniform
-grid refined around the minima of clearance, and the rows ask for a little more than the
-margin (:data:`SOLVER_SLACK`) so that the dips between instants stay outside it.
+grid refined around the minima of clearance, and the instants a solver adds (where its dense
+check found a path below the margin: :meth:`Clearance.critical_times`); the rows ask for a
+little more than the margin (:data:`SOLVER_SLACK`) so that the dips between instants stay
+outside it.
 
 The dense check samples the whole path (:data:`VERIFY_SAMPLES`), refines every near-minimum by
 a bounded scalar search in time, and estimates its own error by step doubling (the same search
@@ -34,6 +36,7 @@ from .clearance_samples import (
     local_minima,
     lowest_minima,
     pair_bounds,
+    undecided,
 )
 
 __all__ = [
@@ -83,6 +86,8 @@ class Clearance(Constraint):
         self._smallest_memo: dict[tuple[bytes, float, int, int], tuple[float, float, int]] = {}
         self._sampled_memo: tuple[tuple[bytes, float, int], np.ndarray] | None = None
         self._measured_memo: tuple[tuple[bytes, float, int, float | None], Measured] | None = None
+        self._below_memo: tuple[tuple[bytes, float, int, float], tuple[float, float, int]] | None
+        self._below_memo = None
 
     def __repr__(self) -> str:
         return f"Clearance(margin={self.margin:g} m, {self.model.n_pairs} pairs)"
@@ -96,14 +101,15 @@ class Clearance(Constraint):
     ) -> ConstraintRows:
         """``margin + slack - min_pair d(q(s))`` (m) and its exact gradient, one row an instant.
 
-        Clearance picks its own instants: the uniform grid :data:`DEFAULT_INSTANTS` (the
-        ``instants`` asked for are thinned to it, since other constraints' tightest instants
-        say nothing of clearance), plus :data:`REFINE` instants in each grid interval next to
-        each of the two lowest local minima of clearance on that grid: a fixed number of rows,
-        as SLSQP needs.
+        Clearance picks its own instants: the uniform grid :data:`DEFAULT_INSTANTS`, plus
+        :data:`REFINE` instants in each grid interval next to each of the two lowest local
+        minima of clearance on that grid; and it keeps the ``instants`` asked for beyond that
+        grid (those a solver added: a dip below the margin between the grid's instants,
+        :meth:`critical_times`, or another constraint's tightest instant). For given
+        ``instants`` the number of rows is fixed, as SLSQP needs.
         """
         beta = np.asarray(beta, dtype=float)
-        key = beta.tobytes()
+        key = beta.tobytes() + np.asarray(instants, dtype=float).tobytes()
         # The rows depend on the path family and beta only: copies of a problem with another
         # goal (continuation's targets) share the family, so they share the rows too.
         if self._memo is not None and self._memo[0] is problem.family and self._memo[1] == key:
@@ -111,7 +117,10 @@ class Clearance(Constraint):
         grid = DEFAULT_INSTANTS
         values_grid, jacobian_grid = self._rows_at(problem, beta, grid)
         coarse = self.margin + SOLVER_SLACK - values_grid  # the smallest distance there
-        extra = np.concatenate([self._refinement(grid, k) for k in lowest_minima(coarse)])
+        passed = np.setdiff1d(np.asarray(instants, dtype=float), grid)
+        extra = np.concatenate(
+            [*(self._refinement(grid, k) for k in lowest_minima(coarse)), passed]
+        )
         values_extra, jacobian_extra = self._rows_at(problem, beta, extra)
         values = np.concatenate([values_grid, values_extra])
         jacobian = np.concatenate([jacobian_grid, jacobian_extra])
@@ -138,10 +147,19 @@ class Clearance(Constraint):
         return np.linspace(lo, hi, 2 * REFINE + 2)[1:-1]
 
     def critical_times(self, robot: Robot, path: JointPolynomials) -> np.ndarray:
-        """The times (s) of the smallest clearance along ``path``, refined between samples."""
+        """The time (s) of the smallest clearance along ``path`` when it is below the margin.
+
+        The solvers' dense check (:meth:`violation`, the same answer: remembered for the last
+        path) found the path below the margin there; a solver that adds the time to its
+        instants gets a row there (:meth:`rows`) and corrects the dip itself, where the
+        grid's rows alone would bring back the same path. None when the path keeps the margin.
+        """
         if self.model.n_pairs == 0:
             return np.zeros(0)
-        return np.array([self.smallest(path, 201)[1]])
+        lowest = self._solvers_check(path)[1]
+        if lowest is None or lowest[0] >= self.margin:
+            return np.zeros(0)
+        return np.array([lowest[1]])
 
     def smallest(
         self, path: JointPolynomials, samples: int, every: int = 1
@@ -280,6 +298,9 @@ class Clearance(Constraint):
         ``limit``, and the middles of halves left undecided, are then refined by a bounded
         scalar search.
         """
+        key = (*self._key(path, measured.known), limit)
+        if self._below_memo is not None and self._below_memo[0] == key:  # the same answer
+            return self._below_memo[1]
         known, table, arms = measured.known, measured.lower, measured.arms
         t = np.linspace(0.0, path.duration, len(known))
         times, values = [t], [np.nan_to_num(known, nan=math.inf)]
@@ -288,7 +309,7 @@ class Clearance(Constraint):
         ends = np.stack([t[:-1], t[1:], known[:-1], known[1:], rows[:-1], rows[1:]])
         with self.model.own_bounds():  # pair bounds from this path's samples alone
             for _ in range(HALVINGS):
-                ends = ends[:, self._undecided(path, ends, (table, arms), limit)]
+                ends = ends[:, undecided(self.model, path, ends, (table, arms), limit)]
                 if ends.shape[1] == 0:
                     break
                 mid = 0.5 * (ends[0] + ends[1])
@@ -307,46 +328,35 @@ class Clearance(Constraint):
                     axis=1,
                 )
         if ends.shape[1]:
-            ends = ends[:, self._undecided(path, ends, (table, arms), limit)]
+            ends = ends[:, undecided(self.model, path, ends, (table, arms), limit)]
         t_all, v_all = np.concatenate(times), np.concatenate(values)
         order = np.argsort(t_all, kind="stable")
         t_all, v_all = t_all[order], v_all[order]
         minima = local_minima(v_all)
         minima = minima[v_all[minima] < limit]
         spans = np.searchsorted(t_all, 0.5 * (ends[0] + ends[1]))
-        return self._refined(path, t_all, v_all, np.unique(np.append(minima, spans)))
-
-    def _undecided(
-        self,
-        path: JointPolynomials,
-        ends: np.ndarray,
-        tables: tuple[np.ndarray, np.ndarray],
-        limit: float,
-    ) -> np.ndarray:
-        """Which intervals may dip below ``limit`` (m) unseen.
-
-        ``ends``: rows t0, t1 (s), v0, v1 (m), and the rows of ``tables`` at both ends. Both
-        ends measured and above ``limit`` (a sample below it is a dip seen), and the bound
-        between them (from the pairs' bounds and the spheres' lever arms in ``tables``, m)
-        below it.
-        """
-        seen = ~np.isnan(ends[2]) & ~np.isnan(ends[3]) & (ends[2] >= limit) & (ends[3] >= limit)
-        bound = np.full(ends.shape[1], math.inf)
-        if np.any(seen):
-            first, second = ends[4, seen].astype(int), ends[5, seen].astype(int)
-            table, arms = tables
-            bound[seen] = bounds_between(
-                self.model,
-                path,
-                (ends[0, seen], ends[1, seen]),
-                (table[first], table[second]),
-                (arms[first], arms[second]),
-            )
-        return bound < limit
+        answer = self._refined(path, t_all, v_all, np.unique(np.append(minima, spans)))
+        self._below_memo = (key, answer)
+        return answer
 
     @staticmethod
     def _key(path: JointPolynomials, t: np.ndarray) -> tuple[bytes, float, int]:
         return (path.coefficients.tobytes(), path.duration, len(t))
+
+    def _solvers_check(
+        self, path: JointPolynomials
+    ) -> tuple[float, tuple[float, float, int] | None]:
+        """The solvers' dense check of ``path`` (201 samples): its bound and its lowest point.
+
+        The bound of the clearance along the path (m), and where it does not clear the margin,
+        the smallest clearance (m), its time (s) and pair (None when it clears it).
+        """
+        measured = self._measured(path, 201, self.margin)
+        if measured.bound >= self.margin:
+            return measured.bound, None
+        if self.model.weights is None:
+            return measured.bound, self.smallest(path, 201)
+        return measured.bound, self._below(path, measured, self.margin)
 
     def excess(self, robot: Robot, path: JointPolynomials) -> Excess:
         """``margin - smallest clearance`` along the path (m), with its own error estimate."""
@@ -370,15 +380,11 @@ class Clearance(Constraint):
         if self.model.n_pairs == 0:
             return Excess(-math.inf, 0.0, "no pairs to check")
         path = problem.polynomials(beta)
-        measured = self._measured(path, 201, self.margin)
-        bound = measured.bound
-        if bound >= self.margin:  # clear everywhere: the refined minimum is not needed
+        bound, lowest = self._solvers_check(path)
+        if lowest is None:  # clear everywhere: the refined minimum is not needed
             detail = f"min clearance >= {bound:.6g} m everywhere, margin {self.margin:g} m"
             return Excess(self.margin - bound, 0.0, detail)
-        if self.model.weights is None:
-            clearance, when, pair = self.smallest(path, 201)
-        else:
-            clearance, when, pair = self._below(path, measured, self.margin)
+        clearance, when, pair = lowest
         detail = (
             f"min clearance {clearance:.6g} m ({self.model.names[pair]}) at t = {when:.4g} s, "
             f"margin {self.margin:g} m"

@@ -2,8 +2,8 @@
 
 Helpers of :mod:`freefloat.problem.constraints.clearance` (the constraint's module stays a
 readable size): the record of a path's measured samples with each pair's bounds and the
-spheres' lever arms there, the bound of the clearance between two samples, and the local
-minima of sampled values.
+spheres' lever arms there, the bound of the clearance between two samples, the intervals
+that bound leaves undecided, and the local minima of sampled values.
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ __all__ = [
     "local_minima",
     "lowest_minima",
     "pair_bounds",
+    "undecided",
 ]
 
 
@@ -112,3 +113,31 @@ def local_minima(values: np.ndarray) -> np.ndarray:
     left = np.concatenate([[np.inf], values[:-1]])
     right = np.concatenate([values[1:], [np.inf]])
     return np.flatnonzero((values <= left) & (values <= right))
+
+
+def undecided(
+    model: CollisionModel,
+    path: JointPolynomials,
+    ends: np.ndarray,
+    tables: tuple[np.ndarray, np.ndarray],
+    limit: float,
+) -> np.ndarray:
+    """Which intervals may dip below ``limit`` (m) unseen (a boolean per column of ``ends``).
+
+    ``ends``: rows t0, t1 (s), v0, v1 (m), and the rows of ``tables`` (the pairs' bounds and
+    the spheres' lever arms, m) at both ends. Both ends measured and above ``limit`` (a sample
+    below it is a dip seen), and the bound between them (:func:`bounds_between`) below it.
+    """
+    seen = ~np.isnan(ends[2]) & ~np.isnan(ends[3]) & (ends[2] >= limit) & (ends[3] >= limit)
+    bound = np.full(ends.shape[1], math.inf)
+    if np.any(seen):
+        first, second = ends[4, seen].astype(int), ends[5, seen].astype(int)
+        table, arms = tables
+        bound[seen] = bounds_between(
+            model,
+            path,
+            (ends[0, seen], ends[1, seen]),
+            (table[first], table[second]),
+            (arms[first], arms[second]),
+        )
+    return bound < limit
