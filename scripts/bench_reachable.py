@@ -16,8 +16,9 @@ Run alone (``python scripts/bench_reachable.py [--runs N] [--goals N] [--kinova-
   report is the same as the first one's (it must be: the directions are independent).
 - Agreement of the inner set with ``plan``: goals sampled inside the reported inner set
   (seeded: a direction with a positive inner turn, a share 0.2-1 of that turn), each planned
-  with ``ff.plan`` on the scenario as it stands (the UR5 servicer with its clearance
-  constraint; the Kinova servicer without); counts of planned and refused, refusals quoted.
+  with ``ff.plan`` on the scenario as it stands (the UR5 and dual UR5 servicers with their
+  clearance constraint, the dual UR5's end-effector goal replaced by the joints the report
+  gives; the Kinova servicer without); counts of planned and refused, refusals quoted.
 """
 
 from __future__ import annotations
@@ -91,11 +92,14 @@ def bench_reachable(
     runs: int = 1,
     kinova_goals: int = 20,
     jobs: tuple[int, ...] | None = None,
+    dual_goals: int = 20,
 ) -> dict[str, object]:
     """Reach times (medians of ``runs`` fresh calls) and the inner set's agreement with plan.
 
-    ``goals`` goals inside the UR5 servicer's inner set and ``kinova_goals`` inside the Kinova
-    servicer's are planned. ``panda``: also time the Panda servicer (minutes with clearance).
+    ``goals`` goals inside the UR5 servicer's inner set, ``kinova_goals`` inside the Kinova
+    servicer's and ``dual_goals`` inside the dual UR5 servicer's (an end-effector goal: planned
+    with the joints the report gives, as reach prints them) are planned. ``panda``: also time
+    the Panda servicer (minutes with clearance).
     ``jobs``: the worker processes to time each scenario with (default: the default, then 1).
     """
     if jobs is None:
@@ -120,6 +124,9 @@ def bench_reachable(
     agreement = [
         _agreement(*reports["ur5 servicer (shipped, clearance)"], goals, "ur5 servicer"),
         _agreement(*reports["kinova on 500 kg (no clearance)"], kinova_goals, "kinova"),
+        _agreement(
+            *reports["dual ur5 servicer (shipped, clearance)"], dual_goals, "dual ur5 servicer"
+        ),
     ]
     return {"reach": rows, "agreement": agreement}
 
@@ -150,7 +157,13 @@ def _row(
 def _agreement(
     scenario: ff.Scenario, report: ff.ReachReport, goals: int, name: str
 ) -> dict[str, object]:
-    """Plan ``goals`` goals sampled (seeded) inside the report's inner set, as they stand."""
+    """Plan ``goals`` goals sampled (seeded) inside the report's inner set, as they stand.
+
+    An end-effector goal is planned with the joints the report holds (those reach prints).
+    """
+    if report.end_effector_goal:
+        joints = dict(zip(scenario.robot.joint_names, report.goal_joints.tolist(), strict=True))
+        scenario = dataclasses.replace(scenario, goal_joints=joints, goal_poses={})
     rng = np.random.default_rng(28)
     pool = [d for d in report.directions if d.inner > 0.0]
     planned, refused, times = 0, [], []
@@ -212,6 +225,7 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=1, help="fresh reach calls per scenario")
     parser.add_argument("--goals", type=int, default=50, help="UR5 goals planned")
     parser.add_argument("--kinova-goals", type=int, default=20, help="Kinova goals planned")
+    parser.add_argument("--dual-goals", type=int, default=20, help="dual UR5 goals planned")
     parser.add_argument("--no-panda", action="store_true", help="skip the Panda servicer")
     parser.add_argument(
         "--jobs",
@@ -227,6 +241,7 @@ def main() -> None:
         runs=args.runs,
         kinova_goals=args.kinova_goals,
         jobs=None if args.jobs is None else tuple(args.jobs),
+        dual_goals=args.dual_goals,
     )
     print_reachable(found)
     if args.markdown:

@@ -233,3 +233,41 @@ def test_a_start_closer_than_the_margin_is_refused_as_plan_refuses_it(tmp_path, 
     assert main(["reach", str(path), "--jobs", "1"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"freefloat: error: {path}: start configuration: ") and "\n" not in err
+
+
+def test_an_end_effector_goals_joints_are_printed_and_its_goals_plan_with_them(
+    tmp_path, capsys
+) -> None:
+    """The dual UR5 servicer's goal is an end-effector point: reach prints the joints it was
+    solved into at the stated attitude, and a printed goal pasted with those joints plans
+    (its own verification is the truth). Kept as an end-effector goal, the same attitude
+    solves other joints, far from these: why they are printed."""
+    source = SCENARIOS / "dual_ur5_servicer.toml"
+    text = source.read_text()
+    stated, table = "base_zyx_deg = [-5.0, -1.0, -4.0]", "[goal.end_effectors.left_tool0]\n"
+    assert text.count(stated) == 1 and text.count(table) == 1
+    assert main(["reach", str(source)]) == 0
+    out = capsys.readouterr().out
+    lines = out.splitlines()
+    first = lines.index("  [goal.joints]  # deg (m for prismatic joints)")
+    pasted = [line.strip() for line in lines[first : first + 13]]
+    printed = dict(re.fullmatch(r"(\w+) = ([-\d.]+)", line).groups() for line in pasted[1:])
+    assert len(printed) == 12
+    rows = [[float(x) for x in m.groups()] for m in map(ROW.match, lines) if m]
+    (down,) = [r for r in rows if r[:3] == [0.0, -1.0, 0.0]]
+    assert down[3] > 5.0
+    goal = down[5:8]
+    block = text[text.index(table) :].split("\n\n", 1)[0]
+    written = tmp_path / "goal.toml"
+    written.write_text(
+        text.replace(stated, f"base_zyx_deg = {goal}").replace(block, "\n".join(pasted))
+    )
+    scenario = ff.Scenario.from_toml(written)
+    joints = np.degrees(scenario.goal)
+    np.testing.assert_allclose(joints, [float(v) for v in printed.values()], atol=1e-9)
+    plan = ff.plan(scenario, samples=41)
+    assert plan.verification.passed
+    np.testing.assert_allclose(plan.base.achieved_zyx_deg, goal, atol=1e-6)
+    kept = tmp_path / "kept.toml"
+    kept.write_text(text.replace(stated, f"base_zyx_deg = {goal}"))
+    assert np.abs(np.degrees(ff.Scenario.from_toml(kept).resolved().goal) - joints).max() > 1.0

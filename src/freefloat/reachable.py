@@ -97,6 +97,12 @@ class ReachReport:
         evaluations: residual evaluations spent on the inner estimate (those of worker
             processes included: the same count whatever the jobs).
         budget: the evaluation budget per direction.
+        goal_joints: the goal joint values every direction is reached with (rad, or m for
+            prismatic joints), in joint order.
+        end_effector_goal: the scenario's goal is an end-effector goal, solved into
+            ``goal_joints`` at its stated attitude: a goal of this report is one with these
+            joints (solved anew at another attitude, the joints may move far, and with them
+            the drift attitude and the reach).
     """
 
     robot: str
@@ -110,6 +116,8 @@ class ReachReport:
     freedom: tuple[int, ...]
     evaluations: int
     budget: int
+    goal_joints: np.ndarray
+    end_effector_goal: bool
 
     @property
     def largest_outer(self) -> float:
@@ -155,8 +163,10 @@ def reachable(
 ) -> ReachReport:
     """Drift attitude, outer bound and inner estimate of the scenario's reachable attitudes.
 
-    The scenario's goal attitude is ignored (its joints are used). Nothing is written except an
-    inline servicer's URDF into its cache.
+    The scenario's goal attitude is ignored (its joints are used; an end-effector goal is solved
+    into joints at the stated attitude, :attr:`ReachReport.goal_joints`, and a goal of the
+    report is one with those joints). Nothing is written except an inline servicer's URDF into
+    its cache.
 
     Args:
         scenario: the request.
@@ -178,6 +188,7 @@ def reachable(
             refuses it (a spatial robot's only with a budget: the inner estimate's claim).
     """
     check_jobs(jobs, "jobs")
+    end_effector_goal = bool(scenario.goal_poses)
     scenario = scenario.resolved()
     scenario.write_robot()
     probe = problem_from_scenario(scenario, check_bounds=False)
@@ -185,7 +196,7 @@ def reachable(
     ratio = inertia_ratio(mmap, probe.family.start)
     if probe.planar:
         check_endpoints(scenario, scenario_constraints(scenario))  # as plan refuses them
-        return _planar_report(scenario, probe, ratio)
+        return _planar_report(scenario, probe, ratio, end_effector_goal)
     extra = scenario.extra if scenario.extra is not None else [2] * scenario.robot.n
     problem = problem_from_scenario(scenario, extra=extra, check_bounds=False)
     start = problem.start_quaternion
@@ -212,6 +223,8 @@ def reachable(
         freedom=estimate.freedom,
         evaluations=problem.evaluations - before,
         budget=budget,
+        goal_joints=problem.family.goal.copy(),
+        end_effector_goal=end_effector_goal,
     )
 
 
@@ -248,7 +261,9 @@ def _inner(
         )
 
 
-def _planar_report(scenario: Scenario, problem: Problem, ratio: float) -> ReachReport:
+def _planar_report(
+    scenario: Scenario, problem: Problem, ratio: float, end_effector_goal: bool
+) -> ReachReport:
     """The planar bounds as a reach report: +- the planar axis from the drift attitude."""
     interval = problem.bounds_interval
     if interval is None:
@@ -274,4 +289,6 @@ def _planar_report(scenario: Scenario, problem: Problem, ratio: float) -> ReachR
         freedom=tuple(d - 5 for d in problem.family.degrees),
         evaluations=0,
         budget=0,
+        goal_joints=problem.family.goal.copy(),
+        end_effector_goal=end_effector_goal,
     )

@@ -99,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
         if scenario.source is None:
             raise
         raise exc.naming(scenario.source) from None
-    print("\n".join(reach_lines(report)))
+    print("\n".join(reach_lines(report, scenario.robot)))
     if args.plot:
         from ..viz.reach_plot import save_reach_figure
 

@@ -7,8 +7,9 @@ import math
 import numpy as np
 
 from ..reachable import SMALL_REACH_DEG, ReachReport
+from ..robot.model import Robot
 
-__all__ = ["reach_lines", "verdict"]
+__all__ = ["goal_joint_lines", "reach_lines", "verdict"]
 
 
 def _vector(values: np.ndarray, digits: int = 4) -> str:
@@ -32,8 +33,34 @@ def verdict(report: ReachReport) -> str:
     )
 
 
-def reach_lines(report: ReachReport) -> list[str]:
-    """The report: drift attitude, outer bound, inner estimate per direction, verdict."""
+def goal_joint_lines(report: ReachReport, robot: Robot) -> list[str]:
+    """For an end-effector goal: the joints it was solved into, as a table to paste (deg, m).
+
+    The goals of the report are reached with these joints; kept as an end-effector goal, the
+    joints are solved anew at the attitude pasted and may move far (another branch of the
+    arm's inverse kinematics), and the reach with them. Empty for a goal given as joints.
+    """
+    if not report.end_effector_goal:
+        return []
+    values = [
+        (joint.name, value if joint.kind == "prismatic" else math.degrees(value))
+        for joint, value in zip(robot.joints, report.goal_joints.tolist(), strict=True)
+    ]
+    return [
+        "goal joints: solved from the scenario's end-effector goal at its stated attitude; the",
+        "  goals below are reached with these joints: paste them in place of the",
+        "  [goal.end_effectors.*] tables (kept, they are solved anew at the attitude pasted,",
+        "  possibly on another branch of the arm, with another drift attitude and reach):",
+        "  [goal.joints]  # deg (m for prismatic joints)",
+        *(f"  {name} = {value:.6f}" for name, value in values),
+    ]
+
+
+def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
+    """The report: drift attitude, outer bound, inner estimate per direction, verdict.
+
+    With ``robot`` (the report's), an end-effector goal's joints too (:func:`goal_joint_lines`).
+    """
     kind = "planar" if report.planar else "spatial"
     drift = report.drift_quaternion
     lines = [
@@ -41,6 +68,7 @@ def reach_lines(report: ReachReport) -> list[str]:
         "drift attitude (where the plain quintic path leaves the spacecraft):",
         f"  base_zyx_deg = {_vector(report.drift_zyx_deg)}",
         f"  base_quaternion_xyzw = {_vector(drift, 6)}",
+        *([] if robot is None else goal_joint_lines(report, robot)),
         f"spacecraft / arm rotational inertia about the system CM: {report.inertia_ratio:.3g}",
     ]
     if report.bound is not None:
