@@ -11,7 +11,8 @@
 - an *inner estimate*: per direction, the largest turn from the drift attitude that
   continuation reached with a solved path, heading for that outer limit, with the same
   freedom and constraints the planner tries first (:func:`freefloat.solvers.reach.reach_set`);
-  every goal on that segment is one the planner plans.
+  its end is solved as the planner solves it, and the goals before it take the planner's
+  steps along the same branch (as a rule, not a proof: docs/reach.md).
 
 For a planar robot the reachable yaw changes are the planar bounds (docs/method.md section 6).
 """

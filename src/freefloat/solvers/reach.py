@@ -2,10 +2,12 @@
 
 From the attitude the quintic path reaches, continuation (:func:`.continuation.track`) heads
 towards a far goal in each of a set of directions and stops where it cannot go on (a joint's
-limit, a singular map, the freedom of the path family). Every attitude up to that angle along
-the direction is reached by a solved path within the constraints, so the set of these segments
-is an *inner* estimate of the reachable set with the given freedom: more freedom (or paths
-the continuation does not find) may reach further.
+limit, a singular map, the freedom of the path family). The attitudes up to that angle along
+the direction were reached by solved paths within the constraints on the way, so the set of
+these segments is an *inner* estimate of the reachable set with the given freedom: more
+freedom (or paths the continuation does not find) may reach further. (The planner heading for
+a nearer goal takes the same steps but its own last one, which can fail where the traced
+steps did not: docs/reach.md.)
 """
 
 from __future__ import annotations
