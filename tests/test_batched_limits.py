@@ -192,12 +192,13 @@ def test_rate_rows_left_out_while_far_do_not_change_the_least_effort_path(tmp_pa
     assert np.abs(rates).max() < 1.0
 
 
-@pytest.mark.parametrize("name", ["worked_example", "dual_ur5_servicer"])
-def test_the_batch_takes_the_map_rate_at_the_joint_rates_alone(name):
+@pytest.mark.parametrize("name", ["worked_example", "dual_ur5_servicer", "mixed_arm"])
+def test_the_batch_takes_the_map_rate_at_the_joint_rates_alone(name, tmp_path):
     """Along a zero-momentum motion (base at the identity) the rate term of the centroidal
     map at the whole velocity equals the one at the joint rates alone (Pinocchio at both),
-    and the batch agrees with the one-instant inverse dynamics, which uses the whole."""
-    scenario = ff.Scenario.from_toml(SCENARIOS / f"{name}.toml")
+    and the batch agrees with the one-instant inverse dynamics, which uses the whole; on
+    shipped robots and on an arm with a continuous, a revolute and a prismatic joint."""
+    scenario = _scenario_named(name, tmp_path)
     problem = ff.problem_from_scenario(scenario, extra=[2] * scenario.robot.n)
     beta = 0.3 * np.random.default_rng(7).standard_normal(problem.n_free)
     inside = np.linspace(0.05, 0.95, 19) * problem.duration  # moving: not at rest
@@ -217,3 +218,19 @@ def test_the_batch_takes_the_map_rate_at_the_joint_rates_alone(name):
         one = inverse_dynamics(mmap, samples.q[k], samples.qd[k], samples.qdd[k])
         scale = 1.0 + np.abs(one.tau).max()
         np.testing.assert_allclose(batch.tau[k], one.tau, rtol=0.0, atol=1e-11 * scale)
+
+
+def _scenario_named(name: str, folder: Path) -> ff.Scenario:
+    """A shipped scenario, or ``mixed_arm``: a continuous, a revolute and a prismatic joint."""
+    if name != "mixed_arm":
+        return ff.Scenario.from_toml(SCENARIOS / f"{name}.toml")
+    import urdfs
+
+    urdf = folder / "mixed.urdf"
+    urdf.write_text(urdfs.spatial_arm(kinds=("continuous", "revolute", "prismatic")))
+    return ff.Scenario(
+        robot=ff.load_robot(urdf),
+        duration=4.0,
+        start_joints={"j1": 0.1, "j2": -0.4, "j3": 0.05},
+        goal_joints={"j1": 1.2, "j2": 0.5, "j3": 0.2},
+    )

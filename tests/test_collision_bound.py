@@ -427,3 +427,36 @@ def test_clearance_rows_sit_at_the_instants_a_solver_adds():
     numeric = [-(smallest(beta + e) - smallest(beta - e)) / (2 * h) for e in steps]
     scale = max(1.0, float(np.abs(numeric).max()))
     np.testing.assert_allclose(more.jacobian[-1], numeric, rtol=0.0, atol=1e-5 * scale)
+
+
+class _DipProblem(_OnePath):
+    """The one path of :class:`_OnePath` as a problem over 1 s (no robot needed)."""
+
+    robot, duration = None, 1.0
+
+
+def test_the_solvers_impose_a_dip_on_clearance_alone_each_dip_once():
+    """``with_dips`` adds the closed-form dip (t = 100.5 / 200 of 1 s) once however often it
+    is found, and nothing for a path that keeps the margin; ``rows_instants`` asks clearance
+    at its own grid and the dips only, every other constraint at the solver's instants."""
+    from freefloat.problem.constraints import DEFAULT_INSTANTS, JointPositionLimits
+    from freefloat.problem.constraints.clearance import Clearance
+    from freefloat.problem.paths import JointPolynomials
+    from freefloat.solvers.rows import NO_DIPS, rows_instants, with_dips
+
+    margin = 0.01
+    problem = _DipProblem(JointPolynomials.from_monomials([[0.0, 1.0]], 1.0))
+    broken = Clearance(_Dip(margin, 0.5, np.array([[1.0]])), margin)
+    limits = JointPositionLimits()
+    dips = with_dips(problem, [limits, broken], np.zeros(1), NO_DIPS)
+    assert dips.shape == (1,) and dips[0] == pytest.approx(100.5 / 200, abs=1e-6)
+    again = with_dips(problem, [broken], np.zeros(1), np.array([0.25, *dips]))
+    np.testing.assert_array_equal(again, [0.25, dips[0]])  # in the order found, each once
+    kept = Clearance(_Dip(margin, 0.5, np.array([[1.0]])), margin - 2e-3)
+    assert with_dips(problem, [kept], np.zeros(1), NO_DIPS).shape == (0,)
+    asked = np.array([0.0, 0.3141, 1.0])
+    np.testing.assert_array_equal(rows_instants(limits, asked, dips), asked)
+    np.testing.assert_array_equal(rows_instants(broken, asked, NO_DIPS), DEFAULT_INSTANTS)
+    np.testing.assert_array_equal(
+        rows_instants(broken, asked, dips), np.union1d(DEFAULT_INSTANTS, dips)
+    )

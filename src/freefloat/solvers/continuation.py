@@ -41,7 +41,7 @@ from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
 from .predictor import newton_correction, tangent
 from .restore import Broken, broken_constraint, first_broken
-from .rows import RowCache, linear_rows, with_critical
+from .rows import NO_DIPS, RowCache, linear_rows, with_critical, with_dips
 from .tracked import BranchPoint, ContinuationResult
 
 __all__ = ["ContinuationResult", "continuation", "track"]
@@ -77,9 +77,10 @@ def _tangent(
     instants: np.ndarray,
     cache: RowCache,
     step: float | None = None,
+    dips: np.ndarray = NO_DIPS,
 ) -> np.ndarray:
     """:func:`.predictor.tangent` with the constraints' rows at ``beta`` (``step``: see there)."""
-    g, g_mat = linear_rows(problem, constraints, beta, instants, cache)
+    g, g_mat = linear_rows(problem, constraints, beta, instants, cache, dips)
     return tangent(jac, delta, g, g_mat, step)
 
 
@@ -94,13 +95,14 @@ def _correct(
     tol: float,
     instants: np.ndarray,
     cache: RowCache,
+    dips: np.ndarray = NO_DIPS,
 ) -> tuple[np.ndarray | None, np.ndarray, np.ndarray, int]:
     """Newton corrector from ``beta``: (solved beta or None, residual, Jacobian, iterations)."""
     r, jac = problem.residual_and_jacobian(beta)
     previous = math.inf
     for iteration in range(1, CORRECTOR_ITERATIONS + 1):
         norm = float(np.linalg.norm(r))
-        g, g_mat = linear_rows(problem, constraints, beta, instants, cache)
+        g, g_mat = linear_rows(problem, constraints, beta, instants, cache, dips)
         if norm < tol and (len(g) == 0 or float(np.max(g)) <= 0.0):
             return beta, r, jac, iteration
         if iteration > 2 and norm > 0.5 * previous and norm > 1e3 * tol:
@@ -110,7 +112,7 @@ def _correct(
             break
         beta, previous = beta + d, norm
         r, jac = problem.residual_and_jacobian(beta)
-    g = linear_rows(problem, constraints, beta, instants, cache)[0]
+    g = linear_rows(problem, constraints, beta, instants, cache, dips)[0]
     if float(np.linalg.norm(r)) < tol and (len(g) == 0 or float(np.max(g)) <= 0.0):
         return beta, r, jac, CORRECTOR_ITERATIONS
     return None, r, jac, CORRECTOR_ITERATIONS
@@ -178,7 +180,7 @@ def track(
     axis = delta / angle if angle > 0 else np.array([0.0, 0.0, 1.0])
     final_tol = POLISH * options.tolerance
     first_evaluation = problem.evaluations
-    instants = DEFAULT_INSTANTS
+    instants, dips = DEFAULT_INSTANTS, NO_DIPS
     cache: RowCache = {}
 
     beta, lam, iterations, steps = zero, 0.0, 0, 0
@@ -206,7 +208,7 @@ def track(
         if stall and _stalled(lam, reached, steps):
             # At the pace of the last steps the step budget ends short of the goal: stop now
             # rather than spend the budget on the same refusal.
-            tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache)
+            tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache, None, dips)
             blocked = _ahead(problem, constraints, beta, tangent)
             gain = lam - reached[steps - PACE_WINDOW]
             stopped_by = (
@@ -222,12 +224,13 @@ def track(
             partial(_where, lam * angle, angle, steps, problem.evaluations - first_evaluation)
         )
         step = min(dl, 1.0 - lam)
-        tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache, step)
+        tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache, step, dips)
         last = lam + step >= 1.0
         target = _target(problem if last else coarse, start, delta, 1.0 if last else lam + step)
         tol = final_tol if last else INTERMEDIATE_TOLERANCE
-        done = _step(problem, target, constraints, beta + step * tangent, tol, instants, cache)
-        iterations, instants = iterations + done.spent, done.instants
+        at = _Rows(instants, dips, cache)
+        done = _step(problem, target, constraints, beta + step * tangent, tol, at)
+        iterations, instants, dips = iterations + done.spent, done.instants, done.dips
         if done.beta is None:
             reached.append(lam)
             dl = 0.5 * step
@@ -258,6 +261,8 @@ class _Step:
         iterations: the first corrector's Newton iterations (they set the next step).
         spent: every corrector's iterations.
         instants: the instants now imposed (normalised).
+        dips: the instants where the dense check found a dip, now imposed on the constraints
+            with their own instants (:func:`.rows.with_dips`; normalised).
     """
 
     beta: np.ndarray | None
@@ -266,6 +271,16 @@ class _Step:
     iterations: int
     spent: int
     instants: np.ndarray
+    dips: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """Where a step's rows sit: the instants, the dips (see :class:`_Step`) and the row cache."""
+
+    instants: np.ndarray
+    dips: np.ndarray
+    cache: RowCache
 
 
 def _step(
@@ -274,18 +289,15 @@ def _step(
     constraints: Sequence[Constraint],
     predicted: np.ndarray,
     tol: float,
-    instants: np.ndarray,
-    cache: RowCache,
+    at: _Rows,
 ) -> _Step:
     """Correct the ``predicted`` path onto ``target`` (``tol``, rad), then densely inside."""
-    solved, r, jac, its = _correct(target, constraints, predicted, tol, instants, cache)
-    spent = its
+    solved, r, jac, its = _correct(
+        target, constraints, predicted, tol, at.instants, at.cache, at.dips
+    )
     if solved is not None and not _dense_ok(problem, constraints, solved):
-        solved, r, jac, more, instants = _densely(
-            problem, target, constraints, solved, tol, instants, cache
-        )
-        spent += more
-    return _Step(solved, r, jac, its, spent, instants)
+        return _densely(problem, target, constraints, solved, tol, at, its)
+    return _Step(solved, r, jac, its, its, at.instants, at.dips)
 
 
 def _stalled(lam: float, reached: Sequence[float], steps: int) -> bool:
@@ -305,27 +317,29 @@ def _densely(
     constraints: Sequence[Constraint],
     solved: np.ndarray,
     tol: float,
-    instants: np.ndarray,
-    cache: RowCache,
-) -> tuple[np.ndarray | None, np.ndarray, np.ndarray, int, np.ndarray]:
+    at: _Rows,
+    spent: int,
+) -> _Step:
     """Correct a path inside at the instants but not everywhere, at its tightest instants.
 
-    Up to three times: add the path's tightest instants and correct again. Returns the path
-    (None when it stays outside), its residual (rad) and Jacobian, the corrector iterations
-    spent and the instants now imposed.
+    Up to three times: add the path's tightest instants, and the instants of its dips below
+    the limit of a constraint with its own instants (:func:`.rows.with_dips`), and correct
+    again. ``spent``: the corrector iterations so far. Returns the step with its path (None
+    when it stays outside) and the instants and dips now imposed.
     """
     r = jac = np.zeros(0)
-    iterations = 0
+    instants, dips, first = at.instants, at.dips, spent
     for _ in range(3):
         instants = with_critical(problem, constraints, solved, instants)
-        found, r, jac, more = _correct(target, constraints, solved, tol, instants, cache)
-        iterations += more
+        dips = with_dips(problem, constraints, solved, dips)
+        found, r, jac, more = _correct(target, constraints, solved, tol, instants, at.cache, dips)
+        spent += more
         if found is None:
-            return None, r, jac, iterations, instants
+            return _Step(None, r, jac, first, spent, instants, dips)
         solved = found
         if _dense_ok(problem, constraints, solved):
-            return solved, r, jac, iterations, instants
-    return None, r, jac, iterations, instants
+            return _Step(solved, r, jac, first, spent, instants, dips)
+    return _Step(None, r, jac, first, spent, instants, dips)
 
 
 def continuation(

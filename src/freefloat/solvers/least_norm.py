@@ -39,7 +39,7 @@ from .newton import polish_at
 from .options import SolveOptions
 from .predictor import FAR_INSIDE, MARGIN
 from .restore import broken_constraint
-from .rows import RowCache, linear_rows, with_critical
+from .rows import NO_DIPS, RowCache, linear_rows, with_critical, with_dips
 
 __all__ = [
     "CORRECTIONS",
@@ -167,16 +167,19 @@ def least_norm_root_within(
             beta = honoured = inside.beta
     cache: RowCache = {}
     instants = with_critical(problem, active, beta, DEFAULT_INSTANTS)
+    dips = with_dips(problem, active, beta, NO_DIPS)
     spent = 0
     for _ in range(ROUNDS):
-        point, steps = _steps(problem, active, beta, instants, cache, options.tolerance, settled)
+        tolerance = options.tolerance
+        point, steps = _steps(problem, active, beta, instants, cache, tolerance, settled, dips)
         spent += steps
         beta = polish_at(problem, point.beta, options.tolerance, evaluated=point.evaluated).beta
         if not broken_constraint(problem, active, beta):
             return LeastNorm(beta, spent, True)
         instants = with_critical(problem, active, beta, instants)
+        dips = with_dips(problem, active, beta, dips)
         # pressed past a limit between the instants: brought back inside, least-norm
-        inside = nearest_root_within(problem, beta, active, instants, options)
+        inside = nearest_root_within(problem, beta, active, instants, options, dips)
         bar = given if honoured is None else _norm(honoured)  # deviate less than these
         if inside.honoured and _norm(inside.beta) < bar:
             return LeastNorm(inside.beta, spent, True)
@@ -196,21 +199,24 @@ def nearest_root_within(
     constraints: Sequence[Constraint],
     instants: np.ndarray,
     options: SolveOptions,
+    dips: np.ndarray = NO_DIPS,
 ) -> LeastNorm:
     """A root near ``beta`` within the constraints, for a root just outside one between rows.
 
     Least-norm corrections onto the root set and inside the rows linearised at the last path
     (each polished onto ``h = 0``), the rows at ``instants`` and at the last path's tightest
-    instants, at most :data:`CORRECTIONS` times (rad or m). ``honoured`` says whether the
-    dense check of every constraint passes.
+    instants (and, for a constraint with its own instants, at ``dips`` and the last path's:
+    :func:`.rows.with_dips`), at most :data:`CORRECTIONS` times (rad or m). ``honoured`` says
+    whether the dense check of every constraint passes.
     """
     active = [c for c in constraints if c.applies_to(problem.robot)]
     beta = np.asarray(beta, dtype=float)
     for count in range(1, CORRECTIONS + 1):
         instants = with_critical(problem, active, beta, instants)
+        dips = with_dips(problem, active, beta, dips)
         cache: RowCache = {}
-        point = _Point.at(problem, active, beta, instants, cache)
-        found = _corrected(problem, active, point, instants, cache, options.tolerance)
+        point = _Point.at(problem, active, beta, instants, cache, dips=dips)
+        found = _corrected(problem, active, point, instants, cache, options.tolerance, dips)
         if found is None:
             return LeastNorm(beta, count, False)
         beta = found.beta
@@ -227,6 +233,7 @@ def _steps(
     cache: RowCache,
     tolerance: float,
     settled: float,
+    dips: np.ndarray = NO_DIPS,
 ) -> tuple[_Point, int]:
     """Feasible trust-region SQP steps at fixed instants: (the last point, steps).
 
@@ -234,11 +241,12 @@ def _steps(
     least-norm step back onto the root set and inside the rows linearised there, then polished
     onto ``h = 0`` (:func:`.newton.polish`); it is kept when that path is a root within
     :data:`ROW_SLACK` of every row and deviates less. Otherwise the trust region halves. A
-    start outside rows added since the last round is first corrected the same way.
+    start outside rows added since the last round is first corrected the same way. ``dips``:
+    see :func:`.rows.linear_rows`.
     """
-    here = _Point.at(problem, constraints, beta, instants, cache)
+    here = _Point.at(problem, constraints, beta, instants, cache, dips=dips)
     if here.finite and float(here.g.max(initial=-1.0)) > ROW_SLACK:  # rows added since
-        inside = _corrected(problem, constraints, here, instants, cache, tolerance)
+        inside = _corrected(problem, constraints, here, instants, cache, tolerance, dips)
         here = here if inside is None else inside
     trust = TRUST
     steps = 0
@@ -248,8 +256,8 @@ def _steps(
         if found is None:
             break
         d = found
-        trial = _Point.at(problem, constraints, here.beta + d, instants, cache)
-        new = _corrected(problem, constraints, trial, instants, cache, tolerance)
+        trial = _Point.at(problem, constraints, here.beta + d, instants, cache, dips=dips)
+        new = _corrected(problem, constraints, trial, instants, cache, tolerance, dips)
         before = float(here.beta @ here.beta)
         if new is not None and float(new.beta @ new.beta) < before:
             here, trust = new, min(2.0 * trust, TRUST_MAX)
@@ -267,6 +275,7 @@ def _corrected(
     instants: np.ndarray,
     cache: RowCache,
     tolerance: float,
+    dips: np.ndarray = NO_DIPS,
 ) -> _Point | None:
     """The root near ``point`` (evaluated at ``instants``) within the rows, or None.
 
@@ -288,7 +297,7 @@ def _corrected(
         if not np.all(np.isfinite(found.beta)):
             return None
         evaluated = (found.residual, found.jacobian)
-        point = _Point.at(problem, constraints, found.beta, instants, cache, evaluated)
+        point = _Point.at(problem, constraints, found.beta, instants, cache, evaluated, dips)
     return None
 
 
@@ -311,12 +320,13 @@ class _Point:
         instants: np.ndarray,
         cache: RowCache,
         evaluated: tuple[np.ndarray, np.ndarray] | None = None,
+        dips: np.ndarray = NO_DIPS,
     ) -> _Point:
         """The point at ``beta``; ``evaluated``: ``(h, dh/dbeta)`` there when known."""
         r, jac = evaluated if evaluated is not None else problem.residual_and_jacobian(beta)
         if not (np.all(np.isfinite(r)) and np.all(np.isfinite(jac))):
             return cls(beta, r, jac, np.full(1, np.inf), np.zeros((1, len(beta))))
-        g, g_mat = linear_rows(problem, constraints, beta, instants, cache)
+        g, g_mat = linear_rows(problem, constraints, beta, instants, cache, dips)
         return cls(beta, r, jac, g, g_mat)
 
     @property

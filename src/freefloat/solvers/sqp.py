@@ -14,6 +14,7 @@ import numpy as np
 from ..problem.constraints import DEFAULT_INSTANTS, Constraint, ConstraintRows
 from ..problem.residual import Problem
 from .options import SolveOptions
+from .rows import NO_DIPS, rows_instants
 
 __all__ = ["constraint_functions", "minimum_norm_sqp"]
 
@@ -29,14 +30,16 @@ def constraint_functions(
 
     Affine constraints (``g = g0 + G beta``) are evaluated once; the others once per ``beta``
     for both the values and the Jacobian. ``instants`` are the normalised instants of the rows
-    (constraints that choose their own instants, as clearance does, ignore them).
+    (constraints that choose their own instants, as clearance does, keep to theirs:
+    :func:`.rows.rows_instants`).
     """
     out: list[tuple[Function, Function]] = []
     for constraint in constraints:
         if not constraint.applies_to(problem.robot):
             continue
+        at = rows_instants(constraint, instants, NO_DIPS)
         if constraint.affine:
-            rows = constraint.rows(problem, np.zeros(problem.n_free), instants)
+            rows = constraint.rows(problem, np.zeros(problem.n_free), at)
             if rows.count:
 
                 def values(
@@ -52,12 +55,15 @@ def constraint_functions(
             memo: dict[bytes, ConstraintRows] = {}
 
             def rows_at(
-                b: np.ndarray, c: Constraint = constraint, memo: dict = memo
+                b: np.ndarray,
+                c: Constraint = constraint,
+                memo: dict = memo,
+                at: np.ndarray = at,
             ) -> ConstraintRows:
                 key = np.asarray(b, dtype=float).tobytes()
                 if key not in memo:
                     memo.clear()
-                    memo[key] = c.rows(problem, b, instants)
+                    memo[key] = c.rows(problem, b, at)
                 return memo[key]
 
             def row_values(

@@ -83,11 +83,10 @@ class Constraint(abc.ABC):
         affine: whether ``g`` is affine in ``beta`` (then its Jacobian is constant).
         lazy: whether planning first ignores it and imposes it only when the path found
             breaks it (for constraints whose rows are costly and rarely bind).
-        own_instants: whether its rows sit at instants it picks itself besides those the
-            solvers pass: its :meth:`critical_times` are then added by a solver only where a
-            path it found breaks the constraint between instants
-            (:func:`~freefloat.solvers.rows.with_critical`), not to every minimisation's
-            instants.
+        own_instants: whether its rows sit at instants it picks itself: the solvers ask it
+            only at those and at its :meth:`critical_times` where a path they found breaks
+            it between them (:func:`~freefloat.solvers.rows.with_dips`), not at the other
+            constraints' instants.
     """
 
     name: str = "constraint"

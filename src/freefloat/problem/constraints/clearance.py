@@ -104,9 +104,9 @@ class Clearance(Constraint):
         Clearance picks its own instants: the uniform grid :data:`DEFAULT_INSTANTS`, plus
         :data:`REFINE` instants in each grid interval next to each of the two lowest local
         minima of clearance on that grid; and it keeps the ``instants`` asked for beyond that
-        grid (those a solver added: a dip below the margin between the grid's instants,
-        :meth:`critical_times`, or another constraint's tightest instant). For given
-        ``instants`` the number of rows is fixed, as SLSQP needs.
+        grid (the solvers ask only at the dips they found below the margin between the grid's
+        instants, :meth:`critical_times`: :func:`~freefloat.solvers.rows.rows_instants`). For
+        given ``instants`` the number of rows is fixed, as SLSQP needs.
         """
         beta = np.asarray(beta, dtype=float)
         key = beta.tobytes() + np.asarray(instants, dtype=float).tobytes()
@@ -147,7 +147,7 @@ class Clearance(Constraint):
         return np.linspace(lo, hi, 2 * REFINE + 2)[1:-1]
 
     def critical_times(self, robot: Robot, path: JointPolynomials) -> np.ndarray:
-        """The time (s) of the smallest clearance along ``path`` when it is below the margin.
+        """The time (s) of the smallest clearance along ``path`` when it breaks the margin.
 
         The solvers' dense check (:meth:`violation`, the same answer: remembered for the last
         path) found the path below the margin there; a solver that adds the time to its
@@ -157,7 +157,7 @@ class Clearance(Constraint):
         if self.model.n_pairs == 0:
             return np.zeros(0)
         lowest = self._solvers_check(path)[1]
-        if lowest is None or lowest[0] >= self.margin:
+        if lowest is None or lowest[0] >= self.margin - self.tolerance:  # not broken
             return np.zeros(0)
         return np.array([lowest[1]])
 
