@@ -460,3 +460,36 @@ def test_the_solvers_impose_a_dip_on_clearance_alone_each_dip_once():
     np.testing.assert_array_equal(
         rows_instants(broken, asked, dips), np.union1d(DEFAULT_INSTANTS, dips)
     )
+
+
+def test_clearance_picks_its_refinement_and_the_solvers_keep_it():
+    """The instants clearance picks at a path are the off-grid instants of its rows there
+    (three either side of the two lowest minima on the grid, from every pair measured), and
+    ``with_picked`` keeps those of every iterate, adding nothing for other constraints."""
+    from freefloat.problem.constraints import DEFAULT_INSTANTS, JointPositionLimits
+    from freefloat.problem.constraints.clearance import REFINE, Clearance
+    from freefloat.problem.constraints.clearance_samples import lowest_minima
+    from freefloat.solvers.rows import NO_DIPS, with_picked
+
+    scenario = ff.Scenario.from_toml(UR5)
+    robot = scenario.robot
+    problem = ff.problem_from_scenario(scenario, extra=[2] * robot.n)
+    check = Clearance(CollisionModel(robot, known_srdf(robot)), 0.01)
+    everything = CollisionModel(robot, known_srdf(robot))
+    rng = np.random.default_rng(5)
+    kept = NO_DIPS
+    for scale in (0.2, 0.6):
+        beta = rng.normal(0.0, scale, problem.n_free)
+        grid = DEFAULT_INSTANTS
+        q = problem.polynomials(beta).evaluate(grid * problem.duration).q
+        smallest = np.array([everything.distances(row).values.min() for row in q])
+        expected = []
+        for k in lowest_minima(smallest):
+            lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+            expected.extend(np.linspace(lo, hi, 2 * REFINE + 2)[1:-1])
+        picked = check.picked_instants(problem, beta)
+        np.testing.assert_allclose(picked, expected, rtol=0.0, atol=1e-15)
+        assert with_picked(problem, [JointPositionLimits()], beta, NO_DIPS).shape == (0,)
+        kept = with_picked(problem, [check], beta, kept)
+        assert set(picked.tolist()) <= set(kept.tolist())
+    assert len(kept) > 2 * 2 * REFINE  # the first iterate's instants stayed

@@ -271,3 +271,22 @@ def test_an_end_effector_goals_joints_are_printed_and_its_goals_plan_with_them(
     kept = tmp_path / "kept.toml"
     kept.write_text(text.replace(stated, f"base_zyx_deg = {goal}"))
     assert np.abs(np.degrees(ff.Scenario.from_toml(kept).resolved().goal) - joints).max() > 1.0
+
+
+def test_a_last_step_whose_corrector_first_takes_the_path_back_inside_plans() -> None:
+    """The dual UR5 servicer (its goal joints as reach prints them), 12.03 deg about
+    (-1, 1, -1) from the drift attitude, just short of the 12.40 deg its reach confirms: the
+    last step's corrector first pushes the path back inside clearance rows, which raises the
+    residual, then converges. Given up as 'not contracting' (and with rows that jumped with
+    each iterate), the goal was refused while 12.40 deg planned. The truth is the plan's own
+    verification."""
+    from freefloat.physics.attitude import quat_exp, quat_multiply
+
+    scenario = ff.Scenario.from_toml(SCENARIOS / "dual_ur5_servicer.toml").resolved()
+    problem = ff.problem_from_scenario(scenario, extra=scenario.extra)
+    drift = problem.achieved(np.zeros(problem.n_free))
+    axis = np.array([-1.0, 1.0, -1.0]) / math.sqrt(3.0)
+    goal = quat_multiply(drift, quat_exp(math.radians(12.03) * axis))
+    plan = ff.plan(replace(scenario, goal_attitude=goal), samples=41)
+    assert plan.verification.passed
+    assert ff.geodesic_angle(np.array(plan.base.achieved_quaternion_xyzw), goal) < 1e-9

@@ -106,9 +106,9 @@ def inverse_dynamics_batch(
     The motion is evaluated with the base at the origin and identity attitude: without gravity
     the torques do not depend on the base pose, and the CM and end effector of any other base
     pose follow by one rotation and translation. Two Pinocchio calls per instant (the map and
-    its rate in one, RNEA) and one per end effector (the CM comes with the centroidal maps: :func:`centre_of_mass`). The last
-    batch per robot is kept: asked again for the very same instants (a plan's samples, by
-    sampling then by its check), it is returned again (copies).
+    its rate in one, RNEA) and one per end effector (the CM comes with the centroidal maps:
+    :func:`centre_of_mass`). The last batch per robot is kept: asked again for the very same
+    instants (a plan's samples, by sampling then by its check), it is returned again (copies).
 
     Args:
         mmap: momentum map of the robot.

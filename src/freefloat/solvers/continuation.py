@@ -41,7 +41,7 @@ from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
 from .predictor import newton_correction, tangent
 from .restore import Broken, broken_constraint, first_broken
-from .rows import NO_DIPS, RowCache, linear_rows, with_critical, with_dips
+from .rows import NO_DIPS, RowCache, linear_rows, with_critical, with_dips, with_picked
 from .tracked import BranchPoint, ContinuationResult
 
 __all__ = ["ContinuationResult", "continuation", "track"]
@@ -97,20 +97,29 @@ def _correct(
     cache: RowCache,
     dips: np.ndarray = NO_DIPS,
 ) -> tuple[np.ndarray | None, np.ndarray, np.ndarray, int]:
-    """Newton corrector from ``beta``: (solved beta or None, residual, Jacobian, iterations)."""
+    """Newton corrector from ``beta``: (solved beta or None, residual, Jacobian, iterations).
+
+    The instants the constraints with their own instants pick at each iterate are kept for
+    the next ones (:func:`.rows.with_picked`): rows that jump with the iterate would let
+    Newton chase them instead of converging. The corrector gives up early when a Newton step
+    from inside the rows did not halve the residual (the predicted step was too long); a step
+    that took the path back inside rows may raise the residual and is not held against it.
+    """
     r, jac = problem.residual_and_jacobian(beta)
-    previous = math.inf
+    previous, was_inside = math.inf, True
     for iteration in range(1, CORRECTOR_ITERATIONS + 1):
         norm = float(np.linalg.norm(r))
         g, g_mat = linear_rows(problem, constraints, beta, instants, cache, dips)
-        if norm < tol and (len(g) == 0 or float(np.max(g)) <= 0.0):
+        dips = with_picked(problem, constraints, beta, dips)
+        inside = len(g) == 0 or float(np.max(g)) <= 0.0
+        if norm < tol and inside:
             return beta, r, jac, iteration
-        if iteration > 2 and norm > 0.5 * previous and norm > 1e3 * tol:
+        if iteration > 2 and was_inside and norm > 0.5 * previous and norm > 1e3 * tol:
             break  # not contracting: the step was too long
         d = newton_correction(jac, r, g, g_mat)
         if d is None:
             break
-        beta, previous = beta + d, norm
+        beta, previous, was_inside = beta + d, norm, inside
         r, jac = problem.residual_and_jacobian(beta)
     g = linear_rows(problem, constraints, beta, instants, cache, dips)[0]
     if float(np.linalg.norm(r)) < tol and (len(g) == 0 or float(np.max(g)) <= 0.0):

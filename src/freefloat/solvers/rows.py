@@ -27,6 +27,7 @@ __all__ = [
     "tightest_instants",
     "with_critical",
     "with_dips",
+    "with_picked",
 ]
 
 #: Most instants kept besides the default ones (the tightest instants found on the way).
@@ -130,6 +131,24 @@ def with_dips(
         for c in constraints
         if c.own_instants
     ]
+    return _joined(dips, found)
+
+
+def with_picked(
+    problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray, dips: np.ndarray
+) -> np.ndarray:
+    """``dips`` with the instants the constraints with their own instants pick at ``beta``.
+
+    (:meth:`~freefloat.problem.constraints.Constraint.picked_instants`.) A corrector that
+    passes them on keeps rows at the instants of every iterate, not only at those its last
+    iterate picked.
+    """
+    found = [c.picked_instants(problem, beta) for c in constraints if c.own_instants]
+    return _joined(dips, found)
+
+
+def _joined(dips: np.ndarray, found: Sequence[np.ndarray]) -> np.ndarray:
+    """``dips`` then ``found`` (normalised), each once in the order met, the last kept."""
     joined = np.concatenate([dips, *found]).clip(0.0, 1.0)
     _, first = np.unique(joined, return_index=True)
     return joined[np.sort(first)][-MAX_ADDED_INSTANTS:]

@@ -122,6 +122,15 @@ class Constraint(abc.ABC):
         """
         return np.zeros(0)
 
+    def picked_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
+        """Normalised instants a constraint with its own instants picks for its rows at ``beta``.
+
+        Beyond those every path shares (a refinement about the path's tightest instants): a
+        Newton corrector keeps rows at those of every iterate, so that the rows do not jump
+        from one iterate to the next. Default: none.
+        """
+        return np.zeros(0)
+
     def violation(self, problem: Problem, beta: np.ndarray) -> Excess:
         """:meth:`excess` of the problem's path at ``beta`` (for solvers filtering roots)."""
         return self.excess(problem.robot, problem.polynomials(beta))

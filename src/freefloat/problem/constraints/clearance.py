@@ -83,6 +83,7 @@ class Clearance(Constraint):
         self.model = model
         self.margin = float(margin)
         self._memo: tuple[PathFamily, bytes, ConstraintRows] | None = None
+        self._picked: tuple[PathFamily, bytes, np.ndarray] | None = None
         self._smallest_memo: dict[tuple[bytes, float, int, int], tuple[float, float, int]] = {}
         self._sampled_memo: tuple[tuple[bytes, float, int], np.ndarray] | None = None
         self._measured_memo: tuple[tuple[bytes, float, int, float | None], Measured] | None = None
@@ -117,16 +118,26 @@ class Clearance(Constraint):
         grid = DEFAULT_INSTANTS
         values_grid, jacobian_grid = self._rows_at(problem, beta, grid)
         coarse = self.margin + SOLVER_SLACK - values_grid  # the smallest distance there
-        passed = np.setdiff1d(np.asarray(instants, dtype=float), grid)
-        extra = np.concatenate(
-            [*(self._refinement(grid, k) for k in lowest_minima(coarse)), passed]
-        )
+        refined = np.concatenate([self._refinement(grid, k) for k in lowest_minima(coarse)])
+        self._picked = (problem.family, beta.tobytes(), refined)
+        passed = np.setdiff1d(np.asarray(instants, dtype=float), np.union1d(grid, refined))
+        extra = np.concatenate([refined, passed])
         values_extra, jacobian_extra = self._rows_at(problem, beta, extra)
         values = np.concatenate([values_grid, values_extra])
         jacobian = np.concatenate([jacobian_grid, jacobian_extra])
         rows = ConstraintRows(values, jacobian)
         self._memo = (problem.family, key, rows)  # solvers ask several times at one beta
         return rows
+
+    def picked_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
+        """The instants :meth:`rows` refines at ``beta`` beyond the grid (normalised)."""
+        beta = np.asarray(beta, dtype=float)
+        picked = self._picked
+        if picked is None or picked[0] is not problem.family or picked[1] != beta.tobytes():
+            self.rows(problem, beta, DEFAULT_INSTANTS)
+            picked = self._picked
+        assert picked is not None
+        return picked[2]
 
     def _rows_at(
         self, problem: Problem, beta: np.ndarray, instants: np.ndarray
