@@ -102,11 +102,11 @@ def _correct(
     The instants the constraints with their own instants pick at each iterate are kept for
     the next ones (:func:`.rows.with_picked`): rows that jump with the iterate would let
     Newton chase them instead of converging. The corrector gives up early when a Newton step
-    from inside the rows did not halve the residual (the predicted step was too long); a step
-    that took the path back inside rows may raise the residual and is not held against it.
+    did not halve the residual (the predicted step was too long), except once: after a step
+    that took the path back inside rows, which may raise the residual.
     """
     r, jac = problem.residual_and_jacobian(beta)
-    previous, was_inside = math.inf, True
+    previous, was_inside, excused = math.inf, True, False
     for iteration in range(1, CORRECTOR_ITERATIONS + 1):
         norm = float(np.linalg.norm(r))
         g, g_mat = linear_rows(problem, constraints, beta, instants, cache, dips)
@@ -114,8 +114,10 @@ def _correct(
         inside = len(g) == 0 or float(np.max(g)) <= 0.0
         if norm < tol and inside:
             return beta, r, jac, iteration
-        if iteration > 2 and was_inside and norm > 0.5 * previous and norm > 1e3 * tol:
-            break  # not contracting: the step was too long
+        if iteration > 2 and norm > 0.5 * previous and norm > 1e3 * tol:
+            if was_inside or excused:
+                break  # not contracting: the step was too long
+            excused = True
         d = newton_correction(jac, r, g, g_mat)
         if d is None:
             break

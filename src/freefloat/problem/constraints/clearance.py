@@ -36,6 +36,7 @@ from .clearance_samples import (
     local_minima,
     lowest_minima,
     pair_bounds,
+    refinement,
     undecided,
 )
 
@@ -118,7 +119,7 @@ class Clearance(Constraint):
         grid = DEFAULT_INSTANTS
         values_grid, jacobian_grid = self._rows_at(problem, beta, grid)
         coarse = self.margin + SOLVER_SLACK - values_grid  # the smallest distance there
-        refined = np.concatenate([self._refinement(grid, k) for k in lowest_minima(coarse)])
+        refined = np.concatenate([refinement(grid, k, REFINE) for k in lowest_minima(coarse)])
         self._picked = (problem.family, beta.tobytes(), refined)
         passed = np.setdiff1d(np.asarray(instants, dtype=float), np.union1d(grid, refined))
         extra = np.concatenate([refined, passed])
@@ -150,12 +151,6 @@ class Clearance(Constraint):
         values = self.margin + SOLVER_SLACK - closest.values
         jacobian = -np.einsum("kn,knf->kf", closest.gradients, dq)
         return values, jacobian
-
-    @staticmethod
-    def _refinement(grid: np.ndarray, k: int) -> np.ndarray:
-        """:data:`REFINE` instants on each side of grid point ``k``, none on the grid."""
-        lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
-        return np.linspace(lo, hi, 2 * REFINE + 2)[1:-1]
 
     def critical_times(self, robot: Robot, path: JointPolynomials) -> np.ndarray:
         """The time (s) of the smallest clearance along ``path`` when it breaks the margin.

@@ -26,6 +26,7 @@ __all__ = [
     "local_minima",
     "lowest_minima",
     "pair_bounds",
+    "refinement",
     "undecided",
 ]
 
@@ -106,6 +107,12 @@ def lowest_minima(values: np.ndarray) -> list[int]:
         far = [int(k) for k in np.argsort(values, kind="stable") if abs(int(k) - order[0]) > 2]
         order.append(far[0] if far else (order[0] + n // 2) % n)
     return order[:2]
+
+
+def refinement(grid: np.ndarray, k: int, count: int) -> np.ndarray:
+    """``count`` instants on each side of grid point ``k`` (normalised), none on the grid."""
+    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+    return np.linspace(lo, hi, 2 * count + 2)[1:-1]
 
 
 def local_minima(values: np.ndarray) -> np.ndarray:
