@@ -493,3 +493,35 @@ def test_clearance_picks_its_refinement_and_the_solvers_keep_it():
         kept = with_picked(problem, [check], beta, kept)
         assert set(picked.tolist()) <= set(kept.tolist())
     assert len(kept) > 2 * 2 * REFINE  # the first iterate's instants stayed
+
+
+def test_the_picked_instants_stay_with_their_path_when_a_rows_call_fails(monkeypatch):
+    """A rows call that fails half way (an error in its second batch of distances) leaves
+    the instants picked for the last path whose rows were made: those a fresh constraint
+    picks there."""
+    from freefloat.problem.constraints.clearance import Clearance
+
+    scenario = ff.Scenario.from_toml(UR5)
+    robot = scenario.robot
+    problem = ff.problem_from_scenario(scenario, extra=[2] * robot.n)
+    check = Clearance(CollisionModel(robot, known_srdf(robot)), 0.01)
+    rng = np.random.default_rng(8)
+    first, second = rng.normal(0.0, 0.3, problem.n_free), rng.normal(0.0, 0.6, problem.n_free)
+    check.rows(problem, first)
+    calls = []
+    measured = Clearance._rows_at
+
+    def failing(self, problem, beta, instants):
+        calls.append(1)
+        if len(calls) == 2:
+            raise ValueError("a distance query failed")
+        return measured(self, problem, beta, instants)
+
+    monkeypatch.setattr(Clearance, "_rows_at", failing)
+    with pytest.raises(ValueError):
+        check.rows(problem, second)
+    monkeypatch.setattr(Clearance, "_rows_at", measured)
+    fresh = Clearance(CollisionModel(robot, known_srdf(robot)), 0.01)
+    np.testing.assert_array_equal(
+        check.picked_instants(problem, first), fresh.picked_instants(problem, first)
+    )

@@ -290,3 +290,19 @@ def test_a_last_step_whose_corrector_first_takes_the_path_back_inside_plans() ->
     plan = ff.plan(replace(scenario, goal_attitude=goal), samples=41)
     assert plan.verification.passed
     assert ff.geodesic_angle(np.array(plan.base.achieved_quaternion_xyzw), goal) < 1e-9
+
+
+def test_the_ur5_servicer_turns_its_whole_outer_bound_about_z_with_clearance() -> None:
+    """About +z the UR5 servicer's continuation with clearance reaches the whole outer turn
+    once each corrector keeps the rows of every iterate (with rows that jumped between
+    iterates it stopped on its budget at 12 deg, and at 21 deg with the dips alone); the goal
+    there plans, and its verification (attitude integrated apart from the planner, clearance
+    certified on the meshes) is the truth."""
+    scenario = ff.Scenario.from_toml(SCENARIOS / "ur5_servicer.toml")
+    report = ff.reachable(scenario, budget=30, directions=np.array([[0.0, 0.0, 1.0]]), jobs=1)
+    (up,) = report.directions
+    assert up.inner >= up.outer - math.radians(0.01) and not up.stopped_by
+    goal = _turned(report, up, 1.0)
+    plan = ff.plan(replace(scenario, goal_attitude=goal), samples=41)
+    assert plan.verification.passed
+    assert ff.geodesic_angle(np.array(plan.base.achieved_quaternion_xyzw), goal) < 1e-9

@@ -129,7 +129,7 @@ def with_dips(
     found = [
         np.asarray(c.critical_times(problem.robot, path), dtype=float) / problem.duration
         for c in constraints
-        if c.own_instants
+        if c.own_instants and c.applies_to(problem.robot)
     ]
     return _joined(dips, found)
 
@@ -141,10 +141,16 @@ def with_picked(
 
     (:meth:`~freefloat.problem.constraints.Constraint.picked_instants`.) A corrector that
     passes them on keeps rows at the instants of every iterate, not only at those its last
-    iterate picked.
+    iterate picked. ``dips`` are all kept: past :data:`MAX_ADDED_INSTANTS`, new picks are not
+    added.
     """
-    found = [c.picked_instants(problem, beta) for c in constraints if c.own_instants]
-    return _joined(dips, found)
+    found = [
+        c.picked_instants(problem, beta)
+        for c in constraints
+        if c.own_instants and c.applies_to(problem.robot)
+    ]
+    new = np.setdiff1d(_joined(np.zeros(0), found), dips)
+    return np.concatenate([dips, new[: max(0, MAX_ADDED_INSTANTS - len(dips))]])
 
 
 def _joined(dips: np.ndarray, found: Sequence[np.ndarray]) -> np.ndarray:

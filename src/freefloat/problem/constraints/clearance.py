@@ -120,7 +120,6 @@ class Clearance(Constraint):
         values_grid, jacobian_grid = self._rows_at(problem, beta, grid)
         coarse = self.margin + SOLVER_SLACK - values_grid  # the smallest distance there
         refined = np.concatenate([refinement(grid, k, REFINE) for k in lowest_minima(coarse)])
-        self._picked = (problem.family, beta.tobytes(), refined)
         passed = np.setdiff1d(np.asarray(instants, dtype=float), np.union1d(grid, refined))
         extra = np.concatenate([refined, passed])
         values_extra, jacobian_extra = self._rows_at(problem, beta, extra)
@@ -128,6 +127,7 @@ class Clearance(Constraint):
         jacobian = np.concatenate([jacobian_grid, jacobian_extra])
         rows = ConstraintRows(values, jacobian)
         self._memo = (problem.family, key, rows)  # solvers ask several times at one beta
+        self._picked = (problem.family, beta.tobytes(), refined)  # with it: the same beta
         return rows
 
     def picked_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
