@@ -111,7 +111,7 @@ def _correct(
         norm = float(np.linalg.norm(r))
         g, g_mat = linear_rows(problem, constraints, beta, instants, cache, dips)
         dips = with_picked(problem, constraints, beta, dips)
-        inside = len(g) == 0 or float(np.max(g)) <= 0.0
+        inside = _inside(g)
         if norm < tol and inside:
             return beta, r, jac, iteration
         if iteration > 2 and norm > 0.5 * previous and norm > 1e3 * tol:
@@ -124,9 +124,14 @@ def _correct(
         beta, previous, was_inside = beta + d, norm, inside
         r, jac = problem.residual_and_jacobian(beta)
     g = linear_rows(problem, constraints, beta, instants, cache, dips)[0]
-    if float(np.linalg.norm(r)) < tol and (len(g) == 0 or float(np.max(g)) <= 0.0):
+    if float(np.linalg.norm(r)) < tol and _inside(g):
         return beta, r, jac, CORRECTOR_ITERATIONS
     return None, r, jac, CORRECTOR_ITERATIONS
+
+
+def _inside(g: np.ndarray) -> bool:
+    """Whether every linearised row ``g`` (its constraint's unit) is at or inside its limit."""
+    return len(g) == 0 or float(np.max(g)) <= 0.0
 
 
 def _dense_ok(problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray) -> bool:
@@ -219,7 +224,7 @@ def track(
         if stall and _stalled(lam, reached, steps):
             # At the pace of the last steps the step budget ends short of the goal: stop now
             # rather than spend the budget on the same refusal.
-            tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache, None, dips)
+            tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache, dips=dips)
             blocked = _ahead(problem, constraints, beta, tangent)
             gain = lam - reached[steps - PACE_WINDOW]
             stopped_by = (

@@ -149,7 +149,7 @@ def with_picked(
         for c in constraints
         if c.own_instants and c.applies_to(problem.robot)
     ]
-    new = np.setdiff1d(_joined(np.zeros(0), found), dips)
+    new = np.setdiff1d(np.concatenate([np.zeros(0), *found]), dips)
     return np.concatenate([dips, new[: max(0, MAX_ADDED_INSTANTS - len(dips))]])
 
 

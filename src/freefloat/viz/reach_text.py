@@ -43,7 +43,7 @@ def goal_joint_lines(report: ReachReport, robot: Robot) -> list[str]:
     if not report.end_effector_goal:
         return []
     values = [
-        (joint.name, value if joint.kind == "prismatic" else math.degrees(value))
+        (joint.name, math.degrees(value) if joint.angular else value)
         for joint, value in zip(robot.joints, report.goal_joints.tolist(), strict=True)
     ]
     return [
