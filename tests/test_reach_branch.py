@@ -77,8 +77,7 @@ def test_rows_that_show_a_break_agree_with_the_dense_check() -> None:
     on the shipped UR5 servicer: a path tracked within the joint limits alone sweeps the arm
     through the spacecraft; the quintic path is clear."""
     from freefloat.problem.constraints import Clearance, scenario_constraints
-    from freefloat.solvers.reach import _broken
-    from freefloat.solvers.restore import broken_constraint
+    from freefloat.solvers.restore import broken_constraint, broken_rows_first
 
     scenario = ff.Scenario.from_toml(SCENARIOS / "ur5_servicer.toml").resolved()
     problem = problem_from_scenario(scenario, extra=[2] * scenario.robot.n, check_bounds=False)
@@ -87,8 +86,8 @@ def test_rows_that_show_a_break_agree_with_the_dense_check() -> None:
     axis = np.array([0.0, 1.0, 0.0])
     through = track(_towards(problem, axis, math.radians(9.0)), limits, SolveOptions())
     assert through.reached
-    said = _broken(problem, eager, limits, through.beta)
+    said = broken_rows_first(problem, eager, through.beta)
     assert said.startswith("clearance (a solver row")
     assert broken_constraint(problem, eager, through.beta).startswith("clearance")
     zero = np.zeros(problem.n_free)
-    assert _broken(problem, eager, limits, zero) == broken_constraint(problem, eager, zero) == ""
+    assert broken_rows_first(problem, eager, zero) == broken_constraint(problem, eager, zero) == ""

@@ -20,7 +20,7 @@ from ..problem.constraints import Constraint, DurationScaledLimit, LimitPeak
 from ..problem.residual import Problem
 from ..problem.scenario import Scenario
 from .options import SolveOptions
-from .restore import broken_constraint, first_broken
+from .restore import broken_constraint, broken_rows_first, first_broken
 from .search import SearchResult, search
 
 __all__ = ["broken_by", "explain_lazy_breaks", "search_lazily"]
@@ -103,14 +103,15 @@ def _search_proxy_first(
         return search(scenario, options, eager)
     except SolverError:
         return search(scenario, options, eager)
-    return search(scenario, options, eager) if broken_by(found, eager) else found
+    broken = broken_rows_first(found.problem, eager, found.solution.beta)
+    return search(scenario, options, eager) if broken else found
 
 
 def _stopped_within(error: UnreachableAttitudeError, costly: Sequence[Constraint]) -> bool:
     """Whether the path a search stopped on (``error``'s) honours the ``costly`` constraints."""
     if not isinstance(error.problem, Problem) or error.last_beta is None:
         return False
-    return not broken_constraint(error.problem, costly, np.asarray(error.last_beta, dtype=float))
+    return not broken_rows_first(error.problem, costly, np.asarray(error.last_beta, dtype=float))
 
 
 def _out_of_reach(

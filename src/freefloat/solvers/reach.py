@@ -21,11 +21,10 @@ import numpy as np
 from ..parallel import run_tasks
 from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
 from ..problem.constraints import Constraint, default_constraints
-from ..problem.constraints.clearance import SOLVER_SLACK
 from ..problem.residual import Problem
 from .continuation import ContinuationResult, track
 from .options import SolveOptions
-from .restore import broken_constraint
+from .restore import broken_constraint, broken_rows_first
 from .tracked import BranchPoint
 
 __all__ = ["DirectionReach", "ReachEstimate", "default_directions", "describe", "reach_set"]
@@ -185,30 +184,6 @@ def _imposed(
     return turn, result.stopped_by, beta
 
 
-def _broken(
-    problem: Problem,
-    eager: Sequence[Constraint],
-    tracked: Sequence[Constraint],
-    beta: np.ndarray,
-) -> str:
-    """``"name (where)"`` of a constraint the path at ``beta`` breaks, or ``""``.
-
-    A deferred constraint (``eager``, not ``tracked``) is first asked for its solver rows:
-    they ask for at most :data:`SOLVER_SLACK` beyond the limit, so a row above that (and the
-    constraint's tolerance) is a measured excess, and the dense check, which on a path deep
-    in collision measures nearly every sample, is not needed. Otherwise the dense check
-    decides (:func:`.restore.broken_constraint`).
-    """
-    for constraint in eager:
-        if any(constraint is c for c in tracked) or not constraint.applies_to(problem.robot):
-            continue
-        worst = float(np.max(constraint.rows(problem, beta).values, initial=-math.inf))
-        if worst > SOLVER_SLACK + constraint.tolerance:
-            over = f"{worst - SOLVER_SLACK:.3g} {constraint.unit}"
-            return f"{constraint.name} (a solver row {over} beyond the limit)"
-    return broken_constraint(problem, eager, beta)
-
-
 def _direction(
     problem: Problem,
     quintic: np.ndarray,
@@ -237,10 +212,10 @@ def _direction(
             result = _furthest(problem, quintic, axis, angle, eager, options, False)
             reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
         return reached, stopped_by, beta
-    broken = _broken(problem, eager, tracked, beta) if deferred else ""
+    broken = broken_rows_first(problem, eager, beta) if deferred else ""
     if not result.reached and not broken:  # solved only to the intermediate tolerance
         reached, beta = _confirmed(problem, quintic, axis, reached, tracked, options, step, trace)
-        broken = _broken(problem, eager, tracked, beta) if deferred and reached > 0.0 else ""
+        broken = broken_rows_first(problem, eager, beta) if deferred and reached > 0.0 else ""
     if broken:  # as the planner solves it, with every eager constraint imposed
         reached, why, beta = _imposed(problem, quintic, axis, reached, eager, options, step)
         stopped_by = why or stopped_by

@@ -30,6 +30,7 @@ from ..residual import Problem
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 from .clearance_samples import (
     Measured,
+    RowsAtBeta,
     arms_table,
     bounds_between,
     lever_arms,
@@ -62,6 +63,8 @@ NEAR = 0.01
 #: The solvers' dense check first measures every this many of its samples, and the ones
 #: between only where the bound between measured samples does not clear the margin.
 COARSE_EVERY = 8
+#: A lowest point of clearance along a path: the distance (m), its time (s) and its pair.
+Lowest = tuple[float, float, int]
 
 
 class Clearance(Constraint):
@@ -85,11 +88,11 @@ class Clearance(Constraint):
         self.margin = float(margin)
         self._memo: tuple[PathFamily, bytes, ConstraintRows] | None = None
         self._picked: tuple[PathFamily, bytes, np.ndarray] | None = None
-        self._smallest_memo: dict[tuple[bytes, float, int, int], tuple[float, float, int]] = {}
+        self._at_beta = RowsAtBeta()  # the rows of the last beta, per instant
+        self._smallest_memo: dict[tuple[bytes, float, int, int], Lowest] = {}
         self._sampled_memo: tuple[tuple[bytes, float, int], np.ndarray] | None = None
         self._measured_memo: tuple[tuple[bytes, float, int, float | None], Measured] | None = None
-        self._below_memo: tuple[tuple[bytes, float, int, float], tuple[float, float, int]] | None
-        self._below_memo = None
+        self._below_memo: tuple[tuple[bytes, float, int, float], Lowest] | None = None
 
     def __repr__(self) -> str:
         return f"Clearance(margin={self.margin:g} m, {self.model.n_pairs} pairs)"
@@ -143,14 +146,16 @@ class Clearance(Constraint):
     def _rows_at(
         self, problem: Problem, beta: np.ndarray, instants: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Row values (m) and Jacobian at normalised ``instants`` (one closest pair each)."""
-        base, dq, _ = problem.family.linear_map(instants)
-        q = base.q + dq @ beta
-        closest = self.model.closest_many(q, instants, gradients=True)
-        assert closest.gradients is not None
-        values = self.margin + SOLVER_SLACK - closest.values
-        jacobian = -np.einsum("kn,knf->kf", closest.gradients, dq)
-        return values, jacobian
+        """Row values (m) and Jacobian at ``instants``, each measured once per beta (RowsAtBeta)."""
+
+        def measure(at: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            base, dq, _ = problem.family.linear_map(at)
+            closest = self.model.closest_many(base.q + dq @ beta, at, gradients=True)
+            assert closest.gradients is not None
+            jacobian = -np.einsum("kn,knf->kf", closest.gradients, dq)
+            return self.margin + SOLVER_SLACK - closest.values, jacobian
+
+        return self._at_beta.rows(problem.family, beta, np.asarray(instants, float), measure)
 
     def critical_times(self, robot: Robot, path: JointPolynomials) -> np.ndarray:
         """The time (s) of the smallest clearance along ``path`` when it breaks the margin.
@@ -167,9 +172,7 @@ class Clearance(Constraint):
             return np.zeros(0)
         return np.array([lowest[1]])
 
-    def smallest(
-        self, path: JointPolynomials, samples: int, every: int = 1
-    ) -> tuple[float, float, int]:
+    def smallest(self, path: JointPolynomials, samples: int, every: int = 1) -> Lowest:
         """Smallest clearance along ``path`` (m), its time (s) and pair, from ``samples``.
 
         Only every ``every``-th of the samples is used (the verification's coarser estimate of
@@ -292,9 +295,7 @@ class Clearance(Constraint):
         self._measured_memo = (key, answer)
         return answer
 
-    def _below(
-        self, path: JointPolynomials, measured: Measured, limit: float
-    ) -> tuple[float, float, int]:
+    def _below(self, path: JointPolynomials, measured: Measured, limit: float) -> Lowest:
         """The smallest clearance (m), its time (s) and pair, for a path a bound cannot clear.
 
         ``measured``: :meth:`_measured` with ``limit`` (m; NaN where spared: above it). An
@@ -349,9 +350,7 @@ class Clearance(Constraint):
     def _key(path: JointPolynomials, t: np.ndarray) -> tuple[bytes, float, int]:
         return (path.coefficients.tobytes(), path.duration, len(t))
 
-    def _solvers_check(
-        self, path: JointPolynomials
-    ) -> tuple[float, tuple[float, float, int] | None]:
+    def _solvers_check(self, path: JointPolynomials) -> tuple[float, Lowest | None]:
         """The solvers' dense check of ``path`` (201 samples): its bound and its lowest point.
 
         The bound of the clearance along the path (m), and where it does not clear the margin,

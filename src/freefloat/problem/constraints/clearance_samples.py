@@ -3,12 +3,14 @@
 Helpers of :mod:`freefloat.problem.constraints.clearance` (the constraint's module stays a
 readable size): the record of a path's measured samples with each pair's bounds and the
 spheres' lever arms there, the bound of the clearance between two samples, the intervals
-that bound leaves undecided, and the local minima of sampled values.
+that bound leaves undecided, the local minima of sampled values, and the rows already measured
+at one ``beta`` (:class:`RowsAtBeta`).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,6 +22,7 @@ from ..rate_bounds import rate_bounds
 
 __all__ = [
     "Measured",
+    "RowsAtBeta",
     "arms_table",
     "bounds_between",
     "lever_arms",
@@ -47,6 +50,50 @@ class Measured:
     lower: np.ndarray
     bound: float
     arms: np.ndarray
+
+
+class RowsAtBeta:
+    """The rows (value, m; Jacobian row, m per unit of ``beta``) measured at one path, per instant.
+
+    A solver asks for the rows at one ``beta`` more than once with other instants (the
+    predictor after the corrector, without the corrector's picked instants): an instant
+    measured at that ``beta`` is not measured again. An instant's row does not depend on the
+    other instants asked with it (the smallest distance and its pair do not depend on the
+    batch: :meth:`CollisionModel.closest_many`), so the rows are those of a fresh query, to
+    rounding (the joints of a batch come from one matrix product). Only the last ``beta`` (of
+    one path family) is kept.
+    """
+
+    def __init__(self) -> None:
+        self._family: object = None
+        self._beta = b""
+        self._known: dict[float, tuple[float, np.ndarray]] = {}
+
+    def rows(
+        self,
+        family: object,
+        beta: np.ndarray,
+        instants: np.ndarray,
+        measure: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Values and Jacobian at the normalised ``instants``; ``measure`` for those not known.
+
+        ``measure(instants)`` gives the values (K,) and Jacobian (K, F) at ``instants``.
+        """
+        key = beta.tobytes()
+        if family is not self._family or key != self._beta:
+            self._family, self._beta, self._known = family, key, {}
+        wanted = instants.tolist()
+        known = self._known
+        missing = list(dict.fromkeys(s for s in wanted if s not in known))  # in order, once
+        if missing:
+            values, jacobian = measure(np.array(missing))
+            known.update(zip(missing, zip(values.tolist(), jacobian, strict=True), strict=True))
+        width = len(beta)
+        return (
+            np.array([known[s][0] for s in wanted], dtype=float),
+            np.array([known[s][1] for s in wanted], dtype=float).reshape(len(wanted), width),
+        )
 
 
 def pair_bounds(found: Closest) -> np.ndarray:

@@ -1,0 +1,97 @@
+"""Clearance work shared between solver calls at one path: the same answers as asked afresh.
+
+Truth here: a fresh constraint (nothing remembered) asked the same question, every pair's
+distance measured densely along the path, and the dense check itself.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import freefloat as ff
+from freefloat.problem.constraints import DEFAULT_INSTANTS
+from freefloat.problem.constraints.clearance import SOLVER_SLACK, Clearance
+from freefloat.robot.collision import CollisionModel, known_srdf
+from freefloat.solvers.restore import broken_constraint, broken_rows_first
+
+from conftest import ROOT
+
+UR5 = ROOT / "robots" / "scenarios" / "ur5_servicer.toml"
+
+
+@pytest.fixture(scope="module")
+def ur5():  # type: ignore[no-untyped-def]
+    """The UR5 servicer's problem (2 free coefficients per joint) and its robot."""
+    scenario = ff.Scenario.from_toml(UR5)
+    robot = scenario.robot
+    return ff.problem_from_scenario(scenario, extra=[2] * robot.n), robot
+
+
+def _fresh(robot: ff.Robot) -> Clearance:
+    return Clearance(CollisionModel(robot, known_srdf(robot)), 0.01)
+
+
+def test_rows_asked_again_at_one_path_measure_only_new_instants(ur5, monkeypatch):
+    """Rows at a path asked with the corrector's instants, then with fewer (the predictor's)
+    and more (a dip): each answer is a fresh constraint's (to rounding: an instant measured in
+    another batch has its joints from another matrix product), and the later calls measure no
+    instant twice (counted at the collision model)."""
+    problem, robot = ur5
+    check = _fresh(robot)
+    measured: list[int] = []
+    original = CollisionModel.closest_many
+
+    def counting(self, joints, slots=None, gradients=False):  # type: ignore[no-untyped-def]
+        measured.append(len(np.atleast_2d(joints)))
+        return original(self, joints, slots, gradients)
+
+    monkeypatch.setattr(CollisionModel, "closest_many", counting)
+    beta = np.random.default_rng(3).normal(0.0, 0.4, problem.n_free)
+    picked = np.array([0.1234, 0.5678])
+    first = check.rows(problem, beta, np.union1d(DEFAULT_INSTANTS, picked))
+    count = sum(measured)
+    fewer = check.rows(problem, beta, DEFAULT_INSTANTS)
+    assert sum(measured) == count  # every instant known: nothing measured
+    more = check.rows(problem, beta, np.union1d(DEFAULT_INSTANTS, [0.9001]))
+    assert sum(measured) == count + 1  # the new instant alone
+    for asked, rows in (
+        (np.union1d(DEFAULT_INSTANTS, picked), first),
+        (DEFAULT_INSTANTS, fewer),
+        (np.union1d(DEFAULT_INSTANTS, [0.9001]), more),
+    ):
+        truth = _fresh(robot).rows(problem, beta, asked)
+        np.testing.assert_allclose(rows.values, truth.values, rtol=0.0, atol=1e-15)
+        np.testing.assert_allclose(rows.jacobian, truth.jacobian, rtol=0.0, atol=1e-13)
+    other = beta + 1e-3
+    moved = check.rows(problem, other, DEFAULT_INSTANTS)  # another path: measured again
+    truth = _fresh(robot).rows(problem, other, DEFAULT_INSTANTS)
+    np.testing.assert_allclose(moved.values, truth.values, rtol=0.0, atol=1e-15)
+
+
+def _densely_smallest(problem, robot, beta) -> float:  # type: ignore[no-untyped-def]
+    """Smallest distance (m) of every pair at 2001 instants, no pair spared."""
+    everything = CollisionModel(robot, known_srdf(robot))
+    t = np.linspace(0.0, problem.duration, 2001)
+    q = problem.polynomials(beta).evaluate(t).q
+    return float(min(everything.distances(row).values.min() for row in q))
+
+
+def test_a_path_broken_by_its_rows_is_broken_by_the_dense_check(ur5):
+    """A path deep in collision (every pair measured densely: below the margin) is called
+    broken by its solver rows alone, by a row that many mm beyond the limit, and the dense
+    check calls it broken too; a path that keeps the margin everywhere is broken by neither."""
+    problem, robot = ur5
+    deep = np.random.default_rng(11).normal(0.0, 1.5, problem.n_free)
+    smallest = _densely_smallest(problem, robot, deep)
+    assert smallest < 0.01 - 0.005
+    said = broken_rows_first(problem, [_fresh(robot)], deep)
+    assert said.startswith("clearance (a solver row ") and "beyond the limit" in said
+    beyond = float(said.split("a solver row ")[1].split(" m")[0])
+    assert beyond == pytest.approx(0.01 - smallest, abs=0.05)  # the rows' instants, not all
+    assert beyond > SOLVER_SLACK
+    assert broken_constraint(problem, [_fresh(robot)], deep).startswith("clearance")
+    free = np.zeros(problem.n_free)
+    assert _densely_smallest(problem, robot, free) > 0.01
+    assert broken_rows_first(problem, [_fresh(robot)], free) == ""
+    assert broken_constraint(problem, [_fresh(robot)], free) == ""
