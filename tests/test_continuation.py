@@ -163,7 +163,7 @@ def test_a_stopped_search_is_continued_with_more_freedom(panda: ff.Scenario) -> 
 
     from freefloat.progress import configure
 
-    far = ff.quat_from_zyx(math.radians(60.0), 0.0, 0.0)  # yaw 40 deg plans since round 13
+    far = ff.quat_from_zyx(math.radians(75.0), 0.0, 0.0)  # yaw 60 deg plans since round 14
     log = io.StringIO()
     configure(1, stream=log)  # -v: a line per freedom level
     try:

@@ -125,7 +125,7 @@ def test_velocity_limit_reports_the_shortest_duration(tmp_path):
 
 def test_spatial_failure_reports_the_residual_per_axis_and_what_was_tried():
     scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "panda_servicer.toml")
-    far = ff.quat_from_zyx(math.radians(60.0), 0.0, 0.0)  # beyond the Panda within its limits
+    far = ff.quat_from_zyx(math.radians(75.0), 0.0, 0.0)  # beyond the Panda within its limits
     quick = ff.SolveOptions(starts=2, max_evaluations=200)
     impossible = ff.Scenario(**{**scenario.__dict__, "goal_attitude": far})
     with pytest.raises(ff.SolverError) as info:

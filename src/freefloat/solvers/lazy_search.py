@@ -3,23 +3,28 @@
 The search first runs within the affine constraints alone (joint limits: cheap rows), and
 imposes the costly ones (clearance) only when the path it finds breaks one
 (:func:`search_lazily`); the lazy ones (velocity and effort limits, checked on the result)
-only when the path breaks them. A goal the cheap search stops short of, on a path the costly
-constraints do not bind, is refused without a second search. When only the velocity or effort
-limits stood in the way, the refusal names the shortest duration at which the path found
-without them respects them (another path may at a shorter one).
+only when the path breaks them. A path that breaks clearance is first brought inside by
+least-norm corrections (the root nearest it within every constraint); only when that fails
+does the search run again with clearance imposed. A goal the cheap search stops short of, on
+a path the costly constraints do not bind, is refused without a second search. When only the
+velocity or effort limits stood in the way, the refusal names the shortest duration at which
+the path found without them respects them (another path may at a shorter one).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..errors import SolverError, UnreachableAttitudeError
-from ..problem.constraints import Constraint, DurationScaledLimit, LimitPeak
+from ..problem.constraints import DEFAULT_INSTANTS, Constraint, DurationScaledLimit, LimitPeak
 from ..problem.residual import Problem
 from ..problem.scenario import Scenario
-from .options import SolveOptions
+from .certify import certify
+from .least_norm import nearest_root_within
+from .options import Root, SolveOptions
 from .restore import broken_constraint, broken_rows_first, first_broken
 from .search import SearchResult, search
 
@@ -63,11 +68,16 @@ def search_lazily(
     eager = [c for c in constraints if not c.lazy]
     lazy = [c for c in constraints if c.lazy]
     try:
-        found = _search_proxy_first(scenario, options, eager)
+        proxied = _search_proxy_first(scenario, options, eager)
+        found = proxied.found
+        broken = bool(lazy) and bool(broken_by(found, lazy))
+        if broken and proxied.brought_inside:  # as without that path: clearance imposed
+            found = search(scenario, options, eager)
+            broken = bool(broken_by(found, lazy))
     except SolverError as exc:
         _explain_duration_limits(scenario, options, constraints, exc)
         raise
-    if not lazy or not broken_by(found, lazy):  # the search honoured the eager ones
+    if not broken:  # the search honoured the eager ones
         return found, eager
     try:
         return search(scenario, options, constraints), constraints
@@ -78,33 +88,94 @@ def search_lazily(
         raise
 
 
+@dataclass(frozen=True)
+class _Proxied:
+    """What :func:`_search_proxy_first` found.
+
+    Attributes:
+        found: the search's result, within every eager constraint.
+        brought_inside: whether it is the cheap search's path brought inside the costly
+            constraints (:func:`_brought_inside`) rather than a search's own.
+    """
+
+    found: SearchResult
+    brought_inside: bool = False
+
+
 def _search_proxy_first(
     scenario: Scenario, options: SolveOptions, eager: list[Constraint]
-) -> SearchResult:
+) -> _Proxied:
     """The search within the affine constraints alone, kept when its path honours the others.
 
     The costly constraints (clearance) are imposed only where they bind: when the path found
-    within the cheap ones (joint limits) breaks one, or that search fails, the search runs
-    again with every constraint. Except when the cheap search stopped short of the goal on a
-    path that honours the costly ones too: they do not bind where it stopped, and the goal is
-    refused at once (:func:`_out_of_reach`). Both searches are local, so this is not a proof
-    that the search with every constraint would stop there too; it stopped there on every goal
-    compared (docs/clearance.md).
+    within the cheap ones (joint limits) breaks one, it is brought inside them by least-norm
+    corrections (:func:`_brought_inside`), and when that fails, or the cheap search fails, the
+    search runs again with every constraint. Except when the cheap search stopped short of
+    the goal on a path that honours the costly ones too: they do not bind where it stopped,
+    and the goal is refused at once (:func:`_out_of_reach`). Both searches are local, so this
+    is not a proof that the search with every constraint would stop there too; it stopped
+    there on every goal compared (docs/clearance.md).
     """
     cheap = [c for c in eager if c.affine]
     if len(cheap) == len(eager):
-        return search(scenario, options, eager)
+        return _Proxied(search(scenario, options, eager))
     costly = [c for c in eager if not c.affine]
     try:
         found = search(scenario, options, cheap)
     except UnreachableAttitudeError as exc:
         if _stopped_within(exc, costly):
             raise _out_of_reach(exc, costly) from None
-        return search(scenario, options, eager)
+        return _Proxied(search(scenario, options, eager))
     except SolverError:
-        return search(scenario, options, eager)
+        return _Proxied(search(scenario, options, eager))
     broken = broken_rows_first(found.problem, eager, found.solution.beta)
-    return search(scenario, options, eager) if broken else found
+    if not broken:
+        return _Proxied(found)
+    inside = _brought_inside(found, eager, broken, options)
+    if inside is not None:
+        return _Proxied(inside, brought_inside=True)
+    return _Proxied(search(scenario, options, eager))
+
+
+def _brought_inside(
+    found: SearchResult, eager: Sequence[Constraint], broken: str, options: SolveOptions
+) -> SearchResult | None:
+    """The cheap search's root brought inside the eager constraints it breaks, or None.
+
+    Least-norm corrections onto the root set within every eager constraint's rows
+    (:func:`.least_norm.nearest_root_within`): a path that dips into the clearance margin
+    becomes the root nearest it that keeps the margin, for a few corrections instead of a
+    second search. Kept only when its integration is certified on its own grid and the dense
+    check of every eager constraint passes; None otherwise, a numerical failure included (the
+    search with every eager constraint then runs).
+    """
+    problem = found.problem.with_steps(found.solution.steps)
+    before = problem.evaluations
+    try:
+        inside = nearest_root_within(problem, found.solution.beta, eager, DEFAULT_INSTANTS, options)
+        if not inside.honoured:
+            return None
+        residual = float(np.linalg.norm(problem.residual(inside.beta)))
+        checked = certify(problem, inside.beta, residual, options.tolerance)
+    except (np.linalg.LinAlgError, FloatingPointError, ValueError):  # the search decides
+        return None
+    if not checked.passed or broken_constraint(checked.problem, eager, checked.beta):
+        return None
+    root = Root(checked.beta, checked.residual, checked.problem.path_length(checked.beta))
+    solution = replace(
+        found.solution,
+        beta=checked.beta,
+        residual=checked.residual,
+        evaluations=found.solution.evaluations + problem.evaluations - before,
+        roots=(root,),
+        integration_error=checked.integration_error,
+        steps=checked.problem.steps,
+    )
+    note = (
+        f"the path found within the joint limits broke {broken}: brought inside by "
+        f"{inside.steps} least-norm correction{'s' if inside.steps > 1 else ''}"
+    )
+    return replace(found, problem=checked.problem, solution=solution, tried=[*found.tried, note])
 
 
 def _stopped_within(error: UnreachableAttitudeError, costly: Sequence[Constraint]) -> bool:
