@@ -47,7 +47,8 @@ from .solvers.reach import DirectionReach, ReachEstimate, default_directions, re
 
 __all__ = ["DEFAULT_BUDGET", "SMALL_REACH_DEG", "DirectionLimits", "ReachReport", "reachable"]
 
-#: Residual evaluations per direction of the inner estimate (a count; ``--budget``).
+#: Residual evaluations per continuation pass of a direction of the inner estimate (a count;
+#: ``--budget``; :func:`~freefloat.solvers.reach.reach_set`).
 DEFAULT_BUDGET = 30
 #: Below this largest outer turn (deg) the report says the reach is small.
 SMALL_REACH_DEG = 5.0
@@ -97,7 +98,7 @@ class ReachReport:
         freedom: free coefficients per joint of the inner estimate's path family.
         evaluations: residual evaluations spent on the inner estimate (those of worker
             processes included: the same count whatever the jobs).
-        budget: the evaluation budget per direction.
+        budget: the evaluation budget per continuation pass of a direction.
         goal_joints: the goal joint values every direction is reached with (rad, or m for
             prismatic joints), in joint order.
         end_effector_goal: the scenario's goal is an end-effector goal, solved into
@@ -172,7 +173,9 @@ def reachable(
     Args:
         scenario: the request.
         travel_factor: ``k >= 1`` of the outer bound (1: every joint monotone).
-        budget: residual evaluations per direction of the inner estimate (a count); 0: the
+        budget: residual evaluations per continuation pass of a direction of the inner
+            estimate (a count: a direction makes one pass, and more where it confirms its turn
+            or imposes a deferred constraint such as clearance); 0: the
             drift attitude and the outer bound only (every ``inner`` is 0).
         directions: rotation axes (rows, base frame); default the six axes and eight diagonals.
         progress: called after each direction of the inner estimate (with several jobs, in

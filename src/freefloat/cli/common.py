@@ -33,7 +33,8 @@ __all__ = [
 
 #: Where ``freefloat plan`` without a scenario writes the worked example.
 DEFAULT_OUT_DIR = Path("freefloat-out")
-#: Largest ``bounds --budget`` and ``reach --budget`` (residual evaluations per direction).
+#: Largest ``bounds --budget`` and ``reach --budget`` (residual evaluations per continuation
+#: pass of a direction).
 MAX_BUDGET = 100_000
 
 

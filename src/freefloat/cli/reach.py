@@ -41,8 +41,9 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
         "--budget",
         type=int,
         default=DEFAULT_REACH_BUDGET,
-        help="residual evaluations per direction of the inner estimate "
-        f"(default {DEFAULT_REACH_BUDGET}; a count); 0: the drift attitude and the outer bound "
+        help="residual evaluations per continuation pass of the inner estimate (a direction "
+        "makes one pass, more where it confirms its turn or imposes clearance; "
+        f"default {DEFAULT_REACH_BUDGET}; a count); 0: the drift attitude and the outer bound "
         "only (well under a second)",
     )
     add_jobs(p_reach)

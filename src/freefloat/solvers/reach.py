@@ -271,7 +271,9 @@ def reach_set(
         max_angle: the rotation to head for in each direction (rad, below pi): one for all,
             or one per direction (e.g. an outer bound of that direction).
         constraints: path constraints; default joint position, velocity and effort limits.
-        options: solver settings (the evaluation budget applies per direction).
+        options: solver settings (the evaluation budget applies per continuation pass: a
+            direction makes one, and up to :data:`CONFIRM_TRIES` more each time it confirms a
+            turn, plus one when it imposes a deferred constraint).
         progress: called after each direction (see :data:`ReachProgress`).
         deferred: constraints among ``constraints`` to check at the end of a direction
             rather than track.

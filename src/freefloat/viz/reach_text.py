@@ -89,7 +89,7 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
             lines += [
                 f"inner estimate: continuation from the drift attitude towards the outer bound, "
                 f"freedom +{max(report.freedom)} per joint, {report.budget} residual evaluations "
-                "per direction;",
+                "per continuation pass;",
                 "  the goal at 'inner' about a listed axis is solved by plan's own search, and",
                 "  nearer goals about it take the same steps (as a rule, not a proof: docs/reach.md)",
             ]
