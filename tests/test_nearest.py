@@ -6,6 +6,7 @@ import dataclasses
 import math
 
 import numpy as np
+import pytest
 from scipy.optimize import minimize
 
 import freefloat as ff
@@ -117,6 +118,8 @@ def test_least_norm_root_within_a_binding_limit_matches_slsqp_on_a_dense_grid(wo
     assert found.honoured
     beta = found.beta
     assert np.linalg.norm(problem.residual(beta)) < 1e-10
+    # the residual it carries is the one a fresh integration of its path gives
+    assert found.residual == pytest.approx(np.linalg.norm(problem.residual(beta)), abs=1e-13)
     excess = limits.violation(problem, beta).value
     assert -1e-6 < excess <= limits.tolerance
     cap = _slsqp_rows(problem, limits)
@@ -148,6 +151,8 @@ def test_corrections_bring_a_root_inside_a_cap_it_breaks(worked_scenario):
     found = nearest_root_within(problem, start, [limits], DEFAULT_INSTANTS, options)
     assert found.honoured
     assert np.linalg.norm(problem.residual(found.beta)) < 1e-10
+    fresh = np.linalg.norm(problem.residual(found.beta))
+    assert found.residual == pytest.approx(fresh, abs=1e-13)  # carried, not integrated again
     assert limits.violation(problem, found.beta).value <= limits.tolerance
     cap = _slsqp_rows(problem, limits)
     nearest = minimize(

@@ -146,8 +146,9 @@ def _brought_inside(
     (:func:`.least_norm.nearest_root_within`): a path that dips into the clearance margin
     becomes the root nearest it that keeps the margin, for a few corrections instead of a
     second search. Kept only when its integration is certified on its own grid and the dense
-    check of every eager constraint passes; None otherwise, a numerical failure included (the
-    search with every eager constraint then runs).
+    check of every eager constraint passes (the corrections' own check, made again only when
+    certifying polished the root on a finer grid); None otherwise, a numerical failure
+    included (the search with every eager constraint then runs).
     """
     problem = found.problem.with_steps(found.solution.steps)
     before = problem.evaluations
@@ -155,11 +156,13 @@ def _brought_inside(
         inside = nearest_root_within(problem, found.solution.beta, eager, DEFAULT_INSTANTS, options)
         if not inside.honoured:
             return None
-        residual = float(np.linalg.norm(problem.residual(inside.beta)))
-        checked = certify(problem, inside.beta, residual, options.tolerance)
+        checked = certify(problem, inside.beta, inside.residual, options.tolerance)
     except (np.linalg.LinAlgError, FloatingPointError, ValueError):  # the search decides
         return None
-    if not checked.passed or broken_constraint(checked.problem, eager, checked.beta):
+    if not checked.passed:
+        return None
+    moved = not np.array_equal(checked.beta, inside.beta)  # polished on a finer grid
+    if moved and broken_constraint(checked.problem, eager, checked.beta):
         return None
     root = Root(checked.beta, checked.residual, checked.problem.path_length(checked.beta))
     solution = replace(

@@ -27,8 +27,9 @@ Each result is polished onto ``h = 0`` by minimum-norm Newton steps. Budgets are
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import quadprog
@@ -93,11 +94,15 @@ class LeastNorm:
         beta: the root (free coefficients, rad or m), polished onto ``h = 0``.
         steps: SQP steps spent.
         honoured: whether its path honours every constraint everywhere (the dense check).
+        residual: ``|h(beta)|`` (rad) as the last evaluation found it, so a caller need not
+            integrate the path again; NaN where ``beta`` was not evaluated (a correction that
+            failed returns its start).
     """
 
     beta: np.ndarray
     steps: int
     honoured: bool
+    residual: float = math.nan
 
 
 def least_norm_root(problem: Problem, beta: np.ndarray, options: SolveOptions) -> np.ndarray:
@@ -160,32 +165,33 @@ def least_norm_root_within(
     active = [c for c in constraints if c.applies_to(problem.robot)]
     beta = np.asarray(beta, dtype=float)
     given = _norm(beta)
-    honoured: np.ndarray | None = None  # a root below beta's norm that the dense check passed
+    honoured: LeastNorm | None = None  # a root below beta's norm that the dense check passed
     if free is not None:
         inside = nearest_root_within(problem, free, active, DEFAULT_INSTANTS, options)
         if inside.honoured and float(inside.beta @ inside.beta) < float(beta @ beta):
-            beta = honoured = inside.beta
+            honoured, beta = inside, inside.beta
     cache: RowCache = {}
     instants = with_critical(problem, active, beta, DEFAULT_INSTANTS)
     dips = with_dips(problem, active, beta, NO_DIPS)
-    spent = 0
+    spent, residual = 0, math.nan
     for _ in range(ROUNDS):
         tolerance = options.tolerance
         point, steps = _steps(problem, active, beta, instants, cache, tolerance, settled, dips)
         spent += steps
-        beta = polish_at(problem, point.beta, options.tolerance, evaluated=point.evaluated).beta
+        polished = polish_at(problem, point.beta, options.tolerance, evaluated=point.evaluated)
+        beta, residual = polished.beta, float(np.linalg.norm(polished.residual))
         if not broken_constraint(problem, active, beta):
-            return LeastNorm(beta, spent, True)
+            return LeastNorm(beta, spent, True, residual)
         instants = with_critical(problem, active, beta, instants)
         dips = with_dips(problem, active, beta, dips)
         # pressed past a limit between the instants: brought back inside, least-norm
         inside = nearest_root_within(problem, beta, active, instants, options, dips)
-        bar = given if honoured is None else _norm(honoured)  # deviate less than these
+        bar = given if honoured is None else _norm(honoured.beta)  # deviate less than these
         if inside.honoured and _norm(inside.beta) < bar:
-            return LeastNorm(inside.beta, spent, True)
+            return replace(inside, steps=spent)
     if honoured is not None:  # the rounds pressed past a limit between their instants
-        return LeastNorm(honoured, spent, True)
-    return LeastNorm(beta, spent, False)
+        return replace(honoured, steps=spent)
+    return LeastNorm(beta, spent, False, residual)
 
 
 def _norm(beta: np.ndarray) -> float:
@@ -221,7 +227,7 @@ def nearest_root_within(
             return LeastNorm(beta, count, False)
         beta = found.beta
         if not broken_constraint(problem, active, beta):
-            return LeastNorm(beta, count, True)
+            return LeastNorm(beta, count, True, float(np.linalg.norm(found.r)))
     return LeastNorm(beta, CORRECTIONS, False)
 
 

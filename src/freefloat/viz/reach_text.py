@@ -91,7 +91,8 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
                 f"freedom +{max(report.freedom)} per joint, {report.budget} residual evaluations "
                 "per continuation pass;",
                 "  the goal at 'inner' about a listed axis is solved by plan's own search, and",
-                "  nearer goals about it take the same steps (as a rule, not a proof: docs/reach.md)",
+                "  nearer goals about it take the same steps (as a rule, not a proof: "
+                "docs/reach.md)",
             ]
         else:
             lines.append("inner estimate: not computed (--budget 0)")
