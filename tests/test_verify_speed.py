@@ -242,7 +242,8 @@ def test_kept_inverse_dynamics_are_pinocchios_per_instant_and_never_stale():
 
 def test_euler_angles_of_many_quaternions_rebuild_them():
     """SciPy's intrinsic ZYX rotation of the angles is the quaternion (up to sign), gimbal
-    lock included; and each row is the single-quaternion function's, to the bit."""
+    lock included; and each row is the single-quaternion function's (plain floats and the
+    math module), to rounding; angles wrapped across +-pi as it wraps them."""
     rng = np.random.default_rng(11)
     quats = rng.normal(size=(50, 4))
     half = math.sqrt(0.5)
@@ -252,7 +253,15 @@ def test_euler_angles_of_many_quaternions_rebuild_them():
     rebuilt = Rotation.from_euler("ZYX", angles).as_quat()
     sign = np.sign(np.sum(rebuilt * quats, axis=1))[:, None]
     np.testing.assert_allclose(rebuilt * sign, quats, atol=1e-12)
-    assert np.array_equal(angles, np.array([zyx_from_quat(q) for q in quats]))
+    single = np.array([zyx_from_quat(q) for q in quats])
+    assert np.abs(angles - single).max() <= 4e-16 * math.pi
+    # yaw and roll near +-pi (sum and difference of the half angles past pi): the same side
+    near = np.array([[0.0, 0.0, math.sin(a / 2), math.cos(a / 2)] for a in (3.14159, -3.14159)])
+    near = np.vstack([near, [[math.sin(a / 2), 0.0, 0.0, math.cos(a / 2)] for a in (3.1416,)]])
+    np.testing.assert_array_equal(
+        np.sign(zyx_from_quats(near)), np.sign([zyx_from_quat(q) for q in near])
+    )
+    assert np.all(np.abs(zyx_from_quats(rng.normal(size=(400, 4)) * 9.0)) <= math.pi)
 
 
 def test_planar_sampled_attitudes_follow_pinocchios_momentum_map(worked_scenario):

@@ -157,8 +157,29 @@ def zyx_from_quat(q: Sequence[float] | np.ndarray) -> np.ndarray:
 
 
 def zyx_from_quats(quats: np.ndarray) -> np.ndarray:
-    """(K, 3) :func:`zyx_from_quat` of K unit quaternions (rad), the same numbers, row by row."""
-    return np.array([_zyx(*row) for row in np.asarray(quats, dtype=float).tolist()]).reshape(-1, 3)
+    """(K, 3) :func:`zyx_from_quat` of K unit quaternions (rad), the same formulas in numpy.
+
+    Equal to the single quaternion's to rounding (numpy's ``hypot`` and ``arctan2`` may
+    differ from :mod:`math`'s in the last bit); the wrap into (-pi, pi] is exact, as
+    ``math.remainder``'s: the half-angle sum and difference lie in (-pi, pi], so yaw and roll
+    lie in (-2 pi, 2 pi] and one subtraction of 2 pi, exact there, wraps them.
+    """
+    x, y, z, w = np.asarray(quats, dtype=float).reshape(-1, 4).T
+    plus, minus = np.hypot(w + y, z - x), np.hypot(w - y, z + x)
+    pitch = 2.0 * np.arctan2(plus - minus, plus + minus)
+    difference = np.arctan2(z - x, w + y)  # a - c
+    total = np.arctan2(z + x, w - y)  # a + c
+    locked_up, locked_down = minus < _LOCKED, (minus >= _LOCKED) & (plus < _LOCKED)
+    total = np.where(locked_up, difference, total)  # pitch = +pi/2: only a - c matters
+    difference = np.where(locked_down, total, difference)  # pitch = -pi/2: only a + c
+    return np.stack([_wrapped(total + difference), pitch, _wrapped(total - difference)], axis=1)
+
+
+def _wrapped(angles: np.ndarray) -> np.ndarray:
+    """Angles in (-2 pi, 2 pi] (rad) wrapped into (-pi, pi], as :func:`_wrap` wraps each."""
+    out = np.where(angles > math.pi, angles - 2.0 * math.pi, angles)
+    out = np.where(out < -math.pi, out + 2.0 * math.pi, out)
+    return np.where(out == -math.pi, math.pi, out)
 
 
 def _zyx(x: float, y: float, z: float, w: float) -> tuple[float, float, float]:

@@ -159,7 +159,9 @@ def _stages(
     ``x`` (N joint values, rad or m) is advanced in place; returns the stages' velocities
     (base twist in the base frame, joint rates), the final velocity and the largest momentum
     norm met (NaN unless ``track_momentum``). ``forces``: generalised forces at the quarters of
-    the steps (N m or N).
+    the steps (N m or N). Each stage's increments go into one kept buffer and, when the joints
+    fill the configuration from index 7 in order, its joint values straight into the
+    configuration: the same operations as ``x + increment``, without a new array per stage.
     """
     model, nv = mmap.model, mmap.model.nv
     data, aba = model.createData(), pin.aba
@@ -172,22 +174,34 @@ def _stages(
     slopes = np.empty((count, 2 * nv))
     velocities, accelerations = slopes[:, :nv], slopes[:, nv:]
     before = [slopes[:i] for i in range(count)]  # the stages before each one
+    change = np.empty(2 * nv)  # a stage's increments of [joints and base; velocity]
+    rate_change = change[nv:]
+    # the joints' increments as a view of the buffer when their slots are contiguous
+    moved = change[joint_rates] if isinstance(joint_rates, slice) else None
+    here_q = config.q[7:] if config.contiguous and moved is not None else None
+    table = list(forces)  # row views: cheaper to pick from a list than by numpy indexing
+    rows = np.empty_like(STAGE_MATRIX)
+    stage_rows = [rows[i, :i] for i in range(count)]
     v = np.zeros(nv)
     momentum_max = 0.0 if track_momentum else math.nan
     for k, dt in enumerate(widths.tolist()):
-        rows = dt * STAGE_MATRIX
+        np.multiply(dt, STAGE_MATRIX, out=rows)
         velocities[0] = v
-        accelerations[0] = aba(model, data, config(x), v, forces[4 * k])
+        accelerations[0] = aba(model, data, config(x), v, table[4 * k])
         for i in range(1, count):
-            change = rows[i, :i] @ before[i]
+            np.matmul(stage_rows[i], before[i], out=change)
             here = velocities[i]
-            np.add(v, change[nv:], out=here)
-            joints = x + change[:nv][joint_rates]
-            accelerations[i] = aba(model, data, config(joints), here, forces[4 * k + QUARTERS[i]])
+            np.add(v, rate_change, out=here)
+            if here_q is not None and moved is not None:
+                np.add(x, moved, out=here_q)
+                q = config.q
+            else:
+                q = config(x + (change[:nv][joint_rates] if moved is None else moved))
+            accelerations[i] = aba(model, data, q, here, table[4 * k + QUARTERS[i]])
         stages[k] = velocities
-        change = (dt * WEIGHTS) @ slopes
-        x += change[:nv][joint_rates]
-        v = v + change[nv:]
+        step = (dt * WEIGHTS) @ slopes
+        x += step[:nv][joint_rates]
+        v = v + step[nv:]
         if track_momentum:
             momentum = mmap.momentum(config(x), v)
             momentum_max = max(momentum_max, float(np.linalg.norm(momentum)))
