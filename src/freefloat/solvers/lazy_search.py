@@ -128,7 +128,9 @@ def _search_proxy_first(
         return _Proxied(search(scenario, options, eager))
     except SolverError:
         return _Proxied(search(scenario, options, eager))
-    broken = broken_rows_first(found.problem, eager, found.solution.beta)
+    # the dense check, not the rows first: the path is clear on most requests, and then the
+    # rows would be measured for nothing (a correction measures them anyway)
+    broken = broken_constraint(found.problem, eager, found.solution.beta)
     if not broken:
         return _Proxied(found)
     inside = _brought_inside(found, eager, broken, options)
