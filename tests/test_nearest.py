@@ -12,6 +12,7 @@ from scipy.optimize import minimize
 import freefloat as ff
 from freefloat.problem.constraints import DEFAULT_INSTANTS
 from freefloat.problem.constraints.joint_position import JointPositionLimits
+from freefloat.solvers import least_norm
 from freefloat.solvers.least_norm import (
     least_norm_root,
     least_norm_root_within,
@@ -26,9 +27,11 @@ def test_least_norm_root_is_a_kkt_point_and_matches_slsqp(worked_scenario):
     scenario = worked_scenario.resolved()
     problem = ff.problem_from_scenario(scenario, extra=[2, 2])
     start = ff.solve(problem, ff.SolveOptions(), []).beta
-    beta = least_norm_root(problem, start, ff.SolveOptions())
+    found = least_norm_root(problem, start, ff.SolveOptions())
+    beta = found.beta
     residual, jac = problem.residual_and_jacobian(beta)
     assert np.linalg.norm(residual) < 1e-9
+    np.testing.assert_array_equal(found.residual, residual)  # what it returns is at its root
     # KKT of min |beta|^2 s.t. h = 0: beta lies in the row space of the Jacobian
     null = np.linalg.svd(jac)[2][jac.shape[0] :]
     assert np.linalg.norm(null @ beta) < 1e-6 * np.linalg.norm(beta)
@@ -81,7 +84,7 @@ def test_effort_limits_the_eager_steps_break_are_imposed_in_a_second_pass(worked
     eager = least_norm_root_within(problem, start, [limits], options, least).beta
     cap = 0.9 * peaks(problem, eager)[0]
     capped = _capped(worked_scenario, effort=cap)
-    found = _within(capped, start, [limits, JointEffortLimits()], options, least)
+    found = _within(capped, start, [limits, JointEffortLimits()], options, least).beta
     assert np.linalg.norm(capped.residual(found)) < 1e-10
     assert limits.violation(capped, found).value <= limits.tolerance
     assert peaks(capped, found)[0] <= cap
@@ -118,8 +121,8 @@ def test_least_norm_root_within_a_binding_limit_matches_slsqp_on_a_dense_grid(wo
     assert found.honoured
     beta = found.beta
     assert np.linalg.norm(problem.residual(beta)) < 1e-10
-    # the residual it carries is the one a fresh integration of its path gives
-    assert found.residual == pytest.approx(np.linalg.norm(problem.residual(beta)), abs=1e-13)
+    # the residual it carries is the one a fresh integration of its path gives, to rounding
+    assert found.residual == pytest.approx(np.linalg.norm(problem.residual(beta)), abs=1e-15)
     excess = limits.violation(problem, beta).value
     assert -1e-6 < excess <= limits.tolerance
     cap = _slsqp_rows(problem, limits)
@@ -139,7 +142,7 @@ def test_least_norm_root_within_a_binding_limit_matches_slsqp_on_a_dense_grid(wo
     assert other.x @ other.x * (1 - 1e-6) <= default @ default <= 1.05 * (other.x @ other.x)
 
 
-def test_corrections_bring_a_root_inside_a_cap_it_breaks(worked_scenario):
+def test_corrections_bring_a_root_inside_a_cap_it_breaks(worked_scenario, monkeypatch):
     """The free least-norm root breaks the 1.45 rad cap on q1 by 0.066 rad: least-norm
     corrections with the rows at its tightest instants give a root within the cap everywhere
     (exact polynomial extremes), moved about as little as the nearest such root SciPy's SLSQP
@@ -152,7 +155,16 @@ def test_corrections_bring_a_root_inside_a_cap_it_breaks(worked_scenario):
     assert found.honoured
     assert np.linalg.norm(problem.residual(found.beta)) < 1e-10
     fresh = np.linalg.norm(problem.residual(found.beta))
-    assert found.residual == pytest.approx(fresh, abs=1e-13)  # carried, not integrated again
+    assert found.residual == pytest.approx(fresh, abs=1e-15)  # carried, not integrated again
+    # a correction that fails returns its start, with the residual there: off the root set,
+    # so a residual carried from anywhere else would not match a fresh integration
+    off = start + 0.05
+    with monkeypatch.context() as patch:
+        patch.setattr(least_norm, "_corrected", lambda *args, **kwargs: None)
+        failed = nearest_root_within(problem, off, [limits], DEFAULT_INSTANTS, options)
+    assert not failed.honoured and np.array_equal(failed.beta, off)
+    truth = np.linalg.norm(problem.residual(off))
+    assert truth > 1e-3 and failed.residual == pytest.approx(truth, rel=1e-12)
     assert limits.violation(problem, found.beta).value <= limits.tolerance
     cap = _slsqp_rows(problem, limits)
     nearest = minimize(

@@ -119,10 +119,11 @@ def test_a_goal_read_from_reach_output_plans_first_try(kinova_reach, capsys) -> 
     drift = re.search(r"base_zyx_deg = \[([-\d.]+), ([-\d.]+), ([-\d.]+)\]", out)
     assert drift is not None
     assert "verdict: this spacecraft is" in out  # about a degree at most: said in one line
-    # the budget is per continuation pass (a confirmed direction makes more than one), and
-    # each direction's own total is in its -v line
+    # the budget is per continuation pass, as the report says: a direction that confirms its
+    # turn makes more than one, and its total (its -v line) exceeds the budget
     assert "30 residual evaluations per continuation pass;" in out
-    assert len(re.findall(r"\(\d+ evaluations\)", err)) == 14
+    spent = [int(n) for n in re.findall(r"\((\d+) evaluations\)", err)]
+    assert len(spent) == 14 and max(spent) > 30
     # A new user: the three-axis direction that reaches furthest, its printed goal attitude.
     diagonal = max((r for r in rows if all(abs(a) > 0.5 for a in r[:3])), key=lambda r: r[3])
     assert diagonal[3] > 0.0

@@ -255,12 +255,24 @@ def test_euler_angles_of_many_quaternions_rebuild_them():
     np.testing.assert_allclose(rebuilt * sign, quats, atol=1e-12)
     single = np.array([zyx_from_quat(q) for q in quats])
     assert np.abs(angles - single).max() <= 4e-16 * math.pi
-    # yaw and roll near +-pi (sum and difference of the half angles past pi): the same side
-    near = np.array([[0.0, 0.0, math.sin(a / 2), math.cos(a / 2)] for a in (3.14159, -3.14159)])
-    near = np.vstack([near, [[math.sin(a / 2), 0.0, 0.0, math.cos(a / 2)] for a in (3.1416,)]])
-    np.testing.assert_array_equal(
-        np.sign(zyx_from_quats(near)), np.sign([zyx_from_quat(q) for q in near])
+    # On the seams, where the last bit of atan2 decides a side of the wrap at +-pi or the
+    # gimbal-lock branch, the very row of the single-quaternion function: yaw and roll at
+    # +-180 deg with pitches near and at the lock (SciPy's quaternions), and a quaternion whose
+    # yaw lands within rounding of -pi.
+    seams = [
+        (a, b, c)
+        for a in (180.0, -180.0)
+        for b in (0.3, 89.9999, 90.0, -90.0)
+        for c in (0.0, 180.0)
+    ]
+    on_seam = Rotation.from_euler("ZYX", seams, degrees=True).as_quat()
+    on_seam = np.vstack(
+        [
+            on_seam,
+            [-0.12941721901624123, 0.49438553896802095, 0.8563008720199357, 0.07471906623679953],
+        ]
     )
+    np.testing.assert_array_equal(zyx_from_quats(on_seam), [zyx_from_quat(q) for q in on_seam])
     assert np.all(np.abs(zyx_from_quats(rng.normal(size=(400, 4)) * 9.0)) <= math.pi)
 
 

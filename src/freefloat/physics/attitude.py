@@ -160,11 +160,15 @@ def zyx_from_quats(quats: np.ndarray) -> np.ndarray:
     """(K, 3) :func:`zyx_from_quat` of K unit quaternions (rad), the same formulas in numpy.
 
     Equal to the single quaternion's to rounding (numpy's ``hypot`` and ``arctan2`` may
-    differ from :mod:`math`'s in the last bit); the wrap into (-pi, pi] is exact, as
-    ``math.remainder``'s: the half-angle sum and difference lie in (-pi, pi], so yaw and roll
-    lie in (-2 pi, 2 pi] and one subtraction of 2 pi, exact there, wraps them.
+    differ from :mod:`math`'s in the last bit). Where that bit could decide a discrete choice,
+    yaw or roll within :data:`_SEAM` of +-pi (which side of the wrap) or a pair within
+    :data:`_SEAM` of the gimbal-lock threshold, the row is the single quaternion's own. The
+    wrap into (-pi, pi] is exact, as ``math.remainder``'s: the half-angle sum and difference
+    lie in [-pi, pi], so yaw and roll lie in [-2 pi, 2 pi] and one subtraction or addition of
+    2 pi, exact there, wraps them.
     """
-    x, y, z, w = np.asarray(quats, dtype=float).reshape(-1, 4).T
+    quats = np.asarray(quats, dtype=float).reshape(-1, 4)
+    x, y, z, w = quats.T
     plus, minus = np.hypot(w + y, z - x), np.hypot(w - y, z + x)
     pitch = 2.0 * np.arctan2(plus - minus, plus + minus)
     difference = np.arctan2(z - x, w + y)  # a - c
@@ -172,11 +176,21 @@ def zyx_from_quats(quats: np.ndarray) -> np.ndarray:
     locked_up, locked_down = minus < _LOCKED, (minus >= _LOCKED) & (plus < _LOCKED)
     total = np.where(locked_up, difference, total)  # pitch = +pi/2: only a - c matters
     difference = np.where(locked_down, total, difference)  # pitch = -pi/2: only a + c
-    return np.stack([_wrapped(total + difference), pitch, _wrapped(total - difference)], axis=1)
+    out = np.stack([_wrapped(total + difference), pitch, _wrapped(total - difference)], axis=1)
+    seam = np.abs(out[:, [0, 2]]).max(axis=1) > math.pi - _SEAM
+    seam |= np.abs(np.minimum(plus, minus) - _LOCKED) < _SEAM
+    for k in np.flatnonzero(seam).tolist():
+        out[k] = _zyx(*quats[k].tolist())
+    return out
+
+
+#: Yaw or roll this close to +-pi (rad), or a pair this close to the gimbal-lock threshold:
+#: the batched Euler angles take the single quaternion's own row there.
+_SEAM = 1e-9
 
 
 def _wrapped(angles: np.ndarray) -> np.ndarray:
-    """Angles in (-2 pi, 2 pi] (rad) wrapped into (-pi, pi], as :func:`_wrap` wraps each."""
+    """Angles in [-2 pi, 2 pi] (rad) wrapped into (-pi, pi], as :func:`_wrap` wraps each."""
     out = np.where(angles > math.pi, angles - 2.0 * math.pi, angles)
     out = np.where(out < -math.pi, out + 2.0 * math.pi, out)
     return np.where(out == -math.pi, math.pi, out)

@@ -192,7 +192,7 @@ def _stages(
             np.matmul(stage_rows[i], before[i], out=change)
             here = velocities[i]
             np.add(v, rate_change, out=here)
-            if here_q is not None and moved is not None:
+            if here_q is not None and moved is not None:  # here_q is set only with moved
                 np.add(x, moved, out=here_q)
                 q = config.q
             else:

@@ -36,7 +36,7 @@ import quadprog
 
 from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.residual import Problem
-from .newton import polish_at
+from .newton import Polished, polish_at
 from .options import SolveOptions
 from .predictor import FAR_INSIDE, MARGIN
 from .restore import broken_constraint
@@ -94,19 +94,21 @@ class LeastNorm:
         beta: the root (free coefficients, rad or m), polished onto ``h = 0``.
         steps: SQP steps spent.
         honoured: whether its path honours every constraint everywhere (the dense check).
-        residual: ``|h(beta)|`` (rad) as the last evaluation found it, so a caller need not
-            integrate the path again; NaN where ``beta`` was not evaluated (a correction that
-            failed returns its start).
+        residual: ``|h(beta)|`` (rad) as the last evaluation at ``beta`` found it, so a caller
+            need not integrate the path again.
     """
 
     beta: np.ndarray
     steps: int
     honoured: bool
-    residual: float = math.nan
+    residual: float
 
 
-def least_norm_root(problem: Problem, beta: np.ndarray, options: SolveOptions) -> np.ndarray:
-    """SQP on ``min |beta|^2 s.t. h(beta) = 0`` from ``beta``, no path constraint (rad or m)."""
+def least_norm_root(problem: Problem, beta: np.ndarray, options: SolveOptions) -> Polished:
+    """SQP on ``min |beta|^2 s.t. h(beta) = 0`` from ``beta``, no path constraint (rad or m).
+
+    Returns the root polished onto ``h = 0`` with its residual (rad) and Jacobian there.
+    """
     r, jac = problem.residual_and_jacobian(beta)
     norms = [float(beta @ beta)]
     for _ in range(FREE_ITERATIONS):
@@ -134,7 +136,7 @@ def least_norm_root(problem: Problem, beta: np.ndarray, options: SolveOptions) -
             abs(norms[-1 - SETTLE_STEPS] - norms[-1]) <= FREE_SETTLED * norms[-1]
         ):
             break
-    return polish_at(problem, beta, options.tolerance, evaluated=(r, jac)).beta
+    return polish_at(problem, beta, options.tolerance, evaluated=(r, jac))
 
 
 def least_norm_root_within(
@@ -217,6 +219,7 @@ def nearest_root_within(
     """
     active = [c for c in constraints if c.applies_to(problem.robot)]
     beta = np.asarray(beta, dtype=float)
+    residual = math.nan
     for count in range(1, CORRECTIONS + 1):
         instants = with_critical(problem, active, beta, instants)
         dips = with_dips(problem, active, beta, dips)
@@ -224,11 +227,11 @@ def nearest_root_within(
         point = _Point.at(problem, active, beta, instants, cache, dips=dips)
         found = _corrected(problem, active, point, instants, cache, options.tolerance, dips)
         if found is None:
-            return LeastNorm(beta, count, False)
-        beta = found.beta
+            return LeastNorm(beta, count, False, float(np.linalg.norm(point.r)))
+        beta, residual = found.beta, float(np.linalg.norm(found.r))
         if not broken_constraint(problem, active, beta):
-            return LeastNorm(beta, count, True, float(np.linalg.norm(found.r)))
-    return LeastNorm(beta, CORRECTIONS, False)
+            return LeastNorm(beta, count, True, residual)
+    return LeastNorm(beta, CORRECTIONS, False, residual)
 
 
 def _steps(

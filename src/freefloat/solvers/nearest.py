@@ -34,7 +34,7 @@ from ..problem.paths import excursions
 from ..problem.residual import Problem
 from ..problem.scenario import Scenario
 from .certify import certify
-from .least_norm import least_norm_root, least_norm_root_within
+from .least_norm import LeastNorm, least_norm_root, least_norm_root_within
 from .options import Root, SolveOptions
 from .restore import broken_constraint
 from .search import SearchResult
@@ -71,7 +71,7 @@ def _within(
     constraints: Sequence[Constraint],
     options: SolveOptions,
     free: np.ndarray,
-) -> np.ndarray:
+) -> LeastNorm:
     """:func:`.least_norm.least_norm_root_within`, the lazy constraints imposed when broken.
 
     As the search does, the steps first keep the eager constraints alone (the effort limits'
@@ -83,8 +83,8 @@ def _within(
         found = least_norm_root_within(problem, start, eager, options, free)
         lazy = [c for c in constraints if c.lazy]
         if found.honoured and not broken_constraint(problem, lazy, found.beta):
-            return found.beta
-    return least_norm_root_within(problem, start, constraints, options, free).beta
+            return found
+    return least_norm_root_within(problem, start, constraints, options, free)
 
 
 def nearest_root(
@@ -123,11 +123,13 @@ def nearest_root(
         start = level.family.embed(best.problem.family, best.solution.beta)
         if start is None:
             break
-        candidate, how = least_norm_root(level, start, options), "least-norm SQP"
+        free = least_norm_root(level, start, options)
+        candidate, how = free.beta, "least-norm SQP"
+        residual = float(np.linalg.norm(free.residual))  # no second integration of its path
         if broken_constraint(level, eager_first, candidate):  # the constraints bind
-            candidate = _within(level, start, constraints, options, candidate)
+            within = _within(level, start, constraints, options, candidate)
+            candidate, residual = within.beta, within.residual
             how = "least-norm SQP within the constraints"
-        residual = float(np.linalg.norm(level.residual(candidate)))
         checked = certify(level, candidate, residual, options.tolerance)
         deviation = float(checked.beta @ checked.beta)
         best_deviation = float(best.solution.beta @ best.solution.beta)
