@@ -360,3 +360,31 @@ def test_a_refusal_under_another_headline_keeps_every_figure():
     for name in ("stopped_by", "last_beta", "axis", "problem", "reached_fraction"):
         assert getattr(renamed, name) == getattr(error, name), name
     assert renamed.reached_fraction == pytest.approx(1 / 3)
+
+
+@pytest.mark.parametrize(
+    ("reached_deg", "asked_deg"),
+    [(10.0, 60.0), (46.7864, 46.8), (46.79996, 46.8), (0.636, 0.636), (29.3, 47.9)],
+)
+def test_a_refusals_turns_never_print_a_turn_short_of_the_goal_as_the_goal(
+    reached_deg: float, asked_deg: float
+) -> None:
+    """``reachable up to X of the Y deg asked``: X and Y read back (the message's own text)
+    lie within their printed precision of the turns, and a turn short of the goal never
+    prints as the goal's figure; three digits where those already differ."""
+    import math
+    import re
+
+    phrase = ff.UnreachableAttitudeError.turn_phrase(
+        math.radians(reached_deg), math.radians(asked_deg)
+    )
+    found = re.fullmatch(r"reachable up to (\S+) deg of the (\S+) deg asked", phrase)
+    assert found is not None, phrase
+    shown_reached, shown_asked = found.groups()
+    for shown, truth in ((shown_reached, reached_deg), (shown_asked, asked_deg)):
+        digits = len(shown.replace(".", "").lstrip("0"))
+        assert abs(float(shown) - truth) <= 0.5 * 10 ** (math.floor(math.log10(truth)) - digits + 1)
+    if reached_deg < asked_deg:
+        assert shown_reached != shown_asked
+    if f"{reached_deg:.3g}" != f"{asked_deg:.3g}" or reached_deg == asked_deg:
+        assert (shown_reached, shown_asked) == (f"{reached_deg:.3g}", f"{asked_deg:.3g}")

@@ -113,7 +113,8 @@ def test_velocity_limit_error_is_printed_in_degrees_per_second():
 
 def test_rounding_level_figures_print_as_zero():
     """An achieved angle of -1e-12 deg prints as 0.000000 (no minus sign), and an excursion
-    beyond a span of 2.5e-14 deg (the extremes' rounding) as 0; a real one as itself."""
+    beyond a span of 2.5e-14 deg (the extremes' rounding) as 0, naming no joint as the
+    largest (none goes beyond its span); a real one as itself, with its joint."""
     import dataclasses
 
     from freefloat.viz.summary import _attitude_table, quality_line
@@ -131,7 +132,8 @@ def test_rounding_level_figures_print_as_zero():
             excursion_beyond_span={joint: excursion},
         )
         line = quality_line(dataclasses.replace(plan, quality=quality))
-        assert f"span {shown} ({joint}); {joint} {shown}" in line
+        named = f" ({joint})" if excursion > 1e-9 else ""
+        assert f"span {shown}{named}; {joint} {shown}" in line
 
 
 def test_the_summary_names_each_path_constraint_and_its_margin(tmp_path, capsys):

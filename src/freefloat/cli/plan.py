@@ -40,8 +40,9 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
     p_plan.add_argument(
         "-o",
         "--output",
-        help="plan file to write, its folder made if missing (default: SCENARIO.plan.json,"
-        " or freefloat-out/plan.json for the worked example)",
+        help="plan file to write, its folder made if missing (default: the scenario file's "
+        "name with .plan.json in the current folder, e.g. ./panda_servicer.plan.json; "
+        "freefloat-out/plan.json, with its page and plots, for the worked example)",
     )
     p_plan.add_argument(
         "--allow-full-turns",

@@ -5,6 +5,7 @@ Units as in every message: rad, rad/s, N m (m, m/s, N for prismatic joints), s.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 from .base import FreeFloatError, SolverError
@@ -174,6 +175,20 @@ class UnreachableAttitudeError(SolverError, UnreachableGoalError):
             blocked_by=blocked_by,
         )
         self.distance = self.radius = float("nan")
+
+    @staticmethod
+    def turn_phrase(reached: float, asked: float) -> str:
+        """``"reachable up to X deg of the Y deg asked"`` from turns in rad.
+
+        Three significant digits, more (up to nine, both figures alike) while a turn short of
+        the one asked would print the same as it (46.8 of 46.8 reads as reached; 46.79 of 46.8
+        does not).
+        """
+        out, goal = math.degrees(reached), math.degrees(asked)
+        digits = 3
+        while digits < 9 and out < goal and f"{out:.{digits}g}" == f"{goal:.{digits}g}":
+            digits += 1
+        return f"reachable up to {out:.{digits}g} deg of the {goal:.{digits}g} deg asked"
 
     def with_headline(self, headline: str) -> UnreachableAttitudeError:
         """The same refusal under another headline: every figure and attribute kept."""

@@ -33,6 +33,7 @@ from functools import partial
 
 import numpy as np
 
+from ..errors import UnreachableAttitudeError
 from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
 from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.residual import Problem
@@ -391,10 +392,8 @@ def continuation(
     attempt.blocked_by = (result.blocked_by,) if result.blocked_by else ()
     attempt.last_beta = result.beta if result.fraction > 0.0 else None
     axis = ", ".join(f"{x:.3f}" for x in result.axis)
-    attempt.message = (
-        f"reachable up to {math.degrees(result.fraction * result.angle):.3g} deg of the "
-        f"{math.degrees(result.angle):.3g} deg asked about this direction (axis {axis} from "
-        f"the {'starting' if start is not None and np.any(start) else 'quintic'} path's "
-        f"attitude); stopped by {result.stopped_by}"
-    )
+    origin = "starting" if start is not None and np.any(start) else "quintic"
+    phrase = UnreachableAttitudeError.turn_phrase(result.fraction * result.angle, result.angle)
+    where = f"axis {axis} from the {origin} path's attitude"
+    attempt.message = f"{phrase} about this direction ({where}); stopped by {result.stopped_by}"
     return attempt

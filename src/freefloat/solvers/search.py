@@ -290,8 +290,8 @@ def _refuse(
         reached = max(origin.asked - closest.best_residual, origin.reached)
         axis = ", ".join(f"{a:.3f}" for a in origin.axis)
         raise UnreachableAttitudeError(
-            f"reachable up to {math.degrees(reached):.3g} deg of the "
-            f"{math.degrees(origin.asked):.3g} deg asked about this direction (axis {axis} "
+            f"{UnreachableAttitudeError.turn_phrase(reached, origin.asked)} about this "
+            f"direction (axis {axis} "
             f"from the quintic path's attitude); stopped by {closest.stopped_by}",
             closest.best_residual,
             reached=reached,

@@ -69,7 +69,8 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
         f"  base_zyx_deg = {_vector(report.drift_zyx_deg)}",
         f"  base_quaternion_xyzw = {_vector(drift, 6)}",
         *([] if robot is None else goal_joint_lines(report, robot)),
-        f"spacecraft / arm rotational inertia about the system CM: {report.inertia_ratio:.3g}",
+        f"spacecraft / arm rotational inertia about the system CM (ratio): "
+        f"{report.inertia_ratio:.3g}",
     ]
     if report.bound is not None:
         bound = report.bound

@@ -248,10 +248,10 @@ def quality_line(p: Plan) -> str:
 
     q = p.quality
     each = ", ".join(f"{k} {shown(k, v)}" for k, v in q.excursion_beyond_span.items())
-    return (
-        f"  path quality    largest excursion beyond a start-goal span "
-        f"{shown(q.largest_joint, q.largest_excursion)} ({q.largest_joint}); {each}"
-    )
+    largest = shown(q.largest_joint, q.largest_excursion)
+    if not largest.startswith("0 "):  # a joint named only when it does go beyond its span
+        largest += f" ({q.largest_joint})"
+    return f"  path quality    largest excursion beyond a start-goal span {largest}; {each}"
 
 
 def objective_line(p: Plan) -> str:
