@@ -213,6 +213,16 @@ def test_reach_without_an_inner_estimate_offers_no_goal_to_paste(capsys) -> None
     for row in rows:
         inner, outer, goal = row.split()[3:6]
         assert inner == "-" and goal == "-" and float(outer) > 0.0
+    # The outer column is no second bound: a turn from the drift attitude that keeps within
+    # the bound B of the start lies between B - d and B + d (d: the drift's own angle from
+    # the start; the triangle inequality of rotation angles), as the printed note says.
+    note = next(line for line in out if line.startswith("  (outer: as far as"))
+    bound, drift = (float(x) for x in re.findall(r"(\d+\.?\d*) deg", note))
+    assert bound == pytest.approx(
+        float(re.search(r"turns at most ([\d.]+) deg", "\n".join(out)).group(1)), abs=0.05
+    )
+    outers = [float(row.split()[4]) for row in rows]
+    assert all(bound - drift - 0.1 <= o <= bound + drift + 0.1 for o in outers), outers
 
 
 def test_a_start_closer_than_the_margin_is_refused_as_plan_refuses_it(tmp_path, capsys) -> None:

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from ..physics.attitude import geodesic_angle
 from ..reachable import SMALL_REACH_DEG, ReachReport
 from ..robot.model import Robot
 
@@ -82,8 +83,9 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
         lines += [
             f"outer bound for simple motions ({travel}):",
             f"  the base turns at most {math.degrees(bound.bound):.4g} deg from the start "
-            "attitude (sum over joints of the largest |F1 column| over the",
-            "  configurations such a path visits, sampled and refined, times the joint's travel);",
+            "attitude (sum over joints of the largest",
+            "  |F1 column| over the configurations such a path visits, sampled and refined, times",
+            "  the joint's travel);",
             "  a path whose joints go back and forth is not bounded by it: plan may turn further",
         ]
         if report.budget > 0:
@@ -103,6 +105,13 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
         )
     if not report.planar:
         lines.append("  per axis, turns measured from the drift attitude:")
+        if report.bound is not None:  # the outer column is no second bound: say why it is larger
+            away = math.degrees(geodesic_angle(report.start_quaternion, drift))
+            within = math.degrees(report.bound.bound)
+            lines.append(
+                f"  (outer: as far as the attitude stays within {within:.4g} deg of the start; "
+                f"the drift lies {away:.3g} deg from it)"
+            )
     lines.append(
         f"  {'axis (base frame)':<20}{'inner [deg]':>12}{'outer [deg]':>12}  "
         f"{'goal base_zyx_deg at inner':<30}  stopped by"
