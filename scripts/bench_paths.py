@@ -80,7 +80,8 @@ def real_cases() -> dict[str, str]:
         out["ETS-VII 1.7 deg three-axis, T = 60 s"] = head + "base_zyx_deg = [1.0, -1.0, 1.0]\n"
     if r2.exists():
         out["Robonaut 2 (12 joints) on a 500 kg bus, keep attitude, T = 30 s"] = (
-            f'duration = 30.0\n[robot]\narm = "{r2}"\nbase_mass = 500.0\n'
+            f'duration = 30.0\nend_effector = "r2/right_palm"\n[robot]\narm = "{r2}"\n'
+            "base_mass = 500.0\n"
             "base_size = [1.0, 1.0, 1.0]\nmount = [0.5, 0.0, 0.0]\n"
             "mount_rpy_deg = [0.0, 90.0, 0.0]\n[start]\n"
             + _r2_joints(1)

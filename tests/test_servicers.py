@@ -189,6 +189,44 @@ joints = {{ {joints} }}
     assert ff.Scenario.from_toml(scenario).robot.urdf == loaded.robot.urdf  # cached
 
 
+def test_a_torso_with_two_equal_arms_composes_and_plans_with_the_end_effector_named(
+    tmp_path, monkeypatch
+):
+    """An arm URDF that is a torso with two equally long chains (Robonaut 2's shape) has no
+    default end effector: composed inline, the scenario's ``end_effector`` names one and the
+    plan is made and verified (before, composing refused it whatever the scenario named);
+    without one, the refusal's advice (name one in the scenario) is what makes it plan. The
+    arm's URDF is named relative to the scenario file (the tests run from another folder),
+    as ``robot = "..."`` is."""
+    import urdfs
+
+    monkeypatch.setenv("FREEFLOAT_CACHE", str(tmp_path / "cache"))
+    body = urdfs.BASE.replace('name="base"', 'name="torso"').format(mass=20.0, i=0.5)
+    for side, y in (("left", 0.3), ("right", -0.3)):
+        body += urdfs.joint(f"{side}_q1", "torso", f"{side}_upper", xyz=(0.0, y, 0.3))
+        body += urdfs.link(f"{side}_upper")
+        body += urdfs.joint(f"{side}_q2", f"{side}_upper", f"{side}_lower", axis=(0, 1, 0))
+        body += urdfs.link(f"{side}_lower")
+    arm = tmp_path / "torso.urdf"
+    arm.write_text(urdfs.robot(body, "torso"))
+    joints = "{ left_q1 = 0.0, left_q2 = 0.0, right_q1 = 0.0, right_q2 = 0.0 }"
+    goal = "{ left_q1 = 20.0, left_q2 = -15.0, right_q1 = -20.0, right_q2 = 10.0 }"
+    text = (
+        'duration = 10.0\n[robot]\narm = "torso.urdf"\nbase_mass = 200.0\n'
+        "base_size = [0.6, 0.6, 0.6]\nmount = [0.3, 0.0, 0.0]\n[safety]\ncheck = false\n"
+        f"[start]\njoints = {joints}\n[goal]\njoints = {goal}\n"
+    )
+    scenario = tmp_path / "torso.toml"
+    scenario.write_text(text)
+    with pytest.raises(ff.AmbiguousEndEffectorError, match="name one in the scenario"):
+        ff.Scenario.from_toml(scenario)
+    scenario.write_text('end_effector = "right_lower"\n' + text)
+    plan = ff.plan(ff.Scenario.from_toml(scenario))
+    assert plan.verification.passed
+    assert plan.robot.end_effector == "right_lower"
+    assert set(plan.robot.joints) == {"left_q1", "left_q2", "right_q1", "right_q2"}
+
+
 @pytest.fixture(scope="module", params=["panda_servicer", "ur5_servicer"])
 def servicer_plan(request):
     scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / f"{request.param}.toml")

@@ -187,7 +187,7 @@ def robot_source(value: Any, start: Any, relative_to: Path | None) -> RobotSourc
         urdf = resolve_robot(value["urdf"], relative_to)
         source = RobotSource(urdf, srdf=_sibling_srdf(urdf))
     else:
-        source = _servicer(value)
+        source = _servicer(value, relative_to)
     lock = value.get("lock", [])
     if lock == []:
         return source
@@ -246,7 +246,7 @@ def _lock_values(lock: Any, text: str, start: Any) -> dict[str, float]:
     return values
 
 
-def _servicer(table: Mapping[str, Any]) -> RobotSource:
+def _servicer(table: Mapping[str, Any], relative_to: Path | None = None) -> RobotSource:
     """The cache path of the servicer an inline ``[robot]`` table describes, and its URDF.
 
     The URDF text is None when the cache file exists (it is read from there); otherwise the
@@ -256,7 +256,7 @@ def _servicer(table: Mapping[str, Any]) -> RobotSource:
     from ..robot.srdf import merged_srdf
 
     check_keys(table, _SERVICER_KEYS, "[robot]")
-    arms = _arms(table)
+    arms = _arms(table, relative_to)
     for key in ("base_mass", "base_size"):
         if key not in table:
             raise ScenarioError(f"[robot] needs {key!r} (required: arm, base_mass, base_size)")
@@ -284,9 +284,13 @@ def _servicer(table: Mapping[str, Any]) -> RobotSource:
     return RobotSource(path, text, spec, tips, srdf, srdf_text)
 
 
-def _arms(table: Mapping[str, Any]) -> list[Any]:
-    """The arms of a servicer table: ``arm`` (with ``mount``...) or an ``arms`` list."""
-    from ..robot.compose import ArmSpec
+def _arms(table: Mapping[str, Any], relative_to: Path | None = None) -> list[Any]:
+    """The arms of a servicer table: ``arm`` (with ``mount``...) or an ``arms`` list.
+
+    An arm given as a relative URDF path is taken relative to ``relative_to`` (the scenario's
+    folder), as ``robot = "..."`` is; an arm name (:data:`~freefloat.robot.compose.ARMS`) as is.
+    """
+    from ..robot.compose import ARMS, ArmSpec
 
     if ("arm" in table) == ("arms" in table):
         raise ScenarioError(
@@ -322,9 +326,12 @@ def _arms(table: Mapping[str, Any]) -> list[Any]:
         if not isinstance(keep, bool):
             raise ScenarioError(f"{where} keep_gripper must be true or false, got {excerpt(keep)}")
         rpy = triple(item, "mount_rpy_deg", [0.0] * 3, where)
+        arm = item["arm"]
+        if arm not in ARMS and relative_to is not None:
+            arm = str(relative_to / Path(arm).expanduser())  # an absolute path stays as it is
         arms.append(
             ArmSpec(
-                item["arm"],
+                arm,
                 triple(item, "mount", [0.0, 0.0, 0.0], where),
                 tuple(math.radians(a) for a in rpy),
                 prefix,

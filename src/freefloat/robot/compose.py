@@ -67,7 +67,7 @@ class Composed:
         notes: what the composition chose on its own (a finger locked mid-range...), one line
             each.
         end_effectors: the default end effector of each arm (the tip of its longest chain
-            that is not a finger), in arm order.
+            that is not a finger), in arm order; an arm whose longest chains tie has none.
         srdf: the SRDF text of the pairs never checked (each arm's own SRDF pairs, with the
             arm's prefix), for a servicer of several arms; None otherwise.
         prismatic: the locked joints that were prismatic (their values in m, not rad).
@@ -263,7 +263,9 @@ def compose(spec: ServicerSpec) -> Composed:
 
     body = etree.tostring(urdf.write_xml(), pretty_print=True, encoding="unicode")
     text = "<?xml version='1.0' encoding='UTF-8'?>\n" + body
-    tips = arm_tips(text, [a.prefix for a in arms])
+    # a payload needs its arm's tip; otherwise an arm with two equally long chains (a dual-arm
+    # torso) has none by default, and the scenario or the loader names the end effector
+    tips = arm_tips(text, [a.prefix for a in arms], strict=spec.payload is not None)
     srdf = merged_srdf([a.arm for a in arms], [a.prefix for a in arms]) if len(arms) > 1 else None
     for note in notes:
         LOGGER.warning("%s", note)  # a choice the user did not state
@@ -294,8 +296,12 @@ def _spacecraft(spec: ServicerSpec) -> tuple[Any, Any]:
     return spacecraft, hull
 
 
-def arm_tips(text: str, prefixes: Sequence[str]) -> tuple[str, ...]:
-    """The default end effector of each arm (by its prefix) in a composed URDF."""
+def arm_tips(text: str, prefixes: Sequence[str], strict: bool = True) -> tuple[str, ...]:
+    """The default end effector of each arm (by its prefix) in a composed URDF.
+
+    An arm whose longest chains tie has none: with ``strict`` that is an error
+    (:class:`AmbiguousEndEffectorError`), otherwise the arm is left out of the tuple.
+    """
     import pinocchio as pin
 
     from .end_effectors import end_effector_candidates
@@ -304,9 +310,9 @@ def arm_tips(text: str, prefixes: Sequence[str]) -> tuple[str, ...]:
     tips = []
     for prefix in prefixes:
         found = end_effector_candidates(model, prefix)
-        if len(found) > 1:
+        if len(found) > 1 and strict:
             raise AmbiguousEndEffectorError(found)
-        tips.append(found[0])
+        tips += found[:1] if len(found) == 1 else []
     return tuple(tips)
 
 
