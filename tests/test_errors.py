@@ -364,7 +364,15 @@ def test_a_refusal_under_another_headline_keeps_every_figure():
 
 @pytest.mark.parametrize(
     ("reached_deg", "asked_deg"),
-    [(10.0, 60.0), (46.7864, 46.8), (46.79996, 46.8), (0.636, 0.636), (29.3, 47.9)],
+    [
+        (10.0, 60.0),
+        (46.7864, 46.8),
+        (46.79996, 46.8),
+        (46.8 - 1e-10, 46.8),
+        (0.636, 0.636),
+        (29.3, 47.9),
+        (47.9, 29.3),
+    ],
 )
 def test_a_refusals_turns_never_print_a_turn_short_of_the_goal_as_the_goal(
     reached_deg: float, asked_deg: float
@@ -384,7 +392,7 @@ def test_a_refusals_turns_never_print_a_turn_short_of_the_goal_as_the_goal(
     for shown, truth in ((shown_reached, reached_deg), (shown_asked, asked_deg)):
         digits = len(shown.replace(".", "").lstrip("0"))
         assert abs(float(shown) - truth) <= 0.5 * 10 ** (math.floor(math.log10(truth)) - digits + 1)
-    if reached_deg < asked_deg:
+    if math.radians(reached_deg) < math.radians(asked_deg):
         assert shown_reached != shown_asked
     if f"{reached_deg:.3g}" != f"{asked_deg:.3g}" or reached_deg == asked_deg:
         assert (shown_reached, shown_asked) == (f"{reached_deg:.3g}", f"{asked_deg:.3g}")

@@ -225,6 +225,41 @@ def test_a_torso_with_two_equal_arms_composes_and_plans_with_the_end_effector_na
     assert plan.verification.passed
     assert plan.robot.end_effector == "right_lower"
     assert set(plan.robot.joints) == {"left_q1", "left_q2", "right_q1", "right_q2"}
+    # two such torsos side by side (an arms list), one end effector named: planned too
+    both = [
+        f"arm{k}_{name}" for k in (1, 2) for name in ("left_q1", "left_q2", "right_q1", "right_q2")
+    ]
+    start = ", ".join(f"{n} = 0.0" for n in both)
+    finish = ", ".join(
+        f"{n} = {v}" for n, v in zip(both, [20.0, -15.0, -20.0, 10.0] * 2, strict=True)
+    )
+    scenario.write_text(
+        'end_effector = "arm1_right_lower"\nduration = 10.0\n[robot]\nbase_mass = 200.0\n'
+        'base_size = [0.6, 0.6, 0.6]\narms = [{ arm = "torso.urdf", mount = [0.3, 0.0, 0.0] }, '
+        '{ arm = "torso.urdf", mount = [-0.3, 0.0, 0.0], mount_rpy_deg = [0.0, 0.0, 180.0] }]\n'
+        f"[safety]\ncheck = false\n[start]\njoints = {{ {start} }}\n"
+        f"[goal]\njoints = {{ {finish} }}\n"
+    )
+    assert ff.plan(ff.Scenario.from_toml(scenario)).verification.passed
+    # composed on its own (freefloat compose), the tie is an error naming both chains
+    spec = ServicerSpec(arm=str(arm), base_mass=200.0, base_size=(0.6, 0.6, 0.6))
+    with pytest.raises(ff.AmbiguousEndEffectorError, match=r"left_lower.*right_lower"):
+        compose_servicer(spec, tmp_path / "torso_servicer.urdf")
+    assert not (tmp_path / "torso_servicer.urdf").exists()
+
+
+def test_an_unknown_arm_name_is_named_as_written(tmp_path):
+    """A mistyped arm name is reported as the name written, not as a path in the scenario's
+    folder (only a path-like arm, with a folder or .urdf, is taken relative to the file)."""
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(
+        'duration = 10.0\n[robot]\narm = "pandaa"\nbase_mass = 100.0\n'
+        "base_size = [0.6, 0.6, 0.6]\n[start]\njoints = { joint1 = 0.0 }\n"
+        "[goal]\njoints = { joint1 = 1.0 }\n"
+    )
+    with pytest.raises(ff.UnknownNameError, match="unknown arm 'pandaa'") as info:
+        ff.Scenario.from_toml(scenario)
+    assert str(tmp_path) not in str(info.value).split("unknown arm", 1)[1]
 
 
 @pytest.fixture(scope="module", params=["panda_servicer", "ur5_servicer"])

@@ -180,13 +180,13 @@ class UnreachableAttitudeError(SolverError, UnreachableGoalError):
     def turn_phrase(reached: float, asked: float) -> str:
         """``"reachable up to X deg of the Y deg asked"`` from turns in rad.
 
-        Three significant digits, more (up to nine, both figures alike) while a turn short of
-        the one asked would print the same as it (46.8 of 46.8 reads as reached; 46.79 of 46.8
-        does not).
+        Three significant digits, more (both figures alike, up to the 17 that tell any two
+        floats apart) while a turn short of the one asked would print the same as it (46.8 of
+        46.8 reads as reached; 46.79 of 46.8 does not).
         """
         out, goal = math.degrees(reached), math.degrees(asked)
         digits = 3
-        while digits < 9 and out < goal and f"{out:.{digits}g}" == f"{goal:.{digits}g}":
+        while digits < 17 and out < goal and f"{out:.{digits}g}" == f"{goal:.{digits}g}":
             digits += 1
         return f"reachable up to {out:.{digits}g} deg of the {goal:.{digits}g} deg asked"
 

@@ -278,10 +278,17 @@ def _servicer(table: Mapping[str, Any], relative_to: Path | None = None) -> Robo
         return RobotSource(path, text, spec)
     settled = spec.arms()
     prefixes = [a.prefix for a in settled]
-    tips = arm_tips(text if text is not None else path.read_text(), prefixes)
+    # an arm whose longest chains tie leaves the end effectors to the scenario or the loader
+    tips = arm_tips(text if text is not None else path.read_text(), prefixes, strict=False)
+    tips = tips if len(tips) == len(prefixes) else ()
     srdf = path.with_suffix(".srdf")
     srdf_text = None if srdf.is_file() else merged_srdf([a.arm for a in settled], prefixes)
     return RobotSource(path, text, spec, tips, srdf, srdf_text)
+
+
+def _looks_like_path(arm: str) -> bool:
+    """Whether an arm that is no arm name is meant as a file (a folder or ``.urdf`` in it)."""
+    return "/" in arm or os.sep in arm or arm.startswith("~") or arm.lower().endswith(".urdf")
 
 
 def _arms(table: Mapping[str, Any], relative_to: Path | None = None) -> list[Any]:
@@ -327,8 +334,8 @@ def _arms(table: Mapping[str, Any], relative_to: Path | None = None) -> list[Any
             raise ScenarioError(f"{where} keep_gripper must be true or false, got {excerpt(keep)}")
         rpy = triple(item, "mount_rpy_deg", [0.0] * 3, where)
         arm = item["arm"]
-        if arm not in ARMS and relative_to is not None:
-            arm = str(relative_to / Path(arm).expanduser())  # an absolute path stays as it is
+        if arm not in ARMS and relative_to is not None and _looks_like_path(arm):
+            arm = os.path.normpath(relative_to / Path(arm).expanduser())  # absolute: kept
         arms.append(
             ArmSpec(
                 arm,

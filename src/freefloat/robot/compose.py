@@ -67,7 +67,8 @@ class Composed:
         notes: what the composition chose on its own (a finger locked mid-range...), one line
             each.
         end_effectors: the default end effector of each arm (the tip of its longest chain
-            that is not a finger), in arm order; an arm whose longest chains tie has none.
+            that is not a finger), in arm order; empty when an arm's longest chains tie
+            (composed with ``strict_tips=False``).
         srdf: the SRDF text of the pairs never checked (each arm's own SRDF pairs, with the
             arm's prefix), for a servicer of several arms; None otherwise.
         prismatic: the locked joints that were prismatic (their values in m, not rad).
@@ -197,11 +198,16 @@ def compose_servicer_text(spec: ServicerSpec) -> str:
 
     Raises: as :func:`compose`.
     """
-    return compose(spec).text
+    return compose(spec, strict_tips=False).text
 
 
-def compose(spec: ServicerSpec) -> Composed:
+def compose(spec: ServicerSpec, strict_tips: bool = True) -> Composed:
     """Compose the servicer and validate it with yourdfpy (no file is written).
+
+    ``strict_tips``: an arm whose longest chains tie (a dual-arm torso) has no default end
+    effector: an error (:class:`AmbiguousEndEffectorError`, naming the candidates), unless
+    False (a scenario's servicer: its ``end_effector`` names one) and no payload needs it;
+    then :attr:`Composed.end_effectors` is empty.
 
     Raises:
         ModelError: an arm URDF cannot be read, or the result does not validate.
@@ -263,9 +269,9 @@ def compose(spec: ServicerSpec) -> Composed:
 
     body = etree.tostring(urdf.write_xml(), pretty_print=True, encoding="unicode")
     text = "<?xml version='1.0' encoding='UTF-8'?>\n" + body
-    # a payload needs its arm's tip; otherwise an arm with two equally long chains (a dual-arm
-    # torso) has none by default, and the scenario or the loader names the end effector
-    tips = arm_tips(text, [a.prefix for a in arms], strict=spec.payload is not None)
+    strict = strict_tips or spec.payload is not None  # a payload needs its arm's tip
+    tips = arm_tips(text, [a.prefix for a in arms], strict=strict)
+    tips = tips if len(tips) == len(arms) else ()  # one per arm, or none
     srdf = merged_srdf([a.arm for a in arms], [a.prefix for a in arms]) if len(arms) > 1 else None
     for note in notes:
         LOGGER.warning("%s", note)  # a choice the user did not state
@@ -300,7 +306,8 @@ def arm_tips(text: str, prefixes: Sequence[str], strict: bool = True) -> tuple[s
     """The default end effector of each arm (by its prefix) in a composed URDF.
 
     An arm whose longest chains tie has none: with ``strict`` that is an error
-    (:class:`AmbiguousEndEffectorError`), otherwise the arm is left out of the tuple.
+    (:class:`AmbiguousEndEffectorError`), otherwise the arm is left out of the tuple (a caller
+    that needs one per arm checks the length).
     """
     import pinocchio as pin
 

@@ -106,7 +106,7 @@ def turn_candidates(scenario: Scenario) -> list[np.ndarray]:
 
 def _describe(counts: list[int], names: list[str]) -> str:
     """Free coefficients per joint for people: ``+2 for each joint`` when all alike."""
-    if len(counts) > 1 and counts[0] > 0 and len(set(counts)) == 1:
+    if len(counts) == len(names) > 1 and counts[0] > 0 and len(set(counts)) == 1:
         return f"+{counts[0]} for each joint"
     return ", ".join(f"{n}+{c}" for n, c in zip(names, counts, strict=True) if c) or "none"
 

@@ -105,9 +105,9 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
         )
     if not report.planar:
         lines.append("  per axis, turns measured from the drift attitude:")
-        if report.bound is not None:  # the outer column is no second bound: say why it is larger
-            away = math.degrees(geodesic_angle(report.start_quaternion, drift))
-            within = math.degrees(report.bound.bound)
+        away = math.degrees(geodesic_angle(report.start_quaternion, drift))
+        within = math.degrees(report.bound.bound) if report.bound is not None else 0.0
+        if away < within < 180.0:  # the outer column is no second bound: say why it is larger
             lines.append(
                 f"  (outer: as far as the attitude stays within {within:.4g} deg of the start; "
                 f"the drift lies {away:.3g} deg from it)"

@@ -249,7 +249,7 @@ def quality_line(p: Plan) -> str:
     q = p.quality
     each = ", ".join(f"{k} {shown(k, v)}" for k, v in q.excursion_beyond_span.items())
     largest = shown(q.largest_joint, q.largest_excursion)
-    if not largest.startswith("0 "):  # a joint named only when it does go beyond its span
+    if abs(q.largest_excursion) >= _RESOLVED_EXCURSION:  # named only when it leaves its span
         largest += f" ({q.largest_joint})"
     return f"  path quality    largest excursion beyond a start-goal span {largest}; {each}"
 
