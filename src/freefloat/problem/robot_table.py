@@ -280,7 +280,6 @@ def _servicer(table: Mapping[str, Any], relative_to: Path | None = None) -> Robo
     prefixes = [a.prefix for a in settled]
     # an arm whose longest chains tie leaves the end effectors to the scenario or the loader
     tips = arm_tips(text if text is not None else path.read_text(), prefixes, strict=False)
-    tips = tips if len(tips) == len(prefixes) else ()
     srdf = path.with_suffix(".srdf")
     srdf_text = None if srdf.is_file() else merged_srdf([a.arm for a in settled], prefixes)
     return RobotSource(path, text, spec, tips, srdf, srdf_text)

@@ -271,7 +271,6 @@ def compose(spec: ServicerSpec, strict_tips: bool = True) -> Composed:
     text = "<?xml version='1.0' encoding='UTF-8'?>\n" + body
     strict = strict_tips or spec.payload is not None  # a payload needs its arm's tip
     tips = arm_tips(text, [a.prefix for a in arms], strict=strict)
-    tips = tips if len(tips) == len(arms) else ()  # one per arm, or none
     srdf = merged_srdf([a.arm for a in arms], [a.prefix for a in arms]) if len(arms) > 1 else None
     for note in notes:
         LOGGER.warning("%s", note)  # a choice the user did not state
@@ -306,8 +305,8 @@ def arm_tips(text: str, prefixes: Sequence[str], strict: bool = True) -> tuple[s
     """The default end effector of each arm (by its prefix) in a composed URDF.
 
     An arm whose longest chains tie has none: with ``strict`` that is an error
-    (:class:`AmbiguousEndEffectorError`), otherwise the arm is left out of the tuple (a caller
-    that needs one per arm checks the length).
+    (:class:`AmbiguousEndEffectorError`), otherwise the tuple is empty: one tip per arm, or
+    none.
     """
     import pinocchio as pin
 
@@ -319,7 +318,9 @@ def arm_tips(text: str, prefixes: Sequence[str], strict: bool = True) -> tuple[s
         found = end_effector_candidates(model, prefix)
         if len(found) > 1 and strict:
             raise AmbiguousEndEffectorError(found)
-        tips += found[:1] if len(found) == 1 else []
+        if len(found) > 1:
+            return ()
+        tips.append(found[0])
     return tuple(tips)
 
 
