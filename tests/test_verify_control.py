@@ -207,17 +207,24 @@ def test_a_replay_that_amplifies_its_torques_rounding_does_not_refuse():
     """A light arm on a 500 kg spacecraft for 20 s. Its torques, computed from two evaluations
     of the file's path (NumPy monomials here, the verifier's basis there), differ by more
     than 1e-13 of their largest; scaled by 1 + 1e-13 they drive the open-loop replay's end
-    more than the tolerance away: no replay can tell the plan's error from its inputs'. Its
-    converged replay ends 5e-4 rad from the goal; with the torques perturbed by 1e-12 of
-    their largest moving the end by far more, the check says no verdict instead of refusing
-    the plan."""
+    more than the tolerance away: no replay can tell the plan's error from its inputs'. Where
+    its replay converges (on the host this was written on, 5e-4 rad from the goal),
+    the torques perturbed by 1e-12 of their largest move the end by far more and the check
+    says no verdict instead of refusing; elsewhere the replay may not converge by its cap,
+    which is no verdict too."""
     scenario = ff.Scenario.from_toml(ROOT / "examples" / "kinova_servicer.toml")
     p = ff.plan(dataclasses.replace(scenario, goal_attitude=KINOVA_GOAL), samples=41)
     joints = p.verification["replay_joints"]
-    assert joints.verdict == "no verdict" and "torques perturbed by 1e-12" in joints.detail
+    assert joints.verdict == "no verdict"
     assert joints.value > joints.tolerance and joints.error_estimate >= joints.value
     said = summary(p)
-    assert "more steps will not settle it" in said and "--replay-steps" not in said
+    # Which of the two honest answers the replay gives depends on the platform's rounding (the
+    # plan's root and the replay's sums differ in their last bits between hosts): the
+    # perturbation shows no replay can settle it, or the replay did not converge by its cap.
+    if "torques perturbed by 1e-12" in joints.detail:
+        assert "more steps will not settle it" in said and "--replay-steps" not in said
+    else:
+        assert "8192 steps, not converged" in joints.detail and "--replay-steps" in said
     arm = ff.load_robot(p.robot.urdf)
     mmap = ff.MomentumMap(arm)
     steps = 4096
