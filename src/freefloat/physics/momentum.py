@@ -12,11 +12,10 @@ identity attitude. The system centre of mass (CM) is the inertial origin.
 
 from __future__ import annotations
 
-import weakref
-
 import numpy as np
 import pinocchio as pin
 
+from ..robot.content_cache import RobotCache
 from ..robot.model import Robot
 from .centroidal_batch import BatchedCentroidal, NodeRates
 
@@ -190,14 +189,10 @@ def is_planar(robot: Robot, samples: int = 16, seed: int = 0) -> bool:
     return planar_axis(robot, samples, seed) is not None
 
 
-#: Planar axis per robot (None: not planar), computed once; entries go with the robot.
-_PLANAR_AXES: weakref.WeakKeyDictionary[Robot, tuple[np.ndarray | None]] = (
-    weakref.WeakKeyDictionary()
-)
+#: Planar axis (None: not planar), computed once per robot content.
+_PLANAR_AXES: RobotCache[np.ndarray | None] = RobotCache()
 
 
 def cached_planar_axis(robot: Robot) -> np.ndarray | None:
-    """:func:`planar_axis`, computed once per robot."""
-    if robot not in _PLANAR_AXES:
-        _PLANAR_AXES[robot] = (planar_axis(robot),)
-    return _PLANAR_AXES[robot][0]
+    """:func:`planar_axis`, computed once per robot content."""
+    return _PLANAR_AXES.get(robot, lambda: planar_axis(robot))

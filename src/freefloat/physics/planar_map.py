@@ -16,12 +16,12 @@ many configurations at once in a few array operations.
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
+from ..robot.content_cache import RobotCache
 from ..robot.model import Robot
 
 __all__ = ["PlanarMap", "cached_identify", "identify"]
@@ -140,12 +140,10 @@ def identify(robot: Robot, axis: np.ndarray, seed: int = 0) -> PlanarMap | None:
     return PlanarMap(axis, coeffs[:, 0], coeffs[:, 1:], error)
 
 
-#: Identified planar maps per robot (None: not identifiable), computed once.
-_MAPS: weakref.WeakKeyDictionary[Robot, tuple[PlanarMap | None]] = weakref.WeakKeyDictionary()
+#: Identified planar maps (None: not identifiable), computed once per robot content.
+_MAPS: RobotCache[PlanarMap | None] = RobotCache()
 
 
 def cached_identify(robot: Robot, axis: np.ndarray) -> PlanarMap | None:
-    """:func:`identify`, computed once per robot."""
-    if robot not in _MAPS:
-        _MAPS[robot] = (identify(robot, axis),)
-    return _MAPS[robot][0]
+    """:func:`identify`, computed once per robot content (``axis``: its planar axis)."""
+    return _MAPS.get(robot, lambda: identify(robot, axis))

@@ -10,7 +10,6 @@ intervals is the (open) interval of yaw changes a simple point-to-point motion c
 from __future__ import annotations
 
 import math
-import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -18,7 +17,7 @@ import numpy as np
 
 from ..physics.momentum import MomentumMap
 from ..physics.planar_map import PlanarMap
-from ..robot.model import Robot
+from ..robot.content_cache import RobotCache
 from .quasi_random import unit_points
 
 __all__ = ["PlanarBounds", "joint_ranges", "planar_bounds"]
@@ -46,14 +45,12 @@ class PlanarBounds:
 def cached_planar_bounds(
     mmap: MomentumMap, axis: np.ndarray, planar_map: PlanarMap | None
 ) -> PlanarBounds:
-    """:func:`planar_bounds` computed once per robot (they depend on the robot alone)."""
-    if mmap.robot not in _BOUNDS:
-        _BOUNDS[mmap.robot] = planar_bounds(mmap, axis=axis, planar_map=planar_map)
-    return _BOUNDS[mmap.robot]
+    """:func:`planar_bounds` computed once per robot content (they depend on the robot alone)."""
+    return _BOUNDS.get(mmap.robot, lambda: planar_bounds(mmap, axis=axis, planar_map=planar_map))
 
 
-#: Planar bounds per robot, computed once; entries go with the robot.
-_BOUNDS: weakref.WeakKeyDictionary[Robot, PlanarBounds] = weakref.WeakKeyDictionary()
+#: Planar bounds, computed once per robot content.
+_BOUNDS: RobotCache[PlanarBounds] = RobotCache()
 
 
 def joint_ranges(mmap: MomentumMap) -> np.ndarray:
