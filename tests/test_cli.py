@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -172,6 +173,20 @@ def test_help(command):
     )
     assert result.returncode == 0
     assert "usage: freefloat" in result.stdout
+
+
+def test_plan_help_states_the_default_tolerance_in_both_units(capsys):
+    """The default attitude tolerance is 1e-9 rad (docs/reference.md); its degrees in the help
+    are that value's conversion (180/pi), to the three digits printed."""
+    assert main(["plan", "--help"]) == 0
+    said = " ".join(capsys.readouterr().out.split())
+    found = re.search(
+        r"--tolerance-deg DEG attitude tolerance in deg \(default (\S+) deg, that is (\S+) rad\)",
+        said,
+    )
+    assert found is not None, said
+    assert float(found[2]) == 1e-9
+    assert found[1] == "5.73e-08" and abs(float(found[1]) - 1e-9 * 180 / math.pi) < 5e-11
 
 
 def test_console_script_exit_code(tmp_path):

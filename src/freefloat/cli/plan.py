@@ -61,7 +61,8 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
         "--tolerance-deg",
         type=float,
         metavar="DEG",
-        help=f"attitude tolerance in deg (default {math.degrees(DEFAULT_TOLERANCE):g})",
+        help=f"attitude tolerance in deg (default {math.degrees(DEFAULT_TOLERANCE):.3g} deg, "
+        f"that is {DEFAULT_TOLERANCE:g} rad)",
     )
     p_plan.add_argument(
         "--tolerance",
