@@ -183,3 +183,18 @@ def test_a_stopped_search_is_continued_with_more_freedom(panda: ff.Scenario) -> 
     assert err.reached_fraction == pytest.approx(err.reached / err.asked, rel=1e-12)
     assert f"reachable up to {math.degrees(err.reached):.3g} deg of the" in str(err)
     assert f"misses the goal by {err.best_residual:.3g} rad" in str(err)
+
+
+@pytest.mark.parametrize(
+    ("fraction", "printed"),
+    [(0.5, "0.5"), (0.1234, "0.123"), (0.9996, "0.9996"), (0.99999999, "0.99999999"), (1.0, "1")],
+)
+def test_a_stop_short_of_the_goal_never_prints_as_the_whole_way(fraction, printed):
+    from freefloat.solvers.tracked import ContinuationResult
+
+    def result(f):
+        return ContinuationResult(np.zeros(1), f, 0.1, np.array([0.0, 0.0, 1.0]), np.zeros(3), 1, 1)
+
+    assert result(fraction).fraction_text == printed
+    just_short = np.nextafter(1.0, 0.0)
+    assert float(result(just_short).fraction_text) == just_short

@@ -382,7 +382,7 @@ def continuation(
         # A square system leaves the corrector no room to slide along a limit: the Newton-type
         # searches of the multistart strategy (counted budget) get their turn.
         fallback = multistart(problem, constraints, options, start)
-        attempt.tried += [f"continuation stopped at {result.fraction:.3g} of the way"]
+        attempt.tried += [f"continuation stopped at {result.fraction_text} of the way"]
         attempt.tried += fallback.tried
         attempt.blocked_by = tuple(dict.fromkeys(attempt.blocked_by + fallback.blocked_by))
         if fallback.candidates:

@@ -40,6 +40,17 @@ class ContinuationResult:
         """Whether the goal itself was reached."""
         return not self.stopped_by
 
+    @property
+    def fraction_text(self) -> str:
+        """``fraction`` as printed: three significant digits, more while short of 1.
+
+        A stop short of the goal never prints as the whole way (0.9996 reads "0.9996", not "1").
+        """
+        digits = 3
+        while digits < 17 and self.fraction < 1.0 and float(f"{self.fraction:.{digits}g}") >= 1:
+            digits += 1
+        return f"{self.fraction:.{digits}g}"
+
 
 @dataclass(frozen=True)
 class BranchPoint:
