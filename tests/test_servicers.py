@@ -302,3 +302,25 @@ def test_exact_jacobian_on_a_servicer(servicer_plan):
     eps = 1e-5
     fd = ref.central_jacobian(problem.residual, beta, eps)
     assert np.abs(jac - fd).max() <= 1e-6 * np.abs(fd).max()
+
+
+def test_robot_and_arm_tell_a_file_from_a_name_by_one_rule(tmp_path):
+    """``robot = "..."`` and a servicer's ``arm`` share the rule; an upper-case suffix or a
+    leading ``~`` is a file for both (the robot's rule once sent "Arm.URDF" to the shipped
+    names)."""
+    from freefloat.robot.locations import is_path_like, resolve_robot, robots_dir
+
+    for text, is_file in [
+        ("planar_2dof", False),
+        ("ur5", False),
+        ("Arm.URDF", True),
+        ("arms/ur5", True),
+        ("arms\\ur5", True),
+        ("~/arm.urdf", True),
+    ]:
+        assert is_path_like(text) is is_file, text
+    urdf = tmp_path / "Arm.URDF"
+    urdf.write_text((robots_dir() / "planar_2dof.urdf").read_text())
+    assert resolve_robot("Arm.URDF", relative_to=tmp_path) == urdf
+    with pytest.raises(ff.UnknownNameError, match="robot"):
+        resolve_robot("Arm", relative_to=tmp_path)

@@ -43,6 +43,7 @@ import numpy as np
 
 from ..errors import InputError, InputLimitError, ScenarioError, UnknownNameError, excerpt
 from ..files import read_text_file
+from ..robot.locations import is_path_like
 from ..robot.lock import lock_joints, movable_joints
 from ..robot.model import MAX_URDF_BYTES, resolve_robot
 from .limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, check_number
@@ -285,11 +286,6 @@ def _servicer(table: Mapping[str, Any], relative_to: Path | None = None) -> Robo
     return RobotSource(path, text, spec, tips, srdf, srdf_text)
 
 
-def _looks_like_path(arm: str) -> bool:
-    """Whether an arm that is no arm name is meant as a file (a folder or ``.urdf`` in it)."""
-    return "/" in arm or os.sep in arm or arm.startswith("~") or arm.lower().endswith(".urdf")
-
-
 def _arms(table: Mapping[str, Any], relative_to: Path | None = None) -> list[Any]:
     """The arms of a servicer table: ``arm`` (with ``mount``...) or an ``arms`` list.
 
@@ -333,7 +329,7 @@ def _arms(table: Mapping[str, Any], relative_to: Path | None = None) -> list[Any
             raise ScenarioError(f"{where} keep_gripper must be true or false, got {excerpt(keep)}")
         rpy = triple(item, "mount_rpy_deg", [0.0] * 3, where)
         arm = item["arm"]
-        if arm not in ARMS and relative_to is not None and _looks_like_path(arm):
+        if arm not in ARMS and relative_to is not None and is_path_like(arm):
             arm = os.path.normpath(relative_to / Path(arm).expanduser())  # absolute: kept
         arms.append(
             ArmSpec(

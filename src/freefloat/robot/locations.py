@@ -8,7 +8,13 @@ from pathlib import Path
 from ..errors import ModelError, UnknownNameError
 from ..files import absolute_path
 
-__all__ = ["example_robot_data_dir", "resolve_robot", "robots_dir", "shipped_robots"]
+__all__ = [
+    "example_robot_data_dir",
+    "is_path_like",
+    "resolve_robot",
+    "robots_dir",
+    "shipped_robots",
+]
 
 
 def example_robot_data_dir() -> Path | None:
@@ -37,14 +43,23 @@ def shipped_robots() -> list[str]:
     return sorted(p.stem for p in robots_dir().glob("*.urdf"))
 
 
+def is_path_like(text: str) -> bool:
+    """Whether a robot or arm given as text names a file rather than a robot or arm.
+
+    A file has a folder in it (a slash or a backslash), a leading ``~`` or a ``.urdf`` suffix (any
+    case); ``robot = "..."`` and a servicer's ``arm`` use this one rule.
+    """
+    return "/" in text or "\\" in text or text.startswith("~") or text.lower().endswith(".urdf")
+
+
 def resolve_robot(name_or_path: str | Path, relative_to: Path | None = None) -> Path:
     """Resolve a shipped robot name or a URDF path to an absolute URDF path.
 
-    A plain name without a suffix or separator (``"planar_2dof"``) is a shipped robot; anything
-    else is a path, relative to ``relative_to`` (a folder) when not absolute.
+    A name (``"planar_2dof"``; see :func:`is_path_like`) is a shipped robot; anything else is a
+    path, relative to ``relative_to`` (a folder) when not absolute.
     """
     text = str(name_or_path)
-    if "/" not in text and "\\" not in text and not text.endswith(".urdf"):
+    if not is_path_like(text):
         path = robots_dir() / f"{text}.urdf"
         if not path.is_file():
             raise UnknownNameError("robot", text, shipped_robots())
