@@ -7,6 +7,7 @@ import dataclasses
 
 import numpy as np
 import pinocchio as pin
+import pytest
 
 from freefloat.physics.momentum import MomentumMap, cached_planar_axis, planar_axis
 from freefloat.physics.planar_map import cached_identify, identify
@@ -27,6 +28,11 @@ def test_robots_read_from_one_file_share_their_results():
     assert first is not second and first.model is not second.model
     assert content_key(first) == content_key(second)
     assert _bounds(first) is _bounds(second)
+    shared = _bounds(first)
+    axis = cached_planar_axis(first)
+    for array in (shared.g_min, shared.g_max, axis, cached_identify(first, axis).num):
+        with pytest.raises(ValueError, match="read-only"):
+            array *= -1.0
 
 
 def test_masses_changed_in_place_get_their_own_bounds():

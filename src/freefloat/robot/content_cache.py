@@ -11,11 +11,14 @@ were changed in place (``freefloat.robust``) gets its own entry.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import weakref
 from collections import OrderedDict
 from collections.abc import Callable
 from typing import Generic, TypeVar
+
+import numpy as np
 
 from .model import Robot
 
@@ -59,8 +62,19 @@ class RobotCache(Generic[T]):
         if key in self._by_content:
             self._by_content.move_to_end(key)
             return self._by_content[key]
-        value = compute()
+        value = _read_only(compute())
         self._by_content[key] = value
         if len(self._by_content) > self._size:
             self._by_content.popitem(last=False)
         return value
+
+
+def _read_only(value: T) -> T:
+    """``value`` with its arrays (itself, or a dataclass's fields) made read-only: shared."""
+    arrays = [value] if isinstance(value, np.ndarray) else []
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        arrays = [getattr(value, f.name) for f in dataclasses.fields(value)]
+    for array in arrays:
+        if isinstance(array, np.ndarray):
+            array.setflags(write=False)
+    return value
