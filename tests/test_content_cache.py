@@ -4,6 +4,8 @@ physics differs (masses changed in place, other limits, a robot built without UR
 from __future__ import annotations
 
 import dataclasses
+import threading
+import time
 
 import numpy as np
 import pinocchio as pin
@@ -19,8 +21,7 @@ URDF = robots_dir() / "planar_2dof.urdf"
 
 
 def _bounds(robot):
-    axis = cached_planar_axis(robot)
-    return cached_planar_bounds(MomentumMap(robot), axis, cached_identify(robot, axis))
+    return cached_planar_bounds(MomentumMap(robot))
 
 
 def test_robots_read_from_one_file_share_their_results():
@@ -30,7 +31,7 @@ def test_robots_read_from_one_file_share_their_results():
     assert _bounds(first) is _bounds(second)
     shared = _bounds(first)
     axis = cached_planar_axis(first)
-    for array in (shared.g_min, shared.g_max, axis, cached_identify(first, axis).num):
+    for array in (shared.g_min, shared.g_max, axis, cached_identify(first).num):
         with pytest.raises(ValueError, match="read-only"):
             array *= -1.0
 
@@ -47,11 +48,11 @@ def test_masses_changed_in_place_get_their_own_bounds():
     np.testing.assert_allclose(after.g_max, planar_bounds(MomentumMap(robot), axis=axis).g_max)
     np.testing.assert_allclose(after.g_min, planar_bounds(MomentumMap(robot), axis=axis).g_min)
     assert not np.allclose(after.g_max, before.g_max)
-    assert cached_identify(robot, axis) is not cached_identify(load_robot(URDF), axis)
+    assert cached_identify(robot) is not cached_identify(load_robot(URDF))
     fresh = identify(robot, axis)
     assert fresh is not None
     np.testing.assert_allclose(
-        cached_identify(robot, axis).gains(np.zeros(2)), fresh.gains(np.zeros(2))
+        cached_identify(robot).gains(np.zeros(2)), fresh.gains(np.zeros(2))
     )
 
 
@@ -94,3 +95,37 @@ def test_a_robot_without_text_is_kept_per_object_and_old_entries_are_dropped():
     assert cache.get(keys[0], lambda: compute(99)) == 99  # the oldest entry was dropped
     assert cache.get(keys[2], lambda: compute(98)) == 12  # the newest is kept
     assert calls == [1, 3, 10, 11, 12, 99]
+
+
+def test_threads_asking_at_once_compute_each_content_once():
+    cache: RobotCache[int] = RobotCache()
+    robot = load_robot(URDF)
+    calls = []
+    gate = threading.Barrier(8)
+
+    def compute():
+        calls.append(1)
+        time.sleep(0.05)  # lets the other threads run meanwhile: without the lock they compute
+        return 7
+
+    results = []
+
+    def ask():
+        gate.wait()  # all eight threads ask together
+        results.append(cache.get(robot, compute))
+
+    threads = [threading.Thread(target=ask) for _ in range(8)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert results == [7] * 8
+    assert calls == [1]
+
+
+def test_a_robot_that_is_not_planar_has_no_planar_map_nor_bounds():
+    robot = load_robot(robots_dir() / "ur5_servicer.urdf")
+    assert cached_planar_axis(robot) is None
+    assert cached_identify(robot) is None
+    with pytest.raises(ValueError, match="does not turn about one axis"):
+        cached_planar_bounds(MomentumMap(robot))

@@ -23,6 +23,7 @@ import pinocchio as pin
 
 from ..robot.content_cache import RobotCache
 from ..robot.model import Robot
+from .momentum import cached_planar_axis
 
 __all__ = ["PlanarMap", "cached_identify", "identify"]
 
@@ -144,6 +145,16 @@ def identify(robot: Robot, axis: np.ndarray, seed: int = 0) -> PlanarMap | None:
 _MAPS: RobotCache[PlanarMap | None] = RobotCache()
 
 
-def cached_identify(robot: Robot, axis: np.ndarray) -> PlanarMap | None:
-    """:func:`identify`, computed once per robot content (``axis``: its planar axis)."""
-    return _MAPS.get(robot, lambda: identify(robot, axis))
+def cached_identify(robot: Robot) -> PlanarMap | None:
+    """:func:`identify` about the robot's own planar axis, computed once per robot content.
+
+    None when the robot is not planar, or its map is not identifiable. The axis is derived
+    from the robot (:func:`~.momentum.cached_planar_axis`), so everything the map depends on is
+    in the content key.
+    """
+
+    def compute() -> PlanarMap | None:
+        axis = cached_planar_axis(robot)
+        return None if axis is None else identify(robot, axis)
+
+    return _MAPS.get(robot, compute)

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.momentum import MomentumMap
-from ..physics.planar_map import PlanarMap
+from ..physics.momentum import MomentumMap, cached_planar_axis
+from ..physics.planar_map import PlanarMap, cached_identify
 from ..robot.content_cache import RobotCache
 from .quasi_random import unit_points
 
@@ -42,11 +42,24 @@ class PlanarBounds:
         return float(lo.sum()), float(hi.sum())
 
 
-def cached_planar_bounds(
-    mmap: MomentumMap, axis: np.ndarray, planar_map: PlanarMap | None
-) -> PlanarBounds:
-    """:func:`planar_bounds` computed once per robot content (they depend on the robot alone)."""
-    return _BOUNDS.get(mmap.robot, lambda: planar_bounds(mmap, axis=axis, planar_map=planar_map))
+def cached_planar_bounds(mmap: MomentumMap) -> PlanarBounds:
+    """:func:`planar_bounds` computed once per robot content (they depend on the robot alone).
+
+    The planar axis and map are the robot's own, derived from it (kept per content too), so
+    everything the bounds depend on is in the content key.
+
+    Raises:
+        ValueError: the robot is not planar.
+    """
+    robot = mmap.robot
+
+    def compute() -> PlanarBounds:
+        axis = cached_planar_axis(robot)
+        if axis is None:
+            raise ValueError("planar bounds of a robot whose base does not turn about one axis")
+        return planar_bounds(mmap, axis=axis, planar_map=cached_identify(robot))
+
+    return _BOUNDS.get(robot, compute)
 
 
 #: Planar bounds, computed once per robot content.

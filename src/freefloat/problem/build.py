@@ -108,14 +108,14 @@ def build_problem(
     planar = axis is not None
     planar_map = None
     if axis is not None:
-        planar_map = cached_identify(robot, axis)
+        planar_map = cached_identify(robot)
     counts = _free_counts(robot, extra, planar)
     family = PathFamily.with_extra(start, goal, counts)
 
     bounds = yaw_change = None
     if axis is not None:
         yaw_change = _planar_yaw_change(quats, axis)
-        bounds = cached_planar_bounds(mmap, axis, planar_map)
+        bounds = cached_planar_bounds(mmap)
         lo, hi = bounds.interval(goal - start)
         if check_bounds:
             branch = planar_yaw_branch(yaw_change, lo, hi)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import threading
 import weakref
 from collections import OrderedDict
 from collections.abc import Callable
@@ -45,16 +46,24 @@ class RobotCache(Generic[T]):
     """Values computed once per robot content (at most ``size`` kept, the oldest dropped).
 
     A robot without URDF text (built in memory) is kept per object, for as long as it lives.
+    Safe across threads (a Dask worker's): one lock per cache, held while a value is computed,
+    so each content is computed once; a computation may use *other* caches (each its own lock).
     """
 
     def __init__(self, size: int = 32) -> None:
         self._size = size
         self._by_content: OrderedDict[str, T] = OrderedDict()
         self._by_object: weakref.WeakKeyDictionary[Robot, tuple[T]] = weakref.WeakKeyDictionary()
+        self._lock = threading.Lock()
 
     def get(self, robot: Robot, compute: Callable[[], T]) -> T:
         """The value for ``robot``: kept, or ``compute()`` kept for the next robot like it."""
         key = content_key(robot)
+        with self._lock:
+            return self._get(robot, key, compute)
+
+    def _get(self, robot: Robot, key: str | None, compute: Callable[[], T]) -> T:
+        """:meth:`get` under the lock (``key``: the robot's :func:`content_key`)."""
         if key is None:
             if robot not in self._by_object:
                 self._by_object[robot] = (compute(),)
