@@ -129,3 +129,12 @@ def test_a_robot_that_is_not_planar_has_no_planar_map_nor_bounds():
     assert cached_identify(robot) is None
     with pytest.raises(ValueError, match="does not turn about one axis"):
         cached_planar_bounds(MomentumMap(robot))
+
+
+def test_a_joint_axis_changed_in_place_is_other_content():
+    robot = load_robot(URDF)
+    keys = []
+    for axis in ((0.0, 0.6, 0.8), (0.0, 0.8, 0.6)):
+        robot.model.joints[2] = pin.JointModel(pin.JointModelRevoluteUnaligned(*axis))
+        keys.append(content_key(robot))
+    assert keys[0] != keys[1]  # the same joint type, another axis

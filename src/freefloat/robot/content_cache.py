@@ -4,9 +4,9 @@ A user's process reads the same URDF many times (a sweep, a study, each ``ff.pla
 scenario file builds a new :class:`.Robot`). What depends only on the robot's physics (the
 planar axis, the planar map's coefficients, the planar bounds) is then the same each time;
 :class:`RobotCache` keeps it under a key of everything it can depend on (:func:`content_key`):
-the URDF text, the movable joints with their limits as the robot holds them, and every joint
-placement and body inertia as the Pinocchio model holds them *now*, so a model whose masses
-were changed in place (``freefloat.robust``) gets its own entry.
+the URDF text, the movable joints with their limits as the robot holds them, and every joint's
+type, axis and placement and every body's inertia as the Pinocchio model holds them *now*, so a
+model whose masses were changed in place (``freefloat.robust``) gets its own entry.
 """
 
 from __future__ import annotations
@@ -36,7 +36,11 @@ def content_key(robot: Robot) -> str | None:
     digest = hashlib.sha256(robot.urdf_text.encode("utf-8"))
     digest.update(repr((robot.base_link, robot.joints)).encode("utf-8"))
     for index in range(model.njoints):
-        digest.update(model.joints[index].shortname().encode("utf-8"))
+        joint = model.joints[index]
+        digest.update(joint.shortname().encode("utf-8"))  # RX, RZ, ...: the axis when aligned
+        axis = getattr(joint.extract(), "axis", None)  # an unaligned joint's own axis
+        if axis is not None:
+            digest.update(np.asarray(axis, dtype=float).tobytes())
         digest.update(model.jointPlacements[index].homogeneous.tobytes())
         digest.update(model.inertias[index].toDynamicParameters().tobytes())
     return digest.hexdigest()
