@@ -51,9 +51,7 @@ def test_masses_changed_in_place_get_their_own_bounds():
     assert cached_identify(robot) is not cached_identify(load_robot(URDF))
     fresh = identify(robot, axis)
     assert fresh is not None
-    np.testing.assert_allclose(
-        cached_identify(robot).gains(np.zeros(2)), fresh.gains(np.zeros(2))
-    )
+    np.testing.assert_allclose(cached_identify(robot).gains(np.zeros(2)), fresh.gains(np.zeros(2)))
 
 
 def test_other_limits_are_other_content():
