@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
@@ -38,11 +37,12 @@ from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
 from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.residual import Problem
 from ..progress import heartbeat
+from .corrector import Rows, correct, corrected_step
 from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
-from .predictor import newton_correction, tangent
-from .restore import Broken, broken_constraint, first_broken
-from .rows import NO_DIPS, RowCache, linear_rows, with_critical, with_dips, with_picked
+from .predictor import tangent
+from .restore import Broken, first_broken
+from .rows import NO_DIPS, RowCache, linear_rows
 from .tracked import BranchPoint, ContinuationResult
 
 __all__ = ["ContinuationResult", "continuation", "track"]
@@ -61,8 +61,6 @@ INTERMEDIATE_TOLERANCE = 1e-4
 #: The targets on the way are solved on the problem's integration steps divided by this
 #: (at least 16 steps): their tolerance allows it, and the node rates cost half as much.
 INTERMEDIATE_STEPS = 2
-#: Newton iterations per corrector.
-CORRECTOR_ITERATIONS = 8
 #: Why a continuation stops when no path within the constraints is found at its start.
 NO_START = "no path within the constraints reaches even the quintic path's own attitude"
 #: Singular-value ratio below which dh/dbeta counts as singular.
@@ -85,59 +83,18 @@ def _tangent(
     return tangent(jac, delta, g, g_mat, step)
 
 
+def _way(start: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+    """The geodesic from ``start`` to ``goal`` (``[x, y, z, w]``): rotation vector, angle, axis.
+
+    The rotation vector and angle in rad, in the start's frame; the axis is z when they agree.
+    """
+    delta = quat_log(quat_multiply(quat_conjugate(start), goal))
+    angle = float(np.linalg.norm(delta))
+    return delta, angle, delta / angle if angle > 0 else np.array([0.0, 0.0, 1.0])
+
+
 def _target(problem: Problem, start: np.ndarray, delta: np.ndarray, lam: float) -> Problem:
     return problem.with_goal(quat_multiply(start, quat_exp(lam * delta)))
-
-
-def _correct(
-    problem: Problem,
-    constraints: Sequence[Constraint],
-    beta: np.ndarray,
-    tol: float,
-    instants: np.ndarray,
-    cache: RowCache,
-    dips: np.ndarray = NO_DIPS,
-) -> tuple[np.ndarray | None, np.ndarray, np.ndarray, int]:
-    """Newton corrector from ``beta``: (solved beta or None, residual, Jacobian, iterations).
-
-    The instants the constraints with their own instants pick at each iterate are kept for
-    the next ones (:func:`.rows.with_picked`): rows that jump with the iterate would let
-    Newton chase them instead of converging. The corrector gives up early when a Newton step
-    did not halve the residual (the predicted step was too long), except once: after a step
-    that took the path back inside rows, which may raise the residual.
-    """
-    r, jac = problem.residual_and_jacobian(beta)
-    previous, was_inside, excused = math.inf, True, False
-    for iteration in range(1, CORRECTOR_ITERATIONS + 1):
-        norm = float(np.linalg.norm(r))
-        g, g_mat = linear_rows(problem, constraints, beta, instants, cache, dips)
-        dips = with_picked(problem, constraints, beta, dips)
-        inside = _inside(g)
-        if norm < tol and inside:
-            return beta, r, jac, iteration
-        if iteration > 2 and norm > 0.5 * previous and norm > 1e3 * tol:
-            if was_inside or excused:
-                break  # not contracting: the step was too long
-            excused = True
-        d = newton_correction(jac, r, g, g_mat)
-        if d is None:
-            break
-        beta, previous, was_inside = beta + d, norm, inside
-        r, jac = problem.residual_and_jacobian(beta)
-    g = linear_rows(problem, constraints, beta, instants, cache, dips)[0]
-    if float(np.linalg.norm(r)) < tol and _inside(g):
-        return beta, r, jac, CORRECTOR_ITERATIONS
-    return None, r, jac, CORRECTOR_ITERATIONS
-
-
-def _inside(g: np.ndarray) -> bool:
-    """Whether every linearised row ``g`` (its constraint's unit) is at or inside its limit."""
-    return len(g) == 0 or float(np.max(g)) <= 0.0
-
-
-def _dense_ok(problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray) -> bool:
-    """Whether ``beta``'s path honours every constraint everywhere (exact dense check)."""
-    return not broken_constraint(problem, constraints, beta)
 
 
 def _ahead(
@@ -192,21 +149,18 @@ def track(
     """
     zero = np.zeros(problem.n_free) if origin is None else np.asarray(origin, dtype=float)
     start = problem.achieved(zero)
-    delta = quat_log(quat_multiply(quat_conjugate(start), problem.goal_quaternion))
-    angle = float(np.linalg.norm(delta))
-    axis = delta / angle if angle > 0 else np.array([0.0, 0.0, 1.0])
+    delta, angle, axis = _way(start, problem.goal_quaternion)
     final_tol = POLISH * options.tolerance
     first_evaluation = problem.evaluations
     instants, dips = DEFAULT_INSTANTS, NO_DIPS
     cache: RowCache = {}
-
     beta, lam, iterations, steps = zero, 0.0, 0, 0
     here = _target(problem, start, delta, 0.0)
     coarse = problem.with_steps(max(problem.steps // INTERMEDIATE_STEPS, 16))  # on the way
     r, jac = here.residual_and_jacobian(beta)
     broke = first_broken(problem, constraints, beta)  # the quintic's: brought inside first
     if broke is not None:
-        solved, r, jac, iterations = _correct(
+        solved, r, jac, iterations = correct(
             here, constraints, beta, INTERMEDIATE_TOLERANCE, instants, cache
         )
         if solved is None:  # the start could not be brought within what it broke
@@ -227,11 +181,7 @@ def track(
             # rather than spend the budget on the same refusal.
             tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache, dips=dips)
             blocked = _ahead(problem, constraints, beta, tangent)
-            gain = lam - reached[steps - PACE_WINDOW]
-            stopped_by = (
-                f"{_why(blocked, jac)} (stalled: "
-                f"{math.degrees(gain * angle):.2g} deg in the last {PACE_WINDOW} steps)"
-            )
+            stopped_by = _stall_reason(blocked, jac, (lam - reached[steps - PACE_WINDOW]) * angle)
             break
         if problem.evaluations - first_evaluation > options.max_evaluations:
             stopped_by = f"evaluation budget ({options.max_evaluations} residual evaluations)"
@@ -245,8 +195,8 @@ def track(
         last = lam + step >= 1.0
         target = _target(problem if last else coarse, start, delta, 1.0 if last else lam + step)
         tol = final_tol if last else INTERMEDIATE_TOLERANCE
-        at = _Rows(instants, dips, cache)
-        done = _step(problem, target, constraints, beta + step * tangent, tol, at)
+        at = Rows(instants, dips, cache)
+        done = corrected_step(problem, target, constraints, beta + step * tangent, tol, at)
         iterations, instants, dips = iterations + done.spent, done.instants, done.dips
         if done.beta is None:
             reached.append(lam)
@@ -267,54 +217,12 @@ def track(
     )
 
 
-@dataclass(frozen=True)
-class _Step:
-    """One continuation step's corrected path (:func:`_step`).
-
-    Attributes:
-        beta: the corrected path's free coefficients (rad or m), None when none was found.
-        residual: its residual (rad).
-        jacobian: the residual's Jacobian there (rad per unit of ``beta``).
-        iterations: the first corrector's Newton iterations (they set the next step).
-        spent: every corrector's iterations.
-        instants: the instants now imposed (normalised).
-        dips: the instants where the dense check found a dip, now imposed on the constraints
-            with their own instants (:func:`.rows.with_dips`; normalised).
-    """
-
-    beta: np.ndarray | None
-    residual: np.ndarray
-    jacobian: np.ndarray
-    iterations: int
-    spent: int
-    instants: np.ndarray
-    dips: np.ndarray
-
-
-@dataclass(frozen=True)
-class _Rows:
-    """Where a step's rows sit: the instants, the dips (see :class:`_Step`) and the row cache."""
-
-    instants: np.ndarray
-    dips: np.ndarray
-    cache: RowCache
-
-
-def _step(
-    problem: Problem,
-    target: Problem,
-    constraints: Sequence[Constraint],
-    predicted: np.ndarray,
-    tol: float,
-    at: _Rows,
-) -> _Step:
-    """Correct the ``predicted`` path onto ``target`` (``tol``, rad), then densely inside."""
-    solved, r, jac, its = _correct(
-        target, constraints, predicted, tol, at.instants, at.cache, at.dips
+def _stall_reason(blocked: Broken | None, jac: np.ndarray, gain: float) -> str:
+    """Why a stalled branch stops: :func:`_why`, and its ``gain`` (rad) over the pace window."""
+    return (
+        f"{_why(blocked, jac)} (stalled: "
+        f"{math.degrees(gain):.2g} deg in the last {PACE_WINDOW} steps)"
     )
-    if solved is not None and not _dense_ok(problem, constraints, solved):
-        return _densely(problem, target, constraints, solved, tol, at, its)
-    return _Step(solved, r, jac, its, its, at.instants, at.dips)
 
 
 def _stalled(lam: float, reached: Sequence[float], steps: int) -> bool:
@@ -326,37 +234,6 @@ def _stalled(lam: float, reached: Sequence[float], steps: int) -> bool:
         return False
     gain = lam - reached[steps - PACE_WINDOW]
     return lam + gain * (MAX_STEPS - steps) / PACE_WINDOW < 1.0
-
-
-def _densely(
-    problem: Problem,
-    target: Problem,
-    constraints: Sequence[Constraint],
-    solved: np.ndarray,
-    tol: float,
-    at: _Rows,
-    spent: int,
-) -> _Step:
-    """Correct a path inside at the instants but not everywhere, at its tightest instants.
-
-    Up to three times: add the path's tightest instants, and the instants of its dips below
-    the limit of a constraint with its own instants (:func:`.rows.with_dips`), and correct
-    again. ``spent``: the corrector iterations so far. Returns the step with its path (None
-    when it stays outside) and the instants and dips now imposed.
-    """
-    r = jac = np.zeros(0)
-    instants, dips, first = at.instants, at.dips, spent
-    for _ in range(3):
-        instants = with_critical(problem, constraints, solved, instants)
-        dips = with_dips(problem, constraints, solved, dips)
-        found, r, jac, more = _correct(target, constraints, solved, tol, instants, at.cache, dips)
-        spent += more
-        if found is None:
-            return _Step(None, r, jac, first, spent, instants, dips)
-        solved = found
-        if _dense_ok(problem, constraints, solved):
-            return _Step(solved, r, jac, first, spent, instants, dips)
-    return _Step(None, r, jac, first, spent, instants, dips)
 
 
 def continuation(

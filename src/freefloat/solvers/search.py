@@ -132,11 +132,7 @@ def search(
     record = _Record()
     for offset in offsets:
         turns = {n: round(o / (2 * math.pi)) for n, o in zip(names, offset, strict=True) if o}
-        label = (
-            "goal as stated"
-            if not turns
-            else "goal " + ", ".join(f"{n} {k:+d} turn(s)" for n, k in turns.items())
-        )
+        label = _turns_label(turns)
         distributions = _distributions(scenario, options, planar)
         carry: tuple[PathFamily, tuple[float, ...]] | None = None
         for level, counts in enumerate(distributions, start=1):
@@ -174,17 +170,7 @@ def search(
                 continue
             how = " (continued from where less freedom stopped)" if start is not None else ""
             record.tried.append(f"{freedom}: solved{how}")
-            return SearchResult(
-                problem=problem,
-                solution=solution,
-                freedom=dict(zip(names, used, strict=True)),
-                full_turns={
-                    n: turns.get(n, 0)
-                    for n, j in zip(names, robot.joints, strict=True)
-                    if j.kind == "continuous"
-                },
-                tried=record.tried,
-            )
+            return _result(problem, solution, used, turns, record.tried)
 
     _refuse(
         scenario,
@@ -194,6 +180,36 @@ def search(
         record.tried,
         (record.origin, record.closest),
         tuple(dict.fromkeys(record.blocked)),
+    )
+
+
+def _turns_label(turns: dict[str, int]) -> str:
+    """The goal an offset asks for, for people: ``goal as stated`` or its joints' turns."""
+    if not turns:
+        return "goal as stated"
+    return "goal " + ", ".join(f"{n} {k:+d} turn(s)" for n, k in turns.items())
+
+
+def _result(
+    problem: Problem,
+    solution: Solution,
+    used: list[int],
+    turns: dict[str, int],
+    tried: list[str],
+) -> SearchResult:
+    """The search's answer: the solved problem, its freedom per joint and its joints' turns."""
+    robot = problem.robot
+    names = robot.joint_names
+    return SearchResult(
+        problem=problem,
+        solution=solution,
+        freedom=dict(zip(names, used, strict=True)),
+        full_turns={
+            n: turns.get(n, 0)
+            for n, j in zip(names, robot.joints, strict=True)
+            if j.kind == "continuous"
+        },
+        tried=tried,
     )
 
 
