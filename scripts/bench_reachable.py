@@ -117,7 +117,7 @@ def bench_reachable(
         reports[name] = (first[3], first[2])
         for workers, runs_done in timed.items():
             rows.append(_row(name, workers, runs_done, drift, first[2]))
-            print(rows[-1], flush=True)
+            print(f"  done: {rows[-1]}", flush=True)
         if 1 in timed:
             for row in rows[-len(timed) :]:
                 row["speedup"] = statistics.median(r[0] for r in timed[1]) / row["wall_s"]
@@ -181,7 +181,10 @@ def _agreement(
                 f"{math.degrees(d.inner):.2f} deg: {str(exc)[:200]}"
             )
         times.append(time.perf_counter() - clock)
-        print(f"{name} goal {k + 1}/{goals}: planned {planned}, refused {len(refused)}", flush=True)
+        print(
+            f"  done: {name} goal {k + 1}/{goals}: planned {planned}, refused {len(refused)}",
+            flush=True,
+        )
     return {
         "scenario": name,
         "goals": goals,

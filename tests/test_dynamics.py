@@ -89,9 +89,10 @@ def test_verify_cli_says_how_to_read_a_path_constraints_row(tmp_path, capsys):
     path = plan.save(tmp_path / "p.json")
     assert main(["verify", str(path)]) == 0
     lines = capsys.readouterr().out.splitlines()
-    rows = {line.split()[0]: line.split() for line in lines[2:-3]}
+    rows = {line.split()[0]: line.split() for line in lines[2:-4]}
     assert float(rows["joint_position_limits"][2]) < 0.0 and float(rows["clearance"][2]) < 0.0
-    assert "negative where" in lines[-2] and "beyond the margin" in lines[-1]
+    assert "negative where" in lines[-3] and "beyond the margin" in lines[-2]
+    assert lines[-1].startswith("  clearance       min clearance ")
 
 
 def test_verify_cli_fails_a_tampered_free_parameter(tmp_path, worked_plan, capsys):

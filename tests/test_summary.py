@@ -8,7 +8,7 @@ import re
 import freefloat as ff
 from freefloat.cli import main
 from freefloat.cli.messages import in_degrees
-from freefloat.viz.summary import robot_label
+from freefloat.viz.summary import clearance_line, robot_label
 
 import reference as ref
 from conftest import ROOT
@@ -182,13 +182,17 @@ def test_verify_reads_a_constraint_row_with_the_plans_own_figure(tmp_path, capsy
     )
     capsys.readouterr()
     assert main(["verify", str(out)]) == 0
-    note = capsys.readouterr().out.strip().splitlines()[-1]
-    clearance = next(c for c in ff.Plan.load(out).verification.checks if c.name == "clearance")
+    note, closest = capsys.readouterr().out.rstrip().splitlines()[-2:]
+    saved = ff.Plan.load(out)
+    clearance = next(c for c in saved.verification.checks if c.name == "clearance")
     assert clearance.value < 0.0
     assert note == (
         f"  it holds (clearance {clearance.value:.3g} m: the smallest distance is at least "
         f"{-clearance.value:.3g} m beyond the margin)"
     )
+    # the closest pair, its instant and the margin: the line plan prints, word for word
+    assert closest == clearance_line(saved)
+    assert closest.startswith("  clearance       min clearance ") and "margin 0.01 m" in closest
 
 
 def test_a_spacecraft_lighter_than_what_it_carries_is_warned_about(tmp_path, caplog):

@@ -71,6 +71,8 @@ def run(args: argparse.Namespace) -> int:
         print("  a path constraint's value is its worst excess over its limit, negative where")
         chosen = next((c for c in rows if c.name == "clearance"), rows[0])  # the most read
         print(f"  it holds ({_reading(chosen)})")
+        if chosen.name == "clearance" and chosen.detail:  # plan prints the same line
+            print(f"  {'clearance':<16}{chosen.detail}")
     return 0 if result.passed else 1
 
 
