@@ -100,8 +100,9 @@ def replay(
     steps: int = 2000,
     track_momentum: bool = True,
     nodes: np.ndarray | None = None,
+    start_velocity: np.ndarray | None = None,
 ) -> ReplayResult:
-    """Simulate the free-floating system from rest under the joint torques ``torque(t)``.
+    """Simulate the free-floating system under the joint torques ``torque(t)``, from rest.
 
     Args:
         mmap: momentum map of the robot (its model is used, with data of its own).
@@ -115,6 +116,9 @@ def replay(
         track_momentum: record the largest total momentum along the replay.
         nodes: the steps' ends, ``steps + 1`` ascending instants from 0 to ``duration`` (s);
             default uniform.
+        start_velocity: the velocity at t = 0 instead of rest, ``[v_base; qdot]`` (the
+            Pinocchio model's nv entries: base twist in the base frame, m/s and rad/s, then
+            the joint rates in their velocity slots); a motion of zero momentum keeps it zero.
     """
     if steps < 1:
         raise ValueError(f"the replay needs at least one step, got {steps}")
@@ -131,7 +135,7 @@ def replay(
     # A step too long for the motion can blow up; the caller sees non-finite results.
     with np.errstate(over="ignore", invalid="ignore"):
         stages, v, momentum_max = _stages(
-            mmap, config, x, forces, widths, rate_index, track_momentum
+            mmap, config, x, forces, widths, rate_index, track_momentum, start_velocity
         )
         end = ordered_product(step_matrices(stages[:, :, 3:6], widths))
         quaternion = end @ np.asarray(start_quaternion_xyzw, float)
@@ -153,8 +157,11 @@ def _stages(
     widths: np.ndarray,
     rate_index: np.ndarray,
     track_momentum: bool,
+    start_velocity: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, float]:
-    """Runge-Kutta steps of the joints and velocity from rest: (steps, 6, nv) stage velocities.
+    """Runge-Kutta steps of the joints and velocity: (steps, 6, nv) stage velocities.
+
+    From rest, or from ``start_velocity`` (nv entries, as :func:`replay` takes it).
 
     ``x`` (N joint values, rad or m) is advanced in place; returns the stages' velocities
     (base twist in the base frame, joint rates), the final velocity and the largest momentum
@@ -182,7 +189,7 @@ def _stages(
     table = list(forces)  # row views: cheaper to pick from a list than by numpy indexing
     rows = np.empty_like(STAGE_MATRIX)
     stage_rows = [rows[i, :i] for i in range(count)]
-    v = np.zeros(nv)
+    v = np.zeros(nv) if start_velocity is None else np.array(start_velocity, dtype=float)
     momentum_max = 0.0 if track_momentum else math.nan
     for k, dt in enumerate(widths.tolist()):
         np.multiply(dt, STAGE_MATRIX, out=rows)

@@ -35,6 +35,7 @@ class PathDynamics:
         self.mmap, self.path = mmap, path
         self._torques: dict[float, np.ndarray] = {}
         self._omega: dict[float, np.ndarray] = {}
+        self._twist: dict[float, np.ndarray] = {}
 
     def torques(self, t: np.ndarray) -> np.ndarray:
         """(len(t), N) joint torques at times ``t`` (s)."""
@@ -43,10 +44,25 @@ class PathDynamics:
         if len(missing):
             q, qd, qdd = self.path(missing)
             found = joint_torques_and_twist(self.mmap, q, qd, qdd)
-            for x, tau, omega in zip(missing.tolist(), found.tau, found.twist, strict=True):
+            for x, tau, twist in zip(missing.tolist(), found.tau, found.twist, strict=True):
                 self._torques[x] = tau
-                self._omega.setdefault(x, omega[3:])
+                self._twist[x] = twist
+                self._omega.setdefault(x, twist[3:])
         return np.array([self._torques[x] for x in times])
+
+    def velocities(self, t: np.ndarray) -> np.ndarray:
+        """(len(t), nv) Pinocchio velocities at times ``t`` (s): ``[v_base; qdot]``.
+
+        The zero-momentum base twist (base frame, m/s then rad/s) that comes with the torques,
+        the file's joint rates in their velocity slots (rad/s or m/s).
+        """
+        times = np.asarray(t, dtype=float)
+        self.torques(times)  # the twists come with them
+        out = np.zeros((len(times), self.mmap.model.nv))
+        out[:, :6] = [self._twist[x] for x in times.tolist()]
+        slots = [j.idx_v for j in self.mmap.robot.joints]
+        out[:, slots] = self.path(times)[1]
+        return out
 
     def omega(self, t: np.ndarray) -> np.ndarray:
         """(len(t), 3) base angular velocity at times ``t`` (s)."""

@@ -183,21 +183,32 @@ def verify_plan(
             predated = (*predated, "replay_attitude", "replay_joints")
         stated = Verification(tuple(c for c in checks if c.name not in predated))
         on_file = Verification(tuple(c for c in plan.verification.checks if c.name not in predated))
-        compare_verification(on_file, stated, _made_by_rk4(plan.verification))
+        compare_verification(on_file, stated, _made_otherwise(plan.verification, verification))
     return verification
 
 
-def _made_by_rk4(stated: Verification) -> frozenset[str]:
-    """The integrating checks a file states as classical RK4 found them (an earlier version).
+def _made_otherwise(stated: Verification, made: Verification) -> frozenset[str]:
+    """The integrating checks a file states as another method found them.
 
-    Their ``detail`` starts ``"RK4, "``: their values are compared within both versions'
-    error estimates, not the estimates themselves (:func:`compare_verification`).
+    Classical RK4 (an earlier version: ``detail`` starting ``"RK4, "``), or the replay from
+    rest where it is now made in segments, or the other way round (an earlier version did not
+    segment; the ``detail`` says which). Their values are compared within both methods' error
+    estimates, not the estimates themselves (:func:`compare_verification`).
     """
+    now = {c.name: c.detail for c in made.checks}
     return frozenset(
         c.name
         for c in stated.checks
-        if c.name in INTEGRATING_CHECKS and c.detail.startswith("RK4, ")
+        if c.name in INTEGRATING_CHECKS
+        and (
+            c.detail.startswith("RK4, ")
+            or (_SEGMENTED in c.detail) != (_SEGMENTED in now.get(c.name, ""))
+        )
     )
+
+
+#: What the detail of a replay made in segments says (:func:`.integrating.replay_checks`).
+_SEGMENTED = " segments of "
 
 
 def constraint_checks(subject: Subject, constraints: list[Constraint]) -> list[Check]:

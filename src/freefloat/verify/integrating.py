@@ -29,6 +29,7 @@ from ..physics.replay import replay
 from ..plans.guarantees import Check
 from ..robot.model import Robot
 from .plan_checks import TOLERANCES, Subject
+from .segmented import segmented_replay
 from .stepping import (
     _FIRST_ATTITUDE_STEPS,
     _FIRST_REPLAY_STEPS,
@@ -38,6 +39,8 @@ from .stepping import (
     _finite,
     _refine,
     attitude_by_doubling,
+    motion_speed,
+    wrapped_joints,
 )
 
 __all__ = ["INTEGRATING_CHECKS", "METHOD", "attitude_check", "integrating_checks", "replay_checks"]
@@ -105,8 +108,37 @@ class _Replay:
 
 
 def replay_checks(subject: Subject) -> list[Check]:
-    """``replay_attitude`` and ``replay_joints``: forward dynamics from the start at rest."""
+    """``replay_attitude`` and ``replay_joints``: forward dynamics from the start at rest.
+
+    When the replay over the whole motion cannot decide (it does not converge within its
+    steps, blows up, or its end moves as far when its torques are perturbed by their own
+    assumed error), it is made again in segments, each from the path's state at its start
+    (:mod:`.segmented`); their figures stand when they converge, and the detail says that
+    they are a segmented replay's and why.
+    """
     level = _replay(subject)
+    checks = _from_rest(level)
+    if level.converged and all(c.verdict != "no verdict" for c in checks):
+        return checks
+    pieces = segmented_replay(subject)
+    if not pieces.converged:
+        return checks
+    why = (
+        f"{level.steps} steps did not converge"
+        if not level.converged
+        else f"its end moves as far with its torques perturbed by {TORQUE_PERTURBATION:g}"
+    )
+    return _checks(
+        (pieces.attitude, pieces.joints),
+        (pieces.attitude_estimate, pieces.joint_estimate),
+        f"{METHOD} in {pieces.segments} segments of {pieces.steps} steps, each from the "
+        f"path's state at its start (from rest, {why}: open loop, the replay amplifies its "
+        "own error)",
+    )
+
+
+def _from_rest(level: _Replay) -> list[Check]:
+    """The replay checks from the replay over the whole motion from rest (its last level)."""
     att_estimate, joint_estimate = level.attitude_estimate, level.joint_estimate
     detail = f"{METHOD}, {level.steps} steps"
     if not level.converged:
@@ -134,22 +166,24 @@ def replay_checks(subject: Subject) -> list[Check]:
             f", torques perturbed by {TORQUE_PERTURBATION:g} of their largest move its end by "
             f"{level.moved[0]:.2g} rad, {level.moved[1]:.2g} (joints)"
         )
+    return _checks((level.attitude, level.joints), (att_estimate, joint_estimate), detail)
+
+
+def _checks(
+    values: tuple[float, float], estimates: tuple[float, float], detail: str
+) -> list[Check]:
+    """The two replay checks: (attitude rad, joints rad or m) with their estimates."""
     return [
         Check(
             "replay_attitude",
-            level.attitude,
+            values[0],
             TOLERANCES["replay_attitude_rad"],
             "rad",
-            att_estimate,
+            estimates[0],
             detail,
         ),
         Check(
-            "replay_joints",
-            level.joints,
-            TOLERANCES["replay_joint"],
-            "rad|m",
-            joint_estimate,
-            detail,
+            "replay_joints", values[1], TOLERANCES["replay_joint"], "rad|m", estimates[1], detail
         ),
     ]
 
@@ -176,13 +210,8 @@ def _replay(subject: Subject) -> _Replay:
     torques = _refine(None, steps, duration, subject.dynamics.torques)
     coarse_q, coarse_j = run(steps, torques)
     replay_att = geodesic_angle(coarse_q, target)
-    replay_joint = float(np.abs(_wrap_joints(robot, coarse_j - goal)).max())
-    samples = plan.samples
-    speed = max(
-        float(np.abs(np.asarray(samples.qd, float)).max()),
-        float(np.linalg.norm(np.asarray(samples.base_angular_velocity, float), axis=1).max()),
-        0.0,
-    )
+    replay_joint = float(np.abs(wrapped_joints(robot, coarse_j - goal)).max())
+    speed = motion_speed(plan)
     att_estimate = joint_estimate = math.inf
     previous = earlier = (math.inf, math.inf)  # the last two differences (attitude, joints)
     while 2 * steps <= subject.replay_steps:
@@ -190,9 +219,9 @@ def _replay(subject: Subject) -> _Replay:
         torques = _refine(torques, steps, duration, subject.dynamics.torques)
         fine_q, fine_j = run(steps, torques)
         replay_att = geodesic_angle(fine_q, target)
-        replay_joint = float(np.abs(_wrap_joints(robot, fine_j - goal)).max())
+        replay_joint = float(np.abs(wrapped_joints(robot, fine_j - goal)).max())
         att_estimate = _finite(geodesic_angle(coarse_q, fine_q))
-        joint_estimate = _finite(float(np.abs(_wrap_joints(robot, fine_j - coarse_j)).max()))
+        joint_estimate = _finite(float(np.abs(wrapped_joints(robot, fine_j - coarse_j)).max()))
         turn = speed * duration / steps
         attitude_settled = _decided(
             replay_att,
@@ -240,14 +269,5 @@ def _moved(
     attitude, joints = run(steps, torques + offset)
     return (
         _finite(geodesic_angle(attitude, end[0])),
-        _finite(float(np.abs(_wrap_joints(robot, joints - end[1])).max())),
+        _finite(float(np.abs(wrapped_joints(robot, joints - end[1])).max())),
     )
-
-
-def _wrap_joints(robot: Robot, delta: np.ndarray) -> np.ndarray:
-    """Joint differences, continuous joints wrapped to (-pi, pi] (rad or m)."""
-    out = np.array(delta, dtype=float)
-    for i, joint in enumerate(robot.joints):
-        if joint.kind == "continuous":
-            out[i] = math.remainder(out[i], 2.0 * math.pi)
-    return out

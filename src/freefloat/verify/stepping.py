@@ -17,8 +17,17 @@ import numpy as np
 
 from ..physics.attitude import geodesic_angle, ordered_product
 from ..physics.runge_kutta import QUARTERS, step_matrices
+from ..plans.format import Plan
+from ..robot.model import Robot
 
-__all__ = ["CONVERGED_FRACTION", "MAX_REPLAY_STEPS", "AttitudeLevel", "attitude_by_doubling"]
+__all__ = [
+    "CONVERGED_FRACTION",
+    "MAX_REPLAY_STEPS",
+    "AttitudeLevel",
+    "attitude_by_doubling",
+    "motion_speed",
+    "wrapped_joints",
+]
 
 #: A numerical check refines (doubles its steps) until its verdict no longer depends on its own
 #: error, or until its error estimate is below this fraction of its tolerance.
@@ -69,6 +78,29 @@ def _decided(
         return True
     settled = earlier is None or (math.isfinite(earlier) and previous <= earlier / 8.0)
     return settled and value - estimate > tolerance and estimate <= CONVERGED_FRACTION * value
+
+
+def wrapped_joints(robot: Robot, delta: np.ndarray) -> np.ndarray:
+    """Joint differences (rad or m; any leading shape), continuous joints wrapped to (-pi, pi]."""
+    out = np.array(delta, dtype=float)
+    turn = np.vectorize(lambda value: math.remainder(value, 2.0 * math.pi), otypes=[float])
+    for i, joint in enumerate(robot.joints):
+        if joint.kind == "continuous":
+            out[..., i] = turn(out[..., i])
+    return out
+
+
+def motion_speed(plan: Plan) -> float:
+    """The largest joint rate or base angular speed of the plan's samples (rad/s or m/s).
+
+    Times a step's duration, the largest turn in one step (``turn`` of :func:`_decided`).
+    """
+    samples = plan.samples
+    return max(
+        float(np.abs(np.asarray(samples.qd, float)).max()),
+        float(np.linalg.norm(np.asarray(samples.base_angular_velocity, float), axis=1).max()),
+        0.0,
+    )
 
 
 def _finite(x: float) -> float:

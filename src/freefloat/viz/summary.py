@@ -8,6 +8,7 @@ goal for a Cartesian goal's error.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -130,8 +131,10 @@ def verification_lines(v: Verification) -> list[str]:
     if not v.checks:
         return []
     replay = v["replay_attitude"]
+    segments = re.search(r" in (\d+) segments of ", replay.detail)
     replayed = (
         f"replay {replay.value:.1e} rad"
+        + (f" (in {segments[1]} segments, each from the path's state)" if segments else "")
         if replay.verdict != "no verdict"
         else f"replay no verdict ({replay.detail})"
     )

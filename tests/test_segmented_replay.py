@@ -1,0 +1,149 @@
+"""The replay from a moving start, and the replay in segments each from the path's state.
+
+Truth: SciPy's DOP853 on Pinocchio's ABA (another integrator), momentum conservation, the
+whole replay where it converges, and plans whose torques are known wrong."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from scipy.integrate import solve_ivp
+
+import freefloat as ff
+from freefloat.physics.attitude import quat_multiply
+from freefloat.verify import integrating
+from freefloat.verify.along import PathDynamics
+from freefloat.verify.checks import Subject
+from freefloat.verify.path_eval import file_path
+from freefloat.verify.segmented import segmented_replay
+from freefloat.viz.summary import summary
+
+from conftest import ROOT
+
+
+def _zero_momentum_start(robot: ff.Robot, joints: np.ndarray, rates: np.ndarray) -> np.ndarray:
+    """[v_base; qdot] whose total momentum is zero: the base twist from the centroidal map."""
+    model, data = robot.model, robot.model.createData()
+    ag = pin.computeCentroidalMap(model, data, robot.configuration(joints))
+    v = np.zeros(model.nv)
+    slots = [j.idx_v for j in robot.joints]
+    v[slots] = rates
+    v[:6] = -np.linalg.solve(ag[:, :6], ag[:, slots] @ rates)
+    return v
+
+
+def test_a_replay_from_a_moving_start_matches_dop853_and_keeps_zero_momentum():
+    robot = ff.load_robot(ROOT / "robots" / "ur5_servicer.urdf")
+    mmap = ff.MomentumMap(robot)
+    joints = np.array([0.3, -1.2, 1.1, -0.4, 0.8, 0.2])
+    rates = np.array([0.2, -0.1, 0.15, 0.3, -0.25, 0.1])
+    tau = np.array([0.5, -1.0, 0.3, 0.05, -0.02, 0.01])
+    start = _zero_momentum_start(robot, joints, rates)
+    quaternion = ff.quat_from_zyx(0.1, -0.2, 0.05)
+    found = ff.replay(mmap, joints, quaternion, lambda t: tau, 0.5, 64, start_velocity=start)
+
+    model, data = robot.model, robot.model.createData()
+    slots = [j.idx_v for j in robot.joints]
+    forces = np.zeros(model.nv)
+    forces[slots] = tau
+
+    def rhs(_t, y):
+        x, v, quat = y[:6], y[6 : 6 + model.nv], y[6 + model.nv :]
+        a = pin.aba(model, data, robot.configuration(x), v, forces)
+        turn = 0.5 * quat_multiply(quat, np.concatenate([v[3:6], [0.0]]))
+        return np.concatenate([v[slots], a, turn])
+
+    y0 = np.concatenate([joints, start, quaternion])
+    truth = solve_ivp(rhs, (0.0, 0.5), y0, method="DOP853", rtol=1e-12, atol=1e-13).y[:, -1]
+    np.testing.assert_allclose(found.joints, truth[:6], atol=1e-9)
+    np.testing.assert_allclose(found.rates, truth[6 + 6 : 6 + model.nv], atol=1e-8)
+    end = truth[6 + model.nv :] / np.linalg.norm(truth[6 + model.nv :])
+    assert ff.geodesic_angle(found.quaternion_xyzw, end) < 1e-9
+    assert found.momentum_max < 1e-9  # the start had none, and no external force acts
+
+
+def _forced_to_segments(monkeypatch):
+    """The replay from rest made to report no convergence: the segments decide."""
+    whole = integrating._replay
+
+    def unresolved(subject):
+        level = whole(subject)
+        return integrating._Replay(
+            level.attitude, level.joints, np.inf, np.inf, level.steps, False, None
+        )
+
+    monkeypatch.setattr(integrating, "_replay", unresolved)
+
+
+def test_segments_agree_with_the_whole_replay_where_it_converges(worked_plan, monkeypatch):
+    robot = ff.load_robot(worked_plan.robot.urdf)
+    subject = Subject(worked_plan, robot, ff.MomentumMap(robot), file_path(worked_plan), 8192)
+    pieces = segmented_replay(subject)
+    assert pieces.converged and pieces.segments == 8
+    whole = worked_plan.verification
+    for value, estimate, name in (
+        (pieces.attitude, pieces.attitude_estimate, "replay_attitude"),
+        (pieces.joints, pieces.joint_estimate, "replay_joints"),
+    ):
+        assert value <= whole[name].tolerance
+        # both near zero for a genuine plan: each within the other's error and the rounding
+        assert abs(value - whole[name].value) <= estimate + whole[name].error_estimate + 1e-9
+    _forced_to_segments(monkeypatch)
+    checked = ff.verify_plan(worked_plan, recompute=False)["replay_joints"]
+    assert checked.verdict == "ok" and checked.detail.startswith("RK5 in 8 segments of ")
+
+
+def test_segments_refuse_torques_that_do_not_drive_the_path(worked_plan, monkeypatch):
+    """Every torque 1 % too large: each segment ends off the path, and the plan fails."""
+    true_torques = PathDynamics.torques
+    monkeypatch.setattr(PathDynamics, "torques", lambda self, t: 1.01 * true_torques(self, t))
+    _forced_to_segments(monkeypatch)
+    verdict = ff.verify_plan(worked_plan, recompute=False)
+    joints = verdict["replay_joints"]
+    assert joints.verdict == "FAILED" and not verdict.passed
+    assert " segments of " in joints.detail
+    assert joints.value - joints.error_estimate > 10 * joints.tolerance
+
+
+@pytest.fixture(scope="module")
+def kinova_plan():
+    """A light arm on a 500 kg spacecraft for 20 s: its replay from rest cannot converge."""
+    scenario = ff.Scenario.from_toml(ROOT / "examples" / "kinova_servicer.toml")
+    goal = np.array([-0.00099725133, -0.00378116414, -0.00171438778, 0.99999088454])
+    goal /= np.linalg.norm(goal)
+    return ff.plan(ff.Scenario(**{**scenario.__dict__, "goal_attitude": goal}), samples=41)
+
+
+def test_a_replay_from_rest_that_cannot_converge_is_decided_in_segments(kinova_plan):
+    joints = kinova_plan.verification["replay_joints"]
+    assert joints.verdict == "ok"
+    assert "segments of" in joints.detail and "8192 steps did not converge" in joints.detail
+    assert joints.value + joints.error_estimate <= joints.tolerance
+    said = summary(kinova_plan)
+    assert "segments, each from the path's state" in said and "no verdict" not in said
+
+
+def test_a_file_whose_replay_from_rest_said_no_verdict_still_verifies(kinova_plan, tmp_path):
+    """A file written before replays were segmented states the Kinova replay as the replay
+    from rest found it (no verdict, its estimate covering its value); verify, now deciding
+    it in segments, compares the two within both estimates: no mismatch. A figure no method
+    could give (the replay's joints near the tolerance, estimate small) still disagrees."""
+    data = json.loads(kinova_plan.to_json())
+    checks = {c["name"]: c for c in data["verification"]["checks"]}
+    for name, value in (("replay_attitude", 2.8e-6), ("replay_joints", 0.0173)):
+        checks[name].update(
+            value=value,
+            error_estimate=max(value, 1e-4),
+            detail="RK5, 8192 steps, not converged: no verdict",
+        )
+    path = tmp_path / "before.json"
+    path.write_text(json.dumps(data))
+    made = ff.verify_plan(ff.Plan.load(path))
+    assert made.passed and " segments of " in made["replay_joints"].detail
+    checks["replay_joints"].update(value=0.99e-4, error_estimate=1e-9, detail="RK5, 64 steps")
+    path.write_text(json.dumps(data))
+    with pytest.raises(ff.PlanMismatchError, match=r"verification\.checks"):
+        ff.verify_plan(ff.Plan.load(path))
