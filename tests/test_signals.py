@@ -111,3 +111,30 @@ def test_main_restores_the_handlers(capsys):
     assert main(["plan", "--samples", "1"]) == 2
     assert (signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)) == before
     capsys.readouterr()
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+def test_a_signal_after_the_command_ended_is_no_traceback(tmp_path, signum):
+    """The race the hostile campaign once met: the signal lands after the command's work,
+    while the process exits (its handlers then were the start-up guard's, which raised in
+    the atexit callbacks: a traceback). The command's code and output stand, nothing more."""
+    code = f"""
+import os, sys
+sys.argv = [{str(Path(sys.executable).parent / "freefloat")!r}, "--version"]
+from freefloat.cli import main
+code = main()
+os.kill(os.getpid(), {int(signum)})  # delivered at once, in the main thread
+print("still here", flush=True)
+sys.exit(code)
+"""
+    result = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        env=_env(),
+        cwd=tmp_path,
+        check=False,
+        timeout=60,
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[-1] == "still here" and result.stderr == ""

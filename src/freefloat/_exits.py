@@ -32,6 +32,7 @@ __all__ = [
     "error_line",
     "flush_output",
     "handle_signals",
+    "ignore_late_signals",
     "silence_output",
 ]
 
@@ -92,6 +93,18 @@ def handle_signals() -> Callable[[], None]:
             signal.signal(number, handler if handler is not None else signal.SIG_DFL)
 
     return undo
+
+
+def ignore_late_signals() -> None:
+    """Make SIGINT, SIGTERM and SIGHUP do nothing from now on (the main thread only).
+
+    For the ``freefloat`` command once its work has ended: the process is leaving with its
+    code, and a signal arriving while it exits (its output flushed, logging shut down) must not
+    raise there, where it would print a traceback ("Exception ignored in atexit callback").
+    """
+    if threading.current_thread() is threading.main_thread():
+        for name in _names():
+            signal.signal(getattr(signal, name), _nothing)
 
 
 def silence_output(stream_fd: int = 1) -> None:

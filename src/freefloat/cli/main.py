@@ -17,7 +17,16 @@ from types import ModuleType
 from typing import Any, NoReturn
 
 from .. import __version__
-from .._exits import HungUp, Terminated, error_line, flush_output, handle_signals, silence_output
+from .._exits import (
+    HungUp,
+    Terminated,
+    error_line,
+    flush_output,
+    handle_signals,
+    ignore_late_signals,
+    silence_output,
+)
+from .._interrupt import is_command
 from ..errors import FreeFloatError, UnitsWarning
 from ..progress import LOGGER, configure
 from . import (
@@ -163,3 +172,5 @@ def _main(argv: Sequence[str] | None) -> int:
         return 129
     finally:
         undo()
+        if is_command():  # the process leaves now: a late signal must not raise as it exits
+            ignore_late_signals()
