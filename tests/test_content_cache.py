@@ -136,3 +136,41 @@ def test_a_joint_axis_changed_in_place_is_other_content():
         robot.model.joints[2] = pin.JointModel(pin.JointModelRevoluteUnaligned(*axis))
         keys.append(content_key(robot))
     assert keys[0] != keys[1]  # the same joint type, another axis
+
+
+def test_a_computation_asking_for_its_own_content_raises_and_others_are_computed_apart():
+    cache: RobotCache[int] = RobotCache()
+    other: RobotCache[int] = RobotCache()
+    robot = load_robot(URDF)
+
+    def cycle() -> int:
+        return cache.get(robot, cycle)  # its own content again: a cycle, not a hang
+
+    with pytest.raises(RuntimeError, match="its own robot content"):
+        cache.get(robot, cycle)
+    # another cache's computation of the same content, from inside this one's: no cycle
+    assert cache.get(robot, lambda: other.get(robot, lambda: 5) + 1) == 6
+    assert other.get(robot, lambda: 99) == 5
+
+
+def test_threads_asking_for_other_contents_are_not_held_up():
+    """One content's computation waits until another thread has asked for another content
+    and got it: with one lock held while computing, that other thread would wait for it."""
+    cache: RobotCache[int] = RobotCache()
+    slow, fast = load_robot(URDF), load_robot(URDF)
+    fast.model.inertias[1] = pin.Inertia(
+        2.0, fast.model.inertias[1].lever, fast.model.inertias[1].inertia
+    )
+    answered = threading.Event()
+
+    def waits() -> int:
+        assert answered.wait(timeout=30), "the other content was held up"
+        return 1
+
+    worker = threading.Thread(target=lambda: cache.get(slow, waits))
+    worker.start()
+    time.sleep(0.05)  # the slow computation has begun and holds its own lock
+    assert cache.get(fast, lambda: 2) == 2
+    answered.set()
+    worker.join()
+    assert cache.get(slow, lambda: 3) == 1

@@ -119,8 +119,10 @@ def kinova_plan():
 
 def test_a_replay_from_rest_that_cannot_converge_is_decided_in_segments(kinova_plan):
     joints = kinova_plan.verification["replay_joints"]
-    assert joints.verdict == "ok"
-    assert "segments of" in joints.detail and "8192 steps did not converge" in joints.detail
+    assert joints.verdict == "ok" and " segments of " in joints.detail
+    # whether the replay from rest converges (and its perturbed torques then move its end as
+    # far) or not depends on the host's rounding; either way it cannot decide
+    assert "8192 steps did not converge" in joints.detail or "perturbed by 1e-12" in joints.detail
     assert joints.value + joints.error_estimate <= joints.tolerance
     said = summary(kinova_plan)
     assert "segments, each from the path's state" in said and "no verdict" not in said
@@ -130,7 +132,7 @@ def test_a_file_whose_replay_from_rest_said_no_verdict_still_verifies(kinova_pla
     """A file written before replays were segmented states the Kinova replay as the replay
     from rest found it (no verdict, its estimate covering its value); verify, now deciding
     it in segments, compares the two within both estimates: no mismatch. A figure no method
-    could give (the replay's joints near the tolerance, estimate small) still disagrees."""
+    could give (the replay's attitude 9e-5 rad off, estimate 1e-9) still disagrees."""
     data = json.loads(kinova_plan.to_json())
     checks = {c["name"]: c for c in data["verification"]["checks"]}
     for name, value in (("replay_attitude", 2.8e-6), ("replay_joints", 0.0173)):
@@ -143,7 +145,23 @@ def test_a_file_whose_replay_from_rest_said_no_verdict_still_verifies(kinova_pla
     path.write_text(json.dumps(data))
     made = ff.verify_plan(ff.Plan.load(path))
     assert made.passed and " segments of " in made["replay_joints"].detail
-    checks["replay_joints"].update(value=0.99e-4, error_estimate=1e-9, detail="RK5, 64 steps")
+    checks["replay_attitude"].update(value=0.9e-4, error_estimate=1e-9, detail="RK5, 64 steps")
     path.write_text(json.dumps(data))
     with pytest.raises(ff.PlanMismatchError, match=r"verification\.checks"):
         ff.verify_plan(ff.Plan.load(path))
+
+
+@pytest.mark.parametrize("error", [1e-3, 1e-5])
+def test_segments_find_torques_a_little_wrong_on_a_sensitive_motion(
+    kinova_plan, monkeypatch, error
+):
+    """The Kinova motion, its replay from rest made unable to decide: torques off by a
+    thousandth or a hundred-thousandth are still refused by the segments (their figures are
+    scaled to the whole motion: re-anchoring each segment hides most of a wrong torque)."""
+    true_torques = PathDynamics.torques
+    monkeypatch.setattr(
+        PathDynamics, "torques", lambda self, t: (1.0 + error) * true_torques(self, t)
+    )
+    _forced_to_segments(monkeypatch)
+    joints = ff.verify_plan(kinova_plan, recompute=False)["replay_joints"]
+    assert " segments of " in joints.detail and joints.verdict == "FAILED"

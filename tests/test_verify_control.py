@@ -14,7 +14,7 @@ import freefloat as ff
 from freefloat.cli import main
 from freefloat.physics.attitude import quat_multiply
 from freefloat.physics.dynamics import inverse_dynamics_batch
-from freefloat.verify import integrating
+from freefloat.verify import integrating, stepping
 from freefloat.verify.along import PathDynamics
 from freefloat.verify.path_eval import file_path
 from freefloat.viz.summary import summary
@@ -281,7 +281,7 @@ def test_a_miss_the_torques_own_error_could_explain_is_no_verdict(worked_plan, m
         return 1.01 * true_torques(self, t)
 
     monkeypatch.setattr(PathDynamics, "torques", wrong)
-    monkeypatch.setattr(integrating, "TORQUE_PERTURBATION", 0.05)
+    monkeypatch.setattr(stepping, "TORQUE_PERTURBATION", 0.05)
     # the segments, which would decide it (test_segmented_replay), made unable to
     segmented = integrating.segmented_replay
     monkeypatch.setattr(

@@ -106,8 +106,8 @@ def replay(
 
     Args:
         mmap: momentum map of the robot (its model is used, with data of its own).
-        start_joints: N joint values at t = 0 (rad or m); the system starts at rest with its CM
-            at the origin.
+        start_joints: N joint values at t = 0 (rad or m); the system starts at rest (or at
+            ``start_velocity``) with its CM at the origin.
         start_quaternion_xyzw: base attitude at t = 0.
         torque: joint torques (N m or N): a function of time (s), or a (4 steps + 1, N) table
             at the quarters of the steps (``k duration / (4 steps)`` for uniform steps).

@@ -50,36 +50,77 @@ class RobotCache(Generic[T]):
     """Values computed once per robot content (at most ``size`` kept, the oldest dropped).
 
     A robot without URDF text (built in memory) is kept per object, for as long as it lives.
-    Safe across threads (a Dask worker's): one lock per cache, held while a value is computed,
-    so each content is computed once; a computation may use *other* caches (each its own lock).
+    Safe across threads (a Dask worker's): each content is computed once, under a lock of its
+    own (threads asking for other contents go on meanwhile); a computation may ask this cache
+    for another content, and asking for its own content again raises rather than hangs.
     """
 
     def __init__(self, size: int = 32) -> None:
         self._size = size
         self._by_content: OrderedDict[str, T] = OrderedDict()
         self._by_object: weakref.WeakKeyDictionary[Robot, tuple[T]] = weakref.WeakKeyDictionary()
-        self._lock = threading.Lock()
+        self._lock = threading.Lock()  # guards the dictionaries, never held while computing
+        self._gates: dict[object, threading.RLock] = {}  # one per content being computed
 
     def get(self, robot: Robot, compute: Callable[[], T]) -> T:
-        """The value for ``robot``: kept, or ``compute()`` kept for the next robot like it."""
-        key = content_key(robot)
-        with self._lock:
-            return self._get(robot, key, compute)
+        """The value for ``robot``: kept, or ``compute()`` kept for the next robot like it.
 
-    def _get(self, robot: Robot, key: str | None, compute: Callable[[], T]) -> T:
-        """:meth:`get` under the lock (``key``: the robot's :func:`content_key`)."""
+        Raises:
+            RuntimeError: ``compute`` asked for the same robot content again (a cycle).
+        """
+        key = content_key(robot)
+        gate_key: object = key if key is not None else id(robot)
+        found = self._kept(robot, key)
+        if found is not None:
+            return found[0]
+        with self._lock:
+            gate = self._gates.setdefault(gate_key, threading.RLock())
+        mine = (id(self), gate_key)  # other caches may compute the same content meanwhile
+        with gate:
+            if mine in _computing():
+                raise RuntimeError("a cached computation asked for its own robot content")
+            found = self._kept(robot, key)  # another thread may have computed it meanwhile
+            if found is not None:
+                return found[0]
+            _computing().add(mine)
+            try:
+                value = compute()
+            finally:
+                _computing().discard(mine)
+            with self._lock:
+                self._store(robot, key, value)
+                self._gates.pop(gate_key, None)
+            return value
+
+    def _kept(self, robot: Robot, key: str | None) -> tuple[T] | None:
+        """The kept value for ``robot`` (in a 1-tuple: a value may be None), or None."""
+        with self._lock:
+            if key is None:
+                return self._by_object.get(robot)
+            if key in self._by_content:
+                self._by_content.move_to_end(key)
+                return (self._by_content[key],)
+            return None
+
+    def _store(self, robot: Robot, key: str | None, value: T) -> None:
+        """Keep ``value`` for ``robot`` (under the lock); its arrays become read-only if shared."""
         if key is None:
-            if robot not in self._by_object:
-                self._by_object[robot] = (compute(),)
-            return self._by_object[robot][0]
-        if key in self._by_content:
-            self._by_content.move_to_end(key)
-            return self._by_content[key]
-        value = _read_only(compute())
-        self._by_content[key] = value
+            self._by_object[robot] = (value,)
+            return
+        self._by_content[key] = _read_only(value)
         if len(self._by_content) > self._size:
             self._by_content.popitem(last=False)
-        return value
+
+
+_LOCAL = threading.local()
+
+
+def _computing() -> set[object]:
+    """The contents this thread is computing now (to tell a cycle from a wait)."""
+    if not hasattr(_LOCAL, "keys"):
+        _LOCAL.keys = set()
+    keys: set[object] = _LOCAL.keys
+    return keys
 
 
 def _read_only(value: T) -> T:

@@ -46,6 +46,7 @@ from .plan_checks import (
     samples_check,
 )
 from .recompute import check_plan_numbers, compare_verification
+from .segmented import segment_count
 from .stepping import MAX_REPLAY_STEPS
 
 __all__ = [
@@ -191,9 +192,10 @@ def _made_otherwise(stated: Verification, made: Verification) -> frozenset[str]:
     """The integrating checks a file states as another method found them.
 
     Classical RK4 (an earlier version: ``detail`` starting ``"RK4, "``), or the replay from
-    rest where it is now made in segments, or the other way round (an earlier version did not
-    segment; the ``detail`` says which). Their values are compared within both methods' error
-    estimates, not the estimates themselves (:func:`compare_verification`).
+    rest where it is now made in segments, in another number of segments (a host whose
+    rounding decided at another count), or the other way round; the ``detail`` says which.
+    Their values are compared within both methods' error estimates, not the estimates
+    themselves (:func:`compare_verification`).
     """
     now = {c.name: c.detail for c in made.checks}
     return frozenset(
@@ -202,13 +204,9 @@ def _made_otherwise(stated: Verification, made: Verification) -> frozenset[str]:
         if c.name in INTEGRATING_CHECKS
         and (
             c.detail.startswith("RK4, ")
-            or (_SEGMENTED in c.detail) != (_SEGMENTED in now.get(c.name, ""))
+            or segment_count(c.detail) != segment_count(now.get(c.name, ""))
         )
     )
-
-
-#: What the detail of a replay made in segments says (:func:`.integrating.replay_checks`).
-_SEGMENTED = " segments of "
 
 
 def constraint_checks(subject: Subject, constraints: list[Constraint]) -> list[Check]:

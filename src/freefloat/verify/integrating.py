@@ -28,8 +28,9 @@ from ..physics.attitude import geodesic_angle
 from ..physics.replay import replay
 from ..plans.guarantees import Check
 from ..robot.model import Robot
+from . import stepping
 from .plan_checks import TOLERANCES, Subject
-from .segmented import segmented_replay
+from .segmented import SEGMENTED, segmented_replay
 from .stepping import (
     _FIRST_ATTITUDE_STEPS,
     _FIRST_REPLAY_STEPS,
@@ -40,19 +41,23 @@ from .stepping import (
     _refine,
     attitude_by_doubling,
     motion_speed,
+    perturbed_torques,
     wrapped_joints,
 )
 
-__all__ = ["INTEGRATING_CHECKS", "METHOD", "attitude_check", "integrating_checks", "replay_checks"]
+__all__ = [
+    "INTEGRATING_CHECKS",
+    "METHOD",
+    "attitude_check",
+    "integrating_checks",
+    "replay_checks",
+]
 
 #: The integrator the checks name in their ``detail`` (``"RK5, 32 steps"``); a file whose
 #: checks name another (``RK4`` before this version) states figures of that integrator.
 METHOD = "RK5"
 #: The checks this module makes.
 INTEGRATING_CHECKS = ("attitude_independent", "replay_attitude", "replay_joints")
-#: Before a replay refuses a plan, its torques are offset by this fraction of each joint's
-#: largest and the replay run again: how far its end moves joins its error estimate.
-TORQUE_PERTURBATION = 1e-12
 
 
 def integrating_checks(subject: Subject) -> list[Check]:
@@ -126,14 +131,14 @@ def replay_checks(subject: Subject) -> list[Check]:
     why = (
         f"{level.steps} steps did not converge"
         if not level.converged
-        else f"its end moves as far with its torques perturbed by {TORQUE_PERTURBATION:g}"
+        else f"its end moves as far with its torques perturbed by {stepping.TORQUE_PERTURBATION:g}"
     )
     return _checks(
         (pieces.attitude, pieces.joints),
         (pieces.attitude_estimate, pieces.joint_estimate),
-        f"{METHOD} in {pieces.segments} segments of {pieces.steps} steps, each from the "
-        f"path's state at its start (from rest, {why}: open loop, the replay amplifies its "
-        "own error)",
+        f"{METHOD} in {pieces.segments}{SEGMENTED}{pieces.steps} steps, each from the path's "
+        f"state at its start, figures scaled to the whole motion (from rest, {why}: open "
+        "loop, the replay amplifies its own error)",
     )
 
 
@@ -163,8 +168,8 @@ def _from_rest(level: _Replay) -> list[Check]:
             detail += ", not converged: its last level blew up (not a number)"
     if level.moved is not None:
         detail += (
-            f", torques perturbed by {TORQUE_PERTURBATION:g} of their largest move its end by "
-            f"{level.moved[0]:.2g} rad, {level.moved[1]:.2g} (joints)"
+            f", torques perturbed by {stepping.TORQUE_PERTURBATION:g} of their largest move its "
+            f"end by {level.moved[0]:.2g} rad, {level.moved[1]:.2g} (joints)"
         )
     return _checks((level.attitude, level.joints), (att_estimate, joint_estimate), detail)
 
@@ -258,15 +263,13 @@ def _moved(
 ) -> tuple[float, float]:
     """How far the replay's ``end`` (attitude, joints) moves when its torques are perturbed.
 
-    Each joint's torques are offset by :data:`TORQUE_PERTURBATION` of its largest (N m or N;
-    alternate joints in opposite senses): about a thousand times their own rounding. A motion
+    Each joint's torques are offset by :data:`~.stepping.TORQUE_PERTURBATION` of its largest
+    (:func:`~.stepping.perturbed_torques`): about a thousand times their own rounding. A motion
     whose open-loop replay amplifies that much (a light wrist on a heavy spacecraft over a
     long time) cannot tell a plan's error from its inputs' rounding. Returns the attitude's
     move (rad) and the largest joint's (rad or m).
     """
-    signs = np.where(np.arange(torques.shape[1]) % 2 == 0, 1.0, -1.0)
-    offset = TORQUE_PERTURBATION * np.abs(torques).max(axis=0) * signs
-    attitude, joints = run(steps, torques + offset)
+    attitude, joints = run(steps, perturbed_torques(torques))
     return (
         _finite(geodesic_angle(attitude, end[0])),
         _finite(float(np.abs(wrapped_joints(robot, joints - end[1])).max())),

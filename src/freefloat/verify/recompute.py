@@ -200,7 +200,8 @@ def compare_verification(
     """Compare a plan file's verification figures with their recomputation.
 
     Nothing to compare when the file has none (format 1, or a plan not yet verified). Checks
-    named in ``other_method`` were made by another integrator than this version's: both
+    named in ``other_method`` were made by another method than the recomputation's (another
+    integrator, or a replay from rest against one in segments): both
     results lie within their own error estimates of the truth, so the value must agree within
     the sum of the two estimates, and the estimates themselves are not compared (a stated
     check that could not tell, "no verdict", states an estimate that covers its value: its

@@ -10,25 +10,35 @@ twist they come with: :meth:`~freefloat.verify.along.PathDynamics.velocities`), 
 the same torques, and its end is compared with the path's state there. Without gravity the
 articulated-body algorithm does not depend on the base pose, so each segment turns the base
 by a rotation of its own, and the attitude at the end is the start attitude turned by every
-segment's in order. The figures:
+segment's in order. Re-anchoring each segment also hides most of what a wrong torque does: an
+acceleration error ``a`` moves a segment of length ``h = T / K`` by about ``a h^2 / 2``, the
+whole motion by ``a T^2 / 2``, ``K^2`` times as much (the base's turn, summed over the
+segments, ``K`` times). So the figures are scaled to the whole motion, and the tolerances are
+the replay's own:
 
-- ``replay_attitude``: the angle (rad) from that end attitude to the target; its error
-  estimate is the angle between the end attitudes of the last two step counts (rotations
-  compose isometrically: the segments' errors add at most).
-- ``replay_joints``: the largest joint defect at a segment's end (rad or m, continuous joints
-  wrapped); its estimate the largest change of a segment's end over the last doubling.
+- ``replay_attitude``: ``K`` times the angle (rad) from that end attitude to the target; its
+  error estimate ``K`` times the angle between the end attitudes of the last two step counts
+  (rotations compose isometrically: the segments' errors add at most).
+- ``replay_joints``: ``K^2`` times the largest joint defect at a segment's end (rad or m,
+  continuous joints wrapped); its estimate ``K^2`` times the largest change of a segment's end
+  over the last doubling.
 
 Each level doubles the steps of every segment (from 8) and is decided as the whole replay is
-(:func:`~freefloat.verify.stepping._decided`); the segment counts tried are
-:data:`SEGMENT_COUNTS`, the steps of all segments together within the replay's cap. What a
+(:func:`~freefloat.verify.stepping._decided`), including its rule before a refusal: the
+segments are replayed once more with their torques perturbed by
+:data:`~freefloat.verify.stepping.TORQUE_PERTURBATION`'s fraction, and how far the ends move
+(scaled alike) joins the estimates. The segment counts tried are :data:`SEGMENT_COUNTS`, the
+steps of all segments together within the replay's cap; a count whose figures are not
+numbers or whose estimates grow past its second doubling is left for the next. What a
 segmented replay shows is weaker than a whole one, and the check's detail says which was made:
-that the path and its torques satisfy the dynamics over every segment (defects within the
-tolerance), not that the torques alone, open loop, would bring the system there.
+that the path and its torques satisfy the dynamics over every segment, not that the torques
+alone, open loop, would bring the system there.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,12 +46,23 @@ import numpy as np
 from ..physics.attitude import geodesic_angle
 from ..physics.replay import replay
 from .plan_checks import TOLERANCES, Subject
-from .stepping import _FIRST_REPLAY_STEPS, _decided, _finite, motion_speed, wrapped_joints
+from .stepping import (
+    _FIRST_REPLAY_STEPS,
+    _MAX_TURN,
+    _decided,
+    _finite,
+    motion_speed,
+    perturbed_torques,
+    wrapped_joints,
+)
 
-__all__ = ["SEGMENT_COUNTS", "SegmentedReplay", "segmented_replay"]
+__all__ = ["SEGMENTED", "SEGMENT_COUNTS", "SegmentedReplay", "segment_count", "segmented_replay"]
 
 #: Segment counts tried, in order (a count each): more segments, shorter ones, less amplified.
 SEGMENT_COUNTS = (8, 32, 128)
+#: What the detail of a replay made in segments says after its count (``"RK5 in 8 segments of
+#: 32 steps, ..."``); :func:`segment_count` reads the count back.
+SEGMENTED = " segments of "
 
 
 @dataclass(frozen=True)
@@ -49,10 +70,11 @@ class SegmentedReplay:
     """The last level of a replay in segments.
 
     Attributes:
-        attitude: angle from the end attitude to the target (rad).
-        joints: largest joint defect at a segment's end (rad or m).
-        attitude_estimate: its change over the last doubling of the steps (rad).
-        joint_estimate: the same for the joint defects (rad or m).
+        attitude: angle from the end attitude to the target, times the count (rad).
+        joints: largest joint defect at a segment's end, times the count squared (rad or m).
+        attitude_estimate: its change over the last doubling of the steps, and how far the
+            perturbed torques moved it before a refusal (rad).
+        joint_estimate: the same for the joints (rad or m).
         segments: the number of segments.
         steps: Runge-Kutta steps per segment at the last level (0: none fitted the cap).
         converged: whether both verdicts stand whatever those estimates.
@@ -69,18 +91,32 @@ class SegmentedReplay:
 
 @dataclass(frozen=True)
 class _Shot:
-    """One step count's segments: the end attitude and each segment's end joints."""
+    """One step count's segments: the end attitude ``[x, y, z, w]``, each segment's end joints.
+
+    The joints in rad or m, one row per segment.
+    """
 
     quaternion: np.ndarray
     ends: np.ndarray
 
 
+def segment_count(detail: str) -> int | None:
+    """The segment count a replay check's ``detail`` names, or None for a replay from rest."""
+    found = re.search(rf" in (\d+){SEGMENTED}", detail)
+    return int(found[1]) if found else None
+
+
 def segmented_replay(subject: Subject) -> SegmentedReplay:
     """The replay in :data:`SEGMENT_COUNTS` segments, the first count that converges.
 
-    The last count's level when none does (``converged`` False).
+    The last count's level when none does (``converged`` False); none is tried when the cap
+    cannot resolve the motion in any count (its largest turn in one step, the same for every
+    count at the cap, beyond what a step-doubling check trusts).
     """
     level = SegmentedReplay(math.nan, math.nan, math.inf, math.inf, SEGMENT_COUNTS[0], 0, False)
+    plan = subject.plan
+    if motion_speed(plan) * plan.duration / subject.replay_steps > _MAX_TURN:
+        return level
     for count in SEGMENT_COUNTS:
         if count * 2 * _FIRST_REPLAY_STEPS > subject.replay_steps:
             break  # not even two levels of this count fit the cap
@@ -91,11 +127,15 @@ def segmented_replay(subject: Subject) -> SegmentedReplay:
 
 
 def _doubling(subject: Subject, count: int) -> SegmentedReplay:
-    """``count`` segments on doubling steps until both verdicts stand or the cap is reached."""
-    plan, robot = subject.plan, subject.robot
-    target = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
+    """``count`` segments on doubling steps until both verdicts stand or the cap is reached.
+
+    A refusal stands only when the torques perturbed by their assumed error do not move the
+    ends as far (:data:`~freefloat.verify.stepping.TORQUE_PERTURBATION`); otherwise, and
+    when the figures are not numbers or the estimates grow past the second doubling, this
+    count is left undecided.
+    """
+    plan = subject.plan
     tolerances = (TOLERANCES["replay_attitude_rad"], TOLERANCES["replay_joint"])
-    knots = subject.path(np.linspace(0.0, plan.duration, count + 1))[0]
     speed = motion_speed(plan)
     steps = _FIRST_REPLAY_STEPS
     coarse = _shot(subject, count, steps)
@@ -104,14 +144,13 @@ def _doubling(subject: Subject, count: int) -> SegmentedReplay:
     while count * 2 * steps <= subject.replay_steps:
         steps *= 2
         fine = _shot(subject, count, steps)
-        figures = (
-            geodesic_angle(fine.quaternion, target),
-            float(np.abs(wrapped_joints(robot, fine.ends - knots[1:])).max()),
-        )
-        estimates = (
-            _finite(geodesic_angle(coarse.quaternion, fine.quaternion)),
-            _finite(float(np.abs(wrapped_joints(robot, fine.ends - coarse.ends)).max())),
-        )
+        figures, estimates = _figures(subject, count, fine), _apart(subject, count, coarse, fine)
+        if not all(map(math.isfinite, figures)) or (
+            steps > 4 * _FIRST_REPLAY_STEPS
+            and all(map(math.isfinite, previous))
+            and any(e > p for e, p in zip(estimates, previous, strict=True))
+        ):
+            break  # not converging at this count: a later one may
         turn = speed * plan.duration / (count * steps)
         if all(
             _decided(value, estimate, before, tolerance, turn, earliest)
@@ -119,21 +158,49 @@ def _doubling(subject: Subject, count: int) -> SegmentedReplay:
                 figures, estimates, previous, tolerances, earlier, strict=True
             )
         ):
+            if any(f - e > t for f, e, t in zip(figures, estimates, tolerances, strict=True)):
+                moved = _apart(subject, count, fine, _shot(subject, count, steps, perturbed=True))
+                estimates = (estimates[0] + moved[0], estimates[1] + moved[1])
+                if not any(
+                    f - e > t for f, e, t in zip(figures, estimates, tolerances, strict=True)
+                ):
+                    break  # its inputs' own error could move the ends that far: undecided
             return SegmentedReplay(*figures, *estimates, count, steps, True)
         coarse, earlier, previous = fine, previous, estimates
     return SegmentedReplay(*figures, *previous, count, steps, False)
 
 
-def _shot(subject: Subject, count: int, steps: int) -> _Shot:
+def _figures(subject: Subject, count: int, shot: _Shot) -> tuple[float, float]:
+    """The attitude and joint figures of a shot, scaled to the whole motion (rad; rad or m)."""
+    plan = subject.plan
+    target = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
+    knots = subject.path(np.linspace(0.0, plan.duration, count + 1)[1:])[0]
+    defect = float(np.abs(wrapped_joints(subject.robot, shot.ends - knots)).max())
+    return count * geodesic_angle(shot.quaternion, target), count * count * defect
+
+
+def _apart(subject: Subject, count: int, one: _Shot, other: _Shot) -> tuple[float, float]:
+    """How far two shots' ends lie apart, scaled as :func:`_figures` (inf for not a number)."""
+    joints = float(np.abs(wrapped_joints(subject.robot, one.ends - other.ends)).max())
+    return (
+        _finite(count * geodesic_angle(one.quaternion, other.quaternion)),
+        _finite(count * count * joints),
+    )
+
+
+def _shot(subject: Subject, count: int, steps: int, perturbed: bool = False) -> _Shot:
     """Every segment replayed on ``steps`` steps from the path's state at its start.
 
-    The torques come at the quarters of the steps of the whole duration's grid
+    The torques (N m or N) come at the quarters of the steps of the whole duration's grid
     ``k T / (4 count steps)`` (the instants the whole replay uses, to the bit, when the counts
-    are powers of two), each segment taking its share.
+    are powers of two), each segment taking its share; ``perturbed``: offset as
+    :func:`~freefloat.verify.stepping.perturbed_torques` offsets them.
     """
     plan = subject.plan
     grid = np.linspace(0.0, plan.duration, 4 * steps * count + 1)
     torques = subject.dynamics.torques(grid)
+    if perturbed:
+        torques = perturbed_torques(torques)
     knots = grid[:: 4 * steps]
     joints = subject.path(knots[:-1])[0]
     velocities = subject.dynamics.velocities(knots[:-1])

@@ -23,9 +23,11 @@ from ..robot.model import Robot
 __all__ = [
     "CONVERGED_FRACTION",
     "MAX_REPLAY_STEPS",
+    "TORQUE_PERTURBATION",
     "AttitudeLevel",
     "attitude_by_doubling",
     "motion_speed",
+    "perturbed_torques",
     "wrapped_joints",
 ]
 
@@ -42,6 +44,9 @@ _FIRST_ATTITUDE_STEPS = 8
 _MAX_ATTITUDE_STEPS = 1 << 14
 #: Largest rotation (rad) of a joint or the base in one step before a check trusts its steps.
 _MAX_TURN = 0.25
+#: Before a replay refuses a plan, its torques are offset by this fraction of each joint's
+#: largest and the replay run again: how far its end moves joins its error estimate.
+TORQUE_PERTURBATION = 1e-12
 
 
 def _decided(
@@ -88,6 +93,15 @@ def wrapped_joints(robot: Robot, delta: np.ndarray) -> np.ndarray:
         if joint.kind == "continuous":
             out[..., i] = turn(out[..., i])
     return out
+
+
+def perturbed_torques(torques: np.ndarray) -> np.ndarray:
+    """``torques`` (K, N; N m or N) offset by :data:`TORQUE_PERTURBATION` of each joint's largest.
+
+    Alternate joints in opposite senses: about a thousand times the torques' own rounding.
+    """
+    signs = np.where(np.arange(torques.shape[1]) % 2 == 0, 1.0, -1.0)
+    return torques + TORQUE_PERTURBATION * np.abs(torques).max(axis=0) * signs
 
 
 def motion_speed(plan: Plan) -> float:

@@ -8,7 +8,6 @@ goal for a Cartesian goal's error.
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -19,6 +18,7 @@ from ..plans.guarantees import Verification
 from ..plans.versions import MONOMIAL_BASIS
 from ..problem.constraints import CONSTRAINTS
 from ..problem.scenario import Scenario
+from ..verify.segmented import segment_count
 from .robustness import robustness_line
 
 __all__ = ["cartesian_report", "clearance_line", "robot_label", "summary", "verification_lines"]
@@ -131,10 +131,10 @@ def verification_lines(v: Verification) -> list[str]:
     if not v.checks:
         return []
     replay = v["replay_attitude"]
-    segments = re.search(r" in (\d+) segments of ", replay.detail)
+    segments = segment_count(replay.detail)
     replayed = (
         f"replay {replay.value:.1e} rad"
-        + (f" (in {segments[1]} segments, each from the path's state)" if segments else "")
+        + (f" (in {segments} segments, each from the path's state)" if segments else "")
         if replay.verdict != "no verdict"
         else f"replay no verdict ({replay.detail})"
     )
