@@ -28,6 +28,19 @@ def _env(**extra: str) -> dict[str, str]:
     return env
 
 
+def _python(code: str, folder: Path) -> subprocess.CompletedProcess[str]:
+    """``python -c code`` in ``folder`` with this checkout's package, its output captured."""
+    return subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        env=_env(),
+        cwd=folder,
+        check=False,
+        timeout=60,
+    )
+
+
 def _wait_for(predicate, timeout: float = 60.0) -> None:
     deadline = time.monotonic() + timeout
     while not predicate():
@@ -79,15 +92,7 @@ sys.argv = [{str(Path(sys.executable).parent / "freefloat")!r}, "plan"]
 from freefloat.cli import main
 sys.exit(main())
 """
-    result = subprocess.run(
-        [sys.executable, "-c", code],
-        capture_output=True,
-        text=True,
-        env=_env(),
-        cwd=tmp_path,
-        check=False,
-        timeout=60,
-    )
+    result = _python(code, tmp_path)
     assert result.returncode == 130
     assert result.stderr == "freefloat: interrupted\n"
     assert list(tmp_path.iterdir()) == []
@@ -127,14 +132,6 @@ os.kill(os.getpid(), {int(signum)})  # delivered at once, in the main thread
 print("still here", flush=True)
 sys.exit(code)
 """
-    result = subprocess.run(
-        [sys.executable, "-c", code],
-        capture_output=True,
-        text=True,
-        env=_env(),
-        cwd=tmp_path,
-        check=False,
-        timeout=60,
-    )
+    result = _python(code, tmp_path)
     assert result.returncode == 0, result.stderr
     assert result.stdout.splitlines()[-1] == "still here" and result.stderr == ""
