@@ -324,3 +324,17 @@ def test_robot_and_arm_tell_a_file_from_a_name_by_one_rule(tmp_path):
     assert resolve_robot("Arm.URDF", relative_to=tmp_path) == urdf
     with pytest.raises(ff.UnknownNameError, match="robot"):
         resolve_robot("Arm", relative_to=tmp_path)
+    # an inline servicer's arm, through the scenario's [robot] table: the same text is the
+    # file next to the scenario (a copy of the Kinova arm), not an unknown arm name
+    from freefloat.robot.arms import arm_urdf
+
+    (tmp_path / "Kinova.URDF").write_text(arm_urdf("kinova").read_text())
+    example = (ROOT / "examples" / "kinova_servicer.toml").read_text()
+    assert 'arm = "kinova"' in example
+    scenario_file = tmp_path / "servicer.toml"
+    scenario_file.write_text(example.replace('arm = "kinova"', 'arm = "Kinova.URDF"'))
+    composed = ff.Scenario.from_toml(scenario_file).robot
+    assert (
+        composed.joint_names
+        == ff.Scenario.from_toml(ROOT / "examples" / "kinova_servicer.toml").robot.joint_names
+    )
