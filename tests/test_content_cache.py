@@ -161,15 +161,16 @@ def test_threads_asking_for_other_contents_are_not_held_up():
     fast.model.inertias[1] = pin.Inertia(
         2.0, fast.model.inertias[1].lever, fast.model.inertias[1].inertia
     )
-    answered = threading.Event()
+    answered, started = threading.Event(), threading.Event()
 
     def waits() -> int:
+        started.set()
         assert answered.wait(timeout=30), "the other content was held up"
         return 1
 
     worker = threading.Thread(target=lambda: cache.get(slow, waits))
     worker.start()
-    time.sleep(0.05)  # the slow computation has begun and holds its own lock
+    assert started.wait(timeout=30)  # the slow computation has begun and holds its lock
     assert cache.get(fast, lambda: 2) == 2
     answered.set()
     worker.join()

@@ -12,13 +12,13 @@ articulated-body algorithm does not depend on the base pose, so each segment tur
 by a rotation of its own, and the attitude at the end is the start attitude turned by every
 segment's in order. Re-anchoring each segment also hides most of what a wrong torque does: an
 acceleration error ``a`` moves a segment of length ``h = T / K`` by about ``a h^2 / 2``, the
-whole motion by ``a T^2 / 2``, ``K^2`` times as much (the base's turn, summed over the
-segments, ``K`` times). So the figures are scaled to the whole motion, and the tolerances are
-the replay's own:
+whole motion by ``a T^2 / 2``, ``K^2`` times as much. So each segment's defects are scaled by
+``K^2``, and the tolerances are the replay's own:
 
-- ``replay_attitude``: ``K`` times the angle (rad) from that end attitude to the target; its
-  error estimate ``K`` times the angle between the end attitudes of the last two step counts
-  (rotations compose isometrically: the segments' errors add at most).
+- ``replay_attitude``: the angle (rad) from the end attitude to the target, plus ``K^2`` times
+  the largest angle between a segment's replayed turn of the base and the path's own turn over
+  it (integrated on the same steps from the base angular velocity that comes with the torques);
+  its error estimate bounds how far both terms moved over the last doubling.
 - ``replay_joints``: ``K^2`` times the largest joint defect at a segment's end (rad or m,
   continuous joints wrapped); its estimate ``K^2`` times the largest change of a segment's end
   over the last doubling.
@@ -29,7 +29,8 @@ segments are replayed once more with their torques perturbed by
 :data:`~freefloat.verify.stepping.TORQUE_PERTURBATION`'s fraction, and how far the ends move
 (scaled alike) joins the estimates. The segment counts tried are :data:`SEGMENT_COUNTS`, the
 steps of all segments together within the replay's cap; a count whose figures are not
-numbers or whose estimates grow past its second doubling is left for the next. What a
+numbers, or that is undecided while a difference above rounding grows past its second
+doubling, is left for the next. What a
 segmented replay shows is weaker than a whole one, and the check's detail says which was made:
 that the path and its torques satisfy the dynamics over every segment, not that the torques
 alone, open loop, would bring the system there.
@@ -43,14 +44,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.attitude import geodesic_angle
+from ..physics.attitude import geodesic_angle, quat_multiply
 from ..physics.replay import replay
 from .plan_checks import TOLERANCES, Subject
 from .stepping import (
     _FIRST_REPLAY_STEPS,
     _MAX_TURN,
+    ROUNDING_FLOOR,
     _decided,
     _finite,
+    _rk5_attitude,
     motion_speed,
     perturbed_torques,
     wrapped_joints,
@@ -91,13 +94,26 @@ class SegmentedReplay:
 
 @dataclass(frozen=True)
 class _Shot:
-    """One step count's segments: the end attitude ``[x, y, z, w]``, each segment's end joints.
+    """One step count's segments: each one's turn of the base and its end joints.
 
-    The joints in rad or m, one row per segment.
+    Attributes:
+        turns: (K, 4) each segment's replayed turn of the base, ``[x, y, z, w]`` from the
+            identity (the base frame at its start).
+        path_turns: (K, 4) the path's own turn over each segment, integrated on the same
+            steps from the base angular velocity that comes with the torques.
+        ends: (K, N) each segment's end joints (rad or m).
     """
 
-    quaternion: np.ndarray
+    turns: np.ndarray
+    path_turns: np.ndarray
     ends: np.ndarray
+
+    def end(self, start: np.ndarray) -> np.ndarray:
+        """The attitude ``[x, y, z, w]`` from ``start`` turned by every segment's turn in order."""
+        attitude = np.asarray(start, dtype=float)
+        for turn in self.turns:
+            attitude = quat_multiply(attitude, turn)
+        return attitude / np.linalg.norm(attitude)
 
 
 def segment_count(detail: str) -> int | None:
@@ -145,12 +161,8 @@ def _doubling(subject: Subject, count: int) -> SegmentedReplay:
         steps *= 2
         fine = _shot(subject, count, steps)
         figures, estimates = _figures(subject, count, fine), _apart(subject, count, coarse, fine)
-        if not all(map(math.isfinite, figures)) or (
-            steps > 4 * _FIRST_REPLAY_STEPS
-            and all(map(math.isfinite, previous))
-            and any(e > p for e, p in zip(estimates, previous, strict=True))
-        ):
-            break  # not converging at this count: a later one may
+        if not all(map(math.isfinite, figures)):
+            break  # blew up at this count: a later one may not
         turn = speed * plan.duration / (count * steps)
         if all(
             _decided(value, estimate, before, tolerance, turn, earliest)
@@ -166,25 +178,59 @@ def _doubling(subject: Subject, count: int) -> SegmentedReplay:
                 ):
                     break  # its inputs' own error could move the ends that far: undecided
             return SegmentedReplay(*figures, *estimates, count, steps, True)
+        if steps > 4 * _FIRST_REPLAY_STEPS and _growing(estimates, previous, tolerances):
+            break  # not converging at this count: a later one may
         coarse, earlier, previous = fine, previous, estimates
-    return SegmentedReplay(*figures, *previous, count, steps, False)
+    return SegmentedReplay(*figures, *estimates, count, steps, False)
+
+
+def _growing(
+    estimates: tuple[float, float], previous: tuple[float, float], tolerances: tuple[float, float]
+) -> bool:
+    """Whether a difference grew over the last doubling, above the rounding floor.
+
+    Differences at the floor (:data:`~freefloat.verify.stepping.ROUNDING_FLOOR` of the
+    tolerance) go up and down with rounding: their growth means nothing.
+    """
+    return any(
+        e > p and e > ROUNDING_FLOOR * t
+        for e, p, t in zip(estimates, previous, tolerances, strict=True)
+    )
 
 
 def _figures(subject: Subject, count: int, shot: _Shot) -> tuple[float, float]:
-    """The attitude and joint figures of a shot, scaled to the whole motion (rad; rad or m)."""
+    """The attitude and joint figures of a shot, scaled to the whole motion (rad; rad or m).
+
+    Attitude: the angle from the end attitude to the target, plus ``K^2`` times the largest
+    angle between a segment's replayed turn and the path's own; joints: ``K^2`` times the
+    largest joint defect at a segment's end.
+    """
     plan = subject.plan
+    start = np.asarray(plan.base.start_quaternion_xyzw, dtype=float)
     target = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
     knots = subject.path(np.linspace(0.0, plan.duration, count + 1)[1:])[0]
     defect = float(np.abs(wrapped_joints(subject.robot, shot.ends - knots)).max())
-    return count * geodesic_angle(shot.quaternion, target), count * count * defect
+    turned = max(geodesic_angle(a, b) for a, b in zip(shot.turns, shot.path_turns, strict=True))
+    square = count * count
+    return geodesic_angle(shot.end(start), target) + square * turned, square * defect
 
 
 def _apart(subject: Subject, count: int, one: _Shot, other: _Shot) -> tuple[float, float]:
-    """How far two shots' ends lie apart, scaled as :func:`_figures` (inf for not a number)."""
+    """How far two shots' figures can differ, bounded as :func:`_figures` is made (inf: NaN).
+
+    A segment's defect angle moves at most by how far its replayed turn and the path's turn
+    moved (the triangle inequality); the end attitude by the segments' turns' moves in all.
+    """
+    start = np.asarray(subject.plan.base.start_quaternion_xyzw, dtype=float)
+    turns = max(
+        geodesic_angle(a, b) + geodesic_angle(c, d)
+        for a, b, c, d in zip(one.turns, other.turns, one.path_turns, other.path_turns, strict=True)
+    )
     joints = float(np.abs(wrapped_joints(subject.robot, one.ends - other.ends)).max())
+    square = count * count
     return (
-        _finite(count * geodesic_angle(one.quaternion, other.quaternion)),
-        _finite(count * count * joints),
+        _finite(geodesic_angle(one.end(start), other.end(start)) + square * turns),
+        _finite(square * joints),
     )
 
 
@@ -204,20 +250,24 @@ def _shot(subject: Subject, count: int, steps: int, perturbed: bool = False) -> 
     knots = grid[:: 4 * steps]
     joints = subject.path(knots[:-1])[0]
     velocities = subject.dynamics.velocities(knots[:-1])
-    quaternion = np.asarray(plan.base.start_quaternion_xyzw, dtype=float)
+    omega = subject.dynamics.omega(grid)
+    identity = np.array([0.0, 0.0, 0.0, 1.0])
+    turns, path_turns = np.empty((count, 4)), np.empty((count, 4))
     ends = np.empty((count, subject.robot.n))
     with np.errstate(over="ignore", invalid="ignore"):
         for k in range(count):
-            share = torques[4 * steps * k : 4 * steps * (k + 1) + 1]
+            share = slice(4 * steps * k, 4 * steps * (k + 1) + 1)
+            width = float(knots[k + 1] - knots[k])
             result = replay(
                 subject.mmap,
                 joints[k],
-                quaternion,
-                share,
-                float(knots[k + 1] - knots[k]),
+                identity,
+                torques[share],
+                width,
                 steps,
                 track_momentum=False,
                 start_velocity=velocities[k],
             )
-            quaternion, ends[k] = result.quaternion_xyzw, result.joints
-    return _Shot(quaternion, ends)
+            turns[k], ends[k] = result.quaternion_xyzw, result.joints
+            path_turns[k] = _rk5_attitude(identity, omega[share], width)
+    return _Shot(turns, path_turns, ends)

@@ -23,6 +23,7 @@ from ..robot.model import Robot
 __all__ = [
     "CONVERGED_FRACTION",
     "MAX_REPLAY_STEPS",
+    "ROUNDING_FLOOR",
     "TORQUE_PERTURBATION",
     "AttitudeLevel",
     "attitude_by_doubling",
@@ -34,6 +35,10 @@ __all__ = [
 #: A numerical check refines (doubles its steps) until its verdict no longer depends on its own
 #: error, or until its error estimate is below this fraction of its tolerance.
 CONVERGED_FRACTION = 0.1
+
+#: A step-doubling difference at or below this fraction of the tolerance is at rounding: it
+#: need not shrink further to be trusted.
+ROUNDING_FLOOR = 1e-3 * CONVERGED_FRACTION
 
 #: Default cap on the replay's Runge-Kutta steps (see :func:`verify_plan`).
 MAX_REPLAY_STEPS = 8192
@@ -70,18 +75,24 @@ def _decided(
     small against the tolerance (and the value within it) or the value is clear of the
     tolerance by more than the estimate. To refuse, the value must exceed the tolerance by
     more than the estimate, the estimate must also be small against the value, and the
-    difference must have shrunk 8-fold over the doubling before as well: an erratic sequence
-    (an open-loop replay whose error grows without bound, say) can shrink once by chance.
+    difference must have shrunk 8-fold over the doubling before as well (or have been at
+    rounding already, :data:`ROUNDING_FLOOR` of the tolerance): an erratic sequence (an
+    open-loop replay whose error grows without bound, say) can shrink once by chance.
     """
     # a first difference (``previous`` inf) has not shrunk yet: it bounds nothing on its own
     shrunk = math.isfinite(previous) and estimate <= previous / 8.0
-    converging = shrunk or estimate <= 1e-3 * CONVERGED_FRACTION * tolerance
+    floor = ROUNDING_FLOOR * tolerance
+    converging = shrunk or estimate <= floor
     if turn > _MAX_TURN or not converging:
         return False
     small = estimate <= CONVERGED_FRACTION * tolerance
     if value + estimate <= tolerance or (small and value <= tolerance):
         return True
-    settled = earlier is None or (math.isfinite(earlier) and previous <= earlier / 8.0)
+    settled = (
+        earlier is None
+        or previous <= floor  # the difference before was at rounding already
+        or (math.isfinite(earlier) and previous <= earlier / 8.0)
+    )
     return settled and value - estimate > tolerance and estimate <= CONVERGED_FRACTION * value
 
 
