@@ -5,6 +5,7 @@ whole replay where it converges, and plans whose torques are known wrong."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -18,7 +19,14 @@ from freefloat.verify import integrating
 from freefloat.verify.along import PathDynamics
 from freefloat.verify.checks import Subject
 from freefloat.verify.path_eval import file_path
-from freefloat.verify.segmented import SEGMENT_COUNTS, _doubling, segmented_replay
+from freefloat.verify.segmented import (
+    SEGMENT_COUNTS,
+    _doubling,
+    _figures,
+    _shot,
+    segmented_replay,
+)
+from freefloat.verify.stepping import _rk5_attitude
 from freefloat.viz.summary import summary
 
 from conftest import ROOT
@@ -161,11 +169,14 @@ def test_a_replay_from_rest_that_cannot_converge_is_decided_in_segments(kinova_p
 
 def test_a_file_whose_replay_from_rest_said_no_verdict_still_verifies(kinova_plan, tmp_path):
     """A file written before replays were segmented states the Kinova replay as the replay
-    from rest found it (no verdict, its estimate covering its value); verify, now deciding
-    it in segments, compares the two within both estimates: no mismatch. A figure no method
-    could give (the replay's attitude 9e-5 rad off, estimate 1e-9) still disagrees."""
+    from rest found it (no verdict, its estimate covering its value): another quantity than
+    the segments' figures, so verify does not compare them and the replay made now decides.
+    A figure stated as made the same way (8 segments) that no such replay could give (the
+    attitude 9e-5 rad off, estimate 1e-9) still disagrees with its recomputation."""
     data = json.loads(kinova_plan.to_json())
     checks = {c["name"]: c for c in data["verification"]["checks"]}
+    made_in_segments = checks["replay_attitude"]["detail"]
+    assert made_in_segments.startswith("RK5 in 8 segments of ")
     for name, value in (("replay_attitude", 2.8e-6), ("replay_joints", 0.0173)):
         checks[name].update(
             value=value,
@@ -176,10 +187,36 @@ def test_a_file_whose_replay_from_rest_said_no_verdict_still_verifies(kinova_pla
     path.write_text(json.dumps(data))
     made = ff.verify_plan(ff.Plan.load(path))
     assert made.passed and " segments of " in made["replay_joints"].detail
-    checks["replay_attitude"].update(value=0.9e-4, error_estimate=1e-9, detail="RK5, 64 steps")
+    checks["replay_attitude"].update(value=0.9e-4, error_estimate=1e-9, detail=made_in_segments)
     path.write_text(json.dumps(data))
     with pytest.raises(ff.PlanMismatchError, match=r"verification\.checks"):
         ff.verify_plan(ff.Plan.load(path))
+
+
+def test_segment_turns_compose_to_the_paths_attitude(kinova_plan):
+    """The path's own turns over the segments, composed in order from the start, end where
+    the attitude equation integrated over the whole path in one run ends (the Kinova motion
+    turns about every axis, so the order of the composition matters)."""
+    subject = _subject(kinova_plan)
+    shot = _shot(subject, 8, 64)
+    start = np.asarray(kinova_plan.base.start_quaternion_xyzw, dtype=float)
+    composed = dataclasses.replace(shot, turns=shot.path_turns).end(start)
+    grid = np.linspace(0.0, kinova_plan.duration, 4 * 8 * 64 + 1)
+    whole = _rk5_attitude(start, subject.dynamics.omega(grid), kinova_plan.duration)
+    assert ff.geodesic_angle(composed, whole) < 1e-12
+    reversed_order = dataclasses.replace(shot, turns=shot.path_turns[::-1]).end(start)
+    assert ff.geodesic_angle(reversed_order, whole) > 1e-9  # the check can tell the order
+
+
+def test_a_segmented_levels_estimates_bound_a_finer_level(kinova_plan):
+    """The figures on four times the steps differ from the decided level's by no more than
+    its error estimates (both terms of the attitude figure move)."""
+    subject = _subject(kinova_plan)
+    level = _doubling(subject, 8)
+    assert level.converged
+    finer = _figures(subject, 8, _shot(subject, 8, 4 * level.steps))
+    assert abs(level.attitude - finer[0]) <= level.attitude_estimate
+    assert abs(level.joints - finer[1]) <= level.joint_estimate
 
 
 @pytest.mark.parametrize("error", [1e-3, 1e-5])

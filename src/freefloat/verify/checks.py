@@ -176,36 +176,47 @@ def verify_plan(
     verification = Verification(tuple(checks))
     if recompute:
         # An older file states some checks as they were made then (_PREDATED; integrating
-        # checks made by RK4: compared within both estimates), and a replay
-        # allowed other steps than the file's (the default) gives other figures: the figures
-        # it states otherwise are compared; every check made now decides whether it passes.
-        predated = _PREDATED.get(plan.format, ())
+        # checks made by RK4: compared within both estimates), and a replay allowed other
+        # steps than the file's (the default), or made otherwise (from rest against in
+        # segments, or in another number of segments: another quantity), gives other
+        # figures: the figures it states otherwise are compared; every check made now
+        # decides whether it passes.
+        predated = (*_PREDATED.get(plan.format, ()), *_replayed_otherwise(plan, verification))
         if replay_steps != MAX_REPLAY_STEPS:
             predated = (*predated, "replay_attitude", "replay_joints")
         stated = Verification(tuple(c for c in checks if c.name not in predated))
         on_file = Verification(tuple(c for c in plan.verification.checks if c.name not in predated))
-        compare_verification(on_file, stated, _made_otherwise(plan.verification, verification))
+        compare_verification(on_file, stated, _made_by_rk4(plan.verification))
     return verification
 
 
-def _made_otherwise(stated: Verification, made: Verification) -> frozenset[str]:
-    """The integrating checks a file states as another method found them.
+def _made_by_rk4(stated: Verification) -> frozenset[str]:
+    """The integrating checks a file states as classical RK4 found them (an earlier version).
 
-    Classical RK4 (an earlier version: ``detail`` starting ``"RK4, "``), or the replay from
-    rest where it is now made in segments, in another number of segments (a host whose
-    rounding decided at another count), or the other way round; the ``detail`` says which.
-    Their values are compared within both methods' error estimates, not the estimates
-    themselves (:func:`compare_verification`).
+    Their ``detail`` starts ``"RK4, "``: their values are compared within both versions'
+    error estimates, not the estimates themselves (:func:`compare_verification`).
     """
-    now = {c.name: c.detail for c in made.checks}
     return frozenset(
         c.name
         for c in stated.checks
-        if c.name in INTEGRATING_CHECKS
-        and (
-            c.detail.startswith("RK4, ")
-            or segment_count(c.detail) != segment_count(now.get(c.name, ""))
-        )
+        if c.name in INTEGRATING_CHECKS and c.detail.startswith("RK4, ")
+    )
+
+
+def _replayed_otherwise(plan: Plan, made: Verification) -> tuple[str, ...]:
+    """The replay checks the file states as made another way than now (not compared).
+
+    From rest against in segments, or in another number of segments (a host whose rounding
+    decided at another count): the figures of a segmented replay are its defects scaled to
+    the whole motion, which differ with the count, so they measure another quantity; the
+    ``detail`` says which was made.
+    """
+    now = {c.name: c.detail for c in made.checks}
+    return tuple(
+        c.name
+        for c in plan.verification.checks
+        if c.name in ("replay_attitude", "replay_joints")
+        and segment_count(c.detail) != segment_count(now.get(c.name, ""))
     )
 
 

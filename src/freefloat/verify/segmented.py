@@ -73,7 +73,8 @@ class SegmentedReplay:
     """The last level of a replay in segments.
 
     Attributes:
-        attitude: angle from the end attitude to the target, times the count (rad).
+        attitude: angle from the end attitude to the target plus the count squared times the
+            largest angle between a segment's replayed turn and the path's (rad).
         joints: largest joint defect at a segment's end, times the count squared (rad or m).
         attitude_estimate: its change over the last doubling of the steps, and how far the
             perturbed torques moved it before a refusal (rad).
@@ -156,7 +157,7 @@ def _doubling(subject: Subject, count: int) -> SegmentedReplay:
     steps = _FIRST_REPLAY_STEPS
     coarse = _shot(subject, count, steps)
     previous = earlier = (math.inf, math.inf)  # the last two differences (attitude, joints)
-    figures = (math.nan, math.nan)
+    figures, estimates = (math.nan, math.nan), (math.inf, math.inf)
     while count * 2 * steps <= subject.replay_steps:
         steps *= 2
         fine = _shot(subject, count, steps)

@@ -39,6 +39,9 @@ CONVERGED_FRACTION = 0.1
 #: A step-doubling difference at or below this fraction of the tolerance is at rounding: it
 #: need not shrink further to be trusted.
 ROUNDING_FLOOR = 1e-3 * CONVERGED_FRACTION
+#: A refusal's difference at or below this fraction of the tolerance, two levels running,
+#: need not shrink again for the refusal to stand (such a sequence is done converging).
+SETTLED_FLOOR = 1e-5
 
 #: Default cap on the replay's Runge-Kutta steps (see :func:`verify_plan`).
 MAX_REPLAY_STEPS = 8192
@@ -76,7 +79,8 @@ def _decided(
     tolerance by more than the estimate. To refuse, the value must exceed the tolerance by
     more than the estimate, the estimate must also be small against the value, and the
     difference must have shrunk 8-fold over the doubling before as well (or have been at
-    rounding already, :data:`ROUNDING_FLOOR` of the tolerance): an erratic sequence (an
+    rounding already, :data:`SETTLED_FLOOR` of the tolerance, after a difference that was a
+    number): an erratic sequence (an
     open-loop replay whose error grows without bound, say) can shrink once by chance.
     """
     # a first difference (``previous`` inf) has not shrunk yet: it bounds nothing on its own
@@ -90,7 +94,8 @@ def _decided(
         return True
     settled = (
         earlier is None
-        or previous <= floor  # the difference before was at rounding already
+        # the difference before was at rounding already, after one that was a number
+        or (math.isfinite(earlier) and previous <= SETTLED_FLOOR * tolerance)
         or (math.isfinite(earlier) and previous <= earlier / 8.0)
     )
     return settled and value - estimate > tolerance and estimate <= CONVERGED_FRACTION * value
