@@ -15,7 +15,7 @@ from scipy.integrate import solve_ivp
 
 import freefloat as ff
 from freefloat.physics.attitude import quat_multiply
-from freefloat.verify import integrating
+from freefloat.verify import integrating, segmented
 from freefloat.verify.along import PathDynamics
 from freefloat.verify.checks import Subject
 from freefloat.verify.path_eval import file_path
@@ -248,3 +248,21 @@ def test_a_file_replayed_in_another_number_of_segments_still_verifies(kinova_pla
     path = tmp_path / "other_host.json"
     path.write_text(json.dumps(data))
     assert ff.verify_plan(ff.Plan.load(path)).passed
+
+
+def test_a_count_whose_differences_grow_is_left_early(worked_plan, monkeypatch):
+    """Ends that move further from the path at each doubling (a diverging count, as 8
+    segments of the 24-joint chain): the count is left at its third doubling, not run to
+    the cap (1024 steps a segment for 8 segments)."""
+    subject = _subject(worked_plan)
+    knots = subject.path(np.linspace(0.0, worked_plan.duration, 9)[1:])[0]
+    identity = np.tile([0.0, 0.0, 0.0, 1.0], (8, 1))
+    asked = []
+
+    def diverging(subject, count, steps, perturbed=False):
+        asked.append(steps)
+        return segmented._Shot(identity, identity, knots + 1e-3 * steps)
+
+    monkeypatch.setattr(segmented, "_shot", diverging)
+    level = _doubling(subject, 8)
+    assert not level.converged and max(asked) == 64 < 1024
