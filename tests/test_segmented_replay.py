@@ -5,7 +5,9 @@ whole replay where it converges, and plans whose torques are known wrong."""
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import io
 import json
 
 import numpy as np
@@ -266,3 +268,15 @@ def test_a_count_whose_differences_grow_is_left_early(worked_plan, monkeypatch):
     monkeypatch.setattr(segmented, "_shot", diverging)
     level = _doubling(subject, 8)
     assert not level.converged and max(asked) == 64 < 1024
+
+
+def test_verify_says_when_the_replay_was_made_in_segments(kinova_plan, worked_plan, tmp_path):
+    from freefloat.cli import main
+
+    for plan, segmented_expected in ((kinova_plan, True), (worked_plan, False)):
+        path = plan.save(tmp_path / "p.json")
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out):
+            assert main(["verify", str(path)]) == 0
+        said = "the replay was made in 8 segments, each from the path's state" in out.getvalue()
+        assert said is segmented_expected

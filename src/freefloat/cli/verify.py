@@ -7,6 +7,7 @@ from pathlib import Path
 
 from ..plans.guarantees import Check
 from ..verify.checks import REPLAY_STEPS_LIMIT, check_replay_steps, verify_plan
+from ..verify.segmented import segment_count
 from ..verify.stepping import MAX_REPLAY_STEPS
 from .common import Commands
 
@@ -64,6 +65,12 @@ def run(args: argparse.Namespace) -> int:
             f"{check.error_estimate:>12.1e}  {check.verdict}"
         )
     print(f"  {'verification':<34}{'passed' if result.passed else 'FAILED':>12}")
+    segments = segment_count(result["replay_joints"].detail)
+    if segments:  # the replay from rest could not decide: say what was made instead
+        print(
+            f"  the replay was made in {segments} segments, each from the path's state at its "
+            "start, figures scaled to the whole motion (from rest it could not decide)"
+        )
     from ..problem.constraints import CONSTRAINTS
 
     rows = [check for check in result.checks if check.name in CONSTRAINTS]
