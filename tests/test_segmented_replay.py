@@ -280,3 +280,25 @@ def test_verify_says_when_the_replay_was_made_in_segments(kinova_plan, worked_pl
             assert main(["verify", str(path)]) == 0
         said = "the replay was made in 8 segments, each from the path's state" in out.getvalue()
         assert said is segmented_expected
+
+
+def test_a_continuous_joint_across_pi_is_compared_wrapped(tmp_path, monkeypatch):
+    """A continuous joint from 2.9 to 3.6 rad: the replay holds it as an angle in (-pi, pi],
+    the path past pi; its defects at the segments' ends are wrapped (else about 2 pi, and
+    the plan would fail)."""
+    import urdfs
+
+    path = tmp_path / "arm.urdf"
+    path.write_text(urdfs.spatial_arm(kinds=("continuous", "revolute", "prismatic")))
+    robot = ff.load_robot(path)
+    names = robot.joint_names
+    start = dict(zip(names, (2.9, 0.1, 0.0), strict=True))
+    goal = dict(zip(names, (3.6, 0.3, 0.05), strict=True))
+    scenario = ff.Scenario(robot, 10.0, start, goal)
+    problem = ff.problem_from_scenario(scenario)
+    drift = problem.achieved(np.zeros(problem.n_free))  # a goal the plain path reaches
+    plan = ff.plan(dataclasses.replace(scenario, goal_attitude=drift), samples=41)
+    _forced_to_segments(monkeypatch)
+    joints = ff.verify_plan(plan, recompute=False)["replay_joints"]
+    assert " segments of " in joints.detail and joints.verdict == "ok"
+    assert joints.value < 1e-6
