@@ -263,7 +263,7 @@ def test_a_count_whose_differences_grow_is_left_early(worked_plan, monkeypatch):
 
     def diverging(subject, count, steps, perturbed=False):
         asked.append(steps)
-        return segmented._Shot(identity, identity, knots + 1e-3 * steps)
+        return segmented._Shot(identity, identity, knots + 1e-3 * steps, knots)
 
     monkeypatch.setattr(segmented, "_shot", diverging)
     level = _doubling(subject, 8)

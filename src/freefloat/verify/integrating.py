@@ -45,13 +45,7 @@ from .stepping import (
     wrapped_joints,
 )
 
-__all__ = [
-    "INTEGRATING_CHECKS",
-    "METHOD",
-    "attitude_check",
-    "integrating_checks",
-    "replay_checks",
-]
+__all__ = ["INTEGRATING_CHECKS", "METHOD", "attitude_check", "integrating_checks", "replay_checks"]
 
 #: The integrator the checks name in their ``detail`` (``"RK5, 32 steps"``); a file whose
 #: checks name another (``RK4`` before this version) states figures of that integrator.

@@ -103,11 +103,13 @@ class _Shot:
         path_turns: (K, 4) the path's own turn over each segment, integrated on the same
             steps from the base angular velocity that comes with the torques.
         ends: (K, N) each segment's end joints (rad or m).
+        path_ends: (K, N) the path's joints at the segments' ends (rad or m).
     """
 
     turns: np.ndarray
     path_turns: np.ndarray
     ends: np.ndarray
+    path_ends: np.ndarray
 
     def end(self, start: np.ndarray) -> np.ndarray:
         """The attitude ``[x, y, z, w]`` from ``start`` turned by every segment's turn in order."""
@@ -171,18 +173,23 @@ def _doubling(subject: Subject, count: int) -> SegmentedReplay:
                 figures, estimates, previous, tolerances, earlier, strict=True
             )
         ):
-            if any(f - e > t for f, e, t in zip(figures, estimates, tolerances, strict=True)):
+            if _refuses(figures, estimates, tolerances):
                 moved = _apart(subject, count, fine, _shot(subject, count, steps, perturbed=True))
                 estimates = (estimates[0] + moved[0], estimates[1] + moved[1])
-                if not any(
-                    f - e > t for f, e, t in zip(figures, estimates, tolerances, strict=True)
-                ):
+                if not _refuses(figures, estimates, tolerances):
                     break  # its inputs' own error could move the ends that far: undecided
             return SegmentedReplay(*figures, *estimates, count, steps, True)
         if steps > 4 * _FIRST_REPLAY_STEPS and _growing(estimates, previous, tolerances):
             break  # not converging at this count: a later one may
         coarse, earlier, previous = fine, previous, estimates
     return SegmentedReplay(*figures, *estimates, count, steps, False)
+
+
+def _refuses(
+    figures: tuple[float, float], estimates: tuple[float, float], tolerances: tuple[float, float]
+) -> bool:
+    """Whether a figure exceeds its tolerance by more than its estimate (a refusal)."""
+    return any(f - e > t for f, e, t in zip(figures, estimates, tolerances, strict=True))
 
 
 def _growing(
@@ -209,8 +216,7 @@ def _figures(subject: Subject, count: int, shot: _Shot) -> tuple[float, float]:
     plan = subject.plan
     start = np.asarray(plan.base.start_quaternion_xyzw, dtype=float)
     target = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
-    knots = subject.path(np.linspace(0.0, plan.duration, count + 1)[1:])[0]
-    defect = float(np.abs(wrapped_joints(subject.robot, shot.ends - knots)).max())
+    defect = float(np.abs(wrapped_joints(subject.robot, shot.ends - shot.path_ends)).max())
     turned = max(geodesic_angle(a, b) for a, b in zip(shot.turns, shot.path_turns, strict=True))
     square = count * count
     return geodesic_angle(shot.end(start), target) + square * turned, square * defect
@@ -249,7 +255,7 @@ def _shot(subject: Subject, count: int, steps: int, perturbed: bool = False) -> 
     if perturbed:
         torques = perturbed_torques(torques)
     knots = grid[:: 4 * steps]
-    joints = subject.path(knots[:-1])[0]
+    joints = subject.path(knots)[0]  # each segment's start, and the path at its end
     velocities = subject.dynamics.velocities(knots[:-1])
     omega = subject.dynamics.omega(grid)
     identity = np.array([0.0, 0.0, 0.0, 1.0])
@@ -271,4 +277,4 @@ def _shot(subject: Subject, count: int, steps: int, perturbed: bool = False) -> 
             )
             turns[k], ends[k] = result.quaternion_xyzw, result.joints
             path_turns[k] = _rk5_attitude(identity, omega[share], width)
-    return _Shot(turns, path_turns, ends)
+    return _Shot(turns, path_turns, ends, joints[1:])
