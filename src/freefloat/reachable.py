@@ -28,10 +28,10 @@ import numpy as np
 from ._blas import one_blas_thread
 from .parallel import check_jobs, default_jobs, where_run
 from .physics.attitude import (
-    quat_conjugate,
     quat_exp,
-    quat_log,
     quat_multiply,
+    relative_quat,
+    relative_rotvec,
     zyx_from_quat,
 )
 from .physics.momentum import MomentumMap
@@ -206,7 +206,7 @@ def reachable(
     start = problem.start_quaternion
     drift = problem.achieved(np.zeros(problem.n_free))
     bound = simple_motion_bound(mmap, problem.family.start, problem.family.goal, travel_factor)
-    moved = quat_multiply(quat_conjugate(start), drift)
+    moved = relative_quat(start, drift)
     axes = default_directions() if directions is None else np.atleast_2d(directions)
     axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
     outer = np.array([turn_limit(moved, axis, bound.bound) for axis in axes])
@@ -274,7 +274,7 @@ def _planar_report(
         raise ValueError("a planar problem without planar bounds")
     start = problem.start_quaternion
     drift = problem.achieved(np.zeros(problem.n_free))
-    change = float(quat_log(quat_multiply(quat_conjugate(start), drift)) @ problem.axis)
+    change = float(relative_rotvec(start, drift) @ problem.axis)
     lo, hi = interval
     axis = np.asarray(problem.axis, dtype=float)
     directions = (

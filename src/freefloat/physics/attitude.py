@@ -33,6 +33,8 @@ __all__ = [
     "quat_multiply",
     "quat_rate_matrices",
     "quat_to_matrix",
+    "relative_quat",
+    "relative_rotvec",
     "rotation_matrices",
     "so3_right_jacobian",
     "step_nodes",
@@ -91,6 +93,22 @@ def quat_log(q: np.ndarray) -> np.ndarray:
     small = norm < 1e-12
     factor = np.where(small, 2.0 / np.where(w == 0.0, 1.0, w), angle / np.where(small, 1.0, norm))
     return factor * vec
+
+
+def relative_quat(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The rotation taking attitude ``a`` to attitude ``b``, in ``a``'s frame: ``conj(a) (x) b``.
+
+    Unit quaternions ``[x, y, z, w]``; broadcasts like :func:`quat_multiply`.
+    """
+    return quat_multiply(quat_conjugate(a), b)
+
+
+def relative_rotvec(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Rotation vector (rad, in ``a``'s frame, angle in [0, pi]) taking attitude ``a`` to ``b``.
+
+    :func:`quat_log` of :func:`relative_quat`.
+    """
+    return quat_log(relative_quat(a, b))
 
 
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:

@@ -15,7 +15,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ..errors import InfeasibleError, InputError, JointLimitError
-from ..physics.attitude import quat_conjugate, quat_log, quat_multiply
+from ..physics.attitude import relative_rotvec
 from ..physics.momentum import MomentumMap, cached_planar_axis
 from ..physics.planar_map import cached_identify
 from ..robot.model import Robot
@@ -182,7 +182,7 @@ def _planar_yaw_change(quats: Sequence[np.ndarray], axis: np.ndarray) -> float:
     Raises:
         InfeasibleError: the goal is turned about other axes too (a planar base cannot).
     """
-    relative = quat_log(quat_multiply(quat_conjugate(quats[0]), quats[1]))
+    relative = relative_rotvec(quats[0], quats[1])
     off_axis = float(np.linalg.norm(relative - (relative @ axis) * axis))
     if off_axis > 1e-9:
         raise InfeasibleError(

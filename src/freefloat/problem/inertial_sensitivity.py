@@ -31,10 +31,9 @@ from ..physics.attitude import (
     magnus_increment_jacobian,
     magnus_increments,
     propagate,
-    quat_conjugate,
     quat_log,
-    quat_multiply,
     quat_to_matrix,
+    relative_quat,
     rotation_matrices,
     so3_right_jacobian,
     step_nodes,
@@ -215,7 +214,7 @@ def attitude_sensitivity(
         after[m - 1] = rotations[m] @ after[m]
     dtheta = np.einsum("mji,mjk,mkf->if", after, so3_right_jacobian(increments), dw)
     reached = propagate(problem.start_quaternion, increments)[-1]
-    relative = quat_multiply(quat_conjugate(problem.goal_quaternion), reached)
+    relative = relative_quat(problem.goal_quaternion, reached)
     jacobian = np.asarray(pin.Jlog3(quat_to_matrix(relative))) @ dtheta
     return Sensitivity(
         bodies=body_names(robot),

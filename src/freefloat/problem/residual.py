@@ -21,11 +21,12 @@ from ..physics.attitude import (
     magnus_increment_jacobian,
     magnus_increments,
     propagate,
-    quat_conjugate,
     quat_exp,
     quat_log,
     quat_multiply,
     quat_to_matrix,
+    relative_quat,
+    relative_rotvec,
     so3_right_jacobian,
     step_nodes,
 )
@@ -264,7 +265,7 @@ class Problem:
             assert self.yaw_change is not None
             return np.array([self.yaw_change_of(beta) - self.yaw_change])
         reached = self.achieved(beta)
-        return quat_log(quat_multiply(quat_conjugate(self.goal_quaternion), reached))
+        return relative_rotvec(self.goal_quaternion, reached)
 
     def residual_and_jacobian(self, beta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``h(beta)`` and its exact Jacobian ``dh/dbeta`` (rad per unit of beta).
@@ -319,7 +320,7 @@ class Problem:
         after = np.einsum("mji,jk->mik", attitudes[1:], attitudes[-1])
         right = so3_right_jacobian(increments)
         dtheta = np.einsum("mji,mjk,mkf->if", after, right, dw)  # body frame at the end
-        relative = quat_multiply(quat_conjugate(self.goal_quaternion), quaternions[-1])
+        relative = relative_quat(self.goal_quaternion, quaternions[-1])
         value = quat_log(relative)
         jac = np.asarray(pin.Jlog3(quat_to_matrix(relative))) @ dtheta
         return value, jac

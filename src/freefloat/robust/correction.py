@@ -23,7 +23,10 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import SolverError
-from ..physics.attitude import geodesic_angle, quat_conjugate, quat_log, quat_multiply
+from ..physics.attitude import (
+    geodesic_angle,
+    relative_rotvec,
+)
 from ..pipeline import plan_from_solution
 from ..plans.format import Plan
 from ..problem.build import build_problem
@@ -111,7 +114,7 @@ def correcting_plan(
     )
     constraints = plan_constraints(plan, robot)
     # the loop turns the base frame at the end: the turn wanted, in that frame (planar: yaw)
-    turn = quat_log(quat_multiply(quat_conjugate(measured), goal))
+    turn = relative_rotvec(measured, goal)
     if problem.planar:
         turn = -problem.residual(np.zeros(problem.n_free))
     start = loop_start(problem, constraints, turn) if angle > 0.0 else None

@@ -15,7 +15,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.attitude import geodesic_angle, quat_conjugate, quat_log, quat_multiply
+from ..physics.attitude import (
+    geodesic_angle,
+    relative_rotvec,
+)
 from ..physics.momentum import MomentumMap
 from ..plans.format import Plan
 from ..robot.model import Robot
@@ -83,5 +86,5 @@ def replay_attitude(
 
     level = attitude_by_doubling(start, omega_at, duration, FIRST_STEPS, MAX_STEPS, accurate)
     fine = level.attitude
-    rotvec = quat_log(quat_multiply(quat_conjugate(goal), fine))
+    rotvec = relative_rotvec(goal, fine)
     return ReplayOutcome(fine, rotvec, float(np.linalg.norm(rotvec)), level.estimate, level.steps)

@@ -33,7 +33,7 @@ from functools import partial
 import numpy as np
 
 from ..errors import UnreachableAttitudeError
-from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
+from ..physics.attitude import quat_exp, quat_multiply, relative_rotvec
 from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.residual import Problem
 from ..progress import heartbeat
@@ -88,7 +88,7 @@ def _way(start: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float, np.nda
 
     The rotation vector and angle in rad, in the start's frame; the axis is z when they agree.
     """
-    delta = quat_log(quat_multiply(quat_conjugate(start), goal))
+    delta = relative_rotvec(start, goal)
     angle = float(np.linalg.norm(delta))
     return delta, angle, delta / angle if angle > 0 else np.array([0.0, 0.0, 1.0])
 

@@ -20,7 +20,7 @@ from typing import NoReturn
 import numpy as np
 
 from ..errors import SolverError, UnreachableAttitudeError
-from ..physics.attitude import quat_conjugate, quat_log, quat_multiply
+from ..physics.attitude import relative_rotvec
 from ..plugins import Registry, plugin_function
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
@@ -180,9 +180,7 @@ def _refuse(
         # Out of reach: every figure of the error is taken at the path where the search
         # stopped (how far it got, and what remains of the way).
         stopped_at = problem.residual(attempt.last_beta)
-        turn = quat_log(
-            quat_multiply(quat_conjugate(problem.achieved(start)), problem.goal_quaternion)
-        )
+        turn = relative_rotvec(problem.achieved(start), problem.goal_quaternion)
         asked = float(np.linalg.norm(turn))
         raise UnreachableAttitudeError(
             attempt.message,

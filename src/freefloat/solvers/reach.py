@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..parallel import run_tasks
-from ..physics.attitude import quat_conjugate, quat_exp, quat_log, quat_multiply
+from ..physics.attitude import quat_exp, quat_multiply, relative_rotvec
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
 from .continuation import ContinuationResult, track
@@ -351,7 +351,7 @@ def describe(
         axis = " ".join(f"{x:+.2f}" for x in d.axis)
         lines.append(f"{axis:<24}{math.degrees(d.reached):>14.2f}  {d.stopped_by or '-'}")
     if goal is not None:
-        wanted = quat_log(quat_multiply(quat_conjugate(estimate.quintic_quaternion), goal))
+        wanted = relative_rotvec(estimate.quintic_quaternion, goal)
         angle = float(np.linalg.norm(wanted))
         axis = " ".join(f"{x:+.2f}" for x in wanted / max(angle, 1e-300))
         lines.append(
