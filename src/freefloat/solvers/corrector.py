@@ -20,7 +20,16 @@ from ..problem.constraints import Constraint
 from ..problem.residual import Problem
 from .predictor import newton_correction
 from .restore import broken_constraint
-from .rows import NO_DIPS, RowCache, linear_rows, with_critical, with_dips, with_picked
+from .rows import (
+    NO_DIPS,
+    Linearised,
+    RowCache,
+    linear_rows,
+    linearised,
+    with_critical,
+    with_dips,
+    with_picked,
+)
 
 __all__ = ["CORRECTOR_ITERATIONS", "Rows", "Step", "correct", "corrected_step"]
 
@@ -39,19 +48,32 @@ def correct(
 ) -> tuple[np.ndarray | None, np.ndarray, np.ndarray, int]:
     """Newton corrector from ``beta``: (solved beta or None, residual, Jacobian, iterations).
 
-    The instants the constraints with their own instants pick at each iterate are kept for
-    the next ones (:func:`.rows.with_picked`): rows that jump with the iterate would let
-    Newton chase them instead of converging. The corrector gives up early when a Newton step
-    did not halve the residual (the predicted step was too long), except once: after a step
-    that took the path back inside rows, which may raise the residual.
+    The rows of the constraints that are not affine (clearance: exact distance queries) are
+    measured at the first iterate and then linearised about it (:class:`.rows.Linearised`)
+    while every row stays well inside (:meth:`~.rows.Linearised.trusted_at`; a row near
+    its limit is measured at each iterate); where the corrector would accept a path they
+    are measured at that path, which is accepted only inside them, and otherwise corrected
+    on from there. The residual, its
+    Jacobian and the affine rows are exact at every iterate. The instants the constraints
+    with their own instants pick where measured are kept for the next ones
+    (:func:`.rows.with_picked`): rows that jump with the iterate would let Newton chase them
+    instead of converging. The corrector gives up early when a Newton step did not halve the
+    residual (the predicted step was too long), except once: after a step that took the path
+    back inside rows, which may raise the residual.
     """
     r, jac = problem.residual_and_jacobian(beta)
     previous, was_inside, excused = math.inf, True, False
+    about: Linearised | None = None
     for iteration in range(1, CORRECTOR_ITERATIONS + 1):
         norm = float(np.linalg.norm(r))
-        g, g_mat = linear_rows(problem, constraints, beta, instants, cache, dips)
-        dips = with_picked(problem, constraints, beta, dips)
+        if about is None or not about.trusted_at(beta):
+            about, dips = _measured(problem, constraints, beta, instants, dips)
+        g, g_mat = linear_rows(problem, constraints, beta, instants, cache, dips, about)
         inside = _inside(g)
+        if norm < tol and inside and not about.measured_at(beta):  # exact where it accepts
+            about, dips = _measured(problem, constraints, beta, instants, dips)
+            g, g_mat = linear_rows(problem, constraints, beta, instants, cache, dips, about)
+            inside = _inside(g)
         if norm < tol and inside:
             return beta, r, jac, iteration
         if iteration > 2 and norm > 0.5 * previous and norm > 1e3 * tol:
@@ -67,6 +89,18 @@ def correct(
     if float(np.linalg.norm(r)) < tol and _inside(g):
         return beta, r, jac, CORRECTOR_ITERATIONS
     return None, r, jac, CORRECTOR_ITERATIONS
+
+
+def _measured(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    beta: np.ndarray,
+    instants: np.ndarray,
+    dips: np.ndarray,
+) -> tuple[Linearised, np.ndarray]:
+    """The rows that are not affine measured at ``beta``, and ``dips`` with the instants picked."""
+    about = linearised(problem, constraints, beta, instants, dips)
+    return about, with_picked(problem, constraints, beta, dips)
 
 
 def _inside(g: np.ndarray) -> bool:

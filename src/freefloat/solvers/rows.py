@@ -12,6 +12,7 @@ constraint alone gets rows besides its own.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -21,8 +22,10 @@ from ..problem.residual import Problem
 __all__ = [
     "MAX_ADDED_INSTANTS",
     "NO_DIPS",
+    "Linearised",
     "RowCache",
     "linear_rows",
+    "linearised",
     "rows_instants",
     "tightest_instants",
     "with_critical",
@@ -40,6 +43,49 @@ NO_DIPS = np.zeros(0)
 RowCache = dict[tuple[int, bytes], tuple[np.ndarray, np.ndarray]]
 
 
+@dataclass(frozen=True)
+class Linearised:
+    """The rows of the constraints that are not affine, measured at one path.
+
+    The corrector measures them (clearance: exact distance queries) at its first iterate and
+    where it would accept a path, and takes their linearisation ``g0 + G (beta - beta0)``
+    between (a simplified Newton method for the inequality rows; the residual and its
+    Jacobian stay exact at every iterate).
+
+    Attributes:
+        beta: the path they were measured at (free coefficients, rad or m).
+        rows: per constraint (its index in the list), the values ``g0`` (its unit) and the
+            Jacobian ``G`` (its unit per unit of ``beta``) there.
+    """
+
+    beta: np.ndarray
+    rows: dict[int, tuple[np.ndarray, np.ndarray]]
+
+    def at(self, index: int, beta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Constraint ``index``'s rows linearised at ``beta``: values and Jacobian."""
+        g0, g_mat = self.rows[index]
+        return g0 + g_mat @ (beta - self.beta), g_mat
+
+    def trusted_at(self, beta: np.ndarray) -> bool:
+        """Whether every row stays inside at ``beta`` even were its change twice as large.
+
+        ``g0 + 2 max(G (beta - beta0), 0) <= 0`` for every row: the linearisation is then
+        kept; otherwise the rows are measured again (a row at or near its limit, or one
+        outside where it was measured, is always measured at the iterate itself).
+        """
+        for g0, g_mat in self.rows.values():
+            if (
+                len(g0)
+                and float(np.max(g0 + 2.0 * np.maximum(g_mat @ (beta - self.beta), 0.0))) > 0.0
+            ):
+                return False
+        return True
+
+    def measured_at(self, beta: np.ndarray) -> bool:
+        """Whether the rows were measured at ``beta`` itself (then they are exact)."""
+        return bool(np.array_equal(self.beta, beta))
+
+
 def linear_rows(
     problem: Problem,
     constraints: Sequence[Constraint],
@@ -47,6 +93,7 @@ def linear_rows(
     instants: np.ndarray,
     cache: RowCache,
     dips: np.ndarray = NO_DIPS,
+    about: Linearised | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Stacked constraint values ``g`` and Jacobian ``G`` at ``beta`` (g <= 0 feasible).
 
@@ -55,10 +102,20 @@ def linear_rows(
     (:meth:`~freefloat.problem.constraints.Constraint.tight_instants`, a joint's extremes),
     so that a path these rows hold inside stays inside between the instants too. A constraint
     with its own instants is asked at the default ones and ``dips`` (:func:`rows_instants`).
+    With ``about``, the constraints that are not affine are not measured: their rows are
+    the linearisation about the path they were measured at (:class:`Linearised`).
     """
     values, rows = [np.zeros(0)], [np.zeros((0, problem.n_free))]
     for index, constraint in enumerate(constraints):
         if not constraint.applies_to(problem.robot):
+            continue
+        if not constraint.affine:
+            if about is None:
+                g, g_mat = _costly_rows(problem, constraint, beta, instants, dips)
+            else:
+                g, g_mat = about.at(index, beta)
+            values.append(g)
+            rows.append(g_mat)
             continue
         tight = constraint.tight_instants(problem, beta)
         if len(tight):
@@ -66,22 +123,56 @@ def linear_rows(
             values.append(at_tight.values)
             rows.append(at_tight.jacobian)
         at = rows_instants(constraint, instants, dips)
-        if constraint.affine:
-            key = (index, at.tobytes())
-            cached = cache.get(key)
-            if cached is None:
-                at_zero = constraint.rows(problem, np.zeros(problem.n_free), at)
-                cached = (at_zero.values, at_zero.jacobian)
-                if len(cache) > 64:
-                    cache.clear()
-                cache[key] = cached
-            values.append(cached[0] + cached[1] @ beta)
-            rows.append(cached[1])
-        else:
-            r = constraint.rows(problem, beta, at)
-            values.append(r.values)
-            rows.append(r.jacobian)
+        key = (index, at.tobytes())
+        cached = cache.get(key)
+        if cached is None:
+            at_zero = constraint.rows(problem, np.zeros(problem.n_free), at)
+            cached = (at_zero.values, at_zero.jacobian)
+            if len(cache) > 64:
+                cache.clear()
+            cache[key] = cached
+        values.append(cached[0] + cached[1] @ beta)
+        rows.append(cached[1])
     return np.concatenate(values), np.concatenate(rows)
+
+
+def _costly_rows(
+    problem: Problem,
+    constraint: Constraint,
+    beta: np.ndarray,
+    instants: np.ndarray,
+    dips: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """A constraint's rows measured at ``beta``: at its tight instants, then at its instants."""
+    g, g_mat = [np.zeros(0)], [np.zeros((0, problem.n_free))]
+    tight = constraint.tight_instants(problem, beta)
+    if len(tight):
+        at_tight = constraint.rows(problem, beta, tight)
+        g.append(at_tight.values)
+        g_mat.append(at_tight.jacobian)
+    at = constraint.rows(problem, beta, rows_instants(constraint, instants, dips))
+    g.append(at.values)
+    g_mat.append(at.jacobian)
+    return np.concatenate(g), np.concatenate(g_mat)
+
+
+def linearised(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    beta: np.ndarray,
+    instants: np.ndarray,
+    dips: np.ndarray = NO_DIPS,
+) -> Linearised:
+    """The rows of the constraints that are not affine, measured at ``beta`` and kept.
+
+    The same rows :func:`linear_rows` measures at ``beta`` (instants and dips as there).
+    """
+    found = {
+        index: _costly_rows(problem, constraint, beta, instants, dips)
+        for index, constraint in enumerate(constraints)
+        if not constraint.affine and constraint.applies_to(problem.robot)
+    }
+    return Linearised(np.array(beta, dtype=float), found)
 
 
 def tightest_instants(
