@@ -42,8 +42,10 @@ from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .problem.simple_bound import SimpleMotionBound, inertia_ratio, simple_motion_bound, turn_limit
 from .progress import LOGGER
+from .solvers.continuation import singular
 from .solvers.options import SolveOptions
 from .solvers.reach import DirectionReach, ReachEstimate, default_directions, reach_set
+from .solvers.search import freedom_candidates
 
 __all__ = ["DEFAULT_BUDGET", "SMALL_REACH_DEG", "DirectionLimits", "ReachReport", "reachable"]
 
@@ -201,8 +203,7 @@ def reachable(
     if probe.planar:
         check_endpoints(scenario, scenario_constraints(scenario))  # as plan refuses them
         return _planar_report(scenario, probe, ratio, end_effector_goal)
-    extra = scenario.extra if scenario.extra is not None else [2] * scenario.robot.n
-    problem = problem_from_scenario(scenario, extra=extra, check_bounds=False)
+    problem = _estimated_family(scenario)
     start = problem.start_quaternion
     drift = problem.achieved(np.zeros(problem.n_free))
     bound = simple_motion_bound(mmap, problem.family.start, problem.family.goal, travel_factor)
@@ -230,6 +231,25 @@ def reachable(
         goal_joints=problem.family.goal.copy(),
         end_effector_goal=end_effector_goal,
     )
+
+
+def _estimated_family(scenario: Scenario) -> Problem:
+    """The spatial problem of the inner estimate, its freedom as the planner would start.
+
+    The scenario's ``[path] extra``, or else the planner's first freedom level whose map is
+    not singular at the plain quintic path. Continuation cannot start from a path where the
+    residual's Jacobian loses rank (its tangent is then meaningless): the planner goes on to
+    its next level there, and so does the estimate (the last level when every one is).
+    """
+    if scenario.extra is not None:
+        return problem_from_scenario(scenario, extra=scenario.extra, check_bounds=False)
+    levels = freedom_candidates(scenario.robot.n, 3, continuation=True)
+    for extra in levels:
+        problem = problem_from_scenario(scenario, extra=extra, check_bounds=False)
+        _, jacobian = problem.residual_and_jacobian(np.zeros(problem.n_free))
+        if not singular(jacobian):
+            break
+    return problem
 
 
 def _inner(

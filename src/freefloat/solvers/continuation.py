@@ -111,13 +111,26 @@ def _ahead(
 
 
 def _why(blocked: Broken | None, jac: np.ndarray) -> str:
-    """Why the branch cannot go on: a constraint ahead, a singular map, or freedom."""
+    """Why the branch cannot go on: a singular map, a constraint ahead, or freedom.
+
+    A singular map first: the tangent is then the least-squares one, its length set by the
+    smallest singular value, and a constraint it would break ahead says nothing of the
+    branch (a step of 10^8 rad breaks every joint limit).
+    """
+    if singular(jac):
+        return "a singular map (dh/dbeta loses rank)"
     if blocked is not None:
         return f"{blocked.name}: {blocked.detail}"
-    sigma = np.linalg.svd(jac, compute_uv=False)
-    if sigma[-1] < SINGULAR * max(sigma[0], 1e-300) or sigma[-1] < 1e-9:
-        return "a singular map (dh/dbeta loses rank)"
     return "freedom exhausted (the corrector does not converge with this path family)"
+
+
+def singular(jac: np.ndarray) -> bool:
+    """Whether the residual's Jacobian ``jac`` (rad per unit of beta) counts as rank deficient.
+
+    Its smallest singular value below :data:`SINGULAR` times its largest, or below 1e-9.
+    """
+    sigma = np.linalg.svd(jac, compute_uv=False)
+    return bool(sigma[-1] < SINGULAR * max(sigma[0], 1e-300) or sigma[-1] < 1e-9)
 
 
 def _where(reached: float, angle: float, steps: int, evaluations: int) -> str:
