@@ -139,3 +139,14 @@ def test_the_printed_table_is_the_same_with_workers(command, capsys) -> None:
         where = "serially (one job asked)" if jobs == "1" else "on 2 worker processes"
         assert f"{command}: 14 directions {where}" in err
     assert outs[0] == outs[1] and len(lines[0]) == 14 and lines[0] == lines[1]
+
+
+def test_bounds_keeps_the_constraints_plan_imposes(capsys) -> None:
+    """`bounds` tracks within the scenario's constraints, as plan imposes them: clearance on
+    the UR5 servicer (which checks it), not on the Kinova example (which does not); the
+    first line says which."""
+    for path, clearance in ((UR5, True), (KINOVA, False)):
+        assert main(["bounds", str(path), "--budget", "3", "--max-angle", "2", "--jobs", "1"]) == 0
+        out = capsys.readouterr().out
+        within = "within joint_position_limits, joint_velocity_limits"
+        assert within + (", clearance," if clearance else ",") in out, out

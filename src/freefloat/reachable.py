@@ -47,7 +47,14 @@ from .solvers.options import SolveOptions
 from .solvers.reach import DirectionReach, ReachEstimate, default_directions, reach_set
 from .solvers.search import freedom_candidates
 
-__all__ = ["DEFAULT_BUDGET", "SMALL_REACH_DEG", "DirectionLimits", "ReachReport", "reachable"]
+__all__ = [
+    "DEFAULT_BUDGET",
+    "SMALL_REACH_DEG",
+    "DirectionLimits",
+    "ReachReport",
+    "inner_family",
+    "reachable",
+]
 
 #: Residual evaluations per continuation pass of a direction of the inner estimate (a count;
 #: ``--budget``; :func:`~freefloat.solvers.reach.reach_set`).
@@ -203,7 +210,7 @@ def reachable(
     if probe.planar:
         check_endpoints(scenario, scenario_constraints(scenario))  # as plan refuses them
         return _planar_report(scenario, probe, ratio, end_effector_goal)
-    problem = _estimated_family(scenario)
+    problem = inner_family(scenario)
     start = problem.start_quaternion
     drift = problem.achieved(np.zeros(problem.n_free))
     bound = simple_motion_bound(mmap, problem.family.start, problem.family.goal, travel_factor)
@@ -233,7 +240,7 @@ def reachable(
     )
 
 
-def _estimated_family(scenario: Scenario) -> Problem:
+def inner_family(scenario: Scenario) -> Problem:
     """The spatial problem of the inner estimate, its freedom as the planner would start.
 
     The scenario's ``[path] extra``, or else the planner's first freedom level whose map is

@@ -98,11 +98,14 @@ def spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
     """A spatial robot's inner estimate of its reachable attitudes (and its figure)."""
     from .._blas import one_blas_thread
     from ..parallel import default_jobs, where_run
+    from ..problem.constraints import Clearance, scenario_constraints
     from ..progress import LOGGER, counted
+    from ..reachable import inner_family
     from ..solvers.reach import default_directions, describe, reach_set
 
-    extra = scenario.extra if scenario.extra is not None else [2] * scenario.robot.n
-    problem = problem_from_scenario(scenario.resolved(), extra=extra, check_bounds=False)
+    scenario = scenario.resolved()
+    problem = inner_family(scenario)
+    constraints = scenario_constraints(scenario)
     angle = math.radians(args.max_angle)
     options = SolveOptions(max_evaluations=args.budget)
     count = len(default_directions())
@@ -113,14 +116,17 @@ def spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
             problem,
             None,
             angle,
-            None,
+            constraints,
             options,
             lambda i, n, d: advance(direction_line(d)),
+            deferred=[c for c in constraints if isinstance(c, Clearance)],
             confirm=False,
             jobs=jobs,
         )
     print(f"freefloat bounds: {scenario.robot.name} (spatial) -- INNER ESTIMATE")
-    for line in describe(estimate, scenario.robot.joint_names, angle, problem.goal_quaternion):
+    names = [c.name for c in constraints if not c.lazy]
+    lines = describe(estimate, scenario.robot.joint_names, angle, problem.goal_quaternion, names)
+    for line in lines:
         print(f"  {line}")
     if args.plot:
         from ..viz.reach_plot import save_reach_figure

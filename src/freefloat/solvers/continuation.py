@@ -113,14 +113,16 @@ def _ahead(
 def _why(blocked: Broken | None, jac: np.ndarray) -> str:
     """Why the branch cannot go on: a singular map, a constraint ahead, or freedom.
 
-    A singular map first: the tangent is then the least-squares one, its length set by the
+    A constraint is named with "ahead" and where the path a short step along the tangent
+    breaks it (its figure is that path's, beyond the limit; the branch itself keeps it). A
+    singular map first: the tangent is then the least-squares one, its length set by the
     smallest singular value, and a constraint it would break ahead says nothing of the
     branch (a step of 10^8 rad breaks every joint limit).
     """
     if singular(jac):
         return "a singular map (dh/dbeta loses rank)"
     if blocked is not None:
-        return f"{blocked.name}: {blocked.detail}"
+        return f"{blocked.name} ahead: {blocked.detail}"  # on the path a short step on
     return "freedom exhausted (the corrector does not converge with this path family)"
 
 

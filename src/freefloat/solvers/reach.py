@@ -332,17 +332,18 @@ def describe(
     joint_names: Sequence[str],
     max_angle: float,
     goal: np.ndarray | None = None,
+    within: Sequence[str] = ("joint_position_limits",),
 ) -> list[str]:
     """The estimate as lines for people (degrees), saying plainly that it is an inner one.
 
     With ``goal`` (``[x, y, z, w]``), a last line gives the rotation it asks for from the
-    quintic path's attitude.
+    quintic path's attitude. ``within``: the names of the constraints the paths keep.
     """
     freedom = ", ".join(f"{n}+{k}" for n, k in zip(joint_names, estimate.freedom, strict=True) if k)
     lines = [
         "from the attitude the quintic path reaches, continuation heads up to",
-        f"{math.degrees(max_angle):g} deg about each direction within the joint limits, with the "
-        "freedom",
+        f"{math.degrees(max_angle):g} deg about each direction within {', '.join(within)}, "
+        "with the freedom",
         f"{freedom}; every rotation up to 'reached' is planned by a solved path.",
         "More freedom, or paths continuation does not find, may reach further.",
         f"{'axis (base frame)':<24}{'reached [deg]':>14}  stopped by",
