@@ -250,3 +250,27 @@ def test_verify_recomputes_the_objective(tmp_path, capsys, effort_plans):
         err = capsys.readouterr().err.strip()
         assert "\n" not in err
         assert "objective." in err, err
+
+
+def test_a_kept_minimum_norm_path_is_said_on_the_objective_line() -> None:
+    """When no freedom level improved on the minimum-norm path (each kept it, with a note),
+    the summary says so and why; an objective that improved it says nothing of the kind."""
+    from freefloat.problem.objectives.base import Level
+    from freefloat.viz.summary import objective_line
+
+    plan = ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "worked_example.toml"))
+    why = "breaks clearance (min clearance -1.17 m (a / b) at t = 3 s, margin 0.01 m)"
+    kept = dataclasses.replace(
+        plan.objective,
+        name="min_effort",
+        value=2.0,
+        start_value=2.0,
+        levels=[Level({"j1": 1}, 2.0, 4, why), Level({"j1": 2}, 2.0, 3, why)],
+    )
+    line = objective_line(dataclasses.replace(plan, objective=kept))
+    assert "+0.0 % against the minimum-norm path" in line
+    assert line.endswith(f"; the minimum-norm path kept: {why}")
+    improved = dataclasses.replace(
+        kept, value=1.0, levels=[Level({"j1": 1}, 1.0, 4), kept.levels[0]]
+    )
+    assert "kept" not in objective_line(dataclasses.replace(plan, objective=improved))

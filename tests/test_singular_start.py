@@ -83,3 +83,22 @@ def test_the_reach_estimate_starts_where_the_map_is_regular_and_its_goals_plan(r
         goal = ff.quat_from_zyx(*np.radians(np.round(direction.goal_zyx_deg, 4)))
         plan = ff.plan(dataclasses.replace(scenario, goal_attitude=goal))
         assert plan.verification.passed
+
+
+def test_a_refusal_never_claims_more_of_the_way_than_its_path_covers(robot) -> None:
+    """The branch's fraction comes from targets solved on a coarser grid; the refusal's is
+    the path's own on the problem's grid. A path that has not moved (beta = 0, the quintic)
+    towards a goal 20 deg off covers none of the way, whatever the branch claimed (by hand:
+    the goal is the quintic attitude turned 20 deg); the quintic's own attitude covers all."""
+    from freefloat.solvers.continuation import _held_fraction
+    from freefloat.solvers.tracked import ContinuationResult
+
+    problem = _problem(robot, 3)
+    quintic = problem.achieved(np.zeros(problem.n_free))
+    angle = math.radians(20.0)
+    goal = att.quat_multiply(quintic, att.quat_exp(np.array([0.0, 0.0, angle])))
+    stopped = ContinuationResult(
+        np.zeros(problem.n_free), 0.9, angle, np.eye(3)[2], np.zeros(3), 5, 9, "x"
+    )
+    assert _held_fraction(problem.with_goal(goal), stopped) == pytest.approx(0.0, abs=1e-12)
+    assert _held_fraction(problem.with_goal(quintic), stopped) == 0.9

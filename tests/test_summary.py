@@ -273,6 +273,12 @@ def test_a_joint_turned_a_full_turn_beyond_its_span_is_warned_of(tmp_path, caplo
         _warn_spinning(quality, robot, "min_effort")
     said = [r.getMessage() for r in caplog.records if "full turn" in r.getMessage()]
     assert len(said) == 1 and f"({a!r} 2.5 turns)" in said[0] and "min_effort" in said[0]
+    assert said[0].endswith("give it limits in the URDF, or plan with the default objective")
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="freefloat"):  # already the default one
+        _warn_spinning(quality, robot, "min_norm")
+    said = [r.getMessage() for r in caplog.records if "full turn" in r.getMessage()]
+    assert len(said) == 1 and said[0].endswith("give it limits in the URDF")
     caplog.clear()
     with caplog.at_level(logging.WARNING, logger="freefloat"):
         plan = ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml"))

@@ -125,3 +125,29 @@ def test_a_sweep_says_it_once_and_its_workers_stay_quiet(tmp_path, capfd):
         "freefloat: warning: [start] joints look like radians (every value within +-6.28, "
         "q1 = 1.4); scenario joints are in degrees (1.4 rad is 80.21 deg)\n"
     )
+
+
+@pytest.mark.parametrize(
+    ("written", "said"),
+    [
+        ("[1, 0, 0, 0]", "is a half turn about x (the order is x, y, z, w)"),
+        ("[-1.0, 0, 0, 0]", "is a half turn about x (the order is x, y, z, w)"),
+        ("[0, 0, 0, 2]", "has norm 2, not 1; it is used divided by it"),
+        ("[0.1, 0.2, 0.3, 0.5]", "has norm 0.6245, not 1"),
+        ("[0, 0, 0, 1]", None),
+        ("[0.0012, -0.0104, 0.6523, 0.7579]", None),  # 4 decimals of a unit quaternion
+        ("[0, 1, 0, 0]", None),  # a half turn about y: w first would be [0, 0, 1, 0] here
+    ],
+)
+def test_a_written_quaternion_in_another_convention_is_warned_of(tmp_path, written, said):
+    """w first (the identity [1, 0, 0, 0] of Eigen and many papers), or a norm far from 1
+    (by hand: |[0.1, 0.2, 0.3, 0.5]| = sqrt(0.39) = 0.6245); plain ones say nothing."""
+    path = _ur5_scenario(tmp_path, (0, -90, 90, -90, -90, 0))
+    text = path.read_text().replace("base_zyx_deg = [-7.6, -1.8, -8.3]", "")
+    path.write_text(text + f"base_quaternion_xyzw = {written}\n")
+    messages = _units_warnings(path)
+    if said is None:
+        assert messages == []
+    else:
+        assert len(messages) == 1 and said in messages[0]
+        assert messages[0].startswith("[goal] base_quaternion_xyzw = [")

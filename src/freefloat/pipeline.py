@@ -207,12 +207,14 @@ def _warn_spinning(quality: PathQuality, robot: Robot, objective: str) -> None:
     }
     if spun:
         turns = ", ".join(f"{name!r} {value:.3g}" for name, value in spun.items())
+        other = "" if objective == DEFAULT_OBJECTIVE else ", or plan with the default objective"
         LOGGER.warning(
             "the path (objective %s) turns a joint a full turn or more beyond its start-goal "
             "span (%s turns): if the real joint cannot turn freely (cables, hard stops), give "
-            "it limits in the URDF, or plan with the default objective",
+            "it limits in the URDF%s",
             objective,
             turns,
+            other,
         )
 
 

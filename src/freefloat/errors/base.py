@@ -338,5 +338,5 @@ class UnitsWarning(UserWarning):
 
     Issued through :mod:`warnings` (the command line prints it as one line
     ``freefloat: warning: ...``): scenario joint values that look like radians, where scenario
-    files are in degrees.
+    files are in degrees; a base quaternion written ``w`` first, or far from unit length.
     """

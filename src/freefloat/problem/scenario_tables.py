@@ -26,6 +26,7 @@ from ..robot.model import Robot
 from ..robot.payload import Payload
 from .limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, MAX_SCENARIO_BYTES, check_extra
 from .objectives.registry import DEFAULT_OBJECTIVE, OBJECTIVES
+from .quaternion_hint import warn_if_odd_quaternion
 from .radians_hint import warn_if_radians
 from .robot_table import RobotSource, check_keys, number, numbers, scenario_errors, triple
 
@@ -181,6 +182,7 @@ def _attitude(table: Mapping[str, Any], name: str) -> np.ndarray:
         quat = numbers(table["base_quaternion_xyzw"], 4, f"[{name}] base_quaternion_xyzw")
         if np.linalg.norm(quat) < 1e-9:
             raise ScenarioError(f"[{name}] base_quaternion_xyzw must be non-zero")
+        warn_if_odd_quaternion(quat, f"[{name}]")
         return quat / np.linalg.norm(quat)
     zyx = numbers(
         table.get("base_zyx_deg", [0.0, 0.0, 0.0]),
