@@ -207,7 +207,9 @@ def _parsed_entry(
             )
         except (RuntimeError, ValueError) as exc:
             raise ModelError(
-                f"cannot read its collision geometry ({exc})", str(robot.urdf)
+                f"cannot read its collision geometry ({exc}); put the mesh files where the "
+                "URDF names them, or plan without clearance: [safety] check = false",
+                str(robot.urdf),
             ) from None
         if len(_PARSED) >= 16:
             _PARSED.pop(next(iter(_PARSED)))

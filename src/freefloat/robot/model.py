@@ -113,7 +113,16 @@ class Robot:
         for joint in self.joints:
             if joint.name == name:
                 return joint
-        raise UnknownNameError("joint", name, self.joint_names)
+        raise self._unknown_joint(name)
+
+    def _unknown_joint(self, name: str) -> UnknownNameError:
+        """The error for a name that is not a movable joint's (saying when it is a fixed one)."""
+        model = self.model
+        fixed = model.existFrame(name) and (
+            model.frames[model.getFrameId(name)].type == pin.FrameType.FIXED_JOINT
+        )
+        why = "a fixed joint in the URDF: it does not move" if fixed else ""
+        return UnknownNameError("joint", name, self.joint_names, why)
 
     def vector(self, values: Mapping[str, float], what: str = "joint values") -> np.ndarray:
         """Order a ``{joint name: value}`` mapping into an N-vector (rad or m).
@@ -123,7 +132,7 @@ class Robot:
         """
         for name in values:
             if name not in self.joint_names:
-                raise UnknownNameError("joint", name, self.joint_names)
+                raise self._unknown_joint(name)
         missing = [j.name for j in self.joints if j.name not in values]
         if missing:
             raise ModelError(

@@ -274,8 +274,15 @@ def _check_tree(root: ET.Element, links: list[str]) -> tuple[str, list[str]]:
         names.add(jname)
         jtype = joint.get("type")
         if jtype not in _URDF_JOINT_TYPES:
+            floats = (
+                "; the URDF's root link is the spacecraft and already floats: remove this joint "
+                "and the link above it"
+                if jtype == "floating"
+                else ""
+            )
             raise ModelError(
-                f"joint {jname!r} has type {jtype!r}; supported: {', '.join(_URDF_JOINT_TYPES)}"
+                f"joint {jname!r} has type {jtype!r}; supported: "
+                f"{', '.join(_URDF_JOINT_TYPES)}{floats}"
             )
         if jtype != "fixed":
             _check_movable_joint(joint, jname, jtype)
