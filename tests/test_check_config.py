@@ -117,3 +117,16 @@ def test_check_says_why_clearance_was_not_checked(tmp_path, capsys) -> None:
     assert (
         "  clearance: not checked ([safety] check = false)" in capsys.readouterr().out.splitlines()
     )
+
+
+def test_check_warns_of_joint_values_that_look_like_radians(capsys) -> None:
+    """--at is in degrees, as scenario files: a ROS joint state pasted in radians is warned of
+    with the scenario's own words (-1.57 rad = -1.57 * 180 / pi = -89.95 deg); degrees are not."""
+    assert main(["check", str(UR5), "--at", "0,-1.57,1.57,0,1.2,0"]) == 0
+    err = capsys.readouterr().err
+    assert err == (
+        "freefloat: warning: --at joints look like radians (every value within +-6.28, "
+        "shoulder_lift_joint = -1.57); scenario joints are in degrees (-1.57 rad is -89.95 deg)\n"
+    )
+    assert main(["check", str(UR5), "--at", "0,-90,90,-90,-90,0"]) == 0
+    assert "warning" not in capsys.readouterr().err

@@ -227,6 +227,10 @@ def test_a_spacecraft_lighter_than_what_it_carries_is_warned_about(tmp_path, cap
         "compose or an inline [robot] table"
     ]
     caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="freefloat"):  # reach says it too
+        ff.reachable(scenario, budget=0)
+    assert [r.getMessage() for r in caplog.records if "lighter than" in r.getMessage()] == said
+    caplog.clear()
     with caplog.at_level(logging.WARNING, logger="freefloat"):
         ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml"))
     assert not any("lighter than" in r.getMessage() for r in caplog.records)

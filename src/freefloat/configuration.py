@@ -16,6 +16,7 @@ import numpy as np
 
 from .errors import InputError
 from .problem.constraints import Clearance, scenario_constraints
+from .problem.radians_hint import warn_if_radians
 from .problem.scenario import Scenario
 
 __all__ = ["ConfigurationReport", "JointRoom", "check_configuration", "parse_joints"]
@@ -94,6 +95,7 @@ def parse_joints(text: str, scenario: Scenario) -> np.ndarray:
             f"--at needs {len(joints)} finite values, one per joint "
             f"({', '.join(j.name for j in joints)}), got {len(values)}"
         )
+    warn_if_radians({j.name: v for v, j in zip(values, joints, strict=True) if j.angular}, "--at")
     return np.array(
         [math.radians(v) if j.angular else v for v, j in zip(values, joints, strict=True)]
     )

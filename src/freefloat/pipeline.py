@@ -50,6 +50,7 @@ from .problem.paths import boundary_errors
 from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .progress import LOGGER, stage
+from .robot.light_base import warn_light_base
 from .robot.model import Robot
 from .solvers.lazy_search import broken_by, explain_lazy_breaks, search_lazily
 from .solvers.minimise import minimise
@@ -118,7 +119,7 @@ def _plan(
     )
     check_registered(chosen, constraints)  # what verify could not rebuild: before any work
     check_endpoints(scenario, constraints)
-    _warn_light_base(scenario.robot)
+    warn_light_base(scenario.robot)
     clock = time.perf_counter()
     with stage("solve"):
         # another objective's freedom may find a path within limits the search's path breaks
@@ -171,25 +172,6 @@ def _plan(
     if result.quality is not None:
         _warn_spinning(result.quality, scenario.robot, chosen.name)
     return replace(result, solver=solver)
-
-
-def _warn_light_base(robot: Robot) -> None:
-    """Warn when the URDF's root, taken as the spacecraft, is lighter than what it carries.
-
-    A fixed-base arm's URDF (root ``world`` or a small mounting link) planned as it is makes
-    that link the spacecraft: a legal model, rarely the one meant.
-    """
-    masses = [float(inertia.mass) for inertia in robot.model.inertias[1:]]
-    base, carried = masses[0], sum(masses[1:])
-    if base < carried:
-        LOGGER.warning(
-            "the spacecraft (the URDF's root link %r, %.3g kg) is lighter than the bodies it "
-            "carries (%.3g kg); if the URDF describes an arm alone, add a spacecraft with "
-            "freefloat compose or an inline [robot] table",
-            robot.base_link,
-            base,
-            carried,
-        )
 
 
 def _warn_spinning(quality: PathQuality, robot: Robot, objective: str) -> None:

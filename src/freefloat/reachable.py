@@ -42,6 +42,7 @@ from .problem.residual import Problem
 from .problem.scenario import Scenario
 from .problem.simple_bound import SimpleMotionBound, inertia_ratio, simple_motion_bound, turn_limit
 from .progress import LOGGER
+from .robot.light_base import warn_light_base
 from .solvers.continuation import singular
 from .solvers.options import SolveOptions
 from .solvers.reach import DirectionReach, ReachEstimate, default_directions, reach_set
@@ -204,6 +205,7 @@ def reachable(
     end_effector_goal = bool(scenario.goal_poses)
     scenario = scenario.resolved()
     scenario.write_robot()
+    warn_light_base(scenario.robot)
     probe = problem_from_scenario(scenario, check_bounds=False)
     mmap = MomentumMap(scenario.robot)
     ratio = inertia_ratio(mmap, probe.family.start)
