@@ -490,6 +490,11 @@ arms = [
     assert scenario.safety.srdf == (tmp_path / "cache" / f"{scenario.servicer.key()}.srdf")
     scenario.write_robot()
     assert scenario.safety.srdf.read_text() == DUAL.with_suffix(".srdf").read_text()
+    # bounds writes the servicer's files itself (its clearance reads the SRDF): a fresh cache
+    monkeypatch.setenv("FREEFLOAT_CACHE", str(tmp_path / "fresh"))
+    args = ["bounds", str(path), "--budget", "2", "--max-angle", "1", "--jobs", "1"]
+    assert main(args) == 0
+    assert (tmp_path / "fresh" / f"{scenario.servicer.key()}.srdf").is_file()
 
 
 # -- plan format ----------------------------------------------------------------------------

@@ -141,12 +141,26 @@ def test_the_printed_table_is_the_same_with_workers(command, capsys) -> None:
     assert outs[0] == outs[1] and len(lines[0]) == 14 and lines[0] == lines[1]
 
 
-def test_bounds_keeps_the_constraints_plan_imposes(capsys) -> None:
+def test_bounds_keeps_the_constraints_plan_imposes(capsys, monkeypatch) -> None:
     """`bounds` tracks within the scenario's constraints, as plan imposes them: clearance on
-    the UR5 servicer (which checks it), not on the Kinova example (which does not); the
-    first line says which."""
+    the UR5 servicer (which checks it; deferred, as reach defers it), not on the Kinova
+    example (which does not). What reaches the estimate is captured; the first line says
+    which constraints the paths keep."""
+    import freefloat.solvers.reach as reach
+
+    asked: list[dict] = []
+    original = reach.reach_set
+
+    def capture(*args, **kwargs):  # type: ignore[no-untyped-def]
+        asked.append({"constraints": args[3], "deferred": kwargs["deferred"]})
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(reach, "reach_set", capture)
     for path, clearance in ((UR5, True), (KINOVA, False)):
         assert main(["bounds", str(path), "--budget", "3", "--max-angle", "2", "--jobs", "1"]) == 0
         out = capsys.readouterr().out
         within = "within joint_position_limits, joint_velocity_limits"
         assert within + (", clearance," if clearance else ",") in out, out
+        names = [c.name for c in asked[-1]["constraints"]]
+        assert ("clearance" in names) == clearance and "joint_position_limits" in names
+        assert [c.name for c in asked[-1]["deferred"]] == (["clearance"] if clearance else [])

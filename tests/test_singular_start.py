@@ -62,6 +62,7 @@ def test_a_branch_that_cannot_start_names_the_singular_map(robot) -> None:
     result = track(target, ff.default_constraints(), SolveOptions(max_evaluations=30))
     assert result.fraction == 0.0
     assert result.stopped_by == "a singular map (dh/dbeta loses rank)"
+    assert result.blocked_by == ""  # no constraint named from that tangent's step
 
 
 def test_the_reach_estimate_starts_where_the_map_is_regular_and_its_goals_plan(robot) -> None:
@@ -90,7 +91,7 @@ def test_a_refusal_never_claims_more_of_the_way_than_its_path_covers(robot) -> N
     the path's own on the problem's grid. A path that has not moved (beta = 0, the quintic)
     towards a goal 20 deg off covers none of the way, whatever the branch claimed (by hand:
     the goal is the quintic attitude turned 20 deg); the quintic's own attitude covers all."""
-    from freefloat.solvers.continuation import _held_fraction
+    from freefloat.solvers.continuation import held_fraction
     from freefloat.solvers.tracked import ContinuationResult
 
     problem = _problem(robot, 3)
@@ -100,5 +101,5 @@ def test_a_refusal_never_claims_more_of_the_way_than_its_path_covers(robot) -> N
     stopped = ContinuationResult(
         np.zeros(problem.n_free), 0.9, angle, np.eye(3)[2], np.zeros(3), 5, 9, "x"
     )
-    assert _held_fraction(problem.with_goal(goal), stopped) == pytest.approx(0.0, abs=1e-12)
-    assert _held_fraction(problem.with_goal(quintic), stopped) == 0.9
+    assert held_fraction(problem.with_goal(goal), stopped) == pytest.approx(0.0, abs=1e-12)
+    assert held_fraction(problem.with_goal(quintic), stopped) == 0.9

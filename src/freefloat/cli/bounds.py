@@ -104,6 +104,7 @@ def spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
     from ..solvers.reach import default_directions, describe, reach_set
 
     scenario = scenario.resolved()
+    scenario.write_robot()  # an inline servicer: its URDF and SRDF (clearance reads it)
     problem = inner_family(scenario)
     constraints = scenario_constraints(scenario)
     angle = math.radians(args.max_angle)

@@ -3,7 +3,7 @@
 Scenario files give a quaternion in the order ``[x, y, z, w]`` (Pinocchio's, SciPy's, ROS
 messages'). Eigen's constructor and many papers write ``w`` first, so the identity pasted
 from them, ``[1, 0, 0, 0]``, reads here as a half turn about x: a valid attitude, planned or
-refused as such (on ETS-VII: refused after reaching 179 deg of the 179 deg asked). A
+refused as such (on ETS-VII: refused, 148 deg of the 179 deg asked reached). A
 quaternion far from unit length is normalised, but it seldom is what was meant either.
 """
 

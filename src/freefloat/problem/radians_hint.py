@@ -30,7 +30,7 @@ def warn_if_radians(written: Mapping[str, float], where: str) -> None:
     Args:
         written: the revolute joints' values as written in the file (meant as deg), by
             joint name; prismatic joints (m) left out.
-        where: the table, ``"[start]"`` or ``"[goal]"``.
+        where: the table, ``"[start]"`` or ``"[goal]"``, or ``"--at"`` (``freefloat check``).
     """
     if not written or any(not abs(v) <= RADIAN_LIKE for v in written.values()):
         return

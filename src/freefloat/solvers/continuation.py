@@ -45,7 +45,7 @@ from .restore import Broken, first_broken
 from .rows import NO_DIPS, RowCache, linear_rows
 from .tracked import BranchPoint, ContinuationResult
 
-__all__ = ["ContinuationResult", "continuation", "track"]
+__all__ = ["ContinuationResult", "continuation", "held_fraction", "singular", "track"]
 
 #: First step as an angle of the target's travel (rad).
 FIRST_STEP = math.radians(3.0)
@@ -195,7 +195,7 @@ def track(
             # At the pace of the last steps the step budget ends short of the goal: stop now
             # rather than spend the budget on the same refusal.
             tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache, dips=dips)
-            blocked = _ahead(problem, constraints, beta, tangent)
+            blocked = None if singular(jac) else _ahead(problem, constraints, beta, tangent)
             stopped_by = _stall_reason(blocked, jac, (lam - reached[steps - PACE_WINDOW]) * angle)
             break
         if problem.evaluations - first_evaluation > options.max_evaluations:
@@ -217,7 +217,7 @@ def track(
             reached.append(lam)
             dl = 0.5 * step
             if dl * angle < MIN_STEP:
-                blocked = _ahead(problem, constraints, beta, tangent)
+                blocked = None if singular(jac) else _ahead(problem, constraints, beta, tangent)
                 stopped_by = _why(blocked, jac)
                 break
             continue
@@ -262,7 +262,7 @@ def continuation(
     attempt = Attempt(
         method="continuation (tangent predictor, minimum-norm Newton corrector with constraints)",
         iterations=result.iterations,
-        reached_fraction=result.fraction if result.reached else _held_fraction(problem, result),
+        reached_fraction=result.fraction if result.reached else held_fraction(problem, result),
     )
     attempt.tried.append(
         f"continuation over {math.degrees(result.angle):.4g} deg in {result.steps} steps"
@@ -293,15 +293,15 @@ def continuation(
     return attempt
 
 
-def _held_fraction(problem: Problem, result: ContinuationResult) -> float:
+def held_fraction(problem: Problem, result: ContinuationResult) -> float:
     """The fraction of the way the path a branch stopped on holds on the problem's own grid.
 
     Targets on the way are solved on a coarser grid (:data:`INTERMEDIATE_STEPS`); on a wild
-    path its integration error can be large (ETS-VII heading 179 deg away: 0.011 deg from its
-    target there, 29.4 deg from the goal on the problem's grid, which is 0.011 deg away on
-    the coarse one). The fraction is then at most ``(angle - miss) / angle``, ``miss`` the
-    path's distance to the goal on the problem's grid (rad): a refusal never claims more of
-    the way than the path it stopped on covers, and its figures agree.
+    path its integration error can be large (ETS-VII heading 179 deg away: the path it stopped
+    on is 0.011 deg from the goal on the coarse grid, 30.8 deg on the problem's). The
+    fraction is then at most ``(angle - miss) / angle``, ``miss`` the path's distance to the
+    goal on the problem's grid (rad): a refusal (or ``bounds``) never claims more of the way
+    than the path it stopped on covers, and its figures agree.
     """
     if result.angle <= 0.0:
         return result.fraction

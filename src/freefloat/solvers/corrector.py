@@ -48,10 +48,11 @@ def correct(
 ) -> tuple[np.ndarray | None, np.ndarray, np.ndarray, int]:
     """Newton corrector from ``beta``: (solved beta or None, residual, Jacobian, iterations).
 
-    The rows of the constraints that are not affine (clearance: exact distance queries) are
-    measured at the first iterate and then linearised about it (:class:`.rows.Linearised`)
-    while every row stays well inside (:meth:`~.rows.Linearised.trusted_at`; a row near
-    its limit is measured at each iterate); where the corrector would accept a path they
+    The rows of the constraints that are not affine (clearance: exact distance queries;
+    effort limits, the end-effector cone) are measured at the first iterate and then
+    linearised about it (:class:`.rows.Linearised`) while every row stays inside at twice its
+    predicted rise (:meth:`~.rows.Linearised.trusted_at`; an iterate where the linearisation
+    brings a row near its limit is measured itself); where the corrector would accept a path they
     are measured at that path, which is accepted only inside them, and otherwise corrected
     on from there. The residual, its
     Jacobian and the affine rows are exact at every iterate. The instants the constraints

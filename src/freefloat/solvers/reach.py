@@ -22,7 +22,7 @@ from ..parallel import run_tasks
 from ..physics.attitude import quat_exp, quat_multiply, relative_rotvec
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
-from .continuation import ContinuationResult, track
+from .continuation import ContinuationResult, held_fraction, track
 from .options import SolveOptions
 from .restore import broken_constraint, broken_rows_first
 from .tracked import BranchPoint
@@ -210,8 +210,10 @@ def _direction(
     if not confirm:  # the bounds estimate: as far as the budget goes
         if deferred and broken_constraint(problem, eager, beta):
             result = _furthest(problem, quintic, axis, angle, eager, options, False)
-            reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
-        return reached, stopped_by, beta
+        if not result.reached:  # as far as the path covers on the problem's own grid
+            target = problem.with_goal(quat_multiply(quintic, quat_exp(angle * axis)))
+            return held_fraction(target, result) * angle, result.stopped_by, result.beta
+        return angle, result.stopped_by, result.beta
     broken = broken_rows_first(problem, eager, beta) if deferred else ""
     if not result.reached and not broken:  # solved only to the intermediate tolerance
         reached, beta = _confirmed(problem, quintic, axis, reached, tracked, options, step, trace)

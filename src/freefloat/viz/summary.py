@@ -276,8 +276,9 @@ def objective_line(p: Plan) -> str:
         change = 100.0 * (o.value - o.start_value) / abs(o.start_value)
         used = ", ".join(f"{k}+{v}" for k, v in p.solver.freedom.items() if v) or "none"
         line += f"; {change:+.1f} % against the minimum-norm path; freedom {used}"
-    if o.name != "min_norm" and o.levels and all(level.note for level in o.levels):
-        line += f"; the minimum-norm path kept: {o.levels[-1].note}"  # no level improved it
+    notes = [level.note for level in o.levels if level.note]
+    if o.name != "min_norm" and notes and o.value == o.start_value:  # the start path stood
+        line += f"; the minimum-norm path kept: {notes[-1]}"
     return line
 
 
