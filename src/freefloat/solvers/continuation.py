@@ -65,6 +65,8 @@ INTERMEDIATE_STEPS = 2
 NO_START = "no path within the constraints reaches even the quintic path's own attitude"
 #: Singular-value ratio below which dh/dbeta counts as singular.
 SINGULAR = 1e-9
+#: Singular-value ratio below which a refusal notes that dh/dbeta nearly loses rank.
+NEAR_SINGULAR = 1e-3
 
 
 def _tangent(
@@ -121,9 +123,23 @@ def _why(blocked: Broken | None, jac: np.ndarray) -> str:
     """
     if singular(jac):
         return "a singular map (dh/dbeta loses rank)"
-    if blocked is not None:
-        return f"{blocked.name} ahead: {blocked.detail}"  # on the path a short step on
+    if blocked is not None:  # on the path a short step on
+        return f"{blocked.name} ahead: {blocked.detail}{_near_singular(jac)}"
     return "freedom exhausted (the corrector does not converge with this path family)"
+
+
+def _near_singular(jac: np.ndarray) -> str:
+    """A note when ``jac`` (rad per unit of beta) nearly loses rank, else "".
+
+    Its smallest singular value below :data:`NEAR_SINGULAR` of its largest: a small turn
+    about its weakest direction then asks large joint motions, and the constraint met ahead
+    may lie far from the path.
+    """
+    sigma = np.linalg.svd(jac, compute_uv=False)
+    ratio = float(sigma[-1] / max(sigma[0], 1e-300))
+    if ratio >= NEAR_SINGULAR:
+        return ""
+    return f" (near a singular map: its weakest gain {ratio:.1g} of its strongest)"
 
 
 def singular(jac: np.ndarray) -> bool:
