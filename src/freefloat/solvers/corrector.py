@@ -50,17 +50,16 @@ def correct(
 
     The rows of the constraints that are not affine (clearance: exact distance queries;
     effort limits, the end-effector cone) are measured at the first iterate and then
-    linearised about it (:class:`.rows.Linearised`) while every row stays inside at twice its
-    predicted rise (:meth:`~.rows.Linearised.trusted_at`; an iterate where the linearisation
-    brings a row near its limit is measured itself); where the corrector would accept a path they
-    are measured at that path, which is accepted only inside them, and otherwise corrected
-    on from there. The residual, its
-    Jacobian and the affine rows are exact at every iterate. The instants the constraints
-    with their own instants pick where measured are kept for the next ones
-    (:func:`.rows.with_picked`): rows that jump with the iterate would let Newton chase them
-    instead of converging. The corrector gives up early when a Newton step did not halve the
-    residual (the predicted step was too long), except once: after a step that took the path
-    back inside rows, which may raise the residual.
+    linearised about it (:class:`.rows.Linearised`) while every row stays inside at twice
+    its predicted rise (:meth:`~.rows.Linearised.trusted_at`; an iterate where the
+    linearisation brings a row near its limit is measured itself). Where the corrector
+    would accept a path they are measured at that path, which is accepted only inside them,
+    and otherwise corrected on from there. The residual, its Jacobian and the affine rows are
+    exact at every iterate. The instants the constraints with their own instants pick where
+    measured are kept for the next ones (:func:`.rows.with_picked`): rows that jump with the
+    iterate would let Newton chase them instead of converging. The corrector gives up early
+    when a Newton step did not halve the residual (the predicted step was too long), except
+    once: after a step that took the path back inside rows, which may raise the residual.
     """
     r, jac = problem.residual_and_jacobian(beta)
     previous, was_inside, excused = math.inf, True, False
