@@ -23,10 +23,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import SolverError
-from ..physics.attitude import (
-    geodesic_angle,
-    relative_rotvec,
-)
+from ..physics.attitude import geodesic_angle, relative_rotvec
 from ..pipeline import plan_from_solution
 from ..plans.format import Plan
 from ..problem.build import build_problem

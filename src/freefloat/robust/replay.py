@@ -15,10 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.attitude import (
-    geodesic_angle,
-    relative_rotvec,
-)
+from ..physics.attitude import geodesic_angle, relative_rotvec
 from ..physics.momentum import MomentumMap
 from ..plans.format import Plan
 from ..robot.model import Robot

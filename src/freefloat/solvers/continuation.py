@@ -100,9 +100,18 @@ def _target(problem: Problem, start: np.ndarray, delta: np.ndarray, lam: float) 
 
 
 def _ahead(
-    problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray, tangent: np.ndarray
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    beta: np.ndarray,
+    tangent: np.ndarray,
+    jac: np.ndarray,
 ) -> Broken | None:
-    """The first constraint a short step along ``tangent`` from ``beta`` would break, or None."""
+    """The first constraint a short step along ``tangent`` from ``beta`` would break, or None.
+
+    None on a singular map ``jac`` too: the tangent is then meaningless (see :func:`_why`).
+    """
+    if singular(jac):
+        return None
     ahead = beta + tangent * 0.05
     for constraint in constraints:
         if constraint.applies_to(problem.robot):
@@ -121,25 +130,21 @@ def _why(blocked: Broken | None, jac: np.ndarray) -> str:
     smallest singular value, and a constraint it would break ahead says nothing of the
     branch (a step of 10^8 rad breaks every joint limit).
     """
-    if singular(jac):
+    smallest, ratio = _gains(jac)
+    if ratio < SINGULAR or smallest < 1e-9:
         return "a singular map (dh/dbeta loses rank)"
     if blocked is not None:  # on the path a short step on
-        return f"{blocked.name} ahead: {blocked.detail}{_near_singular(jac)}"
+        # nearly singular: a small turn about the weakest direction asks large joint motions,
+        # and the constraint met ahead may lie far from the path
+        near = f" (near a singular map: its weakest gain {ratio:.1g} of its strongest)"
+        return f"{blocked.name} ahead: {blocked.detail}{near if ratio < NEAR_SINGULAR else ''}"
     return "freedom exhausted (the corrector does not converge with this path family)"
 
 
-def _near_singular(jac: np.ndarray) -> str:
-    """A note when ``jac`` (rad per unit of beta) nearly loses rank, else "".
-
-    Its smallest singular value below :data:`NEAR_SINGULAR` of its largest: a small turn
-    about its weakest direction then asks large joint motions, and the constraint met ahead
-    may lie far from the path.
-    """
+def _gains(jac: np.ndarray) -> tuple[float, float]:
+    """The smallest singular value of ``jac`` (rad per unit of beta), and over the largest."""
     sigma = np.linalg.svd(jac, compute_uv=False)
-    ratio = float(sigma[-1] / max(sigma[0], 1e-300))
-    if ratio >= NEAR_SINGULAR:
-        return ""
-    return f" (near a singular map: its weakest gain {ratio:.1g} of its strongest)"
+    return float(sigma[-1]), float(sigma[-1] / max(sigma[0], 1e-300))
 
 
 def singular(jac: np.ndarray) -> bool:
@@ -147,8 +152,8 @@ def singular(jac: np.ndarray) -> bool:
 
     Its smallest singular value below :data:`SINGULAR` times its largest, or below 1e-9.
     """
-    sigma = np.linalg.svd(jac, compute_uv=False)
-    return bool(sigma[-1] < SINGULAR * max(sigma[0], 1e-300) or sigma[-1] < 1e-9)
+    smallest, ratio = _gains(jac)
+    return ratio < SINGULAR or smallest < 1e-9
 
 
 def _where(reached: float, angle: float, steps: int, evaluations: int) -> str:
@@ -211,7 +216,7 @@ def track(
             # At the pace of the last steps the step budget ends short of the goal: stop now
             # rather than spend the budget on the same refusal.
             tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache, dips=dips)
-            blocked = None if singular(jac) else _ahead(problem, constraints, beta, tangent)
+            blocked = _ahead(problem, constraints, beta, tangent, jac)
             stopped_by = _stall_reason(blocked, jac, (lam - reached[steps - PACE_WINDOW]) * angle)
             break
         if problem.evaluations - first_evaluation > options.max_evaluations:
@@ -233,7 +238,7 @@ def track(
             reached.append(lam)
             dl = 0.5 * step
             if dl * angle < MIN_STEP:
-                blocked = None if singular(jac) else _ahead(problem, constraints, beta, tangent)
+                blocked = _ahead(problem, constraints, beta, tangent, jac)
                 stopped_by = _why(blocked, jac)
                 break
             continue

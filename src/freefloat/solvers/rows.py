@@ -73,13 +73,11 @@ class Linearised:
         kept; otherwise the rows are measured again (a row at or near its limit, or one
         outside where it was measured, is always measured at the iterate itself).
         """
-        for g0, g_mat in self.rows.values():
-            if (
-                len(g0)
-                and float(np.max(g0 + 2.0 * np.maximum(g_mat @ (beta - self.beta), 0.0))) > 0.0
-            ):
-                return False
-        return True
+        step = beta - self.beta
+        return all(
+            bool(np.all(g0 + 2.0 * np.maximum(g_mat @ step, 0.0) <= 0.0))
+            for g0, g_mat in self.rows.values()
+        )
 
     def measured_at(self, beta: np.ndarray) -> bool:
         """Whether the rows were measured at ``beta`` itself (then they are exact)."""
