@@ -52,3 +52,28 @@ def test_a_fixed_joint_named_as_a_movable_one_is_said_to_be_fixed(tmp_path) -> N
     with pytest.raises(ff.UnknownNameError) as caught:
         robot.joint("j9")
     assert str(caught.value) == "unknown joint 'j9'; valid: j1, j2, j3"
+
+
+def test_the_command_line_says_each_hint_in_one_line_and_exits_2(tmp_path, capsys) -> None:
+    """`freefloat check` on a scenario naming a fixed joint, and on a URDF with a floating
+    root joint: one line each, exit 2, no traceback."""
+    from freefloat.cli import main
+
+    path = tmp_path / "arm.urdf"
+    path.write_text(urdfs.spatial_arm())
+    scenario = tmp_path / "s.toml"
+    joints = "{ j1 = 10.0, j2 = 20.0, j3 = 30.0, tip_joint = 0.0 }"
+    scenario.write_text(
+        f'robot = "{path}"\nduration = 5.0\n[safety]\ncheck = false\n'
+        f"[start]\njoints = {joints}\n[goal]\njoints = {joints}\n"
+    )
+    assert main(["check", str(scenario)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "(a fixed joint in the URDF: it does not move)" in err
+    body = '\n  <link name="world"/>' + urdfs.joint("world_to_base", "world", "base", "floating")
+    path.write_text(urdfs.spatial_arm().replace("</robot>", body + "\n</robot>"))
+    scenario.write_text(scenario.read_text().replace(", tip_joint = 0.0", ""))
+    assert main(["check", str(scenario)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("freefloat: error: ")
+    assert "the URDF's root link is the spacecraft and already floats" in err
