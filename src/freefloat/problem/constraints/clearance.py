@@ -303,7 +303,10 @@ class Clearance(Constraint):
         halved, measuring its middle, until the bound clears ``limit`` on each half or a
         sample falls below it, at most :data:`HALVINGS` times; the sampled local minima below
         ``limit``, and the middles of halves left undecided, are then refined by a bounded
-        scalar search.
+        scalar search. Once a sample lies below ``limit``, only intervals whose bound falls
+        below the smallest sample so far are halved: the others cannot hold the smallest
+        clearance (on a path deep in collision most intervals are such, and were halved to no
+        end: the answer is the same).
         """
         key = (*self._key(path, measured.known), limit)
         if self._below_memo is not None and self._below_memo[0] == key:  # the same answer
@@ -316,7 +319,8 @@ class Clearance(Constraint):
         ends = np.stack([t[:-1], t[1:], known[:-1], known[1:], rows[:-1], rows[1:]])
         with self.model.own_bounds():  # pair bounds from this path's samples alone
             for _ in range(HALVINGS):
-                ends = ends[:, undecided(self.model, path, ends, (table, arms), limit)]
+                lowest = float(min(np.min(v, initial=math.inf) for v in values))
+                ends = ends[:, undecided(self.model, path, ends, (table, arms), limit, lowest)]
                 if ends.shape[1] == 0:
                     break
                 mid = 0.5 * (ends[0] + ends[1])
@@ -335,7 +339,8 @@ class Clearance(Constraint):
                     axis=1,
                 )
         if ends.shape[1]:
-            ends = ends[:, undecided(self.model, path, ends, (table, arms), limit)]
+            lowest = float(min(np.min(v, initial=math.inf) for v in values))
+            ends = ends[:, undecided(self.model, path, ends, (table, arms), limit, lowest)]
         t_all, v_all = np.concatenate(times), np.concatenate(values)
         order = np.argsort(t_all, kind="stable")
         t_all, v_all = t_all[order], v_all[order]

@@ -175,12 +175,15 @@ def undecided(
     ends: np.ndarray,
     tables: tuple[np.ndarray, np.ndarray],
     limit: float,
+    below: float | None = None,
 ) -> np.ndarray:
     """Which intervals may dip below ``limit`` (m) unseen (a boolean per column of ``ends``).
 
     ``ends``: rows t0, t1 (s), v0, v1 (m), and the rows of ``tables`` (the pairs' bounds and
     the spheres' lever arms, m) at both ends. Both ends measured and above ``limit`` (a sample
-    below it is a dip seen), and the bound between them (:func:`bounds_between`) below it.
+    below it is a dip seen), and the bound between them (:func:`bounds_between`) below it, or
+    below ``below`` (m, at most ``limit``) when given: an interval whose bound is above the
+    smallest value measured anywhere cannot hold the path's smallest clearance.
     """
     seen = ~np.isnan(ends[2]) & ~np.isnan(ends[3]) & (ends[2] >= limit) & (ends[3] >= limit)
     bound = np.full(ends.shape[1], math.inf)
@@ -194,4 +197,4 @@ def undecided(
             (table[first], table[second]),
             (arms[first], arms[second]),
         )
-    return bound < limit
+    return bound < (limit if below is None else min(below, limit))
