@@ -17,6 +17,7 @@ import pytest
 import freefloat as ff
 from freefloat.cli import main
 from freefloat.parallel import serial_reason
+from freefloat.physics import attitude as att
 from freefloat.solvers.reach import DirectionReach
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -145,7 +146,9 @@ def test_bounds_keeps_the_constraints_plan_imposes(capsys, monkeypatch) -> None:
     """`bounds` tracks within the scenario's constraints, as plan imposes them: clearance on
     the UR5 servicer (which checks it; deferred, as reach defers it), not on the Kinova
     example (which does not). What reaches the estimate is captured; the first line says
-    which constraints the paths keep."""
+    which constraints the paths keep. The truth: goals at the printed 'reached' turns (from
+    the quintic path's attitude, base axes) are planned with every constraint and pass the
+    independent verification."""
     import freefloat.solvers.reach as reach
 
     asked: list[dict] = []
@@ -164,3 +167,17 @@ def test_bounds_keeps_the_constraints_plan_imposes(capsys, monkeypatch) -> None:
         names = [c.name for c in asked[-1]["constraints"]]
         assert ("clearance" in names) == clearance and "joint_position_limits" in names
         assert [c.name for c in asked[-1]["deferred"]] == (["clearance"] if clearance else [])
+        rows = [line.split() for line in out.splitlines() if line[:3] in ("  +", "  -")]
+        for row in (rows[0], rows[5], rows[9]):  # +x, -z, a diagonal
+            axis = np.array([float(v) for v in row[:3]])
+            turn = np.radians(float(row[3])) * axis / np.linalg.norm(axis)
+            plan = ff.plan(_turned_from_quintic(ff.Scenario.from_toml(path), turn))
+            assert plan.verification.passed and plan.base.attitude_error_rad < 1e-9
+
+
+def _turned_from_quintic(scenario: ff.Scenario, rotvec: np.ndarray) -> ff.Scenario:
+    """The scenario with its goal attitude the quintic path's turned by ``rotvec`` (rad, base
+    axes)."""
+    problem = ff.problem_from_scenario(scenario)
+    drift = problem.achieved(np.zeros(problem.n_free))
+    return replace(scenario, goal_attitude=att.quat_multiply(drift, att.quat_exp(rotvec)))
