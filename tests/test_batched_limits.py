@@ -26,7 +26,7 @@ from freefloat.physics.dynamics import centre_of_mass, inverse_dynamics, inverse
 from freefloat.physics.joint_torques import joint_torques_and_twist, joint_torques_batch
 from freefloat.problem.objectives import objective_named
 from freefloat.problem.paths import JointPolynomials
-from freefloat.solvers.optimise import scaled_coordinates
+from freefloat.solvers.scaled import scaled_coordinates
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "robots" / "scenarios"

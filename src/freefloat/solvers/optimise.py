@@ -19,7 +19,10 @@ extremes, say), and are held :data:`BACKOFF` tolerances inside the limit, so tha
 reached at a row is not broken between rows by more than its tolerance. When a result still
 breaks an imposed constraint, its tightest instants are added and the nearest root within
 them is tried (least-norm corrections, :func:`.least_norm.nearest_root_within`); if that
-fails, the run is repeated from there (at most :data:`ROUNDS` runs).
+fails, the run is repeated from there (at most :data:`ROUNDS` runs). A run that SLSQP ends
+without converging ("Inequality constraints incompatible", its last point perhaps deep in
+collision) falls back on the points of lowest objective it met within every row
+(:mod:`.iterates`), polished, and brought inside where they break a constraint between rows.
 
 The result is polished back onto ``h = 0`` by minimum-norm Newton steps and kept only if it
 honours every constraint and lowers the objective (or ``beta_0`` broke a constraint);
@@ -29,24 +32,23 @@ otherwise ``beta_0`` stands. Budgets are counts: SLSQP's iterations per run and
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from functools import partial
-from typing import Any
 
 import numpy as np
 
 from .._blas import one_blas_thread
 from ..problem.constraints import Constraint, DurationScaledLimit
-from ..problem.objectives import Objective, gauss_legendre
+from ..problem.objectives import Objective
 from ..problem.residual import Problem
-from ..progress import heartbeat
+from .iterates import Journal
 from .least_norm import nearest_root_within
 from .newton import polish
 from .options import SolveOptions
 from .restore import broken_constraint
 from .rows import tightest_instants
-from .sqp import constraint_functions
+from .scaled import BudgetSpentError, Evaluations, scaled_coordinates
+from .sqp import Function, constraint_functions
 
 __all__ = ["ROUNDS", "Optimised", "optimise"]
 
@@ -63,6 +65,9 @@ FAR_FRACTION = 0.5
 #: SLSQP runs at most, each adding what the last one broke: a left-out constraint, or the
 #: instants where it broke an imposed one.
 ROUNDS = 8
+#: Points within the rows a run that did not converge is polished from, at most
+#: (:mod:`.iterates`).
+FALLBACKS = 3
 
 
 @dataclass(frozen=True)
@@ -88,43 +93,12 @@ class Optimised:
     evaluations: int = 0
 
 
-class _BudgetSpentError(Exception):
-    """The objective evaluation budget of one call is spent."""
-
-
 def _tightest(
     problem: Problem, constraints: Sequence[Constraint], beta: np.ndarray, instants: np.ndarray
 ) -> np.ndarray:
     """``instants`` with the normalised instants where the path at ``beta`` is tightest."""
     extra = tightest_instants(problem, constraints, beta)
     return np.unique(np.clip(np.concatenate([instants, extra]), 0.0, 1.0))
-
-
-def scaled_coordinates(
-    problem: Problem, objective: Objective, beta: np.ndarray, value: float
-) -> np.ndarray:
-    """``S`` in which the objective divided by ``value`` has a Hessian near the identity.
-
-    With the objective's metric ``M`` at ``beta`` (its Gauss-Newton factor: ``2 M^T M`` is
-    close to the Hessian), ``S^T (M^T M + r^2 A^T A) S = value / 2 I``, where ``A`` is the
-    weighted second-derivative map of the basis (exact Gauss-Legendre integration) and ``r`` a
-    small multiple that keeps the matrix positive definite where ``M`` is rank deficient.
-    Without a metric (``min_length``), ``S^T A^T A S`` is ``value / |A|^2 I``: the acceleration
-    norm, scaled to the value. Built from the QR factors of the stacked matrices, not from a
-    Cholesky factor of the product: that squares the condition number of a high-degree
-    monomial basis.
-    """
-    s, w = gauss_legendre(max(problem.family.degrees))
-    dqss = problem.family.affine_samples(s).dqss
-    accel = (np.sqrt(w)[:, None, None] * dqss).reshape(-1, problem.n_free)
-    metric = objective.metric(problem, beta)
-    if metric is None:
-        stacked = accel * np.sqrt(max(value, 1e-300) / max(_norm2(accel), 1e-300))
-    else:
-        weight = 1e-3 * np.sqrt(_norm2(metric) / max(_norm2(accel), 1e-300))
-        stacked = np.vstack([metric, weight * accel]) / np.sqrt(max(0.5 * value, 1e-300))
-    r = np.linalg.qr(stacked, mode="r")
-    return np.linalg.solve(r, np.eye(problem.n_free))
 
 
 def _imposed_first(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
@@ -155,6 +129,29 @@ def _far(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
     return peak is not None and peak.fraction < FAR_FRACTION
 
 
+def _fallback_kept(
+    problem: Problem,
+    constraints: Sequence[Constraint],
+    placed: Sequence[Constraint],
+    instants: np.ndarray,
+    run: _Run,
+    options: SolveOptions,
+) -> np.ndarray | None:
+    """The first of a run's fallbacks whose path keeps every constraint, or None.
+
+    One that breaks a constraint between the rows' instants is first brought inside by
+    least-norm corrections at its tightest instants, as a run's own result is (rad or m).
+    """
+    for beta in run.fallbacks:
+        if not broken_constraint(problem, constraints, beta):
+            return beta
+        at = _tightest(problem, placed, beta, instants)
+        inside = nearest_root_within(problem, beta, placed, at, options)
+        if inside.honoured and not broken_constraint(problem, constraints, inside.beta):
+            return inside.beta
+    return None
+
+
 def _reaches(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
     """Whether a constraint left out of a run must be imposed after it.
 
@@ -165,16 +162,6 @@ def _reaches(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool
     if not constraint.affine:
         return bool(broken_constraint(problem, [constraint], beta))
     return constraint.violation(problem, beta).value > -BACKOFF * constraint.tolerance
-
-
-def _norm2(matrix: np.ndarray) -> float:
-    """Squared Frobenius norm."""
-    return float(np.sum(matrix * matrix))
-
-
-def _where(name: str, spent: int, budget: int) -> str:
-    """A progress line of the minimisation (evaluations are counts)."""
-    return f"minimise {name}: {spent} of at most {budget} objective evaluations at this level"
 
 
 def optimise(
@@ -210,7 +197,8 @@ def optimise(
     scale = start.value if start.value > 0 else 1.0
     s_mat = scaled_coordinates(unit, objective, beta0, scale)
 
-    ev = _Evaluations(problem, unit, objective, beta0, s_mat, scale, max_evaluations)
+    ev = Evaluations(problem, unit, objective, beta0, s_mat, scale, max_evaluations)
+    ev.start = start.value / scale  # the start's value, as the runs see it
 
     active = [c for c in constraints if c.applies_to(problem.robot)]
     imposed = [c for c in active if _imposed_first(problem, c, beta0)]
@@ -227,7 +215,11 @@ def optimise(
         run = _run(problem, ev, imposed, instants, z, max_iterations, options.tolerance)
         iterations += run.iterations
         if run.candidate is None:
-            return kept(run.note)
+            fallback = _fallback_kept(problem, constraints, imposed, instants, run, options)
+            if fallback is None:
+                return kept(run.note)
+            candidate = fallback
+            break
         candidate, z = run.candidate, run.z
         broken = broken_constraint(problem, constraints, candidate)
         if not broken:
@@ -245,7 +237,11 @@ def optimise(
             candidate = inside.beta
             break
         if not run.success:  # no point within the imposed rows: more instants will not help
-            return kept(f"breaks {broken}")
+            fallback = _fallback_kept(problem, constraints, imposed, instants, run, options)
+            if fallback is None:
+                return kept(f"breaks {broken}")
+            candidate = fallback  # the best point the run met within its rows
+            break
     else:
         return kept(f"breaks {broken}")
     value = objective.evaluate(unit, candidate).value
@@ -264,6 +260,8 @@ class _Run:
         iterations: SLSQP iterations spent.
         success: whether SLSQP says it converged.
         note: why there is no candidate ("" when there is one).
+        fallbacks: when SLSQP did not converge, the points of lowest objective it met within
+            every row (below the start's), polished onto the goal (rad or m), best first.
     """
 
     candidate: np.ndarray | None
@@ -271,11 +269,12 @@ class _Run:
     iterations: int
     success: bool = False
     note: str = ""
+    fallbacks: tuple[np.ndarray, ...] = ()
 
 
 def _run(
     problem: Problem,
-    ev: _Evaluations,
+    ev: Evaluations,
     imposed: Sequence[Constraint],
     instants: np.ndarray,
     z: np.ndarray,
@@ -285,100 +284,80 @@ def _run(
     """SLSQP from ``z`` within the ``imposed`` rows at ``instants``, polished (rad)."""
     from scipy.optimize import minimize  # imported when first used
 
+    journal = Journal(0)
     cons = [{"type": "eq", "fun": ev.h, "jac": ev.dh}]
-    cons += _inequalities(problem, imposed, instants, ev)
+    cons += _inequalities(problem, imposed, instants, ev, journal)
     try:
         with np.errstate(all="ignore"), one_blas_thread():
             result = minimize(
-                ev.fun,
+                journal.objective_of(ev.fun),
                 z,
                 jac=ev.grad,
                 method="SLSQP",
                 constraints=cons,
                 options={"ftol": 1e-12, "maxiter": int(max_iterations)},
             )
-    except _BudgetSpentError:
+    except BudgetSpentError:
         return _Run(None, z, 0, note=f"evaluation budget ({ev.budget}) spent")
     nit, z = int(result.nit), np.asarray(result.x, dtype=float)
-    candidate = ev.to_beta(z)
-    if not np.all(np.isfinite(candidate)):
-        return _Run(None, z, nit, note="diverged")
+    fallbacks = () if result.success else _fallbacks(problem, ev, journal, tolerance)
+    candidate = _polished(problem, ev.to_beta(z), tolerance)
+    if isinstance(candidate, str):
+        return _Run(None, z, nit, note=candidate, fallbacks=fallbacks)
+    return _Run(candidate, z, nit, bool(result.success), fallbacks=fallbacks)
+
+
+def _polished(problem: Problem, beta: np.ndarray, tolerance: float) -> np.ndarray | str:
+    """``beta`` polished onto the goal (rad or m), or why it cannot be."""
+    if not np.all(np.isfinite(beta)):
+        return "diverged"
     try:
-        candidate, vector = polish(problem, candidate, tolerance)
+        beta, vector = polish(problem, beta, tolerance)
     except (np.linalg.LinAlgError, FloatingPointError, ValueError):
-        return _Run(None, z, nit, note="polish failed")
+        return "polish failed"
     if float(np.linalg.norm(vector)) >= tolerance:
-        return _Run(None, z, nit, note="left the goal")
-    return _Run(candidate, z, nit, bool(result.success))
+        return "left the goal"
+    return beta
 
 
-class _Evaluations:
-    """The objective and the attitude residual in scaled coordinates ``z``.
+def _fallbacks(
+    problem: Problem, ev: Evaluations, journal: Journal, tolerance: float
+) -> tuple[np.ndarray, ...]:
+    """The best points a run that did not converge met within its rows, polished (rad or m).
 
-    ``beta = beta0 + S z``; the objective at T = 1 s divided by ``scale``. Values are kept for
-    the last few points; objective evaluations are counted against a budget (a count).
+    Of the :data:`FALLBACKS` points of lowest objective below the start's, those that polish
+    onto the goal, lowest objective first.
     """
-
-    def __init__(
-        self,
-        problem: Problem,
-        unit: Problem,
-        objective: Objective,
-        beta0: np.ndarray,
-        s_mat: np.ndarray,
-        scale: float,
-        budget: int,
-    ) -> None:
-        self.problem, self.unit, self.objective = problem, unit, objective
-        self.beta0, self.s_mat, self.scale, self.budget = beta0, s_mat, scale, budget
-        self.memo: dict[bytes, Any] = {}
-        self.spent = 0  # objective evaluations so far
-
-    def to_beta(self, z: np.ndarray) -> np.ndarray:
-        return self.beta0 + self.s_mat @ z
-
-    def _cached(self, kind: str, z: np.ndarray, make: Callable[[np.ndarray], Any]) -> Any:
-        key = kind.encode() + np.asarray(z, dtype=float).tobytes()
-        if key not in self.memo:
-            if kind == "j":
-                self.spent += 1
-                if self.spent > self.budget:
-                    raise _BudgetSpentError
-                heartbeat(partial(_where, self.objective.name, self.spent, self.budget))
-            if len(self.memo) > 64:
-                self.memo.clear()
-            self.memo[key] = make(self.to_beta(z))
-        return self.memo[key]
-
-    def _objective(self, z: np.ndarray) -> Any:
-        return self._cached("j", z, lambda b: self.objective.evaluate(self.unit, b))
-
-    def fun(self, z: np.ndarray) -> float:
-        return float(self._objective(z).value) / self.scale
-
-    def grad(self, z: np.ndarray) -> np.ndarray:
-        return np.asarray(self.s_mat.T @ self._objective(z).gradient) / self.scale
-
-    def h(self, z: np.ndarray) -> np.ndarray:
-        return np.asarray(self._cached("h", z, self.problem.residual_and_jacobian)[0])
-
-    def dh(self, z: np.ndarray) -> np.ndarray:
-        return np.asarray(self._cached("h", z, self.problem.residual_and_jacobian)[1] @ self.s_mat)
+    best = journal.best(ev.start, FALLBACKS)
+    polished = [_polished(problem, ev.to_beta(z), tolerance) for z in best]
+    return tuple(beta for beta in polished if not isinstance(beta, str))
 
 
 def _inequalities(
-    problem: Problem, imposed: Sequence[Constraint], instants: np.ndarray, ev: _Evaluations
+    problem: Problem,
+    imposed: Sequence[Constraint],
+    instants: np.ndarray,
+    ev: Evaluations,
+    journal: Journal,
 ) -> list[dict[str, object]]:
-    """SLSQP inequality rows of the imposed constraints at the instants, backed off a little."""
+    """SLSQP inequality rows of the imposed constraints at the instants, backed off a little.
+
+    Each function's values are noted in ``journal`` (its ``rows`` set to their number).
+    """
     cons: list[dict[str, object]] = []
     for constraint in imposed:
         backoff = BACKOFF * constraint.tolerance
         for g, dg in constraint_functions(problem, [constraint], instants):
+
+            def values(z: np.ndarray, g: Function = g, b: float = backoff) -> np.ndarray:
+                return g(ev.to_beta(z)) - b
+
             cons.append(
                 {
                     "type": "ineq",
-                    "fun": lambda z, g=g, b=backoff: g(ev.to_beta(z)) - b,
+                    "fun": journal.inequality(len(cons), values),
                     "jac": lambda z, dg=dg: dg(ev.to_beta(z)) @ ev.s_mat,
                 }
             )
+    journal.rows = len(cons)
     return cons
