@@ -240,3 +240,28 @@ def test_the_free_least_norm_root_settles_far_enough_to_make_the_path_natural():
     assert beyond <= NATURAL_EXCURSION
     assert plan.objective.value < plan.objective.start_value
     assert plan.verification.passed
+
+
+def test_a_root_past_a_limit_by_less_than_the_row_slack_is_brought_inside(worked_scenario):
+    """q1's cap set 3e-7 rad below the root's largest q1 (closed form of the polynomial's
+    extreme): beyond the limit's 1e-9 rad tolerance, within the 1e-6 a row may be broken by
+    (``ROW_SLACK``). The corrections do not return the root as it is, which the dense check
+    rejects again; they bring it inside: q1 within the cap on 200001 samples, on the root set."""
+    problem = _capped(worked_scenario)
+    options = ff.SolveOptions()
+    start = ff.solve(problem, options, []).beta
+    t = np.linspace(0.0, problem.duration, 200001)
+    peak = float(problem.polynomials(start).evaluate(t).q[:, 0].max())
+    joints = list(problem.robot.joints)
+    joints[0] = dataclasses.replace(joints[0], upper=peak - 3e-7)
+    robot = dataclasses.replace(problem.robot, joints=tuple(joints))
+    scenario = worked_scenario.resolved()
+    tight = worked_problem(dataclasses.replace(scenario, robot=robot), {"q1": 3, "q2": 3})
+    assert np.linalg.norm(tight.residual(start)) < 1e-10  # the same family: still a root
+    limits = JointPositionLimits()
+    assert limits.violation(tight, start).value > 1e-7  # broken beyond the tolerance
+    found = nearest_root_within(tight, start, [limits], DEFAULT_INSTANTS, options)
+    assert found.honoured and not np.array_equal(found.beta, start)
+    sampled = tight.polynomials(found.beta).evaluate(t).q[:, 0]
+    assert float(sampled.max()) <= peak - 3e-7 + 1e-9
+    assert np.linalg.norm(tight.residual(found.beta)) < 1e-10

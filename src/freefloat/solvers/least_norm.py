@@ -225,7 +225,10 @@ def nearest_root_within(
         dips = with_dips(problem, active, beta, dips)
         cache: RowCache = {}
         point = _Point.at(problem, active, beta, instants, cache, dips=dips)
-        found = _corrected(problem, active, point, instants, cache, options.tolerance, dips)
+        # a point the dense check rejected gets a step even where its rows hold within
+        # ROW_SLACK: returned as it is, it would be rejected again
+        slack = ROW_SLACK if count == 1 else 0.0
+        found = _corrected(problem, active, point, instants, cache, options.tolerance, dips, slack)
         if found is None:
             return LeastNorm(beta, count, False, float(np.linalg.norm(point.r)))
         beta, residual = found.beta, float(np.linalg.norm(found.r))
@@ -285,17 +288,18 @@ def _corrected(
     cache: RowCache,
     tolerance: float,
     dips: np.ndarray = NO_DIPS,
+    slack: float = ROW_SLACK,
 ) -> _Point | None:
     """The root near ``point`` (evaluated at ``instants``) within the rows, or None.
 
     Least-norm steps onto the root set and inside the rows linearised at the last point, each
-    polished onto ``h = 0``, until a point is a root within the rows; at most
-    :data:`CORRECTOR_STEPS` points are checked (the given one and its steps').
+    polished onto ``h = 0``, until a point is a root within ``slack`` of every row (their
+    units); at most :data:`CORRECTOR_STEPS` points are checked (the given one and its steps').
     """
     for count in range(1, CORRECTOR_STEPS + 1):
         if not point.finite:
             return None
-        if np.linalg.norm(point.r) < tolerance and point.g.max(initial=-1.0) <= ROW_SLACK:
+        if np.linalg.norm(point.r) < tolerance and point.g.max(initial=-1.0) <= slack:
             return point
         if count == CORRECTOR_STEPS:
             return None  # a further step would not be checked

@@ -304,9 +304,7 @@ class Clearance(Constraint):
         sample falls below it, at most :data:`HALVINGS` times; the sampled local minima below
         ``limit``, and the middles of halves left undecided, are then refined by a bounded
         scalar search. Once a sample lies below ``limit``, only intervals whose bound falls
-        below the smallest sample so far are halved: the others cannot hold the smallest
-        clearance (on a path deep in collision most intervals are such, and were halved to no
-        end: the answer is the same).
+        below the smallest sample so far are halved: no other can hold the smallest clearance.
         """
         key = (*self._key(path, measured.known), limit)
         if self._below_memo is not None and self._below_memo[0] == key:  # the same answer
