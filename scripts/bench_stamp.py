@@ -38,12 +38,12 @@ def stamp() -> str:
     load = ", ".join(f"{x:.1f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "?"
     when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     command = "python " + " ".join(shlex.quote(a) for a in sys.argv)
-    # With PYTHONDONTWRITEBYTECODE set, a process compiles every module that has no cached
-    # bytecode yet (an editable install's own) at each start-up: about 0.2 s more per command.
-    bytecode = "off (each start-up compiles)" if sys.flags.dont_write_bytecode else "on"
+    # With PYTHONDONTWRITEBYTECODE (or -B), no .pyc is written: a module without one (an
+    # editable install's own) is compiled at each start-up, about 0.2 s more per command.
+    bytecode = "off (no .pyc written)" if sys.flags.dont_write_bytecode else "on"
     return (
         f"*Measured {when} on {machine()}, numpy {np.__version__}; load average {load} "
-        f"(1, 5, 15 min); bytecode cache {bytecode}; command: `{command}`*"
+        f"(1, 5, 15 min); bytecode writing {bytecode}; command: `{command}`*"
     )
 
 

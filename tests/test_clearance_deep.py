@@ -66,7 +66,7 @@ def test_the_smallest_clearance_of_a_path_deep_in_collision_is_the_dense_grids(
 
     monkeypatch.setattr(clearance_module, "undecided", below_the_margin)
     halved = Clearance(CollisionModel(robot, known_srdf(robot)), MARGIN)
-    assert halved.violation(problem, beta).value == excess.value
+    assert halved.violation(problem, beta) == excess  # value, and time and pair in the detail
 
 
 class _TwoDips:

@@ -160,7 +160,7 @@ def test_bounds_keeps_the_constraints_plan_imposes(capsys, monkeypatch) -> None:
 
     monkeypatch.setattr(reach, "reach_set", capture)
     for path, clearance in ((UR5, True), (KINOVA, False)):
-        assert main(["bounds", str(path), "--budget", "3", "--max-angle", "2", "--jobs", "1"]) == 0
+        assert main(["bounds", str(path), "--budget", "3", "--max-angle", "30", "--jobs", "1"]) == 0
         out = capsys.readouterr().out
         within = "within joint_position_limits, joint_velocity_limits"
         assert within + (", clearance," if clearance else ",") in out, out
@@ -168,7 +168,8 @@ def test_bounds_keeps_the_constraints_plan_imposes(capsys, monkeypatch) -> None:
         assert ("clearance" in names) == clearance and "joint_position_limits" in names
         assert [c.name for c in asked[-1]["deferred"]] == (["clearance"] if clearance else [])
         rows = [line.split() for line in out.splitlines() if line[:3] in ("  +", "  -")]
-        for row in (rows[0], rows[5], rows[9]):  # +x, -z, a diagonal
+        for row in (rows[0], rows[5], rows[9]):  # +x, -z, a diagonal: short of 30 deg
+            assert row[4] != "-" and float(row[3]) < 30.0  # the budget or a limit stopped it
             axis = np.array([float(v) for v in row[:3]])
             turn = np.radians(float(row[3])) * axis / np.linalg.norm(axis)
             plan = ff.plan(_turned_from_quintic(ff.Scenario.from_toml(path), turn))

@@ -35,8 +35,18 @@ def _effort(plan: ff.Plan, robot: ff.Robot) -> float:
     )
 
 
-def _stopping_short(iterations: int):
-    """SciPy's ``minimize`` cut to ``iterations`` SLSQP iterations, failing far off."""
+#: How the cut run's last point is left: far off (its path, polished, breaks the joint
+#: limits), not a number (no candidate at all), or back at the start (no lower value).
+ENDS = {
+    "far": lambda x, x0: np.asarray(x) + 50.0,
+    "nan": lambda x, x0: np.full_like(np.asarray(x, dtype=float), np.nan),
+    "start": lambda x, x0: np.array(x0, dtype=float),
+}
+
+
+def _stopping_short(iterations: int, end: str = "far"):
+    """SciPy's ``minimize`` cut to ``iterations`` SLSQP iterations, failing, its last point
+    left as ``end`` says (:data:`ENDS`)."""
     real = scipy.optimize.minimize
 
     def minimize(fun, x0, **kwargs):  # type: ignore[no-untyped-def]
@@ -44,7 +54,7 @@ def _stopping_short(iterations: int):
         result = real(fun, x0, options=options, **kwargs)
         result.success = False
         result.status, result.message = 4, "Inequality constraints incompatible"
-        result.x = np.asarray(result.x) + 50.0  # the last point far from any root
+        result.x = ENDS[end](result.x, x0)
         return result
 
     return minimize
@@ -55,13 +65,15 @@ def scenario() -> ff.Scenario:
     return ff.Scenario.from_toml(PANDA)
 
 
-def test_a_run_that_stops_short_keeps_the_best_point_within_its_rows(scenario, monkeypatch):
-    """The plan keeps a lower-effort path than the minimum-norm one, within every
-    constraint (verification passes on the meshes), and its effort as the plan file gives it
-    is the reported value and below the minimum-norm path's."""
+@pytest.mark.parametrize("end", sorted(ENDS))
+def test_a_run_that_stops_short_keeps_the_best_point_within_its_rows(scenario, monkeypatch, end):
+    """However the run's last point is left, the plan keeps a lower-effort path than the
+    minimum-norm one, within every constraint (verification passes on the meshes), and its
+    effort as the plan file gives it is the reported value and below the minimum-norm
+    path's."""
     minimum_norm = ff.plan(scenario)
     start = _effort(minimum_norm, scenario.robot)
-    monkeypatch.setattr(scipy.optimize, "minimize", _stopping_short(4))
+    monkeypatch.setattr(scipy.optimize, "minimize", _stopping_short(4, end))
     plan = ff.plan(scenario, objective="min_effort")
     assert plan.verification.passed
     report = plan.objective

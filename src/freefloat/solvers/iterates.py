@@ -71,13 +71,14 @@ class Journal:
     def best(self, below: float, count: int) -> list[np.ndarray]:
         """Up to ``count`` points within every row, objective below ``below``, lowest first.
 
-        A point counts only where every inequality function was asked (and the objective
-        known) and none was negative or not a number.
+        ``below``: in the objective's own scale (the run's scaled value, unitless). A point
+        counts only where the objective is known and every inequality function was asked
+        (with none, every such point), none negative or not a number.
         """
         within = []
-        for key, rows in self.lowest.items():
-            value = self.objective.get(key, math.nan)
-            if len(rows) < self.rows or not value < below:
+        for key, value in self.objective.items():
+            rows = self.lowest.get(key, {})
+            if len(rows) < self.rows or not value < below:  # False for NaN
                 continue
             if all(v >= 0.0 for v in rows.values()):  # False for NaN
                 within.append((value, key))

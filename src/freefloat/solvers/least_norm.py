@@ -225,8 +225,9 @@ def nearest_root_within(
         dips = with_dips(problem, active, beta, dips)
         cache: RowCache = {}
         point = _Point.at(problem, active, beta, instants, cache, dips=dips)
-        # a point the dense check rejected gets a step even where its rows hold within
-        # ROW_SLACK: returned as it is, it would be rejected again
+        # from the second correction on, the point is one the dense check rejected after a
+        # correction: it gets a step even where its rows hold within ROW_SLACK (returned as
+        # it is, it would be rejected again)
         slack = ROW_SLACK if count == 1 else 0.0
         found = _corrected(problem, active, point, instants, cache, options.tolerance, dips, slack)
         if found is None:

@@ -32,7 +32,7 @@ otherwise ``beta_0`` stands. Budgets are counts: SLSQP's iterations per run and
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -132,23 +132,31 @@ def _far(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
 def _fallback_kept(
     problem: Problem,
     constraints: Sequence[Constraint],
-    placed: Sequence[Constraint],
+    imposed: Sequence[Constraint],
     instants: np.ndarray,
     run: _Run,
     options: SolveOptions,
+    lower: Callable[[np.ndarray], bool],
 ) -> np.ndarray | None:
-    """The first of a run's fallbacks whose path keeps every constraint, or None.
+    """The first of a run's fallbacks that is a root within every constraint and ``lower``.
 
-    One that breaks a constraint between the rows' instants is first brought inside by
-    least-norm corrections at its tightest instants, as a run's own result is (rad or m).
+    Each is polished onto the goal; one that breaks a constraint between the rows' instants
+    is first brought inside by least-norm corrections at its tightest instants, as a run's
+    own result is; ``lower`` says whether a path's objective is below the start's (rad or m).
     """
-    for beta in run.fallbacks:
-        if not broken_constraint(problem, constraints, beta):
+    active = [c for c in constraints if c.applies_to(problem.robot)]
+    for point in run.fallbacks:
+        beta = _polished(problem, point, options.tolerance)
+        if isinstance(beta, str):
+            continue
+        if broken_constraint(problem, constraints, beta):
+            at = _tightest(problem, _placed(active, imposed), beta, instants)
+            inside = nearest_root_within(problem, beta, imposed, at, options)
+            if not inside.honoured or broken_constraint(problem, constraints, inside.beta):
+                continue
+            beta = inside.beta
+        if lower(beta):
             return beta
-        at = _tightest(problem, placed, beta, instants)
-        inside = nearest_root_within(problem, beta, placed, at, options)
-        if inside.honoured and not broken_constraint(problem, constraints, inside.beta):
-            return inside.beta
     return None
 
 
@@ -211,14 +219,22 @@ def optimise(
         """The start stands (``note`` says why)."""
         return Optimised(beta0, start_value, start_value, iterations, False, note, ev.spent)
 
+    def fallback(run: _Run) -> np.ndarray | None:
+        """The best point a run that did not converge met, kept (:func:`_fallback_kept`)."""
+
+        def lower(beta: np.ndarray) -> bool:
+            return bool(objective.evaluate(unit, beta).value < start.value)
+
+        return _fallback_kept(problem, constraints, imposed, instants, run, options, lower)
+
     for _ in range(ROUNDS):
         run = _run(problem, ev, imposed, instants, z, max_iterations, options.tolerance)
         iterations += run.iterations
         if run.candidate is None:
-            fallback = _fallback_kept(problem, constraints, imposed, instants, run, options)
-            if fallback is None:
+            found = fallback(run)
+            if found is None:
                 return kept(run.note)
-            candidate = fallback
+            candidate = found
             break
         candidate, z = run.candidate, run.z
         broken = broken_constraint(problem, constraints, candidate)
@@ -237,16 +253,19 @@ def optimise(
             candidate = inside.beta
             break
         if not run.success:  # no point within the imposed rows: more instants will not help
-            fallback = _fallback_kept(problem, constraints, imposed, instants, run, options)
-            if fallback is None:
+            found = fallback(run)
+            if found is None:
                 return kept(f"breaks {broken}")
-            candidate = fallback  # the best point the run met within its rows
+            candidate = found  # the best point the run met within its rows
             break
     else:
         return kept(f"breaks {broken}")
     value = objective.evaluate(unit, candidate).value
     if not value < start.value and not broken_constraint(problem, constraints, beta0):
-        return kept("no lower value")
+        found = fallback(run)  # a run that did not converge may have met a lower point
+        if found is None:
+            return kept("no lower value")
+        candidate, value = found, objective.evaluate(unit, found).value
     return Optimised(candidate, value * at_t, start_value, iterations, True, "", ev.spent)
 
 
@@ -260,8 +279,9 @@ class _Run:
         iterations: SLSQP iterations spent.
         success: whether SLSQP says it converged.
         note: why there is no candidate ("" when there is one).
-        fallbacks: when SLSQP did not converge, the points of lowest objective it met within
-            every row (below the start's), polished onto the goal (rad or m), best first.
+        fallbacks: when SLSQP did not converge (or spent the evaluation budget), the points
+            of lowest objective it met within every row, below the start's (rad or m, not
+            polished), best first.
     """
 
     candidate: np.ndarray | None
@@ -298,9 +318,10 @@ def _run(
                 options={"ftol": 1e-12, "maxiter": int(max_iterations)},
             )
     except BudgetSpentError:
-        return _Run(None, z, 0, note=f"evaluation budget ({ev.budget}) spent")
+        note = f"evaluation budget ({ev.budget}) spent"
+        return _Run(None, z, 0, note=note, fallbacks=_fallbacks(ev, journal))
     nit, z = int(result.nit), np.asarray(result.x, dtype=float)
-    fallbacks = () if result.success else _fallbacks(problem, ev, journal, tolerance)
+    fallbacks = () if result.success else _fallbacks(ev, journal)
     candidate = _polished(problem, ev.to_beta(z), tolerance)
     if isinstance(candidate, str):
         return _Run(None, z, nit, note=candidate, fallbacks=fallbacks)
@@ -320,17 +341,13 @@ def _polished(problem: Problem, beta: np.ndarray, tolerance: float) -> np.ndarra
     return beta
 
 
-def _fallbacks(
-    problem: Problem, ev: Evaluations, journal: Journal, tolerance: float
-) -> tuple[np.ndarray, ...]:
-    """The best points a run that did not converge met within its rows, polished (rad or m).
+def _fallbacks(ev: Evaluations, journal: Journal) -> tuple[np.ndarray, ...]:
+    """The best points a run met within every row (rad or m), lowest objective first.
 
-    Of the :data:`FALLBACKS` points of lowest objective below the start's, those that polish
-    onto the goal, lowest objective first.
+    At most :data:`FALLBACKS`, each below the start's objective; polished only when used
+    (:func:`_fallback_kept`).
     """
-    best = journal.best(ev.start, FALLBACKS)
-    polished = [_polished(problem, ev.to_beta(z), tolerance) for z in best]
-    return tuple(beta for beta in polished if not isinstance(beta, str))
+    return tuple(ev.to_beta(z) for z in journal.best(ev.start, FALLBACKS))
 
 
 def _inequalities(
