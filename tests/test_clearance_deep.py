@@ -14,6 +14,7 @@ import freefloat as ff
 import freefloat.problem.constraints.clearance as clearance_module
 from freefloat.problem.constraints.clearance import Clearance
 from freefloat.robot.collision import CollisionModel, known_srdf
+from test_collision_bound import _Dip, _OnePath
 
 from conftest import ROOT
 
@@ -69,7 +70,7 @@ def test_the_smallest_clearance_of_a_path_deep_in_collision_is_the_dense_grids(
     assert halved.violation(problem, beta) == excess  # value, and time and pair in the detail
 
 
-class _TwoDips:
+class _TwoDips(_Dip):
     """A fake collision model along one joint, ``q = t`` over 1 s, 201 samples (closed form).
 
     Clearance (m): ``margin - 2 cm + |q - 0.25|`` (a dip seen: its minimum on sample 50) and
@@ -78,42 +79,15 @@ class _TwoDips:
     changes at most 40 m per rad (the weight).
     """
 
-    n_pairs, names, levers = 1, ["a-b"], None
-    weights = np.array([[40.0]])
     hidden = 150.5 / 200
 
     def __init__(self, margin: float) -> None:
-        self.margin = margin
-        self.rows = 0
+        super().__init__(margin, 0.0, np.array([[40.0]]))
 
-    def _values(self, q: np.ndarray) -> np.ndarray:
+    def values(self, q: np.ndarray) -> np.ndarray:
         seen = self.margin - 0.02 + np.abs(q - 0.25)
         hidden = self.margin - 0.05 + 40.0 * np.abs(q - self.hidden)
         return np.minimum(seen, hidden)
-
-    def closest_value(self, joints: np.ndarray, slot: float | None = None) -> tuple[float, int]:
-        self.rows += 1
-        return float(self._values(np.asarray(joints, float)[:1])[0]), 0
-
-    def own_bounds(self):
-        import contextlib
-
-        return contextlib.nullcontext()
-
-    def closest_many(self, joints: np.ndarray, slots=None):
-        from freefloat.robot.collision import Closest
-
-        values = self._values(np.asarray(joints, float)[:, 0])
-        self.rows += len(values)
-        return Closest(values, np.zeros(len(values), dtype=int), None, values[:, None])
-
-
-class _OnePath:
-    def __init__(self, path) -> None:
-        self.path = path
-
-    def polynomials(self, beta):
-        return self.path
 
 
 def test_a_deeper_dip_between_samples_than_the_deepest_sample_is_found(monkeypatch):

@@ -325,10 +325,15 @@ class _Dip:
 
     def __init__(self, margin: float, cap: float, weights: np.ndarray | None) -> None:
         self.margin, self.cap, self.weights = margin, cap, weights
+        self.rows = 0  # configurations asked about
+
+    def values(self, q: np.ndarray) -> np.ndarray:
+        """The clearance (m) at joint values ``q`` (rad)."""
+        return self.margin - 1e-3 + np.minimum(np.abs(q - 100.5 / 200), self.cap)
 
     def closest_value(self, joints: np.ndarray, slot: float | None = None) -> tuple[float, int]:
-        dip = abs(float(joints[0]) - 100.5 / 200)
-        return self.margin - 1e-3 + min(dip, self.cap), 0
+        self.rows += 1
+        return float(self.values(np.asarray(joints, float)[:1])[0]), 0
 
     def own_bounds(self):
         import contextlib
@@ -338,8 +343,8 @@ class _Dip:
     def closest_many(self, joints: np.ndarray, slots=None):
         from freefloat.robot.collision import Closest
 
-        dip = np.abs(np.asarray(joints, float)[:, 0] - 100.5 / 200)
-        values = self.margin - 1e-3 + np.minimum(dip, self.cap)
+        values = self.values(np.asarray(joints, float)[:, 0])
+        self.rows += len(values)
         return Closest(values, np.zeros(len(values), dtype=int), None, values[:, None])
 
 
