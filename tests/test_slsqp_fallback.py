@@ -16,7 +16,9 @@ import pytest
 import scipy.optimize
 
 import freefloat as ff
+from freefloat.solvers.optimise import FALLBACK_NOTE
 from freefloat.verify.checks import joint_torque_function
+from freefloat.viz.summary import objective_line
 
 from conftest import ROOT
 
@@ -81,6 +83,9 @@ def test_a_run_that_stops_short_keeps_the_best_point_within_its_rows(scenario, m
     effort = _effort(plan, scenario.robot)
     assert effort == pytest.approx(report.value, rel=1e-6)
     assert effort < 0.99 * start
+    note = f"{FALLBACK_NOTE} (Inequality constraints incompatible)"  # as the cut run ends
+    assert [level.note for level in report.levels][-1] == note
+    assert objective_line(plan).endswith(f"; found as {note}")
 
 
 def test_without_a_point_within_the_rows_the_minimum_norm_path_stands(scenario, monkeypatch):

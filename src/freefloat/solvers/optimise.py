@@ -50,7 +50,7 @@ from .rows import tightest_instants
 from .scaled import BudgetSpentError, Evaluations, scaled_coordinates
 from .sqp import Function, constraint_functions
 
-__all__ = ["ROUNDS", "Optimised", "optimise"]
+__all__ = ["FALLBACK_NOTE", "ROUNDS", "Optimised", "optimise"]
 
 #: Objective evaluations one call may spend by default (SLSQP's line searches included);
 #: beyond its budget the start stands.
@@ -68,6 +68,8 @@ ROUNDS = 8
 #: Points within the rows a run that did not converge is polished from, at most
 #: (:mod:`.iterates`).
 FALLBACKS = 3
+#: How a result taken from a run's fallbacks is recorded (the plan's objective levels).
+FALLBACK_NOTE = "the best point within its rows of an SLSQP run that did not converge"
 
 
 @dataclass(frozen=True)
@@ -80,7 +82,8 @@ class Optimised:
         start_value: the objective at ``beta_0`` (the same).
         iterations: SLSQP iterations.
         improved: whether ``beta`` differs from ``beta_0``.
-        note: why ``beta_0`` was kept, when it was.
+        note: why ``beta_0`` was kept, when it was; how ``beta`` was found, when it is the
+            best point of a run that did not converge (:func:`_fallback_kept`).
         evaluations: objective evaluations spent.
     """
 
@@ -227,6 +230,7 @@ def optimise(
 
         return _fallback_kept(problem, constraints, imposed, instants, run, options, lower)
 
+    how = ""  # how the result was found, when not as a run's own end
     for _ in range(ROUNDS):
         run = _run(problem, ev, imposed, instants, z, max_iterations, options.tolerance)
         iterations += run.iterations
@@ -234,7 +238,7 @@ def optimise(
             found = fallback(run)
             if found is None:
                 return kept(run.note)
-            candidate = found
+            candidate, how = found, _fallback_note(run)
             break
         candidate, z = run.candidate, run.z
         broken = broken_constraint(problem, constraints, candidate)
@@ -256,7 +260,7 @@ def optimise(
             found = fallback(run)
             if found is None:
                 return kept(f"breaks {broken}")
-            candidate = found  # the best point the run met within its rows
+            candidate, how = found, _fallback_note(run)  # the best it met within its rows
             break
     else:
         return kept(f"breaks {broken}")
@@ -265,8 +269,9 @@ def optimise(
         found = fallback(run)  # a run that did not converge may have met a lower point
         if found is None:
             return kept("no lower value")
-        candidate, value = found, objective.evaluate(unit, found).value
-    return Optimised(candidate, value * at_t, start_value, iterations, True, "", ev.spent)
+        candidate, how = found, _fallback_note(run)
+        value = objective.evaluate(unit, found).value
+    return Optimised(candidate, value * at_t, start_value, iterations, True, how, ev.spent)
 
 
 @dataclass(frozen=True)
@@ -279,6 +284,7 @@ class _Run:
         iterations: SLSQP iterations spent.
         success: whether SLSQP says it converged.
         note: why there is no candidate ("" when there is one).
+        stopped: why SLSQP stopped without converging ("" when it converged).
         fallbacks: when SLSQP did not converge (or spent the evaluation budget), the points
             of lowest objective it met within every row, below the start's (rad or m, not
             polished), best first.
@@ -290,6 +296,7 @@ class _Run:
     success: bool = False
     note: str = ""
     fallbacks: tuple[np.ndarray, ...] = ()
+    stopped: str = ""
 
 
 def _run(
@@ -319,13 +326,19 @@ def _run(
             )
     except BudgetSpentError:
         note = f"evaluation budget ({ev.budget}) spent"
-        return _Run(None, z, 0, note=note, fallbacks=_fallbacks(ev, journal))
+        return _Run(None, z, 0, note=note, fallbacks=_fallbacks(ev, journal), stopped=note)
     nit, z = int(result.nit), np.asarray(result.x, dtype=float)
     fallbacks = () if result.success else _fallbacks(ev, journal)
+    stopped = "" if result.success else str(result.message)
     candidate = _polished(problem, ev.to_beta(z), tolerance)
     if isinstance(candidate, str):
-        return _Run(None, z, nit, note=candidate, fallbacks=fallbacks)
-    return _Run(candidate, z, nit, bool(result.success), fallbacks=fallbacks)
+        return _Run(None, z, nit, note=candidate, fallbacks=fallbacks, stopped=stopped)
+    return _Run(candidate, z, nit, bool(result.success), fallbacks=fallbacks, stopped=stopped)
+
+
+def _fallback_note(run: _Run) -> str:
+    """The record of a result taken from a run's fallbacks (:class:`Optimised` ``note``)."""
+    return f"{FALLBACK_NOTE} ({run.stopped})"
 
 
 def _polished(problem: Problem, beta: np.ndarray, tolerance: float) -> np.ndarray | str:

@@ -18,6 +18,7 @@ from ..plans.guarantees import Verification
 from ..plans.versions import MONOMIAL_BASIS
 from ..problem.constraints import CONSTRAINTS
 from ..problem.scenario import Scenario
+from ..solvers.optimise import FALLBACK_NOTE
 from ..verify.segmented import segment_count
 from .robustness import robustness_line
 
@@ -279,6 +280,8 @@ def objective_line(p: Plan) -> str:
     notes = [level.note for level in o.levels if level.note]
     if o.name != "min_norm" and notes and o.value == o.start_value:  # the start path stood
         line += f"; the minimum-norm path kept: {notes[-1]}"
+    elif any(note.startswith(FALLBACK_NOTE) for note in notes):
+        line += "; found as " + next(n for n in notes if n.startswith(FALLBACK_NOTE))
     return line
 
 
