@@ -259,11 +259,11 @@ def optimise(
         if not run.success:  # no point within the imposed rows: more instants will not help
             found = fallback(run)
             if found is None:
-                return kept(f"breaks {broken}")
+                return kept(f"the minimised path breaks {broken}")
             candidate, how = found, _fallback_note(run)  # the best it met within its rows
             break
     else:
-        return kept(f"breaks {broken}")
+        return kept(f"the minimised path breaks {broken}")
     value = objective.evaluate(unit, candidate).value
     if not value < start.value and not broken_constraint(problem, constraints, beta0):
         found = fallback(run)  # a run that did not converge may have met a lower point
