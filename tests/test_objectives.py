@@ -259,7 +259,10 @@ def test_a_kept_minimum_norm_path_is_said_on_the_objective_line() -> None:
     from freefloat.viz.summary import objective_line
 
     plan = ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "worked_example.toml"))
-    why = "the minimised path breaks clearance (min clearance -1.17 m (a / b) at t = 3 s, margin 0.01 m)"
+    why = (
+        "the minimised path breaks clearance (min clearance -1.17 m (a / b) at t = 3 s, "
+        "margin 0.01 m)"
+    )
     kept = dataclasses.replace(
         plan.objective,
         name="min_effort",
