@@ -117,3 +117,21 @@ def test_the_journal_lists_points_within_every_row_lowest_objective_first():
     best = journal.best(5.0, 3)
     assert [list(z) for z in best] == [[0.2, 0.1], [1.0, 0.5]]
     assert [list(z) for z in journal.best(1.0, 3)] == [[0.2, 0.1]]
+
+
+def test_corrections_that_fail_numerically_leave_a_verified_plan(scenario, monkeypatch):
+    """The least-norm corrections raising (as a point far off may make them) neither stop the
+    plan nor let a path within no constraint through: the plan verifies, and its effort is at
+    most the minimum-norm path's."""
+    import numpy.linalg
+
+    import freefloat.solvers.optimise as optimise
+
+    def failing(*args, **kwargs):  # type: ignore[no-untyped-def]
+        raise numpy.linalg.LinAlgError("SVD did not converge")
+
+    monkeypatch.setattr(scipy.optimize, "minimize", _stopping_short(4, "far"))
+    monkeypatch.setattr(optimise, "nearest_root_within", failing)
+    plan = ff.plan(scenario, objective="min_effort")
+    assert plan.verification.passed
+    assert plan.objective.value <= plan.objective.start_value

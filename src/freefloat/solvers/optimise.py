@@ -19,10 +19,8 @@ extremes, say), and are held :data:`BACKOFF` tolerances inside the limit, so tha
 reached at a row is not broken between rows by more than its tolerance. When a result still
 breaks an imposed constraint, its tightest instants are added and the nearest root within
 them is tried (least-norm corrections, :func:`.least_norm.nearest_root_within`); if that
-fails, the run is repeated from there (at most :data:`ROUNDS` runs). A run that SLSQP ends
-without converging ("Inequality constraints incompatible", its last point perhaps deep in
-collision) falls back on the points of lowest objective it met within every row
-(:mod:`.iterates`), polished, and brought inside where they break a constraint between rows.
+fails, the run is repeated from there (at most :data:`ROUNDS` runs). A run SLSQP ends without
+converging falls back on the best points it met within every row (:mod:`.iterates`).
 
 The result is polished back onto ``h = 0`` by minimum-norm Newton steps and kept only if it
 honours every constraint and lowers the objective (or ``beta_0`` broke a constraint);
@@ -141,11 +139,10 @@ def _fallback_kept(
     options: SolveOptions,
     lower: Callable[[np.ndarray], bool],
 ) -> np.ndarray | None:
-    """The first of a run's fallbacks that is a root within every constraint and ``lower``.
+    """The first of a run's fallbacks, polished, within every constraint and ``lower``.
 
-    Each is polished onto the goal; one that breaks a constraint between the rows' instants
-    is first brought inside by least-norm corrections at its tightest instants, as a run's
-    own result is; ``lower`` says whether a path's objective is below the start's (rad or m).
+    One that breaks a constraint between the rows' instants is first brought inside at its
+    tightest instants, as a run's own result is (:func:`_inside`; rad or m).
     """
     active = [c for c in constraints if c.applies_to(problem.robot)]
     for point in run.fallbacks:
@@ -154,13 +151,28 @@ def _fallback_kept(
             continue
         if broken_constraint(problem, constraints, beta):
             at = _tightest(problem, _placed(active, imposed), beta, instants)
-            inside = nearest_root_within(problem, beta, imposed, at, options)
-            if not inside.honoured or broken_constraint(problem, constraints, inside.beta):
+            inside = _inside(problem, beta, imposed, at, options)
+            if inside is None or broken_constraint(problem, constraints, inside):
                 continue
-            beta = inside.beta
+            beta = inside
         if lower(beta):
             return beta
     return None
+
+
+def _inside(
+    problem: Problem,
+    beta: np.ndarray,
+    imposed: Sequence[Constraint],
+    instants: np.ndarray,
+    options: SolveOptions,
+) -> np.ndarray | None:
+    """:func:`.least_norm.nearest_root_within`'s root if honoured, else None (rad or m)."""
+    try:
+        inside = nearest_root_within(problem, beta, imposed, instants, options)
+    except (np.linalg.LinAlgError, FloatingPointError, ValueError):
+        return None
+    return inside.beta if inside.honoured else None
 
 
 def _reaches(problem: Problem, constraint: Constraint, beta: np.ndarray) -> bool:
@@ -224,10 +236,7 @@ def optimise(
 
     def fallback(run: _Run) -> np.ndarray | None:
         """The best point a run that did not converge met, kept (:func:`_fallback_kept`)."""
-
-        def lower(beta: np.ndarray) -> bool:
-            return bool(objective.evaluate(unit, beta).value < start.value)
-
+        lower = lambda beta: bool(objective.evaluate(unit, beta).value < start.value)  # noqa: E731
         return _fallback_kept(problem, constraints, imposed, instants, run, options, lower)
 
     how = ""  # how the result was found, when not as a run's own end
@@ -252,9 +261,9 @@ def optimise(
         # Rows hold at the instants but not between them (or the run stopped short of them):
         # add the path's tightest instants and first try the nearest root within them.
         instants = _tightest(problem, _placed(active, imposed), candidate, instants)
-        inside = nearest_root_within(problem, candidate, imposed, instants, options)
-        if inside.honoured and not broken_constraint(problem, constraints, inside.beta):
-            candidate = inside.beta
+        inside = _inside(problem, candidate, imposed, instants, options)
+        if inside is not None and not broken_constraint(problem, constraints, inside):
+            candidate = inside
             break
         if not run.success:  # no point within the imposed rows: more instants will not help
             found = fallback(run)
@@ -355,11 +364,7 @@ def _polished(problem: Problem, beta: np.ndarray, tolerance: float) -> np.ndarra
 
 
 def _fallbacks(ev: Evaluations, journal: Journal) -> tuple[np.ndarray, ...]:
-    """The best points a run met within every row (rad or m), lowest objective first.
-
-    At most :data:`FALLBACKS`, each below the start's objective; polished only when used
-    (:func:`_fallback_kept`).
-    """
+    """The :data:`FALLBACKS` best points (below the start's) a run met within every row."""
     return tuple(ev.to_beta(z) for z in journal.best(ev.start, FALLBACKS))
 
 
