@@ -119,8 +119,8 @@ def test_compact_page_keeps_every_scene_command(worked_plan):
     from freefloat.viz.compact import compact_page
     from freefloat.viz.playback import build_playback
 
-    with build_playback(worked_plan) as playback:
-        original = playback.html()
+    playback = build_playback(worked_plan)
+    original = playback.html()
     found = re.findall(r"base64,([A-Za-z0-9+/=]+)\"\)", original)
     compact = compact_page(original)
     packed = json.loads(re.search(r"const commands = (\[.*?\]);", compact).group(1))

@@ -8,7 +8,8 @@ import numpy as np
 
 import freefloat as ff
 from freefloat.robot.compose import ServicerSpec, compose_servicer
-from freefloat.viz.playback import MISSING_MESH_RADIUS, _visual_model, build_playback, write_html
+from freefloat.viz.playback import build_playback, write_html
+from freefloat.viz.visuals import MISSING_MESH_RADIUS, visual_model
 
 from conftest import ROOT
 
@@ -41,9 +42,9 @@ def test_plan_and_playback_draw_a_sphere_for_the_missing_mesh(tmp_path, caplog, 
     plan = ff.plan(ff.Scenario.from_toml(path))
     np.testing.assert_allclose(plan.samples.q, worked_plan.samples.q, atol=1e-12)
     with caplog.at_level(logging.WARNING, logger="freefloat"):
-        visual = _visual_model(ff.load_robot(urdf))
-        with build_playback(plan) as playback:
-            nodes = set(playback.frames[0])
+        visual = visual_model(ff.load_robot(urdf))
+        playback = build_playback(plan)
+        nodes = set(playback.frames[0])
         page = write_html(plan, tmp_path / "page.html")
     link1 = next(g for g in visual.geometryObjects if g.name.startswith("link1"))
     assert type(link1.geometry).__name__ == "Sphere"

@@ -101,13 +101,13 @@ def test_shipped_dual_scenario_plans_and_verifies(dual_plan):
 @pytest.mark.slow
 def test_shipped_dual_plan_plays_back_every_end_effector(dual_plan):
     _, plan = dual_plan
-    with build_playback(plan) as playback:
-        clips = playback.animation.clips
-        for node, frame in ((f"{EXTRAS}/end_effector", 0), (f"{EXTRAS}/end_effector_2", 1)):
-            clip = next(c for path, c in clips.items() if path.lower().endswith(node))
-            positions = np.array(clip.tracks["position"].values)
-            path = plan.samples.end_effector_paths[plan.robot.end_effectors[frame]]
-            np.testing.assert_allclose(positions, np.asarray(path), atol=1e-9)
+    playback = build_playback(plan)
+    clips = playback.animation.clips
+    for node, frame in ((f"{EXTRAS}/end_effector", 0), (f"{EXTRAS}/end_effector_2", 1)):
+        clip = next(c for path, c in clips.items() if path.lower().endswith(node))
+        positions = np.array(clip.tracks["position"].values)
+        path = plan.samples.end_effector_paths[plan.robot.end_effectors[frame]]
+        np.testing.assert_allclose(positions, np.asarray(path), atol=1e-9)
 
 
 @pytest.mark.slow

@@ -24,8 +24,7 @@ def _servers() -> int:
 
 @pytest.fixture(scope="module")
 def playback(worked_plan):
-    with build_playback(worked_plan) as pb:
-        yield pb
+    return build_playback(worked_plan)
 
 
 def _track(playback, node, prop):
@@ -157,11 +156,11 @@ def test_browser_plays_a_composed_servicer_with_meshes(tmp_path):
     plan = ff.plan(
         ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml"), samples=61
     )
-    with build_playback(plan) as pb:
-        meshes = [name for name in pb.frames[0] if "shoulder" in name or "forearm" in name]
-        assert meshes  # the UR5's mesh visuals are animated
-        _, positions = _track(pb, f"{EXTRAS}/base_frame", "position")
-        np.testing.assert_allclose(positions, np.array(plan.samples.base_position), atol=1e-12)
+    pb = build_playback(plan)
+    meshes = [name for name in pb.frames[0] if "shoulder" in name or "forearm" in name]
+    assert meshes  # the UR5's mesh visuals are animated
+    _, positions = _track(pb, f"{EXTRAS}/base_frame", "position")
+    np.testing.assert_allclose(positions, np.array(plan.samples.base_position), atol=1e-12)
     page = write_html(plan, tmp_path / "ur5.html")
     text = page.read_text()
     assert "set_object" in text and len(text) > 1_000_000  # meshes are embedded

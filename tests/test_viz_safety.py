@@ -67,18 +67,18 @@ def _quat_matrix(xyzw) -> np.ndarray:
 
 def test_obstacles_move_with_the_spacecraft(guarded_plan):
     s = guarded_plan.samples
-    with build_playback(guarded_plan) as pb:
-        for record in (PANEL, BALL, ROD):
-            node = obstacle_node(record.name)
-            local = _pose(record.xyz, record.rpy)
-            for k in range(0, len(s.t), 25):
-                base = np.eye(4)
-                base[:3, :3] = _quat_matrix(s.base_quaternion_xyzw[k])
-                base[:3, 3] = s.base_position[k]
-                np.testing.assert_allclose(pb.frames[k][node], base @ local, atol=1e-12)
-        # the base turns during the plan, so the obstacles do too
-        first, last = pb.frames[0][obstacle_node("panel")], pb.frames[-1][obstacle_node("panel")]
-        assert np.abs(first[:3, :3] - last[:3, :3]).max() > 1e-3
+    pb = build_playback(guarded_plan)
+    for record in (PANEL, BALL, ROD):
+        node = obstacle_node(record.name)
+        local = _pose(record.xyz, record.rpy)
+        for k in range(0, len(s.t), 25):
+            base = np.eye(4)
+            base[:3, :3] = _quat_matrix(s.base_quaternion_xyzw[k])
+            base[:3, 3] = s.base_position[k]
+            np.testing.assert_allclose(pb.frames[k][node], base @ local, atol=1e-12)
+    # the base turns during the plan, so the obstacles do too
+    first, last = pb.frames[0][obstacle_node("panel")], pb.frames[-1][obstacle_node("panel")]
+    assert np.abs(first[:3, :3] - last[:3, :3]).max() > 1e-3
 
 
 def test_standalone_html_contains_the_obstacles(guarded_plan, tmp_path):
@@ -131,8 +131,8 @@ def test_standalone_html_contains_the_obstacles(guarded_plan, tmp_path):
 
 
 def test_plan_without_obstacles_draws_none(worked_plan):
-    with build_playback(worked_plan) as pb:
-        assert not [name for name in pb.frames[0] if "/obstacles/" in name]
+    pb = build_playback(worked_plan)
+    assert not [name for name in pb.frames[0] if "/obstacles/" in name]
 
 
 #: The worked example's planar arm with collision shapes: a base box and a ball at the tip.

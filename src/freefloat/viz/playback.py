@@ -1,23 +1,20 @@
 """Browser 3D playback of a plan in MeshCat (a visualisation leaf: it only reads a plan).
 
-The robot's visual geometry (URDF primitives or meshes) is drawn by Pinocchio's
-``MeshcatVisualizer``; each sample of the plan becomes one animation frame that places every
-visual (base and arm together), so meshcat's animation controls play, pause and scrub it.
+The robot's visual geometry (URDF primitives or meshes) is drawn as meshcat objects
+(:mod:`freefloat.viz.visuals`); each sample of the plan becomes one animation frame that places
+every visual (base and arm together), so meshcat's animation controls play, pause and scrub it.
 Also drawn: the end-effector trail, the system centre of mass (a fixed point at the origin),
 the inertial axes and the base frame's axes. A link whose mesh file cannot be found is drawn
 as a small sphere, with a warning (the dynamics never need the meshes). The plan's keep-out
 objects (``plan.safety.obstacles``) are drawn semi-transparent red, fixed to the spacecraft
 (animated with the base pose; a capsule is a cylinder and two spheres).
 
-meshcat 0.3.2 quirks handled here: the scene can only be exported (``static_html``) while its
-server subprocess runs, and ``Visualizer.close()`` raises; :class:`Playback` stops the server
-itself (:meth:`Playback.close`, also on exit from a ``with`` block).
+The scene is kept in this process (:class:`~freefloat.viz.scene.RecordedScene` as the
+viewer's window): no meshcat server is started, and the page is written from the kept scene.
 """
 
 from __future__ import annotations
 
-import contextlib
-import io
 import logging
 import time
 from dataclasses import dataclass, field
@@ -32,7 +29,7 @@ from ..files import atomic_write_text
 from ..plans.format import Plan
 from ..plans.robot_copy import plan_robot
 from ..robot.collision import Obstacle
-from ..robot.model import Robot, example_robot_data_dir
+from ..robot.model import Robot
 from .controls import CM_COLOR, EE_COLOR, TRAIL_COLOR
 
 __all__ = ["Playback", "build_playback", "serve", "write_html"]
@@ -51,97 +48,41 @@ ON_TOP = {"depthTest": False, "transparent": True, "opacity": 0.95}
 OBSTACLE_OPACITY = 0.35
 
 
-def _import_viewer() -> tuple[Any, Any]:
+def _import_viewer() -> Any:
+    """The meshcat package (its animation and geometry modules loaded), or a one-line error."""
     try:
         import meshcat
         import meshcat.animation
         import meshcat.geometry
-        from pinocchio.visualize import MeshcatVisualizer
     except Exception as exc:
         raise ViewerError(
             f"the 3D viewer needs meshcat, which failed to import ({type(exc).__name__}: {exc});"
             " reinstall it with: pip install 'meshcat>=0.3.2'"
         ) from None
-    return meshcat, MeshcatVisualizer
+    return meshcat
 
 
 @dataclass(eq=False)
 class Playback:
-    """An animated plan inside a running meshcat server.
+    """An animated plan in a meshcat scene kept in this process.
 
     Attributes:
-        viewer: the ``meshcat.Visualizer`` (its server is a subprocess of this one).
+        viewer: the ``meshcat.Visualizer``; its window is a
+            :class:`~freefloat.viz.scene.RecordedScene` (no server).
         animation: the ``meshcat.animation.Animation`` sent to the viewer.
-        url: web address of the viewer.
         frames: per animation frame, the 4 x 4 pose (inertial frame) of every animated node,
             keyed by meshcat path; the base frame is ``freefloat_extras/base_frame``.
         fps: animation frames per second of animation time (samples per second x speed).
     """
 
     viewer: Any
-    url: str
     frames: list[dict[str, np.ndarray]] = field(default_factory=list)
     fps: float = 30.0
     animation: Any = None
 
     def html(self) -> str:
-        """Self-contained HTML of the scene and its animation (the server must be running)."""
-        return str(self.viewer.static_html())
-
-    def close(self) -> None:
-        """Stop the meshcat server subprocess (``Visualizer.close()`` raises in meshcat 0.3.2)."""
-        proc = getattr(self.viewer.window, "server_proc", None)
-        if proc is not None and proc.poll() is None:
-            proc.kill()
-            proc.wait(timeout=10)
-        socket = getattr(self.viewer.window, "zmq_socket", None)
-        if socket is not None:
-            socket.close(linger=0)
-
-    def __enter__(self) -> Playback:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-
-#: Radius (m) of the sphere drawn for a link whose mesh file cannot be found.
-MISSING_MESH_RADIUS = 0.04
-
-
-def _mesh_found(name: str, robot: Robot) -> bool:
-    """Whether a URDF mesh reference resolves to a file (as Pinocchio would look it up)."""
-    if name.startswith("package://"):
-        rest = name[len("package://") :]
-        folders = [*robot.package_dirs, example_robot_data_dir()]
-        return any(d is not None and (Path(d) / rest).is_file() for d in folders)
-    path = Path(name[len("file://") :] if name.startswith("file://") else name)
-    return (path if path.is_absolute() else Path(robot.urdf).parent / path).is_file()
-
-
-def _with_simple_shapes(robot: Robot) -> tuple[str | None, list[str]]:
-    """The URDF text with every missing visual mesh replaced by a small sphere, and the names.
-
-    Returns ``(None, [])`` when every mesh is found (the file is used as it is).
-    """
-    import xml.etree.ElementTree as ET
-
-    try:
-        root = ET.fromstring(robot.urdf_text or Path(robot.urdf).read_text(encoding="utf-8"))
-    except (OSError, ET.ParseError):
-        return None, []
-    missing = []
-    for visual in root.iter("visual"):
-        geometry = visual.find("geometry")
-        mesh = geometry.find("mesh") if geometry is not None else None
-        if geometry is None or mesh is None or _mesh_found(mesh.get("filename", ""), robot):
-            continue
-        missing.append(mesh.get("filename", ""))
-        geometry.remove(mesh)
-        ET.SubElement(geometry, "sphere", radius=repr(MISSING_MESH_RADIUS))
-    if not missing:
-        return None, []
-    return ET.tostring(root, encoding="unicode"), missing
+        """Self-contained HTML of the scene and its animation (meshcat's standalone page)."""
+        return str(self.viewer.window.get_scene())
 
 
 #: Colours of the end-effector trails, in end-effector order.
@@ -152,36 +93,6 @@ def _tip_nodes(count: int) -> list[tuple[str, str]]:
     """Viewer nodes (trail, marker) per end effector: the first unnumbered, then ``_2``..."""
     tags = [""] + [f"_{k}" for k in range(2, count + 1)]
     return [(f"{EXTRAS}/trail{tag}", f"{EXTRAS}/end_effector{tag}") for tag in tags[:count]]
-
-
-def _visual_model(robot: Robot) -> pin.GeometryModel:
-    text, missing = _with_simple_shapes(robot)
-    if missing:
-        LOGGER.warning(
-            "%d mesh file(s) of %s cannot be found (e.g. %s); those links are drawn as "
-            "spheres of %g m",
-            len(missing),
-            Path(robot.urdf).name,
-            missing[0],
-            MISSING_MESH_RADIUS,
-        )
-    try:
-        text = text if text is not None else robot.urdf_text
-        if text:  # the text the robot was loaded from (a plan's copy of its URDF)
-            return pin.buildGeomFromUrdfString(
-                robot.model,
-                text,
-                pin.GeometryType.VISUAL,
-                package_dirs=[str(d) for d in robot.package_dirs],
-            )
-        return pin.buildGeomFromUrdf(
-            robot.model,
-            str(robot.urdf),
-            pin.GeometryType.VISUAL,
-            package_dirs=[str(d) for d in robot.package_dirs],
-        )
-    except (RuntimeError, ValueError) as exc:
-        raise ViewerError(f"cannot load the visual geometry of {robot.urdf}: {exc}") from None
 
 
 def obstacle_node(name: str) -> str:
@@ -214,7 +125,7 @@ def _draw_obstacle(viewer: Any, g: Any, node: str, obstacle: Obstacle) -> None:
 
 
 def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -> Playback:
-    """Start a meshcat server and load the plan's animation into it.
+    """Draw the plan's robot, extras and animation into a meshcat scene kept in this process.
 
     Args:
         plan: the plan to show.
@@ -229,30 +140,23 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
 
     if not (np.isfinite(speed) and speed > 0):
         raise InputError(f"--speed must be a positive number, got {speed}")
-    meshcat, meshcat_visualizer = _import_viewer()
+    meshcat = _import_viewer()
     from meshcat.animation import Animation
 
+    from .scene import RecordedScene
+    from .visuals import draw_visuals, visual_model
+
     robot = robot or plan_robot(plan)
-    visual = _visual_model(robot)
+    visual = visual_model(robot)
     samples = plan.samples
     n = len(samples.t)
     fps = (n - 1) / plan.duration * speed if n > 1 else 30.0
-
+    viewer = meshcat.Visualizer(window=RecordedScene())
+    playback = Playback(viewer=viewer, fps=fps)
     try:
-        with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL; we report it
-            viewer = meshcat.Visualizer()
-    except Exception as exc:
-        raise ViewerError(f"the meshcat server failed to start: {exc}") from None
-    playback = Playback(viewer=viewer, url=str(viewer.url()), fps=fps)
-    try:
-        # No collision group: the page would carry every mesh twice.
-        viz = meshcat_visualizer(robot.model, pin.GeometryModel(), visual)
-        viz.initViewer(viewer=viewer)
-        viz.loadViewerModel(rootNodeName=ROOT_NODE)
-
+        nodes = draw_visuals(viewer, visual, ROOT_NODE)
         obstacles, tips = _draw_extras(viewer, plan, robot)
         base_link = robot.model.getFrameId(robot.base_link)
-
         animation = Animation(default_framerate=fps)
         data, gdata = robot.model.createData(), visual.createData()
         ee_frames = robot.end_effector_frames
@@ -263,10 +167,7 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
             pin.forwardKinematics(robot.model, data, q)
             pin.updateFramePlacements(robot.model, data)
             pin.updateGeometryPlacements(robot.model, data, visual, gdata)
-            poses: dict[str, np.ndarray] = {}
-            for index, obj in enumerate(visual.geometryObjects):
-                name = viz.getViewerNodeName(obj, pin.GeometryType.VISUAL)
-                poses[name] = gdata.oMg[index].homogeneous.copy()
+            poses = {node: gdata.oMg[i].homogeneous.copy() for i, node in enumerate(nodes)}
             base = np.eye(4)
             base[:3, :3] = pin.Quaternion(np.asarray(samples.base_quaternion_xyzw[k])).matrix()
             base[:3, 3] = samples.base_position[k]
@@ -281,17 +182,14 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
             with animation.at_frame(viewer, k) as frame:
                 for name, pose in poses.items():
                     frame[name].set_transform(pose)
-            if k == 0:  # static placement too (keeps mesh scales; animation sets pose only)
-                viz.display(q)
-                for name in (f"{EXTRAS}/base_frame", *(t for _, t in tips), *obstacles):
-                    viewer[name].set_transform(poses[name])
+            if k == 0:  # the static placement too: the page shows it before the animation
+                for name, pose in poses.items():
+                    viewer[name].set_transform(pose)
         viewer.set_animation(animation, play=True, repetitions=LOOPS)
         playback.animation = animation
     except FreeFloatError:
-        playback.close()
         raise
     except Exception as exc:
-        playback.close()
         raise ViewerError(f"the 3D viewer failed: {type(exc).__name__}: {exc}") from None
     return playback
 
@@ -349,9 +247,7 @@ def page_html(plan: Plan, speed: float = 1.0) -> str:
     from .compact import compact_page
     from .controls import inject_controls
 
-    with build_playback(plan, speed) as playback:
-        html = playback.html()
-    return inject_controls(compact_page(html), plan, speed)
+    return inject_controls(compact_page(build_playback(plan, speed).html()), plan, speed)
 
 
 def write_html(plan: Plan, path: str | Path, speed: float = 1.0) -> Path:

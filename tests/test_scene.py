@@ -1,0 +1,135 @@
+"""The scene kept in this process against meshcat's own server, and the robot's visuals
+against Pinocchio's meshcat visualizer (two other implementations of the same pages)."""
+
+from __future__ import annotations
+
+import base64
+import contextlib
+import io
+import re
+
+import meshcat
+import meshcat.animation
+import meshcat.geometry as g
+import numpy as np
+import pinocchio as pin
+import pytest
+import umsgpack
+
+import freefloat as ff
+from freefloat.viz.scene import RecordedScene
+from freefloat.viz.visuals import draw_visuals, visual_model
+
+from conftest import ROOT
+
+_EMBEDDED = re.compile(r'fetch\("data:application/octet-binary;base64,([A-Za-z0-9+/=]*)"\)')
+
+
+def _commands(page: str) -> list[dict]:
+    """The scene commands a standalone page embeds, decoded, in page order."""
+    return [umsgpack.unpackb(base64.b64decode(m)) for m in _EMBEDDED.findall(page)]
+
+
+def _draw(viewer) -> None:
+    """Every kind of command, with the cases the server's rules decide: a property dropped by
+    a new object, a transform replaced, a subtree deleted, the root's own animation."""
+    viewer["a/box"].set_object(g.Box([0.1, 0.2, 0.3]), g.MeshLambertMaterial(color=0xFF0000))
+    viewer["a/box"].set_property("visible", False)
+    viewer["a/box"].set_object(g.Sphere(0.2))  # a new object: the property goes
+    viewer["a/box"].set_property("opacity", 0.5)
+    viewer["a/box"].set_transform(np.diag([1.0, 2.0, 3.0, 1.0]))
+    viewer["a/box"].set_transform(np.eye(4))  # the later transform stays
+    viewer["a/gone/deep"].set_object(g.Sphere(0.1))
+    viewer["a/gone"].delete()
+    viewer["b"].set_object(g.Cylinder(0.4, 0.1))
+    animation = meshcat.animation.Animation()
+    for k in range(3):
+        with animation.at_frame(viewer, k) as frame:
+            pose = np.eye(4)
+            pose[0, 3] = 0.1 * k
+            frame["b"].set_transform(pose)
+    viewer.set_animation(animation, play=True, repetitions=5)
+
+
+def test_the_kept_scene_writes_the_page_meshcats_server_writes():
+    with contextlib.redirect_stdout(io.StringIO()):
+        served = meshcat.Visualizer()
+    try:
+        kept = meshcat.Visualizer(window=RecordedScene())
+        _draw(served)
+        _draw(kept)
+        want = _commands(served.static_html())
+        got = _commands(kept.window.get_scene())
+    finally:
+        served.window.server_proc.kill()
+        served.window.server_proc.wait(timeout=10)
+    # the objects are drawn twice, each draw with its own identifiers: compare without them
+    assert [_without_ids(c) for c in got] == [_without_ids(c) for c in want]
+    kinds = [c["type"] for c in got]
+    assert kinds.count("set_animation") == 1 and kinds.count("set_property") == 1
+    assert not any("gone" in c["path"] for c in got)
+
+
+def _without_ids(data):
+    """``data`` without meshcat's identifiers (fresh for every object drawn)."""
+    if isinstance(data, dict):
+        ids = ("uuid", "geometry", "material")
+        return {k: _without_ids(v) for k, v in data.items() if k not in ids}
+    if isinstance(data, list):
+        return [_without_ids(v) for v in data]
+    return data
+
+
+def _world_matrices(page: str) -> dict[str, tuple[np.ndarray, dict]]:
+    """Per drawn node: its transform times its object's own matrix (three.js reads both
+    column by column), and the object's first geometry or its mesh file."""
+    objects, transforms = {}, {}
+    for command in _commands(page):
+        if command["type"] == "set_object":
+            objects[command["path"]] = command["object"]
+        elif command["type"] == "set_transform":
+            transforms[command["path"]] = np.reshape(command["matrix"], (4, 4)).T
+    out = {}
+    for path, obj in objects.items():
+        own = np.reshape(obj["object"]["matrix"], (4, 4)).T
+        shape = obj["geometries"][0] if obj["geometries"] else obj["object"]
+        out[path] = (transforms.get(path, np.eye(4)) @ own, shape)
+    return out
+
+
+@pytest.mark.parametrize("urdf", ["panda_servicer.urdf", "ur5_servicer.urdf", "planar_2dof.urdf"])
+def test_visuals_are_where_pinocchios_visualizer_puts_them(urdf):
+    """The same robot drawn at one configuration by Pinocchio's MeshcatVisualizer and by
+    :func:`draw_visuals`: every visual node holds the same shape (box and sphere sizes, a
+    cylinder's radius and height, a mesh file's text or bytes), at the same place once its
+    transform and its object's own matrix are combined (Pinocchio scales the transform, this
+    project the object). A cylinder's axis may come out flipped: it is symmetric."""
+    from pinocchio.visualize import MeshcatVisualizer
+
+    robot = ff.load_robot(ROOT / "robots" / urdf)
+    visual = visual_model(robot)
+    q = robot.configuration(np.linspace(-0.7, 0.9, robot.n))
+    theirs = meshcat.Visualizer(window=RecordedScene())
+    viz = MeshcatVisualizer(robot.model, pin.GeometryModel(), visual)
+    viz.initViewer(viewer=theirs)
+    viz.loadViewerModel(rootNodeName="robot")
+    viz.display(q)
+    mine = meshcat.Visualizer(window=RecordedScene())
+    nodes = draw_visuals(mine, visual, "robot")
+    data, gdata = robot.model.createData(), visual.createData()
+    pin.forwardKinematics(robot.model, data, q)
+    pin.updateGeometryPlacements(robot.model, data, visual, gdata)
+    for i, node in enumerate(nodes):
+        mine[node].set_transform(gdata.oMg[i].homogeneous)
+    want = _world_matrices(theirs.window.get_scene())
+    got = _world_matrices(mine.window.get_scene())
+    assert set(got) == set(want) and len(got) == len(visual.geometryObjects)
+    for path, (matrix, shape) in got.items():
+        their_matrix, their_shape = want[path]
+        keys = ("type", "width", "height", "depth", "radius", "radiusTop", "radiusBottom", "data")
+        assert {k: shape.get(k) for k in keys} == {k: their_shape.get(k) for k in keys}, path
+        if shape.get("type") == "CylinderGeometry":  # the axis either way up
+            their_matrix = their_matrix.copy()
+            flip = np.abs(their_matrix[:3, 1] + matrix[:3, 1]).max() < 1e-12
+            their_matrix[:3, 1:3] *= -1.0 if flip else 1.0
+        np.testing.assert_allclose(matrix, their_matrix, atol=1e-12, err_msg=path)
