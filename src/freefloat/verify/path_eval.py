@@ -6,7 +6,8 @@ disagreement:
 
 - format 4 (``path.basis = "quintic+jacobi66"``): the quintic between the requested start and
   goal plus ``sum_n beta_n c_n s^3 (1 - s)^3 P_n^(6,6)(2 s - 1)``, with the Jacobi polynomials
-  of :func:`scipy.special.eval_jacobi`, ``c_n`` from its closed form, and the derivatives from
+  as rescaled Gegenbauer polynomials (their own recurrence; the tests hold them to
+  :func:`scipy.special.eval_jacobi`), ``c_n`` from its closed form, and the derivatives from
   ``d/dx P_n^(a,b) = (n + a + b + 1) / 2 P_{n-1}^(a+1,b+1)`` and the product rule;
 - older formats: the stored monomials in t, by Horner's rule (:func:`numpy.polynomial`).
 
@@ -44,12 +45,35 @@ def _scales(count: int) -> np.ndarray:
 
 
 def _jacobi(n: np.ndarray, shift: int, x: np.ndarray) -> np.ndarray:
-    """``P_{n - shift}^(6 + shift, 6 + shift)(x)`` (zero where ``n < shift``), (len(x), len(n))."""
-    from scipy.special import eval_jacobi  # when needed: it costs start-up time
+    """``P_{n - shift}^(6 + shift, 6 + shift)(x)`` (zero where ``n < shift``), (len(x), len(n)).
 
+    A symmetric Jacobi polynomial is a Gegenbauer polynomial rescaled,
+    ``P_m^(a,a)(x) = (a + 1)_m / (2 a + 1)_m C_m^(a + 1/2)(x)``, and the Gegenbauer
+    polynomials follow their own recurrence ``m C_m = 2 (m + l - 1) x C_{m-1} - (m + 2 l - 2)
+    C_{m-2}`` (``l = a + 1/2``, ``C_0 = 1``, ``C_1 = 2 l x``): another route than the planner's
+    Jacobi recurrence on Chebyshev coefficients (:func:`~freefloat.problem.basis.basis_chebyshev`).
+    """
+    a = 6 + shift
+    lam = a + 0.5
     m = n - shift
-    values = eval_jacobi(np.maximum(m, 0)[None, :], 6 + shift, 6 + shift, x[:, None])
-    return np.where(m[None, :] >= 0, values, 0.0)
+    count = max(int(m.max()) + 1, 1) if len(m) else 1
+    values = np.empty((len(x), count))
+    values[:, 0] = 1.0
+    if count > 1:
+        values[:, 1] = 2.0 * lam * x
+    for k in range(2, count):
+        values[:, k] = (
+            2.0 * (k + lam - 1.0) * x * values[:, k - 1] - (k + 2.0 * lam - 2.0) * values[:, k - 2]
+        ) / k
+    k = np.arange(count)
+    # (a + 1)_k / (2 a + 1)_k, by log-gamma
+    ratio = np.exp(
+        np.array([math.lgamma(a + 1 + j) - math.lgamma(2 * a + 1 + j) for j in k])
+        - (math.lgamma(a + 1) - math.lgamma(2 * a + 1))
+    )
+    table = values * ratio
+    picked = table[:, np.clip(m, 0, count - 1)]
+    return np.where(m[None, :] >= 0, picked, 0.0)
 
 
 @dataclass(frozen=True)
