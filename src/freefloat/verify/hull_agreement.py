@@ -5,8 +5,12 @@ geometry code:
 
 - **shapes**, once per mesh and independent of any configuration: every mesh vertex lies
   inside the solver's hull, and every hull vertex inside the convex hull of the mesh's
-  vertices (SciPy's qhull, each face plane's signed distance), both to
-  :data:`~freefloat.verify.clearance.HULL_TOLERANCE` (:func:`shape_excess`);
+  vertices (each facet plane's signed distance), both to
+  :data:`~freefloat.verify.clearance.HULL_TOLERANCE` (:func:`shape_excess`). The facets are
+  the hull's own triangles once proved to be its facets (closed, each plane supporting every
+  hull point; then a hull made of mesh vertices lies inside the mesh's hull), else SciPy's
+  qhull's: the proof costs a few milliseconds a body where importing SciPy's spatial package
+  costs a fresh process 0.4 s;
 - **placements**, at the instant of the smallest clearance: a pair's hull distance is at most
   its mesh distance (within ``HULL_TOLERANCE``, GJK's) and at least the mesh distance minus the
   two hulls' slack (:func:`~freefloat.verify.clearance.hull_slack`), for the pairs the
@@ -108,7 +112,8 @@ def shape_excess(mesh: MeshClearance, solver: CollisionModel) -> tuple[float, st
 
     In each body's own frame: the largest distance of a mesh vertex outside the solver's hull
     (a hull that misses part of its mesh) or of a hull vertex outside the convex hull of the
-    mesh's vertices (a hull of more than its mesh), by face planes. Remembered per pair of
+    mesh's vertices (a hull of more than its mesh), by facet planes (:func:`_excess_by_facets`,
+    else qhull's). Remembered per pair of
     vertex sets (the shapes do not change with the configuration). ``-inf`` when no mesh has a
     hull.
     """
@@ -123,11 +128,59 @@ def shape_excess(mesh: MeshClearance, solver: CollisionModel) -> tuple[float, st
         points = np.array(shape.points(), dtype=float).reshape(-1, 3)
         key = (_digest(points), _digest(vertices))
         if key not in _SHAPES:
-            _SHAPES[key] = max(_outside(vertices, points), _outside(points, vertices))
+            by_facets = _excess_by_facets(vertices, points, shape)
+            _SHAPES[key] = (
+                by_facets
+                if by_facets is not None
+                else max(_outside(vertices, points), _outside(points, vertices))
+            )
         if _SHAPES[key] > worst:
             worst = _SHAPES[key]
             where = f"{objects[index].name}: hull and mesh vertices {worst:.3g} m apart"
     return worst, where
+
+
+def _excess_by_facets(
+    vertices: np.ndarray, points: np.ndarray, hull: coal.ConvexBase
+) -> float | None:
+    """:func:`shape_excess` of one body without qhull, or None when it cannot be told so.
+
+    The hull's own triangles are taken as candidate facets and proved to be its facets: they
+    close up (every edge in exactly two of them), none is a sliver, and the plane through each
+    (its normal turned away from the points' centroid) has every hull point on its inner side,
+    to 1e-9 of the hull's size. A closed surface of such triangles covers the boundary of the
+    points' convex hull, so their planes are its facet planes, and the mesh vertices' largest
+    distance outside them (plus the largest point beyond a plane, a number of rounding size) is
+    the distance qhull's facets give. When every hull point is one of the mesh's vertices, none
+    lies outside the mesh's convex hull: the other side is 0. Otherwise (a hull of moved or
+    extra points, triangles that do not prove themselves), None: qhull decides.
+    """
+    known = {row.tobytes() for row in np.ascontiguousarray(vertices)}
+    if any(row.tobytes() not in known for row in np.ascontiguousarray(points)):
+        return None
+    triangles = np.array(
+        [[hull.polygons(i)[k] for k in range(3)] for i in range(hull.num_polygons)], dtype=int
+    ).reshape(-1, 3)
+    edges = np.sort(
+        np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1
+    )
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    size = float(np.ptp(points, axis=0).max()) if len(points) else 0.0
+    if len(triangles) < 4 or not np.all(counts == 2) or size <= 0.0:
+        return None
+    a, b, c = (points[triangles[:, k]] for k in range(3))
+    normals = np.cross(b - a, c - a)
+    lengths = np.linalg.norm(normals, axis=1)
+    if np.any(lengths <= 1e-12 * size**2):
+        return None
+    normals /= lengths[:, None]
+    offsets = np.einsum("ij,ij->i", normals, a)
+    outward = np.where(normals @ points.mean(axis=0) - offsets > 0.0, -1.0, 1.0)
+    normals, offsets = normals * outward[:, None], offsets * outward
+    beyond = float((points @ normals.T - offsets).max())
+    if beyond > 1e-9 * size:
+        return None
+    return float((vertices @ normals.T - offsets).max()) + max(beyond, 0.0)
 
 
 def _outside(points: np.ndarray, around: np.ndarray) -> float:
