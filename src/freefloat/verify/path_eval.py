@@ -65,10 +65,9 @@ def _jacobi(n: np.ndarray, shift: int, x: np.ndarray) -> np.ndarray:
         values[:, k] = (
             2.0 * (k + lam - 1.0) * x * values[:, k - 1] - (k + 2.0 * lam - 2.0) * values[:, k - 2]
         ) / k
-    k = np.arange(count)
-    # (a + 1)_k / (2 a + 1)_k, by log-gamma
+    # (a + 1)_j / (2 a + 1)_j, by log-gamma
     ratio = np.exp(
-        np.array([math.lgamma(a + 1 + j) - math.lgamma(2 * a + 1 + j) for j in k])
+        np.array([math.lgamma(a + 1 + j) - math.lgamma(2 * a + 1 + j) for j in range(count)])
         - (math.lgamma(a + 1) - math.lgamma(2 * a + 1))
     )
     table = values * ratio
