@@ -854,6 +854,17 @@ def run() -> None:
         "--no-roll", action="store_true", help="speed section without the 65 deg roll (slow)"
     )
     parser.add_argument(
+        "--fresh-only",
+        action="store_true",
+        help="only a user's single call: every case in a fresh process (bench_fresh.py)",
+    )
+    parser.add_argument(
+        "--fresh-baseline",
+        type=Path,
+        metavar="SRC",
+        help="with --fresh-only: a baseline checkout's src folder, run in the same rounds",
+    )
+    parser.add_argument(
         "--reachable-only",
         action="store_true",
         help="only the freefloat reach section (issue 28: times, inner set against plan)",
@@ -911,6 +922,18 @@ def run() -> None:
         print_paths(paths)
         if args.json:
             args.json.write_text(json.dumps({"machine": machine(), "paths": paths}, indent=1))
+        return
+    if args.fresh_only:
+        from bench_fresh import REPO, bench_fresh, print_fresh
+
+        trees = {"this tree": REPO / "src"}
+        if args.fresh_baseline:
+            trees = {"baseline": args.fresh_baseline, **trees}
+        rounds = max(3, args.runs // 2)
+        fresh = bench_fresh(rounds, trees)
+        print_fresh(fresh, rounds)
+        if args.json:
+            args.json.write_text(json.dumps({"machine": machine(), "fresh": fresh}, indent=1))
         return
     if args.speed_only:
         from bench_speed import bench_speed, print_speed
