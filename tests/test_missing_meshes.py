@@ -9,7 +9,7 @@ import numpy as np
 import freefloat as ff
 from freefloat.robot.compose import ServicerSpec, compose_servicer
 from freefloat.viz.playback import build_playback, write_html
-from freefloat.viz.visuals import MISSING_MESH_RADIUS, visual_model
+from freefloat.viz.urdf_visuals import MISSING_MESH_RADIUS, visual_model
 
 from conftest import ROOT
 
@@ -46,9 +46,8 @@ def test_plan_and_playback_draw_a_sphere_for_the_missing_mesh(tmp_path, caplog, 
         playback = build_playback(plan)
         nodes = set(playback.frames[0])
         page = write_html(plan, tmp_path / "page.html")
-    link1 = next(g for g in visual.geometryObjects if g.name.startswith("link1"))
-    assert type(link1.geometry).__name__ == "Sphere"
-    assert link1.geometry.radius == MISSING_MESH_RADIUS
+    link1 = next(v for v in visual if v.name.startswith("link1"))
+    assert (link1.shape, link1.size) == ("sphere", (MISSING_MESH_RADIUS,))
     assert any(name.lower().endswith("link1_0") for name in nodes)  # the link is still drawn
     assert page.is_file() and page.stat().st_size > 0
     messages = [r.getMessage() for r in caplog.records]

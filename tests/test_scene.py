@@ -18,7 +18,8 @@ import umsgpack
 
 import freefloat as ff
 from freefloat.viz.scene import RecordedScene
-from freefloat.viz.visuals import draw_visuals, visual_model
+from freefloat.viz.urdf_visuals import visual_model
+from freefloat.viz.visuals import draw_visuals
 
 from conftest import ROOT
 
@@ -97,39 +98,75 @@ def _world_matrices(page: str) -> dict[str, tuple[np.ndarray, dict]]:
     return out
 
 
-@pytest.mark.parametrize("urdf", ["panda_servicer.urdf", "ur5_servicer.urdf", "planar_2dof.urdf"])
-def test_visuals_are_where_pinocchios_visualizer_puts_them(urdf):
-    """The same robot drawn at one configuration by Pinocchio's MeshcatVisualizer and by
-    :func:`draw_visuals`: every visual node holds the same shape (box and sphere sizes, a
-    cylinder's radius and height, a mesh file's text or bytes), at the same place once its
-    transform and its object's own matrix are combined (Pinocchio scales the transform, this
-    project the object). A cylinder's axis may come out flipped: it is symmetric."""
+def _their_visuals(robot) -> pin.GeometryModel:
+    dirs = [str(d) for d in robot.package_dirs]
+    return pin.buildGeomFromUrdfString(
+        robot.model, robot.urdf_text, pin.GeometryType.VISUAL, package_dirs=dirs
+    )
+
+
+def _compare(robot) -> int:
+    """Draw ``robot`` at one configuration with Pinocchio's visual model and MeshcatVisualizer,
+    and with this project's reading of the URDF and :func:`draw_visuals`; compare every node."""
     from pinocchio.visualize import MeshcatVisualizer
 
-    robot = ff.load_robot(ROOT / "robots" / urdf)
-    visual = visual_model(robot)
     q = robot.configuration(np.linspace(-0.7, 0.9, robot.n))
     theirs = meshcat.Visualizer(window=RecordedScene())
-    viz = MeshcatVisualizer(robot.model, pin.GeometryModel(), visual)
+    viz = MeshcatVisualizer(robot.model, pin.GeometryModel(), _their_visuals(robot))
     viz.initViewer(viewer=theirs)
     viz.loadViewerModel(rootNodeName="robot")
     viz.display(q)
     mine = meshcat.Visualizer(window=RecordedScene())
-    nodes = draw_visuals(mine, visual, "robot")
-    data, gdata = robot.model.createData(), visual.createData()
+    visuals = visual_model(robot)
+    nodes = draw_visuals(mine, visuals, "robot")
+    data = robot.model.createData()
     pin.forwardKinematics(robot.model, data, q)
-    pin.updateGeometryPlacements(robot.model, data, visual, gdata)
-    for i, node in enumerate(nodes):
-        mine[node].set_transform(gdata.oMg[i].homogeneous)
-    want = _world_matrices(theirs.window.get_scene())
-    got = _world_matrices(mine.window.get_scene())
-    assert set(got) == set(want) and len(got) == len(visual.geometryObjects)
+    for visual, node in zip(visuals, nodes, strict=True):
+        mine[node].set_transform((data.oMi[visual.joint] * visual.placement).homogeneous)
+    their_page, my_page = theirs.window.get_scene(), mine.window.get_scene()
+    want, got = _world_matrices(their_page), _world_matrices(my_page)
+    assert set(got) == set(want) and len(got) == len(visuals)
     for path, (matrix, shape) in got.items():
         their_matrix, their_shape = want[path]
-        keys = ("type", "width", "height", "depth", "radius", "radiusTop", "radiusBottom", "data")
-        assert {k: shape.get(k) for k in keys} == {k: their_shape.get(k) for k in keys}, path
+        keys = ("width", "height", "depth", "radius", "radiusTop", "radiusBottom")
+        sizes = [float(shape.get(k, "nan")) for k in keys]
+        their_sizes = [float(their_shape.get(k, "nan")) for k in keys]
+        np.testing.assert_allclose(sizes, their_sizes, rtol=1e-6, err_msg=path)
+        assert (shape.get("type"), shape.get("data")) == (
+            their_shape.get("type"),
+            their_shape.get("data"),
+        ), path
         if shape.get("type") == "CylinderGeometry":  # the axis either way up
             their_matrix = their_matrix.copy()
             flip = np.abs(their_matrix[:3, 1] + matrix[:3, 1]).max() < 1e-12
             their_matrix[:3, 1:3] *= -1.0 if flip else 1.0
-        np.testing.assert_allclose(matrix, their_matrix, atol=1e-12, err_msg=path)
+        np.testing.assert_allclose(matrix, their_matrix, atol=1e-9, err_msg=path)
+    mine_colours, their_colours = _colours(my_page), _colours(their_page)
+    assert set(mine_colours) == set(their_colours)
+    for path, colours in mine_colours.items():
+        assert len(colours) == len(their_colours[path]), path
+        assert np.abs(np.subtract(colours, their_colours[path])).max(initial=0) <= 1, path
+    return len(got)
+
+
+def _colours(page: str) -> dict[str, list[int]]:
+    """Per node, its material colours as (r, g, b) bytes."""
+    out = {}
+    for command in _commands(page):
+        if command["type"] == "set_object":
+            colours = [m["color"] for m in command["object"].get("materials", [])]
+            out[command["path"]] = [c >> shift & 255 for c in colours for shift in (16, 8, 0)]
+    return out
+
+
+@pytest.mark.parametrize("urdf", ["panda_servicer.urdf", "ur5_servicer.urdf", "planar_2dof.urdf"])
+def test_visuals_are_where_pinocchios_visualizer_puts_them(urdf):
+    """The same robot drawn at one configuration from Pinocchio's visual geometry model by
+    Pinocchio's MeshcatVisualizer, and from this project's reading of the URDF (no mesh
+    loaded) by :func:`draw_visuals`: every visual node holds the same shape (box and sphere
+    sizes, a cylinder's radius and height, a mesh file's text or bytes) in the same colour
+    (to a unit of 255: Pinocchio truncates, this project rounds), at the same place once its
+    transform and its object's own matrix are combined (Pinocchio scales the transform, this
+    project the object; URDF numbers are read as float32 by one and float64 by the other,
+    hence 1e-9). A cylinder's axis may come out flipped: it is symmetric."""
+    assert _compare(ff.load_robot(ROOT / "robots" / urdf)) >= 4

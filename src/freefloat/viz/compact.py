@@ -2,7 +2,7 @@
 
 ``meshcat``'s standalone page embeds every scene command (meshes as COLLADA text, transforms,
 the animation) as a base64 ``data:`` URL fetched in parallel. :func:`compact_page` gzips each
-command (COLLADA text shrinks about five-fold) and replays them one after the other in the
+command (COLLADA text shrinks two- to three-fold) and replays them one after the other in the
 browser (``DecompressionStream``, in every current browser): first the scene, then the
 animation, so the animation binds to the final objects. A page whose layout is not the one
 expected is returned unchanged.
@@ -17,6 +17,9 @@ import re
 
 __all__ = ["compact_page"]
 
+#: gzip level of the embedded commands: 3 makes the Panda servicer's page in 0.24 s, 7 % larger
+#: than level 6 (0.76 s) on the 2-core machine; 1 would save 0.1 s more for 6 % more.
+COMPRESSION = 3
 _VIEWER = 'var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));'
 _FETCH = re.compile(
     r'fetch\("data:application/octet-binary;base64,([A-Za-z0-9+/=]*)"\)\s*'
@@ -56,6 +59,8 @@ def compact_page(page: str) -> str:
         return page  # something else in the script: leave the page as it is
     raws = [base64.b64decode(m.group(1)) for m in _FETCH.finditer(body)]
     ordered = [r for r in raws if not _is_animation(r)] + [r for r in raws if _is_animation(r)]
-    packed = [base64.b64encode(gzip.compress(r, 6, mtime=0)).decode("ascii") for r in ordered]
+    packed = [
+        base64.b64encode(gzip.compress(r, COMPRESSION, mtime=0)).decode("ascii") for r in ordered
+    ]
     loader = _LOADER.replace("__COMMANDS__", json.dumps(packed))
     return page[:body_start] + loader + page[end:]

@@ -144,7 +144,8 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
     from meshcat.animation import Animation
 
     from .scene import RecordedScene
-    from .visuals import draw_visuals, visual_model
+    from .urdf_visuals import visual_model
+    from .visuals import draw_visuals
 
     robot = robot or plan_robot(plan)
     visual = visual_model(robot)
@@ -158,7 +159,7 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
         obstacles, tips = _draw_extras(viewer, plan, robot)
         base_link = robot.model.getFrameId(robot.base_link)
         animation = Animation(default_framerate=fps)
-        data, gdata = robot.model.createData(), visual.createData()
+        data = robot.model.createData()
         ee_frames = robot.end_effector_frames
         for k in range(n):
             q = robot.configuration(
@@ -166,8 +167,10 @@ def build_playback(plan: Plan, speed: float = 1.0, robot: Robot | None = None) -
             )
             pin.forwardKinematics(robot.model, data, q)
             pin.updateFramePlacements(robot.model, data)
-            pin.updateGeometryPlacements(robot.model, data, visual, gdata)
-            poses = {node: gdata.oMg[i].homogeneous.copy() for i, node in enumerate(nodes)}
+            poses = {
+                node: (data.oMi[v.joint] * v.placement).homogeneous
+                for v, node in zip(visual, nodes, strict=True)
+            }
             base = np.eye(4)
             base[:3, :3] = pin.Quaternion(np.asarray(samples.base_quaternion_xyzw[k])).matrix()
             base[:3, 3] = samples.base_position[k]

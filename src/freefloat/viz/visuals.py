@@ -1,85 +1,75 @@
-"""The robot's visual geometry, loaded from its URDF and drawn as meshcat objects.
+"""The robot's visuals (:mod:`.urdf_visuals`) drawn as meshcat objects.
 
 Each visual of the URDF becomes one meshcat node ``<root>/visuals/<name>`` holding its shape in
 the visual's own frame: a box, sphere or cylinder as the URDF gives it (meshcat's cylinder runs
 along y, the URDF's along z, so it is turned), a capsule as a triangulated capsule, a mesh file
 as its text (COLLADA with its texture images embedded, Wavefront OBJ) or bytes (STL), with the
 URDF's scale in the object's own matrix so that a node's transform is the visual's pose alone
-(what an animation frame sets). A mesh file's own materials are kept unless the URDF gives the
-visual a material; other shapes take the URDF colour. A link whose mesh file cannot be found
-is drawn as a small sphere (:data:`MISSING_MESH_RADIUS`), with a warning.
+(what an animation frame sets). A COLLADA file keeps its own materials (the viewer draws its
+colours, as with Pinocchio's visualizer); other shapes take the URDF colour (Pinocchio's light
+grey without one).
 """
 
 from __future__ import annotations
 
 import base64
-import logging
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
 
 import meshcat.geometry as g
 import numpy as np
-import pinocchio as pin
 
 from ..errors import ViewerError
-from ..robot.model import Robot, example_robot_data_dir
+from .urdf_visuals import DEFAULT_RGBA, Visual
 
-__all__ = ["MISSING_MESH_RADIUS", "draw_visuals", "visual_model", "visual_node"]
+__all__ = ["draw_visuals", "visual_node"]
 
-LOGGER = logging.getLogger(__name__)
-
-#: Radius (m) of the sphere drawn for a link whose mesh file cannot be found.
-MISSING_MESH_RADIUS = 0.04
 #: meshcat's cylinder axis (y) turned onto the URDF's (z).
 _Y_TO_Z = np.array([[1.0, 0, 0, 0], [0, 0, -1.0, 0], [0, 1.0, 0, 0], [0, 0, 0, 1.0]])
 _COLLADA = "{http://www.collada.org/2005/11/COLLADASchema}"
 
 
-def visual_node(root: str, obj: pin.GeometryObject) -> str:
+def visual_node(root: str, visual: Visual) -> str:
     """The meshcat path of a visual's node."""
-    return f"{root}/visuals/{obj.name}"
+    return f"{root}/visuals/{visual.name}"
 
 
-def draw_visuals(viewer: Any, visual: pin.GeometryModel, root: str) -> list[str]:
-    """Set every visual's meshcat object below ``root``; returns the nodes in model order.
+def draw_visuals(viewer: Any, visuals: list[Visual], root: str) -> list[str]:
+    """Set every visual's meshcat object below ``root``; returns the nodes in the same order.
 
     Raises:
-        ViewerError: a visual whose shape meshcat cannot draw (a plane, an octree...).
+        ViewerError: a mesh file that cannot be read.
     """
     nodes = []
-    for obj in visual.geometryObjects:
-        node = visual_node(root, obj)
-        shown = _shown(obj)
+    for visual in visuals:
+        node = visual_node(root, visual)
+        shown = _shown(visual)
         if isinstance(shown, _ColladaFile):
             viewer[node].set_object(shown)
         else:
-            viewer[node].set_object(shown, _material(obj))
+            viewer[node].set_object(shown, _material(visual))
         nodes.append(node)
     return nodes
 
 
-def _shown(obj: pin.GeometryObject) -> Any:
+def _shown(visual: Visual) -> Any:
     """The meshcat geometry (or, for a COLLADA file, the object) of one visual."""
-    shape, kind = obj.geometry, type(obj.geometry).__name__
-    path = Path(obj.meshPath) if obj.meshPath else None
-    scale = np.asarray(obj.meshScale, dtype=float)
-    if path is not None and path.suffix.lower() in (".dae", ".obj", ".stl"):
-        return _mesh_file(path, scale, obj)
-    if kind == "Box":
-        return g.Box([float(x) for x in 2.0 * np.asarray(shape.halfSide)])
-    if kind == "Sphere":
-        return g.Sphere(float(shape.radius))
-    if kind == "Cylinder":
-        return _Placed(g.Cylinder(2.0 * float(shape.halfLength), float(shape.radius)), _Y_TO_Z)
-    if kind == "Capsule":
-        return _capsule(float(shape.radius), float(shape.halfLength))
-    raise ViewerError(f"the visual {obj.name!r} is a {kind}, which the playback cannot draw")
+    size = visual.size
+    if visual.mesh is not None:
+        return _mesh_file(visual.mesh, np.asarray(visual.scale, dtype=float))
+    if visual.shape == "box":
+        return g.Box([float(x) for x in size])
+    if visual.shape == "sphere":
+        return g.Sphere(float(size[0]))
+    if visual.shape == "cylinder":
+        return _Placed(g.Cylinder(float(size[1]), float(size[0])), _Y_TO_Z)
+    return _capsule(float(size[0]), 0.5 * float(size[1]))
 
 
-def _material(obj: pin.GeometryObject) -> Any:
+def _material(visual: Visual) -> Any:
     """The URDF colour of a visual as a meshcat material (transparent below opacity 1)."""
-    rgba = np.clip(np.asarray(obj.meshColor, dtype=float), 0.0, 1.0)
+    rgba = np.clip(np.asarray(visual.rgba or DEFAULT_RGBA, dtype=float), 0.0, 1.0)
     red, green, blue = (int(x) for x in np.rint(rgba[:3] * 255.0))
     colour = red << 16 | green << 8 | blue
     if rgba[3] < 1.0:
@@ -106,11 +96,9 @@ class _Placed(g.Geometry):
 class _ColladaFile(g.Object):
     """A COLLADA file as a whole meshcat object, its texture images embedded as data URLs."""
 
-    def __init__(
-        self, text: str, resources: dict[str, str], matrix: np.ndarray, material: Any
-    ) -> None:
+    def __init__(self, text: str, resources: dict[str, str], matrix: np.ndarray) -> None:
         g.SceneElement.__init__(self)
-        self.text, self.resources, self.matrix, self.material = text, resources, matrix, material
+        self.text, self.resources, self.matrix = text, resources, matrix
 
     def lower(self) -> dict[str, Any]:
         data: dict[str, Any] = {
@@ -126,12 +114,10 @@ class _ColladaFile(g.Object):
                 "matrix": [float(x) for x in self.matrix.T.flatten()],
             },
         }
-        if self.material is not None:
-            self.material.lower_in_object(data)
         return data
 
 
-def _mesh_file(path: Path, scale: np.ndarray, obj: pin.GeometryObject) -> Any:
+def _mesh_file(path: Path, scale: np.ndarray) -> Any:
     """A mesh file as meshcat geometry (OBJ, STL) or a whole object (COLLADA), scaled."""
     matrix = np.diag([*scale, 1.0])
     suffix = path.suffix.lower()
@@ -141,8 +127,7 @@ def _mesh_file(path: Path, scale: np.ndarray, obj: pin.GeometryObject) -> Any:
         text = path.read_text(encoding="utf-8", errors="replace")
         if suffix == ".obj":
             return _Placed(g.MeshGeometry(text, "obj"), matrix)
-        material = _material(obj) if obj.overrideMaterial else None
-        return _ColladaFile(text, _textures(path), matrix, material)
+        return _ColladaFile(text, _textures(path), matrix)
     except OSError as exc:
         raise ViewerError(f"cannot read the mesh {path}: {exc}") from None
 
@@ -187,66 +172,3 @@ def _capsule(radius: float, half_length: float, around: int = 24, rings: int = 8
             a, b = i * around + j, i * around + (j + 1) % around
             faces += [[a, a + around, b], [b, a + around, b + around]]
     return g.TriangularMeshGeometry(vertices, np.array(faces))
-
-
-def _mesh_found(name: str, robot: Robot) -> bool:
-    """Whether a URDF mesh reference resolves to a file (as Pinocchio would look it up)."""
-    if name.startswith("package://"):
-        rest = name[len("package://") :]
-        folders = [*robot.package_dirs, example_robot_data_dir()]
-        return any(d is not None and (Path(d) / rest).is_file() for d in folders)
-    path = Path(name[len("file://") :] if name.startswith("file://") else name)
-    return (path if path.is_absolute() else Path(robot.urdf).parent / path).is_file()
-
-
-def _with_simple_shapes(robot: Robot) -> tuple[str | None, list[str]]:
-    """The URDF text with every missing visual mesh replaced by a small sphere, and the names.
-
-    Returns ``(None, [])`` when every mesh is found (the file is used as it is).
-    """
-    try:
-        root = ET.fromstring(robot.urdf_text or Path(robot.urdf).read_text(encoding="utf-8"))
-    except (OSError, ET.ParseError):
-        return None, []
-    missing = []
-    for visual in root.iter("visual"):
-        geometry = visual.find("geometry")
-        mesh = geometry.find("mesh") if geometry is not None else None
-        if geometry is None or mesh is None or _mesh_found(mesh.get("filename", ""), robot):
-            continue
-        missing.append(mesh.get("filename", ""))
-        geometry.remove(mesh)
-        ET.SubElement(geometry, "sphere", radius=repr(MISSING_MESH_RADIUS))
-    if not missing:
-        return None, []
-    return ET.tostring(root, encoding="unicode"), missing
-
-
-def visual_model(robot: Robot) -> pin.GeometryModel:
-    """The robot's visual geometry model (a missing mesh replaced by a sphere, with a warning).
-
-    Raises:
-        ViewerError: Pinocchio cannot build the visual geometry.
-    """
-    text, missing = _with_simple_shapes(robot)
-    if missing:
-        LOGGER.warning(
-            "%d mesh file(s) of %s cannot be found (e.g. %s); those links are drawn as "
-            "spheres of %g m",
-            len(missing),
-            Path(robot.urdf).name,
-            missing[0],
-            MISSING_MESH_RADIUS,
-        )
-    dirs = [str(d) for d in robot.package_dirs]
-    try:
-        text = text if text is not None else robot.urdf_text
-        if text:  # the text the robot was loaded from (a plan's copy of its URDF)
-            return pin.buildGeomFromUrdfString(
-                robot.model, text, pin.GeometryType.VISUAL, package_dirs=dirs
-            )
-        return pin.buildGeomFromUrdf(
-            robot.model, str(robot.urdf), pin.GeometryType.VISUAL, package_dirs=dirs
-        )
-    except (RuntimeError, ValueError) as exc:
-        raise ViewerError(f"cannot load the visual geometry of {robot.urdf}: {exc}") from None
