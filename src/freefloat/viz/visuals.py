@@ -13,6 +13,7 @@ grey without one).
 from __future__ import annotations
 
 import base64
+import io
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
@@ -20,7 +21,7 @@ from typing import Any
 import meshcat.geometry as g
 import numpy as np
 
-from ..errors import ViewerError
+from .mesh_files import checked_mesh
 from .urdf_visuals import DEFAULT_RGBA, Visual
 
 __all__ = ["draw_visuals", "visual_node"]
@@ -118,26 +119,25 @@ class _ColladaFile(g.Object):
 
 
 def _mesh_file(path: Path, scale: np.ndarray) -> Any:
-    """A mesh file as meshcat geometry (OBJ, STL) or a whole object (COLLADA), scaled."""
+    """A mesh file as meshcat geometry (OBJ, STL) or a whole object (COLLADA), scaled.
+
+    Raises:
+        ViewerError: a file the viewer could not read (:func:`.mesh_files.checked_mesh`).
+    """
     matrix = np.diag([*scale, 1.0])
     suffix = path.suffix.lower()
-    try:
-        if suffix == ".stl":
-            return _Placed(g.StlMeshGeometry.from_file(str(path)), matrix)
-        text = path.read_text(encoding="utf-8", errors="replace")
-        if suffix == ".obj":
-            return _Placed(g.MeshGeometry(text, "obj"), matrix)
-        return _ColladaFile(text, _textures(path), matrix)
-    except OSError as exc:
-        raise ViewerError(f"cannot read the mesh {path}: {exc}") from None
+    data = checked_mesh(path)
+    if suffix == ".stl":
+        return _Placed(g.StlMeshGeometry.from_stream(io.BytesIO(data)), matrix)
+    text = data.decode("utf-8", errors="replace")
+    if suffix == ".obj":
+        return _Placed(g.MeshGeometry(text, "obj"), matrix)
+    return _ColladaFile(text, _textures(path, data), matrix)
 
 
-def _textures(path: Path) -> dict[str, str]:
-    """A COLLADA file's texture images, by the name the file uses, as data URLs."""
-    try:
-        images = ET.parse(path).find(f"{_COLLADA}library_images")
-    except ET.ParseError:
-        return {}
+def _textures(path: Path, data: bytes) -> dict[str, str]:
+    """A COLLADA file's (``data``, read from ``path``) texture images, as data URLs by name."""
+    images = ET.fromstring(data).find(f"{_COLLADA}library_images")
     out = {}
     for element in images.iter() if images is not None else ():
         if not element.tag.endswith("init_from") or not element.text:
@@ -146,8 +146,8 @@ def _textures(path: Path) -> dict[str, str]:
         found = image if image.is_absolute() else path.parent / image
         if found.is_file():
             kind = "jpeg" if found.suffix.lower() in (".jpg", ".jpeg") else "png"
-            data = base64.b64encode(found.read_bytes()).decode("ascii")
-            out[element.text] = f"data:image/{kind};base64,{data}"
+            encoded = base64.b64encode(found.read_bytes()).decode("ascii")
+            out[element.text] = f"data:image/{kind};base64,{encoded}"
     return out
 
 
