@@ -107,3 +107,28 @@ def test_the_page_of_a_robot_with_a_broken_mesh_is_refused(tmp_path):
     assert "broken.stl" in shown.stderr and "Traceback" not in shown.stderr
     assert len(shown.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "arm.html").exists()
+
+
+def test_a_mesh_of_another_format_is_drawn_as_a_sphere_with_a_warning(tmp_path, caplog):
+    """A visual mesh the page's viewer cannot read (a PLY file, which exists) is drawn as the
+    small sphere a missing mesh gets, and said so; the other links keep their shapes."""
+    import logging
+
+    import freefloat as ff
+    from freefloat.viz.urdf_visuals import MISSING_MESH_RADIUS, visual_model
+
+    cylinder = '<geometry><cylinder radius="0.05" length="1.0"/></geometry>'
+    ply = tmp_path / "link.ply"
+    ply.write_text("ply\nformat ascii 1.0\nend_header\n")
+    urdf = (ROOT / "robots" / "planar_2dof.urdf").read_text()
+    path = tmp_path / "arm.urdf"
+    path.write_text(urdf.replace(cylinder, f'<geometry><mesh filename="{ply}"/></geometry>', 1))
+    with caplog.at_level(logging.WARNING, logger="freefloat"):
+        visuals = visual_model(ff.load_robot(path))
+    spheres = [v for v in visuals if v.size == (MISSING_MESH_RADIUS,)]
+    assert len(spheres) == 1 and spheres[0].shape == "sphere"
+    assert {v.shape for v in visuals} >= {"box", "cylinder"}  # the rest as the URDF says
+    assert any(
+        "link.ply" in r.getMessage() and "not STL, OBJ or COLLADA" in r.getMessage()
+        for r in caplog.records
+    )

@@ -9,8 +9,8 @@ frame at the frame's placement composed with the visual's ``<origin>``. Its colo
 ``<material>``'s ``<color>``, or the colour of the robot-level material of that name; without
 one, none is stated. A mesh reference is found as ``package://`` in the robot's package folders
 (and example-robot-data's), as a ``file://`` or absolute path, or relative to the URDF; a mesh
-that cannot be found is drawn as a small sphere (:data:`MISSING_MESH_RADIUS`), with one
-warning for the robot.
+that cannot be found, or is not a file the viewer reads (:data:`DRAWN_FORMATS`), is drawn as a
+small sphere (:data:`MISSING_MESH_RADIUS`), with one warning for the robot.
 """
 
 from __future__ import annotations
@@ -32,6 +32,8 @@ LOGGER = logging.getLogger(__name__)
 
 #: Radius (m) of the sphere drawn for a link whose mesh file cannot be found.
 MISSING_MESH_RADIUS = 0.04
+#: The mesh files the page's viewer reads (file name endings, lower case).
+DRAWN_FORMATS = (".stl", ".obj", ".dae")
 #: The colour a visual without a material is drawn in (RGBA, Pinocchio's default).
 DEFAULT_RGBA = (0.9, 0.9, 0.9, 1.0)
 
@@ -93,8 +95,8 @@ def visual_model(robot: Robot) -> list[Visual]:
             out.append(Visual(f"{name}_{k}", int(frame.parentJoint), placement, *drawn, rgba))
     if missing:
         LOGGER.warning(
-            "%d mesh file(s) of %s cannot be found (e.g. %s); those links are drawn as "
-            "spheres of %g m",
+            "%d mesh file(s) of %s cannot be found or are not STL, OBJ or COLLADA files (e.g. "
+            "%s); those links are drawn as spheres of %g m",
             len(missing),
             Path(robot.urdf).name,
             missing[0],
@@ -145,7 +147,7 @@ def _geometry(
     if shape.tag == "mesh":
         reference = shape.get("filename", "")
         found = _mesh_file(reference, robot)
-        if found is None:
+        if found is None or found.suffix.lower() not in DRAWN_FORMATS:
             missing.append(reference)
             return "sphere", (MISSING_MESH_RADIUS,), None, one
         sx, sy, sz = _numbers(shape.get("scale"), one)
