@@ -105,3 +105,48 @@ def test_planning_with_clearance_loads_no_scipy_spatial():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip().splitlines()[-1] == "False"
+
+
+def _convex(points: np.ndarray, triangles: list[tuple[int, int, int]]) -> coal.ConvexBase:
+    vertices = coal.StdVec_Vec3s()
+    for point in points:
+        vertices.append(np.array(point, dtype=float))
+    faces = coal.StdVec_Triangle()
+    for triangle in triangles:
+        faces.append(coal.Triangle(*map(int, triangle)))
+    return coal.Convex(vertices, faces)
+
+
+@pytest.mark.parametrize(
+    "triangles",
+    [
+        [(1, 5, 7), (1, 7, 3), (1, 5, 3), (5, 7, 3)],  # the top square twice over
+        [(1, 5, 7), (7, 5, 1), (0, 4, 6), (6, 4, 0)],  # two triangles, each with its reverse
+        [(1, 3, 7), (1, 7, 5), (0, 4, 6), (0, 6, 2)],  # top and bottom alone: open
+    ],
+)
+def test_triangles_that_do_not_cover_the_hull_prove_nothing(triangles):
+    """A unit cube's points with triangles that close up edge by edge without covering its
+    boundary (found by review: the earlier check counted undirected edges and turned each
+    normal outward itself, and reported 0 where qhull reports 4 m): left to qhull."""
+    cube = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)])
+    mesh = np.vstack([cube, [[5.0, 0.5, 0.5]]])
+    hull = _convex(cube, triangles)
+    points = np.array(hull.points(), dtype=float).reshape(-1, 3)
+    assert _qhull_excess(mesh, points) == pytest.approx(4.0)
+    assert _excess_by_facets(mesh, points, hull) is None
+
+
+def test_a_cubes_outward_triangles_give_qhulls_figure():
+    """The same cube with its twelve outward-wound triangles: proved, and the far vertex's
+    4 m outside, as qhull has it."""
+    cube = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)])
+    mesh = np.vstack([cube, [[5.0, 0.5, 0.5]]])
+    triangles = []
+    for face in ConvexHull(cube).simplices:  # qhull's facets, wound outward here
+        a, b, c = cube[face]
+        outward = np.cross(b - a, c - a) @ (a - cube.mean(axis=0)) > 0.0
+        triangles.append(tuple(face) if outward else (face[0], face[2], face[1]))
+    hull = _convex(cube, triangles)
+    points = np.array(hull.points(), dtype=float).reshape(-1, 3)
+    assert _excess_by_facets(mesh, points, hull) == pytest.approx(4.0, abs=1e-12)

@@ -145,15 +145,18 @@ def _excess_by_facets(
 ) -> float | None:
     """:func:`shape_excess` of one body without qhull, or None when it cannot be told so.
 
-    The hull's own triangles are taken as candidate facets and proved to be its facets: they
-    close up (every edge in exactly two of them), none is a sliver, and the plane through each
-    (its normal turned away from the points' centroid) has every hull point on its inner side,
-    to 1e-9 of the hull's size. A closed surface of such triangles covers the boundary of the
-    points' convex hull, so their planes are its facet planes, and the mesh vertices' largest
-    distance outside them (plus the largest point beyond a plane, a number of rounding size) is
-    the distance qhull's facets give. When every hull point is one of the mesh's vertices, none
-    lies outside the mesh's convex hull: the other side is 0. Otherwise (a hull of moved or
-    extra points, triangles that do not prove themselves), None: qhull decides.
+    The hull's own triangles are taken as candidate facets and proved to cover its boundary:
+    they form a closed surface oriented by their winding (every directed edge in exactly one
+    triangle, and its reverse in exactly one other), none is a sliver, and the plane through
+    each, its normal from its winding, has every hull point on its inner side (to 1e-9 of the
+    hull's size). Such a surface lies in the boundary of the points' convex hull with every
+    triangle facing out, so it covers that boundary a whole number of times, at least once:
+    every facet of the hull holds one of the triangles, and their planes are its facet planes.
+    The mesh vertices' largest distance outside them (plus the largest point beyond a plane, a
+    number of rounding size) is then the distance qhull's facets give. When every hull point
+    is one of the mesh's vertices, none lies outside the mesh's convex hull: the other side is
+    0. Otherwise (a hull of moved or extra points, triangles that do not prove themselves:
+    doubled, reversed, open), None: qhull decides.
     """
     known = {row.tobytes() for row in np.ascontiguousarray(vertices)}
     if any(row.tobytes() not in known for row in np.ascontiguousarray(points)):
@@ -161,12 +164,8 @@ def _excess_by_facets(
     triangles = np.array(
         [[hull.polygons(i)[k] for k in range(3)] for i in range(hull.num_polygons)], dtype=int
     ).reshape(-1, 3)
-    edges = np.sort(
-        np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1
-    )
-    _, counts = np.unique(edges, axis=0, return_counts=True)
     size = float(np.ptp(points, axis=0).max()) if len(points) else 0.0
-    if len(triangles) < 4 or not np.all(counts == 2) or size <= 0.0:
+    if len(triangles) < 4 or size <= 0.0 or not _closed_and_oriented(triangles):
         return None
     a, b, c = (points[triangles[:, k]] for k in range(3))
     normals = np.cross(b - a, c - a)
@@ -175,12 +174,23 @@ def _excess_by_facets(
         return None
     normals /= lengths[:, None]
     offsets = np.einsum("ij,ij->i", normals, a)
-    outward = np.where(normals @ points.mean(axis=0) - offsets > 0.0, -1.0, 1.0)
-    normals, offsets = normals * outward[:, None], offsets * outward
     beyond = float((points @ normals.T - offsets).max())
     if beyond > 1e-9 * size:
         return None
     return float((vertices @ normals.T - offsets).max()) + max(beyond, 0.0)
+
+
+def _closed_and_oriented(triangles: np.ndarray) -> bool:
+    """Whether the (T, 3) triangles close up, consistently oriented by their winding.
+
+    Every directed edge in exactly one triangle, and its reverse in exactly one other.
+    """
+    directed = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    pairs, counts = np.unique(directed, axis=0, return_counts=True)
+    if np.any(counts != 1):
+        return False
+    found = {(int(i), int(j)) for i, j in pairs}
+    return all((j, i) in found for i, j in found)
 
 
 def _outside(points: np.ndarray, around: np.ndarray) -> float:
