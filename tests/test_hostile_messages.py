@@ -67,13 +67,13 @@ def test_an_arm_that_is_no_urdf_is_one_line_without_parser_noise(tmp_path, capfd
 
 
 @pytest.mark.parametrize(
-    ("content", "needle"),
+    ("content", "reason"),
     [
-        (b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n", "broken.stl"),
-        (b"<COLLADA><bad", "broken.stl"),
+        (b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n", "an ASCII STL cut short"),
+        (b"<COLLADA><bad", "neither a binary STL"),
     ],
 )
-def test_a_broken_mesh_is_one_line_naming_the_file(tmp_path, capfd, content, needle):
+def test_a_broken_mesh_is_one_line_naming_the_file(tmp_path, capfd, content, reason):
     mesh = tmp_path / "broken.stl"
     mesh.write_bytes(content)
     urdf = tmp_path / "m.urdf"
@@ -85,8 +85,7 @@ def test_a_broken_mesh_is_one_line_naming_the_file(tmp_path, capfd, content, nee
     path = plan.save(tmp_path / "p.json")
     capfd.readouterr()  # planning's own warning (this robot has no collision geometry)
     line = _refused(capfd, "show", path, "--html", tmp_path / "p.html")
-    assert f"cannot load the visual geometry of {urdf}" in line
-    assert f"Could not load resource {mesh}" in line
+    assert f"cannot draw the mesh {mesh}: {reason}" in line
     assert "From file" not in line and "in function" not in line
     assert not (tmp_path / "p.html").exists()
 
