@@ -140,7 +140,7 @@ def _compare(robot) -> int:
             their_matrix = their_matrix.copy()
             flip = np.abs(their_matrix[:3, 1] + matrix[:3, 1]).max() < 1e-12
             their_matrix[:3, 1:3] *= -1.0 if flip else 1.0
-        np.testing.assert_allclose(matrix, their_matrix, atol=1e-9, err_msg=path)
+        np.testing.assert_allclose(matrix, their_matrix, atol=1e-12, err_msg=path)
     mine_colours, their_colours = _colours(my_page), _colours(their_page)
     assert set(mine_colours) == set(their_colours)
     for path, colours in mine_colours.items():
@@ -167,6 +167,89 @@ def test_visuals_are_where_pinocchios_visualizer_puts_them(urdf):
     sizes, a cylinder's radius and height, a mesh file's text or bytes) in the same colour
     (to a unit of 255: Pinocchio truncates, this project rounds), at the same place once its
     transform and its object's own matrix are combined (Pinocchio scales the transform, this
-    project the object; URDF numbers are read as float32 by one and float64 by the other,
-    hence 1e-9). A cylinder's axis may come out flipped: it is symmetric."""
+    project the object; the products agree to double rounding, checked to 1e-12). A
+    cylinder's axis may come out flipped: it is symmetric."""
     assert _compare(ff.load_robot(ROOT / "robots" / urdf)) >= 4
+
+
+#: A robot with what the shipped ones lack: materials by urdfdom's rules (a robot-level colour
+#: wins over a visual's own; a colour named in one visual serves later ones), scaled STL, OBJ
+#: and COLLADA meshes, a turned origin, a cylinder, a link on a fixed joint.
+_EDGE_URDF = """<?xml version="1.0"?>
+<robot name="edge">
+  <material name="blue"><color rgba="0 0 1 1"/></material>
+  <link name="base">
+    <inertial><mass value="100"/>
+      <inertia ixx="10" iyy="10" izz="10" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><origin xyz="0.1 0.2 0.3" rpy="0.3 -0.4 1.2"/><geometry><box size="1 2 3"/></geometry>
+      <material name="blue"><color rgba="1 0 0 1"/></material></visual>
+    <visual><geometry><sphere radius="0.2"/></geometry>
+      <material name="green"><color rgba="0 1 0 0.5"/></material></visual>
+  </link>
+  <link name="l1">
+    <inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><origin rpy="0.5 0 0"/><geometry><cylinder radius="0.1" length="0.5"/></geometry>
+      <material name="green"/></visual>
+    <visual><origin xyz="0 0 0.4"/><geometry><mesh scale="2 3 4"
+      filename="package://example-robot-data/robots/ur_description/meshes/ur5/visual/base.dae"/>
+      </geometry></visual>
+    <visual><geometry><mesh scale="0.5 0.5 2"
+      filename="package://example-robot-data/robots/cassie_description/meshes/shin.stl"/>
+      </geometry></visual>
+    <visual><origin xyz="0.1 0 0" rpy="0 0.2 0"/><geometry><mesh scale="1 2 1"
+      filename="package://example-robot-data/robots/laikago_description/meshes/calf.obj"/>
+      </geometry><material name="blue"/></visual>
+  </link>
+  <link name="l2">
+    <inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><origin xyz="0 0.1 0" rpy="0 0 0.5"/><geometry><box size="0.1 0.1 0.1"/></geometry>
+      <material name="green"/></visual>
+  </link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 1" rpy="0.1 0.2 0.3"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <joint name="f" type="fixed"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0.3 0 0" rpy="0 0.5 0"/></joint>
+</robot>
+"""
+
+
+def test_visuals_of_scaled_meshes_and_urdfdoms_materials_match_pinocchios(tmp_path):
+    path = tmp_path / "edge.urdf"
+    path.write_text(_EDGE_URDF)
+    robot = ff.load_robot(path, end_effector="l2")
+    assert _compare(robot) == 7
+    colours = {v.name: v.rgba for v in visual_model(robot)}
+    assert colours["base_0"] == (0.0, 0.0, 1.0, 1.0)  # the robot-level blue, not its own red
+    assert colours["l1_0"] == colours["l2_0"] == (0.0, 1.0, 0.0, 0.5)  # green, named in base_1
+
+
+def test_a_capsule_is_drawn_at_its_radius_from_its_segment():
+    """The triangulated capsule's vertices lie at its radius from its axis segment (to
+    float32 rounding: meshcat keeps vertices in float32)."""
+    from freefloat.viz.visuals import _capsule
+
+    radius, half = 0.07, 0.2
+    vertices = np.asarray(_capsule(radius, half).vertices, dtype=float)
+    along = np.clip(vertices[:, 2], -half, half)
+    gap = np.linalg.norm(vertices - np.column_stack([0 * along, 0 * along, along]), axis=1)
+    np.testing.assert_allclose(gap, radius, atol=1e-7)
+    assert vertices[:, 2].max() == pytest.approx(half + radius)
+    assert vertices[:, 2].min() == pytest.approx(-half - radius)
+
+
+@pytest.mark.parametrize(
+    ("broken", "said"),
+    [
+        ('rpy="0.3 -0.4 1.2"', 'rpy="0 0"'),
+        ('<sphere radius="0.2"/>', '<sphere radius="abc"/>'),
+        ('<color rgba="0 0 1 1"/>', '<color rgba="0 0 1"/>'),
+    ],
+)
+def test_a_visual_number_in_the_wrong_form_is_refused_by_name(tmp_path, broken, said):
+    from freefloat.errors import ViewerError
+
+    path = tmp_path / "edge.urdf"
+    path.write_text(_EDGE_URDF.replace(broken, said, 1))
+    with pytest.raises(ViewerError, match=r"edge\.urdf: .* gives .*; expected \d finite number"):
+        visual_model(ff.load_robot(path, end_effector="l2"))

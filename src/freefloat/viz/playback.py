@@ -15,7 +15,6 @@ viewer's window): no meshcat server is started, and the page is written from the
 
 from __future__ import annotations
 
-import logging
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,7 +33,6 @@ from .controls import CM_COLOR, EE_COLOR, TRAIL_COLOR
 
 __all__ = ["Playback", "build_playback", "serve", "write_html"]
 
-LOGGER = logging.getLogger(__name__)
 
 ROOT_NODE = "freefloat"
 EXTRAS = "freefloat_extras"

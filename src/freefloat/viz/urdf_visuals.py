@@ -5,17 +5,20 @@ and checked to exist, but not parsed (Pinocchio's ``buildGeomFromUrdf`` loads ev
 into collision structures, about 0.5 s for the Panda's COLLADA files, which a drawing never
 uses). Each ``<visual>`` of a link becomes one :class:`Visual` named as Pinocchio names it
 (``<link>_<k>``, k counting the link's visuals from 0), carried by the joint of the link's body
-frame at the frame's placement composed with the visual's ``<origin>``. Its colour is the
-``<material>``'s ``<color>``, or the colour of the robot-level material of that name; without
-one, none is stated. A mesh reference is found as ``package://`` in the robot's package folders
-(and example-robot-data's), as a ``file://`` or absolute path, or relative to the URDF; a mesh
-that cannot be found, or is not a file the viewer reads (:data:`DRAWN_FORMATS`), is drawn as a
-small sphere (:data:`MISSING_MESH_RADIUS`), with one warning for the robot.
+frame at the frame's placement composed with the visual's ``<origin>``. Its colour follows
+urdfdom: the robot-level material of the ``<material>``'s name, else the ``<material>``'s own
+``<color>`` (which later visuals then know by that name); without one, none is stated. A
+number the URDF gives in the wrong count or form is refused, naming the visual. A mesh
+reference is found as ``package://`` in the robot's package folders (and example-robot-data's),
+as a ``file://`` or absolute path, or relative to the URDF; a mesh that cannot be found, or is
+not a file the viewer reads (:data:`DRAWN_FORMATS`), is drawn as a small sphere
+(:data:`MISSING_MESH_RADIUS`), with one warning for the robot.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
@@ -74,9 +77,13 @@ def visual_model(robot: Robot) -> list[Visual]:
         root = ET.fromstring(robot.urdf_text or Path(robot.urdf).read_text(encoding="utf-8"))
     except (OSError, ET.ParseError) as exc:
         raise ViewerError(f"cannot read the visuals of {robot.urdf}: {exc}") from None
-    colours = {
-        m.get("name", ""): _rgba(m) for m in root.findall("material") if _rgba(m) is not None
-    }
+    # urdfdom's rule: a robot-level material of the name wins over a visual's own colour, and
+    # a named colour given in a visual is known by that name to the visuals after it
+    colours: dict[str, tuple[float, float, float, float]] = {}
+    for material in root.findall("material"):
+        rgba = _rgba(material, robot)
+        if rgba is not None:
+            colours[material.get("name", "")] = rgba
     model = robot.model
     out: list[Visual] = []
     missing: list[str] = []
@@ -86,13 +93,18 @@ def visual_model(robot: Robot) -> list[Visual]:
             continue
         frame = model.frames[model.getFrameId(name, pin.FrameType.BODY)]
         for k, element in enumerate(link.findall("visual")):
-            placement = frame.placement * _origin(element.find("origin"))
-            drawn = _geometry(element.find("geometry"), robot, f"{name}_{k}", missing)
-            material = element.find("material")
-            rgba = None
-            if material is not None:
-                rgba = _rgba(material) or colours.get(material.get("name", ""))
-            out.append(Visual(f"{name}_{k}", int(frame.parentJoint), placement, *drawn, rgba))
+            label = f"{name}_{k}"
+            placement = frame.placement * _origin(element.find("origin"), robot, label)
+            drawn = _geometry(element.find("geometry"), robot, label, missing)
+            out.append(
+                Visual(
+                    label,
+                    int(frame.parentJoint),
+                    placement,
+                    *drawn,
+                    _colour(element, colours, robot),
+                )
+            )
     if missing:
         LOGGER.warning(
             "%d mesh file(s) of %s cannot be found or are not STL, OBJ or COLLADA files (e.g. "
@@ -105,27 +117,55 @@ def visual_model(robot: Robot) -> list[Visual]:
     return out
 
 
-def _rgba(material: ET.Element) -> tuple[float, float, float, float] | None:
-    """A ``<material>``'s ``<color rgba>``, or None."""
+def _colour(
+    visual: ET.Element, colours: dict[str, tuple[float, float, float, float]], robot: Robot
+) -> tuple[float, float, float, float] | None:
+    """A visual's colour by urdfdom's rule (see :func:`visual_model`), or None."""
+    material = visual.find("material")
+    if material is None:
+        return None
+    name = material.get("name", "")
+    if name in colours:
+        return colours[name]
+    own = _rgba(material, robot)
+    if own is not None and name:
+        colours[name] = own
+    return own
+
+
+def _rgba(material: ET.Element, robot: Robot) -> tuple[float, float, float, float] | None:
+    """A ``<material>``'s ``<color rgba>``, or None when it gives none."""
     colour = material.find("color")
     if colour is None or colour.get("rgba") is None:
         return None
-    values = [float(x) for x in str(colour.get("rgba")).split()]
-    if len(values) != 4:
-        return None
-    return (values[0], values[1], values[2], values[3])
+    r, g, b, a = _numbers(colour.get("rgba"), 4, f"material {material.get('name', '')!r}", robot)
+    return (r, g, b, a)
 
 
-def _numbers(text: str | None, default: tuple[float, ...]) -> tuple[float, ...]:
-    return tuple(float(x) for x in text.split()) if text else default
+def _numbers(text: str | None, count: int, what: str, robot: Robot) -> tuple[float, ...]:
+    """``count`` numbers from a URDF attribute (zeros when absent).
+
+    Raises:
+        ViewerError: another count of numbers, or a value that is not one.
+    """
+    if not text:
+        return (0.0,) * count
+    try:
+        values = tuple(float(x) for x in text.split())
+    except ValueError:
+        values = ()
+    if len(values) != count or not all(math.isfinite(v) for v in values):
+        numbers = f"{count} finite number{'s' if count > 1 else ''}"
+        raise ViewerError(f"{Path(robot.urdf).name}: {what} gives {text!r}; expected {numbers}")
+    return values
 
 
-def _origin(element: ET.Element | None) -> pin.SE3:
+def _origin(element: ET.Element | None, robot: Robot, label: str) -> pin.SE3:
     """An ``<origin xyz rpy>`` as a placement (m, rad; URDF's fixed-axis roll, pitch, yaw)."""
     if element is None:
         return pin.SE3.Identity()
-    xyz = _numbers(element.get("xyz"), (0.0, 0.0, 0.0))
-    rpy = _numbers(element.get("rpy"), (0.0, 0.0, 0.0))
+    xyz = _numbers(element.get("xyz"), 3, f"the visual {label!r}, origin xyz,", robot)
+    rpy = _numbers(element.get("rpy"), 3, f"the visual {label!r}, origin rpy,", robot)
     return pin.SE3(pin.rpy.rpyToMatrix(*rpy), np.array(xyz))
 
 
@@ -137,20 +177,23 @@ def _geometry(
     if shape is None:
         raise ViewerError(f"the visual {name!r} states no geometry")
     one = (1.0, 1.0, 1.0)
+    what = f"the visual {name!r}, {shape.tag}"
     if shape.tag == "box":
-        return "box", _numbers(shape.get("size"), (0.0, 0.0, 0.0)), None, one
+        return "box", _numbers(shape.get("size"), 3, f"{what} size,", robot), None, one
     if shape.tag == "sphere":
-        return "sphere", (float(shape.get("radius", 0.0)),), None, one
+        return "sphere", _numbers(shape.get("radius"), 1, f"{what} radius,", robot), None, one
     if shape.tag in ("cylinder", "capsule"):
-        size = (float(shape.get("radius", 0.0)), float(shape.get("length", 0.0)))
-        return shape.tag, size, None, one
+        radius = _numbers(shape.get("radius"), 1, f"{what} radius,", robot)
+        length = _numbers(shape.get("length"), 1, f"{what} length,", robot)
+        return shape.tag, radius + length, None, one
     if shape.tag == "mesh":
         reference = shape.get("filename", "")
         found = _mesh_file(reference, robot)
         if found is None or found.suffix.lower() not in DRAWN_FORMATS:
             missing.append(reference)
             return "sphere", (MISSING_MESH_RADIUS,), None, one
-        sx, sy, sz = _numbers(shape.get("scale"), one)
+        scale = shape.get("scale") or "1 1 1"
+        sx, sy, sz = _numbers(scale, 3, f"{what} scale,", robot)
         return "mesh", (), found, (sx, sy, sz)
     raise ViewerError(f"the visual {name!r} is a {shape.tag}, which the playback cannot draw")
 

@@ -24,14 +24,14 @@ import numpy as np
 from .mesh_files import checked_mesh
 from .urdf_visuals import DEFAULT_RGBA, Visual
 
-__all__ = ["draw_visuals", "visual_node"]
+__all__ = ["draw_visuals"]
 
 #: meshcat's cylinder axis (y) turned onto the URDF's (z).
 _Y_TO_Z = np.array([[1.0, 0, 0, 0], [0, 0, -1.0, 0], [0, 1.0, 0, 0], [0, 0, 0, 1.0]])
 _COLLADA = "{http://www.collada.org/2005/11/COLLADASchema}"
 
 
-def visual_node(root: str, visual: Visual) -> str:
+def _visual_node(root: str, visual: Visual) -> str:
     """The meshcat path of a visual's node."""
     return f"{root}/visuals/{visual.name}"
 
@@ -44,7 +44,7 @@ def draw_visuals(viewer: Any, visuals: list[Visual], root: str) -> list[str]:
     """
     nodes = []
     for visual in visuals:
-        node = visual_node(root, visual)
+        node = _visual_node(root, visual)
         shown = _shown(visual)
         if isinstance(shown, _ColladaFile):
             viewer[node].set_object(shown)
