@@ -84,3 +84,16 @@ def as_older_format(doc: dict, fmt: str = "freefloat.plan/3") -> dict:
     if fmt == "freefloat.plan/2":
         old.pop("objective", None)
     return old
+
+
+def coal_hull(vertices, triangles):
+    """Coal's true convex hull (qhull, "Qt") of a triangle mesh's vertices (m)."""
+    import coal
+
+    model = coal.BVHModelOBBRSS()
+    model.beginModel(len(triangles), len(vertices))
+    model.addVertices(vertices)
+    model.addTriangles(triangles)
+    model.endModel()
+    model.buildConvexHull(True, "Qt")
+    return model.convex

@@ -29,7 +29,7 @@ from freefloat.verify.clearance import MeshClearance, hull_slack
 from freefloat.verify.hull_agreement import compared, shape_excess
 from freefloat.verify.motion import PolynomialMotion
 
-from conftest import ROOT
+from conftest import ROOT, coal_hull
 from geometry_truth import (
     box_hull_distance,
     point_hull_distance,
@@ -366,13 +366,7 @@ def _moved_hull(obj: pin.GeometryObject, axis: int, move: float) -> coal.ConvexB
     vertices = vertices.copy()
     top = vertices[:, axis].max()
     vertices[vertices[:, axis] > top - 0.008, axis] += move
-    model = coal.BVHModelOBBRSS()
-    model.beginModel(len(triangles), len(vertices))
-    model.addVertices(vertices)
-    model.addTriangles(triangles)
-    model.endModel()
-    model.buildConvexHull(True, "Qt")
-    return model.convex
+    return coal_hull(vertices, triangles)
 
 
 @pytest.mark.parametrize("move", [-0.005, 0.005])

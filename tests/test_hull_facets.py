@@ -17,7 +17,7 @@ from freefloat.robot.srdf import known_srdf
 from freefloat.verify.clearance import MeshClearance
 from freefloat.verify.hull_agreement import _excess_by_facets
 
-from conftest import ROOT
+from conftest import ROOT, coal_hull
 
 
 def _qhull_excess(vertices: np.ndarray, points: np.ndarray) -> float:
@@ -29,16 +29,6 @@ def _qhull_excess(vertices: np.ndarray, points: np.ndarray) -> float:
         return float((these @ planes[:, :3].T + planes[:, 3]).max())
 
     return max(outside(vertices, points), outside(points, vertices))
-
-
-def _hull(vertices: np.ndarray, triangles: np.ndarray) -> coal.ConvexBase:
-    model = coal.BVHModelOBBRSS()
-    model.beginModel(len(triangles), len(vertices))
-    model.addVertices(vertices)
-    model.addTriangles(triangles)
-    model.endModel()
-    model.buildConvexHull(True, "Qt")
-    return model.convex
 
 
 @pytest.mark.parametrize("urdf", ["ur5_servicer.urdf", "panda_servicer.urdf"])
@@ -73,7 +63,7 @@ def test_a_hull_of_part_of_its_mesh_is_caught_by_its_facets():
         inside = triangles[np.all(keep[triangles], axis=1)]
         renumber = np.full(len(all_vertices), -1)
         renumber[kept] = np.arange(len(kept))
-        partial = _hull(all_vertices[kept], renumber[inside])
+        partial = coal_hull(all_vertices[kept], renumber[inside])
         points = np.array(partial.points(), dtype=float).reshape(-1, 3)
         got = _excess_by_facets(vertices, points, partial)
         assert got is not None, objects[index].name
@@ -89,7 +79,7 @@ def test_a_hull_of_other_points_is_left_to_qhull():
     index, (vertices, _) = next(iter(mesh.meshes.items()))
     all_vertices, triangles = meshes.object_triangles(mesh.geometry.geometryObjects[index])
     moved = all_vertices * 1.01
-    hull = _hull(moved, triangles)
+    hull = coal_hull(moved, triangles)
     points = np.array(hull.points(), dtype=float).reshape(-1, 3)
     assert _excess_by_facets(vertices, points, hull) is None
 
