@@ -43,6 +43,7 @@ __all__ = [
     "check_urdf_xml",
     "parser_messages",
     "urdf_document",
+    "urdf_number",
 ]
 
 _URDF_JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
@@ -84,7 +85,7 @@ class CheckedUrdf:
 _NUMBER = re.compile(r"\s*[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|\s*[+-]?(inf|nan)", re.I | re.A)
 
 
-def _parse(raw: str) -> float:
+def urdf_number(raw: str) -> float:
     """``raw`` as a float, read as urdfdom reads it; ``ValueError`` otherwise."""
     if not _NUMBER.fullmatch(raw):
         raise ValueError(raw)
@@ -104,7 +105,7 @@ def _float_attr(
             raise ModelError(f"{what} has no {attr!r} attribute")
         return default
     try:
-        value = _parse(raw)
+        value = urdf_number(raw)
     except ValueError:
         raise ModelError(f"{what} {attr}={excerpt(raw)} is not a number") from None
     if not math.isfinite(value):
@@ -120,7 +121,7 @@ def _triple(element: ET.Element | None, attr: str, what: str) -> list[float]:
     """Three finite numbers of at most :data:`MAX_LENGTH_M` (``xyz`` or ``rpy``; default 0)."""
     raw = "0 0 0" if element is None else element.get(attr, "0 0 0")
     try:
-        values = [_parse(v) for v in raw.split()]
+        values = [urdf_number(v) for v in raw.split()]
     except ValueError:
         values = []
     if len(values) != 3 or not all(math.isfinite(v) and abs(v) <= MAX_LENGTH_M for v in values):
@@ -163,7 +164,7 @@ def _check_movable_joint(joint: ET.Element, name: str, kind: str) -> None:
     axis = joint.find("axis")
     raw = "1 0 0" if axis is None else axis.get("xyz", "1 0 0")
     try:
-        xyz = [_parse(v) for v in raw.split()]
+        xyz = [urdf_number(v) for v in raw.split()]
     except ValueError:
         xyz = []
     if len(xyz) != 3 or not all(math.isfinite(v) for v in xyz):

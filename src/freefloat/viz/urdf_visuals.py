@@ -28,6 +28,7 @@ import pinocchio as pin
 
 from ..errors import ViewerError
 from ..robot.model import Robot, example_robot_data_dir
+from ..robot.urdf_checks import urdf_number
 
 __all__ = ["MISSING_MESH_RADIUS", "Visual", "visual_model"]
 
@@ -143,7 +144,7 @@ def _rgba(material: ET.Element, robot: Robot) -> tuple[float, float, float, floa
 
 
 def _numbers(text: str | None, count: int, what: str, robot: Robot) -> tuple[float, ...]:
-    """``count`` numbers from a URDF attribute (zeros when absent).
+    """``count`` numbers from a URDF attribute, read as urdfdom reads them (zeros when absent).
 
     Raises:
         ViewerError: another count of numbers, or a value that is not one.
@@ -151,7 +152,7 @@ def _numbers(text: str | None, count: int, what: str, robot: Robot) -> tuple[flo
     if not text:
         return (0.0,) * count
     try:
-        values = tuple(float(x) for x in text.split())
+        values = tuple(urdf_number(x) for x in text.split())
     except ValueError:
         values = ()
     if len(values) != count or not all(math.isfinite(v) for v in values):
