@@ -111,3 +111,18 @@ def test_an_empty_scheduler_address_is_refused_by_name(tmp_path, capfd):
         capfd, "sweep", tmp_path / "s.toml", "-o", tmp_path / "r.csv", "--scheduler", " "
     )
     assert "--scheduler is empty; give the Dask scheduler's address" in line
+
+
+def test_a_visual_colour_of_three_numbers_is_one_line_naming_it(tmp_path, capfd):
+    """The page refuses a material colour of the wrong count (urdfdom wants r g b a), in one
+    line on the command line, exit 2, no page left behind."""
+    urdf = tmp_path / "m.urdf"
+    text = PLANAR.read_text()
+    assert '<color rgba="0.9 0.55 0.1 1"/>' in text
+    urdf.write_text(text.replace('<color rgba="0.9 0.55 0.1 1"/>', '<color rgba="0.9 0.55 0.1"/>'))
+    plan = ff.plan(ff.Scenario.from_toml(_write(tmp_path, scenario_text(robot=str(urdf)))))
+    path = plan.save(tmp_path / "p.json")
+    capfd.readouterr()
+    line = _refused(capfd, "show", path, "--html", tmp_path / "p.html")
+    assert "m.urdf: material 'arm' gives '0.9 0.55 0.1'; expected 4 finite numbers" in line
+    assert not (tmp_path / "p.html").exists()
