@@ -27,6 +27,7 @@ from ...robot.collision import CollisionModel
 from ...robot.model import Robot
 from ..paths import JointPolynomials, PathFamily
 from ..residual import Problem
+from ..scalar_minimum import scalar_minimum
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 from .clearance_samples import (
     Measured,
@@ -209,9 +210,8 @@ class Clearance(Constraint):
         """The smallest sampled clearance (m), its time (s) and pair, minima refined.
 
         The sampled local minima at ``minima`` are refined by a bounded scalar search between
-        their neighbouring samples.
+        their neighbouring samples (:func:`~freefloat.problem.scalar_minimum.scalar_minimum`).
         """
-        from scipy.optimize import minimize_scalar  # when needed: it costs start-up time
 
         def lowest(s: float) -> tuple[float, int]:
             return self.model.closest_value(path.evaluate(np.array([s])).q[0], s / path.duration)
@@ -223,14 +223,9 @@ class Clearance(Constraint):
         for index in minima:
             k = int(index)
             lo, hi = float(t[max(k - 1, 0)]), float(t[min(k + 1, count - 1)])
-            result = minimize_scalar(
-                lambda s: lowest(s)[0],
-                bounds=(lo, hi),
-                method="bounded",
-                options={"xatol": 1e-9 * max(1.0, path.duration)},
-            )
-            if float(result.fun) < best:
-                best, best_t = float(result.fun), float(result.x)
+            result = scalar_minimum(lambda s: lowest(s)[0], lo, hi, 1e-9 * max(1.0, path.duration))
+            if result.value < best:
+                best, best_t = result.value, result.x
                 best_pair = lowest(best_t)[1]
         return best, best_t, best_pair
 

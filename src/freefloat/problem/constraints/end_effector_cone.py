@@ -35,6 +35,7 @@ from ...errors import InputError, excerpt
 from ...robot.model import Robot
 from ..paths import JointPolynomials
 from ..residual import Problem
+from ..scalar_minimum import scalar_minimum
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 
 __all__ = ["VERIFY_SAMPLES", "EndEffectorCone"]
@@ -159,21 +160,19 @@ class EndEffectorCone(Constraint):
 
     def _worst(self, robot: Robot, path: JointPolynomials, samples: int) -> tuple[float, float]:
         """Largest ``g`` and its time (s): sampled, each local maximum refined in time."""
-        from scipy.optimize import minimize_scalar  # when needed: it costs start-up time
-
         t = np.linspace(0.0, path.duration, samples)
         g = self._gap(robot, path, t)
         best, when = float(g.max()), float(t[int(np.argmax(g))])
         inner = np.flatnonzero((g[1:-1] >= g[:-2]) & (g[1:-1] >= g[2:])) + 1
         for k in inner[np.argsort(g[inner])[::-1][:8]]:
-            found = minimize_scalar(
+            found = scalar_minimum(
                 lambda x: -float(self._gap(robot, path, np.array([x]))[0]),
-                bounds=(float(t[k - 1]), float(t[k + 1])),
-                method="bounded",
-                options={"xatol": 1e-10 * path.duration},
+                float(t[k - 1]),
+                float(t[k + 1]),
+                1e-10 * path.duration,
             )
-            if -found.fun > best:
-                best, when = float(-found.fun), float(found.x)
+            if -found.value > best:
+                best, when = -found.value, found.x
         return best, when
 
     def critical_times(self, robot: Robot, path: JointPolynomials) -> np.ndarray:
