@@ -12,9 +12,11 @@ may leave that box by ``(k - 1) |goal_i - start_i| / 2`` on either side (within 
 The geodesic angle between the start attitude and the end attitude is at most the length of
 the attitude's path, so ``B = sum_i G_i L_i`` bounds how far from the start attitude any simple
 motion leaves the spacecraft. ``G_i`` is the largest value found by sampling the box (evenly
-spread points, :func:`.quasi_random.unit_points`) and refining the best samples by bounded
-quasi-Newton searches: a maximum estimated, not certified (a narrow peak between samples
-could be missed), so the bound is as good as that search. Cyclic back-and-forth motions
+spread points, :func:`.quasi_random.unit_points`) and refining the best sample of each joint
+by a projected gradient ascent within the box (the column's analytic derivative,
+:meth:`~freefloat.physics.momentum.MomentumMap.base_rates`; a count of steps): a maximum
+estimated, not certified (a narrow peak between samples could be missed), so the bound is as
+good as that search. Cyclic back-and-forth motions
 (``k`` large) can turn the base further; the bound says nothing about them.
 """
 
@@ -34,8 +36,12 @@ __all__ = ["SimpleMotionBound", "inertia_ratio", "simple_motion_bound", "turn_li
 
 #: Configurations sampled in the box before refinement.
 SAMPLES = 256
-#: Quasi-Newton iterations per refined joint gain.
-REFINE_ITERATIONS = 40
+#: Gradient steps tried per refined joint gain (a count; all joints' searches in one batch).
+REFINE_STEPS = 200
+#: First step of a gradient search, as a fraction of the unit box's diagonal.
+FIRST_STEP = 0.25
+#: A search stops once its step falls below this (unit coordinates).
+SMALLEST_STEP = 1e-9
 
 
 @dataclass(frozen=True)
@@ -95,25 +101,14 @@ def simple_motion_bound(
     start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
     box = _box(mmap, start, goal, travel_factor)
     travel = travel_factor * np.abs(goal - start)
-    n = len(start)
-    from scipy import optimize
-
-    unit = unit_points(samples, n, seed)
+    unit = unit_points(samples, len(start), seed)
     points = np.vstack([start, goal, box[:, 0] + unit * (box[:, 1] - box[:, 0])])
-    norms = np.array([np.linalg.norm(mmap.f1(p), axis=0) for p in points])  # (K, N)
+    norms = np.linalg.norm(mmap.base_rates(points, np.zeros_like(points)).f1, axis=1)  # (K, N)
+    moving = np.flatnonzero(travel > 0.0)  # a joint that does not move adds nothing
     gains = norms.max(axis=0)
-    bounds = [(float(a), float(b)) for a, b in box]
-    for i in range(n):
-        if travel[i] == 0.0:
-            continue  # this joint does not move: its gain does not enter the bound
-        result = optimize.minimize(
-            lambda q, i=i: -float(np.linalg.norm(mmap.f1(q)[:, i])),
-            points[int(np.argmax(norms[:, i]))],
-            method="L-BFGS-B",
-            bounds=bounds,
-            options={"maxiter": REFINE_ITERATIONS},
-        )
-        gains[i] = max(gains[i], -float(result.fun))
+    if len(moving):
+        found = _ascended(mmap, points[np.argmax(norms[:, moving], axis=0)], moving, box)
+        gains[moving] = np.maximum(gains[moving], found)
     return SimpleMotionBound(
         travel_factor=float(travel_factor),
         travel=travel,
@@ -121,6 +116,63 @@ def simple_motion_bound(
         gains=gains,
         bound=float(gains @ travel),
     )
+
+
+def _column_norms(
+    mmap: MomentumMap, joints: np.ndarray, columns: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Row ``k``: ``|F1[:, columns[k]](joints[k])|`` (rad per rad or m) and its gradient.
+
+    The column is the base rate of a unit rate of that joint, so its derivative over the
+    joints is the analytic ``d omega / d q`` at those rates (per rad or m).
+    """
+    rates = np.zeros_like(joints)
+    rates[np.arange(len(columns)), columns] = 1.0
+    found = mmap.base_rates(joints, rates, derivatives=True)
+    norms = np.linalg.norm(found.omega, axis=1)
+    assert found.domega_dq is not None
+    slope = np.einsum("ki,kij->kj", found.omega, found.domega_dq)
+    return norms, slope / np.maximum(norms, 1e-300)[:, None]
+
+
+def _ascended(
+    mmap: MomentumMap, joints: np.ndarray, columns: np.ndarray, box: np.ndarray
+) -> np.ndarray:
+    """Per row, the largest ``|F1[:, columns[k]]|`` a projected gradient ascent finds.
+
+    Each row climbs from ``joints[k]`` within ``box`` in unit coordinates (the box scaled to
+    the unit cube, so radians and metres weigh alike) along its gradient, less the parts that
+    point out of the box at a face it lies on, clipped to the box. A step is taken when it
+    raises the norm, else halved; after a step the next one's length is the Barzilai-Borwein
+    estimate of the curvature met (secant), which keeps long ridges from costing many short
+    steps. :data:`REFINE_STEPS` batched evaluations at most, fewer once every step is below
+    :data:`SMALLEST_STEP`. Deterministic.
+    """
+    low, width = box[:, 0], box[:, 1] - box[:, 0]
+    unit = np.where(width > 0.0, (joints - low) / np.where(width > 0.0, width, 1.0), 0.0)
+    values, slope = _column_norms(mmap, joints, columns)
+    climb = slope * width  # d norm / d unit coordinate
+    scale = np.linalg.norm(climb, axis=1)
+    factor = FIRST_STEP * math.sqrt(len(low)) / np.where(scale > 0.0, scale, 1.0)
+    for _ in range(REFINE_STEPS):
+        ahead = np.where((unit <= 0.0) & (climb < 0.0) | (unit >= 1.0) & (climb > 0.0), 0.0, climb)
+        trial = np.clip(unit + factor[:, None] * ahead, 0.0, 1.0)
+        moved = trial - unit
+        active = np.linalg.norm(moved, axis=1) >= SMALLEST_STEP
+        if not active.any():
+            break
+        rows = np.flatnonzero(active)  # only the searches still moving are evaluated
+        tried, tried_slope = _column_norms(mmap, low + trial[rows] * width, columns[rows])
+        moved, tried_climb = moved[rows], tried_slope * width
+        curvature = -np.einsum("kj,kj->k", moved, tried_climb - climb[rows])  # > 0: concave
+        secant = np.einsum("kj,kj->k", moved, moved) / np.where(curvature > 0.0, curvature, 1.0)
+        better = tried > values[rows]
+        factor[rows] = np.where(
+            better, np.where(curvature > 0.0, secant, 2.0 * factor[rows]), 0.5 * factor[rows]
+        )
+        kept = rows[better]
+        unit[kept], values[kept], climb[kept] = trial[kept], tried[better], tried_climb[better]
+    return values
 
 
 def turn_limit(drift: np.ndarray, axis: np.ndarray, bound: float) -> float:
