@@ -123,3 +123,18 @@ def test_a_constraint_ahead_on_a_nearly_singular_map_says_so() -> None:
     assert _why(ahead, np.c_[np.diag([2.0, 1.0, 1e-12]), np.zeros(3)]) == (
         "a singular map (dh/dbeta loses rank)"
     )
+
+
+def test_a_path_that_does_not_move_takes_no_step_from_its_singular_map(robot) -> None:
+    """Start and goal joints alike: every free coefficient's first-order effect on the
+    attitude vanishes (the finite-difference Jacobian is zero to rounding), so continuation
+    stops at once, naming the singular map. (It used to step along a least-squares tangent of
+    order 1e9 and, on some CPUs, leave quadprog looping on the rows of that path.)"""
+    problem = ff.build_problem(robot, START, START, att.IDENTITY, att.IDENTITY, 8.0, extra=[2, 2])
+    assert np.abs(_finite_difference_jacobian(problem)).max() < 1e-9
+    target = problem.with_goal(att.quat_exp(math.radians(1.0) * np.array([0.0, 0.0, 1.0])))
+    before = problem.evaluations
+    result = track(target, ff.default_constraints(), SolveOptions(max_evaluations=30))
+    assert (result.steps, result.fraction) == (0, 0.0)
+    assert result.stopped_by == "a singular map (dh/dbeta loses rank)"
+    assert problem.evaluations - before <= 2

@@ -182,6 +182,9 @@ def track(
     estimate of ``freefloat bounds``, which wants the furthest point within its budget).
     With ``trace``, the start and every accepted point are appended to it (the reach
     estimate resumes from them; those on the way are solved on the intermediate grid).
+    Where the map is singular at the start (a path that does not move, say: every free
+    coefficient's first-order effect on the attitude vanishes) there is no tangent to follow,
+    and it stops there, "a singular map", without a step.
     """
     zero = np.zeros(problem.n_free) if origin is None else np.asarray(origin, dtype=float)
     start = problem.achieved(zero)
@@ -202,6 +205,8 @@ def track(
         if solved is None:  # the start could not be brought within what it broke
             return ContinuationResult(beta, 0, angle, axis, r, 0, iterations, NO_START, broke.name)
         beta = solved
+    if angle > 0.0 and singular(jac):  # no tangent to follow: a step would be meaningless
+        return ContinuationResult(beta, 0, angle, axis, r, 0, iterations, _why(None, jac), "")
     dl = min(1.0, FIRST_STEP / angle) if angle > 0 else 1.0
     if trace is not None:
         trace.append(BranchPoint(0.0, beta, dl * angle))

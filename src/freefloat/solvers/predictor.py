@@ -32,6 +32,8 @@ def newton_correction(
     near = g > FAR_INSIDE
     c_mat = np.vstack([jac, -g_mat[near]]).T
     b = np.concatenate([-r, g[near] + MARGIN])
+    if not (np.isfinite(c_mat).all() and np.isfinite(b).all()):  # quadprog would not return
+        return None
     try:
         return np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, len(r))[0])
     except ValueError:
