@@ -4,7 +4,8 @@ A goal may give the position (m, inertial frame, origin at the system CM) and, o
 orientation of one or more end-effector frames instead of joint values. With the base attitude
 fixed by the goal and the base position fixed by the CM staying at the origin, every frame's
 pose is a function of the joint values alone; the goal joints are found by bounded least
-squares over the joints that move a goal frame (the others hold their start or given goal
+squares (:mod:`.box_least_squares`) over the joints that move a goal frame (the others hold
+their start or given goal
 value), from the start joints (so the nearest solution is preferred), then from further
 starts.
 """
@@ -17,11 +18,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-from scipy.optimize import least_squares, minimize
 
 from ..errors import InputError, UnreachableGoalError
 from ..physics.momentum import MomentumMap
 from .bounds import joint_ranges
+from .box_least_squares import box_least_squares
 from .quasi_random import unit_points
 
 __all__ = ["FrameGoal", "solve_cartesian_goal", "solve_frame_goals", "workspace_radius"]
@@ -52,6 +53,8 @@ def workspace_radius(
 
     def distance(q: np.ndarray) -> float:
         return float(np.linalg.norm(_placement(mmap, q, quaternion_xyzw, index_of).translation))
+
+    from scipy.optimize import minimize  # an unreachable goal's message only: lazily
 
     values = np.array([distance(p) for p in points])
     best = float(values.max())
@@ -175,17 +178,8 @@ def solve_frame_goals(
     guesses += [rng.uniform(ranges[:, 0], ranges[:, 1]) for _ in range(starts - 1)]
     best_x, best = guesses[0], math.inf
     for guess in guesses:
-        result = least_squares(
-            residual,
-            guess,
-            bounds=(lower, upper),
-            method="trf",
-            jac="3-point",
-            xtol=1e-15,
-            ftol=1e-15,
-            gtol=1e-15,
-        )
-        error = float(np.linalg.norm(result.fun))
+        result = box_least_squares(residual, guess, lower, upper)
+        error = result.cost
         if error < best:
             best_x, best = result.x, error
         if best < TOLERANCE:
