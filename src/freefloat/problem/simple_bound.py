@@ -14,7 +14,8 @@ the attitude's path, so ``B = sum_i G_i L_i`` bounds how far from the start atti
 motion leaves the spacecraft. ``G_i`` is the largest value found by sampling the box (evenly
 spread points, :func:`.quasi_random.unit_points`) and refining the best sample of each joint
 by a projected gradient ascent within the box (the column's analytic derivative,
-:meth:`~freefloat.physics.momentum.MomentumMap.base_rates`; a count of steps): a maximum
+:meth:`~freefloat.physics.momentum.MomentumMap.base_rates`; a count of steps) and a few
+projected Newton steps where the maximum is concave: a maximum
 estimated, not certified (a narrow peak between samples could be missed), so the bound is as
 good as that search. Cyclic back-and-forth motions
 (``k`` large) can turn the base further; the bound says nothing about them.
@@ -38,6 +39,10 @@ __all__ = ["SimpleMotionBound", "inertia_ratio", "simple_motion_bound", "turn_li
 SAMPLES = 256
 #: Gradient steps tried per refined joint gain (a count; all joints' searches in one batch).
 REFINE_STEPS = 200
+#: Projected Newton steps after the gradient ascent, per joint gain (a count).
+NEWTON_STEPS = 8
+#: Forward-difference step of the Hessian, in unit coordinates.
+DIFFERENCE = 1e-6
 #: First step of a gradient search, as a fraction of the unit box's diagonal.
 FIRST_STEP = 0.25
 #: A search stops once its step falls below this (unit coordinates).
@@ -172,7 +177,56 @@ def _ascended(
         )
         kept = rows[better]
         unit[kept], values[kept], climb[kept] = trial[kept], tried[better], tried_climb[better]
+    for k in range(len(columns)):  # the ridge's last stretch: Newton steps on the free faces
+        values[k] = _polished(mmap, int(columns[k]), unit[k], float(values[k]), climb[k], box)
     return values
+
+
+def _polished(
+    mmap: MomentumMap,
+    column: int,
+    unit: np.ndarray,
+    value: float,
+    climb: np.ndarray,
+    box: np.ndarray,
+) -> float:
+    """The norm after up to :data:`NEWTON_STEPS` projected Newton steps from ``unit``.
+
+    Unit coordinates as in :func:`_ascended`; ``climb`` is the norm's gradient there. The
+    Hessian comes from forward differences of the analytic gradient (one batch per step);
+    the joints free to move are those not held at a face by their gradient. A Newton step is
+    taken only where the Hessian is negative definite on them and the step raises the norm
+    (halved up to four times); otherwise the search ends. Returns the best norm found.
+    """
+    low, width = box[:, 0], box[:, 1] - box[:, 0]
+    n = len(unit)
+    for _ in range(NEWTON_STEPS):
+        free = (width > 0.0) & ~(((unit <= 0.0) & (climb < 0.0)) | ((unit >= 1.0) & (climb > 0.0)))
+        if not free.any():
+            break
+        shift = np.where(unit + DIFFERENCE <= 1.0, DIFFERENCE, -DIFFERENCE)
+        shifted = unit[None, :] + np.diag(shift)
+        _, slopes = _column_norms(mmap, low + shifted * width, np.full(n, column))
+        hessian = (slopes * width - climb[None, :]) / shift[:, None]
+        block = -0.5 * (hessian + hessian.T)[np.ix_(free, free)]
+        try:
+            lower = np.linalg.cholesky(block)  # negative definite: a maximum's neighbourhood
+        except np.linalg.LinAlgError:
+            break
+        step = np.zeros(n)
+        step[free] = np.linalg.solve(lower.T, np.linalg.solve(lower, climb[free]))
+        for _ in range(5):
+            trial = np.clip(unit + step, 0.0, 1.0)
+            tried, tried_slope = _column_norms(
+                mmap, (low + trial * width)[None, :], np.array([column])
+            )
+            if tried[0] > value:
+                unit, value, climb = trial, float(tried[0]), tried_slope[0] * width
+                break
+            step *= 0.5
+        else:
+            break
+    return value
 
 
 def turn_limit(drift: np.ndarray, axis: np.ndarray, bound: float) -> float:
