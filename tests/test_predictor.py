@@ -81,3 +81,13 @@ def test_the_newton_correction_is_slsqps_minimum_norm_step(seed: int) -> None:
     assert (
         newton_correction(np.array([[1.0]]), np.array([-1.0]), np.array([0.0]), np.eye(1)) is None
     )
+
+
+def test_a_correction_from_rows_that_are_not_finite_is_refused_not_solved() -> None:
+    # quadprog may never return on such rows: None (infeasible) before it is called.
+    jac, r, g = np.eye(2, 3), np.array([0.1, -0.2]), np.array([-0.1, -0.2])
+    g_mat = np.ones((2, 3))
+    assert newton_correction(jac, r, g, np.where([[True], [False]], np.nan, g_mat)) is None
+    assert newton_correction(jac, r * np.inf, g, g_mat) is None
+    assert newton_correction(np.where(jac > 0.0, np.inf, 0.0), r, g, g_mat) is None
+    assert newton_correction(jac, r, g, g_mat) is not None  # finite: solved

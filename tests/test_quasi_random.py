@@ -57,21 +57,3 @@ def test_bad_sizes_are_refused() -> None:
     with pytest.raises(ValueError, match="dimensions >= 1"):
         unit_points(4, 0)
     assert unit_points(0, 3).shape == (0, 3)
-
-
-def test_reach_loads_neither_scipy_stats_nor_its_optimiser() -> None:
-    # SciPy's statistics package takes about 0.3 s to import and its optimiser about 0.2 s:
-    # neither the reach bound nor the clearance check's refinement of a sampled minimum
-    # (which the Panda's (-1, 1, 1) direction asks for: counted) needs them.
-    code = (
-        "import sys, numpy as np, freefloat as ff\n"
-        "import freefloat.problem.constraints.clearance as c\n"
-        "calls, search = [], c.scalar_minimum\n"
-        "c.scalar_minimum = lambda *a: calls.append(1) or search(*a)\n"
-        "s = ff.Scenario.from_toml(ff.default_scenario_path().parent / 'panda_servicer.toml')\n"
-        "r = ff.reachable(s, directions=np.array([[-1.0, 1.0, 1.0]]), jobs=1)\n"
-        "print(r.directions[0].inner > 0, len(calls) > 0, 'scipy.stats' in sys.modules,"
-        " 'scipy.optimize' in sys.modules)"
-    )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.split() == ["True", "True", "False", "False"]

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 import re
+import subprocess
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -323,3 +325,21 @@ def test_the_ur5_servicer_turns_its_whole_outer_bound_about_z_with_clearance() -
     plan = ff.plan(replace(scenario, goal_attitude=goal), samples=41)
     assert plan.verification.passed
     assert ff.geodesic_angle(np.array(plan.base.achieved_quaternion_xyzw), goal) < 1e-9
+
+
+def test_reach_loads_neither_scipy_stats_nor_its_optimiser() -> None:
+    # SciPy's statistics package takes about 0.3 s to import and its optimiser about 0.2 s:
+    # neither the reach bound nor the clearance check's refinement of a sampled minimum
+    # (which the Panda's (-1, 1, 1) direction asks for: counted) needs them.
+    code = (
+        "import sys, numpy as np, freefloat as ff\n"
+        "import freefloat.problem.constraints.clearance as c\n"
+        "calls, search = [], c.scalar_minimum\n"
+        "c.scalar_minimum = lambda *a: calls.append(1) or search(*a)\n"
+        "s = ff.Scenario.from_toml(ff.default_scenario_path().parent / 'panda_servicer.toml')\n"
+        "r = ff.reachable(s, directions=np.array([[-1.0, 1.0, 1.0]]), jobs=1)\n"
+        "print(r.directions[0].inner > 0, len(calls) > 0, 'scipy.stats' in sys.modules,"
+        " 'scipy.optimize' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["True", "True", "False", "False"]

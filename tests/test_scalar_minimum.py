@@ -60,10 +60,20 @@ def test_the_budget_is_a_count_and_is_reported() -> None:
     assert found.value == min(f(x) for x in calls[:6])
 
 
+def test_an_interval_of_one_point_is_that_point() -> None:
+    found = scalar_minimum(math.cos, 2.0, 2.0, 1e-9)
+    assert (found.x, found.value, found.evaluations, found.converged) == (
+        2.0,
+        math.cos(2.0),
+        1,
+        True,
+    )
+
+
 @pytest.mark.parametrize(
     ("low", "high", "tolerance", "budget", "message"),
     [
-        (1.0, 1.0, 1e-9, 10, r"low < high, got \[1.0, 1.0\]"),
+        (1.0, 0.5, 1e-9, 10, r"low <= high, got \[1.0, 0.5\]"),
         (0.0, 1.0, 0.0, 10, "x_tolerance > 0"),
         (0.0, 1.0, 1e-9, 0, "max_evaluations >= 1"),
     ],

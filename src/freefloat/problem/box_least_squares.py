@@ -46,16 +46,19 @@ class BoxFit:
     Attributes:
         x: the best point found (inside the box; the unknowns' units).
         residual: the residual there.
-        cost: ``|residual|`` (the residual's norm).
+        norm: ``|residual|`` (the residual's Euclidean norm).
         iterations: iterations made (a count).
         evaluations: residual evaluations (a count, differences included).
+        converged: the search ended at ``target`` or where no step lowers the norm (a local
+            minimum within the box, to rounding); False: the iteration budget ran out first.
     """
 
     x: np.ndarray
     residual: np.ndarray
-    cost: float
+    norm: float
     iterations: int
     evaluations: int
+    converged: bool
 
 
 def box_least_squares(
@@ -79,21 +82,23 @@ def box_least_squares(
     lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     x = np.clip(np.asarray(start, dtype=float), lower, upper)
     r = np.asarray(residual(x), dtype=float)
-    cost, evaluations, damping, iterations = float(r @ r), 1, -1.0, 0
-    while iterations < max_iterations and math.sqrt(cost) > target:
+    squares, evaluations, damping, iterations = float(r @ r), 1, -1.0, 0
+    while math.sqrt(squares) > target:
+        if iterations >= max_iterations:
+            return BoxFit(x, r, math.sqrt(squares), iterations, evaluations, False)
         iterations += 1
-        jacobian = _differences(residual, x, r, lower, upper)
-        evaluations += 2 * len(x)
+        jacobian, spent = _differences(residual, x, r, lower, upper)
+        evaluations += spent
         gradient = jacobian.T @ r
         free = ~(((x <= lower) & (gradient > 0.0)) | ((x >= upper) & (gradient < 0.0)))
         if not np.any(gradient[free]):  # a stationary point of the sum of squares in the box
             break
         normal = jacobian[:, free].T @ jacobian[:, free]
-        diagonal = np.maximum(np.diag(normal), 1e-300)
+        largest = max(float(np.diag(normal).max()), 1e-300)
         if damping < 0.0:
-            damping = FIRST_DAMPING * float(diagonal.max(initial=0.0))
+            damping = FIRST_DAMPING * largest
         moved = False
-        while damping <= LARGEST_DAMPING * float(diagonal.max(initial=1.0)):
+        while damping <= LARGEST_DAMPING * largest:
             step = np.zeros_like(x)
             try:
                 step[free] = np.linalg.solve(
@@ -106,16 +111,18 @@ def box_least_squares(
             if length > MAX_STEP:  # far from a solution the model is not trusted further
                 step *= MAX_STEP / length
             trial = np.clip(x + step, lower, upper)
+            if np.array_equal(trial, x):  # the step is lost to rounding: nothing left to gain
+                break
             trial_r = np.asarray(residual(trial), dtype=float)
             evaluations += 1
-            if float(trial_r @ trial_r) < cost:
-                x, r, cost, moved = trial, trial_r, float(trial_r @ trial_r), True
+            if float(trial_r @ trial_r) < squares:
+                x, r, squares, moved = trial, trial_r, float(trial_r @ trial_r), True
                 damping = max(damping / 3.0, 1e-300)
                 break
             damping *= 4.0
         if not moved:
             break
-    return BoxFit(x, r, math.sqrt(cost), iterations, evaluations)
+    return BoxFit(x, r, math.sqrt(squares), iterations, evaluations, True)
 
 
 def _differences(
@@ -124,13 +131,14 @@ def _differences(
     r: np.ndarray,
     lower: np.ndarray,
     upper: np.ndarray,
-) -> np.ndarray:
+) -> tuple[np.ndarray, int]:
     """The residual's Jacobian at ``x`` (where it is ``r``) by central differences, in the box.
 
-    Where a central step would leave the box, the difference is taken over the part of the
-    interval ``[x - h, x + h]`` that lies inside it (one-sided at a bound).
+    Also the residual evaluations it took (a count). Where a central step would leave the
+    box, the difference is taken over the part of ``[x - h, x + h]`` inside it (one-sided at a
+    bound); an unknown whose box has no width gets a zero column without an evaluation.
     """
-    columns = []
+    columns, spent = [], 0
     for i in range(len(x)):
         h = _STEP * max(1.0, abs(float(x[i])))
         ahead, behind = x.copy(), x.copy()
@@ -145,4 +153,5 @@ def _differences(
             np.asarray(residual(behind), dtype=float),
         )
         columns.append((up - down) / span)
-    return np.stack(columns, axis=1)
+        spent += 2
+    return np.stack(columns, axis=1), spent

@@ -178,8 +178,8 @@ def solve_frame_goals(
     guesses += [rng.uniform(ranges[:, 0], ranges[:, 1]) for _ in range(starts - 1)]
     best_x, best = guesses[0], math.inf
     for guess in guesses:
-        result = box_least_squares(residual, guess, lower, upper)
-        error = result.cost
+        result = box_least_squares(residual, guess, lower, upper, target=1e-3 * TOLERANCE)
+        error = result.norm
         if error < best:
             best_x, best = result.x, error
         if best < TOLERANCE:

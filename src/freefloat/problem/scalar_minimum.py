@@ -58,7 +58,7 @@ def scalar_minimum(
     Args:
         function: ``f(x)``, a finite float for every ``x`` in the interval.
         low: the interval's lower end (any unit).
-        high: its upper end, ``> low``.
+        high: its upper end, ``>= low`` (equal: that one point, evaluated).
         x_tolerance: the search stops when ``x`` is known within about this (same unit;
             ``> 0``).
         max_evaluations: evaluations at most (a count, ``>= 1``).
@@ -66,8 +66,10 @@ def scalar_minimum(
     Raises:
         ValueError: an empty interval, a tolerance not above 0 or a budget below 1.
     """
-    if not high > low:
-        raise ValueError(f"scalar_minimum needs low < high, got [{low}, {high}]")
+    if not high >= low:
+        raise ValueError(f"scalar_minimum needs low <= high, got [{low}, {high}]")
+    if high == low:  # one point: nothing to search
+        return ScalarMinimum(float(low), float(function(float(low))), 1, True)
     if not x_tolerance > 0.0 or max_evaluations < 1:
         raise ValueError("scalar_minimum needs x_tolerance > 0 and max_evaluations >= 1")
     a, b = float(low), float(high)
