@@ -8,7 +8,9 @@ every case in its own new process, interleaved, so both trees see the same machi
 - ``ff.plan`` on each shipped scenario, timed inside the process (after ``import freefloat``):
   the whole call, and its solve, sample and verify stages from the plan's record;
 - the README's main command (``freefloat plan``: the worked example, its playback page and
-  plots), timed from outside as a whole process in an empty folder.
+  plots), timed from outside as a whole process in an empty folder;
+- ``freefloat reach SCENARIO -q`` on each shipped servicer (issue 28: at most 2 s), timed
+  from outside as a whole process (on the usable cores, as a user runs it).
 
 Medians over the rounds; the ratio of the whole call to its solve is the figure issue 25's
 third target names ("the whole verified plan costs at most 2x its solve").
@@ -26,7 +28,9 @@ import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-SCENARIOS = ("worked_example", "panda_servicer", "ur5_servicer")
+SCENARIOS = ("worked_example", "panda_servicer", "ur5_servicer", "dual_ur5_servicer")
+#: Servicers whose ``freefloat reach`` is timed.
+REACHED = ("panda_servicer", "ur5_servicer", "dual_ur5_servicer")
 
 _PLAN = """
 import json, sys, time
@@ -59,9 +63,9 @@ def _plan_once(source: Path, name: str) -> dict[str, float]:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def _main_command_once(source: Path) -> float:
-    """Wall time (s) of ``freefloat plan`` (page and plots) in an empty folder."""
-    code = "import sys\nfrom freefloat.cli import main\nsys.exit(main(['plan', '-q']))"
+def _command_once(source: Path, arguments: list[str]) -> float:
+    """Wall time (s) of ``freefloat ARGUMENTS`` as a whole process, in an empty folder."""
+    code = f"import sys\nfrom freefloat.cli import main\nsys.exit(main({arguments!r}))"
     with tempfile.TemporaryDirectory() as folder:
         start = time.perf_counter()
         command = [sys.executable, "-c", code]
@@ -69,16 +73,26 @@ def _main_command_once(source: Path) -> float:
         return time.perf_counter() - start
 
 
+def _commands() -> dict[str, list[str]]:
+    """The whole-process cases: the README's main command, then reach on each servicer."""
+    reach = {
+        f"reach {name}": ["reach", str(REPO / "robots" / "scenarios" / f"{name}.toml"), "-q"]
+        for name in REACHED
+    }
+    return {"main command": ["plan", "-q"], **reach}
+
+
 def bench_fresh(rounds: int, sources: dict[str, Path]) -> dict[str, dict[str, dict[str, float]]]:
-    """Medians per source label and case: the plan stages (s) and the main command (s)."""
+    """Medians per source label and case: the plan stages (s) and the commands (s)."""
     samples: dict[str, dict[str, list[dict[str, float]]]] = {s: {} for s in sources}
     for round_ in range(rounds):
         for label, source in sources.items():
             for name in SCENARIOS:
                 samples[label].setdefault(name, []).append(_plan_once(source, name))
-            samples[label].setdefault("main command", []).append(
-                {"whole_s": _main_command_once(source)}
-            )
+            for case, arguments in _commands().items():
+                samples[label].setdefault(case, []).append(
+                    {"whole_s": _command_once(source, arguments)}
+                )
         print(f"  done: fresh-process round {round_ + 1} of {rounds}", flush=True)
     return {
         label: {
@@ -97,7 +111,7 @@ def print_fresh(found: dict[str, dict[str, dict[str, float]]], rounds: int) -> N
     head = " | ".join(f"{label}: {group}" for label in labels)
     print(f"| case | {head} |")
     print("|---|" + "---:|" * (5 * len(labels)))
-    for case in (*SCENARIOS, "main command"):
+    for case in (*SCENARIOS, *_commands()):
         cells = []
         for label in labels:
             r = found[label][case]
@@ -114,7 +128,7 @@ def print_fresh(found: dict[str, dict[str, dict[str, float]]], rounds: int) -> N
         a, b = labels
         ratios = ", ".join(
             f"{case} {found[b][case]['whole_s'] / found[a][case]['whole_s']:.2f}x"
-            for case in (*SCENARIOS, "main command")
+            for case in (*SCENARIOS, *_commands())
         )
         print(f"\n{b} / {a}, whole: {ratios}")
 
