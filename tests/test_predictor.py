@@ -91,3 +91,12 @@ def test_a_correction_from_rows_that_are_not_finite_is_refused_not_solved() -> N
     assert newton_correction(jac, r * np.inf, g, g_mat) is None
     assert newton_correction(np.where(jac > 0.0, np.inf, 0.0), r, g, g_mat) is None
     assert newton_correction(jac, r, g, g_mat) is not None  # finite: solved
+
+
+def test_a_tangent_from_rows_that_are_not_finite_skips_the_programs() -> None:
+    # The near rows are not finite: no program is solved; the least-squares tangent is what
+    # numpy's lstsq gives for J t = delta (the corrector decides).
+    jac, delta = np.eye(2, 3), np.array([0.3, -0.1])
+    g, g_mat = np.array([-1e-9, -0.2]), np.array([[np.inf, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    t = tangent(jac, delta, g, g_mat, step=0.5)
+    np.testing.assert_allclose(t, np.linalg.lstsq(jac, delta, rcond=None)[0], atol=1e-15)

@@ -24,20 +24,28 @@ MARGIN = 1e-7
 FAR_INSIDE = -0.5
 
 
+def _least_norm_qp(c_mat: np.ndarray, b: np.ndarray, equalities: int) -> np.ndarray | None:
+    """``min |x|^2`` with ``C^T x = b`` (first ``equalities``) and ``C^T x >= b`` (the rest).
+
+    None when the rows admit no such ``x``, or when they are not all finite (quadprog may not
+    return on such rows).
+    """
+    if not (np.isfinite(c_mat).all() and np.isfinite(b).all()):
+        return None
+    n = c_mat.shape[0]
+    try:
+        return np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, equalities)[0])
+    except ValueError:
+        return None
+
+
 def newton_correction(
     jac: np.ndarray, r: np.ndarray, g: np.ndarray, g_mat: np.ndarray
 ) -> np.ndarray | None:
     """Minimum-norm ``d`` with ``J d = -r`` and ``g + G d <= 0``; None when infeasible."""
-    n = jac.shape[1]
     near = g > FAR_INSIDE
     c_mat = np.vstack([jac, -g_mat[near]]).T
-    b = np.concatenate([-r, g[near] + MARGIN])
-    if not (np.isfinite(c_mat).all() and np.isfinite(b).all()):  # quadprog would not return
-        return None
-    try:
-        return np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, len(r))[0])
-    except ValueError:
-        return None
+    return _least_norm_qp(c_mat, np.concatenate([-r, g[near] + MARGIN]), len(r))
 
 
 def tangent(
@@ -58,21 +66,19 @@ def tangent(
     tangent exists, the rows active now only; when none keeps those, the least-squares
     tangent (the corrector decides).
     """
-    n = jac.shape[1]
     near = g > FAR_INSIDE
     if step is not None and step > 0.0 and np.any(near):
         c_mat = np.vstack([jac, -step * g_mat[near]]).T
-        b = np.concatenate([delta, g[near] + MARGIN])
-        try:
-            return np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, len(delta))[0])
-        except ValueError:
-            pass  # no predicted path keeps every near row: slide along the active ones
+        found = _least_norm_qp(c_mat, np.concatenate([delta, g[near] + MARGIN]), len(delta))
+        if found is not None:
+            return found
+        # no predicted path keeps every near row: slide along the active ones
     active = g > -10.0 * MARGIN
     if np.any(active):
         c_mat = np.vstack([jac, -g_mat[active]]).T
         b = np.concatenate([delta, np.zeros(int(active.sum()))])
-        try:
-            return np.asarray(quadprog.solve_qp(np.eye(n), np.zeros(n), c_mat, b, len(delta))[0])
-        except ValueError:
-            pass  # no tangent keeps every active row: predict freely, the corrector decides
+        found = _least_norm_qp(c_mat, b, len(delta))
+        if found is not None:
+            return found
+        # no tangent keeps every active row: predict freely, the corrector decides
     return np.asarray(np.linalg.lstsq(jac, delta, rcond=None)[0])
