@@ -5,9 +5,8 @@ orientation of one or more end-effector frames instead of joint values. With the
 fixed by the goal and the base position fixed by the CM staying at the origin, every frame's
 pose is a function of the joint values alone; the goal joints are found by bounded least
 squares (:mod:`.box_least_squares`) over the joints that move a goal frame (the others hold
-their start or given goal
-value), from the start joints (so the nearest solution is preferred), then from further
-starts.
+their start or given goal value), from the start joints (so the nearest solution is
+preferred), then from further starts.
 """
 
 from __future__ import annotations
