@@ -140,6 +140,11 @@ def _column_norms(
     return norms, slope / np.maximum(norms, 1e-300)[:, None]
 
 
+def _held(unit: np.ndarray, climb: np.ndarray) -> np.ndarray:
+    """Coordinates at a face of the unit box whose gradient ``climb`` points out of it."""
+    return ((unit <= 0.0) & (climb < 0.0)) | ((unit >= 1.0) & (climb > 0.0))
+
+
 def _ascended(
     mmap: MomentumMap, joints: np.ndarray, columns: np.ndarray, box: np.ndarray
 ) -> np.ndarray:
@@ -160,7 +165,7 @@ def _ascended(
     scale = np.linalg.norm(climb, axis=1)
     factor = FIRST_STEP * math.sqrt(len(low)) / np.where(scale > 0.0, scale, 1.0)
     for _ in range(REFINE_STEPS):
-        ahead = np.where((unit <= 0.0) & (climb < 0.0) | (unit >= 1.0) & (climb > 0.0), 0.0, climb)
+        ahead = np.where(_held(unit, climb), 0.0, climb)
         trial = np.clip(unit + factor[:, None] * ahead, 0.0, 1.0)
         moved = trial - unit
         active = np.linalg.norm(moved, axis=1) >= SMALLEST_STEP
@@ -201,7 +206,7 @@ def _polished(
     low, width = box[:, 0], box[:, 1] - box[:, 0]
     n = len(unit)
     for _ in range(NEWTON_STEPS):
-        free = (width > 0.0) & ~(((unit <= 0.0) & (climb < 0.0)) | ((unit >= 1.0) & (climb > 0.0)))
+        free = (width > 0.0) & ~_held(unit, climb)
         if not free.any():
             break
         shift = np.where(unit + DIFFERENCE <= 1.0, DIFFERENCE, -DIFFERENCE)
