@@ -38,6 +38,7 @@ from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.residual import Problem
 from ..progress import heartbeat
 from .corrector import Rows, correct, corrected_step
+from .in_the_way import in_the_way
 from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
 from .predictor import tangent
@@ -67,6 +68,9 @@ NO_START = "no path within the constraints reaches even the quintic path's own a
 SINGULAR = 1e-9
 #: Singular-value ratio below which a refusal notes that dh/dbeta nearly loses rank.
 NEAR_SINGULAR = 1e-3
+#: The longest step (a fraction of the way) at which a stopped branch looks for a constraint
+#: ahead (:func:`_ahead`).
+PROBE = 0.05
 
 
 def _tangent(
@@ -105,27 +109,36 @@ def _ahead(
     beta: np.ndarray,
     tangent: np.ndarray,
     jac: np.ndarray,
+    step: float,
 ) -> Broken | None:
-    """The first constraint a short step along ``tangent`` from ``beta`` would break, or None.
+    """The first constraint a step along ``tangent`` from ``beta`` would break, or None.
 
-    None on a singular map ``jac`` too: the tangent is then meaningless (see :func:`_why`).
+    The step the branch was taking first (``step``, a fraction of the way): what it breaks is
+    what stopped it; only when it breaks nothing, a step of :data:`PROBE`. A step of one size
+    alone would name the wrong one: on a weak map the tangent is long, and a joint's position
+    limit far away is broken at :data:`PROBE` as surely as the velocity limit the branch is
+    pressed against. None on a singular map ``jac`` too: the tangent is then meaningless (see
+    :func:`_why`).
     """
     if singular(jac):
         return None
-    ahead = beta + tangent * 0.05
-    for constraint in constraints:
-        if constraint.applies_to(problem.robot):
-            excess = constraint.violation(problem, ahead)
-            if excess.value > 0.0:
-                return Broken(constraint.name, excess.detail)
+    for size in sorted({min(step, PROBE), PROBE}):
+        ahead = beta + tangent * size
+        for constraint in constraints:
+            if constraint.applies_to(problem.robot):
+                excess = constraint.violation(problem, ahead)
+                if excess.value > 0.0:
+                    return Broken(constraint.name, excess.detail)
     return None
 
 
 def _why(blocked: Broken | None, jac: np.ndarray) -> str:
     """Why the branch cannot go on: a singular map, a constraint ahead, or freedom.
 
-    A constraint is named with "ahead" and where the path a short step along the tangent
-    breaks it (its figure is that path's, beyond the limit; the branch itself keeps it). A
+    A constraint is named with "ahead" and where the path a step along the tangent breaks it
+    (:func:`_ahead`; or, with :data:`~.in_the_way.WITHOUT` in its detail, where the path the
+    failed step converges to without it breaks it: :func:`.in_the_way.in_the_way`); its
+    figure is that path's, beyond the limit, while the branch itself keeps it. A
     singular map first: the tangent is then the least-squares one, its length set by the
     smallest singular value, and a constraint it would break ahead says nothing of the
     branch (a step of 10^8 rad breaks every joint limit).
@@ -221,7 +234,7 @@ def track(
             # At the pace of the last steps the step budget ends short of the goal: stop now
             # rather than spend the budget on the same refusal.
             tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache, dips=dips)
-            blocked = _ahead(problem, constraints, beta, tangent, jac)
+            blocked = _ahead(problem, constraints, beta, tangent, jac, dl)
             stopped_by = _stall_reason(blocked, jac, (lam - reached[steps - PACE_WINDOW]) * angle)
             break
         if problem.evaluations - first_evaluation > options.max_evaluations:
@@ -243,7 +256,10 @@ def track(
             reached.append(lam)
             dl = 0.5 * step
             if dl * angle < MIN_STEP:
-                blocked = _ahead(problem, constraints, beta, tangent, jac)
+                blocked = _ahead(problem, constraints, beta, tangent, jac, step)
+                if blocked is None and not singular(jac):
+                    predicted = beta + step * tangent
+                    blocked = in_the_way(problem, target, constraints, predicted, tol, at)
                 stopped_by = _why(blocked, jac)
                 break
             continue

@@ -1,0 +1,90 @@
+"""A stopped branch names the constraint that stops it, not one far away along a long tangent.
+
+A 100 kg base with a three-joint arm (limits +-3 rad, 2 rad/s) asked to turn 30 deg in 4 s:
+the velocity limit binds long before any position limit. The truth is the stopped path
+itself, sampled densely: its joint rates by finite differences of its joint values (not the
+constraints' own formulas) reach 2 rad/s, while every joint keeps more than 0.3 rad from its
+position limits.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import freefloat as ff
+from freefloat.physics import attitude as att
+from freefloat.problem.constraints import default_constraints
+from freefloat.solvers import continuation
+from freefloat.solvers.continuation import track
+from freefloat.solvers.in_the_way import WITHOUT
+from freefloat.solvers.options import SolveOptions
+
+import urdfs
+
+START, GOAL, DURATION = [0.2, -0.3, 0.4], [0.9, 0.3, -0.2], 4.0
+#: The URDF's limits (urdfs.joint): position +-3 rad, velocity 2 rad/s.
+POSITION, VELOCITY = 3.0, 2.0
+
+
+@pytest.fixture(scope="module")
+def problem(tmp_path_factory: pytest.TempPathFactory) -> ff.Problem:
+    path = tmp_path_factory.mktemp("slow") / "arm.urdf"
+    path.write_text(urdfs.spatial_arm(base_mass=100.0))
+    robot = ff.load_robot(path)
+    return ff.build_problem(robot, START, GOAL, att.IDENTITY, att.IDENTITY, DURATION, extra=[2] * 3)
+
+
+def _turned(problem: ff.Problem, axis: list[float], degrees: float) -> ff.Problem:
+    drift = problem.achieved(np.zeros(problem.n_free))
+    turn = att.quat_exp(math.radians(degrees) * np.array(axis, dtype=float))
+    return problem.with_goal(att.quat_multiply(drift, turn))
+
+
+def _room_and_peak_rate(problem: ff.Problem, beta: np.ndarray) -> tuple[float, float]:
+    """Smallest distance to a position limit (rad) and largest |rate| (rad/s), sampled."""
+    t = np.linspace(0.0, DURATION, 4001)
+    q = problem.polynomials(beta).evaluate(t).q
+    rates = np.gradient(q, t, axis=0)  # finite differences of the joint values
+    return POSITION - float(np.abs(q).max()), float(np.abs(rates).max())
+
+
+@pytest.mark.parametrize("axis", [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+def test_the_velocity_limit_that_binds_is_named_not_a_distant_position_limit(
+    problem, axis
+) -> None:
+    found = track(_turned(problem, axis, 30.0), default_constraints(), SolveOptions())
+    assert 0.0 < found.fraction < 1.0
+    assert found.stopped_by.startswith("joint_velocity_limits ahead: joint 'j")
+    room, peak = _room_and_peak_rate(problem, found.beta)
+    assert room > 0.3
+    assert peak == pytest.approx(VELOCITY, abs=1e-3)
+
+
+def test_a_constraint_in_the_way_but_not_ahead_is_found_by_leaving_it_out(
+    problem, monkeypatch
+) -> None:
+    """Where no constraint is broken along the tangent (here: made so), the failed step is
+    corrected without each constraint in turn; the one named is the one without which the
+    branch goes further, on a path that breaks it."""
+    target = _turned(problem, [1.0, 0.0, 0.0], 30.0)
+    monkeypatch.setattr(continuation, "_ahead", lambda *args: None)
+    found = track(target, default_constraints(), SolveOptions())
+    assert found.stopped_by.startswith("joint_velocity_limits ahead: joint 'j")
+    assert found.stopped_by.endswith(f"({WITHOUT})")
+    assert found.blocked_by == "joint_velocity_limits"
+    monkeypatch.undo()
+    others = [c for c in default_constraints() if c.name != "joint_velocity_limits"]
+    freer = track(target, others, SolveOptions())
+    assert freer.fraction > found.fraction
+    assert _room_and_peak_rate(problem, freer.beta)[1] > VELOCITY + 1e-3
+
+
+def test_without_any_constraint_in_the_way_the_family_is_blamed(problem, monkeypatch) -> None:
+    """No constraint ahead and none whose absence lets the step converge: the freedom."""
+    monkeypatch.setattr(continuation, "_ahead", lambda *args: None)
+    monkeypatch.setattr(continuation, "in_the_way", lambda *args: None)
+    found = track(_turned(problem, [1.0, 0.0, 0.0], 30.0), default_constraints(), SolveOptions())
+    assert found.stopped_by.startswith("freedom exhausted")
