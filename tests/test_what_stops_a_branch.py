@@ -52,9 +52,7 @@ def _room_and_peak_rate(problem: ff.Problem, beta: np.ndarray) -> tuple[float, f
 
 
 @pytest.mark.parametrize("axis", [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-def test_the_velocity_limit_that_binds_is_named_not_a_distant_position_limit(
-    problem, axis
-) -> None:
+def test_the_velocity_limit_that_binds_is_named_not_a_distant_position_limit(problem, axis) -> None:
     found = track(_turned(problem, axis, 30.0), default_constraints(), SolveOptions())
     assert 0.0 < found.fraction < 1.0
     assert found.stopped_by.startswith("joint_velocity_limits ahead: joint 'j")
