@@ -9,6 +9,7 @@ position limits.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -30,10 +31,14 @@ POSITION, VELOCITY = 3.0, 2.0
 
 
 @pytest.fixture(scope="module")
-def problem(tmp_path_factory: pytest.TempPathFactory) -> ff.Problem:
+def robot(tmp_path_factory: pytest.TempPathFactory) -> ff.Robot:
     path = tmp_path_factory.mktemp("slow") / "arm.urdf"
     path.write_text(urdfs.spatial_arm(base_mass=100.0))
-    robot = ff.load_robot(path)
+    return ff.load_robot(path)
+
+
+@pytest.fixture(scope="module")
+def problem(robot: ff.Robot) -> ff.Problem:
     return ff.build_problem(robot, START, GOAL, att.IDENTITY, att.IDENTITY, DURATION, extra=[2] * 3)
 
 
@@ -86,3 +91,29 @@ def test_without_any_constraint_in_the_way_the_family_is_blamed(problem, monkeyp
     monkeypatch.setattr(continuation, "in_the_way", lambda *args: None)
     found = track(_turned(problem, [1.0, 0.0, 0.0], 30.0), default_constraints(), SolveOptions())
     assert found.stopped_by.startswith("freedom exhausted")
+
+
+def test_a_velocity_refusal_says_how_far_the_search_within_the_limits_got(robot) -> None:
+    """10 deg about x in 4 s needs more than 2 rad/s: the refusal names the joint's rate and
+    the longer duration, and how far the search within every limit got; a goal that far (and
+    one nearer) about the same axis plans at 4 s, its rates within the limit by finite
+    differences of its joint values on a dense grid."""
+    names = [j.name for j in robot.joints]
+    scenario = ff.Scenario(robot, DURATION, dict(zip(names, START)), dict(zip(names, GOAL)))
+    quintic = ff.problem_from_scenario(scenario)
+    drift = quintic.achieved(np.zeros(quintic.n_free))
+    turn = att.quat_exp(math.radians(10.0) * np.array([1.0, 0.0, 0.0]))
+    with pytest.raises(ff.VelocityLimitError) as info:
+        ff.plan(dataclasses.replace(scenario, goal_attitude=att.quat_multiply(drift, turn)))
+    error = info.value
+    assert 0.0 < error.reached < error.asked == pytest.approx(math.radians(10.0), rel=1e-6)
+    phrase = ff.UnreachableAttitudeError.turn_phrase(error.reached, error.asked)
+    assert str(error).endswith(f"; at this duration and within every limit, {phrase}")
+    axis = np.array(error.__cause__.axis)
+    t = np.linspace(0.0, DURATION, 20001)
+    for share in (1.0, 0.6):
+        goal = att.quat_multiply(drift, att.quat_exp(share * error.reached * axis))
+        plan = ff.plan(dataclasses.replace(scenario, goal_attitude=goal), samples=41)
+        assert plan.verification.passed
+        rates = np.gradient(plan.joint_positions(t), t, axis=0)  # finite differences
+        assert np.abs(rates).max() <= VELOCITY + 1e-6

@@ -24,6 +24,10 @@ class DurationLimitError(FreeFloatError):
         least_duration: no path with the same start and goal respects the limits in less (s;
             0 when not known).
         unit: the unit of the joint's value (rad or m).
+        reached: the largest turn towards the goal attitude that the search within every
+            limit reached (rad; NaN when not known, see :meth:`within_reach`).
+        asked: the turn the goal asks for from where that search started (rad; NaN when not
+            known).
     """
 
     #: What is limited ("velocity", "effort").
@@ -44,7 +48,15 @@ class DurationLimitError(FreeFloatError):
         self.shortest_duration = float(shortest_duration)
         self.least_duration = float(least_duration)
         self.unit = unit
+        self.reached = self.asked = math.nan
         super().__init__(self.message_in(1.0, unit))
+
+    def within_reach(self, reached: float, asked: float) -> DurationLimitError:
+        """This error, saying how far the search within every limit got: ``reached`` of
+        ``asked`` (rad) towards the goal attitude; its message says it too."""
+        self.reached, self.asked = float(reached), float(asked)
+        self.args = (self.message_in(1.0, self.unit),)
+        return self
 
     def _exceeds(self, scale: float, unit: str) -> str:
         """The joint's peak against its limit, values times ``scale`` in ``unit``."""
@@ -57,11 +69,16 @@ class DurationLimitError(FreeFloatError):
             f"{self.shortest_duration:.4g} s on"
         )
         if self.least_duration > 0.0:
-            return (
+            message = (
                 f"{message}, no path can in under {self.least_duration:.4g} s (each joint's "
                 "travel at its limit), and a duration between may plan with another path"
             )
-        return f"{message}; a shorter duration may plan with another path"
+        else:
+            message = f"{message}; a shorter duration may plan with another path"
+        if 0.0 <= self.reached < self.asked < math.inf:  # a figure that says something
+            turned = UnreachableAttitudeError.turn_phrase(self.reached, self.asked)
+            message += f"; at this duration and within every limit, {turned}"
+        return message
 
 
 class VelocityLimitError(DurationLimitError):

@@ -234,4 +234,7 @@ def _explain_duration_limits(
         if worst is None or peak.shortest_duration > worst[1].shortest_duration:
             worst = (limit, peak)
     if worst is not None:
-        raise worst[0].error(worst[1]) from error
+        found_error = worst[0].error(worst[1])
+        if isinstance(error, UnreachableAttitudeError):  # how far the search within them got
+            found_error = found_error.within_reach(error.reached, error.asked)
+        raise found_error from error
