@@ -99,7 +99,8 @@ def test_a_velocity_refusal_says_how_far_the_search_within_the_limits_got(robot)
     one nearer) about the same axis plans at 4 s, its rates within the limit by finite
     differences of its joint values on a dense grid."""
     names = [j.name for j in robot.joints]
-    scenario = ff.Scenario(robot, DURATION, dict(zip(names, START)), dict(zip(names, GOAL)))
+    start, goal = dict(zip(names, START, strict=True)), dict(zip(names, GOAL, strict=True))
+    scenario = ff.Scenario(robot, DURATION, start, goal)
     quintic = ff.problem_from_scenario(scenario)
     drift = quintic.achieved(np.zeros(quintic.n_free))
     turn = att.quat_exp(math.radians(10.0) * np.array([1.0, 0.0, 0.0]))

@@ -52,8 +52,10 @@ class DurationLimitError(FreeFloatError):
         super().__init__(self.message_in(1.0, unit))
 
     def within_reach(self, reached: float, asked: float) -> DurationLimitError:
-        """This error, saying how far the search within every limit got: ``reached`` of
-        ``asked`` (rad) towards the goal attitude; its message says it too."""
+        """This error, saying how far the search within every limit got.
+
+        ``reached`` of ``asked`` (rad) towards the goal attitude; its message says it too.
+        """
         self.reached, self.asked = float(reached), float(asked)
         self.args = (self.message_in(1.0, self.unit),)
         return self
