@@ -264,6 +264,33 @@ joints = {_joints_toml({**start, "left_elbow_joint": 60.0})}
         np.testing.assert_allclose(got.homogeneous, expected.homogeneous, atol=1e-12)
 
 
+def test_a_joint_locked_without_a_value_whose_range_excludes_0_is_fixed_mid_range(tmp_path):
+    """[robot] urdf + lock = ["j2"], j2 limited to [0.3, 0.7] rad and no start value for it: it
+    is fixed at 0.5 rad (not refused for 0), the tip where Pinocchio puts it on the full URDF
+    at j2 = 0.5."""
+    body = BASE.format(mass=200.0, i=30.0)
+    body += joint("j1", "base", "l1", axis=(0, 0, 1)) + link("l1")
+    body += joint("j2", "l1", "l2", axis=(0, 1, 0), limits=(0.3, 0.7)) + link("l2")
+    body += joint("tip_joint", "l2", "tip", "fixed") + '\n  <link name="tip"/>'
+    urdf = tmp_path / "mid.urdf"
+    urdf.write_text(robot(body))
+    path = tmp_path / "mid.toml"
+    path.write_text(
+        f'duration = 10.0\n[robot]\nurdf = "{urdf}"\nlock = ["j2"]\n'
+        "[start]\njoints = { j1 = 0.0 }\n[goal]\njoints = { j1 = 30.0 }\n"
+    )
+    locked = ff.Scenario.from_toml(path).robot
+    assert locked.joint_names == ["j1"]
+    full = pin.buildModelFromUrdf(str(urdf))
+    data = full.createData()
+    pin.framesForwardKinematics(full, data, np.array([0.4, 0.5]))
+    mine = locked.model.createData()
+    q = locked.configuration(np.array([0.4]), [0.0, 0.0, 0.0], ff.quat_from_zyx(0.0))
+    pin.framesForwardKinematics(locked.model, mine, q)
+    tip = mine.oMf[locked.model.getFrameId("tip")].homogeneous
+    np.testing.assert_allclose(tip, data.oMf[full.getFrameId("tip")].homogeneous, atol=1e-12)
+
+
 def _scenario_error(tmp_path, text: str) -> str:
     path = tmp_path / "bad.toml"
     path.write_text(text)

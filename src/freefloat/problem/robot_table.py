@@ -44,7 +44,7 @@ import numpy as np
 from ..errors import InputError, InputLimitError, ScenarioError, UnknownNameError, excerpt
 from ..files import read_text_file
 from ..robot.locations import is_path_like
-from ..robot.lock import lock_joints, movable_joints
+from ..robot.lock import finger_lock_value, lock_joints, movable_joints
 from ..robot.model import MAX_URDF_BYTES, resolve_robot
 from .limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, check_number
 
@@ -216,7 +216,10 @@ def _sibling_srdf(urdf: Path) -> Path | None:
 
 
 def _lock_values(lock: Any, text: str, start: Any) -> dict[str, float]:
-    """``{joint: value}`` (rad or m) of a ``lock`` list: given value, start value, or 0."""
+    """``{joint: value}`` (rad or m) of a ``lock`` list: given value, start value, or else 0.
+
+    Or else the middle of the joint's range when 0 is outside it (:func:`finger_lock_value`).
+    """
     if not isinstance(lock, list):
         raise ScenarioError(
             '[robot] lock must be a list of joint names or { joint = "name", value = deg }, '
@@ -239,8 +242,12 @@ def _lock_values(lock: Any, text: str, start: Any) -> dict[str, float]:
             )
         if name not in movable:
             raise UnknownNameError("joint to lock", name, list(movable))
-        raw = given.get(name, 0.0) if raw is None else raw
-        angular = movable[name][0] != "prismatic"
+        kind, lower, upper = movable[name]
+        if raw is None and name not in given:  # 0, or the middle of a range without it
+            values[name] = finger_lock_value(lower, upper)
+            continue
+        raw = given[name] if raw is None else raw
+        angular = kind != "prismatic"
         limit, unit = (MAX_ANGLE_DEG, "deg") if angular else (MAX_LENGTH_M, "m")
         amount = number(raw, f"[robot] lock value of {name!r}", limit, unit)
         values[name] = math.radians(amount) if angular else amount

@@ -64,7 +64,8 @@ class ArmSpec:
         mount: arm root position in the spacecraft frame (m).
         mount_rpy: arm root roll, pitch, yaw in the spacecraft frame (rad).
         prefix: put before each of its link and joint names; default ``armK_`` (K = 1, 2...).
-        lock: joints of this arm to lock: a name (locked at 0) or ``(name, value)`` (rad or m).
+        lock: joints of this arm to lock: a name (locked at 0, or at the middle of its range
+            when 0 is outside it) or ``(name, value)`` (rad or m).
         keep_gripper: keep gripper and finger joints movable.
     """
 
@@ -187,8 +188,8 @@ def _lock_values(arm: ArmSpec, joints: Sequence[Any]) -> tuple[dict[str, float],
         LockedJointError: a value outside the joint's limits.
     """
     movable = {j.name: j for j in joints if j.type in ("revolute", "continuous", "prismatic")}
-    asked = dict(
-        (item, 0.0) if isinstance(item, str) else (item[0], float(item[1])) for item in arm.lock
+    asked: dict[str, float | None] = dict(
+        (item, None) if isinstance(item, str) else (item[0], float(item[1])) for item in arm.lock
     )
     values: dict[str, float] = {}
     notes: list[str] = []
@@ -196,29 +197,20 @@ def _lock_values(arm: ArmSpec, joints: Sequence[Any]) -> tuple[dict[str, float],
         if name not in movable:  # a fixed joint is no joint to lock: only movable ones listed
             raise UnknownNameError("movable joint to lock", name, list(movable))
         joint = movable[name]
-        if joint.type != "continuous" and joint.limit is not None:
-            low, high = float(joint.limit.lower), float(joint.limit.upper)
-            if not low <= value <= high:
-                scale, unit = (1.0, "m") if joint.type == "prismatic" else (180 / math.pi, "deg")
-                raise LockedJointError(
-                    arm.prefix + name, value * scale, low * scale, high * scale, unit
-                )
+        low, high = _range(joint)
+        if value is None:  # no value asked: 0, or the middle of a range without it
+            values[arm.prefix + name] = _default_lock(arm.prefix + name, joint, notes)
+            continue
+        if not low <= value <= high:
+            scale, unit = _display(joint)
+            shown = (value * scale, low * scale, high * scale)
+            raise LockedJointError(arm.prefix + name, *shown, unit)
         values[arm.prefix + name] = value
     fingers = [] if arm.keep_gripper else [j for j in movable.values() if _GRIPPER.search(j.name)]
     for joint in fingers:
-        if joint.name in asked:
-            continue
-        low, high = -math.inf, math.inf
-        if joint.type != "continuous" and joint.limit is not None:
-            low, high = float(joint.limit.lower), float(joint.limit.upper)
-        value = finger_lock_value(low, high)
-        values[arm.prefix + joint.name] = value
-        if value != 0.0:
-            scale, unit = (1.0, "m") if joint.type == "prismatic" else (180 / math.pi, "deg")
-            notes.append(
-                f"finger joint {arm.prefix + joint.name!r} locked at {value * scale:.4g} {unit}, "
-                f"the middle of its range [{low * scale:.4g}, {high * scale:.4g}] {unit} "
-                "(0 is outside it)"
+        if joint.name not in asked:
+            values[arm.prefix + joint.name] = _default_lock(
+                f"finger joint {arm.prefix + joint.name!r}", joint, notes
             )
     for joint in movable.values():  # a follower of a locked joint is locked with it
         target = None if joint.mimic is None else arm.prefix + joint.mimic.joint
@@ -227,6 +219,35 @@ def _lock_values(arm: ArmSpec, joints: Sequence[Any]) -> tuple[dict[str, float],
             offset = float(joint.mimic.offset or 0.0)
             values[arm.prefix + joint.name] = multiplier * values[target] + offset
     return values, notes
+
+
+def _range(joint: Any) -> tuple[float, float]:
+    """A movable joint's position limits (rad or m; infinite for a continuous one)."""
+    if joint.type != "continuous" and joint.limit is not None:
+        return float(joint.limit.lower), float(joint.limit.upper)
+    return -math.inf, math.inf
+
+
+def _display(joint: Any) -> tuple[float, str]:
+    """The factor and unit a joint's values are shown in (deg, or m for a prismatic one)."""
+    return (1.0, "m") if joint.type == "prismatic" else (180 / math.pi, "deg")
+
+
+def _default_lock(label: str, joint: Any, notes: list[str]) -> float:
+    """Where a joint locked without a value is fixed (rad or m): :func:`finger_lock_value`.
+
+    Away from 0 (the middle of a range without it), ``notes`` gets a line saying so, with
+    ``label`` naming the joint.
+    """
+    low, high = _range(joint)
+    value = finger_lock_value(low, high)
+    if value != 0.0:
+        scale, unit = _display(joint)
+        notes.append(
+            f"{label} locked at {value * scale:.4g} {unit}, the middle of its range "
+            f"[{low * scale:.4g}, {high * scale:.4g}] {unit} (0 is outside it)"
+        )
+    return value
 
 
 def _absolute_mesh(element: Any, folder: Path) -> Any:

@@ -93,7 +93,8 @@ class ServicerSpec:
         mount: arm root position in the spacecraft frame (m).
         mount_rpy: arm root roll, pitch, yaw in the spacecraft frame (rad).
         base_inertia: principal moments Ixx, Iyy, Izz (kg m^2); default: the uniform box's.
-        lock: extra joints to lock: a name (locked at 0) or ``(name, value)`` (rad or m).
+        lock: extra joints to lock: a name (locked at 0, or at the middle of its range when 0
+            is outside it) or ``(name, value)`` (rad or m).
         keep_gripper: keep gripper and finger joints movable (else each finger is locked at 0,
             or at the middle of its range when 0 is outside it).
         payload: a captured payload fixed to the (first arm's) end effector.
