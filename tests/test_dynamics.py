@@ -146,7 +146,9 @@ def test_a_plan_failing_verification_is_never_written(tmp_path, monkeypatch, cap
     out = tmp_path / "p.json"
     assert main(["plan", "-o", str(out)]) == 2
     err = capsys.readouterr().err
-    assert "the plan fails verification (replay_attitude)" in err
+    assert (
+        "the plan fails verification (replay_attitude: 1 rad against a tolerance of 0.0001)" in err
+    )
     assert not out.exists()
 
 

@@ -263,7 +263,15 @@ def plan_from_solution(
         recompute=False,  # the numbers were just computed by the same functions
     )
     if not verification.passed:
-        raise VerificationError(verification.failures)
+        failed = [c for c in verification.checks if not c.passed]
+        raise VerificationError(
+            [c.name for c in failed],
+            [
+                f"{c.value:.4g} {c.unit} against a tolerance of {c.tolerance:.2g}"
+                + (f", {c.detail}" if c.detail else "")
+                for c in failed
+            ],
+        )
     report = replace(unverified.solver, verify_time_s=time.perf_counter() - clock)
     return replace(unverified, verification=verification, solver=report)
 

@@ -241,14 +241,20 @@ class PlanMismatchError(PlanFileError):
 
 
 class VerificationError(FreeFloatError):
-    """A plan that fails its independent verification; carries the failed checks."""
+    """A plan that fails its independent verification; carries the failed checks.
 
-    def __init__(self, failures: Sequence[str]) -> None:
+    Attributes:
+        failures: the names of the checks that failed.
+        details: per failed check, what it found (its figure against its tolerance, and
+            where), or "" when not known; the message gives them after the names.
+    """
+
+    def __init__(self, failures: Sequence[str], details: Sequence[str] = ()) -> None:
         self.failures = tuple(failures)
+        self.details = tuple(details) + ("",) * (len(self.failures) - len(details))
+        said = [f"{n}: {d}" if d else n for n, d in zip(self.failures, self.details, strict=False)]
         super().__init__(
-            "the plan fails verification ("
-            + ", ".join(self.failures)
-            + "); it is not returned or written"
+            "the plan fails verification (" + "; ".join(said) + "); it is not returned or written"
         )
 
 

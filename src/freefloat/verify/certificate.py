@@ -24,6 +24,7 @@ import numpy as np
 from ..robot.collision import CollisionModel
 from .clearance import (
     ACCURACY,
+    CHECK_TOLERANCE,
     FIRST_INSTANTS,
     MAX_BISECTIONS,
     SLACK_FRACTION,
@@ -45,6 +46,27 @@ def _tolerance(measured: float, margin: float) -> float:
     a bound that close to a minimum well clear of the margin still clears it.
     """
     return max(ACCURACY, SLACK_FRACTION * (measured - margin))
+
+
+def _threshold(measured: float, margin: float) -> float:
+    """The bound (m) at or above which an interval is settled, ``measured`` the least yet.
+
+    Within :func:`_tolerance` of ``measured``; but never below the margin while ``measured``
+    clears it (nor below the margin less :data:`CHECK_TOLERANCE`, what the check allows,
+    while ``measured`` clears that): a path 20 um clear of the margin must not fail because
+    its bound was settled 100 um below its minimum. A minimum within :data:`_BARELY` of
+    either is settled loosely: no bound could be brought that close in a sensible number of
+    halvings.
+    """
+    loose = measured - _tolerance(measured, margin)
+    for need in (margin, margin - CHECK_TOLERANCE):
+        if measured >= need + _BARELY:
+            return max(loose, need)
+    return loose
+
+
+#: See :func:`_threshold` (m): far below the distance queries' own tolerance.
+_BARELY = 1e-9
 
 
 class _Least:
@@ -85,7 +107,7 @@ def certify(
     exhausted = False
     while heap:
         lb, t0, t1, k, exact, speed = heap[0]
-        if lb >= least.value - _tolerance(least.value, margin):
+        if lb >= _threshold(least.value, margin):
             break  # this and every later item is within the accuracy of the minimum
         heapq.heappop(heap)
         if not exact:
@@ -102,7 +124,7 @@ def certify(
             store.load(_middles(store, heap, t0, t1))
         least.note(store.distance(mid, k), mid, k)
         rates = store.rates([t0, mid], [mid, t1])
-        threshold = least.value - _tolerance(least.value, margin)
+        threshold = _threshold(least.value, margin)
         for (a, b), rate in zip(((t0, mid), (mid, t1)), rates, strict=True):
             speed = float(rate @ mesh.pair_reach[:, k])
             value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
@@ -172,7 +194,7 @@ def _measure_ends(
     d = store.distance(first, k)
     least.note(d, first, k)
     if (other, k) not in store.exact:
-        threshold = least.value - _tolerance(least.value, margin)
+        threshold = _threshold(least.value, margin)
         one_end = d - speed * (t1 - t0)
         if one_end < threshold:  # the leaf pairs' own speeds may settle it
             rates = store.rates([t0], [t1])[0]
@@ -183,7 +205,7 @@ def _measure_ends(
     least.note(d0, t0, k)
     least.note(d1, t1, k)
     value = 0.5 * (d0 + d1 - speed * (t1 - t0))
-    if value < least.value - _tolerance(least.value, margin):  # the leaf pairs may settle it
+    if value < _threshold(least.value, margin):  # the leaf pairs may settle it
         value = max(value, _leaf_value(store, k, t0, t1, store.rates([t0], [t1])[0]))
     return value
 
@@ -230,11 +252,11 @@ def _first_pass(
     rates = store.rates(times[:-1].tolist(), times[1:].tolist())
     lipschitz = rates @ mesh.pair_reach
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
-    settled = lbs >= measured - _tolerance(measured, margin)
+    settled = lbs >= _threshold(measured, margin)
     rows, pairs = np.nonzero(~settled)  # the lever arms' speeds (never above the reach's)
     lipschitz[rows, pairs] = levers.first_pass(rates, (rows, pairs), placements)
     lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
-    settled = lbs >= measured - _tolerance(measured, margin)
+    settled = lbs >= _threshold(measured, margin)
     _tighten(
         store,
         placements,
@@ -242,9 +264,9 @@ def _first_pass(
         (bounds, rates, lipschitz),
         lbs,
         settled,
-        measured - _tolerance(measured, margin),
+        _threshold(measured, margin),
     )
-    settled = lbs >= measured - _tolerance(measured, margin)
+    settled = lbs >= _threshold(measured, margin)
     lower = float(lbs[settled].min()) if settled.any() else math.inf
     rows, pairs = np.nonzero(~settled)
     heap: list[_Item] = [

@@ -59,6 +59,7 @@ from .sphere_tree import LeafSpheres
 
 __all__ = [
     "ACCURACY",
+    "CHECK_TOLERANCE",
     "HULL_TOLERANCE",
     "MAX_BISECTIONS",
     "SLACK_FRACTION",
@@ -76,6 +77,10 @@ ACCURACY = 1e-4
 SLACK_FRACTION = 0.25
 #: Most interval halvings of one certificate (a count, so the verdict is reproducible).
 MAX_BISECTIONS = 20000
+#: How far (m) the certified lower bound may lie below the margin and the path still pass
+#: the ``clearance`` check: the certificate refines until its bound clears the margin less
+#: this whenever the smallest clearance measured does, however close to the margin it lies.
+CHECK_TOLERANCE = 1e-6
 #: A hull may report at most this much more clearance than its mesh (m): GJK's tolerance.
 HULL_TOLERANCE = 1e-6
 

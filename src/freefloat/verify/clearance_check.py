@@ -18,14 +18,14 @@ from ..problem.constraints.clearance import Clearance
 from ..robot.geometry import BuiltPerSource
 from ..robot.model import Robot
 from .certificate import certify
-from .clearance import HULL_TOLERANCE, ClearanceCertificate, MeshClearance
+from .clearance import CHECK_TOLERANCE, HULL_TOLERANCE, ClearanceCertificate, MeshClearance
 from .motion import PolynomialMotion
 from .path_eval import FilePath
 
 __all__ = ["clearance_certificate", "clearance_checks", "mesh_clearance"]
 
-#: Tolerance of both checks (m).
-TOLERANCE = 1e-6
+#: Tolerance of the ``clearance`` check (m).
+TOLERANCE = CHECK_TOLERANCE
 
 
 def mesh_clearance(robot: Robot, constraint: Clearance) -> MeshClearance:
