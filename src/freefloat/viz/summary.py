@@ -298,6 +298,18 @@ def robot_label(scenario: Scenario) -> str:
     return f"{robot.name} ({Path(robot.urdf).name}, {robot.n} joints)"
 
 
+def rotation_angle(rotation: np.ndarray) -> float:
+    """The angle (rad, 0 to pi) of a 3 x 3 rotation matrix, accurate down to rounding.
+
+    From both its sine (half the norm of the skew part) and its cosine (from the trace): the
+    arc cosine of the trace alone turns a rounding error of 1e-16 into an angle of 1e-8 rad.
+    """
+    skew = rotation - rotation.T
+    sine = 0.5 * math.sqrt(skew[2, 1] ** 2 + skew[0, 2] ** 2 + skew[1, 0] ** 2)
+    cosine = 0.5 * (float(np.trace(rotation)) - 1.0)
+    return math.atan2(sine, cosine)
+
+
 def cartesian_report(scenario: Scenario, p: Plan) -> list[str]:
     """Goal joints chosen by inverse kinematics and each end effector's error at the goal."""
     if not scenario.goal_poses:
@@ -323,8 +335,7 @@ def cartesian_report(scenario: Scenario, p: Plan) -> list[str]:
             + f") m, position error {miss:.3e} m"
         )
         if goal.rotation is not None:
-            cos = (np.trace(goal.rotation.T @ pose.rotation) - 1.0) / 2.0
-            angle = math.degrees(math.acos(min(1.0, max(-1.0, cos))))
+            angle = math.degrees(rotation_angle(goal.rotation.T @ pose.rotation))
             line += f", orientation error {angle:.3e} deg"
         lines.append(line)
     return lines
