@@ -55,9 +55,35 @@ def test_unreachable_cartesian_goal_names_the_workspace(tmp_path, capsys):
     assert f"the workspace radius from the system CM is about {radius:.3f} m" in err
     # the miss has its unit, and no configuration comes nearer than the goal's distance from
     # the system CM less the arm's full reach (closed form)
-    miss = float(re.search(r"misses it by ([0-9.e+-]+) m;", err).group(1))
+    miss = float(
+        re.search(r"misses it by ([0-9.e+-]+) m \(a goal is met within 1e-09 m", err).group(1)
+    )
     assert miss >= math.hypot(2.5, 0.3) - radius - 1e-3
     assert not (tmp_path / "p.json").exists()
+
+
+def test_a_pose_goal_for_an_arm_of_fewer_than_six_joints_says_a_position_may_be_met(
+    tmp_path, capsys
+):
+    """The planar two-joint arm asked for a reachable point with a tool tilted out of its
+    plane: the refusal states the acceptance (1e-9 m and rad) and that a pose fixes six
+    numbers where this robot has two joints; the same point alone plans."""
+    x, y = ref.end_effector(0.0, math.radians(-60), math.radians(90))  # closed form
+    text = _cartesian(tmp_path, x, y).read_text()
+    path = tmp_path / "pose.toml"
+    path.write_text(
+        text.replace(
+            "base_zyx_deg = [0.0, 0.0, 0.0]\n[path]",
+            "end_effector_rpy_deg = [30.0, 0.0, 0.0]\nbase_zyx_deg = [0.0, 0.0, 0.0]\n[path]",
+        )
+    )
+    assert main(["plan", str(path), "-o", str(tmp_path / "p.json")]) == 2
+    err = capsys.readouterr().err
+    assert "(a goal is met within 1e-09 m and rad)" in err
+    assert err.strip().endswith(
+        "a pose fixes 6 numbers and this robot has 2 joints: a position alone may be met"
+    )
+    assert ff.plan(ff.Scenario.from_toml(_cartesian(tmp_path, x, y))).verification.passed
 
 
 def test_cartesian_pose_goal_on_a_servicer(tmp_path):

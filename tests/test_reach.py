@@ -343,3 +343,40 @@ def test_reach_loads_neither_scipy_stats_nor_its_optimiser() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["True", "True", "False", "False"]
+
+
+def test_a_goal_from_inverse_kinematics_too_close_asks_to_move_the_end_effector_goal(
+    monkeypatch,
+) -> None:
+    """The dual UR5 servicer's goal joints come from its end-effector goal: a goal pose closer
+    than the margin (made so here: the measured gap is replaced at the goal joints alone) is
+    refused by plan and reach asking to move that goal, not joints the user never gave; the
+    UR5 servicer's goal joints, given in its file, are asked to move."""
+    import freefloat.problem.endpoints as endpoints
+
+    real = endpoints.clearance_at
+
+    def close_at(goal):
+        def measured(model, joints):
+            if np.allclose(joints, goal):
+                return 0.001, "left_wrist_3_link_0 / spacecraft_0"
+            return real(model, joints)
+
+        return measured
+
+    dual = ff.Scenario.from_toml(SCENARIOS / "dual_ur5_servicer.toml")
+    monkeypatch.setattr(endpoints, "clearance_at", close_at(dual.resolved().goal))
+    for call in (lambda: ff.plan(dual), lambda: ff.reachable(dual, jobs=1)):
+        with pytest.raises(ff.CollisionError) as info:
+            call()
+        assert info.value.chosen and info.value.where == "goal"
+        assert str(info.value).endswith(
+            "move the end-effector goal (inverse kinematics chose the goal joints) or lower "
+            "[safety] margin_m"
+        )
+    ur5 = ff.Scenario.from_toml(SCENARIOS / "ur5_servicer.toml")
+    monkeypatch.setattr(endpoints, "clearance_at", close_at(ur5.goal))
+    with pytest.raises(ff.CollisionError) as info:
+        ff.plan(ur5)
+    assert not info.value.chosen
+    assert str(info.value).endswith("move the goal joints or lower [safety] margin_m")

@@ -109,6 +109,7 @@ def _plan(
     options = options or SolveOptions()
     if scenario.max_deviation is not None:
         options = SolveOptions(**{**asdict(options), "max_deviation": scenario.max_deviation})
+    chosen_goal = bool(scenario.goal_poses)  # goal joints from inverse kinematics
     scenario = scenario.resolved()
     scenario.write_robot()  # an inline servicer or a payload: its URDF, into the cache
     constraints = scenario_constraints(scenario) if constraints is None else list(constraints)
@@ -118,7 +119,7 @@ def _plan(
         else objective_named(objective or scenario.objective)
     )
     check_registered(chosen, constraints)  # what verify could not rebuild: before any work
-    check_endpoints(scenario, constraints)
+    check_endpoints(scenario, constraints, chosen_goal)
     warn_light_base(scenario.robot)
     clock = time.perf_counter()
     with stage("solve"):

@@ -210,7 +210,7 @@ def reachable(
     mmap = MomentumMap(scenario.robot)
     ratio = inertia_ratio(mmap, probe.family.start)
     if probe.planar:
-        check_endpoints(scenario, scenario_constraints(scenario))  # as plan refuses them
+        check_endpoints(scenario, scenario_constraints(scenario), end_effector_goal)  # as plan
         return _planar_report(scenario, probe, ratio, end_effector_goal)
     problem = inner_family(scenario)
     start = problem.start_quaternion
@@ -221,6 +221,8 @@ def reachable(
     axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
     outer = np.array([turn_limit(moved, axis, bound.bound) for axis in axes])
     before = problem.evaluations
+    if budget > 0:  # as plan refuses them: no goal of this scenario plans
+        check_endpoints(scenario, scenario_constraints(scenario), end_effector_goal)
     estimate = _inner(scenario, problem, drift, axes, outer, budget, progress, jobs)
     return ReachReport(
         robot=scenario.robot.name,
@@ -277,7 +279,6 @@ def _inner(
         freedom = tuple(d - 5 for d in problem.family.degrees)
         return ReachEstimate(drift, (skipped,) * len(axes), freedom)
     constraints = scenario_constraints(scenario)
-    check_endpoints(scenario, constraints)  # as plan refuses them: no goal of this one plans
     workers = default_jobs(len(axes)) if jobs is None else jobs
     LOGGER.info("reach: %d directions %s", len(axes), where_run(workers, len(axes)))
     with one_blas_thread():  # many tiny products: see freefloat._blas

@@ -270,18 +270,28 @@ class CollisionError(FreeFloatError):
         pair: the two bodies, ``"a / b"``.
         clearance: their signed distance (m; negative when they overlap).
         margin: the required clearance (m).
+        chosen: whether those joints came from inverse kinematics of an end-effector goal
+            (the message then asks to move that goal).
     """
 
-    def __init__(self, where: str, pair: str, clearance: float, margin: float) -> None:
+    def __init__(
+        self, where: str, pair: str, clearance: float, margin: float, chosen: bool = False
+    ) -> None:
         self.where = where
         self.pair = pair
         self.clearance = float(clearance)
         self.margin = float(margin)
+        self.chosen = chosen
         state = "overlap by" if clearance < 0 else "are"
         amount = f"{abs(clearance):.4g} m" + ("" if clearance < 0 else " apart")
+        move = (
+            f"move the end-effector goal (inverse kinematics chose the {where} joints) "
+            if chosen
+            else f"move the {where} joints "
+        )
         super().__init__(
             f"{where} configuration: {pair} {state} {amount}, below the clearance margin "
-            f"{margin:g} m; move the {where} joints or lower [safety] margin_m"
+            f"{margin:g} m; {move}or lower [safety] margin_m"
         )
 
 

@@ -214,10 +214,17 @@ def _unreachable(
     radius = workspace_radius(mmap, quat, frame=worst.frame)  # reuses the model's data
     what = "pose" if worst.rotation is not None else "position"
     named = f" ({worst.frame!r})" if len(goals) > 1 else ""
+    few = ""
+    if worst.rotation is not None and mmap.robot.n < 6:  # a pose fixes six numbers
+        few = (
+            f"; a pose fixes 6 numbers and this robot has {mmap.robot.n} joints: a position "
+            "alone may be met"
+        )
     return UnreachableGoalError(
         f"end-effector goal{named} {what} {np.round(worst.position, 4).tolist()} m is out of "
-        f"reach: the closest configuration within the joint limits misses it by {miss}; the "
-        f"workspace radius from the system CM is about {radius:.3f} m",
+        f"reach: the closest configuration within the joint limits misses it by {miss} (a "
+        f"goal is met within {TOLERANCE:g} m and rad); the workspace radius from the system "
+        f"CM is about {radius:.3f} m{few}",
         distance=misses[k],
         radius=radius,
     )

@@ -19,11 +19,14 @@ from .scenario import Scenario
 __all__ = ["check_endpoints"]
 
 
-def check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> None:
+def check_endpoints(
+    scenario: Scenario, constraints: Sequence[Constraint], chosen_goal: bool = False
+) -> None:
     """Refuse a start or goal outside the joint limits, then one too close to a collision.
 
     Limits first: an overlap of a pose the arm cannot take says nothing useful. Each refusal
-    names the joint or the pair.
+    names the joint or the pair; ``chosen_goal``: the goal joints came from inverse
+    kinematics of an end-effector goal (the refusal asks to move that goal).
 
     Raises:
         JointLimitError: the start or goal joints outside their limits (rad or m).
@@ -37,4 +40,5 @@ def check_endpoints(scenario: Scenario, constraints: Sequence[Constraint]) -> No
             for where, joints in (("start", scenario.start), ("goal", scenario.goal)):
                 clearance, pair = clearance_at(constraint.model, joints)
                 if clearance < constraint.margin:
-                    raise CollisionError(where, pair, clearance, constraint.margin)
+                    chosen = chosen_goal and where == "goal"
+                    raise CollisionError(where, pair, clearance, constraint.margin, chosen)
