@@ -142,6 +142,44 @@ def test_dual_plan_exports_and_reloads_every_path(dual_plan, tmp_path):
 
 
 @pytest.mark.slow
+def test_dual_plan_bag_and_mcap_say_which_frame_each_end_effector_topic_follows(
+    dual_plan, tmp_path
+):
+    """Read back by rosbags and mcap themselves: each file records the frame of every
+    end-effector topic, and the points on each topic are that frame's path in the plan."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+    from rosbags.rosbag2 import Reader
+    from ruamel.yaml import YAML
+
+    _, plan = dual_plan
+    source = plan.save(tmp_path / "dual.json")
+    frames = plan.robot.frames
+    expected = {"/end_effector": frames[0], "/end_effector_2": frames[1]}
+    mcap_file = tmp_path / "d.mcap"
+    assert main(["export", str(source), "--format", "mcap", "-o", str(mcap_file)]) == 0
+    points: dict[str, list] = {}
+    with open(mcap_file, "rb") as handle:
+        reader = make_reader(handle, decoder_factories=[DecoderFactory()])
+        (record,) = [m for m in reader.iter_metadata() if m.name == "freefloat.end_effectors"]
+        assert json.loads(record.metadata["topics"]) == expected
+        for _, channel, _, decoded in reader.iter_decoded_messages(topics=list(expected)):
+            points.setdefault(channel.topic, []).append(
+                [decoded.point.x, decoded.point.y, decoded.point.z]
+            )
+    for topic, frame in expected.items():
+        np.testing.assert_allclose(
+            points[topic], plan.samples.end_effector_paths[frame], atol=1e-12
+        )
+    bag = tmp_path / "bag"
+    assert main(["export", str(source), "--format", "ros2-bag", "-o", str(bag)]) == 0
+    with Reader(bag) as reader:  # a bag rosbags reads; its metadata by rosbags' own YAML
+        assert set(reader.topics) >= set(expected)
+    info = YAML(typ="safe").load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert json.loads(info["custom_data"]["freefloat.end_effectors"]) == expected
+
+
+@pytest.mark.slow
 def test_dual_plan_figures_draw_every_end_effector(dual_plan):
     from freefloat.viz.plots import figures
 

@@ -16,7 +16,13 @@ import numpy as np
 from ..errors import ViewerError
 from ..files import atomic_write
 from ..plans.format import Plan
-from .messages import messages, root_link, typestore
+from .messages import (
+    END_EFFECTOR_RECORD,
+    end_effector_topics,
+    messages,
+    root_link,
+    typestore,
+)
 from .trajectory import Trajectory
 
 __all__ = ["write", "write_mcap"]
@@ -46,6 +52,7 @@ def write_mcap(traj: Trajectory, path: str | Path, urdf: str, urdf_text: str = "
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as handle:
             writer = Writer(handle)
+            writer.add_metadata(END_EFFECTOR_RECORD, {"topics": end_effector_topics(traj)})
             schemas: dict[str, Any] = {}
             for msg in messages(traj, child):
                 if msg.msgtype not in schemas:

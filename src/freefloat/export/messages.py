@@ -13,7 +13,9 @@ Topics (times relative to the plan's start, which is stamped 0 s):
   (inertial, origin at the system centre of mass), child frame the URDF's root link (m);
 - ``/end_effector``: ``geometry_msgs/msg/PointStamped`` per sample, in ``world`` (m);
   further end effectors of the robot on ``/end_effector_2``, ``/end_effector_3``... in the
-  plan's end-effector order.
+  plan's end-effector order. Which frame each topic follows is recorded in the file
+  (:func:`end_effector_topics`: a bag's custom data, an MCAP metadata record, both named
+  :data:`END_EFFECTOR_RECORD`), since a point's header names the frame it is expressed in.
 """
 
 from __future__ import annotations
@@ -30,11 +32,14 @@ from .trajectory import Trajectory
 
 __all__ = [
     "END_EFFECTOR",
+    "END_EFFECTOR_RECORD",
     "JOINT_STATES",
     "JOINT_TRAJECTORY",
     "TF",
     "WORLD_FRAME",
     "Message",
+    "end_effector_topic",
+    "end_effector_topics",
     "messages",
     "root_link",
     "typestore",
@@ -47,6 +52,20 @@ TF = ("/tf", "tf2_msgs/msg/TFMessage")
 END_EFFECTOR = ("/end_effector", "geometry_msgs/msg/PointStamped")
 #: Every topic with its message type, in writing order.
 TOPICS = (JOINT_TRAJECTORY, JOINT_STATES, TF, END_EFFECTOR)
+#: The name under which an export records which frame each end-effector topic follows.
+END_EFFECTOR_RECORD = "freefloat.end_effectors"
+
+
+def end_effector_topic(number: int) -> str:
+    """The topic of the plan's end effector ``number`` (0 first): ``/end_effector_2``..."""
+    return END_EFFECTOR[0] + ("" if number == 0 else f"_{number + 1}")
+
+
+def end_effector_topics(traj: Trajectory) -> str:
+    """``{"topic": "frame", ...}`` as JSON: the frame each end-effector topic follows."""
+    import json
+
+    return json.dumps({end_effector_topic(k): f for k, f in enumerate(traj.end_effectors)})
 
 
 def typestore() -> Any:
@@ -156,7 +175,7 @@ def _instant(traj: Trajectory, k: int, child_frame: str, types: Any) -> Iterator
     paths = traj.end_effector_paths[1:]
     for number, point in enumerate([traj.end_effector_position[k], *(p[k] for p in paths)]):
         ex, ey, ez = (float(v) for v in point)
-        topic = END_EFFECTOR[0] + ("" if number == 0 else f"_{number + 1}")
+        topic = end_effector_topic(number)
         position = types["geometry_msgs/msg/Point"](x=ex, y=ey, z=ez)
         yield Message(
             topic,

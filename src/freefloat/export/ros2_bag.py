@@ -18,7 +18,13 @@ from typing import Any
 from ..errors import InputError
 from ..files import default_file_mode
 from ..plans.format import Plan
-from .messages import messages, root_link, typestore
+from .messages import (
+    END_EFFECTOR_RECORD,
+    end_effector_topics,
+    messages,
+    root_link,
+    typestore,
+)
 from .trajectory import Trajectory
 
 __all__ = ["write", "write_bag"]
@@ -47,6 +53,7 @@ def write_bag(traj: Trajectory, path: str | Path, urdf: str, urdf_text: str = ""
     try:
         bag = holder / target.name
         with Writer(bag, version=8) as writer:  # rosbag2 metadata 8: Iron and newer
+            writer.set_custom_data(END_EFFECTOR_RECORD, end_effector_topics(traj))
             connections: dict[str, Any] = {}
             for msg in messages(traj, child):
                 if msg.topic not in connections:
