@@ -118,3 +118,32 @@ def test_a_velocity_refusal_says_how_far_the_search_within_the_limits_got(robot)
         assert plan.verification.passed
         rates = np.gradient(plan.joint_positions(t), t, axis=0)  # finite differences
         assert np.abs(rates).max() <= VELOCITY + 1e-6
+
+
+def test_a_goal_refused_before_any_step_is_an_unreachable_attitude(robot) -> None:
+    """A branch that takes no step (every corrector fails; made so here) is refused as the
+    out-of-reach goal its message describes: an ``UnreachableAttitudeError`` (so also an
+    ``UnreachableGoalError``), reached 0 of the turn asked, that turn measured apart."""
+    names = [j.name for j in robot.joints]
+    start, goal = dict(zip(names, START, strict=True)), dict(zip(names, GOAL, strict=True))
+    scenario = ff.Scenario(robot, 20.0, start, goal)
+    quintic = ff.problem_from_scenario(scenario)
+    drift = quintic.achieved(np.zeros(quintic.n_free))
+    turn = att.quat_exp(math.radians(2.0) * np.array([0.0, 0.0, 1.0]))
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(continuation, "corrected_step", _failing_step)
+        with pytest.raises(ff.UnreachableAttitudeError) as info:
+            ff.plan(dataclasses.replace(scenario, goal_attitude=att.quat_multiply(drift, turn)))
+    error = info.value
+    assert isinstance(error, ff.UnreachableGoalError)
+    assert error.reached == 0.0 and error.last_beta is None
+    assert error.asked == pytest.approx(math.radians(2.0), rel=1e-9)
+    assert str(error).startswith("reachable up to 0 deg of the 2 deg asked")
+
+
+def _failing_step(problem, target, constraints, predicted, tol, at):
+    """A ``corrected_step`` whose corrector never converges."""
+    from freefloat.solvers.corrector import Step
+
+    r, jac = target.residual_and_jacobian(predicted)
+    return Step(None, r, jac, 8, 8, at.instants, at.dips)

@@ -176,10 +176,12 @@ def _refuse(
             figure is taken at the path where it stopped.
         SolverError: otherwise.
     """
-    if attempt.stopped_by and attempt.last_beta is not None:
+    if attempt.stopped_by:
         # Out of reach: every figure of the error is taken at the path where the search
-        # stopped (how far it got, and what remains of the way).
-        stopped_at = problem.residual(attempt.last_beta)
+        # stopped (how far it got, and what remains of the way), its start when it took no
+        # step (then it has no path to hand on: ``last_beta`` is None).
+        on = attempt.last_beta
+        stopped_at = problem.residual(start if on is None else on)
         turn = relative_rotvec(problem.achieved(start), problem.goal_quaternion)
         asked = float(np.linalg.norm(turn))
         raise UnreachableAttitudeError(
@@ -190,7 +192,7 @@ def _refuse(
             tried=_dedupe(tried),
             per_axis=stopped_at.tolist(),
             stopped_by=attempt.stopped_by,
-            last_beta=attempt.last_beta.tolist(),
+            last_beta=None if on is None else on.tolist(),
             axis=(turn / max(asked, 1e-300)).tolist(),
             problem=problem,
             blocked_by=blocked,
