@@ -65,7 +65,8 @@ def _threshold(measured: float, margin: float) -> float:
     return loose
 
 
-#: See :func:`_threshold` (m): far below the distance queries' own tolerance.
+#: See :func:`_threshold` (m): the distance queries' own tolerance (GJK's), closer than which
+#: no bound can be brought.
 _BARELY = 1e-9
 
 
