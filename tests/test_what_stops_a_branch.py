@@ -147,3 +147,18 @@ def _failing_step(problem, target, constraints, predicted, tol, at):
 
     r, jac = target.residual_and_jacobian(predicted)
     return Step(None, r, jac, 8, 8, at.instants, at.dips)
+
+
+def test_a_search_that_spends_its_budget_without_a_path_stays_a_plain_solver_error(
+    problem,
+) -> None:
+    """Only a strategy that says how far it got is refused as out of reach: the multistart
+    search stopped by its evaluation budget (one evaluation) is a ``SolverError`` that
+    claims no turn reached."""
+    from freefloat.solvers.dispatch import solve
+
+    target = _turned(problem, [1.0, 0.0, 0.0], 60.0)
+    with pytest.raises(ff.SolverError) as info:
+        solve(target, SolveOptions(strategy="multistart", max_evaluations=1), default_constraints())
+    assert not isinstance(info.value, ff.UnreachableAttitudeError)
+    assert "reachable up to" not in str(info.value)

@@ -176,10 +176,12 @@ def _refuse(
             figure is taken at the path where it stopped.
         SolverError: otherwise.
     """
-    if attempt.stopped_by:
+    if attempt.stopped_by and (attempt.last_beta is not None or attempt.message):
         # Out of reach: every figure of the error is taken at the path where the search
         # stopped (how far it got, and what remains of the way), its start when it took no
-        # step (then it has no path to hand on: ``last_beta`` is None).
+        # step (then it has no path to hand on: ``last_beta`` is None; only a strategy that
+        # says how far it got, in its message, is refused so: a search that spent its budget
+        # without a path to show stays a plain SolverError).
         on = attempt.last_beta
         stopped_at = problem.residual(start if on is None else on)
         turn = relative_rotvec(problem.achieved(start), problem.goal_quaternion)

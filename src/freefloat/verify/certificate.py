@@ -51,23 +51,19 @@ def _tolerance(measured: float, margin: float) -> float:
 def _threshold(measured: float, margin: float) -> float:
     """The bound (m) at or above which an interval is settled, ``measured`` the least yet.
 
-    Within :func:`_tolerance` of ``measured``; but never below the margin while ``measured``
-    clears it (nor below the margin less :data:`CHECK_TOLERANCE`, what the check allows,
-    while ``measured`` clears that): a path 20 um clear of the margin must not fail because
-    its bound was settled 100 um below its minimum. A minimum within :data:`_BARELY` of
-    either is settled loosely: no bound could be brought that close in a sensible number of
-    halvings.
+    Within :func:`_tolerance` of ``measured``; but not below what the ``clearance`` check
+    needs while ``measured`` leaves room for it: a path 20 um clear of the margin must not
+    fail because its bound was settled 100 um below its minimum. While ``measured`` clears
+    the margin by :data:`CHECK_TOLERANCE`, the margin itself; while it clears the margin less
+    half of that, the margin less :data:`CHECK_TOLERANCE` (what the check allows). A bound
+    is never asked to come closer to ``measured`` than half that tolerance: nearer, the
+    halvings needed grow without end (a wall 20 nm clear spent the 20,000 halvings).
     """
     loose = measured - _tolerance(measured, margin)
-    for need in (margin, margin - CHECK_TOLERANCE):
-        if measured >= need + _BARELY:
+    for need, room in ((margin, CHECK_TOLERANCE), (margin - CHECK_TOLERANCE, CHECK_TOLERANCE / 2)):
+        if measured >= need + room:
             return max(loose, need)
     return loose
-
-
-#: See :func:`_threshold` (m): the distance queries' own tolerance (GJK's), closer than which
-#: no bound can be brought.
-_BARELY = 1e-9
 
 
 class _Least:
@@ -164,7 +160,7 @@ def certify(
         penetration=least.value < 0.0,
         instants=len(store.placements),
         bisections=bisections,
-        certified=lower >= margin,
+        certified=lower >= margin - CHECK_TOLERANCE,
         exhausted=exhausted,
         hull_excess=agreement[0],
         hull_detail=agreement[1],

@@ -78,8 +78,8 @@ SLACK_FRACTION = 0.25
 #: Most interval halvings of one certificate (a count, so the verdict is reproducible).
 MAX_BISECTIONS = 20000
 #: How far (m) the certified lower bound may lie below the margin and the path still pass
-#: the ``clearance`` check: the certificate refines until its bound clears the margin less
-#: this whenever the smallest clearance measured does, however close to the margin it lies.
+#: the ``clearance`` check; the certificate refines towards it near the margin
+#: (:func:`~freefloat.verify.certificate.certify`).
 CHECK_TOLERANCE = 1e-6
 #: A hull may report at most this much more clearance than its mesh (m): GJK's tolerance.
 HULL_TOLERANCE = 1e-6
@@ -98,7 +98,8 @@ class ClearanceCertificate:
         kind: how that pair was measured (``"mesh / sphere"``...).
         penetration: whether some pair overlaps (then ``measured`` is minus its depth).
         instants: instants measured; ``bisections``: intervals halved.
-        certified: whether ``lower_bound >= margin`` holds on every interval.
+        certified: whether ``lower_bound`` clears the margin within :data:`CHECK_TOLERANCE`
+            (what the ``clearance`` check allows) on every interval.
         exhausted: whether the halving budget ran out before the bound came within
             :data:`ACCURACY` of ``measured`` (the bound still holds; it is only looser).
         hull_excess: how far the solver's hull figures stray outside what the meshes allow
