@@ -67,7 +67,7 @@ def test_a_pose_goal_for_an_arm_of_fewer_than_six_joints_says_a_position_may_be_
 ):
     """The planar two-joint arm asked for a reachable point with a tool tilted out of its
     plane: the refusal states the acceptance (1e-9 m and rad) and that a pose fixes six
-    numbers where this robot has two joints; the same point alone plans."""
+    numbers where two joints are free; the same point alone plans."""
     x, y = ref.end_effector(0.0, math.radians(-60), math.radians(90))  # closed form
     text = _cartesian(tmp_path, x, y).read_text()
     path = tmp_path / "pose.toml"
@@ -81,7 +81,7 @@ def test_a_pose_goal_for_an_arm_of_fewer_than_six_joints_says_a_position_may_be_
     err = capsys.readouterr().err
     assert "(a goal is met within 1e-09 m and rad)" in err
     assert err.strip().endswith(
-        "a pose fixes 6 numbers and this robot has 2 joints: a position alone may be met"
+        "the goals fix 6 numbers and 2 joints are free to meet them: a position alone may be met"
     )
     assert ff.plan(ff.Scenario.from_toml(_cartesian(tmp_path, x, y))).verification.passed
 

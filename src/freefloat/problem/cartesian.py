@@ -183,7 +183,7 @@ def solve_frame_goals(
             best_x, best = result.x, error
         if best < TOLERANCE:
             return full(np.asarray(best_x, dtype=float))
-    raise _unreachable(mmap, goals, frames, full(best_x), quat, best)
+    raise _unreachable(mmap, goals, frames, full(best_x), quat, len(free))
 
 
 def _unreachable(
@@ -192,13 +192,15 @@ def _unreachable(
     frames: Sequence[int],
     closest: np.ndarray,
     quat: np.ndarray,
-    best: float,
+    free: int,
 ) -> UnreachableGoalError:
     """The error for goals missed, naming the worst-missed frame's goal and its miss (m, deg).
 
-    ``best`` is the least-squares residual's norm (metres and radians mixed), used only to
-    choose the closest configuration; the message gives the miss of the worst-missed frame's
-    position in m and, for a pose goal, of its orientation in deg.
+    ``closest``: the configuration the least squares ended nearest (rad or m); ``free``: the
+    number of joints that were free to meet the goals. The message gives the miss of the
+    worst-missed frame's position in m and, for a pose goal, of its orientation in deg; where
+    the goals fix more numbers than there are free joints (3 per position, 6 per pose), it
+    says so.
     """
     placements = [pin.SE3(_placement(mmap, closest, quat, f)) for f in frames]
     misses = [
@@ -214,11 +216,11 @@ def _unreachable(
     radius = workspace_radius(mmap, quat, frame=worst.frame)  # reuses the model's data
     what = "pose" if worst.rotation is not None else "position"
     named = f" ({worst.frame!r})" if len(goals) > 1 else ""
+    fixed = sum(3 if g.rotation is None else 6 for g in goals)
     few = ""
-    if worst.rotation is not None and mmap.robot.n < 6:  # a pose fixes six numbers
-        few = (
-            f"; a pose fixes 6 numbers and this robot has {mmap.robot.n} joints: a position "
-            "alone may be met"
+    if fixed > free:  # more numbers asked than joints to meet them
+        few = f"; the goals fix {fixed} numbers and {free} joints are free to meet them" + (
+            ": a position alone may be met" if worst.rotation is not None else ""
         )
     return UnreachableGoalError(
         f"end-effector goal{named} {what} {np.round(worst.position, 4).tolist()} m is out of "

@@ -132,6 +132,29 @@ def _ahead(
     return None
 
 
+def _blocker(
+    problem: Problem,
+    target: Problem,
+    constraints: Sequence[Constraint],
+    at_point: tuple[np.ndarray, np.ndarray, np.ndarray],
+    step: float,
+    tol: float,
+    rows: Rows,
+) -> Broken | None:
+    """What stopped a branch whose ``step`` (towards ``target``) failed at its floor.
+
+    ``at_point``: the branch's path, tangent and Jacobian. The constraint the step breaks
+    ahead (:func:`_ahead`); where none is, the one without which the step converges onto a
+    path that breaks it (:func:`.in_the_way.in_the_way`); None on a singular map or when
+    neither names one.
+    """
+    beta, tangent, jac = at_point
+    blocked = _ahead(problem, constraints, beta, tangent, jac, step)
+    if blocked is None and not singular(jac):
+        blocked = in_the_way(problem, target, constraints, beta + step * tangent, tol, rows)
+    return blocked
+
+
 def _why(blocked: Broken | None, jac: np.ndarray) -> str:
     """Why the branch cannot go on: a singular map, a constraint ahead, or freedom.
 
@@ -256,10 +279,8 @@ def track(
             reached.append(lam)
             dl = 0.5 * step
             if dl * angle < MIN_STEP:
-                blocked = _ahead(problem, constraints, beta, tangent, jac, step)
-                if blocked is None and not singular(jac):
-                    predicted = beta + step * tangent
-                    blocked = in_the_way(problem, target, constraints, predicted, tol, at)
+                point = (beta, tangent, jac)
+                blocked = _blocker(problem, target, constraints, point, step, tol, at)
                 stopped_by = _why(blocked, jac)
                 break
             continue

@@ -6,7 +6,9 @@ cause when there is one (:func:`.continuation.track`); but the tangent keeps the
 inside, so a constraint can block the corrector without being broken ahead, and the refusal
 then blamed the path family's freedom. Here the failed step is corrected again without each
 constraint in turn: a constraint without which the step converges onto a path that breaks it
-is the one in the way. Only a refusal pays for it: at most one corrector per constraint.
+is the one in the way. Only a branch that stops so pays for it: one corrected step per
+constraint (a corrector, and up to three more at the dips it finds), its residual evaluations
+counted with the branch's.
 """
 
 from __future__ import annotations
@@ -54,7 +56,10 @@ def in_the_way(
             continue
         others = [c for c in constraints if c is not constraint]
         alone = Rows(at.instants, at.dips, {})
-        done = corrected_step(problem, target, others, predicted, tol, alone)
+        try:
+            done = corrected_step(problem, target, others, predicted, tol, alone)
+        except (np.linalg.LinAlgError, FloatingPointError, ValueError):
+            continue  # a numerical failure without it says nothing of this constraint
         if done.beta is None:
             continue
         excess = constraint.violation(problem, done.beta)
