@@ -302,7 +302,7 @@ joints = {_joints_toml({**start, "left_elbow_joint": 60.0})}
         np.testing.assert_allclose(got.homogeneous, expected.homogeneous, atol=1e-12)
 
 
-def test_a_joint_locked_without_a_value_whose_range_excludes_0_is_fixed_mid_range(tmp_path):
+def test_a_joint_locked_without_a_value_whose_range_excludes_0_is_fixed_mid_range(tmp_path, caplog):
     """[robot] urdf + lock = ["j2"], j2 limited to [0.3, 0.7] rad and no start value for it: it
     is fixed at 0.5 rad (not refused for 0), the tip where Pinocchio puts it on the full URDF
     at j2 = 0.5."""
@@ -317,8 +317,11 @@ def test_a_joint_locked_without_a_value_whose_range_excludes_0_is_fixed_mid_rang
         f'duration = 10.0\n[robot]\nurdf = "{urdf}"\nlock = ["j2"]\n'
         "[start]\njoints = { j1 = 0.0 }\n[goal]\njoints = { j1 = 30.0 }\n"
     )
-    locked = ff.Scenario.from_toml(path).robot
+    with caplog.at_level("WARNING"):
+        locked = ff.Scenario.from_toml(path).robot
     assert locked.joint_names == ["j1"]
+    said = "joint 'j2' locked at 28.65 deg, the middle of its range [17.19, 40.11] deg"
+    assert any(r.getMessage().startswith(said) for r in caplog.records)
     full = pin.buildModelFromUrdf(str(urdf))
     data = full.createData()
     pin.framesForwardKinematics(full, data, np.array([0.4, 0.5]))

@@ -269,6 +269,7 @@ def plan_from_solution(
             [c.name for c in failed],
             [
                 f"{c.value:.4g} {c.unit} against a tolerance of {c.tolerance:.2g}"
+                + (f" and its own error {c.error_estimate:.2g}" if c.error_estimate else "")
                 + (f", {c.detail}" if c.detail else "")
                 for c in failed
             ],

@@ -251,6 +251,8 @@ class VerificationError(FreeFloatError):
 
     def __init__(self, failures: Sequence[str], details: Sequence[str] = ()) -> None:
         self.failures = tuple(failures)
+        if len(details) > len(self.failures):
+            raise ValueError(f"{len(details)} details for {len(self.failures)} failed checks")
         self.details = tuple(details) + ("",) * (len(self.failures) - len(details))
         said = [f"{n}: {d}" if d else n for n, d in zip(self.failures, self.details, strict=False)]
         super().__init__(

@@ -20,6 +20,7 @@ Topics (times relative to the plan's start, which is stamped 0 s):
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -63,8 +64,6 @@ def end_effector_topic(number: int) -> str:
 
 def end_effector_topics(traj: Trajectory) -> str:
     """``{"topic": "frame", ...}`` as JSON: the frame each end-effector topic follows."""
-    import json
-
     return json.dumps({end_effector_topic(k): f for k, f in enumerate(traj.end_effectors)})
 
 

@@ -32,6 +32,7 @@ each arm's SRDF pairs (prefixed; written beside the servicer) and every pair bet
 from __future__ import annotations
 
 import hashlib
+import logging
 import math
 import os
 from collections.abc import Mapping
@@ -61,6 +62,8 @@ __all__ = [
     "servicer_cache_dir",
     "triple",
 ]
+
+LOGGER = logging.getLogger(__name__)
 
 _SERVICER_KEYS = (
     "arm",
@@ -245,6 +248,18 @@ def _lock_values(lock: Any, text: str, start: Any) -> dict[str, float]:
         kind, lower, upper = movable[name]
         if raw is None and name not in given:  # 0, or the middle of a range without it
             values[name] = finger_lock_value(lower, upper)
+            if values[name] != 0.0:  # a choice the user did not state
+                scale, unit = (1.0, "m") if kind == "prismatic" else (180 / math.pi, "deg")
+                LOGGER.warning(
+                    "joint %r locked at %.4g %s, the middle of its range [%.4g, %.4g] %s "
+                    "(0 is outside it)",
+                    name,
+                    values[name] * scale,
+                    unit,
+                    lower * scale,
+                    upper * scale,
+                    unit,
+                )
             continue
         raw = given[name] if raw is None else raw
         angular = kind != "prismatic"

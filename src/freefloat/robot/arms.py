@@ -199,7 +199,7 @@ def _lock_values(arm: ArmSpec, joints: Sequence[Any]) -> tuple[dict[str, float],
         joint = movable[name]
         low, high = _range(joint)
         if value is None:  # no value asked: 0, or the middle of a range without it
-            values[arm.prefix + name] = _default_lock(arm.prefix + name, joint, notes)
+            values[arm.prefix + name] = _default_lock(f"joint {arm.prefix + name!r}", joint, notes)
             continue
         if not low <= value <= high:
             scale, unit = _display(joint)
