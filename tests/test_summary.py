@@ -303,3 +303,49 @@ def test_the_orientation_error_printed_is_the_rotations_angle_to_rounding(angle)
     k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
     rotation = np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * (k @ k)
     assert rotation_angle(rotation) == pytest.approx(angle, rel=1e-12, abs=1e-15)
+
+
+def test_joints_without_velocity_or_effort_limits_are_named(tmp_path, caplog):
+    """A URDF whose second joint has no <limit> velocity or effort (0 or none): plan and
+    reach warn, naming that joint only; the shipped UR5 servicer (every limit given) does
+    not."""
+    import logging
+
+    import numpy as np
+
+    import urdfs
+
+    body = urdfs.BASE.format(mass=100.0, i=10.0)
+    body += urdfs.joint("q1", "base", "l1") + urdfs.link("l1")
+    body += urdfs.joint("q2", "l1", "l2", "continuous").replace(
+        '<limit effort="50" velocity="2"/>', ""
+    )
+    body += urdfs.link("l2")
+    urdf = tmp_path / "unlimited.urdf"
+    urdf.write_text(urdfs.robot(body))
+    assert urdf.read_text().count("<limit") == 1  # q1's alone
+    robot = ff.load_robot(urdf)
+    problem = ff.build_problem(
+        robot, [0.2, 0.3], [0.6, -0.2], ff.quat_from_zyx(0.0), ff.quat_from_zyx(0.0), 4.0
+    )
+    scenario = ff.Scenario(
+        robot,
+        4.0,
+        {"q1": 0.2, "q2": 0.3},
+        {"q1": 0.6, "q2": -0.2},
+        goal_attitude=problem.achieved(np.zeros(problem.n_free)),
+    )
+    expected = [
+        "the URDF gives no velocity or no effort limit for 'q2': no such limit is imposed there "
+        "(add <limit velocity=... effort=...> to the joint to impose one)"
+    ]
+    for call in (lambda: ff.plan(scenario), lambda: ff.reachable(scenario, budget=0)):
+        caplog.clear()
+        with caplog.at_level(logging.WARNING, logger="freefloat"):
+            call()
+        said = [r.getMessage() for r in caplog.records if "no velocity" in r.getMessage()]
+        assert said == expected
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="freefloat"):
+        ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml"))
+    assert not any("no velocity" in r.getMessage() for r in caplog.records)
