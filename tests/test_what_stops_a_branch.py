@@ -162,3 +162,27 @@ def test_a_search_that_spends_its_budget_without_a_path_stays_a_plain_solver_err
         solve(target, SolveOptions(strategy="multistart", max_evaluations=1), default_constraints())
     assert not isinstance(info.value, ff.UnreachableAttitudeError)
     assert "reachable up to" not in str(info.value)
+
+
+def test_a_duration_below_every_paths_floor_is_named_in_the_refusal(tmp_path) -> None:
+    """A 100 t base, 0.2 s, a goal 10 deg off the drift attitude: out of reach with or without
+    the velocity limits, and 0.2 s is shorter than any path between these joints can keep
+    2 rad/s (the largest span over the limit, closed form: 0.35 s). The refusal says so, so
+    the user lengthens the duration before doubting the attitude."""
+    path = tmp_path / "heavy.urdf"
+    path.write_text(urdfs.spatial_arm(base_mass=1e5))
+    heavy = ff.load_robot(path)
+    names = [j.name for j in heavy.joints]
+    start, goal = dict(zip(names, START, strict=True)), dict(zip(names, GOAL, strict=True))
+    scenario = ff.Scenario(heavy, 0.2, start, goal)
+    quintic = ff.problem_from_scenario(scenario)
+    drift = quintic.achieved(np.zeros(quintic.n_free))
+    turn = att.quat_exp(math.radians(10.0) * np.array([1.0, 0.0, 0.0]))
+    floor = max(abs(g - s) for s, g in zip(START, GOAL, strict=True)) / VELOCITY
+    assert floor == pytest.approx(0.35)
+    with pytest.raises(ff.SolverError) as info:
+        ff.plan(dataclasses.replace(scenario, goal_attitude=att.quat_multiply(drift, turn)))
+    assert str(info.value).endswith(
+        f"no path keeps every velocity limit in under {floor:.4g} s (each joint's travel at its "
+        "limit), longer than the 0.2 s asked: lengthen the duration first"
+    )

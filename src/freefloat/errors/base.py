@@ -200,6 +200,20 @@ class SolverError(FreeFloatError):
             figure = f"best residual {self.best_residual:.3g} rad{axes}"
         super().__init__(f"{message} ({figure}){detail}{hint}")
 
+    def with_hint(self, more: str) -> SolverError:
+        """The same refusal with ``more`` added to its hint: every figure kept."""
+        return SolverError(
+            self.headline,
+            self.best_residual,
+            self.tried,
+            self.per_axis,
+            hint=f"{self.hint}; {more}" if self.hint else more,
+            stopped_by=self.stopped_by,
+            reached_fraction=self.reached_fraction,
+            last_beta=self.last_beta,
+            blocked_by=self.blocked_by,
+        )
+
 
 class PlanFileError(FreeFloatError):
     """A plan file that is unreadable, corrupt or of another format version."""

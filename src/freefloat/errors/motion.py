@@ -209,8 +209,16 @@ class UnreachableAttitudeError(SolverError, UnreachableGoalError):
             digits += 1
         return f"reachable up to {out:.{digits}g} deg of the {goal:.{digits}g} deg asked"
 
+    def with_hint(self, more: str) -> UnreachableAttitudeError:
+        """The same refusal with ``more`` added to its hint: every figure kept."""
+        return self._copy(self.headline, f"{self.hint}; {more}" if self.hint else more)
+
     def with_headline(self, headline: str) -> UnreachableAttitudeError:
         """The same refusal under another headline: every figure and attribute kept."""
+        return self._copy(headline, self.hint)
+
+    def _copy(self, headline: str, hint: str) -> UnreachableAttitudeError:
+        """This refusal with ``headline`` and ``hint``: every figure and attribute kept."""
         return UnreachableAttitudeError(
             headline,
             self.best_residual,
@@ -218,7 +226,7 @@ class UnreachableAttitudeError(SolverError, UnreachableGoalError):
             asked=self.asked,
             tried=self.tried,
             per_axis=self.per_axis,
-            hint=self.hint,
+            hint=hint,
             stopped_by=self.stopped_by,
             last_beta=self.last_beta,
             axis=self.axis,

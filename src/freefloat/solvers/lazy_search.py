@@ -19,6 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import SolverError, UnreachableAttitudeError
+from ..problem.build import problem_from_scenario
 from ..problem.constraints import DEFAULT_INSTANTS, Constraint, DurationScaledLimit, LimitPeak
 from ..problem.residual import Problem
 from ..problem.scenario import Scenario
@@ -223,7 +224,8 @@ def _explain_duration_limits(
         return  # the velocity and effort limits did not stand in the way
     try:
         found = search(scenario, options, relaxed)
-    except SolverError:
+    except SolverError:  # no path without them either: is the duration itself too short?
+        _refuse_below_floor(scenario, timed, error)
         return
     path = found.problem.polynomials(found.solution.beta)
     worst: tuple[DurationScaledLimit, LimitPeak] | None = None
@@ -238,3 +240,29 @@ def _explain_duration_limits(
         if isinstance(error, UnreachableAttitudeError):  # how far the search within them got
             found_error = found_error.within_reach(error.reached, error.asked)
         raise found_error from error
+
+
+def _refuse_below_floor(
+    scenario: Scenario, timed: Sequence[DurationScaledLimit], error: SolverError
+) -> None:
+    """Raise ``error`` saying so when no path at all keeps the velocity limits in its duration.
+
+    The floor is path-free: each joint's travel at its velocity limit (s; read off the plain
+    quintic path, the same for every path between the same joints). A refusal of the attitude
+    at a duration below it would point the user at the goal attitude instead of the duration.
+    """
+    if not (type(error) is SolverError or isinstance(error, UnreachableAttitudeError)):
+        return
+    quintic = problem_from_scenario(scenario, check_bounds=False)
+    path = quintic.polynomials(np.zeros(quintic.n_free))
+    floor = 0.0
+    for limit in timed:
+        peak = limit.worst(scenario.robot, path)
+        if peak is not None:
+            floor = max(floor, peak.least_duration)
+    if scenario.duration < floor:
+        raise error.with_hint(
+            f"no path keeps every velocity limit in under {floor:.4g} s (each joint's travel "
+            f"at its limit), longer than the {scenario.duration:.4g} s asked: lengthen the "
+            "duration first"
+        ) from error
