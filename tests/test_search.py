@@ -176,3 +176,31 @@ def test_a_goal_out_of_reach_within_the_limits_is_refused_without_the_costly_row
     assert "; the search without loose stopped on a path that honours loose too" in str(err)
     assert err.stopped_by.startswith("joint_position_limits")
     assert 0.0 < err.reached < err.asked
+
+
+def test_a_refusal_over_several_goals_reports_the_goal_that_got_closest():
+    """With full turns allowed, each goal tried (as stated, or with a joint's turn) has its own
+    levels; the refusal gives the figures of the goal whose levels got closest, a continued
+    level's included (ETS-VII once reported 5.1 of 20 deg where a turned goal reached 17.3 of
+    20.1 deg). Errors built here with known figures (rad)."""
+    from freefloat.solvers.search import _Record, _refuse
+
+    def stopped(reached, asked, residual):
+        return ff.UnreachableAttitudeError(
+            "reachable ...", residual, reached=reached, asked=asked, axis=(0.0, 1.0, 0.0)
+        )
+
+    record = _Record()
+    record.failed(stopped(0.09, 0.35, 0.26), "goal as stated, freedom +2", False, "goal as stated")
+    record.failed(stopped(0.10, 0.26, 0.25), "goal as stated, freedom +3", True, "goal as stated")
+    turned = "goal Joint_6 -1 turn(s)"
+    record.failed(stopped(0.20, 0.35, 0.15), f"{turned}, freedom +2", False, turned)
+    record.failed(stopped(0.10, 0.15, 0.05), f"{turned}, freedom +3", True, turned)
+    nearest = record.nearest_goal()
+    assert nearest.goal == turned and nearest.closest.best_residual == 0.05
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
+    with pytest.raises(ff.UnreachableAttitudeError) as info:
+        _refuse(scenario, 2, None, (0.15, None, None), record.tried, nearest, ())
+    error = info.value
+    assert error.asked == 0.35 and error.reached == pytest.approx(0.30)  # 0.35 - 0.05
+    assert str(error).startswith(f"{turned}: reachable up to 17.2 deg of the 20.1 deg asked")

@@ -166,7 +166,7 @@ def search(
                 LOGGER.info("solve: level %d stopped: %s", level, exc.headline)
                 if exc.last_beta is not None:
                     carry = (problem.family, exc.last_beta)
-                record.failed(exc, freedom, continued=start is not None)
+                record.failed(exc, freedom, continued=start is not None, goal=label)
                 continue
             how = " (continued from where less freedom stopped)" if start is not None else ""
             record.tried.append(f"{freedom}: solved{how}")
@@ -178,7 +178,7 @@ def search(
         record.first_error,
         (record.best, record.best_axes, record.best_error),
         record.tried,
-        (record.origin, record.closest),
+        record.nearest_goal(),
         tuple(dict.fromkeys(record.blocked)),
     )
 
@@ -222,8 +222,9 @@ class _Record:
         first_error: the first error met.
         best: the smallest residual of a level (rad), ``best_axes`` its vector and
             ``best_error`` its error (or the level that got furthest along its way).
-        origin: the first level's unreachable-attitude error (the turn asked from the quintic
-            path's attitude); ``closest`` the one that got closest.
+        turns: per goal tried (its label: ``goal as stated``, or its joints' turns), the
+            unreachable-attitude errors of its first level (the turn asked from the quintic
+            path's attitude) and of the level that got closest.
         blocked: the names of the constraints that stood in the way of some level.
     """
 
@@ -232,18 +233,18 @@ class _Record:
     best: float = math.inf
     best_axes: tuple[float, ...] | None = None
     best_error: SolverError | None = None
-    origin: UnreachableAttitudeError | None = None
-    closest: UnreachableAttitudeError | None = None
+    turns: dict[str, list[UnreachableAttitudeError | None]] = field(default_factory=dict)
     blocked: list[str] = field(default_factory=list)
 
-    def failed(self, exc: SolverError, freedom: str, continued: bool) -> None:
-        """Record a level (``freedom``: its label) that stopped with ``exc``."""
+    def failed(self, exc: SolverError, freedom: str, continued: bool, goal: str = "") -> None:
+        """Record a level (``freedom``: its label, ``goal`` its goal's) stopped with ``exc``."""
         self.blocked += exc.blocked_by
         if isinstance(exc, UnreachableAttitudeError):
+            pair = self.turns.setdefault(goal, [None, None])
             if not continued:
-                self.origin = exc  # the turn asked from the quintic path's attitude
-            if self.closest is None or exc.best_residual < self.closest.best_residual:
-                self.closest = exc
+                pair[0] = exc  # the turn asked from the quintic path's attitude
+            if pair[1] is None or exc.best_residual < pair[1].best_residual:
+                pair[1] = exc
         self.first_error = self.first_error or exc
         if continued:  # its reach counts from a later point: keep the first
             self.tried.append(f"{freedom} (continued): " + _short(exc))
@@ -255,6 +256,27 @@ class _Record:
         )
         if exc.best_residual < self.best or further:
             self.best, self.best_axes, self.best_error = exc.best_residual, exc.per_axis, exc
+
+    def nearest_goal(self) -> _Turns:
+        """The goal tried whose levels got closest, its first level's and its closest error.
+
+        Its label is "" when the goal as stated was the only one tried; (None, None) errors
+        when no level stopped on the way to its goal.
+        """
+        known = [(g, o, c) for g, (o, c) in self.turns.items() if o is not None and c is not None]
+        if not known:
+            return _Turns("", None, None)
+        goal, origin, closest = min(known, key=lambda item: item[2].best_residual)
+        return _Turns(goal, origin, closest)
+
+
+@dataclass(frozen=True)
+class _Turns:
+    """A goal's label, and its first level's and closest level's refusals (see :class:`_Record`)."""
+
+    goal: str
+    origin: UnreachableAttitudeError | None
+    closest: UnreachableAttitudeError | None
 
 
 def _distributions(
@@ -274,7 +296,7 @@ def _refuse(
     first_error: FreeFloatError | None,
     nearest: tuple[float, tuple[float, ...] | None, SolverError | None],
     tried: list[str],
-    turns: tuple[UnreachableAttitudeError | None, UnreachableAttitudeError | None],
+    turns: _Turns,
     blocked: tuple[str, ...],
 ) -> NoReturn:
     """Raise the refusal of a search that found no root (``attempts`` goal offsets tried).
@@ -289,7 +311,7 @@ def _refuse(
         SolverError: otherwise, with the best residual (rad) and every attempt.
     """
     best, best_axes, best_error = nearest
-    origin, closest = turns
+    origin, closest = turns.origin, turns.closest
     continuous = any(j.kind == "continuous" for j in scenario.robot.joints)
     hint = ""
     if continuous and not scenario.allow_full_turns:
@@ -304,12 +326,14 @@ def _refuse(
         raise first_error
     if extra_hint := _extra_hint(scenario, best_error or first_error):
         hint = f"{extra_hint}; {hint}" if hint else extra_hint
-    if origin is not None and closest is not None and attempts == 1:
-        # One figure: how far along the turn asked from the quintic attitude any level got.
+    if origin is not None and closest is not None:
+        # One figure: how far along the turn asked from the quintic attitude any level got,
+        # for the goal tried (as stated, or with joints' turns) whose levels got closest.
         reached = max(origin.asked - closest.best_residual, origin.reached)
         axis = ", ".join(f"{a:.3f}" for a in origin.axis)
+        goal = f"{turns.goal}: " if attempts > 1 else ""
         raise UnreachableAttitudeError(
-            f"{UnreachableAttitudeError.turn_phrase(reached, origin.asked)} about this "
+            f"{goal}{UnreachableAttitudeError.turn_phrase(reached, origin.asked)} about this "
             f"direction (axis {axis} "
             f"from the quintic path's attitude); stopped by {closest.stopped_by}",
             closest.best_residual,
