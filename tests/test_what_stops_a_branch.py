@@ -48,6 +48,15 @@ def _turned(problem: ff.Problem, axis: list[float], degrees: float) -> ff.Proble
     return problem.with_goal(att.quat_multiply(drift, turn))
 
 
+def _scenario_and_drift(robot: ff.Robot, duration: float) -> tuple[ff.Scenario, np.ndarray]:
+    """The scenario from START to GOAL in ``duration`` (s), and its plain quintic's attitude."""
+    names = [j.name for j in robot.joints]
+    start, goal = dict(zip(names, START, strict=True)), dict(zip(names, GOAL, strict=True))
+    scenario = ff.Scenario(robot, duration, start, goal)
+    quintic = ff.problem_from_scenario(scenario)
+    return scenario, quintic.achieved(np.zeros(quintic.n_free))
+
+
 def _room_and_peak_rate(problem: ff.Problem, beta: np.ndarray) -> tuple[float, float]:
     """Smallest distance to a position limit (rad) and largest |rate| (rad/s), sampled."""
     t = np.linspace(0.0, DURATION, 4001)
@@ -98,11 +107,7 @@ def test_a_velocity_refusal_says_how_far_the_search_within_the_limits_got(robot)
     the longer duration, and how far the search within every limit got; a goal that far (and
     one nearer) about the same axis plans at 4 s, its rates within the limit by finite
     differences of its joint values on a dense grid."""
-    names = [j.name for j in robot.joints]
-    start, goal = dict(zip(names, START, strict=True)), dict(zip(names, GOAL, strict=True))
-    scenario = ff.Scenario(robot, DURATION, start, goal)
-    quintic = ff.problem_from_scenario(scenario)
-    drift = quintic.achieved(np.zeros(quintic.n_free))
+    scenario, drift = _scenario_and_drift(robot, DURATION)
     turn = att.quat_exp(math.radians(10.0) * np.array([1.0, 0.0, 0.0]))
     with pytest.raises(ff.VelocityLimitError) as info:
         ff.plan(dataclasses.replace(scenario, goal_attitude=att.quat_multiply(drift, turn)))
@@ -124,11 +129,7 @@ def test_a_goal_refused_before_any_step_is_an_unreachable_attitude(robot) -> Non
     """A branch that takes no step (every corrector fails; made so here) is refused as the
     out-of-reach goal its message describes: an ``UnreachableAttitudeError`` (so also an
     ``UnreachableGoalError``), reached 0 of the turn asked, that turn measured apart."""
-    names = [j.name for j in robot.joints]
-    start, goal = dict(zip(names, START, strict=True)), dict(zip(names, GOAL, strict=True))
-    scenario = ff.Scenario(robot, 20.0, start, goal)
-    quintic = ff.problem_from_scenario(scenario)
-    drift = quintic.achieved(np.zeros(quintic.n_free))
+    scenario, drift = _scenario_and_drift(robot, 20.0)
     turn = att.quat_exp(math.radians(2.0) * np.array([0.0, 0.0, 1.0]))
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(continuation, "corrected_step", _failing_step)
@@ -172,11 +173,7 @@ def test_a_duration_below_every_paths_floor_is_named_in_the_refusal(tmp_path) ->
     path = tmp_path / "heavy.urdf"
     path.write_text(urdfs.spatial_arm(base_mass=1e5))
     heavy = ff.load_robot(path)
-    names = [j.name for j in heavy.joints]
-    start, goal = dict(zip(names, START, strict=True)), dict(zip(names, GOAL, strict=True))
-    scenario = ff.Scenario(heavy, 0.2, start, goal)
-    quintic = ff.problem_from_scenario(scenario)
-    drift = quintic.achieved(np.zeros(quintic.n_free))
+    scenario, drift = _scenario_and_drift(heavy, 0.2)
     turn = att.quat_exp(math.radians(10.0) * np.array([1.0, 0.0, 0.0]))
     floor = max(abs(g - s) for s, g in zip(START, GOAL, strict=True)) / VELOCITY
     assert floor == pytest.approx(0.35)
