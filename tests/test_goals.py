@@ -53,6 +53,7 @@ def test_unreachable_cartesian_goal_names_the_workspace(tmp_path, capsys):
     radius = ref.A + ref.B + ref.C
     assert "end-effector goal position [2.5, 0.3, 0.0] m is out of reach" in err
     assert f"the workspace radius from the system CM is about {radius:.3f} m" in err
+    assert "numbers" not in err  # two joints meet an in-plane point: no count of them
     # the miss has its unit, and no configuration comes nearer than the goal's distance from
     # the system CM less the arm's full reach (closed form)
     miss = float(

@@ -182,25 +182,29 @@ def test_a_refusal_over_several_goals_reports_the_goal_that_got_closest():
     """With full turns allowed, each goal tried (as stated, or with a joint's turn) has its own
     levels; the refusal gives the figures of the goal whose levels got closest, a continued
     level's included (ETS-VII once reported 5.1 of 20 deg where a turned goal reached 17.3 of
-    20.1 deg). Errors built here with known figures (rad)."""
+    20.1 deg), every figure from that goal. Errors built here with known figures (rad)."""
     from freefloat.solvers.search import _Record, _refuse
 
-    def stopped(reached, asked, residual):
+    def stopped(reached, asked, residual, axis, why):
         return ff.UnreachableAttitudeError(
-            "reachable ...", residual, reached=reached, asked=asked, axis=(0.0, 1.0, 0.0)
+            "reachable ...", residual, reached=reached, asked=asked, axis=axis, stopped_by=why
         )
 
+    stated, turned = "goal as stated", "goal Joint_6 -1 turn(s)"
     record = _Record()
-    record.failed(stopped(0.09, 0.35, 0.26), "goal as stated, freedom +2", False, "goal as stated")
-    record.failed(stopped(0.10, 0.26, 0.25), "goal as stated, freedom +3", True, "goal as stated")
-    turned = "goal Joint_6 -1 turn(s)"
-    record.failed(stopped(0.20, 0.35, 0.15), f"{turned}, freedom +2", False, turned)
-    record.failed(stopped(0.10, 0.15, 0.05), f"{turned}, freedom +3", True, turned)
+    x, y = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)
+    record.failed(stopped(0.09, 0.30, 0.21, x, "a"), f"{stated}, freedom +2", False, stated)
+    record.failed(stopped(0.10, 0.21, 0.20, x, "b"), f"{stated}, freedom +3", True, stated)
+    record.failed(stopped(0.20, 0.35, 0.15, y, "c"), f"{turned}, freedom +2", False, turned)
+    record.failed(stopped(0.10, 0.15, 0.05, y, "d"), f"{turned}, freedom +3", True, turned)
     nearest = record.nearest_goal()
     assert nearest.goal == turned and nearest.closest.best_residual == 0.05
     scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
     with pytest.raises(ff.UnreachableAttitudeError) as info:
-        _refuse(scenario, 2, None, (0.15, None, None), record.tried, nearest, ())
+        _refuse(scenario, 2, None, (0.05, None, None), record.tried, nearest, ())
     error = info.value
-    assert error.asked == 0.35 and error.reached == pytest.approx(0.30)  # 0.35 - 0.05
+    # asked and axis from the turned goal's first level; the rest of the way from its
+    # closest (continued) level: 0.35 - 0.05
+    assert error.asked == 0.35 and error.axis == y and error.reached == pytest.approx(0.30)
+    assert error.stopped_by == "d" and error.best_residual == 0.05
     assert str(error).startswith(f"{turned}: reachable up to 17.2 deg of the 20.1 deg asked")

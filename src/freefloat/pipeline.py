@@ -52,7 +52,6 @@ from .problem.scenario import Scenario
 from .progress import LOGGER, stage
 from .robot.light_base import warn_light_base
 from .robot.model import Robot
-from .robot.unlimited_joints import warn_unlimited_joints
 from .solvers.lazy_search import broken_by, explain_lazy_breaks, search_lazily
 from .solvers.minimise import minimise
 from .solvers.nearest import nearest_root
@@ -122,7 +121,6 @@ def _plan(
     check_registered(chosen, constraints)  # what verify could not rebuild: before any work
     check_endpoints(scenario, constraints, chosen_goal)
     warn_light_base(scenario.robot)
-    warn_unlimited_joints(scenario.robot)
     clock = time.perf_counter()
     with stage("solve"):
         # another objective's freedom may find a path within limits the search's path breaks

@@ -43,7 +43,6 @@ from .problem.scenario import Scenario
 from .problem.simple_bound import SimpleMotionBound, inertia_ratio, simple_motion_bound, turn_limit
 from .progress import LOGGER
 from .robot.light_base import warn_light_base
-from .robot.unlimited_joints import warn_unlimited_joints
 from .solvers.continuation import singular
 from .solvers.options import SolveOptions
 from .solvers.reach import DirectionReach, ReachEstimate, default_directions, reach_set
@@ -207,7 +206,6 @@ def reachable(
     scenario = scenario.resolved()
     scenario.write_robot()
     warn_light_base(scenario.robot)
-    warn_unlimited_joints(scenario.robot)
     probe = problem_from_scenario(scenario, check_bounds=False)
     mmap = MomentumMap(scenario.robot)
     ratio = inertia_ratio(mmap, probe.family.start)

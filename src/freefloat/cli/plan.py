@@ -15,7 +15,7 @@ from ..problem.objectives import OBJECTIVES
 from ..problem.residual import INTEGRATION_TOLERANCE
 from ..progress import LOGGER, TIMINGS, stage
 from ..solvers.options import DEFAULT_TOLERANCE, TOLERANCE_RANGE_RAD, SolveOptions
-from ..viz.summary import cartesian_report, robot_label, summary
+from ..viz.summary import cartesian_report, robot_label, summary, unlimited_line
 from .common import DEFAULT_OUT_DIR, Commands, check_outputs, load_scenario
 
 __all__ = ["add_parser", "check", "run", "tolerance_rad"]
@@ -170,6 +170,7 @@ def run(args: argparse.Namespace) -> int:
         wall_time_s=time.perf_counter() - args.started,
         timings=dict(TIMINGS),
         extra_lines=cartesian,
+        limit_lines=[unlimited_line(scenario.robot)],
     )
     print("\n".join([text, *after]))
     return 0

@@ -199,8 +199,9 @@ def _unreachable(
     ``closest``: the configuration the least squares ended nearest (rad or m); ``free``: the
     number of joints that were free to meet the goals. The message gives the miss of the
     worst-missed frame's position in m and, for a pose goal, of its orientation in deg; where
-    the goals fix more numbers than there are free joints (3 per position, 6 per pose), it
-    says so.
+    that goal is a pose and the goals fix more numbers than there are free joints (3 per
+    position, 6 per pose: a planar robot's in-plane goals fix fewer, so a position goal gets
+    no such clause), it says so.
     """
     placements = [pin.SE3(_placement(mmap, closest, quat, f)) for f in frames]
     misses = [
@@ -218,9 +219,10 @@ def _unreachable(
     named = f" ({worst.frame!r})" if len(goals) > 1 else ""
     fixed = sum(3 if g.rotation is None else 6 for g in goals)
     few = ""
-    if fixed > free:  # more numbers asked than joints to meet them
-        few = f"; the goals fix {fixed} numbers and {free} joints are free to meet them" + (
-            ": a position alone may be met" if worst.rotation is not None else ""
+    if worst.rotation is not None and fixed > free:  # more numbers asked than joints
+        few = (
+            f"; the goals fix {fixed} numbers and {free} joints are free to meet them: a "
+            "position alone may be met"
         )
     return UnreachableGoalError(
         f"end-effector goal{named} {what} {np.round(worst.position, 4).tolist()} m is out of "

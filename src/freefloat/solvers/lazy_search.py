@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import SolverError, UnreachableAttitudeError
+from ..errors import FreeFloatError, SolverError, UnreachableAttitudeError
 from ..problem.build import problem_from_scenario
 from ..problem.constraints import DEFAULT_INSTANTS, Constraint, DurationScaledLimit, LimitPeak
 from ..problem.residual import Problem
@@ -251,12 +251,16 @@ def _refuse_below_floor(
     quintic path, the same for every path between the same joints). A refusal of the attitude
     at a duration below it would point the user at the goal attitude instead of the duration.
     """
-    if not (type(error) is SolverError or isinstance(error, UnreachableAttitudeError)):
+    rates = [limit for limit in timed if limit.power == 1]  # torques have no such floor
+    if not rates or not (type(error) is SolverError or isinstance(error, UnreachableAttitudeError)):
         return
-    quintic = problem_from_scenario(scenario, check_bounds=False)
+    try:
+        quintic = problem_from_scenario(scenario, check_bounds=False)
+    except FreeFloatError:  # the refusal stands as it is
+        return
     path = quintic.polynomials(np.zeros(quintic.n_free))
     floor = 0.0
-    for limit in timed:
+    for limit in rates:
         peak = limit.worst(scenario.robot, path)
         if peak is not None:
             floor = max(floor, peak.least_duration)

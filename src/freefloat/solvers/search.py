@@ -260,8 +260,8 @@ class _Record:
     def nearest_goal(self) -> _Turns:
         """The goal tried whose levels got closest, its first level's and its closest error.
 
-        Its label is "" when the goal as stated was the only one tried; (None, None) errors
-        when no level stopped on the way to its goal.
+        Its label as the search names it (``goal as stated``, or its joints' turns); "" and
+        no errors when no level stopped on the way to its goal.
         """
         known = [(g, o, c) for g, (o, c) in self.turns.items() if o is not None and c is not None]
         if not known:
@@ -308,6 +308,8 @@ def _refuse(
     Raises:
         InfeasibleError: the planar bounds refused the only goal tried.
         InputError: bad input, and no attempt got to solve.
+        UnreachableAttitudeError: a level stopped on the way to its goal: the figures of the
+            goal whose levels got closest (named first when several were tried).
         SolverError: otherwise, with the best residual (rad) and every attempt.
     """
     best, best_axes, best_error = nearest

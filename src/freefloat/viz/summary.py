@@ -18,11 +18,19 @@ from ..plans.guarantees import Verification
 from ..plans.versions import MONOMIAL_BASIS
 from ..problem.constraints import CONSTRAINTS
 from ..problem.scenario import Scenario
+from ..robot.model import Robot
 from ..solvers.optimise import FALLBACK_NOTE
 from ..verify.segmented import segment_count
 from .robustness import robustness_line
 
-__all__ = ["cartesian_report", "clearance_line", "robot_label", "summary", "verification_lines"]
+__all__ = [
+    "cartesian_report",
+    "clearance_line",
+    "robot_label",
+    "summary",
+    "unlimited_line",
+    "verification_lines",
+]
 
 #: Paths with at most this many free parameters in all also show them as the paper's
 #: monomial coefficients in t (higher degrees would print large cancelling numbers).
@@ -62,6 +70,7 @@ def summary(
     timings: dict[str, float] | None = None,
     extra_lines: Sequence[str] = (),
     command: str = "plan",
+    limit_lines: Sequence[str] = (),
 ) -> str:
     """The text summary ``freefloat plan`` prints (angles in degrees, units on every figure).
 
@@ -73,6 +82,7 @@ def summary(
         timings: wall time (s) per stage (``solve``, ``sample and verify``...).
         extra_lines: more lines (a Cartesian goal's report), printed after the attitude.
         command: the command that made the plan, named in the header (``plan``, ``correct``).
+        limit_lines: more lines after the constraints' (:func:`unlimited_line`).
     """
     lines = [f"freefloat {command}: {robot_label or Path(p.robot.urdf).name}, T = {p.duration:g} s"]
     lines += _attitude_table(p)
@@ -83,6 +93,7 @@ def summary(
     lines += verification_lines(p.verification)
     if constraints := constraints_line(p):
         lines.append(constraints)
+    lines += [line for line in limit_lines if line]
     lines.append(clearance_line(p))
     lines += free_parameter_lines(p)
     if p.feasibility.planar and p.feasibility.yaw_change_bounds_deg is not None:
@@ -160,6 +171,23 @@ def verification_lines(v: Verification) -> list[str]:
             f"of the tolerance, either side; not refused for it{settle}"
         )
     return lines
+
+
+def unlimited_line(robot: Robot) -> str:
+    """A line naming the joints the URDF gives no velocity or no effort limit; "" if none.
+
+    Plans honour the URDF's limits; where it gives none (no ``<limit>``, or 0), none is
+    imposed, and a short duration may ask any rate or torque (ETS-VII in 1 ms: 1e4 rad/s and
+    1e10 N m): said beside the constraints, not warned of (the paper's planar model has none).
+    """
+    missing = []
+    for kind, attribute in (("velocity", "velocity_limit"), ("effort", "effort_limit")):
+        names = [j.name for j in robot.joints if not math.isfinite(getattr(j, attribute))]
+        if names:
+            missing.append(f"no {kind} limit for {', '.join(repr(n) for n in names)}")
+    if not missing:
+        return ""
+    return f"  URDF limits     {'; '.join(missing)}: none imposed there"
 
 
 def constraints_line(p: Plan) -> str:
