@@ -276,3 +276,37 @@ def test_a_dask_worker_with_several_threads_is_refused_before_any_job(tmp_path, 
     ):
         ff.sweep(path, client=client, output=tmp_path / "dask.csv", progress=False)
     assert not (tmp_path / "dask.csv").exists()
+
+
+def test_a_job_that_spins_a_joint_is_flagged_in_its_row_and_said_once(tmp_path, capfd):
+    """Goal yaws -48 and -47 deg turn the elbow more than a full turn beyond its span: each
+    row carries the excursion (against the plan of that goal, its joint values sampled
+    densely here), and the sweep says it once for both jobs, not once per job."""
+    import dataclasses
+    import math
+
+    import numpy as np
+
+    path = _sweep_file(
+        tmp_path, '[[axis]]\nkey = "goal.base_zyx_deg.0"\nvalues = [-48.0, -47.0, -30.0]\n'
+    )
+    out = tmp_path / "out.csv"
+    assert main(["sweep", str(path), "-o", str(out), "--workers", "2"]) == 0
+    said = [line for line in capfd.readouterr().err.splitlines() if "full turn" in line]
+    assert len(said) == 1
+    assert said[0].startswith(
+        "freefloat: warning: 2 planned job(s) turn a joint a full turn or more beyond its "
+        "start-goal span (jobs 0, 1; at most "
+    )
+    with open(out, newline="") as handle:
+        rows = {float(r["goal.base_zyx_deg.0"]): r for r in csv.DictReader(handle)}
+    scenario = ff.Scenario.from_toml(tmp_path / "worked_example_auto.toml")
+    goal = ff.quat_from_zyx(math.radians(-47.0), 0.0, 0.0)
+    plan = ff.plan(dataclasses.replace(scenario, goal_attitude=goal), samples=21)
+    t = np.linspace(0.0, plan.duration, 400001)
+    q = np.degrees(plan.joint_positions(t))
+    ends = np.degrees(np.array([plan.request.start_joints, plan.request.goal_joints]))
+    beyond = np.maximum(q.max(axis=0) - ends.max(axis=0), ends.min(axis=0) - q.min(axis=0))
+    assert float(rows[-47.0]["largest_excursion_deg"]) == pytest.approx(beyond.max(), abs=1e-4)
+    assert float(rows[-47.0]["largest_excursion_deg"]) >= 360.0
+    assert float(rows[-30.0]["largest_excursion_deg"]) < 360.0

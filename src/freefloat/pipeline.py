@@ -58,7 +58,7 @@ from .solvers.nearest import nearest_root
 from .solvers.options import DEFAULT_TOLERANCE, Solution, SolveOptions
 from .verify.checks import verify_plan
 
-__all__ = ["BOUNDARY_TOLERANCE", "plan", "plan_from_solution"]
+__all__ = ["BOUNDARY_TOLERANCE", "SPIN_WARNING", "plan", "plan_from_solution"]
 
 #: Boundary conditions must hold to this (rad, rad/s, rad/s^2; relative to the joint travel).
 BOUNDARY_TOLERANCE = 1e-9
@@ -175,6 +175,15 @@ def _plan(
     return replace(result, solver=solver)
 
 
+#: The warning of a path that turns a joint a full turn or more beyond its span (its format:
+#: objective, turns, advice); a sweep says it once for all its jobs (:mod:`freefloat.sweep`).
+SPIN_WARNING = (
+    "the path (objective %s) turns a joint a full turn or more beyond its start-goal span (%s "
+    "turns): if the real joint cannot turn freely (cables, hard stops), give it limits in the "
+    "URDF%s"
+)
+
+
 def _warn_spinning(quality: PathQuality, robot: Robot, objective: str) -> None:
     """Warn when a turning joint goes a full turn or more beyond its start-goal span (deg).
 
@@ -191,14 +200,7 @@ def _warn_spinning(quality: PathQuality, robot: Robot, objective: str) -> None:
     if spun:
         turns = ", ".join(f"{name!r} {value:.3g}" for name, value in spun.items())
         other = "" if objective == DEFAULT_OBJECTIVE else ", or plan with the default objective"
-        LOGGER.warning(
-            "the path (objective %s) turns a joint a full turn or more beyond its start-goal "
-            "span (%s turns): if the real joint cannot turn freely (cables, hard stops), give "
-            "it limits in the URDF%s",
-            objective,
-            turns,
-            other,
-        )
+        LOGGER.warning(SPIN_WARNING, objective, turns, other)
 
 
 def plan_from_solution(

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import FreeFloatError, InfeasibleError, UnitsWarning
-from ..pipeline import plan
+from ..pipeline import SPIN_WARNING, plan
 from ..plans.format import Plan
 from ..problem.scenario import Scenario
 from ..progress import LOGGER
@@ -55,6 +55,9 @@ class SweepRow:
             of the joint paths from the quintic (docs/paths.md).
         path_length: summed joint travel of the chosen path (rad, plus m for prismatic).
         peak_torque: largest joint torque magnitude along the samples (N m, or N).
+        largest_excursion_deg: the farthest a turning joint goes beyond the interval between
+            its start and goal values (deg, from the exact extremes; 360 and more: a full turn
+            or more, which the sweep warns of once for all its jobs); planned only.
         objective: what the path minimises (``min_norm``, ``min_effort`` ...); planned only.
         objective_value: its value along the plan (the objective's unit, e.g. N^2 m^2 s).
         requested_yaw_change_deg: planar robots: the requested base yaw change (deg).
@@ -72,6 +75,7 @@ class SweepRow:
     free_parameter_norm: float | None = None
     path_length: float | None = None
     peak_torque: float | None = None
+    largest_excursion_deg: float | None = None
     objective: str = ""
     objective_value: float | None = None
     requested_yaw_change_deg: float | None = None
@@ -144,6 +148,7 @@ def _planned(job: Job, result: Plan, started: float) -> SweepRow:
         free_parameter_norm=float(math.sqrt(sum(c * c for c in free))),
         path_length=float(lengths[0]) if lengths else None,
         peak_torque=float(np.max(np.abs(tau))) if tau.size else None,
+        largest_excursion_deg=_turning_excursion(result),
         objective=result.objective.name,
         objective_value=result.objective.value,
         requested_yaw_change_deg=feasibility.requested_yaw_change_deg,
@@ -152,6 +157,19 @@ def _planned(job: Job, result: Plan, started: float) -> SweepRow:
         solve_time_s=float(result.solver.wall_time_s),
         total_time_s=time.perf_counter() - started,
     )
+
+
+def _turning_excursion(result: Plan) -> float | None:
+    """The largest excursion beyond its span of a turning joint (deg); None if none is known."""
+    if result.quality is None:
+        return None
+    kinds = dict(zip(result.robot.joints, result.robot.joint_kinds, strict=False))
+    beyond = [
+        value
+        for name, value in result.quality.excursion_beyond_span.items()
+        if kinds.get(name, "revolute") != "prismatic"
+    ]
+    return float(max(beyond)) if beyond else None
 
 
 def _planar_feasibility(scenario: Scenario) -> dict[str, Any]:
@@ -206,6 +224,8 @@ class _Collector(logging.Handler):
 
     def emit(self, record: logging.LogRecord) -> None:
         messages = getattr(self.local, "messages", None)
+        if record.msg == SPIN_WARNING:  # in the row's largest_excursion_deg: said once per sweep
+            return
         if messages is not None and record.getMessage() not in messages:
             messages.append(record.getMessage())
 

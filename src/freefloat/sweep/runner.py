@@ -316,4 +316,30 @@ def sweep(
     ordered = [rows[i] for i in sorted(rows)]
     if output is not None:
         write_rows(spec, output, ordered)
+    _warn_spun(ordered)
     return ordered
+
+
+def _warn_spun(rows: Sequence[Row]) -> None:
+    """Say once for the whole sweep which planned jobs turn a joint a full turn or more.
+
+    Each job's plan would warn of it with its own figures (a line per job); the rows carry
+    them in ``largest_excursion_deg`` (deg).
+    """
+    spun = [
+        (row.index, excursion / 360.0)
+        for row in rows
+        if (excursion := getattr(row, "largest_excursion_deg", None)) is not None
+        and excursion >= 360.0
+    ]
+    if not spun:
+        return
+    shown = ", ".join(str(index) for index, _ in spun[:10]) + (", ..." if len(spun) > 10 else "")
+    LOGGER.warning(
+        "%d planned job(s) turn a joint a full turn or more beyond its start-goal span (jobs "
+        "%s; at most %.3g turns; column largest_excursion_deg): if the real joints cannot turn "
+        "freely (cables, hard stops), give them limits in the URDF",
+        len(spun),
+        shown,
+        max(turns for _, turns in spun),
+    )
