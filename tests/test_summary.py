@@ -338,3 +338,34 @@ def test_joints_without_velocity_or_effort_limits_are_named(tmp_path, capsys):
     ur5 = ROOT / "robots" / "scenarios" / "ur5_servicer.toml"
     assert main(["plan", str(ur5), "-o", str(tmp_path / "u.json")]) == 0
     assert "URDF limits" not in capsys.readouterr().out
+
+
+def test_a_unitless_check_is_summarised_by_its_detail(tmp_path, capsys):
+    """The README's scenario keeps the tool's x axis within 60 deg of a direction: its
+    constraints line gives the largest angle and when (a cosine gap alone said nothing), and
+    that angle is the one Pinocchio's kinematics give at that instant (the cone's angle does
+    not depend on the base attitude: the tool's orientation relative to the spacecraft)."""
+    import numpy as np
+    import pinocchio as pin
+
+    block = re.search(r"```toml\n(.*?)```", (ROOT / "README.md").read_text(), re.S).group(1)
+    path = tmp_path / "cone.toml"
+    path.write_text(block)
+    assert main(["plan", str(path), "-o", str(tmp_path / "cone.json")]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("  constraints"))
+    said = re.search(
+        r"end_effector_cone \(axis ([\d.]+) deg from the direction \(half-angle 60 deg\) at "
+        r"t = ([\d.]+) s\)",
+        line,
+    )
+    assert said is not None, line
+    angle, when = float(said.group(1)), float(said.group(2))
+    plan = ff.Plan.load(tmp_path / "cone.json")
+    robot = ff.load_robot(ROOT / "robots" / "planar_2dof.urdf")
+    q = robot.configuration(plan.joint_positions(when), [0.0, 0.0, 0.0], ff.quat_from_zyx(0.0))
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, q)
+    tool = data.oMf[robot.model.getFrameId("ee")].rotation @ np.array([1.0, 0.0, 0.0])
+    direction = np.array([0.34, 0.94, 0.0]) / np.linalg.norm([0.34, 0.94, 0.0])
+    truth = math.degrees(math.acos(float(np.clip(tool @ direction, -1.0, 1.0))))
+    assert angle == pytest.approx(truth, abs=0.01)

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..plans.format import Plan
-from ..plans.guarantees import Verification
+from ..plans.guarantees import Check, Verification
 from ..plans.versions import MONOMIAL_BASIS
 from ..problem.constraints import CONSTRAINTS
 from ..problem.scenario import Scenario
@@ -195,16 +195,23 @@ def constraints_line(p: Plan) -> str:
 
     Clearance has its own line. Margins in degrees for angles (rad or rad/s checks; ``a|b``
     units take the revolute one when no joint is prismatic); a check without a physical unit
-    (a cosine gap) is named without a figure. Empty when there are none.
+    (a cosine gap) gives its own detail instead (the end-effector cone: the axis's largest
+    angle from its direction, against the half-angle). Empty when there are none.
     """
     checks = [c for c in p.verification.checks if c.name in CONSTRAINTS and c.name != "clearance"]
     if not checks:
         return ""
     prismatic = "prismatic" in _kinds(p)
     each = ", ".join(
-        c.name + (_margin(c.value, c.unit, prismatic) if c.passed else " BROKEN") for c in checks
+        c.name + (_margin(c.value, c.unit, prismatic) or _said(c) if c.passed else " BROKEN")
+        for c in checks
     )
     return f"  constraints     held, margin to the limit: {each}"
+
+
+def _said(check: Check) -> str:
+    """`` (its detail)``: how a held check without a physical unit says where it stands."""
+    return f" ({check.detail})" if check.unit == "1" and check.detail else ""
 
 
 def _margin(value: float, unit: str, prismatic: bool) -> str:
