@@ -45,7 +45,7 @@ import numpy as np
 from ..errors import InputError, InputLimitError, ScenarioError, UnknownNameError, excerpt
 from ..files import read_text_file
 from ..robot.locations import is_path_like
-from ..robot.lock import finger_lock_value, lock_joints, movable_joints
+from ..robot.lock import default_lock, lock_joints, movable_joints
 from ..robot.model import MAX_URDF_BYTES, resolve_robot
 from .limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, check_number
 
@@ -221,7 +221,8 @@ def _sibling_srdf(urdf: Path) -> Path | None:
 def _lock_values(lock: Any, text: str, start: Any) -> dict[str, float]:
     """``{joint: value}`` (rad or m) of a ``lock`` list: given value, start value, or else 0.
 
-    Or else the middle of the joint's range when 0 is outside it (:func:`finger_lock_value`).
+    Or else the middle of the joint's range when 0 is outside it
+    (:func:`~freefloat.robot.lock.default_lock`).
     """
     if not isinstance(lock, list):
         raise ScenarioError(
@@ -247,19 +248,9 @@ def _lock_values(lock: Any, text: str, start: Any) -> dict[str, float]:
             raise UnknownNameError("joint to lock", name, list(movable))
         kind, lower, upper = movable[name]
         if raw is None and name not in given:  # 0, or the middle of a range without it
-            values[name] = finger_lock_value(lower, upper)
-            if values[name] != 0.0:  # a choice the user did not state
-                scale, unit = (1.0, "m") if kind == "prismatic" else (180 / math.pi, "deg")
-                LOGGER.warning(
-                    "joint %r locked at %.4g %s, the middle of its range [%.4g, %.4g] %s "
-                    "(0 is outside it)",
-                    name,
-                    values[name] * scale,
-                    unit,
-                    lower * scale,
-                    upper * scale,
-                    unit,
-                )
+            values[name], note = default_lock(f"joint {name!r}", kind, lower, upper)
+            if note:  # a choice the user did not state
+                LOGGER.warning("%s", note)
             continue
         raw = given[name] if raw is None else raw
         angular = kind != "prismatic"

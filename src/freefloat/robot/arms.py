@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import LockedJointError, ModelError, UnknownNameError
 from ..files import absolute_path, read_text_file
-from .lock import finger_lock_value, locked_origin
+from .lock import default_lock, locked_origin
 from .model import MAX_URDF_BYTES, example_robot_data_dir
 from .urdf_checks import urdf_document
 
@@ -202,7 +202,7 @@ def _lock_values(arm: ArmSpec, joints: Sequence[Any]) -> tuple[dict[str, float],
             values[arm.prefix + name] = _default_lock(f"joint {arm.prefix + name!r}", joint, notes)
             continue
         if not low <= value <= high:
-            scale, unit = _display(joint)
+            scale, unit = (1.0, "m") if joint.type == "prismatic" else (180 / math.pi, "deg")
             shown = (value * scale, low * scale, high * scale)
             raise LockedJointError(arm.prefix + name, *shown, unit)
         values[arm.prefix + name] = value
@@ -228,25 +228,14 @@ def _range(joint: Any) -> tuple[float, float]:
     return -math.inf, math.inf
 
 
-def _display(joint: Any) -> tuple[float, str]:
-    """The factor and unit a joint's values are shown in (deg, or m for a prismatic one)."""
-    return (1.0, "m") if joint.type == "prismatic" else (180 / math.pi, "deg")
-
-
 def _default_lock(label: str, joint: Any, notes: list[str]) -> float:
-    """Where a joint locked without a value is fixed (rad or m): :func:`finger_lock_value`.
+    """Where a joint locked without a value is fixed (rad or m): :func:`default_lock`.
 
-    Away from 0 (the middle of a range without it), ``notes`` gets a line saying so, with
-    ``label`` naming the joint.
+    Away from 0, ``notes`` gets its line, ``label`` naming the joint.
     """
-    low, high = _range(joint)
-    value = finger_lock_value(low, high)
-    if value != 0.0:
-        scale, unit = _display(joint)
-        notes.append(
-            f"{label} locked at {value * scale:.4g} {unit}, the middle of its range "
-            f"[{low * scale:.4g}, {high * scale:.4g}] {unit} (0 is outside it)"
-        )
+    value, note = default_lock(label, joint.type, *_range(joint))
+    if note:
+        notes.append(note)
     return value
 
 

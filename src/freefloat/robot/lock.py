@@ -20,7 +20,7 @@ import pinocchio as pin
 
 from ..errors import LockedJointError, ModelError, UnknownNameError
 
-__all__ = ["finger_lock_value", "lock_joints", "locked_origin", "movable_joints"]
+__all__ = ["default_lock", "finger_lock_value", "lock_joints", "locked_origin", "movable_joints"]
 
 _MOVABLE = ("revolute", "continuous", "prismatic")
 #: Drop-outs of a joint element once it is fixed.
@@ -32,6 +32,22 @@ def finger_lock_value(lower: float, upper: float) -> float:
     if lower <= 0.0 <= upper:
         return 0.0
     return 0.5 * (lower + upper)
+
+
+def default_lock(label: str, kind: str, lower: float, upper: float) -> tuple[float, str]:
+    """Where a joint locked without a value is fixed (rad or m), and a note when not at 0.
+
+    :func:`finger_lock_value` of its limits ``[lower, upper]`` (rad or m); the note ("" at 0)
+    names it by ``label`` and gives the value and range in deg (m for a ``prismatic`` one).
+    """
+    value = finger_lock_value(lower, upper)
+    if value == 0.0:
+        return value, ""
+    scale, unit = (1.0, "m") if kind == "prismatic" else (180 / math.pi, "deg")
+    return value, (
+        f"{label} locked at {value * scale:.4g} {unit}, the middle of its range "
+        f"[{lower * scale:.4g}, {upper * scale:.4g}] {unit} (0 is outside it)"
+    )
 
 
 def locked_origin(origin: np.ndarray, kind: str, axis: Sequence[float], value: float) -> np.ndarray:
