@@ -90,6 +90,9 @@ class EndEffectorCone(Constraint):
                 f"{excerpt(half_angle)}"
             )
         self.half_angle = float(half_angle)
+        #: the half-angle as its record gave it (deg), recorded back as given: a round trip
+        #: through radians would turn 60 into 59.99999999999999
+        self._half_angle_deg: float | None = None
 
     # -- records ----------------------------------------------------------------------------
 
@@ -98,7 +101,11 @@ class EndEffectorCone(Constraint):
         return {
             "axis": self.axis.tolist(),
             "direction": self.direction.tolist(),
-            "half_angle_deg": math.degrees(self.half_angle),
+            "half_angle_deg": (
+                math.degrees(self.half_angle)
+                if self._half_angle_deg is None
+                else self._half_angle_deg
+            ),
         }
 
     @classmethod
@@ -119,7 +126,9 @@ class EndEffectorCone(Constraint):
                 "end_effector_cone half_angle_deg must be a number between 0 and 180 "
                 f"(exclusive) [deg], got {excerpt(half)}"
             )
-        return cls(record["axis"], record["direction"], math.radians(half))
+        cone = cls(record["axis"], record["direction"], math.radians(half))
+        cone._half_angle_deg = float(half)
+        return cone
 
     # -- geometry ---------------------------------------------------------------------------
 
