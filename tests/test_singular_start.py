@@ -107,7 +107,7 @@ def test_a_refusal_never_claims_more_of_the_way_than_its_path_covers(robot) -> N
 
 def test_a_constraint_ahead_on_a_nearly_singular_map_says_so() -> None:
     """By hand, the singular values of a diagonal map: a weakest gain below 1e-3 of the
-    strongest is noted after the constraint (the step ahead that breaks it is then long);
+    strongest is named before the constraint, as the cause (the step ahead is then long);
     above, nothing; a singular map is named instead of the constraint."""
     from freefloat.solvers.continuation import _why
     from freefloat.solvers.restore import Broken
@@ -115,8 +115,8 @@ def test_a_constraint_ahead_on_a_nearly_singular_map_says_so() -> None:
     ahead = Broken("joint_position_limits", "joint 'j1' at t = 2 s")
     near = _why(ahead, np.c_[np.diag([2.0, 1.0, 8e-4]), np.zeros(3)])
     assert near == (
-        "joint_position_limits ahead: joint 'j1' at t = 2 s "
-        "(near a singular map: its weakest gain 0.0004 of its strongest)"
+        "a nearly singular map (its weakest gain 0.0004 of its strongest), so a step on is "
+        "long: joint_position_limits ahead: joint 'j1' at t = 2 s"
     )
     regular = np.c_[np.diag([2.0, 1.0, 4e-3]), np.zeros(3)]
     assert _why(ahead, regular) == "joint_position_limits ahead: joint 'j1' at t = 2 s"

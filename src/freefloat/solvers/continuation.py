@@ -170,10 +170,14 @@ def _why(blocked: Broken | None, jac: np.ndarray) -> str:
     if ratio < SINGULAR or smallest < 1e-9:
         return "a singular map (dh/dbeta loses rank)"
     if blocked is not None:  # on the path a short step on
-        # nearly singular: a small turn about the weakest direction asks large joint motions,
-        # and the constraint met ahead may lie far from the path
-        near = f" (near a singular map: its weakest gain {ratio:.1g} of its strongest)"
-        return f"{blocked.name} ahead: {blocked.detail}{near if ratio < NEAR_SINGULAR else ''}"
+        ahead = f"{blocked.name} ahead: {blocked.detail}"
+        if ratio < NEAR_SINGULAR:  # the cause first: a small turn about the weakest
+            # direction asks large joint motions, so the constraint a step meets may lie far
+            return (
+                f"a nearly singular map (its weakest gain {ratio:.1g} of its strongest), "
+                f"so a step on is long: {ahead}"
+            )
+        return ahead
     return "freedom exhausted (the corrector does not converge with this path family)"
 
 
