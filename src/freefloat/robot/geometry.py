@@ -11,8 +11,9 @@ Two distance models read the same URDF through this module and nothing else in c
 
 Both check the same pairs (:func:`checked_pairs`): every body on the spacecraft against every
 arm body except the one mounted on it, every keep-out object against every arm body, and every
-two arm bodies that are not parent and child; pairs an SRDF disables (MoveIt's
-``<disable_collisions>``) are removed.
+two arm bodies that are not parent and child; a captured payload against every body but the
+one holding it and the bodies that one carries (the link before it included); pairs an SRDF
+disables (MoveIt's ``<disable_collisions>``) are removed.
 
 The URDF's geometry is parsed once per URDF in a process (each caller gets its own deep copy,
 :func:`load_collision_geometry`; or, for the two models above, which never change a shape,
@@ -36,6 +37,7 @@ from ..errors import ModelError
 from .file_stamp import FileStamp, file_stamp
 from .meshes import MeshKey, mesh_key
 from .model import Robot
+from .payload import PAYLOAD_LINK
 
 __all__ = [
     "OBSTACLE_PREFIX",
@@ -293,15 +295,21 @@ def _pairs_of(
     objects = list(geometry.geometryObjects)
     joints = [int(obj.parentJoint) for obj in objects]
     obstacle = [obj.name.startswith(OBSTACLE_PREFIX) for obj in objects]
+    # a captured payload is carried by its end effector's body but is no part of it: it
+    # touches that body (and what that body carries further on, fingers say) by design,
+    # never the link before
+    payload = [model.frames[obj.parentFrame].name == PAYLOAD_LINK for obj in objects]
     geometry.removeAllCollisionPairs()
     for a in range(len(objects)):
         for b in range(a + 1, len(objects)):
             ja, jb = joints[a], joints[b]
             if ja == jb:
                 continue  # one body
-            kept_out = obstacle[a] or obstacle[b]
-            if not kept_out and (parent[ja] == jb or parent[jb] == ja):
-                continue  # parent and child touch by design (a keep-out object never does)
+            if obstacle[a] or obstacle[b]:  # a keep-out object touches nothing by design
+                geometry.addCollisionPair(pin.CollisionPair(a, b))
+                continue
+            if (parent[ja] == jb and not payload[a]) or (parent[jb] == ja and not payload[b]):
+                continue  # parent and child touch by design
             geometry.addCollisionPair(pin.CollisionPair(a, b))
     if srdf is not None:
         pin.removeCollisionPairs(model, geometry, str(srdf))

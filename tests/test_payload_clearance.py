@@ -1,0 +1,103 @@
+"""A captured payload is checked against the link before the one that holds it.
+
+The payload is fixed to the end-effector body, so the rule that spares a parent and its child
+(they touch at their joint by design) once spared the payload against the forearm: a plan
+could carry a client satellite straight through it. Truth here is closed form: a sphere
+against a box placed by hand from the joint angles.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import pytest
+
+from freefloat.cli import main
+
+#: A 1 m cube spacecraft and two links along x, each with a 5 cm sphere at its middle.
+URDF = """<?xml version="1.0"?>
+<robot name="holder">
+  <link name="spacecraft">
+    <inertial><mass value="500"/><inertia ixx="80" iyy="80" izz="80" ixy="0" ixz="0" iyz="0"/>
+    </inertial>
+    <collision><geometry><box size="1 1 1"/></geometry></collision>
+  </link>
+  <joint name="a1" type="revolute"><parent link="spacecraft"/><child link="upper"/>
+    <origin xyz="0.8 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="50" velocity="2"/></joint>
+  <link name="upper">
+    <inertial><origin xyz="0.25 0 0"/><mass value="5"/>
+      <inertia ixx="0.01" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0.25 0 0"/><geometry><sphere radius="0.05"/></geometry></collision>
+  </link>
+  <joint name="a2" type="revolute"><parent link="upper"/><child link="lower"/>
+    <origin xyz="0.5 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="50" velocity="2"/></joint>
+  <link name="lower">
+    <inertial><origin xyz="0.25 0 0"/><mass value="3"/>
+      <inertia ixx="0.01" iyy="0.06" izz="0.06" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0.25 0 0"/><geometry><sphere radius="0.05"/></geometry></collision>
+  </link>
+</robot>
+"""
+
+#: A 10 cm cube payload held 0.25 m behind the lower link's joint: at a2 = 0 its centre is
+#: the upper link's sphere centre.
+SCENARIO = """robot = "holder.urdf"
+duration = 20.0
+[start]
+joints = {{ a1 = 0.0, a2 = 90.0 }}
+base_zyx_deg = [0.0, 0.0, 0.0]
+[goal]
+joints = {{ a1 = 0.0, a2 = {goal} }}
+base_zyx_deg = [0.0, 0.0, 0.0]
+[payload]
+mass = 20.0
+inertia = [0.05, 0.05, 0.05, 0.0, 0.0, 0.0]
+com_xyz = [-0.25, 0.0, 0.0]
+box = [0.1, 0.1, 0.1]
+"""
+
+
+@pytest.fixture
+def holder(tmp_path):
+    (tmp_path / "holder.urdf").write_text(URDF)
+
+    def scenario(goal: float) -> str:
+        path = tmp_path / f"holder_{goal:g}.toml"
+        path.write_text(SCENARIO.format(goal=goal))
+        return str(path)
+
+    return scenario
+
+
+def _pair_distance(out: str, pair: str) -> float:
+    found = re.search(rf"^\s*{re.escape(pair)}\s+(-?\d+\.\d+) m$", out, re.M)
+    assert found, out
+    return float(found.group(1))
+
+
+def test_the_payload_is_measured_against_the_link_before_its_holder(holder, capsys) -> None:
+    """At a2 = 90 deg the payload's centre is at (1.3, -0.25, 0) m and the upper sphere's at
+    (1.05, 0, 0) m: the sphere's centre lies 0.2 m beyond two faces of the (still axis-aligned)
+    cube, so their distance is sqrt(0.2^2 + 0.2^2) - 0.05 m. At a2 = 0 the centres coincide:
+    the sphere is 0.05 + 0.05 m deep in the box."""
+    scenario = holder(0.0)
+    assert main(["check", scenario, "--at", "start"]) == 0
+    apart = _pair_distance(capsys.readouterr().out, "upper_0 / captured_payload_0")
+    assert apart == pytest.approx(math.hypot(0.2, 0.2) - 0.05, abs=1e-4)
+    assert main(["check", scenario, "--at", "goal"]) == 1
+    out = capsys.readouterr().out
+    assert _pair_distance(out, "upper_0 / captured_payload_0") == pytest.approx(-0.1, abs=1e-4)
+    assert "configuration: NOT OK" in out
+
+
+def test_a_goal_that_puts_the_payload_into_the_forearm_is_refused(
+    holder, tmp_path, capsys
+) -> None:
+    out = tmp_path / "plan.json"
+    assert main(["plan", holder(0.0), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "upper_0 / captured_payload_0" in err and "\n" not in err.strip()
+    assert not out.exists()
