@@ -130,3 +130,31 @@ def test_check_warns_of_joint_values_that_look_like_radians(capsys) -> None:
     )
     assert main(["check", str(UR5), "--at", "0,-90,90,-90,-90,0"]) == 0
     assert "warning" not in capsys.readouterr().err
+
+
+def test_joint_values_that_start_negative_are_taken_as_values(capsys) -> None:
+    """``--at -10,-90,...`` (argparse takes a leading minus for an option) reads as written."""
+    assert main(["check", str(UR5), "--at", "-10,-90,90,-90,-90,0"]) in (0, 1)
+    out = capsys.readouterr().out
+    values = [float(row.split()[1]) for row in out.splitlines() if row.strip().endswith("deg")]
+    assert values == [-10.0, -90.0, 90.0, -90.0, -90.0, 0.0]
+
+
+def test_a_value_that_is_not_finite_is_named_not_counted(capsys) -> None:
+    assert main(["check", str(UR5), "--at", "0,0,nan,0,0,0"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "joint 'elbow_joint' is not finite" in err and "got 6" not in err
+
+
+def test_the_start_is_checked_whatever_the_cartesian_goal(tmp_path, capsys) -> None:
+    """An end-effector goal 10 m away has no joints: only ``--at goal`` needs them."""
+    text = UR5.read_text()
+    goal = re.search(r"^\[goal\]\n(joints = .*\n)", text, re.M)
+    assert goal
+    far = text.replace(goal.group(1), "end_effector_xyz = [10.0, 0.0, 0.0]\n")
+    scenario = tmp_path / "far.toml"  # the robot by its shipped name
+    scenario.write_text(far)
+    assert main(["check", str(scenario), "--at", "start"]) == 0, capsys.readouterr().err
+    capsys.readouterr()
+    assert main(["check", str(scenario), "--at", "goal"]) == 2
+    assert "out of reach" in capsys.readouterr().err

@@ -90,11 +90,14 @@ def parse_joints(text: str, scenario: Scenario) -> np.ndarray:
             f"--at must be start, goal or {len(joints)} comma-separated numbers "
             f"(deg; m for prismatic joints), got {text!r}"
         ) from None
-    if len(values) != len(joints) or not all(math.isfinite(v) for v in values):
+    if len(values) != len(joints):
         raise InputError(
             f"--at needs {len(joints)} finite values, one per joint "
             f"({', '.join(j.name for j in joints)}), got {len(values)}"
         )
+    bad = next((j.name for v, j in zip(values, joints, strict=True) if not math.isfinite(v)), None)
+    if bad is not None:
+        raise InputError(f"--at needs finite values, got {text!r} (joint {bad!r} is not finite)")
     warn_if_radians({j.name: v for v, j in zip(values, joints, strict=True) if j.angular}, "--at")
     return np.array(
         [math.radians(v) if j.angular else v for v, j in zip(values, joints, strict=True)]
@@ -103,8 +106,7 @@ def parse_joints(text: str, scenario: Scenario) -> np.ndarray:
 
 def check_configuration(scenario: Scenario, joints: np.ndarray) -> ConfigurationReport:
     """Limits, closest pairs and clearance of the scenario's robot at ``joints`` (rad or m)."""
-    scenario = scenario.resolved()
-    scenario.write_robot()
+    scenario.write_robot()  # the goal is not solved: the joints asked about are given
     robot = scenario.robot
     rooms = tuple(
         JointRoom(j.name, float(v), j.lower, j.upper, j.angular)

@@ -4,10 +4,31 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
+from collections.abc import Sequence
 
 from .common import Commands, load_scenario
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "joined_values", "run"]
+
+#: A comma-separated list of numbers whose first is negative (``-36.6,-76.4``): argparse
+#: takes it for an option, since only a lone negative number passes as a value.
+_NEGATIVE_LIST = re.compile(r"^-(\d|\.\d)[^,]*,")
+
+
+def joined_values(argv: Sequence[str]) -> list[str]:
+    """``argv`` with ``--at -36.6,-76.4,...`` written as ``--at=-36.6,-76.4,...``.
+
+    Joint values often start negative; without this, argparse refuses them with "expected one
+    argument".
+    """
+    out: list[str] = []
+    for token in argv:
+        if out and out[-1] == "--at" and _NEGATIVE_LIST.match(token):
+            out[-1] = f"--at={token}"
+        else:
+            out.append(token)
+    return out
 
 
 def add_parser(commands: Commands) -> argparse.ArgumentParser:

@@ -10,6 +10,7 @@ sub-parser, checks its arguments before any work and runs; the plan summary live
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 import warnings
 from collections.abc import Callable, Sequence
@@ -140,7 +141,7 @@ def _main(argv: Sequence[str] | None) -> int:
     try:
         parser = build_parser()
         try:
-            args = parser.parse_args(argv)
+            args = parser.parse_args(check.joined_values(sys.argv[1:] if argv is None else argv))
         except SystemExit as exc:  # --help, --version, or a one-line argument error
             flush_output()
             return exc.code if isinstance(exc.code, int) else 2
