@@ -150,6 +150,39 @@ def test_payload_must_be_physical():
         Payload(10.0, inertia=(1.0, 1.0, 1.0, 2.0, 0.0, 0.0))
 
 
+UR5_TOML = ROOT / "robots" / "scenarios" / "ur5_servicer.toml"
+
+
+@pytest.mark.parametrize(
+    ("table", "message"),
+    [
+        ("mass = -5.0\nbox = [1.0, 1.0, 1.0]", "payload mass must be a finite number > 0 kg"),
+        ("mass = -5.0", "payload mass must be a finite number > 0 kg"),  # before the inertia
+        ("mass = 20.0", "[payload] needs inertia = [ixx, iyy, izz, ixy, ixz, iyz]"),
+        ("box = [1.0, 1.0, 1.0]", "[payload] needs mass [kg]"),
+    ],
+)
+def test_a_bad_payload_table_is_named(table, message, tmp_path):
+    path = tmp_path / "held.toml"
+    path.write_text(UR5_TOML.read_text() + f"\n[payload]\n{table}\n")
+    with pytest.raises(ff.ScenarioError) as info:
+        ff.Scenario.from_toml(path)
+    assert message in str(info.value)
+
+
+def test_a_payload_box_without_inertia_is_a_uniform_box(tmp_path):
+    """Closed form of a uniform 20 kg box of edges 0.2, 0.4, 0.6 m about its centre:
+    m / 12 (y^2 + z^2) and so on."""
+    path = tmp_path / "held.toml"
+    path.write_text(UR5_TOML.read_text() + "\n[payload]\nmass = 20.0\nbox = [0.2, 0.4, 0.6]\n")
+    payload = ff.Scenario.from_toml(path).payload
+    assert payload is not None
+    m = 20.0 / 12.0
+    want = (m * (0.16 + 0.36), m * (0.04 + 0.36), m * (0.04 + 0.16), 0.0, 0.0, 0.0)
+    assert payload.inertia == pytest.approx(want, rel=1e-14)
+    assert payload.box == (0.2, 0.4, 0.6)
+
+
 def _scenario(tmp_path, body: str, robot: str = "ur5_servicer"):
     path = tmp_path / "s.toml"
     path.write_text(f'robot = "{robot}"\nduration = 10.0\n{body}')

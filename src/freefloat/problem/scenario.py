@@ -41,7 +41,8 @@ Safety, keep-out objects and a captured payload (all optional)::
     mass = 300.0                   # [kg]
     com_xyz = [0.0, 0.0, 0.4]      # its CM in the end-effector frame [m]
     inertia = [20.0, 20.0, 20.0, 0.0, 0.0, 0.0]   # about that CM [kg m^2]
-    box = [0.6, 0.6, 0.6]          # optional collision shape centred on the CM [m]
+    box = [0.6, 0.6, 0.6]          # optional collision shape centred on the CM [m]; without
+                                   # inertia, a uniform box's
 
 An inline servicer replaces ``robot = "..."`` with a table (composed in memory when read;
 written to its content-addressed cache file when a plan is made, see :meth:`Scenario.write_robot`)::

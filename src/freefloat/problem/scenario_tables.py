@@ -23,7 +23,7 @@ from ..errors import InputError, ScenarioError, excerpt
 from ..files import other_kind_hint, read_text_file
 from ..physics.attitude import quat_from_zyx, quat_to_matrix
 from ..robot.model import Robot
-from ..robot.payload import Payload
+from ..robot.payload import Payload, check_mass
 from .limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, MAX_SCENARIO_BYTES, check_extra
 from .objectives.registry import DEFAULT_OBJECTIVE, OBJECTIVES
 from .quaternion_hint import warn_if_odd_quaternion
@@ -373,16 +373,21 @@ def payload_table(table: Any) -> Payload | None:
     if not isinstance(table, Mapping):
         raise ScenarioError("[payload] must be a table")
     check_keys(table, PAYLOAD_KEYS, "[payload]")
-    if "mass" not in table or "inertia" not in table:
-        raise ScenarioError(
-            "[payload] needs mass [kg] and inertia = [ixx, iyy, izz, ixy, ixz, iyz]"
-        )
+    if "mass" not in table:
+        raise ScenarioError("[payload] needs mass [kg]")
     try:
-        return Payload(
-            mass=number(table["mass"], "[payload] mass", MAX_MAGNITUDE, "kg"),
-            com_xyz=triple(table, "com_xyz", [0.0, 0.0, 0.0], "[payload]"),
-            inertia=tuple(float(v) for v in numbers(table["inertia"], 6, "[payload] inertia")),  # type: ignore[arg-type]
-            box=triple(table, "box", None, "[payload]") if "box" in table else None,
-        )
+        mass = number(table["mass"], "[payload] mass", MAX_MAGNITUDE, "kg")
+        com = triple(table, "com_xyz", [0.0, 0.0, 0.0], "[payload]")
+        box = triple(table, "box", None, "[payload]") if "box" in table else None
+        if "inertia" in table:
+            inertia = tuple(float(v) for v in numbers(table["inertia"], 6, "[payload] inertia"))
+            return Payload(mass=mass, com_xyz=com, inertia=inertia, box=box)  # type: ignore[arg-type]
+        if box is not None:  # a uniform box, as compose --payload-box makes it
+            return Payload.uniform_box(mass, box, com)  # type: ignore[arg-type]
+        check_mass(mass)  # a bad mass is named before the missing inertia
     except InputError as exc:
         raise ScenarioError(str(exc)) from None
+    raise ScenarioError(
+        "[payload] needs inertia = [ixx, iyy, izz, ixy, ixz, iyz] about its centre of mass "
+        "[kg m^2], or a box [m] for a uniform box's"
+    )

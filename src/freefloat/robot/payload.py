@@ -18,10 +18,16 @@ import numpy as np
 
 from ..errors import InputError, ModelError
 
-__all__ = ["PAYLOAD_LINK", "Payload", "attach_payload"]
+__all__ = ["PAYLOAD_LINK", "Payload", "attach_payload", "check_mass"]
 
 #: Name of the link the payload becomes.
 PAYLOAD_LINK = "captured_payload"
+
+
+def check_mass(mass: float) -> None:
+    """Refuse a payload mass (kg) that is not a finite number > 0 (:class:`InputError`)."""
+    if not (math.isfinite(mass) and mass > 0.0):
+        raise InputError(f"payload mass must be a finite number > 0 kg, got {mass!r}")
 
 
 @dataclass(frozen=True)
@@ -43,8 +49,7 @@ class Payload:
     box: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.mass) and self.mass > 0.0):
-            raise InputError(f"payload mass must be a finite number > 0 kg, got {self.mass!r}")
+        check_mass(self.mass)
         if not all(math.isfinite(v) for v in (*self.com_xyz, *self.inertia)):
             raise InputError("payload com_xyz and inertia must be finite numbers")
         moments = np.linalg.eigvalsh(self.matrix)
