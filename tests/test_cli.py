@@ -30,7 +30,7 @@ def test_plan_without_arguments_plans_the_worked_example(tmp_path, monkeypatch, 
     assert code == 0, err
     plan_path = tmp_path / "freefloat-out" / "plan.json"
     data = json.loads(plan_path.read_text())
-    assert data["format"] == "freefloat.plan/4"
+    assert data["format"] == "freefloat.plan/5"
     assert data["robustness"]["inertia_fraction"] == 0.1 and data["robustness"]["rms_rad"] > 0
     # the paper's b26 = -0.552e-4 rad/s^6 is -sqrt(12012) beta / T^6 (docs/method.md section 4)
     b26 = -math.sqrt(12012.0) * data["free_parameters"]["q2"][0] / 10.0**6

@@ -248,15 +248,15 @@ def test_corrupt_plan_file(tmp_path):
 
 def test_plan_file_of_another_version(tmp_path, worked_plan):
     data = worked_plan.to_dict()
-    data["format"] = "freefloat.plan/5"
+    data["format"] = "freefloat.plan/6"
     path = tmp_path / "p.json"
     path.write_text(json.dumps(data))
     with pytest.raises(ff.PlanFileError) as info:
         ff.Plan.load(path)
     assert (
-        "plan format 'freefloat.plan/5' is not supported; this freefloat reads "
+        "plan format 'freefloat.plan/6' is not supported; this freefloat reads "
         "'freefloat.plan/1' and 'freefloat.plan/2' and 'freefloat.plan/3' and "
-        "'freefloat.plan/4'" in str(info.value)
+        "'freefloat.plan/4' and 'freefloat.plan/5'" in str(info.value)
     )
 
 

@@ -70,7 +70,7 @@ def dual_plan():
 @pytest.mark.slow
 def test_shipped_dual_scenario_plans_and_verifies(dual_plan):
     _scenario, plan = dual_plan
-    assert plan.format == "freefloat.plan/4"
+    assert plan.format == "freefloat.plan/5"
     assert plan.verification.passed and plan.safety.checked
     assert plan.safety.srdf is not None and plan.safety.srdf.endswith("dual_ur5_servicer.srdf")
     assert plan.robot.end_effectors == ["left_tool0", "right_tool0"]
@@ -570,7 +570,7 @@ arms = [
 
 def test_a_format_3_plan_still_loads_verifies_and_keeps_its_format(worked_plan, tmp_path):
     data = json.loads(worked_plan.to_json())
-    assert data["format"] == "freefloat.plan/4"
+    assert data["format"] == "freefloat.plan/5"
     data = as_older_format(data)
     path = tmp_path / "old.json"
     path.write_text(json.dumps(data))

@@ -93,9 +93,7 @@ def test_the_payload_is_measured_against_the_link_before_its_holder(holder, caps
     assert "configuration: NOT OK" in out
 
 
-def test_a_goal_that_puts_the_payload_into_the_forearm_is_refused(
-    holder, tmp_path, capsys
-) -> None:
+def test_a_goal_that_puts_the_payload_into_the_forearm_is_refused(holder, tmp_path, capsys) -> None:
     out = tmp_path / "plan.json"
     assert main(["plan", holder(0.0), "-o", str(out)]) == 2
     err = capsys.readouterr().err

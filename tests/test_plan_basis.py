@@ -47,7 +47,7 @@ def richer_plan(worked_scenario) -> ff.Plan:
 def test_a_plan_is_evaluated_from_its_file_alone(worked_plan, richer_plan):
     for plan in (worked_plan, richer_plan):
         doc = json.loads(plan.to_json())
-        assert doc["format"] == "freefloat.plan/4"
+        assert doc["format"] == "freefloat.plan/5"
         assert doc["path"]["basis"] == "quintic+jacobi66"
         q, qd, qdd = _from_file(doc)
         samples = doc["samples"]

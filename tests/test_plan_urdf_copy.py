@@ -32,7 +32,7 @@ def moved(tmp_path, worked_plan):
 
 
 def test_a_plan_carries_its_urdf(worked_plan):
-    assert worked_plan.format == "freefloat.plan/4"
+    assert worked_plan.format == "freefloat.plan/5"
     assert worked_plan.robot.urdf_text == PLANAR.read_text(encoding="utf-8")
     digest = hashlib.sha256(PLANAR.read_bytes()).hexdigest()  # the file's bytes: no BOM here
     assert worked_plan.robot.urdf_sha256 == digest

@@ -253,7 +253,7 @@ def test_cone_and_toy_plugins_round_trip_through_plan_file_and_verify(
     _, err = capsys.readouterr()
     assert code == 0, err
     data = json.loads(out.read_text())
-    assert data["format"] == "freefloat.plan/4"
+    assert data["format"] == "freefloat.plan/5"
     assert data["objective"]["name"] == "toy_weighted_norm"
     assert data["objective"]["parameters"] == {"weight": 2.0}
     records = {c["name"]: c["parameters"] for c in data["constraints"]}

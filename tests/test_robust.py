@@ -29,7 +29,7 @@ from freefloat.physics.attitude import quat_from_zyx, zyx_from_quat
 from freefloat.problem.inertial_sensitivity import attitude_sensitivity as path_sensitivity
 from freefloat.problem.inertial_sensitivity import body_parameters
 from freefloat.problem.scenario import Scenario
-from freefloat.problem.uncertainty import Uncertainty, spread, worst_case
+from freefloat.problem.uncertainty import DEFAULT_UNCERTAINTY, Uncertainty, spread, worst_case
 from freefloat.robot.model import load_robot, robots_dir
 from freefloat.robust import perturbed_robot, replay_attitude
 from freefloat.robust.correction import correcting_plan
@@ -126,6 +126,124 @@ def test_sensitivity_matches_finite_differences_of_rk4_replays(
     # a link joined by fixed joints moves its body's centre of mass: only moments map 1:1
     assert np.linalg.norm(fd - exact) <= 1e-5 * np.linalg.norm(exact) + 1e-12
     assert np.linalg.norm(exact) > 0.0 or key == "inertia.ixy"
+
+
+@pytest.fixture(scope="module")
+def held(tmp_path_factory):
+    """The Panda servicer holding a 5 kg payload whose frame is turned 45 deg from its body's."""
+    tmp = tmp_path_factory.mktemp("held")
+    path = tmp / "held.toml"
+    path.write_text(
+        (SCENARIOS / "panda_servicer.toml").read_text()
+        + "\n[payload]\nmass = 5.0\ncom_xyz = [0.02, -0.01, 0.1]\n"
+        "inertia = [0.05, 0.04, 0.03, 0.004, -0.002, 0.001]\n"
+    )
+    plan = ff.plan(Scenario.from_toml(path), samples=41)
+    return plan, path, load_robot(plan.robot.urdf, plan.robot.end_effector)
+
+
+@pytest.mark.parametrize(
+    ("link", "row", "key", "column"),
+    [
+        ("captured_payload", "captured_payload", "mass", 0),
+        ("captured_payload", "captured_payload", "com.0", 1),
+        ("captured_payload", "captured_payload", "com.2", 3),
+        ("captured_payload", "captured_payload", "inertia.izz", 6),
+        ("captured_payload", "captured_payload", "inertia.ixy", 7),
+        ("panda_link7", "panda_link7", "inertia.izz", 6),  # the holder, payload left out
+    ],
+)
+def test_a_payload_has_its_own_row_matching_replays_of_the_changed_urdf(
+    held, link, row, key, column
+):
+    """The payload's parameters in its own frame (turned against its body's), by finite
+    differences of RK4 replays of the URDF with the payload's values changed and parsed again
+    by Pinocchio (which merges it into the hand's body); the holder's row without it."""
+    plan, _, robot = held
+    sens = attitude_sensitivity(plan, robot)
+    assert sens.bodies[-2:] == ("panda_link7", "captured_payload")
+    assert sens.nominal[-1].tolist() == [
+        5.0,
+        0.02,
+        -0.01,
+        0.1,
+        0.05,
+        0.04,
+        0.03,
+        0.004,
+        -0.002,
+        0.001,
+    ]
+    # the holder's mass is its body's less the payload's
+    body = robot.model.inertias[robot.model.njoints - 1].mass
+    assert sens.nominal[-2, 0] == pytest.approx(body - 5.0, rel=1e-12)
+    value = link_inertials(robot_text(robot))[link].value(key)
+    scale = 0.05 if key.startswith("com") else max(abs(value), 0.1)
+    estimates = []
+    for h in (1e-3 * scale, 5e-4 * scale):  # step control: Richardson on two steps
+        plus = _replayed_error(plan, robot, link, key, value + h)
+        minus = _replayed_error(plan, robot, link, key, value - h)
+        estimates.append((plus - minus) / (2 * h))
+    fd = (4 * estimates[1] - estimates[0]) / 3
+    exact = sens.jacobian[:, sens.bodies.index(row), column]
+    assert np.linalg.norm(fd - exact) <= 1e-5 * np.linalg.norm(exact) + 1e-12
+    assert np.linalg.norm(exact) > 0.0
+
+
+def test_a_format_4_record_counts_the_payload_within_its_holder_and_still_verifies(held, tmp_path):
+    """Format 5 records the payload apart; a format-4 file's record, made with the payload
+    within its holder's body, is recomputed so by verify, and the other figure fails it."""
+    plan, _, robot = held
+    plan = with_robustness(plan, robot)  # as freefloat plan records it
+    problem, beta = problem_from_plan(plan, robot)
+    apart = spread(path_sensitivity(problem, beta), DEFAULT_UNCERTAINTY)
+    within = spread(path_sensitivity(problem, beta, payload_apart=False), DEFAULT_UNCERTAINTY)
+    assert plan.format == "freefloat.plan/5" and plan.robustness.rms_rad == apart.rms
+    assert abs(apart.rms - within.rms) > 1e-3 * within.rms  # the two models differ
+    data = plan.to_dict()
+    data["format"] = "freefloat.plan/4"
+    for figures, code in ((within, 0), (apart, 2)):
+        data["robustness"]["rms_rad"] = figures.rms
+        data["robustness"]["worst_rad"] = figures.worst
+        old = tmp_path / "old.json"
+        old.write_text(json.dumps(data))
+        assert main(["verify", str(old)]) == code
+
+
+def _table(out: str) -> dict[str, list[float]]:
+    """The sensitivity table's rows: body -> mass, com, inertia, RMS (deg)."""
+    rows = {}
+    for line in out.splitlines():
+        parts = line.split()
+        if len(parts) == 5 and all(
+            p.replace(".", "").replace("e-", "").isdigit() for p in parts[1:]
+        ):
+            rows[parts[0]] = [float(p) for p in parts[1:]]
+    return rows
+
+
+def test_a_payload_may_have_its_own_uncertainty(held, worked, tmp_path, capsys):
+    """A group's worst case scales with its size (first order, closed form): 20 % of the
+    payload's mass is four times 5 %, 50 mm of its centre of mass five times 10 mm; every
+    other body's row is unchanged."""
+    plan, _, _ = held
+    path = plan.save(tmp_path / "held.plan.json")
+    assert main(["sensitivity", str(path)]) == 0
+    plain = _table(capsys.readouterr().out)
+    argv = ["sensitivity", str(path), "--payload-mass-pct", "20", "--payload-com-mm", "50"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "the captured payload mass 20 %, centre of mass 50 mm, inertia 10 %" in out
+    mine = _table(out)
+    assert mine["captured_payload"][0] == pytest.approx(4 * plain["captured_payload"][0], rel=1e-3)
+    assert mine["captured_payload"][1] == pytest.approx(5 * plain["captured_payload"][1], rel=1e-3)
+    assert mine["captured_payload"][2] == plain["captured_payload"][2]
+    assert {k: v for k, v in mine.items() if k != "captured_payload"} == {
+        k: v for k, v in plain.items() if k != "captured_payload"
+    }
+    _, without, _ = worked
+    assert main(["sensitivity", str(without), "--payload-mass-pct", "20"]) == 2
+    assert "holds a captured payload" in capsys.readouterr().err
 
 
 def test_worst_case_equals_brute_force_vertex_enumeration():
@@ -298,7 +416,7 @@ def test_the_robustness_record_is_recomputed_by_verify_and_old_plans_load(tmp_pa
     plan, _, robot = worked
     recorded = with_robustness(plan, robot)
     found = plan_spread(plan, robot)
-    assert recorded.robustness.rms_rad == found.rms and recorded.format == "freefloat.plan/4"
+    assert recorded.robustness.rms_rad == found.rms and recorded.format == "freefloat.plan/5"
     path = recorded.save(tmp_path / "r.json")
     assert main(["verify", str(path)]) == 0
     data = json.loads(path.read_text())

@@ -5,11 +5,17 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..errors import InputError
 from ..problem.limits import check_number
 from ..progress import stage
+from ..robot.payload import PAYLOAD_LINK
 from .common import Commands
 
 __all__ = ["add_parser", "check", "run"]
+
+#: The uncertainty options (attribute names) with their units; a captured payload may have
+#: each of its own (``--payload-mass-pct`` ...).
+_SIZES = {"mass_pct": "%%", "com_mm": "mm", "inertia_pct": "%%"}
 
 
 def add_parser(commands: Commands) -> argparse.ArgumentParser:
@@ -28,14 +34,23 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
     p_sens.add_argument(
         "--inertia-pct", type=float, default=10.0, help="inertia components, %% (10)"
     )
+    for key, unit in _SIZES.items():
+        option = key.replace("_", "-")
+        p_sens.add_argument(
+            f"--payload-{option}",
+            type=float,
+            help=f"a captured payload's own, {unit} (default: as --{option})",
+        )
     p_sens.set_defaults(func=run, check=check)
     return p_sens
 
 
 def check(args: argparse.Namespace) -> None:
     """Refuse uncertainties outside 0 to 1000 (%, mm) before any work."""
-    for option in ("mass_pct", "com_mm", "inertia_pct"):
-        check_number(getattr(args, option), f"--{option.replace('_', '-')}", 1000.0, low=0.0)
+    for key in _SIZES:
+        for name in (key, f"payload_{key}"):
+            if getattr(args, name) is not None:
+                check_number(getattr(args, name), f"--{name.replace('_', '-')}", 1000.0, low=0.0)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -44,9 +59,30 @@ def run(args: argparse.Namespace) -> int:
     from ..robust.plan_robustness import plan_sensitivity
     from ..viz.robustness import sensitivity_table
 
-    uncertainty = Uncertainty(args.mass_pct / 100.0, args.com_mm / 1000.0, args.inertia_pct / 100.0)
+    payload = None
+    if any(getattr(args, f"payload_{key}") is not None for key in _SIZES):
+        payload = Uncertainty(*_sizes(args, "payload_"))
+    uncertainty = Uncertainty(*_sizes(args), payload=payload)
     with stage("sensitivity"):
         loaded, result = plan_sensitivity(args.plan, uncertainty)
+    if payload is not None and all(b.body != PAYLOAD_LINK for b in result.bodies):
+        raise InputError(
+            "--payload-* options need a plan whose robot holds a captured payload ([payload] "
+            "in the scenario, or freefloat compose --payload-mass); this one holds none"
+        )
     print(f"freefloat sensitivity: {args.plan} ({Path(loaded.robot.urdf).name}), final attitude")
     print("\n".join(sensitivity_table(result)))
     return 0
+
+
+def _sizes(args: argparse.Namespace, prefix: str = "") -> tuple[float, float, float]:
+    """Mass and inertia fractions and the centre of mass (m) of the options with ``prefix``.
+
+    A payload option not given takes the general one's value.
+    """
+
+    def given(option: str) -> float:
+        value = getattr(args, prefix + option)
+        return float(getattr(args, option) if value is None else value)
+
+    return given("mass_pct") / 100.0, given("com_mm") / 1000.0, given("inertia_pct") / 100.0

@@ -19,7 +19,7 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
     p_verify = commands.add_parser(
         "verify",
         help="re-run the independent checks of a plan file",
-        description="Re-run a plan's checks from the file alone (a freefloat.plan/4 file "
+        description="Re-run a plan's checks from the file alone (a freefloat.plan/5 or /4 file "
         "carries its URDF and its SHA-256; a URDF file at its path must still be that one). "
         "The file is "
         "checked against the plan schema and its limits first, then every number in it (free "

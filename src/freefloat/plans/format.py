@@ -2,7 +2,7 @@
 
 :class:`Plan` gathers the records of :mod:`freefloat.plans.records` (the motion) and
 :mod:`freefloat.plans.guarantees` (what it honours and how that was checked); it evaluates its
-joint paths and writes its file, and reads it (``freefloat.plan/4``, :mod:`freefloat.plans.io`;
+joint paths and writes its file, and reads it (``freefloat.plan/5``, :mod:`freefloat.plans.io`;
 older versions, :mod:`freefloat.plans.versions`). Planning a scenario into a plan lives in
 :mod:`freefloat.pipeline`; checking a plan lives in :mod:`freefloat.verify`.
 

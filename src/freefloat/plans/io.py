@@ -40,7 +40,7 @@ from .records import (
     sha256_hex,
 )
 from .versions import (
-    FORMAT,
+    BASIS_FORMATS,
     FORMAT_1,
     READABLE_FORMATS,
     path_basis,
@@ -99,7 +99,7 @@ def plan_fields(data: Any, where: str = "plan", folder: Path | None = None) -> d
             "objective": _objective(data.get("objective")),
             "format": read_as(fmt),
             "constraints": _constraints(data, fmt, where),
-            "robustness": _robustness(data.get("robustness") if fmt == FORMAT else None),
+            "robustness": _robustness(data.get("robustness") if fmt in BASIS_FORMATS else None),
             "basis": basis,
             "quality": _quality(data.get("path_quality")),
         }
@@ -148,9 +148,9 @@ def _beside(path: str, folder: Path | None) -> str:
 def _robot_ref(data: Mapping[str, Any], fmt: str, folder: Path | None) -> RobotRef:
     """The ``robot`` record: its path read from the plan's folder, its URDF copy checked."""
     ref = RobotRef(**{**data, "urdf": _beside(str(data["urdf"]), folder)})
-    if fmt == FORMAT and not ref.urdf_text:
+    if fmt in BASIS_FORMATS and not ref.urdf_text:
         raise _CopyError(
-            f"plan field 'robot.urdf_text' is missing or empty; {FORMAT} files carry their URDF"
+            f"plan field 'robot.urdf_text' is missing or empty; {fmt} files carry their URDF"
         )
     if ref.urdf_text and sha256_hex(ref.urdf_text) != ref.urdf_sha256:
         raise _CopyError(

@@ -6,7 +6,7 @@ wrong with a document as one line per problem, naming the field by its path (for
 and raises :class:`~freefloat.errors.PlanFileError` naming the first bad field;
 :func:`load_plan_file` reads a plan file once, checks it against the schema and the limits of
 :mod:`freefloat.plans.limits`, and returns the plan. The schema
-describes ``freefloat.plan/4`` (the URDF copy and the records it requires, the optional
+describes ``freefloat.plan/5`` and ``/4`` (the URDF copy and the records they require, the optional
 robustness record), ``/3`` (the objective record it requires) and ``/2``; ``/1`` files are left
 to :meth:`Plan.load`.
 
@@ -28,7 +28,7 @@ from typing import Any
 from ..errors import PlanFileError, ViewerError
 from .format import Plan
 from .io import read_plan_json
-from .versions import FORMAT, FORMAT_2, FORMAT_3
+from .versions import FORMAT, FORMAT_2, FORMAT_3, FORMAT_4
 
 __all__ = [
     "SCHEMAS",
@@ -205,7 +205,7 @@ def check_plan_file(path: str | Path) -> None:
 
 
 def _check_schema(data: Any, path: Path) -> None:
-    if isinstance(data, dict) and data.get("format") not in (FORMAT, FORMAT_3, FORMAT_2):
+    if isinstance(data, dict) and data.get("format") not in (FORMAT, FORMAT_4, FORMAT_3, FORMAT_2):
         return
     errors = schema_errors(data, "plan")
     if errors:

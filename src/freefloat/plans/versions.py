@@ -1,6 +1,9 @@
 """The plan format's versions: their tags, what each changed, and reading older ones.
 
-Versions: ``freefloat.plan/4`` (this one) stores the joint paths in the orthonormal
+Versions: ``freefloat.plan/5`` (this one) is format 4 whose ``robustness`` record counts a
+captured payload as a body of its own, apart from the body holding it (a format-4 record
+counts it within that body, and is recomputed so). ``freefloat.plan/4`` stores the joint paths
+in the orthonormal
 basis of :mod:`freefloat.problem.basis` (``path.basis = "quintic+jacobi66"``: per joint the
 coefficients ``beta`` in rad, the quintic between ``request.start_joints`` and
 ``request.goal_joints`` implied; ``free_parameters`` and each root's are the same ``beta``) and
@@ -43,10 +46,12 @@ from .guarantees import ConstraintRecord
 from .records import RobotRef, Samples
 
 __all__ = [
+    "BASIS_FORMATS",
     "FORMAT",
     "FORMAT_1",
     "FORMAT_2",
     "FORMAT_3",
+    "FORMAT_4",
     "MONOMIAL_BASIS",
     "PROMISED",
     "READABLE_FORMATS",
@@ -58,7 +63,9 @@ __all__ = [
 ]
 
 #: Format tag of plan files written by this version.
-FORMAT = "freefloat.plan/4"
+FORMAT = "freefloat.plan/5"
+#: The format before a captured payload had its own robustness row (still read and kept).
+FORMAT_4 = "freefloat.plan/4"
 #: The format before plan format 4 (still read, and kept when re-written).
 FORMAT_3 = "freefloat.plan/3"
 #: The format of freefloat 0.1 (read as format 3, its untyped verification dropped).
@@ -67,7 +74,9 @@ FORMAT_1 = "freefloat.plan/1"
 FORMAT_2 = "freefloat.plan/2"
 
 #: Format tags this version reads (``/1`` is converted on load).
-READABLE_FORMATS = (FORMAT_1, FORMAT_2, FORMAT_3, FORMAT)
+READABLE_FORMATS = (FORMAT_1, FORMAT_2, FORMAT_3, FORMAT_4, FORMAT)
+#: The formats that store the orthonormal basis, the URDF and the records of format 4.
+BASIS_FORMATS = (FORMAT_4, FORMAT)
 
 #: The constraints a file written before constraint records is held to, by format: every limit
 #: its URDF states, whatever its format (a format label never chooses the limits).
@@ -93,16 +102,17 @@ def path_basis(data: Mapping[str, Any], fmt: str, where: str) -> str:
     """
     section = data.get("path")
     basis = section.get("basis", MONOMIAL_BASIS) if isinstance(section, Mapping) else ""
-    if (fmt == FORMAT) != (basis == BASIS_NAME):
+    if (fmt in BASIS_FORMATS) != (basis == BASIS_NAME):
         raise PlanFileError(
             f"{where}: path basis {excerpt(basis)} does not belong to format {fmt}; "
-            f"format {FORMAT} stores basis {BASIS_NAME!r}, older formats monomials"
+            f"formats {FORMAT_4} and {FORMAT} store basis {BASIS_NAME!r}, older formats "
+            "monomials"
         )
     return str(basis)
 
 
 def promised_constraints(fmt: str) -> list[ConstraintRecord] | None:
-    """The constraints a file of an older format is held to (None: format 4 records them)."""
+    """The constraints a file of an older format is held to (None: formats 4 on record them)."""
     if fmt not in PROMISED:
         return None
     return [ConstraintRecord(name) for name in PROMISED[fmt]]
@@ -120,7 +130,7 @@ def with_every_end_effector(robot: RobotRef, samples: Samples) -> tuple[RobotRef
 
 def as_written_in(record: dict[str, Any], fmt: str) -> dict[str, Any]:
     """A current plan record with only the keys a file of format ``fmt`` has (in place)."""
-    if fmt == FORMAT:
+    if fmt in BASIS_FORMATS:
         return record
     record["robot"].pop("end_effectors")
     record["samples"].pop("end_effector_paths")

@@ -383,7 +383,7 @@ def payload_table(table: Any) -> Payload | None:
             inertia = tuple(float(v) for v in numbers(table["inertia"], 6, "[payload] inertia"))
             return Payload(mass=mass, com_xyz=com, inertia=inertia, box=box)  # type: ignore[arg-type]
         if box is not None:  # a uniform box, as compose --payload-box makes it
-            return Payload.uniform_box(mass, box, com)  # type: ignore[arg-type]
+            return Payload.uniform_box(mass, box, com)
         check_mass(mass)  # a bad mass is named before the missing inertia
     except InputError as exc:
         raise ScenarioError(str(exc)) from None

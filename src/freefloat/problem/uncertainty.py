@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..robot.payload import PAYLOAD_LINK
 from .inertial_sensitivity import Sensitivity
 
 __all__ = ["DEFAULT_UNCERTAINTY", "AttitudeSpread", "BodyEffect", "Uncertainty", "spread"]
@@ -40,11 +41,14 @@ class Uncertainty:
         mass_fraction: of each body's mass (0.05 = 5 %).
         com_m: of each centre-of-mass coordinate (m).
         inertia_fraction: of each inertia component's scale.
+        payload: a captured payload's own sizes (a client's mass properties are the least
+            known); None: the same as every body's.
     """
 
     mass_fraction: float = 0.05
     com_m: float = 0.01
     inertia_fraction: float = 0.10
+    payload: Uncertainty | None = None
 
     def __post_init__(self) -> None:
         for name, value in (
@@ -57,8 +61,19 @@ class Uncertainty:
                     f"{name} must be a number from 0 to 10 (m or fraction), got {value}"
                 )
 
-    def sizes(self, nominal: np.ndarray) -> np.ndarray:
-        """(B, 10) the size ``u`` of each parameter (kg, m, kg m^2) for nominal values (B, 10)."""
+    def sizes(self, nominal: np.ndarray, bodies: tuple[str, ...] = ()) -> np.ndarray:
+        """(B, 10) the size ``u`` of each parameter (kg, m, kg m^2) for nominal values (B, 10).
+
+        ``bodies``: the rows' names; a captured payload's row takes :attr:`payload`'s sizes.
+        """
+        u = self._sizes(nominal)
+        if self.payload is not None and PAYLOAD_LINK in bodies:
+            row = bodies.index(PAYLOAD_LINK)
+            u[row] = self.payload._sizes(nominal[row : row + 1])[0]
+        return u
+
+    def _sizes(self, nominal: np.ndarray) -> np.ndarray:
+        """:meth:`sizes` with this uncertainty's own sizes for every row."""
         u = np.empty_like(nominal)
         u[:, 0] = self.mass_fraction * np.abs(nominal[:, 0])
         u[:, 1:4] = self.com_m
@@ -71,10 +86,13 @@ class Uncertainty:
 
     def describe(self) -> str:
         """The uncertainty in words, e.g. ``mass 5 %, centre of mass 10 mm, inertia 10 %``."""
-        return (
+        said = (
             f"mass {100 * self.mass_fraction:g} %, centre of mass {1000 * self.com_m:g} mm, "
             f"inertia {100 * self.inertia_fraction:g} %"
         )
+        if self.payload is not None:
+            said += f"; the captured payload {self.payload.describe()}"
+        return said
 
 
 #: The uncertainty of the plan summary's one-line figure.
@@ -151,7 +169,7 @@ def spread(
     sensitivity: Sensitivity, uncertainty: Uncertainty = DEFAULT_UNCERTAINTY
 ) -> AttitudeSpread:
     """The first-order attitude error of a plan under ``uncertainty`` (see the module doc)."""
-    sizes = uncertainty.sizes(sensitivity.nominal)
+    sizes = uncertainty.sizes(sensitivity.nominal, sensitivity.bodies)
     jac = sensitivity.jacobian  # (3, B, 10)
     effects = []
     for b, body in enumerate(sensitivity.bodies):

@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import xml.etree.ElementTree as ET
-
 from ..progress import LOGGER
 from .model import Robot
-from .payload import PAYLOAD_LINK
+from .payload import held_payload
 
 __all__ = ["warn_light_base"]
 
@@ -33,19 +31,6 @@ def warn_light_base(robot: Robot) -> None:
 
 
 def _payload_mass(robot: Robot) -> float:
-    """The captured payload's mass (kg) as the robot's URDF file states it; 0 without one.
-
-    Pinocchio merges the payload's link into the end effector's body, so its mass is read
-    from the file.
-    """
-    if not any(frame.name == PAYLOAD_LINK for frame in robot.model.frames):
-        return 0.0
-    try:
-        root = ET.parse(robot.urdf).getroot()
-    except (OSError, ET.ParseError):
-        return 0.0
-    for link in root.iter("link"):
-        mass = link.find("inertial/mass")
-        if link.get("name") == PAYLOAD_LINK and mass is not None:
-            return float(mass.get("value", 0.0))
-    return 0.0
+    """The captured payload's mass (kg; :func:`.payload.held_payload`); 0 without one."""
+    held = held_payload(robot)
+    return 0.0 if held is None else float(held.mass)

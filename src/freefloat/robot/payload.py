@@ -15,10 +15,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 
 from ..errors import InputError, ModelError
+from .model import Robot
 
-__all__ = ["PAYLOAD_LINK", "Payload", "attach_payload", "check_mass"]
+__all__ = ["PAYLOAD_LINK", "Payload", "attach_payload", "check_mass", "held_payload"]
 
 #: Name of the link the payload becomes.
 PAYLOAD_LINK = "captured_payload"
@@ -134,3 +136,37 @@ def attach_payload(
     ET.SubElement(joint, "child", link=PAYLOAD_LINK)
     ET.SubElement(joint, "origin", xyz="0 0 0", rpy="0 0 0")
     return "<?xml version='1.0' encoding='UTF-8'?>\n" + ET.tostring(root, encoding="unicode")
+
+
+def held_payload(robot: Robot) -> pin.Inertia | None:
+    """The captured payload's inertia in its own link frame, as the robot's URDF states it.
+
+    Mass (kg), centre of mass (m) and inertia about it (kg m^2, turned by the inertial's
+    ``rpy`` into the link frame); None when the robot holds none. Pinocchio merges the
+    payload's link into the end effector's body, so its values are read from the URDF text
+    the robot was loaded from.
+    """
+    if not any(frame.name == PAYLOAD_LINK for frame in robot.model.frames):
+        return None
+    try:
+        root = ET.fromstring(robot.urdf_text)
+    except ET.ParseError:
+        return None
+    link = next((k for k in root.findall("link") if k.get("name") == PAYLOAD_LINK), None)
+    inertial = None if link is None else link.find("inertial")
+    if inertial is None:
+        return None
+    origin, mass, inertia = (inertial.find(tag) for tag in ("origin", "mass", "inertia"))
+
+    def floats(text: str | None) -> np.ndarray:
+        return np.array([float(v) for v in (text or "0 0 0").split()])
+
+    com = floats(None if origin is None else origin.get("xyz"))
+    rotation = pin.rpy.rpyToMatrix(*floats(None if origin is None else origin.get("rpy")))
+    ixx, iyy, izz, ixy, ixz, iyz = (
+        float(inertia.get(k, "0")) if inertia is not None else 0.0
+        for k in ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
+    )
+    matrix = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    value = float(mass.get("value", "0")) if mass is not None else 0.0
+    return pin.Inertia(value, com, rotation @ matrix @ rotation.T)

@@ -2,7 +2,7 @@
 
 :func:`plan_spread` is the first-order final attitude error of a plan under an uncertainty
 (:mod:`freefloat.problem.uncertainty`); :func:`with_robustness` puts that figure into the plan
-(its ``robustness`` record, format ``freefloat.plan/4``); :func:`plan_sensitivity` and
+(its ``robustness`` record, format ``freefloat.plan/5``); :func:`plan_sensitivity` and
 :func:`correct_plan` take a plan file, as the commands ``sensitivity`` and ``correct`` do.
 """
 
@@ -42,7 +42,7 @@ def plan_spread(
 def with_robustness(
     plan: Plan, robot: Robot, uncertainty: Uncertainty = DEFAULT_UNCERTAINTY
 ) -> Plan:
-    """The plan with its ``robustness`` record (format ``freefloat.plan/4``)."""
+    """The plan with its ``robustness`` record (format ``freefloat.plan/5``)."""
     found = plan_spread(plan, robot, uncertainty)
     record = RobustnessReport(
         mass_fraction=uncertainty.mass_fraction,
