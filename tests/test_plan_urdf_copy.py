@@ -7,6 +7,7 @@ import hashlib
 import json
 import shutil
 
+import numpy as np
 import pytest
 
 import freefloat as ff
@@ -118,3 +119,33 @@ def test_a_clearance_checked_plan_verifies_and_exports_when_its_urdf_is_gone(tmp
     from freefloat.export.messages import root_link
 
     assert root_link(str(urdf), doc["robot"]["urdf_text"]) == scenario.robot.base_link
+
+
+def test_a_plan_is_held_to_its_urdf_limits_whatever_its_records(tmp_path, capsys):
+    """The UR5 servicer's elbow given an upper limit below its path's peak (sampled densely
+    here) but above its start and goal, in the plan's URDF copy; the file's ``constraints``
+    list emptied and its limit rows dropped. Verify still holds the plan to the URDF's limits
+    and refuses it."""
+    plan = ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml"))
+    elbow = plan.robot.joints.index("elbow_joint")
+    t = np.linspace(0.0, plan.duration, 20001)
+    q = plan.joint_positions(t)[:, elbow]
+    upper = float(0.5 * (q.max() + max(q[0], q[-1])))
+    assert q.max() > upper + 1e-3 and upper > max(q[0], q[-1]) + 1e-3
+    doc = json.loads(plan.to_json())
+    text = doc["robot"]["urdf_text"]
+    start = text.index('<joint name="elbow_joint"')
+    limit = text.index("<limit", start)
+    field = text.index('upper="', limit) + len('upper="')
+    text = text[:field] + repr(upper) + text[text.index('"', field) :]
+    doc["robot"]["urdf_text"] = text
+    doc["robot"]["urdf_sha256"] = hashlib.sha256(text.encode()).hexdigest()
+    doc["robot"]["urdf"] = str(tmp_path / "gone.urdf")
+    doc["constraints"] = []
+    doc["verification"]["checks"] = [
+        c for c in doc["verification"]["checks"] if not c["name"].startswith("joint_")
+    ]
+    path = tmp_path / "emptied.json"
+    path.write_text(json.dumps(doc))
+    assert main(["verify", str(path)]) == 2
+    assert "joint_position_limits" in capsys.readouterr().err

@@ -55,6 +55,7 @@ __all__ = [
     "MONOMIAL_BASIS",
     "PROMISED",
     "READABLE_FORMATS",
+    "URDF_LIMITS",
     "as_written_in",
     "path_basis",
     "promised_constraints",
@@ -80,10 +81,9 @@ BASIS_FORMATS = (FORMAT_4, FORMAT)
 
 #: The constraints a file written before constraint records is held to, by format: every limit
 #: its URDF states, whatever its format (a format label never chooses the limits).
-PROMISED: dict[str, tuple[str, ...]] = {
-    fmt: ("joint_position_limits", "joint_velocity_limits", "joint_effort_limits")
-    for fmt in (FORMAT_1, FORMAT_2, FORMAT_3)
-}
+#: The URDF's limits: every plan is held to them, whatever its records say.
+URDF_LIMITS = ("joint_position_limits", "joint_velocity_limits", "joint_effort_limits")
+PROMISED: dict[str, tuple[str, ...]] = {fmt: URDF_LIMITS for fmt in (FORMAT_1, FORMAT_2, FORMAT_3)}
 
 #: ``Plan.basis`` of files before format 4: ascending monomial coefficients in t (s).
 MONOMIAL_BASIS = "monomial"

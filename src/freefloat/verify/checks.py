@@ -29,7 +29,7 @@ from ..physics.momentum import MomentumMap
 from ..plans.format import Plan
 from ..plans.guarantees import Check, Verification
 from ..plans.robot_copy import plan_robot
-from ..plans.versions import FORMAT_2, FORMAT_3
+from ..plans.versions import FORMAT_2, FORMAT_3, URDF_LIMITS
 from ..problem.constraints import Constraint, JointEffortLimits, constraint_from_record
 from ..problem.constraints.clearance import Clearance
 from ..problem.constraints.registry import clearance_constraint
@@ -97,7 +97,9 @@ def plan_constraints(plan: Plan, robot: Robot) -> list[Constraint]:
 
     Every ``constraints`` record, and clearance when its ``safety`` record says it was checked.
     A file written before constraint records is held to what its format promised
-    (:data:`~freefloat.plans.versions.PROMISED`: a ``freefloat.plan/2`` file, no effort limits).
+    (:data:`~freefloat.plans.versions.PROMISED`). Every plan is held to the URDF's limits
+    (:data:`~freefloat.plans.versions.URDF_LIMITS`) whether its records name them or not: a
+    file whose ``constraints`` list was emptied still answers to them.
 
     Raises:
         PlanFileError: a record names a constraint this freefloat does not know, or a bad
@@ -109,6 +111,8 @@ def plan_constraints(plan: Plan, robot: Robot) -> list[Constraint]:
             constraints.append(constraint_from_record(record.name, record.parameters))
         except FreeFloatError as exc:
             raise PlanFileError(f"plan field 'constraints[{i}]': {exc}") from None
+    named = {record.name for record in plan.constraints}
+    constraints += [constraint_from_record(n, {}) for n in URDF_LIMITS if n not in named]
     if plan.safety.checked:
         clearance = clearance_constraint(
             robot, plan.safety.srdf, plan.safety.obstacles, plan.safety.margin_m
