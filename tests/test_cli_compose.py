@@ -83,3 +83,52 @@ def test_a_payload_mass_of_zero_is_named_before_what_it_would_need(tmp_path, cap
     assert capsys.readouterr().err == (
         "freefloat: error: --payload-mass must be a finite number > 0 kg, got 0.0\n"
     )
+
+
+#: A three-joint arm (revolute, prismatic, revolute), with room for one more joint element.
+_ARM = """<?xml version="1.0"?>
+<robot name="pris">
+  <link name="base"><inertial><mass value="10"/>
+    <inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0.5 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" velocity="1" effort="100"/></joint>
+  <link name="l1"><inertial><origin xyz="0.5 0 0"/><mass value="10"/>
+    <inertia ixx="0.1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="p2" type="prismatic"><parent link="l1"/><child link="l2"/>
+    <origin xyz="1 0 0"/><axis xyz="1 0 0"/>
+    <limit lower="0" upper="0.5" velocity="0.2" effort="100"/></joint>
+  <link name="l2"><inertial><origin xyz="0.2 0 0"/><mass value="5"/>
+    <inertia ixx="0.1" iyy="0.5" izz="0.5" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/>
+    <origin xyz="0.4 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-3" upper="3" velocity="1" effort="100"/>{mimic}</joint>
+  <link name="l3"><inertial><origin xyz="0.3 0 0"/><mass value="5"/>
+    <inertia ixx="0.1" iyy="0.5" izz="0.5" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  {extra}
+</robot>
+"""
+_LOOP = (
+    '<joint name="close" type="revolute"><parent link="l3"/><child link="l1"/>'
+    '<axis xyz="0 0 1"/><limit lower="-1" upper="1" velocity="1" effort="1"/></joint>'
+)
+
+
+@pytest.mark.parametrize(
+    ("mimic", "extra", "message"),
+    [
+        ("", _LOOP, "closed loop: link 'l1' is the child of two joints"),
+        ('<mimic joint="j1" multiplier="2"/>', "", "arm joint 'j3' mimics 'j1'"),
+    ],
+)
+def test_an_arm_composed_as_no_urdf_loads_it_is_refused(mimic, extra, message, tmp_path, capsys):
+    """A closed loop crashed Pinocchio's model builder (exit 139); a mimic was dropped, the arm
+    then planned as if its joints moved apart. Both refused in one line, nothing written."""
+    arm = tmp_path / "arm.urdf"
+    arm.write_text(_ARM.format(mimic=mimic, extra=extra))
+    out = tmp_path / "servicer.urdf"
+    argv = ["compose", "--arm", str(arm), "--base-mass", "500", "--base-size", "1", "1", "1"]
+    assert main([*argv, "--mount", "0.5", "0", "0", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert message in err[-1] and err[-1].startswith("freefloat: error:")
+    assert not out.exists()

@@ -177,7 +177,7 @@ def check(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Compose the servicer, write its URDF (and SRDF) and print what it is."""
-    from ..robot.compose import compose, write_composed
+    from ..robot.compose import REFUSED, compose, write_composed
     from ..robot.model import load_robot
 
     spec = _servicer_spec(args, _payload(args))
@@ -189,9 +189,7 @@ def run(args: argparse.Namespace) -> int:
             robot = load_robot(Path(args.output), composed.end_effectors, text=composed.text)
         except ModelError as exc:  # named as the servicer composed, not as a file read
             reason = str(exc).removeprefix(f"{exc.urdf}: ") if exc.urdf else str(exc)
-            raise ModelError(
-                f"the composed servicer is refused, nothing written: {reason}"
-            ) from None
+            raise ModelError(f"{REFUSED}: {reason}") from None
         path = write_composed(composed, args.output)
     print(f"freefloat compose: wrote {path}")
     if composed.srdf is not None:

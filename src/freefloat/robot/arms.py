@@ -159,8 +159,12 @@ def arm_part(arm: ArmSpec) -> ArmPart:
                 safety_controller=None,
                 calibration=None,
             )
-        elif joint.mimic is not None:
-            joint = replace(joint, mimic=replace(joint.mimic, joint=prefix + joint.mimic.joint))
+        elif joint.mimic is not None:  # the composed URDF would lose it: the arm moves apart
+            raise ModelError(
+                f"arm joint {joint.name.removeprefix(prefix)!r} mimics "
+                f"{joint.mimic.joint!r}: mimic joints are not supported (freefloat moves every "
+                "joint on its own path); lock it (--lock), or make it fixed in the arm's URDF"
+            )
         joints.append(joint)
     links = []
     for link in robot.links:

@@ -38,11 +38,13 @@ from .arms import ARMS, BASE_LINK, ArmSpec, arm_part, arm_urdf
 from .model import example_robot_data_dir
 from .payload import PAYLOAD_LINK, Payload
 from .srdf import merged_srdf
+from .urdf_checks import check_urdf_xml
 
 LOGGER = logging.getLogger(__name__)
 
 __all__ = [
     "ARMS",
+    "REFUSED",
     "ArmSpec",
     "Composed",
     "ServicerSpec",
@@ -194,6 +196,10 @@ def write_composed(composed: Composed, output: str | Path) -> Path:
     return atomic_write_text(output, composed.text)
 
 
+#: How a composed servicer that is no URDF freefloat loads is refused.
+REFUSED = "the composed servicer is refused, nothing written"
+
+
 def compose_servicer_text(spec: ServicerSpec) -> str:
     """Compose the servicer and validate it with yourdfpy; return the URDF text (no file).
 
@@ -270,6 +276,10 @@ def compose(spec: ServicerSpec, strict_tips: bool = True) -> Composed:
 
     body = etree.tostring(urdf.write_xml(), pretty_print=True, encoding="unicode")
     text = "<?xml version='1.0' encoding='UTF-8'?>\n" + body
+    try:  # a closed loop, say, before Pinocchio builds the model below (it would crash)
+        check_urdf_xml(text)
+    except ModelError as exc:
+        raise ModelError(f"{REFUSED}: {exc}") from None
     strict = strict_tips or spec.payload is not None  # a payload needs its arm's tip
     tips = arm_tips(text, [a.prefix for a in arms], strict=strict)
     srdf = merged_srdf([a.arm for a in arms], [a.prefix for a in arms]) if len(arms) > 1 else None
