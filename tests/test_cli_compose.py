@@ -132,3 +132,16 @@ def test_an_arm_composed_as_no_urdf_loads_it_is_refused(mimic, extra, message, t
     err = capsys.readouterr().err.strip().splitlines()
     assert message in err[-1] and err[-1].startswith("freefloat: error:")
     assert not out.exists()
+
+
+def test_lock_repeated_locks_every_joint_named(tmp_path, capsys):
+    """``--lock A --lock B`` kept only B; the URDF written is read back here by its XML."""
+    import xml.etree.ElementTree as ET
+
+    out = tmp_path / "servicer.urdf"
+    base = ["compose", "--arm", "ur5", "--base-mass", "500", "--base-size", "1", "1", "1"]
+    locks = ["--lock", "shoulder_pan_joint=10", "--lock", "elbow_joint=20"]
+    assert main([*base, "--mount", "0.5", "0", "0", *locks, "-o", str(out)]) == 0
+    kinds = {j.get("name"): j.get("type") for j in ET.parse(out).getroot().iter("joint")}
+    assert kinds["shoulder_pan_joint"] == kinds["elbow_joint"] == "fixed"
+    assert kinds["shoulder_lift_joint"] == "revolute"

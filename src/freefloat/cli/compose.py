@@ -155,8 +155,10 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
     p_compose.add_argument(
         "--lock",
         nargs="*",
+        action="extend",
         metavar="JOINT[=DEG]",
-        help="more joints to lock, at 0 or at DEG (with several arms, prefixed names)",
+        help="more joints to lock, at 0 or at DEG (with several arms, prefixed names); "
+        "several after one --lock, or --lock repeated",
     )
     p_compose.add_argument(
         "--keep-gripper", action="store_true", help="keep gripper and finger joints movable"
