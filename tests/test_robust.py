@@ -408,6 +408,10 @@ def test_cli_sensitivity_and_correct(tmp_path, worked, capsys):
         for line in printed.splitlines()
     )
     assert ff.Plan.load(output).base.attitude_error_rad <= 1e-9
+    # its joints end where they start: beyond the planar bounds of simple motions, (0, 0),
+    # and judged on its own checks (verify once refused it for the bounds)
+    capsys.readouterr()
+    assert main(["verify", str(output)]) == 0, capsys.readouterr().err
     assert main(["correct", str(plan_path), "--base-zyx-deg", "0", "3", "0"]) == 2
     assert "this robot is planar" in capsys.readouterr().err
 

@@ -77,22 +77,22 @@ def problem_from_plan(plan: Plan, robot: Robot) -> tuple[Problem, np.ndarray]:
     Raises:
         PlanFileError: the plan's request cannot be a problem (joints beyond their limits, a
             goal a planar robot cannot reach).
-        PlanMismatchError: the requested yaw change lies outside the planar bounds.
     """
+    request = (
+        robot,
+        np.asarray(plan.request.start_joints, dtype=float),
+        np.asarray(plan.request.goal_joints, dtype=float),
+        np.asarray(plan.base.start_quaternion_xyzw, dtype=float),
+        np.asarray(plan.base.target_quaternion_xyzw, dtype=float),
+        plan.duration,
+    )
     try:
-        problem = build_problem(
-            robot,
-            np.asarray(plan.request.start_joints, dtype=float),
-            np.asarray(plan.request.goal_joints, dtype=float),
-            np.asarray(plan.base.start_quaternion_xyzw, dtype=float),
-            np.asarray(plan.base.target_quaternion_xyzw, dtype=float),
-            plan.duration,
-            extra=free_counts(plan),
-        )
-    except InfeasibleError as exc:
-        raise PlanMismatchError(
-            "feasibility.requested_yaw_change_deg", math.inf, 0.0, message=str(exc)
-        ) from None
+        try:
+            problem = build_problem(*request, extra=free_counts(plan))
+        except InfeasibleError:
+            # beyond the planar bounds of simple motions: a path that goes back and forth (a
+            # correcting loop, whose joints end where they start) is judged on its own checks
+            problem = build_problem(*request, extra=free_counts(plan), check_bounds=False)
     except FreeFloatError as exc:
         raise PlanFileError(f"the plan's request is not a valid problem: {exc}") from None
     if plan.solver.integration_steps > 0:
