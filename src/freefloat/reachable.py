@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -295,6 +295,10 @@ def _inner(
         )
 
 
+#: Why a one-joint planar robot's reach is nil.
+ONE_JOINT = "one joint: every path turns the spacecraft alike"
+
+
 def _planar_report(
     scenario: Scenario, problem: Problem, ratio: float, end_effector_goal: bool
 ) -> ReachReport:
@@ -311,6 +315,8 @@ def _planar_report(
         _limits(drift, axis, max(hi - change, 0.0), None),
         _limits(drift, -axis, max(change - lo, 0.0), None),
     )
+    if scenario.robot.n == 1:  # the bounds are the one change every path makes
+        directions = tuple(replace(d, stopped_by=ONE_JOINT) for d in directions)
     return ReachReport(
         robot=scenario.robot.name,
         planar=True,

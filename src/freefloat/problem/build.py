@@ -15,7 +15,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ..errors import InfeasibleError, InputError, JointLimitError
-from ..physics.attitude import relative_rotvec
+from ..physics.attitude import quat_exp, quat_multiply, relative_rotvec
 from ..physics.momentum import MomentumMap, cached_planar_axis
 from ..physics.planar_map import cached_identify
 from ..robot.model import Robot
@@ -117,7 +117,7 @@ def build_problem(
         yaw_change = _planar_yaw_change(quats, axis)
         bounds = cached_planar_bounds(mmap)
         lo, hi = bounds.interval(goal - start)
-        if check_bounds:
+        if check_bounds and robot.n > 1:  # one joint: checked below, on the exact change
             branch = planar_yaw_branch(yaw_change, lo, hi)
             if branch is None:
                 interval = (math.degrees(lo), math.degrees(hi))
@@ -136,6 +136,8 @@ def build_problem(
         bounds=bounds,
         yaw_change=yaw_change,
     )
+    if planar and robot.n == 1 and check_bounds:
+        problem.yaw_change = _one_joint_yaw(problem)
     if family.n_free < problem.n_equations:
         raise InputError(
             f"{family.n_free} free path coefficient(s) for {problem.n_equations} attitude "
@@ -143,6 +145,35 @@ def build_problem(
             "[path] extra"
         )
     return problem.with_steps(problem.steps_for())
+
+
+#: How far (rad) a one-joint planar robot's goal may lie from the one attitude it reaches.
+ONE_JOINT_TOLERANCE = 1e-9
+
+
+def _one_joint_yaw(problem: Problem) -> float:
+    """The goal's yaw change (rad) of a one-joint planar robot: the one every path makes.
+
+    Raises:
+        InfeasibleError: the goal asks another (beyond :data:`ONE_JOINT_TOLERANCE`).
+    """
+    assert problem.yaw_change is not None and problem.bounds_interval is not None
+    exact = problem.bounds_interval[0]
+    off = wrap_angle(problem.yaw_change - exact)
+    if abs(off) > ONE_JOINT_TOLERANCE:
+        reached = quat_multiply(problem.start_quaternion, quat_exp(exact * problem.axis))
+        raise InfeasibleError(
+            math.degrees(problem.yaw_change),
+            (math.degrees(exact), math.degrees(exact)),
+            message=(
+                f"a robot with one joint turns the spacecraft alike along every path between "
+                f"these joints: by {math.degrees(exact):.9g} deg about {_axis_name(problem.axis)}"
+                f", not the {math.degrees(wrap_angle(problem.yaw_change)):.9g} deg asked; its "
+                f"goal attitude can only be base_quaternion_xyzw = "
+                f"{[float(v) for v in reached]} (to {ONE_JOINT_TOLERANCE:g} rad)"
+            ),
+        )
+    return exact + off
 
 
 def _checked_inputs(

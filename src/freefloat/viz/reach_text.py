@@ -20,6 +20,12 @@ def _vector(values: np.ndarray, digits: int = 4) -> str:
 def verdict(report: ReachReport) -> str:
     """One line when the reach is small, naming why (the inertia ratio); "" otherwise."""
     largest = math.degrees(report.largest_outer)
+    if len(report.freedom) == 1:
+        quaternion = [float(v) for v in report.drift_quaternion]
+        return (
+            "with one joint every path turns the spacecraft alike: the drift attitude is the "
+            f"only goal, base_quaternion_xyzw = {quaternion} (the figures above are rounded)"
+        )
     if largest >= SMALL_REACH_DEG:
         return ""
     if report.bound is not None:
@@ -127,7 +133,7 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
         inner = f"{'-':>12}" if skipped else f"{math.degrees(d.inner):>12.2f}"
         goal = "-" if skipped else _vector(d.goal_zyx_deg, 4)
         lines.append(f"  {axis:<20}{inner}{math.degrees(d.outer):>12.2f}  {goal:<30}  {why}")
-    if report.planar:
+    if report.planar and len(report.freedom) > 1:
         lines.append("  the interval is open: a goal at its very end is not reached")
     said = verdict(report)
     if said:

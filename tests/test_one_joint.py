@@ -1,0 +1,103 @@
+"""A one-joint planar robot: every path turns the spacecraft alike.
+
+With one joint the base's rate is ``f(q) q'``, so its attitude obeys an ODE in ``q`` alone and
+a path that goes back and forth retraces it: the goal attitude is fixed by the joints. Truth
+here: SciPy's integrator on Pinocchio's centroidal map along two different joint paths (one
+monotone, one that overshoots and comes back), not the planner's Magnus scheme or planar map.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from scipy.integrate import solve_ivp
+
+import freefloat as ff
+from freefloat.cli import main
+
+#: A 100 kg box and one 10 kg link turning about the box's y axis, off its centre.
+URDF = """<?xml version="1.0"?>
+<robot name="one">
+  <link name="base"><inertial><mass value="100"/>
+    <inertia ixx="10" iyy="10" izz="10" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0.5 0 0.3"/><axis xyz="0 1 0"/>
+    <limit lower="-3" upper="3" velocity="1" effort="100"/></joint>
+  <link name="l1"><inertial><origin xyz="0.5 0 0"/><mass value="10"/>
+    <inertia ixx="0.1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+</robot>
+"""
+
+SCENARIO = """robot = "one.urdf"
+duration = 10.0
+[start]
+joints = {{ j1 = 0.0 }}
+[goal]
+joints = {{ j1 = 60.0 }}
+{goal}
+[safety]
+check = false
+"""
+
+
+def _pitch(model: pin.Model, path) -> float:
+    """The base's final turn about y (rad) along ``path(t) -> (q, qd)`` on [0, 1] s."""
+    data = model.createData()
+
+    def rhs(t: float, y: np.ndarray) -> np.ndarray:
+        q, qd = path(t)
+        config = pin.neutral(model)
+        config[7] = q
+        ag = pin.computeCentroidalMap(model, data, config)
+        twist = -np.linalg.solve(ag[:, :6], ag[:, 6:] @ np.array([qd]))
+        return np.array([twist[4]])  # the y rate; the base turns about y alone
+
+    return float(solve_ivp(rhs, (0.0, 1.0), [0.0], rtol=1e-12, atol=1e-14).y[0, -1])
+
+
+@pytest.fixture
+def one(tmp_path):
+    (tmp_path / "one.urdf").write_text(URDF)
+
+    def scenario(goal: str) -> str:
+        path = tmp_path / "one.toml"
+        path.write_text(SCENARIO.format(goal=goal))
+        return str(path)
+
+    return scenario
+
+
+def test_a_one_joint_robot_reaches_one_attitude_and_says_which(one, tmp_path, capsys) -> None:
+    model = pin.buildModelFromXML(URDF, pin.JointModelFreeFlyer())
+    goal = math.radians(60.0)
+
+    def monotone(t: float) -> tuple[float, float]:
+        s = 10 * t**3 - 15 * t**4 + 6 * t**5
+        return goal * s, goal * (30 * t**2 - 60 * t**3 + 30 * t**4)
+
+    def overshoot(t: float) -> tuple[float, float]:  # 1.2 rad beyond the goal, and back
+        q, qd = monotone(t)
+        return q + 1.2 * math.sin(math.pi * t) ** 2, qd + 1.2 * math.pi * math.sin(2 * math.pi * t)
+
+    exact = _pitch(model, monotone)
+    assert _pitch(model, overshoot) == pytest.approx(exact, abs=1e-9)
+    # the planner says so, naming that turn
+    assert main(["plan", one("base_zyx_deg = [0.0, -5.0, 0.0]"), "-o", str(tmp_path / "p")]) == 2
+    err = capsys.readouterr().err
+    said = re.search(r"by (-?[\d.]+) deg about its y axis", err)
+    assert said and float(said.group(1)) == pytest.approx(math.degrees(exact), abs=1e-6)
+    # reach says there is nothing to reach, and the attitude to paste in full
+    assert main(["reach", one("base_zyx_deg = [0.0, -5.0, 0.0]"), "-q"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("one joint: every path turns the spacecraft alike") == 2
+    pasted = re.search(r"base_quaternion_xyzw = (\[[^\]]+\]) \(the figures", out)
+    assert pasted
+    quaternion = [float(v) for v in pasted.group(1).strip("[]").split(",")]
+    assert quaternion[1] == pytest.approx(math.sin(exact / 2), abs=1e-12)
+    # and that attitude plans
+    plan = ff.plan(ff.Scenario.from_toml(one(f"base_quaternion_xyzw = {quaternion}")))
+    assert plan.verification.passed and plan.base.attitude_error_rad <= 1e-9
