@@ -93,3 +93,25 @@ def test_verify_names_the_bad_field(worked_plan, tmp_path, capsys, change, messa
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("freefloat: error: ")
     assert "does not match the plan schema" in err[0] and message in err[0], err[0]
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["verify"],
+        ["sensitivity"],
+        ["correct", "--base-zyx-deg", "1", "0", "0"],
+        ["export", "--format", "csv", "-o", "out.csv"],
+    ],
+)
+def test_a_negative_margin_is_named_by_every_command_that_reads_a_plan(
+    worked_plan, tmp_path, capsys, monkeypatch, argv
+):
+    """A clearance margin below 0 m raised a traceback from verify, correct, sensitivity and
+    export (the last three read the file without its schema)."""
+    monkeypatch.chdir(tmp_path)
+    path = _broken(worked_plan, tmp_path, lambda d: d["safety"].__setitem__("margin_m", -1.0))
+    assert main([argv[0], str(path), *argv[1:]]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "safety.margin_m: -1.0 is less than the minimum of 0" in err[0]
+    assert not (tmp_path / "out.csv").exists() and not path.with_suffix(".correct.json").exists()

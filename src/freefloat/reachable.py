@@ -311,7 +311,7 @@ def _planar_report(
     change = float(relative_rotvec(start, drift) @ problem.axis)
     lo, hi = interval
     axis = np.asarray(problem.axis, dtype=float)
-    directions = (
+    directions: tuple[DirectionLimits, ...] = (
         _limits(drift, axis, max(hi - change, 0.0), None),
         _limits(drift, -axis, max(change - lo, 0.0), None),
     )

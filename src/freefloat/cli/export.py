@@ -6,7 +6,7 @@ import argparse
 
 from ..errors import InputError
 from ..export import EXPORTS
-from ..plans.format import Plan
+from ..plans.schema import load_plan_file
 from ..progress import stage
 from .common import Commands, check_outputs
 
@@ -51,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
             rate = float(args.rate)
         except ValueError:
             raise InputError(f"--rate must be a positive number of Hz, got {args.rate!r}") from None
-    loaded = Plan.load(args.plan)
+    loaded = load_plan_file(args.plan)  # the schema first: a tampered file is named
     with stage(f"export {args.format}"):
         written = export(loaded, args.output, args.format, rate)
     source = "the plan's samples" if rate is None else f"resampled at {rate:g} Hz"

@@ -214,7 +214,7 @@ def _check_schema(data: Any, path: Path) -> None:
 
 
 def load_plan_file(path: str | Path) -> Plan:
-    """Read a plan file once: the schema first (formats 2 to 4), then its limits, then the plan.
+    """Read a plan file once: the schema first (formats 2 to 5), then its limits, then the plan.
 
     Raises:
         PlanFileError: not a regular file, too large, not JSON, a field that breaks the schema

@@ -18,6 +18,7 @@ from ..physics.attitude import geodesic_angle, quat_from_zyx
 from ..plans.format import Plan
 from ..plans.guarantees import RobustnessReport
 from ..plans.robot_copy import plan_robot
+from ..plans.schema import load_plan_file
 from ..plans.versions import FORMAT
 from ..problem.inertial_sensitivity import attitude_sensitivity
 from ..problem.uncertainty import DEFAULT_UNCERTAINTY, AttitudeSpread, Uncertainty, spread
@@ -56,7 +57,7 @@ def with_robustness(
 
 def plan_sensitivity(path: str | Path, uncertainty: Uncertainty) -> tuple[Plan, AttitudeSpread]:
     """The plan file at ``path`` and its first-order attitude error under ``uncertainty``."""
-    plan = Plan.load(path)
+    plan = load_plan_file(path)
     return plan, plan_spread(plan, plan_robot(plan), uncertainty)
 
 
@@ -70,7 +71,7 @@ def correct_plan(path: str | Path, measured_zyx_deg: Sequence[float]) -> tuple[P
     Returns:
         The correcting plan and the angle it turns the spacecraft back by (rad).
     """
-    plan = Plan.load(path)
+    plan = load_plan_file(path)
     yaw, pitch, roll = (np.radians(float(a)) for a in measured_zyx_deg)
     measured = quat_from_zyx(yaw, pitch, roll)
     goal = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
