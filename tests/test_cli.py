@@ -155,6 +155,20 @@ def test_bounds_plot_of_a_planar_robot_is_refused_not_dropped(tmp_path, capsys):
     assert not figure.exists()
 
 
+@pytest.mark.parametrize("command", ["reach", "bounds"])
+@pytest.mark.parametrize("name", ["figure.txt", "figure"])
+def test_a_figure_not_named_for_its_format_is_refused_before_any_work(
+    tmp_path, capsys, command, name
+):
+    """``--plot x.txt`` raised matplotlib's traceback after the work; ``--plot x`` wrote
+    ``x.png``. Both are refused first, in one line, nothing printed or written."""
+    figure = tmp_path / name
+    assert main([command, "--plot", str(figure)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "a figure is written as PNG, SVG or PDF" in err
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_bounds_of_an_infeasible_request_reports_it(tmp_path, capsys):
     scenario = tmp_path / "s.toml"
     scenario.write_text(scenario_text(yaw="40.0"))

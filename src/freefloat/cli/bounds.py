@@ -10,7 +10,7 @@ from ..parallel import check_jobs
 from ..problem.build import planar_yaw_branch, problem_from_scenario
 from ..problem.scenario import Scenario
 from ..solvers.options import SolveOptions
-from .common import MAX_BUDGET, Commands, check_outputs, load_scenario, positive
+from .common import MAX_BUDGET, Commands, check_figure, load_scenario, positive
 from .reach import add_jobs, direction_line
 
 __all__ = ["add_parser", "check", "run"]
@@ -57,7 +57,7 @@ def check(args: argparse.Namespace) -> None:
     if not 1 <= args.budget <= MAX_BUDGET:
         raise InputLimitError("--budget", args.budget, 1, MAX_BUDGET)
     check_jobs(args.jobs, "--jobs")
-    check_outputs(args, ("--plot", "plot"))
+    check_figure(args)
 
 
 def run(args: argparse.Namespace) -> int:

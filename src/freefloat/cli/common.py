@@ -22,9 +22,11 @@ else:
 
 __all__ = [
     "DEFAULT_OUT_DIR",
+    "FIGURE_SUFFIXES",
     "MAX_BUDGET",
     "Commands",
     "add_no_verify",
+    "check_figure",
     "check_outputs",
     "checked_plan",
     "load_scenario",
@@ -87,6 +89,27 @@ def positive(value: float, name: str, high: float, unit: str = "") -> float:
         units = f" of {unit}" if unit else ""
         raise InputError(f"{name} must be a positive number{units}, got {value:g}")
     return check_number(value, name, high, unit)
+
+
+#: The figure formats ``--plot FILE`` writes, by the file name's suffix.
+FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
+
+
+def check_figure(args: argparse.Namespace, option: str = "--plot", name: str = "plot") -> None:
+    """Refuse a figure file (``option``, when given) not named for a format it is written in.
+
+    Raises:
+        InputError: its suffix is not one of :data:`FIGURE_SUFFIXES` (none included: matplotlib
+            would write ``NAME.png`` beside the name asked for).
+        FileError: it cannot be written (:func:`check_outputs`).
+    """
+    value = getattr(args, name, None)
+    if value and Path(value).suffix.lower() not in FIGURE_SUFFIXES:
+        raise InputError(
+            f"{option} {value!r}: a figure is written as PNG, SVG or PDF; give a file name "
+            f"ending {', '.join(FIGURE_SUFFIXES)}"
+        )
+    check_outputs(args, (option, name))
 
 
 def check_outputs(

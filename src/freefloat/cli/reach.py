@@ -10,7 +10,7 @@ from ..parallel import MAX_JOBS, check_jobs
 from ..problem.limits import check_number
 from ..reachable import DEFAULT_BUDGET as DEFAULT_REACH_BUDGET
 from ..solvers.reach import DirectionReach
-from .common import MAX_BUDGET, Commands, check_outputs, load_scenario
+from .common import MAX_BUDGET, Commands, check_figure, load_scenario
 
 __all__ = ["MAX_TRAVEL", "add_jobs", "add_parser", "check", "direction_line", "run"]
 
@@ -76,7 +76,7 @@ def check(args: argparse.Namespace) -> None:
     if not 0 <= args.budget <= MAX_BUDGET:
         raise InputLimitError("--budget", args.budget, 0, MAX_BUDGET)
     check_jobs(args.jobs, "--jobs")
-    check_outputs(args, ("--plot", "plot"))
+    check_figure(args)
 
 
 def run(args: argparse.Namespace) -> int:
