@@ -19,7 +19,7 @@ from ..physics.attitude import quat_exp, quat_multiply, relative_rotvec
 from ..physics.momentum import MomentumMap, cached_planar_axis
 from ..physics.planar_map import cached_identify
 from ..robot.model import Robot
-from .bounds import cached_planar_bounds
+from .bounds import PlanarBounds, cached_planar_bounds
 from .limits import check_duration, check_extra, check_joint_count
 from .paths import PathFamily
 from .residual import Problem, wrap_angle
@@ -136,8 +136,10 @@ def build_problem(
         bounds=bounds,
         yaw_change=yaw_change,
     )
-    if planar and robot.n == 1 and check_bounds:
-        problem.yaw_change = _one_joint_yaw(problem)
+    if planar and robot.n == 1:  # the one change every path makes (method.md section 6)
+        problem.bounds = _one_joint_bounds(problem)
+        if check_bounds:
+            problem.yaw_change = _one_joint_yaw(problem)
     if family.n_free < problem.n_equations:
         raise InputError(
             f"{family.n_free} free path coefficient(s) for {problem.n_equations} attitude "
@@ -149,6 +151,19 @@ def build_problem(
 
 #: How far (rad) a one-joint planar robot's goal may lie from the one attitude it reaches.
 ONE_JOINT_TOLERANCE = 1e-9
+
+
+def _one_joint_bounds(problem: Problem) -> PlanarBounds:
+    """A one-joint planar robot's bounds: its gain's mean over the motion (rad per rad or m).
+
+    With one joint the base's attitude obeys an ODE in that joint's value alone (a path that
+    goes back and forth retraces it), so every path makes the quintic path's yaw change, and
+    the interval of :meth:`PlanarBounds.interval` is that one change.
+    """
+    change = problem.yaw_change_of(np.zeros(problem.n_free))
+    travel = float(problem.family.goal[0] - problem.family.start[0])
+    gain = np.array([change / travel if travel != 0.0 else 0.0])
+    return PlanarBounds(gain, gain)
 
 
 def _one_joint_yaw(problem: Problem) -> float:

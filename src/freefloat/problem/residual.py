@@ -158,16 +158,9 @@ class Problem:
 
     @property
     def bounds_interval(self) -> tuple[float, float] | None:
-        """Reachable yaw-change interval (rad) for this joint motion, planar problems only.
-
-        With one joint, the one yaw change every path makes (the base's attitude then obeys an
-        ODE in that joint's value alone: a path that goes back and forth retraces it).
-        """
+        """Reachable yaw-change interval (rad) for this joint motion, planar problems only."""
         if self.bounds is None:
             return None
-        if self.robot.n == 1:
-            exact = self.yaw_change_of(np.zeros(self.n_free))
-            return exact, exact
         return self.bounds.interval(self.family.goal - self.family.start)
 
     def _use_steps(self, steps: int) -> None:
