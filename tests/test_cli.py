@@ -221,3 +221,30 @@ def test_console_script_exit_code(tmp_path):
 def test_api_round_trip_matches_cli(tmp_path, worked_plan):
     path = worked_plan.save(tmp_path / "x.json")
     assert ff.Plan.load(path).free_parameters == worked_plan.free_parameters
+
+
+@pytest.mark.parametrize(
+    ("argv", "option"),
+    [
+        (["show", "{plan}", "--html", ""], "--html needs a file name, got an empty one"),
+        (["plan", "-o", ""], "-o needs a file name, got an empty one"),
+        (["show", "{plan}", "--html", "{plan}"], "is the file this command reads"),
+        (["export", "{plan}", "--format", "csv", "-o", "{plan}"], "is the file this command reads"),
+        (["correct", "{plan}", "--base-zyx-deg", "1", "0", "0", "-o", "{plan}"], "reads"),
+        (["plan", "{scenario}", "-o", "{scenario}"], "is the file this command reads"),
+    ],
+)
+def test_an_empty_output_name_or_one_that_is_the_input_is_refused(
+    tmp_path, capsys, worked_plan, argv, option
+):
+    """``show --html ""`` started the server (and hung); ``--html plan.json`` overwrote the
+    plan it shows. Each is refused in one line, and the input stays as it was."""
+    plan = worked_plan.save(tmp_path / "plan.json")
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(scenario_text())
+    kept = {p: p.read_bytes() for p in (plan, scenario)}
+    filled = [a.format(plan=plan, scenario=scenario) for a in argv]
+    assert main(filled) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and option in err
+    assert {p: p.read_bytes() for p in kept} == kept

@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..errors import InputError, PlanFileError, PlanMismatchError
+from ..errors import FileError, InputError, PlanFileError, PlanMismatchError
 from ..files import check_output
 from ..plans.format import Plan
 from ..problem.limits import check_number
@@ -118,9 +118,25 @@ def check_outputs(
     """Refuse unwritable outputs before any work: each ``(option, attribute)`` that is given.
 
     Raises:
-        FileError: the output (a file, or a folder when ``folder``) cannot be written.
+        InputError: an empty name.
+        FileError: the output (a file, or a folder when ``folder``) cannot be written, or it
+            is the command's own input (its plan or scenario file), which it would overwrite.
     """
     for option, name in outputs:
         value = getattr(args, name, None)
-        if value:
-            check_output(value, option, folder=folder)
+        if value is None:
+            continue
+        if not str(value).strip():
+            raise InputError(f"{option} needs a file name, got an empty one")
+        target = check_output(value, option, folder=folder)
+        for source in (getattr(args, key, None) for key in _INPUTS):
+            if source and target.exists() and target.samefile(Path(source).expanduser()):
+                raise FileError(
+                    f"{option} {value} is the file this command reads; give another name "
+                    "(it would be overwritten)",
+                    str(value),
+                )
+
+
+#: The attributes holding a command's input file: an output may not overwrite them.
+_INPUTS = ("plan", "scenario", "sweep")
