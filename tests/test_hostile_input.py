@@ -195,6 +195,16 @@ def test_symlink_loops(tmp_path, capsys):
     assert "URDF path" in line and "a symbolic-link loop" in line
 
 
+def test_an_output_link_into_a_missing_folder_makes_no_folder(tmp_path, capsys):
+    """A dangling link to ``missing/deeper/x.json``: the output would have made those folders
+    at the link's end. Refused; nothing made."""
+    link = tmp_path / "out.json"
+    link.symlink_to(tmp_path / "missing" / "deeper" / "x.json")
+    line = _refused(capsys, "plan", "-o", str(link))
+    assert "is a symbolic link into a folder that does not exist" in line
+    assert not (tmp_path / "missing").exists()
+
+
 def test_nul_bytes_in_paths(tmp_path, capsys):
     assert "contains a NUL byte" in _refused(capsys, "plan", "wo\0rk.toml")
     text = scenario_text(robot=str(PLANAR)).replace("planar_2dof.urdf", "planar\\u0000.urdf")

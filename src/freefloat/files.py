@@ -181,6 +181,13 @@ def check_output(path: str | Path, what: str = "output", folder: bool = False) -
         )
     if folder and target.exists() and not target.is_dir():
         raise FileError(f"{what} {excerpt(shown)} is a file; give a folder", shown)
+    given = Path(shown).expanduser()
+    if given.is_symlink() and not target.parent.exists():  # no folders made at a link's end
+        raise FileError(
+            f"{what} {excerpt(shown)} is a symbolic link into a folder that does not exist "
+            f"({target.parent}); give a file name",
+            shown,
+        )
     ancestor = target if folder and target.is_dir() else target.parent
     while not ancestor.exists():
         ancestor = ancestor.parent
