@@ -171,6 +171,36 @@ def test_resume_after_an_interrupted_run_gives_the_same_file(tmp_path):
     assert out.read_text() == again and len(ran) == 5
 
 
+def test_an_edited_results_file_is_refused_on_resume(tmp_path):
+    """A planned row given a 5 rad attitude error, a NaN or a word in a number's place, or a
+    status the rows never have, was kept as it was on resume (the summary then read "9
+    planned" for 10 jobs). Each is refused, naming the line, the file left as it was."""
+    path = _sweep_file(tmp_path, '[[axis]]\nkey = "goal.base_zyx_deg.0"\nvalues = [0.0, 10.0]\n')
+    out = tmp_path / "two.csv"
+    ff.sweep(path, workers=1, output=out, progress=False)
+    whole = out.read_text()
+    one, two = csv.DictReader(whole.splitlines())
+    assert one["status"] == two["status"] == "planned"
+    edits = {
+        "attitude_error_rad": ("5.0", "a planned row whose attitude error 5.0 rad exceeds"),
+        "path_length": ("nan", "path_length 'nan' is not a finite number"),
+        "peak_torque": ("lots", "peak_torque 'lots' is not a finite number"),
+        "status": ("bogus", "status 'bogus' is none of planned, infeasible, failed"),
+    }
+    for column, (value, message) in edits.items():
+        rows = list(csv.DictReader(whole.splitlines()))
+        rows[1][column] = value
+        with open(out, "w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=list(rows[0]), lineterminator="\n")
+            writer.writeheader()
+            writer.writerows(rows)
+        edited = out.read_text()
+        with pytest.raises(ff.ScenarioError) as info:
+            ff.sweep(path, workers=1, output=out, progress=False)
+        assert f"{out} line 3: {message}" in str(info.value)
+        assert out.read_text() == edited
+
+
 def test_output_of_another_sweep_is_refused(tmp_path):
     out = tmp_path / "other.csv"
     out.write_text("index,duration,status\n")

@@ -15,7 +15,7 @@ import time
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -67,6 +67,9 @@ class SweepRow:
         total_time_s: wall time of the whole job (s); a timing, not part of the result.
         message: the one-line message of a refusal or failure; empty when planned.
     """
+
+    #: the statuses a row can have
+    statuses: ClassVar[tuple[str, ...]] = STATUSES
 
     index: int
     values: tuple[Value, ...]

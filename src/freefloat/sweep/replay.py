@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, fields, replace
+from typing import ClassVar
 
 from ..errors import FreeFloatError
 from ..plans.format import Plan
@@ -43,6 +44,9 @@ class ReplayRow:
         total_time_s: wall time of the job (s); a timing, not part of the result.
         message: why a job failed; empty when replayed.
     """
+
+    #: the statuses a row can have
+    statuses: ClassVar[tuple[str, ...]] = ("replayed", "failed")
 
     index: int
     values: tuple[Value, ...]

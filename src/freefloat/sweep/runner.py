@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import multiprocessing as mp
 import os
 import sys
@@ -26,6 +27,7 @@ from typing import Any
 from ..errors import InputError, ScenarioError
 from ..files import atomic_write_text
 from ..progress import LOGGER
+from ..verify.plan_checks import TOLERANCES
 from .jobs import _ROBOTS, JobOutcome, SweepRow, run_job_collecting
 from .replay import ReplayRow
 from .spec import Job, SweepSpec
@@ -70,14 +72,46 @@ def _row_cells(row: Row) -> list[str]:
     ]
 
 
-def _parse_row(cells: Sequence[str], job: Job, kind: type[Row]) -> Row:
+def _parse_row(cells: Sequence[str], job: Job, kind: type[Row], where: str) -> Row:
+    """One row of a results file read back, each cell as the runner writes it.
+
+    Raises:
+        ScenarioError: a number that is not one (or not finite), a status the rows never
+            have, or a planned row whose attitude error no plan has (the file was edited).
+    """
     values: dict[str, Any] = {}
     for f, text in zip(fields(kind)[2:], cells, strict=True):
         if f.name in ("status", "message", "objective"):
             values[f.name] = text
-        else:
+            continue
+        try:
             values[f.name] = float(text) if text else None
-    return kind(index=job.index, values=job.values, **values)
+        except ValueError:
+            values[f.name] = math.nan
+        if values[f.name] is not None and not math.isfinite(values[f.name]):
+            raise ScenarioError(f"{where}: {f.name} {text!r} is not a finite number{_EDITED}")
+    row = kind(index=job.index, values=job.values, **values)
+    if row.status not in kind.statuses:
+        raise ScenarioError(
+            f"{where}: status {row.status!r} is none of {', '.join(kind.statuses)}{_EDITED}"
+        )
+    error = row.attitude_error_rad
+    if row.status == "planned" and (error is None or error > PLANNED_ATTITUDE_RAD):
+        raise ScenarioError(
+            f"{where}: a planned row whose attitude error {_text_of(error)} rad exceeds the "
+            f"{PLANNED_ATTITUDE_RAD:g} rad every plan keeps{_EDITED}"
+        )
+    return row
+
+
+#: The largest attitude error (rad) of a planned row: what verification holds a plan to.
+PLANNED_ATTITUDE_RAD = TOLERANCES["attitude_independent_rad"]
+_EDITED = " (an edited file?); choose another output file or delete it"
+
+
+def _text_of(value: float | None) -> str:
+    """A row's number as the file has it, or "none"."""
+    return "none" if value is None else repr(value)
 
 
 def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, Row]:
@@ -113,7 +147,8 @@ def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, Row]:
                 f"{path} line {number} has other axis values than job {job.index}; choose "
                 "another output file or delete it"
             )
-        rows[job.index] = _parse_row(cells[1 + n_axes :], job, row_class(spec))
+        where = f"{path} line {number}"
+        rows[job.index] = _parse_row(cells[1 + n_axes :], job, row_class(spec), where)
     return rows
 
 
