@@ -188,6 +188,21 @@ def test_error_estimates_bound_the_difference_to_a_tighter_integration(worked_sc
     assert abs(v["replay_attitude"].value - att_error) <= v["replay_attitude"].error_estimate
 
 
+def test_verify_names_the_checks_without_a_verdict(worked_plan, tmp_path, capsys):
+    """One replay step cannot decide (its error estimate spans the tolerance): the plan still
+    passes, as the design has it, but the summary names the undecided checks instead of a
+    bare "passed"; at the default cap no line."""
+    path = worked_plan.save(tmp_path / "p.json")
+    assert main(["verify", str(path), "--replay-steps", "1"]) == 0
+    out = capsys.readouterr().out
+    rows = {line.split()[0]: line.split()[-1] for line in out.splitlines()[2:] if "[" in line}
+    undecided = sorted(name for name, verdict in rows.items() if verdict == "verdict")
+    assert undecided == ["replay_attitude", "replay_joints"]
+    assert "without a verdict (their own error spans the tolerance): replay_attitude, " in out
+    assert main(["verify", str(path)]) == 0
+    assert "without a verdict" not in capsys.readouterr().out
+
+
 def test_verify_rejects_a_replay_cap_below_one(worked_plan, tmp_path, capsys):
     path = worked_plan.save(tmp_path / "p.json")
     assert main(["verify", str(path), "--replay-steps", "0"]) == 2

@@ -65,6 +65,13 @@ def run(args: argparse.Namespace) -> int:
             f"{check.error_estimate:>12.1e}  {check.verdict}"
         )
     print(f"  {'verification':<34}{'passed' if result.passed else 'FAILED':>12}")
+    undecided = [c.name for c in result.checks if c.verdict == "no verdict"]
+    if undecided:  # passed, but not by these: their own error covers the tolerance
+        hint = "; more --replay-steps may decide them" if "replay" in "".join(undecided) else ""
+        print(
+            f"  without a verdict (their own error spans the tolerance): "
+            f"{', '.join(undecided)}{hint}"
+        )
     segments = segment_count(result["replay_joints"].detail)
     if segments:  # the replay from rest could not decide: say what was made instead
         print(
