@@ -340,3 +340,35 @@ def test_a_job_that_spins_a_joint_is_flagged_in_its_row_and_said_once(tmp_path, 
     assert float(rows[-47.0]["largest_excursion_deg"]) == pytest.approx(beyond.max(), abs=1e-4)
     assert float(rows[-47.0]["largest_excursion_deg"]) >= 360.0
     assert float(rows[-30.0]["largest_excursion_deg"]) < 360.0
+
+
+@pytest.mark.parametrize("reply", [b"", b"\xff" * 64])
+def test_a_server_that_is_no_scheduler_is_named_not_waited_on(monkeypatch, reply):
+    """A loopback server that accepts and then says nothing (a web server waiting for its
+    request held the sweep for ever), or answers garbage (read as a 3 EiB message length:
+    MemoryError's traceback). Both refused in a bounded time, naming the address."""
+    pytest.importorskip("distributed")
+    import socket
+    import threading
+
+    from freefloat.sweep import runner
+
+    monkeypatch.setattr(runner, "HANDSHAKE_GRACE", 1.0)
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    held = []
+
+    def serve() -> None:
+        conn, _ = server.accept()
+        held.append(conn)
+        if reply:
+            conn.sendall(reply)
+
+    threading.Thread(target=serve, daemon=True).start()
+    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    with pytest.raises(ff.InputError, match=f"cannot connect to the Dask scheduler '{address}'"):
+        runner.connect(address, timeout=1.0)
+    for conn in held:
+        conn.close()
+    server.close()

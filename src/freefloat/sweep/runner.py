@@ -17,6 +17,7 @@ import math
 import multiprocessing as mp
 import os
 import sys
+import threading
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
@@ -282,10 +283,29 @@ def connect(address: str, timeout: float = 10.0) -> Any:
         raise InputError(
             "--scheduler needs Dask distributed: pip install 'freefloat[cluster]'"
         ) from None
-    try:
-        return Client(address, timeout=timeout)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise InputError(f"cannot connect to the Dask scheduler {address!r}: {exc}") from None
+    outcome: dict[str, Any] = {}
+
+    def attempt() -> None:
+        try:
+            outcome["client"] = Client(address, timeout=timeout)
+        except Exception as exc:  # whatever the far end did (garbage read as a message
+            outcome["error"] = exc  # length gives a MemoryError), it is named below
+
+    # Dask's timeout covers the connection, not its handshake: a server that accepts and then
+    # says nothing (a web server, say) would hold the call for ever
+    thread = threading.Thread(target=attempt, name="freefloat-connect", daemon=True)
+    thread.start()
+    thread.join(timeout + HANDSHAKE_GRACE)
+    if "client" in outcome:
+        return outcome["client"]
+    reason = outcome.get("error") or TimeoutError(
+        f"no Dask handshake within {timeout + HANDSHAKE_GRACE:g} s (is it a Dask scheduler?)"
+    )
+    raise InputError(f"cannot connect to the Dask scheduler {address!r}: {reason}")
+
+
+#: Seconds beyond the connection timeout that the scheduler's handshake may take.
+HANDSHAKE_GRACE = 5.0
 
 
 def sweep(
