@@ -65,7 +65,18 @@ def test_check_names_the_closest_pair_at_the_goal(capsys) -> None:
     assert plan_scenario.safety.margin < pairs[0]
 
 
-@pytest.mark.parametrize("at", ["1,2", "a,b,c,d,e,f", "nan,0,0,0,0,0"])
+@pytest.mark.parametrize(
+    "at",
+    [
+        "1,2",
+        "a,b,c,d,e,f",
+        "nan,0,0,0,0,0",
+        "1_0,0,0,0,0,0",  # float() takes these three
+        "\u0661,0,0,0,0,0",
+        "0,0,0,0,0,0,",
+        "1e300,0,0,0,0,0",
+    ],
+)
 def test_check_refuses_bad_joints_in_one_line(at: str, capsys) -> None:
     assert main(["check", str(UR5), "--at", at]) == 2
     err = capsys.readouterr().err.strip()

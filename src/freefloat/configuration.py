@@ -10,16 +10,23 @@ servicer's URDF into its cache).
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
 
 from .errors import InputError
 from .problem.constraints import Clearance, scenario_constraints
+from .problem.limits import MAX_ANGLE_DEG, MAX_LENGTH_M, check_number
 from .problem.radians_hint import warn_if_radians
 from .problem.scenario import Scenario
 
 __all__ = ["ConfigurationReport", "JointRoom", "check_configuration", "parse_joints"]
+
+#: A plain decimal number in ASCII (no underscores, no other scripts' digits).
+_NUMBER = re.compile(
+    r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|[+-]?(nan|inf)", re.IGNORECASE | re.ASCII
+)
 
 #: Closest pairs a report lists.
 CLOSEST_PAIRS = 5
@@ -82,14 +89,13 @@ def parse_joints(text: str, scenario: Scenario) -> np.ndarray:
     if text == "goal":
         return np.asarray(scenario.goal, dtype=float)
     joints = scenario.robot.joints
-    parts = [p for p in text.replace(" ", "").split(",") if p]
-    try:
-        values = [float(p) for p in parts]
-    except ValueError:
+    parts = text.replace(" ", "").split(",")
+    if not all(_NUMBER.fullmatch(p) for p in parts):  # float() takes 1_0 and other digits
         raise InputError(
             f"--at must be start, goal or {len(joints)} comma-separated numbers "
             f"(deg; m for prismatic joints), got {text!r}"
-        ) from None
+        )
+    values = [float(p) for p in parts]
     if len(values) != len(joints):
         raise InputError(
             f"--at needs {len(joints)} finite values, one per joint "
@@ -98,6 +104,9 @@ def parse_joints(text: str, scenario: Scenario) -> np.ndarray:
     bad = next((j.name for v, j in zip(values, joints, strict=True) if not math.isfinite(v)), None)
     if bad is not None:
         raise InputError(f"--at needs finite values, got {text!r} (joint {bad!r} is not finite)")
+    for value, joint in zip(values, joints, strict=True):
+        high, unit = (MAX_ANGLE_DEG, "deg") if joint.angular else (MAX_LENGTH_M, "m")
+        check_number(value, f"--at joint {joint.name!r}", high, unit)
     warn_if_radians({j.name: v for v, j in zip(values, joints, strict=True) if j.angular}, "--at")
     return np.array(
         [math.radians(v) if j.angular else v for v, j in zip(values, joints, strict=True)]
