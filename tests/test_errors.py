@@ -246,6 +246,15 @@ def test_corrupt_plan_file(tmp_path):
         ff.Plan.load(path)
 
 
+def test_a_plan_file_without_its_format_says_so(tmp_path, worked_plan):
+    data = worked_plan.to_dict()
+    del data["format"]
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ff.PlanFileError, match="plan has no 'format' field; this freefloat reads"):
+        ff.Plan.load(path)
+
+
 def test_plan_file_of_another_version(tmp_path, worked_plan):
     data = worked_plan.to_dict()
     data["format"] = "freefloat.plan/6"

@@ -69,8 +69,9 @@ def plan_fields(data: Any, where: str = "plan", folder: Path | None = None) -> d
         raise PlanFileError(f"{where}: not a plan file (top level is not an object)")
     fmt = data.get("format")
     if fmt not in READABLE_FORMATS:
+        said = "has no 'format' field" if fmt is None else f"format {excerpt(fmt)} is not supported"
         raise PlanFileError(
-            f"{where}: plan format {excerpt(fmt)} is not supported; this freefloat reads "
+            f"{where}: plan {said}; this freefloat reads "
             + " and ".join(repr(f) for f in READABLE_FORMATS)
         )
     check_plan_values(data, where)
