@@ -218,3 +218,22 @@ def test_bad_format_or_rate_is_one_line_and_writes_nothing(plan_file, tmp_path, 
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("freefloat: error: ") and needle in lines[0]
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("duration", [10.0, 7.3, 0.25])
+def test_the_rate_a_refusal_suggests_is_accepted(duration):
+    """``--rate 200000`` over 10 s was told to use "a rate up to 2e+05 Hz": the same rate.
+    The suggestion is now one the export takes, just below the refused one's limit."""
+    import re
+
+    import importlib
+
+    trajectory = importlib.import_module("freefloat.export.trajectory")
+
+    refused = 2.0 * trajectory.MAX_SAMPLES / duration
+    with pytest.raises(ff.InputError) as info:
+        trajectory._check_rate(refused, duration)
+    suggested = float(re.search(r"use a rate up to ([\d.e+]+) Hz", str(info.value)).group(1))
+    assert trajectory._check_rate(suggested, duration) <= trajectory.MAX_SAMPLES
+    with pytest.raises(ff.InputError):
+        trajectory._check_rate(suggested * 1.001, duration)

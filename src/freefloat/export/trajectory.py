@@ -97,9 +97,12 @@ def _check_rate(rate: float, duration: float) -> int:
         raise InputError(f"--rate must be a positive number of Hz, got {rate}")
     count = math.floor(duration * rate * (1 + 1e-12)) + 2
     if count > MAX_SAMPLES:
+        # the largest rate that keeps the count, rounded down to 4 significant figures
+        largest = (MAX_SAMPLES - 2) / (duration * (1 + 1e-12))
+        scale = 10.0 ** (math.floor(math.log10(largest)) - 3)
         raise InputError(
             f"--rate {rate:g} Hz gives {count} samples over {duration:g} s; at most "
-            f"{MAX_SAMPLES} (use a rate up to {MAX_SAMPLES / duration:.4g} Hz)"
+            f"{MAX_SAMPLES} (use a rate up to {math.floor(largest / scale) * scale:.4g} Hz)"
         )
     return count
 
