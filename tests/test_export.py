@@ -224,9 +224,8 @@ def test_bad_format_or_rate_is_one_line_and_writes_nothing(plan_file, tmp_path, 
 def test_the_rate_a_refusal_suggests_is_accepted(duration):
     """``--rate 200000`` over 10 s was told to use "a rate up to 2e+05 Hz": the same rate.
     The suggestion is now one the export takes, just below the refused one's limit."""
-    import re
-
     import importlib
+    import re
 
     trajectory = importlib.import_module("freefloat.export.trajectory")
 
