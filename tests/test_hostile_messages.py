@@ -126,3 +126,10 @@ def test_a_visual_colour_of_three_numbers_is_one_line_naming_it(tmp_path, capfd)
     line = _refused(capfd, "show", path, "--html", tmp_path / "p.html")
     assert "m.urdf: material 'arm' gives '0.9 0.55 0.1'; expected 4 finite numbers" in line
     assert not (tmp_path / "p.html").exists()
+
+
+def test_a_value_just_beyond_its_limit_is_shown_as_given(capfd):
+    """``--max-angle 180.0001`` read "180 deg is outside [-180, 180]": the value as given, and
+    the range of a positive option from 0."""
+    line = _refused(capfd, "bounds", "--max-angle", "180.0001")
+    assert "--max-angle = 180.0001 deg is outside the supported range [0, 180] deg" in line

@@ -88,7 +88,7 @@ def positive(value: float, name: str, high: float, unit: str = "") -> float:
     if isinstance(value, float) and (math.isnan(value) or value <= 0.0):
         units = f" of {unit}" if unit else ""
         raise InputError(f"{name} must be a positive number{units}, got {value:g}")
-    return check_number(value, name, high, unit)
+    return check_number(value, name, high, unit, low=0.0)
 
 
 #: The figure formats ``--plot FILE`` writes, by the file name's suffix.

@@ -101,8 +101,14 @@ class InputLimitError(InputError):
             limit = f"above the supported maximum {high:g}{u}"
         else:
             limit = f"below the supported minimum {low:g}{u}"
-        shown = f"{value:g}" if isinstance(value, float) else excerpt(value)
+        shown = _number(value) if isinstance(value, float) else excerpt(value)
         super().__init__(f"{name} = {shown}{u} is {limit}" + (f"; {why}" if why else ""))
+
+
+def _number(value: float) -> str:
+    """A number shortly (``2e+09``), in full where that would hide it (180.0001, not 180)."""
+    short = f"{value:g}"
+    return short if not math.isfinite(value) or float(short) == value else repr(value)
 
 
 class JointLimitError(FreeFloatError):
