@@ -230,6 +230,10 @@ xyz = [{tip[0]}, {tip[1]}, {tip[2]}]
         ('[[obstacles]]\nname = "a"\nsphere = -0.1\n', "sizes must be finite and > 0 m"),
         ('[[obstacles]]\nname = "a"\n', "give exactly one shape"),
         ("[safety]\nmargin_m = -1.0\n", "margin_m must be >= 0 m"),
+        (
+            "[safety]\nmargin_m = 1e9\n",
+            "margin_m = 1e+09 m is outside the supported range [0, 1000]",
+        ),
         ("[safety]\nspeed = 1.0\n", "unknown key in [safety] 'speed'"),
         ("[payload]\nmass = -3.0\ninertia = [1, 1, 1, 0, 0, 0]\n", "payload mass must be"),
         ("[payload]\nmass = 3.0\ninertia = [1, 1, 3, 0, 0, 0]\n", "triangle inequality"),

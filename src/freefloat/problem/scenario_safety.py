@@ -16,8 +16,8 @@ from ..errors import InputError, ScenarioError, UnknownNameError, excerpt
 from ..robot.collision import Obstacle
 from .constraints.base import Constraint
 from .constraints.registry import constraint_from_record, default_constraints
-from .limits import MAX_LENGTH_M
-from .robot_table import check_keys, number, numbers, triple
+from .limits import MAX_LENGTH_M, check_number
+from .robot_table import check_keys, number, numbers, scenario_errors, triple
 
 __all__ = ["OBSTACLE_KEYS", "SAFETY_KEYS", "Safety", "constraint_tables", "safety_tables"]
 
@@ -51,9 +51,10 @@ def safety_tables(table: Any, obstacles: Any, relative_to: Path | None) -> Safet
     if not isinstance(table, Mapping):
         raise ScenarioError("[safety] must be a table")
     check_keys(table, SAFETY_KEYS, "[safety]")
-    margin = number(table.get("margin_m", 0.01), "[safety] margin_m", MAX_LENGTH_M, "m")
-    if margin < 0.0:
-        raise ScenarioError(f"[safety] margin_m must be >= 0 m, got {margin:g}")
+    given = table.get("margin_m", 0.01)
+    if isinstance(given, (int, float)) and not isinstance(given, bool) and given < 0.0:
+        raise ScenarioError(f"[safety] margin_m must be >= 0 m, got {given:g}")
+    margin = scenario_errors(check_number, given, "[safety] margin_m", MAX_LENGTH_M, "m", 0.0)
     srdf = None
     if "srdf" in table:
         if not isinstance(table["srdf"], str):
