@@ -361,6 +361,23 @@ def test_revolute_joint_without_limit_is_one_clean_line(tmp_path, capfd):
     assert "joint 'q1' (revolute) has no <limit>; it needs <limit lower=... upper=..." in err
 
 
+@pytest.mark.parametrize("attr", ["effort", "velocity"])
+def test_a_negative_limit_is_refused_by_name(tmp_path, capfd, attr):
+    """Pinocchio's parser said only that it could not read the file."""
+    limit = f'<limit lower="-3" upper="3" effort="10" velocity="2" {attr}="-1"/>'.replace(
+        f'{attr}="{"10" if attr == "effort" else "2"}" ', ""
+    )
+    urdf = _planar_variant(
+        tmp_path,
+        '<joint name="q1" type="continuous">',
+        '<joint name="q1" type="revolute">' + limit,
+    )
+    code = main(["plan", str(_scenario(tmp_path, scenario_text(robot=str(urdf))))])
+    _, err = capfd.readouterr()
+    assert code == 2 and err.count("\n") == 1
+    assert f"joint 'q1' <limit> {attr}='-1' is negative; a limit is a magnitude" in err
+
+
 def test_zero_axis_is_refused_by_name_without_warnings(tmp_path):
     import subprocess
     import sys
