@@ -329,13 +329,18 @@ def test_goal_with_joints_and_cartesian_position(tmp_path):
     assert "[goal] gives both joints and end_effector_xyz; give one" in msg
 
 
-def test_zero_quaternion_in_a_scenario(tmp_path):
+@pytest.mark.parametrize(
+    ("quaternion", "norm"),
+    [("[0.0, 0.0, 0.0, 0.0]", "0"), ("[1e-300, 0.0, 0.0, 1e-300]", "1.41e-300")],
+)
+def test_zero_quaternion_in_a_scenario(tmp_path, quaternion, norm):
+    """A tiny quaternion was said to be "non-zero"-less; its norm is named."""
     text = scenario_text().replace(
-        "base_zyx_deg = [0.0, 0.0, 0.0]", "base_quaternion_xyzw = [0.0, 0.0, 0.0, 0.0]"
+        "base_zyx_deg = [0.0, 0.0, 0.0]", f"base_quaternion_xyzw = {quaternion}"
     )
     assert "base_quaternion_xyzw" in text
     msg = _scenario_error(tmp_path, text, ff.ScenarioError)
-    assert "[goal] base_quaternion_xyzw must be non-zero" in msg
+    assert f"[goal] base_quaternion_xyzw has norm {norm}, too near zero to be an attitude" in msg
 
 
 def test_cli_rejects_too_few_samples(capsys, tmp_path):

@@ -181,7 +181,10 @@ def _attitude(table: Mapping[str, Any], name: str) -> np.ndarray:
     if "base_quaternion_xyzw" in table:
         quat = numbers(table["base_quaternion_xyzw"], 4, f"[{name}] base_quaternion_xyzw")
         if np.linalg.norm(quat) < 1e-9:
-            raise ScenarioError(f"[{name}] base_quaternion_xyzw must be non-zero")
+            raise ScenarioError(
+                f"[{name}] base_quaternion_xyzw has norm {np.linalg.norm(quat):.3g}, too near "
+                "zero to be an attitude; give a unit quaternion [x, y, z, w]"
+            )
         warn_if_odd_quaternion(quat, f"[{name}]")
         return quat / np.linalg.norm(quat)
     zyx = numbers(
