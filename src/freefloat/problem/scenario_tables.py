@@ -180,9 +180,9 @@ def _attitude(table: Mapping[str, Any], name: str) -> np.ndarray:
         raise ScenarioError(f"[{name}] gives both base_zyx_deg and base_quaternion_xyzw; give one")
     if "base_quaternion_xyzw" in table:
         quat = numbers(table["base_quaternion_xyzw"], 4, f"[{name}] base_quaternion_xyzw")
-        if np.linalg.norm(quat) < 1e-9:
+        if math.hypot(*quat) < 1e-9:  # hypot: 1e-300 squared would underflow to 0
             raise ScenarioError(
-                f"[{name}] base_quaternion_xyzw has norm {np.linalg.norm(quat):.3g}, too near "
+                f"[{name}] base_quaternion_xyzw has norm {math.hypot(*quat):.3g}, too near "
                 "zero to be an attitude; give a unit quaternion [x, y, z, w]"
             )
         warn_if_odd_quaternion(quat, f"[{name}]")
