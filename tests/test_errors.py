@@ -255,6 +255,19 @@ def test_a_plan_file_without_its_format_says_so(tmp_path, worked_plan):
         ff.Plan.load(path)
 
 
+def test_a_plan_whose_end_effector_is_not_its_first_is_refused(tmp_path, worked_plan):
+    """A plan writes its main end effector first in the list; an edited file that names
+    another one as the main loaded and verified."""
+    data = worked_plan.to_dict()
+    data["robot"]["end_effector"] = "link2"
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(
+        ff.PlanFileError, match=r"'robot.end_effector' \('link2'\) is not the first"
+    ):
+        ff.Plan.load(path)
+
+
 def test_plan_file_of_another_version(tmp_path, worked_plan):
     data = worked_plan.to_dict()
     data["format"] = "freefloat.plan/6"

@@ -153,6 +153,11 @@ def _robot_ref(data: Mapping[str, Any], fmt: str, folder: Path | None) -> RobotR
         raise _CopyError(
             f"plan field 'robot.urdf_text' is missing or empty; {fmt} files carry their URDF"
         )
+    if ref.end_effectors and ref.end_effectors[0] != ref.end_effector:
+        raise _CopyError(
+            f"plan field 'robot.end_effector' ({excerpt(ref.end_effector)}) is not the first of "
+            f"'robot.end_effectors' ({excerpt(ref.end_effectors[0])}), as a plan writes them"
+        )
     if ref.urdf_text and sha256_hex(ref.urdf_text) != ref.urdf_sha256:
         raise _CopyError(
             f"plan field 'robot.urdf_sha256' ({excerpt(ref.urdf_sha256, 20)}) is not the SHA-256 "
