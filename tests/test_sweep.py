@@ -372,3 +372,11 @@ def test_a_server_that_is_no_scheduler_is_named_not_waited_on(monkeypatch, reply
     for conn in held:
         conn.close()
     server.close()
+
+
+def test_a_sweep_whose_scenario_is_itself_says_so(tmp_path):
+    """It read "unknown sweep key 'duration'", the sweep file parsed as its own scenario."""
+    path = tmp_path / "self.toml"
+    path.write_text('scenario = "self.toml"\n[[axis]]\nkey = "duration"\nvalues = [1.0]\n')
+    with pytest.raises(ff.ScenarioError, match="the sweep's scenario 'self.toml' is the sweep"):
+        SweepSpec.from_toml(path)

@@ -175,6 +175,11 @@ class SweepSpec:
             scenario_path, base, urdf = plan_source(name, folder)
         else:
             scenario_path = _scenario_path(name, folder)
+            if source is not None and scenario_path == Path(source).resolve():
+                raise ScenarioError(
+                    f"the sweep's scenario {name!r} is the sweep file itself; name the "
+                    "scenario file the axes vary"
+                )
             base = read_toml(scenario_path, "scenario")
             urdf = None
         samples = data.get("samples", 201)
