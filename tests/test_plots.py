@@ -150,3 +150,29 @@ def test_joint_limits_are_drawn_from_the_urdf():
         if line.get_label() == "_limit"
     ]
     assert max(rates) == pytest.approx(np.degrees(max(j.velocity_limit for j in robot.joints)))
+
+
+def test_names_the_font_lacks_give_one_warning_line(tmp_path, capfd):
+    """Joints named in Chinese: matplotlib warned once per missing glyph, with its source
+    paths, on stderr; now one freefloat line, and the figures are written."""
+    from conftest import ROOT
+
+    names = {"q1": "关节一", "q2": "关节二"}
+    urdf = (ROOT / "robots" / "planar_2dof.urdf").read_text(encoding="utf-8")
+    scenario = (ROOT / "robots" / "scenarios" / "worked_example.toml").read_text()
+    for old, new in names.items():
+        urdf = urdf.replace(f'"{old}"', f'"{new}"')
+        scenario = scenario.replace(f"{old} =", f'"{new}" =')
+    (tmp_path / "cjk.urdf").write_text(urdf, encoding="utf-8")
+    lines = ['robot = "cjk.urdf"' if s.startswith("robot =") else s for s in scenario.splitlines()]
+    (tmp_path / "cjk.toml").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    plan = tmp_path / "cjk.json"
+    assert main(["plan", str(tmp_path / "cjk.toml"), "-o", str(plan)]) == 0
+    capfd.readouterr()
+    assert main(["plot", str(plan), "-o", str(tmp_path / "figs")]) == 0
+    err = capfd.readouterr().err.strip().splitlines()
+    assert err == [
+        "freefloat: warning: some names use characters the plots' font lacks (joint names in "
+        "another script, say); they are drawn as boxes"
+    ]
+    assert len(list((tmp_path / "figs").glob("*.png"))) == len(TOPICS) + 1

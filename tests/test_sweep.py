@@ -378,5 +378,5 @@ def test_a_sweep_whose_scenario_is_itself_says_so(tmp_path):
     """It read "unknown sweep key 'duration'", the sweep file parsed as its own scenario."""
     path = tmp_path / "self.toml"
     path.write_text('scenario = "self.toml"\n[[axis]]\nkey = "duration"\nvalues = [1.0]\n')
-    with pytest.raises(ff.ScenarioError, match="the sweep's scenario 'self.toml' is the sweep"):
+    with pytest.raises(ff.ScenarioError, match=r"the sweep's scenario 'self\.toml' is the sweep"):
         SweepSpec.from_toml(path)

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import logging
 import math
+import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -303,13 +304,23 @@ def save_figures(plan: Plan, directory: str | Path, svg: bool = False) -> list[P
     folder = Path(directory).expanduser().resolve()
     folder.mkdir(parents=True, exist_ok=True)
     written = []
-    for name, fig in figures(plan).items():
-        dpi = 80 if name == "overview" else 110
-        for ext in ("png", "svg") if svg else ("png",):
+    with warnings.catch_warnings(record=True) as caught:  # matplotlib's, one per glyph
+        warnings.filterwarnings("always", message="Glyph .* missing from", category=UserWarning)
+        for name, fig in figures(plan).items():
+            dpi = 80 if name == "overview" else 110
+            for ext in ("png", "svg") if svg else ("png",):
 
-            def save(tmp: Path, fig: Any = fig, ext: str = ext, dpi: int = dpi) -> None:
-                fig.savefig(tmp, dpi=dpi, format=ext)
+                def save(tmp: Path, fig: Any = fig, ext: str = ext, dpi: int = dpi) -> None:
+                    fig.savefig(tmp, dpi=dpi, format=ext)
 
-            written.append(atomic_write(folder / f"{name}.{ext}", save, suffix=f".{ext}"))
-        plt.close(fig)
+                written.append(atomic_write(folder / f"{name}.{ext}", save, suffix=f".{ext}"))
+            plt.close(fig)
+    if any("missing from" in str(w.message) for w in caught):
+        LOGGER.warning(
+            "some names use characters the plots' font lacks (joint names in another script, "
+            "say); they are drawn as boxes"
+        )
+    for w in caught:  # anything else, as it was
+        if "missing from" not in str(w.message):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return written
