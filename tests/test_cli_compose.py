@@ -119,6 +119,11 @@ _LOOP = (
     [
         ("", _LOOP, "closed loop: link 'l1' is the child of two joints"),
         ('<mimic joint="j1" multiplier="2"/>', "", "arm joint 'j3' mimics 'j1'"),
+        (  # back to the arm's root: no link is the root
+            "",
+            _LOOP.replace('child link="l1"', 'child link="base"'),
+            "closed loop: every link has a parent joint",
+        ),
     ],
 )
 def test_an_arm_composed_as_no_urdf_loads_it_is_refused(mimic, extra, message, tmp_path, capsys):

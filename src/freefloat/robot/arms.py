@@ -172,6 +172,11 @@ def arm_part(arm: ArmSpec) -> ArmPart:
         collisions = [_absolute_mesh(c, source.parent) for c in link.collisions]
         links.append(replace(link, name=prefix + link.name, visuals=visuals, collisions=collisions))
     roots = [link.name for link in links if link.name not in {j.child for j in joints}]
+    if not roots:
+        raise ModelError(
+            f"arm URDF {source}: closed loop: every link has a parent joint; a tree needs "
+            "exactly one root link"
+        )
     if len(roots) != 1:
         raise ModelError(f"arm URDF {source} must have one root link, found {roots}")
     mount = yourdfpy.Joint(
