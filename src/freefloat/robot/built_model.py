@@ -45,10 +45,13 @@ def check_built_model(model: pin.Model, checked: CheckedUrdf) -> None:
         inertia = model.inertias[index]
         body = f"{model.names[index]!r}" if index > 1 else f"base {checked.root_link!r}"
         if not inertia.mass > 0.0:
-            raise ModelError(
-                f"the body moved by joint {body} has no mass; every moving body needs a "
-                "positive <mass>"
+            what = (
+                f"the spacecraft (the root link {checked.root_link!r}, with the links fixed to "
+                "it)"
+                if index == 1
+                else f"the body moved by joint {body}"
             )
+            raise ModelError(f"{what} has no mass; every moving body needs a positive <mass>")
         eigenvalues = np.linalg.eigvalsh(inertia.inertia)
         lowest = float(eigenvalues.min())
         floor = -1e-12 * float(np.abs(eigenvalues).max())
