@@ -201,6 +201,18 @@ def test_an_edited_results_file_is_refused_on_resume(tmp_path):
         assert out.read_text() == edited
 
 
+def test_a_results_file_saved_with_a_byte_order_mark_resumes(tmp_path):
+    """A spreadsheet saved the file with a BOM: its header read as another sweep's."""
+    path = _sweep_file(tmp_path, '[[axis]]\nkey = "goal.base_zyx_deg.0"\nvalues = [0.0, 10.0]\n')
+    out = tmp_path / "two.csv"
+    ff.sweep(path, workers=1, output=out, progress=False)
+    whole = out.read_text()
+    out.write_text("\ufeff" + whole, encoding="utf-8")
+    ran = []
+    ff.sweep(path, workers=1, output=out, progress=False, on_row=ran.append)
+    assert ran == [] and out.read_text() == whole  # nothing run again; written without it
+
+
 def test_output_of_another_sweep_is_refused(tmp_path):
     out = tmp_path / "other.csv"
     out.write_text("index,duration,status\n")

@@ -124,7 +124,7 @@ def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, Row]:
     path = Path(output)
     if not path.is_file():
         return {}
-    text = path.read_text(encoding="utf-8")
+    text = path.read_text(encoding="utf-8-sig")  # a spreadsheet may have added a BOM
     if text and not text.endswith("\n"):  # a torn last line of an interrupted run
         text = text[: text.rfind("\n") + 1]
     lines = list(csv.reader(io.StringIO(text)))
