@@ -375,7 +375,7 @@ def test_a_negative_limit_is_refused_by_name(tmp_path, capfd, attr):
     code = main(["plan", str(_scenario(tmp_path, scenario_text(robot=str(urdf))))])
     _, err = capfd.readouterr()
     assert code == 2 and err.count("\n") == 1
-    assert f"joint 'q1' <limit> {attr}='-1' is negative; a limit is a magnitude" in err
+    assert f"joint 'q1' <limit> {attr}='-1' is negative; a limit is a magnitude (>= 0" in err
 
 
 def test_zero_axis_is_refused_by_name_without_warnings(tmp_path):

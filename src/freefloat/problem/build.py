@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -136,46 +137,45 @@ def build_problem(
         bounds=bounds,
         yaw_change=yaw_change,
     )
-    if planar and robot.n == 1:  # the one change every path makes (method.md section 6)
-        problem.bounds = _one_joint_bounds(problem)
-        if check_bounds:
-            problem.yaw_change = _one_joint_yaw(problem)
     if family.n_free < problem.n_equations:
         raise InputError(
             f"{family.n_free} free path coefficient(s) for {problem.n_equations} attitude "
             f"equation(s); add at least {problem.n_equations - family.n_free} more with "
             "[path] extra"
         )
-    return problem.with_steps(problem.steps_for())
+    problem = problem.with_steps(problem.steps_for())
+    if planar and robot.n == 1:  # the one change every path makes (method.md section 6)
+        problem = _one_joint(problem, check_bounds)
+    return problem
 
 
-#: How far (rad) a one-joint planar robot's goal may lie from the one attitude it reaches.
+#: How far (rad) a one-joint planar robot's goal may lie from the one attitude it reaches,
+#: at the least (more when the integration's own error estimate is larger).
 ONE_JOINT_TOLERANCE = 1e-9
 
 
-def _one_joint_bounds(problem: Problem) -> PlanarBounds:
-    """A one-joint planar robot's bounds: its gain's mean over the motion (rad per rad or m).
+def _one_joint(problem: Problem, check_bounds: bool) -> Problem:
+    """A one-joint planar problem with its bounds the one change (rad) every path makes.
 
     With one joint the base's attitude obeys an ODE in that joint's value alone (a path that
-    goes back and forth retraces it), so every path makes the quintic path's yaw change, and
-    the interval of :meth:`PlanarBounds.interval` is that one change.
-    """
-    change = problem.yaw_change_of(np.zeros(problem.n_free))
-    travel = float(problem.family.goal[0] - problem.family.start[0])
-    gain = np.array([change / travel if travel != 0.0 else 0.0])
-    return PlanarBounds(gain, gain)
-
-
-def _one_joint_yaw(problem: Problem) -> float:
-    """The goal's yaw change (rad) of a one-joint planar robot: the one every path makes.
+    goes back and forth retraces it), so every path makes the quintic path's yaw change: on
+    the problem's own grid (chosen for it), the bounds' gain is its mean over the travel. With
+    ``check_bounds`` the goal is held to it, within :data:`ONE_JOINT_TOLERANCE` or the
+    integration's own error estimate if larger, and its branch taken. A new problem (residuals
+    remembered for the old goal's branch are not carried over).
 
     Raises:
-        InfeasibleError: the goal asks another (beyond :data:`ONE_JOINT_TOLERANCE`).
+        InfeasibleError: the goal asks another change.
     """
-    assert problem.yaw_change is not None and problem.bounds_interval is not None
-    exact = problem.bounds_interval[0]
+    beta = np.zeros(problem.n_free)
+    exact = problem.yaw_change_of(beta)
+    travel = float(problem.family.goal[0] - problem.family.start[0])
+    gain = np.array([exact / travel if travel != 0.0 else 0.0])
+    if not check_bounds or problem.yaw_change is None:
+        return replace(problem, bounds=PlanarBounds(gain, gain))
+    tolerance = max(ONE_JOINT_TOLERANCE, problem.integration_error(beta))
     off = wrap_angle(problem.yaw_change - exact)
-    if abs(off) > ONE_JOINT_TOLERANCE:
+    if abs(off) > tolerance:
         reached = quat_multiply(problem.start_quaternion, quat_exp(exact * problem.axis))
         raise InfeasibleError(
             math.degrees(problem.yaw_change),
@@ -185,10 +185,10 @@ def _one_joint_yaw(problem: Problem) -> float:
                 f"these joints: by {math.degrees(exact):.9g} deg about {_axis_name(problem.axis)}"
                 f", not the {math.degrees(wrap_angle(problem.yaw_change)):.9g} deg asked; its "
                 f"goal attitude can only be base_quaternion_xyzw = "
-                f"{[float(v) for v in reached]} (to {ONE_JOINT_TOLERANCE:g} rad)"
+                f"{[float(v) for v in reached]} (to {tolerance:.2g} rad)"
             ),
         )
-    return exact + off
+    return replace(problem, bounds=PlanarBounds(gain, gain), yaw_change=exact + off)
 
 
 def _checked_inputs(

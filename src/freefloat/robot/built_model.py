@@ -46,8 +46,7 @@ def check_built_model(model: pin.Model, checked: CheckedUrdf) -> None:
         body = f"{model.names[index]!r}" if index > 1 else f"base {checked.root_link!r}"
         if not inertia.mass > 0.0:
             what = (
-                f"the spacecraft (the root link {checked.root_link!r}, with the links fixed to "
-                "it)"
+                f"the spacecraft (the root link {checked.root_link!r}, with the links fixed to it)"
                 if index == 1
                 else f"the body moved by joint {body}"
             )

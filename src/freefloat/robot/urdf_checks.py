@@ -157,12 +157,10 @@ def _check_movable_joint(joint: ET.Element, name: str, kind: str) -> None:
             f"effort=... velocity=.../> ({_LIMIT_UNITS[kind]}){hint}"
         )
     if limit is not None:
-        for attr in ("effort", "velocity"):
+        for attr in ("effort", "velocity"):  # negative: Pinocchio's parser says only "cannot"
             if _float_attr(limit, attr, f"joint {name!r} <limit>", high=MAX_LIMIT) < 0.0:
-                raise ModelError(  # Pinocchio's parser says only that it cannot read the file
-                    f"joint {name!r} <limit> {attr}={excerpt(limit.get(attr))} is negative; a "
-                    f"limit is a magnitude (>= 0; 0 means none is stated)"
-                )
+                what = f"joint {name!r} <limit> {attr}={excerpt(limit.get(attr))}"
+                raise ModelError(f"{what} is negative; a limit is a magnitude (>= 0; 0: none)")
         for attr in ("lower", "upper"):  # +-1e16 stands for "none" in some files
             _float_attr(limit, attr, f"joint {name!r} <limit>", 0.0, MAX_LIMIT)
     axis = joint.find("axis")
