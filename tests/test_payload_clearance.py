@@ -99,3 +99,45 @@ def test_a_goal_that_puts_the_payload_into_the_forearm_is_refused(holder, tmp_pa
     err = capsys.readouterr().err
     assert "upper_0 / captured_payload_0" in err and "\n" not in err.strip()
     assert not out.exists()
+
+
+#: The holder with a two-joint finger whose tip sphere sits in the payload's box at a2 = 90
+#: deg (a grasp), hung below the lower link.
+FINGERED = URDF.replace(
+    "</robot>",
+    """  <joint name="f1" type="revolute"><parent link="lower"/><child link="knuckle"/>
+    <origin xyz="-0.1 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="5" velocity="2"/></joint>
+  <link name="knuckle"><inertial><mass value="0.2"/>
+    <inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="f2" type="revolute"><parent link="knuckle"/><child link="tip"/>
+    <origin xyz="-0.1 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="5" velocity="2"/></joint>
+  <link name="tip"><inertial><mass value="0.1"/>
+    <inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="-0.05 0 0"/><geometry><sphere radius="0.02"/></geometry>
+    </collision></link>
+</robot>""",
+)
+
+
+def test_a_payload_touches_what_its_holder_carries_at_any_depth(tmp_path) -> None:
+    """The fingertip two joints below the holder lies inside the payload's box (by
+    construction: its centre 0.25 m behind the lower link's joint, the box's centre): a grasp,
+    spared; the payload stays checked against the upper link. The rule spared only the
+    holder's direct children."""
+    import freefloat as ff
+    from freefloat.robot.geometry import checked_pairs, load_collision_geometry
+
+    (tmp_path / "holder.urdf").write_text(FINGERED)
+    text = SCENARIO.format(goal=90.0).replace(
+        "joints = { a1 = 0.0, a2 = 90.0 }", "joints = { a1 = 0.0, a2 = 90.0, f1 = 0.0, f2 = 0.0 }"
+    )
+    text = 'end_effector = "lower"\n' + text
+    (tmp_path / "f.toml").write_text(text)
+    robot = ff.Scenario.from_toml(tmp_path / "f.toml").robot
+    geometry = load_collision_geometry(robot)
+    names = [o.name for o in geometry.geometryObjects]
+    pairs = {frozenset((names[a], names[b])) for a, b in checked_pairs(robot, geometry, None)}
+    assert frozenset(("upper_0", "captured_payload_0")) in pairs
+    assert frozenset(("tip_0", "captured_payload_0")) not in pairs

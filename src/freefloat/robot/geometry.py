@@ -310,10 +310,23 @@ def _pairs_of(
                 continue
             if (parent[ja] == jb and not payload[a]) or (parent[jb] == ja and not payload[b]):
                 continue  # parent and child touch by design
+            if (payload[a] and _carries(parent, ja, jb)) or (
+                payload[b] and _carries(parent, jb, ja)
+            ):
+                continue  # a grasped payload touches what its holder carries (fingertips)
             geometry.addCollisionPair(pin.CollisionPair(a, b))
     if srdf is not None:
         pin.removeCollisionPairs(model, geometry, str(srdf))
     return [(int(p.first), int(p.second)) for p in geometry.collisionPairs]
+
+
+def _carries(parent: list[int], holder: int, joint: int) -> bool:
+    """Whether ``joint``'s body hangs below ``holder``'s at any depth (Pinocchio indices)."""
+    while joint > 0:
+        joint = parent[joint]
+        if joint == holder:
+            return True
+    return False
 
 
 #: Checked pairs per set of objects, kinematic tree and SRDF file (see checked_pairs).
