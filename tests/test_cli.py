@@ -232,6 +232,7 @@ def test_api_round_trip_matches_cli(tmp_path, worked_plan):
         (["export", "{plan}", "--format", "csv", "-o", "{plan}"], "is the file this command reads"),
         (["correct", "{plan}", "--base-zyx-deg", "1", "0", "0", "-o", "{plan}"], "reads"),
         (["plan", "{scenario}", "-o", "{scenario}"], "is the file this command reads"),
+        (["plan", "{missing}", "-o", "{plan}"], "scenario file not found"),  # not the output
     ],
 )
 def test_an_empty_output_name_or_one_that_is_the_input_is_refused(
@@ -243,7 +244,7 @@ def test_an_empty_output_name_or_one_that_is_the_input_is_refused(
     scenario = tmp_path / "s.toml"
     scenario.write_text(scenario_text())
     kept = {p: p.read_bytes() for p in (plan, scenario)}
-    filled = [a.format(plan=plan, scenario=scenario) for a in argv]
+    filled = [a.format(plan=plan, scenario=scenario, missing=tmp_path / "no.toml") for a in argv]
     assert main(filled) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and option in err

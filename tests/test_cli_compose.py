@@ -150,3 +150,14 @@ def test_lock_repeated_locks_every_joint_named(tmp_path, capsys):
     kinds = {j.get("name"): j.get("type") for j in ET.parse(out).getroot().iter("joint")}
     assert kinds["shoulder_pan_joint"] == kinds["elbow_joint"] == "fixed"
     assert kinds["shoulder_lift_joint"] == "revolute"
+
+
+def test_compose_will_not_write_over_its_arm(tmp_path, capsys):
+    """``compose --arm a.urdf -o a.urdf`` would replace the arm it reads."""
+    arm = tmp_path / "arm.urdf"
+    arm.write_text(_ARM.format(mimic="", extra=""))
+    kept = arm.read_bytes()
+    argv = ["compose", "--arm", str(arm), "--base-mass", "500", "--base-size", "1", "1", "1"]
+    assert main([*argv, "--mount", "0.5", "0", "0", "-o", str(arm)]) == 2
+    assert "is the file this command reads" in capsys.readouterr().err
+    assert arm.read_bytes() == kept

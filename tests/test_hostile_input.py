@@ -201,7 +201,12 @@ def test_an_output_link_into_a_missing_folder_makes_no_folder(tmp_path, capsys):
     link = tmp_path / "out.json"
     link.symlink_to(tmp_path / "missing" / "deeper" / "x.json")
     line = _refused(capsys, "plan", "-o", str(link))
-    assert "is a symbolic link into a folder that does not exist" in line
+    assert "goes through a symbolic link to nothing" in line
+    assert not (tmp_path / "missing").exists()
+    folder = tmp_path / "linked"  # a folder of the path, not its last part
+    folder.symlink_to(tmp_path / "missing" / "deeper")
+    line = _refused(capsys, "plan", "-o", str(folder / "out.json"))
+    assert "goes through a symbolic link to nothing" in line
     assert not (tmp_path / "missing").exists()
 
 

@@ -121,31 +121,44 @@ def test_a_clearance_checked_plan_verifies_and_exports_when_its_urdf_is_gone(tmp
     assert root_link(str(urdf), doc["robot"]["urdf_text"]) == scenario.robot.base_link
 
 
-def test_a_plan_is_held_to_its_urdf_limits_whatever_its_records(tmp_path, capsys):
-    """The UR5 servicer's elbow given an upper limit below its path's peak (sampled densely
-    here) but above its start and goal, in the plan's URDF copy; the file's ``constraints``
-    list emptied and its limit rows dropped. Verify still holds the plan to the URDF's limits
-    and refuses it."""
-    plan = ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml"))
-    elbow = plan.robot.joints.index("elbow_joint")
-    t = np.linspace(0.0, plan.duration, 20001)
-    q = plan.joint_positions(t)[:, elbow]
-    upper = float(0.5 * (q.max() + max(q[0], q[-1])))
-    assert q.max() > upper + 1e-3 and upper > max(q[0], q[-1]) + 1e-3
+def _elbow_limited(plan, tmp_path, upper, drop_rows):
+    """The plan's file with the elbow's URDF upper limit set (rad), its ``constraints`` list
+    emptied and, with ``drop_rows``, its joint-limit checks removed."""
     doc = json.loads(plan.to_json())
     text = doc["robot"]["urdf_text"]
-    start = text.index('<joint name="elbow_joint"')
-    limit = text.index("<limit", start)
+    limit = text.index("<limit", text.index('<joint name="elbow_joint"'))
     field = text.index('upper="', limit) + len('upper="')
     text = text[:field] + repr(upper) + text[text.index('"', field) :]
     doc["robot"]["urdf_text"] = text
     doc["robot"]["urdf_sha256"] = hashlib.sha256(text.encode()).hexdigest()
     doc["robot"]["urdf"] = str(tmp_path / "gone.urdf")
     doc["constraints"] = []
-    doc["verification"]["checks"] = [
-        c for c in doc["verification"]["checks"] if not c["name"].startswith("joint_")
-    ]
+    if drop_rows:
+        checks = doc["verification"]["checks"]
+        doc["verification"]["checks"] = [c for c in checks if not c["name"].startswith("joint_")]
     path = tmp_path / "emptied.json"
     path.write_text(json.dumps(doc))
-    assert main(["verify", str(path)]) == 2
-    assert "joint_position_limits" in capsys.readouterr().err
+    return path
+
+
+def test_a_plan_is_held_to_its_urdf_limits_whatever_its_records(tmp_path, capsys):
+    """The file's ``constraints`` list emptied: verify still recomputes the URDF's limit checks
+    (a file that keeps its rows and its limits verifies; the old code refused it for the
+    rows it no longer recomputed), so a file must list them (one with its rows removed is
+    refused, which the old code passed), and an elbow limit lowered below the path's peak
+    (sampled densely here) but above its start and goal is a value the recomputation
+    disagrees with."""
+    plan = ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml"))
+    elbow = plan.robot.joints.index("elbow_joint")
+    t = np.linspace(0.0, plan.duration, 20001)
+    q = plan.joint_positions(t)[:, elbow]
+    lowered = float(0.5 * (q.max() + max(q[0], q[-1])))
+    assert q.max() > lowered + 1e-3 and lowered > max(q[0], q[-1]) + 1e-3
+    intact = float(ff.load_robot(ROOT / "robots" / "ur5_servicer.urdf").joints[elbow].upper)
+    assert main(["verify", str(_elbow_limited(plan, tmp_path, intact, False))]) == 0
+    capsys.readouterr()
+    assert main(["verify", str(_elbow_limited(plan, tmp_path, lowered, True))]) == 2
+    assert "the recomputation momentum" in capsys.readouterr().err  # the lists differ
+    assert main(["verify", str(_elbow_limited(plan, tmp_path, lowered, False))]) == 2
+    err = capsys.readouterr().err
+    assert "joint_position_limits" in err and "disagrees with the recomputation" in err

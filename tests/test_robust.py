@@ -1,6 +1,6 @@
 """Robustness to wrong mass properties: sensitivity, perturbed replays, correction.
 
-Truths used: central finite differences of an independent integrator (RK4 replays in models
+Truths used: central finite differences of an independent integrator (RK5 replays in models
 whose URDF was changed and re-parsed by Pinocchio) for the exact sensitivity, brute-force
 vertex enumeration for the worst case, the Monte Carlo replays for the first-order spread, and
 a replay in the perturbed model for the correction.
@@ -157,7 +157,7 @@ def test_a_payload_has_its_own_row_matching_replays_of_the_changed_urdf(
     held, link, row, key, column
 ):
     """The payload's parameters in its own frame (turned against its body's), by finite
-    differences of RK4 replays of the URDF with the payload's values changed and parsed again
+    differences of RK5 replays of the URDF with the payload's values changed and parsed again
     by Pinocchio (which merges it into the hand's body); the holder's row without it."""
     plan, _, robot = held
     sens = attitude_sensitivity(plan, robot)
@@ -202,6 +202,8 @@ def test_a_format_4_record_counts_the_payload_within_its_holder_and_still_verifi
     assert abs(apart.rms - within.rms) > 1e-3 * within.rms  # the two models differ
     data = plan.to_dict()
     data["format"] = "freefloat.plan/4"
+    with pytest.raises(ff.InputError, match="states one uncertainty for every body"):
+        with_robustness(plan, robot, Uncertainty(payload=Uncertainty(mass_fraction=0.2)))
     for figures, code in ((within, 0), (apart, 2)):
         data["robustness"]["rms_rad"] = figures.rms
         data["robustness"]["worst_rad"] = figures.worst
@@ -305,7 +307,7 @@ def test_correction_reaches_the_goal_and_shrinks_a_five_percent_error(worked):
     assert before.error_rad > 1e-3
     corr = correcting_plan(plan, robot, before.quaternion)
     assert corr.request.start_joints == corr.request.goal_joints == plan.request.goal_joints
-    nominal = replay_attitude(corr, robot)  # RK4, not the planner's Magnus scheme
+    nominal = replay_attitude(corr, robot)  # RK5, not the planner's Magnus scheme
     assert nominal.error_rad <= 1e-9 + nominal.estimate_rad
     after = replay_attitude(corr, true, start_quaternion=before.quaternion)
     assert after.error_rad <= 0.1 * before.error_rad

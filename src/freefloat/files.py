@@ -182,10 +182,13 @@ def check_output(path: str | Path, what: str = "output", folder: bool = False) -
     if folder and target.exists() and not target.is_dir():
         raise FileError(f"{what} {excerpt(shown)} is a file; give a folder", shown)
     given = Path(shown).expanduser()
-    if given.is_symlink() and not target.parent.exists():  # no folders made at a link's end
+    dangling = next((p for p in given.parents if p.is_symlink() and not p.exists()), None)
+    if given.is_symlink() and not target.parent.exists():
+        dangling = given
+    if dangling is not None:  # no folders made at a link's end
         raise FileError(
-            f"{what} {excerpt(shown)} is a symbolic link into a folder that does not exist "
-            f"({target.parent}); give a file name",
+            f"{what} {excerpt(shown)} goes through a symbolic link to nothing ({dangling}); "
+            "give a file name in a folder that exists",
             shown,
         )
     ancestor = target if folder and target.is_dir() else target.parent

@@ -129,8 +129,8 @@ def check_outputs(
         if not str(value).strip():
             raise InputError(f"{option} needs a file name, got an empty one")
         target = check_output(value, option, folder=folder)
-        for source in (getattr(args, key, None) for key in _INPUTS):
-            if source and target.exists() and target.samefile(Path(source).expanduser()):
+        for source in _inputs(args):
+            if target.exists() and source.exists() and target.samefile(source):
                 raise FileError(
                     f"{option} {value} is the file this command reads; give another name "
                     "(it would be overwritten)",
@@ -138,5 +138,16 @@ def check_outputs(
                 )
 
 
-#: The attributes holding a command's input file: an output may not overwrite them.
-_INPUTS = ("plan", "scenario", "sweep")
+#: The attributes holding a command's input files: an output may not overwrite them.
+_INPUTS = ("plan", "scenario", "sweep", "arm")
+
+
+def _inputs(args: argparse.Namespace) -> list[Path]:
+    """The files the command reads (its plan, scenario, sweep or arm URDFs), as given."""
+    found: list[Path] = []
+    for key in _INPUTS:
+        value = getattr(args, key, None)
+        for item in value if isinstance(value, list) else [value]:
+            if isinstance(item, str) and item and "\x00" not in item:
+                found.append(Path(item).expanduser())
+    return found

@@ -5,10 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..errors import InputError
 from ..problem.limits import check_number
 from ..progress import stage
-from ..robot.payload import PAYLOAD_LINK
 from .common import Commands
 
 __all__ = ["add_parser", "check", "run"]
@@ -65,11 +63,6 @@ def run(args: argparse.Namespace) -> int:
     uncertainty = Uncertainty(*_sizes(args), payload=payload)
     with stage("sensitivity"):
         loaded, result = plan_sensitivity(args.plan, uncertainty)
-    if payload is not None and all(b.body != PAYLOAD_LINK for b in result.bodies):
-        raise InputError(
-            "--payload-* options need a plan whose robot holds a captured payload ([payload] "
-            "in the scenario, or freefloat compose --payload-mass); this one holds none"
-        )
     print(f"freefloat sensitivity: {args.plan} ({Path(loaded.robot.urdf).name}), final attitude")
     print("\n".join(sensitivity_table(result)))
     return 0

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
 from ..physics.attitude import geodesic_angle, quat_from_zyx
 from ..plans.format import Plan
 from ..plans.guarantees import RobustnessReport
@@ -23,6 +24,7 @@ from ..plans.versions import FORMAT
 from ..problem.inertial_sensitivity import attitude_sensitivity
 from ..problem.uncertainty import DEFAULT_UNCERTAINTY, AttitudeSpread, Uncertainty, spread
 from ..robot.model import Robot
+from ..robot.payload import held_payload
 from ..verify.recompute import problem_from_plan
 from .correction import correcting_plan
 
@@ -43,7 +45,17 @@ def plan_spread(
 def with_robustness(
     plan: Plan, robot: Robot, uncertainty: Uncertainty = DEFAULT_UNCERTAINTY
 ) -> Plan:
-    """The plan with its ``robustness`` record (format ``freefloat.plan/5``)."""
+    """The plan with its ``robustness`` record (format ``freefloat.plan/5``).
+
+    Raises:
+        InputError: ``uncertainty`` gives a payload sizes of its own, which the record (one
+            size per kind for every body) cannot state.
+    """
+    if uncertainty.payload is not None:
+        raise InputError(
+            "a plan's robustness record states one uncertainty for every body; a payload's own "
+            "is for freefloat sensitivity (plan_spread), not the record"
+        )
     found = plan_spread(plan, robot, uncertainty)
     record = RobustnessReport(
         mass_fraction=uncertainty.mass_fraction,
@@ -56,9 +68,20 @@ def with_robustness(
 
 
 def plan_sensitivity(path: str | Path, uncertainty: Uncertainty) -> tuple[Plan, AttitudeSpread]:
-    """The plan file at ``path`` and its first-order attitude error under ``uncertainty``."""
+    """The plan file at ``path`` and its first-order attitude error under ``uncertainty``.
+
+    Raises:
+        InputError: ``uncertainty`` gives a payload sizes of its own and the plan's robot
+            holds no captured payload (before any work).
+    """
     plan = load_plan_file(path)
-    return plan, plan_spread(plan, plan_robot(plan), uncertainty)
+    robot = plan_robot(plan)
+    if uncertainty.payload is not None and held_payload(robot) is None:  # before any work
+        raise InputError(
+            "--payload-* options need a plan whose robot holds a captured payload ([payload] "
+            "in the scenario, or freefloat compose --payload-mass); this one holds none"
+        )
+    return plan, plan_spread(plan, robot, uncertainty)
 
 
 def correct_plan(path: str | Path, measured_zyx_deg: Sequence[float]) -> tuple[Plan, float]:

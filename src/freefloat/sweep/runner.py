@@ -284,20 +284,29 @@ def connect(address: str, timeout: float = 10.0) -> Any:
             "--scheduler needs Dask distributed: pip install 'freefloat[cluster]'"
         ) from None
     outcome: dict[str, Any] = {}
+    lock = threading.Lock()
 
     def attempt() -> None:
         try:
-            outcome["client"] = Client(address, timeout=timeout)
+            client = Client(address, timeout=timeout)
         except Exception as exc:  # whatever the far end did (garbage read as a message
             outcome["error"] = exc  # length gives a MemoryError), it is named below
+            return
+        with lock:
+            if outcome.get("abandoned"):  # answered after the caller gave up: not leaked
+                client.close()
+            else:
+                outcome["client"] = client
 
     # Dask's timeout covers the connection, not its handshake: a server that accepts and then
     # says nothing (a web server, say) would hold the call for ever
     thread = threading.Thread(target=attempt, name="freefloat-connect", daemon=True)
     thread.start()
     thread.join(timeout + HANDSHAKE_GRACE)
-    if "client" in outcome:
-        return outcome["client"]
+    with lock:
+        outcome["abandoned"] = True
+        if "client" in outcome:
+            return outcome["client"]
     reason = outcome.get("error") or TimeoutError(
         f"no Dask handshake within {timeout + HANDSHAKE_GRACE:g} s (is it a Dask scheduler?)"
     )

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..errors import FreeFloatError, InfeasibleError, PlanFileError, PlanMismatchError
 from ..plans.format import Plan
-from ..plans.guarantees import Verification
+from ..plans.guarantees import Check, Verification
 from ..plans.versions import MONOMIAL_BASIS
 from ..problem.build import build_problem
 from ..problem.residual import Problem
@@ -222,26 +222,35 @@ def compare_verification(
             message=f"the file lists {', '.join(theirs)}; the recomputation {', '.join(mine)}",
         )
     for i, (s, r) in enumerate(zip(stored.checks, recomputed.checks, strict=True)):
-        field = f"verification.checks[{i}]"
-        if s.unit != r.unit:
+        try:
+            _compare_check(f"verification.checks[{i}]", s, r, other_method)
+        except PlanMismatchError as exc:  # named by the check, not its index alone
+            if exc.where or exc.difference == math.inf:
+                raise
             raise PlanMismatchError(
-                f"{field}.unit", math.inf, 0.0, message=f"{s.unit!r} stored, {r.unit!r} recomputed"
-            )
-        slack = FIGURE_FRACTION * r.tolerance
-        agreement.compare(
-            f"{field}.tolerance", s.tolerance, r.tolerance, RELATIVE_TOLERANCE * r.tolerance, r.unit
+                exc.field, exc.difference, exc.tolerance, exc.unit, f"(the {s.name} check)"
+            ) from None
+
+
+def _compare_check(field: str, s: Check, r: Check, other_method: frozenset[str]) -> None:
+    """One stored check ``s`` against its recomputation ``r`` (see :func:`compare_verification`)."""
+    if s.unit != r.unit:
+        raise PlanMismatchError(
+            f"{field}.unit", math.inf, 0.0, message=f"{s.unit!r} stored, {r.unit!r} recomputed"
         )
-        if s.name in other_method:
-            allowed = slack + s.error_estimate + r.error_estimate
-            agreement.compare(f"{field}.value", s.value, r.value, allowed, r.unit)
-            continue
-        agreement.compare(
-            f"{field}.value", s.value, r.value, slack + 2.0 * r.error_estimate, r.unit
-        )
-        agreement.compare(
-            f"{field}.error_estimate",
-            s.error_estimate,
-            r.error_estimate,
-            slack + r.error_estimate,
-            r.unit,
-        )
+    slack = FIGURE_FRACTION * r.tolerance
+    agreement.compare(
+        f"{field}.tolerance", s.tolerance, r.tolerance, RELATIVE_TOLERANCE * r.tolerance, r.unit
+    )
+    if s.name in other_method:
+        allowed = slack + s.error_estimate + r.error_estimate
+        agreement.compare(f"{field}.value", s.value, r.value, allowed, r.unit)
+        return
+    agreement.compare(f"{field}.value", s.value, r.value, slack + 2.0 * r.error_estimate, r.unit)
+    agreement.compare(
+        f"{field}.error_estimate",
+        s.error_estimate,
+        r.error_estimate,
+        slack + r.error_estimate,
+        r.unit,
+    )
