@@ -223,7 +223,18 @@ def reachable(
     before = problem.evaluations
     if budget > 0:  # as plan refuses them: no goal of this scenario plans
         check_endpoints(scenario, scenario_constraints(scenario), end_effector_goal)
-    estimate = _inner(scenario, problem, drift, axes, outer, budget, progress, jobs)
+    if scenario.robot.n == 1:  # every path reaches the drift attitude (method.md section 6)
+        freedom = tuple(d - 5 for d in problem.family.degrees)
+        found = tuple(
+            replace(_limits(drift, axis, 0.0, None), stopped_by=ONE_JOINT) for axis in axes
+        )
+    else:
+        estimate = _inner(scenario, problem, drift, axes, outer, budget, progress, jobs)
+        freedom = estimate.freedom
+        found = tuple(
+            _limits(drift, axis, float(limit), reached)
+            for axis, limit, reached in zip(axes, outer, estimate.directions, strict=True)
+        )
     return ReachReport(
         robot=scenario.robot.name,
         planar=False,
@@ -232,11 +243,8 @@ def reachable(
         drift_zyx_deg=np.degrees(zyx_from_quat(drift)),
         bound=bound,
         inertia_ratio=ratio,
-        directions=tuple(
-            _limits(drift, axis, float(limit), reached)
-            for axis, limit, reached in zip(axes, outer, estimate.directions, strict=True)
-        ),
-        freedom=estimate.freedom,
+        directions=found,
+        freedom=freedom,
         evaluations=problem.evaluations - before,
         budget=budget,
         goal_joints=problem.family.goal.copy(),

@@ -16,7 +16,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import InfeasibleError, InputError, JointLimitError
-from ..physics.attitude import quat_exp, quat_multiply, relative_rotvec
+from ..physics.attitude import geodesic_angle, quat_exp, quat_multiply, relative_rotvec
 from ..physics.momentum import MomentumMap, cached_planar_axis
 from ..physics.planar_map import cached_identify
 from ..robot.model import Robot
@@ -144,9 +144,7 @@ def build_problem(
             "[path] extra"
         )
     problem = problem.with_steps(problem.steps_for())
-    if planar and robot.n == 1:  # the one change every path makes (method.md section 6)
-        problem = _one_joint(problem, check_bounds)
-    return problem
+    return _one_joint(problem, check_bounds) if robot.n == 1 else problem
 
 
 #: How far (rad) a one-joint planar robot's goal may lie from the one attitude it reaches,
@@ -155,19 +153,29 @@ ONE_JOINT_TOLERANCE = 1e-9
 
 
 def _one_joint(problem: Problem, check_bounds: bool) -> Problem:
-    """A one-joint planar problem with its bounds the one change (rad) every path makes.
+    """A one-joint problem: the goal held to the one attitude every path reaches.
 
     With one joint the base's attitude obeys an ODE in that joint's value alone (a path that
-    goes back and forth retraces it), so every path makes the quintic path's yaw change: on
-    the problem's own grid (chosen for it), the bounds' gain is its mean over the travel. With
+    goes back and forth retraces it), so every path reaches the quintic path's attitude
+    (docs/method.md section 6): on the problem's own grid (chosen for it). A planar problem's
+    bounds become that one change (their gain its mean over the travel). With
     ``check_bounds`` the goal is held to it, within :data:`ONE_JOINT_TOLERANCE` or the
-    integration's own error estimate if larger, and its branch taken. A new problem (residuals
-    remembered for the old goal's branch are not carried over).
+    integration's own error estimate if larger, and a planar goal's branch taken. A new
+    problem (residuals remembered for the old goal's branch are not carried over).
 
     Raises:
-        InfeasibleError: the goal asks another change.
+        InfeasibleError: the goal asks another attitude.
     """
     beta = np.zeros(problem.n_free)
+    if not problem.planar:
+        drift = problem.achieved(beta)
+        off = geodesic_angle(drift, problem.goal_quaternion)
+        tolerance = max(ONE_JOINT_TOLERANCE, problem.integration_error(beta))
+        if check_bounds and off > tolerance:
+            raise InfeasibleError(
+                math.degrees(off), (0.0, 0.0), message=_one_attitude(drift, off, tolerance)
+            )
+        return problem
     exact = problem.yaw_change_of(beta)
     travel = float(problem.family.goal[0] - problem.family.start[0])
     gain = np.array([exact / travel if travel != 0.0 else 0.0])
@@ -189,6 +197,16 @@ def _one_joint(problem: Problem, check_bounds: bool) -> Problem:
             ),
         )
     return replace(problem, bounds=PlanarBounds(gain, gain), yaw_change=exact + off)
+
+
+def _one_attitude(reached: np.ndarray, off: float, tolerance: float) -> str:
+    """A spatial one-joint robot's refusal: the one attitude it reaches (rad)."""
+    return (
+        "a robot with one joint turns the spacecraft alike along every path between these "
+        f"joints: its goal attitude can only be base_quaternion_xyzw = "
+        f"{[float(v) for v in reached]} (to {tolerance:.2g} rad), {math.degrees(off):.6g} deg "
+        "from the one asked"
+    )
 
 
 def _checked_inputs(

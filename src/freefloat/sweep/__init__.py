@@ -8,7 +8,8 @@ when called).
 
 from .jobs import STATUSES, TIMING_COLUMNS, SweepRow, run_job
 from .plots import plot_sweep
-from .runner import connect, read_rows, sweep, write_rows
+from .results import read_rows, write_rows
+from .runner import connect, sweep
 from .spec import Axis, Job, SweepSpec
 
 __all__ = [

@@ -1,7 +1,7 @@
 """Running a sweep: local processes or a Dask cluster; CSV output written as jobs finish.
 
-The output is one CSV row per job: ``index``, one column per axis (the axis key), then the
-columns of :class:`SweepRow`. Rows are appended as jobs finish, one whole line per write, so
+The output is one CSV row per job (:mod:`.results`). Rows are appended as jobs finish, one
+whole line per write, so
 an interrupted run leaves complete rows (a torn last line is dropped on the next run). A
 re-run with the same output skips the jobs whose rows are there (same index and axis values)
 and, when every job has a row, rewrites the file sorted by index (atomically). The file is
@@ -11,9 +11,6 @@ then the same whatever the number of workers or the backend, except the timing c
 
 from __future__ import annotations
 
-import csv
-import io
-import math
 import multiprocessing as mp
 import os
 import sys
@@ -21,162 +18,16 @@ import threading
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
-from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError, ScenarioError
-from ..files import atomic_write_text
+from ..errors import InputError
 from ..progress import LOGGER
-from ..verify.plan_checks import TOLERANCES
-from .jobs import _ROBOTS, JobOutcome, SweepRow, run_job_collecting
-from .replay import ReplayRow
+from .jobs import _ROBOTS, JobOutcome, run_job_collecting
+from .results import Appender, Row, read_rows, write_rows
 from .spec import Job, SweepSpec
 
-__all__ = ["connect", "read_rows", "row_class", "sweep"]
-
-
-def _cell(value: Any) -> str:
-    """CSV text of a value: floats round-trip exactly (shortest repr); None is empty."""
-    if value is None:
-        return ""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, float):
-        return repr(value)
-    return str(value)
-
-
-def row_class(spec: SweepSpec) -> type[SweepRow] | type[ReplayRow]:
-    """The rows a sweep gives: :class:`SweepRow` (plans) or :class:`ReplayRow` (replays)."""
-    return ReplayRow if spec.replay else SweepRow
-
-
-Row = SweepRow | ReplayRow
-
-
-def _header(spec: SweepSpec) -> list[str]:
-    return ["index", *spec.keys, *row_class(spec).result_columns()]
-
-
-def _line(cells: Sequence[str]) -> str:
-    buffer = io.StringIO()
-    csv.writer(buffer, lineterminator="\n").writerow(cells)
-    return buffer.getvalue()
-
-
-def _row_cells(row: Row) -> list[str]:
-    return [
-        str(row.index),
-        *(_cell(v) for v in row.values),
-        *(_cell(getattr(row, name)) for name in row.result_columns()),
-    ]
-
-
-def _parse_row(cells: Sequence[str], job: Job, kind: type[Row], where: str) -> Row:
-    """One row of a results file read back, each cell as the runner writes it.
-
-    Raises:
-        ScenarioError: a number that is not one (or not finite), a status the rows never
-            have, or a planned row whose attitude error no plan has (the file was edited).
-    """
-    values: dict[str, Any] = {}
-    for f, text in zip(fields(kind)[2:], cells, strict=True):
-        if f.name in ("status", "message", "objective"):
-            values[f.name] = text
-            continue
-        try:
-            values[f.name] = float(text) if text else None
-        except ValueError:
-            values[f.name] = math.nan
-        if values[f.name] is not None and not math.isfinite(values[f.name]):
-            raise ScenarioError(f"{where}: {f.name} {text!r} is not a finite number{_EDITED}")
-    row = kind(index=job.index, values=job.values, **values)
-    if row.status not in kind.statuses:
-        raise ScenarioError(
-            f"{where}: status {row.status!r} is none of {', '.join(kind.statuses)}{_EDITED}"
-        )
-    error = row.attitude_error_rad
-    if row.status == "planned" and (error is None or error > PLANNED_ATTITUDE_RAD):
-        raise ScenarioError(
-            f"{where}: a planned row whose attitude error {_text_of(error)} rad exceeds the "
-            f"{PLANNED_ATTITUDE_RAD:g} rad every plan keeps{_EDITED}"
-        )
-    return row
-
-
-#: The largest attitude error (rad) of a planned row: what verification holds a plan to.
-PLANNED_ATTITUDE_RAD = TOLERANCES["attitude_independent_rad"]
-_EDITED = " (an edited file?); choose another output file or delete it"
-
-
-def _text_of(value: float | None) -> str:
-    """A row's number as the file has it, or "none"."""
-    return "none" if value is None else repr(value)
-
-
-def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, Row]:
-    """The rows of an existing output file, by job index (resume); empty if there is none.
-
-    Raises:
-        ScenarioError: the file holds another sweep (other columns or job values).
-    """
-    path = Path(output)
-    if not path.is_file():
-        return {}
-    text = path.read_text(encoding="utf-8-sig")  # a spreadsheet may have added a BOM
-    if text and not text.endswith("\n"):  # a torn last line of an interrupted run
-        text = text[: text.rfind("\n") + 1]
-    lines = list(csv.reader(io.StringIO(text)))
-    if not lines:
-        return {}
-    header = _header(spec)
-    if lines[0] != header:
-        raise ScenarioError(
-            f"{path} holds another sweep (columns {', '.join(lines[0][:6])}...); choose another "
-            "output file or delete it"
-        )
-    jobs = spec.jobs()
-    rows: dict[int, Row] = {}
-    n_axes = len(spec.axes)
-    for number, cells in enumerate(lines[1:], start=2):
-        if len(cells) != len(header) or not cells[0].isdigit() or int(cells[0]) >= len(jobs):
-            raise ScenarioError(f"{path} line {number} is not a row of this sweep")
-        job = jobs[int(cells[0])]
-        if cells[1 : 1 + n_axes] != [_cell(v) for v in job.values]:
-            raise ScenarioError(
-                f"{path} line {number} has other axis values than job {job.index}; choose "
-                "another output file or delete it"
-            )
-        where = f"{path} line {number}"
-        rows[job.index] = _parse_row(cells[1 + n_axes :], job, row_class(spec), where)
-    return rows
-
-
-def write_rows(spec: SweepSpec, output: str | Path, rows: Sequence[Row]) -> Path:
-    """Write the whole output file atomically, rows sorted by index."""
-    text = _line(_header(spec)) + "".join(
-        _line(_row_cells(r)) for r in sorted(rows, key=lambda r: r.index)
-    )
-    return atomic_write_text(output, text)
-
-
-class _Appender:
-    """Appends whole rows to the output file (one ``write`` per row, ``O_APPEND``)."""
-
-    def __init__(self, spec: SweepSpec, path: Path, rows: dict[int, Row]) -> None:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        if not path.is_file() or not rows:
-            write_rows(spec, path, [])
-        else:  # drop a torn last line before appending
-            write_rows(spec, path, list(rows.values()))
-        self._fd = os.open(path, os.O_WRONLY | os.O_APPEND)
-
-    def add(self, row: Row) -> None:
-        os.write(self._fd, _line(_row_cells(row)).encode("utf-8"))
-
-    def close(self) -> None:
-        os.close(self._fd)
+__all__ = ["BLAS_ENV", "HANDSHAKE_GRACE", "connect", "sweep"]
 
 
 #: One BLAS thread per worker: the solvers' floating-point results depend on the number of
@@ -351,7 +202,7 @@ def sweep(
     done = read_rows(spec, output) if output is not None else {}
     todo = [job for job in spec.jobs() if job.index not in done]
     rows = dict(done)
-    appender = _Appender(spec, Path(output), done) if output is not None else None
+    appender = Appender(spec, Path(output), done) if output is not None else None
     show = sys.stderr.isatty() if progress is None else progress
     from tqdm import tqdm
 
