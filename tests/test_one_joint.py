@@ -104,3 +104,66 @@ def test_a_one_joint_robot_reaches_one_attitude_and_says_which(
     # and that attitude plans
     plan = ff.plan(ff.Scenario.from_toml(one(f"base_quaternion_xyzw = {quaternion}")))
     assert plan.verification.passed and plan.base.attitude_error_rad <= 1e-9
+
+
+def _final_attitude(model: pin.Model, path) -> np.ndarray:
+    """The base quaternion ``[x, y, z, w]`` at t = 1 s from rest at the identity, by SciPy on
+    the quaternion equation with Pinocchio's centroidal map along ``path(t) -> (q, qd)``."""
+    data = model.createData()
+
+    def rhs(t: float, y: np.ndarray) -> np.ndarray:
+        q, qd = path(t)
+        config = pin.neutral(model)
+        config[7] = q
+        ag = pin.computeCentroidalMap(model, data, config)
+        w = -np.linalg.solve(ag[:, :6], ag[:, 6:] @ np.array([qd]))[3:]
+        x, y_, z, s = y
+        return 0.5 * np.array(  # q (x) [w, 0] / 2, w in the base frame
+            [
+                s * w[0] + y_ * w[2] - z * w[1],
+                s * w[1] + z * w[0] - x * w[2],
+                s * w[2] + x * w[1] - y_ * w[0],
+                -(x * w[0] + y_ * w[1] + z * w[2]),
+            ]
+        )
+
+    end = solve_ivp(rhs, (0.0, 1.0), [0.0, 0.0, 0.0, 1.0], rtol=1e-12, atol=1e-14).y[:, -1]
+    return end / np.linalg.norm(end)
+
+
+def test_a_spatial_one_joint_robot_reaches_one_attitude_and_says_which(tmp_path, capsys):
+    """A joint about (0.3, 0.5, 0.8): the base turns about changing axes, still alike along
+    a monotone path and one that overshoots (SciPy); plan names that attitude, reach says so,
+    and the quaternion it prints plans."""
+    text = URDF.format(lever=0.5, mass=10.0, limit=3.0).replace(
+        '<axis xyz="0 1 0"/>', '<axis xyz="0.3 0.5 0.8"/>'
+    )
+    (tmp_path / "one.urdf").write_text(text)
+    model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    goal = math.radians(60.0)
+
+    def monotone(t: float) -> tuple[float, float]:
+        s = 10 * t**3 - 15 * t**4 + 6 * t**5
+        return goal * s, goal * (30 * t**2 - 60 * t**3 + 30 * t**4)
+
+    def overshoot(t: float) -> tuple[float, float]:
+        q, qd = monotone(t)
+        return q + 1.2 * math.sin(math.pi * t) ** 2, qd + 1.2 * math.pi * math.sin(2 * math.pi * t)
+
+    exact = _final_attitude(model, monotone)
+    assert ff.geodesic_angle(_final_attitude(model, overshoot), exact) < 1e-9
+    scenario = tmp_path / "one.toml"
+    scenario.write_text(SCENARIO.format(goal="base_zyx_deg = [-10.0, 0.0, 0.0]", travel=60.0))
+    assert main(["plan", str(scenario), "-o", str(tmp_path / "p.json")]) == 2
+    err = capsys.readouterr().err
+    named = re.search(r"can only be base_quaternion_xyzw = (\[[^\]]+\])", err)
+    assert named, err
+    quaternion = np.array([float(v) for v in named.group(1).strip("[]").split(",")])
+    assert ff.geodesic_angle(quaternion, exact) < 1e-8
+    assert main(["reach", str(scenario), "-q"]) == 0
+    assert capsys.readouterr().out.count("one joint: every path turns the spacecraft alike") == 14
+    scenario.write_text(
+        SCENARIO.format(goal=f"base_quaternion_xyzw = {quaternion.tolist()}", travel=60.0)
+    )
+    plan = ff.plan(ff.Scenario.from_toml(scenario))
+    assert plan.verification.passed and plan.base.attitude_error_rad <= 1e-9
