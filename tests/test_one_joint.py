@@ -93,6 +93,12 @@ def test_a_one_joint_robot_reaches_one_attitude_and_says_which(
     err = capsys.readouterr().err
     said = re.search(r"by (-?[\d.]+) deg about its y axis", err)
     assert said and float(said.group(1)) == pytest.approx(math.degrees(exact), rel=1e-8)  # 9 digits
+    # bounds gives that one change, no interval of gains
+    assert main(["bounds", one("base_zyx_deg = [0.0, -5.0, 0.0]")]) == 0
+    out = capsys.readouterr().out
+    printed = re.search(r"yaw change: (-?[\d.]+) deg \(along every path\)", out)
+    assert printed and float(printed.group(1)) == pytest.approx(math.degrees(exact), abs=1e-6)
+    assert "g_min" not in out
     # reach says there is nothing to reach, and the attitude to paste in full
     assert main(["reach", one("base_zyx_deg = [0.0, -5.0, 0.0]"), "-q"]) == 0
     out = capsys.readouterr().out
@@ -104,6 +110,10 @@ def test_a_one_joint_robot_reaches_one_attitude_and_says_which(
     # and that attitude plans
     plan = ff.plan(ff.Scenario.from_toml(one(f"base_quaternion_xyzw = {quaternion}")))
     assert plan.verification.passed and plan.base.attitude_error_rad <= 1e-9
+    # and no loop corrects it (it said "cannot turn ... within the plan's limits")
+    saved = plan.save(tmp_path / "one.plan.json")
+    assert main(["correct", str(saved), "--base-zyx-deg", "1", "2", "3"]) == 2
+    assert "a robot with one joint cannot correct its attitude" in capsys.readouterr().err
 
 
 def _final_attitude(model: pin.Model, path) -> np.ndarray:

@@ -7,7 +7,7 @@ import math
 
 from ..errors import InputError, InputLimitError
 from ..parallel import check_jobs
-from ..problem.build import planar_yaw_branch, problem_from_scenario
+from ..problem.build import ONE_JOINT_TOLERANCE, planar_yaw_branch, problem_from_scenario
 from ..problem.scenario import Scenario
 from ..solvers.options import SolveOptions
 from .common import MAX_BUDGET, Commands, check_figure, load_scenario, positive
@@ -71,6 +71,12 @@ def run(args: argparse.Namespace) -> int:
             f"--plot draws a spatial robot's estimate; {scenario.robot.name} is planar: its "
             "bounds are the interval printed here, and freefloat reach --plot draws them"
         )
+    if scenario.robot.n == 1:  # no interval: every path makes the one change
+        return _one_joint(
+            scenario.robot.name,
+            problem.bounds.interval(problem.family.goal - problem.family.start)[0],
+            problem.yaw_change,
+        )
     bounds = problem.bounds
     delta = problem.family.goal - problem.family.start
     print(f"freefloat bounds: {scenario.robot.name} (planar), simple point-to-point motion")
@@ -91,6 +97,16 @@ def run(args: argparse.Namespace) -> int:
     verdict = "feasible" if branch is not None else "outside the bounds: no simple path"
     shown = math.degrees(problem.yaw_change if branch is None else branch)
     print(f"  requested yaw change: {shown:.3f} deg -> {verdict}")
+    return 0
+
+
+def _one_joint(name: str, change: float, asked: float) -> int:
+    """A one-joint planar robot's bounds: the one yaw change (rad) every path makes."""
+    print(f"freefloat bounds: {name} (planar), one joint: every path makes the same yaw change")
+    print(f"  yaw change: {math.degrees(change):.6f} deg (along every path)")
+    off = math.remainder(asked - change, 2.0 * math.pi)
+    verdict = "feasible" if abs(off) <= ONE_JOINT_TOLERANCE else "not that one: no path"
+    print(f"  requested yaw change: {math.degrees(change + off):.6f} deg -> {verdict}")
     return 0
 
 

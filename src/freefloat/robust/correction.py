@@ -22,7 +22,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..errors import SolverError
+from ..errors import InputError, SolverError
 from ..physics.attitude import geodesic_angle, relative_rotvec
 from ..pipeline import plan_from_solution
 from ..plans.format import Plan
@@ -90,9 +90,15 @@ def correcting_plan(
     when the plan was kept clear).
 
     Raises:
+        InputError: the robot has one joint (no loop turns its spacecraft).
         SolverError: one motion cannot turn the spacecraft that far (the message gives the
             angle asked and how far the search got).
     """
+    if robot.n == 1:
+        raise InputError(
+            "a robot with one joint cannot correct its attitude: every path from its joints "
+            "back to them turns the spacecraft alike, that is not at all"
+        )
     options = options or SolveOptions()
     goal_joints = np.asarray(plan.request.goal_joints, dtype=float)
     goal = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
