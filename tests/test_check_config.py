@@ -151,6 +151,21 @@ def test_joint_values_that_start_negative_are_taken_as_values(capsys) -> None:
     assert values == [-10.0, -90.0, 90.0, -90.0, -90.0, 0.0]
 
 
+@pytest.mark.parametrize(
+    ("at", "said"),
+    [
+        ("-3e1,0,0,0,0,0", "configuration:"),
+        ("-inf,0,0,0,0,0", "joint 'shoulder_pan_joint' is not finite"),
+        ("-36.6;-76.4", "comma-separated numbers"),
+    ],
+)
+def test_values_that_start_negative_reach_the_parser(at, said, capsys) -> None:
+    """argparse said "expected one argument" for each: the value is read and judged."""
+    main(["check", str(UR5), "--at", at])
+    out, err = capsys.readouterr()
+    assert said in out + err and "expected one argument" not in err
+
+
 def test_a_value_that_is_not_finite_is_named_not_counted(capsys) -> None:
     assert main(["check", str(UR5), "--at", "0,0,nan,0,0,0"]) == 2
     err = capsys.readouterr().err.strip()

@@ -11,9 +11,9 @@ from .common import Commands, load_scenario
 
 __all__ = ["add_parser", "joined_values", "run"]
 
-#: A comma-separated list of numbers whose first is negative (``-36.6,-76.4``): argparse
-#: takes it for an option, since only a lone negative number passes as a value.
-_NEGATIVE_LIST = re.compile(r"^-(\d|\.\d)[^,]*,")
+#: A value that starts negative (``-36.6,-76.4``, ``-3e1``, ``-inf,0``): argparse takes one
+#: for an option unless it is a lone plain negative number.
+_NEGATIVE_LIST = re.compile(r"^-(\d|\.\d|inf|nan)", re.IGNORECASE)
 
 
 def joined_values(argv: Sequence[str]) -> list[str]:
