@@ -405,6 +405,10 @@ def test_cli_sensitivity_and_correct(tmp_path, worked, capsys):
     assert main(argv) == 0
     printed = capsys.readouterr().out
     assert "freefloat plan:" not in printed  # the summary's header names its own command
+    # its joints come back: beyond the bounds of simple motions, said as such
+    assert "deg beyond (0.000, 0.000) deg of simple motions: this path goes back and forth" in (
+        printed
+    )
     assert any(
         line.startswith("freefloat correct: planar_2dof.urdf, T = ")
         for line in printed.splitlines()

@@ -98,9 +98,11 @@ def summary(
     lines += free_parameter_lines(p)
     if p.feasibility.planar and p.feasibility.yaw_change_bounds_deg is not None:
         lo, hi = p.feasibility.yaw_change_bounds_deg
+        asked = p.feasibility.requested_yaw_change_deg
+        where = "in" if asked is not None and lo <= asked <= hi else "beyond"
+        loop = "" if where == "in" else " of simple motions: this path goes back and forth"
         lines.append(
-            f"  planar bounds   yaw change {p.feasibility.requested_yaw_change_deg:.3f} deg in "
-            f"({lo:.3f}, {hi:.3f}) deg"
+            f"  planar bounds   yaw change {asked:.3f} deg {where} ({lo:.3f}, {hi:.3f}) deg{loop}"
         )
     lines.append(objective_line(p))
     if p.quality is not None:
