@@ -177,3 +177,21 @@ def test_a_spatial_one_joint_robot_reaches_one_attitude_and_says_which(tmp_path,
     )
     plan = ff.plan(ff.Scenario.from_toml(scenario))
     assert plan.verification.passed and plan.base.attitude_error_rad <= 1e-9
+
+
+def test_every_turned_goal_refused_up_front_says_so(tmp_path, capsys) -> None:
+    """A continuous one-joint robot with full turns allowed: each turned goal is refused
+    before any search, and the refusal read "best residual nan rad"."""
+    text = URDF.format(lever=0.5, mass=10.0, limit=3.0).replace(
+        'type="revolute"', 'type="continuous"'
+    )
+    (tmp_path / "one.urdf").write_text(text)
+    scenario = tmp_path / "one.toml"
+    scenario.write_text(
+        SCENARIO.format(goal="base_zyx_deg = [0.0, -5.0, 0.0]", travel=60.0)
+        + "[path]\nallow_full_turns = true\n"
+    )
+    assert main(["plan", str(scenario), "-o", str(tmp_path / "p.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("freefloat: error: no goal tried can be reached; tried: goal as stated")
+    assert "nan" not in err and "j1 +1 turn(s): a robot with one joint" in err

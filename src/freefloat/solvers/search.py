@@ -324,6 +324,12 @@ def _refuse(
     if isinstance(first_error, InfeasibleError) and attempts == 1:
         message = f"{first_error}; {hint}" if hint else str(first_error)
         raise InfeasibleError(first_error.requested_deg, first_error.bounds_deg, message=message)
+    if isinstance(first_error, InfeasibleError) and best == math.inf:  # each refused up front
+        raise InfeasibleError(
+            first_error.requested_deg,
+            first_error.bounds_deg,
+            message=f"no goal tried can be reached; tried: {'; '.join(tried)}",
+        )
     if isinstance(first_error, InputError) and best == math.inf:
         raise first_error
     if extra_hint := _extra_hint(scenario, best_error or first_error):
