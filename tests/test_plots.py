@@ -155,8 +155,11 @@ def test_joint_limits_are_drawn_from_the_urdf():
 def test_names_the_font_lacks_give_one_warning_line(tmp_path, capfd):
     """Joints named in Chinese: matplotlib warned once per missing glyph, with its source
     paths, on stderr; now one freefloat line, and the figures are written."""
+    import matplotlib.pyplot as plt
+
     from conftest import ROOT
 
+    plt.close("all")  # what earlier tests left open (the last test here to use figures)
     names = {"q1": "关节一", "q2": "关节二"}
     urdf = (ROOT / "robots" / "planar_2dof.urdf").read_text(encoding="utf-8")
     scenario = (ROOT / "robots" / "scenarios" / "worked_example.toml").read_text()
