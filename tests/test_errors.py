@@ -247,26 +247,29 @@ def test_corrupt_plan_file(tmp_path):
         ff.Plan.load(path)
 
 
-def test_a_plan_file_without_its_format_says_so(tmp_path, worked_plan):
-    data = worked_plan.to_dict()
-    del data["format"]
+def _edited(tmp_path, plan, change):
+    """The plan's file as ``change`` edits its record."""
+    data = plan.to_dict()
+    change(data)
     path = tmp_path / "p.json"
     path.write_text(json.dumps(data))
-    with pytest.raises(ff.PlanFileError, match="plan has no 'format' field; this freefloat reads"):
-        ff.Plan.load(path)
+    return path
 
 
-def test_a_plan_whose_end_effector_is_not_its_first_is_refused(tmp_path, worked_plan):
-    """A plan writes its main end effector first in the list; an edited file that names
-    another one as the main loaded and verified."""
-    data = worked_plan.to_dict()
-    data["robot"]["end_effector"] = "link2"
-    path = tmp_path / "p.json"
-    path.write_text(json.dumps(data))
-    with pytest.raises(
-        ff.PlanFileError, match=r"'robot.end_effector' \('link2'\) is not the first"
-    ):
-        ff.Plan.load(path)
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda d: d.pop("format"), "plan has no 'format' field; this freefloat reads"),
+        (  # a plan writes its main end effector first; an edited file loaded and verified
+            lambda d: d["robot"].__setitem__("end_effector", "link2"),
+            "'robot.end_effector' ('link2') is not the first of 'robot.end_effectors'",
+        ),
+    ],
+)
+def test_an_edited_plan_record_is_named(tmp_path, worked_plan, change, message):
+    with pytest.raises(ff.PlanFileError) as info:
+        ff.Plan.load(_edited(tmp_path, worked_plan, change))
+    assert message in str(info.value)
 
 
 def test_plan_file_of_another_version(tmp_path, worked_plan):

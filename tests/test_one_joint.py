@@ -48,6 +48,21 @@ check = false
 ARMS = [(0.5, 10.0, 3.0, 60.0), (1.5, 80.0, 70.0, 1800.0)]
 
 
+def _paths(goal: float):
+    """Two joint paths (q rad, qd rad/s) on [0, 1] s from 0 to ``goal`` (rad): the quintic,
+    and one that goes 1.2 rad beyond it at mid-way and comes back."""
+
+    def monotone(t: float) -> tuple[float, float]:
+        s = 10 * t**3 - 15 * t**4 + 6 * t**5
+        return goal * s, goal * (30 * t**2 - 60 * t**3 + 30 * t**4)
+
+    def overshoot(t: float) -> tuple[float, float]:
+        q, qd = monotone(t)
+        return q + 1.2 * math.sin(math.pi * t) ** 2, qd + 1.2 * math.pi * math.sin(2 * math.pi * t)
+
+    return monotone, overshoot
+
+
 def _pitch(model: pin.Model, path) -> float:
     """The base's final turn about y (rad) along ``path(t) -> (q, qd)`` on [0, 1] s."""
     data = model.createData()
@@ -76,16 +91,7 @@ def test_a_one_joint_robot_reaches_one_attitude_and_says_which(
         return str(path)
 
     model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
-    goal = math.radians(travel)
-
-    def monotone(t: float) -> tuple[float, float]:
-        s = 10 * t**3 - 15 * t**4 + 6 * t**5
-        return goal * s, goal * (30 * t**2 - 60 * t**3 + 30 * t**4)
-
-    def overshoot(t: float) -> tuple[float, float]:  # 1.2 rad beyond the goal, and back
-        q, qd = monotone(t)
-        return q + 1.2 * math.sin(math.pi * t) ** 2, qd + 1.2 * math.pi * math.sin(2 * math.pi * t)
-
+    monotone, overshoot = _paths(math.radians(travel))
     exact = _pitch(model, monotone)
     assert _pitch(model, overshoot) == pytest.approx(exact, abs=1e-9)
     # the planner says so, naming that turn
@@ -150,16 +156,7 @@ def test_a_spatial_one_joint_robot_reaches_one_attitude_and_says_which(tmp_path,
     )
     (tmp_path / "one.urdf").write_text(text)
     model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
-    goal = math.radians(60.0)
-
-    def monotone(t: float) -> tuple[float, float]:
-        s = 10 * t**3 - 15 * t**4 + 6 * t**5
-        return goal * s, goal * (30 * t**2 - 60 * t**3 + 30 * t**4)
-
-    def overshoot(t: float) -> tuple[float, float]:
-        q, qd = monotone(t)
-        return q + 1.2 * math.sin(math.pi * t) ** 2, qd + 1.2 * math.pi * math.sin(2 * math.pi * t)
-
+    monotone, overshoot = _paths(math.radians(60.0))
     exact = _final_attitude(model, monotone)
     assert ff.geodesic_angle(_final_attitude(model, overshoot), exact) < 1e-9
     scenario = tmp_path / "one.toml"

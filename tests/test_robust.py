@@ -74,6 +74,19 @@ def _replayed_error(plan, robot, link, key, value):
     return replay_attitude(plan, _reparsed(robot, {link: {key: value}})).error_rotvec
 
 
+def _replayed_derivative(plan, robot, link, key):
+    """d(final error rotation vector)/d(the link's value): central differences of replays in
+    re-parsed URDFs, with step control (Richardson on two steps)."""
+    value = link_inertials(robot_text(robot))[link].value(key)
+    scale = 0.05 if key.startswith("com") else max(abs(value), 0.1)
+    estimates = []
+    for h in (1e-3 * scale, 5e-4 * scale):
+        plus = _replayed_error(plan, robot, link, key, value + h)
+        minus = _replayed_error(plan, robot, link, key, value - h)
+        estimates.append((plus - minus) / (2 * h))
+    return (4 * estimates[1] - estimates[0]) / 3
+
+
 def test_changing_a_loaded_model_equals_parsing_the_changed_urdf(tmp_path):
     robot = load_robot(robots_dir() / "panda_servicer.urdf")
     text = robot_text(robot).replace(  # an inertia frame turned against its link
@@ -114,14 +127,7 @@ def test_sensitivity_matches_finite_differences_of_rk4_replays(
 ):
     plan, _, robot = request.getfixturevalue(fixture)
     sens = attitude_sensitivity(plan, robot)
-    link_value = link_inertials(robot_text(robot))[link].value(key)
-    scale = 0.05 if key.startswith("com") else max(abs(link_value), 0.1)
-    estimates = []
-    for h in (1e-3 * scale, 5e-4 * scale):  # step control: Richardson on two steps
-        plus = _replayed_error(plan, robot, link, key, link_value + h)
-        minus = _replayed_error(plan, robot, link, key, link_value - h)
-        estimates.append((plus - minus) / (2 * h))
-    fd = (4 * estimates[1] - estimates[0]) / 3
+    fd = _replayed_derivative(plan, robot, link, key)
     exact = sens.jacobian[:, body, column]
     # a link joined by fixed joints moves its body's centre of mass: only moments map 1:1
     assert np.linalg.norm(fd - exact) <= 1e-5 * np.linalg.norm(exact) + 1e-12
@@ -177,14 +183,7 @@ def test_a_payload_has_its_own_row_matching_replays_of_the_changed_urdf(
     # the holder's mass is its body's less the payload's
     body = robot.model.inertias[robot.model.njoints - 1].mass
     assert sens.nominal[-2, 0] == pytest.approx(body - 5.0, rel=1e-12)
-    value = link_inertials(robot_text(robot))[link].value(key)
-    scale = 0.05 if key.startswith("com") else max(abs(value), 0.1)
-    estimates = []
-    for h in (1e-3 * scale, 5e-4 * scale):  # step control: Richardson on two steps
-        plus = _replayed_error(plan, robot, link, key, value + h)
-        minus = _replayed_error(plan, robot, link, key, value - h)
-        estimates.append((plus - minus) / (2 * h))
-    fd = (4 * estimates[1] - estimates[0]) / 3
+    fd = _replayed_derivative(plan, robot, link, key)
     exact = sens.jacobian[:, sens.bodies.index(row), column]
     assert np.linalg.norm(fd - exact) <= 1e-5 * np.linalg.norm(exact) + 1e-12
     assert np.linalg.norm(exact) > 0.0
