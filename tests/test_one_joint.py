@@ -63,17 +63,21 @@ def _paths(goal: float):
     return monotone, overshoot
 
 
+def _omega(model: pin.Model, data: pin.Data, q: float, qd: float) -> np.ndarray:
+    """The base's angular velocity (rad/s, base frame) at zero momentum, from Pinocchio's
+    centroidal map."""
+    config = pin.neutral(model)
+    config[7] = q
+    ag = pin.computeCentroidalMap(model, data, config)
+    return -np.linalg.solve(ag[:, :6], ag[:, 6:] @ np.array([qd]))[3:]
+
+
 def _pitch(model: pin.Model, path) -> float:
     """The base's final turn about y (rad) along ``path(t) -> (q, qd)`` on [0, 1] s."""
     data = model.createData()
 
     def rhs(t: float, y: np.ndarray) -> np.ndarray:
-        q, qd = path(t)
-        config = pin.neutral(model)
-        config[7] = q
-        ag = pin.computeCentroidalMap(model, data, config)
-        twist = -np.linalg.solve(ag[:, :6], ag[:, 6:] @ np.array([qd]))
-        return np.array([twist[4]])  # the y rate; the base turns about y alone
+        return _omega(model, data, *path(t))[1:2]  # the base turns about y alone
 
     return float(solve_ivp(rhs, (0.0, 1.0), [0.0], rtol=1e-12, atol=1e-14).y[0, -1])
 
@@ -128,11 +132,7 @@ def _final_attitude(model: pin.Model, path) -> np.ndarray:
     data = model.createData()
 
     def rhs(t: float, y: np.ndarray) -> np.ndarray:
-        q, qd = path(t)
-        config = pin.neutral(model)
-        config[7] = q
-        ag = pin.computeCentroidalMap(model, data, config)
-        w = -np.linalg.solve(ag[:, :6], ag[:, 6:] @ np.array([qd]))[3:]
+        w = _omega(model, data, *path(t))
         x, y_, z, s = y
         return 0.5 * np.array(  # q (x) [w, 0] / 2, w in the base frame
             [
