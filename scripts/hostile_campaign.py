@@ -471,6 +471,42 @@ def _message_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str]
         ),
         (["verify", plan_file], False, ""),
         *_pitch90_case(folder),
+        *_edited_and_misnamed_cases(folder, plan_file),
+    ]
+
+
+def _edited_and_misnamed_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str]]:
+    """The twenty-fourth round's trials: a negative margin in a plan file (a traceback from
+    four commands), outputs named empty or as the input, an arm with a loop (a crash), a
+    figure of another format, joint values that start negative."""
+    doc = json.loads(plan_file.read_text())
+    doc["safety"]["margin_m"] = -1.0
+    negative = folder / "negative_margin.json"
+    negative.write_text(json.dumps(doc))
+    copy = folder / "own.json"
+    shutil.copy(plan_file, copy)
+    loop = folder / "loop.urdf"
+    loop.write_text(
+        PLANAR.read_text().replace(
+            "</robot>",
+            '<joint name="back" type="revolute"><parent link="link2"/><child link="link1"/>'
+            '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+            "</robot>",
+        )
+    )
+    compose = ["--base-mass", "100", "--base-size", "1", "1", "1", "--mount", "0.5", "0", "0"]
+    ur5 = ROOT / "robots" / "scenarios" / "ur5_servicer.toml"
+    margin = "safety.margin_m: -1.0 is less than the minimum of 0"
+    return [
+        (["verify", negative], True, margin),
+        (["sensitivity", negative], True, margin),
+        (["correct", negative, "--base-zyx-deg", "1", "0", "0"], True, margin),
+        (["export", negative, "--format", "csv", "-o", "n.csv"], True, margin),
+        (["show", copy, "--html", ""], True, "needs a file name"),
+        (["export", copy, "--format", "csv", "-o", copy], True, "is the file this command reads"),
+        (["compose", "--arm", loop, *compose, "-o", "l.urdf"], True, "closed loop"),
+        (["reach", "--plot", "r.txt"], True, "a figure is written as PNG, SVG or PDF"),
+        (["check", ur5, "--at", "-10,-90,90,-90,-90,0"], False, ""),
     ]
 
 
