@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import os
 import shutil
 import sys
 from dataclasses import replace
@@ -392,3 +393,59 @@ def test_a_sweep_whose_scenario_is_itself_says_so(tmp_path):
     path.write_text('scenario = "self.toml"\n[[axis]]\nkey = "duration"\nvalues = [1.0]\n')
     with pytest.raises(ff.ScenarioError, match=r"the sweep's scenario 'self\.toml' is the sweep"):
         SweepSpec.from_toml(path)
+
+
+def _children(pid: int) -> list[int]:
+    """The processes whose parent is ``pid`` (from /proc)."""
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            found.append(int(stat.parent.name))
+    return found
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc")
+def test_workers_leave_when_the_sweep_is_killed_outright(tmp_path):
+    """SIGKILL, which nothing can catch, left the fork server, its two workers and the
+    resource tracker running for ever; they now leave within seconds."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "killed.csv"
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "freefloat.cli",
+            "sweep",
+            str(DATA / "yaw_sweep.toml"),
+            "-o",
+            str(out),
+            "--workers",
+            "2",
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    deadline = time.monotonic() + 60.0
+    while time.monotonic() < deadline and (not out.exists() or out.read_text().count("\n") < 4):
+        time.sleep(0.05)
+    helpers = _children(proc.pid)
+    workers = [w for h in helpers for w in _children(h)]
+    assert len(helpers) >= 2 and len(workers) >= 1, (helpers, workers)  # mid-sweep
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    left = [p for p in helpers + workers if Path(f"/proc/{p}").exists()]
+    deadline = time.monotonic() + 15.0
+    while left and time.monotonic() < deadline:
+        time.sleep(0.1)
+        left = [p for p in left if Path(f"/proc/{p}").exists()]
+    for pid in left:  # not to leave them to the next test either
+        os.kill(pid, signal.SIGKILL)
+    assert left == []

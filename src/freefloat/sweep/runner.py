@@ -15,6 +15,7 @@ import multiprocessing as mp
 import os
 import sys
 import threading
+import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
@@ -36,9 +37,27 @@ __all__ = ["BLAS_ENV", "HANDSHAKE_GRACE", "connect", "sweep"]
 BLAS_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 
 
-def _init_worker() -> None:
-    """Start a local worker process with an empty robot cache."""
+def _init_worker(parent: int) -> None:
+    """Start a local worker process with an empty robot cache, watching the sweep's process.
+
+    ``parent``: the process running the sweep. A worker's own parent is the fork server, which
+    outlives a sweep killed outright (SIGKILL, which nothing can catch): the worker would
+    finish its job and wait for the next for ever. It leaves when the sweep's process is gone.
+    """
     _ROBOTS.clear()
+    threading.Thread(
+        target=_leave_with, args=(parent,), name="freefloat-watch", daemon=True
+    ).start()
+
+
+def _leave_with(parent: int, every: float = 1.0) -> None:
+    """Exit this worker (status 1) once process ``parent`` is gone; poll every ``every`` s."""
+    while True:
+        time.sleep(every)
+        try:
+            os.kill(parent, 0)
+        except (ProcessLookupError, PermissionError):  # gone (its number reused: another's)
+            os._exit(1)
 
 
 @contextmanager
@@ -70,7 +89,10 @@ def _local(jobs: Sequence[Job], workers: int) -> Iterator[JobOutcome]:
         context.set_forkserver_preload(["freefloat.sweep.jobs"])
     with _blas_env():
         pool = ProcessPoolExecutor(
-            max_workers=min(workers, len(jobs)), mp_context=context, initializer=_init_worker
+            max_workers=min(workers, len(jobs)),
+            mp_context=context,
+            initializer=_init_worker,
+            initargs=(os.getpid(),),
         )
         futures = [pool.submit(run_job_collecting, job) for job in jobs]
     try:
