@@ -384,3 +384,35 @@ def test_a_unitless_check_is_summarised_by_its_detail(tmp_path, capsys):
     direction = np.array([0.34, 0.94, 0.0]) / np.linalg.norm([0.34, 0.94, 0.0])
     truth = math.degrees(math.acos(float(np.clip(tool @ direction, -1.0, 1.0))))
     assert angle == pytest.approx(truth, abs=0.01)
+
+
+def test_a_far_planar_swing_suggests_more_freedom_which_helps(tmp_path, capsys):
+    """The worked example with automatic freedom and the goal yaw -20 deg: its path swings q1
+    265 deg beyond its span (one coefficient, the least that reaches the goal). The summary
+    says more free coefficients may swing less, and they do: with two on each joint the
+    largest excursion, sampled densely here, is far smaller."""
+    from freefloat.cli import main
+
+    base = (ROOT / "tests" / "data" / "worked_example_auto.toml").read_text()
+    text = base.replace(
+        "[goal]\njoints = { q1 = -60.0, q2 = 90.0 }   # [deg]; end effector at (1.71, -0.29) m "
+        "from the CM\nbase_zyx_deg = [0.0, 0.0, 0.0]",
+        "[goal]\njoints = { q1 = -60.0, q2 = 90.0 }\nbase_zyx_deg = [-20.0, 0.0, 0.0]",
+    )
+    assert "[-20.0, 0.0, 0.0]" in text
+    (tmp_path / "far.toml").write_text(text)
+    assert main(["plan", str(tmp_path / "far.toml"), "-o", str(tmp_path / "far.json")]) == 0
+    assert "more free coefficients ([path] extra on every joint) may find one" in (
+        capsys.readouterr().out
+    )
+    (tmp_path / "more.toml").write_text(text + "\n[path]\nextra = { q1 = 2, q2 = 2 }\n")
+    assert main(["plan", str(tmp_path / "more.toml"), "-o", str(tmp_path / "more.json")]) == 0
+
+    def swing(path):  # beyond the start-goal span, the largest over joints (rad)
+        plan = ff.Plan.load(path)
+        q = plan.joint_positions(np.linspace(0.0, plan.duration, 20001))
+        low, high = np.minimum(q[0], q[-1]), np.maximum(q[0], q[-1])
+        return float(np.max(np.maximum(q.max(axis=0) - high, low - q.min(axis=0))))
+
+    assert swing(tmp_path / "far.json") > np.radians(200.0)
+    assert swing(tmp_path / "more.json") < 0.5 * swing(tmp_path / "far.json")

@@ -292,7 +292,19 @@ def quality_line(p: Plan) -> str:
     largest = shown(q.largest_joint, q.largest_excursion)
     if abs(q.largest_excursion) >= _RESOLVED_EXCURSION:  # named only when it leaves its span
         largest += f" ({q.largest_joint})"
-    return f"  path quality    largest excursion beyond a start-goal span {largest}; {each}"
+    line = f"  path quality    largest excursion beyond a start-goal span {largest}; {each}"
+    if p.feasibility.planar and q.largest_excursion > FAR_EXCURSION_DEG:
+        # the search's root, least freedom first: the nearer-root search is spatial only
+        line += (
+            "; a planar path is kept as the search found it: more free coefficients "
+            "([path] extra on every joint) may find one that swings less"
+        )
+    return line
+
+
+#: A planar path whose largest excursion exceeds this (deg) gets the hint of more freedom
+#: (the spatial planner looks for a nearer root itself beyond the same 60 deg).
+FAR_EXCURSION_DEG = 60.0
 
 
 def objective_line(p: Plan) -> str:
