@@ -155,3 +155,25 @@ def test_spatial_bounds_inner_estimate(tmp_path, capsys):
     for row in rows:
         assert 0.0 <= float(row[3]) <= 5.0 + 1e-9
     assert figure.stat().st_size > 0
+
+
+def test_solved_goal_joints_take_the_turn_nearest_the_start():
+    """An unlimited joint solved whole turns away from its start (ETS-VII's wrist at -209 deg
+    from 20 deg, where 151 deg is the same pose) is moved to the turn nearest the start: the
+    same frame placement (Pinocchio's kinematics) and within half a turn of the start."""
+    import pinocchio as pin
+
+    from freefloat.problem.cartesian import _nearest_turns
+
+    robot = ff.load_robot(ROOT / "robots" / "planar_2dof.urdf")  # two continuous joints
+    start = np.radians([20.0, 30.0])
+    solved = np.radians([-209.0, 30.0 + 720.0])
+    nearer = _nearest_turns(robot, solved, start)
+    assert np.degrees(nearer) == pytest.approx([151.0, 30.0], abs=1e-9)
+    model, data = robot.model, robot.model.createData()
+    frame = model.getFrameId(robot.end_effector)
+    placed = []
+    for joints in (solved, nearer):
+        pin.framesForwardKinematics(model, data, robot.configuration(joints))
+        placed.append(data.oMf[frame].homogeneous.copy())
+    assert placed[0] == pytest.approx(placed[1], abs=1e-12)

@@ -20,6 +20,7 @@ import pinocchio as pin
 
 from ..errors import InputError, UnreachableGoalError
 from ..physics.momentum import MomentumMap
+from ..robot.model import Robot
 from .bounds import joint_ranges
 from .box_least_squares import box_least_squares
 from .quasi_random import unit_points
@@ -182,8 +183,25 @@ def solve_frame_goals(
         if error < best:
             best_x, best = result.x, error
         if best < TOLERANCE:
-            return full(np.asarray(best_x, dtype=float))
+            return _nearest_turns(robot, full(np.asarray(best_x, dtype=float)), base)
     raise _unreachable(mmap, goals, frames, full(best_x), quat, len(free))
+
+
+def _nearest_turns(robot: Robot, joints: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """``joints`` (rad or m) with each turning joint's value a whole turn nearer ``start``.
+
+    A turning joint's value and that value plus whole turns place every frame alike, so the
+    goal's pose stays met; of those within the joint's limits, the one nearest the start
+    joint's (an unlimited wrist solved at -209 deg where 151 deg is the same pose) asks the
+    path for less travel.
+    """
+    out = joints.copy()
+    for i, joint in enumerate(robot.joints):
+        if joint.angular:
+            nearer = start[i] + math.remainder(out[i] - start[i], 2.0 * math.pi)
+            if joint.lower <= nearer <= joint.upper:
+                out[i] = nearer
+    return out
 
 
 def _unreachable(
