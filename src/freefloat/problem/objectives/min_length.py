@@ -29,7 +29,7 @@ class MinLength(Objective):
     unit = "rad"
     duration_power = 0
     exact = False
-    description = "shortest joint-space path (smoothed length)"
+    description = "shortest joint-space path (smoothed: at most 1e-3 of the travel above it)"
 
     def __init__(self, nodes: int = 64) -> None:
         self.nodes = int(nodes)
