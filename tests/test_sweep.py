@@ -449,3 +449,18 @@ def test_workers_leave_when_the_sweep_is_killed_outright(tmp_path):
     for pid in left:  # not to leave them to the next test either
         os.kill(pid, signal.SIGKILL)
     assert left == []
+
+
+def test_a_resumed_sweep_says_how_many_jobs_it_kept(tmp_path, capsys):
+    from freefloat.cli import main
+
+    path = _subset_file(tmp_path)
+    out = tmp_path / "subset.csv"
+    assert main(["sweep", str(path), "-o", str(out), "--workers", "1"]) == 0
+    assert "(resumed:" not in capsys.readouterr().out  # a whole run
+    lines = out.read_text().splitlines(keepends=True)
+    out.write_text("".join(lines[:4]))  # the header and three rows
+    assert main(["sweep", str(path), "-o", str(out), "--workers", "1"]) == 0
+    assert f"(resumed: 3 of {len(SUBSET)} jobs were in it, {len(SUBSET) - 3} run now)" in (
+        capsys.readouterr().out
+    )

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
 
 from ..errors import InputError, InputLimitError
@@ -62,8 +63,11 @@ def run(args: argparse.Namespace) -> int:
             raise InputError("--plots draws feasibility maps of plans; a replay sweep has none")
         check_plottable(spec)
     client = connect(args.scheduler) if args.scheduler is not None else None
+    ran: list[object] = []
     try:
-        rows = sweep(spec, workers=args.workers, client=client, output=args.output)
+        rows = sweep(
+            spec, workers=args.workers, client=client, output=args.output, on_row=ran.append
+        )
     finally:
         if client is not None:
             client.close()
@@ -84,15 +88,21 @@ def run(args: argparse.Namespace) -> int:
             dtype=float,
         )
         print("\n".join(distribution_lines(error_distribution(vectors), len(rows))))
-        print(f"  results         {Path(args.output).resolve()}")
+        print(f"  results         {Path(args.output).resolve()}{_resumed(rows, ran)}")
         return 0
     counts = {s: sum(r.status == s for r in rows) for s in ("planned", "infeasible", "failed")}
     print(
         f"freefloat sweep: {len(rows)} jobs over {', '.join(spec.keys)}: "
         + ", ".join(f"{n} {s}" for s, n in counts.items())
     )
-    print(f"  results         {Path(args.output).resolve()}")
+    print(f"  results         {Path(args.output).resolve()}{_resumed(rows, ran)}")
     if args.plots:
         written = plot_sweep(spec, [r for r in rows if isinstance(r, SweepRow)], args.plots)
         print(f"  plots           {', '.join(str(p) for p in written)}")
     return 0
+
+
+def _resumed(rows: Sequence[object], ran: Sequence[object]) -> str:
+    """`` (resumed: K of N jobs were in the file, M run now)``, or "" for a whole run."""
+    kept = len(rows) - len(ran)
+    return f" (resumed: {kept} of {len(rows)} jobs were in it, {len(ran)} run now)" if kept else ""
