@@ -86,6 +86,27 @@ def test_resampling_reproduces_the_samples_at_their_instants(worked_plan):
         np.testing.assert_allclose(getattr(again, name), getattr(own, name), atol=1e-10)
 
 
+def test_resampling_in_small_chunks_reproduces_the_samples(worked_plan, monkeypatch):
+    """The attitude is integrated a chunk of steps at a time (the base rates of millions of
+    nodes at once exhausted the memory at the largest rate): chunks of 7 steps give the
+    plan's own samples as well."""
+    import importlib
+
+    trajectory = importlib.import_module("freefloat.export.trajectory")
+    monkeypatch.setattr(trajectory, "_CHUNK", 7)
+    own = from_samples(worked_plan)
+    again = resample(worked_plan, 20.0, times=own.t)
+    np.testing.assert_allclose(again.base_quaternion_xyzw, own.base_quaternion_xyzw, atol=1e-10)
+    np.testing.assert_allclose(again.base_position, own.base_position, atol=1e-10)
+
+
+@pytest.mark.parametrize("times", [[5.0, 10.0, 2.0], [0.0, 5.0, 25.0], [-1.0, 5.0]])
+def test_resampling_instants_must_ascend_within_the_motion(worked_plan, times):
+    """Unsorted instants gave wrong attitudes; ones past T were extrapolated."""
+    with pytest.raises(ff.InputError, match="resampling instants must ascend within"):
+        resample(worked_plan, 20.0, times=np.array(times))
+
+
 def test_resampled_grid(worked_plan):
     traj = resample(worked_plan, 7.0)
     T = worked_plan.duration
@@ -203,7 +224,8 @@ def test_ros2_bag_round_trip_resampled(worked_plan, plan_file, tmp_path):
         (["--format", "csv", "--rate", "0"], "--rate must be a positive number of Hz"),
         (["--format", "csv", "--rate", "fast"], "--rate must be a positive number of Hz"),
         (["--format", "mcap", "--rate", "nan"], "--rate must be a positive number of Hz"),
-        (["--format", "csv", "--rate", "1e12"], "at most"),
+        (["--format", "csv", "--rate", "1e12"], "samples an export may hold"),
+        (["--format", "csv", "--rate", "1e308"], "samples an export may hold"),
     ],
 )
 def test_bad_format_or_rate_is_one_line_and_writes_nothing(plan_file, tmp_path, extra, needle):

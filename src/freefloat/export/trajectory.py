@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -95,14 +96,15 @@ def _kinds(plan: Plan) -> list[str]:
 def _check_rate(rate: float, duration: float) -> int:
     if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
         raise InputError(f"--rate must be a positive number of Hz, got {rate}")
-    count = math.floor(duration * rate * (1 + 1e-12)) + 2
+    span = duration * rate * (1 + 1e-12)  # beyond the floats for --rate 1e308
+    count = math.floor(span) + 2 if span < MAX_SAMPLES else MAX_SAMPLES + 1
     if count > MAX_SAMPLES:
         # the largest rate that keeps the count, rounded down to 4 significant figures
         largest = (MAX_SAMPLES - 2) / (duration * (1 + 1e-12))
         scale = 10.0 ** (math.floor(math.log10(largest)) - 3)
         raise InputError(
-            f"--rate {rate:g} Hz gives {count} samples over {duration:g} s; at most "
-            f"{MAX_SAMPLES} (use a rate up to {math.floor(largest / scale) * scale:.4g} Hz)"
+            f"--rate {rate:g} Hz gives more than the {MAX_SAMPLES} samples an export may hold "
+            f"over {duration:g} s (use a rate up to {math.floor(largest / scale) * scale:.4g} Hz)"
         )
     return count
 
@@ -113,13 +115,13 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
     Args:
         plan: the plan.
         rate: samples per second (Hz), positive.
-        times: explicit instants (s) in [0, T] instead of the rate's grid (tests).
+        times: explicit instants (s) in [0, T], ascending, instead of the rate's grid (tests).
 
     Raises:
-        InputError: ``rate`` is not a positive finite number, or gives too many samples.
+        InputError: ``rate`` is not a positive finite number or gives too many samples, or
+            ``times`` are not ascending instants within the motion.
         ModelError: the plan's URDF cannot be loaded.
     """
-    from ..physics.attitude import magnus_increments, propagate, step_nodes
     from ..physics.dynamics import inverse_dynamics
     from ..physics.momentum import MomentumMap
     from ..plans.robot_copy import plan_robot
@@ -131,34 +133,22 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
         grid = grid[grid < T - 1e-9 * max(1.0, T)]
         times = np.append(grid, T)
     t = np.asarray(times, dtype=float)
+    if t.ndim != 1 or not len(t) or np.any(np.diff(t) < 0.0) or t[0] < 0.0 or t[-1] > T:
+        raise InputError(f"resampling instants must ascend within [0, {T:g}] s")
     robot = plan_robot(plan)
     mmap = MomentumMap(robot)
     frames = list(robot.end_effectors)
     path = plan.path()
     exact = path.evaluate(t)
     q, qd, qdd = exact.q, exact.qd, exact.qdd
-
-    # Attitude: Magnus steps on a fine grid that contains every output instant.
-    edges = [0.0]
-    for a, b in zip(np.concatenate([[0.0], t[:-1]]), t, strict=True):
-        if b > a:
-            steps = max(1, math.ceil((b - a) / (T / 2000.0)))
-            edges.extend(np.linspace(a, b, steps + 1)[1:].tolist())
-    fine = np.asarray(edges)
-    nodes, h = step_nodes(fine)
-    at_nodes = path.evaluate(nodes)
-    omega = mmap.base_rates(at_nodes.q, at_nodes.qd).omega.reshape(-1, 3, 3)
-    attitudes = propagate(
-        np.asarray(plan.base.start_quaternion_xyzw, float), magnus_increments(omega, h)
-    )
-    index = np.searchsorted(fine, t)
-    quats = attitudes[np.clip(index, 0, len(fine) - 1)]
-
-    base, ee, tau = [], [], []
-    for qk, qdk, qddk, quat in zip(q, qd, qdd, quats, strict=True):
-        base.append(mmap.base_position(qk, quat))
-        ee.append([mmap.end_effector_pose(qk, quat, f).translation.copy() for f in frames])
-        tau.append(inverse_dynamics(mmap, qk, qdk, qddk).tau)
+    quats = _attitudes(plan, path, mmap, t)
+    base, tau = np.empty((len(t), 3)), np.empty_like(q)
+    ee = np.empty((len(frames), len(t), 3))
+    for k, (qk, qdk, qddk, quat) in enumerate(zip(q, qd, qdd, quats, strict=True)):
+        base[k] = mmap.base_position(qk, quat)
+        for e, f in enumerate(frames):
+            ee[e, k] = mmap.end_effector_pose(qk, quat, f).translation
+        tau[k] = inverse_dynamics(mmap, qk, qdk, qddk).tau
     return Trajectory(
         joints=list(plan.robot.joints),
         kinds=_kinds(plan),
@@ -166,14 +156,45 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
         q=q,
         qd=qd,
         qdd=qdd,
-        tau=np.asarray(tau),
+        tau=tau,
         base_quaternion_xyzw=quats,
-        base_position=np.asarray(base),
-        end_effector_position=np.asarray(ee)[:, 0],
+        base_position=base,
+        end_effector_position=ee[0],
         resampled=True,
         end_effectors=frames,
-        end_effector_paths=np.asarray(ee).transpose(1, 0, 2),
+        end_effector_paths=ee,
     )
+
+
+#: Magnus steps whose base rates are computed together (a bound on memory, not on accuracy).
+_CHUNK = 4096
+
+
+def _attitudes(plan: Plan, path: Any, mmap: Any, t: np.ndarray) -> np.ndarray:
+    """(K, 4) base attitudes at the ascending instants ``t`` (s), from the plan's start.
+
+    Sixth-order Magnus steps of at most ``T / 2000`` on a grid that contains every instant,
+    taken :data:`_CHUNK` at a time (the base rates of millions of nodes at once would need
+    gigabytes), each chunk from the last one's end.
+    """
+    from ..physics.attitude import magnus_increments, propagate, step_nodes
+
+    T = plan.duration
+    edges = [0.0]
+    for a, b in zip(np.concatenate([[0.0], t[:-1]]), t, strict=True):
+        if b > a:
+            steps = max(1, math.ceil((b - a) / (T / 2000.0)))
+            edges.extend(np.linspace(a, b, steps + 1)[1:].tolist())
+    fine = np.asarray(edges)
+    attitudes = np.empty((len(fine), 4))
+    attitudes[0] = np.asarray(plan.base.start_quaternion_xyzw, float)
+    for lo in range(0, len(fine) - 1, _CHUNK):
+        piece = fine[lo : lo + _CHUNK + 1]
+        nodes, h = step_nodes(piece)
+        at_nodes = path.evaluate(nodes)
+        omega = mmap.base_rates(at_nodes.q, at_nodes.qd).omega.reshape(-1, 3, 3)
+        attitudes[lo : lo + len(piece)] = propagate(attitudes[lo], magnus_increments(omega, h))
+    return attitudes[np.clip(np.searchsorted(fine, t), 0, len(fine) - 1)]
 
 
 def trajectory(plan: Plan, rate: float | None = None) -> Trajectory:
