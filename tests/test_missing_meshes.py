@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 
 import numpy as np
+import pytest
 
 import freefloat as ff
 from freefloat.robot.compose import ServicerSpec, compose_servicer
@@ -54,3 +55,32 @@ def test_plan_and_playback_draw_a_sphere_for_the_missing_mesh(tmp_path, caplog, 
     assert any(
         "meshes/link.stl" in m and f"spheres of {MISSING_MESH_RADIUS:g} m" in m for m in messages
     )
+
+
+def test_links_without_visuals_are_drawn_from_their_collisions_or_said_undrawn(tmp_path, caplog):
+    """Robonaut 2 and a composed Canadarm2 showed no robot: their links have no <visual>.
+    link1's <visual> becomes a <collision> (a 0.07 m sphere here): drawn from it, as its
+    URDF states it; link2's is removed: a body with mass and nothing to draw, said so."""
+    text = (ROOT / "robots" / "planar_2dof.urdf").read_text()
+    first = text.index("<visual>", text.index('<link name="link1">'))
+    end = text.index("</visual>", first) + len("</visual>")
+    text = (
+        text[:first]
+        + (
+            '<collision><origin xyz="0.5 0 0"/><geometry><sphere radius="0.07"/></geometry>'
+            "</collision>"
+        )
+        + text[end:]
+    )
+    second = text.index("<visual>", text.index('<link name="link2">'))
+    text = text[:second] + text[text.index("</visual>", second) + len("</visual>") :]
+    path = tmp_path / "bare.urdf"
+    path.write_text(text)
+    with caplog.at_level(logging.WARNING, logger="freefloat"):
+        drawn = {v.name: v for v in visual_model(ff.load_robot(path))}
+    assert (drawn["link1_0"].shape, drawn["link1_0"].size) == ("sphere", (0.07,))
+    assert drawn["link1_0"].placement.translation == pytest.approx([0.5, 0.0, 0.0])
+    assert not any(name.startswith("link2") for name in drawn)
+    said = [r.getMessage() for r in caplog.records]
+    assert any("have no <visual> (e.g. link1): drawn from their <collision>" in m for m in said)
+    assert any("neither a <visual> nor a <collision> shape (e.g. link2)" in m for m in said)

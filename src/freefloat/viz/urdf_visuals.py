@@ -88,12 +88,18 @@ def visual_model(robot: Robot) -> list[Visual]:
     model = robot.model
     out: list[Visual] = []
     missing: list[str] = []
+    borrowed: list[str] = []  # links drawn from their collision shapes
+    bare: list[str] = []  # links with mass and nothing to draw
     for link in root.findall("link"):
         name = link.get("name", "")
         if not model.existFrame(name, pin.FrameType.BODY):
             continue
         frame = model.frames[model.getFrameId(name, pin.FrameType.BODY)]
-        for k, element in enumerate(link.findall("visual")):
+        elements = link.findall("visual")
+        if not elements:
+            elements = link.findall("collision")
+            (borrowed if elements else bare if _massive(link) else []).append(name)
+        for k, element in enumerate(elements):
             label = f"{name}_{k}"
             placement = frame.placement * _origin(element.find("origin"), robot, label)
             drawn = _geometry(element.find("geometry"), robot, label, missing)
@@ -106,6 +112,7 @@ def visual_model(robot: Robot) -> list[Visual]:
                     _colour(element, colours, robot),
                 )
             )
+    _say_undrawn(robot, borrowed, bare)
     if missing:
         LOGGER.warning(
             "%d mesh file(s) of %s cannot be found or are not STL, OBJ or COLLADA files (e.g. "
@@ -116,6 +123,35 @@ def visual_model(robot: Robot) -> list[Visual]:
             MISSING_MESH_RADIUS,
         )
     return out
+
+
+def _massive(link: ET.Element) -> bool:
+    """Whether a link states a mass above zero (a body, not a bare frame)."""
+    mass = link.find("inertial/mass")
+    try:
+        return mass is not None and float(mass.get("value", "0")) > 0.0
+    except ValueError:
+        return False
+
+
+def _say_undrawn(robot: Robot, borrowed: list[str], bare: list[str]) -> None:
+    """One warning each for links drawn from their collision shapes and links not drawn."""
+    urdf = Path(robot.urdf).name
+    if borrowed:
+        LOGGER.warning(
+            "%d link(s) of %s have no <visual> (e.g. %s): drawn from their <collision> shapes",
+            len(borrowed),
+            urdf,
+            borrowed[0],
+        )
+    if bare:
+        LOGGER.warning(
+            "%d link(s) of %s with mass have neither a <visual> nor a <collision> shape (e.g. "
+            "%s): not drawn",
+            len(bare),
+            urdf,
+            bare[0],
+        )
 
 
 def _colour(
