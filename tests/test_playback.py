@@ -127,11 +127,20 @@ def test_show_html_cli_leaves_no_server(tmp_path, worked_plan, capsys):
     assert "wrote" in capsys.readouterr().out
 
 
-def test_bad_speed_is_refused(tmp_path, worked_plan, capsys):
+@pytest.mark.parametrize(
+    ("speed", "said"),
+    [
+        ("0", "--speed must be a positive number"),
+        # slower, the page's animation times overflowed to infinity: nothing played
+        ("1e-300", "--speed = 1e-300 is outside the supported range [0.001, 1000]"),
+    ],
+)
+def test_bad_speed_is_refused(tmp_path, worked_plan, capsys, speed, said):
     plan_path = worked_plan.save(tmp_path / "p.json")
-    assert main(["show", str(plan_path), "--html", str(tmp_path / "x.html"), "--speed", "0"]) == 2
-    assert "--speed must be a positive number" in capsys.readouterr().err
-    assert not (tmp_path / "x.html").exists()
+    page = tmp_path / "x.html"
+    assert main(["show", str(plan_path), "--html", str(page), "--speed", speed]) == 2
+    assert said in capsys.readouterr().err
+    assert not page.exists()
 
 
 def test_broken_meshcat_gives_a_clear_error(tmp_path, worked_plan):

@@ -4,13 +4,16 @@ from __future__ import annotations
 
 import argparse
 
+from ..errors import InputLimitError
 from ..progress import stage
 from .common import Commands, add_no_verify, check_outputs, checked_plan, positive
 
-__all__ = ["MAX_SPEED", "add_parser", "check", "run"]
+__all__ = ["MAX_SPEED", "MIN_SPEED", "add_parser", "check", "run"]
 
-#: Fastest playback of ``show --speed`` (times real time).
+#: Fastest and slowest playback of ``show --speed`` (times real time); slower than the
+#: slowest, the page's animation times overflow (1e-300: every key at infinity).
 MAX_SPEED = 1000.0
+MIN_SPEED = 1e-3
 
 
 def add_parser(commands: Commands) -> argparse.ArgumentParser:
@@ -34,6 +37,8 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
 def check(args: argparse.Namespace) -> None:
     """Refuse a bad speed and an unwritable page before any work (docs/limits.md)."""
     positive(args.speed, "--speed", MAX_SPEED)
+    if args.speed < MIN_SPEED:
+        raise InputLimitError("--speed", args.speed, MIN_SPEED, MAX_SPEED)
     check_outputs(args, ("--html", "html"))
 
 
