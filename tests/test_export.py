@@ -258,3 +258,23 @@ def test_the_rate_a_refusal_suggests_is_accepted(duration):
     assert trajectory._check_rate(suggested, duration) <= trajectory.MAX_SAMPLES
     with pytest.raises(ff.InputError):
         trajectory._check_rate(suggested * 1.001, duration)
+
+
+def test_export_verifies_the_plan_first(plan_file, tmp_path, capsys):
+    """A plan whose end effector was moved 0.5 m at one sample exported without a word, for ROS
+    tools to trust; it is refused as show and plot refuse it, and --no-verify writes it."""
+    import json
+
+    data = json.loads(plan_file.read_text())
+    data["samples"]["end_effector_position"][10][0] += 0.5
+    tampered = tmp_path / "tampered.json"
+    tampered.write_text(json.dumps(data))
+    out = tmp_path / "t.csv"
+    from freefloat.cli import main
+
+    assert main(["export", str(tampered), "--format", "csv", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "end_effector_position" in err and "--no-verify exports it anyway" in err
+    assert not out.exists()
+    assert main(["export", str(tampered), "--format", "csv", "-o", str(out), "--no-verify"]) == 0
+    assert out.is_file()

@@ -47,7 +47,7 @@ def load_scenario(path: str | None) -> Scenario:
 
 
 def checked_plan(args: argparse.Namespace) -> Plan:
-    """The plan file of ``show`` or ``plot``, verified unless ``--no-verify``.
+    """The plan file of ``show``, ``plot`` or ``export``, verified unless ``--no-verify``.
 
     Raises:
         PlanFileError: unreadable, breaks the schema or a limit, disagrees with its
@@ -73,7 +73,7 @@ def checked_plan(args: argparse.Namespace) -> Plan:
 
 
 def add_no_verify(parser: argparse.ArgumentParser, verb: str) -> None:
-    """--no-verify of show and plot."""
+    """--no-verify of show, plot and export."""
     parser.add_argument(
         "--no-verify",
         action="store_true",

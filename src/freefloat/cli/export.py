@@ -6,9 +6,8 @@ import argparse
 
 from ..errors import InputError
 from ..export import EXPORTS
-from ..plans.schema import load_plan_file
 from ..progress import stage
-from .common import Commands, check_outputs
+from .common import Commands, add_no_verify, check_outputs, checked_plan
 
 __all__ = ["add_parser", "check", "run"]
 
@@ -30,6 +29,7 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
     p_export.add_argument(
         "-o", "--output", required=True, metavar="FILE", help="file (folder for ros2-bag)"
     )
+    add_no_verify(p_export, "export")
     p_export.set_defaults(func=run, check=check)
     return p_export
 
@@ -51,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
             rate = float(args.rate)
         except ValueError:
             raise InputError(f"--rate must be a positive number of Hz, got {args.rate!r}") from None
-    loaded = load_plan_file(args.plan)  # the schema first: a tampered file is named
+    loaded = checked_plan(args)  # verified, as show and plot do, unless --no-verify
     with stage(f"export {args.format}"):
         written = export(loaded, args.output, args.format, rate)
     source = "the plan's samples" if rate is None else f"resampled at {rate:g} Hz"
