@@ -120,6 +120,12 @@ def test_a_one_joint_robot_reaches_one_attitude_and_says_which(
     # and that attitude plans
     plan = ff.plan(ff.Scenario.from_toml(one(f"base_quaternion_xyzw = {quaternion}")))
     assert plan.verification.passed and plan.base.attitude_error_rad <= 1e-9
+    assert (
+        main(["plan", one(f"base_quaternion_xyzw = {quaternion}"), "-o", str(tmp_path / "o.json")])
+        == 0
+    )
+    summary = capsys.readouterr().out  # the one change is its own interval: not "beyond"
+    assert re.search(r"planar bounds   yaw change \S+ deg in \(", summary), summary
     # and no loop corrects it (it said "cannot turn ... within the plan's limits")
     saved = plan.save(tmp_path / "one.plan.json")
     assert main(["correct", str(saved), "--base-zyx-deg", "1", "2", "3"]) == 2
@@ -169,6 +175,11 @@ def test_a_spatial_one_joint_robot_reaches_one_attitude_and_says_which(tmp_path,
     assert ff.geodesic_angle(quaternion, exact) < 1e-8
     assert main(["reach", str(scenario), "-q"]) == 0
     assert capsys.readouterr().out.count("one joint: every path turns the spacecraft alike") == 14
+    assert main(["bounds", str(scenario)]) == 0  # no continuation to run: the one attitude
+    said = re.search(r"reaches base_quaternion_xyzw = (\[[^\]]+\])", capsys.readouterr().out)
+    assert said
+    bounded = np.array([float(v) for v in said.group(1).strip("[]").split(",")])
+    assert ff.geodesic_angle(bounded, exact) < 1e-8
     scenario.write_text(
         SCENARIO.format(goal=f"base_quaternion_xyzw = {quaternion.tolist()}", travel=60.0)
     )

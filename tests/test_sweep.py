@@ -411,7 +411,8 @@ def _children(pid: int) -> list[int]:
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc")
 def test_workers_leave_when_the_sweep_is_killed_outright(tmp_path):
     """SIGKILL, which nothing can catch, left the fork server, its two workers and the
-    resource tracker running for ever; they now leave within seconds."""
+    resource tracker running for ever; they now leave within seconds, even while the killed
+    sweep waits to be reaped (a zombie, as here until the end)."""
     import signal
     import subprocess
     import sys
@@ -439,8 +440,7 @@ def test_workers_leave_when_the_sweep_is_killed_outright(tmp_path):
     helpers = _children(proc.pid)
     workers = [w for h in helpers for w in _children(h)]
     assert len(helpers) >= 2 and len(workers) >= 1, (helpers, workers)  # mid-sweep
-    proc.send_signal(signal.SIGKILL)
-    proc.wait()
+    proc.send_signal(signal.SIGKILL)  # not reaped until the end: a zombie meanwhile
     left = [p for p in helpers + workers if Path(f"/proc/{p}").exists()]
     deadline = time.monotonic() + 15.0
     while left and time.monotonic() < deadline:
@@ -448,6 +448,7 @@ def test_workers_leave_when_the_sweep_is_killed_outright(tmp_path):
         left = [p for p in left if Path(f"/proc/{p}").exists()]
     for pid in left:  # not to leave them to the next test either
         os.kill(pid, signal.SIGKILL)
+    proc.wait()
     assert left == []
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import math
 
+import numpy as np
+
 from ..errors import InputError, InputLimitError
 from ..parallel import check_jobs
 from ..problem.build import ONE_JOINT_TOLERANCE, planar_yaw_branch, problem_from_scenario
@@ -64,6 +66,11 @@ def run(args: argparse.Namespace) -> int:
     """Print the planar bounds, or a spatial robot's inner estimate."""
     scenario = load_scenario(args.scenario)
     problem = problem_from_scenario(scenario.resolved(), check_bounds=False)
+    if scenario.robot.n == 1 and not problem.planar:  # no estimate to make: one attitude
+        reached = [float(v) for v in problem.achieved(np.zeros(problem.n_free))]
+        print(f"freefloat bounds: {scenario.robot.name} (spatial), one joint: every path")
+        print(f"  reaches base_quaternion_xyzw = {reached}")
+        return 0
     if problem.bounds is None or problem.yaw_change is None:
         return spatial_bounds(scenario, args)
     if args.plot:  # before any line is printed: nothing drawn would be silently dropped

@@ -147,9 +147,11 @@ def build_problem(
     return _one_joint(problem, check_bounds) if robot.n == 1 else problem
 
 
-#: How far (rad) a one-joint planar robot's goal may lie from the one attitude it reaches,
-#: at the least (more when the integration's own error estimate is larger).
-ONE_JOINT_TOLERANCE = 1e-9
+#: How far (rad) a one-joint robot's goal may lie from the one attitude it reaches before it
+#: is refused here: verification's attitude tolerance, the loosest a plan can be asked for
+#: (more when the integration's own error estimate is larger); a goal nearer is the solver's
+#: to judge at the tolerance it was given.
+ONE_JOINT_TOLERANCE = 1e-7
 
 
 def _one_joint(problem: Problem, check_bounds: bool) -> Problem:

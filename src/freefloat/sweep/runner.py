@@ -45,9 +45,10 @@ def _init_worker(parent: int) -> None:
     finish its job and wait for the next for ever. It leaves when the sweep's process is gone.
     """
     _ROBOTS.clear()
-    threading.Thread(
-        target=_leave_with, args=(parent,), name="freefloat-watch", daemon=True
-    ).start()
+    if os.name == "posix":  # signal 0 probes a process there (elsewhere it is a Ctrl-C)
+        threading.Thread(
+            target=_leave_with, args=(parent,), name="freefloat-watch", daemon=True
+        ).start()
 
 
 def _leave_with(parent: int, every: float = 1.0) -> None:
@@ -56,8 +57,20 @@ def _leave_with(parent: int, every: float = 1.0) -> None:
         time.sleep(every)
         try:
             os.kill(parent, 0)
-        except (ProcessLookupError, PermissionError):  # gone (its number reused: another's)
+        except ProcessLookupError:
             os._exit(1)
+        except PermissionError:  # there, but not ours to signal (a sandbox): still alive
+            continue
+        if _zombie(parent):  # killed and not yet reaped by its own parent
+            os._exit(1)
+
+
+def _zombie(pid: int) -> bool:
+    """Whether process ``pid`` has ended and waits to be reaped (Linux's /proc; else False)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
+    except (OSError, IndexError):
+        return False
 
 
 @contextmanager

@@ -99,7 +99,8 @@ def summary(
     if p.feasibility.planar and p.feasibility.yaw_change_bounds_deg is not None:
         lo, hi = p.feasibility.yaw_change_bounds_deg
         asked = p.feasibility.requested_yaw_change_deg
-        where = "in" if asked is not None and lo <= asked <= hi else "beyond"
+        # within rounding (deg) of the interval: a one-joint robot's is a single point
+        where = "in" if asked is not None and lo - 1e-6 <= asked <= hi + 1e-6 else "beyond"
         loop = "" if where == "in" else " of simple motions: this path goes back and forth"
         lines.append(
             f"  planar bounds   yaw change {asked:.3f} deg {where} ({lo:.3f}, {hi:.3f}) deg{loop}"
