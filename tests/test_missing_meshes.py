@@ -79,6 +79,7 @@ def test_links_without_visuals_are_drawn_from_their_collisions_or_said_undrawn(t
     with caplog.at_level(logging.WARNING, logger="freefloat"):
         drawn = {v.name: v for v in visual_model(ff.load_robot(path))}
     assert (drawn["link1_0"].shape, drawn["link1_0"].size) == ("sphere", (0.07,))
+    assert drawn["link1_0"].element == "collision" and drawn["base_0"].element == "visual"
     assert drawn["link1_0"].placement.translation == pytest.approx([0.5, 0.0, 0.0])
     assert not any(name.startswith("link2") for name in drawn)
     said = [r.getMessage() for r in caplog.records]

@@ -117,7 +117,8 @@ def _compare(robot) -> int:
     viz.loadViewerModel(rootNodeName="robot")
     viz.display(q)
     mine = meshcat.Visualizer(window=RecordedScene())
-    visuals = visual_model(robot)
+    # the URDF's visuals (a link that states none is drawn from its collisions: not theirs)
+    visuals = [v for v in visual_model(robot) if v.element == "visual"]
     nodes = draw_visuals(mine, visuals, "robot")
     data = robot.model.createData()
     pin.forwardKinematics(robot.model, data, q)

@@ -56,6 +56,8 @@ class Visual:
         mesh: the mesh file, for ``"mesh"``.
         scale: the mesh's scale per axis.
         rgba: the URDF's colour, or None when it states none.
+        element: the URDF element drawn: ``"visual"``, or ``"collision"`` for a link that
+            states no visual.
     """
 
     name: str
@@ -66,6 +68,7 @@ class Visual:
     mesh: Path | None = None
     scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
     rgba: tuple[float, float, float, float] | None = None
+    element: str = "visual"
 
 
 def visual_model(robot: Robot) -> list[Visual]:
@@ -110,6 +113,7 @@ def visual_model(robot: Robot) -> list[Visual]:
                     placement,
                     *drawn,
                     _colour(element, colours, robot),
+                    element.tag,
                 )
             )
     _say_undrawn(robot, borrowed, bare)
