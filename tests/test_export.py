@@ -253,11 +253,11 @@ def test_the_rate_a_refusal_suggests_is_accepted(duration):
 
     refused = 2.0 * trajectory.MAX_SAMPLES / duration
     with pytest.raises(ff.InputError) as info:
-        trajectory._check_rate(refused, duration)
+        trajectory.check_rate(refused, duration)
     suggested = float(re.search(r"use a rate up to ([\d.e+]+) Hz", str(info.value)).group(1))
-    assert trajectory._check_rate(suggested, duration) <= trajectory.MAX_SAMPLES
+    assert trajectory.check_rate(suggested, duration) <= trajectory.MAX_SAMPLES
     with pytest.raises(ff.InputError):
-        trajectory._check_rate(suggested * 1.001, duration)
+        trajectory.check_rate(suggested * 1.001, duration)
 
 
 def test_export_verifies_the_plan_first(plan_file, tmp_path, capsys):
@@ -278,3 +278,18 @@ def test_export_verifies_the_plan_first(plan_file, tmp_path, capsys):
     assert not out.exists()
     assert main(["export", str(tampered), "--format", "csv", "-o", str(out), "--no-verify"]) == 0
     assert out.is_file()
+
+
+def test_a_rate_beyond_the_limit_is_refused_before_the_plan_is_verified(
+    plan_file, tmp_path, capsys, monkeypatch
+):
+    """The rate is checked against the plan's duration first: its refusal costs no
+    verification (it came after one)."""
+    from freefloat.cli import common, main
+
+    verified = []
+    monkeypatch.setattr(common, "verify_plan", lambda plan: verified.append(plan))
+    out = tmp_path / "r.csv"
+    assert main(["export", str(plan_file), "--format", "csv", "--rate", "1e9", "-o", str(out)]) == 2
+    assert "samples an export may hold" in capsys.readouterr().err
+    assert verified == [] and not out.exists()

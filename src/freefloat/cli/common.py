@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -46,8 +47,11 @@ def load_scenario(path: str | None) -> Scenario:
         return Scenario.from_toml(path if path else default_scenario_path())
 
 
-def checked_plan(args: argparse.Namespace) -> Plan:
+def checked_plan(args: argparse.Namespace, before: Callable[[Plan], None] | None = None) -> Plan:
     """The plan file of ``show``, ``plot`` or ``export``, verified unless ``--no-verify``.
+
+    ``before``: called with the plan read, before it is verified (a check of the command's own
+    options against it, so that a refusal costs no verification).
 
     Raises:
         PlanFileError: unreadable, breaks the schema or a limit, disagrees with its
@@ -56,6 +60,8 @@ def checked_plan(args: argparse.Namespace) -> Plan:
     from ..plans.schema import load_plan_file
 
     loaded = load_plan_file(args.plan)
+    if before is not None:
+        before(loaded)
     if args.no_verify:
         return loaded
     hint = f"freefloat verify {args.plan} shows the checks; --no-verify {args.command}s it anyway"

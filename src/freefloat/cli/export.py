@@ -6,6 +6,8 @@ import argparse
 
 from ..errors import InputError
 from ..export import EXPORTS
+from ..export.trajectory import check_rate
+from ..plans.format import Plan
 from ..progress import stage
 from .common import Commands, add_no_verify, check_outputs, checked_plan
 
@@ -51,7 +53,12 @@ def run(args: argparse.Namespace) -> int:
             rate = float(args.rate)
         except ValueError:
             raise InputError(f"--rate must be a positive number of Hz, got {args.rate!r}") from None
-    loaded = checked_plan(args)  # verified, as show and plot do, unless --no-verify
+
+    def rate_fits(plan: Plan) -> None:  # before its verification
+        if rate is not None:
+            check_rate(rate, plan.duration)
+
+    loaded = checked_plan(args, rate_fits)  # verified, as show and plot do, unless --no-verify
     with stage(f"export {args.format}"):
         written = export(loaded, args.output, args.format, rate)
     source = "the plan's samples" if rate is None else f"resampled at {rate:g} Hz"

@@ -26,7 +26,7 @@ import numpy as np
 from ..errors import InputError
 from ..plans.format import Plan
 
-__all__ = ["MAX_SAMPLES", "Trajectory", "from_samples", "resample", "trajectory"]
+__all__ = ["MAX_SAMPLES", "Trajectory", "check_rate", "from_samples", "resample", "trajectory"]
 
 #: Largest number of instants a resampled export may hold.
 MAX_SAMPLES = 2_000_000
@@ -93,7 +93,13 @@ def _kinds(plan: Plan) -> list[str]:
     return kinds if len(kinds) == len(plan.robot.joints) else ["revolute"] * len(kinds or [])
 
 
-def _check_rate(rate: float, duration: float) -> int:
+def check_rate(rate: float, duration: float) -> int:
+    """The number of instants ``rate`` (Hz) gives over ``duration`` (s), if an export may hold it.
+
+    Raises:
+        InputError: not a positive finite number, or more than :data:`MAX_SAMPLES` instants
+            (with the largest rate that keeps them).
+    """
     if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
         raise InputError(f"--rate must be a positive number of Hz, got {rate}")
     span = duration * rate * (1 + 1e-12)  # beyond the floats for --rate 1e308
@@ -127,7 +133,7 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
     from ..plans.robot_copy import plan_robot
 
     T = plan.duration
-    _check_rate(rate, T)
+    check_rate(rate, T)
     if times is None:
         grid = np.arange(0.0, T, 1.0 / rate)
         grid = grid[grid < T - 1e-9 * max(1.0, T)]
