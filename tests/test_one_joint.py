@@ -174,7 +174,10 @@ def test_a_spatial_one_joint_robot_reaches_one_attitude_and_says_which(tmp_path,
     quaternion = np.array([float(v) for v in named.group(1).strip("[]").split(",")])
     assert ff.geodesic_angle(quaternion, exact) < 1e-8
     assert main(["reach", str(scenario), "-q"]) == 0
-    assert capsys.readouterr().out.count("one joint: every path turns the spacecraft alike") == 14
+    out = capsys.readouterr().out
+    assert out.count("one joint: every path turns the spacecraft alike") == 14
+    assert "one joint: every path between these joints reaches the drift attitude" in out
+    assert "inner estimate: continuation" not in out and "(outer: as far as" not in out
     assert main(["bounds", str(scenario)]) == 0  # no continuation to run: the one attitude
     said = re.search(r"reaches base_quaternion_xyzw = (\[[^\]]+\])", capsys.readouterr().out)
     assert said

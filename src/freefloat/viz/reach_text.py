@@ -79,7 +79,12 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
         f"spacecraft / arm rotational inertia about the system CM (ratio): "
         f"{report.inertia_ratio:.3g}",
     ]
-    if report.bound is not None:
+    if report.bound is not None and len(report.freedom) == 1:  # nothing to bound or trace
+        lines.append(
+            "one joint: every path between these joints reaches the drift attitude, whatever "
+            "its timing or its back-and-forth (docs/reach.md)"
+        )
+    elif report.bound is not None:
         bound = report.bound
         travel = (
             "every joint monotone between start and goal"
@@ -113,7 +118,7 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
         lines.append("  per axis, turns measured from the drift attitude:")
         away = math.degrees(geodesic_angle(report.start_quaternion, drift))
         within = math.degrees(report.bound.bound) if report.bound is not None else 0.0
-        if away < within < 180.0:  # the outer column is no second bound: say why it is larger
+        if away < within < 180.0 and len(report.freedom) > 1:  # why the outer column is larger
             lines.append(
                 f"  (outer: as far as the attitude stays within {within:.4g} deg of the start; "
                 f"the drift lies {away:.3g} deg from it)"
