@@ -7,6 +7,7 @@ import json
 import pytest
 
 import freefloat as ff
+from test_schema import _broken
 
 import urdfs
 from conftest import ROOT
@@ -247,15 +248,6 @@ def test_corrupt_plan_file(tmp_path):
         ff.Plan.load(path)
 
 
-def _edited(tmp_path, plan, change):
-    """The plan's file as ``change`` edits its record."""
-    data = plan.to_dict()
-    change(data)
-    path = tmp_path / "p.json"
-    path.write_text(json.dumps(data))
-    return path
-
-
 @pytest.mark.parametrize(
     ("change", "message"),
     [
@@ -268,7 +260,7 @@ def _edited(tmp_path, plan, change):
 )
 def test_an_edited_plan_record_is_named(tmp_path, worked_plan, change, message):
     with pytest.raises(ff.PlanFileError) as info:
-        ff.Plan.load(_edited(tmp_path, worked_plan, change))
+        ff.Plan.load(_broken(worked_plan, tmp_path, change))
     assert message in str(info.value)
 
 

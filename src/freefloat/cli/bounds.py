@@ -79,11 +79,8 @@ def run(args: argparse.Namespace) -> int:
             "bounds are the interval printed here, and freefloat reach --plot draws them"
         )
     if scenario.robot.n == 1:  # no interval: every path makes the one change
-        return _one_joint(
-            scenario.robot.name,
-            problem.bounds.interval(problem.family.goal - problem.family.start)[0],
-            problem.yaw_change,
-        )
+        assert problem.bounds_interval is not None  # planar: its bounds are set
+        return _one_joint(scenario.robot.name, problem.bounds_interval[0], problem.yaw_change)
     bounds = problem.bounds
     delta = problem.family.goal - problem.family.start
     print(f"freefloat bounds: {scenario.robot.name} (planar), simple point-to-point motion")
