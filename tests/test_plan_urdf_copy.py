@@ -79,7 +79,19 @@ def test_a_relative_path_is_read_from_the_plans_folder(moved, tmp_path, monkeypa
     assert ff.Plan.load(path).robot.urdf == str(urdf)
     assert main(["verify", str(path)]) == 0, capsys.readouterr().err
     err = capsys.readouterr().err
-    assert "a freefloat.plan/3 plan carries no copy of its URDF: read from" in err
+    assert "a plan written before freefloat.plan/4 carries no copy of its URDF: read from" in err
+
+
+def test_a_format_1_plan_is_not_called_format_3(moved, capsys):
+    """A /1 file is kept as /3 in memory; the warning names no format it is not."""
+    path, _ = moved
+    doc = as_older_format(json.loads(path.read_text()))
+    doc["format"] = "freefloat.plan/1"
+    path.write_text(json.dumps(doc))
+    assert main(["verify", str(path)]) == 0, capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "written before freefloat.plan/4 carries no copy" in err
+    assert "plan/3" not in err
 
 
 def test_a_format_4_plan_without_its_copy_is_refused(moved, capsys):

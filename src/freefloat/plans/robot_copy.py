@@ -25,6 +25,7 @@ from ..robot.model import MAX_URDF_BYTES, Robot, load_robot
 from ..robot.urdf_checks import urdf_document
 from .format import Plan
 from .records import sha256_hex
+from .versions import BASIS_FORMATS
 
 __all__ = ["plan_robot"]
 
@@ -77,9 +78,9 @@ def plan_robot(plan: Plan) -> Robot:
             robot = replace(robot, urdf=_materialised(ref.urdf_text, Path(ref.urdf)))
     else:
         LOGGER.warning(
-            "a %s plan carries no copy of its URDF: read from %s as it is now (a plan made by "
-            "this freefloat carries its URDF)",
-            plan.format,
+            "a plan written before %s carries no copy of its URDF: read from %s as it is now "
+            "(a plan made by this freefloat carries its URDF)",
+            BASIS_FORMATS[0],
             ref.urdf,
         )
         robot = load_robot(ref.urdf, ref.frames)
