@@ -124,3 +124,28 @@ def test_both_tolerance_options_exit_2_without_traceback_from_the_console(tmp_pa
 def test_range_errors_are_in_the_unit_typed(seen, capsys, argv, needle):
     assert needle in _refusal(capsys, *argv)
     assert seen == []
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["plan", "--tolerance-deg", "-1e-3"], "--tolerance-deg = -0.001 deg is outside"),
+        (
+            ["correct", "absent.json", "--base-zyx-deg", "-1e9", "0", "0"],
+            "--base-zyx-deg = -1e+09 deg is outside the supported range [-3600, 3600] deg",
+        ),
+        (
+            ["correct", "absent.json", "--base-zyx-deg", "0", "-2.5E+4", "0"],
+            "--base-zyx-deg = -25000 deg is outside",
+        ),
+    ],
+)
+def test_negative_numbers_in_exponent_notation_are_values(
+    tmp_path, monkeypatch, capsys, argv, needle
+):
+    """Not options: argparse's own pattern reads ``-1e9`` as one ("expected 3 arguments")."""
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and needle in err, err
+    assert not any(tmp_path.iterdir())

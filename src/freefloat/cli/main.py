@@ -10,6 +10,7 @@ sub-parser, checks its arguments before any work and runs; the plan summary live
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import time
 import warnings
@@ -66,8 +67,21 @@ COMMANDS: tuple[ModuleType, ...] = (
 )
 
 
+#: What reads as a negative number, not an option: ``-3``, ``-.5``, ``-1e9``, ``-2.5E-3``.
+#: (argparse's own pattern has no exponent: ``--base-zyx-deg -1e9 0 0`` then read "expected 3
+#: arguments" instead of the range check's message. Python 3.13's pattern takes it too.)
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+
+
 class _Parser(argparse.ArgumentParser):
-    """An argument parser whose errors are one line ``freefloat: error: ...`` (exit code 2)."""
+    """An argument parser whose errors are one line ``freefloat: error: ...`` (exit code 2).
+
+    Negative numbers in exponent notation are values, as plain ones are (:data:`_NEGATIVE_NUMBER`).
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_NUMBER
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"freefloat: error: {message} (see {self.prog} --help)\n")
