@@ -146,3 +146,21 @@ def test_panda_page_is_a_few_megabytes(tmp_path):
     commands = [gzip.decompress(base64.b64decode(c)) for c in packed]
     assert any(b"/visuals/" in c for c in commands)
     assert not any(b"/collisions/" in c for c in commands)  # no second copy of the meshes
+
+
+def test_titles_name_the_robot_not_its_cache_file(worked_plan):
+    """A composed or inline servicer's URDF is a cache file named by a hash: titles (page and
+    figures) take the URDF copy's ``<robot name>``; a plan without a copy, the file's stem."""
+    from dataclasses import replace
+
+    from freefloat.viz.plots import figures
+
+    cached = replace(
+        worked_plan,
+        robot=replace(worked_plan.robot, urdf="/home/u/.cache/freefloat/3f9a1c0d7e.urdf"),
+    )
+    assert plan_title(cached).startswith("planar_2dof: T = 10 s")
+    title = figures(cached, ("base_rate",))["base_rate"].axes[0].get_title()
+    assert title == "base rate (planar_2dof, T = 10 s)"
+    bare = replace(cached, robot=replace(cached.robot, urdf_text=""))
+    assert plan_title(bare).startswith("3f9a1c0d7e: T = 10 s")

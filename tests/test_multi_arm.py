@@ -110,6 +110,38 @@ def test_shipped_dual_plan_plays_back_every_end_effector(dual_plan):
         np.testing.assert_allclose(positions, np.asarray(path), atol=1e-9)
 
 
+def test_dual_plan_page_legend_has_each_trail_in_its_colour(dual_plan):
+    """One path line per end effector, in the colour the scene draws that trail in."""
+    import base64
+    import gzip
+    import json
+    import re
+
+    import umsgpack
+
+    from freefloat.viz.playback import page_html
+
+    _, plan = dual_plan
+    text = page_html(plan)
+    legend = re.search(r'<ul id="ff-legend">(.*?)</ul>', text).group(1)
+    said = dict(
+        re.findall(r'background:(#[0-9a-f]{6})"></span>end-effector path \(([^)]*)\)', legend)
+    )
+    assert sorted(said.values()) == sorted(plan.robot.end_effectors), legend
+    packed = json.loads(re.search(r"const commands = (\[.*?\]);", text).group(1))
+    colours = {}
+    for item in packed:
+        command = umsgpack.unpackb(gzip.decompress(base64.b64decode(item)))
+        if command.get("type") == "set_object" and "/trail" in command["path"]:
+            tail = command["path"].rsplit("/", 1)[-1]
+            colours[tail] = f"#{command['object']['materials'][0]['color']:06x}"
+    trails = {"trail": plan.robot.end_effectors[0], "trail_2": plan.robot.end_effectors[1]}
+    assert {trails[node]: colour for node, colour in colours.items()} == {
+        frame: colour for colour, frame in said.items()
+    }
+    assert len(set(colours.values())) == 2
+
+
 @pytest.mark.slow
 def test_dual_plan_exports_and_reloads_every_path(dual_plan, tmp_path):
     from freefloat.export.csv_file import columns

@@ -8,6 +8,7 @@ import sys
 
 import numpy as np
 import pytest
+from matplotlib.colors import to_rgba
 from PIL import Image
 
 from freefloat.cli import main
@@ -127,7 +128,16 @@ def test_goal_values_and_projection_are_marked(figs, worked_plan):
     assert "inertial x-y plane" in figs["end_effector_path"].axes[0].get_xlabel()
 
 
+def _limits_in_view(values, marks):
+    """The marks within two data spans of the data (the figure's rule, restated)."""
+    low, high = float(np.min(values)), float(np.max(values))
+    reach = 2.0 * max(high - low, 1e-9 + 1e-3 * max(abs(low), abs(high)))
+    return [m for m in marks if low - reach <= m <= high + reach]
+
+
 def test_joint_limits_are_drawn_from_the_urdf():
+    """Limits near the data are drawn; those far beyond it (they would flatten every line)
+    are named in the legend instead: together, every finite URDF limit."""
     import freefloat as ff
 
     from conftest import ROOT
@@ -135,21 +145,78 @@ def test_joint_limits_are_drawn_from_the_urdf():
     plan = ff.plan(ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml"))
     robot = ff.load_robot(plan.robot.urdf)
     figs = figures(plan, ("joint_positions", "joint_rates"))
-    drawn = sorted(
-        round(line.get_ydata()[0], 9)
-        for line in figs["joint_positions"].axes[0].lines
-        if line.get_label() == "_limit"
+    for topic, key in (("joint_positions", "q"), ("joint_rates", "qd")):
+        ax = figs[topic].axes[0]
+        data = np.degrees(np.asarray(getattr(plan.samples, key)))
+        drawn = sorted(
+            round(line.get_ydata()[0], 9) for line in ax.lines if line.get_label() == "_limit"
+        )
+        marks = {
+            j.name: [
+                float(np.degrees(v))
+                for v in (
+                    (j.lower, j.upper) if key == "q" else (-j.velocity_limit, j.velocity_limit)
+                )
+            ]
+            for j in robot.joints
+        }
+        shown = {name: _limits_in_view(data, m) for name, m in marks.items()}
+        assert drawn == sorted(round(v, 9) for m in shown.values() for v in m), topic
+        far = [name for name, m in marks.items() if len(shown[name]) < len(m)]
+        labels = [line.get_label() for line in ax.get_legend().get_lines()]
+        texts = [t.get_text() for t in ax.get_legend().get_texts()]
+        which = "\n".join(far) if len(far) <= 3 else f"{len(far)} joints"
+        said = f"limits beyond the axes\n(not drawn): {which}"
+        assert labels and (said in texts) == bool(far), texts
+        assert not far or all(abs(v) > 2 * np.ptp(data) for name in far for v in marks[name])
+    # the UR5's rate limits (180 deg/s) lie far beyond its motion: named, not drawn
+    assert "limits beyond the axes" in " ".join(
+        t.get_text() for t in figs["joint_rates"].axes[0].get_legend().get_texts()
     )
-    expected = sorted(
-        round(float(np.degrees(v)), 9) for j in robot.joints for v in (j.lower, j.upper)
+
+
+def test_prismatic_joints_get_their_own_axis_in_metres(worked_plan):
+    """A robot with revolute and prismatic joints: metres never share an axis with degrees."""
+    from dataclasses import replace
+
+    robot = replace(worked_plan.robot, joint_kinds=["revolute", "prismatic"])
+    figs = figures(replace(worked_plan, robot=robot), ("joint_positions", "joint_rates"))
+    q = np.asarray(worked_plan.samples.q)
+    for topic, unit in (("joint_positions", "m"), ("joint_rates", "m/s")):
+        left, right = figs[topic].axes
+        assert left.get_ylabel().endswith("[deg]" if unit == "m" else "[deg/s]")
+        assert right.get_ylabel() == f"prismatic joint {topic.split('_')[1][:-1]} [{unit}]"
+        on_left = [line.get_label() for line in left.lines]
+        assert "q1" in on_left and "q2" not in on_left
+        assert "q2" in [line.get_label() for line in right.lines]
+        assert "q2" in [t.get_text() for t in left.get_legend().get_texts()]  # one legend
+    right = figs["joint_positions"].axes[1]
+    q2 = next(line for line in right.lines if line.get_label() == "q2")
+    np.testing.assert_array_equal(q2.get_ydata(), q[:, 1])  # metres: not scaled to degrees
+
+
+def test_twelve_joints_have_twelve_distinct_styles(worked_plan):
+    """Matplotlib's cycle has ten colours: the eleventh joint took the first's."""
+    from dataclasses import replace
+
+    names = [f"j{k}" for k in range(12)]
+    samples = worked_plan.samples
+    wide = {
+        key: np.tile(np.asarray(getattr(samples, key)), 6).tolist() for key in ("q", "qd", "tau")
+    }
+    plan = replace(
+        worked_plan,
+        robot=replace(worked_plan.robot, joints=names, joint_kinds=["revolute"] * 12),
+        samples=replace(samples, **wide),
+        request=replace(worked_plan.request, goal_joints=[0.0] * 12, start_joints=[0.0] * 12),
     )
-    assert drawn == expected
-    rates = [
-        line.get_ydata()[0]
-        for line in figs["joint_rates"].axes[0].lines
-        if line.get_label() == "_limit"
-    ]
-    assert max(rates) == pytest.approx(np.degrees(max(j.velocity_limit for j in robot.joints)))
+    ax = figures(plan, ("joint_positions",))["joint_positions"].axes[0]
+    lines = [line for line in ax.lines if line.get_label() in names]
+    assert len(lines) == 12
+    styles = {
+        (tuple(np.round(to_rgba(line.get_color()), 6)), line.get_linestyle()) for line in lines
+    }
+    assert len(styles) == 12
 
 
 def test_names_the_font_lacks_give_one_warning_line(tmp_path, capfd):

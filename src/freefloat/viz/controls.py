@@ -18,20 +18,50 @@ import json
 import math
 from pathlib import Path
 
+from ..errors import ModelError
 from ..plans.format import Plan
+from ..robot.urdf_checks import urdf_document
 
-__all__ = ["CM_COLOR", "EE_COLOR", "LEGEND", "TRAIL_COLOR", "inject_controls", "plan_title"]
+__all__ = [
+    "CM_COLOR",
+    "EE_COLOR",
+    "LEGEND",
+    "TRAIL_COLORS",
+    "inject_controls",
+    "legend_entries",
+    "plan_title",
+    "robot_label",
+]
 
-#: Colours of the end-effector path, the end-effector marker and the CM marker (RGB).
-TRAIL_COLOR, EE_COLOR, CM_COLOR = 0x1F77B4, 0x2CA02C, 0xD62728
+#: Colours of the end-effector paths, in end-effector order (RGB; the fifth takes the first's).
+TRAIL_COLORS = (0x1F77B4, 0xFF7F0E, 0x9467BD, 0x8C564B)
+#: Colours of the end-effector marker and the CM marker (RGB).
+EE_COLOR, CM_COLOR = 0x2CA02C, 0xD62728
 
-#: What the page draws, with the colours playback.py uses (CSS hex).
+#: What the page draws, with the colours playback.py uses (CSS hex); a plan with several end
+#: effectors gets one path line per end effector (:func:`legend_entries`).
 LEGEND = (
-    (f"#{TRAIL_COLOR:06x}", "end-effector path"),
+    (f"#{TRAIL_COLORS[0]:06x}", "end-effector path"),
     (f"#{EE_COLOR:06x}", "end effector (drawn over the arm)"),
     (f"#{CM_COLOR:06x}", "system centre of mass (origin, drawn over the spacecraft)"),
     ("linear-gradient(90deg,#f00,#0f0,#00f)", "axes: large inertial, small base (x y z)"),
 )
+
+
+def robot_label(plan: Plan) -> str:
+    """The plan's robot as titles name it: its URDF copy's ``<robot name>``, else the file stem.
+
+    (A composed or inline servicer's URDF lives in a cache under a content hash: its file name
+    says nothing to a reader.)
+    """
+    if plan.robot.urdf_text:
+        try:
+            name = urdf_document(plan.robot.urdf_text).get("name", "").strip()
+        except ModelError:
+            name = ""
+        if name:
+            return name
+    return Path(plan.robot.urdf).stem
 
 
 def plan_title(plan: Plan) -> str:
@@ -43,7 +73,7 @@ def plan_title(plan: Plan) -> str:
         for axis, a, b in zip(("yaw", "pitch", "roll"), start, target, strict=True)
         if abs(a) > 1e-9 or abs(b) > 1e-9
     )
-    title = f"{Path(plan.robot.urdf).stem}: T = {plan.duration:g} s"
+    title = f"{robot_label(plan)}: T = {plan.duration:g} s"
     return f"{title}, base {angles}" if angles else title
 
 
@@ -96,15 +126,29 @@ _SCRIPT = """
 """
 
 
+def legend_entries(plan: Plan) -> list[tuple[str, str]]:
+    """The page's legend for ``plan``: (CSS colour, text) per line.
+
+    :data:`LEGEND`, with one path line per end effector when there are several (each in its
+    trail's colour, named by its frame), and the keep-out objects when there are any.
+    """
+    frames = plan.robot.frames
+    trails = [LEGEND[0]]
+    if len(frames) > 1:
+        trails = [
+            (f"#{TRAIL_COLORS[k % len(TRAIL_COLORS)]:06x}", f"end-effector path ({frame})")
+            for k, frame in enumerate(frames)
+        ]
+    kept_out = [("rgba(224,32,32,.45)", "keep-out objects")] if plan.safety.obstacles else []
+    return [*trails, *LEGEND[1:], *kept_out]
+
+
 def inject_controls(page: str, plan: Plan, speed: float = 1.0) -> str:
     """The standalone MeshCat ``page`` with the controls panel added before ``</body>``."""
     title = html.escape(plan_title(plan))
     legend = "".join(
         f'<li><span style="background:{colour}"></span>{html.escape(text)}</li>'
-        for colour, text in (
-            *LEGEND,
-            *([("rgba(224,32,32,.45)", "keep-out objects")] if plan.safety.obstacles else []),
-        )
+        for colour, text in legend_entries(plan)
     )
     speeds = "".join(
         f'<option value="{s}"{" selected" if s == 1 else ""}>{s:g}x</option>'

@@ -29,7 +29,7 @@ from ..plans.format import Plan
 from ..plans.robot_copy import plan_robot
 from ..robot.collision import Obstacle
 from ..robot.model import Robot
-from .controls import CM_COLOR, EE_COLOR, TRAIL_COLOR
+from .controls import CM_COLOR, EE_COLOR, TRAIL_COLORS
 
 __all__ = ["Playback", "build_playback", "serve", "write_html"]
 
@@ -81,10 +81,6 @@ class Playback:
     def html(self) -> str:
         """Self-contained HTML of the scene and its animation (meshcat's standalone page)."""
         return str(self.viewer.window.get_scene())
-
-
-#: Colours of the end-effector trails, in end-effector order.
-_TRAIL_COLOURS = (TRAIL_COLOR, 0xFF7F0E, 0x9467BD, 0x8C564B)
 
 
 def _tip_nodes(count: int) -> list[tuple[str, str]]:
@@ -212,7 +208,7 @@ def _draw_extras(
         viewer[trail].set_object(
             g.Line(
                 g.PointsGeometry(path.T.astype(np.float32)),
-                g.LineBasicMaterial(color=_TRAIL_COLOURS[number % 4], linewidth=2),
+                g.LineBasicMaterial(color=TRAIL_COLORS[number % len(TRAIL_COLORS)], linewidth=2),
             )
         )
     # The markers are drawn over everything (no depth test, after the opaque meshes): the

@@ -33,6 +33,7 @@ from ..errors import InputError, ViewerError
 from ..files import atomic_write
 from ..plans.format import Plan
 from .clearance_curve import ClearanceCurve, clearance_curve
+from .controls import robot_label
 
 __all__ = ["OPTIONAL_TOPICS", "TOPICS", "figures", "save_figures"]
 
@@ -92,11 +93,12 @@ def _draw(
     clearance: ClearanceCurve | None = None,
 ) -> None:
     """Draw figure ``topic`` of ``plan`` on ``ax``, with its axes, grid and legend."""
+    twin = None
     if topic in _DRAWERS:
         _DRAWERS[topic](plan, ax)
     elif topic in ("joint_positions", "joint_rates", "joint_torques"):
         scale, kinds = _joint_scale(plan)
-        _draw_joints(plan, topic, ax, limits or {}, scale, kinds)
+        twin = _draw_joints(plan, topic, ax, limits or {}, scale, kinds)
     elif topic == "clearance" and clearance is not None:
         _draw_clearance(clearance, ax)
     else:  # pragma: no cover - guarded by the callers
@@ -105,7 +107,22 @@ def _draw(
         ax.set_xlabel("t [s]")
         ax.set_xlim(0.0, plan.duration)
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize="small")
+    handles, labels = ax.get_legend_handles_labels()
+    if twin is not None:  # its joints after the others, before the marks; beyond its ticks
+        joints = set(plan.robot.joints)
+        first = [k for k, label in enumerate(labels) if label in joints]
+        marks = [k for k, label in enumerate(labels) if label not in joints]
+        more = twin.get_legend_handles_labels()
+        handles = [handles[k] for k in first] + more[0] + [handles[k] for k in marks]
+        labels = [labels[k] for k in first] + more[1] + [labels[k] for k in marks]
+    ax.legend(
+        handles,
+        labels,
+        loc="upper left",
+        bbox_to_anchor=(1.02 if twin is None else 1.16, 1.0),
+        borderaxespad=0.0,
+        fontsize="small",
+    )
 
 
 def _draw_end_effector(plan: Plan, ax: Any) -> None:
@@ -203,6 +220,23 @@ _DRAWERS: dict[str, Callable[[Plan, Any], None]] = {
 }
 
 
+#: A limit is drawn when it lies within this many spans of the figure's data beyond the data
+#: (a limit far beyond, 1000 rad/s against motions of a few deg/s, would flatten every line);
+#: the others are named in the legend.
+LIMIT_SPANS = 2.0
+
+
+def _joint_styles(count: int) -> list[tuple[Any, Any]]:
+    """(colour, line style) per joint: ten colours, twenty beyond ten joints, then dashes."""
+    import matplotlib
+
+    if count <= 10:
+        return [(f"C{i}", "-") for i in range(count)]
+    colours = matplotlib.colormaps["tab20"]
+    dashes = ("-", "--", "-.", ":")
+    return [(colours(i % 20), dashes[(i // 20) % 4]) for i in range(count)]
+
+
 def _draw_joints(
     plan: Plan,
     topic: str,
@@ -210,47 +244,80 @@ def _draw_joints(
     limits: dict[str, tuple[float, float, float]],
     scale: np.ndarray,
     kinds: list[str],
-) -> None:
-    """Joint positions, rates or torques (deg, m, N m, N) with their goals and URDF limits."""
+) -> Any:
+    """Joint positions, rates or torques (deg, m, N m, N) with their goals and URDF limits.
+
+    Prismatic joints of a robot with revolute ones too get an axis of their own on the right
+    (m, m/s, N), returned (None when every joint shares one axis).
+    """
     s = plan.samples
     t = np.asarray(s.t)
-    names = plan.robot.joints
-    unit = "deg" if all(k != "prismatic" for k in kinds) else "deg | m"
     key = {"joint_positions": "q", "joint_rates": "qd", "joint_torques": "tau"}[topic]
     values = np.asarray(getattr(s, key), dtype=float)
     if topic != "joint_torques":
         values = values * scale
-    for i, name in enumerate(names):
-        (line,) = ax.plot(t, values[:, i], label=name)
-        colour = line.get_color()
+    sliding = np.array([k == "prismatic" for k in kinds], dtype=bool)
+    twin = ax.twinx() if sliding.any() and not sliding.all() else None
+    styles = _joint_styles(len(plan.robot.joints))
+    beyond: list[str] = []
+    for group, axis in ((~sliding, ax), (sliding, twin)) if twin is not None else ((None, ax),):
+        chosen = range(len(kinds)) if group is None else np.flatnonzero(group).tolist()
+        beyond += _draw_group(plan, topic, axis, t, values, scale, limits, styles, chosen)
+    if topic == "joint_positions":
+        ax.plot([], [], "o", mfc="none", color="0.3", label="goal at T")
+    if any(line.get_label() == "_limit" for a in (ax, twin) if a for line in a.lines):
+        ax.plot([], [], "--", color="0.3", label="limit (URDF)")
+    if beyond:  # named in a narrow legend entry: a long one would squeeze the axes
+        which = "\n".join(beyond) if len(beyond) <= 3 else f"{len(beyond)} joints"
+        ax.plot([], [], " ", label=f"limits beyond the axes\n(not drawn): {which}")
+    quantity = {"joint_positions": "position", "joint_rates": "rate", "joint_torques": "torque"}
+    units = {"joint_positions": ("deg", "m"), "joint_rates": ("deg/s", "m/s")}
+    turning, moving = units.get(topic, ("N m", "N"))
+    ax.set_ylabel(f"joint {quantity[topic]} [{moving if sliding.all() else turning}]")
+    if twin is not None:
+        twin.set_ylabel(f"prismatic joint {quantity[topic]} [{moving}]")
+    return twin
+
+
+def _draw_group(
+    plan: Plan,
+    topic: str,
+    ax: Any,
+    t: np.ndarray,
+    values: np.ndarray,
+    scale: np.ndarray,
+    limits: dict[str, tuple[float, float, float]],
+    styles: list[tuple[Any, Any]],
+    chosen: Sequence[int],
+) -> list[str]:
+    """The ``chosen`` joints' lines, goals and limits on ``ax``.
+
+    Returns the joints whose limits lie beyond the axes (:data:`LIMIT_SPANS`): not drawn.
+    """
+    names = plan.robot.joints
+    data = values[:, list(chosen)]
+    low, high = (float(data.min()), float(data.max())) if data.size else (0.0, 0.0)
+    reach = LIMIT_SPANS * max(high - low, 1e-9 + 1e-3 * max(abs(low), abs(high)))
+    beyond = []
+    for i in chosen:
+        colour, style = styles[i]
+        ax.plot(t, values[:, i], color=colour, linestyle=style, label=names[i])
         if topic == "joint_positions" and i < len(plan.request.goal_joints):
             goal = plan.request.goal_joints[i] * scale[i]
             ax.plot([t[-1]], [goal], "o", mfc="none", color=colour, label="_goal")
-        lower, upper, rate = limits.get(name, (-math.inf, math.inf, math.inf))
-        marks = (lower, upper) if topic == "joint_positions" else (-rate, rate)
-        if topic != "joint_torques":
-            for mark in marks:
-                if math.isfinite(mark):
-                    ax.axhline(
-                        mark * scale[i],
-                        color=colour,
-                        linestyle="--",
-                        linewidth=0.8,
-                        label="_limit",
-                    )
-    if topic == "joint_positions":
-        ax.plot([], [], "o", mfc="none", color="0.3", label="goal at T")
-    if any(line.get_label() == "_limit" for line in ax.lines):
-        ax.plot([], [], "--", color="0.3", label="limit (URDF)")
-    ax.set_ylabel(
-        {
-            "joint_positions": f"joint position [{unit}]",
-            "joint_rates": f"joint rate [{unit}/s]",
-            "joint_torques": "joint torque [N m | N]"
-            if "prismatic" in kinds
-            else "joint torque [N m]",
-        }[topic]
-    )
+        if topic == "joint_torques":
+            continue
+        lower, upper, rate = limits.get(names[i], (-math.inf, math.inf, math.inf))
+        marks = [
+            m * scale[i] for m in ((lower, upper) if topic == "joint_positions" else (-rate, rate))
+        ]
+        marks = [m for m in marks if math.isfinite(m)]
+        shown = [m for m in marks if low - reach <= m <= high + reach]
+        for mark in shown:
+            ax.axhline(mark, color=colour, linestyle="--", linewidth=0.8, label="_limit")
+        if len(shown) < len(marks):
+            beyond.append(names[i])
+    return beyond
 
 
 def _clearance(plan: Plan) -> ClearanceCurve | None:
@@ -273,7 +340,7 @@ def figures(plan: Plan, topics: Sequence[str] = (*TOPICS, *OPTIONAL_TOPICS)) -> 
     for topic in topics:
         if topic not in valid:
             raise InputError(f"unknown figure {topic!r}; valid: {', '.join(valid)}")
-    title = f"{Path(plan.robot.urdf).stem}, T = {plan.duration:g} s"
+    title = f"{robot_label(plan)}, T = {plan.duration:g} s"
     limits = _limits(plan)
     clearance = _clearance(plan) if "clearance" in topics else None
     if clearance is None:  # not checked (or no model): no clearance figure
