@@ -6,10 +6,15 @@ One figure per topic and one overview sheet, all against time in seconds:
 for prismatic joints), ``joint_rates`` (deg/s or m/s), ``joint_torques`` (N m or N), and
 ``end_effector_path`` (the path projected onto the inertial x-y plane, m; the projection is
 named in the axis label). Every plotted line carries the plan's samples unchanged apart from
-the unit conversion named in its axis label. Legends sit outside the data, to the right.
+the unit conversion named in its axis label; a robot with both revolute and prismatic joints
+draws the prismatic ones on an axis of their own, on the right (m, m/s, N). Legends sit
+outside the data, to the right. More than ten joints take twenty colours, then line styles.
 Marked: the goal values (joint goals at t = T, the target base attitude; dotted) and the
 URDF's finite joint position and velocity limits (dashed, in the joint's colour; read from the
-plan's URDF when it loads, else left out).
+plan's URDF when it loads, else left out). A limit more than :data:`LIMIT_SPANS` spans of the
+figure's data beyond it is not drawn (1000 rad/s would flatten a motion of a few deg/s):
+the legend names the joints whose limits lie beyond the axes. Titles name the robot by its
+URDF's ``<robot name>`` (:func:`~freefloat.viz.controls.robot_label`).
 
 ``clearance`` (only when the plan was kept clear, ``plan.safety.checked``): the smallest signed
 distance (m) over the checked pairs, recomputed with the plan's collision model (its SRDF and
