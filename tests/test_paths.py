@@ -109,6 +109,35 @@ def test_family_boundary_conditions_and_derivatives():
     np.testing.assert_allclose((plus.qd - minus.qd) / (2 * eps), here.qdd, rtol=1e-6, atol=1e-12)
 
 
+@pytest.mark.parametrize("width", [1, 2, 6, 12, 28])
+def test_every_derivative_is_the_series_differentiated_in_time(width):
+    """Each order against numpy's own Chebyshev differentiation and, in time, against the
+    monomial form differentiated term by term (two other routes)."""
+    rng = np.random.default_rng(width)
+    duration = 37.0
+    path = JointPolynomials(rng.normal(size=(3, width)), duration)
+    below = path.coefficients.T
+    t = np.linspace(0.0, duration, 9)
+    for order in range(width + 2):
+        expected = np.zeros((3, width))
+        if order < width:
+            series = np.polynomial.chebyshev.chebder(below, order, scl=2.0 / duration)
+            expected[:, : width - order] = np.asarray(series).T
+        got = path.derivative(order)
+        scale = max(1.0, float(np.abs(expected).max()))
+        np.testing.assert_allclose(got, expected, rtol=0, atol=1e-13 * scale, err_msg=str(order))
+    np.testing.assert_array_equal(path.positions(t), path.evaluate(t).q)
+    if width <= 12:  # monomials in t lose digits to cancellation beyond
+        monomials = path.monomials()
+        x = 2.0 * t / duration - 1.0
+        vander = np.polynomial.chebyshev.chebvander(x, width - 1)
+        for order in range(3):
+            in_t = [np.polynomial.Polynomial(c).deriv(order)(t) for c in monomials]
+            np.testing.assert_allclose(
+                vander @ path.derivative(order).T, np.array(in_t).T, rtol=1e-8, atol=1e-9
+            )
+
+
 def test_projection_and_monomials_round_trip():
     family = PathFamily(np.array([0.0, 1.0]), np.array([1.0, -2.0]), (6, 9))
     beta = np.array([3.0, -2.0, 5.0, 0.5, -1.0])

@@ -89,7 +89,7 @@ class Plan:
     def joint_positions(self, t: float | np.ndarray) -> np.ndarray:
         """Joint values (rad or m) at times ``t`` (s) from the plan's path."""
         t = np.asarray(t, dtype=float)
-        return self.path().evaluate(np.atleast_1d(t)).q.reshape(*t.shape, -1)
+        return self.path().positions(np.atleast_1d(t)).reshape(*t.shape, -1)
 
     # -- file -------------------------------------------------------------------------------
 

@@ -16,12 +16,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from functools import cached_property, lru_cache
+from functools import cached_property
 
 import numpy as np
 
 from ..errors import InputError
 from .basis import basis_chebyshev, quintic_chebyshev
+from .chebyshev_derivatives import derivative_maps, unit_interval_maps
 from .chebyshev_extremes import series_extremes
 
 __all__ = [
@@ -34,19 +35,6 @@ __all__ = [
 ]
 
 _CHEB = np.polynomial.chebyshev
-
-
-@lru_cache(maxsize=16)
-def _derivative_matrices(width: int) -> tuple[np.ndarray, np.ndarray]:
-    """(width, width) maps from Chebyshev coefficients in x to those of d/ds and d^2/ds^2."""
-    eye = np.eye(width)
-    first = np.zeros((width, width))
-    second = np.zeros((width, width))
-    if width > 1:
-        first[: width - 1] = _CHEB.chebder(eye, 1, scl=2.0)
-    if width > 2:
-        second[: width - 2] = _CHEB.chebder(eye, 2, scl=2.0)
-    return first, second
 
 
 def boundary_errors(
@@ -175,19 +163,22 @@ class JointPolynomials:
     def derivative(self, order: int) -> np.ndarray:
         """(N, K) Chebyshev coefficients in x of the ``order``-th time derivative (per s^order).
 
-        Each order is derived once from the one below and kept (rate bounds ask for them all).
+        Each order is derived once, by one product with its power of the derivative map
+        (:func:`~.chebyshev_derivatives.derivative_maps`), and kept (rate bounds ask for them all).
         """
         table = self._derivative_table
         if order < len(table):
             return table[order]
         grown = list(table)
+        width = self.coefficients.shape[1]
+        powers = derivative_maps(width)
+        scale = 2.0 / self.duration
         while len(grown) <= order:
-            below = grown[-1]
-            width = below.shape[1]
-            out = np.zeros_like(below)
-            if width > 1:
-                out[:, : width - 1] = _CHEB.chebder(below.T, 1, scl=2.0 / self.duration).T
-            grown.append(out)
+            below = len(grown)
+            if below < width:
+                grown.append(self.coefficients @ powers[below].T * scale**below)
+            else:  # beyond the degree: zero
+                grown.append(np.zeros_like(self.coefficients))
         # replaced whole, never appended to: threads sharing a path each see a complete table
         self.__dict__["_derivative_table"] = tuple(grown)
         return grown[order]
@@ -196,6 +187,11 @@ class JointPolynomials:
     def _derivative_table(self) -> tuple[np.ndarray, ...]:
         """The coefficients of the derivatives derived so far, by order (0: the path)."""
         return (self.coefficients,)
+
+    def positions(self, t: np.ndarray) -> np.ndarray:
+        """(len(t), N) joint values (rad or m) at times ``t`` (s): :meth:`evaluate`'s ``q``."""
+        x = 2.0 * np.asarray(t, dtype=float) / self.duration - 1.0
+        return _CHEB.chebvander(x, self.coefficients.shape[1] - 1) @ self.coefficients.T
 
     def evaluate(self, t: np.ndarray) -> PathSamples:
         """Positions (rad or m), rates (per s) and accelerations (per s^2) at times ``t`` (s)."""
@@ -324,7 +320,7 @@ class PathFamily:
         """
         width = max(self.degrees) + 1
         values = _CHEB.chebvander(2.0 * np.asarray(s, dtype=float) - 1.0, width - 1)
-        first, second = _derivative_matrices(width)
+        first, second = unit_interval_maps(width)
         return values, values @ first, values @ second
 
     def linear_map(self, s: np.ndarray) -> tuple[PathSamples, np.ndarray, np.ndarray]:

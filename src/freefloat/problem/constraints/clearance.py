@@ -214,7 +214,7 @@ class Clearance(Constraint):
         """
 
         def lowest(s: float) -> tuple[float, int]:
-            return self.model.closest_value(path.evaluate(np.array([s])).q[0], s / path.duration)
+            return self.model.closest_value(path.positions(np.array([s]))[0], s / path.duration)
 
         count = len(t)
         k_best = int(np.argmin(sampled))
@@ -233,7 +233,7 @@ class Clearance(Constraint):
         """Smallest distance over the pairs at each time of ``t`` (m), remembered per path."""
         key = self._key(path, t)
         if self._sampled_memo is None or self._sampled_memo[0] != key:
-            q = path.evaluate(t).q
+            q = path.positions(t)
             self._sampled_memo = (key, self.model.closest_many(q).values)
         return self._sampled_memo[1]
 
@@ -259,7 +259,7 @@ class Clearance(Constraint):
         if memo is not None and memo[0] == key:  # the same path and limit: the same answer
             return memo[1]
         t = np.linspace(0.0, path.duration, samples)
-        q = path.evaluate(t).q
+        q = path.positions(t)
         known = np.full(samples, math.nan)
         lower = np.full((samples, self.model.n_pairs), math.nan)
         todo = np.unique(np.append(np.arange(0, samples, COARSE_EVERY), samples - 1))
@@ -317,7 +317,7 @@ class Clearance(Constraint):
                 if ends.shape[1] == 0:
                     break
                 mid = 0.5 * (ends[0] + ends[1])
-                q_mid = path.evaluate(mid).q
+                q_mid = path.positions(mid)
                 found = self.model.closest_many(q_mid, mid / path.duration)
                 vm, at = found.values, np.arange(len(table), len(table) + len(mid), dtype=float)
                 table = np.concatenate([table, pair_bounds(found)])

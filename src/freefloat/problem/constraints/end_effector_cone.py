@@ -137,7 +137,7 @@ class EndEffectorCone(Constraint):
         model, data = robot.model, robot.model.createData()
         frame, cos = robot.end_effector_frame, math.cos(self.half_angle)
         out = []
-        for joints in path.evaluate(np.atleast_1d(t)).q:
+        for joints in path.positions(np.atleast_1d(t)):
             pin.framesForwardKinematics(model, data, robot.configuration(joints))
             out.append(cos - self.direction @ (data.oMf[frame].rotation @ self.axis))
         return np.array(out)

@@ -77,7 +77,7 @@ class JointVelocityLimits(DurationScaledLimit):
     def worst(self, robot: Robot, path: JointPolynomials) -> LimitPeak | None:
         """The joint whose exact peak rate (rad/s or m/s) is the largest fraction of its limit."""
         worst: LimitPeak | None = None
-        ends = path.evaluate(np.array([0.0, path.duration])).q
+        ends = path.positions(np.array([0.0, path.duration]))
         least = 0.0  # each joint travels at least its span: at its limit, this long (s)
         for i, joint in enumerate(robot.joints):
             if math.isfinite(joint.velocity_limit):
