@@ -195,7 +195,7 @@ def test_the_shortest_duration_is_named_only_when_a_timed_limit_stood_in_the_way
 
 def test_a_start_no_path_brings_within_the_effort_limits_names_the_shortest_duration():
     """The UR5 servicer with effort limits a thousandth of its URDF's, in 3 s: no path within
-    them reaches even the quintic path's own attitude, so the continuation stops at its start.
+    them is found at the quintic path's own attitude, so the continuation stops at its start.
     The refusal says the effort limits stood in the way and names the shortest duration (it
     was a plain SolverError); planned 1 % slower than that, the plan's sampled torques (the
     sampling's inverse dynamics, not the limit's torque formula) stay within the limits."""

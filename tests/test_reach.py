@@ -15,7 +15,9 @@ import pytest
 
 import freefloat as ff
 from freefloat.cli import main
+from freefloat.problem.constraints import scenario_constraints
 from freefloat.problem.simple_bound import simple_motion_bound, turn_limit
+from freefloat.solvers.restore import broken_constraint
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "robots" / "scenarios"
@@ -380,3 +382,44 @@ def test_a_goal_from_inverse_kinematics_too_close_asks_to_move_the_end_effector_
         ff.plan(ur5)
     assert not info.value.chosen
     assert str(info.value).endswith("move the goal joints or lower [safety] margin_m")
+
+
+PLATE = """
+[safety]
+margin_m = 0.02
+[[obstacles]]
+name = "plate"
+box = [0.12, 0.12, 0.003]
+xyz = [0.655, 0.393, -0.444]
+"""
+
+
+def test_a_quintic_path_through_a_keep_out_plate_still_has_a_reach(tmp_path) -> None:
+    """The UR5 servicer with a 3 mm plate where its plain quintic path's tool passes half way.
+
+    Reach said in every direction that no path reaches even the drift attitude (its
+    corrector's local failure at the quintic path; one direction, whose first pass never met
+    the plate, said 27 deg), while plan planned goals there from its restored start. Now each
+    direction starts from a path at the drift attitude within the constraints, reached from
+    plan's restored start, and its turn is confirmed from that start as plan heads for it.
+    The truth is each plan's own verification (clearance certified on the meshes, attitude
+    integrated apart from the planner).
+    """
+    text = (
+        (SCENARIOS / "ur5_servicer.toml")
+        .read_text()
+        .replace('robot = "ur5_servicer"', f'robot = "{ROOT / "robots" / "ur5_servicer.urdf"}"')
+    )
+    (tmp_path / "plate.toml").write_text(text + PLATE)
+    scenario = ff.Scenario.from_toml(tmp_path / "plate.toml")
+    problem = ff.problem_from_scenario(scenario, check_bounds=False)
+    clearance = [c for c in scenario_constraints(scenario) if c.name == "clearance"]
+    assert broken_constraint(problem, clearance, np.zeros(problem.n_free))  # as described
+    axes = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    report = ff.reachable(scenario, directions=axes, jobs=1)
+    for direction in report.directions:
+        assert direction.inner > math.radians(5.0), direction
+        goal = _turned(report, direction, 1.0)
+        plan = ff.plan(replace(scenario, goal_attitude=goal), samples=41)
+        assert plan.verification.passed and plan.safety.checked
+        assert ff.geodesic_angle(np.array(plan.base.achieved_quaternion_xyzw), goal) < 1e-9

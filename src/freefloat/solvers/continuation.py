@@ -62,8 +62,12 @@ INTERMEDIATE_TOLERANCE = 1e-4
 #: The targets on the way are solved on the problem's integration steps divided by this
 #: (at least 16 steps): their tolerance allows it, and the node rates cost half as much.
 INTERMEDIATE_STEPS = 2
-#: Why a continuation stops when no path within the constraints is found at its start.
-NO_START = "no path within the constraints reaches even the quintic path's own attitude"
+#: Why a continuation stops when its corrector finds no path within the constraints at its
+#: start (a local search: a path elsewhere may exist; the planner's restored start is one).
+NO_START = (
+    "its start path breaks a constraint and the corrector found no path within the "
+    "constraints at that path's own attitude"
+)
 #: Singular-value ratio below which dh/dbeta counts as singular.
 SINGULAR = 1e-9
 #: Singular-value ratio below which a refusal notes that dh/dbeta nearly loses rank.

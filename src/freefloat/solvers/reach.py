@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -23,6 +24,7 @@ from ..physics.attitude import quat_exp, quat_multiply, relative_rotvec
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
 from .continuation import ContinuationResult, held_fraction, track
+from .drift_start import RESTORED_SHORT, confirmed_from, drift_start
 from .options import SolveOptions
 from .restore import broken_constraint, broken_rows_first
 from .tracked import BranchPoint
@@ -84,6 +86,11 @@ DEFAULT_MAX_ANGLE = math.radians(60.0)
 CONFIRM_TRIES = 3
 
 
+def _target(problem: Problem, quintic: np.ndarray, axis: np.ndarray, angle: float) -> Problem:
+    """The problem heading for ``angle`` (rad) about ``axis`` from the drift attitude."""
+    return problem.with_goal(quat_multiply(quintic, quat_exp(angle * axis)))
+
+
 def _furthest(
     problem: Problem,
     quintic: np.ndarray,
@@ -100,8 +107,7 @@ def _furthest(
     From ``origin`` (a path on the branch towards that axis; default the quintic path),
     accepted points appended to ``trace``.
     """
-    target = problem.with_goal(quat_multiply(quintic, quat_exp(angle * axis)))
-    return track(target, constraints, options, origin, stall=stall, trace=trace)
+    return track(_target(problem, quintic, axis, angle), constraints, options, origin, stall, trace)
 
 
 def _parting(trace: Sequence[BranchPoint], turn: float) -> BranchPoint:
@@ -146,14 +152,13 @@ def _confirmed(
         if reached <= 0.0:
             break
         part = _parting(trace, reached)
-        origin = part.beta if part.turn > 0.0 else None
         result = _furthest(
-            problem, quintic, axis, reached, constraints, options, True, None, origin
+            problem, quintic, axis, reached, constraints, options, True, None, part.beta
         )
         if result.reached:
             return reached, result.beta
         reached = max((b.turn for b in trace if b.turn < reached - step), default=0.0)
-    return 0.0, np.zeros(problem.n_free)
+    return 0.0, trace[0].beta
 
 
 def _imposed(
@@ -164,18 +169,20 @@ def _imposed(
     constraints: Sequence[Constraint],
     options: SolveOptions,
     step: float,
+    origin: np.ndarray,
 ) -> tuple[float, str, np.ndarray]:
     """The planner's continuation within ``constraints`` towards ``angle`` (rad), rounded.
 
-    Where it stops short, the turn it reached is confirmed (:func:`_confirmed`). Returns the
-    turn (rad), why it stopped short ("" when it did not) and its path.
+    From ``origin`` (a path at the drift attitude). Where it stops short, the turn it reached
+    is confirmed (:func:`_confirmed`). Returns the turn (rad), why it stopped short ("" when
+    it did not) and its path.
     """
     if step > 0.0:
         angle = math.floor(angle / step + 1e-9) * step
     if angle <= 0.0:
-        return 0.0, "", np.zeros(problem.n_free)
+        return 0.0, "", origin
     trace: list[BranchPoint] = []
-    result = _furthest(problem, quintic, axis, angle, constraints, options, True, trace)
+    result = _furthest(problem, quintic, axis, angle, constraints, options, True, trace, origin)
     if result.reached:
         return angle, "", result.beta
     turn, beta = _confirmed(
@@ -194,24 +201,27 @@ def _direction(
     options: SolveOptions,
     confirm: bool,
     step: float,
+    origin: np.ndarray,
 ) -> tuple[float, str, np.ndarray]:
     """How far one direction goes: the turn (rad), why it stopped short, its path.
 
-    The deferred constraints (``eager`` but not ``tracked``) are checked on the path where
-    the direction ends; only when that path breaks one is the direction tracked again with
-    every eager constraint imposed, as the planner imposes them (:func:`_imposed`, from the
-    turn reached without them: never farther), and the confirmation without them is
+    From ``origin``, a path at the drift attitude within the eager constraints
+    (:func:`.drift_start.drift_start`). The deferred constraints (``eager`` but not
+    ``tracked``) are checked on the path where the direction ends; only when that path breaks
+    one is the direction tracked again with every eager constraint imposed, as the planner
+    imposes them (:func:`_imposed`, from the turn reached without them: never farther), and
+    the confirmation without them is
     skipped.
     """
     trace: list[BranchPoint] = []
-    result = _furthest(problem, quintic, axis, angle, tracked, options, confirm, trace)
+    result = _furthest(problem, quintic, axis, angle, tracked, options, confirm, trace, origin)
     reached, stopped_by, beta = result.fraction * angle, result.stopped_by, result.beta
     deferred = len(tracked) < len(eager)
     if not confirm:  # the bounds estimate: as far as the budget goes
         if deferred and broken_constraint(problem, eager, beta):
-            result = _furthest(problem, quintic, axis, angle, eager, options, False)
+            result = _furthest(problem, quintic, axis, angle, eager, options, False, None, origin)
         if not result.reached:  # as far as the path covers on the problem's own grid
-            target = problem.with_goal(quat_multiply(quintic, quat_exp(angle * axis)))
+            target = _target(problem, quintic, axis, angle)
             return held_fraction(target, result) * angle, result.stopped_by, result.beta
         return angle, result.stopped_by, result.beta
     broken = broken_rows_first(problem, eager, beta) if deferred else ""
@@ -219,7 +229,7 @@ def _direction(
         reached, beta = _confirmed(problem, quintic, axis, reached, tracked, options, step, trace)
         broken = broken_rows_first(problem, eager, beta) if deferred and reached > 0.0 else ""
     if broken:  # as the planner solves it, with every eager constraint imposed
-        reached, why, beta = _imposed(problem, quintic, axis, reached, eager, options, step)
+        reached, why, beta = _imposed(problem, quintic, axis, reached, eager, options, step, origin)
         stopped_by = why or stopped_by
     return reached, stopped_by, beta
 
@@ -297,17 +307,26 @@ def reach_set(
     directions = default_directions() if directions is None else np.atleast_2d(directions)
     angles = np.broadcast_to(np.asarray(max_angle, dtype=float), (len(directions),))
     quintic = problem.achieved(np.zeros(problem.n_free))
+    start = drift_start(problem, eager, options)  # shared by every direction
+    origin = np.zeros(problem.n_free) if start.beta is None else start.beta
 
     def one(index: int) -> _Spent:
         axis = np.asarray(directions[index], dtype=float)
         axis = axis / np.linalg.norm(axis)
         angle = float(angles[index])
         before, maps = problem.evaluations, problem.map_evaluations
-        reached, stopped_by, beta = 0.0, "", np.zeros(problem.n_free)
-        if angle > 0.0:
+        reached, stopped_by, beta = 0.0, start.why_not, origin
+        if angle > 0.0 and start.beta is not None:
             reached, stopped_by, beta = _direction(
-                problem, quintic, axis, angle, tracked, eager, options, confirm, step
+                problem, quintic, axis, angle, tracked, eager, options, confirm, step, origin
             )
+            if confirm and start.restored is not None and reached > 0.0:
+                target = partial(_target, problem, quintic, axis)
+                found = confirmed_from(start.restored, target, reached, eager, options, step)
+                if found.halved:
+                    said = "this turn" if found.turn > 0.0 else "no turn about this axis"
+                    stopped_by = RESTORED_SHORT.format(said)
+                reached, beta = found.turn, found.beta
         breaks = broken_constraint(problem, lazy, beta) if lazy else ""
         evaluations = problem.evaluations - before
         direction = DirectionReach(axis, reached, angle, stopped_by, evaluations, beta, breaks)
@@ -320,11 +339,11 @@ def reach_set(
         if progress is not None:
             progress(finished[0], len(directions), spent.reach)
 
-    before, maps = problem.evaluations, problem.map_evaluations
+    here, here_maps = problem.evaluations, problem.map_evaluations
     found = run_tasks(one, len(directions), jobs, done)
-    if problem.evaluations == before:  # worker processes did the work: counted here
-        problem.counter.evaluations = before + sum(f.reach.evaluations for f in found)
-        problem.counter.map_evaluations = maps + sum(f.map_evaluations for f in found)
+    if problem.evaluations == here:  # worker processes did the work: counted here
+        problem.counter.evaluations = here + sum(f.reach.evaluations for f in found)
+        problem.counter.map_evaluations = here_maps + sum(f.map_evaluations for f in found)
     freedom = tuple(d - 5 for d in problem.family.degrees)
     return ReachEstimate(quintic, tuple(f.reach for f in found), freedom)
 
