@@ -342,3 +342,46 @@ def test_the_ur5_pan_through_the_hull_plans_clear_of_it(tmp_path):
     t = np.linspace(0.0, plan.duration, 801)
     q = plan.joint_positions(t)
     assert min(model.distances(x).values.min() for x in q) >= 0.01 - 1e-6
+
+
+@pytest.mark.parametrize(
+    ("name", "text", "said"),
+    [
+        ("garbage.srdf", "not xml at all <<<", "is not XML (syntax error: line 1, column 0)"),
+        ("empty.srdf", "", "is not XML (no element found"),
+        (
+            "half.srdf",
+            '<robot name="r"><disable_collisions link1="upper_arm_link"/></robot>',
+            "<disable_collisions> number 1 lacks link1 or link2",
+        ),
+        ("other.srdf", '<urdf name="r"/>', "root element is <urdf>, expected <robot>"),
+        ("pairs.toml", '<robot name="r"/>', "does not end in .srdf; give an SRDF file"),
+    ],
+)
+def test_a_malformed_srdf_is_refused_in_one_line(tmp_path, capsys, name, text, said):
+    """Pinocchio's SRDF reader raised a traceback (exit 1) on each of these."""
+    (tmp_path / name).write_text(text)
+    scenario = UR5_TOML.read_text().replace(
+        'robot = "ur5_servicer"', f'robot = "{ROOT / "robots" / "ur5_servicer.urdf"}"'
+    )
+    (tmp_path / "s.toml").write_text(scenario + f'\n[safety]\nsrdf = "{name}"\n')
+    assert main(["check", str(tmp_path / "s.toml")]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1, err
+    assert err.startswith(f"freefloat: error: SRDF {tmp_path / name}") and said in err, err
+
+
+def test_an_srdf_naming_links_the_robot_lacks_is_warned_and_the_rest_applies(tmp_path, capfd):
+    """A typo or a missing arm prefix disabled nothing without a word."""
+    robot = ff.load_robot(ROOT / "robots" / "ur5_servicer.urdf")
+    srdf = tmp_path / "typo.srdf"
+    srdf.write_text(
+        '<robot name="r"><disable_collisions link1="spacecraft" link2="upper_arm_lnk"/>'
+        '<disable_collisions link1="spacecraft" link2="forearm_link"/></robot>'
+    )
+    everything = CollisionModel(robot)
+    trimmed = CollisionModel(robot, srdf)
+    err = capfd.readouterr().err
+    assert "names links the robot does not have (upper_arm_lnk): their pairs disable nothing" in err
+    removed = set(everything.names) - set(trimmed.names)
+    assert removed and all("forearm_link" in n and "spacecraft" in n for n in removed)

@@ -34,10 +34,12 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelError
+from ..progress import LOGGER
 from .file_stamp import FileStamp, file_stamp
 from .meshes import MeshKey, mesh_key
 from .model import Robot
 from .payload import PAYLOAD_LINK
+from .srdf import checked_srdf
 
 __all__ = [
     "OBSTACLE_PREFIX",
@@ -316,8 +318,28 @@ def _pairs_of(
                 continue  # a grasped payload touches what its holder carries (fingertips)
             geometry.addCollisionPair(pin.CollisionPair(a, b))
     if srdf is not None:
-        pin.removeCollisionPairs(model, geometry, str(srdf))
+        _remove_srdf_pairs(model, geometry, srdf)
     return [(int(p.first), int(p.second)) for p in geometry.collisionPairs]
+
+
+def _remove_srdf_pairs(model: pin.Model, geometry: pin.GeometryModel, srdf: Path) -> None:
+    """Remove the pairs the SRDF disables, the file checked first (:func:`.srdf.checked_srdf`).
+
+    Raises:
+        ModelError: the file is not an SRDF Pinocchio can read.
+    """
+    links = {f.name for f in model.frames if f.type == pin.FrameType.BODY}
+    unknown = checked_srdf(srdf, links)
+    if unknown:
+        LOGGER.warning(
+            "the SRDF %s names links the robot does not have (%s): their pairs disable nothing",
+            srdf,
+            ", ".join(unknown[:5]) + (f" and {len(unknown) - 5} more" if len(unknown) > 5 else ""),
+        )
+    try:
+        pin.removeCollisionPairs(model, geometry, str(srdf))
+    except (RuntimeError, ValueError) as exc:  # what the check above does not foresee
+        raise ModelError(f"SRDF {srdf} cannot be read ({exc})") from None
 
 
 def _carries(parent: list[int], holder: int, joint: int) -> bool:

@@ -15,7 +15,14 @@ from pathlib import Path
 from ..errors import ModelError
 from .model import MAX_URDF_BYTES, Robot, example_robot_data_dir
 
-__all__ = ["ARM_SRDFS", "arm_srdf", "disabled_pairs", "known_srdf", "merged_srdf"]
+__all__ = [
+    "ARM_SRDFS",
+    "arm_srdf",
+    "checked_srdf",
+    "disabled_pairs",
+    "known_srdf",
+    "merged_srdf",
+]
 
 
 #: SRDF files of example-robot-data arms (below ``example-robot-data/robots``).
@@ -68,6 +75,38 @@ def disabled_pairs(path: Path) -> list[tuple[str, str]]:
         for e in root.iter("disable_collisions")
         if e.get("link1") and e.get("link2")
     ]
+
+
+def checked_srdf(path: Path, links: set[str]) -> list[str]:
+    """Check an SRDF file as Pinocchio will read it; return the links it names not in ``links``.
+
+    Those links' pairs disable nothing; they are returned in the order found, each once.
+
+    Raises:
+        ModelError: the file does not end in ``.srdf`` (Pinocchio refuses it), is too large,
+            is not XML, has another root than ``<robot>``, or has a ``<disable_collisions>``
+            without both its links.
+    """
+    if path.suffix.lower() != ".srdf":
+        raise ModelError(f"SRDF {path} does not end in .srdf; give an SRDF file (*.srdf)")
+    if path.stat().st_size > MAX_URDF_BYTES:
+        raise ModelError(f"SRDF {path} is larger than {MAX_URDF_BYTES} bytes")
+    try:
+        root = ET.fromstring(path.read_text(encoding="utf-8"))
+    except (ET.ParseError, UnicodeDecodeError) as exc:
+        raise ModelError(f"SRDF {path} is not XML ({exc})") from None
+    if root.tag != "robot":
+        raise ModelError(f"SRDF {path}: root element is <{root.tag[:40]}>, expected <robot>")
+    unknown: dict[str, None] = {}
+    for number, element in enumerate(root.iter("disable_collisions"), start=1):
+        names = (element.get("link1"), element.get("link2"))
+        if not all(names):
+            raise ModelError(
+                f"SRDF {path}: <disable_collisions> number {number} lacks link1 or link2; each "
+                'names two links: <disable_collisions link1="a" link2="b"/>'
+            )
+        unknown.update((str(n), None) for n in names if n not in links)
+    return list(unknown)
 
 
 def merged_srdf(arms: Sequence[str], prefixes: Sequence[str]) -> str:
