@@ -385,3 +385,24 @@ def test_an_srdf_naming_links_the_robot_lacks_is_warned_and_the_rest_applies(tmp
     assert "names links the robot does not have (upper_arm_lnk): their pairs disable nothing" in err
     removed = set(everything.names) - set(trimmed.names)
     assert removed and all("forearm_link" in n and "spacecraft" in n for n in removed)
+
+
+def test_keep_out_objects_no_body_can_be_checked_against_are_refused(tmp_path, capsys):
+    """The paper's planar robot has no collision geometry: a keep-out sphere its arm passes
+    through was dropped from the plan (``safety.obstacles: []``) and ``check`` said "ok"."""
+    text = (ROOT / "robots" / "scenarios" / "worked_example.toml").read_text()
+    text = text.replace(
+        'robot = "planar_2dof"', f'robot = "{ROOT / "robots" / "planar_2dof.urdf"}"'
+    )
+    text = text.replace("check = false", "margin_m = 0.05")
+    text += '\n[[obstacles]]\nname = "post"\nsphere = 0.3\nxyz = [1.5, 0.9, 0.0]\n'
+    (tmp_path / "s.toml").write_text(text)
+    for argv in (["check"], ["plan", "-o", str(tmp_path / "p.json")]):
+        assert main([*argv, str(tmp_path / "s.toml")]) == 2
+        _, err = capsys.readouterr()
+        assert err.count("\n") == 1 and "Traceback" not in err, err
+        assert err.startswith(
+            "freefloat: error: keep-out object 'post' cannot be kept clear: no moving body of "
+            "planar_2dof has collision geometry to check against it;"
+        ), err
+    assert not (tmp_path / "p.json").exists()

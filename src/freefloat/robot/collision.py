@@ -42,6 +42,7 @@ from .distance_query import (
     checked_distance,
 )
 from .geometry import (
+    OBSTACLE_PREFIX,
     add_obstacles,
     bodies_without_geometry,
     checked_pairs,
@@ -107,6 +108,14 @@ class CollisionModel(PairQueries):
         pairs = checked_pairs(robot, geometry, srdf)
         objects = list(geometry.geometryObjects)
         names = [f"{objects[a].name} / {objects[b].name}" for a, b in pairs]
+        paired = {k for pair in pairs for k in pair}
+        #: Keep-out objects in no checked pair (no moving body with collision geometry to
+        #: keep clear of them), by name.
+        self.unpaired_obstacles = tuple(
+            obj.name.removeprefix(OBSTACLE_PREFIX)
+            for k, obj in enumerate(objects)
+            if obj.name.startswith(OBSTACLE_PREFIX) and k not in paired
+        )
         super().__init__(robot, geometry, pairs, names)
         self._levers: PairLevers | None = None
         if self._weights is not None:

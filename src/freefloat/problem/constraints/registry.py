@@ -17,7 +17,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Protocol
 
-from ...errors import InputError, UnknownNameError
+from ...errors import InputError, ScenarioError, UnknownNameError
 from ...plugins import Registry, plugin_class
 from ...robot.collision import CollisionModel, Obstacle, collision_model, known_srdf
 from ...robot.geometry import BuiltPerSource
@@ -120,11 +120,24 @@ def scenario_constraints(scenario: ScenarioLike) -> list[Constraint]:
     The defaults, its ``[constraints.<name>]`` tables, and clearance when checked.
     Clearance is added when ``[safety] check`` is on (the default) and the robot's collision
     geometry (with the scenario's obstacles and payload) has pairs to check.
+
+    Raises:
+        ScenarioError: a keep-out object no moving body can be checked against (clearance
+            on, and no body with collision geometry in a pair with it): it would be ignored.
     """
     constraints = [*default_constraints(), *scenario.constraints]
     safety = scenario.safety
     if safety.check:
         srdf = safety.srdf or known_srdf(scenario.robot)
+        unpaired = cached_collision_model(scenario.robot, srdf, safety.obstacles).unpaired_obstacles
+        if unpaired:
+            raise ScenarioError(
+                f"keep-out object{'s' if len(unpaired) > 1 else ''} "
+                f"{', '.join(repr(n) for n in unpaired)} cannot be kept clear: no moving body "
+                f"of {scenario.robot.name} has collision geometry to check against it; add "
+                "<collision> elements to its links, or remove the object, or set [safety] "
+                "check = false"
+            )
         clearance = clearance_constraint(scenario.robot, srdf, safety.obstacles, safety.margin)
         if clearance is not None:
             constraints.append(clearance)
