@@ -161,3 +161,24 @@ def test_compose_will_not_write_over_its_arm(tmp_path, capsys):
     assert main([*argv, "--mount", "0.5", "0", "0", "-o", str(arm)]) == 2
     assert "is the file this command reads" in capsys.readouterr().err
     assert arm.read_bytes() == kept
+
+
+@pytest.mark.parametrize(
+    ("mount", "said"),
+    [
+        (["3", "0", "0"], "is mounted at [3.0, 0.0, 0.0] m, 2.5 m off the box's surface"),
+        (["0", "0", "0"], "is mounted at [0.0, 0.0, 0.0] m, 0.5 m inside the box"),
+        (["0.5", "0.2", "-0.1"], None),  # on the +x face
+        (["0.6", "0.6", "0"], "is mounted at [0.6, 0.6, 0.0] m, 0.141 m off the box's surface"),
+    ],
+)
+def test_a_mount_off_the_box_surface_is_said(tmp_path, capsys, mount, said):
+    """An arm mounted 2.5 m off its spacecraft, or at its centre, composed without a word."""
+    argv = ["compose", "--arm", "ur5", "--base-mass", "100", "--base-size", "1", "1", "1"]
+    assert main([*argv, "--mount", *mount, "-o", str(tmp_path / "s.urdf")]) == 0
+    err = capsys.readouterr().err
+    if said is None:
+        assert "mounted at" not in err, err
+    else:
+        assert f"freefloat: warning: the arm 'ur5' {said} (1 x 1 x 1 m, faces at" in err, err
+        assert "it is fixed there rigidly, as on a massless pedestal" in err

@@ -8,7 +8,8 @@ import pytest
 
 import freefloat as ff
 from freefloat.cli import main
-from freefloat.robot.compose import ServicerSpec, arm_urdf, compose_servicer_text, payload_parent
+from freefloat.robot.arm_tips import payload_parent
+from freefloat.robot.compose import ServicerSpec, arm_urdf, compose_servicer_text
 from freefloat.robot.payload import PAYLOAD_LINK, Payload
 
 BASE = ["--base-mass", "500", "--base-size", "1", "1", "1", "--mount", "0.5", "0", "0"]

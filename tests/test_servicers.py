@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import xml.etree.ElementTree as ET
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -11,6 +13,8 @@ import yourdfpy
 import freefloat as ff
 from freefloat.cli import main
 from freefloat.robot.compose import ARMS, ServicerSpec, compose_servicer, resolve_mesh
+from freefloat.robot.model import example_robot_data_dir
+from freefloat.robot.payload import Payload
 
 import reference as ref
 from conftest import ROOT
@@ -241,11 +245,19 @@ def test_a_torso_with_two_equal_arms_composes_and_plans_with_the_end_effector_na
         f"[goal]\njoints = {{ {finish} }}\n"
     )
     assert ff.plan(ff.Scenario.from_toml(scenario)).verification.passed
-    # composed on its own (freefloat compose), the tie is an error naming both chains
+    # composed on its own (freefloat compose), both tips are offered and the file written (it
+    # was refused with advice compose cannot follow: "name one in the scenario"); a scenario
+    # names the one it plans for, and loaded without one the tie is named
     spec = ServicerSpec(arm=str(arm), base_mass=200.0, base_size=(0.6, 0.6, 0.6))
+    path = compose_servicer(spec, tmp_path / "torso_servicer.urdf")
     with pytest.raises(ff.AmbiguousEndEffectorError, match=r"left_lower.*right_lower"):
-        compose_servicer(spec, tmp_path / "torso_servicer.urdf")
-    assert not (tmp_path / "torso_servicer.urdf").exists()
+        ff.load_robot(path)
+    assert ff.load_robot(path, ["right_lower"]).end_effector == "right_lower"
+    # a captured payload needs the one tip that holds it: refused, nothing written
+    held = replace(spec, payload=Payload(10.0, inertia=(1.0, 1.0, 1.0, 0.0, 0.0, 0.0)))
+    with pytest.raises(ff.AmbiguousEndEffectorError, match=r"left_lower.*right_lower"):
+        compose_servicer(held, tmp_path / "held.urdf")
+    assert not (tmp_path / "held.urdf").exists()
 
 
 def test_an_unknown_arm_name_is_named_as_written(tmp_path):
@@ -338,3 +350,25 @@ def test_robot_and_arm_tell_a_file_from_a_name_by_one_rule(tmp_path):
         composed.joint_names
         == ff.Scenario.from_toml(ROOT / "examples" / "kinova_servicer.toml").robot.joint_names
     )
+
+
+def test_one_arm_composed_from_a_urdf_keeps_the_srdf_beside_it(tmp_path, capsys):
+    """With two arms the arms' SRDF pairs were merged and kept; with one they were dropped, so
+    the pairs the arm's makers disable (fingers that interleave, say) were checked."""
+    share = example_robot_data_dir() / "example-robot-data" / "robots" / "ur_description"
+    urdf = (share / "urdf" / "ur5_robot.urdf").read_text()
+    arm = tmp_path / "my_ur5.urdf"
+    arm.write_text(urdf.replace("package://example-robot-data/robots/", f"{share.parent}/"))
+    (tmp_path / "my_ur5.srdf").write_text((share / "srdf" / "ur5.srdf").read_text())
+    out = tmp_path / "servicer.urdf"
+    argv = ["compose", "--arm", str(arm), "--base-mass", "100", "--base-size", "0.6", "0.6", "0.6"]
+    assert (
+        main([*argv, "--mount", "0.3", "0", "0", "--mount-rpy", "0", "90", "0", "-o", str(out)])
+        == 0
+    )
+    assert "with servicer.srdf: the arm's SRDF pairs" in capsys.readouterr().out
+    pairs = lambda path: {  # noqa: E731
+        frozenset((e.get("link1"), e.get("link2")))
+        for e in ET.parse(path).getroot().iter("disable_collisions")
+    }
+    assert pairs(out.with_suffix(".srdf")) == pairs(tmp_path / "my_ur5.srdf") != set()

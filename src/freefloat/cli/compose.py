@@ -195,7 +195,10 @@ def run(args: argparse.Namespace) -> int:
         path = write_composed(composed, args.output)
     print(f"freefloat compose: wrote {path}")
     if composed.srdf is not None:
-        print(f"  with {path.with_suffix('.srdf').name}: each arm's SRDF pairs, prefixed")
+        whose = (
+            "each arm's SRDF pairs, prefixed" if len(spec.arms()) > 1 else "the arm's SRDF pairs"
+        )
+        print(f"  with {path.with_suffix('.srdf').name}: {whose}")
     for name, value in composed.locked.items():
         shown = value if name in composed.prismatic else math.degrees(value)
         print(f"  locked {name} at {shown:.6g} {'m' if name in composed.prismatic else 'deg'}")
@@ -205,6 +208,11 @@ def run(args: argparse.Namespace) -> int:
         f"{robot.total_mass:.3f} kg, end effector{'s' if len(robot.end_effectors) > 1 else ''} "
         f"{tips}"
     )
+    if len(robot.end_effectors) > len(spec.arms()):  # an arm's longest chains tie
+        print(
+            "  an arm's longest chains tie: a scenario names the end effectors it plans for "
+            '(end_effectors = ["..."])'
+        )
     if spec.payload is not None:
         print(
             f"  captured payload {spec.payload.mass:g} kg fixed to {robot.end_effector!r} "

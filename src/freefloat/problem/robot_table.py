@@ -266,8 +266,9 @@ def _servicer(table: Mapping[str, Any], relative_to: Path | None = None) -> Robo
     The URDF text is None when the cache file exists (it is read from there); otherwise the
     servicer is composed in memory and written only by the scenario's ``write_robot``.
     """
-    from ..robot.compose import ServicerSpec, arm_tips, compose_servicer_text
-    from ..robot.srdf import merged_srdf
+    from ..robot.arm_tips import arm_tips
+    from ..robot.compose import ServicerSpec, compose_servicer_text
+    from ..robot.srdf import ARM_SRDFS, arm_srdf, merged_srdf
 
     check_keys(table, _SERVICER_KEYS, "[robot]")
     arms = _arms(table, relative_to)
@@ -288,8 +289,8 @@ def _servicer(table: Mapping[str, Any], relative_to: Path | None = None) -> Robo
     )
     path = servicer_cache_dir() / f"{spec.key()}.urdf"
     text = None if path.is_file() else compose_servicer_text(spec)
-    if len(arms) == 1:
-        return RobotSource(path, text, spec)
+    if len(arms) == 1 and (first.arm in ARM_SRDFS or arm_srdf(first.arm) is None):
+        return RobotSource(path, text, spec)  # a named arm's SRDF is found by its name
     settled = spec.arms()
     prefixes = [a.prefix for a in settled]
     # an arm whose longest chains tie leaves the end effectors to the scenario or the loader

@@ -21,23 +21,19 @@ import hashlib
 import json
 import logging
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import (
-    AmbiguousEndEffectorError,
-    InputError,
-    ModelError,
-)
+from ..errors import InputError, ModelError
 from ..files import atomic_write_text
+from .arm_tips import arm_tips, every_tip
 from .arms import ARMS, BASE_LINK, ArmSpec, arm_part, arm_urdf
 from .model import example_robot_data_dir
-from .payload import PAYLOAD_LINK, Payload
-from .srdf import merged_srdf
+from .payload import Payload
+from .srdf import ARM_SRDFS, arm_srdf, merged_srdf
 from .urdf_checks import check_urdf_xml
 
 LOGGER = logging.getLogger(__name__)
@@ -48,12 +44,10 @@ __all__ = [
     "ArmSpec",
     "Composed",
     "ServicerSpec",
-    "arm_tips",
     "arm_urdf",
     "compose",
     "compose_servicer",
     "compose_servicer_text",
-    "payload_parent",
     "resolve_mesh",
     "write_composed",
 ]
@@ -69,10 +63,11 @@ class Composed:
         notes: what the composition chose on its own (a finger locked mid-range...), one line
             each.
         end_effectors: the default end effector of each arm (the tip of its longest chain
-            that is not a finger), in arm order; empty when an arm's longest chains tie
-            (composed with ``strict_tips=False``).
+            that is not a finger), in arm order; an arm whose longest chains tie gives every
+            tip (composed with ``offer_ties``), or none at all (without).
         srdf: the SRDF text of the pairs never checked (each arm's own SRDF pairs, with the
-            arm's prefix), for a servicer of several arms; None otherwise.
+            arm's prefix), for a servicer of several arms, or of one arm given as a URDF with
+            an SRDF beside it (a named arm's is found by the servicer's name); None otherwise.
         prismatic: the locked joints that were prismatic (their values in m, not rad).
     """
 
@@ -177,8 +172,9 @@ class ServicerSpec:
 def compose_servicer(spec: ServicerSpec, output: str | Path) -> Path:
     """Compose the servicer, validate it with yourdfpy and write it atomically to ``output``.
 
-    A servicer of several arms also gets its SRDF (each arm's pairs never checked, prefixed)
-    next to it, ``output`` with the suffix ``.srdf``.
+    A servicer of several arms, or of an arm URDF with an SRDF beside it, also gets its SRDF
+    (each arm's pairs never checked, prefixed) next to it, ``output`` with the suffix
+    ``.srdf``.
 
     Raises:
         ModelError: the arm URDF cannot be read, or the result does not validate.
@@ -205,16 +201,17 @@ def compose_servicer_text(spec: ServicerSpec) -> str:
 
     Raises: as :func:`compose`.
     """
-    return compose(spec, strict_tips=False).text
+    return compose(spec, offer_ties=False).text
 
 
-def compose(spec: ServicerSpec, strict_tips: bool = True) -> Composed:
+def compose(spec: ServicerSpec, offer_ties: bool = True) -> Composed:
     """Compose the servicer and validate it with yourdfpy (no file is written).
 
-    ``strict_tips``: an arm whose longest chains tie (a dual-arm torso) has no default end
-    effector: an error (:class:`AmbiguousEndEffectorError`, naming the candidates), unless
-    False (a scenario's servicer: its ``end_effector`` names one) and no payload needs it;
-    then :attr:`Composed.end_effectors` is empty.
+    An arm whose longest chains tie (a dual-arm torso) has no default end effector: a
+    captured payload, which that tip would hold, is refused (:class:`AmbiguousEndEffectorError`,
+    naming the candidates). Otherwise :attr:`Composed.end_effectors` lists every tip of such
+    an arm with ``offer_ties`` (the compose command: the scenario names the ones it plans
+    for), and is empty without (a scenario's servicer: its ``end_effectors`` name them).
 
     Raises:
         ModelError: an arm URDF cannot be read, or the result does not validate.
@@ -230,15 +227,12 @@ def compose(spec: ServicerSpec, strict_tips: bool = True) -> Composed:
     locked: dict[str, float] = {}
     notes: list[str] = []
     prismatic: set[str] = set()
+    bare: dict[str, None] = {}  # arms without collision geometry, each warned of once
     for arm in arms:
         part = arm_part(arm)
         if not any(link.collisions for link in part.links):  # nothing for clearance to measure
-            LOGGER.warning(
-                "no link of the arm %r has collision geometry: clearance between it and the "
-                "spacecraft cannot be checked, and plans may pass it through the box; add "
-                "<collision> elements to its URDF",
-                arm.arm,
-            )
+            bare[arm.arm] = None
+        notes += _mount_notes(spec, arm)
         links += part.links
         joints += part.joints
         for material in part.materials:
@@ -246,6 +240,13 @@ def compose(spec: ServicerSpec, strict_tips: bool = True) -> Composed:
         locked.update(part.locked)
         notes += part.notes
         prismatic |= part.prismatic
+    for name in bare:
+        LOGGER.warning(
+            "no link of the arm %r has collision geometry: clearance between it and the "
+            "spacecraft cannot be checked, and plans may pass it through the box; add "
+            "<collision> elements to its URDF",
+            name,
+        )
     spacecraft, hull = _spacecraft(spec)
     names = [a.arm if a.arm in ARMS else Path(a.arm).stem for a in arms]
     composed = yourdfpy.Robot(
@@ -280,9 +281,14 @@ def compose(spec: ServicerSpec, strict_tips: bool = True) -> Composed:
         check_urdf_xml(text)
     except ModelError as exc:
         raise ModelError(f"{REFUSED}: {exc}") from None
-    strict = strict_tips or spec.payload is not None  # a payload needs its arm's tip
-    tips = arm_tips(text, [a.prefix for a in arms], strict=strict)
-    srdf = merged_srdf([a.arm for a in arms], [a.prefix for a in arms]) if len(arms) > 1 else None
+    # A payload needs its arm's tip; without one, an arm whose longest chains tie (a dual-arm
+    # torso) offers every tip: the scenario names the ones it plans for.
+    prefixes = [a.prefix for a in arms]
+    tips = arm_tips(text, prefixes, strict=spec.payload is not None)
+    if not tips and offer_ties:
+        tips = every_tip(text, prefixes)
+    own = len(arms) > 1 or (arms[0].arm not in ARM_SRDFS and arm_srdf(arms[0].arm) is not None)
+    srdf = merged_srdf([a.arm for a in arms], prefixes) if own else None
     for note in notes:
         LOGGER.warning("%s", note)  # a choice the user did not state
     if spec.payload is not None:
@@ -290,6 +296,32 @@ def compose(spec: ServicerSpec, strict_tips: bool = True) -> Composed:
 
         text = attach_payload(text, tips[0], spec.payload)
     return Composed(text, locked, tuple(notes), tips, srdf, frozenset(prismatic))
+
+
+#: How far (m) a mount point may lie from the spacecraft box's surface without a note.
+MOUNT_TOLERANCE = 1e-3
+
+
+def _mount_notes(spec: ServicerSpec, arm: ArmSpec) -> list[str]:
+    """A note when ``arm``'s mount point is not on the spacecraft box's surface.
+
+    Inside the box or off it, the arm is fixed there rigidly, as if on a massless pedestal:
+    legal, and said, since a mistyped mount (a size for a half size) composes silently.
+    """
+    half = 0.5 * np.asarray(spec.base_size, dtype=float)
+    where = np.abs(np.asarray(arm.mount, dtype=float))
+    outside = float(np.linalg.norm(np.maximum(where - half, 0.0)))
+    depth = float(np.min(half - where))
+    off = outside if outside > 0.0 else -depth  # the signed distance to the surface (m)
+    if abs(off) <= MOUNT_TOLERANCE:
+        return []
+    how = f"{off:.3g} m off the box's surface" if off > 0 else f"{-off:.3g} m inside the box"
+    size = " x ".join(f"{x:g}" for x in spec.base_size)
+    return [
+        f"the arm {arm.arm!r} is mounted at {list(arm.mount)} m, {how} ({size} m, faces at "
+        f"+-{', +-'.join(f'{h:g}' for h in half)} m): it is fixed there rigidly, as on a "
+        "massless pedestal; mount it on a face if that is not meant"
+    ]
 
 
 def _spacecraft(spec: ServicerSpec) -> tuple[Any, Any]:
@@ -310,44 +342,6 @@ def _spacecraft(spec: ServicerSpec) -> tuple[Any, Any]:
         collisions=[yourdfpy.Collision(name="hull", origin=np.eye(4), geometry=box)],
     )
     return spacecraft, hull
-
-
-def arm_tips(text: str, prefixes: Sequence[str], strict: bool = True) -> tuple[str, ...]:
-    """The default end effector of each arm (by its prefix) in a composed URDF.
-
-    An arm whose longest chains tie has none: with ``strict`` that is an error
-    (:class:`AmbiguousEndEffectorError`), otherwise the tuple is empty: one tip per arm, or
-    none.
-    """
-    import pinocchio as pin
-
-    from .end_effectors import end_effector_candidates
-
-    model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
-    tips = []
-    for prefix in prefixes:
-        found = end_effector_candidates(model, prefix)
-        if len(found) > 1 and strict:
-            raise AmbiguousEndEffectorError(found)
-        if len(found) > 1:
-            return ()
-        tips.append(found[0])
-    return tuple(tips)
-
-
-def payload_parent(text: str) -> str | None:
-    """The link a URDF's captured payload is fixed to (its end effector), or None if none."""
-    import xml.etree.ElementTree as ET
-
-    try:
-        root = ET.fromstring(text)
-    except ET.ParseError:
-        return None
-    for joint in root.findall("joint"):
-        child, parent = joint.find("child"), joint.find("parent")
-        if child is not None and parent is not None and child.get("link") == PAYLOAD_LINK:
-            return parent.get("link")
-    return None
 
 
 def _mesh_names(robot: Any) -> list[str]:
