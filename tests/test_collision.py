@@ -406,3 +406,24 @@ def test_keep_out_objects_no_body_can_be_checked_against_are_refused(tmp_path, c
             "planar_2dof has collision geometry to check against it;"
         ), err
     assert not (tmp_path / "p.json").exists()
+
+
+@pytest.mark.parametrize(
+    ("shape", "said"),
+    [
+        (
+            "sphere = 1e7",
+            "[[obstacles]] #1 sphere = 1e+07 m is outside the supported range [0, 1000] m",
+        ),
+        ("box = [0.1, -2e3, 0.1]", "box[1] = -2000 m is outside the supported range [0, 1000] m"),
+    ],
+)
+def test_an_obstacle_size_beyond_its_range_names_a_range_of_sizes(tmp_path, capsys, shape, said):
+    """A radius was said to lie outside [-1000, 1000] m: no negative size is valid."""
+    text = UR5_TOML.read_text().replace(
+        'robot = "ur5_servicer"', f'robot = "{ROOT / "robots" / "ur5_servicer.urdf"}"'
+    )
+    (tmp_path / "s.toml").write_text(text + f'\n[[obstacles]]\nname = "o"\n{shape}\n')
+    assert main(["check", str(tmp_path / "s.toml")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and said in err, err

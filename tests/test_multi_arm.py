@@ -352,7 +352,7 @@ def test_a_joint_locked_without_a_value_whose_range_excludes_0_is_fixed_mid_rang
     with caplog.at_level("WARNING"):
         locked = ff.Scenario.from_toml(path).robot
     assert locked.joint_names == ["j1"]
-    said = "joint 'j2' locked at 28.65 deg, the middle of its range [17.19, 40.11] deg"
+    said = "joint 'j2' locked at 28.6479 deg, the middle of its range [17.19, 40.11] deg"
     assert any(r.getMessage().startswith(said) for r in caplog.records)
     full = pin.buildModelFromUrdf(str(urdf))
     data = full.createData()
@@ -486,7 +486,7 @@ def test_compose_locks_fingers_mid_range_and_never_picks_a_finger(tmp_path, caps
     printed = captured.out
     assert "locked gripper_left_finger_joint at 30.0803 deg" in printed
     assert (  # said once, as a warning: a value the user did not state
-        "gripper_left_finger_joint' locked at 30.08 deg, the middle of its range "
+        "gripper_left_finger_joint' locked at 30.0803 deg, the middle of its range "
         "[20.05, 40.11] deg (0 is outside it)" in captured.err
     )
     assert "end effector 'fore'" in printed

@@ -100,18 +100,25 @@ def scenario_errors(check: Any, *args: Any, **kwargs: Any) -> Any:
         raise ScenarioError(str(exc)) from None
 
 
-def number(value: Any, where: str, limit: float = MAX_MAGNITUDE, unit: str = "") -> float:
-    """A finite number of magnitude at most ``limit`` (README, "Limits")."""
-    return float(scenario_errors(check_number, value, where, limit, unit))
+def number(
+    value: Any, where: str, limit: float = MAX_MAGNITUDE, unit: str = "", low: float | None = None
+) -> float:
+    """A finite number at most ``limit`` in magnitude, at least ``low`` if given (README)."""
+    return float(scenario_errors(check_number, value, where, limit, unit, low))
 
 
 def numbers(
-    value: Any, count: int, where: str, limit: float = MAX_MAGNITUDE, unit: str = ""
+    value: Any,
+    count: int,
+    where: str,
+    limit: float = MAX_MAGNITUDE,
+    unit: str = "",
+    low: float | None = None,
 ) -> np.ndarray:
-    """A list of ``count`` finite numbers of magnitude at most ``limit``."""
+    """A list of ``count`` finite numbers of magnitude at most ``limit`` (at least ``low``)."""
     if not isinstance(value, list) or len(value) != count:
         raise ScenarioError(f"{where} must be a list of {count} numbers, got {excerpt(value)}")
-    return np.array([number(v, f"{where}[{i}]", limit, unit) for i, v in enumerate(value)])
+    return np.array([number(v, f"{where}[{i}]", limit, unit, low) for i, v in enumerate(value)])
 
 
 def triple(

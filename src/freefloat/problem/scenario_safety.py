@@ -85,11 +85,11 @@ def safety_tables(table: Any, obstacles: Any, relative_to: Path | None) -> Safet
             )
         shape = shapes[0]
         raw = item[shape]
-        if shape == "sphere":
-            size = (number(raw, f"{where} sphere", MAX_LENGTH_M, "m"),)
+        if shape == "sphere":  # sizes: at least 0 (the obstacle refuses 0 itself)
+            size = (number(raw, f"{where} sphere", MAX_LENGTH_M, "m", 0.0),)
         else:
             count = 3 if shape == "box" else 2
-            size = tuple(numbers(raw, count, f"{where} {shape}", MAX_LENGTH_M, "m"))
+            size = tuple(numbers(raw, count, f"{where} {shape}", MAX_LENGTH_M, "m", 0.0))
         try:
             parsed.append(
                 Obstacle(

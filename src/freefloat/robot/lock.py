@@ -45,7 +45,7 @@ def default_lock(label: str, kind: str, lower: float, upper: float) -> tuple[flo
         return value, ""
     scale, unit = (1.0, "m") if kind == "prismatic" else (180 / math.pi, "deg")
     return value, (
-        f"{label} locked at {value * scale:.4g} {unit}, the middle of its range "
+        f"{label} locked at {value * scale:.6g} {unit}, the middle of its range "
         f"[{lower * scale:.4g}, {upper * scale:.4g}] {unit} (0 is outside it)"
     )
 

@@ -129,10 +129,12 @@ class ClearanceCertificate:
         bound = (
             "" if self.penetration else f"certified >= {self.lower_bound:.6g} m at every instant "
         )
+        # the figure is the smallest at the instants measured (not refined between them: the
+        # bound is what the check judges)
         text = (
             f"{what} {self.measured:.6g} m ({self.pair}, {self.kind}) at t = {self.time:.4g} s, "
-            f"margin {self.margin:g} m; {bound}"
-            f"({self.instants} instants, {self.bisections} halvings)"
+            f"the smallest of the {self.instants} instants measured; margin {self.margin:g} m; "
+            f"{bound}({self.bisections} halvings)"
         )
         if not self.certified:
             text += "; NOT certified between samples"
