@@ -134,3 +134,28 @@ def test_an_arm_without_collision_geometry_is_composed_with_a_warning(plain_arm,
     assert main(["compose", *two, "-o", str(tmp_path / "d.urdf")]) == 0
     err = capsys.readouterr().err  # two arms, one without: that one is named
     assert err.count("has collision geometry") == 1 and repr(plain_arm) in err
+
+
+def test_a_payload_table_for_a_servicer_already_holding_one_says_what_to_do(
+    plain_arm, tmp_path, capsys
+):
+    held = tmp_path / "held.urdf"
+    payload = ["--payload-mass", "75", "--payload-box", "0.4", "0.3", "0.2"]
+    assert main(["compose", "--arm", plain_arm, *BASE, *payload, "-o", str(held)]) == 0
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(
+        f'robot = "{held}"\nend_effector = "lower"\nduration = 10.0\n'
+        "[start]\njoints = { a1 = 0.0, a2 = 0.0 }\n[goal]\njoints = { a1 = 10.0, a2 = 5.0 }\n"
+        "[payload]\nmass = 5.0\nbox = [0.1, 0.1, 0.1]\n[safety]\ncheck = false\n"
+    )
+    capsys.readouterr()
+    assert main(["check", str(scenario)]) == 2
+    err = capsys.readouterr().err
+    assert (
+        err.count("\n") == 1
+        and (
+            f"already has a link {PAYLOAD_LINK!r} (a payload composed into it): drop the "
+            "scenario's [payload] table, or compose the servicer without --payload-*"
+        )
+        in err
+    ), err

@@ -118,7 +118,10 @@ def attach_payload(
     if end_effector_link not in links:
         raise ModelError(f"no link {end_effector_link!r} to attach the payload to")
     if PAYLOAD_LINK in links:
-        raise ModelError(f"the URDF already has a link {PAYLOAD_LINK!r}")
+        raise ModelError(
+            f"the URDF already has a link {PAYLOAD_LINK!r} (a payload composed into it): "
+            "drop the scenario's [payload] table, or compose the servicer without --payload-*"
+        )
     link = ET.SubElement(root, "link", name=PAYLOAD_LINK)
     inertial = ET.SubElement(link, "inertial")
     ET.SubElement(inertial, "origin", xyz=_xyz(payload.com_xyz), rpy="0 0 0")
