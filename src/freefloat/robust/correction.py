@@ -126,9 +126,16 @@ def correcting_plan(
     except SolverError as exc:
         said = "continued from where the search with less freedom stopped"  # the solver's words
         tried = [t.replace(said, "started from the quadratic-model loop") for t in exc.tried]
+        began = problem.achieved(np.zeros(problem.n_free) if start is None else start)
+        away = geodesic_angle(began, goal)  # what the search's own figures count from
+        where = (
+            ""
+            if abs(away - angle) < 1e-9
+            else f"its search began on a loop ending {math.degrees(away):.4g} deg from the goal: "
+        )
         raise SolverError(
             f"one correcting motion cannot turn the spacecraft back by {math.degrees(angle):.4g}"
-            f" deg within the plan's limits ({exc.headline})",
+            f" deg within the plan's limits ({where}{exc.headline})",
             exc.best_residual,
             tried,
             per_axis=exc.per_axis,
