@@ -227,7 +227,11 @@ xyz = [{tip[0]}, {tip[1]}, {tip[2]}]
     "body, message",
     [
         ('[[obstacles]]\nname = "a"\nbox = [0.1, 0.1]\n', "box must be a list of 3 numbers"),
-        ('[[obstacles]]\nname = "a"\nsphere = -0.1\n', "sizes must be finite and > 0 m"),
+        (
+            '[[obstacles]]\nname = "a"\nsphere = -0.1\n',
+            "sphere = -0.1 m is outside the supported range [0, 1000] m",
+        ),
+        ('[[obstacles]]\nname = "a"\nsphere = 0\n', "sizes must be finite and > 0 m"),
         ('[[obstacles]]\nname = "a"\n', "give exactly one shape"),
         ("[safety]\nmargin_m = -1.0\n", "margin_m must be >= 0 m"),
         (
