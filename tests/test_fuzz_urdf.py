@@ -22,7 +22,7 @@ import pinocchio as pin
 import pytest
 
 import freefloat as ff
-from freefloat.robot.urdf_checks import parser_messages
+from freefloat.robot.parser_messages import parser_messages
 
 from conftest import ROOT
 

@@ -45,7 +45,7 @@ def _evil_robot() -> str:
 def test_the_hidden_robot_is_another_robot_for_pinocchio():
     """The attack is real: given the file's own text, Pinocchio builds the 41 kg robot."""
     text = HIDDEN_ROBOT.format(robot=_evil_robot()) + PLANAR.read_text().split("-->", 1)[1]
-    with ff.robot.urdf_checks.parser_messages():
+    with ff.robot.parser_messages.parser_messages():
         model = pin.buildModelFromXML(text)
     assert model.inertias[1].mass == 41.0  # Python's parser reads 40 kg in the same text
 

@@ -101,16 +101,16 @@ def test_a_goal_that_puts_the_payload_into_the_forearm_is_refused(holder, tmp_pa
     assert not out.exists()
 
 
-#: The holder with a two-joint finger whose tip sphere sits in the payload's box at a2 = 90
-#: deg (a grasp), hung below the lower link.
+#: The holder with a two-joint finger (joints named so) whose tip sphere sits in the payload's
+#: box at a2 = 90 deg (a grasp), hung below the lower link.
 FINGERED = URDF.replace(
     "</robot>",
-    """  <joint name="f1" type="revolute"><parent link="lower"/><child link="knuckle"/>
+    """  <joint name="finger_f1" type="revolute"><parent link="lower"/><child link="knuckle"/>
     <origin xyz="-0.1 0 0"/><axis xyz="0 0 1"/>
     <limit lower="-3" upper="3" effort="5" velocity="2"/></joint>
   <link name="knuckle"><inertial><mass value="0.2"/>
     <inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <joint name="f2" type="revolute"><parent link="knuckle"/><child link="tip"/>
+  <joint name="finger_f2" type="revolute"><parent link="knuckle"/><child link="tip"/>
     <origin xyz="-0.1 0 0"/><axis xyz="0 0 1"/>
     <limit lower="-3" upper="3" effort="5" velocity="2"/></joint>
   <link name="tip"><inertial><mass value="0.1"/>
@@ -131,7 +131,8 @@ def test_a_payload_touches_what_its_holder_carries_at_any_depth(tmp_path) -> Non
 
     (tmp_path / "holder.urdf").write_text(FINGERED)
     text = SCENARIO.format(goal=90.0).replace(
-        "joints = { a1 = 0.0, a2 = 90.0 }", "joints = { a1 = 0.0, a2 = 90.0, f1 = 0.0, f2 = 0.0 }"
+        "joints = { a1 = 0.0, a2 = 90.0 }",
+        "joints = { a1 = 0.0, a2 = 90.0, finger_f1 = 0.0, finger_f2 = 0.0 }",
     )
     text = 'end_effector = "lower"\n' + text
     (tmp_path / "f.toml").write_text(text)
@@ -141,3 +142,28 @@ def test_a_payload_touches_what_its_holder_carries_at_any_depth(tmp_path) -> Non
     pairs = {frozenset((names[a], names[b])) for a, b in checked_pairs(robot, geometry, None)}
     assert frozenset(("upper_0", "captured_payload_0")) in pairs
     assert frozenset(("tip_0", "captured_payload_0")) not in pairs
+
+
+@pytest.mark.parametrize("holder", ["upper", "spacecraft"])
+def test_a_payload_held_in_mid_arm_or_by_the_spacecraft_is_checked_against_the_arm_beyond(
+    tmp_path, holder
+) -> None:
+    """Held by the upper link, or by the spacecraft itself (``end_effector = "spacecraft"``),
+    the payload was spared against every body its holder carries: the whole arm beyond, so a
+    box enclosing the arm planned and verified. Only fingers (joints named so) are spared."""
+    import freefloat as ff
+    from freefloat.robot.geometry import checked_pairs, load_collision_geometry
+
+    (tmp_path / "holder.urdf").write_text(FINGERED)
+    text = SCENARIO.format(goal=90.0).replace(
+        "joints = { a1 = 0.0, a2 = 90.0 }",
+        "joints = { a1 = 0.0, a2 = 90.0, finger_f1 = 0.0, finger_f2 = 0.0 }",
+    )
+    (tmp_path / "f.toml").write_text(f'end_effector = "{holder}"\n' + text)
+    robot = ff.Scenario.from_toml(tmp_path / "f.toml").robot
+    geometry = load_collision_geometry(robot)
+    names = [o.name for o in geometry.geometryObjects]
+    pairs = {frozenset((names[a], names[b])) for a, b in checked_pairs(robot, geometry, None)}
+    beyond = ["lower_0", "tip_0"] if holder == "upper" else ["upper_0", "lower_0", "tip_0"]
+    for body in beyond:
+        assert frozenset((body, "captured_payload_0")) in pairs, body

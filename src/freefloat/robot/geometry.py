@@ -12,7 +12,7 @@ Two distance models read the same URDF through this module and nothing else in c
 Both check the same pairs (:func:`checked_pairs`): every body on the spacecraft against every
 arm body except the one mounted on it, every keep-out object against every arm body, and every
 two arm bodies that are not parent and child; a captured payload against every body but the
-one holding it and the bodies that one carries (the link before it included); pairs an SRDF
+one holding it and that one's fingers (the link before it included); pairs an SRDF
 disables (MoveIt's ``<disable_collisions>``) are removed.
 
 The URDF's geometry is parsed once per URDF in a process (each caller gets its own deep copy,
@@ -35,6 +35,7 @@ import pinocchio as pin
 
 from ..errors import ModelError
 from ..progress import LOGGER
+from .end_effectors import FINGER_NAME
 from .file_stamp import FileStamp, file_stamp
 from .meshes import MeshKey, mesh_key
 from .model import Robot
@@ -298,8 +299,7 @@ def _pairs_of(
     joints = [int(obj.parentJoint) for obj in objects]
     obstacle = [obj.name.startswith(OBSTACLE_PREFIX) for obj in objects]
     # a captured payload is carried by its end effector's body but is no part of it: it
-    # touches that body (and what that body carries further on, fingers say) by design,
-    # never the link before
+    # touches that body (and its fingers) by design, never the link before nor the arm beyond
     payload = [model.frames[obj.parentFrame].name == PAYLOAD_LINK for obj in objects]
     geometry.removeAllCollisionPairs()
     for a in range(len(objects)):
@@ -310,12 +310,12 @@ def _pairs_of(
             if obstacle[a] or obstacle[b]:  # a keep-out object touches nothing by design
                 geometry.addCollisionPair(pin.CollisionPair(a, b))
                 continue
-            if (parent[ja] == jb and not payload[a]) or (parent[jb] == ja and not payload[b]):
-                continue  # parent and child touch by design
-            if (payload[a] and _carries(parent, ja, jb)) or (
-                payload[b] and _carries(parent, jb, ja)
+            if not (payload[a] or payload[b]) and (parent[ja] == jb or parent[jb] == ja):
+                continue  # parent and child touch by design (a payload is neither)
+            if (payload[a] and _finger_of(model, ja, jb)) or (
+                payload[b] and _finger_of(model, jb, ja)
             ):
-                continue  # a grasped payload touches what its holder carries (fingertips)
+                continue  # a grasped payload touches its holder's fingers
             geometry.addCollisionPair(pin.CollisionPair(a, b))
     if srdf is not None:
         _remove_srdf_pairs(model, geometry, srdf)
@@ -342,13 +342,21 @@ def _remove_srdf_pairs(model: pin.Model, geometry: pin.GeometryModel, srdf: Path
         raise ModelError(f"SRDF {srdf} cannot be read ({exc})") from None
 
 
-def _carries(parent: list[int], holder: int, joint: int) -> bool:
-    """Whether ``joint``'s body hangs below ``holder``'s at any depth (Pinocchio indices)."""
-    while joint > 0:
-        joint = parent[joint]
-        if joint == holder:
-            return True
-    return False
+def _finger_of(model: pin.Model, holder: int, joint: int) -> bool:
+    """Whether ``joint``'s body is a finger of ``holder``'s (Pinocchio joint indices).
+
+    It hangs below the holder only through joints named like a gripper's or a finger's
+    (:data:`~.end_effectors.FINGER_NAME`): a payload held by a mid-arm link, or by the
+    spacecraft, is checked against the arm beyond it.
+    """
+    if joint == holder:
+        return False
+    parent = model.parents
+    while joint != holder:
+        if joint <= 1 or not FINGER_NAME.search(model.names[joint]):
+            return False
+        joint = int(parent[joint])
+    return True
 
 
 #: Checked pairs per set of objects, kinematic tree and SRDF file (see checked_pairs).

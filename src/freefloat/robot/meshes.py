@@ -16,6 +16,8 @@ import coal
 import numpy as np
 import pinocchio as pin
 
+from ..errors import ModelError
+
 __all__ = [
     "HullInfo",
     "MeshKey",
@@ -78,10 +80,35 @@ def true_hull(obj: pin.GeometryObject, key: MeshKey | None = None) -> coal.Conve
     """
     key = mesh_key(obj) if key is None else key
     if key not in _HULLS:
+        _check_solid(obj)
         shape = obj.geometry.clone()  # the object's own shape is left as it is
-        shape.buildConvexHull(True, "Qt")
+        try:
+            shape.buildConvexHull(True, "Qt")
+        except (ValueError, RuntimeError) as exc:  # qhull's refusals, one line
+            first = str(exc).strip().splitlines()[-1][:200]
+            raise ModelError(
+                f"collision mesh {obj.meshPath} ({obj.name}): no hull ({first})"
+            ) from None
         _HULLS[key] = shape.convex
     return _HULLS[key]
+
+
+def _check_solid(obj: pin.GeometryObject) -> None:
+    """Refuse a collision mesh whose vertices span no volume (coal's hull code crashes on it).
+
+    Raises:
+        ModelError: fewer than four vertices, or all in one plane (or on one line).
+    """
+    vertices = np.array(obj.geometry.vertices(), dtype=float).reshape(-1, 3)
+    flat = len(vertices) < 4
+    if not flat:
+        spread = np.linalg.svd(vertices - vertices.mean(axis=0), compute_uv=False)
+        flat = bool(spread[2] <= 1e-9 * max(float(spread[0]), 1e-300))
+    if flat:
+        raise ModelError(
+            f"collision mesh {obj.meshPath} ({obj.name}) is flat: its {len(vertices)} vertices "
+            "span no volume, and clearance needs a solid; give a thin <box> for a panel"
+        )
 
 
 def mesh_triangles(shape: coal.BVHModelBase) -> tuple[np.ndarray, np.ndarray]:

@@ -22,7 +22,8 @@ from ..errors import AmbiguousEndEffectorError, ModelError
 from ..progress import LOGGER
 from .built_model import check_built_model
 from .end_effectors import end_effector_candidates
-from .urdf_checks import CheckedUrdf, check_urdf_xml, parser_messages
+from .parser_messages import parser_messages
+from .urdf_checks import CheckedUrdf, check_urdf_xml
 
 __all__ = ["Joint", "ParsedUrdf", "parsed_urdf"]
 

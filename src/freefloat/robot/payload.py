@@ -19,11 +19,9 @@ import pinocchio as pin
 
 from ..errors import InputError, ModelError
 from .model import Robot
+from .urdf_shapes import PAYLOAD_LINK
 
 __all__ = ["PAYLOAD_LINK", "Payload", "attach_payload", "check_mass", "held_payload"]
-
-#: Name of the link the payload becomes.
-PAYLOAD_LINK = "captured_payload"
 
 
 def check_mass(mass: float) -> None:

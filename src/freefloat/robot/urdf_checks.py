@@ -18,21 +18,16 @@ every ``package://`` mesh path stays inside its package.
 from __future__ import annotations
 
 import math
-import os
 import posixpath
 import re
-import sys
-import tempfile
 import xml.etree.ElementTree as ET
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 from xml.parsers import expat
 
 import numpy as np
 
 from ..errors import ModelError, UnknownNameError, excerpt
-from ..progress import LOGGER
+from .urdf_shapes import check_payload_link, check_shapes
 
 __all__ = [
     "MAX_INERTIA",
@@ -41,7 +36,6 @@ __all__ = [
     "MAX_MASS_KG",
     "CheckedUrdf",
     "check_urdf_xml",
-    "parser_messages",
     "urdf_document",
     "urdf_number",
 ]
@@ -362,7 +356,9 @@ def check_urdf_xml(text: str) -> CheckedUrdf:
         _check_inertial(link, link.get("name", "")) for link in root.findall("link")
     )
     _check_mesh_paths(root)
+    check_shapes(root, urdf_number)
     root_link, movable = _check_tree(root, links)
+    check_payload_link(root)
     return CheckedUrdf(
         text=ET.tostring(root, encoding="unicode"),
         name=root.get("name", ""),
@@ -371,30 +367,3 @@ def check_urdf_xml(text: str) -> CheckedUrdf:
         movable_joints=tuple(movable),
         total_mass=total_mass,
     )
-
-
-@contextmanager
-def parser_messages() -> Iterator[list[str]]:
-    """Collect what C++ code (urdfdom) prints on file descriptor 2 instead of showing it.
-
-    The lines are in the yielded list after the block; they are logged at DEBUG level (and an
-    error message quotes the first). Without a usable descriptor 2 nothing is captured.
-    """
-    lines: list[str] = []
-    try:
-        sys.stderr.flush()
-        saved = os.dup(2)
-    except (OSError, ValueError, AttributeError):
-        yield lines
-        return
-    with tempfile.TemporaryFile() as sink:
-        os.dup2(sink.fileno(), 2)
-        try:
-            yield lines
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
-            sink.seek(0)
-            lines += sink.read(100_000).decode("utf-8", "replace").splitlines()
-            for line in lines:
-                LOGGER.debug("URDF parser: %s", line)

@@ -1,0 +1,85 @@
+"""Collision shapes urdfdom would drop, or that crash the hull code, are refused in one line.
+
+urdfdom skips a geometry element it cannot read and goes on: the spacecraft's box written
+with decimal commas left the hull out of the collision model, and a plan through it was
+planned and verified. A mesh scaled by 0, or a flat one, crashed coal (segfault). The truth
+here is the shipped UR5 servicer's own refusal of the same goal with its hull intact.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from freefloat.cli import main
+
+from conftest import ROOT
+
+URDF = (ROOT / "robots" / "ur5_servicer.urdf").read_text()
+SCENARIO = (ROOT / "robots" / "scenarios" / "ur5_servicer.toml").read_text()
+#: Goal joints that put the upper arm and forearm 0.3 m inside the spacecraft's hull.
+INSIDE = "0,90,0,0,0,0"
+HULL = '<collision name="hull">\n      <geometry>\n        <box size="0.6 0.6 0.6"/>'
+
+
+def _scenario(tmp_path, urdf_text):
+    (tmp_path / "r.urdf").write_text(urdf_text)
+    (tmp_path / "s.toml").write_text(
+        SCENARIO.replace('robot = "ur5_servicer"', f'robot = "{tmp_path / "r.urdf"}"')
+    )
+    return str(tmp_path / "s.toml")
+
+
+def test_the_intact_hull_refuses_the_configuration(tmp_path, capsys):
+    assert HULL in URDF
+    assert main(["check", _scenario(tmp_path, URDF), "--at", INSIDE]) == 1
+    assert "configuration: NOT OK" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("shape", "said"),
+    [
+        ('<box size="0,6 0,6 0,6"/>', "link 'spacecraft' collision box size='0,6 0,6 0,6': give 3"),
+        ('<box size="nan 0.6 0.6"/>', "box size='nan 0.6 0.6': give 3 numbers > 0 m"),
+        ('<box size="0.6 0.6"/>', "box size='0.6 0.6': give 3 numbers > 0 m"),
+        ('<box size="-0.6 -0.6 -0.6"/>', "box size='-0.6 -0.6 -0.6': give 3 numbers > 0 m"),
+        ("<box/>", "link 'spacecraft' collision box missing: give 3 numbers > 0 m"),
+        ('<sphere radius="inf"/>', "sphere radius='inf': give a number > 0 m"),
+        ("", "link 'spacecraft' collision has an empty <geometry>"),
+    ],
+)
+def test_a_collision_shape_urdfdom_would_drop_is_refused(tmp_path, capsys, shape, said):
+    urdf = URDF.replace(HULL, HULL.replace('<box size="0.6 0.6 0.6"/>', shape))
+    assert main(["check", _scenario(tmp_path, urdf), "--at", INSIDE]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and said in err, err
+
+
+@pytest.mark.parametrize("scale", ["0 0 0", "nan 1 1", "1 1"])
+def test_a_mesh_scale_that_crashed_the_hull_code_is_refused(tmp_path, capsys, scale):
+    mesh = 'collision/forearm.stl"/>'
+    assert mesh in URDF
+    urdf = URDF.replace(mesh, f'collision/forearm.stl" scale="{scale}"/>')
+    assert main(["check", _scenario(tmp_path, urdf)]) == 2
+    err = capsys.readouterr().err
+    assert f"link 'forearm_link' collision mesh scale='{scale}' is not three finite non-zero" in err
+
+
+def test_a_flat_collision_mesh_is_refused_in_one_line(tmp_path, capsys):
+    """Four vertices in a plane: coal's hull code crashed the process (segfault)."""
+    (tmp_path / "flat.obj").write_text(
+        "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0.1 0.1 0\nf 1 2 3\nf 2 4 3\n"
+    )
+    mesh = "package://example-robot-data/robots/ur_description/meshes/ur5/collision/forearm.stl"
+    urdf = URDF.replace(mesh, str(tmp_path / "flat.obj"))
+    assert main(["check", _scenario(tmp_path, urdf)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "flat.obj (forearm_link_0) is flat: its 4 vertices" in err, err
+
+
+def test_a_spacecraft_named_like_a_captured_payload_is_refused(tmp_path, capsys):
+    """Named so, the spacecraft took the payload's clearance rule: every arm body was spared
+    against it, and the arm planned 0.32 m inside the hull."""
+    urdf = URDF.replace('"spacecraft"', '"captured_payload"')
+    assert main(["check", _scenario(tmp_path, urdf), "--at", INSIDE]) == 2
+    err = capsys.readouterr().err
+    assert "link 'captured_payload' is freefloat's name for a captured payload" in err
