@@ -431,3 +431,26 @@ def test_an_obstacle_size_beyond_its_range_names_a_range_of_sizes(tmp_path, caps
     assert main(["check", str(tmp_path / "s.toml")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and said in err, err
+
+
+def test_a_known_arms_srdf_applies_only_to_its_own_shapes(tmp_path, capfd):
+    """The shipped UR5 servicer with its wrist's collision mesh swapped for a 0.4 m sphere,
+    its name kept: example-robot-data's UR5 SRDF (chosen by the name) disabled the wrist's
+    pairs, and a wrist 0.35 m inside the forearm planned and verified."""
+    wrist = "meshes/ur5/collision/wrist3.stl"
+    urdf = (ROOT / "robots" / "ur5_servicer.urdf").read_text()
+    start = urdf.index(
+        f'<mesh filename="package://example-robot-data/robots/ur_description/{wrist}"/>'
+    )
+    end = urdf.index("/>", start) + 2
+    (tmp_path / "r.urdf").write_text(urdf[:start] + '<sphere radius="0.4"/>' + urdf[end:])
+    scenario = UR5_TOML.read_text().replace(
+        'robot = "ur5_servicer"', f'robot = "{tmp_path / "r.urdf"}"'
+    )
+    (tmp_path / "s.toml").write_text(scenario)
+    assert main(["check", str(tmp_path / "s.toml")]) == 1
+    out, err = capfd.readouterr()
+    assert "configuration: NOT OK" in out and "wrist_3_link_0" in out
+    assert "the collision shapes of its link 'wrist_3_link' are not that arm's" in err
+    robot = ff.load_robot(ROOT / "robots" / "ur5_servicer.urdf")  # the shipped one: applied
+    assert known_srdf(robot) is not None

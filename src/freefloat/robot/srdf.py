@@ -13,6 +13,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..errors import ModelError
+from ..progress import LOGGER
+from .arms import ARMS
 from .model import MAX_URDF_BYTES, Robot, example_robot_data_dir
 
 __all__ = [
@@ -38,14 +40,78 @@ ARM_SRDFS = {
 def known_srdf(robot: Robot) -> Path | None:
     """The SRDF of a servicer composed from an example-robot-data arm (named ``ARM_servicer``).
 
-    None for any other robot, or when example-robot-data is not installed.
+    Only when the robot's collision shapes of every link the SRDF names are that arm's own
+    (:func:`_differing_link`): a URDF that keeps the name but changes a shape (a wrist grown
+    to a 0.4 m sphere) would otherwise have pairs disabled that now collide; it is then not
+    applied, with a warning. None for any other robot, or when example-robot-data is not
+    installed.
     """
     arm = robot.name.removesuffix("_servicer")
     share = example_robot_data_dir()
     if arm == robot.name or arm not in ARM_SRDFS or share is None:
         return None
     path = share / "example-robot-data" / "robots" / ARM_SRDFS[arm]
-    return path if path.is_file() else None
+    if not path.is_file():
+        return None
+    key = (robot.urdf_text, str(path))
+    if key not in _MATCHED:
+        arm_text = (share / "example-robot-data" / "robots" / ARMS[arm]).read_text()
+        links = {name for pair in disabled_pairs(path) for name in pair}
+        differing = _differing_link(robot.urdf_text, arm_text, links)
+        if differing:
+            LOGGER.warning(
+                "%s is named like a servicer of example-robot-data's %s, but the collision "
+                "shapes of its link %r are not that arm's: the arm's SRDF (%s) is not applied; "
+                "give [safety] srdf to disable pairs",
+                robot.name,
+                arm,
+                differing,
+                path.name,
+            )
+        _MATCHED[key] = not differing
+    return path if _MATCHED[key] else None
+
+
+#: Whether a robot's shapes match its arm's, per (URDF text, SRDF path).
+_MATCHED: dict[tuple[str, str], bool] = {}
+
+
+def _differing_link(text: str, arm_text: str, links: set[str]) -> str:
+    """The first of ``links`` whose ``<collision>`` elements differ between two URDFs ("" if none).
+
+    Compared by shape, its numbers (sizes, mesh scale), the mesh file's name and the
+    collision's origin, to 1e-9; a link missing from either URDF differs.
+    """
+    mine, theirs = _collisions(text), _collisions(arm_text)
+    for link in sorted(links):
+        if link not in mine or link not in theirs or mine[link] != theirs[link]:
+            return link
+    return ""
+
+
+def _collisions(text: str) -> dict[str, list[tuple]]:
+    """Per link, each collision as (origin, shape, its numbers, mesh file name) (m)."""
+    found: dict[str, list[tuple]] = {}
+    for link in ET.fromstring(text).findall("link"):
+        shapes = []
+        for element in link.findall("collision"):
+            origin = element.find("origin")
+            where = tuple(
+                round(float(v), 9)
+                for attr in ("xyz", "rpy")
+                for v in (origin.get(attr, "0 0 0") if origin is not None else "0 0 0").split()
+            )
+            geometry = element.find("geometry")
+            for shape in [] if geometry is None else list(geometry):
+                numbers = tuple(
+                    round(float(v), 9)
+                    for attr in ("size", "radius", "length", "scale")
+                    for v in shape.get(attr, "1 1 1" if attr == "scale" else "").split()
+                )
+                mesh = Path(shape.get("filename", "")).name
+                shapes.append((where, shape.tag, numbers, mesh))
+        found[str(link.get("name"))] = shapes
+    return found
 
 
 def arm_srdf(arm: str) -> Path | None:
