@@ -303,11 +303,19 @@ def test_scenario_constraint_errors(tmp_path):
         "[constraints.joint_position_limits]\n": "always honoured",
         "[constraints.end_effector_cone]\naxis = [1, 0, 0]\n": "missing 'direction'",
         CONE.replace("60.0", "190.0"): "half_angle_deg must be a number between 0 and 180",
-        CONE.replace("[1.0, 0.0, 0.0]", "[0, 0, 0]"): "axis must be a finite non-zero",
+        CONE.replace("[1.0, 0.0, 0.0]", "[0, 0, 0]"): "axis must be a non-zero vector",
+        # an integer beyond the floats raised OverflowError (a traceback)
+        CONE.replace("[1.0, 0.0, 0.0]", f"[{10**400}, 0, 0]"): "axis must be finite numbers",
     }
     for text, message in bad.items():
         with pytest.raises(ff.FreeFloatError, match=message):
             ff.Scenario.from_toml(_scenario(tmp_path, text))
+    # a vector whose norm overflows, or underflows, still has a direction
+    for axis in ("[1e300, 1e300, 0.0]", "[1e-300, 0.0, 0.0]"):
+        scenario = ff.Scenario.from_toml(_scenario(tmp_path, CONE.replace("[1.0, 0.0, 0.0]", axis)))
+        (cone,) = scenario.constraints
+        expected = np.array([1.0, 1.0, 0.0]) / np.sqrt(2.0) if "300, 1e" in axis else [1, 0, 0]
+        np.testing.assert_allclose(cone.axis, expected, rtol=1e-15)
 
 
 def test_a_format_3_plan_is_held_to_the_limits_it_promised(tmp_path, capsys, worked_plan):

@@ -97,6 +97,20 @@ def test_unknown_key_is_refused_naming_the_valid_keys(tmp_path):
         ('key = "duration"\nvalues = { start = 1.0, stop = 2.0, num = 0 }', r"num must be"),
         ('key = "duration"\nvalues = []', r"non-empty list"),
         ('key = "goal"\nvalues = [1.0]', r"names a table or list.*goal\.joints"),
+        # integers beyond the floats, and a range whose step overflows: tracebacks before
+        (f'key = "goal.joints.q2"\nvalues = [{10**400}]', r"must be finite, got 1000.*\(401 d"),
+        (
+            f'key = "goal.joints.q2"\nvalues = {{ start = {10**400}, stop = 2.0, num = 3 }}',
+            r"range start must be finite",
+        ),
+        (
+            f'key = "goal.joints.q2"\nvalues = {{ normal = [{10**400}, 1.0], samples = 3 }}',
+            r"normal must be two finite numbers",
+        ),
+        (
+            'key = "goal.joints.q2"\nvalues = { start = -1.7e308, stop = 1.7e308, num = 3 }',
+            r"range from -1\.7e\+308 to 1\.7e\+308 overflows the floats",
+        ),
     ],
 )
 def test_bad_values_are_refused_before_any_job(tmp_path, monkeypatch, axis, match):
@@ -109,6 +123,19 @@ def test_bad_values_are_refused_before_any_job(tmp_path, monkeypatch, axis, matc
     monkeypatch.setattr(sys.modules["freefloat.sweep.runner"], "run_job_collecting", no_job)
     with pytest.raises(ff.FreeFloatError, match=match):
         ff.sweep(path, workers=1, progress=False)
+
+
+def test_a_grid_of_1e15_jobs_is_refused_at_once(tmp_path):
+    """Each axis within its limit, their product counted: it was listed first, 1e15 tuples
+    (a hang, memory growing without end)."""
+    axes = "".join(
+        f'[[axis]]\nkey = "{key}"\nvalues = {{ start = 1.0, stop = 2.0, num = 100000 }}\n'
+        for key in ("goal.joints.q1", "goal.joints.q2", "goal.base_zyx_deg.0")
+    )
+    with pytest.raises(
+        ff.InputLimitError, match=r"jobs of the sweep = 1000000000000000 is outside"
+    ):
+        SweepSpec.from_toml(_sweep_file(tmp_path, axes))
 
 
 def test_cli_exit_codes_and_no_file_on_bad_input(tmp_path, capsys):

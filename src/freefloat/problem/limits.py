@@ -49,6 +49,7 @@ __all__ = [
     "check_joint_count",
     "check_number",
     "check_samples",
+    "finite_number",
 ]
 
 #: Largest scenario or sweep file read (bytes): a scenario is a page of text.
@@ -70,6 +71,20 @@ MAX_JOINTS = 24
 #: times the duration): 10001 samples of the Panda servicer are a 12.5 MB plan file written in
 #: about 4 s; a plan's polynomials give any other instant exactly.
 MAX_SAMPLES = 10001
+
+
+def finite_number(value: Any) -> bool:
+    """Whether ``value`` is a number (not a boolean) that a float holds finitely.
+
+    An integer beyond the floats (a 400-digit TOML integer) is not: ``math.isfinite`` raises
+    ``OverflowError`` on it.
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return math.isfinite(float(value))
+    except OverflowError:
+        return False
 
 
 def check_number(

@@ -20,7 +20,6 @@ physical bodies; at most :data:`REDRAWS` times the samples are drawn in all.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -36,6 +35,7 @@ from ..errors import (
     excerpt,
 )
 from ..plans.schema import load_plan_file
+from ..problem.limits import finite_number
 from ..problem.scenario import Scenario
 from ..robust.inertial import PARAMETERS, robot_text, with_inertials
 
@@ -96,9 +96,7 @@ def inertial_changes(keys: Sequence[tuple[str, str] | None], values: Sequence[An
 
 
 def _pair(raw: Any, name: str, key: str) -> tuple[float, float]:
-    ok = isinstance(raw, list) and len(raw) == 2
-    ok = ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in raw)
-    if not ok or not all(math.isfinite(v) for v in raw):
+    if not (isinstance(raw, list) and len(raw) == 2 and all(finite_number(v) for v in raw)):
         raise ScenarioError(f"axis {key!r}: {name} must be two finite numbers, got {excerpt(raw)}")
     return float(raw[0]), float(raw[1])
 

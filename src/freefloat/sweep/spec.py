@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import FreeFloatError, InputLimitError, ScenarioError, UnknownNameError, excerpt
-from ..problem.limits import check_samples
+from ..problem.limits import check_samples, finite_number
 from ..problem.scenario import Scenario
 from ..problem.scenario_tables import read_toml
 from ..robot.model import robots_dir
@@ -213,8 +213,12 @@ class SweepSpec:
 
     @property
     def size(self) -> int:
-        """Number of jobs (the grid axes' product, times the draws of the random axes)."""
-        return len(self._combinations())
+        """Number of jobs (the grid axes' product, times the draws of the random axes).
+
+        Counted, not listed: 1e15 combinations were listed before the job limit was met.
+        """
+        draws = max((len(a.values) for a in self.axes if a.random), default=1)
+        return math.prod(len(a.values) for a in self.axes if not a.random) * draws
 
     def _combinations(self) -> list[tuple[Value, ...]]:
         """Axis values of every job: grid axes combined (last fastest), random ones drawn."""
@@ -337,8 +341,8 @@ def _axis(table: Any, position: int, base: Mapping[str, Any], replay: bool = Fal
     for value in values:
         if numeric:
             ok = isinstance(value, (int, float)) and not isinstance(value, bool)
-            if isinstance(value, float) and not math.isfinite(value):
-                raise ScenarioError(f"axis {key!r} values must be finite, got {value!r}")
+            if ok and not finite_number(value):
+                raise ScenarioError(f"axis {key!r} values must be finite, got {excerpt(value)}")
             if isinstance(current, int) and isinstance(value, float):
                 ok = False
         else:
@@ -366,12 +370,19 @@ def _range(raw: Mapping[str, Any], key: str) -> tuple[float, ...]:
     for name, value in (("start", start), ("stop", stop)):
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ScenarioError(f"axis {key!r} range {name} must be a number, got {excerpt(value)}")
-        if not math.isfinite(value):
-            raise ScenarioError(f"axis {key!r} range {name} must be finite, got {value!r}")
+        if not finite_number(value):
+            raise ScenarioError(f"axis {key!r} range {name} must be finite, got {excerpt(value)}")
     if isinstance(num, bool) or not isinstance(num, int) or num < 1:
         raise ScenarioError(f"axis {key!r} range num must be an integer >= 1, got {excerpt(num)}")
     if num > MAX_SWEEP_JOBS:
         raise InputLimitError(f"axis {key!r} range num", num, 1, MAX_SWEEP_JOBS)
     if num == 1:
         return (float(start),)
-    return tuple(float(v) for v in np.linspace(float(start), float(stop), num))
+    with np.errstate(over="ignore", invalid="ignore"):
+        values = np.linspace(float(start), float(stop), num)
+    if not np.all(np.isfinite(values)):  # its step overflows the floats
+        raise ScenarioError(
+            f"axis {key!r} range from {start:g} to {stop:g} overflows the floats; give a "
+            "narrower range"
+        )
+    return tuple(float(v) for v in values)

@@ -33,6 +33,7 @@ import pinocchio as pin
 
 from ...errors import InputError, excerpt
 from ...robot.model import Robot
+from ..limits import finite_number
 from ..paths import JointPolynomials
 from ..residual import Problem
 from ..scalar_minimum import scalar_minimum
@@ -56,12 +57,14 @@ def _unit_vector(value: Any, key: str) -> np.ndarray:
         raise InputError(
             f"end_effector_cone {key} must be 3 numbers [x, y, z], got {excerpt(value)}"
         )
+    if not all(finite_number(x) for x in value):  # an integer beyond the floats too
+        raise InputError(f"end_effector_cone {key} must be finite numbers, got {excerpt(value)}")
     vector = np.array(value, dtype=float)
+    largest = float(np.abs(vector).max())
+    if largest == 0.0:
+        raise InputError(f"end_effector_cone {key} must be a non-zero vector, got {excerpt(value)}")
+    vector = vector / largest  # scaled first: [1e300, 1e300, 0] has no float norm
     norm = float(np.linalg.norm(vector))
-    if not (math.isfinite(norm) and norm > 1e-9):
-        raise InputError(
-            f"end_effector_cone {key} must be a finite non-zero vector, got {excerpt(value)}"
-        )
     return vector / norm
 
 
