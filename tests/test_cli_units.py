@@ -149,3 +149,28 @@ def test_negative_numbers_in_exponent_notation_are_values(
     out, err = capsys.readouterr()
     assert out == "" and err.count("\n") == 1 and needle in err, err
     assert not any(tmp_path.iterdir())
+
+
+def test_names_an_ascii_terminal_cannot_show_are_escaped_not_a_traceback(tmp_path):
+    """Joints named in Chinese, printed with an ASCII encoding (``LC_ALL=C``): ``check``,
+    ``plan`` and others raised UnicodeEncodeError (exit 1), ``plan`` after writing its file."""
+    root = SRC.parent
+    urdf = (root / "robots" / "planar_2dof.urdf").read_text(encoding="utf-8")
+    scenario = (root / "robots" / "scenarios" / "worked_example.toml").read_text()
+    for old, new in {"q1": "关节一", "q2": "关节二"}.items():
+        urdf = urdf.replace(f'"{old}"', f'"{new}"')
+        scenario = scenario.replace(f"{old} =", f'"{new}" =')
+    (tmp_path / "cjk.urdf").write_text(urdf, encoding="utf-8")
+    lines = ['robot = "cjk.urdf"' if s.startswith("robot =") else s for s in scenario.splitlines()]
+    (tmp_path / "cjk.toml").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    env = {**os.environ, "PYTHONPATH": str(SRC), "PYTHONIOENCODING": "ascii"}
+    done = subprocess.run(
+        [sys.executable, "-m", "freefloat.cli", "check", "cjk.toml"],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+        encoding="ascii",
+    )
+    assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+    assert "\\u5173\\u8282\\u4e00" in done.stdout  # the name, escaped

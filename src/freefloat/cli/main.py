@@ -10,6 +10,7 @@ sub-parser, checks its arguments before any work and runs; the plan summary live
 from __future__ import annotations
 
 import argparse
+import contextlib
 import re
 import sys
 import time
@@ -132,9 +133,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     each, no partial file left); 141: standard output was closed (silently). The package's
     :class:`UnitsWarning` is one line ``freefloat: warning: ...`` (none with ``-q``).
     """
+    _escaping_streams()
     with warnings.catch_warnings():
         warnings.showwarning = _one_line_warnings(warnings.showwarning)
         return _main(argv)
+
+
+def _escaping_streams() -> None:
+    """Standard output and error write what their encoding lacks as backslash escapes.
+
+    A joint named in another script, printed to an ASCII or Latin-1 terminal (``LC_ALL=C``),
+    raised UnicodeEncodeError after the plan was written (exit 1, a traceback).
+    """
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)
+        if reconfigure is not None:
+            with contextlib.suppress(ValueError, OSError):  # a closed stream: left as it is
+                reconfigure(errors="backslashreplace")
 
 
 def _one_line_warnings(show: Callable[..., None]) -> Callable[..., None]:
