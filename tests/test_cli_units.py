@@ -174,3 +174,42 @@ def test_names_an_ascii_terminal_cannot_show_are_escaped_not_a_traceback(tmp_pat
     )
     assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
     assert "\\u5173\\u8282\\u4e00" in done.stdout  # the name, escaped
+
+
+def test_an_output_is_never_the_robot_a_scenario_or_plan_reads(tmp_path, monkeypatch, capsys):
+    """``plan -o r.urdf`` replaced the scenario's own robot with the plan; export, show and
+    correct did the same through a plan's URDF, compose an arm's SRDF through its own."""
+    import shutil
+
+    root = SRC.parent
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(root / "robots" / "planar_2dof.urdf", "r.urdf")
+    text = (root / "robots" / "scenarios" / "worked_example.toml").read_text()
+    Path("s.toml").write_text(text.replace('robot = "planar_2dof"', 'robot = "r.urdf"'))
+    original = Path("r.urdf").read_bytes()
+    assert main(["plan", "s.toml", "-o", "p.json", "-q"]) == 0
+    capsys.readouterr()
+    for argv in (
+        ["plan", "s.toml", "-o", "r.urdf"],
+        ["export", "p.json", "--format", "csv", "-o", "r.urdf"],
+        ["show", "p.json", "--html", "r.urdf"],
+        ["correct", "p.json", "--base-zyx-deg", "1", "0", "0", "-o", "r.urdf"],
+    ):
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert (
+            err.count("\n") == 1 and "r.urdf is a file this command reads (the robot's URDF)" in err
+        )
+    assert Path("r.urdf").read_bytes() == original
+    Path("a.urdf").write_bytes(original)
+    Path("a.srdf").write_text(
+        '<robot name="a"><disable_collisions link1="link1" link2="link2"/></robot>'
+    )
+    kept = Path("a.srdf").read_bytes()
+    argv = ["compose", "--arm", "a.urdf", "--mount", "0.5", "0", "0", "--arm", "ur5", "--mount"]
+    argv += ["-0.5", "0", "0", "--base-mass", "100", "--base-size", "1", "1", "1", "-o", "a.xml"]
+    assert main(argv) == 2
+    assert "-o a.xml (and a.srdf beside it) is a file this command reads (the robot's SRDF)" in (
+        capsys.readouterr().err
+    )
+    assert Path("a.srdf").read_bytes() == kept and not Path("a.xml").exists()

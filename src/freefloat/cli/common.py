@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -28,10 +28,13 @@ __all__ = [
     "Commands",
     "add_no_verify",
     "check_figure",
+    "check_not_read",
     "check_outputs",
     "checked_plan",
     "load_scenario",
+    "plan_reads",
     "positive",
+    "scenario_reads",
 ]
 
 #: Where ``freefloat plan`` without a scenario writes the worked example.
@@ -60,6 +63,7 @@ def checked_plan(args: argparse.Namespace, before: Callable[[Plan], None] | None
     from ..plans.schema import load_plan_file
 
     loaded = load_plan_file(args.plan)
+    check_not_read(args, plan_reads(loaded, args.plan))
     if before is not None:
         before(loaded)
     if args.no_verify:
@@ -142,6 +146,58 @@ def check_outputs(
                     "(it would be overwritten)",
                     str(value),
                 )
+
+
+#: The attributes holding a command's output files (:func:`check_not_read`).
+_OUTPUTS = (("-o", "output"), ("--html", "html"))
+
+
+def check_not_read(
+    args: argparse.Namespace, reads: Iterable[Path | None], suffix: str = ""
+) -> None:
+    """Refuse an output that is a file the command reads through its scenario or plan.
+
+    ``reads``: the robot's URDF and SRDF a scenario or plan names (a plan's own path and the
+    scenario's are checked before any work, :func:`check_outputs`). ``suffix``: the output's
+    companion with this suffix is the file compared (compose's SRDF beside its URDF).
+
+    Raises:
+        FileError: ``-o`` or ``--html`` (or its companion) is one of them (it would be
+            overwritten).
+    """
+    for option, name in _OUTPUTS:
+        value = getattr(args, name, None)
+        target = Path(value).expanduser() if value else None
+        if target is not None and suffix:
+            target = target.with_suffix(suffix)
+            value = f"{value} (and {target.name} beside it)"
+        if target is None or not target.exists():
+            continue
+        for source in reads:
+            if source is not None and source.exists() and target.samefile(source):
+                raise FileError(
+                    f"{option} {value} is a file this command reads (the robot's "
+                    f"{source.suffix.lstrip('.').upper() or 'file'}); give another name (it "
+                    "would be overwritten)",
+                    str(value),
+                )
+
+
+def scenario_reads(scenario: Scenario) -> list[Path | None]:
+    """The robot files a scenario reads: its URDF, its SRDF and the SRDF beside the URDF."""
+    urdf = Path(scenario.robot.urdf)
+    srdf = scenario.safety.srdf
+    return [urdf, urdf.with_suffix(".srdf"), None if srdf is None else Path(srdf)]
+
+
+def plan_reads(plan: Plan, path: str | Path) -> list[Path | None]:
+    """The robot files a plan reads: its URDF and SRDF (relative to the plan's folder)."""
+    folder = Path(path).expanduser().parent
+    found: list[Path | None] = []
+    for name in (plan.robot.urdf, plan.safety.srdf):
+        if name:
+            found.append(Path(name) if Path(name).is_absolute() else folder / name)
+    return found
 
 
 #: The attributes holding a command's input files: an output may not overwrite them.

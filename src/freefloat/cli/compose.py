@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 from ..errors import InputError, ModelError
 from ..problem.limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, check_number
 from ..progress import stage
-from .common import Commands, check_outputs
+from .common import Commands, check_not_read, check_outputs
 
 if TYPE_CHECKING:
     from ..robot.compose import ServicerSpec
@@ -181,6 +181,7 @@ def run(args: argparse.Namespace) -> int:
     """Compose the servicer, write its URDF (and SRDF) and print what it is."""
     from ..robot.compose import REFUSED, compose, write_composed
     from ..robot.model import load_robot
+    from ..robot.srdf import arm_srdf
 
     spec = _servicer_spec(args, _payload(args))
     with stage("compose servicer"):
@@ -192,6 +193,8 @@ def run(args: argparse.Namespace) -> int:
         except ModelError as exc:  # named as the servicer composed, not as a file read
             reason = str(exc).removeprefix(f"{exc.urdf}: ") if exc.urdf else str(exc)
             raise ModelError(f"{REFUSED}: {reason}") from None
+        if composed.srdf is not None:  # written beside the output: never over an arm's own
+            check_not_read(args, [arm_srdf(a.arm) for a in spec.arms()], ".srdf")
         path = write_composed(composed, args.output)
     print(f"freefloat compose: wrote {path}")
     if composed.srdf is not None:

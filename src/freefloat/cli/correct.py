@@ -10,7 +10,7 @@ from pathlib import Path
 from ..problem.limits import MAX_ANGLE_DEG, check_number
 from ..progress import stage
 from ..viz.summary import summary
-from .common import Commands, check_outputs
+from .common import Commands, check_not_read, check_outputs, plan_reads
 
 __all__ = ["add_parser", "check", "run"]
 
@@ -52,6 +52,7 @@ def run(args: argparse.Namespace) -> int:
 
     with stage("plan correction"):
         result, residual = correct_plan(args.plan, args.base_zyx_deg)
+    check_not_read(args, plan_reads(result, args.plan))  # the robot it reads, rewritten
     output = Path(args.output) if args.output else Path(args.plan).with_suffix(".correct.json")
     written = result.save(output)
     print(f"freefloat correct: turns the spacecraft back by {math.degrees(residual):.4g} deg")

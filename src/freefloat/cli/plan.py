@@ -16,7 +16,14 @@ from ..problem.residual import INTEGRATION_TOLERANCE
 from ..progress import LOGGER, TIMINGS, stage
 from ..solvers.options import DEFAULT_TOLERANCE, TOLERANCE_RANGE_RAD, SolveOptions
 from ..viz.summary import cartesian_report, robot_label, summary, unlimited_line
-from .common import DEFAULT_OUT_DIR, Commands, check_outputs, load_scenario
+from .common import (
+    DEFAULT_OUT_DIR,
+    Commands,
+    check_not_read,
+    check_outputs,
+    load_scenario,
+    scenario_reads,
+)
 
 __all__ = ["add_parser", "check", "run", "tolerance_rad"]
 
@@ -125,6 +132,7 @@ def run(args: argparse.Namespace) -> int:
     from ..robust.plan_robustness import with_robustness
 
     scenario = load_scenario(args.scenario)
+    check_not_read(args, scenario_reads(scenario))
     if args.allow_full_turns:
         scenario = dataclasses.replace(scenario, allow_full_turns=True)
     try:
