@@ -246,3 +246,25 @@ def test_names_the_font_lacks_give_one_warning_line(tmp_path, capfd):
         "another script, say); they are drawn as boxes"
     ]
     assert len(list((tmp_path / "figs").glob("*.png"))) == len(TOPICS) + 1
+
+
+def test_a_figure_that_cannot_be_written_leaves_none_behind(tmp_path, worked_plan, capsys):
+    """The last figure's name was a folder: seven of eight figures were written first."""
+    plan_path = worked_plan.save(tmp_path / "p.json")
+    out = tmp_path / "figs"
+    (out / "overview.png").mkdir(parents=True)
+    assert main(["plot", str(plan_path), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("freefloat: error: a figure ") and "is a directory" in err
+    assert err.count("\n") == 1
+    assert [p.name for p in out.iterdir()] == ["overview.png"]
+
+
+def test_the_main_jobs_outputs_are_checked_before_any_work(tmp_path, monkeypatch, capsys):
+    """`freefloat plan` with no arguments writes a plan, a page and plots: with the page's
+    name taken by a folder it refused only after writing the plan."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "freefloat-out" / "plan.html").mkdir(parents=True)
+    assert main(["plan"]) == 2
+    assert "the playback page 'freefloat-out/plan.html' is a directory" in capsys.readouterr().err
+    assert [p.name for p in (tmp_path / "freefloat-out").iterdir()] == ["plan.html"]

@@ -180,7 +180,9 @@ def check_output(path: str | Path, what: str = "output", folder: bool = False) -
             shown,
         )
     if folder and target.exists() and not target.is_dir():
-        raise FileError(f"{what} {excerpt(shown)} is a file; give a folder", shown)
+        mode = target.stat().st_mode
+        kind = "a file" if stat.S_ISREG(mode) else _kind(mode)
+        raise FileError(f"{what} {excerpt(shown)} is {kind}; give a folder", shown)
     given = Path(shown).expanduser()
     dangling = next((p for p in given.parents if p.is_symlink() and not p.exists()), None)
     if given.is_symlink() and not target.parent.exists():

@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 from ..errors import CollisionError, InputError, InputLimitError, JointLimitError
+from ..files import check_output
 from ..pipeline import plan
 from ..problem.limits import check_samples
 from ..problem.objectives import OBJECTIVES
@@ -91,6 +92,14 @@ def check(args: argparse.Namespace) -> None:
             math.degrees(args.tolerance),
         )
     check_outputs(args, ("-o", "output"))
+    if not args.scenario and not args.output:  # the main job's page and plots too
+        from ..viz.plots import figure_paths
+
+        check_output(DEFAULT_OUT_DIR / "plan.json", "the plan")
+        check_output(DEFAULT_OUT_DIR / "plan.html", "the playback page")
+        check_output(DEFAULT_OUT_DIR / "plots", "the plots' folder", folder=True)
+        for path in figure_paths(DEFAULT_OUT_DIR / "plots"):
+            check_output(path, "a figure")
 
 
 def tolerance_rad(args: argparse.Namespace) -> float:

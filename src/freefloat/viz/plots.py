@@ -11,7 +11,8 @@ draws the prismatic ones on an axis of their own, on the right (m, m/s, N). Lege
 outside the data, to the right. More than ten joints take twenty colours, then line styles.
 Marked: the goal values (joint goals at t = T, the target base attitude; dotted) and the
 URDF's finite joint position and velocity limits (dashed, in the joint's colour; read from the
-plan's URDF when it loads, else left out). A limit more than :data:`LIMIT_SPANS` spans of the
+plan's URDF when it loads, else left out). A limit more than
+:data:`~freefloat.viz.joint_plots.LIMIT_SPANS` spans of the
 figure's data beyond it is not drawn (1000 rad/s would flatten a motion of a few deg/s):
 the legend names the joints whose limits lie beyond the axes. Titles name the robot by its
 URDF's ``<robot name>`` (:func:`~freefloat.viz.controls.robot_label`).
@@ -35,12 +36,13 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ViewerError
-from ..files import atomic_write
+from ..files import atomic_write, check_output
 from ..plans.format import Plan
 from .clearance_curve import ClearanceCurve, clearance_curve
 from .controls import robot_label
+from .joint_plots import draw_joints
 
-__all__ = ["OPTIONAL_TOPICS", "TOPICS", "figures", "save_figures"]
+__all__ = ["OPTIONAL_TOPICS", "TOPICS", "figure_paths", "figures", "save_figures"]
 
 LOGGER = logging.getLogger(__name__)
 
@@ -103,7 +105,7 @@ def _draw(
         _DRAWERS[topic](plan, ax)
     elif topic in ("joint_positions", "joint_rates", "joint_torques"):
         scale, kinds = _joint_scale(plan)
-        twin = _draw_joints(plan, topic, ax, limits or {}, scale, kinds)
+        twin = draw_joints(plan, topic, ax, limits or {}, scale, kinds)
     elif topic == "clearance" and clearance is not None:
         _draw_clearance(clearance, ax)
     else:  # pragma: no cover - guarded by the callers
@@ -225,106 +227,6 @@ _DRAWERS: dict[str, Callable[[Plan, Any], None]] = {
 }
 
 
-#: A limit is drawn when it lies within this many spans of the figure's data beyond the data
-#: (a limit far beyond, 1000 rad/s against motions of a few deg/s, would flatten every line);
-#: the others are named in the legend.
-LIMIT_SPANS = 2.0
-
-
-def _joint_styles(count: int) -> list[tuple[Any, Any]]:
-    """(colour, line style) per joint: ten colours, twenty beyond ten joints, then dashes."""
-    import matplotlib
-
-    if count <= 10:
-        return [(f"C{i}", "-") for i in range(count)]
-    colours = matplotlib.colormaps["tab20"]
-    dashes = ("-", "--", "-.", ":")
-    return [(colours(i % 20), dashes[(i // 20) % 4]) for i in range(count)]
-
-
-def _draw_joints(
-    plan: Plan,
-    topic: str,
-    ax: Any,
-    limits: dict[str, tuple[float, float, float]],
-    scale: np.ndarray,
-    kinds: list[str],
-) -> Any:
-    """Joint positions, rates or torques (deg, m, N m, N) with their goals and URDF limits.
-
-    Prismatic joints of a robot with revolute ones too get an axis of their own on the right
-    (m, m/s, N), returned (None when every joint shares one axis).
-    """
-    s = plan.samples
-    t = np.asarray(s.t)
-    key = {"joint_positions": "q", "joint_rates": "qd", "joint_torques": "tau"}[topic]
-    values = np.asarray(getattr(s, key), dtype=float)
-    if topic != "joint_torques":
-        values = values * scale
-    sliding = np.array([k == "prismatic" for k in kinds], dtype=bool)
-    twin = ax.twinx() if sliding.any() and not sliding.all() else None
-    styles = _joint_styles(len(plan.robot.joints))
-    beyond: list[str] = []
-    for group, axis in ((~sliding, ax), (sliding, twin)) if twin is not None else ((None, ax),):
-        chosen = range(len(kinds)) if group is None else np.flatnonzero(group).tolist()
-        beyond += _draw_group(plan, topic, axis, t, values, scale, limits, styles, chosen)
-    if topic == "joint_positions":
-        ax.plot([], [], "o", mfc="none", color="0.3", label="goal at T")
-    if any(line.get_label() == "_limit" for a in (ax, twin) if a for line in a.lines):
-        ax.plot([], [], "--", color="0.3", label="limit (URDF)")
-    if beyond:  # named in a narrow legend entry: a long one would squeeze the axes
-        which = "\n".join(beyond) if len(beyond) <= 3 else f"{len(beyond)} joints"
-        ax.plot([], [], " ", label=f"limits beyond the axes\n(not drawn): {which}")
-    quantity = {"joint_positions": "position", "joint_rates": "rate", "joint_torques": "torque"}
-    units = {"joint_positions": ("deg", "m"), "joint_rates": ("deg/s", "m/s")}
-    turning, moving = units.get(topic, ("N m", "N"))
-    ax.set_ylabel(f"joint {quantity[topic]} [{moving if sliding.all() else turning}]")
-    if twin is not None:
-        twin.set_ylabel(f"prismatic joint {quantity[topic]} [{moving}]")
-    return twin
-
-
-def _draw_group(
-    plan: Plan,
-    topic: str,
-    ax: Any,
-    t: np.ndarray,
-    values: np.ndarray,
-    scale: np.ndarray,
-    limits: dict[str, tuple[float, float, float]],
-    styles: list[tuple[Any, Any]],
-    chosen: Sequence[int],
-) -> list[str]:
-    """The ``chosen`` joints' lines, goals and limits on ``ax``.
-
-    Returns the joints whose limits lie beyond the axes (:data:`LIMIT_SPANS`): not drawn.
-    """
-    names = plan.robot.joints
-    data = values[:, list(chosen)]
-    low, high = (float(data.min()), float(data.max())) if data.size else (0.0, 0.0)
-    reach = LIMIT_SPANS * max(high - low, 1e-9 + 1e-3 * max(abs(low), abs(high)))
-    beyond = []
-    for i in chosen:
-        colour, style = styles[i]
-        ax.plot(t, values[:, i], color=colour, linestyle=style, label=names[i])
-        if topic == "joint_positions" and i < len(plan.request.goal_joints):
-            goal = plan.request.goal_joints[i] * scale[i]
-            ax.plot([t[-1]], [goal], "o", mfc="none", color=colour, label="_goal")
-        if topic == "joint_torques":
-            continue
-        lower, upper, rate = limits.get(names[i], (-math.inf, math.inf, math.inf))
-        marks = [
-            m * scale[i] for m in ((lower, upper) if topic == "joint_positions" else (-rate, rate))
-        ]
-        marks = [m for m in marks if math.isfinite(m)]
-        shown = [m for m in marks if low - reach <= m <= high + reach]
-        for mark in shown:
-            ax.axhline(mark, color=colour, linestyle="--", linewidth=0.8, label="_limit")
-        if len(shown) < len(marks):
-            beyond.append(names[i])
-    return beyond
-
-
 def _clearance(plan: Plan) -> ClearanceCurve | None:
     from ..errors import FreeFloatError
 
@@ -367,13 +269,27 @@ def figures(plan: Plan, topics: Sequence[str] = (*TOPICS, *OPTIONAL_TOPICS)) -> 
     return out
 
 
+def figure_paths(folder: Path, svg: bool = False, clearance: bool = False) -> list[Path]:
+    """The files :func:`save_figures` writes into ``folder``; ``clearance``: with its figure.
+
+    Each is checked before any is written.
+    """
+    names = [*TOPICS, *(["clearance"] if clearance else []), "overview"]
+    return [
+        folder / f"{name}.{ext}" for name in names for ext in (("png", "svg") if svg else ("png",))
+    ]
+
+
 def save_figures(plan: Plan, directory: str | Path, svg: bool = False) -> list[Path]:
     """Write PNG (and SVG) files of every figure into ``directory``; return their paths.
 
-    Each file is written atomically (temporary file, then renamed).
+    Each file is written atomically (temporary file, then renamed), and every one is checked
+    before the first is written: a name that cannot be written leaves none behind.
     """
     plt = _pyplot()
     folder = Path(directory).expanduser().resolve()
+    for path in figure_paths(folder, svg, plan.safety.checked):  # all, before any is drawn
+        check_output(path, "a figure")
     folder.mkdir(parents=True, exist_ok=True)
     written = []
     with warnings.catch_warnings(record=True) as caught:  # matplotlib's, one per glyph
