@@ -213,3 +213,53 @@ def test_an_output_is_never_the_robot_a_scenario_or_plan_reads(tmp_path, monkeyp
         capsys.readouterr().err
     )
     assert Path("a.srdf").read_bytes() == kept and not Path("a.xml").exists()
+
+
+@pytest.mark.parametrize(
+    ("edit", "said"),
+    [
+        (
+            lambda s, u: s.replace(f'robot = "{u}"', 'robot = "https://example.com/x.urdf"'),
+            "robot 'https://example.com/x.urdf' is a URL; give a shipped robot name or the path",
+        ),
+        (lambda s, u: s + '\n[safety]\nsrdf = "/tmp"\n', "srdf /tmp is not a file (a folder"),
+        (
+            lambda s, u: s.replace(
+                "base_zyx_deg = [0.0, 0.0, 0.0]", "base_zyx_deg = [310.0, 0.0, 0.0]"
+            ),
+            "requested yaw change 0.000 deg is outside",
+        ),  # a whole turn from the start: not -0.000
+        (
+            lambda s, u: (
+                s.replace(f'robot = "{u}"', "") + f'[robot]\nurdf = "{u}"\nlock = ["q1", "q2"]\n'
+            ),
+            "[robot] lock locks every movable joint (q1, q2); leave at least one to move",
+        ),
+    ],
+)
+def test_messages_from_the_hostile_trial_say_what_is_wrong(tmp_path, capsys, edit, said):
+    root = SRC.parent
+    urdf = str(root / "robots" / "planar_2dof.urdf")
+    text = (root / "robots" / "scenarios" / "worked_example.toml").read_text()
+    text = text.replace('robot = "planar_2dof"', f'robot = "{urdf}"')
+    text = text.replace("[safety]\ncheck = false", "")  # some edits add their own table
+    (tmp_path / "s.toml").write_text(edit(text, urdf))
+    assert main(["plan", str(tmp_path / "s.toml"), "-o", str(tmp_path / "p.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and said in err, err
+
+
+def test_equal_joint_limits_suggest_a_fixed_joint(tmp_path, capsys):
+    urdf = (SRC.parent / "robots" / "planar_2dof.urdf").read_text()
+    joint = '<joint name="q2" type="continuous">'
+    assert joint in urdf
+    urdf = urdf.replace(joint, joint.replace("continuous", "revolute"))
+    axis = '<axis xyz="0 0 1"/>'
+    start = urdf.index(axis, urdf.index('name="q2"')) + len(axis)
+    limit = '<limit lower="0.5" upper="0.5" effort="10" velocity="1"/>'
+    (tmp_path / "r.urdf").write_text(urdf[:start] + limit + urdf[start:])
+    text = (SRC.parent / "robots" / "scenarios" / "worked_example.toml").read_text()
+    (tmp_path / "s.toml").write_text(text.replace('robot = "planar_2dof"', 'robot = "r.urdf"'))
+    assert main(["check", str(tmp_path / "s.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "has limits [0.5, 0.5]; lower must be below upper; a joint that cannot move is" in err

@@ -98,7 +98,8 @@ def parse_joints(text: str, scenario: Scenario) -> np.ndarray:
     values = [float(p) for p in parts]
     if len(values) != len(joints):
         raise InputError(
-            f"--at needs {len(joints)} finite values, one per joint "
+            f"--at needs {len(joints)} finite value{'s' if len(joints) != 1 else ''}, one per "
+            "joint "
             f"({', '.join(j.name for j in joints)}), got {len(values)}"
         )
     bad = next((j.name for v, j in zip(values, joints, strict=True) if not math.isfinite(v)), None)

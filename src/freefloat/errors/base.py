@@ -146,7 +146,8 @@ class InfeasibleError(FreeFloatError):
         lo, hi = self.bounds_deg
         super().__init__(
             message
-            or f"requested yaw change {self.requested_deg:.3f} deg is outside the reachable "
+            or f"requested yaw change {round(self.requested_deg, 3) + 0.0:.3f} deg is outside the "
+            "reachable "
             f"interval ({lo:.3f}, {hi:.3f}) deg for this joint motion (planar bounds); no "
             "point-to-point path exists"
         )

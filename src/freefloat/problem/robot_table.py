@@ -264,6 +264,11 @@ def _lock_values(lock: Any, text: str, start: Any) -> dict[str, float]:
         limit, unit = (MAX_ANGLE_DEG, "deg") if angular else (MAX_LENGTH_M, "m")
         amount = number(raw, f"[robot] lock value of {name!r}", limit, unit)
         values[name] = math.radians(amount) if angular else amount
+    if movable and set(values) >= set(movable):
+        raise ScenarioError(
+            f"[robot] lock locks every movable joint ({', '.join(movable)}); leave at least "
+            "one to move"
+        )
     return values
 
 

@@ -62,6 +62,10 @@ def safety_tables(table: Any, obstacles: Any, relative_to: Path | None) -> Safet
         srdf = Path(table["srdf"]).expanduser()
         if not srdf.is_absolute() and relative_to is not None:
             srdf = relative_to / srdf
+        if srdf.exists() and not srdf.is_file():
+            raise ScenarioError(
+                f"[safety] srdf {srdf} is not a file (a folder or a device); give an SRDF file"
+            )
         if not srdf.is_file():
             raise ScenarioError(f"[safety] srdf file not found: {srdf}")
     check = table.get("check", True)

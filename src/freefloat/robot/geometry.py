@@ -170,6 +170,8 @@ def _srdf_stamp(srdf: str | Path | None, strict: bool = True) -> FileStamp | Non
     if srdf is None:
         return None
     path = Path(srdf).expanduser().resolve()
+    if strict and path.exists() and not path.is_file():
+        raise ModelError(f"SRDF {path} is not a file (a folder or a device); give an SRDF file")
     if strict and not path.is_file():
         raise ModelError(f"SRDF file not found: {path}")
     return file_stamp(str(path), digest=True)  # a small text file: its content, always

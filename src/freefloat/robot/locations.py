@@ -59,6 +59,11 @@ def resolve_robot(name_or_path: str | Path, relative_to: Path | None = None) -> 
     path, relative to ``relative_to`` (a folder) when not absolute.
     """
     text = str(name_or_path)
+    if "://" in text:  # a URL or package:// path: read as a path, it loses a slash
+        raise ModelError(
+            f"robot {text!r} is a URL; give a shipped robot name or the path of a URDF file "
+            "(package:// paths are read inside a URDF, for its meshes, not here)"
+        )
     if not is_path_like(text):
         path = robots_dir() / f"{text}.urdf"
         if not path.is_file():

@@ -191,9 +191,15 @@ def _joints(model: pin.Model, path: Path) -> list[Joint]:
             lower = float(model.lowerPositionLimit[jm.idx_q])
             upper = float(model.upperPositionLimit[jm.idx_q])
             if not lower < upper:
+                fixed = (
+                    '; a joint that cannot move is type="fixed" (or lock it: [robot] lock, '
+                    "compose --lock)"
+                    if lower == upper
+                    else ""
+                )
                 raise ModelError(
                     f"joint {model.names[index]!r} has limits [{lower}, {upper}]; lower must "
-                    "be below upper",
+                    f"be below upper{fixed}",
                     urdf=str(path),
                 )
         vel = float(model.velocityLimit[jm.idx_v])

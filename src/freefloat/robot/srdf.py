@@ -158,7 +158,10 @@ def checked_srdf(path: Path, links: set[str]) -> list[str]:
     if path.stat().st_size > MAX_URDF_BYTES:
         raise ModelError(f"SRDF {path} is larger than {MAX_URDF_BYTES} bytes")
     try:
-        root = ET.fromstring(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        if "<!doctype" in text.lower():  # as for URDFs: no entities, no second reading
+            raise ModelError(f"SRDF {path} has a document type declaration; remove it")
+        root = ET.fromstring(text)
     except (ET.ParseError, UnicodeDecodeError) as exc:
         raise ModelError(f"SRDF {path} is not XML ({exc})") from None
     if root.tag != "robot":
