@@ -454,3 +454,27 @@ def test_a_known_arms_srdf_applies_only_to_its_own_shapes(tmp_path, capfd):
     assert "the collision shapes of its link 'wrist_3_link' are not that arm's" in err
     robot = ff.load_robot(ROOT / "robots" / "ur5_servicer.urdf")  # the shipped one: applied
     assert known_srdf(robot) is not None
+
+
+def test_a_plan_whose_srdf_is_a_fifo_is_refused_not_waited_on(tmp_path):
+    """Its digest read a FIFO with nobody writing: verify, show, plot and export blocked."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    plan = ff.plan(ff.Scenario.from_toml(UR5_TOML), samples=21)
+    doc = json.loads(plan.to_json())
+    os.mkfifo(tmp_path / "pairs.srdf")
+    doc["safety"]["srdf"] = str(tmp_path / "pairs.srdf")
+    (tmp_path / "p.json").write_text(json.dumps(doc))
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+    done = subprocess.run(
+        [sys.executable, "-m", "freefloat.cli", "verify", str(tmp_path / "p.json")],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+    assert "pairs.srdf is not a file (a folder or a device); give an SRDF file" in done.stderr

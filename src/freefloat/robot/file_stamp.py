@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import stat
 import time
 
 __all__ = ["FRESH_S", "FileStamp", "file_stamp"]
@@ -43,6 +44,8 @@ def file_stamp(path: str, like: FileStamp | None = None, digest: bool = False) -
     try:
         info = os.stat(path)
     except OSError:
+        return (path, -1, -1, -1, -1, "")
+    if not stat.S_ISREG(info.st_mode):  # a FIFO would block the digest's read for ever
         return (path, -1, -1, -1, -1, "")
     newest = max(info.st_mtime_ns, info.st_ctime_ns) / 1e9
     wanted = digest or os.name == "nt" or bool(like and like[-1])
