@@ -55,7 +55,7 @@ SRC = ROOT / "src"
 
 sys.path.insert(0, str(ROOT / "tests"))
 import freefloat as ff  # noqa: E402
-from freefloat.robot.urdf_checks import parser_messages  # noqa: E402
+from freefloat.robot.parser_messages import parser_messages  # noqa: E402
 from test_fuzz_outputs import WRITER  # noqa: E402
 from test_fuzz_urdf import TRICKS, _merged, _physical, _random_tree  # noqa: E402
 
@@ -472,6 +472,44 @@ def _message_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str]
         (["verify", plan_file], False, ""),
         *_pitch90_case(folder),
         *_edited_and_misnamed_cases(folder, plan_file),
+        *_round_25_cases(folder),
+    ]
+
+
+def _round_25_cases(folder: Path) -> list[tuple[list, bool, str]]:
+    """The twenty-fifth round's trials: a malformed SRDF (a traceback), a keep-out object no
+    body can be checked against, a hull box with decimal commas (both accepted wrongly), a URL
+    as robot, a lock list locking every joint, a negative number in exponent notation, a plan
+    written over its own robot."""
+    ur5 = (
+        (ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
+        .read_text()
+        .replace('robot = "ur5_servicer"', f'robot = "{ROOT / "robots" / "ur5_servicer.urdf"}"')
+    )
+    (folder / "garbage.srdf").write_text("not xml <<<")
+    (folder / "srdf.toml").write_text(ur5 + '\n[safety]\nsrdf = "garbage.srdf"\n')
+    comma = (ROOT / "robots" / "ur5_servicer.urdf").read_text()
+    comma = comma.replace('<box size="0.6 0.6 0.6"/>', '<box size="0,6 0,6 0,6"/>')
+    (folder / "comma.urdf").write_text(comma)
+    (folder / "comma.toml").write_text(
+        ur5.replace(str(ROOT / "robots" / "ur5_servicer.urdf"), "comma.urdf")
+    )
+    post = scenario_for(PLANAR, folder, "post.toml")
+    post.write_text(
+        post.read_text().replace("check = false", "margin_m = 0.05")
+        + '\n[[obstacles]]\nname = "post"\nsphere = 0.3\nxyz = [1.5, 0.9, 0.0]\n'
+    )
+    url = scenario_for(PLANAR, folder, "url.toml")
+    url.write_text(url.read_text().replace(f'robot = "{PLANAR}"', 'robot = "https://x.org/r.urdf"'))
+    shutil.copy(PLANAR, folder / "own.urdf")
+    own = scenario_for(folder / "own.urdf", folder, "own.toml")
+    return [
+        (["check", folder / "srdf.toml"], True, "garbage.srdf is not XML"),
+        (["check", folder / "comma.toml"], True, "collision box size='0,6 0,6 0,6'"),
+        (["check", post], True, "keep-out object 'post' cannot be kept clear"),
+        (["plan", url, "-o", "u.json"], True, "is a URL"),
+        (["plan", own, "-o", folder / "own.urdf"], True, "is a file this command reads"),
+        (["correct", "absent.json", "--base-zyx-deg", "-1e9", "0", "0"], True, "is outside"),
     ]
 
 
