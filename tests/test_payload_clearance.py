@@ -167,3 +167,47 @@ def test_a_payload_held_in_mid_arm_or_by_the_spacecraft_is_checked_against_the_a
     beyond = ["lower_0", "tip_0"] if holder == "upper" else ["upper_0", "lower_0", "tip_0"]
     for body in beyond:
         assert frozenset((body, "captured_payload_0")) in pairs, body
+
+
+def _payload_pairs(tmp_path, names, folder):
+    """The checked pairs of the fingered holder whose finger joints are named ``names``."""
+    import freefloat as ff
+    from freefloat.robot.geometry import checked_pairs, load_collision_geometry
+
+    where = tmp_path / folder
+    where.mkdir()
+    text = FINGERED.replace('"finger_f1"', f'"{names[0]}"').replace('"finger_f2"', f'"{names[1]}"')
+    (where / "holder.urdf").write_text(text)
+    scenario = SCENARIO.format(goal=90.0).replace(
+        "joints = { a1 = 0.0, a2 = 90.0 }",
+        f"joints = {{ a1 = 0.0, a2 = 90.0, {names[0]} = 0.0, {names[1]} = 0.0 }}",
+    )
+    (where / "f.toml").write_text('end_effector = "lower"\n' + scenario)
+    robot = ff.Scenario.from_toml(where / "f.toml").robot
+    geometry = load_collision_geometry(robot)
+    objects = [o.name for o in geometry.geometryObjects]
+    return {frozenset((objects[a], objects[b])) for a, b in checked_pairs(robot, geometry, None)}
+
+
+@pytest.mark.parametrize(
+    ("names", "spared"),
+    [
+        (("finger_f1", "finger_f2"), True),
+        (("hand_index_flex_1_joint", "hand_index_flex_2_joint"), True),  # Tiago's hand
+        (("right_outer_knuckle_joint", "right_inner_finger_joint"), True),  # Robotiq's
+        (("a3", "a4"), False),  # an arm's joints: the payload is checked against them
+    ],
+)
+def test_a_grasp_is_spared_by_its_hands_joint_names(tmp_path, names, spared) -> None:
+    pairs = _payload_pairs(tmp_path, names, "one")
+    assert (frozenset(("tip_0", "captured_payload_0")) not in pairs) == spared
+
+
+def test_the_kept_pairs_of_one_shape_follow_its_joint_names(tmp_path) -> None:
+    """The pairs were kept per shape, not per joint names: the second of two robots of one
+    shape got the first one's answer (a pair wrongly spared or checked by load order)."""
+    fingers = _payload_pairs(tmp_path, ("finger_f1", "finger_f2"), "a")
+    arm = _payload_pairs(tmp_path, ("a3", "a4"), "b")
+    again = _payload_pairs(tmp_path, ("finger_f1", "finger_f2"), "c")
+    tip = frozenset(("tip_0", "captured_payload_0"))
+    assert tip not in fingers and tip in arm and tip not in again

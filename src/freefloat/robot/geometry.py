@@ -24,6 +24,7 @@ mesh's triangles read once per file and hulls built once per mesh file and scale
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -35,7 +36,6 @@ import pinocchio as pin
 
 from ..errors import ModelError
 from ..progress import LOGGER
-from .end_effectors import FINGER_NAME
 from .file_stamp import FileStamp, file_stamp
 from .meshes import MeshKey, mesh_key
 from .model import Robot
@@ -265,7 +265,7 @@ def checked_pairs(
     """The pairs of ``geometry`` whose clearance is checked, as index pairs (see module doc).
 
     Adds them to ``geometry`` as its collision pairs too. Worked out once per set of objects
-    (names, joints, links), kinematic tree and SRDF file (its stamp,
+    (names, joints, links), kinematic tree, joint names and SRDF file (its stamp,
     :func:`.file_stamp.file_stamp`) in a process, and again when any of them changes.
 
     Raises:
@@ -278,6 +278,7 @@ def checked_pairs(
     key = (
         tuple((o.name, int(o.parentJoint), model.frames[o.parentFrame].name) for o in objects),
         tuple(int(j) for j in model.parents),
+        tuple(model.names),  # the payload's fingers are known by their joints' names
         stamp,
     )
     pairs = _PAIRS.get(key)
@@ -344,18 +345,24 @@ def _remove_srdf_pairs(model: pin.Model, geometry: pin.GeometryModel, srdf: Path
         raise ModelError(f"SRDF {srdf} cannot be read ({exc})") from None
 
 
+#: Joint names of a hand that grasps a payload (Robotiq's knuckles, Tiago's ``hand_*_flex``,
+#: jaws): the payload touches what hangs below its holder through such joints.
+GRASPING_NAME = re.compile(r"finger|gripper|knuckle|thumb|jaw|claw|hand|grasp|pinch|flex", re.I)
+
+
 def _finger_of(model: pin.Model, holder: int, joint: int) -> bool:
     """Whether ``joint``'s body is a finger of ``holder``'s (Pinocchio joint indices).
 
-    It hangs below the holder only through joints named like a gripper's or a finger's
-    (:data:`~.end_effectors.FINGER_NAME`): a payload held by a mid-arm link, or by the
-    spacecraft, is checked against the arm beyond it.
+    It hangs below the holder only through joints named like a hand's
+    (:data:`GRASPING_NAME`): a payload held by a mid-arm link, or by the spacecraft, is
+    checked against the arm beyond it. (A hand whose joints are named otherwise has its
+    fingers checked against the payload: lock them, or disable those pairs in an SRDF.)
     """
     if joint == holder:
         return False
     parent = model.parents
     while joint != holder:
-        if joint <= 1 or not FINGER_NAME.search(model.names[joint]):
+        if joint <= 1 or not GRASPING_NAME.search(model.names[joint]):
             return False
         joint = int(parent[joint])
     return True

@@ -1,4 +1,4 @@
-"""Checks of a URDF's shapes: every ``<collision>`` and ``<visual>`` geometry is one it means.
+"""Checks of a URDF's shapes: every ``<collision>`` geometry is one urdfdom keeps.
 
 urdfdom drops a geometry element it cannot read (a box ``size="0,6 0,6 0,6"`` with decimal
 commas, ``nan``, two numbers, an empty ``<geometry/>``) with a message on stderr and goes on:
@@ -32,12 +32,12 @@ PAYLOAD_LINK = "captured_payload"
 #: Largest size of a shape accepted (m; a radius, a length, a box side or a mesh scale).
 MAX_SIZE_M = 1e6
 
-#: The attributes of each primitive shape and how many numbers each takes.
+#: The attributes of each primitive shape urdfdom reads and how many numbers each takes (the
+#: urdfdom inside Pinocchio 4.1 reads no ``<capsule>``: it drops it with a note on stderr).
 _SHAPES = {
     "box": (("size", 3),),
     "sphere": (("radius", 1),),
     "cylinder": (("radius", 1), ("length", 1)),
-    "capsule": (("radius", 1), ("length", 1)),
 }
 
 
@@ -60,12 +60,15 @@ def check_shapes(root: ET.Element, number: Reader) -> None:
 
 
 def _check_geometry(geometry: ET.Element, where: str, number: Reader) -> None:
-    shapes = [child for child in geometry if child.tag in (*_SHAPES, "mesh")]
-    if not shapes:
+    valid = "<box>, <sphere>, <cylinder>, <mesh>"
+    if len(geometry) == 0:
+        raise ModelError(f"{where} has an empty <geometry>; give one of {valid}")
+    shape = geometry[0]  # urdfdom reads the first element only
+    if shape.tag not in (*_SHAPES, "mesh"):
         raise ModelError(
-            f"{where} has an empty <geometry>; give one of <box>, <sphere>, <cylinder>, <mesh>"
+            f"{where} <{shape.tag[:40]}> is not a shape urdfdom reads (it would drop it); "
+            f"give one of {valid} first"
         )
-    shape = shapes[0]
     if shape.tag == "mesh":
         raw = shape.get("scale")
         if raw is not None:
