@@ -179,6 +179,7 @@ def test_names_an_ascii_terminal_cannot_show_are_escaped_not_a_traceback(tmp_pat
 def test_an_output_is_never_the_robot_a_scenario_or_plan_reads(tmp_path, monkeypatch, capsys):
     """``plan -o r.urdf`` replaced the scenario's own robot with the plan; export, show and
     correct did the same through a plan's URDF, compose an arm's SRDF through its own."""
+    import json
     import shutil
 
     root = SRC.parent
@@ -201,6 +202,20 @@ def test_an_output_is_never_the_robot_a_scenario_or_plan_reads(tmp_path, monkeyp
             err.count("\n") == 1 and "r.urdf is a file this command reads (the robot's URDF)" in err
         )
     assert Path("r.urdf").read_bytes() == original
+    # a scenario with a [payload] loads a decorated copy: the file it names is still read
+    held = Path("s.toml").read_text() + "[payload]\nmass = 1.0\nbox = [0.1, 0.1, 0.1]\n"
+    Path("held.toml").write_text(held)
+    assert main(["plan", "held.toml", "-o", "r.urdf"]) == 2
+    assert "r.urdf is a file this command reads" in capsys.readouterr().err
+    # a plan whose URDF path is relative, read from another folder
+    Path("sub").mkdir()
+    shutil.copy("r.urdf", "sub/r.urdf")
+    doc = json.loads(Path("p.json").read_text())
+    doc["robot"]["urdf"] = "r.urdf"
+    Path("sub/p.json").write_text(json.dumps(doc))
+    assert main(["export", "sub/p.json", "--format", "csv", "-o", "sub/r.urdf"]) == 2
+    assert "sub/r.urdf is a file this command reads" in capsys.readouterr().err
+    assert Path("r.urdf").read_bytes() == Path("sub/r.urdf").read_bytes() == original
     Path("a.urdf").write_bytes(original)
     Path("a.srdf").write_text(
         '<robot name="a"><disable_collisions link1="link1" link2="link2"/></robot>'
@@ -209,7 +224,7 @@ def test_an_output_is_never_the_robot_a_scenario_or_plan_reads(tmp_path, monkeyp
     argv = ["compose", "--arm", "a.urdf", "--mount", "0.5", "0", "0", "--arm", "ur5", "--mount"]
     argv += ["-0.5", "0", "0", "--base-mass", "100", "--base-size", "1", "1", "1", "-o", "a.xml"]
     assert main(argv) == 2
-    assert "-o a.xml (and a.srdf beside it) is a file this command reads (the robot's SRDF)" in (
+    assert "-o a.xml (and a.srdf beside it) is a file this command reads (an arm's SRDF)" in (
         capsys.readouterr().err
     )
     assert Path("a.srdf").read_bytes() == kept and not Path("a.xml").exists()
@@ -222,7 +237,10 @@ def test_an_output_is_never_the_robot_a_scenario_or_plan_reads(tmp_path, monkeyp
             lambda s, u: s.replace(f'robot = "{u}"', 'robot = "https://example.com/x.urdf"'),
             "robot 'https://example.com/x.urdf' is a URL; give a shipped robot name or the path",
         ),
-        (lambda s, u: s + '\n[safety]\nsrdf = "/tmp"\n', "srdf /tmp is not a file (a folder"),
+        (
+            lambda s, u: s + '\n[safety]\nsrdf = "/tmp"\n',
+            "srdf /tmp is not a regular file (a folder",
+        ),
         (
             lambda s, u: s.replace(
                 "base_zyx_deg = [0.0, 0.0, 0.0]", "base_zyx_deg = [310.0, 0.0, 0.0]"

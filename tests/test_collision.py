@@ -477,4 +477,7 @@ def test_a_plan_whose_srdf_is_a_fifo_is_refused_not_waited_on(tmp_path):
         timeout=120,
     )
     assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
-    assert "pairs.srdf is not a file (a folder or a device); give an SRDF file" in done.stderr
+    assert (
+        "pairs.srdf is not a regular file (a folder, a device or a FIFO); give an SRDF file"
+        in done.stderr
+    )

@@ -6,14 +6,16 @@ import argparse
 import math
 from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..errors import FileError, InputError, PlanFileError, PlanMismatchError
 from ..files import check_output
 from ..plans.format import Plan
 from ..problem.limits import check_number
 from ..problem.scenario import Scenario, default_scenario_path
+from ..problem.scenario_tables import read_toml
 from ..progress import stage
+from ..robot.locations import is_path_like
 from ..verify.checks import verify_plan
 
 if TYPE_CHECKING:
@@ -63,7 +65,7 @@ def checked_plan(args: argparse.Namespace, before: Callable[[Plan], None] | None
     from ..plans.schema import load_plan_file
 
     loaded = load_plan_file(args.plan)
-    check_not_read(args, plan_reads(loaded, args.plan))
+    check_not_read(args, plan_reads(loaded))
     if before is not None:
         before(loaded)
     if args.no_verify:
@@ -153,13 +155,17 @@ _OUTPUTS = (("-o", "output"), ("--html", "html"))
 
 
 def check_not_read(
-    args: argparse.Namespace, reads: Iterable[Path | None], suffix: str = ""
+    args: argparse.Namespace,
+    reads: Iterable[Path | None],
+    suffix: str = "",
+    whose: str = "the robot's",
 ) -> None:
     """Refuse an output that is a file the command reads through its scenario or plan.
 
     ``reads``: the robot's URDF and SRDF a scenario or plan names (a plan's own path and the
     scenario's are checked before any work, :func:`check_outputs`). ``suffix``: the output's
-    companion with this suffix is the file compared (compose's SRDF beside its URDF).
+    companion with this suffix is the file compared (compose's SRDF beside its URDF);
+    ``whose``: what the files are, for the message.
 
     Raises:
         FileError: ``-o`` or ``--html`` (or its companion) is one of them (it would be
@@ -176,7 +182,7 @@ def check_not_read(
         for source in reads:
             if source is not None and source.exists() and target.samefile(source):
                 raise FileError(
-                    f"{option} {value} is a file this command reads (the robot's "
+                    f"{option} {value} is a file this command reads ({whose} "
                     f"{source.suffix.lstrip('.').upper() or 'file'}); give another name (it "
                     "would be overwritten)",
                     str(value),
@@ -184,20 +190,38 @@ def check_not_read(
 
 
 def scenario_reads(scenario: Scenario) -> list[Path | None]:
-    """The robot files a scenario reads: its URDF, its SRDF and the SRDF beside the URDF."""
-    urdf = Path(scenario.robot.urdf)
+    """The robot files a scenario reads, none of which an output may replace.
+
+    The URDF it names and the one it loaded (a payload's or a lock's copy), the SRDFs beside
+    them, an arm URDF it composes, and its ``[safety] srdf``.
+    """
+    urdfs = [Path(scenario.robot.urdf)]
+    if scenario.source is not None:  # the file the scenario names, not its decorated copy
+        urdfs += _named_urdfs(read_toml(scenario.source, "scenario"), scenario.source.parent)
     srdf = scenario.safety.srdf
-    return [urdf, urdf.with_suffix(".srdf"), None if srdf is None else Path(srdf)]
+    return [
+        *urdfs,
+        *(u.with_suffix(".srdf") for u in urdfs),
+        None if srdf is None else Path(srdf),
+    ]
 
 
-def plan_reads(plan: Plan, path: str | Path) -> list[Path | None]:
-    """The robot files a plan reads: its URDF and SRDF (relative to the plan's folder)."""
-    folder = Path(path).expanduser().parent
-    found: list[Path | None] = []
-    for name in (plan.robot.urdf, plan.safety.srdf):
-        if name:
-            found.append(Path(name) if Path(name).is_absolute() else folder / name)
-    return found
+def _named_urdfs(data: dict[str, Any], folder: Path) -> list[Path]:
+    """The URDF files a scenario's ``robot`` (or its table's ``urdf``, ``arm``, ``arms``) names."""
+    value = data.get("robot")
+    table = value if isinstance(value, dict) else {}
+    names = [value] if isinstance(value, str) else [table.get("urdf"), table.get("arm")]
+    names += [a.get("arm") for a in table.get("arms", []) if isinstance(a, dict)]
+    return [
+        Path(n).expanduser() if Path(n).expanduser().is_absolute() else folder / n
+        for n in names
+        if isinstance(n, str) and is_path_like(n)
+    ]
+
+
+def plan_reads(plan: Plan) -> list[Path | None]:
+    """The robot files a plan reads: its URDF and SRDF (as loaded: from the plan's folder)."""
+    return [Path(name) for name in (plan.robot.urdf, plan.safety.srdf) if name]
 
 
 #: The attributes holding a command's input files: an output may not overwrite them.

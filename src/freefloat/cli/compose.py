@@ -194,7 +194,7 @@ def run(args: argparse.Namespace) -> int:
             reason = str(exc).removeprefix(f"{exc.urdf}: ") if exc.urdf else str(exc)
             raise ModelError(f"{REFUSED}: {reason}") from None
         if composed.srdf is not None:  # written beside the output: never over an arm's own
-            check_not_read(args, [arm_srdf(a.arm) for a in spec.arms()], ".srdf")
+            check_not_read(args, [arm_srdf(a.arm) for a in spec.arms()], ".srdf", "an arm's")
         path = write_composed(composed, args.output)
     print(f"freefloat compose: wrote {path}")
     if composed.srdf is not None:

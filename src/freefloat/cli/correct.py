@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
 
     with stage("plan correction"):
         result, residual = correct_plan(args.plan, args.base_zyx_deg)
-    check_not_read(args, plan_reads(result, args.plan))  # the robot it reads, rewritten
+    check_not_read(args, plan_reads(result))  # the robot it reads, rewritten
     output = Path(args.output) if args.output else Path(args.plan).with_suffix(".correct.json")
     written = result.save(output)
     print(f"freefloat correct: turns the spacecraft back by {math.degrees(residual):.4g} deg")

@@ -64,7 +64,8 @@ def safety_tables(table: Any, obstacles: Any, relative_to: Path | None) -> Safet
             srdf = relative_to / srdf
         if srdf.exists() and not srdf.is_file():
             raise ScenarioError(
-                f"[safety] srdf {srdf} is not a file (a folder or a device); give an SRDF file"
+                f"[safety] srdf {srdf} is not a regular file (a folder, a device or a FIFO); "
+                "give an SRDF file"
             )
         if not srdf.is_file():
             raise ScenarioError(f"[safety] srdf file not found: {srdf}")

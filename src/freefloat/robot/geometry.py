@@ -171,7 +171,9 @@ def _srdf_stamp(srdf: str | Path | None, strict: bool = True) -> FileStamp | Non
         return None
     path = Path(srdf).expanduser().resolve()
     if strict and path.exists() and not path.is_file():
-        raise ModelError(f"SRDF {path} is not a file (a folder or a device); give an SRDF file")
+        raise ModelError(
+            f"SRDF {path} is not a regular file (a folder, a device or a FIFO); give an SRDF file"
+        )
     if strict and not path.is_file():
         raise ModelError(f"SRDF file not found: {path}")
     return file_stamp(str(path), digest=True)  # a small text file: its content, always
