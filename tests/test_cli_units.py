@@ -281,3 +281,14 @@ def test_equal_joint_limits_suggest_a_fixed_joint(tmp_path, capsys):
     assert main(["check", str(tmp_path / "s.toml")]) == 2
     err = capsys.readouterr().err
     assert "has limits [0.5, 0.5]; lower must be below upper; a joint that cannot move is" in err
+
+
+def test_a_script_calling_main_keeps_its_own_stream_settings(capsys):
+    """main() escapes what the streams cannot encode while it runs, and puts their error
+    handling back: a caller's later prints behave as before."""
+    import sys
+
+    before = (sys.stdout.errors, sys.stderr.errors)
+    assert "backslashreplace" not in before
+    assert main(["--version"]) == 0
+    assert (sys.stdout.errors, sys.stderr.errors) == before

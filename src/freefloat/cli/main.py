@@ -15,7 +15,7 @@ import re
 import sys
 import time
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from types import ModuleType
 from typing import Any, NoReturn
 
@@ -133,23 +133,33 @@ def main(argv: Sequence[str] | None = None) -> int:
     each, no partial file left); 141: standard output was closed (silently). The package's
     :class:`UnitsWarning` is one line ``freefloat: warning: ...`` (none with ``-q``).
     """
-    _escaping_streams()
-    with warnings.catch_warnings():
+    with _escaping_streams(), warnings.catch_warnings():
         warnings.showwarning = _one_line_warnings(warnings.showwarning)
         return _main(argv)
 
 
-def _escaping_streams() -> None:
+@contextlib.contextmanager
+def _escaping_streams() -> Iterator[None]:
     """Standard output and error write what their encoding lacks as backslash escapes.
 
     A joint named in another script, printed to an ASCII or Latin-1 terminal (``LC_ALL=C``),
-    raised UnicodeEncodeError after the plan was written (exit 1, a traceback).
+    raised UnicodeEncodeError after the plan was written (exit 1, a traceback). Each stream's
+    own setting is restored afterwards (a script calling :func:`main` keeps its own).
     """
+    changed: list[tuple[Callable[..., None], str | None]] = []
     for stream in (sys.stdout, sys.stderr):
         reconfigure = getattr(stream, "reconfigure", None)
-        if reconfigure is not None:
+        before = getattr(stream, "errors", None)
+        if reconfigure is not None and before != "backslashreplace":
             with contextlib.suppress(ValueError, OSError):  # a closed stream: left as it is
                 reconfigure(errors="backslashreplace")
+                changed.append((reconfigure, before))
+    try:
+        yield
+    finally:
+        for reconfigure, before in changed:
+            with contextlib.suppress(ValueError, OSError):
+                reconfigure(errors=before)
 
 
 def _one_line_warnings(show: Callable[..., None]) -> Callable[..., None]:
