@@ -133,4 +133,4 @@ def confirmed_from(
         if result.reached:
             return Confirmed(turn, result.beta, turn < reached - max(step, 1e-12))
         turn *= 0.5
-    return Confirmed(0.0, restored, True)
+    return Confirmed(0.0, restored, True)  # the caller reports the drift path for turn 0

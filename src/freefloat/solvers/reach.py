@@ -285,7 +285,10 @@ def reach_set(
         constraints: path constraints; default joint position, velocity and effort limits.
         options: solver settings (the evaluation budget applies per continuation pass: a
             direction makes one, and up to :data:`CONFIRM_TRIES` more each time it confirms a
-            turn, plus one when it imposes a deferred constraint).
+            turn, plus one when it imposes a deferred constraint; when the quintic path breaks
+            a constraint, one pass shared by every direction reaches the drift attitude first
+            and up to :data:`~.drift_start.RESTORED_TRIES` more confirm each turn from plan's
+            restored start, :mod:`.drift_start`).
         progress: called after each direction (see :data:`ReachProgress`).
         deferred: constraints among ``constraints`` to check at the end of a direction
             rather than track.
@@ -308,14 +311,15 @@ def reach_set(
     angles = np.broadcast_to(np.asarray(max_angle, dtype=float), (len(directions),))
     quintic = problem.achieved(np.zeros(problem.n_free))
     start = drift_start(problem, eager, options)  # shared by every direction
-    origin = np.zeros(problem.n_free) if start.beta is None else start.beta
+    origin = np.zeros(problem.n_free) if start.beta is None else start.beta  # (unused if None)
 
     def one(index: int) -> _Spent:
         axis = np.asarray(directions[index], dtype=float)
         axis = axis / np.linalg.norm(axis)
         angle = float(angles[index])
         before, maps = problem.evaluations, problem.map_evaluations
-        reached, stopped_by, beta = 0.0, start.why_not, origin
+        # no path within the constraints at the drift attitude: none to report
+        reached, stopped_by, beta = 0.0, start.why_not, start.beta
         if angle > 0.0 and start.beta is not None:
             reached, stopped_by, beta = _direction(
                 problem, quintic, axis, angle, tracked, eager, options, confirm, step, origin
@@ -326,8 +330,9 @@ def reach_set(
                 if found.halved:
                     said = "this turn" if found.turn > 0.0 else "no turn about this axis"
                     stopped_by = RESTORED_SHORT.format(said)
-                reached, beta = found.turn, found.beta
-        breaks = broken_constraint(problem, lazy, beta) if lazy else ""
+                # turn 0: the drift attitude, which the path every direction starts on reaches
+                reached, beta = found.turn, found.beta if found.turn > 0.0 else origin
+        breaks = broken_constraint(problem, lazy, beta) if lazy and beta is not None else ""
         evaluations = problem.evaluations - before
         direction = DirectionReach(axis, reached, angle, stopped_by, evaluations, beta, breaks)
         return _Spent(direction, problem.map_evaluations - maps)
