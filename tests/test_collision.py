@@ -451,7 +451,7 @@ def test_a_known_arms_srdf_applies_only_to_its_own_shapes(tmp_path, capfd):
     assert main(["check", str(tmp_path / "s.toml")]) == 1
     out, err = capfd.readouterr()
     assert "configuration: NOT OK" in out and "wrist_3_link_0" in out
-    assert "the collision shapes of its link 'wrist_3_link' are not that arm's" in err
+    assert "the collision shapes or joints of its link 'wrist_3_link' are not that arm's" in err
     robot = ff.load_robot(ROOT / "robots" / "ur5_servicer.urdf")  # the shipped one: applied
     assert known_srdf(robot) is not None
 
@@ -481,3 +481,21 @@ def test_a_plan_whose_srdf_is_a_fifo_is_refused_not_waited_on(tmp_path):
         "pairs.srdf is not a regular file (a folder, a device or a FIFO); give an SRDF file"
         in done.stderr
     )
+
+
+def test_a_known_arms_srdf_does_not_apply_to_a_reshaped_arm(tmp_path, caplog):
+    """Its shapes alone matched: a UR5 servicer whose forearm is 9 cm shorter (the wrist
+    joint's origin moved) kept the UR5's SRDF, and a pair it disables came within the margin
+    unchecked."""
+    urdf = (ROOT / "robots" / "ur5_servicer.urdf").read_text()
+    start = urdf.index('<joint name="wrist_1_joint"')
+    origin = urdf.index("<origin", start)
+    end = urdf.index("/>", origin) + 2
+    shorter = urdf[:origin] + '<origin xyz="0.0 0.0 0.30" rpy="0.0 1.5707963 0.0"/>' + urdf[end:]
+    assert shorter != urdf
+    (tmp_path / "r.urdf").write_text(shorter)
+    with caplog.at_level("WARNING"):
+        assert known_srdf(ff.load_robot(tmp_path / "r.urdf")) is None
+    said = "the collision shapes or joints of its link 'wrist_1_link' are not that arm's"
+    assert any(said in r.getMessage() for r in caplog.records)
+    assert known_srdf(ff.load_robot(ROOT / "robots" / "ur5_servicer.urdf")) is not None

@@ -372,3 +372,19 @@ def test_one_arm_composed_from_a_urdf_keeps_the_srdf_beside_it(tmp_path, capsys)
         for e in ET.parse(path).getroot().iter("disable_collisions")
     }
     assert pairs(out.with_suffix(".srdf")) == pairs(tmp_path / "my_ur5.srdf") != set()
+
+
+def test_one_named_arm_with_a_prefix_gets_its_srdf_prefixed(tmp_path, capsys):
+    """Panda's SRDF is found by the servicer's name, but its links are unprefixed: with
+    ``--prefix left_`` none matched and every pair it disables was checked."""
+    out = tmp_path / "left.urdf"
+    argv = ["compose", "--arm", "panda", "--prefix", "left_", "--base-mass", "100"]
+    argv += ["--base-size", "1", "1", "1", "--mount", "0.5", "0", "0", "-o", str(out)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    share = example_robot_data_dir() / "example-robot-data" / "robots" / "panda_description"
+    pairs = lambda path, prefix="": {  # noqa: E731
+        frozenset((prefix + e.get("link1"), prefix + e.get("link2")))
+        for e in ET.parse(path).getroot().iter("disable_collisions")
+    }
+    assert pairs(out.with_suffix(".srdf")) == pairs(share / "srdf" / "panda.srdf", "left_")

@@ -301,7 +301,7 @@ def _servicer(table: Mapping[str, Any], relative_to: Path | None = None) -> Robo
     )
     path = servicer_cache_dir() / f"{spec.key()}.urdf"
     text = None if path.is_file() else compose_servicer_text(spec)
-    if len(arms) == 1 and (first.arm in ARM_SRDFS or arm_srdf(first.arm) is None):
+    if len(arms) == 1 and not first.prefix and (first.arm in ARM_SRDFS or not arm_srdf(first.arm)):
         return RobotSource(path, text, spec)  # a named arm's SRDF is found by its name
     settled = spec.arms()
     prefixes = [a.prefix for a in settled]

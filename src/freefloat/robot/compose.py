@@ -287,7 +287,10 @@ def compose(spec: ServicerSpec, offer_ties: bool = True) -> Composed:
     tips = arm_tips(text, prefixes, strict=spec.payload is not None)
     if not tips and offer_ties:
         tips = every_tip(text, prefixes)
-    own = len(arms) > 1 or (arms[0].arm not in ARM_SRDFS and arm_srdf(arms[0].arm) is not None)
+    # a named arm's SRDF is found by the servicer's name, unless its links are prefixed
+    first = arms[0]
+    own = len(arms) > 1 or first.prefix or first.arm not in ARM_SRDFS
+    own = bool(own) and any(arm_srdf(a.arm) is not None for a in arms)
     srdf = merged_srdf([a.arm for a in arms], prefixes) if own else None
     for note in notes:
         LOGGER.warning("%s", note)  # a choice the user did not state

@@ -61,13 +61,15 @@ def known_srdf(robot: Robot) -> Path | None:
         if differing:
             LOGGER.warning(
                 "%s is named like a servicer of example-robot-data's %s, but the collision "
-                "shapes of its link %r are not that arm's: the arm's SRDF (%s) is not applied; "
-                "give [safety] srdf to disable pairs",
+                "shapes or joints of its link %r are not that arm's: the arm's SRDF (%s) is not "
+                "applied; give [safety] srdf to disable pairs",
                 robot.name,
                 arm,
                 differing,
                 path.name,
             )
+        if len(_MATCHED) >= 64:  # one per URDF text: a sweep of masses makes many
+            _MATCHED.pop(next(iter(_MATCHED)))
         _MATCHED[key] = not differing
     return path if _MATCHED[key] else None
 
@@ -80,19 +82,37 @@ def _differing_link(text: str, arm_text: str, links: set[str]) -> str:
     """The first of ``links`` whose ``<collision>`` elements differ between two URDFs ("" if none).
 
     Compared by shape, its numbers (sizes, mesh scale), the mesh file's name and the
-    collision's origin, to 1e-9; a link missing from either URDF differs.
+    collision's origin, and by the joint from the link's parent, to 1e-9 (the arm's root,
+    mounted in the servicer, by its shapes alone); a link the arm lacks differs, one the robot
+    lacks is skipped (its pairs disable nothing).
     """
     mine, theirs = _collisions(text), _collisions(arm_text)
-    for link in sorted(links):
-        if link not in mine or link not in theirs or mine[link] != theirs[link]:
+    for link in sorted(links):  # a link the robot lacks (renamed, prefixed) disables nothing
+        if link not in mine:
+            continue
+        if link not in theirs or mine[link][0] != theirs[link][0]:
             return link
+        ours, arms = mine[link][1], theirs[link][1]  # None: the arm's root, mounted
+        if ours is not None and arms is not None and ours[1] == arms[1] and ours != arms:
+            return link  # a locked joint (fixed in the servicer) moves by its lock value
     return ""
 
 
-def _collisions(text: str) -> dict[str, list[tuple]]:
-    """Per link, each collision as (origin, shape, its numbers, mesh file name) (m)."""
-    found: dict[str, list[tuple]] = {}
-    for link in ET.fromstring(text).findall("link"):
+def _collisions(text: str) -> dict[str, tuple[list[tuple], tuple | None]]:
+    """Per link: its collisions and the joint from its parent link.
+
+    Each collision as (origin, shape, its numbers, mesh file name) (m); the joint as (type,
+    parent, origin, axis; None for a root): a shorter forearm keeps its shapes but moves what
+    it carries.
+    """
+    root = ET.fromstring(text)
+    parents = {}
+    for joint in root.findall("joint"):
+        child, parent = joint.find("child"), joint.find("parent")
+        if child is not None and parent is not None:
+            parents[str(child.get("link"))] = joint
+    found: dict[str, tuple[list[tuple], tuple | None]] = {}
+    for link in root.findall("link"):
         shapes = []
         for element in link.findall("collision"):
             origin = element.find("origin")
@@ -110,8 +130,21 @@ def _collisions(text: str) -> dict[str, list[tuple]]:
                 )
                 mesh = Path(shape.get("filename", "")).name
                 shapes.append((where, shape.tag, numbers, mesh))
-        found[str(link.get("name"))] = shapes
+        above = parents.get(str(link.get("name")))
+        found[str(link.get("name"))] = (shapes, None if above is None else _joint_key(above))
     return found
+
+
+def _joint_key(joint: ET.Element) -> tuple:
+    """A joint's type, parent link, origin and axis (numbers to 1e-9), for comparisons."""
+    origin, axis, parent = joint.find("origin"), joint.find("axis"), joint.find("parent")
+    numbers = [
+        *(origin.get("xyz", "0 0 0").split() if origin is not None else ["0"] * 3),
+        *(origin.get("rpy", "0 0 0").split() if origin is not None else ["0"] * 3),
+        *(axis.get("xyz", "1 0 0").split() if axis is not None else ["1", "0", "0"]),
+    ]
+    owner = "" if parent is None else str(parent.get("link"))
+    return ("joint", joint.get("type"), owner, tuple(round(float(v), 9) for v in numbers))
 
 
 def arm_srdf(arm: str) -> Path | None:
