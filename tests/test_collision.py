@@ -499,3 +499,28 @@ def test_a_known_arms_srdf_does_not_apply_to_a_reshaped_arm(tmp_path, caplog):
     said = "the collision shapes or joints of its link 'wrist_1_link' are not that arm's"
     assert any(said in r.getMessage() for r in caplog.records)
     assert known_srdf(ff.load_robot(ROOT / "robots" / "ur5_servicer.urdf")) is not None
+
+
+def test_an_srdf_never_disables_a_keep_out_object(tmp_path, capsys):
+    """An SRDF pair naming the spacecraft (a user's spacecraft / forearm_link) disabled every
+    keep-out object against that link too (they hang on the spacecraft's body): a sphere the
+    forearm went 0.098 m into was accepted. With the pairs re-added in their own order, each
+    pair keeps its own distance (the queries index them by that order)."""
+    (tmp_path / "sc_fa.srdf").write_text(
+        '<robot name="ur5_servicer"><disable_collisions link1="spacecraft" '
+        'link2="forearm_link" reason="user"/></robot>'
+    )
+    text = UR5_TOML.read_text().replace(
+        'robot = "ur5_servicer"', f'robot = "{ROOT / "robots" / "ur5_servicer.urdf"}"'
+    )
+    panel = '\n[[obstacles]]\nname = "panel"\nsphere = 0.05\nxyz = [0.814, 0.016, -0.2]\n'
+    (tmp_path / "plain.toml").write_text(text + panel)
+    (tmp_path / "srdf.toml").write_text(text + '\n[safety]\nsrdf = "sc_fa.srdf"\n' + panel)
+    lines = {}
+    for name in ("plain", "srdf"):
+        assert main(["check", str(tmp_path / f"{name}.toml")]) == 1
+        out = capsys.readouterr().out
+        lines[name] = next(
+            line for line in out.splitlines() if "forearm_link_0 / obstacle:panel" in line
+        )
+    assert lines["plain"] == lines["srdf"] and "-0.09" in lines["plain"]

@@ -322,8 +322,17 @@ def _pairs_of(
             ):
                 continue  # a grasped payload touches its holder's fingers
             geometry.addCollisionPair(pin.CollisionPair(a, b))
-    if srdf is not None:
+    if srdf is not None:  # never a keep-out object's pairs: they belong to no link's design
+        kept = [  # as numbers: the vector's elements change under removal
+            (int(p.first), int(p.second))
+            for p in geometry.collisionPairs
+            if obstacle[p.first] or obstacle[p.second]
+        ]
         _remove_srdf_pairs(model, geometry, srdf)
+        pairs = {(int(p.first), int(p.second)) for p in geometry.collisionPairs} | set(kept)
+        geometry.removeAllCollisionPairs()  # in one order, the queries index them by it
+        for first, second in sorted(pairs):
+            geometry.addCollisionPair(pin.CollisionPair(first, second))
     return [(int(p.first), int(p.second)) for p in geometry.collisionPairs]
 
 
