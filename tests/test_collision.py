@@ -524,3 +524,18 @@ def test_an_srdf_never_disables_a_keep_out_object(tmp_path, capsys):
             line for line in out.splitlines() if "forearm_link_0 / obstacle:panel" in line
         )
     assert lines["plain"] == lines["srdf"] and "-0.09" in lines["plain"]
+
+
+def test_more_keep_out_objects_than_the_limit_are_refused_before_any_work(tmp_path, capsys):
+    """15000 small spheres fit in a 1 MB scenario and took minutes per query batch."""
+    text = UR5_TOML.read_text().replace(
+        'robot = "ur5_servicer"', f'robot = "{ROOT / "robots" / "ur5_servicer.urdf"}"'
+    )
+    many = "".join(
+        f'\n[[obstacles]]\nname = "o{k}"\nsphere = 0.01\nxyz = [5.0, {k * 0.05}, 0.0]\n'
+        for k in range(65)
+    )
+    (tmp_path / "s.toml").write_text(text + many)
+    assert main(["check", str(tmp_path / "s.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "keep-out objects ([[obstacles]]) = 65 is outside the supported range [0, 64]" in err

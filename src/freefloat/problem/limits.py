@@ -42,6 +42,7 @@ __all__ = [
     "MAX_JOINTS",
     "MAX_LENGTH_M",
     "MAX_MAGNITUDE",
+    "MAX_OBSTACLES",
     "MAX_SAMPLES",
     "MAX_SCENARIO_BYTES",
     "check_duration",
@@ -65,6 +66,9 @@ MAX_MAGNITUDE = 1e9
 #: Most free coefficients per joint beyond the quintic (polynomial degree at most 25; the
 #: orthonormal basis keeps the end conditions exactly at any degree).
 MAX_EXTRA_COEFFICIENTS = 20
+#: Most keep-out objects of a scenario: each adds a pair per arm body to every query (3000
+#: took 34 s to plan a UR5 servicer, 15000 over two minutes; 1 MB of TOML holds 15000).
+MAX_OBSTACLES = 64
 #: Most movable joints the planner takes (two 7-joint arms with grippers fit).
 MAX_JOINTS = 24
 #: Most samples of a plan (``--samples``, ``samples =`` of a sweep, an export's ``--rate``

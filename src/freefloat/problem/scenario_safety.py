@@ -12,11 +12,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError, ScenarioError, UnknownNameError, excerpt
+from ..errors import InputError, InputLimitError, ScenarioError, UnknownNameError, excerpt
 from ..robot.collision import Obstacle
 from .constraints.base import Constraint
 from .constraints.registry import constraint_from_record, default_constraints
-from .limits import MAX_LENGTH_M, check_number
+from .limits import MAX_LENGTH_M, MAX_OBSTACLES, check_number
 from .robot_table import check_keys, number, numbers, scenario_errors, triple
 
 __all__ = ["OBSTACLE_KEYS", "SAFETY_KEYS", "Safety", "constraint_tables", "safety_tables"]
@@ -75,6 +75,8 @@ def safety_tables(table: Any, obstacles: Any, relative_to: Path | None) -> Safet
     items = [] if obstacles is None else obstacles
     if not isinstance(items, list) or not all(isinstance(o, Mapping) for o in items):
         raise ScenarioError("[[obstacles]] must be a list of tables")
+    if len(items) > MAX_OBSTACLES:
+        raise InputLimitError("keep-out objects ([[obstacles]])", len(items), 0, MAX_OBSTACLES)
     parsed = []
     for index, item in enumerate(items):
         where = f"[[obstacles]] #{index + 1}"
