@@ -118,7 +118,11 @@ def test_a_file_stamp_changes_with_the_content_fresh_or_still(tmp_path, monkeypa
     path.write_bytes(b"solid a\nendsolid a\n")
     info = path.stat()
     frozen = types.SimpleNamespace(  # what os.stat reports, whatever is written
-        st_mtime_ns=time.time_ns(), st_ctime_ns=time.time_ns(), st_ino=7, st_size=info.st_size
+        st_mtime_ns=time.time_ns(),
+        st_ctime_ns=time.time_ns(),
+        st_ino=7,
+        st_size=info.st_size,
+        st_mode=info.st_mode,
     )
     with monkeypatch.context() as patched:
         patched.setattr(file_stamp.os, "stat", lambda _: frozen)

@@ -35,12 +35,11 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelError
-from ..progress import LOGGER
 from .file_stamp import FileStamp, file_stamp
 from .meshes import MeshKey, mesh_key
 from .model import Robot
 from .payload import PAYLOAD_LINK
-from .srdf import checked_srdf
+from .srdf import remove_srdf_pairs
 
 __all__ = [
     "OBSTACLE_PREFIX",
@@ -328,32 +327,12 @@ def _pairs_of(
             for p in geometry.collisionPairs
             if obstacle[p.first] or obstacle[p.second]
         ]
-        _remove_srdf_pairs(model, geometry, srdf)
+        remove_srdf_pairs(model, geometry, srdf)
         pairs = {(int(p.first), int(p.second)) for p in geometry.collisionPairs} | set(kept)
         geometry.removeAllCollisionPairs()  # in one order, the queries index them by it
         for first, second in sorted(pairs):
             geometry.addCollisionPair(pin.CollisionPair(first, second))
     return [(int(p.first), int(p.second)) for p in geometry.collisionPairs]
-
-
-def _remove_srdf_pairs(model: pin.Model, geometry: pin.GeometryModel, srdf: Path) -> None:
-    """Remove the pairs the SRDF disables, the file checked first (:func:`.srdf.checked_srdf`).
-
-    Raises:
-        ModelError: the file is not an SRDF Pinocchio can read.
-    """
-    links = {f.name for f in model.frames if f.type == pin.FrameType.BODY}
-    unknown = checked_srdf(srdf, links)
-    if unknown:
-        LOGGER.warning(
-            "the SRDF %s names links the robot does not have (%s): their pairs disable nothing",
-            srdf,
-            ", ".join(unknown[:5]) + (f" and {len(unknown) - 5} more" if len(unknown) > 5 else ""),
-        )
-    try:
-        pin.removeCollisionPairs(model, geometry, str(srdf))
-    except (RuntimeError, ValueError) as exc:  # what the check above does not foresee
-        raise ModelError(f"SRDF {srdf} cannot be read ({exc})") from None
 
 
 #: Joint names of a hand that grasps a payload (Robotiq's knuckles, Tiago's ``hand_*_flex``,

@@ -12,6 +12,8 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
 
+import pinocchio as pin
+
 from ..errors import ModelError
 from ..progress import LOGGER
 from .arms import ARMS
@@ -24,6 +26,7 @@ __all__ = [
     "disabled_pairs",
     "known_srdf",
     "merged_srdf",
+    "remove_srdf_pairs",
 ]
 
 
@@ -209,6 +212,26 @@ def checked_srdf(path: Path, links: set[str]) -> list[str]:
             )
         unknown.update((str(n), None) for n in names if n not in links)
     return list(unknown)
+
+
+def remove_srdf_pairs(model: pin.Model, geometry: pin.GeometryModel, srdf: Path) -> None:
+    """Remove the pairs the SRDF disables, the file checked first (:func:`.srdf.checked_srdf`).
+
+    Raises:
+        ModelError: the file is not an SRDF Pinocchio can read.
+    """
+    links = {f.name for f in model.frames if f.type == pin.FrameType.BODY}
+    unknown = checked_srdf(srdf, links)
+    if unknown:
+        LOGGER.warning(
+            "the SRDF %s names links the robot does not have (%s): their pairs disable nothing",
+            srdf,
+            ", ".join(unknown[:5]) + (f" and {len(unknown) - 5} more" if len(unknown) > 5 else ""),
+        )
+    try:
+        pin.removeCollisionPairs(model, geometry, str(srdf))
+    except (RuntimeError, ValueError) as exc:  # what the check above does not foresee
+        raise ModelError(f"SRDF {srdf} cannot be read ({exc})") from None
 
 
 def merged_srdf(arms: Sequence[str], prefixes: Sequence[str]) -> str:

@@ -30,6 +30,7 @@ __all__ = [
     "DriftStart",
     "confirmed_from",
     "drift_start",
+    "rounded_down",
 ]
 
 #: Tries to confirm a direction's turn from the restored start (a count; halved each time).
@@ -84,6 +85,14 @@ def drift_start(
     return DriftStart(result.beta, "", found)
 
 
+def rounded_down(turn: float, step: float) -> float:
+    """``turn`` (rad) rounded down to a multiple of ``step`` (rad; 0: not rounded).
+
+    The precision a turn is reported at, so that the goal printed is the one confirmed.
+    """
+    return math.floor(turn / step + 1e-9) * step if step > 0.0 else turn
+
+
 #: Why a direction stops where plan's own start confirms it (:func:`confirmed_from`); with
 #: "no turn about this axis" when it confirms none.
 RESTORED_SHORT = (
@@ -125,8 +134,7 @@ def confirmed_from(
     """
     turn = reached
     for _ in range(RESTORED_TRIES):
-        if step > 0.0:
-            turn = math.floor(turn / step + 1e-9) * step
+        turn = rounded_down(turn, step)
         if turn <= 0.0:
             break
         result = track(target(turn), constraints, options, restored)

@@ -24,7 +24,7 @@ from ..physics.attitude import quat_exp, quat_multiply, relative_rotvec
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
 from .continuation import ContinuationResult, held_fraction, track
-from .drift_start import RESTORED_SHORT, confirmed_from, drift_start
+from .drift_start import RESTORED_SHORT, confirmed_from, drift_start, rounded_down
 from .options import SolveOptions
 from .restore import broken_constraint, broken_rows_first
 from .tracked import BranchPoint
@@ -147,8 +147,7 @@ def _confirmed(
     where they part. Returns the turn (rad) and its path.
     """
     for _ in range(CONFIRM_TRIES):
-        if step > 0.0:  # the turn reported, so that the goal printed is the one confirmed
-            reached = math.floor(reached / step + 1e-9) * step
+        reached = rounded_down(reached, step)
         if reached <= 0.0:
             break
         part = _parting(trace, reached)
@@ -177,8 +176,7 @@ def _imposed(
     is confirmed (:func:`_confirmed`). Returns the turn (rad), why it stopped short ("" when
     it did not) and its path.
     """
-    if step > 0.0:
-        angle = math.floor(angle / step + 1e-9) * step
+    angle = rounded_down(angle, step)
     if angle <= 0.0:
         return 0.0, "", origin
     trace: list[BranchPoint] = []
