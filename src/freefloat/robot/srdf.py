@@ -16,7 +16,6 @@ import pinocchio as pin
 
 from ..errors import ModelError
 from ..progress import LOGGER
-from .arms import ARMS
 from .model import MAX_URDF_BYTES, Robot, example_robot_data_dir
 
 __all__ = [
@@ -58,6 +57,7 @@ def known_srdf(robot: Robot) -> Path | None:
         return None
     key = (robot.urdf_text, str(path))
     if key not in _MATCHED:
+        from .arms import ARMS  # the arms' table, only for a servicer named like one
         arm_text = (share / "example-robot-data" / "robots" / ARMS[arm]).read_text()
         links = {name for pair in disabled_pairs(path) for name in pair}
         differing = _differing_link(robot.urdf_text, arm_text, links)
