@@ -101,9 +101,10 @@ def _check_solid(obj: pin.GeometryObject) -> None:
     """
     vertices = np.array(obj.geometry.vertices(), dtype=float).reshape(-1, 3)
     flat = len(vertices) < 4
-    if not flat:
-        spread = np.linalg.svd(vertices - vertices.mean(axis=0), compute_uv=False)
-        flat = bool(spread[2] <= 1e-9 * max(float(spread[0]), 1e-300))
+    if not flat:  # the spread's eigenvalues (squared singular values): a 3 x 3 problem
+        centred = vertices - vertices.mean(axis=0)
+        spread = np.linalg.eigvalsh(centred.T @ centred)
+        flat = bool(spread[0] <= 1e-18 * max(float(spread[2]), 1e-300))
     if flat:
         raise ModelError(
             f"collision mesh {obj.meshPath} ({obj.name}) is flat: its {len(vertices)} vertices "
