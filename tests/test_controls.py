@@ -160,7 +160,11 @@ def test_titles_name_the_robot_not_its_cache_file(worked_plan):
         robot=replace(worked_plan.robot, urdf="/home/u/.cache/freefloat/3f9a1c0d7e.urdf"),
     )
     assert plan_title(cached).startswith("planar_2dof: T = 10 s")
-    title = figures(cached, ("base_rate",))["base_rate"].axes[0].get_title()
+    figure = figures(cached, ("base_rate",))["base_rate"]
+    title = figure.axes[0].get_title()
+    import matplotlib.pyplot as plt
+
+    plt.close("all")  # the figures() call's sheets
     assert title == "base rate (planar_2dof, T = 10 s)"
     bare = replace(cached, robot=replace(cached.robot, urdf_text=""))
     assert plan_title(bare).startswith("3f9a1c0d7e: T = 10 s")

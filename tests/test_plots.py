@@ -20,6 +20,14 @@ def figs(worked_plan):
     return figures(worked_plan)
 
 
+def _close(*figures):
+    """Close figures a test made (pyplot keeps every figure until closed)."""
+    import matplotlib.pyplot as plt
+
+    for fig in figures:
+        plt.close(fig)
+
+
 def _line(fig, label):
     ax = fig.axes[0]
     return next(line for line in ax.lines if line.get_label() == label)
@@ -173,6 +181,7 @@ def test_joint_limits_are_drawn_from_the_urdf():
     assert "limits beyond the axes" in " ".join(
         t.get_text() for t in figs["joint_rates"].axes[0].get_legend().get_texts()
     )
+    _close(*figs.values())
 
 
 def test_prismatic_joints_get_their_own_axis_in_metres(worked_plan):
@@ -193,6 +202,7 @@ def test_prismatic_joints_get_their_own_axis_in_metres(worked_plan):
     right = figs["joint_positions"].axes[1]
     q2 = next(line for line in right.lines if line.get_label() == "q2")
     np.testing.assert_array_equal(q2.get_ydata(), q[:, 1])  # metres: not scaled to degrees
+    _close(*figs.values())
 
 
 def test_twelve_joints_have_twelve_distinct_styles(worked_plan):
@@ -217,6 +227,7 @@ def test_twelve_joints_have_twelve_distinct_styles(worked_plan):
         (tuple(np.round(to_rgba(line.get_color()), 6)), line.get_linestyle()) for line in lines
     }
     assert len(styles) == 12
+    _close(ax.figure)
 
 
 def test_names_the_font_lacks_give_one_warning_line(tmp_path, capfd):
