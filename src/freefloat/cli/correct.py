@@ -44,6 +44,10 @@ def check(args: argparse.Namespace) -> None:
     for value in args.base_zyx_deg:
         check_number(value, "--base-zyx-deg", MAX_ANGLE_DEG, "deg")
     check_outputs(args, ("-o", "output"))
+    if args.output:  # not over the robot the plan reads, refused before the work
+        from ..plans.schema import load_plan_file
+
+        check_not_read(args, plan_reads(load_plan_file(args.plan)))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -52,7 +56,6 @@ def run(args: argparse.Namespace) -> int:
 
     with stage("plan correction"):
         result, residual = correct_plan(args.plan, args.base_zyx_deg)
-    check_not_read(args, plan_reads(result))  # the robot it reads, rewritten
     output = Path(args.output) if args.output else Path(args.plan).with_suffix(".correct.json")
     written = result.save(output)
     print(f"freefloat correct: turns the spacecraft back by {math.degrees(residual):.4g} deg")
