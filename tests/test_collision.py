@@ -360,6 +360,11 @@ def test_the_ur5_pan_through_the_hull_plans_clear_of_it(tmp_path):
         ),
         ("other.srdf", '<urdf name="r"/>', "root element is <urdf>, expected <robot>"),
         ("pairs.toml", '<robot name="r"/>', "does not end in .srdf; give an SRDF file"),
+        (
+            "typed.srdf",
+            '<!DOCTYPE robot [<!ENTITY a "x">]>\n<robot name="r"/>',
+            "has a document type declaration; remove it",
+        ),
     ],
 )
 def test_a_malformed_srdf_is_refused_in_one_line(tmp_path, capsys, name, text, said):

@@ -58,6 +58,7 @@ def known_srdf(robot: Robot) -> Path | None:
     key = (robot.urdf_text, str(path))
     if key not in _MATCHED:
         from .arms import ARMS  # the arms' table, only for a servicer named like one
+
         arm_text = (share / "example-robot-data" / "robots" / ARMS[arm]).read_text()
         links = {name for pair in disabled_pairs(path) for name in pair}
         differing = _differing_link(robot.urdf_text, arm_text, links)

@@ -309,7 +309,6 @@ def reach_set(
     angles = np.broadcast_to(np.asarray(max_angle, dtype=float), (len(directions),))
     quintic = problem.achieved(np.zeros(problem.n_free))
     start = drift_start(problem, eager, options)  # shared by every direction
-    origin = np.zeros(problem.n_free) if start.beta is None else start.beta  # (unused if None)
 
     def one(index: int) -> _Spent:
         axis = np.asarray(directions[index], dtype=float)
@@ -318,7 +317,8 @@ def reach_set(
         before, maps = problem.evaluations, problem.map_evaluations
         # no path within the constraints at the drift attitude: none to report
         reached, stopped_by, beta = 0.0, start.why_not, start.beta
-        if angle > 0.0 and start.beta is not None:
+        origin = start.beta
+        if angle > 0.0 and origin is not None:
             reached, stopped_by, beta = _direction(
                 problem, quintic, axis, angle, tracked, eager, options, confirm, step, origin
             )
