@@ -55,6 +55,21 @@ def test_full_turns_are_not_used_unless_asked(tmp_path):
     assert "allow_full_turns = true (or --allow-full-turns)" in str(info.value)
 
 
+def test_a_planar_pitch_goal_gets_no_full_turns_hint(tmp_path):
+    """No way round of a joint turns a planar base about another axis: no such hint."""
+    pitched = WORKED.replace(
+        "[goal]\njoints = { q1 = -60.0, q2 = 90.0 }   # [deg]; end effector at (1.71, -0.29) m "
+        "from the CM\nbase_zyx_deg = [0.0, 0.0, 0.0]",
+        "[goal]\njoints = { q1 = -60.0, q2 = 90.0 }\nbase_zyx_deg = [0.0, 5.0, 0.0]",
+    )
+    assert "base_zyx_deg = [0.0, 5.0, 0.0]" in pitched
+    with pytest.raises(ff.InfeasibleError) as info:
+        ff.plan(_scenario(tmp_path, pitched))
+    assert info.value.off_axis
+    assert "give the goal the start's pitch and roll" in str(info.value)
+    assert "allow_full_turns" not in str(info.value)
+
+
 def test_full_turns_make_an_unreachable_request_a_verified_plan(tmp_path):
     scenario = _scenario(tmp_path, TURNS.replace("[path]", "[path]\nallow_full_turns = true"))
     plan = ff.plan(scenario)

@@ -136,13 +136,26 @@ class JointLimitError(FreeFloatError):
 
 
 class InfeasibleError(FreeFloatError):
-    """A requested attitude change outside the reachable interval (planar bounds)."""
+    """A requested attitude change outside the reachable interval (planar bounds).
+
+    Attributes:
+        requested_deg: the yaw change asked (deg), or with ``off_axis`` the turn asked about
+            the other axes (deg).
+        bounds_deg: the reachable interval (deg).
+        off_axis: the goal turns a planar base about an axis it cannot turn about (no joint
+            motion reaches it, whichever way round a joint goes).
+    """
 
     def __init__(
-        self, requested_deg: float, bounds_deg: Sequence[float], message: str | None = None
+        self,
+        requested_deg: float,
+        bounds_deg: Sequence[float],
+        message: str | None = None,
+        off_axis: bool = False,
     ) -> None:
         self.requested_deg = float(requested_deg)
         self.bounds_deg = (float(bounds_deg[0]), float(bounds_deg[1]))
+        self.off_axis = off_axis
         lo, hi = self.bounds_deg
         super().__init__(
             message

@@ -260,6 +260,7 @@ def _planar_yaw_change(quats: Sequence[np.ndarray], axis: np.ndarray) -> float:
                 f"attitude is {math.degrees(off_axis):.6g} deg away from the start about "
                 "other axes; give the goal the start's pitch and roll"
             ),
+            off_axis=True,
         )
     return wrap_angle(float(relative @ axis))
 

@@ -316,14 +316,17 @@ def _refuse(
     origin, closest = turns.origin, turns.closest
     continuous = any(j.kind == "continuous" for j in scenario.robot.joints)
     hint = ""
-    if continuous and not scenario.allow_full_turns:
+    off_axis = isinstance(first_error, InfeasibleError) and first_error.off_axis
+    if continuous and not scenario.allow_full_turns and not off_axis:  # no way round helps
         hint = (
             "a continuous joint could reach its goal the other way round: try "
             "[path] allow_full_turns = true (or --allow-full-turns)"
         )
     if isinstance(first_error, InfeasibleError) and attempts == 1:
         message = f"{first_error}; {hint}" if hint else str(first_error)
-        raise InfeasibleError(first_error.requested_deg, first_error.bounds_deg, message=message)
+        raise InfeasibleError(
+            first_error.requested_deg, first_error.bounds_deg, message, first_error.off_axis
+        )
     if isinstance(first_error, InfeasibleError) and best == math.inf:  # each refused up front
         raise InfeasibleError(
             first_error.requested_deg,
