@@ -142,6 +142,15 @@ def _scenario_error(tmp_path, text, cls=ff.FreeFloatError):
     return message
 
 
+def test_an_unknown_joint_is_named_with_the_table_it_was_read_in(tmp_path):
+    start = scenario_text().replace("q1 = 80.0, q2 = 30.0", "q1 = 80.0, q9 = 30.0")
+    message = _scenario_error(tmp_path, start, ff.UnknownNameError)
+    assert message.endswith("[start] joints: unknown joint 'q9'; valid: q1, q2")
+    extra = scenario_text(path="[path]\nextra = { q7 = 1 }")
+    message = _scenario_error(tmp_path, extra, ff.UnknownNameError)
+    assert message.endswith("[path] extra: unknown joint 'q7'; valid: q1, q2")
+
+
 def test_scenario_round_trip(tmp_path):
     path = tmp_path / "s.toml"
     path.write_text(scenario_text())

@@ -50,13 +50,16 @@ class ModelError(FreeFloatError):
 class UnknownNameError(FreeFloatError):
     """A joint, frame, robot or key name that does not exist; carries the valid names."""
 
-    def __init__(self, kind: str, name: str, valid: Iterable[str], why: str = "") -> None:
+    def __init__(
+        self, kind: str, name: str, valid: Iterable[str], why: str = "", where: str = ""
+    ) -> None:
         self.kind = kind
         self.name = name
         self.valid = tuple(valid)
         shown = ", ".join(self.valid) if self.valid else "(none)"
         because = f" ({why})" if why else ""
-        super().__init__(f"unknown {kind} {excerpt(name)}{because}; valid: {shown}")
+        prefix = f"{where}: " if where else ""
+        super().__init__(f"{prefix}unknown {kind} {excerpt(name)}{because}; valid: {shown}")
 
 
 class ScenarioError(FreeFloatError):

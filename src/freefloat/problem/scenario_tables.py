@@ -227,7 +227,7 @@ def path_options(table: Any, robot: Robot) -> PathOptions:
             raise ScenarioError("[path] extra must be a table { joint = count, ... }")
         extra = {}
         for joint_name, count in table["extra"].items():
-            robot.joint(joint_name)
+            robot.joint(joint_name, "[path] extra")
             extra[joint_name] = scenario_errors(
                 check_extra, count, f"[path] extra for {joint_name!r}"
             )
@@ -281,7 +281,7 @@ def _joint_table(
         if joint_name in locked:
             _check_locked(joint_name, value, locked[joint_name], name)
             continue
-        joint = robot.joint(joint_name)
+        joint = robot.joint(joint_name, f"[{name}] joints")
         limit, unit = (MAX_ANGLE_DEG, "deg") if joint.angular else (MAX_LENGTH_M, "m")
         amount = number(value, f"[{name}] joint {joint_name!r}", limit, unit)
         joints[joint_name] = math.radians(amount) if joint.angular else amount

@@ -108,35 +108,38 @@ class Robot:
         support = set(self.model.supports[parent])
         return [j.name for j in self.joints if j.index in support]
 
-    def joint(self, name: str) -> Joint:
-        """The joint called ``name``; :class:`UnknownNameError` (listing the valid ones) if none."""
+    def joint(self, name: str, where: str = "") -> Joint:
+        """The joint called ``name``; :class:`UnknownNameError` (listing the valid ones) if none.
+
+        ``where``: the place the name was read (``"[path] extra"``), put before the message.
+        """
         for joint in self.joints:
             if joint.name == name:
                 return joint
-        raise self._unknown_joint(name)
+        raise self._unknown_joint(name, where)
 
-    def _unknown_joint(self, name: str) -> UnknownNameError:
+    def _unknown_joint(self, name: str, where: str = "") -> UnknownNameError:
         """The error for a name that is not a movable joint's (saying when it is a fixed one)."""
         model = self.model
         fixed = model.existFrame(name) and (
             model.frames[model.getFrameId(name)].type == pin.FrameType.FIXED_JOINT
         )
         why = "a fixed joint in the URDF: it does not move" if fixed else ""
-        return UnknownNameError("joint", name, self.joint_names, why)
+        return UnknownNameError("joint", name, self.joint_names, why, where)
 
-    def vector(self, values: Mapping[str, float], what: str = "joint values") -> np.ndarray:
+    def vector(self, values: Mapping[str, float], what: str = "") -> np.ndarray:
         """Order a ``{joint name: value}`` mapping into an N-vector (rad or m).
 
         Every joint must be given once; unknown names and missing joints raise errors that list
-        the valid names.
+        the valid names, after ``what`` (where the values were read, e.g. ``"[start] joints"``).
         """
         for name in values:
             if name not in self.joint_names:
-                raise self._unknown_joint(name)
+                raise self._unknown_joint(name, what)
         missing = [j.name for j in self.joints if j.name not in values]
         if missing:
             raise ModelError(
-                f"{what}: no value for joint(s) {', '.join(missing)}; every joint needs one "
+                f"{what or 'joint values'}: no value for joint(s) {', '.join(missing)}; every joint needs one "
                 f"(joints: {', '.join(self.joint_names)})"
             )
         return np.array([float(values[j.name]) for j in self.joints])
