@@ -151,6 +151,26 @@ def test_an_unknown_joint_is_named_with_the_table_it_was_read_in(tmp_path):
     assert message.endswith("[path] extra: unknown joint 'q7'; valid: q1, q2")
 
 
+def test_a_locked_joint_in_path_extra_is_named_as_locked(tmp_path):
+    robot = str(ROOT / "robots" / "planar_2dof.urdf")
+    text = scenario_text(goal="q1 = -60.0", path="[path]\nextra = { q2 = 1 }")
+    text = text.replace(f'robot = "{robot}"', "").replace(", q2 = 30.0", "")
+    text += f'[robot]\nurdf = "{robot}"\nlock = ["q2"]\n'
+    message = _scenario_error(tmp_path, text)
+    assert message.endswith(
+        "[path] extra: joint 'q2' is locked ([robot] lock): it has no path to shape; leave it "
+        "out of extra"
+    )
+
+
+def test_an_empty_path_extra_says_it_may_be_left_out(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(scenario_text(path="[path]\nextra = {}"))
+    with pytest.raises(ff.InputError) as info:
+        ff.plan(ff.Scenario.from_toml(path))
+    assert str(info.value).endswith("(or leave extra out to let the planner choose)")
+
+
 def test_scenario_round_trip(tmp_path):
     path = tmp_path / "s.toml"
     path.write_text(scenario_text())

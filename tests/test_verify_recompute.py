@@ -168,11 +168,15 @@ def test_a_stated_flag_must_say_what_the_figures_say(original, tmp_path, capsys)
                 for k in list(d["samples"])
                 if isinstance(d["samples"][k], list)  # every per-sample list emptied
             ],
-            "samples.t: expected 2 entries or min",
+            "samples.t: expected at least 2 entries, got []",
         ),
         (
             lambda d: d["path"]["coefficients"]["q2"].extend([0.0] * 30),
-            "path.coefficients.q2: expected 25 entries or max",
+            "path.coefficients.q2: expected at most 25 entries",
+        ),
+        (
+            lambda d: d["solver"].__setitem__("solutions", []),
+            "solver.solutions: expected at least 1 entry, got []",
         ),
         (
             lambda d: d["free_parameters"]["q2"].append(0.0),

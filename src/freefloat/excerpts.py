@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import datetime
 from typing import Any
 
-__all__ = ["EXCERPT_CHARS", "excerpt"]
+__all__ = ["EXCERPT_CHARS", "apart", "excerpt"]
 
 #: The most characters of a bad value an error message quotes (an excerpt beyond that).
 EXCERPT_CHARS = 60
@@ -47,7 +48,25 @@ def excerpt(value: Any, width: int = EXCERPT_CHARS) -> str:
         if len(parts) == len(value):
             return opening + ", ".join(parts) + closing
         return f"{opening}{', '.join([*parts, '...'])}{closing} ({len(value)} items)"
+    if isinstance(value, (datetime.date, datetime.time)):  # TOML's dates, as written
+        kind = "date" if type(value) is datetime.date else "time"
+        kind = "date and time" if isinstance(value, datetime.datetime) else kind
+        return f"{value.isoformat()} (a {kind})"
     text = repr(value)
     if len(text) <= width:
         return text
     return f"{text[: max(width - 24, 8)]}... ({len(text)} characters)"
+
+
+def apart(value: float, *bounds: float) -> str:
+    """``value`` to 6 significant digits, or to as many more as tell it from ``bounds``.
+
+    A value just outside a limit is never printed as the limit (``0.50000001``, not ``0.5``,
+    beside a limit of 0.5); a value equal to a bound prints as the bound does.
+    """
+    value = float(value) + 0.0  # no negative zero
+    for digits in range(6, 18):
+        text = f"{value:.{digits}g}"
+        if all(f"{bound:.{digits}g}" != text for bound in bounds if bound != value):
+            return text
+    return repr(value)

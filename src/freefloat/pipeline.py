@@ -8,6 +8,7 @@ verifies a solution found elsewhere. The file format lives in :mod:`freefloat.pl
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Sequence
 from dataclasses import asdict, replace
@@ -48,7 +49,7 @@ from .problem.limits import check_samples
 from .problem.objectives import DEFAULT_OBJECTIVE, Objective, objective_named
 from .problem.paths import boundary_errors
 from .problem.residual import Problem
-from .problem.scenario import Scenario
+from .problem.scenario import Scenario, scenario_of
 from .progress import LOGGER, stage
 from .robot.light_base import warn_light_base
 from .robot.model import Robot
@@ -65,7 +66,7 @@ BOUNDARY_TOLERANCE = 1e-9
 
 
 def plan(
-    scenario: Scenario,
+    scenario: Scenario | str | os.PathLike,
     options: SolveOptions | None = None,
     samples: int = 201,
     constraints: Sequence[Constraint] | None = None,
@@ -74,7 +75,7 @@ def plan(
     """Plan the scenario's motion and sample it (BLAS on one thread meanwhile: :mod:`._blas`).
 
     Args:
-        scenario: what to plan.
+        scenario: what to plan (or the path of its TOML file).
         options: solver settings; the scenario's ``max_deviation`` overrides the default
             bracket.
         samples: number of equally spaced samples in [0, T] (2 to
@@ -93,6 +94,7 @@ def plan(
             shortest duration at which the path found without them respects them.
         EffortLimitError: the same for the effort limits.
     """
+    scenario = scenario_of(scenario)
     with one_blas_thread():
         return _plan(scenario, options, samples, constraints, objective)
 

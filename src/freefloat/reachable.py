@@ -20,6 +20,7 @@ For a planar robot the reachable yaw changes are the planar bounds (docs/method.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
@@ -39,7 +40,7 @@ from .problem.build import problem_from_scenario
 from .problem.constraints import Clearance, scenario_constraints
 from .problem.endpoints import check_endpoints
 from .problem.residual import Problem
-from .problem.scenario import Scenario
+from .problem.scenario import Scenario, scenario_of
 from .problem.simple_bound import SimpleMotionBound, inertia_ratio, simple_motion_bound, turn_limit
 from .progress import LOGGER
 from .robot.light_base import warn_light_base
@@ -166,7 +167,7 @@ def _limits(
 
 
 def reachable(
-    scenario: Scenario,
+    scenario: Scenario | str | os.PathLike,
     travel_factor: float = 1.0,
     budget: int = DEFAULT_BUDGET,
     directions: np.ndarray | None = None,
@@ -181,7 +182,7 @@ def reachable(
     its cache.
 
     Args:
-        scenario: the request.
+        scenario: the request (or the path of its TOML file).
         travel_factor: ``k >= 1`` of the outer bound (1: every joint monotone).
         budget: residual evaluations per continuation pass of a direction of the inner
             estimate (a count: a direction makes one pass, and more where it confirms its turn
@@ -202,6 +203,7 @@ def reachable(
             refuses it (a spatial robot's only with a budget: the inner estimate's claim).
     """
     check_jobs(jobs, "jobs")
+    scenario = scenario_of(scenario)
     end_effector_goal = bool(scenario.goal_poses)
     scenario = scenario.resolved()
     scenario.write_robot()

@@ -61,11 +61,17 @@ def run(args: argparse.Namespace) -> int:
     report = check_configuration(scenario, parse_joints(args.at, scenario))
     print(f"freefloat check: {scenario.robot.name} at {args.at}")
     width = max([24, *(len(j.name) + 2 for j in report.joints)])
-    print(f"  {'joint':<{width}}{'value':>12}{'lower':>12}{'upper':>12}{'room':>12}")
-    for j in report.joints:
+    digits = [_digits(math.degrees(j.room) if j.angular else j.room) for j in report.joints]
+    cell = max([12, *(d + 8 for d in digits)])  # room for a sign, 4 digits and a space
+    print(
+        f"  {'joint':<{width}}"
+        + "".join(f"{h:>{cell}}" for h in ("value", "lower", "upper", "room"))
+    )
+    for j, places in zip(report.joints, digits, strict=True):
         scale, unit = (math.degrees, "deg") if j.angular else (float, "m")
-        digits = _digits(scale(j.room))
-        cells = "".join(f"{scale(v):>12.{digits}f}" for v in (j.value, j.lower, j.upper, j.room))
+        cells = "".join(
+            f"{scale(v):>{cell}.{places}f}" for v in (j.value, j.lower, j.upper, j.room)
+        )
         flag = "" if j.room >= 0.0 else "  OUTSIDE"
         print(f"  {j.name:<{width}}{cells}  {unit}{flag}")
     if report.margin is None:
@@ -85,6 +91,6 @@ def run(args: argparse.Namespace) -> int:
 def _digits(room: float) -> int:
     """Decimals that show a joint's room (deg or m): 3, more when it would print as 0."""
     digits = 3
-    while room != 0.0 and round(room, digits) == 0.0 and digits < 9:
+    while room != 0.0 and round(room, digits) == 0.0 and digits < 12:
         digits += 1
     return digits

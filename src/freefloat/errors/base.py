@@ -7,10 +7,11 @@ the command line can print it as it is (exit code 2) and a caller can test it.
 from __future__ import annotations
 
 import math
+import unicodedata
 from collections.abc import Iterable, Sequence
 from typing import Any
 
-from ..excerpts import excerpt
+from ..excerpts import apart, excerpt
 
 
 class FreeFloatError(Exception):
@@ -57,9 +58,34 @@ class UnknownNameError(FreeFloatError):
         self.name = name
         self.valid = tuple(valid)
         shown = ", ".join(self.valid) if self.valid else "(none)"
+        twin = _look_alike(name, self.valid) if isinstance(name, str) else None
+        if twin is not None and not why:
+            why = f"looks like {twin!r} but its code points differ: {name!a}, {twin!a}"
         because = f" ({why})" if why else ""
         prefix = f"{where}: " if where else ""
         super().__init__(f"{prefix}unknown {kind} {excerpt(name)}{because}; valid: {shown}")
+
+
+def _look_alike(name: str, valid: Sequence[str]) -> str | None:
+    """A valid name ``name`` could be mistaken for, or None.
+
+    The same text in another Unicode form (NFC against NFD), or the same length, at most half
+    of it differing and only in characters beyond ASCII (a Cyrillic a for a Latin one).
+    """
+    plain = unicodedata.normalize("NFC", name)
+    for other in valid:
+        if other == name:
+            continue
+        if unicodedata.normalize("NFC", other) == plain:
+            return other
+        if len(other) != len(name):
+            continue
+        differ = [(a, b) for a, b in zip(name, other, strict=True) if a != b]
+        if 2 * len(differ) <= len(name) and all(
+            not (a.isascii() and b.isascii()) for a, b in differ
+        ):
+            return other
+    return None
 
 
 class ScenarioError(FreeFloatError):
@@ -132,9 +158,10 @@ class JointLimitError(FreeFloatError):
         self.lower = lower
         self.upper = upper
         self.where = where
+        shown = value * scale
         super().__init__(
-            f"{where}: joint {joint!r} = {value * scale:.6g} {unit} is outside its limits "
-            f"[{lower * scale:.6g}, {upper * scale:.6g}] {unit}"
+            f"{where}: joint {joint!r} = {apart(shown, lower * scale, upper * scale)} {unit} is "
+            f"outside its limits [{lower * scale:.6g}, {upper * scale:.6g}] {unit}"
         )
 
 
@@ -371,7 +398,8 @@ class LockedJointError(FreeFloatError):
         self.unit = unit
         reason = why or f"outside its limits [{lower:.6g}, {upper:.6g}] {unit}"
         super().__init__(
-            f"joint {joint!r} locked at {value:.6g} {unit}: {reason}; lock it within "
+            f"joint {joint!r} locked at {apart(value, lower, upper)} {unit}: {reason}; lock it "
+            "within "
             f"[{lower:.6g}, {upper:.6g}] {unit}"
         )
 

@@ -152,7 +152,9 @@ def _describe(error: Any) -> str:
     if kind == "minLength":
         return f"{where}: {got} is empty; give at least {error.validator_value} character(s)"
     if kind in ("minItems", "maxItems"):
-        return f"{where}: expected {error.validator_value} entries or {kind[:3]}, got {got}"
+        least = "at least" if kind == "minItems" else "at most"
+        count = error.validator_value
+        return f"{where}: expected {least} {count} entr{'y' if count == 1 else 'ies'}, got {got}"
     bounds = {
         "minimum": "less than the minimum of",
         "maximum": "greater than the maximum of",

@@ -141,7 +141,7 @@ def build_problem(
         raise InputError(
             f"{family.n_free} free path coefficient(s) for {problem.n_equations} attitude "
             f"equation(s); add at least {problem.n_equations - family.n_free} more with "
-            "[path] extra"
+            "[path] extra (or leave extra out to let the planner choose)"
         )
     problem = problem.with_steps(problem.steps_for())
     return _one_joint(problem, check_bounds) if robot.n == 1 else problem

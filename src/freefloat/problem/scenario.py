@@ -74,6 +74,7 @@ any joint goals held and every other joint at its start value (docs/multi_arm.md
 from __future__ import annotations
 
 import hashlib
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -81,7 +82,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import FreeFloatError, ScenarioError
+from ..errors import FreeFloatError, InputError, ScenarioError
 from ..files import absolute_path, atomic_write_text, read_text_file
 from ..physics.attitude import quat_from_zyx
 from ..robot.model import MAX_URDF_BYTES, Robot, load_robot, robots_dir
@@ -104,7 +105,7 @@ from .scenario_tables import (
 if TYPE_CHECKING:
     from ..robot.compose import ServicerSpec
 
-__all__ = ["Scenario", "default_scenario_path"]
+__all__ = ["Scenario", "default_scenario_path", "scenario_of"]
 
 
 def default_scenario_path() -> Path:
@@ -222,7 +223,7 @@ class Scenario:
         if safety.srdf is None and origin.srdf is not None:
             safety = replace(safety, srdf=origin.srdf)
         states = state_tables(data, robot, origin.locked)
-        path = path_options(data.get("path", {}), robot)
+        path = path_options(data.get("path", {}), robot, origin.locked)
         return cls(
             robot=robot,
             allow_full_turns=path.allow_full_turns,
@@ -300,3 +301,20 @@ def _with_payload(
     decorated = attach_payload(text, link, payload, Path(urdf).resolve().parent)
     digest = hashlib.sha256(decorated.encode()).hexdigest()[:16]
     return servicer_cache_dir() / f"{Path(urdf).stem}-payload-{digest}.urdf", decorated
+
+
+def scenario_of(scenario: Scenario | str | os.PathLike) -> Scenario:
+    """``scenario`` itself, or the scenario file it names read (:meth:`Scenario.from_toml`).
+
+    Raises:
+        InputError: neither a :class:`Scenario` nor a path.
+        ScenarioError, UnknownNameError, ModelError: as :meth:`Scenario.from_toml`.
+    """
+    if isinstance(scenario, Scenario):
+        return scenario
+    if isinstance(scenario, (str, os.PathLike)):
+        return Scenario.from_toml(Path(scenario))
+    raise InputError(
+        f"scenario must be a freefloat.Scenario or the path of a scenario TOML file, got "
+        f"{type(scenario).__name__}"
+    )

@@ -216,8 +216,13 @@ class PathOptions:
     raise_freedom: bool = True
 
 
-def path_options(table: Any, robot: Robot) -> PathOptions:
-    """The ``[path]`` table (deg) for ``robot``; an absent table gives the defaults."""
+def path_options(
+    table: Any, robot: Robot, locked: Mapping[str, float] | None = None
+) -> PathOptions:
+    """The ``[path]`` table (deg) for ``robot``; an absent table gives the defaults.
+
+    ``locked``: the joints ``[robot] lock`` fixed (rad or m), named as such when listed.
+    """
     if not isinstance(table, Mapping):
         raise ScenarioError("[path] must be a table")
     check_keys(table, PATH_KEYS, "[path]")
@@ -227,6 +232,11 @@ def path_options(table: Any, robot: Robot) -> PathOptions:
             raise ScenarioError("[path] extra must be a table { joint = count, ... }")
         extra = {}
         for joint_name, count in table["extra"].items():
+            if joint_name in (locked or {}):
+                raise ScenarioError(
+                    f"[path] extra: joint {joint_name!r} is locked ([robot] lock): it has no "
+                    "path to shape; leave it out of extra"
+                )
             robot.joint(joint_name, "[path] extra")
             extra[joint_name] = scenario_errors(
                 check_extra, count, f"[path] extra for {joint_name!r}"

@@ -139,8 +139,8 @@ class Robot:
         missing = [j.name for j in self.joints if j.name not in values]
         if missing:
             raise ModelError(
-                f"{what or 'joint values'}: no value for joint(s) {', '.join(missing)}; every joint needs one "
-                f"(joints: {', '.join(self.joint_names)})"
+                f"{what or 'joint values'}: no value for joint(s) {', '.join(missing)}; every "
+                f"joint needs one (joints: {', '.join(self.joint_names)})"
             )
         return np.array([float(values[j.name]) for j in self.joints])
 
