@@ -287,6 +287,27 @@ def test_plot_and_show_refuse_a_tampered_plan_unless_told(original, tmp_path, ca
     assert code == 0 and page.is_file(), err
 
 
+def test_sensitivity_correct_and_replay_sweeps_refuse_a_tampered_plan(original, tmp_path, capsys):
+    """Each reads a plan file: each verifies it first, as show and plot do."""
+    path = _changed(original, tmp_path, _double_tau)
+    line = _refused(capsys, "sensitivity", path)
+    assert "plan field 'samples.tau' disagrees" in line
+    assert line.endswith("--no-verify assesses it anyway")
+    code, out, err, _ = _run(capsys, "sensitivity", path, "--no-verify")
+    assert code == 0 and "final attitude" in out, err
+    corrected = tmp_path / "c.json"
+    line = _refused(capsys, "correct", path, "--base-zyx-deg", "1", "0", "0", "-o", corrected)
+    assert line.endswith("--no-verify corrects it anyway") and not corrected.exists()
+    sweep = tmp_path / "replay.toml"
+    sweep.write_text(
+        f'plan = "{path.name}"\n[[axis]]\nkey = "robot.links.link1.mass"\nvalues = [1.0]\n'
+    )
+    rows = tmp_path / "rows.csv"
+    line = _refused(capsys, "sweep", sweep, "-o", rows)
+    assert f"plan {path.name}: plan field 'samples.tau' disagrees" in line
+    assert not rows.exists()
+
+
 def test_show_catches_a_urdf_changed_after_planning(original, tmp_path, capsys):
     urdf = tmp_path / "arm.urdf"
     shutil.copy(ROOT / "robots" / "planar_2dof.urdf", urdf)

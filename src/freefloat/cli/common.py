@@ -52,8 +52,12 @@ def load_scenario(path: str | None) -> Scenario:
         return Scenario.from_toml(path if path else default_scenario_path())
 
 
+#: What ``--no-verify`` does with a plan that fails verification, per command.
+_ANYWAY = {"sensitivity": "assesses", "correct": "corrects"}
+
+
 def checked_plan(args: argparse.Namespace, before: Callable[[Plan], None] | None = None) -> Plan:
-    """The plan file of ``show``, ``plot`` or ``export``, verified unless ``--no-verify``.
+    """The plan file a command reads (``show``, ``correct``...), verified unless ``--no-verify``.
 
     ``before``: called with the plan read, before it is verified (a check of the command's own
     options against it, so that a refusal costs no verification).
@@ -70,7 +74,8 @@ def checked_plan(args: argparse.Namespace, before: Callable[[Plan], None] | None
         before(loaded)
     if args.no_verify:
         return loaded
-    hint = f"freefloat verify {args.plan} shows the checks; --no-verify {args.command}s it anyway"
+    verb = _ANYWAY.get(args.command, f"{args.command}s")
+    hint = f"freefloat verify {args.plan} shows the checks; --no-verify {verb} it anyway"
     try:
         with stage("verify"):
             verification = verify_plan(loaded)
@@ -85,7 +90,7 @@ def checked_plan(args: argparse.Namespace, before: Callable[[Plan], None] | None
 
 
 def add_no_verify(parser: argparse.ArgumentParser, verb: str) -> None:
-    """--no-verify of show, plot and export."""
+    """--no-verify of the commands that read a plan file (show, plot, export...)."""
     parser.add_argument(
         "--no-verify",
         action="store_true",

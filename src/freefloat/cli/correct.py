@@ -10,7 +10,14 @@ from pathlib import Path
 from ..problem.limits import MAX_ANGLE_DEG, check_number
 from ..progress import stage
 from ..viz.summary import summary
-from .common import Commands, check_not_read, check_outputs, plan_reads
+from .common import (
+    Commands,
+    add_no_verify,
+    check_not_read,
+    check_outputs,
+    checked_plan,
+    plan_reads,
+)
 
 __all__ = ["add_parser", "check", "run"]
 
@@ -35,6 +42,7 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
         help="measured spacecraft attitude: yaw, pitch, roll [deg]",
     )
     p_correct.add_argument("-o", "--output", help="plan file to write (default PLAN.correct.json)")
+    add_no_verify(p_correct, "correct")
     p_correct.set_defaults(func=run, check=check)
     return p_correct
 
@@ -54,8 +62,9 @@ def run(args: argparse.Namespace) -> int:
     """Plan the correcting motion and write it."""
     from ..robust.plan_robustness import correct_plan
 
+    loaded = checked_plan(args)  # verified, as show, plot and export do, unless --no-verify
     with stage("plan correction"):
-        result, residual = correct_plan(args.plan, args.base_zyx_deg)
+        result, residual = correct_plan(loaded, args.base_zyx_deg)
     output = Path(args.output) if args.output else Path(args.plan).with_suffix(".correct.json")
     written = result.save(output)
     print(f"freefloat correct: turns the spacecraft back by {math.degrees(residual):.4g} deg")

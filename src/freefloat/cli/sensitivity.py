@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ..problem.limits import check_number
 from ..progress import stage
-from .common import Commands
+from .common import Commands, add_no_verify, checked_plan
 
 __all__ = ["add_parser", "check", "run"]
 
@@ -39,6 +39,7 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
             type=float,
             help=f"a captured payload's own, {unit} (default: as --{option})",
         )
+    add_no_verify(p_sens, "assess")
     p_sens.set_defaults(func=run, check=check)
     return p_sens
 
@@ -61,8 +62,9 @@ def run(args: argparse.Namespace) -> int:
     if any(getattr(args, f"payload_{key}") is not None for key in _SIZES):
         payload = Uncertainty(*_sizes(args, "payload_"))
     uncertainty = Uncertainty(*_sizes(args), payload=payload)
+    checked = checked_plan(args)  # verified, as show, plot and export do, unless --no-verify
     with stage("sensitivity"):
-        loaded, result = plan_sensitivity(args.plan, uncertainty)
+        loaded, result = plan_sensitivity(checked, uncertainty)
     print(f"freefloat sensitivity: {args.plan} ({Path(loaded.robot.urdf).name}), final attitude")
     print("\n".join(sensitivity_table(result)))
     return 0

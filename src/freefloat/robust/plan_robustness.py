@@ -67,14 +67,18 @@ def with_robustness(
     return replace(plan, robustness=record, format=FORMAT)
 
 
-def plan_sensitivity(path: str | Path, uncertainty: Uncertainty) -> tuple[Plan, AttitudeSpread]:
-    """The plan file at ``path`` and its first-order attitude error under ``uncertainty``.
+def plan_sensitivity(
+    path: str | Path | Plan, uncertainty: Uncertainty
+) -> tuple[Plan, AttitudeSpread]:
+    """The plan (or the plan file at ``path``) and its first-order attitude error.
+
+    ``uncertainty``: the sizes of the mass-property errors.
 
     Raises:
         InputError: ``uncertainty`` gives a payload sizes of its own and the plan's robot
             holds no captured payload (before any work).
     """
-    plan = load_plan_file(path)
+    plan = path if isinstance(path, Plan) else load_plan_file(path)
     robot = plan_robot(plan)
     if uncertainty.payload is not None and held_payload(robot) is None:  # before any work
         raise InputError(
@@ -84,17 +88,17 @@ def plan_sensitivity(path: str | Path, uncertainty: Uncertainty) -> tuple[Plan, 
     return plan, plan_spread(plan, robot, uncertainty)
 
 
-def correct_plan(path: str | Path, measured_zyx_deg: Sequence[float]) -> tuple[Plan, float]:
-    """The correcting plan for the plan file at ``path`` from a measured attitude.
+def correct_plan(path: str | Path | Plan, measured_zyx_deg: Sequence[float]) -> tuple[Plan, float]:
+    """The correcting plan for the plan (or plan file at ``path``) from a measured attitude.
 
     Args:
-        path: the plan that ran.
+        path: the plan that ran, or its file.
         measured_zyx_deg: the spacecraft's measured yaw, pitch, roll (deg).
 
     Returns:
         The correcting plan and the angle it turns the spacecraft back by (rad).
     """
-    plan = load_plan_file(path)
+    plan = path if isinstance(path, Plan) else load_plan_file(path)
     yaw, pitch, roll = (np.radians(float(a)) for a in measured_zyx_deg)
     measured = quat_from_zyx(yaw, pitch, roll)
     goal = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)

@@ -30,6 +30,8 @@ from ..errors import (
     FreeFloatError,
     InputError,
     InputLimitError,
+    PlanFileError,
+    PlanMismatchError,
     ScenarioError,
     UnknownNameError,
     excerpt,
@@ -182,11 +184,30 @@ def random_values(
 
 
 def plan_source(name: str, folder: Path) -> tuple[Path, dict[str, Any], str]:
-    """A plan file to replay (relative to the sweep file): its path, no tables, its URDF."""
+    """A plan file to replay (relative to the sweep file): its path, no tables, its URDF.
+
+    The plan is verified first, as ``show`` and ``correct`` verify theirs: a replay of a path
+    its own checks refuse would report on a motion no plan makes.
+
+    Raises:
+        PlanFileError: the file cannot be read, disagrees with its recomputation or fails a
+            check.
+    """
     from ..plans.robot_copy import plan_robot
+    from ..verify.checks import verify_plan
 
     path = (folder / name).expanduser().resolve()
-    return path, {}, robot_text(plan_robot(load_plan_file(path)))
+    plan = load_plan_file(path)
+    hint = f"freefloat verify {name} shows the checks"
+    try:
+        verification = verify_plan(plan)
+    except PlanMismatchError as exc:
+        raise PlanFileError(f"plan {name}: {exc}; {hint}") from None
+    if not verification.passed:
+        raise PlanFileError(
+            f"plan {name}: the plan fails verification ({', '.join(verification.failures)}); {hint}"
+        )
+    return path, {}, robot_text(plan_robot(plan))
 
 
 def scenario_urdf(base: Mapping[str, Any], path: Path) -> str:
