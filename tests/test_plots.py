@@ -230,6 +230,25 @@ def test_twelve_joints_have_twelve_distinct_styles(worked_plan):
     _close(ax.figure)
 
 
+def test_long_joint_names_are_cut_in_legends_and_leave_the_axes_their_room(worked_plan):
+    """Joints named with 20,000 characters squeezed the axes to nothing (matplotlib warned
+    that its layout collapsed); legends now show each name's two ends, 40 characters."""
+    import warnings
+    from dataclasses import replace
+
+    long = ["a" * 10_000 + "q1" + "b" * 10_000, "c" * 10_000 + "q2" + "d" * 10_000]
+    plan = replace(worked_plan, robot=replace(worked_plan.robot, joints=long))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the layout warning would fail the test
+        fig = figures(plan, ("joint_positions",))["joint_positions"]
+        fig.canvas.draw()
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "a" * 18 + "..." + "b" * 19 in labels and "c" * 18 + "..." + "d" * 19 in labels
+    width = fig.axes[0].get_position().width
+    assert width > 0.3, width  # the data keeps a third of the figure at least
+    _close(fig)
+
+
 def test_names_the_font_lacks_give_one_warning_line(tmp_path, capfd):
     """Joints named in Chinese: matplotlib warned once per missing glyph, with its source
     paths, on stderr; now one freefloat line, and the figures are written."""

@@ -5,10 +5,12 @@ from __future__ import annotations
 import datetime
 from typing import Any
 
-__all__ = ["EXCERPT_CHARS", "apart", "excerpt"]
+__all__ = ["EXCERPT_CHARS", "LABEL_CHARS", "apart", "excerpt", "shortened"]
 
 #: The most characters of a bad value an error message quotes (an excerpt beyond that).
 EXCERPT_CHARS = 60
+#: The most characters of a name a figure's legend or title shows (its middle cut beyond).
+LABEL_CHARS = 40
 
 
 def excerpt(value: Any, width: int = EXCERPT_CHARS) -> str:
@@ -70,3 +72,15 @@ def apart(value: float, *bounds: float) -> str:
         if all(f"{bound:.{digits}g}" != text for bound in bounds if bound != value):
             return text
     return repr(value)
+
+
+def shortened(text: str, width: int = LABEL_CHARS) -> str:
+    """``text`` itself, or its start and end around ``...`` in about ``width`` characters.
+
+    For names in figures (a joint named with 20,000 characters would squeeze a legend's axes
+    to nothing); both ends are kept, since names of one robot often share their start.
+    """
+    if len(text) <= width:
+        return text
+    head = (width - 3) // 2
+    return f"{text[:head]}...{text[len(text) - (width - 3 - head) :]}"

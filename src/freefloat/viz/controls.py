@@ -19,6 +19,7 @@ import math
 from pathlib import Path
 
 from ..errors import ModelError
+from ..excerpts import shortened
 from ..plans.format import Plan
 from ..robot.urdf_checks import urdf_document
 
@@ -60,8 +61,8 @@ def robot_label(plan: Plan) -> str:
         except ModelError:
             name = ""
         if name:
-            return name
-    return Path(plan.robot.urdf).stem
+            return shortened(name)
+    return shortened(Path(plan.robot.urdf).stem)
 
 
 def plan_title(plan: Plan) -> str:

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from ..excerpts import shortened
 from ..plans.format import Plan
 
 __all__ = ["LIMIT_SPANS", "draw_joints"]
@@ -100,7 +101,7 @@ def _draw_group(
     beyond = []
     for i in chosen:
         colour, style = styles[i]
-        ax.plot(t, values[:, i], color=colour, linestyle=style, label=names[i])
+        ax.plot(t, values[:, i], color=colour, linestyle=style, label=shortened(names[i]))
         if topic == "joint_positions" and i < len(plan.request.goal_joints):
             goal = plan.request.goal_joints[i] * scale[i]
             ax.plot([t[-1]], [goal], "o", mfc="none", color=colour, label="_goal")
@@ -115,5 +116,5 @@ def _draw_group(
         for mark in shown:
             ax.axhline(mark, color=colour, linestyle="--", linewidth=0.8, label="_limit")
         if len(shown) < len(marks):
-            beyond.append(names[i])
+            beyond.append(shortened(names[i]))
     return beyond

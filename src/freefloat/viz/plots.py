@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ViewerError
+from ..excerpts import LABEL_CHARS, shortened
 from ..files import atomic_write, check_output
 from ..plans.format import Plan
 from .clearance_curve import ClearanceCurve, clearance_curve
@@ -211,9 +212,8 @@ def _draw_clearance(clearance: ClearanceCurve, ax: Any) -> None:
     """The smallest clearance (m) against time, its closest instant and the margin."""
     value, when, pair = clearance.closest
     ax.plot(clearance.t, clearance.smallest, label="smallest clearance")
-    ax.plot(
-        [when], [value], "o", mfc="none", label=f"closest: {pair}\n{value:.4g} m at {when:.3g} s"
-    )
+    closest = f"closest: {shortened(pair, 2 * LABEL_CHARS)}\n{value:.4g} m at {when:.3g} s"
+    ax.plot([when], [value], "o", mfc="none", label=closest)
     ax.axhline(clearance.margin, color="C3", linestyle="--", linewidth=1, label="margin")
     ax.set_ylabel("clearance [m]")
 
