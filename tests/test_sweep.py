@@ -168,6 +168,11 @@ def test_cli_exit_codes_and_no_file_on_bad_input(tmp_path, capsys):
         "two.toml",
     )
     plots = tmp_path / "plots"
+    (plots / "sweep_heatmap.png").mkdir(parents=True)  # the figure's name taken by a folder
+    assert main(["sweep", str(two), "-o", str(out), "--workers", "1", "--plots", str(plots)]) == 2
+    assert "sweep_heatmap.png' is a directory" in capsys.readouterr().err
+    assert not out.exists()  # refused before any job ran
+    (plots / "sweep_heatmap.png").rmdir()
     assert main(["sweep", str(two), "-o", str(out), "--workers", "1", "--plots", str(plots)]) == 0
     printed = capsys.readouterr().out
     assert "4 jobs" in printed and "2 planned, 2 infeasible, 0 failed" in printed

@@ -54,14 +54,17 @@ def check(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the sweep file and print what its jobs became."""
+    from ..files import check_output
     from ..sweep import SweepRow, SweepSpec, connect, plot_sweep, sweep
-    from ..sweep.plots import check_plottable
+    from ..sweep.plots import check_plottable, plot_files
 
     spec = SweepSpec.from_toml(args.sweep)
     if args.plots:
         if spec.replay:
             raise InputError("--plots draws feasibility maps of plans; a replay sweep has none")
         check_plottable(spec)
+        for path in plot_files(spec, args.plots):  # before any job runs
+            check_output(path, "a figure")
     client = connect(args.scheduler) if args.scheduler is not None else None
     ran: list[object] = []
     try:

@@ -47,18 +47,23 @@ def plot_sweep(spec: SweepSpec, rows: Sequence[SweepRow], directory: str | Path)
     from ..viz.plots import _pyplot
 
     plt = _pyplot()
-    folder = Path(directory).expanduser().resolve()
-    folder.mkdir(parents=True, exist_ok=True)
+    files = plot_files(spec, directory)
+    files[0].parent.mkdir(parents=True, exist_ok=True)
     ordered = sorted(rows, key=lambda r: r.index)
-    if len(spec.axes) == 1:
-        fig = _line_map(plt, spec, ordered)
-        files = [folder / "sweep_map.png"]
-    else:
-        fig = _heat_map(plt, spec, ordered)
-        files = [folder / "sweep_heatmap.png"]
+    draw = _line_map if len(spec.axes) == 1 else _heat_map
+    fig = draw(plt, spec, ordered)
     fig.savefig(files[0], dpi=120)
     plt.close(fig)
     return files
+
+
+def plot_files(spec: SweepSpec, directory: str | Path) -> list[Path]:
+    """The files :func:`plot_sweep` writes into ``directory``.
+
+    The command checks each before any job runs (:func:`freefloat.files.check_output`).
+    """
+    folder = Path(directory).expanduser().resolve()
+    return [folder / ("sweep_map.png" if len(spec.axes) == 1 else "sweep_heatmap.png")]
 
 
 def _error(row: SweepRow) -> float:
