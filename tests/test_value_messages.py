@@ -98,3 +98,15 @@ def test_a_look_alike_name_shows_its_code_points(given, valid, said):
     message = str(ff.UnknownNameError("joint", given, valid))
     assert f"but its code points differ: {said})" in message
     assert "code points" not in str(ff.UnknownNameError("joint", "\u00e9\u00e9", ["ja", "jb"]))
+
+
+def test_a_long_path_is_quoted_with_both_its_ends():
+    from freefloat.excerpts import path_excerpt
+
+    path = "/tmp/" + "deep/" * 40 + "sweep_heatmap.png"
+    quoted = path_excerpt(path)
+    assert quoted.startswith("'/tmp/deep/") and quoted.endswith(
+        f"sweep_heatmap.png' ({len(path)} characters)"
+    )
+    assert len(quoted) < 150
+    assert path_excerpt("/tmp/a.json") == "'/tmp/a.json'"

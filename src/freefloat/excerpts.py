@@ -5,12 +5,23 @@ from __future__ import annotations
 import datetime
 from typing import Any
 
-__all__ = ["EXCERPT_CHARS", "LABEL_CHARS", "apart", "excerpt", "shortened"]
+__all__ = [
+    "EXCERPT_CHARS",
+    "LABEL_CHARS",
+    "PATH_CHARS",
+    "apart",
+    "excerpt",
+    "path_excerpt",
+    "shortened",
+]
 
 #: The most characters of a bad value an error message quotes (an excerpt beyond that).
 EXCERPT_CHARS = 60
 #: The most characters of a name a figure's legend or title shows (its middle cut beyond).
 LABEL_CHARS = 40
+#: The most characters of a path a message quotes (its middle cut beyond: both the folder it
+#: starts in and the file it ends with tell the reader which it is).
+PATH_CHARS = 120
 
 
 def excerpt(value: Any, width: int = EXCERPT_CHARS) -> str:
@@ -84,3 +95,11 @@ def shortened(text: str, width: int = LABEL_CHARS) -> str:
         return text
     head = (width - 3) // 2
     return f"{text[:head]}...{text[len(text) - (width - 3 - head) :]}"
+
+
+def path_excerpt(path: Any) -> str:
+    """A path quoted for a message: whole up to :data:`PATH_CHARS`, else both its ends."""
+    text = str(path)
+    if len(text) <= PATH_CHARS:
+        return repr(text)
+    return f"{shortened(text, PATH_CHARS)!r} ({len(text)} characters)"

@@ -27,7 +27,8 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from .errors import FileError, FreeFloatError, excerpt
+from .errors import FileError, FreeFloatError
+from .excerpts import path_excerpt
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -70,13 +71,13 @@ def absolute_path(path: str | Path, what: str, error: ErrorClass = FileError) ->
     """
     text = os.fspath(path)
     if "\x00" in text:
-        raise error(f"{what} path {excerpt(text)} contains a NUL byte; give a file name")
+        raise error(f"{what} path {path_excerpt(text)} contains a NUL byte; give a file name")
     try:
         return Path(text).expanduser().resolve()
     except RuntimeError:  # Python < 3.13 reports a loop this way
-        raise error(f"{what} path {excerpt(text)}: a symbolic-link loop") from None
+        raise error(f"{what} path {path_excerpt(text)}: a symbolic-link loop") from None
     except OSError as exc:
-        raise error(f"{what} path {excerpt(text)}: {_reason(exc)}") from None
+        raise error(f"{what} path {path_excerpt(text)}: {_reason(exc)}") from None
 
 
 def _kind(mode: int) -> str:
@@ -168,28 +169,28 @@ def check_output(path: str | Path, what: str = "output", folder: bool = False) -
     target = absolute_path(path, what)
     shown = os.fspath(path)
     if target.is_dir() and not folder:
-        raise FileError(f"{what} {excerpt(shown)} is a directory; give a file name", shown)
+        raise FileError(f"{what} {path_excerpt(shown)} is a directory; give a file name", shown)
     if not folder and shown.endswith((os.sep, "/")):  # a folder meant, even one not there yet
         raise FileError(
-            f"{what} {excerpt(shown)} names a folder; give a file name (in it, say)", shown
+            f"{what} {path_excerpt(shown)} names a folder; give a file name (in it, say)", shown
         )
     if not folder and target.exists() and not target.is_file():
         raise FileError(
-            f"{what} {excerpt(shown)} is {_kind(target.stat().st_mode)}; freefloat replaces "
+            f"{what} {path_excerpt(shown)} is {_kind(target.stat().st_mode)}; freefloat replaces "
             "regular files only: give a file name",
             shown,
         )
     if folder and target.exists() and not target.is_dir():
         mode = target.stat().st_mode
         kind = "a file" if stat.S_ISREG(mode) else _kind(mode)
-        raise FileError(f"{what} {excerpt(shown)} is {kind}; give a folder", shown)
+        raise FileError(f"{what} {path_excerpt(shown)} is {kind}; give a folder", shown)
     given = Path(shown).expanduser()
     dangling = next((p for p in given.parents if p.is_symlink() and not p.exists()), None)
     if given.is_symlink() and not target.parent.exists():
         dangling = given
     if dangling is not None:  # no folders made at a link's end
         raise FileError(
-            f"{what} {excerpt(shown)} goes through a symbolic link to nothing ({dangling}); "
+            f"{what} {path_excerpt(shown)} goes through a symbolic link to nothing ({dangling}); "
             "give a file name in a folder that exists",
             shown,
         )
@@ -198,11 +199,11 @@ def check_output(path: str | Path, what: str = "output", folder: bool = False) -
         ancestor = ancestor.parent
     if not ancestor.is_dir():
         raise FileError(
-            f"cannot write {what} {excerpt(shown)}: {ancestor} is a file, not a folder", shown
+            f"cannot write {what} {path_excerpt(shown)}: {ancestor} is a file, not a folder", shown
         )
     if not os.access(ancestor, os.W_OK | os.X_OK):
         raise FileError(
-            f"cannot write {what} {excerpt(shown)}: folder {ancestor} is not writable", shown
+            f"cannot write {what} {path_excerpt(shown)}: folder {ancestor} is not writable", shown
         )
     return target
 
