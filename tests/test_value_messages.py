@@ -110,3 +110,20 @@ def test_a_long_path_is_quoted_with_both_its_ends():
     )
     assert len(quoted) < 150
     assert path_excerpt("/tmp/a.json") == "'/tmp/a.json'"
+
+
+def test_a_scenario_through_a_pipe_without_a_name_is_named_a_pipe():
+    """``plan <(cat s.toml)`` said "file not found: /proc/PID/fd/pipe:[...]"."""
+    import os
+
+    read, write = os.pipe()
+    try:
+        with pytest.raises(ff.ScenarioError) as info:
+            ff.Scenario.from_toml(f"/proc/self/fd/{read}")
+    finally:
+        os.close(read)
+        os.close(write)
+    assert str(info.value) == (
+        f"scenario '/proc/self/fd/{read}' is a pipe or socket with no file name (as <(...) "
+        "gives), not a file; write it to a file first"
+    )

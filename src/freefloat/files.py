@@ -73,11 +73,17 @@ def absolute_path(path: str | Path, what: str, error: ErrorClass = FileError) ->
     if "\x00" in text:
         raise error(f"{what} path {path_excerpt(text)} contains a NUL byte; give a file name")
     try:
-        return Path(text).expanduser().resolve()
+        resolved = Path(text).expanduser().resolve()
     except RuntimeError:  # Python < 3.13 reports a loop this way
         raise error(f"{what} path {path_excerpt(text)}: a symbolic-link loop") from None
     except OSError as exc:
         raise error(f"{what} path {path_excerpt(text)}: {_reason(exc)}") from None
+    if not resolved.exists() and Path(text).expanduser().exists():  # /dev/fd/63 -> pipe:[..]
+        raise error(
+            f"{what} {path_excerpt(text)} is a pipe or socket with no file name (as <(...) "
+            "gives), not a file; write it to a file first"
+        )
+    return resolved
 
 
 def _kind(mode: int) -> str:
