@@ -175,6 +175,19 @@ def test_a_stated_flag_must_say_what_the_figures_say(original, tmp_path, capsys)
             "path.coefficients.q2: expected at most 25 entries",
         ),
         (
+            lambda d: d["safety"].__setitem__(
+                "obstacles", [{"name": "panel", "shape": "sphere", "size": [0.1]}] * 2
+            ),
+            "plan field 'safety.obstacles' must hold at most 64 keep-out objects with distinct "
+            "non-empty names, as a scenario's, got ['panel', 'panel']",
+        ),
+        (
+            lambda d: d["safety"].__setitem__(
+                "obstacles", [{"name": "", "shape": "sphere", "size": [0.1]}]
+            ),
+            "distinct non-empty names, as a scenario's, got ['']",
+        ),
+        (
             lambda d: d["solver"].__setitem__("solutions", []),
             "solver.solutions: expected at least 1 entry, got []",
         ),
@@ -191,6 +204,21 @@ def test_a_stated_flag_must_say_what_the_figures_say(original, tmp_path, capsys)
 def test_hostile_plans_are_refused_in_one_line(original, tmp_path, capsys, change, message):
     line = _refused(capsys, "verify", _changed(original, tmp_path, change))
     assert message in line, line
+
+
+def test_a_urdf_copy_longer_than_a_urdf_file_may_be_is_refused(
+    original, tmp_path, capsys, monkeypatch
+):
+    """As a URDF file beyond MAX_URDF_BYTES is (the limit lowered to the copy's length - 1)."""
+    from freefloat.plans import io
+
+    length = len(original["robot"]["urdf_text"])
+    monkeypatch.setattr(io, "MAX_URDF_BYTES", length - 1)
+    line = _refused(capsys, "verify", _changed(original, tmp_path, lambda d: None))
+    assert f"'robot.urdf_text' holds {length} characters, beyond the {length - 1} bytes" in line
+    monkeypatch.setattr(io, "MAX_URDF_BYTES", length)
+    code, _, err, _ = _run(capsys, "verify", _changed(original, tmp_path, lambda d: None))
+    assert code == 0, err
 
 
 def test_format_1_limits_are_checked_without_the_schema(original, tmp_path, capsys):

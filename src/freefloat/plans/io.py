@@ -17,8 +17,10 @@ from typing import Any
 
 from ..errors import PlanFileError, excerpt
 from ..files import other_kind_hint
+from ..problem.limits import MAX_OBSTACLES
 from ..problem.objectives.base import Level
 from ..robot.collision import Obstacle
+from ..robot.model import MAX_URDF_BYTES
 from .guarantees import (
     Check,
     ConstraintRecord,
@@ -96,7 +98,7 @@ def plan_fields(data: Any, where: str = "plan", folder: Path | None = None) -> d
                 goal_joints=list(data["request"]["goal_joints"]),
             ),
             "verification": verification,
-            "safety": _safety(data.get("safety"), folder),
+            "safety": _safety(data.get("safety"), folder, where),
             "objective": _objective(data.get("objective")),
             "format": read_as(fmt),
             "constraints": _constraints(data, fmt, where),
@@ -153,6 +155,11 @@ def _robot_ref(data: Mapping[str, Any], fmt: str, folder: Path | None) -> RobotR
         raise _CopyError(
             f"plan field 'robot.urdf_text' is missing or empty; {fmt} files carry their URDF"
         )
+    if len(ref.urdf_text) > MAX_URDF_BYTES:  # characters: at most as many as its bytes
+        raise _CopyError(
+            f"plan field 'robot.urdf_text' holds {len(ref.urdf_text)} characters, beyond the "
+            f"{MAX_URDF_BYTES} bytes a URDF file may have"
+        )
     if ref.end_effectors and ref.end_effectors[0] != ref.end_effector:
         raise _CopyError(
             f"plan field 'robot.end_effector' ({excerpt(ref.end_effector)}) is not the first of "
@@ -179,15 +186,26 @@ def _obstacle(data: Mapping[str, Any]) -> Obstacle:
     )
 
 
-def _safety(data: Any, folder: Path | None = None) -> SafetyReport:
-    """The ``safety`` section (absent in files written before it existed: not checked)."""
+def _safety(data: Any, folder: Path | None = None, where: str = "plan") -> SafetyReport:
+    """The ``safety`` section (absent in files written before it existed: not checked).
+
+    Its keep-out objects are held to a scenario's rules: at most
+    :data:`~freefloat.problem.limits.MAX_OBSTACLES`, each named, no name twice.
+    """
     if data is None:
         return SafetyReport()
+    obstacles = [_obstacle(o) for o in data.get("obstacles", [])]
+    names = [o.name for o in obstacles]
+    if len(obstacles) > MAX_OBSTACLES or "" in names or len(set(names)) != len(names):
+        raise PlanFileError(
+            f"{where}: plan field 'safety.obstacles' must hold at most {MAX_OBSTACLES} keep-out "
+            f"objects with distinct non-empty names, as a scenario's, got {excerpt(names)}"
+        )
     return SafetyReport(
         checked=bool(data["checked"]),
         margin_m=float(data["margin_m"]),
         srdf=None if data.get("srdf") is None else _beside(str(data["srdf"]), folder),
-        obstacles=[_obstacle(o) for o in data.get("obstacles", [])],
+        obstacles=obstacles,
         note=str(data.get("note", "")),
     )
 
