@@ -198,3 +198,30 @@ def test_a_stop_short_of_the_goal_never_prints_as_the_whole_way(fraction, printe
     assert result(fraction).fraction_text == printed
     just_short = np.nextafter(1.0, 0.0)
     assert float(result(just_short).fraction_text) == just_short
+
+
+def test_a_start_no_path_can_bring_within_a_constraint_stops_at_once_saying_so(tmp_path):
+    """A cone about the direction opposite to the end effector's axis at the start holds no
+    path of the family: every path shares the start. Continuation stops there, naming the
+    constraint, without a step."""
+    import pinocchio as pin
+
+    from freefloat.problem.constraints.end_effector_cone import EndEffectorCone
+    from freefloat.solvers.continuation import NO_START, track
+    from freefloat.solvers.options import SolveOptions
+
+    import urdfs
+
+    path = tmp_path / "arm.urdf"
+    path.write_text(urdfs.spatial_arm())
+    robot = ff.load_robot(path)
+    start, goal = np.array([0.2, -0.3, 0.4]), np.array([0.9, 0.5, -0.2])
+    problem = ff.build_problem(robot, start, goal, att.IDENTITY, att.IDENTITY, 8.0)
+    data = robot.model.createData()  # the start's end-effector axis, by Pinocchio alone
+    pin.framesForwardKinematics(robot.model, data, robot.configuration(start))
+    tip = data.oMf[robot.model.getFrameId(robot.end_effector)].rotation[:, 0]
+    away = -(data.oMi[1].rotation.T @ tip)  # in the base frame: 180 deg from the axis
+    cone = EndEffectorCone([1.0, 0.0, 0.0], away, math.radians(10.0))
+    result = track(problem, [cone], SolveOptions())
+    assert result.stopped_by == NO_START and result.blocked_by == "end_effector_cone"
+    assert result.steps == 0 and result.fraction == 0.0
