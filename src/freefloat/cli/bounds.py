@@ -121,7 +121,8 @@ def spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
     from ..problem.constraints import Clearance, scenario_constraints
     from ..progress import LOGGER, counted
     from ..reachable import inner_family
-    from ..solvers.reach import default_directions, describe, reach_set
+    from ..solvers.reach import default_directions, reach_set
+    from ..viz.reach_text import estimate_lines
 
     scenario = scenario.resolved()
     scenario.write_robot()  # an inline servicer: its URDF and SRDF (clearance reads it)
@@ -146,7 +147,9 @@ def spatial_bounds(scenario: Scenario, args: argparse.Namespace) -> int:
         )
     print(f"freefloat bounds: {scenario.robot.name} (spatial) -- INNER ESTIMATE")
     names = [c.name for c in constraints if not c.lazy]
-    lines = describe(estimate, scenario.robot.joint_names, angle, problem.goal_quaternion, names)
+    lines = estimate_lines(
+        estimate, scenario.robot.joint_names, angle, problem.goal_quaternion, names
+    )
     for line in lines:
         print(f"  {line}")
     if args.plot:

@@ -20,16 +20,22 @@ from functools import partial
 import numpy as np
 
 from ..parallel import run_tasks
-from ..physics.attitude import quat_exp, quat_multiply, relative_rotvec
+from ..physics.attitude import quat_exp, quat_multiply
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
 from .continuation import ContinuationResult, held_fraction, track
-from .drift_start import RESTORED_SHORT, confirmed_from, drift_start, rounded_down
+from .drift_start import (
+    RESTORED_SHORT,
+    DriftStart,
+    confirmed_from,
+    drift_start,
+    rounded_down,
+)
 from .options import SolveOptions
 from .restore import broken_constraint, broken_rows_first
 from .tracked import BranchPoint
 
-__all__ = ["DirectionReach", "ReachEstimate", "default_directions", "describe", "reach_set"]
+__all__ = ["DirectionReach", "ReachEstimate", "default_directions", "reach_set"]
 
 
 @dataclass(frozen=True)
@@ -245,6 +251,64 @@ class _Spent:
     map_evaluations: int
 
 
+@dataclass(frozen=True)
+class _Shared:
+    """What every direction of :func:`reach_set` reads.
+
+    The problem, the quintic path's attitude (``[x, y, z, w]``), the drift start, the
+    constraints by kind and the settings.
+    """
+
+    problem: Problem
+    quintic: np.ndarray
+    start: DriftStart
+    tracked: tuple[Constraint, ...]
+    eager: tuple[Constraint, ...]
+    lazy: tuple[Constraint, ...]
+    options: SolveOptions
+    confirm: bool
+    step: float
+
+
+def _one_direction(shared: _Shared, axis: np.ndarray, angle: float) -> _Spent:
+    """One direction of :func:`reach_set`: about ``axis`` (base frame), up to ``angle`` (rad)."""
+    problem, start, eager = shared.problem, shared.start, list(shared.eager)
+    axis = axis / np.linalg.norm(axis)
+    angle = float(angle)
+    before, maps = problem.evaluations, problem.map_evaluations
+    # no path within the constraints at the drift attitude: none to report
+    reached, stopped_by, beta = 0.0, start.why_not, start.beta
+    origin = start.beta
+    if angle > 0.0 and origin is not None:
+        reached, stopped_by, beta = _direction(
+            problem,
+            shared.quintic,
+            axis,
+            angle,
+            list(shared.tracked),
+            eager,
+            shared.options,
+            shared.confirm,
+            shared.step,
+            origin,
+        )
+        if shared.confirm and start.restored is not None and reached > 0.0:
+            target = partial(_target, problem, shared.quintic, axis)
+            found = confirmed_from(
+                start.restored, target, reached, eager, shared.options, shared.step
+            )
+            if found.halved:
+                said = "this turn" if found.turn > 0.0 else "no turn about this axis"
+                stopped_by = RESTORED_SHORT.format(said)
+            # turn 0: the drift attitude, which the path every direction starts on reaches
+            reached, beta = found.turn, found.beta if found.turn > 0.0 else origin
+    lazy = list(shared.lazy)
+    breaks = broken_constraint(problem, lazy, beta) if lazy and beta is not None else ""
+    evaluations = problem.evaluations - before
+    direction = DirectionReach(axis, reached, angle, stopped_by, evaluations, beta, breaks)
+    return _Spent(direction, problem.map_evaluations - maps)
+
+
 def reach_set(
     problem: Problem,
     directions: np.ndarray | None = None,
@@ -308,32 +372,20 @@ def reach_set(
     directions = default_directions() if directions is None else np.atleast_2d(directions)
     angles = np.broadcast_to(np.asarray(max_angle, dtype=float), (len(directions),))
     quintic = problem.achieved(np.zeros(problem.n_free))
-    start = drift_start(problem, eager, options)  # shared by every direction
+    shared = _Shared(
+        problem,
+        quintic,
+        drift_start(problem, eager, options),  # shared by every direction
+        tuple(tracked),
+        tuple(eager),
+        tuple(lazy),
+        options,
+        confirm,
+        step,
+    )
 
     def one(index: int) -> _Spent:
-        axis = np.asarray(directions[index], dtype=float)
-        axis = axis / np.linalg.norm(axis)
-        angle = float(angles[index])
-        before, maps = problem.evaluations, problem.map_evaluations
-        # no path within the constraints at the drift attitude: none to report
-        reached, stopped_by, beta = 0.0, start.why_not, start.beta
-        origin = start.beta
-        if angle > 0.0 and origin is not None:
-            reached, stopped_by, beta = _direction(
-                problem, quintic, axis, angle, tracked, eager, options, confirm, step, origin
-            )
-            if confirm and start.restored is not None and reached > 0.0:
-                target = partial(_target, problem, quintic, axis)
-                found = confirmed_from(start.restored, target, reached, eager, options, step)
-                if found.halved:
-                    said = "this turn" if found.turn > 0.0 else "no turn about this axis"
-                    stopped_by = RESTORED_SHORT.format(said)
-                # turn 0: the drift attitude, which the path every direction starts on reaches
-                reached, beta = found.turn, found.beta if found.turn > 0.0 else origin
-        breaks = broken_constraint(problem, lazy, beta) if lazy and beta is not None else ""
-        evaluations = problem.evaluations - before
-        direction = DirectionReach(axis, reached, angle, stopped_by, evaluations, beta, breaks)
-        return _Spent(direction, problem.map_evaluations - maps)
+        return _one_direction(shared, np.asarray(directions[index], dtype=float), angles[index])
 
     finished = [0]
 
@@ -349,37 +401,3 @@ def reach_set(
         problem.counter.map_evaluations = here_maps + sum(f.map_evaluations for f in found)
     freedom = tuple(d - 5 for d in problem.family.degrees)
     return ReachEstimate(quintic, tuple(f.reach for f in found), freedom)
-
-
-def describe(
-    estimate: ReachEstimate,
-    joint_names: Sequence[str],
-    max_angle: float,
-    goal: np.ndarray | None = None,
-    within: Sequence[str] = ("joint_position_limits",),
-) -> list[str]:
-    """The estimate as lines for people (degrees), saying plainly that it is an inner one.
-
-    With ``goal`` (``[x, y, z, w]``), a last line gives the rotation it asks for from the
-    quintic path's attitude. ``within``: the names of the constraints the paths keep.
-    """
-    freedom = ", ".join(f"{n}+{k}" for n, k in zip(joint_names, estimate.freedom, strict=True) if k)
-    lines = [
-        "from the attitude the quintic path reaches, continuation heads up to",
-        f"{math.degrees(max_angle):g} deg about each direction within {', '.join(within)}, "
-        "with the freedom",
-        f"{freedom}; every rotation up to 'reached' is planned by a solved path.",
-        "More freedom, or paths continuation does not find, may reach further.",
-        f"{'axis (base frame)':<24}{'reached [deg]':>14}  stopped by",
-    ]
-    for d in estimate.directions:
-        axis = " ".join(f"{x:+.2f}" for x in d.axis)
-        lines.append(f"{axis:<24}{math.degrees(d.reached):>14.2f}  {d.stopped_by or '-'}")
-    if goal is not None:
-        wanted = relative_rotvec(estimate.quintic_quaternion, goal)
-        angle = float(np.linalg.norm(wanted))
-        axis = " ".join(f"{x:+.2f}" for x in wanted / max(angle, 1e-300))
-        lines.append(
-            f"requested: {math.degrees(angle):.2f} deg about {axis} from the quintic attitude"
-        )
-    return lines

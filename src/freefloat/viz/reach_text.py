@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
-from ..physics.attitude import geodesic_angle
+from ..physics.attitude import geodesic_angle, relative_rotvec
 from ..reachable import SMALL_REACH_DEG, ReachReport
 from ..robot.model import Robot
+from ..solvers.reach import ReachEstimate
 
-__all__ = ["goal_joint_lines", "reach_lines", "verdict"]
+__all__ = ["estimate_lines", "goal_joint_lines", "reach_lines", "verdict"]
 
 
 def _vector(values: np.ndarray, digits: int = 4) -> str:
@@ -143,4 +145,38 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
     said = verdict(report)
     if said:
         lines.append(f"verdict: {said}")
+    return lines
+
+
+def estimate_lines(
+    estimate: ReachEstimate,
+    joint_names: Sequence[str],
+    max_angle: float,
+    goal: np.ndarray | None = None,
+    within: Sequence[str] = ("joint_position_limits",),
+) -> list[str]:
+    """The estimate as lines for people (degrees), saying plainly that it is an inner one.
+
+    With ``goal`` (``[x, y, z, w]``), a last line gives the rotation it asks for from the
+    quintic path's attitude. ``within``: the names of the constraints the paths keep.
+    """
+    freedom = ", ".join(f"{n}+{k}" for n, k in zip(joint_names, estimate.freedom, strict=True) if k)
+    lines = [
+        "from the attitude the quintic path reaches, continuation heads up to",
+        f"{math.degrees(max_angle):g} deg about each direction within {', '.join(within)}, "
+        "with the freedom",
+        f"{freedom}; every rotation up to 'reached' is planned by a solved path.",
+        "More freedom, or paths continuation does not find, may reach further.",
+        f"{'axis (base frame)':<24}{'reached [deg]':>14}  stopped by",
+    ]
+    for d in estimate.directions:
+        axis = " ".join(f"{x:+.2f}" for x in d.axis)
+        lines.append(f"{axis:<24}{math.degrees(d.reached):>14.2f}  {d.stopped_by or '-'}")
+    if goal is not None:
+        wanted = relative_rotvec(estimate.quintic_quaternion, goal)
+        angle = float(np.linalg.norm(wanted))
+        axis = " ".join(f"{x:+.2f}" for x in wanted / max(angle, 1e-300))
+        lines.append(
+            f"requested: {math.degrees(angle):.2f} deg about {axis} from the quintic attitude"
+        )
     return lines
