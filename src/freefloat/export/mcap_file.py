@@ -1,17 +1,15 @@
 """MCAP export (opens in Foxglove): ROS 2 messages, CDR-encoded, with their definitions.
 
-Written with ``mcap`` and ``mcap-ros2-support``; message classes and definitions come from
-``rosbags`` (see :mod:`freefloat.export.messages` for topics and frames). Log and publish
-times are nanoseconds from the plan's start.
+Written with ``mcap``'s writer (profile ``ros2``, zstd chunks, as ``mcap-ros2-support``
+writes them); the message classes, their CDR bytes and their definitions come from
+``rosbags`` (see :mod:`freefloat.export.messages` for topics and frames), the same bytes a
+ROS 2 bag holds. Log and publish times are nanoseconds from the plan's start.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from ..errors import ViewerError
 from ..files import atomic_write
@@ -37,45 +35,44 @@ def write_mcap(traj: Trajectory, path: str | Path, urdf: str, urdf_text: str = "
     """Write the trajectory as an MCAP file atomically; return the absolute path.
 
     Raises:
-        ViewerError: mcap or mcap-ros2-support is missing.
+        ViewerError: mcap is missing.
     """
     try:
-        from mcap_ros2.writer import Writer
+        from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, Writer
     except ImportError as exc:
         raise ViewerError(
-            f"MCAP export needs mcap-ros2-support ({exc}); install it with: "
-            "pip install mcap mcap-ros2-support"
+            f"MCAP export needs mcap ({exc}); install it with: pip install mcap"
         ) from None
     ts = typestore()
     child = root_link(urdf, urdf_text)
 
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as handle:
-            writer = Writer(handle)
+            writer = Writer(handle, compression=CompressionType.ZSTD)
+            writer.start(profile="ros2", library=f"{LIBRARY_IDENTIFIER} freefloat")
             writer.add_metadata(END_EFFECTOR_RECORD, {"topics": end_effector_topics(traj)})
-            schemas: dict[str, Any] = {}
+            channels: dict[str, int] = {}
+            schemas: dict[str, int] = {}
             for msg in messages(traj, child):
-                if msg.msgtype not in schemas:
-                    text, _ = ts.generate_msgdef(msg.msgtype, ros_version=2)
-                    schemas[msg.msgtype] = writer.register_msgdef(msg.msgtype, text)
-                writer.write_message(
-                    msg.topic,
-                    schemas[msg.msgtype],
-                    _plain(msg.message),
+                channel = channels.get(msg.topic)
+                if channel is None:
+                    channel = channels[msg.topic] = _channel(
+                        writer, ts, msg.topic, msg.msgtype, schemas
+                    )
+                writer.add_message(
+                    channel_id=channel,
                     log_time=msg.time_ns,
                     publish_time=msg.time_ns,
+                    data=bytes(ts.serialize_cdr(msg.message, msg.msgtype)),
                 )
             writer.finish()
 
     return atomic_write(path, write, suffix=".mcap")
 
 
-def _plain(value: Any) -> Any:
-    """A rosbags message as the dicts and lists mcap-ros2-support encodes (arrays as lists)."""
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
-    return value
+def _channel(writer: Any, ts: Any, topic: str, msgtype: str, schemas: dict[str, int]) -> int:
+    """Register ``topic`` (and its type's definition, once per type); its channel id."""
+    if msgtype not in schemas:
+        text, _ = ts.generate_msgdef(msgtype, ros_version=2)
+        schemas[msgtype] = writer.register_schema(msgtype, "ros2msg", text.encode())
+    return int(writer.register_channel(topic, "cdr", schemas[msgtype]))

@@ -8,8 +8,14 @@ recomputed consistently from the plan's polynomials and its robot (nothing is in
 - base attitude: the base angular velocity ``F1(q) qdot`` (Pinocchio's centroidal map)
   integrated from the plan's start attitude by sixth-order Magnus steps of at most
   ``T / 2000``, as the planner does;
-- base position and end-effector position: kinematics with the system CM at the origin;
-- joint torques: inverse dynamics of the zero-momentum motion (Pinocchio's RNEA).
+- base position and end-effector position: kinematics with the system CM at the origin
+  (Pinocchio's centre of mass and frame placements);
+- joint torques: inverse dynamics of the zero-momentum motion (Pinocchio's RNEA with the
+  base acceleration solved from the centroidal map, as verification computes them; the
+  plan's samples come from the centroidal map's time variation instead).
+
+Both are computed :data:`_CHUNK` instants at a time, so a long export holds a few
+megabytes of maps, not gigabytes.
 
 At the plan's own sample instants the resampled values equal the plan's samples to the
 planner's integration accuracy (tested).
@@ -22,6 +28,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from ..errors import InputError
 from ..plans.format import Plan
@@ -128,7 +135,8 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
             ``times`` are not ascending instants within the motion.
         ModelError: the plan's URDF cannot be loaded.
     """
-    from ..physics.dynamics import inverse_dynamics
+    from ..physics.attitude import quat_rotate
+    from ..physics.joint_torques import joint_torques_batch
     from ..physics.momentum import MomentumMap
     from ..plans.robot_copy import plan_robot
 
@@ -150,11 +158,13 @@ def resample(plan: Plan, rate: float, times: np.ndarray | None = None) -> Trajec
     quats = _attitudes(plan, path, mmap, t)
     base, tau = np.empty((len(t), 3)), np.empty_like(q)
     ee = np.empty((len(frames), len(t), 3))
-    for k, (qk, qdk, qddk, quat) in enumerate(zip(q, qd, qdd, quats, strict=True)):
-        base[k] = mmap.base_position(qk, quat)
-        for e, f in enumerate(frames):
-            ee[e, k] = mmap.end_effector_pose(qk, quat, f).translation
-        tau[k] = inverse_dynamics(mmap, qk, qdk, qddk).tau
+    for lo in range(0, len(t), _CHUNK):  # the centroidal maps of a chunk at once
+        part = slice(lo, lo + _CHUNK)
+        tau[part] = joint_torques_batch(mmap, q[part], qd[part], qdd[part])
+        com, points = _centre_and_frames(mmap, q[part], frames)
+        base[part] = quat_rotate(quats[part], -com)
+        for e, point in enumerate(points):
+            ee[e, part] = quat_rotate(quats[part], point - com)
     return Trajectory(
         joints=list(plan.robot.joints),
         kinds=_kinds(plan),
@@ -201,6 +211,26 @@ def _attitudes(plan: Plan, path: Any, mmap: Any, t: np.ndarray) -> np.ndarray:
         omega = mmap.base_rates(at_nodes.q, at_nodes.qd).omega.reshape(-1, 3, 3)
         attitudes[lo : lo + len(piece)] = propagate(attitudes[lo], magnus_increments(omega, h))
     return attitudes[np.clip(np.searchsorted(fine, t), 0, len(fine) - 1)]
+
+
+def _centre_and_frames(
+    mmap: Any, joints: np.ndarray, frames: list[str]
+) -> tuple[np.ndarray, list[np.ndarray]]:
+    """(K, 3) system CM and (K, 3) per frame, base at the origin with identity attitude (m).
+
+    By Pinocchio's own centre of mass and frame placements, one instant at a time (the
+    plan's samples get theirs from the centroidal maps instead).
+    """
+    model, data = mmap.model, mmap.data
+    ids = [model.getFrameId(f) for f in frames]
+    configs = mmap.configurations(joints)
+    com = np.empty((len(configs), 3))
+    points = [np.empty((len(configs), 3)) for _ in frames]
+    for k, config in enumerate(configs):
+        com[k] = pin.centerOfMass(model, data, config)  # places the joints too
+        for point, frame in zip(points, ids, strict=True):
+            point[k] = pin.updateFramePlacement(model, data, frame).translation
+    return com, points
 
 
 def trajectory(plan: Plan, rate: float | None = None) -> Trajectory:
