@@ -83,7 +83,10 @@ def _broken(worked_plan, tmp_path, change):
         (lambda d: d["base"].pop("attitude_error_rad"), "base.attitude_error_rad: missing"),
         (lambda d: d.__setitem__("duration", -1.0), "duration: "),
         (lambda d: d["robot"].__setitem__("joints", "q1"), "robot.joints: expected a list"),
-        (lambda d: d["samples"]["base_position"][0].pop(), "samples.base_position[0]: expected 3"),
+        (
+            lambda d: d["samples"]["base_position"][0].pop(),
+            "samples.base_position[0]: expected at least 3 entries",
+        ),
         (lambda d: d["robot"].__setitem__("colour", "red"), "robot: unknown key 'colour'"),
     ],
 )
