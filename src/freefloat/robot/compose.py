@@ -31,6 +31,7 @@ from ..errors import InputError, ModelError
 from ..files import atomic_write_text
 from .arm_tips import arm_tips, every_tip
 from .arms import ARMS, BASE_LINK, ArmSpec, arm_part, arm_urdf
+from .designed_bodies import LOCKED_ATTRIBUTE
 from .model import example_robot_data_dir
 from .payload import Payload
 from .srdf import ARM_SRDFS, arm_srdf, merged_srdf
@@ -275,7 +276,11 @@ def compose(spec: ServicerSpec, offer_ties: bool = True) -> Composed:
 
     from lxml import etree  # yourdfpy's own XML library
 
-    body = etree.tostring(urdf.write_xml(), pretty_print=True, encoding="unicode")
+    tree = urdf.write_xml()
+    for element in tree.iter("joint"):  # the arm as designed: its locked joints marked
+        if element.get("name") in locked:
+            element.set(LOCKED_ATTRIBUTE, repr(float(locked[element.get("name")])))
+    body = etree.tostring(tree, pretty_print=True, encoding="unicode")
     text = "<?xml version='1.0' encoding='UTF-8'?>\n" + body
     try:  # a closed loop, say, before Pinocchio builds the model below (it would crash)
         check_urdf_xml(text)

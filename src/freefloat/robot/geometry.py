@@ -35,6 +35,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelError
+from .designed_bodies import DesignedBodies, designed_bodies
 from .file_stamp import FileStamp, file_stamp
 from .meshes import MeshKey, mesh_key
 from .model import Robot
@@ -276,15 +277,18 @@ def checked_pairs(
     stamp = _srdf_stamp(srdf)
     path = None if stamp is None else Path(stamp[0])
     objects = list(geometry.geometryObjects)
+    designed = designed_bodies(robot.urdf_text) if robot.urdf_text else None
+    links = [model.frames[o.parentFrame].name for o in objects]
     key = (
-        tuple((o.name, int(o.parentJoint), model.frames[o.parentFrame].name) for o in objects),
+        tuple((o.name, int(o.parentJoint), link) for o, link in zip(objects, links, strict=True)),
         tuple(int(j) for j in model.parents),
         tuple(model.names),  # the payload's fingers are known by their joints' names
         stamp,
+        None if designed is None else tuple(_designed_key(designed, link) for link in links),
     )
     pairs = _PAIRS.get(key)
     if pairs is None:
-        pairs = _PAIRS[key] = _pairs_of(model, geometry, path)
+        pairs = _PAIRS[key] = _pairs_of(model, geometry, path, designed)
         if len(_PAIRS) > 32:
             _PAIRS.pop(next(iter(_PAIRS)))
     else:
@@ -294,12 +298,26 @@ def checked_pairs(
     return list(pairs)
 
 
+def _designed_key(designed: DesignedBodies, link: str) -> tuple[str, str | None]:
+    """A link's designed body and that body's parent (what the pairs depend on)."""
+    body = designed.body(link)
+    return body, designed.parent(body)
+
+
 def _pairs_of(
-    model: pin.Model, geometry: pin.GeometryModel, srdf: Path | None
+    model: pin.Model,
+    geometry: pin.GeometryModel,
+    srdf: Path | None,
+    designed: DesignedBodies | None = None,
 ) -> list[tuple[int, int]]:
-    """:func:`checked_pairs` worked out: every pair the rules keep, less the SRDF's."""
+    """:func:`checked_pairs` worked out: every pair the rules keep, less the SRDF's.
+
+    Parent and child are judged on the arm as designed (``designed``: a locked joint still
+    separates its bodies, :mod:`.designed_bodies`), or without it on Pinocchio's bodies.
+    """
     parent = [int(j) for j in model.parents]
     objects = list(geometry.geometryObjects)
+    links = [model.frames[obj.parentFrame].name for obj in objects]
     joints = [int(obj.parentJoint) for obj in objects]
     obstacle = [obj.name.startswith(OBSTACLE_PREFIX) for obj in objects]
     # a captured payload is carried by its end effector's body but is no part of it: it
@@ -314,7 +332,11 @@ def _pairs_of(
             if obstacle[a] or obstacle[b]:  # a keep-out object touches nothing by design
                 geometry.addCollisionPair(pin.CollisionPair(a, b))
                 continue
-            if not (payload[a] or payload[b]) and (parent[ja] == jb or parent[jb] == ja):
+            if designed is not None:
+                touching = designed.adjacent(links[a], links[b])
+            else:
+                touching = parent[ja] == jb or parent[jb] == ja
+            if not (payload[a] or payload[b]) and touching:
                 continue  # parent and child touch by design (a payload is neither)
             if (payload[a] and _finger_of(model, ja, jb)) or (
                 payload[b] and _finger_of(model, jb, ja)

@@ -19,6 +19,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import LockedJointError, ModelError, UnknownNameError
+from .designed_bodies import LOCKED_ATTRIBUTE
 
 __all__ = ["default_lock", "finger_lock_value", "lock_joints", "locked_origin", "movable_joints"]
 
@@ -158,3 +159,4 @@ def _fix(joint: ET.Element, name: str, value: float) -> None:
     origin_element.set("xyz", " ".join(repr(float(x)) for x in new[:3, 3]))
     origin_element.set("rpy", " ".join(repr(float(x)) for x in pin.rpy.matrixToRpy(new[:3, :3])))
     joint.set("type", "fixed")
+    joint.set(LOCKED_ATTRIBUTE, repr(float(value)))  # the arm as designed (.designed_bodies)
