@@ -287,6 +287,35 @@ def test_cone_and_toy_plugins_round_trip_through_plan_file_and_verify(
     assert f"by {math.radians(20):.3g} rad" in err
 
 
+def test_a_start_or_goal_outside_the_cone_is_refused_before_any_search(tmp_path, capsys):
+    """Closed form: the worked example's tool points at q1 + q2 in the base plane, 110 deg at
+    the start and 30 deg at the goal, each 40 deg from the cone's direction (70 deg). With a
+    35 deg half-angle no path can start or end inside: refused at once, as a joint limit is,
+    with no freedom or full-turn advice; ``check`` names it at either end."""
+    angle = abs(math.degrees(math.radians(80 + 30) - math.radians(70)))
+    assert angle == pytest.approx(40.0)
+    scenario = _scenario(tmp_path, CONE.replace("half_angle_deg = 60.0", "half_angle_deg = 35.0"))
+    with pytest.raises(ff.EndpointError) as info:
+        ff.plan(ff.Scenario.from_toml(scenario))
+    assert (info.value.where, info.value.constraint) == ("start", "end_effector_cone")
+    assert info.value.excess == pytest.approx(
+        math.cos(math.radians(35)) - math.cos(math.radians(angle)), abs=1e-12
+    )
+    assert str(info.value) == (
+        f"start configuration breaks end_effector_cone (axis {angle:.4g} deg from the direction "
+        "(half-angle 35 deg)), where every path starts; move the start joints or loosen "
+        "[constraints.end_effector_cone]"
+    )
+    for where in ("start", "goal"):
+        assert main(["check", str(scenario), "--at", where]) == 1
+        out = capsys.readouterr().out
+        assert f"end_effector_cone: axis {angle:.4g} deg from the direction" in out
+        assert "BROKEN" in out and "configuration: NOT OK" in out
+    wide = _scenario(tmp_path, CONE.replace("half_angle_deg = 60.0", "half_angle_deg = 45.0"))
+    assert main(["check", str(wide), "--at", "goal"]) == 0
+    assert "half-angle 45 deg): holds" in capsys.readouterr().out
+
+
 def test_a_plan_naming_an_unregistered_plugin_is_refused_in_one_line(tmp_path, capsys, worked_plan):
     data = json.loads(worked_plan.to_json())
     data["constraints"].append({"name": "toy_ceiling", "parameters": {}})

@@ -1,9 +1,10 @@
-"""One configuration of a scenario's robot checked: joint limits, closest pairs, clearance.
+"""One configuration of a scenario's robot checked: joint limits, clearance, constraints.
 
 :func:`check_configuration` is what ``freefloat check`` prints: per joint its value and room to
 either URDF limit, and, when the scenario checks clearance, the closest body pairs of the
 collision model (signed distances, m: negative when they overlap) and whether the smallest one
-keeps the scenario's margin. Nothing is planned and nothing is written (except an inline
+keeps the scenario's margin; and each scenario constraint the configuration alone decides (an
+end-effector cone). Nothing is planned and nothing is written (except an inline
 servicer's URDF into its cache).
 """
 
@@ -21,7 +22,13 @@ from .problem.limits import MAX_ANGLE_DEG, MAX_LENGTH_M, check_number
 from .problem.radians_hint import warn_if_radians
 from .problem.scenario import Scenario
 
-__all__ = ["ConfigurationReport", "JointRoom", "check_configuration", "parse_joints"]
+__all__ = [
+    "ConfigurationReport",
+    "JointRoom",
+    "PoseConstraint",
+    "check_configuration",
+    "parse_joints",
+]
 
 #: A plain decimal number in ASCII (no underscores, no other scripts' digits).
 _NUMBER = re.compile(
@@ -57,6 +64,23 @@ class JointRoom:
 
 
 @dataclass(frozen=True)
+class PoseConstraint:
+    """A scenario constraint the configuration alone decides, at the configuration.
+
+    Attributes:
+        name: the constraint (its table ``[constraints.<name>]``).
+        excess: how far beyond it (its unit; <= its tolerance when it holds).
+        detail: its own account (an angle).
+        holds: whether the excess is within its tolerance.
+    """
+
+    name: str
+    excess: float
+    detail: str
+    holds: bool
+
+
+@dataclass(frozen=True)
 class ConfigurationReport:
     """A configuration's limits and clearance.
 
@@ -65,11 +89,19 @@ class ConfigurationReport:
         pairs: the closest checked pairs, ``(name "a / b", signed distance m)``, nearest first;
             empty when the scenario checks no clearance.
         margin: the clearance margin (m), or None when clearance is not checked.
+        constraints: the scenario's constraints the configuration alone decides (an
+            end-effector cone), at the configuration.
     """
 
     joints: tuple[JointRoom, ...]
     pairs: tuple[tuple[str, float], ...]
     margin: float | None
+    constraints: tuple[PoseConstraint, ...] = ()
+
+    @property
+    def within_constraints(self) -> bool:
+        """Every constraint of the configuration alone holds there."""
+        return all(c.holds for c in self.constraints)
 
     @property
     def within_limits(self) -> bool:
@@ -122,11 +154,18 @@ def check_configuration(scenario: Scenario, joints: np.ndarray) -> Configuration
         JointRoom(j.name, float(v), j.lower, j.upper, j.angular)
         for j, v in zip(robot.joints, joints, strict=True)
     )
-    clearance = next((c for c in scenario_constraints(scenario) if isinstance(c, Clearance)), None)
+    constraints = scenario_constraints(scenario)
+    posed = []
+    for constraint in constraints:
+        excess = constraint.at_rest(robot, np.asarray(joints, dtype=float))
+        if excess is not None:
+            holds = excess.value <= constraint.tolerance
+            posed.append(PoseConstraint(constraint.name, excess.value, excess.detail, holds))
+    clearance = next((c for c in constraints if isinstance(c, Clearance)), None)
     if clearance is None or not clearance.applies_to(robot):
-        return ConfigurationReport(rooms, (), None)
+        return ConfigurationReport(rooms, (), None, tuple(posed))
     model = clearance.model
     values = np.asarray(model.distances(np.asarray(joints, dtype=float)).values)
     order = np.argsort(values)[:CLOSEST_PAIRS]
     pairs = tuple((model.names[k], float(values[k])) for k in order)
-    return ConfigurationReport(rooms, pairs, clearance.margin)
+    return ConfigurationReport(rooms, pairs, clearance.margin, tuple(posed))

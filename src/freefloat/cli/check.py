@@ -38,8 +38,9 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
         help="check one configuration: joint limits, closest pairs, clearance",
         description="Joint values against the URDF limits (room to the nearer one), the "
         "closest body pairs of the collision model and the smallest clearance against the "
-        "scenario's margin, at the start, the goal or given joint values. Exit code 0 when "
-        "within the limits and clear, 1 otherwise.",
+        "scenario's margin, and the scenario's constraints of the pose alone (an end-effector "
+        "cone), at the start, the goal or given joint values. Exit code 0 when all hold, 1 "
+        "otherwise.",
     )
     p_check.add_argument("scenario", help="scenario TOML file")
     p_check.add_argument(
@@ -83,7 +84,11 @@ def run(args: argparse.Namespace) -> int:
             print(f"    {name:<50}{distance:>10.4f} m")
         state = "keeps" if report.clear else "is below"
         print(f"  clearance {report.pairs[0][1]:.4f} m {state} the margin {report.margin:g} m")
-    verdict = "ok" if report.within_limits and report.clear else "NOT OK"
+    for posed in report.constraints:
+        state = "holds" if posed.holds else "BROKEN"
+        print(f"  {posed.name}: {posed.detail}: {state}")
+    fine = report.within_limits and report.clear and report.within_constraints
+    verdict = "ok" if fine else "NOT OK"
     print(f"  configuration: {verdict}")
     return 0 if verdict == "ok" else 1
 

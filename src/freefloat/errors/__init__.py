@@ -11,6 +11,7 @@ from ..excerpts import EXCERPT_CHARS, excerpt
 from .base import (
     AmbiguousEndEffectorError,
     CollisionError,
+    EndpointError,
     FileError,
     FreeFloatError,
     InfeasibleError,
@@ -43,6 +44,7 @@ __all__ = [
     "CollisionError",
     "DurationLimitError",
     "EffortLimitError",
+    "EndpointError",
     "FileError",
     "FreeFloatError",
     "InfeasibleError",

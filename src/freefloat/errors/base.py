@@ -361,6 +361,37 @@ class CollisionError(FreeFloatError):
         )
 
 
+class EndpointError(FreeFloatError):
+    """A start or goal configuration that breaks a path constraint; no path can keep it.
+
+    Attributes:
+        where: ``"start"`` or ``"goal"``.
+        constraint: the constraint's name (its scenario table ``[constraints.<name>]``).
+        excess: how far beyond it the configuration is (in the constraint's unit).
+        detail: the constraint's own account (an angle, a distance).
+        chosen: whether those joints came from inverse kinematics of an end-effector goal.
+    """
+
+    def __init__(
+        self, where: str, constraint: str, excess: float, detail: str, chosen: bool = False
+    ) -> None:
+        self.where = where
+        self.constraint = constraint
+        self.excess = float(excess)
+        self.detail = detail
+        self.chosen = chosen
+        move = (
+            "move the end-effector goal (inverse kinematics chose the goal joints)"
+            if chosen
+            else f"move the {where} joints"
+        )
+        ends = "starts" if where == "start" else "ends"
+        super().__init__(
+            f"{where} configuration breaks {constraint} ({detail}), where every path {ends}; "
+            f"{move} or loosen [constraints.{constraint}]"
+        )
+
+
 class AmbiguousEndEffectorError(ModelError):
     """No single default end effector: several chains end equally deep; carries the tips.
 

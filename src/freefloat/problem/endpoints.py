@@ -1,7 +1,11 @@
-"""Start and goal checked before any search: inside the joint limits, clear of collisions.
+"""Start and goal checked before any search: limits, clearance, constraints of the pose.
+
+Inside the joint limits, clear of collisions, and within every constraint the configuration
+alone decides (an end-effector cone).
 
 ``plan`` and ``reach`` refuse the same scenarios for the same reason: a motion whose start or
-goal breaks a limit or the clearance margin cannot be planned, whatever the attitude asked.
+goal breaks a limit, the clearance margin or such a constraint cannot be planned, whatever
+the attitude asked.
 """
 
 from __future__ import annotations
@@ -10,7 +14,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..errors import CollisionError
+from ..errors import CollisionError, EndpointError
 from ..robot.collision import clearance_at
 from .build import check_joint_limits
 from .constraints import Clearance, Constraint
@@ -32,13 +36,22 @@ def check_endpoints(
         JointLimitError: the start or goal joints outside their limits (rad or m).
         CollisionError: a checked pair of the start or goal closer than the clearance margin
             of a :class:`Clearance` among ``constraints`` (m).
+        EndpointError: the start or goal breaks a constraint of the configuration alone
+            (:meth:`Constraint.at_rest`: an end-effector cone), which no path can keep.
     """
     for where, values in (("start", scenario.start), ("goal", scenario.goal)):
         check_joint_limits(scenario.robot, np.asarray(values, dtype=float), where)
+    ends = (("start", scenario.start), ("goal", scenario.goal))
     for constraint in constraints:
         if isinstance(constraint, Clearance) and constraint.applies_to(scenario.robot):
-            for where, joints in (("start", scenario.start), ("goal", scenario.goal)):
+            for where, joints in ends:
                 clearance, pair = clearance_at(constraint.model, joints)
                 if clearance < constraint.margin:
                     chosen = chosen_goal and where == "goal"
                     raise CollisionError(where, pair, clearance, constraint.margin, chosen)
+    for constraint in constraints:  # the configuration alone decides, for every path
+        for where, joints in ends:
+            excess = constraint.at_rest(scenario.robot, np.asarray(joints, dtype=float))
+            if excess is not None and excess.value > constraint.tolerance:
+                chosen = chosen_goal and where == "goal"
+                raise EndpointError(where, constraint.name, excess.value, excess.detail, chosen)

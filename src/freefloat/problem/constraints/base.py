@@ -139,6 +139,17 @@ class Constraint(abc.ABC):
         """Whether the constraint has anything to check on this robot (default: yes)."""
         return True
 
+    def at_rest(self, robot: Robot, joints: np.ndarray) -> Excess | None:
+        """Its excess at one configuration held at rest (rad or m), or None.
+
+        Every path of the family starts and ends at rest at the scenario's start and goal, so
+        a constraint of the configuration alone that either breaks holds on no path: ``plan``
+        refuses it before any search (:func:`freefloat.problem.endpoints.check_endpoints`)
+        and ``check`` reports it. None (the default): the constraint judges more than the
+        configuration (rates, torques) or is checked on its own (joint limits, clearance).
+        """
+        return None
+
     def to_record(self) -> dict[str, Any]:
         """The constraint's parameters, JSON-ready, as a plan and a scenario write them.
 

@@ -145,6 +145,16 @@ class EndEffectorCone(Constraint):
             out.append(cos - self.direction @ (data.oMf[frame].rotation @ self.axis))
         return np.array(out)
 
+    def at_rest(self, robot: Robot, joints: np.ndarray) -> Excess:
+        """``g`` at the configuration ``joints`` (rad or m), the tool axis's angle named."""
+        model, data = robot.model, robot.model.createData()
+        pin.framesForwardKinematics(model, data, robot.configuration(joints))
+        pointing = data.oMf[robot.end_effector_frame].rotation @ self.axis
+        cosine = float(np.clip(self.direction @ pointing, -1.0, 1.0))
+        angle, half = math.degrees(math.acos(cosine)), math.degrees(self.half_angle)
+        detail = f"axis {angle:.4g} deg from the direction (half-angle {half:.4g} deg)"
+        return Excess(math.cos(self.half_angle) - cosine, 0.0, detail)
+
     def rows(
         self, problem: Problem, beta: np.ndarray, instants: np.ndarray = DEFAULT_INSTANTS
     ) -> ConstraintRows:
