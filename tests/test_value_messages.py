@@ -127,3 +127,22 @@ def test_a_scenario_through_a_pipe_without_a_name_is_named_a_pipe():
         f"scenario '/proc/self/fd/{read}' is a pipe or socket with no file name (as <(...) "
         "gives), not a file; write it to a file first"
     )
+
+
+def test_an_output_in_a_folder_no_one_can_write_is_refused_before_any_work(tmp_path, capsys):
+    """/proc refuses new files even to root, whose permission bits say yes: the folder is
+    tried, not its bits read (as root the plot was drawn, then refused without a path)."""
+    from freefloat.files import check_output
+
+    with pytest.raises(ff.FileError, match=r"^cannot write --plot '/proc/r\.png': folder /proc is"):
+        check_output("/proc/r.png", "--plot")
+    plan = ff.plan(ff.default_scenario_path()).save(tmp_path / "p.json")
+    assert main(["plot", str(plan), "-o", "/proc/plots"]) == 2
+    assert "folder /proc is not writable" in capsys.readouterr().err
+
+
+def test_reach_draws_into_folders_it_makes(tmp_path, capsys):
+    figure = tmp_path / "new" / "sub" / "reach.png"
+    assert main(["reach", str(ff.default_scenario_path()), "-q", "--plot", str(figure)]) == 0
+    assert figure.read_bytes().startswith(b"\x89PNG")
+    assert not [p for p in figure.parent.iterdir() if p.name.startswith(".")]  # no leftovers

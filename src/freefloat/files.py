@@ -211,6 +211,16 @@ def check_output(path: str | Path, what: str = "output", folder: bool = False) -
         raise FileError(
             f"cannot write {what} {path_excerpt(shown)}: folder {ancestor} is not writable", shown
         )
+    try:  # the permission bits do not bind root, nor tell a read-only file system (/sys)
+        handle, probe = tempfile.mkstemp(prefix=".freefloat-probe-", dir=ancestor)
+        os.close(handle)
+        os.unlink(probe)
+    except OSError as exc:
+        raise FileError(
+            f"cannot write {what} {path_excerpt(shown)}: folder {ancestor} is not writable "
+            f"({_reason(exc)})",
+            shown,
+        ) from None
     return target
 
 

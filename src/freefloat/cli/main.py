@@ -199,7 +199,8 @@ def _main(argv: Sequence[str] | None) -> int:
         return 141
     except OSError as exc:  # a stream, not a file (files raise FileError): > /dev/full
         silence_output(1)
-        error_line(f"error: cannot write the output: {exc.strerror or exc}")
+        where = f" {exc.filename}" if getattr(exc, "filename", None) else " the output"
+        error_line(f"error: cannot write{where}: {exc.strerror or exc}")
         return 2
     except KeyboardInterrupt:
         error_line("interrupted")

@@ -8,13 +8,20 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ViewerError
+from ..files import atomic_write
 from ..solvers.reach import ReachEstimate
 
 __all__ = ["save_reach_figure"]
 
 
 def save_reach_figure(estimate: ReachEstimate, path: str | Path, title: str = "") -> Path:
-    """Draw each direction's reached rotation vector (deg) from the quintic attitude; save."""
+    """Draw each direction's reached rotation vector (deg) from the quintic attitude; save.
+
+    Returns the absolute path written (its folder is made if needed).
+
+    Raises:
+        FileError: the figure cannot be written.
+    """
     try:
         import matplotlib
 
@@ -41,6 +48,8 @@ def save_reach_figure(estimate: ReachEstimate, path: str | Path, title: str = ""
         fontsize=9,
     )
     path = Path(path)
-    figure.savefig(path)
-    plt.close(figure)
-    return path
+    kind = path.suffix.lower().lstrip(".") or "png"
+    try:  # atomically, its folder made as every output's is
+        return atomic_write(path, lambda tmp: figure.savefig(tmp, format=kind), path.suffix)
+    finally:
+        plt.close(figure)
