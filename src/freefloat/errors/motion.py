@@ -76,7 +76,7 @@ class DurationLimitError(FreeFloatError):
                 "travel at its limit), and a duration between may plan with another path"
             )
         else:
-            message = f"{message}; a shorter duration may plan with another path"
+            message = f"{message}; under {self.shortest_duration:.4g} s only another path can"
         if 0.0 <= self.reached < self.asked < math.inf:  # a figure that says something
             turned = UnreachableAttitudeError.turn_phrase(self.reached, self.asked)
             message += f"; at this duration and within every limit, {turned}"
