@@ -152,6 +152,27 @@ def test_lock_repeated_locks_every_joint_named(tmp_path, capsys):
     assert kinds["shoulder_lift_joint"] == "revolute"
 
 
+@pytest.mark.parametrize(
+    ("locks", "message"),
+    [
+        (
+            ["--lock", "elbow_joint=90", "elbow_joint=45"],
+            "--lock elbow_joint given twice (elbow_joint=90 and elbow_joint=45); lock each "
+            "joint once",
+        ),
+        (["--lock", "elbow_joint", "--lock", "elbow_joint"], "--lock elbow_joint given twice"),
+        (["--lock"], "--lock needs at least one JOINT or JOINT=DEG after it"),
+    ],
+)
+def test_a_lock_given_twice_or_empty_is_refused(tmp_path, capsys, locks, message):
+    """The second value silently won; a bare --lock silently locked nothing."""
+    out = tmp_path / "servicer.urdf"
+    base = ["compose", "--arm", "ur5", "--base-mass", "500", "--base-size", "1", "1", "1"]
+    assert main([*base, "--mount", "0.5", "0", "0", *locks, "-o", str(out)]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
 def test_compose_will_not_write_over_its_arm(tmp_path, capsys):
     """``compose --arm a.urdf -o a.urdf`` would replace the arm it reads."""
     arm = tmp_path / "arm.urdf"

@@ -272,8 +272,16 @@ def _servicer_spec(args: argparse.Namespace, payload: Payload | None) -> Service
             dataclasses.replace(a, prefix=a.prefix or f"arm{i + 1}_") for i, a in enumerate(arms)
         ]
     locks: list[list[str | tuple[str, float]]] = [[] for _ in arms]
+    if args.lock is not None and not args.lock:
+        raise InputError("--lock needs at least one JOINT or JOINT=DEG after it")
+    seen: dict[str, str] = {}
     for item in args.lock or ():
         name, _, degrees = item.partition("=")
+        if name in seen:
+            raise InputError(
+                f"--lock {name} given twice ({seen[name]} and {item}); lock each joint once"
+            )
+        seen[name] = item
         value = 0.0
         if degrees:
             try:
