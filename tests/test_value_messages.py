@@ -146,3 +146,15 @@ def test_reach_draws_into_folders_it_makes(tmp_path, capsys):
     assert main(["reach", str(ff.default_scenario_path()), "-q", "--plot", str(figure)]) == 0
     assert figure.read_bytes().startswith(b"\x89PNG")
     assert not [p for p in figure.parent.iterdir() if p.name.startswith(".")]  # no leftovers
+
+
+def test_a_payload_key_on_a_plan_without_a_payload_says_so(tmp_path, capsys):
+    """A replay sweep's payload.mass named "unknown link ... 'payload'"."""
+    plan = ff.plan(ff.default_scenario_path()).save(tmp_path / "p.json")
+    sweep = tmp_path / "s.toml"
+    sweep.write_text(f'plan = "{plan.name}"\n[[axis]]\nkey = "payload.mass"\nvalues = [1.0]\n')
+    assert main(["sweep", str(sweep), "-o", str(tmp_path / "r.csv")]) == 2
+    assert capsys.readouterr().err.rstrip().endswith(
+        "axis 'payload.mass' = 1.0: payload keys need a robot that holds a captured payload "
+        "([payload] in the scenario, or freefloat compose --payload-mass); this one holds none"
+    )

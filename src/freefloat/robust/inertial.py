@@ -157,6 +157,24 @@ def _check_key(key: str) -> None:
         raise UnknownNameError("inertial value", key, PARAMETERS)
 
 
+def _link_named(given: str, current: Mapping[str, object]) -> str:
+    """The link ``given`` names among those with inertial values (``"payload"``: the payload's).
+
+    Raises:
+        InputError: ``"payload"`` on a robot that holds none.
+        UnknownNameError: another name of no such link (naming the valid ones).
+    """
+    name = PAYLOAD_LINK if given == "payload" else given
+    if name in current:
+        return name
+    if given == "payload":
+        raise InputError(
+            "payload keys need a robot that holds a captured payload ([payload] in the "
+            "scenario, or freefloat compose --payload-mass); this one holds none"
+        )
+    raise UnknownNameError("link with inertial values", given, sorted(current))
+
+
 def with_inertials(text: str, changes: Mapping[str, Mapping[str, float]]) -> str:
     """The URDF ``text`` with new inertial values for named links.
 
@@ -173,9 +191,7 @@ def with_inertials(text: str, changes: Mapping[str, Mapping[str, float]]) -> str
     current = link_inertials(text)
     links = {str(link.get("name")): link for link in root.findall("link")}
     for given, values in changes.items():
-        name = PAYLOAD_LINK if given == "payload" else given
-        if name not in current:
-            raise UnknownNameError("link with inertial values", given, sorted(current))
+        name = _link_named(given, current)
         inertial = current[name]
         for key, value in values.items():
             _check_key(key)
@@ -233,9 +249,7 @@ def perturbed_robot(
     current = link_inertials(robot_text(robot) if text is None else text)
     model = robot.model.copy()
     for given, values in changes.items():
-        name = PAYLOAD_LINK if given == "payload" else given
-        if name not in current:
-            raise UnknownNameError("link with inertial values", given, sorted(current))
+        name = _link_named(given, current)
         inertial = current[name]
         for key, value in values.items():
             _check_key(key)
