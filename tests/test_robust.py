@@ -313,10 +313,42 @@ def test_correction_reaches_the_goal_and_shrinks_a_five_percent_error(worked):
 
 
 def test_a_correction_no_motion_can_make_is_refused(worked):
+    """The measured attitude, not a goal, is off-axis: the refusal says what to correct."""
     plan, _, robot = worked
     measured = quat_from_zyx(0.0, math.radians(2.0), 0.0)  # a planar base cannot pitch
-    with pytest.raises(InfeasibleError, match="this robot is planar"):
+    with pytest.raises(InfeasibleError) as info:
         correcting_plan(plan, robot, measured)
+    assert info.value.off_axis
+    assert str(info.value) == (
+        "this robot is planar: a motion turns its base only about its z axis, and the measured "
+        "attitude is 2 deg from the plan's goal about other axes; only the yaw can be "
+        "corrected (give the measured yaw with the goal's pitch and roll)"
+    )
+
+
+def test_a_refused_correction_reports_no_residual_beyond_the_loop_it_began_on(tmp_path):
+    """The worked example kept within a 60 deg cone, turned back by 2 deg: the refusal said
+    its search began on a loop ending 0.16 deg from the goal beside a best residual of 2 deg
+    (the whole turn, from an attempt that started over). The loop keeps every constraint:
+    no figure may be worse than it."""
+    import re
+
+    cone = (
+        "\n[constraints.end_effector_cone]\naxis = [1.0, 0.0, 0.0]\n"
+        "direction = [0.3420201433256687, 0.9396926207859083, 0.0]\nhalf_angle_deg = 60.0\n"
+    )
+    path = tmp_path / "s.toml"
+    path.write_text(ff.default_scenario_path().read_text() + cone)
+    plan = ff.plan(Scenario.from_toml(path))
+    robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+    goal_yaw = math.degrees(zyx_from_quat(plan.base.target_quaternion_xyzw)[0])
+    measured = quat_from_zyx(math.radians(goal_yaw + 2.0), 0.0, 0.0)
+    with pytest.raises(ff.SolverError) as info:
+        correcting_plan(plan, robot, measured)
+    message = str(info.value)
+    began = re.search(r"began on a loop ending ([\d.]+) deg from the goal", message)
+    assert began and "within the plan's constraints" in message, message
+    assert math.degrees(info.value.best_residual) <= float(began.group(1)) * (1 + 1e-3)
 
 
 def test_a_correction_too_far_names_where_its_search_began(tmp_path):

@@ -154,7 +154,11 @@ def test_a_payload_key_on_a_plan_without_a_payload_says_so(tmp_path, capsys):
     sweep = tmp_path / "s.toml"
     sweep.write_text(f'plan = "{plan.name}"\n[[axis]]\nkey = "payload.mass"\nvalues = [1.0]\n')
     assert main(["sweep", str(sweep), "-o", str(tmp_path / "r.csv")]) == 2
-    assert capsys.readouterr().err.rstrip().endswith(
-        "axis 'payload.mass' = 1.0: payload keys need a robot that holds a captured payload "
-        "([payload] in the scenario, or freefloat compose --payload-mass); this one holds none"
+    assert (
+        capsys.readouterr()
+        .err.rstrip()
+        .endswith(
+            "axis 'payload.mass' = 1.0: payload keys need a robot that holds a captured payload "
+            "([payload] in the scenario, or freefloat compose --payload-mass); this one holds none"
+        )
     )

@@ -22,7 +22,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..errors import InputError, SolverError
+from ..errors import InfeasibleError, InputError, SolverError
 from ..physics.attitude import geodesic_angle, relative_rotvec
 from ..pipeline import plan_from_solution
 from ..plans.format import Plan
@@ -105,16 +105,29 @@ def correcting_plan(
     measured = np.asarray(measured_quaternion, dtype=float)
     measured = measured / np.linalg.norm(measured)
     angle = geodesic_angle(measured, goal)
-    problem = build_problem(
-        robot,
-        goal_joints,
-        goal_joints,
-        measured,
-        goal,
-        plan.duration,
-        extra=[FREEDOM] * robot.n,
-        check_bounds=False,
-    )
+    try:
+        problem = build_problem(
+            robot,
+            goal_joints,
+            goal_joints,
+            measured,
+            goal,
+            plan.duration,
+            extra=[FREEDOM] * robot.n,
+            check_bounds=False,
+        )
+    except InfeasibleError as exc:
+        if not exc.off_axis:
+            raise
+        raise InfeasibleError(
+            exc.requested_deg,
+            exc.bounds_deg,
+            f"this robot is planar: a motion turns its base only about its z axis, and the "
+            f"measured attitude is {exc.requested_deg:.6g} deg from the plan's goal about "
+            "other axes; only the yaw can be corrected (give the measured yaw with the goal's "
+            "pitch and roll)",
+            off_axis=True,
+        ) from None
     constraints = plan_constraints(plan, robot)
     # the loop turns the base frame at the end: the turn wanted, in that frame (planar: yaw)
     turn = relative_rotvec(measured, goal)
@@ -133,12 +146,17 @@ def correcting_plan(
             if abs(away - angle) < 1e-9
             else f"its search began on a loop ending {math.degrees(away):.4g} deg from the goal: "
         )
+        best, per_axis = exc.best_residual, exc.per_axis
+        if start is not None:  # the loop keeps the constraints: the search's own figure
+            missed = problem.residual(start)
+            if float(np.linalg.norm(missed)) < best:
+                best, per_axis = float(np.linalg.norm(missed)), tuple(missed)
         raise SolverError(
             f"one correcting motion cannot turn the spacecraft back by {math.degrees(angle):.4g}"
-            f" deg within the plan's limits ({where}{exc.headline})",
-            exc.best_residual,
+            f" deg within the plan's constraints ({where}{exc.headline})",
+            best,
             tried,
-            per_axis=exc.per_axis,
+            per_axis=per_axis,
             stopped_by=exc.stopped_by,
             reached_fraction=exc.reached_fraction,
         ) from None
