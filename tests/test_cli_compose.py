@@ -203,3 +203,32 @@ def test_a_mount_off_the_box_surface_is_said(tmp_path, capsys, mount, said):
     else:
         assert f"freefloat: warning: the arm 'ur5' {said} (1 x 1 x 1 m, faces at" in err, err
         assert "it is fixed there rigidly, as on a massless pedestal" in err
+
+
+#: A second branch as deep as l2 -> l3 (from l1): two longest chains, l3 and l3b.
+_TWIN = (
+    '<joint name="p2b" type="prismatic"><parent link="l1"/><child link="l2b"/>'
+    '<origin xyz="1 0.3 0"/><axis xyz="1 0 0"/>'
+    '<limit lower="0" upper="0.5" velocity="0.2" effort="100"/></joint>'
+    '<link name="l2b"><inertial><mass value="5"/>'
+    '<inertia ixx="0.1" iyy="0.5" izz="0.5" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+    '<joint name="j3b" type="revolute"><parent link="l2b"/><child link="l3b"/>'
+    '<origin xyz="0.4 0 0"/><axis xyz="0 1 0"/>'
+    '<limit lower="-3" upper="3" velocity="1" effort="100"/></joint>'
+    '<link name="l3b"><inertial><mass value="5"/>'
+    '<inertia ixx="0.1" iyy="0.5" izz="0.5" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+)
+
+
+def test_a_payload_on_an_arm_whose_chains_tie_points_to_the_scenario_route(tmp_path, capsys):
+    """compose has no option to name the payload's holder; it said "name one in the
+    scenario" as if it had."""
+    arm = tmp_path / "twin.urdf"
+    arm.write_text(_ARM.format(mimic="", extra=_TWIN))
+    out = tmp_path / "servicer.urdf"
+    argv = ["compose", "--arm", str(arm), "--base-mass", "500", "--base-size", "1", "1", "1"]
+    argv += ["--mount", "0.5", "0", "0", "--payload-mass", "5", "-o", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "the payload's holder is ambiguous: 2 chains are longest (l3, l3b)" in err
+    assert 'end_effector = "..." naming the holder' in err and not out.exists()

@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import InputError, ModelError
+from ..errors import AmbiguousEndEffectorError, InputError, ModelError
 from ..problem.limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, check_number
 from ..progress import stage
 from .common import Commands, check_not_read, check_outputs
@@ -185,7 +185,15 @@ def run(args: argparse.Namespace) -> int:
 
     spec = _servicer_spec(args, _payload(args))
     with stage("compose servicer"):
-        composed = compose(spec)
+        try:
+            composed = compose(spec)
+        except AmbiguousEndEffectorError as exc:  # a payload: compose cannot name its holder
+            raise ModelError(
+                f"{REFUSED}: the payload's holder is ambiguous: {len(exc.candidates)} chains are "
+                f"longest ({', '.join(exc.candidates)}); compose cannot choose it: write the "
+                "servicer inline in a scenario ([robot] arm = ..., [payload], and "
+                'end_effector = "..." naming the holder)'
+            ) from None
         # loaded from its text first: a servicer freefloat refuses is never written (and an
         # earlier file of that name stays as it was)
         try:
