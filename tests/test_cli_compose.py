@@ -227,7 +227,19 @@ def test_a_payload_on_an_arm_whose_chains_tie_points_to_the_scenario_route(tmp_p
     arm.write_text(_ARM.format(mimic="", extra=_TWIN))
     out = tmp_path / "servicer.urdf"
     argv = ["compose", "--arm", str(arm), "--base-mass", "500", "--base-size", "1", "1", "1"]
-    argv += ["--mount", "0.5", "0", "0", "--payload-mass", "5", "-o", str(out)]
+    argv += [
+        "--mount",
+        "0.5",
+        "0",
+        "0",
+        "--payload-mass",
+        "5",
+        "--payload-box",
+        "0.1",
+        "0.1",
+        "0.1",
+    ]
+    argv += ["-o", str(out)]
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert "the payload's holder is ambiguous: 2 chains are longest (l3, l3b)" in err
