@@ -379,6 +379,7 @@ def test_plan_limits_are_the_schema_limits():
 
 def test_scenario_keys_and_the_scenario_schema_name_the_same_keys():
     from freefloat.plans.schema import schema
+    from freefloat.problem import payload_table
     from freefloat.problem import robot_table as rt
     from freefloat.problem import scenario_safety as ss
     from freefloat.problem import scenario_tables as sc
@@ -388,7 +389,7 @@ def test_scenario_keys_and_the_scenario_schema_name_the_same_keys():
         (): sc.TOP_KEYS,
         ("properties", "path"): sc.PATH_KEYS,
         ("properties", "safety"): ss.SAFETY_KEYS,
-        ("properties", "payload"): sc.PAYLOAD_KEYS,
+        ("properties", "payload"): payload_table.PAYLOAD_KEYS,
         ("properties", "start"): sc.STATE_KEYS,
         ("properties", "goal"): sc.GOAL_KEYS,
         ("properties", "obstacles", "items"): ss.OBSTACLE_KEYS,

@@ -2,7 +2,8 @@
 
 Every message is a single line that names the problem and says what would be valid, so that
 the command line can print it as it is (exit code 2) and a caller can test it. The motion
-errors (limits needing a longer duration, goals out of reach) are in :mod:`.motion`. One
+errors (limits needing a longer duration, goals out of reach) are in :mod:`.motion`, those of
+one configuration (limits, collisions, constraints of the pose, locks) in :mod:`.pose`. One
 warning class, :class:`UnitsWarning`, is issued through :mod:`warnings` for a value accepted but
 likely written in the wrong unit.
 """
@@ -10,15 +11,11 @@ likely written in the wrong unit.
 from ..excerpts import EXCERPT_CHARS, excerpt
 from .base import (
     AmbiguousEndEffectorError,
-    CollisionError,
-    EndpointError,
     FileError,
     FreeFloatError,
     InfeasibleError,
     InputError,
     InputLimitError,
-    JointLimitError,
-    LockedJointError,
     ModelError,
     PlanFileError,
     PlanMismatchError,
@@ -37,6 +34,7 @@ from .motion import (
     UnreachableGoalError,
     VelocityLimitError,
 )
+from .pose import CollisionError, EndpointError, JointLimitError, LockedJointError
 
 __all__ = [
     "EXCERPT_CHARS",

@@ -11,7 +11,7 @@ import unicodedata
 from collections.abc import Iterable, Sequence
 from typing import Any
 
-from ..excerpts import apart, excerpt
+from ..excerpts import excerpt
 
 
 class FreeFloatError(Exception):
@@ -138,31 +138,6 @@ def _number(value: float) -> str:
     """A number shortly (``2e+09``), in full where that would hide it (180.0001, not 180)."""
     short = f"{value:g}"
     return short if not math.isfinite(value) or float(short) == value else repr(value)
-
-
-class JointLimitError(FreeFloatError):
-    """A joint position outside its URDF limits; carries the joint and its interval."""
-
-    def __init__(
-        self,
-        joint: str,
-        value: float,
-        lower: float,
-        upper: float,
-        where: str,
-        unit: str = "deg",
-        scale: float = 1.0,
-    ) -> None:
-        self.joint = joint
-        self.value = value
-        self.lower = lower
-        self.upper = upper
-        self.where = where
-        shown = value * scale
-        super().__init__(
-            f"{where}: joint {joint!r} = {apart(shown, lower * scale, upper * scale)} {unit} is "
-            f"outside its limits [{lower * scale:.6g}, {upper * scale:.6g}] {unit}"
-        )
 
 
 class InfeasibleError(FreeFloatError):
@@ -328,70 +303,6 @@ class ViewerError(FreeFloatError):
     """The 3D viewer or the plotting stack is missing, broken, or cannot draw the robot."""
 
 
-class CollisionError(FreeFloatError):
-    """A start or goal configuration closer than the clearance margin; carries the pair.
-
-    Attributes:
-        where: ``"start"`` or ``"goal"``.
-        pair: the two bodies, ``"a / b"``.
-        clearance: their signed distance (m; negative when they overlap).
-        margin: the required clearance (m).
-        chosen: whether those joints came from inverse kinematics of an end-effector goal
-            (the message then asks to move that goal).
-    """
-
-    def __init__(
-        self, where: str, pair: str, clearance: float, margin: float, chosen: bool = False
-    ) -> None:
-        self.where = where
-        self.pair = pair
-        self.clearance = float(clearance)
-        self.margin = float(margin)
-        self.chosen = chosen
-        state = "overlap by" if clearance < 0 else "are"
-        amount = f"{abs(clearance):.4g} m" + ("" if clearance < 0 else " apart")
-        move = (
-            f"move the end-effector goal (inverse kinematics chose the {where} joints) "
-            if chosen
-            else f"move the {where} joints "
-        )
-        super().__init__(
-            f"{where} configuration: {pair} {state} {amount}, below the clearance margin "
-            f"{margin:g} m; {move}or lower [safety] margin_m"
-        )
-
-
-class EndpointError(FreeFloatError):
-    """A start or goal configuration that breaks a path constraint; no path can keep it.
-
-    Attributes:
-        where: ``"start"`` or ``"goal"``.
-        constraint: the constraint's name (its scenario table ``[constraints.<name>]``).
-        excess: how far beyond it the configuration is (in the constraint's unit).
-        detail: the constraint's own account (an angle, a distance).
-        chosen: whether those joints came from inverse kinematics of an end-effector goal.
-    """
-
-    def __init__(
-        self, where: str, constraint: str, excess: float, detail: str, chosen: bool = False
-    ) -> None:
-        self.where = where
-        self.constraint = constraint
-        self.excess = float(excess)
-        self.detail = detail
-        self.chosen = chosen
-        move = (
-            "move the end-effector goal (inverse kinematics chose the goal joints)"
-            if chosen
-            else f"move the {where} joints"
-        )
-        ends = "starts" if where == "start" else "ends"
-        super().__init__(
-            f"{where} configuration breaks {constraint} ({detail}), where every path {ends}; "
-            f"{move} or loosen [constraints.{constraint}]"
-        )
-
-
 class AmbiguousEndEffectorError(ModelError):
     """No single default end effector: several chains end equally deep; carries the tips.
 
@@ -406,32 +317,6 @@ class AmbiguousEndEffectorError(ModelError):
             f"({', '.join(self.candidates)}); name one in the scenario "
             '(end_effector = "..." or end_effectors = [...])',
             urdf,
-        )
-
-
-class LockedJointError(FreeFloatError):
-    """A joint locked at a value outside its limits (or a goal that moves a locked joint).
-
-    Attributes:
-        joint: the joint's name.
-        value: the locked value (deg for angular joints, m for prismatic ones).
-        lower, upper: its limits (same unit).
-        unit: ``"deg"`` or ``"m"``.
-    """
-
-    def __init__(
-        self, joint: str, value: float, lower: float, upper: float, unit: str, why: str = ""
-    ) -> None:
-        self.joint = joint
-        self.value = float(value)
-        self.lower = float(lower)
-        self.upper = float(upper)
-        self.unit = unit
-        reason = why or f"outside its limits [{lower:.6g}, {upper:.6g}] {unit}"
-        super().__init__(
-            f"joint {joint!r} locked at {apart(value, lower, upper)} {unit}: {reason}; lock it "
-            "within "
-            f"[{lower:.6g}, {upper:.6g}] {unit}"
         )
 
 

@@ -90,6 +90,7 @@ from ..robot.payload import Payload, attach_payload
 from .constraints.base import Constraint
 from .limits import check_duration, check_joint_count
 from .objectives.registry import DEFAULT_OBJECTIVE
+from .payload_table import payload_table
 from .robot_table import robot_source, scenario_errors, servicer_cache_dir
 from .scenario_safety import Safety, constraint_tables, safety_tables
 from .scenario_tables import (
@@ -97,7 +98,6 @@ from .scenario_tables import (
     check_top_keys,
     end_effector_names,
     path_options,
-    payload_table,
     read_toml,
     state_tables,
 )

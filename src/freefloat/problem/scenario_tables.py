@@ -19,16 +19,15 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, ScenarioError, excerpt
+from ..errors import ScenarioError, excerpt
 from ..files import other_kind_hint, read_text_file
 from ..physics.attitude import quat_from_zyx, quat_to_matrix
 from ..robot.model import Robot
-from ..robot.payload import Payload, check_mass
-from .limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, MAX_SCENARIO_BYTES, check_extra
+from .limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_SCENARIO_BYTES, check_extra
 from .objectives.registry import DEFAULT_OBJECTIVE, OBJECTIVES
 from .quaternion_hint import warn_if_odd_quaternion
 from .radians_hint import warn_if_radians
-from .robot_table import RobotSource, check_keys, number, numbers, scenario_errors, triple
+from .robot_table import RobotSource, check_keys, number, numbers, scenario_errors
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -38,7 +37,6 @@ else:  # pragma: no cover
 __all__ = [
     "GOAL_KEYS",
     "PATH_KEYS",
-    "PAYLOAD_KEYS",
     "STATE_KEYS",
     "TOP_KEYS",
     "CartesianGoal",
@@ -47,7 +45,6 @@ __all__ = [
     "check_top_keys",
     "end_effector_names",
     "path_options",
-    "payload_table",
     "read_toml",
     "state_tables",
 ]
@@ -66,7 +63,6 @@ TOP_KEYS = (
     "payload",
     "constraints",
 )
-PAYLOAD_KEYS = ("mass", "com_xyz", "inertia", "box")
 STATE_KEYS = ("joints", "base_zyx_deg", "base_quaternion_xyzw")
 GOAL_KEYS = (*STATE_KEYS, "end_effector_xyz", "end_effector_rpy_deg", "end_effectors")
 _FRAME_GOAL_KEYS = ("xyz", "rpy_deg")
@@ -216,6 +212,20 @@ class PathOptions:
     raise_freedom: bool = True
 
 
+def _extra(raw: Any, robot: Robot, locked: Mapping[str, float]) -> dict[str, int]:
+    """``[path] extra``: ``{joint: count}``, each joint the robot's and not locked."""
+    if not isinstance(raw, Mapping):
+        raise ScenarioError("[path] extra must be a table { joint = count, ... }")
+    for name in raw:
+        if name in locked:
+            raise ScenarioError(
+                f"[path] extra: joint {name!r} is locked ([robot] lock): it has no path to "
+                "shape; leave it out of extra"
+            )
+        robot.joint(name, "[path] extra")
+    return {n: scenario_errors(check_extra, c, f"[path] extra for {n!r}") for n, c in raw.items()}
+
+
 def path_options(
     table: Any, robot: Robot, locked: Mapping[str, float] | None = None
 ) -> PathOptions:
@@ -226,21 +236,7 @@ def path_options(
     if not isinstance(table, Mapping):
         raise ScenarioError("[path] must be a table")
     check_keys(table, PATH_KEYS, "[path]")
-    extra = None
-    if "extra" in table:
-        if not isinstance(table["extra"], Mapping):
-            raise ScenarioError("[path] extra must be a table { joint = count, ... }")
-        extra = {}
-        for joint_name, count in table["extra"].items():
-            if joint_name in (locked or {}):
-                raise ScenarioError(
-                    f"[path] extra: joint {joint_name!r} is locked ([robot] lock): it has no "
-                    "path to shape; leave it out of extra"
-                )
-            robot.joint(joint_name, "[path] extra")
-            extra[joint_name] = scenario_errors(
-                check_extra, count, f"[path] extra for {joint_name!r}"
-            )
+    extra = _extra(table["extra"], robot, locked or {}) if "extra" in table else None
     max_deviation = None
     if "max_deviation_deg" in table:
         value = number(table["max_deviation_deg"], "[path] max_deviation_deg", MAX_ANGLE_DEG, "deg")
@@ -377,30 +373,3 @@ def _pose(xyz_value: Any, rpy_value: Any, where: str) -> CartesianGoal:
         rpy = np.radians(rpy)
         rotation = quat_to_matrix(quat_from_zyx(rpy[2], rpy[1], rpy[0]))
     return CartesianGoal(xyz, rotation)
-
-
-def payload_table(table: Any) -> Payload | None:
-    """``[payload]`` (kg, m, kg m^2) as a :class:`Payload`, or None."""
-    if table is None:
-        return None
-    if not isinstance(table, Mapping):
-        raise ScenarioError("[payload] must be a table")
-    check_keys(table, PAYLOAD_KEYS, "[payload]")
-    if "mass" not in table:
-        raise ScenarioError("[payload] needs mass [kg]")
-    try:
-        mass = number(table["mass"], "[payload] mass", MAX_MAGNITUDE, "kg")
-        com = triple(table, "com_xyz", [0.0, 0.0, 0.0], "[payload]")
-        box = triple(table, "box", None, "[payload]") if "box" in table else None
-        if "inertia" in table:
-            inertia = tuple(float(v) for v in numbers(table["inertia"], 6, "[payload] inertia"))
-            return Payload(mass=mass, com_xyz=com, inertia=inertia, box=box)  # type: ignore[arg-type]
-        if box is not None:  # a uniform box, as compose --payload-box makes it
-            return Payload.uniform_box(mass, box, com)
-        check_mass(mass)  # a bad mass is named before the missing inertia
-    except InputError as exc:
-        raise ScenarioError(str(exc)) from None
-    raise ScenarioError(
-        "[payload] needs inertia = [ixx, iyy, izz, ixy, ixz, iyz] about its centre of mass "
-        "[kg m^2], or a box [m] for a uniform box's"
-    )

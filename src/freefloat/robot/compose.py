@@ -274,14 +274,7 @@ def compose(spec: ServicerSpec, offer_ties: bool = True) -> Composed:
         errors = "; ".join(str(e) for e in getattr(urdf, "errors", []))
         raise ModelError(f"the composed URDF does not validate: {errors or 'unknown error'}")
 
-    from lxml import etree  # yourdfpy's own XML library
-
-    tree = urdf.write_xml()
-    for element in tree.iter("joint"):  # the arm as designed: its locked joints marked
-        if element.get("name") in locked:
-            element.set(LOCKED_ATTRIBUTE, repr(float(locked[element.get("name")])))
-    body = etree.tostring(tree, pretty_print=True, encoding="unicode")
-    text = "<?xml version='1.0' encoding='UTF-8'?>\n" + body
+    text = _marked_text(urdf, locked)
     try:  # a closed loop, say, before Pinocchio builds the model below (it would crash)
         check_urdf_xml(text)
     except ModelError as exc:
@@ -304,6 +297,22 @@ def compose(spec: ServicerSpec, offer_ties: bool = True) -> Composed:
 
         text = attach_payload(text, tips[0], spec.payload)
     return Composed(text, locked, tuple(notes), tips, srdf, frozenset(prismatic))
+
+
+def _marked_text(urdf: Any, locked: dict[str, float]) -> str:
+    """The yourdfpy URDF's text, its ``locked`` joints (rad or m) marked as such.
+
+    The mark (:data:`~.designed_bodies.LOCKED_ATTRIBUTE`) keeps the arm as designed: a locked
+    joint still separates its bodies for clearance.
+    """
+    from lxml import etree  # yourdfpy's own XML library
+
+    tree = urdf.write_xml()
+    for element in tree.iter("joint"):
+        if element.get("name") in locked:
+            element.set(LOCKED_ATTRIBUTE, repr(float(locked[element.get("name")])))
+    body = etree.tostring(tree, pretty_print=True, encoding="unicode")
+    return "<?xml version='1.0' encoding='UTF-8'?>\n" + body
 
 
 #: How far (m) a mount point may lie from the spacecraft box's surface without a note.

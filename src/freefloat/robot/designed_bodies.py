@@ -58,6 +58,11 @@ class DesignedBodies:
                 return self.body(parent)
         return None
 
+    def placed(self, link: str) -> tuple[str, str | None]:
+        """``link``'s designed body and that body's parent (what its pairs depend on)."""
+        body = self.body(link)
+        return body, self.parent(body)
+
     def adjacent(self, first: str, second: str) -> bool:
         """Whether the links ``first`` and ``second`` lie on parent and child bodies."""
         a, b = self.body(first), self.body(second)

@@ -284,7 +284,7 @@ def checked_pairs(
         tuple(int(j) for j in model.parents),
         tuple(model.names),  # the payload's fingers are known by their joints' names
         stamp,
-        None if designed is None else tuple(_designed_key(designed, link) for link in links),
+        None if designed is None else tuple(designed.placed(link) for link in links),
     )
     pairs = _PAIRS.get(key)
     if pairs is None:
@@ -296,12 +296,6 @@ def checked_pairs(
         for a, b in pairs:
             geometry.addCollisionPair(pin.CollisionPair(a, b))
     return list(pairs)
-
-
-def _designed_key(designed: DesignedBodies, link: str) -> tuple[str, str | None]:
-    """A link's designed body and that body's parent (what the pairs depend on)."""
-    body = designed.body(link)
-    return body, designed.parent(body)
 
 
 def _pairs_of(

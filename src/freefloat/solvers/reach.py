@@ -253,11 +253,7 @@ class _Spent:
 
 @dataclass(frozen=True)
 class _Shared:
-    """What every direction of :func:`reach_set` reads.
-
-    The problem, the quintic path's attitude (``[x, y, z, w]``), the drift start, the
-    constraints by kind and the settings.
-    """
+    """What every direction of :func:`reach_set` reads (the quintic attitude ``[x, y, z, w]``)."""
 
     problem: Problem
     quintic: np.ndarray
