@@ -47,10 +47,17 @@ class CollisionError(FreeFloatError):
         margin: the required clearance (m).
         chosen: whether those joints came from inverse kinematics of an end-effector goal
             (the message then asks to move that goal).
+        why: what else the reader should know of the pair ("" when nothing).
     """
 
     def __init__(
-        self, where: str, pair: str, clearance: float, margin: float, chosen: bool = False
+        self,
+        where: str,
+        pair: str,
+        clearance: float,
+        margin: float,
+        chosen: bool = False,
+        why: str = "",
     ) -> None:
         self.where = where
         self.pair = pair
@@ -66,7 +73,7 @@ class CollisionError(FreeFloatError):
         )
         super().__init__(
             f"{where} configuration: {pair} {state} {amount}, below the clearance margin "
-            f"{margin:g} m; {move}or lower [safety] margin_m"
+            f"{margin:g} m; {move}or lower [safety] margin_m" + (f" ({why})" if why else "")
         )
 
 

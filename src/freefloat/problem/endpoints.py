@@ -16,6 +16,7 @@ import numpy as np
 
 from ..errors import CollisionError, EndpointError
 from ..robot.collision import clearance_at
+from ..robot.designed_bodies import designed_bodies
 from .build import check_joint_limits
 from .constraints import Clearance, Constraint
 from .scenario import Scenario
@@ -48,10 +49,31 @@ def check_endpoints(
                 clearance, pair = clearance_at(constraint.model, joints)
                 if clearance < constraint.margin:
                     chosen = chosen_goal and where == "goal"
-                    raise CollisionError(where, pair, clearance, constraint.margin, chosen)
+                    why = _swing_note(constraint, pair)
+                    raise CollisionError(where, pair, clearance, constraint.margin, chosen, why)
     for constraint in constraints:  # the configuration alone decides, for every path
         for where, joints in ends:
             excess = constraint.at_rest(scenario.robot, np.asarray(joints, dtype=float))
             if excess is not None and excess.value > constraint.tolerance:
                 chosen = chosen_goal and where == "goal"
                 raise EndpointError(where, constraint.name, excess.value, excess.detail, chosen)
+
+
+def _swing_note(constraint: Clearance, pair: str) -> str:
+    """Why a parent and child pair is checked at all: its joint swings one into the other."""
+    model = constraint.model
+    robot = model.robot
+    if not robot.urdf_text:
+        return ""
+    objects = {o.name: o for o in model.geometry.geometryObjects}
+    names = pair.split(" / ")
+    if len(names) != 2 or not all(n in objects for n in names):
+        return ""
+    links = [robot.model.frames[objects[n].parentFrame].name for n in names]
+    if not designed_bodies(robot.urdf_text).adjacent(*links):
+        return ""
+    return (
+        "parent and child, checked because the joint between them swings one into the other "
+        "(docs/clearance.md); if they touch only where they are joined, start the moving "
+        "link's collision shape clear of the other, or disable the pair in an SRDF"
+    )

@@ -13,11 +13,14 @@ fixed in the arm's own URDF are rigid as designed.
 
 from __future__ import annotations
 
+import re
 from functools import lru_cache
+
+import pinocchio as pin
 
 from .urdf_checks import urdf_document
 
-__all__ = ["LOCKED_ATTRIBUTE", "DesignedBodies", "designed_bodies"]
+__all__ = ["GRASPING_NAME", "LOCKED_ATTRIBUTE", "DesignedBodies", "designed_bodies", "finger_of"]
 
 #: The attribute freefloat puts on a joint it locked (the locked value, rad or m).
 LOCKED_ATTRIBUTE = "freefloat_locked"
@@ -80,3 +83,26 @@ def designed_bodies(text: str) -> DesignedBodies:
         moves = joint.get("type") in _MOVING or joint.get(LOCKED_ATTRIBUTE) is not None
         links[str(child.get("link"))] = (str(joint.get("name")), str(parent.get("link")), moves)
     return DesignedBodies(links)
+
+
+#: Joint names of a hand that grasps a payload (Robotiq's knuckles, Tiago's ``hand_*_flex``,
+#: jaws): the payload touches what hangs below its holder through such joints.
+GRASPING_NAME = re.compile(r"finger|gripper|knuckle|thumb|jaw|claw|hand|grasp|pinch|flex", re.I)
+
+
+def finger_of(model: pin.Model, holder: int, joint: int) -> bool:
+    """Whether ``joint``'s body is a finger of ``holder``'s (Pinocchio joint indices).
+
+    It hangs below the holder only through joints named like a hand's
+    (:data:`GRASPING_NAME`): a payload held by a mid-arm link, or by the spacecraft, is
+    checked against the arm beyond it. (A hand whose joints are named otherwise has its
+    fingers checked against the payload: lock them, or disable those pairs in an SRDF.)
+    """
+    if joint == holder:
+        return False
+    parent = model.parents
+    while joint != holder:
+        if joint <= 1 or not GRASPING_NAME.search(model.names[joint]):
+            return False
+        joint = int(parent[joint])
+    return True

@@ -24,7 +24,6 @@ mesh's triangles read once per file and hulls built once per mesh file and scale
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -35,12 +34,13 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelError
-from .designed_bodies import DesignedBodies, designed_bodies
+from .designed_bodies import DesignedBodies, designed_bodies, finger_of
 from .file_stamp import FileStamp, file_stamp
 from .meshes import MeshKey, mesh_key
 from .model import Robot
 from .payload import PAYLOAD_LINK
 from .srdf import remove_srdf_pairs
+from .swing import swinging_pairs
 
 __all__ = [
     "OBSTACLE_PREFIX",
@@ -318,6 +318,7 @@ def _pairs_of(
     # touches that body (and its fingers) by design, never the link before nor the arm beyond
     payload = [model.frames[obj.parentFrame].name == PAYLOAD_LINK for obj in objects]
     geometry.removeAllCollisionPairs()
+    spared: list[tuple[int, int]] = []
     for a in range(len(objects)):
         for b in range(a + 1, len(objects)):
             ja, jb = joints[a], joints[b]
@@ -331,11 +332,18 @@ def _pairs_of(
             else:
                 touching = parent[ja] == jb or parent[jb] == ja
             if not (payload[a] or payload[b]) and touching:
-                continue  # parent and child touch by design (a payload is neither)
-            if (payload[a] and _finger_of(model, ja, jb)) or (
-                payload[b] and _finger_of(model, jb, ja)
+                spared.append((a, b))  # parent and child touch by design (a payload is neither)
+                continue
+            if (payload[a] and finger_of(model, ja, jb)) or (
+                payload[b] and finger_of(model, jb, ja)
             ):
                 continue  # a grasped payload touches its holder's fingers
+            geometry.addCollisionPair(pin.CollisionPair(a, b))
+    swinging = set() if designed is None else swinging_pairs(model, geometry, designed, spared)
+    if swinging:  # unless the joint swings one into the spacecraft (.swing), in one order
+        every = sorted({(int(p.first), int(p.second)) for p in geometry.collisionPairs} | swinging)
+        geometry.removeAllCollisionPairs()
+        for a, b in every:
             geometry.addCollisionPair(pin.CollisionPair(a, b))
     if srdf is not None:  # never a keep-out object's pairs: they belong to no link's design
         kept = [  # as numbers: the vector's elements change under removal
@@ -349,29 +357,6 @@ def _pairs_of(
         for first, second in sorted(pairs):
             geometry.addCollisionPair(pin.CollisionPair(first, second))
     return [(int(p.first), int(p.second)) for p in geometry.collisionPairs]
-
-
-#: Joint names of a hand that grasps a payload (Robotiq's knuckles, Tiago's ``hand_*_flex``,
-#: jaws): the payload touches what hangs below its holder through such joints.
-GRASPING_NAME = re.compile(r"finger|gripper|knuckle|thumb|jaw|claw|hand|grasp|pinch|flex", re.I)
-
-
-def _finger_of(model: pin.Model, holder: int, joint: int) -> bool:
-    """Whether ``joint``'s body is a finger of ``holder``'s (Pinocchio joint indices).
-
-    It hangs below the holder only through joints named like a hand's
-    (:data:`GRASPING_NAME`): a payload held by a mid-arm link, or by the spacecraft, is
-    checked against the arm beyond it. (A hand whose joints are named otherwise has its
-    fingers checked against the payload: lock them, or disable those pairs in an SRDF.)
-    """
-    if joint == holder:
-        return False
-    parent = model.parents
-    while joint != holder:
-        if joint <= 1 or not GRASPING_NAME.search(model.names[joint]):
-            return False
-        joint = int(parent[joint])
-    return True
 
 
 #: Checked pairs per set of objects, kinematic tree and SRDF file (see checked_pairs).

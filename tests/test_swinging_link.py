@@ -1,0 +1,94 @@
+"""A first link hinged at the face of the spacecraft's hull that its joint can swing into the
+hull is not "touching by design": its pair with the hull is checked (the trial's 1 m link
+ran 0.29 m through the hull in a verified plan). Pairs that do not swing stay spared."""
+
+from __future__ import annotations
+
+import pytest
+
+import freefloat as ff
+from freefloat.cli import main
+from freefloat.robot.collision import CollisionModel
+
+import urdfs
+from conftest import ROOT
+
+HULL = '<collision><geometry><box size="1 1 1"/></geometry></collision>'
+
+
+def _arm(tmp_path, length: float, axis=(0, 0, 1)) -> str:
+    """Base: a 1 m cube (hull), the joint q1 on its +x face, about ``axis``; link1 a box from
+    2 cm beyond the joint out to ``length`` m; link2 a short stub. Closed form: about z, at
+    q1 = 180 deg link1 lies along -x from x = 0.48 to 0.5 - length, inside the cube; about x
+    (the face's normal) it turns about its own length, always outside."""
+    body = urdfs.BASE.format(mass=500.0, i=83.0).replace("</visual>", "</visual>" + HULL)
+    body += urdfs.joint("q1", "base", "link1", "revolute", axis, (0.5, 0, 0), (-3.1, 3.1))
+    reach = length - 0.02
+    body += urdfs.link("link1", mass=4.0).replace(
+        "</link>",
+        f'<collision><origin xyz="{0.02 + reach / 2} 0 0"/>'
+        f'<geometry><box size="{reach} 0.1 0.1"/></geometry></collision></link>',
+    )
+    body += urdfs.joint("q2", "link1", "link2", "revolute", (0, 0, 1), (length + 0.1, 0, 0))
+    body += urdfs.link("link2", mass=1.0)
+    path = tmp_path / "hinged.urdf"
+    path.write_text(urdfs.robot(body, "hinged"))
+    return str(path)
+
+
+def _pairs(urdf: str) -> set[tuple[str, str]]:
+    model = CollisionModel(ff.load_robot(urdf))
+    objects = model.geometry.geometryObjects
+    return {(objects[a].name, objects[b].name) for a, b in model.pairs}
+
+
+def test_a_long_first_link_that_swings_into_the_hull_is_checked(tmp_path, capsys):
+    urdf = _arm(tmp_path, 1.0)
+    assert ("base_0", "link1_0") in _pairs(urdf)
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(
+        f'robot = "{urdf}"\nduration = 10.0\n[start]\njoints = {{ q1 = 0.0, q2 = 0.0 }}\n'
+        "[goal]\njoints = { q1 = 170.0, q2 = 0.0 }\n"
+    )
+    assert main(["check", str(scenario), "--at", "start"]) == 0  # 2 cm clear at the start
+    assert (
+        "base_0 / link1_0                                      0.0200 m" in capsys.readouterr().out
+    )
+    assert main(["check", str(scenario), "--at", "180,0"]) == 1  # inside the cube
+    out = capsys.readouterr().out
+    assert "base_0 / link1_0" in out and "configuration: NOT OK" in out
+    assert main(["plan", str(scenario), "-o", str(tmp_path / "p.json"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "goal configuration: base_0 / link1_0 overlap" in err
+    assert "checked because the joint between them swings one into the other" in err
+
+
+def test_a_link_turning_about_its_own_length_and_the_shipped_robots_stay_spared(tmp_path):
+    """The same link turning about the face's normal never enters the hull: spared, as
+    parent and child. Every shipped servicer's pairs are those of the parent-and-child rule
+    on Pinocchio's bodies, worked out here."""
+    assert ("base_0", "link1_0") not in _pairs(_arm(tmp_path, 1.0, axis=(1, 0, 0)))
+    for name in ("ur5_servicer", "panda_servicer"):
+        robot = ff.load_robot(ROOT / "robots" / f"{name}.urdf")
+        model = CollisionModel(robot)
+        objects = list(model.geometry.geometryObjects)
+        parents = [int(j) for j in robot.model.parents]
+        joints = [int(o.parentJoint) for o in objects]
+        expected = {
+            (a, b)
+            for a in range(len(objects))
+            for b in range(a + 1, len(objects))
+            if joints[a] != joints[b]
+            and parents[joints[a]] != joints[b]
+            and parents[joints[b]] != joints[a]
+        }
+        assert set(model.pairs) == expected, name
+
+
+@pytest.fixture(autouse=True)
+def _fresh_pairs():
+    """Pairs are cached per robot shape in a process: each test works them out."""
+    from freefloat.robot import geometry
+
+    geometry._PAIRS.clear()
+    yield
