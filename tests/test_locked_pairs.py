@@ -111,3 +111,26 @@ def test_a_scenario_lock_keeps_the_pairs_of_the_arm_as_built(tmp_path):
     rigid = {("spacecraft_0", "shoulder_link_0"), ("base_link_0", "shoulder_link_0")}
     assert found == expected - rigid
     assert ("spacecraft_0", "upper_arm_link_0") in found
+
+
+def test_two_locks_in_a_row_keep_the_hull_against_the_link_beyond(tmp_path, capsys):
+    """The review's case: shoulder_pan and shoulder_lift both locked put the spacecraft and
+    the upper arm on one rigid body, skipped as "one body" until now; their pair is kept
+    (its distance is constant: the start must keep the margin)."""
+    out = tmp_path / "two.urdf"
+    argv = ["compose", "--arm", "ur5", "--base-mass", "100", "--base-size", "0.6", "0.6", "0.6"]
+    argv += ["--mount", "0.3", "0", "0", "--mount-rpy", "0", "90", "0"]
+    argv += ["--lock", "shoulder_pan_joint=0", "shoulder_lift_joint=160", "-o", str(out), "-q"]
+    assert main(argv) == 0
+    joints = {k: v for k, v in GOAL.items() if k != "shoulder_lift_joint"}
+    assert _hull_and_upper_arm_collide(str(out), {**joints, "wrist_2_joint": 0.0})
+    scenario = tmp_path / "s.toml"
+    rest = "elbow_joint = -55.0, wrist_1_joint = -60.0, wrist_2_joint = 0.0, wrist_3_joint = 90.0"
+    scenario.write_text(
+        f'robot = "{out}"\nduration = 20.0\n[start]\njoints = {{ {rest} }}\n'
+        f"[goal]\njoints = {{ {rest} }}\n"
+    )
+    capsys.readouterr()
+    assert main(["check", str(scenario), "--at", "start"]) == 1
+    printed = capsys.readouterr().out
+    assert "spacecraft_0 / upper_arm_link_0" in printed and "NOT OK" in printed

@@ -71,6 +71,18 @@ class DesignedBodies:
         a, b = self.body(first), self.body(second)
         return a != b and (self.parent(a) == b or self.parent(b) == a)
 
+    def held_apart(self, first: str, second: str) -> bool:
+        """Whether locks hold ``first`` and ``second`` together on bodies that do not touch.
+
+        As designed the two links lie neither on one body, nor on parent and child, nor on
+        two fingers of one hand (joints named like a hand's, one parent).
+        """
+        a, b = self.body(first), self.body(second)
+        if a == b or self.adjacent(first, second):
+            return False
+        fingers = all(GRASPING_NAME.search(body) for body in (a, b))
+        return not (fingers and self.parent(a) == self.parent(b))
+
 
 @lru_cache(maxsize=16)
 def designed_bodies(text: str) -> DesignedBodies:

@@ -322,8 +322,8 @@ def _pairs_of(
     for a in range(len(objects)):
         for b in range(a + 1, len(objects)):
             ja, jb = joints[a], joints[b]
-            if ja == jb:
-                continue  # one body
+            if ja == jb and not (designed and designed.held_apart(links[a], links[b])):
+                continue  # one body (unless locks made it: then its start keeps the margin)
             if obstacle[a] or obstacle[b]:  # a keep-out object touches nothing by design
                 geometry.addCollisionPair(pin.CollisionPair(a, b))
                 continue
