@@ -134,3 +134,26 @@ def test_two_locks_in_a_row_keep_the_hull_against_the_link_beyond(tmp_path, caps
     assert main(["check", str(scenario), "--at", "start"]) == 1
     printed = capsys.readouterr().out
     assert "spacecraft_0 / upper_arm_link_0" in printed and "NOT OK" in printed
+
+
+def test_composing_an_arm_freefloat_locked_keeps_its_marks(tmp_path):
+    """An arm URDF locked by freefloat (lock_joints, as [robot] lock writes it) composed: yourdfpy
+    drops unknown attributes, so the marks are carried over from the arm's own XML (else the
+    old pair rule came back)."""
+    import xml.etree.ElementTree as ET
+
+    from freefloat.robot.arms import arm_urdf
+    from freefloat.robot.lock import lock_joints
+
+    source = arm_urdf("ur5")
+    arm = tmp_path / "ur5_locked.urdf"
+    arm.write_text(lock_joints(source.read_text(), {"shoulder_pan_joint": 0.0}, source.parent))
+    out = tmp_path / "again.urdf"
+    argv = ["compose", "--arm", str(arm), "--base-mass", "200", "--base-size", "1", "1", "1"]
+    assert main([*argv, "--mount", "0.5", "0", "0", "--prefix", "a_", "-o", str(out), "-q"]) == 0
+    marks = {
+        j.get("name"): j.get("freefloat_locked")
+        for j in ET.parse(out).getroot().iter("joint")
+        if j.get("freefloat_locked") is not None
+    }
+    assert marks == {"a_shoulder_pan_joint": "0.0"}

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..errors import LockedJointError, ModelError, UnknownNameError
 from ..files import absolute_path, read_text_file
+from .designed_bodies import LOCKED_ATTRIBUTE
 from .lock import default_lock, locked_origin
 from .model import MAX_URDF_BYTES, example_robot_data_dir
 from .urdf_checks import urdf_document
@@ -96,7 +97,11 @@ def mount_origin(xyz: Sequence[float], rpy: Sequence[float]) -> np.ndarray:
 
 @dataclass(frozen=True)
 class ArmPart:
-    """One arm's links, joints (mount first) and materials, renamed and locked."""
+    """One arm's links, joints (mount first) and materials, renamed and locked.
+
+    ``locked``: the joints locked now, with their values (rad or m); ``marked``: those its
+    URDF already marks as locked by freefloat (:data:`~.designed_bodies.LOCKED_ATTRIBUTE`).
+    """
 
     links: list[Any]
     joints: list[Any]
@@ -104,6 +109,7 @@ class ArmPart:
     locked: dict[str, float]
     notes: list[str]
     prismatic: set[str]
+    marked: dict[str, float]
 
 
 def arm_part(arm: ArmSpec) -> ArmPart:
@@ -119,9 +125,10 @@ def arm_part(arm: ArmSpec) -> ArmPart:
 
     source = arm_urdf(arm.arm)
     try:  # one clear line for what is no URDF, before yourdfpy's parser says more
-        urdf_document(read_text_file(source, "arm URDF", MAX_URDF_BYTES, ModelError))
+        document = urdf_document(read_text_file(source, "arm URDF", MAX_URDF_BYTES, ModelError))
     except ModelError as exc:
         raise ModelError(f"cannot read arm URDF {source}: {exc}") from None
+    marked = _marked(document, arm.prefix, source)  # yourdfpy drops the marks
     try:
         loaded = yourdfpy.URDF.load(
             str(source),
@@ -186,7 +193,27 @@ def arm_part(arm: ArmSpec) -> ArmPart:
         child=roots[0],
         origin=mount_origin(arm.mount, arm.mount_rpy),
     )
-    return ArmPart(links, [mount, *joints], list(robot.materials), values, notes, prismatic)
+    return ArmPart(links, [mount, *joints], list(robot.materials), values, notes, prismatic, marked)
+
+
+def _marked(document: Any, prefix: str, source: Path) -> dict[str, float]:
+    """``{prefixed joint: value}`` (rad or m) of the joints the URDF marks as locked.
+
+    Raises:
+        ModelError: a mark that is not a number.
+    """
+    marked = {}
+    for joint in document.findall("joint"):
+        value = joint.get(LOCKED_ATTRIBUTE)
+        if value is not None:
+            try:
+                marked[prefix + str(joint.get("name"))] = float(value)
+            except ValueError:
+                raise ModelError(
+                    f"arm URDF {source}: joint {joint.get('name')!r} has {LOCKED_ATTRIBUTE}="
+                    f"{value!r}, not a number (rad or m)"
+                ) from None
+    return marked
 
 
 def _lock_values(arm: ArmSpec, joints: Sequence[Any]) -> tuple[dict[str, float], list[str]]:

@@ -166,7 +166,8 @@ class ServicerSpec:
     def key(self) -> str:
         """A short hash of the spec and the arm file (for cache file names)."""
         texts = [arm_urdf(arm.arm).read_text() for arm in self.arms()]
-        payload = json.dumps([self.__dict__, *texts], default=str)
+        # the version of what is written: servicers composed before the lock marks differ
+        payload = json.dumps([COMPOSED_VERSION, self.__dict__, *texts], default=str)
         return hashlib.sha256(payload.encode()).hexdigest()[:16]
 
 
@@ -226,6 +227,7 @@ def compose(spec: ServicerSpec, offer_ties: bool = True) -> Composed:
     links, joints = [], []
     materials: dict[str, Any] = {}
     locked: dict[str, float] = {}
+    marked: dict[str, float] = {}  # locked by an earlier freefloat, in an arm's own URDF
     notes: list[str] = []
     prismatic: set[str] = set()
     bare: dict[str, None] = {}  # arms without collision geometry, each warned of once
@@ -239,6 +241,7 @@ def compose(spec: ServicerSpec, offer_ties: bool = True) -> Composed:
         for material in part.materials:
             materials.setdefault(material.name, material)
         locked.update(part.locked)
+        marked.update(part.marked)
         notes += part.notes
         prismatic |= part.prismatic
     for name in bare:
@@ -274,7 +277,7 @@ def compose(spec: ServicerSpec, offer_ties: bool = True) -> Composed:
         errors = "; ".join(str(e) for e in getattr(urdf, "errors", []))
         raise ModelError(f"the composed URDF does not validate: {errors or 'unknown error'}")
 
-    text = _marked_text(urdf, locked)
+    text = _marked_text(urdf, {**marked, **locked})
     try:  # a closed loop, say, before Pinocchio builds the model below (it would crash)
         check_urdf_xml(text)
     except ModelError as exc:
@@ -314,6 +317,10 @@ def _marked_text(urdf: Any, locked: dict[str, float]) -> str:
     body = etree.tostring(tree, pretty_print=True, encoding="unicode")
     return "<?xml version='1.0' encoding='UTF-8'?>\n" + body
 
+
+#: Changes whenever a composed servicer's text would differ for the same spec (2: locked
+#: joints marked, :mod:`.designed_bodies`), so that an older cache file is not reused.
+COMPOSED_VERSION = 2
 
 #: How far (m) a mount point may lie from the spacecraft box's surface without a note.
 MOUNT_TOLERANCE = 1e-3
