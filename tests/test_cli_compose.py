@@ -162,6 +162,8 @@ def test_lock_repeated_locks_every_joint_named(tmp_path, capsys):
         ),
         (["--lock", "elbow_joint", "--lock", "elbow_joint"], "--lock elbow_joint given twice"),
         (["--lock"], "--lock needs at least one JOINT or JOINT=DEG after it"),
+        (["--lock", "--lock", "elbow_joint=10"], "--lock needs at least one JOINT"),
+        (["--lock", "elbow_joint="], "--lock elbow_joint=: give JOINT or JOINT=DEG"),
     ],
 )
 def test_a_lock_given_twice_or_empty_is_refused(tmp_path, capsys, locks, message):

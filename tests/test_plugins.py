@@ -306,6 +306,8 @@ def test_a_start_or_goal_outside_the_cone_is_refused_before_any_search(tmp_path,
         "(half-angle 35 deg)), where every path starts; move the start joints or loosen "
         "[constraints.end_effector_cone]"
     )
+    assert main(["plan", str(scenario), "-o", str(tmp_path / "p.json")]) == 2
+    assert capsys.readouterr().err.startswith(f"freefloat: error: {scenario}: start configuration")
     for where in ("start", "goal"):
         assert main(["check", str(scenario), "--at", where]) == 1
         out = capsys.readouterr().out

@@ -124,8 +124,9 @@ def test_velocity_limit_reports_the_shortest_duration(tmp_path):
     assert err.shortest_duration == pytest.approx(3.0 * 15 / 8 / 2.0, rel=1e-6)
     # q1 travels 3 rad: at 2 rad/s no path does it in under 1.5 s
     assert err.least_duration == pytest.approx(3.0 / 2.0, rel=1e-12)
+    # 2.8125 s rounded up (the nearest, 2.812 s, would break the limit as printed)
     assert (
-        "the path found keeps every velocity limit from 2.812 s on, no path can in under 1.5 s"
+        "the path found keeps every velocity limit from 2.813 s on, no path can in under 1.5 s"
         in str(err)
     )
     slow = ff.Scenario(

@@ -97,7 +97,12 @@ def test_plan_and_reach_take_a_scenario_path_and_name_anything_else(tmp_path):
 def test_a_look_alike_name_shows_its_code_points(given, valid, said):
     message = str(ff.UnknownNameError("joint", given, valid))
     assert f"but its code points differ: {said})" in message
-    assert "code points" not in str(ff.UnknownNameError("joint", "\u00e9\u00e9", ["ja", "jb"]))
+    for other, valid in (("\u00e9\u00e9", ["ja"]), ("\u5173\u8282\u4e00", ["\u5173\u8282\u4e8c"])):
+        assert "code points" not in str(ff.UnknownNameError("joint", other, valid))
+    cyrillic = "\u043f\u043b\u0435\u0447\u043e"  # two Russian words a letter apart
+    assert "code points" not in str(
+        ff.UnknownNameError("joint", cyrillic, [cyrillic[:-1] + "\u0438"])
+    )
 
 
 def test_a_long_path_is_quoted_with_both_its_ends():
@@ -125,7 +130,7 @@ def test_a_scenario_through_a_pipe_without_a_name_is_named_a_pipe():
         os.close(write)
     assert str(info.value) == (
         f"scenario '/proc/self/fd/{read}' is a pipe or socket with no file name (as <(...) "
-        "gives), not a file; write it to a file first"
+        "gives), not a file; give a file (a piped input written to one first)"
     )
 
 

@@ -81,7 +81,7 @@ def absolute_path(path: str | Path, what: str, error: ErrorClass = FileError) ->
     if not resolved.exists() and Path(text).expanduser().exists():  # /dev/fd/63 -> pipe:[..]
         raise error(
             f"{what} {path_excerpt(text)} is a pipe or socket with no file name (as <(...) "
-            "gives), not a file; write it to a file first"
+            "gives), not a file; give a file (a piped input written to one first)"
         )
     return resolved
 

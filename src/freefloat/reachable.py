@@ -201,6 +201,8 @@ def reachable(
         JointLimitError: the start or goal joints outside their limits.
         CollisionError: the start or goal closer than the clearance margin, as ``plan``
             refuses it (a spatial robot's only with a budget: the inner estimate's claim).
+        EndpointError: the start or goal breaks a constraint of the pose alone (an
+            end-effector cone), under the same condition.
     """
     check_jobs(jobs, "jobs")
     scenario = scenario_of(scenario)

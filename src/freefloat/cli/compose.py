@@ -155,7 +155,7 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
     p_compose.add_argument(
         "--lock",
         nargs="*",
-        action="extend",
+        action="append",
         metavar="JOINT[=DEG]",
         help="more joints to lock, at 0 or at DEG (with several arms, prefixed names); "
         "several after one --lock, or --lock repeated",
@@ -280,11 +280,13 @@ def _servicer_spec(args: argparse.Namespace, payload: Payload | None) -> Service
             dataclasses.replace(a, prefix=a.prefix or f"arm{i + 1}_") for i, a in enumerate(arms)
         ]
     locks: list[list[str | tuple[str, float]]] = [[] for _ in arms]
-    if args.lock is not None and not args.lock:
+    if args.lock is not None and not all(args.lock):  # one list per --lock
         raise InputError("--lock needs at least one JOINT or JOINT=DEG after it")
     seen: dict[str, str] = {}
-    for item in args.lock or ():
-        name, _, degrees = item.partition("=")
+    for item in [item for given in args.lock or () for item in given]:
+        name, equals, degrees = item.partition("=")
+        if equals and not degrees.strip():
+            raise InputError(f"--lock {item}: give JOINT or JOINT=DEG (a number after =)")
         if name in seen:
             raise InputError(
                 f"--lock {name} given twice ({seen[name]} and {item}); lock each joint once"

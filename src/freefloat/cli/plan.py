@@ -8,7 +8,7 @@ import math
 import time
 from pathlib import Path
 
-from ..errors import CollisionError, InputError, InputLimitError, JointLimitError
+from ..errors import CollisionError, EndpointError, InputError, InputLimitError, JointLimitError
 from ..files import check_output
 from ..pipeline import plan
 from ..problem.limits import check_samples
@@ -151,7 +151,7 @@ def run(args: argparse.Namespace) -> int:
             samples=args.samples,
             objective=args.objective,
         )
-    except (JointLimitError, CollisionError) as exc:  # the file's start or goal: named first
+    except (JointLimitError, CollisionError, EndpointError) as exc:  # the file's ends, named first
         if scenario.source is None:
             raise
         raise exc.naming(scenario.source) from None

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from ..errors import CollisionError, InputLimitError, JointLimitError
+from ..errors import CollisionError, EndpointError, InputLimitError, JointLimitError
 from ..parallel import MAX_JOBS, check_jobs
 from ..problem.limits import check_number
 from ..reachable import DEFAULT_BUDGET as DEFAULT_REACH_BUDGET
@@ -96,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
                 progress=lambda i, n, d: advance(direction_line(d)),
                 jobs=args.jobs,
             )
-    except (JointLimitError, CollisionError) as exc:  # the file's start or goal: named first
+    except (JointLimitError, CollisionError, EndpointError) as exc:  # the file's ends, named first
         if scenario.source is None:
             raise
         raise exc.naming(scenario.source) from None

@@ -66,26 +66,28 @@ class UnknownNameError(FreeFloatError):
         super().__init__(f"{prefix}unknown {kind} {excerpt(name)}{because}; valid: {shown}")
 
 
+#: Letters of other scripts drawn like Latin ones (Cyrillic, Greek): a name typed with one
+#: looks like the Latin name it is not.
+_HOMOGLYPHS = str.maketrans(
+    "\u0430\u0435\u043e\u0440\u0441\u0443\u0445\u0456\u0458\u0455\u0410\u0412\u0415"
+    "\u041a\u041c\u041d\u041e\u0420\u0421\u0422\u0425\u03bf\u0391\u0392\u0395\u0396"
+    "\u0397\u0399\u039a\u039c\u039d\u039f\u03a1\u03a4\u03a5\u03a7",
+    "aeopcyxijsABEKMHOPCTXoABEZHIKMNOPTYX",
+)
+
+
 def _look_alike(name: str, valid: Sequence[str]) -> str | None:
     """A valid name ``name`` could be mistaken for, or None.
 
-    The same text in another Unicode form (NFC against NFD), or the same length, at most half
-    of it differing and only in characters beyond ASCII (a Cyrillic a for a Latin one).
+    The same text in another Unicode form (NFC against NFD), or with letters of another
+    script drawn like Latin ones (a Cyrillic a for a Latin a: :data:`_HOMOGLYPHS`).
     """
-    plain = unicodedata.normalize("NFC", name)
-    for other in valid:
-        if other == name:
-            continue
-        if unicodedata.normalize("NFC", other) == plain:
-            return other
-        if len(other) != len(name):
-            continue
-        differ = [(a, b) for a, b in zip(name, other, strict=True) if a != b]
-        if 2 * len(differ) <= len(name) and all(
-            not (a.isascii() and b.isascii()) for a, b in differ
-        ):
-            return other
-    return None
+
+    def skeleton(text: str) -> str:
+        return unicodedata.normalize("NFC", text).translate(_HOMOGLYPHS)
+
+    drawn = skeleton(name)
+    return next((v for v in valid if v != name and skeleton(v) == drawn), None)
 
 
 class ScenarioError(FreeFloatError):

@@ -6,7 +6,7 @@ Units as in every message: rad, rad/s, N m (m, m/s, N for prismatic joints), s.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from .base import FreeFloatError, SolverError
 
@@ -65,22 +65,36 @@ class DurationLimitError(FreeFloatError):
         return f"joint {self.joint!r} at {scale * self.peak:.4g} {unit}, beyond {self.limit:.4g}"
 
     def message_in(self, scale: float, unit: str) -> str:
-        """The message with the joint's values times ``scale``, in ``unit`` (deg, say)."""
+        """The message with the joint's values times ``scale``, in ``unit`` (deg, say).
+
+        Durations to four figures, rounded so that each claim holds as printed: the
+        shortest duration the path keeps its limits at up, the least any path needs down.
+        """
+        shortest = _rounded(self.shortest_duration, math.ceil)
         message = (
             f"{self._exceeds(scale, unit)}; the path found keeps every {self.kind} limit from "
-            f"{self.shortest_duration:.4g} s on"
+            f"{shortest} s on"
         )
         if self.least_duration > 0.0:
             message = (
-                f"{message}, no path can in under {self.least_duration:.4g} s (each joint's "
-                "travel at its limit), and a duration between may plan with another path"
+                f"{message}, no path can in under {_rounded(self.least_duration, math.floor)} s "
+                "(each joint's travel at its limit), and a duration between may plan with "
+                "another path"
             )
         else:
-            message = f"{message}; under {self.shortest_duration:.4g} s only another path can"
+            message = f"{message}; under {shortest} s only another path can"
         if 0.0 <= self.reached < self.asked < math.inf:  # a figure that says something
             turned = UnreachableAttitudeError.turn_phrase(self.reached, self.asked)
             message += f"; at this duration and within every limit, {turned}"
         return message
+
+
+def _rounded(seconds: float, way: Callable[[float], float]) -> str:
+    """``seconds`` to four significant figures, rounded ``way`` (math.ceil or math.floor)."""
+    if not (math.isfinite(seconds) and seconds > 0.0):
+        return f"{seconds:.4g}"
+    step = 10.0 ** (math.floor(math.log10(seconds)) - 3)
+    return f"{way(seconds / step) * step:.4g}"
 
 
 class VelocityLimitError(DurationLimitError):
