@@ -8,7 +8,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import FileError, InputError, PlanFileError, PlanMismatchError
+from ..errors import FileError, InputError
 from ..files import check_output
 from ..plans.format import Plan
 from ..problem.limits import check_number
@@ -16,7 +16,7 @@ from ..problem.scenario import Scenario, default_scenario_path
 from ..problem.scenario_tables import read_toml
 from ..progress import stage
 from ..robot.locations import is_path_like
-from ..verify.checks import verify_plan
+from ..verify.checks import require_verified
 
 if TYPE_CHECKING:
     Commands = argparse._SubParsersAction[argparse.ArgumentParser]
@@ -76,16 +76,8 @@ def checked_plan(args: argparse.Namespace, before: Callable[[Plan], None] | None
         return loaded
     verb = _ANYWAY.get(args.command, f"{args.command}s")
     hint = f"freefloat verify {args.plan} shows the checks; --no-verify {verb} it anyway"
-    try:
-        with stage("verify"):
-            verification = verify_plan(loaded)
-    except PlanMismatchError as exc:
-        raise PlanFileError(f"{args.plan}: {exc}; {hint}") from None
-    if not verification.passed:
-        raise PlanFileError(
-            f"{args.plan}: the plan fails verification ({', '.join(verification.failures)}); "
-            + hint
-        )
+    with stage("verify"):
+        require_verified(loaded, str(args.plan), hint)
     return loaded
 
 

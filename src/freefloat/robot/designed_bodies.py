@@ -39,6 +39,8 @@ class DesignedBodies:
     def __init__(self, links: dict[str, tuple[str, str, bool]]) -> None:
         self._links = links
         self._body: dict[str, str] = {}
+        #: The link each moving (or locked) joint hangs from.
+        self._mount = {joint: parent for joint, parent, moves in links.values() if moves}
 
     def body(self, link: str) -> str:
         """The joint moving ``link`` as designed (``""``: the root's body, or an unknown link)."""
@@ -56,10 +58,8 @@ class DesignedBodies:
 
     def parent(self, body: str) -> str | None:
         """The body ``body`` is mounted on (None for the root's)."""
-        for joint, parent, moves in self._links.values():
-            if moves and joint == body:
-                return self.body(parent)
-        return None
+        mount = self._mount.get(body)
+        return None if mount is None else self.body(mount)
 
     def placed(self, link: str) -> tuple[str, str | None]:
         """``link``'s designed body and that body's parent (what its pairs depend on)."""

@@ -11,9 +11,11 @@ Two distance models read the same URDF through this module and nothing else in c
 
 Both check the same pairs (:func:`checked_pairs`): every body on the spacecraft against every
 arm body except the one mounted on it, every keep-out object against every arm body, and every
-two arm bodies that are not parent and child; a captured payload against every body but the
-one holding it and that one's fingers (the link before it included); pairs an SRDF
-disables (MoveIt's ``<disable_collisions>``) are removed.
+two arm bodies that are not parent and child, judged on the arm as built (a locked joint still
+separates its bodies: :mod:`.designed_bodies`; a link one joint from the spacecraft that the
+joint swings into it is checked against it: :mod:`.swing`); a captured payload against every
+body but the one holding it and that one's fingers (the link before it included); pairs an
+SRDF disables (MoveIt's ``<disable_collisions>``) are removed.
 
 The URDF's geometry is parsed once per URDF in a process (each caller gets its own deep copy,
 :func:`load_collision_geometry`; or, for the two models above, which never change a shape,

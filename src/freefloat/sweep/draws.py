@@ -30,8 +30,6 @@ from ..errors import (
     FreeFloatError,
     InputError,
     InputLimitError,
-    PlanFileError,
-    PlanMismatchError,
     ScenarioError,
     UnknownNameError,
     excerpt,
@@ -194,19 +192,11 @@ def plan_source(name: str, folder: Path) -> tuple[Path, dict[str, Any], str]:
             check.
     """
     from ..plans.robot_copy import plan_robot
-    from ..verify.checks import verify_plan
+    from ..verify.checks import require_verified
 
     path = (folder / name).expanduser().resolve()
     plan = load_plan_file(path)
-    hint = f"freefloat verify {name} shows the checks"
-    try:
-        verification = verify_plan(plan)
-    except PlanMismatchError as exc:
-        raise PlanFileError(f"plan {name}: {exc}; {hint}") from None
-    if not verification.passed:
-        raise PlanFileError(
-            f"plan {name}: the plan fails verification ({', '.join(verification.failures)}); {hint}"
-        )
+    require_verified(plan, f"plan {name}", f"freefloat verify {name} shows the checks")
     return path, {}, robot_text(plan_robot(plan))
 
 

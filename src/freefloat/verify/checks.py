@@ -23,7 +23,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import FreeFloatError, InputError, PlanFileError
+from ..errors import FreeFloatError, InputError, PlanFileError, PlanMismatchError
 from ..physics.dynamics import inverse_dynamics
 from ..physics.momentum import MomentumMap
 from ..plans.format import Plan
@@ -56,6 +56,7 @@ __all__ = [
     "constraint_checks",
     "joint_torque_function",
     "plan_constraints",
+    "require_verified",
     "verify_plan",
 ]
 
@@ -248,3 +249,20 @@ def constraint_checks(subject: Subject, constraints: list[Constraint]) -> list[C
                 )
             )
     return checks
+
+
+def require_verified(plan: Plan, label: str, hint: str) -> None:
+    """Refuse a plan read from a file that fails verification, before a command uses it.
+
+    ``label``: how the message names the file (its path); ``hint``: what the reader can do.
+
+    Raises:
+        PlanFileError: a number disagrees with its recomputation, or a check fails (named).
+    """
+    try:
+        verification = verify_plan(plan)
+    except PlanMismatchError as exc:
+        raise PlanFileError(f"{label}: {exc}; {hint}") from None
+    if not verification.passed:
+        failed = ", ".join(verification.failures)
+        raise PlanFileError(f"{label}: the plan fails verification ({failed}); {hint}")
