@@ -288,7 +288,7 @@ def test_a_rate_beyond_the_limit_is_refused_before_the_plan_is_verified(
     from freefloat.cli import common, main
 
     verified = []
-    monkeypatch.setattr(common, "verify_plan", lambda plan: verified.append(plan))
+    monkeypatch.setattr(common, "require_verified", lambda plan, *_: verified.append(plan))
     out = tmp_path / "r.csv"
     assert main(["export", str(plan_file), "--format", "csv", "--rate", "1e9", "-o", str(out)]) == 2
     assert "samples an export may hold" in capsys.readouterr().err
