@@ -473,6 +473,7 @@ def _message_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str]
         *_pitch90_case(folder),
         *_edited_and_misnamed_cases(folder, plan_file),
         *_round_25_cases(folder),
+        *_round_26_cases(folder, plan_file),
     ]
 
 
@@ -510,6 +511,41 @@ def _round_25_cases(folder: Path) -> list[tuple[list, bool, str]]:
         (["plan", url, "-o", "u.json"], True, "is a URL"),
         (["plan", own, "-o", folder / "own.urdf"], True, "is a file this command reads"),
         (["correct", "absent.json", "--base-zyx-deg", "-1e9", "0", "0"], True, "is outside"),
+    ]
+
+
+def _round_26_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str]]:
+    """The twenty-sixth round's trials: a locked first joint that hid the hull (a wrong
+    accept), a start outside an end-effector cone (a 33 s search), a tampered plan used by
+    sensitivity, a joint locked twice."""
+    locked = folder / "lockpan.urdf"
+    compose = ["--base-mass", "100", "--base-size", "0.6", "0.6", "0.6", "--mount", "0.3", "0", "0"]
+    compose += ["--mount-rpy", "0", "90", "0"]
+    run(
+        ["compose", "--arm", "ur5", *compose, "--lock", "shoulder_pan_joint=0", "-o", locked],
+        folder,
+    )
+    inside = "shoulder_lift_joint = 155.0, elbow_joint = -55.0, wrist_1_joint = -60.0"
+    (folder / "lockpan.toml").write_text(
+        f'robot = "{locked}"\nduration = 20.0\n[start]\njoints = {{ {inside}, '
+        "wrist_2_joint = 0.0, wrist_3_joint = 90.0 }\n[goal]\njoints = { "
+        f"{inside}, wrist_2_joint = 0.0, wrist_3_joint = 80.0 }}\n"
+    )
+    cone = scenario_for(PLANAR, folder, "cone.toml")
+    cone.write_text(
+        cone.read_text() + "\n[constraints.end_effector_cone]\naxis = [1.0, 0.0, 0.0]\n"
+        "direction = [0.342, 0.94, 0.0]\nhalf_angle_deg = 35.0\n"
+    )
+    tampered = folder / "tampered.json"
+    data = json.loads(Path(plan_file).read_text())
+    data["samples"]["tau"] = [[2.0 * v for v in row] for row in data["samples"]["tau"]]
+    tampered.write_text(json.dumps(data))
+    twice = ["--lock", "elbow_joint=90", "elbow_joint=45", "-o", "t.urdf"]
+    return [
+        (["plan", folder / "lockpan.toml", "-o", "l.json"], True, "upper_arm_link_0"),
+        (["plan", cone, "-o", "c.json"], True, "breaks end_effector_cone"),
+        (["sensitivity", tampered], True, "disagrees with the recomputation"),
+        (["compose", "--arm", "ur5", *compose, *twice], True, "given twice"),
     ]
 
 
