@@ -403,3 +403,20 @@ def test_a_binding_cone_is_held_on_a_spatial_servicer(ur5_scenario, tmp_path, ca
     assert angles.max() <= half + 1e-6
     assert angles.max() > half - 0.05  # it binds
     assert main(["verify", str(held.save(tmp_path / "cone.json"))]) == 0, capsys.readouterr().err
+
+
+def test_the_cones_rows_ask_a_hair_inside_but_never_beyond_the_ends_room():
+    """Closed form: the worked example's tool points at q1 + q2 (110 deg at the start, 30 deg
+    at the goal), 40 deg from a direction at 70 deg at both ends. The rows' half-angle is the
+    cone's less SOLVER_SLACK, or less half the ends' room when that is smaller."""
+    from freefloat.problem.constraints.end_effector_cone import SOLVER_SLACK
+
+    problem = ff.problem_from_scenario(ff.Scenario.from_toml(ff.default_scenario_path()))
+    direction = [math.cos(math.radians(70)), math.sin(math.radians(70)), 0.0]
+    for half_deg, slack in (
+        (60.0, SOLVER_SLACK),
+        (40.0 + math.degrees(SOLVER_SLACK), 0.5 * SOLVER_SLACK),
+        (40.0, 0.0),
+    ):
+        cone = EndEffectorCone([1.0, 0.0, 0.0], direction, math.radians(half_deg))
+        assert cone._slack(problem) == pytest.approx(slack, abs=1e-12)

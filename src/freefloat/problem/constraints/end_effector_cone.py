@@ -10,6 +10,9 @@ end-effector frame, seen from the spacecraft (base) frame, ``v(q) = R(q) a``, mu
 with the exact gradient ``dg/dq_j = -w_j . (v x d)``, ``w_j`` the angular column of joint ``j``
 of the end effector's Jacobian in base-frame axes, chained with the path's affine dependence on
 ``beta``. The cosine form is smooth everywhere (the angle itself is not at the cone's axis).
+The solvers' rows use a half-angle a hair smaller (:data:`SOLVER_SLACK`, less when an end of
+the path lies nearer the edge), so that the path between their instants stays inside; the
+dense check and verification use the cone itself.
 
 The dense check samples the finished path (:data:`VERIFY_SAMPLES` instants of Pinocchio's
 frame placements), refines each sampled local maximum of ``g`` by a bounded scalar search in
@@ -39,10 +42,14 @@ from ..residual import Problem
 from ..scalar_minimum import scalar_minimum
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 
-__all__ = ["VERIFY_SAMPLES", "EndEffectorCone"]
+__all__ = ["SOLVER_SLACK", "VERIFY_SAMPLES", "EndEffectorCone"]
 
 #: Samples of the dense verification check (every sampled local maximum is then refined).
 VERIFY_SAMPLES = 801
+#: How far inside the cone the solvers' rows ask the axis to be (rad: 0.017 deg), so that the
+#: path between their instants stays inside (a root 0.01 deg out between them was refused);
+#: less when the start or goal lies nearer the edge (:meth:`EndEffectorCone._slack`).
+SOLVER_SLACK = 3e-4
 #: Keys of the scenario table and the plan record.
 _KEYS = ("axis", "direction", "half_angle_deg")
 
@@ -147,25 +154,41 @@ class EndEffectorCone(Constraint):
 
     def at_rest(self, robot: Robot, joints: np.ndarray) -> Excess:
         """``g`` at the configuration ``joints`` (rad or m), the tool axis's angle named."""
+        angle = self._angle(robot, joints)
+        degrees, half = math.degrees(angle), math.degrees(self.half_angle)
+        detail = f"axis {degrees:.4g} deg from the direction (half-angle {half:.4g} deg)"
+        return Excess(math.cos(self.half_angle) - math.cos(angle), 0.0, detail)
+
+    def _slack(self, problem: Problem) -> float:
+        """How far inside the rows ask (rad): :data:`SOLVER_SLACK`, or less.
+
+        Half the room of the start or the goal (which every path keeps) when that is nearer
+        the edge; 0 when either lies outside.
+        """
+        room = min(
+            self.half_angle - self._angle(problem.robot, np.asarray(ends, dtype=float))
+            for ends in (problem.family.start, problem.family.goal)
+        )
+        return float(np.clip(0.5 * room, 0.0, SOLVER_SLACK))
+
+    def _angle(self, robot: Robot, joints: np.ndarray) -> float:
+        """The tool axis's angle from the direction at the configuration ``joints`` (rad)."""
         model, data = robot.model, robot.model.createData()
         pin.framesForwardKinematics(model, data, robot.configuration(joints))
         pointing = data.oMf[robot.end_effector_frame].rotation @ self.axis
-        cosine = float(np.clip(self.direction @ pointing, -1.0, 1.0))
-        angle, half = math.degrees(math.acos(cosine)), math.degrees(self.half_angle)
-        detail = f"axis {angle:.4g} deg from the direction (half-angle {half:.4g} deg)"
-        return Excess(math.cos(self.half_angle) - cosine, 0.0, detail)
+        return math.acos(float(np.clip(self.direction @ pointing, -1.0, 1.0)))
 
     def rows(
         self, problem: Problem, beta: np.ndarray, instants: np.ndarray = DEFAULT_INSTANTS
     ) -> ConstraintRows:
-        """``cos(half_angle) - d . v`` at the instants, with its exact Jacobian in ``beta``."""
+        """``cos(half_angle - SOLVER_SLACK) - d . v`` at the instants, exact Jacobian in beta."""
         robot = problem.robot
         model, data = robot.model, robot.model.createData()
         frame = robot.end_effector_frame
         samples = problem.family.affine_samples(np.asarray(instants, dtype=float))
         q = samples.at(beta).q
         columns = [joint.idx_v for joint in robot.joints]
-        cos = math.cos(self.half_angle)
+        cos = math.cos(self.half_angle - self._slack(problem))  # a hair inside
         values = np.empty(len(q))
         gradients = np.empty((len(q), robot.n))
         for k, joints in enumerate(q):
