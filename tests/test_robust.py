@@ -326,6 +326,29 @@ def test_a_correction_no_motion_can_make_is_refused(worked):
     )
 
 
+def test_a_correction_too_far_names_where_its_search_began(tmp_path):
+    """The UR5 servicer turned 126 deg off its goal: the refusal said "back by 126 deg"
+    beside "of the 119 deg asked" (the search's own figure, from the loop it began on) with
+    nothing to tell them apart; now it names that loop's distance, which is the one asked."""
+    import re
+
+    plan = ff.plan(Scenario.from_toml(SCENARIOS / "ur5_servicer.toml"), samples=41)
+    robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+    measured = quat_from_zyx(*np.radians([120.0, 30.0, 10.0]))
+    with pytest.raises(ff.SolverError) as info:
+        correcting_plan(plan, robot, measured)
+    message = str(info.value)
+    wanted = math.degrees(ff.geodesic_angle(measured, plan.base.target_quaternion_xyzw))
+    said = re.search(
+        r"cannot turn the spacecraft back by ([\d.]+) deg .*search began on a loop ending "
+        r"([\d.]+) deg from the goal: reachable up to [\d.]+ deg of the ([\d.]+) deg asked",
+        message,
+    )
+    assert said, message
+    assert float(said.group(1)) == pytest.approx(wanted, abs=0.5)
+    assert float(said.group(2)) == pytest.approx(float(said.group(3)), abs=0.5)
+
+
 def _cone_plan(tmp_path):
     """The worked example kept within 60 deg of the base direction at 70 deg (its tool's x
     axis, which points at q1 + q2 in the base plane)."""

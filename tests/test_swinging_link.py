@@ -4,6 +4,8 @@ ran 0.29 m through the hull in a verified plan). Pairs that do not swing stay sp
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 import freefloat as ff
@@ -16,13 +18,14 @@ from conftest import ROOT
 HULL = '<collision><geometry><box size="1 1 1"/></geometry></collision>'
 
 
-def _arm(tmp_path, length: float, axis=(0, 0, 1)) -> str:
+def _arm(tmp_path, length: float, axis=(0, 0, 1), limits=(-3.1, 3.1), yaw=0.0) -> str:
     """Base: a 1 m cube (hull), the joint q1 on its +x face, about ``axis``; link1 a box from
     2 cm beyond the joint out to ``length`` m; link2 a short stub. Closed form: about z, at
     q1 = 180 deg link1 lies along -x from x = 0.48 to 0.5 - length, inside the cube; about x
     (the face's normal) it turns about its own length, always outside."""
     body = urdfs.BASE.format(mass=500.0, i=83.0).replace("</visual>", "</visual>" + HULL)
-    body += urdfs.joint("q1", "base", "link1", "revolute", axis, (0.5, 0, 0), (-3.1, 3.1))
+    q1 = urdfs.joint("q1", "base", "link1", "revolute", axis, (0.5, 0, 0), limits)
+    body += q1.replace('<origin xyz="0.5 0 0"/>', f'<origin xyz="0.5 0 0" rpy="0 0 {yaw}"/>')
     reach = length - 0.02
     body += urdfs.link("link1", mass=4.0).replace(
         "</link>",
@@ -31,7 +34,7 @@ def _arm(tmp_path, length: float, axis=(0, 0, 1)) -> str:
     )
     body += urdfs.joint("q2", "link1", "link2", "revolute", (0, 0, 1), (length + 0.1, 0, 0))
     body += urdfs.link("link2", mass=1.0)
-    path = tmp_path / "hinged.urdf"
+    path = tmp_path / f"hinged_{length}_{axis[0]}{axis[2]}_{limits[0]}_{limits[1]}_{yaw}.urdf"
     path.write_text(urdfs.robot(body, "hinged"))
     return str(path)
 
@@ -85,10 +88,37 @@ def test_a_link_turning_about_its_own_length_and_the_shipped_robots_stay_spared(
         assert set(model.pairs) == expected, name
 
 
-@pytest.fixture(autouse=True)
-def _fresh_pairs():
-    """Pairs are cached per robot shape in a process: each test works them out."""
-    from freefloat.robot import geometry
+def test_two_robots_of_one_name_get_their_own_pairs(tmp_path):
+    """The pairs were cached by names: a non-swinging variant loaded first gave its pairs to
+    the swinging one of the same names (a link 0.54 m inside the hull verified)."""
+    assert ("base_0", "link1_0") not in _pairs(_arm(tmp_path, 1.0, axis=(1, 0, 0)))
+    assert ("base_0", "link1_0") in _pairs(_arm(tmp_path, 1.0))
 
-    geometry._PAIRS.clear()
-    yield
+
+@pytest.mark.parametrize(
+    ("limits", "yaw", "why"),
+    [
+        ((-0.2, 0.2), math.pi, "lodged inside at every value of its joint"),
+        ((0.0, 6.4), -math.pi / 2, "a range over a full turn, from 0"),
+    ],
+)
+def test_a_link_inside_the_hull_over_its_range_is_checked(tmp_path, limits, yaw, why):
+    """Closed form: turned by pi about z, link1 lies along -x from 0.48 m, inside the cube
+    for every value within +-0.2 rad; with limits 0 to 6.4 rad and the origin turned by
+    -pi/2, 3 pi/2 points it along -x. Either pair is checked, however little its overlap
+    varies, or wherever the turn starts."""
+    assert ("base_0", "link1_0") in _pairs(_arm(tmp_path, 1.0, limits=limits, yaw=yaw)), why
+
+
+def test_a_link_a_lock_holds_inside_the_hull_is_refused(tmp_path, capsys):
+    """q1 locked at 177 deg ([robot] lock) holds link1 inside the cube: that pair, constant
+    now, is checked, and the start refused."""
+    urdf = _arm(tmp_path, 1.0)
+    scenario = tmp_path / "locked.toml"
+    scenario.write_text(
+        f'duration = 10.0\n[robot]\nurdf = "{urdf}"\nlock = [{{ joint = "q1", value = 177.0 }}]\n'
+        "[start]\njoints = { q2 = 0.0 }\n[goal]\njoints = { q2 = 10.0 }\n"
+    )
+    assert main(["check", str(scenario)]) == 1
+    out = capsys.readouterr().out
+    assert "base_0 / link1_0" in out and "configuration: NOT OK" in out

@@ -71,20 +71,22 @@ class UnknownNameError(FreeFloatError):
 _HOMOGLYPHS = str.maketrans(
     "\u0430\u0435\u043e\u0440\u0441\u0443\u0445\u0456\u0458\u0455\u0410\u0412\u0415"
     "\u041a\u041c\u041d\u041e\u0420\u0421\u0422\u0425\u03bf\u0391\u0392\u0395\u0396"
-    "\u0397\u0399\u039a\u039c\u039d\u039f\u03a1\u03a4\u03a5\u03a7",
-    "aeopcyxijsABEKMHOPCTXoABEZHIKMNOPTYX",
+    "\u0397\u0399\u039a\u039c\u039d\u039f\u03a1\u03a4\u03a5\u03a7\u03b1\u03b9\u03ba\u03bd"
+    "\u03c1\u03c5",
+    "aeopcyxijsABEKMHOPCTXoABEZHIKMNOPTYXaikvpu",
 )
 
 
 def _look_alike(name: str, valid: Sequence[str]) -> str | None:
     """A valid name ``name`` could be mistaken for, or None.
 
-    The same text in another Unicode form (NFC against NFD), or with letters of another
-    script drawn like Latin ones (a Cyrillic a for a Latin a: :data:`_HOMOGLYPHS`).
+    The same text in another Unicode form (NFC against NFD, fullwidth letters), or with
+    letters of another script drawn like Latin ones (a Cyrillic a for a Latin a:
+    :data:`_HOMOGLYPHS`).
     """
 
     def skeleton(text: str) -> str:
-        return unicodedata.normalize("NFC", text).translate(_HOMOGLYPHS)
+        return unicodedata.normalize("NFKC", text).translate(_HOMOGLYPHS)
 
     drawn = skeleton(name)
     return next((v for v in valid if v != name and skeleton(v) == drawn), None)

@@ -5,6 +5,7 @@ Units as in every message: rad, rad/s, N m (m, m/s, N for prismatic joints), s.
 
 from __future__ import annotations
 
+import decimal
 import math
 from collections.abc import Callable, Sequence
 
@@ -90,11 +91,16 @@ class DurationLimitError(FreeFloatError):
 
 
 def _rounded(seconds: float, way: Callable[[float], float]) -> str:
-    """``seconds`` to four significant figures, rounded ``way`` (math.ceil or math.floor)."""
+    """``seconds`` to four significant figures, rounded ``way`` (math.ceil or math.floor).
+
+    In decimal, from the float's shortest form: 0.7 rounded down stays 0.7.
+    """
     if not (math.isfinite(seconds) and seconds > 0.0):
         return f"{seconds:.4g}"
-    step = 10.0 ** (math.floor(math.log10(seconds)) - 3)
-    return f"{way(seconds / step) * step:.4g}"
+    exact = decimal.Decimal(repr(float(seconds)))
+    rounding = decimal.ROUND_CEILING if way is math.ceil else decimal.ROUND_FLOOR
+    step = decimal.Decimal(1).scaleb(exact.adjusted() - 3)
+    return f"{float(exact.quantize(step, rounding=rounding)):.4g}"
 
 
 class VelocityLimitError(DurationLimitError):

@@ -176,8 +176,11 @@ def planar_axis(robot: Robot, samples: int = 16, seed: int = 0) -> np.ndarray | 
     for _ in range(samples):
         values = rng.uniform(-np.pi, np.pi, robot.n)
         for i, joint in enumerate(robot.joints):
-            if not joint.angular or np.isfinite(joint.lower):
-                values[i] = rng.uniform(max(joint.lower, -1.0), min(joint.upper, 1.0))
+            if not joint.angular or np.isfinite(joint.lower):  # within its limits, near 0
+                low, high = max(joint.lower, -1.0), min(joint.upper, 1.0)
+                if low > high:  # limits away from 0: one radian (or metre) of them
+                    low, high = joint.lower, min(joint.upper, joint.lower + 1.0)
+                values[i] = rng.uniform(low, high)
         f1 = mmap.f1(values)
         if np.abs(across @ f1).max() > 1e-12 * max(1.0, np.abs(n @ f1).max()):
             return None

@@ -17,6 +17,8 @@ import numpy as np
 from ..errors import CollisionError, EndpointError
 from ..robot.collision import clearance_at
 from ..robot.designed_bodies import designed_bodies
+from ..robot.geometry import OBSTACLE_PREFIX
+from ..robot.payload import PAYLOAD_LINK
 from .build import check_joint_limits
 from .constraints import Clearance, Constraint
 from .scenario import Scenario
@@ -69,8 +71,10 @@ def _swing_note(constraint: Clearance, pair: str) -> str:
     names = pair.split(" / ")
     if len(names) != 2 or not all(n in objects for n in names):
         return ""
+    if any(n.startswith(OBSTACLE_PREFIX) for n in names):  # never parent nor child
+        return ""
     links = [robot.model.frames[objects[n].parentFrame].name for n in names]
-    if not designed_bodies(robot.urdf_text).adjacent(*links):
+    if PAYLOAD_LINK in links or not designed_bodies(robot.urdf_text).adjacent(*links):
         return ""
     return (
         "parent and child, checked because the joint between them swings one into the other "

@@ -26,6 +26,7 @@ mesh's triangles read once per file and hulls built once per mesh file and scale
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -287,6 +288,9 @@ def checked_pairs(
         tuple(model.names),  # the payload's fingers are known by their joints' names
         stamp,
         None if designed is None else tuple(designed.placed(link) for link in links),
+        # the swing sweep reads the joints' origins, axes and limits and the shapes: all the
+        # URDF's (mesh files by name; a mesh changed on disk under the same URDF is not seen)
+        hashlib.sha256(robot.urdf_text.encode("utf-8")).hexdigest(),
     )
     pairs = _PAIRS.get(key)
     if pairs is None:
@@ -325,6 +329,8 @@ def _pairs_of(
         for b in range(a + 1, len(objects)):
             ja, jb = joints[a], joints[b]
             if ja == jb and not (designed and designed.held_apart(links[a], links[b])):
+                if designed and designed.adjacent(links[a], links[b]):
+                    spared.append((a, b))  # a lock holds them: unless it holds one in the other
                 continue  # one body (unless locks made it: then its start keeps the margin)
             if obstacle[a] or obstacle[b]:  # a keep-out object touches nothing by design
                 geometry.addCollisionPair(pin.CollisionPair(a, b))

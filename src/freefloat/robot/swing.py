@@ -7,12 +7,14 @@ into the hull (a 1 m link 0.29 m inside it planned and verified). For every such
 body fixed to the spacecraft and a body one joint away, the joint is swept over its range
 (its limits; a full turn when it has none) with the other shapes fixed, and the pair's
 overlap depth is measured on true convex hulls (primitives as they are; coal's signed
-distance). When the depth varies by more than :func:`swing_allowance` over the range, the
-pair is not touching by design: it is checked like any other pair (its start then has to
-keep the margin too). Within the allowance the depth is the shapes' own asymmetry about the
-axis (Astrobee's arm in its bay: 12 mm); the shipped servicers' and example-robot-data arms'
-pairs do not vary at all. The relative pose of the two bodies depends on that one joint
-alone, so the sweep is exact up to its spacing (:data:`SWEEP_SAMPLES`).
+distance). When the depth varies by more than :func:`swing_allowance` over the range, or
+stays deeper than a quarter of the link's reach (a link lodged in the spacecraft; a locked
+joint: at its locked value), the pair is not touching by design: it is checked like any
+other pair (its start then has to keep the margin too). Within the allowance the depth is
+the shapes' own asymmetry about the axis (Astrobee's arm in its bay: 12 mm); the shipped
+servicers' and example-robot-data arms' pairs do not vary at all. The relative pose of the
+two bodies depends on that one joint alone, so the sweep is exact up to its spacing
+(:data:`SWEEP_SAMPLES`).
 """
 
 from __future__ import annotations
@@ -35,7 +37,10 @@ SWEEP_SAMPLES = 91
 #: The least variation of the overlap depth (m) that is a swing, not the shapes' asymmetry.
 _LEAST = 0.02
 #: The share of the moving shape's size (its largest distance from the joint) that is too.
-_SHARE = 0.1
+_SHARE = 0.05
+#: The share of its size a shape inside the spacecraft at every joint value must exceed to be
+#: no mount contact but a link lodged in the spacecraft.
+_DEEP = 0.25
 
 
 def swing_allowance(reach: float) -> float:
@@ -60,11 +65,13 @@ def swinging_pairs(
     for a, b in candidates:
         for fixed, moved in ((a, b), (b, a)):
             joint = designed.body(links[moved])
-            if designed.body(links[fixed]) != "" or not joint or not model.existJointName(joint):
+            if designed.body(links[fixed]) != "" or not joint or designed.parent(joint) != "":
                 continue
-            if designed.parent(joint) != "" and designed.parent(joint) is not None:
-                continue
-            if _swings(model, geometry, fixed, moved, model.getJointId(joint)):
+            if model.existJointName(joint):
+                swings = _swings(model, geometry, fixed, moved, model.getJointId(joint))
+            else:  # locked: fixed where the lock put it (a frame of that name marks it)
+                swings = _lodged(model, geometry, fixed, moved, joint)
+            if swings:
                 found.add((a, b))
     return found
 
@@ -95,7 +102,36 @@ def _swings(
         centre = b.act(np.asarray(second.aabb_center))
         away = float(np.linalg.norm(centre - data.oMi[joint].translation))
         reach = max(reach, away + float(second.aabb_radius))
-    return max(depths) - min(depths) > swing_allowance(reach)
+    allowance = swing_allowance(reach)
+    return max(depths) - min(depths) > allowance or min(depths) > _DEEP * reach
+
+
+def _lodged(
+    model: pin.Model, geometry: pin.GeometryModel, fixed: int, moved: int, joint: str
+) -> bool:
+    """Whether a locked joint holds shape ``moved`` inside ``fixed`` beyond the allowance.
+
+    The lock fixes one value of the joint: the depth there, against the shape's reach.
+    """
+    if not model.existFrame(joint):
+        return False
+    data, gdata = model.createData(), pin.GeometryData(geometry)
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    pin.updateGeometryPlacements(model, data, geometry, gdata)
+    first, second = (_convex(geometry.geometryObjects[k]) for k in (fixed, moved))
+    second.computeLocalAABB()
+    a, b = gdata.oMg[fixed], gdata.oMg[moved]
+    distance = coal.distance(
+        first,
+        coal.Transform3s(a.rotation, a.translation),
+        second,
+        coal.Transform3s(b.rotation, b.translation),
+        coal.DistanceRequest(),
+        coal.DistanceResult(),
+    )
+    origin = data.oMf[model.getFrameId(joint)].translation
+    away = float(np.linalg.norm(b.act(np.asarray(second.aabb_center)) - origin))
+    return -float(distance) > swing_allowance(away + float(second.aabb_radius))
 
 
 def _convex(obj: pin.GeometryObject) -> coal.CollisionGeometry:
@@ -117,6 +153,8 @@ def _range(model: pin.Model, joint: int) -> np.ndarray:
     lower, upper = float(model.lowerPositionLimit[index]), float(model.upperPositionLimit[index])
     prismatic = "P" in model.joints[joint].shortname().removeprefix("JointModel")
     wide = math.pi if not prismatic else 1.0
-    if not (math.isfinite(lower) and math.isfinite(upper)) or upper - lower > 2 * wide:
+    if not (math.isfinite(lower) and math.isfinite(upper)):
         lower, upper = max(lower, -wide), min(upper, wide)
+    if upper - lower > 2 * wide:  # one full turn of it (1 m either way), from its lower limit
+        upper = lower + 2 * wide
     return np.linspace(lower, upper, SWEEP_SAMPLES)
