@@ -167,3 +167,17 @@ def test_a_payload_key_on_a_plan_without_a_payload_says_so(tmp_path, capsys):
             "([payload] in the scenario, or freefloat compose --payload-mass); this one holds none"
         )
     )
+
+
+def test_planarity_of_a_robot_whose_limits_keep_away_from_zero(tmp_path):
+    """Limits 2 to 3 rad: the planarity test drew from [max(2, -1), min(3, 1)], empty, and
+    plan crashed. Planarity is the axes' property: the answer is the unlimited robot's."""
+    text = urdfs.chain(3)  # every axis along z: planar
+    far = text.replace('lower="-3.0" upper="3.0"', 'lower="2.0" upper="3.0"')
+    assert far != text
+    answers = []
+    for name, body in (("near.urdf", text), ("far.urdf", far)):
+        path = tmp_path / name
+        path.write_text(body)
+        answers.append(ff.is_planar(ff.load_robot(path)))
+    assert answers == [True, True]
