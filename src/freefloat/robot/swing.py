@@ -20,7 +20,7 @@ two bodies depends on that one joint alone, so the sweep is exact up to its spac
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import coal
 import numpy as np
@@ -89,19 +89,9 @@ def _swings(
     for value in _range(model, joint):
         q[index : index + nq] = (math.cos(value), math.sin(value)) if nq == 2 else (value,)
         pin.updateGeometryPlacements(model, data, geometry, gdata, q)
-        a, b = gdata.oMg[fixed], gdata.oMg[moved]
-        distance = coal.distance(
-            first,
-            coal.Transform3s(a.rotation, a.translation),
-            second,
-            coal.Transform3s(b.rotation, b.translation),
-            coal.DistanceRequest(),
-            coal.DistanceResult(),
-        )
-        depths.append(max(0.0, -float(distance)))
-        centre = b.act(np.asarray(second.aabb_center))
-        away = float(np.linalg.norm(centre - data.oMi[joint].translation))
-        reach = max(reach, away + float(second.aabb_radius))
+        depth, far = _depth_and_reach(first, second, gdata.oMg[fixed], gdata.oMg[moved])
+        depths.append(depth)
+        reach = max(reach, far(data.oMi[joint].translation))
     allowance = swing_allowance(reach)
     return max(depths) - min(depths) > allowance or min(depths) > _DEEP * reach
 
@@ -120,7 +110,18 @@ def _lodged(
     pin.updateGeometryPlacements(model, data, geometry, gdata)
     first, second = (_convex(geometry.geometryObjects[k]) for k in (fixed, moved))
     second.computeLocalAABB()
-    a, b = gdata.oMg[fixed], gdata.oMg[moved]
+    depth, far = _depth_and_reach(first, second, gdata.oMg[fixed], gdata.oMg[moved])
+    return depth > swing_allowance(far(data.oMf[model.getFrameId(joint)].translation))
+
+
+def _depth_and_reach(
+    first: coal.CollisionGeometry, second: coal.CollisionGeometry, a: pin.SE3, b: pin.SE3
+) -> tuple[float, Callable[[np.ndarray], float]]:
+    """How deep (m, 0 when apart) the shapes placed at ``a`` and ``b`` overlap, and reach.
+
+    ``reach(point)``: the farthest ``second`` reaches from a point (m, from its local box's
+    bounding sphere).
+    """
     distance = coal.distance(
         first,
         coal.Transform3s(a.rotation, a.translation),
@@ -129,9 +130,13 @@ def _lodged(
         coal.DistanceRequest(),
         coal.DistanceResult(),
     )
-    origin = data.oMf[model.getFrameId(joint)].translation
-    away = float(np.linalg.norm(b.act(np.asarray(second.aabb_center)) - origin))
-    return -float(distance) > swing_allowance(away + float(second.aabb_radius))
+    centre = b.act(np.asarray(second.aabb_center))
+    radius = float(second.aabb_radius)
+
+    def reach(origin: np.ndarray) -> float:
+        return float(np.linalg.norm(centre - origin)) + radius
+
+    return max(0.0, -float(distance)), reach
 
 
 def _convex(obj: pin.GeometryObject) -> coal.CollisionGeometry:
