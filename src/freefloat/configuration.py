@@ -18,6 +18,7 @@ import numpy as np
 
 from .errors import InputError
 from .problem.constraints import Clearance, scenario_constraints
+from .problem.endpoints import at_rest
 from .problem.limits import MAX_ANGLE_DEG, MAX_LENGTH_M, check_number
 from .problem.radians_hint import warn_if_radians
 from .problem.scenario import Scenario
@@ -155,12 +156,10 @@ def check_configuration(scenario: Scenario, joints: np.ndarray) -> Configuration
         for j, v in zip(robot.joints, joints, strict=True)
     )
     constraints = scenario_constraints(scenario)
-    posed = []
-    for constraint in constraints:
-        excess = constraint.at_rest(robot, np.asarray(joints, dtype=float))
-        if excess is not None:
-            holds = excess.value <= constraint.tolerance
-            posed.append(PoseConstraint(constraint.name, excess.value, excess.detail, holds))
+    posed = [
+        PoseConstraint(constraint.name, excess.value, excess.detail, holds)
+        for constraint, excess, holds in at_rest(constraints, robot, joints)
+    ]
     clearance = next((c for c in constraints if isinstance(c, Clearance)), None)
     if clearance is None or not clearance.applies_to(robot):
         return ConfigurationReport(rooms, (), None, tuple(posed))

@@ -18,12 +18,13 @@ from ..errors import CollisionError, EndpointError
 from ..robot.collision import clearance_at
 from ..robot.designed_bodies import designed_bodies
 from ..robot.geometry import OBSTACLE_PREFIX
+from ..robot.model import Robot
 from ..robot.payload import PAYLOAD_LINK
 from .build import check_joint_limits
-from .constraints import Clearance, Constraint
+from .constraints import Clearance, Constraint, Excess
 from .scenario import Scenario
 
-__all__ = ["check_endpoints"]
+__all__ = ["at_rest", "check_endpoints"]
 
 
 def check_endpoints(
@@ -53,12 +54,27 @@ def check_endpoints(
                     chosen = chosen_goal and where == "goal"
                     why = _swing_note(constraint, pair)
                     raise CollisionError(where, pair, clearance, constraint.margin, chosen, why)
-    for constraint in constraints:  # the configuration alone decides, for every path
-        for where, joints in ends:
-            excess = constraint.at_rest(scenario.robot, np.asarray(joints, dtype=float))
-            if excess is not None and excess.value > constraint.tolerance:
+    for where, joints in ends:  # the configuration alone decides, for every path
+        for constraint, excess, holds in at_rest(constraints, scenario.robot, joints):
+            if not holds:
                 chosen = chosen_goal and where == "goal"
                 raise EndpointError(where, constraint.name, excess.value, excess.detail, chosen)
+
+
+def at_rest(
+    constraints: Sequence[Constraint], robot: Robot, joints: np.ndarray
+) -> list[tuple[Constraint, Excess, bool]]:
+    """The constraints the configuration ``joints`` (rad or m) alone decides, at it.
+
+    Each with its excess there and whether that is within its tolerance
+    (:meth:`Constraint.at_rest`).
+    """
+    found = []
+    for constraint in constraints:
+        excess = constraint.at_rest(robot, np.asarray(joints, dtype=float))
+        if excess is not None:
+            found.append((constraint, excess, excess.value <= constraint.tolerance))
+    return found
 
 
 def _swing_note(constraint: Clearance, pair: str) -> str:
