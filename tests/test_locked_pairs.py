@@ -157,3 +157,19 @@ def test_composing_an_arm_freefloat_locked_keeps_its_marks(tmp_path):
         if j.get("freefloat_locked") is not None
     }
     assert marks == {"a_shoulder_pan_joint": "0.0"}
+
+
+def test_a_lock_mark_that_is_no_number_is_refused_in_one_line(tmp_path, capsys):
+    from freefloat.robot.arms import arm_urdf
+    from freefloat.robot.lock import lock_joints
+
+    source = arm_urdf("ur5")
+    text = lock_joints(source.read_text(), {"shoulder_pan_joint": 0.0}, source.parent)
+    arm = tmp_path / "bad_mark.urdf"
+    arm.write_text(text.replace('freefloat_locked="0.0"', 'freefloat_locked="zero"'))
+    out = tmp_path / "s.urdf"
+    argv = ["compose", "--arm", str(arm), "--base-mass", "200", "--base-size", "1", "1", "1"]
+    assert main([*argv, "--mount", "0.5", "0", "0", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and not out.exists()
+    assert "joint 'shoulder_pan_joint' has freefloat_locked='zero', not a number (rad or m)" in err
