@@ -42,9 +42,9 @@ def test_rows_asked_again_at_one_path_measure_only_new_instants(ur5, monkeypatch
     measured: list[int] = []
     original = CollisionModel.closest_many
 
-    def counting(self, joints, slots=None, gradients=False):  # type: ignore[no-untyped-def]
+    def counting(self, joints, slots=None, gradients=False, among=None):  # type: ignore[no-untyped-def]
         measured.append(len(np.atleast_2d(joints)))
-        return original(self, joints, slots, gradients)
+        return original(self, joints, slots, gradients, among)
 
     monkeypatch.setattr(CollisionModel, "closest_many", counting)
     beta = np.random.default_rng(3).normal(0.0, 0.4, problem.n_free)
@@ -95,3 +95,41 @@ def test_a_path_broken_by_its_rows_is_broken_by_the_dense_check(ur5):
     assert _densely_smallest(problem, robot, free) > 0.01
     assert broken_rows_first(problem, [_fresh(robot)], free) == ""
     assert broken_constraint(problem, [_fresh(robot)], free) == ""
+
+
+def test_rows_leave_out_the_pairs_no_free_coefficient_moves():
+    """The dual UR5 servicer as shipped gives its right arm no free coefficients (it holds
+    its pose): each solver row is the margin and slack less the smallest distance over the
+    pairs the left arm moves (a fresh model measuring every pair), its gradient that of
+    central differences of the row, and a held pair that is the smallest at an instant
+    hides no moved pair. The dense check still takes every pair."""
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "dual_ur5_servicer.toml")
+    problem = ff.problem_from_scenario(scenario, extra=scenario.extra)
+    robot = scenario.robot
+    constraint = _fresh(robot)
+    fresh = CollisionModel(robot, known_srdf(robot))
+    left = np.array([j.name.startswith("left_") for j in robot.joints])
+    moved = fresh.pairs_moved_by(left)
+    beta = np.random.default_rng(3).normal(0.0, 0.2, problem.n_free)
+    grid = len(DEFAULT_INSTANTS)  # the first rows: the grid's instants, in order
+    rows = constraint.rows(problem, beta, DEFAULT_INSTANTS)
+    base, dq, _ = problem.family.linear_map(DEFAULT_INSTANTS)
+    joints = base.q + dq @ beta
+    held_smallest = 0
+    for i, q in enumerate(joints):
+        every = fresh.distances(q).values
+        want = 0.01 + SOLVER_SLACK - every[moved].min()
+        assert rows.values[i] == want
+        held_smallest += every[~moved].min() < every[moved].min()
+    assert held_smallest > 0
+    h = 1e-6
+    for k in range(0, problem.n_free, 5):
+        e = np.zeros(problem.n_free)
+        e[k] = h
+        up = _fresh(robot).rows(problem, beta + e, DEFAULT_INSTANTS).values[:grid]
+        down = _fresh(robot).rows(problem, beta - e, DEFAULT_INSTANTS).values[:grid]
+        assert np.allclose(rows.jacobian[:grid, k], (up - down) / (2 * h), atol=1e-5)
+    path = problem.polynomials(beta)
+    assert constraint.smallest(path, 201)[0] <= min(
+        fresh.distances(q).values.min() for q in path.positions(np.linspace(0, path.duration, 201))
+    ) + 1e-12

@@ -243,3 +243,56 @@ def test_clearance_at_is_the_smallest_of_every_pair_measured():
         every = model.distances(joints).values
         k = int(np.argmin(every))
         assert clearance_at(model, joints) == (float(every[k]), model.names[k])
+
+
+def test_pairs_a_joint_set_moves_are_those_whose_distance_changes():
+    """On the dual UR5 servicer with the right arm's joints held: the pairs
+    :meth:`pairs_moved_by` the left arm's joints are exactly those whose distance (a fresh
+    model, every pair measured) changes when only those joints move; the others keep
+    theirs to the bit."""
+    scenario = ff.Scenario.from_toml(DUAL)
+    robot = scenario.robot
+    model = CollisionModel(robot, known_srdf(robot))
+    left = np.array([j.name.startswith("left_") for j in robot.joints])
+    moved = model.pairs_moved_by(left)
+    assert 0 < moved.sum() < len(moved)
+    start = np.asarray(scenario.start)
+    rng = np.random.default_rng(12)
+    changed = np.zeros(len(moved), dtype=bool)
+    before = model.distances(start).values
+    for _ in range(4):
+        q = start.copy()
+        q[left] += rng.normal(0.0, 0.4, left.sum())
+        changed |= model.distances(q).values != before
+    assert np.array_equal(changed, moved)
+    assert not model.pairs_moved_by(np.zeros(robot.n, dtype=bool)).any()
+    assert model.pairs_moved_by(np.ones(robot.n, dtype=bool)).all()
+
+
+@pytest.mark.parametrize("rows", [3, 24])
+def test_the_smallest_among_some_pairs_is_that_of_every_pair_measured(rows):
+    """``closest_many(..., among=)`` gives each row's smallest distance over those pairs
+    alone, its pair and gradient, as a fresh model measuring every pair finds them (a batch
+    and one row at a time), after batches over every pair have kept their bounds."""
+    scenario = ff.Scenario.from_toml(DUAL)
+    robot = scenario.robot
+    model = CollisionModel(robot, known_srdf(robot))
+    fresh = CollisionModel(robot, known_srdf(robot))
+    left = np.array([j.name.startswith("left_") for j in robot.joints])
+    among = model.pairs_moved_by(left)
+    start = np.asarray(scenario.start)
+    rng = np.random.default_rng(13)
+    u = np.linspace(0.0, 1.0, rows)
+    hidden = 0  # rows where a held pair is the smallest of all
+    for round_ in range(2):
+        joints = start + rng.normal(0.0, 0.2, (rows, robot.n)) * left
+        model.closest_many(joints, u)  # every pair: bounds kept for the next call
+        got = model.closest_many(joints, u, gradients=True, among=among)
+        for i, q in enumerate(joints):
+            every = fresh.distances(q, gradients=True)
+            values = np.where(among, every.values, math.inf)
+            k = int(np.argmin(values))
+            assert (float(got.values[i]), int(got.pairs[i])) == (float(values[k]), k)
+            assert np.array_equal(got.gradients[i], every.gradients[k])
+            hidden += not among[int(np.argmin(every.values))]
+    assert hidden > 0

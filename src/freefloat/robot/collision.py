@@ -153,6 +153,16 @@ class CollisionModel(PairQueries):
         measured = np.asarray(pairs, dtype=int).reshape(-1)
         return self._measure(measured, self._spheres(measured))
 
+    def pairs_moved_by(self, joints: np.ndarray) -> np.ndarray:
+        """(P,) which pairs' two shapes move relative to each other when ``joints`` (N,) move.
+
+        A pair is moved by a joint that carries one of its shapes but not the other; a pair
+        none of ``joints`` moves keeps its distance whatever they do.
+        """
+        carried = self._carried[self._pair_array] > 0.0  # (P, 2, N)
+        relative = carried[:, 0] != carried[:, 1]
+        return np.asarray(relative[:, np.asarray(joints, dtype=bool)].any(axis=1))
+
     def closest_value(self, joints: np.ndarray, slot: float | None = None) -> tuple[float, int]:
         """The smallest signed distance over the pairs (m) and its pair index.
 
@@ -182,6 +192,7 @@ class CollisionModel(PairQueries):
         joints: np.ndarray,
         slots: Sequence[float] | np.ndarray | None = None,
         gradients: bool = False,
+        among: np.ndarray | None = None,
     ) -> Closest:
         """:meth:`closest_value` (with ``gradients``: :meth:`closest`) at many joint vectors.
 
@@ -200,6 +211,7 @@ class CollisionModel(PairQueries):
             joints: (B, N) joint values (rad or m).
             slots: a normalised instant per row (see :meth:`closest_value`), or None.
             gradients: also each smallest distance's gradient over the joints (m per rad or m).
+            among: (P,) which pairs the smallest is taken over (at least one; default all).
 
         The result also holds each row's lower bounds of every pair's distance (``lower``).
         """
@@ -208,7 +220,7 @@ class CollisionModel(PairQueries):
         at = [None] * count if slots is None else [float(s) for s in slots]
         lower = np.full((count, len(self.pairs)), math.inf)
         if not len(self.pairs) or count < BATCH:
-            return self._closest_each(joints, at, gradients, lower)
+            return self._closest_each(joints, at, gradients, lower, among)
         centres = self._kinematics.centres(joints)
         gaps = self._kinematics.gaps_at(centres, self._pair_array)
         low, high = gaps - self._reach, gaps + self._reach
@@ -219,8 +231,10 @@ class CollisionModel(PairQueries):
             kept_low, kept_high = self._bounds.widened_many(at, joints)
             unknown = np.isnan(kept_low)
             low, high = np.fmax(low, kept_low), np.fmin(high, kept_high)
-        candidates = low <= high.min(axis=1, keepdims=True) + 1e-9
-        candidates[~np.isfinite(joints).all(axis=1)] = True  # no bound holds: every pair asked
+        chosen = np.ones(len(self.pairs), dtype=bool) if among is None else among
+        nearest = np.where(chosen, high, math.inf).min(axis=1, keepdims=True)
+        candidates = (low <= nearest + 1e-9) & chosen
+        candidates[~np.isfinite(joints).all(axis=1)] = chosen  # no bound holds: each one asked
         found = self._measure_rows(joints, candidates, low, gaps, gradients)
         measure = found.measured
         lower[:] = np.where(measure, found.values, low)

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import coal
 import numpy as np
+import pinocchio as pin
 
 from ..errors import ModelError
 from .sphere_distance import SphereWitness, closed_form_first, sphere_distance
@@ -30,7 +31,9 @@ __all__ = [
     "Closest",
     "Distances",
     "checked_distance",
+    "coal_placement",
     "configure",
+    "possible_distances",
 ]
 
 #: Convergence tolerance of coal's GJK and EPA distance queries (m).
@@ -140,6 +143,21 @@ def checked_distance(
         + ", ".join(f"{t:g}" for t in (GJK_TOLERANCE, *RETRY_TOLERANCES))
         + " m)"
     )
+
+
+def coal_placement(placement: pin.SE3) -> coal.Transform3s:
+    """The coal transform of a Pinocchio placement."""
+    return coal.Transform3s(placement.rotation, placement.translation)
+
+
+def possible_distances(values: np.ndarray, gaps: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """Which distances (m) bounding spheres allow: within ``gaps +- reach`` (m).
+
+    As :func:`checked_distance` requires one; NaN and infinite values are not.
+    """
+    with np.errstate(invalid="ignore"):
+        inside = (values >= gaps - reach - 1e-9) & (values <= gaps + reach + 1e-9)
+    return np.isfinite(values) & inside
 
 
 def _distance_request(epa_tolerance: float) -> coal.DistanceRequest:

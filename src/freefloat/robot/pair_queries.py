@@ -20,7 +20,15 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from .distance_query import GJK_TOLERANCE, RETRY_TOLERANCES, Closest, checked_distance, configure
+from .distance_query import (
+    GJK_TOLERANCE,
+    RETRY_TOLERANCES,
+    Closest,
+    checked_distance,
+    coal_placement,
+    configure,
+    possible_distances,
+)
 from .fixed_boxes import FixedBoxes
 from .model import Robot
 from .motion_bound import PairBounds, motion_weights
@@ -181,7 +189,7 @@ class PairQueries:
             if witnesses is not None and best_k >= 0:
                 results = self._closed_results if best_k in closed else self._pair_results
                 witnesses.take(i, results[best_k], jacobian[:, self._columns])
-        sane = _possible(values, gaps, self._reach)
+        sane = possible_distances(values, gaps, self._reach)
         retried: list[tuple[int, int]] = []
         for i in np.flatnonzero(np.any(measured & ~sane, axis=1)).tolist():
             pairs = np.flatnonzero(candidates[i])
@@ -195,7 +203,12 @@ class PairQueries:
         return _Measured(values, measured, retried, witnesses)
 
     def _closest_each(
-        self, joints: np.ndarray, at: Sequence[float | None], gradients: bool, lower: np.ndarray
+        self,
+        joints: np.ndarray,
+        at: Sequence[float | None],
+        gradients: bool,
+        lower: np.ndarray,
+        among: np.ndarray | None,
     ) -> Closest:
         """:meth:`closest_many` one row at a time (a small batch: spheres placed per row)."""
         count = len(joints)
@@ -204,7 +217,7 @@ class PairQueries:
         if not len(self.pairs):
             return Closest(values, pairs, grads, lower)
         for i in range(count):
-            found = self._bulk(joints[i], True, at[i], lower[i])
+            found = self._bulk(joints[i], True, at[i], lower[i], among)
             k = int(np.argmin(found))
             values[i], pairs[i] = found[k], k
             if grads is not None:
@@ -218,18 +231,19 @@ class PairQueries:
         nearest: bool = False,
         slot: float | None = None,
         lower: np.ndarray | None = None,
+        among: np.ndarray | None = None,
     ) -> np.ndarray:
         """Signed distances (m) of the pairs, each by Pinocchio's ``computeDistance``.
 
-        With ``nearest``, only the pairs that can be the closest are measured (the others are
-        ``inf``; see :meth:`_may_be_closest`), each checked by :meth:`_measure`. ``lower``: a
-        (P,) array that receives a lower bound of every pair's distance (m): the measured
-        value, or for a pair not measured, its bound.
+        With ``nearest``, only the pairs (``among`` them) that can be the closest are measured
+        (the others are ``inf``; see :meth:`_may_be_closest`), each checked by
+        :meth:`_measure`. ``lower``: a (P,) array that receives a lower bound of every pair's
+        distance (m): the measured value, or for a pair not measured, its bound.
         """
         joints = np.asarray(joints, dtype=float)
         self._place(joints)
         if nearest and len(self.pairs):
-            measured = self._may_be_closest(joints, slot, lower)
+            measured = self._may_be_closest(joints, slot, lower, among)
         else:
             measured = np.arange(len(self.pairs))
         found = self._measure(measured, self._spheres(measured))
@@ -262,7 +276,7 @@ class PairQueries:
         found = np.array(
             [exact(k) if k in closed else compute(geometry, gdata, k).min_distance for k in listed]
         )
-        possible = _possible(found, gap, reach)
+        possible = possible_distances(found, gap, reach)
         self._retried = {}
         if not possible.all():
             for i in np.flatnonzero(~possible).tolist():
@@ -301,10 +315,8 @@ class PairQueries:
     def _closed_form(self, k: int) -> float:
         """Pair ``k``'s distance (m) in closed form at the placed shapes, its result kept."""
         a, b = self.pairs[k]
-        placements = self._geometry_data.oMg
-        found = sphere_distance(
-            self._shapes[a], _transform(placements[a]), self._shapes[b], _transform(placements[b])
-        )
+        place = [coal_placement(self._geometry_data.oMg[g]) for g in (a, b)]
+        found = sphere_distance(self._shapes[a], place[0], self._shapes[b], place[1])
         assert found is not None  # a pair of closed_form_first
         self._closed_results[k] = found
         return found.min_distance
@@ -317,9 +329,9 @@ class PairQueries:
         """
         a, b = self.pairs[k]
         placements = self._geometry_data.oMg
-        shapes = (self._shapes[a], _transform(placements[a]), self._shapes[b])
+        shapes = (self._shapes[a], coal_placement(placements[a]), self._shapes[b])
         spheres = (gap - reach, gap + reach)
-        answer = checked_distance(*shapes, _transform(placements[b]), spheres, self.names[k])
+        answer = checked_distance(*shapes, coal_placement(placements[b]), spheres, self.names[k])
         self.retries += max(1, answer.retries)
         self._retried[k] = answer.result
         return answer.value
@@ -351,6 +363,7 @@ class PairQueries:
         joints: np.ndarray,
         slot: float | None,
         out: np.ndarray | None = None,
+        among: np.ndarray | None = None,
     ) -> np.ndarray:
         """Indices of the pairs that may have the smallest distance at ``joints``.
 
@@ -359,6 +372,7 @@ class PairQueries:
         then kept); with no motion bound (a prismatic joint), by its bounding spheres. A pair
         that cannot be the closest is not measured, so the smallest distance and its pair are
         the same bits as with every pair measured. ``out`` receives every pair's lower bound (m).
+        ``among``: the pairs the smallest is taken over (default all).
         """
         if self._bounds is None:
             gap = self._spheres(np.arange(len(self.pairs)))
@@ -371,27 +385,13 @@ class PairQueries:
             lower, upper = self._bounds.widened(slot, joints)
         if out is not None:
             out[:] = lower
+        chosen = np.ones(len(self.pairs), dtype=bool) if among is None else among
         if not np.isfinite(joints).all():  # no bound holds: every pair is asked (and refused)
-            return np.arange(len(self.pairs))
-        return np.flatnonzero(lower <= float(upper.min()) + 1e-9)
+            return np.flatnonzero(chosen)
+        return np.flatnonzero((lower <= float(upper[chosen].min()) + 1e-9) & chosen)
 
     def _gradient(self, k: int) -> np.ndarray:
         """d(distance of pair k)/d(joints), after distances and joint Jacobians are computed."""
         batch = WitnessBatch(1, self.robot.n)
         batch.take(0, self._result(k), self._data.J[:, self._columns])
         return batch.gradients(self._carried, self._pair_array[k : k + 1])[0]
-
-
-def _possible(values: np.ndarray, gaps: np.ndarray, reach: np.ndarray) -> np.ndarray:
-    """Which distances (m) their bounding spheres allow: within ``gaps +- reach`` (m).
-
-    NaN and infinite values are not.
-    """
-    with np.errstate(invalid="ignore"):
-        inside = (values >= gaps - reach - 1e-9) & (values <= gaps + reach + 1e-9)
-    return np.isfinite(values) & inside
-
-
-def _transform(placement: pin.SE3) -> coal.Transform3s:
-    """The coal transform of a Pinocchio placement."""
-    return coal.Transform3s(placement.rotation, placement.translation)

@@ -5,12 +5,14 @@ coal's GJK/EPA; see :mod:`freefloat.robot.collision`). Obstacles are fixed to th
 so clearance is a function of the joints alone.
 
 For the solvers, each instant contributes one row: the margin minus the smallest distance over
-the pairs there (m), with its gradient from the witness points of that pair and the joint
-Jacobians, chained with the path's linear dependence on ``beta``. The instants are a uniform
-grid refined around the minima of clearance, and the instants a solver adds (where its dense
-check found a path below the margin: :meth:`Clearance.critical_times`); the rows ask for a
-little more than the margin (:data:`SOLVER_SLACK`) so that the dips between instants stay
-outside it.
+the pairs the free coefficients move there (m; a pair none moves, of an arm that holds its
+pose say, would give a row with no gradient that hides the pairs the solver can move; the
+dense check takes every pair), with its gradient from the witness points of that pair and the
+joint Jacobians, chained with the path's linear dependence on ``beta``.
+The instants are a uniform grid refined around the minima of clearance, and the instants a
+solver adds (where its dense check found a path below the margin:
+:meth:`Clearance.critical_times`); the rows ask for a little more than the margin
+(:data:`SOLVER_SLACK`) so that the dips between instants stay outside it.
 
 The dense check samples the whole path (:data:`VERIFY_SAMPLES`), refines every near-minimum by
 a bounded scalar search in time, and estimates its own error by step doubling (the same search
@@ -31,6 +33,7 @@ from ..scalar_minimum import scalar_minimum
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 from .clearance_samples import (
     Measured,
+    MovedPairs,
     RowsAtBeta,
     arms_table,
     bounds_between,
@@ -94,6 +97,7 @@ class Clearance(Constraint):
         self._sampled_memo: tuple[tuple[bytes, float, int], np.ndarray] | None = None
         self._measured_memo: tuple[tuple[bytes, float, int, float | None], Measured] | None = None
         self._below_memo: tuple[tuple[bytes, float, int, float], Lowest] | None = None
+        self._moved = MovedPairs(model)  # the pairs the rows take, per path family
 
     def __repr__(self) -> str:
         return f"Clearance(margin={self.margin:g} m, {self.model.n_pairs} pairs)"
@@ -107,17 +111,16 @@ class Clearance(Constraint):
     ) -> ConstraintRows:
         """``margin + slack - min_pair d(q(s))`` (m) and its exact gradient, one row an instant.
 
-        Clearance picks its own instants: the uniform grid :data:`DEFAULT_INSTANTS`, plus
-        :data:`REFINE` instants in each grid interval next to each of the two lowest local
-        minima of clearance on that grid; and it keeps the ``instants`` asked for beyond that
-        grid (the solvers ask only at the dips they found below the margin between the grid's
-        instants, :meth:`critical_times`: :func:`~freefloat.solvers.rows.rows_instants`). For
-        given ``instants`` the number of rows is fixed, as SLSQP needs.
+        The pairs those ``beta`` moves (:class:`MovedPairs`). Clearance picks its own
+        instants: the uniform grid :data:`DEFAULT_INSTANTS`, plus :data:`REFINE` instants in
+        each grid interval next to each of the two lowest local minima on that grid; and it
+        keeps the ``instants`` asked beyond that grid (the solvers ask only at the dips they
+        found below the margin, :meth:`critical_times`). For given ``instants`` the number of
+        rows is fixed, as SLSQP needs.
         """
         beta = np.asarray(beta, dtype=float)
         key = beta.tobytes() + np.asarray(instants, dtype=float).tobytes()
-        # The rows depend on the path family and beta only: copies of a problem with another
-        # goal (continuation's targets) share the family, so they share the rows too.
+        # The rows depend on the family and beta only: continuation's targets share them.
         if self._memo is not None and self._memo[0] is problem.family and self._memo[1] == key:
             return self._memo[2]
         grid = DEFAULT_INSTANTS
@@ -148,10 +151,12 @@ class Clearance(Constraint):
         self, problem: Problem, beta: np.ndarray, instants: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """Row values (m) and Jacobian at ``instants``, each measured once per beta (RowsAtBeta)."""
+        among = self._moved(problem.family)
 
         def measure(at: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             base, dq, _ = problem.family.linear_map(at)
-            closest = self.model.closest_many(base.q + dq @ beta, at, gradients=True)
+            joints = base.q + dq @ beta
+            closest = self.model.closest_many(joints, at, gradients=True, among=among)
             assert closest.gradients is not None
             jacobian = -np.einsum("kn,knf->kf", closest.gradients, dq)
             return self.margin + SOLVER_SLACK - closest.values, jacobian

@@ -3,8 +3,8 @@
 Helpers of :mod:`freefloat.problem.constraints.clearance` (the constraint's module stays a
 readable size): the record of a path's measured samples with each pair's bounds and the
 spheres' lever arms there, the bound of the clearance between two samples, the intervals
-that bound leaves undecided, the local minima of sampled values, and the rows already measured
-at one ``beta`` (:class:`RowsAtBeta`).
+that bound leaves undecided, the local minima of sampled values, the rows already measured
+at one ``beta`` (:class:`RowsAtBeta`) and the pairs the rows take (:class:`MovedPairs`).
 """
 
 from __future__ import annotations
@@ -17,11 +17,12 @@ import numpy as np
 
 from ...robot.collision import Closest, CollisionModel
 from ...robot.motion_bound import BOUND_SLACK
-from ..paths import JointPolynomials
+from ..paths import JointPolynomials, PathFamily
 from ..rate_bounds import rate_bounds
 
 __all__ = [
     "Measured",
+    "MovedPairs",
     "RowsAtBeta",
     "arms_table",
     "bounds_between",
@@ -50,6 +51,26 @@ class Measured:
     lower: np.ndarray
     bound: float
     arms: np.ndarray
+
+
+class MovedPairs:
+    """The pairs the free coefficients of a path family move, for the solver rows.
+
+    :meth:`CollisionModel.pairs_moved_by` the joints with free coefficients; None (every
+    pair) when they move all of them or none. The last family's answer is kept.
+    """
+
+    def __init__(self, model: CollisionModel) -> None:
+        self._model = model
+        self._family: PathFamily | None = None
+        self._among: np.ndarray | None = None
+
+    def __call__(self, family: PathFamily) -> np.ndarray | None:
+        """(P,) which pairs the rows of ``family``'s paths take, or None for every pair."""
+        if family is not self._family:
+            moved = self._model.pairs_moved_by(np.array(family.degrees) > 5)
+            self._family, self._among = family, None if moved.all() or not moved.any() else moved
+        return self._among
 
 
 class RowsAtBeta:
