@@ -133,3 +133,32 @@ def test_rows_leave_out_the_pairs_no_free_coefficient_moves():
     assert constraint.smallest(path, 201)[0] <= min(
         fresh.distances(q).values.min() for q in path.positions(np.linspace(0, path.duration, 201))
     ) + 1e-12
+
+
+def test_the_dense_checks_bound_is_that_of_its_final_intervals(ur5):
+    """The dense check bounds an interval once and keeps the bound until a sample splits it:
+    its bound is the smallest of the bounds of the intervals between the samples it measured,
+    each bounded afresh (and no sample it spared lies below the margin: every pair measured
+    there)."""
+    from freefloat.problem.constraints.clearance_samples import bounds_between
+
+    problem, robot = ur5
+    rng = np.random.default_rng(21)
+    fresh = CollisionModel(robot, known_srdf(robot))
+    for scale in (0.05, 0.3, 0.6):
+        constraint = _fresh(robot)
+        path = problem.polynomials(rng.normal(0.0, scale, problem.n_free))
+        measured = constraint._measured(path, 201, constraint.margin)
+        nodes = np.flatnonzero(~np.isnan(measured.known))
+        assert len(nodes) > 201 // 8
+        a, b = nodes[:-1], nodes[1:]
+        t = np.linspace(0.0, path.duration, 201)
+        lower, arms = measured.lower, measured.arms
+        between = bounds_between(
+            constraint.model, path, (t[a], t[b]), (lower[a], lower[b]), (arms[a], arms[b])
+        )
+        want = float(min(between.min(), np.nanmin(measured.known)))
+        assert measured.bound == pytest.approx(want, abs=1e-12)
+        spared = np.flatnonzero(np.isnan(measured.known))
+        for k in spared[:: max(1, len(spared) // 20)]:
+            assert fresh.distances(path.positions(t[k : k + 1])[0]).values.min() >= 0.01

@@ -284,7 +284,7 @@ def test_the_smallest_among_some_pairs_is_that_of_every_pair_measured(rows):
     rng = np.random.default_rng(13)
     u = np.linspace(0.0, 1.0, rows)
     hidden = 0  # rows where a held pair is the smallest of all
-    for round_ in range(2):
+    for _ in range(2):
         joints = start + rng.normal(0.0, 0.2, (rows, robot.n)) * left
         model.closest_many(joints, u)  # every pair: bounds kept for the next call
         got = model.closest_many(joints, u, gradients=True, among=among)

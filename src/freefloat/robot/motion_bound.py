@@ -112,15 +112,17 @@ class PairBounds:
 
     #: Slots kept before all are forgotten.
     SLOTS = 4096
+    #: Rows the arrays start with (a path's dense check uses a few hundred slots).
+    ROWS = 256
 
     def __init__(self, weights: np.ndarray) -> None:
         self.weights = weights
         pairs, joints = weights.shape
         # Row r of the arrays holds a slot's (joints, lower, upper); rows are used in order.
         self._rows: dict[float | None, int] = {}
-        self._joints = np.zeros((16, pairs, joints))
-        self._lower = np.full((16, pairs), np.nan)
-        self._upper = np.full((16, pairs), np.nan)
+        self._joints = np.zeros((self.ROWS, pairs, joints))  # pages touched as rows are used
+        self._lower = np.full((self.ROWS, pairs), np.nan)
+        self._upper = np.full((self.ROWS, pairs), np.nan)
         self._recent: float | None = None
         self._keys: list[float] = []  # the numeric slots, sorted
 
@@ -133,10 +135,7 @@ class PairBounds:
                 self._keys.clear()
             near = self._rows.get(self._nearest(slot))
             found = len(self._rows)
-            if found == len(self._lower):  # full: twice the rows
-                self._joints = np.concatenate([self._joints, np.zeros_like(self._joints)])
-                self._lower = np.concatenate([self._lower, np.full_like(self._lower, np.nan)])
-                self._upper = np.concatenate([self._upper, np.full_like(self._upper, np.nan)])
+            self._room(found + 1)
             if near is not None:  # a new slot starts from the nearest one, or the last used
                 self._joints[found] = self._joints[near]
                 self._lower[found], self._upper[found] = self._lower[near], self._upper[near]
@@ -148,14 +147,72 @@ class PairBounds:
         self._recent = slot
         return found
 
+    def _room(self, rows: int) -> None:
+        """Room for ``rows`` rows in the arrays (twice the rows while full)."""
+        size = len(self._lower)
+        if rows <= size:
+            return
+        while size < rows:
+            size *= 2
+        used = len(self._rows)
+        joints = np.zeros((size, *self._joints.shape[1:]))
+        joints[:used] = self._joints[:used]
+        lower = np.full((size, self._lower.shape[1]), np.nan)
+        upper = lower.copy()
+        lower[:used], upper[:used] = self._lower[:used], self._upper[:used]
+        self._joints, self._lower, self._upper = joints, lower, upper
+
     def _rows_of(self, slots: Sequence[float | None]) -> list[int]:
         """:meth:`_row` of each slot in turn (one lookup each when every slot is kept)."""
         known = list(map(self._rows.get, slots))
-        if None in known:  # new slots: made one after the other, each from those before it
-            return [self._row(slot) for slot in slots]
+        if None in known and not self._made_at_once(slots, known):
+            return [self._row(slot) for slot in slots]  # one after the other, as asked
         if slots:
             self._recent = slots[-1]
-        return known  # type: ignore[return-value]
+        return list(map(self._rows.__getitem__, slots))
+
+    def _made_at_once(self, slots: Sequence[float | None], known: list[int | None]) -> bool:
+        """Make the new slots of ``slots`` at once, when that gives what :meth:`_row` would.
+
+        Made one after the other, a new slot starts from the nearest slot kept, which may be
+        one made just before it in the same call. When no slot is kept (every new slot starts
+        without bounds), or when each new numeric slot lies strictly nearer a slot kept before
+        the call than any other new slot, each starts from that slot either way: they are
+        made in one pass. False (nothing made) otherwise.
+        """
+        made = list(dict.fromkeys(s for s, row in zip(slots, known, strict=True) if row is None))
+        if None in made or len(self._rows) + len(made) >= self.SLOTS:
+            return False
+        new = [float(s) for s in made if s is not None]
+        if self._rows and not self._keys:  # only the slot None kept: each from the last used
+            return False
+        at = np.array(new, dtype=float)
+        near = np.full(len(new), -1)
+        if self._rows:
+            keys = np.array(self._keys)
+            k = np.searchsorted(keys, at)  # bisect_left, as _nearest
+            below, above = keys[np.maximum(k - 1, 0)], keys[np.minimum(k, len(keys) - 1)]
+            gap_below, gap_above = np.abs(at - below), np.abs(above - at)
+            chosen = np.where(gap_below <= gap_above, below, above)  # a tie: the lower
+            gap = np.minimum(gap_below, gap_above)
+            if len(new) > 1:
+                ordered = np.sort(at)
+                spacing = np.diff(ordered)
+                apart = np.minimum(np.append(spacing, np.inf), np.insert(spacing, 0, np.inf))
+                if np.any(apart[np.searchsorted(ordered, at)] <= gap):
+                    return False
+            near = np.array([self._rows[key] for key in chosen.tolist()])
+        first = len(self._rows)
+        self._room(first + len(new))
+        rows = np.arange(first, first + len(new))
+        copied = near >= 0
+        self._joints[rows[copied]] = self._joints[near[copied]]
+        self._lower[rows], self._upper[rows] = np.nan, np.nan
+        self._lower[rows[copied]] = self._lower[near[copied]]
+        self._upper[rows[copied]] = self._upper[near[copied]]
+        self._rows.update(zip(new, rows.tolist(), strict=True))
+        self._keys = sorted(self._keys + new)
+        return True
 
     def _nearest(self, slot: float | None) -> float | None:
         """The kept slot nearest ``slot`` (the last used for None, or when none is kept)."""

@@ -29,7 +29,6 @@ from ...robot.collision import CollisionModel
 from ...robot.model import Robot
 from ..paths import JointPolynomials, PathFamily
 from ..residual import Problem
-from ..scalar_minimum import scalar_minimum
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 from .clearance_samples import (
     Measured,
@@ -41,6 +40,7 @@ from .clearance_samples import (
     local_minima,
     lowest_minima,
     pair_bounds,
+    refined_minima,
     refinement,
     undecided,
 )
@@ -200,39 +200,14 @@ class Clearance(Constraint):
         t, sampled = t_all[::every], sampled_all[::every]
 
         minima = local_minima(sampled)
-        best, best_t, best_pair = self._refined(
-            path, t, sampled, minima[sampled[minima] <= float(sampled.min()) + NEAR]
+        best, best_t, best_pair = refined_minima(
+            self.model, path, t, sampled, minima[sampled[minima] <= float(sampled.min()) + NEAR]
         )
         answer = (best, best_t, best_pair)
         if len(self._smallest_memo) >= 16:
             self._smallest_memo.pop(next(iter(self._smallest_memo)))
         self._smallest_memo[key] = answer
         return answer
-
-    def _refined(
-        self, path: JointPolynomials, t: np.ndarray, sampled: np.ndarray, minima: np.ndarray
-    ) -> tuple[float, float, int]:
-        """The smallest sampled clearance (m), its time (s) and pair, minima refined.
-
-        The sampled local minima at ``minima`` are refined by a bounded scalar search between
-        their neighbouring samples (:func:`~freefloat.problem.scalar_minimum.scalar_minimum`).
-        """
-
-        def lowest(s: float) -> tuple[float, int]:
-            return self.model.closest_value(path.positions(np.array([s]))[0], s / path.duration)
-
-        count = len(t)
-        k_best = int(np.argmin(sampled))
-        best, best_t = float(sampled[k_best]), float(t[k_best])
-        best_pair = lowest(best_t)[1]
-        for index in minima:
-            k = int(index)
-            lo, hi = float(t[max(k - 1, 0)]), float(t[min(k + 1, count - 1)])
-            result = scalar_minimum(lambda s: lowest(s)[0], lo, hi, 1e-9 * max(1.0, path.duration))
-            if result.value < best:
-                best, best_t = result.value, result.x
-                best_pair = lowest(best_t)[1]
-        return best, best_t, best_pair
 
     def _sampled(self, path: JointPolynomials, t: np.ndarray) -> np.ndarray:
         """Smallest distance over the pairs at each time of ``t`` (m), remembered per path."""
@@ -274,6 +249,8 @@ class Clearance(Constraint):
             self._measured_memo = (key, answer)
             return answer
         arms = arms_table(self.model, samples)
+        # the bound on the interval from each sample, and that interval's end (-1: none yet)
+        bounded, ends = np.full(samples, math.nan), np.full(samples, -1)
         with self.model.own_bounds():  # pair bounds from this path's samples alone
             while True:
                 todo = todo[np.isnan(known[todo])]
@@ -282,9 +259,13 @@ class Clearance(Constraint):
                 arms[todo] = lever_arms(self.model, q[todo])
                 nodes = np.flatnonzero(~np.isnan(known))
                 a, b = nodes[:-1], nodes[1:]
-                between = bounds_between(
-                    self.model, path, (t[a], t[b]), (lower[a], lower[b]), (arms[a], arms[b])
+                new = ends[a] != b  # intervals split since: bounded again, the others kept
+                x, y = a[new], b[new]
+                bounded[x] = bounds_between(
+                    self.model, path, (t[x], t[y]), (lower[x], lower[y]), (arms[x], arms[y])
                 )
+                ends[x] = y
+                between = bounded[a]
                 floor = float(np.nanmin(known)) + NEAR if limit is None else limit
                 short = (between < floor) & (b - a >= 2)
                 if not np.any(short):
@@ -345,7 +326,7 @@ class Clearance(Constraint):
         minima = local_minima(v_all)
         minima = minima[v_all[minima] < limit]
         spans = np.searchsorted(t_all, 0.5 * (ends[0] + ends[1]))
-        answer = self._refined(path, t_all, v_all, np.unique(np.append(minima, spans)))
+        answer = refined_minima(self.model, path, t_all, v_all, np.unique(np.append(minima, spans)))
         self._below_memo = (key, answer)
         return answer
 

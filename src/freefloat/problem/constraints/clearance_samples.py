@@ -3,8 +3,9 @@
 Helpers of :mod:`freefloat.problem.constraints.clearance` (the constraint's module stays a
 readable size): the record of a path's measured samples with each pair's bounds and the
 spheres' lever arms there, the bound of the clearance between two samples, the intervals
-that bound leaves undecided, the local minima of sampled values, the rows already measured
-at one ``beta`` (:class:`RowsAtBeta`) and the pairs the rows take (:class:`MovedPairs`).
+that bound leaves undecided, the local minima of sampled values and their refinement in
+time, the rows already measured at one ``beta`` (:class:`RowsAtBeta`) and the pairs the rows
+take (:class:`MovedPairs`).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from ...robot.collision import Closest, CollisionModel
 from ...robot.motion_bound import BOUND_SLACK
 from ..paths import JointPolynomials, PathFamily
 from ..rate_bounds import rate_bounds
+from ..scalar_minimum import scalar_minimum
 
 __all__ = [
     "Measured",
@@ -30,6 +32,7 @@ __all__ = [
     "local_minima",
     "lowest_minima",
     "pair_bounds",
+    "refined_minima",
     "refinement",
     "undecided",
 ]
@@ -175,6 +178,37 @@ def lowest_minima(values: np.ndarray) -> list[int]:
         far = [int(k) for k in np.argsort(values, kind="stable") if abs(int(k) - order[0]) > 2]
         order.append(far[0] if far else (order[0] + n // 2) % n)
     return order[:2]
+
+
+def refined_minima(
+    model: CollisionModel,
+    path: JointPolynomials,
+    t: np.ndarray,
+    sampled: np.ndarray,
+    minima: np.ndarray,
+) -> tuple[float, float, int]:
+    """The smallest sampled clearance (m), its time (s) and pair, minima refined.
+
+    ``sampled``: the smallest distance over the pairs (m) at the times ``t`` (s). The sampled
+    local minima at ``minima`` are refined by a bounded scalar search between their
+    neighbouring samples (:func:`~freefloat.problem.scalar_minimum.scalar_minimum`).
+    """
+
+    def lowest(s: float) -> tuple[float, int]:
+        return model.closest_value(path.positions(np.array([s]))[0], s / path.duration)
+
+    count = len(t)
+    k_best = int(np.argmin(sampled))
+    best, best_t = float(sampled[k_best]), float(t[k_best])
+    best_pair = lowest(best_t)[1]
+    for index in minima:
+        k = int(index)
+        lo, hi = float(t[max(k - 1, 0)]), float(t[min(k + 1, count - 1)])
+        result = scalar_minimum(lambda s: lowest(s)[0], lo, hi, 1e-9 * max(1.0, path.duration))
+        if result.value < best:
+            best, best_t = result.value, result.x
+            best_pair = lowest(best_t)[1]
+    return best, best_t, best_pair
 
 
 def refinement(grid: np.ndarray, k: int, count: int) -> np.ndarray:
