@@ -130,9 +130,14 @@ def test_rows_leave_out_the_pairs_no_free_coefficient_moves():
         down = _fresh(robot).rows(problem, beta - e, DEFAULT_INSTANTS).values[:grid]
         assert np.allclose(rows.jacobian[:grid, k], (up - down) / (2 * h), atol=1e-5)
     path = problem.polynomials(beta)
-    assert constraint.smallest(path, 201)[0] <= min(
-        fresh.distances(q).values.min() for q in path.positions(np.linspace(0, path.duration, 201))
-    ) + 1e-12
+    assert (
+        constraint.smallest(path, 201)[0]
+        <= min(
+            fresh.distances(q).values.min()
+            for q in path.positions(np.linspace(0, path.duration, 201))
+        )
+        + 1e-12
+    )
 
 
 def test_the_dense_checks_bound_is_that_of_its_final_intervals(ur5):
