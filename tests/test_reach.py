@@ -335,7 +335,7 @@ def test_reach_loads_neither_scipy_stats_nor_its_optimiser() -> None:
     # (which the Panda's (-1, 1, 1) direction asks for: counted) needs them.
     code = (
         "import sys, numpy as np, freefloat as ff\n"
-        "import freefloat.problem.constraints.clearance as c\n"
+        "import freefloat.problem.constraints.clearance_samples as c\n"
         "calls, search = [], c.scalar_minimum\n"
         "c.scalar_minimum = lambda *a: calls.append(1) or search(*a)\n"
         "s = ff.Scenario.from_toml(ff.default_scenario_path().parent / 'panda_servicer.toml')\n"
