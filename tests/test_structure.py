@@ -367,8 +367,12 @@ def test_plan_limits_are_the_schema_limits():
     assert p["robot"]["properties"]["joints"]["maxItems"] == limits.MAX_JOINTS
     assert p["duration"]["minimum"] == limits.MIN_DURATION
     assert p["duration"]["maximum"] == limits.MAX_DURATION
-    coefficients = p["path"]["properties"]["coefficients"]["additionalProperties"]
-    assert coefficients["maxItems"] == limits.MAX_DEGREE + 1
+    # per format: basis coefficients (format 4 on), monomials before
+    by_format = [b for b in schema("plan")["allOf"] if "else" in b][0]
+    basis = by_format["then"]["properties"]["path"]["properties"]["coefficients"]
+    monomials = by_format["else"]["properties"]["path"]["properties"]["coefficients"]
+    assert basis["additionalProperties"]["maxItems"] == limits.MAX_DEGREE - 5
+    assert monomials["additionalProperties"]["maxItems"] == limits.MAX_DEGREE + 1
     assert p["samples"]["properties"]["t"]["maxItems"] == limits.MAX_SAMPLES
     assert p["solver"]["properties"]["solutions"]["maxItems"] == limits.MAX_SOLUTIONS
     steps = p["solver"]["properties"]["integration_steps"]["maximum"]

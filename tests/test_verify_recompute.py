@@ -174,6 +174,10 @@ def test_a_stated_flag_must_say_what_the_figures_say(original, tmp_path, capsys)
             lambda d: d["path"]["coefficients"]["q2"].extend([0.0] * 30),
             "path.coefficients.q2: expected at most 25 entries",
         ),
+        (  # beyond the older formats' limit too: this format's is quoted
+            lambda d: d["path"]["coefficients"]["q2"].extend([0.0] * 40),
+            "path.coefficients.q2: expected at most 25 entries",
+        ),
         (
             lambda d: d["safety"].__setitem__(
                 "obstacles", [{"name": "panel", "shape": "sphere", "size": [0.1]}] * 2
