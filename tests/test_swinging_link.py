@@ -122,3 +122,21 @@ def test_a_link_a_lock_holds_inside_the_hull_is_refused(tmp_path, capsys):
     assert main(["check", str(scenario)]) == 1
     out = capsys.readouterr().out
     assert "base_0 / link1_0" in out and "configuration: NOT OK" in out
+
+
+def test_the_swing_note_names_a_pair_whose_link_name_holds_a_slash(tmp_path, capsys):
+    """Link names may hold " / ", as the pairs' names do between their two objects: the note
+    still finds the pair (it read the two names back from the pair's name, and a third part
+    lost the note)."""
+    urdf = _arm(tmp_path, 1.0)
+    renamed = tmp_path / "slashed.urdf"
+    renamed.write_text(open(urdf).read().replace('"link1"', '"arm / one"'))
+    scenario = tmp_path / "slashed.toml"
+    scenario.write_text(
+        f'robot = "{renamed}"\nduration = 10.0\n[start]\njoints = {{ q1 = 0.0, q2 = 0.0 }}\n'
+        "[goal]\njoints = { q1 = 170.0, q2 = 0.0 }\n"
+    )
+    assert main(["plan", str(scenario), "-o", str(tmp_path / "p.json"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "goal configuration: base_0 / arm / one_0 overlap" in err
+    assert "checked because the joint between them swings one into the other" in err

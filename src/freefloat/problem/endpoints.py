@@ -83,13 +83,13 @@ def _swing_note(constraint: Clearance, pair: str) -> str:
     robot = model.robot
     if not robot.urdf_text:
         return ""
-    objects = {o.name: o for o in model.geometry.geometryObjects}
-    names = pair.split(" / ")
-    if len(names) != 2 or not all(n in objects for n in names):
+    if pair not in model.names:
         return ""
-    if any(n.startswith(OBSTACLE_PREFIX) for n in names):  # never parent nor child
+    objects = model.geometry.geometryObjects
+    pair_objects = [objects[g] for g in model.pairs[model.names.index(pair)]]
+    if any(o.name.startswith(OBSTACLE_PREFIX) for o in pair_objects):  # never parent nor child
         return ""
-    links = [robot.model.frames[objects[n].parentFrame].name for n in names]
+    links = [robot.model.frames[o.parentFrame].name for o in pair_objects]
     if PAYLOAD_LINK in links or not designed_bodies(robot.urdf_text).adjacent(*links):
         return ""
     return (
