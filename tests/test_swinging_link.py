@@ -5,6 +5,7 @@ ran 0.29 m through the hull in a verified plan). Pairs that do not swing stay sp
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
 
@@ -130,7 +131,7 @@ def test_the_swing_note_names_a_pair_whose_link_name_holds_a_slash(tmp_path, cap
     lost the note)."""
     urdf = _arm(tmp_path, 1.0)
     renamed = tmp_path / "slashed.urdf"
-    renamed.write_text(open(urdf).read().replace('"link1"', '"arm / one"'))
+    renamed.write_text(Path(urdf).read_text().replace('"link1"', '"arm / one"'))
     scenario = tmp_path / "slashed.toml"
     scenario.write_text(
         f'robot = "{renamed}"\nduration = 10.0\n[start]\njoints = {{ q1 = 0.0, q2 = 0.0 }}\n'
