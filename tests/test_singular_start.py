@@ -109,7 +109,7 @@ def test_a_constraint_ahead_on_a_nearly_singular_map_says_so() -> None:
     """By hand, the singular values of a diagonal map: a weakest gain below 1e-3 of the
     strongest is named before the constraint, as the cause (the step ahead is then long);
     above, nothing; a singular map is named instead of the constraint."""
-    from freefloat.solvers.continuation import _why
+    from freefloat.solvers.branch_stop import why_stopped as _why
     from freefloat.solvers.restore import Broken
 
     ahead = Broken("joint_position_limits", "joint 'j1' at t = 2 s")

@@ -368,7 +368,7 @@ def test_plan_limits_are_the_schema_limits():
     assert p["duration"]["minimum"] == limits.MIN_DURATION
     assert p["duration"]["maximum"] == limits.MAX_DURATION
     # per format: basis coefficients (format 4 on), monomials before
-    by_format = [b for b in schema("plan")["allOf"] if "else" in b][0]
+    by_format = next(b for b in schema("plan")["allOf"] if "else" in b)
     basis = by_format["then"]["properties"]["path"]["properties"]["coefficients"]
     monomials = by_format["else"]["properties"]["path"]["properties"]["coefficients"]
     assert basis["additionalProperties"]["maxItems"] == limits.MAX_DEGREE - 5

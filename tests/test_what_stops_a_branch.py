@@ -18,7 +18,7 @@ import pytest
 import freefloat as ff
 from freefloat.physics import attitude as att
 from freefloat.problem.constraints import default_constraints
-from freefloat.solvers import continuation
+from freefloat.solvers import branch_stop, continuation
 from freefloat.solvers.continuation import track
 from freefloat.solvers.in_the_way import WITHOUT
 from freefloat.solvers.options import SolveOptions
@@ -82,7 +82,8 @@ def test_a_constraint_in_the_way_but_not_ahead_is_found_by_leaving_it_out(
     corrected without each constraint in turn; the one named is the one without which the
     branch goes further, on a path that breaks it."""
     target = _turned(problem, [1.0, 0.0, 0.0], 30.0)
-    monkeypatch.setattr(continuation, "_ahead", lambda *args: None)
+    for module in (continuation, branch_stop):
+        monkeypatch.setattr(module, "ahead", lambda *args: None)
     found = track(target, default_constraints(), SolveOptions())
     assert found.stopped_by.startswith("joint_velocity_limits ahead: joint 'j")
     assert found.stopped_by.endswith(f"({WITHOUT})")
@@ -96,8 +97,9 @@ def test_a_constraint_in_the_way_but_not_ahead_is_found_by_leaving_it_out(
 
 def test_without_any_constraint_in_the_way_the_family_is_blamed(problem, monkeypatch) -> None:
     """No constraint ahead and none whose absence lets the step converge: the freedom."""
-    monkeypatch.setattr(continuation, "_ahead", lambda *args: None)
-    monkeypatch.setattr(continuation, "in_the_way", lambda *args: None)
+    for module in (continuation, branch_stop):
+        monkeypatch.setattr(module, "ahead", lambda *args: None)
+    monkeypatch.setattr(branch_stop, "in_the_way", lambda *args: None)
     found = track(_turned(problem, [1.0, 0.0, 0.0], 30.0), default_constraints(), SolveOptions())
     assert found.stopped_by.startswith("freedom exhausted")
 

@@ -44,7 +44,7 @@ from .problem.scenario import Scenario, scenario_of
 from .problem.simple_bound import SimpleMotionBound, inertia_ratio, simple_motion_bound, turn_limit
 from .progress import LOGGER
 from .robot.light_base import warn_light_base
-from .solvers.continuation import singular
+from .solvers.branch_stop import singular
 from .solvers.options import SolveOptions
 from .solvers.reach import DirectionReach, ReachEstimate, default_directions, reach_set
 from .solvers.search import freedom_candidates

@@ -37,8 +37,8 @@ from ..physics.attitude import quat_exp, quat_multiply, relative_rotvec
 from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.residual import Problem
 from ..progress import heartbeat
+from .branch_stop import ahead, blocker, singular, why_stopped
 from .corrector import Rows, correct, corrected_step
-from .in_the_way import in_the_way
 from .multistart import multistart
 from .options import POLISH, Attempt, SolveOptions
 from .predictor import tangent
@@ -46,7 +46,7 @@ from .restore import Broken, first_broken
 from .rows import NO_DIPS, RowCache, linear_rows
 from .tracked import BranchPoint, ContinuationResult
 
-__all__ = ["ContinuationResult", "continuation", "held_fraction", "singular", "track"]
+__all__ = ["ContinuationResult", "continuation", "held_fraction", "track"]
 
 #: First step as an angle of the target's travel (rad).
 FIRST_STEP = math.radians(3.0)
@@ -68,13 +68,6 @@ NO_START = (
     "its start path breaks a constraint and the corrector found no path within the "
     "constraints at that path's own attitude"
 )
-#: Singular-value ratio below which dh/dbeta counts as singular.
-SINGULAR = 1e-9
-#: Singular-value ratio below which a refusal notes that dh/dbeta nearly loses rank.
-NEAR_SINGULAR = 1e-3
-#: The longest step (a fraction of the way) at which a stopped branch looks for a constraint
-#: ahead (:func:`_ahead`).
-PROBE = 0.05
 
 
 def _tangent(
@@ -105,99 +98,6 @@ def _way(start: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float, np.nda
 
 def _target(problem: Problem, start: np.ndarray, delta: np.ndarray, lam: float) -> Problem:
     return problem.with_goal(quat_multiply(start, quat_exp(lam * delta)))
-
-
-def _ahead(
-    problem: Problem,
-    constraints: Sequence[Constraint],
-    beta: np.ndarray,
-    tangent: np.ndarray,
-    jac: np.ndarray,
-    step: float,
-) -> Broken | None:
-    """The first constraint a step along ``tangent`` from ``beta`` would break, or None.
-
-    The step the branch was taking first (``step``, a fraction of the way): what it breaks is
-    what stopped it; only when it breaks nothing, a step of :data:`PROBE`. A step of one size
-    alone would name the wrong one: on a weak map the tangent is long, and a joint's position
-    limit far away is broken at :data:`PROBE` as surely as the velocity limit the branch is
-    pressed against. None on a singular map ``jac`` too: the tangent is then meaningless (see
-    :func:`_why`).
-    """
-    if singular(jac):
-        return None
-    for size in sorted({min(step, PROBE), PROBE}):
-        ahead = beta + tangent * size
-        for constraint in constraints:
-            if constraint.applies_to(problem.robot):
-                excess = constraint.violation(problem, ahead)
-                if excess.value > 0.0:
-                    return Broken(constraint.name, excess.detail)
-    return None
-
-
-def _blocker(
-    problem: Problem,
-    target: Problem,
-    constraints: Sequence[Constraint],
-    at_point: tuple[np.ndarray, np.ndarray, np.ndarray],
-    step: float,
-    tol: float,
-    rows: Rows,
-) -> Broken | None:
-    """What stopped a branch whose ``step`` (towards ``target``) failed at its floor.
-
-    ``at_point``: the branch's path, tangent and Jacobian. The constraint the step breaks
-    ahead (:func:`_ahead`); where none is, the one without which the step converges onto a
-    path that breaks it (:func:`.in_the_way.in_the_way`); None on a singular map or when
-    neither names one.
-    """
-    beta, tangent, jac = at_point
-    blocked = _ahead(problem, constraints, beta, tangent, jac, step)
-    if blocked is None and not singular(jac):
-        blocked = in_the_way(problem, target, constraints, beta + step * tangent, tol, rows)
-    return blocked
-
-
-def _why(blocked: Broken | None, jac: np.ndarray) -> str:
-    """Why the branch cannot go on: a singular map, a constraint ahead, or freedom.
-
-    A constraint is named with "ahead" and where the path a step along the tangent breaks it
-    (:func:`_ahead`; or, with :data:`~.in_the_way.WITHOUT` in its detail, where the path the
-    failed step converges to without it breaks it: :func:`.in_the_way.in_the_way`); its
-    figure is that path's, beyond the limit, while the branch itself keeps it. A
-    singular map first: the tangent is then the least-squares one, its length set by the
-    smallest singular value, and a constraint it would break ahead says nothing of the
-    branch (a step of 10^8 rad breaks every joint limit).
-    """
-    smallest, ratio = _gains(jac)
-    if ratio < SINGULAR or smallest < 1e-9:
-        return "a singular map (dh/dbeta loses rank)"
-    if blocked is not None:  # on the path a short step on
-        ahead = f"{blocked.name} ahead: {blocked.detail}"
-        if ratio < NEAR_SINGULAR:  # the cause first: a small turn about the weakest
-            # direction asks large joint motions, so the constraint a step meets may lie far
-            return (
-                f"a nearly singular map (its weakest gain {ratio:.1g} of its strongest), "
-                f"so a step on is long: {ahead}"
-            )
-        return ahead
-    return "freedom exhausted (the corrector does not converge with this path family)"
-
-
-def _gains(jac: np.ndarray) -> tuple[float, float]:
-    """The smallest singular value of ``jac`` (rad per unit of beta), and over the largest."""
-    sigma = np.linalg.svd(jac, compute_uv=False)
-    return float(sigma[-1]), float(sigma[-1] / max(sigma[0], 1e-300))
-
-
-def singular(jac: np.ndarray) -> bool:
-    """Whether the residual's Jacobian ``jac`` (rad per unit of beta) counts as rank deficient.
-
-    Its smallest singular value below :data:`SINGULAR` times its largest, or below 1e-9.
-    """
-    smallest, ratio = _gains(jac)
-    return ratio < SINGULAR or smallest < 1e-9
 
 
 def _where(reached: float, angle: float, steps: int, evaluations: int) -> str:
@@ -250,7 +150,8 @@ def track(
             return ContinuationResult(beta, 0, angle, axis, r, 0, iterations, NO_START, broke.name)
         beta = solved
     if angle > 0.0 and singular(jac):  # no tangent to follow: a step would be meaningless
-        return ContinuationResult(beta, 0, angle, axis, r, 0, iterations, _why(None, jac), "")
+        why = why_stopped(None, jac)
+        return ContinuationResult(beta, 0, angle, axis, r, 0, iterations, why, "")
     dl = min(1.0, FIRST_STEP / angle) if angle > 0 else 1.0
     if trace is not None:
         trace.append(BranchPoint(0.0, beta, dl * angle))
@@ -265,7 +166,7 @@ def track(
             # At the pace of the last steps the step budget ends short of the goal: stop now
             # rather than spend the budget on the same refusal.
             tangent = _tangent(problem, constraints, beta, jac, delta, instants, cache, dips=dips)
-            blocked = _ahead(problem, constraints, beta, tangent, jac, dl)
+            blocked = ahead(problem, constraints, beta, tangent, jac, dl)
             stopped_by = _stall_reason(blocked, jac, (lam - reached[steps - PACE_WINDOW]) * angle)
             break
         if problem.evaluations - first_evaluation > options.max_evaluations:
@@ -288,8 +189,8 @@ def track(
             dl = 0.5 * step
             if dl * angle < MIN_STEP:
                 point = (beta, tangent, jac)
-                blocked = _blocker(problem, target, constraints, point, step, tol, at)
-                stopped_by = _why(blocked, jac)
+                blocked = blocker(problem, target, constraints, point, step, tol, at)
+                stopped_by = why_stopped(blocked, jac)
                 break
             continue
         beta, lam, r, jac = done.beta, 1.0 if last else lam + step, done.residual, done.jacobian
@@ -304,9 +205,9 @@ def track(
 
 
 def _stall_reason(blocked: Broken | None, jac: np.ndarray, gain: float) -> str:
-    """Why a stalled branch stops: :func:`_why`, and its ``gain`` (rad) over the pace window."""
+    """Why a stalled branch stops: :func:`.branch_stop.why_stopped` and its ``gain`` (rad)."""
     return (
-        f"{_why(blocked, jac)} (stalled: "
+        f"{why_stopped(blocked, jac)} (stalled: "
         f"{math.degrees(gain):.2g} deg in the last {PACE_WINDOW} steps)"
     )
 
