@@ -143,6 +143,14 @@ def test_a_goal_read_from_reach_output_plans_first_try(kinova_reach, capsys) -> 
         ff.quat_from_zyx(*np.radians([float(x) for x in drift.groups()])),
     )
     assert math.degrees(turned) == pytest.approx(diagonal[3], abs=2e-3)
+    # Every row that stopped short of its outer turn: its printed goal plans too (a
+    # confirmation that corrected the last traced path printed goals plan refused here).
+    short = [r for r in rows if 0.0 < r[3] < r[4] - 0.01 and r is not diagonal]
+    assert len(short) >= 3
+    for row in short:
+        scenario.write_text(KINOVA.read_text().replace(KEEP_ATTITUDE, f"base_zyx_deg = {row[5:8]}"))
+        plan = ff.plan(ff.Scenario.from_toml(scenario))
+        assert plan.verification.passed, row
 
 
 def test_goals_sampled_inside_the_inner_set_plan() -> None:

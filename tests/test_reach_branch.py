@@ -1,7 +1,6 @@
-"""What the reach estimate's promise rests on: a continuation towards a nearer goal about the
-same axis takes the traced branch's steps up to where it parts from it (the first traced point
-whose next step reaches its goal), then a last step of its own. Checked against runs made from
-scratch (the planner's own)."""
+"""The reach estimate's shortcut: a continuation towards a nearer goal about the same axis
+takes the traced branch's steps up to where it parts from it, so the confirmation resumes
+there. Checked against runs made from scratch (the planner's own), not against the shortcut."""
 
 from __future__ import annotations
 
@@ -18,6 +17,7 @@ from freefloat.problem.build import problem_from_scenario
 from freefloat.problem.constraints import default_constraints
 from freefloat.solvers.continuation import track
 from freefloat.solvers.options import SolveOptions
+from freefloat.solvers.reach import _parting
 from freefloat.solvers.tracked import BranchPoint
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "robots" / "scenarios"
@@ -28,11 +28,6 @@ def ur5_problem():
     shipped = ff.Scenario.from_toml(SCENARIOS / "ur5_servicer.toml")
     scenario = replace(shipped, safety=replace(shipped.safety, check=False)).resolved()
     return problem_from_scenario(scenario, extra=[2] * scenario.robot.n, check_bounds=False)
-
-
-def _parting(trace: list[BranchPoint], turn: float) -> BranchPoint:
-    """The first traced point whose next step (an angle, rad) reaches ``turn`` (rad)."""
-    return next((p for p in trace if p.turn + p.next_step >= turn), trace[-1])
 
 
 def _towards(problem, axis: np.ndarray, angle: float):
@@ -63,6 +58,18 @@ def test_a_run_towards_a_nearer_goal_shares_the_traced_steps_up_to_the_parting_p
     following = short[len(shared)]
     assert following.turn <= near + 1e-12
     assert following.turn != pytest.approx(long[len(shared)].turn, abs=1e-9)
+
+
+def test_parting_is_the_first_point_whose_next_step_reaches_the_turn() -> None:
+    beta = np.zeros(2)
+    trace = [BranchPoint(0.0, beta, 3.0), BranchPoint(3.0, beta, 6.0), BranchPoint(9.0, beta, 3.0)]
+    assert _parting(trace, 2.0).turn == 0.0
+    assert _parting(trace, 3.0).turn == 0.0
+    assert _parting(trace, 8.5).turn == 3.0
+    assert _parting(trace, 9.0).turn == 3.0
+    assert _parting(trace, 9.5).turn == 9.0
+    assert _parting(trace, 11.0).turn == 9.0
+    assert _parting(trace, 50.0).turn == 9.0  # beyond the branch: its last point
 
 
 def test_rows_that_show_a_break_agree_with_the_dense_check() -> None:

@@ -5,11 +5,9 @@ towards a far goal in each of a set of directions and stops where it cannot go o
 limit, a singular map, the freedom of the path family). The attitudes up to that angle along
 the direction were reached by solved paths within the constraints on the way, so the set of
 these segments is an *inner* estimate of the reachable set with the given freedom: more
-freedom (or paths the continuation does not find) may reach further. Where a direction stops
-short, the traced path nearest its last turn is corrected onto that goal as the planner
-solves its last step (:func:`_confirmed`). (The planner heading for a nearer goal takes the
-same steps but its own last one, which can fail where the traced steps did not:
-docs/reach.md.)
+freedom (or paths the continuation does not find) may reach further. (The planner heading for
+a nearer goal takes the same steps but its own last one, which can fail where the traced
+steps did not: docs/reach.md.)
 """
 
 from __future__ import annotations
@@ -23,10 +21,9 @@ import numpy as np
 
 from ..parallel import run_tasks
 from ..physics.attitude import quat_exp, quat_multiply
-from ..problem.constraints import DEFAULT_INSTANTS, Constraint, default_constraints
+from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
 from .continuation import ContinuationResult, held_fraction, track
-from .corrector import Rows, corrected_step
 from .drift_start import (
     RESTORED_SHORT,
     DriftStart,
@@ -34,9 +31,8 @@ from .drift_start import (
     drift_start,
     rounded_down,
 )
-from .options import POLISH, SolveOptions
+from .options import SolveOptions
 from .restore import broken_constraint, broken_rows_first
-from .rows import NO_DIPS
 from .tracked import BranchPoint
 
 __all__ = ["DirectionReach", "ReachEstimate", "default_directions", "reach_set"]
@@ -92,7 +88,7 @@ def default_directions() -> np.ndarray:
 
 #: The rotation each direction heads for by default (rad).
 DEFAULT_MAX_ANGLE = math.radians(60.0)
-#: Tries to confirm a direction's furthest turn as the planner solves its goal (a count).
+#: Tries to confirm a direction's furthest turn as the planner would solve it (a count).
 CONFIRM_TRIES = 3
 
 
@@ -120,6 +116,20 @@ def _furthest(
     return track(_target(problem, quintic, axis, angle), constraints, options, origin, stall, trace)
 
 
+def _parting(trace: Sequence[BranchPoint], turn: float) -> BranchPoint:
+    """Where a continuation towards ``turn`` (rad) leaves the traced branch.
+
+    The continuation's steps are angles, so one heading for a nearer goal about the same
+    axis tries the same targets as the traced one until a step would reach its goal: the
+    first traced point whose next step reaches ``turn``. From there on it takes a shorter
+    last step of its own.
+    """
+    for point in trace:
+        if point.turn + point.next_step >= turn:
+            return point
+    return trace[-1]
+
+
 def _confirmed(
     problem: Problem,
     quintic: np.ndarray,
@@ -130,29 +140,28 @@ def _confirmed(
     step: float,
     trace: Sequence[BranchPoint],
 ) -> tuple[float, np.ndarray]:
-    """The largest turn up to ``reached`` whose goal the planner's corrector solves.
+    """The largest turn up to ``reached`` that the planner's own continuation solves.
 
-    Tracking towards a farther goal (``trace``, within ``constraints``) solves the points on
-    the way on the coarser grid, to the intermediate tolerance; the planner solves its goal
-    on the problem's own grid to its final tolerance. The turn is asked as the planner would
-    ask it, rounded down to a multiple of ``step`` (rad; 0: not rounded), so that the goal
-    printed is the one solved: the traced path nearest that turn is corrected onto that goal
-    as the planner corrects its last step (its final tolerance, then kept within every
-    constraint everywhere: :func:`.corrector.corrected_step`). When it is not, the next try
-    (at most :data:`CONFIRM_TRIES` in all) asks for the traced point before. Returns the turn
-    (rad) and its path.
+    Tracking towards a farther goal (``trace``, within ``constraints``) solves the points
+    on the way only to the intermediate tolerance; the planner heads for the goal itself,
+    with its final tolerance and the stall check. Its run towards a nearer goal takes the
+    traced steps up to where it parts from the branch (:func:`_parting`), so it is resumed
+    from there, not repeated. The turn is asked as the planner would ask it, rounded down to
+    a multiple of ``step`` (rad; 0: not rounded), so the reported turn is one the planner
+    reaches; when the planner stops short, the next try (at most :data:`CONFIRM_TRIES` in
+    all) asks for the traced point before it, which the branch reached in one step from
+    where they part. Returns the turn (rad) and its path.
     """
     for _ in range(CONFIRM_TRIES):
         reached = rounded_down(reached, step)
         if reached <= 0.0:
             break
-        near = min(trace, key=lambda point: (abs(point.turn - reached), point.turn))
-        goal = _target(problem, quintic, axis, reached)
-        rows = Rows(DEFAULT_INSTANTS, NO_DIPS, {})
-        tol = POLISH * options.tolerance
-        done = corrected_step(problem, goal, constraints, near.beta, tol, rows)
-        if done.beta is not None:
-            return reached, done.beta
+        part = _parting(trace, reached)
+        result = _furthest(
+            problem, quintic, axis, reached, constraints, options, True, None, part.beta
+        )
+        if result.reached:
+            return reached, result.beta
         reached = max((b.turn for b in trace if b.turn < reached - step), default=0.0)
     return 0.0, trace[0].beta
 
@@ -312,7 +321,7 @@ def reach_set(
 
     With ``confirm`` each direction is tracked as the planner tracks a goal there (its
     continuation with the stall check); when it stops short, the turn where it stopped is
-    confirmed by the planner's corrector from the traced path (:func:`_confirmed`).
+    confirmed as the planner would solve it (:func:`_confirmed`).
 
     The constraints planning imposes from the start are tracked; the lazy ones (imposed by
     planning only once a path breaks them: velocity and effort limits) are checked on the
@@ -333,9 +342,8 @@ def reach_set(
             or one per direction (e.g. an outer bound of that direction).
         constraints: path constraints; default joint position, velocity and effort limits.
         options: solver settings (the evaluation budget applies per continuation pass: a
-            direction makes one, plus one when it imposes a deferred constraint, and up to
-            :data:`CONFIRM_TRIES` corrections, each of at most a corrector's iterations, each
-            time it confirms a turn; when the quintic path breaks
+            direction makes one, and up to :data:`CONFIRM_TRIES` more each time it confirms a
+            turn, plus one when it imposes a deferred constraint; when the quintic path breaks
             a constraint, one pass shared by every direction reaches the drift attitude first
             and up to :data:`~.drift_start.RESTORED_TRIES` more confirm each turn from plan's
             restored start, :mod:`.drift_start`).

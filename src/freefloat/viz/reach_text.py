@@ -106,9 +106,9 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
                 f"inner estimate: continuation from the drift attitude towards the outer bound, "
                 f"freedom +{max(report.freedom)} per joint, {report.budget} residual evaluations "
                 "per continuation pass;",
-                "  the goal at 'inner' about a listed axis is solved on the branch plan's own",
-                "  search follows, by its corrector, and nearer goals about it take the same",
-                "  steps (as a rule, not a proof: docs/reach.md)",
+                "  the goal at 'inner' about a listed axis is solved by plan's own search, and",
+                "  nearer goals about it take the same steps (as a rule, not a proof: "
+                "docs/reach.md)",
             ]
         else:
             lines.append("inner estimate: not computed (--budget 0)")
