@@ -83,3 +83,19 @@ def test_the_store_grows_and_keeps_its_rows():
         row = store._rows[slot]
         assert store._lower[row].tolist() == [-k] * 3
         assert store._joints[row].tolist() == [[k, k]] * 3
+
+
+def test_the_dense_checks_patterns_are_made_in_one_pass():
+    """A fresh store's first batch and the middles of kept intervals are made in one pass
+    (and start as made one at a time: the tests above); a new slot nearer another new one is
+    not."""
+    weights = np.ones((2, 1))
+    fresh = PairBounds(weights)
+    slots = [0.0, 0.25, 0.5, 0.75, 1.0]
+    assert fresh._made_at_once(slots, [None] * len(slots))
+    kept = PairBounds(weights)
+    for slot in slots:
+        kept.record(slot, np.arange(2), np.zeros(1), np.zeros(2), np.ones(2))
+    middles = [0.125, 0.375, 0.625, 0.875]
+    assert kept._made_at_once(middles, [None] * len(middles))
+    assert not kept._made_at_once([0.6, 0.59], [None, None])

@@ -163,7 +163,11 @@ class PairBounds:
         self._joints, self._lower, self._upper = joints, lower, upper
 
     def _rows_of(self, slots: Sequence[float | None]) -> list[int]:
-        """:meth:`_row` of each slot in turn (one lookup each when every slot is kept)."""
+        """:meth:`_row` of each slot in turn (one lookup each when every slot is kept).
+
+        New slots are made in one pass where that gives what one at a time gives
+        (:meth:`_made_at_once`).
+        """
         known = list(map(self._rows.get, slots))
         if None in known and not self._made_at_once(slots, known):
             return [self._row(slot) for slot in slots]  # one after the other, as asked

@@ -111,12 +111,12 @@ class Clearance(Constraint):
     ) -> ConstraintRows:
         """``margin + slack - min_pair d(q(s))`` (m) and its exact gradient, one row an instant.
 
-        The pairs those ``beta`` moves (:class:`MovedPairs`). Clearance picks its own
-        instants: the uniform grid :data:`DEFAULT_INSTANTS`, plus :data:`REFINE` instants in
-        each grid interval next to each of the two lowest local minima on that grid; and it
-        keeps the ``instants`` asked beyond that grid (the solvers ask only at the dips they
-        found below the margin, :meth:`critical_times`). For given ``instants`` the number of
-        rows is fixed, as SLSQP needs.
+        The smallest over the pairs the free coefficients move (:class:`MovedPairs`). Clearance
+        picks its own instants: the uniform grid :data:`DEFAULT_INSTANTS`, plus :data:`REFINE`
+        instants in each grid interval next to each of the two lowest local minima on that
+        grid; and it keeps the ``instants`` asked beyond that grid (the solvers ask only at the
+        dips they found below the margin, :meth:`critical_times`). For given ``instants`` the
+        number of rows is fixed, as SLSQP needs.
         """
         beta = np.asarray(beta, dtype=float)
         key = beta.tobytes() + np.asarray(instants, dtype=float).tobytes()
