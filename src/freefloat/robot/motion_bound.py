@@ -112,15 +112,15 @@ class PairBounds:
 
     #: Slots kept before all are forgotten.
     SLOTS = 4096
-    #: Rows the arrays start with (a path's dense check uses a few hundred slots).
-    ROWS = 256
+    #: Rows the arrays start with (twice as many each time they fill up).
+    ROWS = 16
 
     def __init__(self, weights: np.ndarray) -> None:
         self.weights = weights
         pairs, joints = weights.shape
         # Row r of the arrays holds a slot's (joints, lower, upper); rows are used in order.
         self._rows: dict[float | None, int] = {}
-        self._joints = np.zeros((self.ROWS, pairs, joints))  # pages touched as rows are used
+        self._joints = np.zeros((self.ROWS, pairs, joints))
         self._lower = np.full((self.ROWS, pairs), np.nan)
         self._upper = np.full((self.ROWS, pairs), np.nan)
         self._recent: float | None = None
