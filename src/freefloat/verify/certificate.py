@@ -2,13 +2,17 @@
 
 Work goes to the (interval, pair) with the lowest lower bound first (a heap), so the smallest
 measured clearance is found early and every interval whose bound lies within
-:func:`_tolerance` of it is settled without more queries. Before any query, the intervals the
+:func:`tolerance` of it is settled without more queries. Before any query, the intervals the
 single bounding spheres leave open are bounded again from the meshes' leaf spheres
 (:mod:`.sphere_tree`): their gaps, and the least over leaf pairs of each leaf pair's own
-Lipschitz bound. Each item is refined in two steps: exact distances at its two ends (in place
-of the sphere bounds it starts from; one end first, whose distance less the pair's speed over
-the whole interval may settle it without the other), then halving; each new interval's bound
-is the larger of the whole bodies' and the leaf pairs' (:func:`_leaf_value`). A pair's speed
+Lipschitz bound (:mod:`.first_pass`). Each item is refined in three steps: lower bounds at its
+two ends from a separating direction over the meshes' own vertices (:mod:`.separation`: a few
+microseconds against a mesh query's hundred), then exact distances there (one end first, whose
+distance less the pair's speed over the whole interval may settle it without the other), then
+halving, the middle bounded the same way; each new interval's bound is the larger of the whole
+bodies' and the leaf pairs' (:func:`_leaf_value`). Before it stops, the instants whose bounds
+lie below the least clearance measured are measured, so that figure is the least of what the
+bounds leave possible (:data:`~.settling.LAST_LOOKS` at most). A pair's speed
 comes from its bodies' reach from the joints, and where that leaves an interval open from
 their lever arms about the joints' axes over the first-pass interval that holds it
 (:mod:`.interval_levers`: never faster).
@@ -23,59 +27,20 @@ import numpy as np
 
 from ..robot.collision import CollisionModel
 from .clearance import (
-    ACCURACY,
     CHECK_TOLERANCE,
     FIRST_INSTANTS,
     MAX_BISECTIONS,
-    SLACK_FRACTION,
     ClearanceCertificate,
     MeshClearance,
 )
+from .first_pass import first_pass
 from .hull_agreement import hull_agreement
 from .instants import Instants
 from .interval_levers import IntervalLevers
 from .motion import PolynomialMotion
+from .settling import EXACT, LAST_LOOKS, SEPARATED, SPHERES, Item, Least, settled_above
 
 __all__ = ["certify"]
-
-
-def _tolerance(measured: float, margin: float) -> float:
-    """How far below the smallest measured clearance a settled bound may lie (m).
-
-    :data:`ACCURACY` near the margin, a fraction :data:`SLACK_FRACTION` of the slack above it:
-    a bound that close to a minimum well clear of the margin still clears it.
-    """
-    return max(ACCURACY, SLACK_FRACTION * (measured - margin))
-
-
-def _threshold(measured: float, margin: float) -> float:
-    """The bound (m) at or above which an interval is settled, ``measured`` the least yet.
-
-    Within :func:`_tolerance` of ``measured``; but not below what the ``clearance`` check
-    needs while ``measured`` leaves room for it: a path 20 um clear of the margin must not
-    fail because its bound was settled 100 um below its minimum. While ``measured`` clears
-    the margin by :data:`CHECK_TOLERANCE`, the margin itself; while it clears the margin less
-    half of that, the margin less :data:`CHECK_TOLERANCE` (what the check allows). A bound
-    is never asked to come closer to ``measured`` than half that tolerance: nearer, the
-    halvings needed grow without end (a wall 20 nm clear spent the 20,000 halvings).
-    """
-    loose = measured - _tolerance(measured, margin)
-    for need, room in ((margin, CHECK_TOLERANCE), (margin - CHECK_TOLERANCE, CHECK_TOLERANCE / 2)):
-        if measured >= need + room:
-            return max(loose, need)
-    return loose
-
-
-class _Least:
-    """The smallest clearance measured so far (m), its instant (s) and pair."""
-
-    def __init__(self, value: float, time: float, pair: int) -> None:
-        self.value, self.time, self.pair = value, time, pair
-
-    def note(self, value: float, time: float, pair: int) -> None:
-        """Keep a clearance ``value`` (m) at ``time`` (s) of ``pair`` if it is the least yet."""
-        if value < self.value:
-            self.value, self.time, self.pair = value, time, pair
 
 
 def certify(
@@ -99,43 +64,13 @@ def certify(
     # the first pass's instants of even index: its intervals measure these ends first
     even = {float(t) for t in times[::2]}
     levers = IntervalLevers(store, times)
-    least, lower, heap = _first_pass(mesh, (store, levers), times, margin)
-    bisections = 0
-    exhausted = False
-    while heap:
-        lb, t0, t1, k, exact, speed = heap[0]
-        if lb >= _threshold(least.value, margin):
-            break  # this and every later item is within the accuracy of the minimum
-        heapq.heappop(heap)
-        if not exact:
-            value = _measure_ends(store, least, margin, t0 in even, (t0, t1, k, speed))
-            heapq.heappush(heap, (value, t0, t1, k, True, speed))
-            continue
-        if bisections >= MAX_BISECTIONS:
-            exhausted = True
-            heapq.heappush(heap, (lb, t0, t1, k, exact, speed))
-            break
-        bisections += 1
-        mid = 0.5 * (t0 + t1)
-        if mid not in store.joints:  # with the middles of its halves and of other intervals
-            store.load(_middles(store, heap, t0, t1))
-        least.note(store.distance(mid, k), mid, k)
-        rates = store.rates([t0, mid], [mid, t1])
-        threshold = _threshold(least.value, margin)
-        for (a, b), rate in zip(((t0, mid), (mid, t1)), rates, strict=True):
-            speed = float(rate @ mesh.pair_reach[:, k])
-            value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
-            if value < threshold:  # the lever arms' speed (never above the reach's)
-                speed = float(rate @ levers.pair(levers.interval(a), k))
-                value = 0.5 * (store.distance(a, k) + store.distance(b, k) - speed * (b - a))
-            if value < threshold:
-                value = max(value, _leaf_value(store, k, a, b, rate))
-            heapq.heappush(heap, (value, a, b, k, True, speed))
+    least, lower, heap = first_pass(mesh, (store, levers), times, margin)
+    bisections, exhausted = _refine(store, (least, levers), margin, heap, even)
     if heap:
         lower = min(lower, heap[0][0])
     contained = _contained_at_start(mesh, store)
     if contained is not None:
-        least = _Least(min(least.value, -store.distance(0.0, contained)), 0.0, contained)
+        least = Least(min(least.value, -store.distance(0.0, contained)), 0.0, contained)
         lower = min(lower, least.value)
     lower = min(lower, least.value)
     agreement = (-math.inf, "")
@@ -167,9 +102,67 @@ def certify(
     )
 
 
+def _refine(
+    store: Instants,
+    work: tuple[Least, IntervalLevers],
+    margin: float,
+    heap: list[Item],
+    even: set[float],
+) -> tuple[int, bool]:
+    """Settle the heap's items, lowest bound first: (intervals halved, budget spent).
+
+    An item bounded by the spheres is bounded next from its ends' separating directions,
+    then from exact distances there, then halved. Before stopping, an instant whose bound
+    lies below the least measured clearance is measured (at most :data:`LAST_LOOKS`), so the
+    figure reported is the least of what the bounds leave possible, and the threshold
+    follows it.
+    """
+    least, levers = work
+    bisections, looks = 0, 0
+    while True:
+        if not heap or heap[0][0] >= settled_above(least.value, margin):
+            # every item left is within the accuracy of the minimum, unless it moves
+            if looks < LAST_LOOKS and _look_below(store, least):
+                looks += 1
+                continue
+            return bisections, False
+        lb, t0, t1, k, level, speed = heapq.heappop(heap)
+        if level == SPHERES:
+            bounded = _bound_ends(store, least, margin, (t0, t1, k, speed))
+            if bounded is not None:
+                heapq.heappush(heap, (bounded[0], t0, t1, k, bounded[1], speed))
+                continue
+            level = SEPARATED
+        if level == SEPARATED:
+            value = _measure_ends(store, least, margin, t0 in even, (t0, t1, k, speed))
+            heapq.heappush(heap, (value, t0, t1, k, EXACT, speed))
+            continue
+        if bisections >= MAX_BISECTIONS:
+            heapq.heappush(heap, (lb, t0, t1, k, level, speed))
+            return bisections, True
+        bisections += 1
+        for item in _halves(store, (least, levers), margin, heap, (t0, t1, k)):
+            heapq.heappush(heap, item)
+
+
+def _look_below(store: Instants, least: Least) -> bool:
+    """Measure the smallest separating-direction bound's instant and pair if it is below ``least``.
+
+    True when it did: the exact distance there may be below the least measured (m).
+    """
+    open_ = [(v, t, k) for (t, k), v in store.separated.items() if (t, k) not in store.exact]
+    if not open_:
+        return False
+    value, t, k = min(open_)
+    if value >= least.value:
+        return False
+    least.note(store.distance(t, k), t, k)
+    return True
+
+
 def _measure_ends(
     store: Instants,
-    least: _Least,
+    least: Least,
     margin: float,
     start_first: bool,
     item: tuple[float, float, int, float],
@@ -191,7 +184,7 @@ def _measure_ends(
     d = store.distance(first, k)
     least.note(d, first, k)
     if (other, k) not in store.exact:
-        threshold = _threshold(least.value, margin)
+        threshold = settled_above(least.value, margin)
         one_end = d - speed * (t1 - t0)
         if one_end < threshold:  # the leaf pairs' own speeds may settle it
             rates = store.rates([t0], [t1])[0]
@@ -202,16 +195,70 @@ def _measure_ends(
     least.note(d0, t0, k)
     least.note(d1, t1, k)
     value = 0.5 * (d0 + d1 - speed * (t1 - t0))
-    if value < _threshold(least.value, margin):  # the leaf pairs may settle it
+    if value < settled_above(least.value, margin):  # the leaf pairs may settle it
         value = max(value, _leaf_value(store, k, t0, t1, store.rates([t0], [t1])[0]))
     return value
 
 
-#: A heap item: lower bound (m), interval ends (s), pair, whether its ends are exact, speed (m/s).
-_Item = tuple[float, float, float, int, bool, float]
+def _bound_ends(
+    store: Instants, least: Least, margin: float, item: tuple[float, float, int, float]
+) -> tuple[float, int] | None:
+    """A first-pass item's bound (m) from lower bounds at its ends, and their level.
+
+    ``item``: its ends (s), pair and speed bound (m/s). The ends' separating-direction bounds
+    (or exact distances where measured), raised by the leaf pairs' bound where still below
+    the settling threshold; None when an end has no such bound (touching hulls).
+    """
+    t0, t1, k, speed = item
+    d0, d1 = store.lower(t0, k), store.lower(t1, k)
+    if d0 == -math.inf or d1 == -math.inf:
+        return None
+    value = 0.5 * (d0 + d1 - speed * (t1 - t0))
+    if value < settled_above(least.value, margin):
+        value = max(value, _leaf_value(store, k, t0, t1, store.rates([t0], [t1])[0]))
+    exact = (t0, k) in store.exact and (t1, k) in store.exact
+    return value, EXACT if exact else SEPARATED
 
 
-def _middles(store: Instants, heap: list[_Item], t0: float, t1: float) -> np.ndarray:
+def _halves(
+    store: Instants,
+    work: tuple[Least, IntervalLevers],
+    margin: float,
+    heap: list[Item],
+    interval: tuple[float, float, int],
+) -> list[Item]:
+    """The two halves of pair k's interval ``[t0, t1]`` (s, its ends exact), as heap items.
+
+    The middle's separating-direction bound where it gives one, else its exact distance
+    (noted in ``least``). Each half's bound uses the pair's speed from its bodies' reach,
+    then from their lever arms and from the leaf pairs where those leave it open.
+    """
+    least, levers = work
+    t0, t1, k = interval
+    mesh = store.mesh
+    mid = 0.5 * (t0 + t1)
+    if mid not in store.joints:  # with the middles of its halves and of other intervals
+        store.load(_middles(store, heap, t0, t1))
+    if store.lower(mid, k) == -math.inf:
+        least.note(store.distance(mid, k), mid, k)
+    rates = store.rates([t0, mid], [mid, t1])
+    threshold = settled_above(least.value, margin)
+    items: list[Item] = []
+    for (a, b), rate in zip(((t0, mid), (mid, t1)), rates, strict=True):
+        ends = store.lower(a, k) + store.lower(b, k)
+        speed = float(rate @ mesh.pair_reach[:, k])
+        value = 0.5 * (ends - speed * (b - a))
+        if value < threshold:  # the lever arms' speed (never above the reach's)
+            speed = float(rate @ levers.pair(levers.interval(a), k))
+            value = 0.5 * (ends - speed * (b - a))
+        if value < threshold:
+            value = max(value, _leaf_value(store, k, a, b, rate))
+        exact = (a, k) in store.exact and (b, k) in store.exact
+        items.append((value, a, b, k, EXACT if exact else SEPARATED, speed))
+    return items
+
+
+def _middles(store: Instants, heap: list[Item], t0: float, t1: float) -> np.ndarray:
     """Instants (s) likely needed next: ``[t0, t1]``'s middle and those of its halves.
 
     And the same for every interval in ``heap`` whose middle is not loaded yet: all loaded
@@ -225,60 +272,6 @@ def _middles(store: Instants, heap: list[_Item], t0: float, t1: float) -> np.nda
             seen.add(mid)
             out += [mid, 0.5 * (a + mid), 0.5 * (mid + b)]
     return np.array(out)
-
-
-def _first_pass(
-    mesh: MeshClearance,
-    work: tuple[Instants, IntervalLevers],
-    times: np.ndarray,
-    margin: float,
-) -> tuple[_Least, float, list[_Item]]:
-    """The uniform first pass at ``times`` (s): sphere bounds, then leaf bounds where open.
-
-    One exact query where the sphere bounds are least. The pairs' speeds from their reach,
-    then from their lever arms where the former leave an interval open. Returns the smallest
-    measured clearance (m) with its time (s) and pair, the least bound of the intervals
-    settled (m; inf if none), and the heap of the others.
-    """
-    store, levers = work
-    store.load(times)
-    placements = np.array([store.at(t) for t in times.tolist()])
-    bounds = mesh.sphere_bounds(placements)
-    k0, p0 = np.unravel_index(int(np.argmin(bounds)), bounds.shape)
-    measured, when, pair = store.distance(float(times[k0]), int(p0)), float(times[k0]), int(p0)
-    rates = store.rates(times[:-1].tolist(), times[1:].tolist())
-    lipschitz = rates @ mesh.pair_reach
-    lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
-    settled = lbs >= _threshold(measured, margin)
-    rows, pairs = np.nonzero(~settled)  # the lever arms' speeds (never above the reach's)
-    lipschitz[rows, pairs] = levers.first_pass(rates, (rows, pairs), placements)
-    lbs = 0.5 * (bounds[:-1] + bounds[1:] - lipschitz * np.diff(times)[:, None])
-    settled = lbs >= _threshold(measured, margin)
-    _tighten(
-        store,
-        placements,
-        times,
-        (bounds, rates, lipschitz),
-        lbs,
-        settled,
-        _threshold(measured, margin),
-    )
-    settled = lbs >= _threshold(measured, margin)
-    lower = float(lbs[settled].min()) if settled.any() else math.inf
-    rows, pairs = np.nonzero(~settled)
-    heap: list[_Item] = [
-        (value, t0, t1, k, False, speed)
-        for value, t0, t1, k, speed in zip(
-            lbs[rows, pairs].tolist(),
-            times[rows].tolist(),
-            times[rows + 1].tolist(),
-            pairs.tolist(),
-            lipschitz[rows, pairs].tolist(),
-            strict=True,
-        )
-    ]
-    heapq.heapify(heap)
-    return _Least(measured, when, pair), lower, heap
 
 
 def _leaf_value(
@@ -296,8 +289,8 @@ def _leaf_value(
     (the whole body's bound stands alone).
     """
     width = abs(b - a)
-    da = store.distance(a, k)
-    db = -math.inf if one_end else store.distance(b, k)
+    da = store.lower(a, k)
+    db = -math.inf if one_end else store.lower(b, k)
     if da <= 0.0 or (db <= 0.0 and not one_end):
         return -math.inf
     travel = (rates @ store.leaf_reach(k)) * width
@@ -306,72 +299,6 @@ def _leaf_value(
     if not one_end:
         end = np.maximum(end, db)
     return float(np.min(0.5 * (start + end - travel)))
-
-
-def _tighten(
-    store: Instants,
-    placements: np.ndarray,
-    times: np.ndarray,
-    spheres: tuple[np.ndarray, np.ndarray, np.ndarray],
-    lbs: np.ndarray,
-    settled: np.ndarray,
-    threshold: float,
-) -> None:
-    """Raise the bounds of the intervals not settled by the single spheres, in place.
-
-    For every such (interval, pair), the larger of two lower bounds: the pair's leaf-sphere
-    bound (:mod:`.sphere_tree`) at both ends where it beats the single spheres', with the
-    whole bodies' speed bound; and the least over the pair's leaf pairs of their own bounds at
-    both ends with their own speed bounds, the latter only for the items the former leaves
-    below ``threshold`` (m). Both hold for the distance, so the interval bound stays one.
-    ``placements``: (K, G, 4, 4) the body poses at ``times``; ``spheres``: the single spheres'
-    bounds (K, P) (m), the joint-rate bounds per interval (K - 1, N) (rad/s or m/s) and the
-    pairs' speed bounds per interval (K - 1, P) (m/s).
-    """
-    mesh, (bounds, rates, lipschitz) = store.mesh, spheres
-    rows, pairs = np.nonzero(~settled)
-    if len(rows) == 0:
-        return
-    leaves, count = mesh.leaves, len(mesh.pairs)
-    # the (instant, pair) cells at the items' ends, each with its leaf pairs' gaps, once
-    codes = np.unique(np.concatenate([rows * count + pairs, (rows + 1) * count + pairs]))
-    cells, cell_pairs = np.divmod(codes, count)
-    runs = leaves.count[cell_pairs]
-    starts = np.cumsum(runs) - runs
-    offsets = np.arange(int(runs.sum())) - np.repeat(starts, runs)
-    gaps = leaves.gaps_at(
-        leaves.centres_at(placements),
-        placements,
-        np.repeat(cells, runs),
-        np.repeat(leaves.start[cell_pairs], runs) + offsets,
-    )
-    store.keep_gaps(times, codes, starts, gaps)
-    tight = bounds.copy()
-    tight[cells, cell_pairs] = np.maximum(
-        bounds[cells, cell_pairs], np.minimum.reduceat(gaps, starts)
-    )
-    widths = times[rows + 1] - times[rows]
-    whole = 0.5 * (tight[rows, pairs] + tight[rows + 1, pairs] - lipschitz[rows, pairs] * widths)
-    lbs[rows, pairs] = whole
-    # the leaf pairs' own bounds, for the items still open: one run of leaf pairs per item
-    still = whole < threshold
-    rows, pairs, widths, whole = rows[still], pairs[still], widths[still], whole[still]
-    if len(rows) == 0:
-        return
-    first = starts[np.searchsorted(codes, rows * count + pairs)]
-    second = starts[np.searchsorted(codes, (rows + 1) * count + pairs)]
-    runs = leaves.count[pairs]
-    item = np.repeat(np.arange(len(rows)), runs)
-    offsets = np.arange(int(runs.sum())) - np.repeat(np.cumsum(runs) - runs, runs)
-    ends = gaps[first[item] + offsets] + gaps[second[item] + offsets]
-    leaf_rows = leaves.start[pairs][item] + offsets
-    speed = np.einsum(
-        "rn,rn->r",
-        np.take(rates, rows[item], axis=0),
-        np.take(leaves.row_reach_t, leaf_rows, axis=0),
-    )
-    own = np.minimum.reduceat(0.5 * (ends - speed * widths[item]), np.cumsum(runs) - runs)
-    lbs[rows, pairs] = np.maximum(whole, own)
 
 
 def _contained_at_start(mesh: MeshClearance, store: Instants) -> int | None:

@@ -43,6 +43,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import coal
@@ -51,10 +52,11 @@ import pinocchio as pin
 
 from ..robot.collision import CollisionModel, Obstacle, checked_distance
 from ..robot.geometry import add_obstacles, checked_pairs, load_shared_geometry
-from ..robot.meshes import object_triangles
+from ..robot.meshes import object_triangles, true_hull
 from ..robot.model import Robot
 from .levers import Levers
 from .motion import reach_coefficients
+from .separation import Separation
 from .sphere_tree import LeafSpheres
 
 __all__ = [
@@ -169,6 +171,12 @@ class MeshClearance:
             for i, s in enumerate(self.shapes)
             if _is_mesh(s)
         }
+        #: Lower bounds from separating directions, on these vertices (hulls only propose).
+        self.separation = Separation(
+            self.shapes,
+            {i: vertices for i, (vertices, _) in self.meshes.items()},
+            {i: partial(true_hull, objects[i], keys.get(i)) for i in self.meshes},
+        )
         self.centres, self.radii = _bounding_spheres(self.shapes, self.meshes)
         #: Leaf spheres of every body: tighter lower bounds than the single spheres.
         boxes = {

@@ -32,6 +32,7 @@ class Instants:
         self.placed: dict[float, Placed] = {}
         self.speeds: dict[float, np.ndarray] = {}
         self.exact: dict[tuple[float, int], float] = {}
+        self.separated: dict[tuple[float, int], float] = {}
         self.leaf_gaps: dict[tuple[float, int], np.ndarray] = {}
         self.interval_rates: dict[tuple[float, float], np.ndarray] = {}
         self.leaf_speeds: dict[int, np.ndarray] = {}
@@ -121,7 +122,30 @@ class Instants:
     def distance(self, t: float, k: int) -> float:
         """Pair k's exact signed distance at ``t`` (m; :meth:`MeshClearance.exact_placed`)."""
         if (t, k) not in self.exact:
-            if t not in self.placed:
-                self.placed[t] = Placed(self.mesh, self.at(t))
-            self.exact[(t, k)] = self.mesh.exact_placed(self.placed[t], k)
+            self.exact[(t, k)] = self.mesh.exact_placed(self._placed(t), k)
         return self.exact[(t, k)]
+
+    def lower(self, t: float, k: int) -> float:
+        """A lower bound of pair k's distance at ``t`` (m): the exact distance if measured.
+
+        Otherwise the separating-direction bound (:mod:`.separation`), -inf when it gives none.
+        """
+        if (t, k) in self.exact:
+            return self.exact[(t, k)]
+        if (t, k) not in self.separated:
+            a, b = self.mesh.pairs[k]
+            placed = self._placed(t)
+            self.separated[(t, k)] = self.mesh.separation.bound(
+                a,
+                b,
+                placed.placements[a],
+                placed.placements[b],
+                (placed.transform(a), placed.transform(b)),
+            )
+        return self.separated[(t, k)]
+
+    def _placed(self, t: float) -> Placed:
+        """The instant ``t`` (s) placed for queries, kept."""
+        if t not in self.placed:
+            self.placed[t] = Placed(self.mesh, self.at(t))
+        return self.placed[t]
