@@ -6,6 +6,7 @@ computed once per instant (or interval) and kept for the certificate's later que
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -33,6 +34,11 @@ class Instants:
         self.speeds: dict[float, np.ndarray] = {}
         self.exact: dict[tuple[float, int], float] = {}
         self.separated: dict[tuple[float, int], float] = {}
+        #: The pairs of two meshes: their exact query walks two triangle hierarchies (100 to
+        #: 400 us against 15 to 40 us with a primitive, about 20 us for a separation bound).
+        self.separable = {
+            k for k, (a, b) in enumerate(mesh.pairs) if a in mesh.meshes and b in mesh.meshes
+        }
         self.leaf_gaps: dict[tuple[float, int], np.ndarray] = {}
         self.interval_rates: dict[tuple[float, float], np.ndarray] = {}
         self.leaf_speeds: dict[int, np.ndarray] = {}
@@ -128,10 +134,14 @@ class Instants:
     def lower(self, t: float, k: int) -> float:
         """A lower bound of pair k's distance at ``t`` (m): the exact distance if measured.
 
-        Otherwise the separating-direction bound (:mod:`.separation`), -inf when it gives none.
+        Otherwise, for a pair of two meshes, the separating-direction bound
+        (:mod:`.separation`); -inf when it gives none, and for the other pairs (whose exact
+        query costs about as much).
         """
         if (t, k) in self.exact:
             return self.exact[(t, k)]
+        if k not in self.separable:
+            return -math.inf
         if (t, k) not in self.separated:
             a, b = self.mesh.pairs[k]
             placed = self._placed(t)
