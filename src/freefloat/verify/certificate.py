@@ -305,12 +305,15 @@ def _contained_at_start(mesh: MeshClearance, store: Instants) -> int | None:
     """A pair one of whose bodies starts inside the other's closed mesh, if any.
 
     Inside by the winding number, and clear of the mesh's surface (positive distance: coal
-    measures a mesh's triangles, not its inside). The winding number first: the exact query
-    only for a pair found inside.
+    measures a mesh's triangles, not its inside). A pair a plane separates is neither
+    (:meth:`.Instants.separation`, a few microseconds); then the winding number, and the
+    exact query only for a pair found inside.
     """
     placements = store.at(0.0)
     near = np.flatnonzero(mesh.sphere_bounds(placements) < 0.0)
     for k in near:
+        if store.separation(0.0, int(k)) > 0.0:
+            continue
         if mesh.contained(placements, int(k)) and store.distance(0.0, int(k)) > 0.0:
             return int(k)
     return None

@@ -142,6 +142,13 @@ class Instants:
             return self.exact[(t, k)]
         if k not in self.separable:
             return -math.inf
+        return self.separation(t, k)
+
+    def separation(self, t: float, k: int) -> float:
+        """Pair k's separating-direction bound at ``t`` (m; -inf when none), kept.
+
+        Positive: a plane separates the two bodies (:mod:`.separation`), any pair.
+        """
         if (t, k) not in self.separated:
             a, b = self.mesh.pairs[k]
             placed = self._placed(t)
