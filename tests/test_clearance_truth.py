@@ -25,7 +25,8 @@ from freefloat.robot.collision import (
     known_srdf,
 )
 from freefloat.verify.certificate import certify
-from freefloat.verify.clearance import CHECK_TOLERANCE, MeshClearance, hull_slack
+from freefloat.verify.clearance import CHECK_TOLERANCE, MeshClearance
+from freefloat.verify.hull_agreement import hull_slack
 from freefloat.verify.hull_agreement import compared, shape_excess
 from freefloat.verify.motion import PolynomialMotion
 

@@ -50,7 +50,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from ..robot.collision import CollisionModel, Obstacle, checked_distance
+from ..robot.collision import Obstacle, checked_distance
 from ..robot.geometry import add_obstacles, checked_pairs, load_shared_geometry
 from ..robot.meshes import object_triangles, true_hull
 from ..robot.model import Robot
@@ -68,7 +68,6 @@ __all__ = [
     "ClearanceCertificate",
     "MeshClearance",
     "Placed",
-    "hull_slack",
 ]
 
 #: Instants of the first pass (uniform in time).
@@ -382,27 +381,3 @@ def _winding_number(vertices: np.ndarray, triangles: np.ndarray, point: np.ndarr
         + np.einsum("ij,ij->i", b, c) * la
     )
     return float(np.arctan2(numerator, denominator).sum() / (2.0 * math.pi))
-
-
-#: Slack per hull object (id of the coal shape; hulls are shared and kept, see true_hull).
-_SLACK: dict[int, float] = {}
-
-
-def hull_slack(model: CollisionModel, index: int) -> float:
-    """How far a solver hull's surface may lie from its mesh (m): 0 for primitives.
-
-    Every hull vertex is a mesh vertex, so every point of a hull face lies within the face's
-    longest edge over sqrt(3) of a mesh point.
-    """
-    shape = model.geometry.geometryObjects[index].geometry
-    if not isinstance(shape, coal.ConvexBase):
-        return 0.0
-    if id(shape) not in _SLACK:
-        points = np.array(shape.points(), dtype=float).reshape(-1, 3)
-        faces = np.array(
-            [[f[0], f[1], f[2]] for f in (shape.polygons(i) for i in range(shape.num_polygons))]
-        )
-        corners = points[faces]
-        edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
-        _SLACK[id(shape)] = float(edges.max()) / math.sqrt(3.0)
-    return _SLACK[id(shape)]

@@ -13,7 +13,7 @@ geometry code:
   costs a fresh process 0.4 s;
 - **placements**, at the instant of the smallest clearance: a pair's hull distance is at most
   its mesh distance (within ``HULL_TOLERANCE``, GJK's) and at least the mesh distance minus the
-  two hulls' slack (:func:`~freefloat.verify.clearance.hull_slack`), for the pairs the
+  two hulls' slack (:func:`hull_slack`), for the pairs the
   certificate measured there (the closest ones) and, for each body none of those holds, the
   pair in which it lies nearest another body by its leaf spheres: every body's placement is
   compared at least once where clearance binds (a pair with a primitive where the body has
@@ -30,9 +30,9 @@ import coal
 import numpy as np
 
 from ..robot.collision import CollisionModel
-from .clearance import MeshClearance, hull_slack
+from .clearance import MeshClearance
 
-__all__ = ["hull_agreement", "shape_excess"]
+__all__ = ["hull_agreement", "hull_slack", "shape_excess"]
 
 
 def hull_agreement(
@@ -215,3 +215,27 @@ def _digest(array: np.ndarray) -> bytes:
 
 #: Shape excess (m) per pair of vertex sets (hull's, mesh's), computed once per process.
 _SHAPES: dict[tuple[bytes, bytes], float] = {}
+
+
+#: Slack per hull object (id of the coal shape; hulls are shared and kept, see true_hull).
+_SLACK: dict[int, float] = {}
+
+
+def hull_slack(model: CollisionModel, index: int) -> float:
+    """How far a solver hull's surface may lie from its mesh (m): 0 for primitives.
+
+    Every hull vertex is a mesh vertex, so every point of a hull face lies within the face's
+    longest edge over sqrt(3) of a mesh point.
+    """
+    shape = model.geometry.geometryObjects[index].geometry
+    if not isinstance(shape, coal.ConvexBase):
+        return 0.0
+    if id(shape) not in _SLACK:
+        points = np.array(shape.points(), dtype=float).reshape(-1, 3)
+        faces = np.array(
+            [[f[0], f[1], f[2]] for f in (shape.polygons(i) for i in range(shape.num_polygons))]
+        )
+        corners = points[faces]
+        edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
+        _SLACK[id(shape)] = float(edges.max()) / math.sqrt(3.0)
+    return _SLACK[id(shape)]

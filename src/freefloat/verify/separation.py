@@ -70,15 +70,18 @@ class Separation:
         """A lower bound (m) of the distance between objects ``a`` and ``b``; -inf if none.
 
         ``placement_a``, ``placement_b``: (4, 4) poses of the objects in one frame;
-        ``transforms``: the same as coal takes them. None when the hulls touch (no direction
-        separates them), or a body has no support here.
+        ``transforms``: the same as coal takes them. -inf when the hulls touch (no direction
+        separates them), coal's GJK fails, or a body has no support here.
         """
         hull_a, hull_b = self._hull(a), self._hull(b)
         support_a, support_b = self._support(a), self._support(b)
         if hull_a is None or hull_b is None or support_a is None or support_b is None:
             return -math.inf
         result = coal.DistanceResult()
-        gap = coal.distance(hull_a, transforms[0], hull_b, transforms[1], self._request, result)
+        try:
+            gap = coal.distance(hull_a, transforms[0], hull_b, transforms[1], self._request, result)
+        except (RuntimeError, ValueError):  # no direction: the exact query decides
+            return -math.inf
         if not gap > 0.0:
             return -math.inf
         direction = result.getNearestPoint2() - result.getNearestPoint1()
