@@ -26,8 +26,7 @@ from freefloat.robot.collision import (
 )
 from freefloat.verify.certificate import certify
 from freefloat.verify.clearance import CHECK_TOLERANCE, MeshClearance
-from freefloat.verify.hull_agreement import hull_slack
-from freefloat.verify.hull_agreement import compared, shape_excess
+from freefloat.verify.hull_agreement import compared, hull_slack, shape_excess
 from freefloat.verify.motion import PolynomialMotion
 
 from conftest import ROOT, coal_hull
