@@ -128,7 +128,9 @@ def _refine(
             return bisections, False
         lb, t0, t1, k, level, speed = heapq.heappop(heap)
         if level == SPHERES:
-            bounded = _bound_ends(store, least, margin, (t0, t1, k, speed))
+            bounded = None
+            if k in store.separable:  # two meshes: bounds first (see Instants.lower)
+                bounded = _bound_ends(store, least, margin, (t0, t1, k, speed))
             if bounded is not None:
                 heapq.heappush(heap, (bounded[0], t0, t1, k, bounded[1], speed))
                 continue
