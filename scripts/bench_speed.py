@@ -58,8 +58,11 @@ def _time(call: Callable[[], object]) -> tuple[float, object]:
 
 
 def paired(first: Callable[[], object], second: Callable[[], object], rounds: int) -> dict:
-    """Medians (s) of two calls timed side by side in each round, order alternating."""
-    a, b, ratios = [], [], []
+    """Medians (s) of two calls timed side by side in each round, order alternating.
+
+    ``outs``: what the first call returned in every round (its stage times are medians too).
+    """
+    a, b, ratios, outs = [], [], [], []
     for k in range(rounds):
         if k % 2 == 0:
             ta, out = _time(first)
@@ -70,11 +73,12 @@ def paired(first: Callable[[], object], second: Callable[[], object], rounds: in
         a.append(ta)
         b.append(tb)
         ratios.append(ta / tb)
+        outs.append(out)
     return {
         "first_s": statistics.median(a),
         "second_s": statistics.median(b),
         "ratio": statistics.median(ratios),
-        "last": out,
+        "outs": outs,
     }
 
 
@@ -87,17 +91,23 @@ def bench_servicers(rounds: int) -> list[dict[str, object]]:
         found = paired(
             lambda n=name: ff.plan(fresh(n)), lambda n=name: ff.plan(fresh(n, False)), rounds
         )
-        plan = found["last"]
-        record = plan.solver if isinstance(plan, ff.Plan) else None
+        records = [p.solver for p in found["outs"] if isinstance(p, ff.Plan)]
+
+        def stage(field: str, records: list = records) -> float:
+            """Median of one stage's time over the rounds' plans (ms)."""
+            if not records:
+                return float("nan")
+            return 1e3 * statistics.median(getattr(r, field) for r in records)
+
         rows.append(
             {
                 "robot": name,
                 "with_ms": 1e3 * found["first_s"],
                 "without_ms": 1e3 * found["second_s"],
                 "ratio": found["ratio"],
-                "solve_ms": 1e3 * record.solve_time_s if record else float("nan"),
-                "sample_ms": 1e3 * record.sample_time_s if record else float("nan"),
-                "verify_ms": 1e3 * record.verify_time_s if record else float("nan"),
+                "solve_ms": stage("solve_time_s"),
+                "sample_ms": stage("sample_time_s"),
+                "verify_ms": stage("verify_time_s"),
             }
         )
         print(f"  done: servicer {name}: {rows[-1]}", flush=True)
