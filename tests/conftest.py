@@ -97,3 +97,18 @@ def coal_hull(vertices, triangles):
     model.endModel()
     model.buildConvexHull(True, "Qt")
     return model.convex
+
+
+def quintic_motion(start, goal, duration: float):
+    """The rest-to-rest quintic from ``start`` to ``goal`` (rad or m) in ``duration`` (s), as
+    verification's polynomial motion (its monomial coefficients written out here)."""
+    from freefloat.verify.motion import PolynomialMotion
+
+    d = goal - start
+    return PolynomialMotion.from_monomials(
+        [
+            [s, 0, 0, 10 * x / duration**3, -15 * x / duration**4, 6 * x / duration**5]
+            for s, x in zip(start, d, strict=True)
+        ],
+        duration,
+    )

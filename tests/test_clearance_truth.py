@@ -29,7 +29,7 @@ from freefloat.verify.clearance import CHECK_TOLERANCE, MeshClearance
 from freefloat.verify.hull_agreement import compared, hull_slack, shape_excess
 from freefloat.verify.motion import PolynomialMotion
 
-from conftest import ROOT, coal_hull
+from conftest import ROOT, coal_hull, quintic_motion
 from geometry_truth import (
     box_hull_distance,
     point_hull_distance,
@@ -41,17 +41,6 @@ from geometry_truth import (
 UR5 = ROOT / "robots" / "ur5_servicer.urdf"
 UR5_START = np.radians([0.0, -90.0, 90.0, -90.0, -90.0, 0.0])
 UR5_GOAL = np.radians([57.3, -57.3, 68.8, -68.8, -57.3, 28.6])
-
-
-def _quintic(start: np.ndarray, goal: np.ndarray, duration: float) -> PolynomialMotion:
-    d = goal - start
-    return PolynomialMotion.from_monomials(
-        [
-            [s, 0, 0, 10 * x / duration**3, -15 * x / duration**4, 6 * x / duration**5]
-            for s, x in zip(start, d, strict=True)
-        ],
-        duration,
-    )
 
 
 @pytest.mark.parametrize(
@@ -185,7 +174,7 @@ def test_a_thin_plate_crossed_between_samples_is_caught(tmp_path):
     path.write_text(SPHERE_ARM.replace('radius="0.1"', 'radius="0.002"'))
     robot = ff.load_robot(path)
     duration = 1.0
-    motion = _quintic(np.array([-1.5, 0.0]), np.array([1.5, 0.0]), duration)
+    motion = quintic_motion(np.array([-1.5, 0.0]), np.array([1.5, 0.0]), duration)
     times = np.linspace(0.0, duration, 401)
     angles = np.array([motion.joints(t)[0] for t in times])
     k = int(np.argmax(np.diff(angles)))  # the widest step, mid-path
@@ -222,7 +211,7 @@ def test_a_path_just_clear_of_the_margin_is_certified_clear(tmp_path, above):
     wall = Obstacle(
         "wall", "box", (thickness, 0.4, 0.5), (x_wall + thickness / 2, 0.0, 0.0), (0.0, 0.0, 0.0)
     )
-    motion = _quintic(np.array([-1.5, 0.0]), np.array([1.5, 0.0]), duration)
+    motion = quintic_motion(np.array([-1.5, 0.0]), np.array([1.5, 0.0]), duration)
     times = np.linspace(0.0, duration, 20001)
     angles = np.array([motion.joints(t)[0] for t in times])
     truth = x_wall - (0.5 + 1.6 * np.cos(angles)) - 0.002  # ball to wall face, closed form
@@ -245,7 +234,7 @@ def test_the_ur5_keep_out_ball_plans_clear_on_the_true_meshes(tmp_path):
         "xyz = [0.85, 0.14, -0.20]\n"
     )
     s = ff.Scenario.from_toml(scenario)
-    quintic = _quintic(np.asarray(s.start), np.asarray(s.goal), s.duration)
+    quintic = quintic_motion(np.asarray(s.start), np.asarray(s.goal), s.duration)
     model = CollisionModel(s.robot, known_srdf(s.robot), s.safety.obstacles)
     centre = np.array([0.85, 0.14, -0.20])
     before = min(
@@ -341,7 +330,7 @@ def test_the_hull_agreement_catches_a_wrong_hull_on_any_body(direction):
     srdf = known_srdf(robot)
     mesh = MeshClearance(robot, srdf)
     solver = CollisionModel(robot, srdf)
-    motion = _quintic(UR5_START, UR5_GOAL, 12.0)
+    motion = quintic_motion(UR5_START, UR5_GOAL, 12.0)
     honest = certify(mesh, motion, 0.01, solver)
     assert honest.hull_excess <= 1e-6, honest.hull_detail
     slack = np.array([hull_slack(solver, i) for i in range(len(mesh.shapes))])
@@ -424,7 +413,7 @@ def test_a_hull_of_the_wrong_shape_is_caught_on_every_mesh_body(monkeypatch, mov
             excess, where = shape_excess(mesh, CollisionModel(robot, srdf))
             assert 0.5 * abs(move) < excess <= abs(move) + 1e-9, (body, axis, excess)
             assert where.startswith(body)
-    motion = _quintic(UR5_START, UR5_GOAL, 12.0)
+    motion = quintic_motion(UR5_START, UR5_GOAL, 12.0)
     cert = certify(mesh, motion, 0.01, CollisionModel(robot, srdf))  # the last body's
     assert 0.5 * abs(move) < cert.hull_excess <= abs(move) + 1e-9
     assert cert.hull_detail.startswith(bodies[-1])

@@ -18,10 +18,9 @@ from freefloat.robot.collision import Obstacle, known_srdf
 from freefloat.verify import separation as separation_module
 from freefloat.verify.certificate import certify
 from freefloat.verify.clearance import ACCURACY, SLACK_FRACTION, MeshClearance, Placed
-from freefloat.verify.motion import PolynomialMotion
 from freefloat.verify.separation import Separation
 
-from conftest import ROOT
+from conftest import ROOT, quintic_motion
 
 UR5 = ROOT / "robots" / "ur5_servicer.urdf"
 
@@ -135,17 +134,6 @@ def test_a_wrong_hull_only_loosens_the_bound(monkeypatch):
         assert np.all(bounds <= exact + 1e-9)
 
 
-def _quintic(start: np.ndarray, goal: np.ndarray, duration: float) -> PolynomialMotion:
-    d = goal - start
-    return PolynomialMotion.from_monomials(
-        [
-            [a, 0, 0, 10 * x / duration**3, -15 * x / duration**4, 6 * x / duration**5]
-            for a, x in zip(start, d, strict=True)
-        ],
-        duration,
-    )
-
-
 @pytest.mark.parametrize(
     ("name", "fewer"), [("panda_servicer", True), ("dual_ur5_servicer", False)]
 )
@@ -159,7 +147,7 @@ def test_the_certificate_with_separations_matches_it_without_on_fewer_queries(
     the accuracy promised."""
     s = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / f"{name}.toml")
     mesh = MeshClearance(s.robot, s.safety.srdf or known_srdf(s.robot))
-    motion = _quintic(np.asarray(s.start), np.asarray(s.goal), s.duration)
+    motion = quintic_motion(np.asarray(s.start), np.asarray(s.goal), s.duration)
     counted = {"exact": 0}
     exact_placed = mesh.exact_placed
 

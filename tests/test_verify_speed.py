@@ -27,11 +27,11 @@ from freefloat.robot.collision import CollisionModel, known_srdf
 from freefloat.verify import certificate, first_pass
 from freefloat.verify.certificate import certify
 from freefloat.verify.clearance import ACCURACY, SLACK_FRACTION, MeshClearance
-from freefloat.verify.motion import PolynomialMotion, reach_coefficients
+from freefloat.verify.motion import reach_coefficients
 from freefloat.verify.sphere_tree import leaf_spheres
 
 import urdfs
-from conftest import ROOT
+from conftest import ROOT, quintic_motion
 from geometry_truth import world_meshes
 
 UR5 = ROOT / "robots" / "ur5_servicer.urdf"
@@ -332,17 +332,6 @@ def test_leaf_bounds_never_exceed_coals_mesh_distances(name):
     assert tighter > 0
 
 
-def _quintic(start: np.ndarray, goal: np.ndarray, duration: float) -> PolynomialMotion:
-    d = goal - start
-    return PolynomialMotion.from_monomials(
-        [
-            [a, 0, 0, 10 * x / duration**3, -15 * x / duration**4, 6 * x / duration**5]
-            for a, x in zip(start, d, strict=True)
-        ],
-        duration,
-    )
-
-
 @pytest.mark.parametrize(("name", "instants"), [("panda_servicer", 101), ("ur5_servicer", 121)])
 def test_the_culled_certificate_holds_against_every_pair_measured_densely(
     name, instants, monkeypatch
@@ -353,7 +342,7 @@ def test_the_culled_certificate_holds_against_every_pair_measured_densely(
     speeds, and queries less or as much (the UR5's halvings: fewer)."""
     s = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / f"{name}.toml")
     mesh = MeshClearance(s.robot, s.safety.srdf or known_srdf(s.robot))
-    motion = _quintic(np.asarray(s.start), np.asarray(s.goal), s.duration)
+    motion = quintic_motion(np.asarray(s.start), np.asarray(s.goal), s.duration)
     counted = {"exact": 0}
     exact, exact_placed = mesh.exact, mesh.exact_placed
 
