@@ -18,9 +18,11 @@ from freefloat.robot.collision import Obstacle, known_srdf
 from freefloat.verify import separation as separation_module
 from freefloat.verify.certificate import certify
 from freefloat.verify.clearance import ACCURACY, SLACK_FRACTION, MeshClearance, Placed
+from freefloat.verify.instants import Instants
 from freefloat.verify.separation import Separation
 
 from conftest import ROOT, quintic_motion
+from geometry_truth import write_stl
 
 UR5 = ROOT / "robots" / "ur5_servicer.urdf"
 
@@ -35,6 +37,11 @@ def _bounds_and_exact(mesh: MeshClearance, joints: np.ndarray) -> tuple[np.ndarr
         bounds.append(mesh.separation.bound(a, b, placements[a], placements[b], transforms))
         exact.append(mesh.exact_placed(placed, k))
     return np.array(bounds), np.array(exact)
+
+
+def _exact_only(store: Instants, t: float, k: int) -> float:
+    """The certificate's end values before separation bounds: exact where measured, else none."""
+    return store.exact.get((t, k), -math.inf)
 
 
 def test_the_bound_never_exceeds_the_mesh_distance_and_is_close_where_given():
@@ -159,8 +166,8 @@ def test_the_certificate_with_separations_matches_it_without_on_fewer_queries(
     with_bounds = certify(mesh, motion, 0.01)
     queries = counted["exact"]
     counted["exact"] = 0
-    with monkeypatch.context() as patch:
-        patch.setattr(mesh.separation, "bound", lambda *args: -math.inf)
+    with monkeypatch.context() as patch:  # the certificate as it was: exact ends only
+        patch.setattr(Instants, "lower", _exact_only)
         without = certify(mesh, motion, 0.01)
     assert 0 < queries <= counted["exact"]
     assert (queries < counted["exact"]) == fewer
@@ -174,3 +181,73 @@ def test_the_certificate_with_separations_matches_it_without_on_fewer_queries(
     assert with_bounds.lower_bound <= dense + 1e-12
     accuracy = max(ACCURACY, SLACK_FRACTION * (with_bounds.measured - 0.01))
     assert with_bounds.measured - with_bounds.lower_bound <= accuracy + 1e-12
+
+
+def _box(lo, hi) -> np.ndarray:
+    """(12, 3, 3) the triangles of an axis-aligned box (m)."""
+    c = np.array(
+        [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+    )
+    faces = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1)]
+    faces += [(2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]
+    return c[np.array(faces)]
+
+
+_COMB_ROBOT = """<?xml version="1.0"?>
+<robot name="comb">
+  <link name="base"><inertial><mass value="100"/>
+    <inertia ixx="10" iyy="10" izz="10" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0 -0.08 -0.1"/><geometry><mesh filename="comb.stl"/></geometry>
+    </collision></link>
+  <joint name="turn" type="revolute"><parent link="base"/><child link="carrier"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="10" velocity="1"/></joint>
+  <link name="carrier"><inertial><mass value="1"/>
+    <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="slide" type="prismatic"><parent link="carrier"/><child link="hand"/>
+    <axis xyz="1 0 0"/><limit lower="-2" upper="2" effort="10" velocity="1"/></joint>
+  <link name="hand"><inertial><mass value="1"/>
+    <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><geometry><mesh filename="hand.stl"/></geometry></collision></link>
+</robot>
+"""
+
+
+@pytest.mark.parametrize(
+    ("start", "goal"), [((0.0, 0.22), (0.05, 0.30)), ((-0.05, 0.24), (0.05, 0.26))]
+)
+def test_a_hand_between_a_combs_teeth_costs_no_more_queries_than_exact_ends(
+    tmp_path, start, goal, monkeypatch
+):
+    """A box hand moving in the gap between two teeth of a comb (two meshes whose hulls
+    overlap all along, so no direction separates them): the certificate with separation
+    bounds makes no more exact queries than the one with exact ends only, reports the same
+    figures, and its bound lies at or below the distance measured at 401 instants."""
+    teeth = [_box((0.05, i * 0.12, 0.0), (0.35, i * 0.12 + 0.04, 0.2)) for i in range(4)]
+    write_stl(tmp_path / "comb.stl", np.concatenate([_box((0, 0, 0), (0.05, 0.48, 0.2)), *teeth]))
+    write_stl(tmp_path / "hand.stl", _box((-0.02, -0.02, -0.05), (0.25, 0.02, 0.05)))
+    (tmp_path / "comb.urdf").write_text(_COMB_ROBOT)
+    mesh = MeshClearance(ff.load_robot(tmp_path / "comb.urdf"), None)
+    motion = quintic_motion(np.array(start), np.array(goal), 1.0)
+    counted = {"exact": 0}
+    exact_placed = mesh.exact_placed
+
+    def counting(placed, k):
+        counted["exact"] += 1
+        return exact_placed(placed, k)
+
+    monkeypatch.setattr(mesh, "exact_placed", counting)
+    with_bounds = certify(mesh, motion, 0.0)
+    queries, counted["exact"] = counted["exact"], 0
+    with monkeypatch.context() as patch:
+        patch.setattr(Instants, "lower", _exact_only)
+        without = certify(mesh, motion, 0.0)
+    assert 0 < queries <= counted["exact"]
+    assert (with_bounds.measured, with_bounds.lower_bound, with_bounds.certified) == (
+        without.measured,
+        without.lower_bound,
+        without.certified,
+    )
+    dense = min(
+        mesh.exact(mesh.placements(q), 0) for q in motion.path(np.linspace(0.0, 1.0, 401))[0]
+    )
+    assert with_bounds.lower_bound <= dense + 1e-12

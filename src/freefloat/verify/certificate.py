@@ -5,14 +5,15 @@ measured clearance is found early and every interval whose bound lies within
 :func:`tolerance` of it is settled without more queries. Before any query, the intervals the
 single bounding spheres leave open are bounded again from the meshes' leaf spheres
 (:mod:`.sphere_tree`): their gaps, and the least over leaf pairs of each leaf pair's own
-Lipschitz bound (:mod:`.first_pass`). Each item is refined in three steps: lower bounds at its
-two ends from a separating direction over the meshes' own vertices (:mod:`.separation`: a few
-microseconds against a mesh query's hundred), then exact distances there (one end first, whose
-distance less the pair's speed over the whole interval may settle it without the other), then
-halving, the middle bounded the same way; each new interval's bound is the larger of the whole
-bodies' and the leaf pairs' (:func:`_leaf_value`). Before it stops, the instants whose bounds
-lie below the least clearance measured are measured, so that figure is the least of what the
-bounds leave possible (:data:`~.settling.LAST_LOOKS` at most). A pair's speed
+Lipschitz bound (:mod:`.first_pass`). Each item is refined in three steps: for two meshes,
+lower bounds at its two ends from a separating direction over their own vertices
+(:mod:`.separation`: tens of microseconds against a mesh query's hundreds), then exact
+distances there (one end first, whose distance less the pair's speed over the whole interval
+may settle it without the other), then halving, the middle bounded the same way; each new
+interval's bound is the larger of the whole bodies' and the leaf pairs' (:func:`_leaf_value`).
+Before it stops, the instants whose bounds lie below the least clearance measured are
+measured, so that figure is the least of what the bounds leave possible
+(:data:`~.settling.LAST_LOOKS` at most). A pair's speed
 comes from its bodies' reach from the joints, and where that leaves an interval open from
 their lever arms about the joints' axes over the first-pass interval that holds it
 (:mod:`.interval_levers`: never faster).
@@ -150,9 +151,15 @@ def _refine(
 def _look_below(store: Instants, least: Least) -> bool:
     """Measure the smallest separating-direction bound's instant and pair if it is below ``least``.
 
-    True when it did: the exact distance there may be below the least measured (m).
+    True when it did: the exact distance there may be below the least measured (m). An
+    instant with no bound (-inf: its hulls touch) is not one: it was left unmeasured on
+    purpose (an interval settled from its other end, :func:`_measure_ends`).
     """
-    open_ = [(v, t, k) for (t, k), v in store.separated.items() if (t, k) not in store.exact]
+    open_ = [
+        (v, t, k)
+        for (t, k), v in store.separated.items()
+        if v > -math.inf and (t, k) not in store.exact
+    ]
     if not open_:
         return False
     value, t, k = min(open_)
@@ -308,7 +315,7 @@ def _contained_at_start(mesh: MeshClearance, store: Instants) -> int | None:
 
     Inside by the winding number, and clear of the mesh's surface (positive distance: coal
     measures a mesh's triangles, not its inside). A pair a plane separates is neither
-    (:meth:`.Instants.separation`, a few microseconds); then the winding number, and the
+    (:meth:`.Instants.separation`, tens of microseconds); then the winding number, and the
     exact query only for a pair found inside.
     """
     placements = store.at(0.0)

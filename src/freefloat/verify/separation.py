@@ -15,8 +15,8 @@ GJK that stopped early) makes the bound looser, never larger than the distance; 
 the supports is about 1e-16 m per metre of body size.
 
 The certificate (:mod:`freefloat.verify.certificate`) takes these bounds at the ends of the
-intervals it refines, where they cost a few microseconds against a mesh-to-mesh query's
-hundred, and measures the exact distance only where the bound leaves an interval open.
+intervals it refines, where they cost tens of microseconds against a mesh-to-mesh query's
+hundreds, and measures the exact distance only where the bound leaves an interval open.
 """
 
 from __future__ import annotations

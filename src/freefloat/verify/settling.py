@@ -1,7 +1,7 @@
 """How far the clearance certificate refines, and what it keeps while it does.
 
 An interval of one pair is *settled* when its lower bound lies within :func:`tolerance` of the
-least clearance measured so far (:func:`threshold`); the certificate refines the others
+least clearance measured so far (:func:`settled_above`); the certificate refines the others
 (:mod:`freefloat.verify.certificate`), its work items ordered in a heap by their bounds.
 """
 
