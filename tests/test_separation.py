@@ -44,6 +44,25 @@ def _exact_only(store: Instants, t: float, k: int) -> float:
     return store.exact.get((t, k), -math.inf)
 
 
+def _with_and_without(mesh: MeshClearance, motion, margin: float, monkeypatch):
+    """The certificate with separation bounds and with exact ends only, and the exact queries
+    each made: ((certificate, queries), (certificate, queries))."""
+    counted = {"exact": 0}
+    exact_placed = mesh.exact_placed
+
+    def counting(placed, k):
+        counted["exact"] += 1
+        return exact_placed(placed, k)
+
+    with monkeypatch.context() as patch:
+        patch.setattr(mesh, "exact_placed", counting)
+        with_bounds = certify(mesh, motion, margin)
+        queries, counted["exact"] = counted["exact"], 0
+        patch.setattr(Instants, "lower", _exact_only)  # the certificate as it was
+        without = certify(mesh, motion, margin)
+    return (with_bounds, queries), (without, counted["exact"])
+
+
 def test_the_bound_never_exceeds_the_mesh_distance_and_is_close_where_given():
     """UR5 servicer with a keep-out box, sphere and capsule, 30 random configurations: every
     bound lies at or below coal's distance on the original meshes, a bound is given for most
@@ -128,7 +147,7 @@ def test_each_primitive_support_is_the_largest_projection_of_its_surface(shape):
         assert support(n) <= sampled + 5e-3
 
 
-def test_a_wrong_hull_only_loosens_the_bound(monkeypatch):
+def test_a_wrong_hull_only_loosens_the_bound():
     """Every mesh's hull swapped for a small ball somewhere else: the directions it proposes
     are poor, yet no bound exceeds coal's mesh distance (the bound is over the vertices)."""
     robot = ff.load_robot(UR5)
@@ -155,22 +174,9 @@ def test_the_certificate_with_separations_matches_it_without_on_fewer_queries(
     s = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / f"{name}.toml")
     mesh = MeshClearance(s.robot, s.safety.srdf or known_srdf(s.robot))
     motion = quintic_motion(np.asarray(s.start), np.asarray(s.goal), s.duration)
-    counted = {"exact": 0}
-    exact_placed = mesh.exact_placed
-
-    def counting(placed, k):
-        counted["exact"] += 1
-        return exact_placed(placed, k)
-
-    monkeypatch.setattr(mesh, "exact_placed", counting)
-    with_bounds = certify(mesh, motion, 0.01)
-    queries = counted["exact"]
-    counted["exact"] = 0
-    with monkeypatch.context() as patch:  # the certificate as it was: exact ends only
-        patch.setattr(Instants, "lower", _exact_only)
-        without = certify(mesh, motion, 0.01)
-    assert 0 < queries <= counted["exact"]
-    assert (queries < counted["exact"]) == fewer
+    (with_bounds, queries), (without, before) = _with_and_without(mesh, motion, 0.01, monkeypatch)
+    assert 0 < queries <= before
+    assert (queries < before) == fewer
     assert with_bounds.certified == without.certified
     assert with_bounds.measured == pytest.approx(without.measured, abs=ACCURACY)
     dense = min(
@@ -228,20 +234,8 @@ def test_a_hand_between_a_combs_teeth_costs_no_more_queries_than_exact_ends(
     (tmp_path / "comb.urdf").write_text(_COMB_ROBOT)
     mesh = MeshClearance(ff.load_robot(tmp_path / "comb.urdf"), None)
     motion = quintic_motion(np.array(start), np.array(goal), 1.0)
-    counted = {"exact": 0}
-    exact_placed = mesh.exact_placed
-
-    def counting(placed, k):
-        counted["exact"] += 1
-        return exact_placed(placed, k)
-
-    monkeypatch.setattr(mesh, "exact_placed", counting)
-    with_bounds = certify(mesh, motion, 0.0)
-    queries, counted["exact"] = counted["exact"], 0
-    with monkeypatch.context() as patch:
-        patch.setattr(Instants, "lower", _exact_only)
-        without = certify(mesh, motion, 0.0)
-    assert 0 < queries <= counted["exact"]
+    (with_bounds, queries), (without, before) = _with_and_without(mesh, motion, 0.0, monkeypatch)
+    assert 0 < queries <= before
     assert (with_bounds.measured, with_bounds.lower_bound, with_bounds.certified) == (
         without.measured,
         without.lower_bound,

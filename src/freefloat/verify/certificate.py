@@ -130,7 +130,7 @@ def _refine(
         lb, t0, t1, k, level, speed = heapq.heappop(heap)
         if level == SPHERES:
             bounded = None
-            if k in store.separable:  # two meshes: bounds first (see Instants.lower)
+            if k in store.mesh.separable:  # two meshes: bounds first (Instants.lower)
                 bounded = _bound_ends(store, least, margin, (t0, t1, k, speed))
             if bounded is not None:
                 heapq.heappush(heap, (bounded[0], t0, t1, k, bounded[1], speed))

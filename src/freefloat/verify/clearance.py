@@ -170,7 +170,13 @@ class MeshClearance:
             for i, s in enumerate(self.shapes)
             if _is_mesh(s)
         }
-        #: Lower bounds from separating directions, on these vertices (hulls only propose).
+        #: Lower bounds from separating directions, on these vertices (hulls only propose),
+        #: taken for the pairs of two meshes: their exact query walks two triangle
+        #: hierarchies (100 to 400 us, against 15 to 40 us with a primitive, about 20 us for
+        #: a separation bound).
+        self.separable = frozenset(
+            k for k, (a, b) in enumerate(self.pairs) if a in self.meshes and b in self.meshes
+        )
         self.separation = Separation(
             self.shapes,
             {i: vertices for i, (vertices, _) in self.meshes.items()},
