@@ -39,7 +39,8 @@ from .hull_agreement import hull_agreement
 from .instants import Instants
 from .interval_levers import IntervalLevers
 from .motion import PolynomialMotion
-from .settling import EXACT, LAST_LOOKS, SEPARATED, SPHERES, Item, Least, settled_above
+from .settling import EXACT, LAST_LOOKS, SEPARATED, SPHERES, TAYLOR, Item, Least, settled_above
+from .taylor import IntervalTaylor
 
 __all__ = ["certify"]
 
@@ -119,6 +120,7 @@ def _refine(
     follows it.
     """
     least, levers = work
+    taylor = IntervalTaylor(store)
     bisections, looks = 0, 0
     while True:
         if not heap or heap[0][0] >= settled_above(least.value, margin):
@@ -143,9 +145,40 @@ def _refine(
         if bisections >= MAX_BISECTIONS:
             heapq.heappush(heap, (lb, t0, t1, k, level, speed))
             return bisections, True
+        if level == EXACT:  # the second-order bound over it, where it can settle it
+            threshold = settled_above(least.value, margin)
+            value = _taylor_value(store, (taylor, heap), threshold, (t0, t1, k, speed))
+            if value > lb:
+                heapq.heappush(heap, (value, t0, t1, k, TAYLOR, speed))
+                continue
         bisections += 1
         for item in _halves(store, (least, levers), margin, heap, (t0, t1, k)):
             heapq.heappush(heap, item)
+
+
+def _taylor_value(
+    store: Instants,
+    work: tuple[IntervalTaylor, list[Item]],
+    threshold: float,
+    item: tuple[float, float, int, float],
+) -> float:
+    """The second-order bound (m) over an item with exact ends, or -inf where it cannot settle.
+
+    ``item``: its ends (s), pair and speed bound (m/s). The bound lies at or below the
+    distance at both ends, and at or below the distance at the middle (at most the nearer end's
+    plus the speed times half the width) less its second-order term: when that ceiling is
+    below ``threshold`` (m) the bound cannot settle the item and is not worked out.
+    """
+    taylor, heap = work
+    t0, t1, k, speed = item
+    half = 0.5 * (t1 - t0)
+    nearer = min(store.distance(t0, k), store.distance(t1, k))
+    spread = taylor.spread(t0, t1, k)
+    if nearer + min(0.0, half * (speed - 0.5 * spread * half)) < threshold:
+        return -math.inf
+    if 0.5 * (t0 + t1) not in store.joints:  # with the middles halving would ask for next
+        store.load(_middles(store, heap, t0, t1))
+    return taylor.bound(t0, t1, k, spread)
 
 
 def _look_below(store: Instants, least: Least) -> bool:

@@ -32,6 +32,10 @@ class Instants:
         self.placements: dict[float, np.ndarray] = {}
         self.placed: dict[float, Placed] = {}
         self.speeds: dict[float, np.ndarray] = {}
+        #: Signed joint rates (rad/s or m/s) and absolute accelerations per instant.
+        self.velocities: dict[float, np.ndarray] = {}
+        self.accelerations: dict[float, np.ndarray] = {}
+        self.directions: dict[tuple[float, int], np.ndarray | None] = {}
         self.exact: dict[tuple[float, int], float] = {}
         self.separated: dict[tuple[float, int], float] = {}
         self.leaf_gaps: dict[tuple[float, int], np.ndarray] = {}
@@ -43,10 +47,11 @@ class Instants:
 
     def load(self, times: np.ndarray) -> None:
         """Joint values and speeds at many instants (s), evaluated in one call."""
-        joints, rates, _ = self.motion.path(np.asarray(times, dtype=float))
-        for t, q, qd in zip(times.tolist(), joints, np.abs(rates), strict=True):
+        joints, rates, accelerations = self.motion.path(np.asarray(times, dtype=float))
+        for t, q, qd, qdd in zip(times.tolist(), joints, rates, accelerations, strict=True):
             if t not in self.joints:
-                self.joints[t], self.speeds[t] = q, qd
+                self.joints[t], self.speeds[t], self.velocities[t] = q, np.abs(qd), qd
+                self.accelerations[t] = np.abs(qdd)
 
     def at(self, t: float) -> np.ndarray:
         """(G, 4, 4) placements at ``t`` (s)."""
@@ -145,16 +150,32 @@ class Instants:
         Positive: a plane separates the two bodies (:mod:`.separation`), any pair.
         """
         if (t, k) not in self.separated:
+            n = self.direction(t, k)
             a, b = self.mesh.pairs[k]
-            placed = self._placed(t)
-            self.separated[(t, k)] = self.mesh.separation.bound(
-                a,
-                b,
-                placed.placements[a],
-                placed.placements[b],
-                (placed.transform(a), placed.transform(b)),
+            placements = self.at(t)
+            self.separated[(t, k)] = (
+                -math.inf
+                if n is None
+                else self.mesh.separation.along(a, b, placements[a], placements[b], n)
             )
         return self.separated[(t, k)]
+
+    def direction(self, t: float, k: int) -> np.ndarray | None:
+        """The unit direction GJK proposes between pair k's hulls at ``t`` (None: none), kept."""
+        if (t, k) not in self.directions:
+            a, b = self.mesh.pairs[k]
+            placed = self._placed(t)
+            transforms = (placed.transform(a), placed.transform(b))
+            self.directions[(t, k)] = self.mesh.separation.direction(a, b, transforms)
+        return self.directions[(t, k)]
+
+    def acceleration_bounds(self, t0: float, t1: float) -> np.ndarray:
+        """(N,) largest ``|qdd_j|`` over ``[t0, t1]`` (rad/s^2 or m/s^2)."""
+        for t in (t0, t1):
+            if t not in self.joints:
+                self.load(np.array([t]))
+        ends = np.array([self.accelerations[t0], self.accelerations[t1]])
+        return self.motion.acceleration_bounds(np.array([t0]), np.array([t1]), ends)[0]
 
     def _placed(self, t: float) -> Placed:
         """The instant ``t`` (s) placed for queries, kept."""

@@ -59,18 +59,16 @@ class PolynomialMotion:
         x = np.cos(np.pi * (np.arange(points) + 0.5) / points)
         acceleration = path(0.5 * (x + 1.0) * self.duration)[2]
         roots: list[tuple[float, int]] = []
+        peaks: list[tuple[float, int]] = []  # where the accelerations peak: the jerk's roots
         for j in range(acceleration.shape[1]):
             coef = chebyshev.chebfit(x, acceleration[:, j], points - 1)
             if not np.any(np.abs(coef[1:]) > 0.0):
                 continue
-            for r in np.atleast_1d(chebyshev.chebroots(coef)):
-                if abs(r.imag) <= 1e-9 and -1.0 < r.real < 1.0:
-                    roots.append((0.5 * (float(r.real) + 1.0) * self.duration, j))
-        roots.sort()
-        self._root_times = np.array([r for r, _ in roots])
-        self._root_joints = np.array([j for _, j in roots], dtype=int)
-        rates = path(self._root_times)[1] if roots else np.zeros((0, acceleration.shape[1]))
-        self._root_rates = np.abs(rates[np.arange(len(roots)), self._root_joints])
+            roots += _inside(chebyshev.chebroots(coef), self.duration, j)
+            if len(coef) > 2 and np.any(np.abs(coef[2:]) > 0.0):
+                peaks += _inside(chebyshev.chebroots(chebyshev.chebder(coef)), self.duration, j)
+        self._root_times, self._root_joints, self._root_rates = _at_roots(path, roots, 1)
+        self._peak_times, self._peak_joints, self._peak_values = _at_roots(path, peaks, 2)
 
     @classmethod
     def from_monomials(
@@ -111,14 +109,63 @@ class PolynomialMotion:
         t0, t1 = np.atleast_1d(np.asarray(t0, float)), np.atleast_1d(np.asarray(t1, float))
         if ends is None:
             ends = np.abs(self.rates(np.concatenate([t0, t1])))
-        bound = np.maximum(ends[: len(t0)], ends[len(t0) :])
-        lo = np.searchsorted(self._root_times, t0)
-        hi = np.searchsorted(self._root_times, t1)
-        for i in np.flatnonzero(hi > lo):
-            for k in range(lo[i], hi[i]):
-                j = self._root_joints[k]
-                bound[i, j] = max(bound[i, j], self._root_rates[k])
-        return bound * (1.0 + 1e-9) + 1e-15
+        found = (self._root_times, self._root_joints, self._root_rates)
+        return _interval_maxima(t0, t1, ends, found)
+
+    def acceleration_bounds(self, t0: np.ndarray, t1: np.ndarray, ends: np.ndarray) -> np.ndarray:
+        """(K, N) largest ``|qdd_j|`` over each ``[t0, t1]`` (rad/s^2 or m/s^2).
+
+        As :meth:`rate_bounds`; ``ends``: the (2 K, N) ``|qdd|`` at the ``t0`` then at the
+        ``t1``. The interior extremes lie at the real roots of the jerk (the acceleration's
+        derivative).
+        """
+        t0, t1 = np.atleast_1d(np.asarray(t0, float)), np.atleast_1d(np.asarray(t1, float))
+        found = (self._peak_times, self._peak_joints, self._peak_values)
+        return _interval_maxima(t0, t1, ends, found)
+
+
+def _inside(roots: np.ndarray, duration: float, joint: int) -> list[tuple[float, int]]:
+    """The real ``roots`` in (-1, 1) as times in (0, ``duration``) (s), each with ``joint``."""
+    return [
+        (0.5 * (float(r.real) + 1.0) * duration, joint)
+        for r in np.atleast_1d(roots)
+        if abs(r.imag) <= 1e-9 and -1.0 < r.real < 1.0
+    ]
+
+
+def _at_roots(
+    path: PathFunction, roots: list[tuple[float, int]], order: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Sorted root times (s), their joints, and ``|derivative order|`` of each joint there."""
+    roots = sorted(roots)
+    times = np.array([r for r, _ in roots])
+    joints = np.array([j for _, j in roots], dtype=int)
+    if not roots:
+        return times, joints, np.zeros(0)
+    values = path(times)[order]
+    return times, joints, np.abs(values[np.arange(len(roots)), joints])
+
+
+def _interval_maxima(
+    t0: np.ndarray,
+    t1: np.ndarray,
+    ends: np.ndarray,
+    found: tuple[np.ndarray, np.ndarray, np.ndarray],
+) -> np.ndarray:
+    """(K, N) the larger of the ``ends`` (2 K, N) and the interior extremes ``found`` in each.
+
+    ``found``: the sorted times (s), joints and absolute values of the interior extremes.
+    Padded by a relative 1e-9 (a root found slightly off moves its extremum by a tiny amount).
+    """
+    times, joints, values = found
+    bound = np.maximum(ends[: len(t0)], ends[len(t0) :])
+    lo = np.searchsorted(times, t0)
+    hi = np.searchsorted(times, t1)
+    for i in np.flatnonzero(hi > lo):
+        for k in range(lo[i], hi[i]):
+            j = joints[k]
+            bound[i, j] = max(bound[i, j], values[k])
+    return bound * (1.0 + 1e-9) + 1e-15
 
 
 def reach_coefficients(

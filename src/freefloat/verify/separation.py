@@ -73,27 +73,68 @@ class Separation:
         ``transforms``: the same as coal takes them. -inf when the hulls touch (no direction
         separates them), coal's GJK fails, or a body has no support here.
         """
-        hull_a, hull_b = self._hull(a), self._hull(b)
-        support_a, support_b = self._support(a), self._support(b)
-        if hull_a is None or hull_b is None or support_a is None or support_b is None:
+        n = self.direction(a, b, transforms)
+        if n is None:
             return -math.inf
+        return self.along(a, b, placement_a, placement_b, n)
+
+    def direction(
+        self, a: int, b: int, transforms: tuple[coal.Transform3s, coal.Transform3s]
+    ) -> np.ndarray | None:
+        """The unit direction (from ``a`` to ``b``) GJK proposes between their hulls, or None.
+
+        None when the hulls touch, coal's GJK fails, or a body has no hull or support here.
+        """
+        hull_a, hull_b = self._hull(a), self._hull(b)
+        if hull_a is None or hull_b is None or self._support(a) is None:
+            return None
+        if self._support(b) is None:
+            return None
         result = coal.DistanceResult()
         try:
             gap = coal.distance(hull_a, transforms[0], hull_b, transforms[1], self._request, result)
         except (RuntimeError, ValueError):  # no direction: the exact query decides
-            return -math.inf
+            return None
         if not gap > 0.0:
-            return -math.inf
+            return None
         direction = result.getNearestPoint2() - result.getNearestPoint1()
         length = math.sqrt(float(direction @ direction))
         if not length > 0.0 or not math.isfinite(length):
+            return None
+        return np.asarray(direction / length, dtype=float)
+
+    def along(
+        self, a: int, b: int, placement_a: np.ndarray, placement_b: np.ndarray, n: np.ndarray
+    ) -> float:
+        """``min over b of n.x - max over a of n.x`` (m) for a unit ``n``; -inf if not > 0."""
+        support_a, support_b = self._support(a), self._support(b)
+        if support_a is None or support_b is None:
             return -math.inf
-        n = direction / length
         rotation_a, rotation_b = placement_a[:3, :3], placement_b[:3, :3]
         top_a = float(n @ placement_a[:3, 3]) + support_a(rotation_a.T @ n)
         bottom_b = float(n @ placement_b[:3, 3]) - support_b(rotation_b.T @ -n)
         value = bottom_b - top_a
         return value if value > 0.0 else -math.inf
+
+    def points(self, i: int) -> tuple[np.ndarray, float] | None:
+        """Object ``i`` as points and a radius: within ``radius`` of their hull (own frame, m).
+
+        Every vertex of a mesh or a box (radius 0), a sphere's centre, a capsule's two ends;
+        None for a cylinder and shapes not known (their rims are no finite set of points).
+        A linear function's extremes over the body lie at these points, offset by the radius.
+        """
+        if i in self._vertices:
+            return self._vertices[i], 0.0
+        shape = self._shapes[i]
+        if isinstance(shape, coal.Box):
+            corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+            return corners * np.asarray(shape.halfSide, dtype=float), 0.0
+        if isinstance(shape, coal.Sphere):
+            return np.zeros((1, 3)), float(shape.radius)
+        if isinstance(shape, coal.Capsule):
+            ends = np.array([[0.0, 0.0, -1.0], [0.0, 0.0, 1.0]]) * float(shape.halfLength)
+            return ends, float(shape.radius)
+        return None
 
     def _hull(self, i: int) -> coal.CollisionGeometry | None:
         """Object ``i``'s convex hull for GJK: a primitive itself, a mesh's hull (or None)."""

@@ -14,6 +14,7 @@ __all__ = [
     "LAST_LOOKS",
     "SEPARATED",
     "SPHERES",
+    "TAYLOR",
     "Item",
     "Least",
     "settled_above",
@@ -27,8 +28,9 @@ LAST_LOOKS = 16
 #: speed (m/s).
 Item = tuple[float, float, float, int, int, float]
 #: An item's ends bounded by the spheres alone (the first pass), by the separating direction
-#: or exact distances (:meth:`.Instants.lower`), or measured exactly at both.
-SPHERES, SEPARATED, EXACT = 0, 1, 2
+#: or exact distances (:meth:`.Instants.lower`), measured exactly at both, or its bound
+#: raised by the second-order bound over it (:mod:`.taylor`), next halved.
+SPHERES, SEPARATED, EXACT, TAYLOR = 0, 1, 2, 3
 
 
 def tolerance(measured: float, margin: float) -> float:
