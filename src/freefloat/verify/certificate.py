@@ -9,8 +9,11 @@ Lipschitz bound (:mod:`.first_pass`). Each item is refined in three steps: for t
 lower bounds at its two ends from a separating direction over their own vertices
 (:mod:`.separation`: tens of microseconds against a mesh query's hundreds), then exact
 distances there (one end first, whose distance less the pair's speed over the whole interval
-may settle it without the other), then halving, the middle bounded the same way; each new
-interval's bound is the larger of the whole bodies' and the leaf pairs' (:func:`_leaf_value`).
+may settle it without the other), then a second-order bound over it where that can settle it
+(:mod:`.taylor`: the rate of change at the middle and the points' accelerations, against the
+first-order bounds' largest speed times the width), then halving, the middle bounded the
+same way; each new interval's bound is the larger of the whole bodies' and the leaf pairs'
+(:func:`_leaf_value`).
 Before it stops, the instants whose bounds lie below the least clearance measured are
 measured, so that figure is the least of what the bounds leave possible
 (:data:`~.settling.LAST_LOOKS` at most). A pair's speed
@@ -114,7 +117,8 @@ def _refine(
     """Settle the heap's items, lowest bound first: (intervals halved, budget spent).
 
     An item bounded by the spheres is bounded next from its ends' separating directions,
-    then from exact distances there, then halved. Before stopping, an instant whose bound
+    then from exact distances there, then by the second-order bound over it
+    (:func:`_taylor_value`), then halved. Before stopping, an instant whose bound
     lies below the least measured clearance is measured (at most :data:`LAST_LOOKS`), so the
     figure reported is the least of what the bounds leave possible, and the threshold
     follows it.
