@@ -59,16 +59,16 @@ class PolynomialMotion:
         x = np.cos(np.pi * (np.arange(points) + 0.5) / points)
         acceleration = path(0.5 * (x + 1.0) * self.duration)[2]
         roots: list[tuple[float, int]] = []
-        peaks: list[tuple[float, int]] = []  # where the accelerations peak: the jerk's roots
+        #: Each joint's acceleration as a Chebyshev series on [-1, 1] (None: constant).
+        self._series: list[np.ndarray | None] = []
         for j in range(acceleration.shape[1]):
             coef = chebyshev.chebfit(x, acceleration[:, j], points - 1)
-            if not np.any(np.abs(coef[1:]) > 0.0):
-                continue
-            roots += _inside(chebyshev.chebroots(coef), self.duration, j)
-            if len(coef) > 2 and np.any(np.abs(coef[2:]) > 0.0):
-                peaks += _inside(chebyshev.chebroots(chebyshev.chebder(coef)), self.duration, j)
+            constant = not np.any(np.abs(coef[1:]) > 0.0)
+            self._series.append(None if constant else coef)
+            if not constant:
+                roots += _inside(chebyshev.chebroots(coef), self.duration, j)
         self._root_times, self._root_joints, self._root_rates = _at_roots(path, roots, 1)
-        self._peak_times, self._peak_joints, self._peak_values = _at_roots(path, peaks, 2)
+        self._peaks: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     @classmethod
     def from_monomials(
@@ -120,8 +120,16 @@ class PolynomialMotion:
         derivative).
         """
         t0, t1 = np.atleast_1d(np.asarray(t0, float)), np.atleast_1d(np.asarray(t1, float))
-        found = (self._peak_times, self._peak_joints, self._peak_values)
-        return _interval_maxima(t0, t1, ends, found)
+        if self._peaks is None:  # the jerk's real roots, found when first asked for
+            chebyshev = np.polynomial.chebyshev
+            peaks = [
+                root
+                for j, coef in enumerate(self._series)
+                if coef is not None and len(coef) > 2 and np.any(np.abs(coef[2:]) > 0.0)
+                for root in _inside(chebyshev.chebroots(chebyshev.chebder(coef)), self.duration, j)
+            ]
+            self._peaks = _at_roots(self.path, peaks, 2)
+        return _interval_maxima(t0, t1, ends, self._peaks)
 
 
 def _inside(roots: np.ndarray, duration: float, joint: int) -> list[tuple[float, int]]:
