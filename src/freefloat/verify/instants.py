@@ -40,6 +40,7 @@ class Instants:
         self.separated: dict[tuple[float, int], float] = {}
         self.leaf_gaps: dict[tuple[float, int], np.ndarray] = {}
         self.interval_rates: dict[tuple[float, float], np.ndarray] = {}
+        self.interval_accelerations: dict[tuple[float, float], np.ndarray] = {}
         self.leaf_speeds: dict[int, np.ndarray] = {}
         #: The first pass's leaf-pair gaps (see :meth:`keep_gaps`), looked up when asked for.
         self.grid: dict[float, int] = {}
@@ -171,11 +172,15 @@ class Instants:
 
     def acceleration_bounds(self, t0: float, t1: float) -> np.ndarray:
         """(N,) largest ``|qdd_j|`` over ``[t0, t1]`` (rad/s^2 or m/s^2)."""
-        for t in (t0, t1):
-            if t not in self.joints:
-                self.load(np.array([t]))
-        ends = np.array([self.accelerations[t0], self.accelerations[t1]])
-        return self.motion.acceleration_bounds(np.array([t0]), np.array([t1]), ends)[0]
+        found = self.interval_accelerations.get((t0, t1))
+        if found is None:
+            for t in (t0, t1):
+                if t not in self.joints:
+                    self.load(np.array([t]))
+            ends = np.array([self.accelerations[t0], self.accelerations[t1]])
+            found = self.motion.acceleration_bounds(np.array([t0]), np.array([t1]), ends)[0]
+            self.interval_accelerations[(t0, t1)] = found
+        return found
 
     def _placed(self, t: float) -> Placed:
         """The instant ``t`` (s) placed for queries, kept."""

@@ -63,7 +63,7 @@ class IntervalTaylor:
         self._data = robot.model.createData()
         self._jacobians: dict[float, dict[int, np.ndarray]] = {}
         self._points: dict[int, tuple[np.ndarray, float] | None] = {}
-        self._pair_chains: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._pair_chains: dict[int, tuple[_Chain, _Chain]] = {}
 
     def spread(self, t0: float, t1: float, k: int) -> float:
         """``M_a + M_b`` (m/s^2): how fast pair k's bodies' points can accelerate.
@@ -74,13 +74,9 @@ class IntervalTaylor:
         """
         if not self.usable:
             return math.inf
-        a, b = self._store.mesh.pairs[k]
-        chain_a, chain_b = self._chains(k)
-        speeds = self._store.rates([t0], [t1])[0]
-        accelerations = self._store.acceleration_bounds(t0, t1)
-        return _acceleration(self._reach[a], chain_a, speeds, accelerations) + _acceleration(
-            self._reach[b], chain_b, speeds, accelerations
-        )
+        speeds = self._store.rates([t0], [t1])[0].tolist()
+        accelerations = self._store.acceleration_bounds(t0, t1).tolist()
+        return sum(_acceleration(chain, speeds, accelerations) for chain in self._chains(k))
 
     def bound(self, t0: float, t1: float, k: int, spread: float) -> float:
         """A lower bound (m) of pair k's distance over ``[t0, t1]`` (s); -inf when none.
@@ -103,12 +99,15 @@ class IntervalTaylor:
         value = low_b - high_a - 0.5 * spread * half * half
         return value if value > 0.0 else -math.inf
 
-    def _chains(self, k: int) -> tuple[np.ndarray, np.ndarray]:
-        """(N,) the joints that move pair k's first body but not its second, and the reverse."""
+    def _chains(self, k: int) -> tuple[_Chain, _Chain]:
+        """The joints that move pair k's first body but not its second, and the reverse."""
         if k not in self._pair_chains:
             a, b = self._store.mesh.pairs[k]
             moves_a, moves_b = self._reach[a] > 0.0, self._reach[b] > 0.0
-            self._pair_chains[k] = (moves_a & ~moves_b, moves_b & ~moves_a)
+            self._pair_chains[k] = (
+                _Chain(np.flatnonzero(moves_a & ~moves_b), self._reach[a]),
+                _Chain(np.flatnonzero(moves_b & ~moves_a), self._reach[b]),
+            )
         return self._pair_chains[k]
 
     def _extreme(
@@ -117,7 +116,7 @@ class IntervalTaylor:
         points: tuple[np.ndarray, float],
         placement: np.ndarray,
         n: np.ndarray,
-        chain: np.ndarray,
+        chain: _Chain,
         middle: float,
         half: float,
         side: float,
@@ -129,9 +128,10 @@ class IntervalTaylor:
         """
         local, radius = points
         rotation, origin = placement[:3, :3], placement[:3, 3]
-        if np.any(chain):
-            rates = np.where(chain, self._store.velocities[middle], 0.0)
-            twist = self._jacobian(middle, self._parents[i]) @ rates  # at the frame's origin
+        if len(chain.columns):
+            rates = self._store.velocities[middle][chain.columns]
+            jacobian = self._jacobian(middle, self._parents[i])[:, chain.columns]
+            twist = jacobian @ rates  # at the frame's origin
             linear, angular = twist[:3], twist[3:]
             # a point x moves at linear + angular x x: along n, n.linear + x.(n x angular)
             turn = _cross(n, angular)
@@ -175,15 +175,29 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     )
 
 
-def _acceleration(
-    reach: np.ndarray, chain: np.ndarray, speeds: np.ndarray, accelerations: np.ndarray
-) -> float:
+class _Chain:
+    """The joints between the link two bodies hang from and one of them, parents first.
+
+    Attributes:
+        columns: their columns among the arm joints (pinocchio's order: parents first).
+        reach: the body's reach from each of them (m per rad; 1 for a prismatic joint).
+    """
+
+    def __init__(self, columns: np.ndarray, reach: np.ndarray) -> None:
+        self.columns = columns
+        self.pairs = list(zip(columns.tolist(), reach[columns].tolist(), strict=True))
+
+
+def _acceleration(chain: _Chain, speeds: list[float], accelerations: list[float]) -> float:
     """Bound of any point's acceleration relative to the chain's root link (m/s^2).
 
-    ``reach``: (N,) the body's reach from each joint (m per rad; 1 prismatic); ``chain``: the
-    joints between the root and the body (parents first in column order); ``speeds``,
-    ``accelerations``: (N,) the largest ``|qd|`` and ``|qdd|`` over the interval.
+    ``speeds``, ``accelerations``: per arm joint, the largest ``|qd|`` and ``|qdd|`` over the
+    interval; each joint adds its reach times its acceleration plus its rate times the rate
+    of itself and twice those of the joints before it.
     """
-    qd = np.where(chain, speeds, 0.0)
-    before = np.cumsum(qd) - qd
-    return float(np.sum(np.where(chain, reach * (accelerations + qd * (qd + 2.0 * before)), 0.0)))
+    total, before = 0.0, 0.0
+    for j, reach in chain.pairs:
+        qd = speeds[j]
+        total += reach * (accelerations[j] + qd * (qd + 2.0 * before))
+        before += qd
+    return total
