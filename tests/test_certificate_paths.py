@@ -13,6 +13,7 @@ same certificate.
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 from pathlib import Path
 
@@ -31,7 +32,7 @@ from freefloat.verify.motion import PolynomialMotion, reach_coefficients
 from freefloat.verify.path_eval import file_path
 from freefloat.verify.sphere_tree import _norms
 
-from conftest import ROOT
+from conftest import ROOT, quintic_motion
 
 SCENARIOS = ROOT / "robots" / "scenarios"
 
@@ -254,3 +255,31 @@ def test_spheres_and_reaches_are_those_worked_out_apart():
     assert np.array_equal(mesh.pair_reach, np.where((ra > 0.0) & (rb > 0.0), 0.0, ra + rb))
     la, lb = own[:, leaves.left], own[:, leaves.right]
     assert np.array_equal(leaves.row_reach, np.where((la > 0.0) & (lb > 0.0), 0.0, la + lb))
+
+
+def test_a_robot_without_collision_geometry_has_no_pairs_to_certify(tmp_path):
+    """Two links and no collision element: the original-geometry model builds with no pair,
+    and the certificate says so (clear at every instant) instead of failing on empty arrays."""
+    inertial = (
+        '<inertial><mass value="{m}"/><inertia ixx="{i}" iyy="{i}" izz="{i}" ixy="0" ixz="0" '
+        'iyz="0"/></inertial>'
+    )
+    joint = (
+        '<joint name="{n}" type="revolute"><parent link="{p}"/><child link="{c}"/>'
+        '<origin xyz="{x} 0 0"/><axis xyz="0 0 1"/>'
+        '<limit lower="-3" upper="3" effort="10" velocity="1"/></joint>'
+    )
+    urdf = (
+        '<robot name="bare">'
+        f'<link name="base">{inertial.format(m=100, i=10)}</link>'
+        + joint.format(n="j1", p="base", c="l1", x=0)
+        + f'<link name="l1">{inertial.format(m=1, i=0.1)}</link>'
+        + joint.format(n="j2", p="l1", c="l2", x=1)
+        + f'<link name="l2">{inertial.format(m=1, i=0.1)}</link></robot>'
+    )
+    (tmp_path / "bare.urdf").write_text(urdf)
+    mesh = MeshClearance(ff.load_robot(tmp_path / "bare.urdf"), None)
+    assert mesh.pairs == []
+    found = certify(mesh, quintic_motion(np.zeros(2), np.ones(2), 5.0), 0.01)
+    assert found.certified and found.lower_bound == math.inf and found.pair == ""
+    assert "no pairs" in found.kind

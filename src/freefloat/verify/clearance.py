@@ -228,7 +228,7 @@ class MeshClearance:
         model = self.robot.model
         pin.forwardKinematics(model, self._data, self._configuration(joints))
         pin.updateGeometryPlacements(model, self._data, self.geometry, self._gdata)
-        return np.array([m.homogeneous for m in self._gdata.oMg])
+        return np.array([m.homogeneous for m in self._gdata.oMg]).reshape(-1, 4, 4)
 
     def _configuration(self, joints: np.ndarray) -> np.ndarray:
         """Pinocchio's configuration of joint values (rad or m), the spacecraft at the origin."""
@@ -352,7 +352,7 @@ def _bounding_spheres(
             centre, radius = np.asarray(shape.aabb_center, float), float(shape.aabb_radius)
         centres.append(centre)
         radii.append(radius)
-    return np.array(centres), np.array(radii)
+    return np.array(centres, dtype=float).reshape(-1, 3), np.array(radii, dtype=float)
 
 
 def _mesh_sphere(vertices: np.ndarray) -> tuple[np.ndarray, float]:

@@ -112,7 +112,8 @@ class LeafSpheres:
             owner += [g] * len(r)
         first_leaf.append(len(owner))
         #: (L, 3) leaf centres in their body's frame, (L,) radii, (L,) owning body.
-        self.local, self.radii = np.concatenate(local), np.concatenate(size)
+        self.local = np.concatenate([np.zeros((0, 3)), *local])  # none: a robot without bodies
+        self.radii = np.concatenate([np.zeros(0), *size])
         self.owner = np.array(owner, dtype=int)
         left: list[int] = []
         right: list[int] = []
