@@ -173,19 +173,24 @@ def _taylor_value(
     """The second-order bound (m) over an item with exact ends, or -inf where it cannot settle.
 
     ``item``: its ends (s), pair and speed bound (m/s). The bound lies at or below the
-    distance at both ends, and at or below the distance at the middle (at most the nearer end's
-    plus the speed times half the width) less its second-order term: when that ceiling is
-    below ``threshold`` (m) the bound cannot settle the item and is not worked out.
+    distance at both ends, and at or below the separation along its direction at the middle
+    (:meth:`.Instants.separation`, at most the distance there: at most the nearer end's plus
+    the speed times half the width) less its second-order term: when either ceiling is below
+    ``threshold`` (m) the bound cannot settle the item and is not worked out. One evaluation
+    at most per item, outside the halving budget (:data:`MAX_BISECTIONS`).
     """
     taylor, heap = work
     t0, t1, k, speed = item
-    half = 0.5 * (t1 - t0)
+    half, middle = 0.5 * (t1 - t0), 0.5 * (t0 + t1)
     nearer = min(store.distance(t0, k), store.distance(t1, k))
     spread = taylor.spread(t0, t1, k)
-    if nearer + min(0.0, half * (speed - 0.5 * spread * half)) < threshold:
+    loss = 0.5 * spread * half * half
+    if min(nearer, nearer + half * speed - loss) < threshold:
         return -math.inf
-    if 0.5 * (t0 + t1) not in store.joints:  # with the middles halving would ask for next
+    if middle not in store.joints:  # with the middles halving would ask for next
         store.load(_middles(store, heap, t0, t1))
+    if store.separation(middle, k) - loss < threshold:
+        return -math.inf
     return taylor.bound(t0, t1, k, spread)
 
 
