@@ -183,9 +183,11 @@ def _taylor_value(
     t0, t1, k, speed = item
     half, middle = 0.5 * (t1 - t0), 0.5 * (t0 + t1)
     nearer = min(store.distance(t0, k), store.distance(t1, k))
+    if nearer < threshold:
+        return -math.inf
     spread = taylor.spread(t0, t1, k)
     loss = 0.5 * spread * half * half
-    if min(nearer, nearer + half * speed - loss) < threshold:
+    if nearer + half * speed - loss < threshold:
         return -math.inf
     if middle not in store.joints:  # with the middles halving would ask for next
         store.load(_middles(store, heap, t0, t1))
