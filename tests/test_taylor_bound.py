@@ -100,33 +100,49 @@ def _tree_urdf() -> str:
     )
     body += joint("torso", "base", "torso_l", "revolute", (0, 0, 1), (0, 0, 0.35))
     body += link("torso_l", box((0.2, 0.2, 0.3), (0, 0, 0.15), (0.1, 0.2, 0.3)))
-    for side, y in (("L", 0.25), ("R", -0.25)):
-        body += joint(f"{side}1", "torso_l", f"{side}_l1", "revolute", (0, 1, 0), (0, y, 0.3))
-        body += link(f"{side}_l1", box((0.4, 0.08, 0.08), (0.2, 0, 0), (0.3, 0, 0)))
-        body += joint(
-            f"{side}2",
-            f"{side}_l1",
-            f"{side}_l2",
+    # per arm: joint kind, axis, origin, turn of the origin, limits, the child's shape
+    arm = [
+        (
+            "revolute",
+            (0, 1, 0),
+            None,
+            (0, 0, 0),
+            (-3, 3),
+            box((0.4, 0.08, 0.08), (0.2, 0, 0), (0.3, 0, 0)),
+        ),
+        (
             "prismatic",
             (1, 0, 0),
             (0.4, 0, 0),
-            limits=(-0.2, 0.3),
-        )
-        body += link(f"{side}_l2", box((0.3, 0.06, 0.06), (0.15, 0, 0)))
-        body += joint(
-            f"{side}3", f"{side}_l2", f"{side}_l3", "continuous", (0, 0.6, 0.8), (0.3, 0, 0)
-        )
-        body += link(f"{side}_l3", sphere(0.07, (0.1, 0.05, 0)))
-        body += joint(
-            f"{side}4",
-            f"{side}_l3",
-            f"{side}_l4",
+            (0, 0, 0),
+            (-0.2, 0.3),
+            box((0.3, 0.06, 0.06), (0.15, 0, 0)),
+        ),
+        (
+            "continuous",
+            (0, 0.6, 0.8),
+            (0.3, 0, 0),
+            (0, 0, 0),
+            (-3, 3),
+            sphere(0.07, (0.1, 0.05, 0)),
+        ),
+        (
             "revolute",
             (1, 0, 0),
             (0.15, 0, 0),
-            rpy=(0.3, 0, 0.5),
-        )
-        body += link(f"{side}_l4", box((0.05, 0.2, 0.05), (0, 0.1, 0), (0, 0, 0.4)))
+            (0.3, 0, 0.5),
+            (-3, 3),
+            box((0.05, 0.2, 0.05), (0, 0.1, 0), (0, 0, 0.4)),
+        ),
+    ]
+    for side, y in (("L", 0.25), ("R", -0.25)):
+        parent = "torso_l"
+        for i, (kind, axis, xyz, rpy, limits, shape) in enumerate(arm, start=1):
+            child = f"{side}_l{i}"
+            origin = (0, y, 0.3) if xyz is None else xyz
+            body += joint(f"{side}{i}", parent, child, kind, axis, origin, rpy, limits)
+            body += link(child, shape)
+            parent = child
     return f'<?xml version="1.0"?>\n<robot name="tree">{body}</robot>\n'
 
 
