@@ -86,9 +86,7 @@ class Separation:
         None when the hulls touch, coal's GJK fails, or a body has no hull or support here.
         """
         hull_a, hull_b = self._hull(a), self._hull(b)
-        if hull_a is None or hull_b is None or self._support(a) is None:
-            return None
-        if self._support(b) is None:
+        if hull_a is None or hull_b is None or None in (self._support(a), self._support(b)):
             return None
         result = coal.DistanceResult()
         try:

@@ -180,7 +180,8 @@ class _Chain:
 
     Attributes:
         columns: their columns among the arm joints (pinocchio's order: parents first).
-        reach: the body's reach from each of them (m per rad; 1 for a prismatic joint).
+        pairs: per joint, its column and the body's reach from it (m per rad; 1 for a
+            prismatic joint).
     """
 
     def __init__(self, columns: np.ndarray, reach: np.ndarray) -> None:
