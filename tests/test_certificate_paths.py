@@ -283,3 +283,4 @@ def test_a_robot_without_collision_geometry_has_no_pairs_to_certify(tmp_path):
     found = certify(mesh, quintic_motion(np.zeros(2), np.ones(2), 5.0), 0.01)
     assert found.certified and found.lower_bound == math.inf and found.pair == ""
     assert "no pairs" in found.kind
+    assert found.detail == "no pairs to check: clear at every instant; margin 0.01 m"

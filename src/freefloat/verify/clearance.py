@@ -125,6 +125,8 @@ class ClearanceCertificate:
     @property
     def detail(self) -> str:
         """One line for the check's detail and the summary."""
+        if not self.pair:  # a model with no pair: nothing to keep apart
+            return f"no pairs to check: clear at every instant; margin {self.margin:g} m"
         what = "penetration" if self.penetration else "min clearance"
         # a depth is not Lipschitz in the motion (coal's mesh depth): no bound is claimed then
         bound = (
