@@ -137,6 +137,15 @@ def test_a_sweep_says_it_once_and_its_workers_stay_quiet(tmp_path, capfd):
         ("[0, 0, 0, 1]", None),
         ("[0.0012, -0.0104, 0.6523, 0.7579]", None),  # 4 decimals of a unit quaternion
         ("[0, 1, 0, 0]", None),  # a half turn about y: w first would be [0, 0, 1, 0] here
+        # 1 deg about z written w first: 2 acos(0.00872654) = 179 deg as written,
+        # 2 acos(0.99996192) = 1 deg read w first
+        (
+            "[0.99996192, 0.0, 0.0, 0.00872654]",
+            "is a 179 deg turn; read w first it would be a 1 deg turn: the order is x, y, z, w",
+        ),
+        ("[0.7071, 0, 0, 0.7072]", None),  # a quarter turn about x, either way
+        ("[0.7072, 0, 0, 0.7071]", None),
+        ("[0.3, 0, 0, 0.954]", None),  # 35 deg about x
     ],
 )
 def test_a_written_quaternion_in_another_convention_is_warned_of(tmp_path, written, said):
