@@ -208,3 +208,31 @@ def test_a_sphere_in_a_cylinder_is_measured_in_closed_form_by_the_collision_mode
             for e in np.eye(2)
         ]
         assert batch.gradients[0] == pytest.approx(slopes, abs=1e-6)
+
+
+@pytest.mark.parametrize("other", sorted(SHAPES))
+def test_pinocchio_placements_give_what_coal_transforms_give(other):
+    """The collision model passes Pinocchio's placements (``oMg``) without making coal's
+    transforms of them: the answer is the same, to the bit, and in the other order the same
+    distance with the normal reversed (to rounding for two spheres: each is then measured
+    from the other's frame)."""
+    import pinocchio as pin
+
+    rng = np.random.default_rng(11)
+    sphere, shape = SHAPES["sphere"](), SHAPES[other]()
+    for _ in range(50):
+        place_a, place_b = _transform(rng), _transform(rng)
+        pin_a, pin_b = (
+            pin.SE3(np.asarray(p.getRotation()), np.asarray(p.getTranslation()))
+            for p in (place_a, place_b)
+        )
+        by_coal = sphere_distance(sphere, place_a, shape, place_b)
+        by_pin = sphere_distance(sphere, pin_a, shape, pin_b)
+        swapped = sphere_distance(shape, pin_b, sphere, pin_a)
+        assert by_coal is not None and by_pin is not None and swapped is not None
+        assert by_pin.min_distance == by_coal.min_distance
+        assert np.array_equal(by_pin.normal, by_coal.normal)
+        for mine, theirs in zip(by_pin.points, by_coal.points, strict=True):
+            assert np.array_equal(mine, theirs)
+        assert swapped.min_distance == pytest.approx(by_pin.min_distance, abs=1e-15)
+        assert np.allclose(swapped.normal, -by_pin.normal, atol=1e-15)

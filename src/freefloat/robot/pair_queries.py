@@ -315,8 +315,8 @@ class PairQueries:
     def _closed_form(self, k: int) -> float:
         """Pair ``k``'s distance (m) in closed form at the placed shapes, its result kept."""
         a, b = self.pairs[k]
-        place = [coal_placement(self._geometry_data.oMg[g]) for g in (a, b)]
-        found = sphere_distance(self._shapes[a], place[0], self._shapes[b], place[1])
+        placements = self._geometry_data.oMg
+        found = sphere_distance(self._shapes[a], placements[a], self._shapes[b], placements[b])
         assert found is not None  # a pair of closed_form_first
         self._closed_results[k] = found
         return found.min_distance

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import coal
 import numpy as np
+import pinocchio as pin
 
 __all__ = ["SphereWitness", "closed_form_first", "sphere_distance"]
 
@@ -59,13 +60,16 @@ def closed_form_first(shape_a: coal.CollisionGeometry, shape_b: coal.CollisionGe
 
 def sphere_distance(
     shape_a: coal.CollisionGeometry,
-    place_a: coal.Transform3s,
+    place_a: coal.Transform3s | pin.SE3,
     shape_b: coal.CollisionGeometry,
-    place_b: coal.Transform3s,
+    place_b: coal.Transform3s | pin.SE3,
 ) -> SphereWitness | None:
     """The exact signed distance of a sphere and a sphere, box, cylinder or capsule (m).
 
-    Either shape may be the sphere; None for any other pair of shapes.
+    Either shape may be the sphere; None for any other pair of shapes. The placements are
+    coal's transforms or Pinocchio's (a geometry object's ``oMg``, read without a copy into
+    coal's type). The arithmetic is on Python floats, three components at a time: for one
+    pair, numpy's per-call cost is most of the work.
     """
     if isinstance(shape_b, coal.Sphere) and not isinstance(shape_a, coal.Sphere):
         found = sphere_distance(shape_b, place_b, shape_a, place_a)
@@ -74,16 +78,37 @@ def sphere_distance(
         return SphereWitness(found.min_distance, -found.normal, found.points[::-1])
     if not isinstance(shape_a, coal.Sphere):
         return None
-    rotation, origin = np.asarray(place_b.getRotation()), np.asarray(place_b.getTranslation())
-    centre = rotation.T @ (np.asarray(place_a.getTranslation()) - origin)  # in b's frame
-    surface = _nearest_surface(shape_b, centre)
-    if surface is None:
-        return None
+    rotation, origin = _pose(place_b)
+    at = _pose(place_a, rotation=False)[1]
+    d = [at[0] - origin[0], at[1] - origin[1], at[2] - origin[2]]
+    centre = [
+        rotation[0][i] * d[0] + rotation[1][i] * d[1] + rotation[2][i] * d[2] for i in range(3)
+    ]
+    if isinstance(shape_b, coal.Cylinder):
+        surface = _cylinder(float(shape_b.radius), float(shape_b.halfLength), *centre)
+    else:
+        nearest = _nearest_surface(shape_b, np.array(centre))
+        if nearest is None:
+            return None
+        surface = (nearest[0], nearest[1].tolist(), nearest[2].tolist())
     signed, point, outward = surface  # the centre's signed distance, b's point, its normal
-    on_b = rotation @ point + origin
-    normal = -(rotation @ outward)  # from the sphere (a) to b
-    on_a = np.asarray(place_a.getTranslation()) + float(shape_a.radius) * normal
-    return SphereWitness(signed - float(shape_a.radius), normal, (on_a, on_b))
+    (x, y, z), (u, v, w) = point, outward
+    on_b = [r[0] * x + r[1] * y + r[2] * z + o for r, o in zip(rotation, origin, strict=True)]
+    normal = [-(r[0] * u + r[1] * v + r[2] * w) for r in rotation]  # from a to b
+    radius = float(shape_a.radius)
+    on_a = [at[i] + radius * normal[i] for i in range(3)]
+    return SphereWitness(signed - radius, np.array(normal), (np.array(on_a), np.array(on_b)))
+
+
+def _pose(
+    place: coal.Transform3s | pin.SE3, rotation: bool = True
+) -> tuple[list[list[float]], list[float]]:
+    """A placement's rotation (rows; empty unless ``rotation``) and translation (m), as floats."""
+    if isinstance(place, pin.SE3):
+        turn, shift = (place.rotation if rotation else None), place.translation
+    else:
+        turn, shift = (place.getRotation() if rotation else None), place.getTranslation()
+    return ([] if turn is None else np.asarray(turn).tolist()), np.asarray(shift).tolist()
 
 
 def _nearest_surface(
@@ -107,7 +132,8 @@ def _nearest_surface(
         distance = float(np.linalg.norm(p - axis_point)) - radius
         return distance, axis_point + radius * direction, direction
     if isinstance(shape, coal.Cylinder):
-        return _cylinder(float(shape.radius), float(shape.halfLength), p)
+        found = _cylinder(float(shape.radius), float(shape.halfLength), *p.tolist())
+        return found[0], np.array(found[1]), np.array(found[2])
     return None
 
 
@@ -124,20 +150,25 @@ def _box(half: np.ndarray, p: np.ndarray) -> tuple[float, np.ndarray, np.ndarray
     return float(excess[k]), point, normal
 
 
-def _cylinder(radius: float, half: float, p: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
-    """:func:`_nearest_surface` of a cylinder (m) about z, centred at the origin."""
-    rho = math.hypot(float(p[0]), float(p[1]))
-    radial = _unit(np.array([p[0], p[1], 0.0]), np.array([1.0, 0.0, 0.0]))
-    sign = 1.0 if p[2] >= 0.0 else -1.0
-    side, cap = rho - radius, abs(float(p[2])) - half
+def _cylinder(
+    radius: float, half: float, x: float, y: float, z: float
+) -> tuple[float, list[float], list[float]]:
+    """:func:`_nearest_surface` of a cylinder (m) about z, centred at the origin, at (x, y, z)."""
+    rho = math.hypot(x, y)
+    rx, ry = (x / rho, y / rho) if rho > 0.0 else (1.0, 0.0)  # the radial way out
+    sign = 1.0 if z >= 0.0 else -1.0
+    side, cap = rho - radius, abs(z) - half
     if side <= 0.0 and cap <= 0.0:  # inside: out through the side or a cap, the nearer
         if side >= cap:
-            return side, np.array([radius * radial[0], radius * radial[1], p[2]]), radial
-        return cap, np.array([p[0], p[1], sign * half]), np.array([0.0, 0.0, sign])
-    point = np.array(
-        [min(rho, radius) * radial[0], min(rho, radius) * radial[1], sign * min(abs(p[2]), half)]
-    )
-    return float(np.linalg.norm(p - point)), point, _unit(p - point, radial)
+            return side, [radius * rx, radius * ry, z], [rx, ry, 0.0]
+        return cap, [x, y, sign * half], [0.0, 0.0, sign]
+    near = min(rho, radius)
+    point = [near * rx, near * ry, sign * min(abs(z), half)]
+    dx, dy, dz = x - point[0], y - point[1], z - point[2]
+    distance = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if distance > 0.0:
+        return distance, point, [dx / distance, dy / distance, dz / distance]
+    return distance, point, [rx, ry, 0.0]  # on the surface
 
 
 def _unit(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
