@@ -39,6 +39,7 @@ from .clearance_samples import (
     lever_arms,
     local_minima,
     lowest_minima,
+    minima_floors,
     pair_bounds,
     refined_minima,
     refinement,
@@ -321,12 +322,14 @@ class Clearance(Constraint):
             lowest = float(min(np.min(v, initial=math.inf) for v in values))
             ends = ends[:, undecided(self.model, path, ends, (table, arms), limit, lowest)]
         t_all, v_all = np.concatenate(times), np.concatenate(values)
-        order = np.argsort(t_all, kind="stable")
+        order = np.argsort(t_all, kind="stable")  # the samples' rows of table, in time
         t_all, v_all = t_all[order], v_all[order]
         minima = local_minima(v_all)
         minima = minima[v_all[minima] < limit]
         spans = np.searchsorted(t_all, 0.5 * (ends[0] + ends[1]))
-        answer = refined_minima(self.model, path, t_all, v_all, np.unique(np.append(minima, spans)))
+        chosen = np.unique(np.append(minima, spans))
+        floors = minima_floors(self.model, path, t_all, chosen, (table[order], arms[order]))
+        answer = refined_minima(self.model, path, t_all, v_all, chosen, floors)
         self._below_memo = (key, answer)
         return answer
 

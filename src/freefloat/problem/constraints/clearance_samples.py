@@ -31,6 +31,7 @@ __all__ = [
     "lever_arms",
     "local_minima",
     "lowest_minima",
+    "minima_floors",
     "pair_bounds",
     "refined_minima",
     "refinement",
@@ -186,12 +187,16 @@ def refined_minima(
     t: np.ndarray,
     sampled: np.ndarray,
     minima: np.ndarray,
+    floors: np.ndarray | None = None,
 ) -> tuple[float, float, int]:
     """The smallest sampled clearance (m), its time (s) and pair, minima refined.
 
     ``sampled``: the smallest distance over the pairs (m) at the times ``t`` (s). The sampled
     local minima at ``minima`` are refined by a bounded scalar search between their
-    neighbouring samples (:func:`~freefloat.problem.scalar_minimum.scalar_minimum`).
+    neighbouring samples (:func:`~freefloat.problem.scalar_minimum.scalar_minimum`), in
+    order; with ``floors`` (m, one per minimum: a lower bound of the clearance between those
+    samples, :func:`minima_floors`), a minimum whose floor is not below the smallest found so
+    far is not searched: its search could not find less, so the answer is the same.
     """
 
     def lowest(s: float) -> tuple[float, int]:
@@ -201,7 +206,9 @@ def refined_minima(
     k_best = int(np.argmin(sampled))
     best, best_t = float(sampled[k_best]), float(t[k_best])
     best_pair = lowest(best_t)[1]
-    for index in minima:
+    for i, index in enumerate(minima):
+        if floors is not None and floors[i] >= best:
+            continue
         k = int(index)
         lo, hi = float(t[max(k - 1, 0)]), float(t[min(k + 1, count - 1)])
         result = scalar_minimum(lambda s: lowest(s)[0], lo, hi, 1e-9 * max(1.0, path.duration))
@@ -209,6 +216,38 @@ def refined_minima(
             best, best_t = result.value, result.x
             best_pair = lowest(best_t)[1]
     return best, best_t, best_pair
+
+
+def minima_floors(
+    model: CollisionModel,
+    path: JointPolynomials,
+    t: np.ndarray,
+    minima: np.ndarray,
+    tables: tuple[np.ndarray, np.ndarray],
+) -> np.ndarray:
+    """(M,) lower bounds (m) of the clearance between the samples next to each minimum.
+
+    ``t``: the samples' times (s), ascending; ``minima``: indices into them;
+    ``tables``: the pairs' bounds (m) and the spheres' lever arms (m) at each sample, in the
+    same order (NaN where a sample was not measured: no bound there, -inf). The smaller of
+    :func:`bounds_between` over the interval before each minimum and the one after it, over
+    which :func:`refined_minima` searches.
+    """
+    if not len(minima):
+        return np.zeros(0)
+    last = len(t) - 1
+    before, after = np.maximum(minima - 1, 0), np.minimum(minima + 1, last)
+    first = np.concatenate([before, minima])
+    second = np.concatenate([minima, after])
+    table, arms = tables
+    bound = bounds_between(
+        model,
+        path,
+        (t[first], t[second]),
+        (table[first], table[second]),
+        (arms[first], arms[second]),
+    )
+    return np.nan_to_num(np.minimum(bound[: len(minima)], bound[len(minima) :]), nan=-math.inf)
 
 
 def refinement(grid: np.ndarray, k: int, count: int) -> np.ndarray:
