@@ -183,6 +183,8 @@ def test_browser_plays_a_composed_servicer_with_meshes(tmp_path):
 def test_show_serves_until_interrupted(tmp_path, worked_plan):
     import re
     import signal
+    import socket
+    import struct
     import time
     import urllib.request
 
@@ -203,6 +205,13 @@ def test_show_serves_until_interrupted(tmp_path, worked_plan):
         # The served page is the standalone page, with its visible controls.
         assert 'id="ff-play"' in page and 'id="ff-title"' in page
         assert _servers() == before  # no MeshCat server is needed to serve it
+        for _ in range(3):  # a client that leaves mid-page: no traceback from the server
+            with socket.create_connection(
+                ("127.0.0.1", int(match.group(1).split(":")[2][:-1]))
+            ) as s:
+                s.sendall(b"GET / HTTP/1.1\r\nHost: x\r\n\r\n")
+                s.recv(100)
+                s.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
     finally:
         time.sleep(0.5)
         proc.send_signal(signal.SIGINT)

@@ -15,6 +15,7 @@ viewer's window): no meshcat server is started, and the page is written from the
 
 from __future__ import annotations
 
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,6 +28,7 @@ from ..errors import FreeFloatError, ViewerError
 from ..files import atomic_write_text
 from ..plans.format import Plan
 from ..plans.robot_copy import plan_robot
+from ..progress import LOGGER
 from ..robot.collision import Obstacle
 from ..robot.model import Robot
 from .controls import CM_COLOR, EE_COLOR, TRAIL_COLORS
@@ -279,7 +281,14 @@ def serve(plan: Plan, speed: float = 1.0, announce: Any = print) -> None:
         def log_message(self, format: str, *args: Any) -> None:
             return  # quiet: the terminal shows the URL only
 
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    class Server(http.server.ThreadingHTTPServer):
+        def handle_error(self, request: Any, client_address: Any) -> None:
+            """A browser that leaves mid-page is no error; anything else is one line."""
+            failure = sys.exc_info()[1]
+            if not isinstance(failure, ConnectionError):
+                LOGGER.warning("show: a request from %s failed: %s", client_address[0], failure)
+
+    server = Server(("127.0.0.1", 0), Handler)
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()
     try:
