@@ -544,3 +544,19 @@ def test_more_keep_out_objects_than_the_limit_are_refused_before_any_work(tmp_pa
     assert main(["check", str(tmp_path / "s.toml")]) == 2
     err = capsys.readouterr().err
     assert "keep-out objects ([[obstacles]]) = 65 is outside the supported range [0, 64]" in err
+
+
+def test_hull_volumes_are_qhulls_and_contain_their_meshes():
+    """The volumes ``-v`` logs: each true hull's (coal's faces) is SciPy's qhull volume of the
+    same points, and at least the volume its mesh encloses (a hull contains its mesh)."""
+    from scipy.spatial import ConvexHull
+
+    s = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "panda_servicer.toml")
+    model = CollisionModel(s.robot, known_srdf(s.robot))
+    infos = model.hulls()
+    assert len(infos) >= 8  # the Panda's links are meshes
+    objects = {o.name: o.geometry for o in model.geometry.geometryObjects}
+    for info in infos:
+        points = np.array(objects[info.name].points(), dtype=float).reshape(-1, 3)
+        assert info.hull_volume == pytest.approx(ConvexHull(points).volume, rel=1e-9)
+        assert info.mesh_volume <= info.hull_volume * (1 + 1e-9)
