@@ -47,7 +47,9 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
     )
     add_jobs(p_bounds)
     p_bounds.add_argument(
-        "scenario", nargs="?", help="scenario TOML file (default: worked example)"
+        "scenario",
+        nargs="?",
+        help="scenario TOML file, or a shipped scenario's name (default: worked example)",
     )
     p_bounds.set_defaults(func=run, check=check)
     return p_bounds

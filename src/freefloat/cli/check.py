@@ -42,7 +42,7 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
         "cone), at the start, the goal or given joint values. Exit code 0 when all hold, 1 "
         "otherwise.",
     )
-    p_check.add_argument("scenario", help="scenario TOML file")
+    p_check.add_argument("scenario", help="scenario TOML file, or a shipped scenario's name")
     p_check.add_argument(
         "--at",
         default="start",

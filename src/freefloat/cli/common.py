@@ -8,11 +8,16 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import FileError, InputError
+from ..errors import FileError, InputError, ScenarioError
 from ..files import check_output
 from ..plans.format import Plan
 from ..problem.limits import check_number
-from ..problem.scenario import Scenario, default_scenario_path
+from ..problem.scenario import (
+    Scenario,
+    default_scenario_path,
+    shipped_scenario,
+    shipped_scenario_names,
+)
 from ..problem.scenario_tables import read_toml
 from ..progress import stage
 from ..robot.locations import is_path_like
@@ -47,9 +52,23 @@ MAX_BUDGET = 100_000
 
 
 def load_scenario(path: str | None) -> Scenario:
-    """The scenario file at ``path``, or the worked example's without one."""
+    """The scenario file at ``path``, or the worked example's without one.
+
+    A name that is no file but a shipped scenario's (``panda_servicer``) is that scenario, as
+    in a sweep file; a missing file's error lists the shipped names.
+    """
     with stage("read scenario"):
-        return Scenario.from_toml(path if path else default_scenario_path())
+        if not path:
+            return Scenario.from_toml(default_scenario_path())
+        if not Path(path).expanduser().exists() and (shipped := shipped_scenario(path)):
+            return Scenario.from_toml(shipped)
+        try:
+            return Scenario.from_toml(path)
+        except ScenarioError as exc:
+            if Path(path).expanduser().exists():
+                raise
+            names = ", ".join(shipped_scenario_names())
+            raise ScenarioError(f"{exc}; or name a shipped scenario: {names}") from None
 
 
 #: What ``--no-verify`` does with a plan that fails verification, per command.

@@ -44,7 +44,11 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
         "summary and write the plan (JSON). Without SCENARIO, plan the shipped worked example "
         "into ./freefloat-out/ with its playback page (plan.html) and plots (plots/).",
     )
-    p_plan.add_argument("scenario", nargs="?", help="scenario TOML file (default: worked example)")
+    p_plan.add_argument(
+        "scenario",
+        nargs="?",
+        help="scenario TOML file, or a shipped scenario's name (default: worked example)",
+    )
     p_plan.add_argument(
         "-o",
         "--output",

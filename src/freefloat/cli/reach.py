@@ -29,7 +29,11 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
         "the drift attitude reached by a solved path, with the goal attitude to paste into the "
         "scenario (docs/reach.md). The scenario's goal attitude is ignored.",
     )
-    p_reach.add_argument("scenario", nargs="?", help="scenario TOML file (default: worked example)")
+    p_reach.add_argument(
+        "scenario",
+        nargs="?",
+        help="scenario TOML file, or a shipped scenario's name (default: worked example)",
+    )
     p_reach.add_argument(
         "--travel",
         type=float,

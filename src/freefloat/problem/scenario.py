@@ -105,12 +105,36 @@ from .scenario_tables import (
 if TYPE_CHECKING:
     from ..robot.compose import ServicerSpec
 
-__all__ = ["Scenario", "default_scenario_path", "scenario_of"]
+__all__ = [
+    "Scenario",
+    "default_scenario_path",
+    "scenario_of",
+    "shipped_scenario",
+    "shipped_scenario_names",
+]
 
 
 def default_scenario_path() -> Path:
     """The shipped worked example of docs/method.md section 8."""
     return robots_dir() / "scenarios" / "worked_example.toml"
+
+
+def shipped_scenario(name: str) -> Path | None:
+    """The shipped scenario called ``name`` (``panda_servicer`` or ``panda_servicer.toml``).
+
+    None when no shipped scenario has that name (a path with a folder in it never does).
+    """
+    if Path(name).name != name:
+        return None
+    folder = robots_dir() / "scenarios"
+    found = next((p for p in (folder / name, folder / f"{name}.toml") if p.is_file()), None)
+    return None if found is None else found.resolve()
+
+
+def shipped_scenario_names() -> list[str]:
+    """The shipped scenarios' names, sorted (``panda_servicer``...; not the sweep file)."""
+    files = (robots_dir() / "scenarios").glob("*.toml")
+    return sorted(p.stem for p in files if not p.stem.endswith("_sweep"))
 
 
 @dataclass(frozen=True)

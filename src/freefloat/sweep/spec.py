@@ -40,9 +40,8 @@ import numpy as np
 
 from ..errors import FreeFloatError, InputLimitError, ScenarioError, UnknownNameError, excerpt
 from ..problem.limits import check_samples, finite_number
-from ..problem.scenario import Scenario
+from ..problem.scenario import Scenario, shipped_scenario, shipped_scenario_names
 from ..problem.scenario_tables import read_toml
-from ..robot.model import robots_dir
 from .draws import (
     Changes,
     check_inertial_value,
@@ -291,14 +290,12 @@ def _scenario_path(name: str, folder: Path) -> Path:
     candidate = (folder / name).expanduser()
     if candidate.is_file():
         return candidate.resolve()
-    shipped_dir = robots_dir() / "scenarios"
-    for shipped in (shipped_dir / name, shipped_dir / f"{name}.toml"):
-        if shipped.is_file():
-            return shipped.resolve()
-    names = sorted(p.name for p in shipped_dir.glob("*.toml"))
+    shipped = shipped_scenario(name)
+    if shipped is not None:
+        return shipped
     raise ScenarioError(
         f"scenario {name!r} is neither a file next to the sweep file ({candidate}) nor a shipped "
-        f"scenario ({', '.join(names)})"
+        f"scenario ({', '.join(shipped_scenario_names())})"
     )
 
 
