@@ -236,7 +236,9 @@ def test_an_unreachable_panda_roll_is_refused_in_one_line_within_an_evaluation_c
     code = main(["plan", str(scenario), "-o", str(out)])
     err = capsys.readouterr().err
     assert code == 2, err
-    assert err.count("\n") == 1 and err.startswith("freefloat: error: reachable up to "), err
+    assert err.count("\n") == 1 and err.startswith(
+        "freefloat: error: goal attitude not reached: reachable up to "
+    ), err
     assert "stopped by joint_position_limits" in err, err
     assert "Traceback" not in err and len(err) < 1000, err
     assert not out.exists()

@@ -30,7 +30,7 @@ from .._exits import (
     silence_output,
 )
 from .._interrupt import is_command
-from ..errors import FreeFloatError, UnitsWarning
+from ..errors import FreeFloatError, UnitsWarning, UnreachableAttitudeError
 from ..progress import LOGGER, configure
 from . import (
     bounds,
@@ -192,7 +192,10 @@ def _main(argv: Sequence[str] | None) -> int:
         flush_output()
         return code
     except FreeFloatError as exc:
-        error_line(f"error: {in_degrees(exc)}")
+        said = in_degrees(exc)
+        if isinstance(exc, UnreachableAttitudeError):  # its message starts with the figures
+            said = f"goal attitude not reached: {said}"
+        error_line(f"error: {said}")
         return 2
     except BrokenPipeError:  # standard output closed (| head): nothing more to say
         silence_output(1)
