@@ -24,7 +24,16 @@ from .lock import default_lock, locked_origin
 from .model import MAX_URDF_BYTES, example_robot_data_dir
 from .urdf_checks import urdf_document
 
-__all__ = ["ARMS", "BASE_LINK", "ArmPart", "ArmSpec", "arm_part", "arm_urdf", "mount_origin"]
+__all__ = [
+    "ARMS",
+    "BASE_LINK",
+    "GRIPPER_JOINT",
+    "ArmPart",
+    "ArmSpec",
+    "arm_part",
+    "arm_urdf",
+    "mount_origin",
+]
 
 #: example-robot-data arms by name: path of the URDF below ``example-robot-data/robots``.
 ARMS = {
@@ -35,7 +44,8 @@ ARMS = {
     "z1": "z1_description/urdf/z1.urdf",
 }
 
-_GRIPPER = re.compile(r"finger|gripper", re.IGNORECASE)
+#: Names of the joints a composed arm locks unless it keeps its gripper (fingers, grippers).
+GRIPPER_JOINT = re.compile(r"finger|gripper", re.IGNORECASE)
 BASE_LINK = "spacecraft"
 
 
@@ -242,7 +252,9 @@ def _lock_values(arm: ArmSpec, joints: Sequence[Any]) -> tuple[dict[str, float],
             shown = (value * scale, low * scale, high * scale)
             raise LockedJointError(arm.prefix + name, *shown, unit)
         values[arm.prefix + name] = value
-    fingers = [] if arm.keep_gripper else [j for j in movable.values() if _GRIPPER.search(j.name)]
+    fingers = (
+        [] if arm.keep_gripper else [j for j in movable.values() if GRIPPER_JOINT.search(j.name)]
+    )
     for joint in fingers:
         if joint.name not in asked:
             values[arm.prefix + joint.name] = _default_lock(

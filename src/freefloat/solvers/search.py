@@ -32,6 +32,7 @@ from ..problem.residual import Problem
 from ..problem.scenario import Scenario
 from ..progress import LOGGER
 from .dispatch import solve
+from .hints import extra_hint, finger_hint
 from .options import Solution, SolveOptions, Strategy
 
 __all__ = ["SearchResult", "freedom_candidates", "search", "turn_candidates"]
@@ -335,8 +336,11 @@ def _refuse(
         )
     if isinstance(first_error, InputError) and best == math.inf:
         raise first_error
-    if extra_hint := _extra_hint(scenario, best_error or first_error):
-        hint = f"{extra_hint}; {hint}" if hint else extra_hint
+    for more in (
+        extra_hint(scenario, best_error or first_error),
+        finger_hint(scenario.robot, closest.stopped_by if closest is not None else ""),
+    ):
+        hint = f"{more}; {hint}" if hint and more else more or hint
     if origin is not None and closest is not None:
         # One figure: how far along the turn asked from the quintic attitude any level got,
         # for the goal tried (as stated, or with joints' turns) whose levels got closest.
@@ -371,18 +375,6 @@ def _refuse(
         stopped_by=best_error.stopped_by if best_error else "",
         reached_fraction=best_error.reached_fraction if best_error else 0.0,
         blocked_by=blocked,
-    )
-
-
-def _extra_hint(scenario: Scenario, error: FreeFloatError | None) -> str:
-    """When a fixed ``[path] extra`` may be the cause, say so and how to remove it."""
-    if scenario.extra is None or not isinstance(error, SolverError):
-        return ""
-    fixed = sum(int(k) for k in scenario.extra.values())
-    return (
-        f"the scenario fixes [path] extra ({fixed} free coefficient(s) in all), which may be too "
-        "little freedom for this goal: remove [path] extra and the planner raises the freedom "
-        "as it needs (freefloat reach SCENARIO shows what is reachable)"
     )
 
 

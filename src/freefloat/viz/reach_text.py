@@ -10,6 +10,7 @@ import numpy as np
 from ..physics.attitude import geodesic_angle, relative_rotvec
 from ..reachable import SMALL_REACH_DEG, ReachReport
 from ..robot.model import Robot
+from ..solvers.hints import finger_hint
 from ..solvers.reach import ReachEstimate
 
 __all__ = ["estimate_lines", "goal_joint_lines", "reach_lines", "verdict"]
@@ -132,7 +133,7 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
     skipped = report.budget == 0 and not report.planar  # no inner estimate: nothing to paste
     for d in report.directions:
         axis = " ".join(f"{x:+.2f}" for x in d.axis)
-        why = d.stopped_by or ("-" if d.inner < d.outer else "reached the outer bound")
+        why = d.stopped_by or "its outer bound (heads no further)"
         if skipped:
             why = "-"
         if d.breaks:
@@ -142,6 +143,9 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
         lines.append(f"  {axis:<20}{inner}{math.degrees(d.outer):>12.2f}  {goal:<30}  {why}")
     if report.planar and len(report.freedom) > 1:
         lines.append("  the interval is open: a goal at its very end is not reached")
+    if robot is not None:  # a finger's limit stopped some direction: say how to hold them
+        fingers = sorted({finger_hint(robot, d.stopped_by) for d in report.directions} - {""})
+        lines += [f"note: {fingers[0]}"] if fingers else []
     said = verdict(report)
     if said:
         lines.append(f"verdict: {said}")
