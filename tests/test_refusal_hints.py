@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 import freefloat as ff
 from freefloat.solvers.hints import extra_hint, finger_hint
 
@@ -85,3 +87,20 @@ def test_reach_names_the_outer_bound_and_a_finger_that_stopped_a_direction(tmp_p
     notes = [line for line in lines if line.startswith("note: ")]
     assert notes == [f"note: {finger_hint(scenario.robot, stopped)}"]
     assert "gripper_left_finger_joint" in notes[0]
+
+
+def test_a_joint_limit_detail_gives_the_value_and_the_limit(tmp_path):
+    """The joint's extreme on the path against the limit it comes nearest, in degrees (a
+    turning joint). On the plain quintic the fingers, held at 0, are the nearest: 0.1 rad
+    (5.7296 deg) below their upper limit, the left one named first."""
+    import numpy as np
+
+    from freefloat.problem.constraints.joint_position import JointPositionLimits
+
+    scenario = _scenario(tmp_path)
+    problem = ff.problem_from_scenario(scenario)
+    path = problem.polynomials(np.zeros(problem.n_free))
+    plain = JointPositionLimits().excess(scenario.robot, path)
+    assert plain.value == pytest.approx(-0.1, abs=1e-12)
+    assert plain.detail.startswith("joint 'gripper_left_finger_joint' at t = ")
+    assert plain.detail.endswith(" s (0 deg, upper limit 5.7296 deg)")

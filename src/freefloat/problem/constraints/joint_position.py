@@ -93,9 +93,22 @@ class JointPositionLimits(Constraint):
             if not (math.isfinite(joint.lower) or math.isfinite(joint.upper)):
                 continue
             (lo, t_lo), (hi, t_hi) = path.extremes(i, 0)
-            for over, t in ((hi - joint.upper, t_hi), (joint.lower - lo, t_lo)):
+            for over, t, value, side, limit in (
+                (hi - joint.upper, t_hi, hi, "upper", joint.upper),
+                (joint.lower - lo, t_lo, lo, "lower", joint.lower),
+            ):
                 if over > worst:
-                    worst, detail = over, f"joint {joint.name!r} at t = {t:.4g} s"
+                    shown = _shown(joint.kind != "prismatic", value, limit)
+                    worst = over
+                    detail = f"joint {joint.name!r} at t = {t:.4g} s ({shown[0]}, {side} limit "
+                    detail += f"{shown[1]})"
         if worst == -math.inf:
             return Excess(0.0, 0.0, "no joint has finite limits")
         return Excess(worst, 0.0, detail)
+
+
+def _shown(angular: bool, value: float, limit: float) -> tuple[str, str]:
+    """A joint value and its limit for a message: deg for a turning joint, else m."""
+    if angular:
+        return f"{math.degrees(value):.5g} deg", f"{math.degrees(limit):.5g} deg"
+    return f"{value:.5g} m", f"{limit:.5g} m"
