@@ -28,7 +28,9 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
         "robot: a constructive inner estimate; from the quintic path's attitude, continuation "
         "goes as far as it can about six axis directions and eight diagonals within the joint "
         "limits, with the scenario's freedom (default two free coefficients per joint). "
-        "freefloat reach prints the drift attitude, an outer bound and goal attitudes to paste.",
+        "freefloat reach prints the drift attitude, an outer bound and goal attitudes to paste: "
+        "its turns are confirmed as plan solves them, so it may report less than this "
+        "estimate, which goes as far as its budget allows without that confirmation.",
     )
     p_bounds.add_argument(
         "--plot", metavar="FILE", help="spatial: also draw the estimate (PNG, SVG or PDF)"
@@ -43,7 +45,8 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
         "--budget",
         type=int,
         default=300,
-        help="spatial: residual evaluations per direction (default 300)",
+        help="spatial: residual evaluations per direction, in one pass (default 300; "
+        "reach's --budget is per pass of plan's own search)",
     )
     add_jobs(p_bounds)
     p_bounds.add_argument(
