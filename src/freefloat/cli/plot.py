@@ -17,7 +17,8 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
         "plot",
         help="write figures of a plan (PNG, optionally SVG)",
         description="Write one figure per topic (end effector, base attitude and rate, joint "
-        "positions, rates and torques) and an overview sheet.",
+        "positions, rates and torques; clearance along the path when the plan was kept clear) "
+        "and an overview sheet.",
     )
     p_plot.add_argument("plan", help="plan JSON file")
     p_plot.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
