@@ -187,15 +187,22 @@ def test_non_regular_scenario_files(tmp_path, capsys):
 
 def test_a_shipped_scenario_by_name_and_a_misspelt_one(tmp_path, capsys, monkeypatch):
     """A bare name that is no file here is the shipped scenario of that name (as in a sweep
-    file); a misspelt one lists the shipped names; a file of that name here comes first."""
+    file); a misspelt one lists the shipped names; a file of that name here (even a dangling
+    link) comes first, and a name with its suffix is always a file."""
     monkeypatch.chdir(tmp_path)
     assert main(["check", "ur5_servicer"]) == 0
     assert capsys.readouterr().out.startswith("freefloat check: ur5_servicer at start")
     line = _refused(capsys, "check", "ur5_servicr")
     assert line == (
         f"freefloat: error: scenario file not found: {tmp_path / 'ur5_servicr'}; or name a "
-        "shipped scenario: dual_ur5_servicer, panda_servicer, ur5_servicer, worked_example"
+        "shipped scenario: dual_ur5_servicer, panda_servicer, ur5_servicer, worked_example, "
+        "worked_example_sweep"
     )
+    # with its suffix a name is a file, never the shipped one; so is a dangling link
+    assert "scenario file not found" in _refused(capsys, "check", "ur5_servicer.toml")
+    (tmp_path / "ur5_servicer").symlink_to(tmp_path / "gone.toml")
+    assert "scenario file not found" in _refused(capsys, "check", "ur5_servicer")
+    (tmp_path / "ur5_servicer").unlink()
     (tmp_path / "ur5_servicer").write_text("robot = 1\n")  # a file here: read, and refused
     assert "ur5_servicer" in _refused(capsys, "check", "ur5_servicer")
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -54,18 +55,21 @@ MAX_BUDGET = 100_000
 def load_scenario(path: str | None) -> Scenario:
     """The scenario file at ``path``, or the worked example's without one.
 
-    A name that is no file but a shipped scenario's (``panda_servicer``) is that scenario, as
-    in a sweep file; a missing file's error lists the shipped names.
+    A bare name (no folder, no suffix) that is no file here but a shipped scenario's
+    (``panda_servicer``) is that scenario, as in a sweep file; ``panda_servicer.toml`` is
+    always a file, never the shipped one. A missing file's error lists the shipped names.
     """
     with stage("read scenario"):
         if not path:
             return Scenario.from_toml(default_scenario_path())
-        if not Path(path).expanduser().exists() and (shipped := shipped_scenario(path)):
+        here = os.path.lexists(Path(path).expanduser())  # a broken link is a file named so
+        bare = Path(path).name == path and not Path(path).suffix  # "panda_servicer", no more
+        if bare and not here and (shipped := shipped_scenario(path)):
             return Scenario.from_toml(shipped)
         try:
             return Scenario.from_toml(path)
         except ScenarioError as exc:
-            if Path(path).expanduser().exists():
+            if here:
                 raise
             names = ", ".join(shipped_scenario_names())
             raise ScenarioError(f"{exc}; or name a shipped scenario: {names}") from None

@@ -132,9 +132,8 @@ def shipped_scenario(name: str) -> Path | None:
 
 
 def shipped_scenario_names() -> list[str]:
-    """The shipped scenarios' names, sorted (``panda_servicer``...; not the sweep file)."""
-    files = (robots_dir() / "scenarios").glob("*.toml")
-    return sorted(p.stem for p in files if not p.stem.endswith("_sweep"))
+    """The shipped scenarios' names, sorted (``panda_servicer``...)."""
+    return sorted(p.stem for p in (robots_dir() / "scenarios").glob("*.toml"))
 
 
 @dataclass(frozen=True)
