@@ -37,9 +37,10 @@ def test_a_finger_joints_limit_suggests_holding_the_fingers(tmp_path):
     stopped = "joint_position_limits ahead: joint 'gripper_right_finger_joint' at t = 4 s"
     assert finger_hint(scenario.robot, stopped) == (
         "joint 'gripper_right_finger_joint', whose limit stopped it, looks like a finger or "
-        "gripper joint: to turn the spacecraft with the arm alone, hold the fingers ([robot] "
-        'table with urdf = "..." and lock = ["gripper_left_finger_joint", '
-        '"gripper_right_finger_joint"])'
+        "gripper joint: to turn the spacecraft with the arm alone, lock the fingers ([robot] "
+        'lock = ["gripper_left_finger_joint", "gripper_right_finger_joint"], in a [robot] '
+        'table with urdf = "..." for a robot from its own URDF; a composed servicer locks '
+        "them unless keep_gripper = true)"
     )
     # an arm joint's limit, another constraint, or no name: nothing to say
     assert (
@@ -104,3 +105,44 @@ def test_a_joint_limit_detail_gives_the_value_and_the_limit(tmp_path):
     assert plain.value == pytest.approx(-0.1, abs=1e-12)
     assert plain.detail.startswith("joint 'gripper_left_finger_joint' at t = ")
     assert plain.detail.endswith(" s (0 deg, upper limit 5.7296 deg)")
+
+
+def test_a_refused_search_asks_for_the_finger_hint_with_what_stopped_it(tmp_path, monkeypatch):
+    """The wiring: a refusal passes the stop it reports to the finger hint and keeps its
+    clause (a stand-in hint here; the real one is tested above), after the others."""
+    import freefloat.solvers.search as search_module
+
+    asked: list[str] = []
+
+    def stand_in(robot, stopped_by: str) -> str:
+        asked.append(stopped_by)
+        return "STAND-IN CLAUSE"
+
+    monkeypatch.setattr(search_module, "finger_hint", stand_in)
+    _scenario(tmp_path, "[safety]\ncheck = false\n")  # writes s.toml
+    text = (tmp_path / "s.toml").read_text().replace("[1.0, 0.0, 0.0]", "[0.0, 0.0, 60.0]")
+    (tmp_path / "s.toml").write_text(text)  # 60 deg about z: beyond this arm
+    with pytest.raises(ff.UnreachableAttitudeError) as refused:
+        ff.plan(ff.Scenario.from_toml(tmp_path / "s.toml"))
+    assert refused.value.stopped_by in asked  # each refused search level asks with its stop
+    assert "STAND-IN CLAUSE" in refused.value.hint
+
+
+def test_a_sliding_joints_detail_is_in_metres_at_its_lower_limit(tmp_path):
+    """A prismatic joint driven below its lower limit: value and limit in m."""
+    import numpy as np
+
+    from freefloat.problem.constraints.joint_position import JointPositionLimits
+
+    (tmp_path / "slider.urdf").write_text(urdfs.slider_arm())
+    (tmp_path / "s.toml").write_text(
+        'robot = "slider.urdf"\nduration = 4.0\n[start]\njoints = { slide = 0.0, turn = 0.0 }\n'
+        "[goal]\njoints = { slide = 0.0, turn = 10.0 }\nbase_zyx_deg = [0.2, 0.0, 0.0]\n"
+    )
+    scenario = ff.Scenario.from_toml(tmp_path / "s.toml")
+    problem = ff.problem_from_scenario(scenario)
+    path = problem.polynomials(np.zeros(problem.n_free))
+    limits = JointPositionLimits()
+    plain = limits.excess(scenario.robot, path)  # the slide held at 0: 0.2 m above -0.2 m
+    assert plain.value == pytest.approx(-0.2, abs=1e-12)
+    assert plain.detail.endswith(" s (0 m, lower limit -0.2 m)")

@@ -114,10 +114,10 @@ def _pose(
 def _nearest_surface(
     shape: coal.CollisionGeometry, p: np.ndarray
 ) -> tuple[float, np.ndarray, np.ndarray] | None:
-    """Signed distance (m) of the point ``p`` (the shape's frame) to the shape.
+    """Signed distance (m) of the point ``p`` (the shape's frame) to a sphere, box or capsule.
 
     With the shape's surface point nearest ``p`` and the outward unit normal there; None for
-    a shape with no closed form here.
+    any other shape (a cylinder: :func:`_cylinder`).
     """
     if isinstance(shape, coal.Sphere):
         radius = float(shape.radius)
@@ -131,10 +131,7 @@ def _nearest_surface(
         direction = _unit(p - axis_point, np.array([1.0, 0.0, 0.0]))
         distance = float(np.linalg.norm(p - axis_point)) - radius
         return distance, axis_point + radius * direction, direction
-    if isinstance(shape, coal.Cylinder):
-        found = _cylinder(float(shape.radius), float(shape.halfLength), *p.tolist())
-        return found[0], np.array(found[1]), np.array(found[2])
-    return None
+    return None  # a cylinder is measured by _cylinder, on floats
 
 
 def _box(half: np.ndarray, p: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:

@@ -42,6 +42,7 @@ def finger_hint(robot: Robot, stopped_by: str) -> str:
     listed = ", ".join(f'"{name}"' for name in fingers)
     return (
         f"joint {stopping[0]!r}, whose limit stopped it, looks like a finger or gripper joint: "
-        "to turn the spacecraft with the arm alone, hold the fingers ([robot] table with "
-        f'urdf = "..." and lock = [{listed}])'
+        f"to turn the spacecraft with the arm alone, lock the fingers ([robot] lock = [{listed}], "
+        'in a [robot] table with urdf = "..." for a robot from its own URDF; a composed '
+        "servicer locks them unless keep_gripper = true)"
     )

@@ -247,7 +247,7 @@ def minima_floors(
         (table[first], table[second]),
         (arms[first], arms[second]),
     )
-    return np.nan_to_num(np.minimum(bound[: len(minima)], bound[len(minima) :]), nan=-math.inf)
+    return np.minimum(bound[: len(minima)], bound[len(minima) :])  # -inf where spared
 
 
 def refinement(grid: np.ndarray, k: int, count: int) -> np.ndarray:

@@ -98,7 +98,7 @@ class JointPositionLimits(Constraint):
                 (joint.lower - lo, t_lo, lo, "lower", joint.lower),
             ):
                 if over > worst:
-                    shown = _shown(joint.kind != "prismatic", value, limit)
+                    shown = _shown(joint.angular, value, limit)
                     worst = over
                     detail = f"joint {joint.name!r} at t = {t:.4g} s ({shown[0]}, {side} limit "
                     detail += f"{shown[1]})"
