@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 import freefloat as ff
-from freefloat.solvers.hints import extra_hint, finger_hint
+from freefloat.solvers.hints import REACH_CLAUSE, extra_hint, finger_hint, reach_hint
 
 import urdfs
 
@@ -126,6 +126,10 @@ def test_a_refused_search_asks_for_the_finger_hint_with_what_stopped_it(tmp_path
         ff.plan(ff.Scenario.from_toml(tmp_path / "s.toml"))
     assert refused.value.stopped_by in asked  # each refused search level asks with its stop
     assert "STAND-IN CLAUSE" in refused.value.hint
+    # and a refused goal attitude ends by pointing at what does plan
+    assert refused.value.hint.endswith(REACH_CLAUSE)
+    assert reach_hint(refused.value.hint) == ""  # named once
+    assert reach_hint("") == REACH_CLAUSE
 
 
 def test_a_sliding_joints_detail_is_in_metres_at_its_lower_limit(tmp_path):

@@ -12,7 +12,10 @@ from ..problem.scenario import Scenario
 from ..robot.arms import GRIPPER_JOINT
 from ..robot.model import Robot
 
-__all__ = ["extra_hint", "finger_hint"]
+__all__ = ["REACH_CLAUSE", "extra_hint", "finger_hint", "reach_hint"]
+
+#: What a refused goal attitude ends with, unless its hint names that command already.
+REACH_CLAUSE = "freefloat reach SCENARIO prints goal attitudes that plan, per direction"
 
 
 def extra_hint(scenario: Scenario, error: FreeFloatError | None) -> str:
@@ -46,3 +49,8 @@ def finger_hint(robot: Robot, stopped_by: str) -> str:
         'in a [robot] table with urdf = "..." for a robot from its own URDF; a composed '
         "servicer locks them unless keep_gripper = true)"
     )
+
+
+def reach_hint(hint: str) -> str:
+    """:data:`REACH_CLAUSE` for a refused goal attitude, unless ``hint`` names the command."""
+    return "" if "freefloat reach" in hint else REACH_CLAUSE

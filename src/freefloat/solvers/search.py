@@ -32,7 +32,7 @@ from ..problem.residual import Problem
 from ..problem.scenario import Scenario
 from ..progress import LOGGER
 from .dispatch import solve
-from .hints import extra_hint, finger_hint
+from .hints import extra_hint, finger_hint, reach_hint
 from .options import Solution, SolveOptions, Strategy
 
 __all__ = ["SearchResult", "freedom_candidates", "search", "turn_candidates"]
@@ -347,6 +347,7 @@ def _refuse(
         reached = max(origin.asked - closest.best_residual, origin.reached)
         axis = ", ".join(f"{a:.3f}" for a in origin.axis)
         goal = f"{turns.goal}: " if attempts > 1 else ""
+        hint = "; ".join(part for part in (hint, reach_hint(hint)) if part)
         raise UnreachableAttitudeError(
             f"{goal}{UnreachableAttitudeError.turn_phrase(reached, origin.asked)} about this "
             f"direction (axis {axis} "
