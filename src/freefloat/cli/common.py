@@ -62,8 +62,9 @@ def load_scenario(path: str | None) -> Scenario:
     with stage("read scenario"):
         if not path:
             return Scenario.from_toml(default_scenario_path())
-        here = os.path.lexists(Path(path).expanduser())  # a broken link is a file named so
-        bare = Path(path).name == path and not Path(path).suffix  # "panda_servicer", no more
+        named = Path(path)
+        here = os.path.lexists(named.expanduser())  # a broken link is a file named so
+        bare = named.name == path and not named.suffix  # "panda_servicer", no more
         if bare and not here and (shipped := shipped_scenario(path)):
             return Scenario.from_toml(shipped)
         try:

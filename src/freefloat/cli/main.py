@@ -30,7 +30,7 @@ from .._exits import (
     silence_output,
 )
 from .._interrupt import is_command
-from ..errors import FreeFloatError, UnitsWarning, UnreachableAttitudeError
+from ..errors import FreeFloatError, UnitsWarning
 from ..progress import LOGGER, configure
 from . import (
     bounds,
@@ -46,7 +46,7 @@ from . import (
     sweep,
     verify,
 )
-from .messages import in_degrees
+from .messages import error_message
 
 __all__ = ["COMMANDS", "build_parser", "main"]
 
@@ -192,10 +192,7 @@ def _main(argv: Sequence[str] | None) -> int:
         flush_output()
         return code
     except FreeFloatError as exc:
-        said = in_degrees(exc)
-        if isinstance(exc, UnreachableAttitudeError):  # its message starts with the figures
-            said = f"goal attitude not reached: {said}"
-        error_line(f"error: {said}")
+        error_line(f"error: {error_message(exc)}")
         return 2
     except BrokenPipeError:  # standard output closed (| head): nothing more to say
         silence_output(1)

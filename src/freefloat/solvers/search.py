@@ -336,11 +336,9 @@ def _refuse(
         )
     if isinstance(first_error, InputError) and best == math.inf:
         raise first_error
-    for more in (
-        extra_hint(scenario, best_error or first_error),
-        finger_hint(scenario.robot, closest.stopped_by if closest is not None else ""),
-    ):
-        hint = f"{more}; {hint}" if hint and more else more or hint
+    fingers = finger_hint(scenario.robot, closest.stopped_by if closest is not None else "")
+    extra = extra_hint(scenario, best_error or first_error)
+    hint = "; ".join(part for part in (fingers, extra, hint) if part)
     if origin is not None and closest is not None:
         # One figure: how far along the turn asked from the quintic attitude any level got,
         # for the goal tried (as stated, or with joints' turns) whose levels got closest.

@@ -98,17 +98,16 @@ class JointPositionLimits(Constraint):
                 (joint.lower - lo, t_lo, lo, "lower", joint.lower),
             ):
                 if over > worst:
-                    shown = _shown(joint.angular, value, limit)
+                    shown, bound = (_shown(joint.angular, v) for v in (value, limit))
                     worst = over
-                    detail = f"joint {joint.name!r} at t = {t:.4g} s ({shown[0]}, {side} limit "
-                    detail += f"{shown[1]})"
+                    detail = (
+                        f"joint {joint.name!r} at t = {t:.4g} s ({shown}, {side} limit {bound})"
+                    )
         if worst == -math.inf:
             return Excess(0.0, 0.0, "no joint has finite limits")
         return Excess(worst, 0.0, detail)
 
 
-def _shown(angular: bool, value: float, limit: float) -> tuple[str, str]:
-    """A joint value and its limit for a message: deg for a turning joint, else m."""
-    if angular:
-        return f"{math.degrees(value):.5g} deg", f"{math.degrees(limit):.5g} deg"
-    return f"{value:.5g} m", f"{limit:.5g} m"
+def _shown(angular: bool, value: float) -> str:
+    """A joint value (rad or m) for a message: in deg for a turning joint, else in m."""
+    return f"{math.degrees(value):.5g} deg" if angular else f"{value:.5g} m"
