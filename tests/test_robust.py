@@ -495,6 +495,29 @@ def test_cli_sensitivity_and_correct(tmp_path, worked, capsys):
     assert "this robot is planar" in capsys.readouterr().err
 
 
+def test_correct_at_the_goal_writes_nothing(tmp_path, worked, capsys):
+    """A measured attitude within the attitude tolerance (1e-9 rad) of the goal: nothing to do.
+
+    Truth: the goal's yaw from the plan file, offset by hand (1e-8 deg = 1.7e-10 rad, within;
+    1e-6 deg = 1.7e-8 rad, beyond, which plans a loop that turns back by that angle).
+    """
+    plan, plan_path, _ = worked
+    yaw, pitch, roll = plan.base.target_zyx_deg
+    output = tmp_path / "c.json"
+    for offset in (0.0, 1e-8):
+        argv = [str(yaw + offset), str(pitch), str(roll)]
+        assert main(["correct", str(plan_path), "--base-zyx-deg", *argv, "-o", str(output)]) == 0
+        printed = capsys.readouterr().out
+        assert printed.startswith("freefloat correct: the measured attitude is ")
+        tail = "within the attitude tolerance (5.73e-08 deg): nothing to correct, no plan written"
+        assert tail in printed, printed
+        assert not output.exists()
+    argv = [str(yaw + 1e-6), str(pitch), str(roll)]
+    assert main(["correct", str(plan_path), "--base-zyx-deg", *argv, "-o", str(output)]) == 0
+    assert "turns the spacecraft back by 1e-06 deg" in capsys.readouterr().out
+    assert ff.Plan.load(output).base.attitude_error_rad <= 1e-9
+
+
 def test_the_robustness_record_is_recomputed_by_verify_and_old_plans_load(tmp_path, worked):
     plan, _, robot = worked
     recorded = with_robustness(plan, robot)

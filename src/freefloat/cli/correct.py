@@ -64,11 +64,20 @@ def run(args: argparse.Namespace) -> int:
 
     loaded = checked_plan(args)  # verified, as show, plot and export do, unless --no-verify
     with stage("plan correction"):
-        result, residual = correct_plan(loaded, args.base_zyx_deg)
+        found = correct_plan(loaded, args.base_zyx_deg)
+    if found.plan is None:
+        print(
+            f"freefloat correct: the measured attitude is {math.degrees(found.turn):.3g} deg "
+            f"from the plan's goal, within the attitude tolerance "
+            f"({math.degrees(found.tolerance):.3g} deg): nothing to correct, no plan written"
+        )
+        return 0
     output = Path(args.output) if args.output else Path(args.plan).with_suffix(".correct.json")
-    written = result.save(output)
-    print(f"freefloat correct: turns the spacecraft back by {math.degrees(residual):.4g} deg")
+    written = found.plan.save(output)
+    print(f"freefloat correct: turns the spacecraft back by {math.degrees(found.turn):.4g} deg")
     print(
-        summary(result, written, wall_time_s=time.perf_counter() - args.started, command="correct")
+        summary(
+            found.plan, written, wall_time_s=time.perf_counter() - args.started, command="correct"
+        )
     )
     return 0

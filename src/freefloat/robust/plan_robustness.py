@@ -9,7 +9,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -25,10 +25,11 @@ from ..problem.inertial_sensitivity import attitude_sensitivity
 from ..problem.uncertainty import DEFAULT_UNCERTAINTY, AttitudeSpread, Uncertainty, spread
 from ..robot.model import Robot
 from ..robot.payload import held_payload
+from ..solvers.options import SolveOptions
 from ..verify.recompute import problem_from_plan
 from .correction import correcting_plan
 
-__all__ = ["correct_plan", "plan_sensitivity", "plan_spread", "with_robustness"]
+__all__ = ["Correction", "correct_plan", "plan_sensitivity", "plan_spread", "with_robustness"]
 
 
 def plan_spread(
@@ -88,19 +89,37 @@ def plan_sensitivity(
     return plan, plan_spread(plan, robot, uncertainty)
 
 
-def correct_plan(path: str | Path | Plan, measured_zyx_deg: Sequence[float]) -> tuple[Plan, float]:
-    """The correcting plan for the plan (or plan file at ``path``) from a measured attitude.
+@dataclass(frozen=True)
+class Correction:
+    """What ``freefloat correct`` found for a measured attitude.
+
+    Attributes:
+        turn: the angle from the measured attitude to the plan's goal (rad).
+        tolerance: the attitude tolerance a correcting plan is solved to (rad).
+        plan: the correcting plan; None when ``turn`` is within ``tolerance`` (the spacecraft
+            is at its goal as closely as a plan would bring it: nothing to correct).
+    """
+
+    turn: float
+    tolerance: float
+    plan: Plan | None
+
+
+def correct_plan(path: str | Path | Plan, measured_zyx_deg: Sequence[float]) -> Correction:
+    """The correction for the plan (or plan file at ``path``) from a measured attitude.
 
     Args:
         path: the plan that ran, or its file.
         measured_zyx_deg: the spacecraft's measured yaw, pitch, roll (deg).
 
-    Returns:
-        The correcting plan and the angle it turns the spacecraft back by (rad).
+    Raises:
+        InputError, SolverError: as :func:`~.correction.correcting_plan`.
     """
     plan = path if isinstance(path, Plan) else load_plan_file(path)
     yaw, pitch, roll = (np.radians(float(a)) for a in measured_zyx_deg)
     measured = quat_from_zyx(yaw, pitch, roll)
     goal = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
-    result = correcting_plan(plan, plan_robot(plan), measured)
-    return result, geodesic_angle(measured, goal)
+    turn, tolerance = geodesic_angle(measured, goal), SolveOptions().tolerance
+    if turn <= tolerance:  # the path that stays put already ends there
+        return Correction(turn, tolerance, None)
+    return Correction(turn, tolerance, correcting_plan(plan, plan_robot(plan), measured))
