@@ -143,7 +143,7 @@ def test_an_output_in_a_folder_no_one_can_write_is_refused_before_any_work(tmp_p
         check_output("/proc/r.png", "--plot")
     plan = ff.plan(ff.default_scenario_path()).save(tmp_path / "p.json")
     assert main(["plot", str(plan), "-o", "/proc/plots"]) == 2
-    assert "folder /proc is not writable" in capsys.readouterr().err
+    assert "folder /proc is not writable (it takes no new files)" in capsys.readouterr().err
 
 
 def test_reach_draws_into_folders_it_makes(tmp_path, capsys):

@@ -216,9 +216,11 @@ def check_output(path: str | Path, what: str = "output", folder: bool = False) -
         os.close(handle)
         os.unlink(probe)
     except OSError as exc:
+        # /proc answers "no such file" to a new file in a folder that exists: say what it means
+        why = "it takes no new files" if exc.errno == errno.ENOENT else _reason(exc)
         raise FileError(
             f"cannot write {what} {path_excerpt(shown)}: folder {ancestor} is not writable "
-            f"({_reason(exc)})",
+            f"({why})",
             shown,
         ) from None
     return target
