@@ -3,11 +3,12 @@
 Each is an example-robot-data arm on a 0.6 m, 100 kg box spacecraft, mounted on the +x face;
 the dual servicer carries two UR5 arms side by side on that face (prefixes ``left_`` at
 y = +0.2 m and ``right_`` at y = -0.2 m), with its SRDF (each arm's pairs, prefixed) beside it.
-Run from the repository root: python scripts/compose_servicers.py
+Each robot is named as its file. Run from the repository root: python scripts/compose_servicers.py
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from freefloat.robot.compose import ArmSpec, ServicerSpec, compose_servicer
@@ -53,7 +54,7 @@ SERVICERS = {
 
 def main() -> None:
     for name, spec in SERVICERS.items():
-        path = compose_servicer(spec, ROBOTS / f"{name}.urdf")
+        path = compose_servicer(replace(spec, name=name), ROBOTS / f"{name}.urdf")
         print(f"wrote {path}")
 
 

@@ -246,3 +246,34 @@ def test_a_payload_on_an_arm_whose_chains_tie_points_to_the_scenario_route(tmp_p
     err = capsys.readouterr().err
     assert "the payload's holder is ambiguous: 2 chains are longest (l3, l3b)" in err
     assert 'end_effector = "..." naming the holder' in err and not out.exists()
+
+
+def _robot_name(path):
+    """The robot element's name attribute, read with the standard library's XML parser."""
+    import xml.etree.ElementTree as ET
+
+    return ET.parse(path).getroot().get("name")
+
+
+def test_the_robot_is_named_as_its_file_or_as_given(tmp_path, capsys):
+    one = ["compose", "--arm", "ur5", "--base-mass", "100", "--base-size", "1", "1", "1"]
+    one += ["--mount", "0.5", "0", "0"]
+    assert main([*one, "-o", str(tmp_path / "my servicer.urdf")]) == 0
+    assert _robot_name(tmp_path / "my servicer.urdf") == "my_servicer"
+    assert main([*one, "--name", "sat-1.a", "-o", str(tmp_path / "b.urdf")]) == 0
+    assert _robot_name(tmp_path / "b.urdf") == "sat-1.a"
+    capsys.readouterr()
+    assert main([*one, "--name", "two words", "-o", str(tmp_path / "c.urdf")]) == 2
+    err = capsys.readouterr().err
+    assert err == (
+        "freefloat: error: robot name 'two words': give letters, digits, '_', '-' or '.' "
+        "(at most 100)\n"
+    )
+    assert not (tmp_path / "c.urdf").exists()
+
+
+def test_the_shipped_servicers_are_named_as_their_files():
+    from freefloat.robot.model import robots_dir
+
+    for name in ("panda_servicer", "ur5_servicer", "dual_ur5_servicer"):
+        assert _robot_name(robots_dir() / f"{name}.urdf") == name

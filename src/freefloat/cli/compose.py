@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -165,6 +166,9 @@ def add_parser(commands: Commands) -> argparse.ArgumentParser:
     )
     for numbers in _PAYLOAD:
         numbers.add(p_compose)
+    p_compose.add_argument(
+        "--name", help="the robot's name in the URDF (default: the output file's name, no .urdf)"
+    )
     p_compose.add_argument("-o", "--output", required=True, help="URDF file to write")
     p_compose.set_defaults(func=run, check=check)
     return p_compose
@@ -324,4 +328,11 @@ def _servicer_spec(args: argparse.Namespace, payload: Payload | None) -> Service
         payload=payload,
         more_arms=tuple(arms[1:]),
         prefix=first.prefix,
+        name=_default_name(args.output) if args.name is None else args.name,
     )
+
+
+def _default_name(output: str) -> str:
+    """The output file's name as a robot name: other characters as '_' ("" if none is left)."""
+    name = re.sub(r"[^A-Za-z0-9_.-]", "_", Path(output).stem)[:100]
+    return name if re.search(r"[A-Za-z0-9]", name) else ""

@@ -21,6 +21,7 @@ import hashlib
 import json
 import logging
 import math
+import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -38,6 +39,9 @@ from .srdf import ARM_SRDFS, arm_srdf, merged_srdf
 from .urdf_checks import check_urdf_xml
 
 LOGGER = logging.getLogger(__name__)
+
+#: A robot name :class:`ServicerSpec` takes.
+NAME = re.compile(r"[A-Za-z0-9_.-]{1,100}")
 
 __all__ = [
     "ARMS",
@@ -99,6 +103,7 @@ class ServicerSpec:
         more_arms: further arms on the same spacecraft; with any, every arm's links and joints
             get its prefix (``prefix`` for this first one, default ``arm1_``).
         prefix: the first arm's prefix (used only with ``more_arms``; default ``arm1_``).
+        name: the URDF's robot name (default: the arms' names joined, then ``_servicer``).
     """
 
     arm: str
@@ -112,8 +117,13 @@ class ServicerSpec:
     payload: Payload | None = None
     more_arms: tuple[ArmSpec, ...] = ()
     prefix: str = ""
+    name: str = ""
 
     def __post_init__(self) -> None:
+        if self.name and not NAME.fullmatch(self.name):
+            raise InputError(
+                f"robot name {self.name!r}: give letters, digits, '_', '-' or '.' (at most 100)"
+            )
         numbers = [self.base_mass, *self.base_size, *self.mount, *self.mount_rpy]
         for arm in self.more_arms:
             numbers += [*arm.mount, *arm.mount_rpy]
@@ -254,7 +264,7 @@ def compose(spec: ServicerSpec, offer_ties: bool = True) -> Composed:
     spacecraft, hull = _spacecraft(spec)
     names = [a.arm if a.arm in ARMS else Path(a.arm).stem for a in arms]
     composed = yourdfpy.Robot(
-        name="_".join(names) + "_servicer",
+        name=spec.name or "_".join(names) + "_servicer",
         links=[spacecraft, *links],
         joints=joints,
         materials=[hull, *materials.values()],
