@@ -242,7 +242,8 @@ def test_clearance_at_is_the_smallest_of_every_pair_measured():
         model.closest_many(np.repeat(joints[None], 9, axis=0) + 0.05)  # some history
         every = model.distances(joints).values
         k = int(np.argmin(every))
-        assert clearance_at(model, joints) == (float(every[k]), model.names[k])
+        found = clearance_at(model, joints)
+        assert (found.distance, found.pair, found.name) == (float(every[k]), k, model.names[k])
 
 
 def test_pairs_a_joint_set_moves_are_those_whose_distance_changes():

@@ -363,13 +363,15 @@ def test_a_goal_from_inverse_kinematics_too_close_asks_to_move_the_end_effector_
     refused by plan and reach asking to move that goal, not joints the user never gave; the
     UR5 servicer's goal joints, given in its file, are asked to move."""
     import freefloat.problem.endpoints as endpoints
+    from freefloat.robot.collision import PairClearance
 
     real = endpoints.clearance_at
 
     def close_at(goal):
         def measured(model, joints):
             if np.allclose(joints, goal):
-                return 0.001, "left_wrist_3_link_0 / spacecraft_0"
+                k = next(k for k, n in enumerate(model.names) if "wrist_3_link" in n)
+                return PairClearance(0.001, k, model.names[k])
             return real(model, joints)
 
         return measured

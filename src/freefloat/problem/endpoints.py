@@ -49,11 +49,12 @@ def check_endpoints(
     for constraint in constraints:
         if isinstance(constraint, Clearance) and constraint.applies_to(scenario.robot):
             for where, joints in ends:
-                clearance, pair = clearance_at(constraint.model, joints)
-                if clearance < constraint.margin:
+                found = clearance_at(constraint.model, joints)
+                if found.distance < constraint.margin:
                     chosen = chosen_goal and where == "goal"
-                    why = _swing_note(constraint, pair)
-                    raise CollisionError(where, pair, clearance, constraint.margin, chosen, why)
+                    why = _swing_note(constraint, found.pair)
+                    margin = constraint.margin
+                    raise CollisionError(where, found.name, found.distance, margin, chosen, why)
     for where, joints in ends:  # the configuration alone decides, for every path
         for constraint, excess, holds in at_rest(constraints, scenario.robot, joints):
             if not holds:
@@ -77,16 +78,14 @@ def at_rest(
     return found
 
 
-def _swing_note(constraint: Clearance, pair: str) -> str:
-    """Why a parent and child pair is checked at all: its joint swings one into the other."""
+def _swing_note(constraint: Clearance, pair: int) -> str:
+    """Why a parent and child pair (its index) is checked: its joint swings one into the other."""
     model = constraint.model
     robot = model.robot
     if not robot.urdf_text:
         return ""
-    if pair not in model.names:
-        return ""
     objects = model.geometry.geometryObjects
-    pair_objects = [objects[g] for g in model.pairs[model.names.index(pair)]]
+    pair_objects = [objects[g] for g in model.pairs[pair]]
     if any(o.name.startswith(OBSTACLE_PREFIX) for o in pair_objects):  # never parent nor child
         return ""
     links = [robot.model.frames[o.parentFrame].name for o in pair_objects]

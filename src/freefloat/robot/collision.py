@@ -26,6 +26,7 @@ points (:mod:`freefloat.robot.witness_gradient`).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -64,6 +65,7 @@ __all__ = [
     "CollisionModel",
     "Distances",
     "Obstacle",
+    "PairClearance",
     "checked_distance",
     "clearance_at",
     "collision_model",
@@ -274,7 +276,22 @@ def collision_model(
     return CollisionModel(robot, srdf, obstacles)
 
 
-def clearance_at(model: CollisionModel, joints: Sequence[float] | np.ndarray) -> tuple[float, str]:
+@dataclass(frozen=True)
+class PairClearance:
+    """The smallest clearance at one configuration.
+
+    Attributes:
+        distance: the clearance (m; negative: penetration depth).
+        pair: the index of the pair that has it (``CollisionModel.pairs``).
+        name: that pair's name (``CollisionModel.names``).
+    """
+
+    distance: float
+    pair: int
+    name: str
+
+
+def clearance_at(model: CollisionModel, joints: Sequence[float] | np.ndarray) -> PairClearance:
     """Smallest clearance (m) at one configuration and the pair that has it.
 
     Only the pairs that can be the closest are measured (:meth:`CollisionModel.closest_value`,
@@ -282,4 +299,4 @@ def clearance_at(model: CollisionModel, joints: Sequence[float] | np.ndarray) ->
     """
     with model.own_bounds():  # not from the model's earlier queries
         value, k = model.closest_value(np.asarray(joints, dtype=float))
-    return value, model.names[k]
+    return PairClearance(value, k, model.names[k])
