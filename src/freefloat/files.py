@@ -219,8 +219,7 @@ def check_output(path: str | Path, what: str = "output", folder: bool = False) -
         # /proc answers "no such file" to a new file in a folder that exists: say what it means
         why = "it takes no new files" if exc.errno == errno.ENOENT else _reason(exc)
         raise FileError(
-            f"cannot write {what} {path_excerpt(shown)}: folder {ancestor} is not writable "
-            f"({why})",
+            f"cannot write {what} {path_excerpt(shown)}: folder {ancestor} is not writable ({why})",
             shown,
         ) from None
     return target

@@ -26,8 +26,8 @@ points (:mod:`freefloat.robot.witness_gradient`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import coal
