@@ -4,21 +4,15 @@ After a plan has run, the spacecraft is measured at an attitude off its goal (it
 properties were not what the model said). A second motion from the plan's goal joints back to
 the same joints (paper's example 5.2) turns it, because a closed loop in joint space turns the
 base by the momentum map's curvature over the area it encloses. Its first-order turn is zero
-(the joints return), so the quintic path ``beta = 0`` is a singular point of ``h``: the
-correction starts from a loop chosen with the quadratic model of the turn instead,
-
-    turn(beta) ~ 1/2 [beta^T H_k beta]_k,   H_k = d^2 h_k / d beta^2 at beta = 0,
-
-(``H`` from central differences of the exact Jacobian): the loop along the top eigenvector of
-``sum_k a_k H_k`` (``a``: the unit direction of the turn wanted), scaled to the angle wanted.
-From there the planner's continuation reaches the goal attitude within the plan's limits and
-clearance, and the result is sampled and verified like any plan.
+(the joints return), so the correction starts from a closed loop chosen with the quadratic
+model of the turn (:mod:`freefloat.solvers.loop_start`). From there the planner's continuation
+reaches the goal attitude within the plan's limits and clearance, and the result is sampled
+and verified like any plan.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 
 import numpy as np
 
@@ -27,54 +21,16 @@ from ..physics.attitude import geodesic_angle, relative_rotvec
 from ..pipeline import plan_from_solution
 from ..plans.format import Plan
 from ..problem.build import build_problem
-from ..problem.constraints import Constraint
-from ..problem.residual import Problem
 from ..robot.model import Robot
 from ..solvers.dispatch import solve
+from ..solvers.loop_start import loop_start
 from ..solvers.options import SolveOptions
-from ..solvers.restore import broken_constraint
 from ..verify.checks import plan_constraints
 
-__all__ = ["FREEDOM", "correcting_plan", "loop_start"]
+__all__ = ["FREEDOM", "correcting_plan"]
 
 #: Free coefficients per joint of the correcting motion.
 FREEDOM = 2
-#: Step of the central differences of the Jacobian that give ``H`` (rad of beta).
-_STEP = 1e-3
-
-
-def _curvature(problem: Problem) -> np.ndarray:
-    """(equations, n_free, n_free) symmetric ``H`` of the quadratic turn at ``beta = 0``."""
-    n = problem.n_free
-    out = np.empty((problem.n_equations, n, n))
-    for i in range(n):
-        e = np.zeros(n)
-        e[i] = _STEP
-        plus = problem.jacobian(e)
-        minus = problem.jacobian(-e)
-        out[:, :, i] = (plus - minus) / (2.0 * _STEP)
-    return 0.5 * (out + out.transpose(0, 2, 1))
-
-
-def loop_start(
-    problem: Problem, constraints: Sequence[Constraint], turn: np.ndarray
-) -> np.ndarray | None:
-    """A closed loop whose quadratic-model turn is ``turn`` (rad, equations' frame).
-
-    Halved while it breaks a constraint (at most 20 times); None when no loop turns that way.
-    """
-    hessian = _curvature(problem)
-    size = float(np.linalg.norm(turn))
-    direction = turn / size
-    values, vectors = np.linalg.eigh(np.einsum("k,kij->ij", direction, hessian))
-    if values[-1] <= 0.0:
-        return None
-    beta = math.sqrt(2.0 * size / values[-1]) * vectors[:, -1]
-    for _ in range(20):
-        if not broken_constraint(problem, constraints, beta):
-            return np.asarray(beta)
-        beta = 0.5 * beta
-    return None
 
 
 def correcting_plan(

@@ -26,13 +26,14 @@ from ..errors import (
 )
 from ..physics.momentum import cached_planar_axis
 from ..problem.build import problem_from_scenario
-from ..problem.constraints import Constraint
+from ..problem.constraints import Constraint, default_constraints
 from ..problem.paths import PathFamily
 from ..problem.residual import Problem
 from ..problem.scenario import Scenario
 from ..progress import LOGGER
 from .dispatch import solve
 from .hints import extra_hint, finger_hint, reach_hint
+from .loop_start import loop_origin
 from .options import Solution, SolveOptions, Strategy
 
 __all__ = ["SearchResult", "freedom_candidates", "search", "turn_candidates"]
@@ -150,16 +151,18 @@ def search(
                 continue
             used = [sum(1 for i, _ in problem.family.free_index if i == j) for j in range(robot.n)]
             freedom = f"{label}, freedom {_describe(used, names)}"
-            start = None
+            continued = carry is not None
             if carry is not None:  # continue where less freedom stopped (new ones start at 0)
                 start = problem.family.embed(carry[0], np.asarray(carry[1]))
+            else:  # the quintic path, or a loop when it stays put (a pure reorientation)
+                start = loop_origin(problem, constraints or default_constraints())
             LOGGER.info(
                 "solve: %s, freedom %s (level %d of %d)%s",
                 label,
                 _describe(used, names),
                 level,
                 len(distributions),
-                " continued from where less freedom stopped" if start is not None else "",
+                " continued from where less freedom stopped" if continued else "",
             )
             try:
                 solution = solve(problem, options, constraints, start)
@@ -167,9 +170,9 @@ def search(
                 LOGGER.info("solve: level %d stopped: %s", level, exc.headline)
                 if exc.last_beta is not None:
                     carry = (problem.family, exc.last_beta)
-                record.failed(exc, freedom, continued=start is not None, goal=label)
+                record.failed(exc, freedom, continued=continued, goal=label)
                 continue
-            how = " (continued from where less freedom stopped)" if start is not None else ""
+            how = " (continued from where less freedom stopped)" if continued else ""
             record.tried.append(f"{freedom}: solved{how}")
             return _result(problem, solution, used, turns, record.tried)
 

@@ -1,0 +1,89 @@
+"""A start for paths whose joints end where they begin: a closed loop, from the quadratic turn.
+
+When every joint's goal is its start (a pure reorientation, or the correcting motion of
+:mod:`freefloat.robust.correction`), the quintic path ``beta = 0`` does not move: every free
+coefficient's first-order effect on the attitude vanishes there, so ``h`` is singular at that
+point and continuation has no tangent to follow. A closed loop in joint space still turns the
+spacecraft, by the momentum map's curvature over the area it encloses (paper's example 5.2),
+and to second order
+
+    turn(beta) ~ 1/2 [beta^T H_k beta]_k,   H_k = d^2 h_k / d beta^2 at beta = 0
+
+(``H`` from central differences of the exact Jacobian). :func:`loop_start` takes the loop along
+the top eigenvector of ``sum_k a_k H_k`` (``a``: the unit direction of the turn wanted), scaled
+to the angle wanted, as the solvers' start; the search continues from there.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..physics.attitude import relative_rotvec
+from ..problem.constraints import Constraint
+from ..problem.residual import Problem
+from .restore import broken_constraint
+
+__all__ = ["loop_origin", "loop_start", "stays_put"]
+
+#: Step of the central differences of the Jacobian that give ``H`` (rad of beta).
+_STEP = 1e-3
+#: Halvings of a loop that breaks a constraint before it is given up (a count).
+_HALVINGS = 20
+
+
+def _curvature(problem: Problem) -> np.ndarray:
+    """(equations, n_free, n_free) symmetric ``H`` of the quadratic turn at ``beta = 0``."""
+    n = problem.n_free
+    out = np.empty((problem.n_equations, n, n))
+    for i in range(n):
+        e = np.zeros(n)
+        e[i] = _STEP
+        out[:, :, i] = (problem.jacobian(e) - problem.jacobian(-e)) / (2.0 * _STEP)
+    return 0.5 * (out + out.transpose(0, 2, 1))
+
+
+def loop_start(
+    problem: Problem, constraints: Sequence[Constraint], turn: np.ndarray
+) -> np.ndarray | None:
+    """A closed loop whose quadratic-model turn is ``turn`` (rad, equations' frame).
+
+    Halved while it breaks a constraint (at most 20 times); None when no loop turns that way.
+    """
+    hessian = _curvature(problem)
+    size = float(np.linalg.norm(turn))
+    direction = turn / size
+    values, vectors = np.linalg.eigh(np.einsum("k,kij->ij", direction, hessian))
+    if values[-1] <= 0.0:
+        return None
+    beta = math.sqrt(2.0 * size / values[-1]) * vectors[:, -1]
+    for _ in range(_HALVINGS):
+        if not broken_constraint(problem, constraints, beta):
+            return np.asarray(beta)
+        beta = 0.5 * beta
+    return None
+
+
+def stays_put(problem: Problem) -> bool:
+    """Whether the problem's quintic path does not move (every joint's goal is its start)."""
+    return bool(np.array_equal(problem.family.start, problem.family.goal))
+
+
+def loop_origin(problem: Problem, constraints: Sequence[Constraint]) -> np.ndarray | None:
+    """Where the solvers start when the quintic path stays put: a loop towards the goal.
+
+    None when the quintic path moves (it is the start), when it already ends at the goal
+    attitude, or when no loop within ``constraints`` turns that way.
+    """
+    if not stays_put(problem) or problem.n_free == 0:
+        return None
+    zero = np.zeros(problem.n_free)
+    if problem.planar:  # the loop turns the base frame at the end: the turn wanted there
+        turn = -problem.residual(zero)
+    else:
+        turn = relative_rotvec(problem.achieved(zero), problem.goal_quaternion)
+    if not np.any(turn):
+        return None
+    return loop_start(problem, constraints, turn)

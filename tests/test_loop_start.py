@@ -1,0 +1,69 @@
+"""A pure reorientation: joints that end where they start turn the spacecraft by a loop.
+
+The quintic path of such a request does not move, so the attitude map is singular there; the
+planner starts from a closed loop chosen with the quadratic model of the turn
+(:mod:`freefloat.solvers.loop_start`), as ``freefloat correct`` does. Truths: the plan's joint
+paths evaluated at both ends (the same joints), and an RK5 replay of the base attitude along
+them (:func:`freefloat.robust.replay_attitude`, not the planner's Magnus scheme), which must
+land on the goal attitude; the planar simple-motion bound (an empty interval for joints that
+do not travel) is not held against it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import freefloat as ff
+from freefloat.physics.attitude import quat_exp, quat_from_zyx, quat_multiply
+from freefloat.problem.build import problem_from_scenario
+from freefloat.robot.model import robots_dir
+from freefloat.robust import replay_attitude
+from freefloat.solvers.loop_start import loop_origin, stays_put
+
+SCENARIOS = robots_dir() / "scenarios"
+
+
+def _in_place(name: str, turn: np.ndarray) -> ff.Scenario:
+    """The shipped scenario with its goal joints its start joints, turned by ``turn`` (rad)."""
+    scenario = ff.Scenario.from_toml(SCENARIOS / f"{name}.toml")
+    goal = quat_multiply(scenario.start_attitude, quat_exp(np.asarray(turn, dtype=float)))
+    return dataclasses.replace(
+        scenario, goal_joints=dict(scenario.start_joints), goal_attitude=goal, extra=None
+    )
+
+
+@pytest.mark.parametrize(
+    ("name", "turn"),
+    [
+        ("worked_example", [0.0, 0.0, np.radians(2.0)]),
+        ("ur5_servicer", np.radians([1.0, -1.0, 1.5])),
+    ],
+)
+def test_a_pure_reorientation_plans_a_loop_that_lands_on_the_goal(name, turn):
+    scenario = _in_place(name, turn)
+    plan = ff.plan(scenario)
+    robot = scenario.robot
+    ends = np.array([plan.samples.q[0], plan.samples.q[-1]])
+    np.testing.assert_allclose(ends[0], scenario.start, atol=1e-12)
+    np.testing.assert_allclose(ends[1], scenario.start, atol=1e-12)
+    assert np.ptp(plan.samples.q, axis=0).max() > np.radians(1.0)  # it does move: a loop
+    replayed = replay_attitude(plan, robot)
+    assert replayed.error_rad <= 1e-9 + replayed.estimate_rad
+
+
+def test_the_loop_is_the_start_only_where_the_quintic_path_stays_put():
+    moving = problem_from_scenario(ff.Scenario.from_toml(SCENARIOS / "ur5_servicer.toml"))
+    assert not stays_put(moving) and loop_origin(moving, ff.default_constraints()) is None
+    still = _in_place("ur5_servicer", [0.0, 0.0, 0.0])
+    problem = problem_from_scenario(still, extra=[2] * still.robot.n)
+    assert stays_put(problem)
+    assert loop_origin(problem, ff.default_constraints()) is None  # already at its goal
+    turned = problem.with_goal(quat_multiply(problem.start_quaternion, quat_from_zyx(0.02)))
+    loop = loop_origin(turned, ff.default_constraints())
+    assert loop is not None and np.any(loop)
+    # the quadratic model's turn: within a fifth of the 0.02 rad asked (it is a model)
+    reached = np.linalg.norm(turned.residual(np.zeros(turned.n_free)) - turned.residual(loop))
+    assert abs(reached - 0.02) < 0.2 * 0.02
