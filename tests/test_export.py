@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import os
 import stat
@@ -293,3 +294,42 @@ def test_a_rate_beyond_the_limit_is_refused_before_the_plan_is_verified(
     assert main(["export", str(plan_file), "--format", "csv", "--rate", "1e9", "-o", str(out)]) == 2
     assert "samples an export may hold" in capsys.readouterr().err
     assert verified == [] and not out.exists()
+
+
+def test_a_robot_whose_root_link_is_world_gets_an_inertial_frame_of_another_name(tmp_path):
+    """A URDF rooted at a link named ``world`` (ROS-industrial files are): /tf from ``world`` to
+    ``world`` would be a frame that is its own parent, which tf2 refuses. The MCAP, read back
+    with the mcap library, names the inertial frame ``freefloat_world`` in every header."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    from freefloat.robot.model import robots_dir
+
+    urdf = tmp_path / "rooted.urdf"
+    text = (robots_dir() / "planar_2dof.urdf").read_text()
+    urdf.write_text(
+        text.replace('link name="base"', 'link name="world"').replace(
+            'parent link="base"', 'parent link="world"'
+        )
+    )
+    scenario = ff.Scenario.from_toml(robots_dir() / "scenarios" / "worked_example.toml")
+    robot = ff.load_robot(urdf, "ee")
+    plan = ff.plan(dataclasses.replace(scenario, robot=robot), samples=11)
+    out = tmp_path / "plan.mcap"
+    assert (
+        main(["export", str(plan.save(tmp_path / "p.json")), "--format", "mcap", "-o", str(out)])
+        == 0
+    )
+    frames = set()
+    with open(out, "rb") as handle:
+        reader = make_reader(handle, decoder_factories=[DecoderFactory()])
+        for _, channel, _, decoded in reader.iter_decoded_messages():
+            if channel.topic == "/tf":
+                ((stamped,),) = [decoded.transforms]
+                assert (stamped.header.frame_id, stamped.child_frame_id) == (
+                    "freefloat_world",
+                    "world",
+                )
+            elif channel.topic in ("/end_effector", "/joint_trajectory"):
+                frames.add(decoded.header.frame_id)
+    assert frames == {"freefloat_world"}

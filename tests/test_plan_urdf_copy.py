@@ -128,9 +128,11 @@ def test_a_clearance_checked_plan_verifies_and_exports_when_its_urdf_is_gone(tmp
     shutil.rmtree(urdf.parent)  # a cleared cache
     assert main(["verify", str(path)]) == 0, capsys.readouterr().err
     assert "clearance" in capsys.readouterr().out
-    from freefloat.export.messages import root_link
+    from freefloat.export.messages import export_frames
 
-    assert root_link(str(urdf), doc["robot"]["urdf_text"]) == scenario.robot.base_link
+    frames = export_frames(str(urdf), doc["robot"]["urdf_text"])
+    # the UR5's URDF has a link named world: the inertial frame takes another name
+    assert (frames.root, frames.inertial) == (scenario.robot.base_link, "freefloat_world")
 
 
 def _elbow_limited(plan, tmp_path, upper, drop_rows):

@@ -17,8 +17,8 @@ from ..plans.format import Plan
 from .messages import (
     END_EFFECTOR_RECORD,
     end_effector_topics,
+    export_frames,
     messages,
-    root_link,
     typestore,
 )
 from .trajectory import Trajectory
@@ -44,7 +44,7 @@ def write_mcap(traj: Trajectory, path: str | Path, urdf: str, urdf_text: str = "
             f"MCAP export needs mcap ({exc}); install it with: pip install mcap"
         ) from None
     ts = typestore()
-    child = root_link(urdf, urdf_text)
+    frames = export_frames(urdf, urdf_text)
 
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as handle:
@@ -53,7 +53,7 @@ def write_mcap(traj: Trajectory, path: str | Path, urdf: str, urdf_text: str = "
             writer.add_metadata(END_EFFECTOR_RECORD, {"topics": end_effector_topics(traj)})
             channels: dict[str, int] = {}
             schemas: dict[str, int] = {}
-            for msg in messages(traj, child):
+            for msg in messages(traj, frames):
                 channel = channels.get(msg.topic)
                 if channel is None:
                     channel = channels[msg.topic] = _channel(

@@ -10,8 +10,9 @@ Topics (times relative to the plan's start, which is stamped 0 s):
 - ``/joint_states``: ``sensor_msgs/msg/JointState`` per sample (position rad or m, velocity
   rad/s or m/s, effort N m or N);
 - ``/tf``: ``tf2_msgs/msg/TFMessage`` per sample, the base pose: parent frame ``world``
-  (inertial, origin at the system centre of mass), child frame the URDF's root link (m);
-- ``/end_effector``: ``geometry_msgs/msg/PointStamped`` per sample, in ``world`` (m);
+  (inertial, origin at the system centre of mass; ``freefloat_world`` when the robot has a
+  link named ``world``), child frame the URDF's root link (m);
+- ``/end_effector``: ``geometry_msgs/msg/PointStamped`` per sample, in that inertial frame (m);
   further end effectors of the robot on ``/end_effector_2``, ``/end_effector_3``... in the
   plan's end-effector order. Which frame each topic follows is recorded in the file
   (:func:`end_effector_topics`: a bag's custom data, an MCAP metadata record, both named
@@ -38,11 +39,12 @@ __all__ = [
     "JOINT_TRAJECTORY",
     "TF",
     "WORLD_FRAME",
+    "Frames",
     "Message",
     "end_effector_topic",
     "end_effector_topics",
+    "export_frames",
     "messages",
-    "root_link",
     "typestore",
 ]
 
@@ -82,17 +84,36 @@ def typestore() -> Any:
     return get_typestore(Stores.ROS2_HUMBLE)
 
 
-def root_link(urdf: str, text: str = "") -> str:
-    """The URDF's root link (the spacecraft); ``base`` if the URDF cannot be read.
+@dataclass(frozen=True)
+class Frames:
+    """The frames an export names: the inertial one and the robot's root link.
+
+    Attributes:
+        inertial: the inertial frame, origin at the system centre of mass: :data:`WORLD_FRAME`,
+            or when the robot has a link of that name, ``freefloat_world`` (a frame that is
+            its own parent is refused by tf2).
+        root: the URDF's root link (the spacecraft), the child of the base pose.
+    """
+
+    inertial: str
+    root: str
+
+
+def export_frames(urdf: str, text: str = "") -> Frames:
+    """The frames of an export of the robot (root link ``base`` if the URDF cannot be read).
 
     Read from ``text`` (a plan's copy of its URDF) when given, else from the file ``urdf``.
     """
     from ..robot.urdf_checks import check_urdf_xml
 
     try:
-        return check_urdf_xml(text or Path(urdf).read_text(encoding="utf-8")).root_link
+        parsed = check_urdf_xml(text or Path(urdf).read_text(encoding="utf-8"))
     except Exception:
-        return "base"
+        return Frames(WORLD_FRAME, "base")
+    inertial = WORLD_FRAME
+    while inertial in parsed.links:
+        inertial = "freefloat_" + inertial
+    return Frames(inertial, parsed.root_link)
 
 
 @dataclass(frozen=True)
@@ -109,12 +130,12 @@ def _ns(t: float) -> int:
     return round(float(t) * 1e9)
 
 
-def messages(traj: Trajectory, child_frame: str) -> Iterator[Message]:
+def messages(traj: Trajectory, frames: Frames) -> Iterator[Message]:
     """Every message of the export in time order (the trajectory first)."""
     types = typestore().types
-    yield Message(*JOINT_TRAJECTORY, 0, _trajectory(traj, types))
+    yield Message(*JOINT_TRAJECTORY, 0, _trajectory(traj, types, frames.inertial))
     for k in range(len(traj.t)):
-        yield from _instant(traj, k, child_frame, types)
+        yield from _instant(traj, k, frames, types)
 
 
 def _stamp(ns: int, types: Any) -> Any:
@@ -127,7 +148,7 @@ def _header(ns: int, types: Any, frame: str = "") -> Any:
     return types["std_msgs/msg/Header"](stamp=_stamp(ns, types), frame_id=frame)
 
 
-def _trajectory(traj: Trajectory, types: Any) -> Any:
+def _trajectory(traj: Trajectory, types: Any, inertial: str) -> Any:
     """The ``trajectory_msgs/msg/JointTrajectory`` of every sample (SI units, rad)."""
     f64 = np.float64
     point = types["trajectory_msgs/msg/JointTrajectoryPoint"]
@@ -143,11 +164,11 @@ def _trajectory(traj: Trajectory, types: Any) -> Any:
         for k, t in enumerate(traj.t)
     ]
     return types[JOINT_TRAJECTORY[1]](
-        header=_header(0, types, WORLD_FRAME), joint_names=list(traj.joints), points=points
+        header=_header(0, types, inertial), joint_names=list(traj.joints), points=points
     )
 
 
-def _instant(traj: Trajectory, k: int, child_frame: str, types: Any) -> Iterator[Message]:
+def _instant(traj: Trajectory, k: int, frames: Frames, types: Any) -> Iterator[Message]:
     """Sample ``k``'s joint state, base pose and end-effector points."""
     f64, ns = np.float64, _ns(traj.t[k])
     yield Message(
@@ -168,7 +189,7 @@ def _instant(traj: Trajectory, k: int, child_frame: str, types: Any) -> Iterator
         rotation=types["geometry_msgs/msg/Quaternion"](x=qx, y=qy, z=qz, w=qw),
     )
     stamped = types["geometry_msgs/msg/TransformStamped"](
-        header=_header(ns, types, WORLD_FRAME), child_frame_id=child_frame, transform=transform
+        header=_header(ns, types, frames.inertial), child_frame_id=frames.root, transform=transform
     )
     yield Message(*TF, ns, types[TF[1]](transforms=[stamped]))
     paths = traj.end_effector_paths[1:]
@@ -180,5 +201,5 @@ def _instant(traj: Trajectory, k: int, child_frame: str, types: Any) -> Iterator
             topic,
             END_EFFECTOR[1],
             ns,
-            types[END_EFFECTOR[1]](header=_header(ns, types, WORLD_FRAME), point=position),
+            types[END_EFFECTOR[1]](header=_header(ns, types, frames.inertial), point=position),
         )

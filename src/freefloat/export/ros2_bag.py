@@ -21,8 +21,8 @@ from ..plans.format import Plan
 from .messages import (
     END_EFFECTOR_RECORD,
     end_effector_topics,
+    export_frames,
     messages,
-    root_link,
     typestore,
 )
 from .trajectory import Trajectory
@@ -48,14 +48,14 @@ def write_bag(traj: Trajectory, path: str | Path, urdf: str, urdf_text: str = ""
         raise InputError(f"{target} exists and is not a ROS 2 bag folder; choose another -o")
     target.parent.mkdir(parents=True, exist_ok=True)
     ts = typestore()
-    child = root_link(urdf, urdf_text)
+    frames = export_frames(urdf, urdf_text)
     holder = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
     try:
         bag = holder / target.name
         with Writer(bag, version=8) as writer:  # rosbag2 metadata 8: Iron and newer
             writer.set_custom_data(END_EFFECTOR_RECORD, end_effector_topics(traj))
             connections: dict[str, Any] = {}
-            for msg in messages(traj, child):
+            for msg in messages(traj, frames):
                 if msg.topic not in connections:
                     connections[msg.topic] = writer.add_connection(
                         msg.topic, msg.msgtype, typestore=ts
