@@ -196,8 +196,9 @@ def test_resume_after_an_interrupted_run_gives_the_same_file(tmp_path):
         {k: v for k, v in row.items() if k not in TIMING_COLUMNS}
         for row in csv.DictReader(whole.splitlines())
     ]
-    kept = [line.split(",")[-2] for line in lines[1:3]]  # timings of kept rows are kept
-    assert [line.split(",")[-2] for line in out.read_text().splitlines()[1:3]] == kept
+    # timings of kept rows are kept (total_time_s: before message and inputs)
+    kept = [line.split(",")[-3] for line in lines[1:3]]
+    assert [line.split(",")[-3] for line in out.read_text().splitlines()[1:3]] == kept
     # a finished file is left as it is
     again = out.read_text()
     assert ff.sweep(path, workers=1, output=out, progress=False, on_row=ran.append)
@@ -232,6 +233,55 @@ def test_an_edited_results_file_is_refused_on_resume(tmp_path):
             ff.sweep(path, workers=1, output=out, progress=False)
         assert f"{out} line 3: {message}" in str(info.value)
         assert out.read_text() == edited
+
+
+def test_rows_of_an_edited_base_scenario_or_robot_are_not_resumed(tmp_path):
+    """Rows planned with a 10 s duration were kept on resume after the base scenario was
+    changed to 20 s, and mixed with the new rows: the file records a digest of the base
+    scenario and robot (``inputs``), and a row of other inputs is refused, naming the line,
+    the file left as it was. A file of an older freefloat (no such column) is refused too."""
+    path = _sweep_file(tmp_path, '[[axis]]\nkey = "goal.base_zyx_deg.0"\nvalues = [0.0, 10.0]\n')
+    out = tmp_path / "two.csv"
+    ff.sweep(path, workers=1, output=out, progress=False)
+    lines = out.read_text().splitlines(keepends=True)
+    assert (
+        lines[0].rstrip().endswith(",inputs")
+        and len({line.split(",")[-1] for line in lines[1:]}) == 1
+    )
+    out.write_text(lines[0] + lines[1])  # interrupted after one row
+    scenario = tmp_path / "worked_example_auto.toml"
+    original = scenario.read_text()
+    assert "duration = 10.0" in original
+    scenario.write_text(original.replace("duration = 10.0", "duration = 20.0"))
+    with pytest.raises(ff.ScenarioError) as info:
+        ff.sweep(path, workers=1, output=out, progress=False)
+    assert str(info.value).startswith(f"{out} line 2 came from another base scenario or robot")
+    assert out.read_text() == lines[0] + lines[1]
+    scenario.write_text(original)  # the same inputs again: resumed
+    assert len(ff.sweep(path, workers=1, output=out, progress=False)) == 2
+    older = "".join(line[: line.rindex(",")] + "\n" for line in out.read_text().splitlines())
+    out.write_text(older)
+    with pytest.raises(ff.ScenarioError, match="written by an older freefloat"):
+        ff.sweep(path, workers=1, output=out, progress=False)
+    assert out.read_text() == older
+
+
+def test_the_inputs_digest_follows_the_robot_file(tmp_path):
+    """An edited URDF (a link's mass) changes the digest: its rows are not this sweep's."""
+    from freefloat.robot.model import robots_dir
+    from freefloat.sweep.results import inputs_digest
+
+    shutil.copy(robots_dir() / "planar_2dof.urdf", tmp_path / "arm.urdf")
+    path = _sweep_file(tmp_path, '[[axis]]\nkey = "goal.base_zyx_deg.0"\nvalues = [0.0]\n')
+    scenario = tmp_path / "worked_example_auto.toml"
+    text = scenario.read_text()
+    assert 'robot = "planar_2dof"' in text
+    scenario.write_text(text.replace('robot = "planar_2dof"', 'robot = "arm.urdf"'))
+    before = inputs_digest(SweepSpec.from_toml(path))
+    urdf = (tmp_path / "arm.urdf").read_text()
+    assert urdf.count('<mass value="40.0"/>') == 1
+    (tmp_path / "arm.urdf").write_text(urdf.replace('<mass value="40.0"/>', '<mass value="41.0"/>'))
+    assert inputs_digest(SweepSpec.from_toml(path)) != before
 
 
 def test_a_results_file_saved_with_a_byte_order_mark_resumes(tmp_path):

@@ -2,15 +2,19 @@
 
 ``index``, one column per axis (the axis key), then the columns of the row class
 (:class:`~freefloat.sweep.jobs.SweepRow` for plans, :class:`~freefloat.sweep.replay.ReplayRow`
-for replays). Floats round-trip exactly. A file read back is checked row by row: the sweep's
-columns and axis values, numbers that are numbers, statuses the rows have, and a planned row
-whose attitude error a plan can have (an edited file is refused, naming the line).
+for replays), then ``inputs``: a digest of what every job reads besides its axis values
+(:func:`inputs_digest`). Floats round-trip exactly. A file read back is checked row by row:
+the sweep's columns, axis values and inputs (a row of an edited base scenario or robot is not
+resumed as one of this sweep), numbers that are numbers, statuses the rows have, and a
+planned row whose attitude error a plan can have (an edited file is refused, naming the line).
 """
 
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
+import json
 import math
 import os
 from collections.abc import Sequence
@@ -21,11 +25,20 @@ from typing import Any
 from ..errors import ScenarioError
 from ..files import atomic_write_text
 from ..verify.plan_checks import TOLERANCES
+from .draws import scenario_urdf
 from .jobs import SweepRow
 from .replay import ReplayRow
 from .spec import Job, SweepSpec
 
-__all__ = ["PLANNED_ATTITUDE_RAD", "Appender", "Row", "read_rows", "row_class", "write_rows"]
+__all__ = [
+    "PLANNED_ATTITUDE_RAD",
+    "Appender",
+    "Row",
+    "inputs_digest",
+    "read_rows",
+    "row_class",
+    "write_rows",
+]
 
 Row = SweepRow | ReplayRow
 
@@ -46,8 +59,33 @@ def row_class(spec: SweepSpec) -> type[SweepRow] | type[ReplayRow]:
     return ReplayRow if spec.replay else SweepRow
 
 
+#: The last column: the digest of the sweep's inputs (:func:`inputs_digest`).
+INPUTS = "inputs"
+
+
 def _header(spec: SweepSpec) -> list[str]:
-    return ["index", *spec.keys, *row_class(spec).result_columns()]
+    return ["index", *spec.keys, *row_class(spec).result_columns(), INPUTS]
+
+
+def inputs_digest(spec: SweepSpec) -> str:
+    """16 hex digits of what every job reads besides its axis values.
+
+    The base scenario's tables and its robot's URDF (the text it is loaded from, inline or
+    read), its SRDF file if it names one, the samples; for a replay sweep, the plan file.
+    """
+    digest = hashlib.sha256()
+    digest.update(
+        json.dumps([spec.base, spec.samples, spec.replay], sort_keys=True, default=str).encode()
+    )
+    if spec.replay:
+        digest.update(spec.scenario_path.read_bytes())
+    else:
+        digest.update(scenario_urdf(spec.base, spec.scenario_path).encode())
+        srdf = spec.base.get("safety", {}).get("srdf")
+        path = spec.scenario_path.parent / str(srdf) if isinstance(srdf, str) else None
+        if path is not None and path.expanduser().is_file():
+            digest.update(path.expanduser().read_bytes())
+    return digest.hexdigest()[:16]
 
 
 def _line(cells: Sequence[str]) -> str:
@@ -56,11 +94,12 @@ def _line(cells: Sequence[str]) -> str:
     return buffer.getvalue()
 
 
-def _row_cells(row: Row) -> list[str]:
+def _row_cells(row: Row, inputs: str) -> list[str]:
     return [
         str(row.index),
         *(_cell(v) for v in row.values),
         *(_cell(getattr(row, name)) for name in row.result_columns()),
+        inputs,
     ]
 
 
@@ -122,6 +161,12 @@ def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, Row]:
     if not lines:
         return {}
     header = _header(spec)
+    if lines[0] == header[:-1]:  # written before the inputs column: nothing to compare
+        raise ScenarioError(
+            f"{path} was written by an older freefloat, without the digest of the scenario and "
+            "robot its rows came from, and cannot be resumed safely; choose another output "
+            "file or delete it"
+        )
     if lines[0] != header:
         raise ScenarioError(
             f"{path} holds another sweep (columns {', '.join(lines[0][:6])}...); choose another "
@@ -130,6 +175,7 @@ def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, Row]:
     jobs = spec.jobs()
     rows: dict[int, Row] = {}
     n_axes = len(spec.axes)
+    inputs = inputs_digest(spec)
     for number, cells in enumerate(lines[1:], start=2):
         if len(cells) != len(header) or not cells[0].isdigit() or int(cells[0]) >= len(jobs):
             raise ScenarioError(f"{path} line {number} is not a row of this sweep")
@@ -139,15 +185,22 @@ def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, Row]:
                 f"{path} line {number} has other axis values than job {job.index}; choose "
                 "another output file or delete it"
             )
+        if cells[-1] != inputs:
+            raise ScenarioError(
+                f"{path} line {number} came from another base scenario or robot (inputs "
+                f"{cells[-1]}, now {inputs}: edited since?); choose another output file or "
+                "delete it"
+            )
         where = f"{path} line {number}"
-        rows[job.index] = _parse_row(cells[1 + n_axes :], job, row_class(spec), where)
+        rows[job.index] = _parse_row(cells[1 + n_axes : -1], job, row_class(spec), where)
     return rows
 
 
 def write_rows(spec: SweepSpec, output: str | Path, rows: Sequence[Row]) -> Path:
     """Write the whole output file atomically, rows sorted by index."""
+    inputs = inputs_digest(spec)
     text = _line(_header(spec)) + "".join(
-        _line(_row_cells(r)) for r in sorted(rows, key=lambda r: r.index)
+        _line(_row_cells(r, inputs)) for r in sorted(rows, key=lambda r: r.index)
     )
     return atomic_write_text(output, text)
 
@@ -162,10 +215,11 @@ class Appender:
         else:  # drop a torn last line before appending
             write_rows(spec, path, list(rows.values()))
         self._fd = os.open(path, os.O_WRONLY | os.O_APPEND)
+        self._inputs = inputs_digest(spec)
 
     def add(self, row: Row) -> None:
         """Append ``row`` as one whole line (one write)."""
-        os.write(self._fd, _line(_row_cells(row)).encode("utf-8"))
+        os.write(self._fd, _line(_row_cells(row, self._inputs)).encode("utf-8"))
 
     def close(self) -> None:
         """Close the file."""
