@@ -118,3 +118,26 @@ def test_a_negative_margin_is_named_by_every_command_that_reads_a_plan(
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "safety.margin_m: -1.0 is less than the minimum of 0" in err[0]
     assert not (tmp_path / "out.csv").exists() and not path.with_suffix(".correct.json").exists()
+
+
+def test_a_payload_given_as_a_box_validates_as_the_loader_reads_it(tmp_path):
+    """The loader takes a payload's inertia or a box (a uniform box's inertia); the schema
+    asked for inertia alone, so a scenario ``plan`` reads was invalid by the schema."""
+    text = (ROOT / "robots" / "scenarios" / "panda_servicer.toml").read_text()
+    text = text.replace(
+        'robot = "panda_servicer"', f'robot = "{ROOT / "robots"}/panda_servicer.urdf"'
+    )
+    tables = {
+        "mass = 5.0\nbox = [0.2, 0.2, 0.2]\n": [],
+        "mass = 5.0\ninertia = [1.0, 1.0, 1.0, 0.0, 0.0, 0.0]\n": [],
+        "mass = 5.0\n": ["payload: give 'inertia' or 'box'"],
+    }
+    for table, errors in tables.items():
+        path = tmp_path / "held.toml"
+        path.write_text(text + "\n[payload]\n" + table)
+        assert schema_errors(tomllib.loads(path.read_text()), "scenario") == errors
+        if errors:
+            with pytest.raises(ff.ScenarioError, match=r"\[payload\] needs inertia"):
+                ff.Scenario.from_toml(path)
+        else:
+            assert ff.Scenario.from_toml(path).payload is not None

@@ -146,6 +146,9 @@ def _describe(error: Any) -> str:
         allowed = error.schema.get("properties", {})
         extra = sorted(k for k in error.instance if k not in allowed)
         return f"{where}: unknown key {', '.join(map(repr, extra))}; valid: {', '.join(allowed)}"
+    if kind == "anyOf" and all(set(o) == {"required"} for o in error.validator_value):
+        keys = [k for o in error.validator_value for k in o["required"]]
+        return f"{where}: give {' or '.join(map(repr, keys))}"
     if kind in ("const", "enum"):
         valid = [error.validator_value] if kind == "const" else error.validator_value
         return f"{where}: expected {' or '.join(map(repr, valid))}, got {got}"
