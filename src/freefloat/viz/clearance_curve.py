@@ -2,8 +2,10 @@
 
 The plan's keep-out objects and the smallest signed distance (m) over
 the checked pairs at evenly spaced instants of the plan's joint polynomials
-(:func:`clearance_curve`), with the pair that is closest. Used by the ``clearance`` figure
-(:mod:`freefloat.viz.plots`) and the playback page's keep-out objects.
+(:func:`clearance_curve`), with the pair that is closest, and the lowest point refined in time
+between the samples (as the plan's own check refines it, so that the figure's label and the
+plan's summary agree). Used by the ``clearance`` figure (:mod:`freefloat.viz.plots`) and the
+playback page's keep-out objects.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import numpy as np
 from ..plans.format import Plan
 
 if TYPE_CHECKING:
+    from ..robot.collision import CollisionModel
     from ..robot.model import Robot
 
 __all__ = ["CLEARANCE_SAMPLES", "ClearanceCurve", "clearance_curve"]
@@ -34,6 +37,8 @@ class ClearanceCurve:
         pair: per instant, the index (into ``names``) of the pair at that distance.
         names: the checked pairs, ``"a / b"``.
         margin: the plan's clearance margin (m).
+        lowest: the smallest clearance (m), its time (s) and pair (index into ``names``),
+            refined between the samples.
     """
 
     t: np.ndarray
@@ -41,12 +46,13 @@ class ClearanceCurve:
     pair: np.ndarray
     names: list[str]
     margin: float
+    lowest: tuple[float, float, int]
 
     @property
     def closest(self) -> tuple[float, float, str]:
         """``(distance m, time s, pair name)`` of the smallest clearance along the plan."""
-        k = int(np.argmin(self.smallest))
-        return float(self.smallest[k]), float(self.t[k]), self.names[int(self.pair[k])]
+        value, when, pair = self.lowest
+        return value, when, self.names[pair]
 
 
 def clearance_curve(
@@ -71,10 +77,45 @@ def clearance_curve(
     t = np.linspace(0.0, plan.duration, max(2, int(samples)))
     joints = plan.joint_positions(t)
     values = [model.closest_value(q) for q in joints]
+    smallest = np.array([v for v, _ in values])
+    pair = np.array([k for _, k in values], dtype=int)
     return ClearanceCurve(
         t=t,
-        smallest=np.array([v for v, _ in values]),
-        pair=np.array([k for _, k in values], dtype=int),
+        smallest=smallest,
+        pair=pair,
         names=list(model.names),
         margin=float(plan.safety.margin_m),
+        lowest=_lowest(model, plan, t, smallest, pair),
     )
+
+
+#: Sampled local minima within this of the smallest are refined in time (m).
+_NEAR = 0.01
+
+
+def _lowest(
+    model: CollisionModel, plan: Plan, t: np.ndarray, smallest: np.ndarray, pair: np.ndarray
+) -> tuple[float, float, int]:
+    """The smallest clearance (m), its time (s) and pair, each near-lowest sample refined.
+
+    A bounded scalar search between the neighbouring samples of every sampled local minimum
+    within :data:`_NEAR` of the smallest (to 1e-9 of the duration).
+    """
+    from ..problem.scalar_minimum import scalar_minimum
+
+    def at(s: float) -> tuple[float, int]:
+        return model.closest_value(plan.joint_positions(np.array([s]))[0])
+
+    k = int(np.argmin(smallest))
+    best = (float(smallest[k]), float(t[k]), int(pair[k]))
+    inner = (smallest[1:-1] <= smallest[:-2]) & (smallest[1:-1] <= smallest[2:])
+    ends = [0] if smallest[0] <= smallest[1] else []
+    ends += [len(t) - 1] if smallest[-1] <= smallest[-2] else []
+    for k in sorted({*ends, *(np.flatnonzero(inner) + 1).tolist()}):
+        if smallest[k] > best[0] + _NEAR:
+            continue
+        low, high = t[max(k - 1, 0)], t[min(k + 1, len(t) - 1)]
+        found = scalar_minimum(lambda s: at(s)[0], low, high, 1e-9 * plan.duration)
+        if found.value < best[0]:
+            best = (found.value, found.x, at(found.x)[1])
+    return best
