@@ -141,3 +141,43 @@ def test_the_swing_note_names_a_pair_whose_link_name_holds_a_slash(tmp_path, cap
     err = capsys.readouterr().err
     assert "goal configuration: base_0 / arm / one_0 overlap" in err
     assert "checked because the joint between them swings one into the other" in err
+
+
+def _coaxial(tmp_path) -> str:
+    """Three links turning about one z axis, stacked along it; link1 and link3 carry balls
+    centred on that axis, 0.1 m apart surface to surface at every configuration (closed form:
+    centres 0.3 m apart on the axis, radii 0.1 m each)."""
+    body = urdfs.BASE.format(mass=500.0, i=83.0)
+    ball = (
+        '<collision><origin xyz="0 0 {z}"/><geometry><sphere radius="0.1"/></geometry></collision>'
+    )
+    body += urdfs.joint("q1", "base", "link1", "revolute", (0, 0, 1), (0.0, 0.0, 0.6))
+    body += urdfs.link("link1", com=(0, 0, 0)).replace("</link>", ball.format(z=0.0) + "</link>")
+    body += urdfs.joint("q2", "link1", "link2", "revolute", (0, 0, 1), (0.0, 0.0, 0.15))
+    body += urdfs.link("link2", com=(0.2, 0, 0))
+    body += urdfs.joint("q3", "link2", "link3", "revolute", (0, 0, 1), (0.0, 0.0, 0.15))
+    body += urdfs.link("link3", com=(0.3, 0, 0)).replace("</link>", ball.format(z=0.0) + "</link>")
+    path = tmp_path / "coaxial.urdf"
+    path.write_text(urdfs.robot(body, "coaxial"))
+    return str(path)
+
+
+def test_a_pair_no_joints_move_is_not_refused_with_move_the_joints(tmp_path, capsys):
+    """ETS-VII's Link_3 / Link_5 lie 0.1 m apart at every configuration: a 0.15 m margin was
+    refused with "move the start joints", which no joint values help."""
+    urdf = _coaxial(tmp_path)
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(
+        f'robot = "{urdf}"\nduration = 10.0\n[start]\njoints = {{ q1 = 0.0, q2 = 0.0, q3 = 0.0 }}\n'
+        "[goal]\njoints = { q1 = 30.0, q2 = 20.0, q3 = 10.0 }\n[safety]\nmargin_m = 0.15\n"
+    )
+    assert main(["plan", str(scenario), "-o", str(tmp_path / "p.json"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert (
+        "start configuration: link1_0 / link3_0 are 0.1 m apart, below the clearance margin" in err
+    )
+    assert err.rstrip().endswith(
+        "no joint values change this pair's distance: disable the pair in an SRDF or lower "
+        "[safety] margin_m"
+    )
+    assert "move the start joints" not in err

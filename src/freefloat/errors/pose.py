@@ -48,6 +48,7 @@ class CollisionError(FreeFloatError):
         chosen: whether those joints came from inverse kinematics of an end-effector goal
             (the message then asks to move that goal).
         why: what else the reader should know of the pair ("" when nothing).
+        fixed: no joint values change the pair's distance (then no joints are asked to move).
     """
 
     def __init__(
@@ -58,19 +59,22 @@ class CollisionError(FreeFloatError):
         margin: float,
         chosen: bool = False,
         why: str = "",
+        fixed: bool = False,
     ) -> None:
         self.where = where
         self.pair = pair
         self.clearance = float(clearance)
         self.margin = float(margin)
         self.chosen = chosen
+        self.fixed = fixed
         state = "overlap by" if clearance < 0 else "are"
         amount = f"{abs(clearance):.4g} m" + ("" if clearance < 0 else " apart")
-        move = (
-            f"move the end-effector goal (inverse kinematics chose the {where} joints) "
-            if chosen
-            else f"move the {where} joints "
-        )
+        if fixed:
+            move = "no joint values change this pair's distance: disable the pair in an SRDF "
+        elif chosen:
+            move = f"move the end-effector goal (inverse kinematics chose the {where} joints) "
+        else:
+            move = f"move the {where} joints "
         super().__init__(
             f"{where} configuration: {pair} {state} {amount}, below the clearance margin "
             f"{margin:g} m; {move}or lower [safety] margin_m" + (f" ({why})" if why else "")

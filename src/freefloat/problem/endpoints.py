@@ -10,12 +10,13 @@ the attitude asked.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from ..errors import CollisionError, EndpointError
-from ..robot.collision import clearance_at
+from ..robot.collision import CollisionModel, clearance_at
 from ..robot.designed_bodies import designed_bodies
 from ..robot.geometry import OBSTACLE_PREFIX
 from ..robot.model import Robot
@@ -53,8 +54,11 @@ def check_endpoints(
                 if found.distance < constraint.margin:
                     chosen = chosen_goal and where == "goal"
                     why = _swing_note(constraint, found.pair)
+                    fixed = _fixed_distance(constraint.model, found.pair, found.distance)
                     margin = constraint.margin
-                    raise CollisionError(where, found.name, found.distance, margin, chosen, why)
+                    raise CollisionError(
+                        where, found.name, found.distance, margin, chosen, why, fixed
+                    )
     for where, joints in ends:  # the configuration alone decides, for every path
         for constraint, excess, holds in at_rest(constraints, scenario.robot, joints):
             if not holds:
@@ -96,3 +100,24 @@ def _swing_note(constraint: Clearance, pair: int) -> str:
         "(docs/clearance.md); if they touch only where they are joined, start the moving "
         "link's collision shape clear of the other, or disable the pair in an SRDF"
     )
+
+
+#: Configurations a refused pair is measured at to tell whether any joints move it (a count).
+FIXED_PROBES = 16
+
+
+def _fixed_distance(model: CollisionModel, pair: int, distance: float) -> bool:
+    """Whether no joint values change pair ``pair``'s ``distance`` (m), measured at rest.
+
+    A refusal then asks for no joints to move. Two links that only turn about an axis that
+    keeps them apart alike (a sphere or a cylinder about that axis, on ETS-VII's links) are
+    such a pair. Measured at :data:`FIXED_PROBES` configurations drawn within the joint
+    limits (seeded; a continuous joint over a turn): fixed when none differs from
+    ``distance`` by more than 1e-9 m.
+    """
+    joints = model.robot.joints
+    low = np.array([j.lower if math.isfinite(j.lower) else -math.pi for j in joints])
+    high = np.array([j.upper if math.isfinite(j.upper) else math.pi for j in joints])
+    probes = np.random.default_rng(0).uniform(low, high, (FIXED_PROBES, len(joints)))
+    found = [model.pair_distances(q, [pair])[0] for q in probes]
+    return bool(np.all(np.abs(np.asarray(found) - distance) <= 1e-9))
