@@ -302,7 +302,7 @@ def test_a_start_or_goal_outside_the_cone_is_refused_before_any_search(tmp_path,
         math.cos(math.radians(35)) - math.cos(math.radians(angle)), abs=1e-12
     )
     assert str(info.value) == (
-        f"start configuration breaks end_effector_cone (axis {angle:.4g} deg from the direction "
+        f"start configuration breaks end_effector_cone (ee's axis {angle:.4g} deg from the direction "
         "(half-angle 35 deg)), where every path starts; move the start joints or loosen "
         "[constraints.end_effector_cone]"
     )
@@ -311,7 +311,7 @@ def test_a_start_or_goal_outside_the_cone_is_refused_before_any_search(tmp_path,
     for where in ("start", "goal"):
         assert main(["check", str(scenario), "--at", where]) == 1
         out = capsys.readouterr().out
-        assert f"end_effector_cone: axis {angle:.4g} deg from the direction" in out
+        assert f"end_effector_cone: ee's axis {angle:.4g} deg from the direction" in out
         assert "BROKEN" in out and "configuration: NOT OK" in out
     wide = _scenario(tmp_path, CONE.replace("half_angle_deg = 60.0", "half_angle_deg = 45.0"))
     assert main(["check", str(wide), "--at", "goal"]) == 0

@@ -160,7 +160,7 @@ def test_the_summary_names_each_path_constraint_and_its_margin(tmp_path, capsys)
     line = next(x for x in out.splitlines() if x.startswith("  constraints "))
     assert "rad" not in line and " deg/s, " in line
     assert re.search(
-        r", end_effector_cone \(axis [\d.]+ deg from the direction \(half-angle "
+        r", end_effector_cone \(\w+'s axis [\d.]+ deg from the direction \(half-angle "
         r"179 deg\) at t = [\d.]+ s\)$",
         line,
     ), line
@@ -369,7 +369,7 @@ def test_a_unitless_check_is_summarised_by_its_detail(tmp_path, capsys):
     assert main(["plan", str(path), "-o", str(tmp_path / "cone.json")]) == 0
     line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("  constraints"))
     said = re.search(
-        r"end_effector_cone \(axis ([\d.]+) deg from the direction \(half-angle 60 deg\) at "
+        r"end_effector_cone \(\w+'s axis ([\d.]+) deg from the direction \(half-angle 60 deg\) at "
         r"t = ([\d.]+) s\)",
         line,
     )
@@ -416,3 +416,28 @@ def test_a_far_planar_swing_suggests_more_freedom_which_helps(tmp_path, capsys):
 
     assert swing(tmp_path / "far.json") > np.radians(200.0)
     assert swing(tmp_path / "more.json") < 0.5 * swing(tmp_path / "far.json")
+
+
+def test_the_header_names_the_end_effector_that_holds_the_payload(tmp_path):
+    """A payload is held by the first end effector listed: the summary's header says which,
+    and how heavy; the URDF the robot was loaded from fixes it there (read with ElementTree)."""
+    import xml.etree.ElementTree as ET
+
+    from freefloat.robot.payload import PAYLOAD_LINK
+    from freefloat.viz.summary import robot_label
+
+    text = (ROOT / "robots" / "scenarios" / "dual_ur5_servicer.toml").read_text()
+    text = text.replace(
+        'robot = "dual_ur5_servicer"', f'robot = "{ROOT / "robots"}/dual_ur5_servicer.urdf"'
+    )
+    text += "\n[payload]\nmass = 5.0\nbox = [0.1, 0.1, 0.1]\n"
+    for order in (["left_tool0", "right_tool0"], ["right_tool0", "left_tool0"]):
+        path = tmp_path / "held.toml"
+        listed = 'end_effectors = ["left_tool0", "right_tool0"]'
+        assert listed in text
+        path.write_text(text.replace(listed, f"end_effectors = {order!r}".replace("'", '"')))
+        scenario = ff.Scenario.from_toml(path)
+        assert robot_label(scenario).endswith(f", a 5 kg payload held by {order[0]})")
+        root = ET.fromstring(scenario.robot.urdf_text)
+        joint = next(j for j in root.iter("joint") if j.find("child").get("link") == PAYLOAD_LINK)
+        assert joint.find("parent").get("link") == order[0]

@@ -343,9 +343,17 @@ def robot_label(scenario: Scenario) -> str:
         arms = " + ".join(Path(str(a.arm)).stem for a in spec.arms())
         return (
             f"servicer: {arms} arm{'s' if spec.more_arms else ''} on a {spec.base_mass:g} kg, "
-            f"{edges} m base ({robot.n} joints)"
+            f"{edges} m base ({robot.n} joints{_held(scenario)})"
         )
-    return f"{robot.name} ({Path(robot.urdf).name}, {robot.n} joints)"
+    return f"{robot.name} ({Path(robot.urdf).name}, {robot.n} joints{_held(scenario)})"
+
+
+def _held(scenario: Scenario) -> str:
+    """``, a 5 kg payload held by panda_hand``: which end effector holds it ("" if none)."""
+    payload = scenario.payload
+    if payload is None:
+        return ""
+    return f", a {payload.mass:g} kg payload held by {scenario.robot.end_effector}"
 
 
 def rotation_angle(rotation: np.ndarray) -> float:

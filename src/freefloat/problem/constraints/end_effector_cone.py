@@ -156,7 +156,10 @@ class EndEffectorCone(Constraint):
         """``g`` at the configuration ``joints`` (rad or m), the tool axis's angle named."""
         angle = self._angle(robot, joints)
         degrees, half = math.degrees(angle), math.degrees(self.half_angle)
-        detail = f"axis {degrees:.4g} deg from the direction (half-angle {half:.4g} deg)"
+        detail = (
+            f"{robot.end_effector}'s axis {degrees:.4g} deg from the direction "
+            f"(half-angle {half:.4g} deg)"
+        )
         return Excess(math.cos(self.half_angle) - math.cos(angle), 0.0, detail)
 
     def _slack(self, problem: Problem) -> float:
@@ -233,7 +236,7 @@ class EndEffectorCone(Constraint):
         coarse, _ = self._worst(robot, path, VERIFY_SAMPLES // 2 + 1)
         angle = math.degrees(math.acos(max(-1.0, min(1.0, math.cos(self.half_angle) - fine))))
         detail = (
-            f"axis {angle:.4g} deg from the direction (half-angle "
+            f"{robot.end_effector}'s axis {angle:.4g} deg from the direction (half-angle "
             f"{math.degrees(self.half_angle):.4g} deg) at t = {when:.4g} s"
         )
         return Excess(fine, abs(fine - coarse), detail)
