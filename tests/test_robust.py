@@ -518,6 +518,21 @@ def test_correct_at_the_goal_writes_nothing(tmp_path, worked, capsys):
     assert ff.Plan.load(output).base.attitude_error_rad <= 1e-9
 
 
+def test_a_correction_with_a_wild_second_root_verifies(tmp_path, worked, capsys):
+    """Corrected from 179 deg, the worked example's search keeps a second root whose path
+    turns 617 rad: its residual was recorded from the solver's grid, and verify, which
+    recomputes it on the plan's own, refused the written plan (3.9e-9 rad apart). Each
+    root's residual is now recorded on the plan's grid."""
+    _, plan_path, _ = worked
+    output = tmp_path / "c.json"
+    argv = ["correct", str(plan_path), "--base-zyx-deg", "179", "0", "0", "-o", str(output)]
+    assert main([*argv, "-q"]) == 0
+    corrected = ff.Plan.load(output)
+    assert len(corrected.solver.solutions) > 1
+    capsys.readouterr()
+    assert main(["verify", str(output)]) == 0, capsys.readouterr().err
+
+
 def test_the_robustness_record_is_recomputed_by_verify_and_old_plans_load(tmp_path, worked):
     plan, _, robot = worked
     recorded = with_robustness(plan, robot)

@@ -316,6 +316,11 @@ def _robot_ref(robot: Robot) -> RobotRef:
     )
 
 
+def _residual(problem: Problem, beta: np.ndarray) -> float:
+    """The norm of the attitude residual at ``beta`` on the problem's grid (rad)."""
+    return float(np.linalg.norm(problem.residual(beta)))
+
+
 def _solver_report(problem: Problem, solution: Solution, sample_time: float) -> SolverReport:
     """The plan's record of the solve (``sample_time``: the sampling's wall time, s)."""
     return SolverReport(
@@ -324,8 +329,8 @@ def _solver_report(problem: Problem, solution: Solution, sample_time: float) -> 
         evaluations=solution.evaluations,
         residual_rad=solution.residual,
         wall_time_s=solution.wall_time,
-        solutions=[
-            solution_record(problem, root.beta, root.residual, root.path_length)
+        solutions=[  # each residual on the plan's own grid, as verification recomputes it
+            solution_record(problem, root.beta, _residual(problem, root.beta), root.path_length)
             for root in solution.roots
         ],
         integration_steps=problem.steps,
