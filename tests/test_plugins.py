@@ -302,8 +302,8 @@ def test_a_start_or_goal_outside_the_cone_is_refused_before_any_search(tmp_path,
         math.cos(math.radians(35)) - math.cos(math.radians(angle)), abs=1e-12
     )
     assert str(info.value) == (
-        f"start configuration breaks end_effector_cone (ee's axis {angle:.4g} deg from the direction "
-        "(half-angle 35 deg)), where every path starts; move the start joints or loosen "
+        f"start configuration breaks end_effector_cone (ee's axis {angle:.4g} deg from the "
+        "direction (half-angle 35 deg)), where every path starts; move the start joints or loosen "
         "[constraints.end_effector_cone]"
     )
     assert main(["plan", str(scenario), "-o", str(tmp_path / "p.json")]) == 2
