@@ -8,6 +8,9 @@ here is the shipped UR5 servicer's own refusal of the same goal with its hull in
 
 from __future__ import annotations
 
+import math
+import struct
+
 import pytest
 
 from freefloat.cli import main
@@ -89,3 +92,25 @@ def test_a_spacecraft_named_like_a_captured_payload_is_refused(tmp_path, capsys)
     assert main(["check", _scenario(tmp_path, urdf), "--at", INSIDE]) == 2
     err = capsys.readouterr().err
     assert "link 'captured_payload' is freefloat's name for a captured payload" in err
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_a_collision_mesh_with_a_vertex_not_a_number_is_refused_in_one_line(tmp_path, capsys, bad):
+    """A binary STL tetrahedron with one vertex NaN (or inf): coal printed "eigen: too many
+    iterations" lines and the hull check raised numpy's LinAlgError, a traceback."""
+    corners = [(0.0, 0.0, 0.0), (0.1, 0.0, 0.0), (0.0, 0.1, 0.0), (bad, 0.0, 0.1)]
+    faces = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (2, 0, 3)]
+    body = b"".join(
+        struct.pack("<12fH", 0.0, 0.0, 0.0, *(x for k in f for x in corners[k]), 0) for f in faces
+    )
+    (tmp_path / "bad.stl").write_bytes(b"\0" * 80 + struct.pack("<I", len(faces)) + body)
+    mesh = "package://example-robot-data/robots/ur_description/meshes/ur5/collision/forearm.stl"
+    urdf = URDF.replace(mesh, str(tmp_path / "bad.stl"))
+    assert main(["check", _scenario(tmp_path, urdf)]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "eigen" not in err
+    last = err.strip().splitlines()[-1]  # after the SRDF's warning
+    assert last == (
+        f"freefloat: error: collision mesh {tmp_path / 'bad.stl'} (forearm_link_0) has vertex "
+        "coordinates that are not finite numbers (NaN or inf); repair or re-export the mesh"
+    )

@@ -39,8 +39,9 @@ import pinocchio as pin
 from ..errors import ModelError
 from .designed_bodies import DesignedBodies, designed_bodies, finger_of
 from .file_stamp import FileStamp, file_stamp
-from .meshes import MeshKey, mesh_key
+from .meshes import MeshKey, check_finite_meshes, mesh_key
 from .model import Robot
+from .parser_messages import parser_messages
 from .payload import PAYLOAD_LINK
 from .srdf import remove_srdf_pairs
 from .swing import swinging_pairs
@@ -205,18 +206,20 @@ def _parsed_entry(
     parsed = _PARSED.get(key)
     if parsed is None or parsed[1] != _stamps(parsed[0], parsed[1]):
         dirs = [str(d) for d in robot.package_dirs]
-        try:
+        try:  # C++ prints of a bad mesh (coal's "eigen: too many iterations") collected
             # from the text the robot was loaded from, the one the models are kept under (the
             # file may have changed on disk since); the file for a robot without one
-            geometry = (
-                pin.buildGeomFromUrdfString(
-                    robot.model, robot.urdf_text, pin.GeometryType.COLLISION, None, dirs
+            with parser_messages():
+                geometry = (
+                    pin.buildGeomFromUrdfString(
+                        robot.model, robot.urdf_text, pin.GeometryType.COLLISION, None, dirs
+                    )
+                    if robot.urdf_text
+                    else pin.buildGeomFromUrdf(
+                        robot.model, str(robot.urdf), pin.GeometryType.COLLISION, None, dirs
+                    )
                 )
-                if robot.urdf_text
-                else pin.buildGeomFromUrdf(
-                    robot.model, str(robot.urdf), pin.GeometryType.COLLISION, None, dirs
-                )
-            )
+            check_finite_meshes(geometry)
         except (RuntimeError, ValueError) as exc:
             raise ModelError(
                 f"cannot read its collision geometry ({exc}); put the mesh files where the "

@@ -21,6 +21,7 @@ from ..errors import ModelError
 __all__ = [
     "HullInfo",
     "MeshKey",
+    "check_finite_meshes",
     "hull_volume",
     "mesh_key",
     "mesh_triangles",
@@ -91,6 +92,21 @@ def true_hull(obj: pin.GeometryObject, key: MeshKey | None = None) -> coal.Conve
             ) from None
         _HULLS[key] = shape.convex
     return _HULLS[key]
+
+
+def check_finite_meshes(geometry: pin.GeometryModel) -> None:
+    """Refuse a collision mesh with a vertex that is not a finite number (NaN or inf).
+
+    Raises:
+        ModelError: such a mesh, named with its file.
+    """
+    for obj in geometry.geometryObjects:
+        mesh = obj.geometry
+        if isinstance(mesh, coal.BVHModelBase) and not np.isfinite(mesh.vertices()).all():
+            raise ModelError(
+                f"collision mesh {obj.meshPath} ({obj.name}) has vertex coordinates that are "
+                "not finite numbers (NaN or inf); repair or re-export the mesh"
+            )
 
 
 def _check_solid(obj: pin.GeometryObject) -> None:
