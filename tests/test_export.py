@@ -333,3 +333,35 @@ def test_a_robot_whose_root_link_is_world_gets_an_inertial_frame_of_another_name
             elif channel.topic in ("/end_effector", "/joint_trajectory"):
                 frames.add(decoded.header.frame_id)
     assert frames == {"freefloat_world"}
+
+
+def test_a_bag_through_a_dangling_link_is_refused_and_nothing_is_made(plan_file, tmp_path, capsys):
+    """A bag (a folder) through a link to nothing was made at the link's end (at the root of
+    the file system for a link to /nonexistent)."""
+    link = tmp_path / "bag"
+    link.symlink_to(tmp_path / "elsewhere")
+    argv = ["export", str(plan_file), "--format", "ros2-bag", "-o", str(link)]
+    assert main(argv) == 2
+    assert "goes through a symbolic link to nothing" in capsys.readouterr().err
+    assert not (tmp_path / "elsewhere").exists()
+
+
+def test_a_bag_the_disk_cannot_hold_is_one_line_and_leaves_nothing(
+    plan_file, tmp_path, capsys, monkeypatch
+):
+    """SQLite's "database or disk is full" (a 64 kB file system) was a traceback."""
+    import sqlite3
+
+    import rosbags.rosbag2
+
+    class Full(rosbags.rosbag2.Writer):
+        def write(self, *args, **kwargs):
+            raise sqlite3.OperationalError("database or disk is full")
+
+    monkeypatch.setattr(rosbags.rosbag2, "Writer", Full)
+    target = tmp_path / "out" / "bag"
+    target.parent.mkdir()
+    assert main(["export", str(plan_file), "--format", "ros2-bag", "-o", str(target)]) == 2
+    err = capsys.readouterr().err
+    assert err == f"freefloat: error: cannot write the bag {target}: database or disk is full\n"
+    assert list(target.parent.iterdir()) == []

@@ -192,8 +192,8 @@ def check_output(path: str | Path, what: str = "output", folder: bool = False) -
         raise FileError(f"{what} {path_excerpt(shown)} is {kind}; give a folder", shown)
     given = Path(shown).expanduser()
     dangling = next((p for p in given.parents if p.is_symlink() and not p.exists()), None)
-    if given.is_symlink() and not target.parent.exists():
-        dangling = given
+    if given.is_symlink() and not (target.exists() if folder else target.parent.exists()):
+        dangling = given  # a folder is not made at a link's end (mkdir follows no link)
     if dangling is not None:  # no folders made at a link's end
         raise FileError(
             f"{what} {path_excerpt(shown)} goes through a symbolic link to nothing ({dangling}); "

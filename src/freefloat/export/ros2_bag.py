@@ -11,11 +11,12 @@ from __future__ import annotations
 
 import os
 import shutil
+import sqlite3
 import tempfile
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
+from ..errors import FileError, InputError
 from ..files import default_file_mode
 from ..plans.format import Plan
 from .messages import (
@@ -71,6 +72,8 @@ def write_bag(traj: Trajectory, path: str | Path, urdf: str, urdf_text: str = ""
         if target.exists():
             shutil.rmtree(target)
         os.replace(bag, target)
+    except (sqlite3.Error, OSError) as exc:  # a full disk, say: nothing of the bag is left
+        raise FileError(f"cannot write the bag {target}: {exc}", str(target)) from None
     finally:
         shutil.rmtree(holder, ignore_errors=True)
     return target
