@@ -111,6 +111,11 @@ def test_unknown_key_is_refused_naming_the_valid_keys(tmp_path):
             'key = "goal.joints.q2"\nvalues = { start = -1.7e308, stop = 1.7e308, num = 3 }',
             r"range from -1\.7e\+308 to 1\.7e\+308 overflows the floats",
         ),
+        # numpy's uniform draw overflowed: OverflowError, a traceback
+        (
+            'key = "goal.joints.q2"\nvalues = { uniform = [-1e308, 1e308], samples = 2 }',
+            r"uniform must be two finite numbers of magnitude at most 1e\+09",
+        ),
     ],
 )
 def test_bad_values_are_refused_before_any_job(tmp_path, monkeypatch, axis, match):

@@ -35,7 +35,7 @@ from ..errors import (
     excerpt,
 )
 from ..plans.schema import load_plan_file
-from ..problem.limits import finite_number
+from ..problem.limits import MAX_MAGNITUDE, finite_number
 from ..problem.scenario import Scenario
 from ..robust.inertial import PARAMETERS, robot_text, with_inertials
 
@@ -96,8 +96,16 @@ def inertial_changes(keys: Sequence[tuple[str, str] | None], values: Sequence[An
 
 
 def _pair(raw: Any, name: str, key: str) -> tuple[float, float]:
-    if not (isinstance(raw, list) and len(raw) == 2 and all(finite_number(v) for v in raw)):
-        raise ScenarioError(f"axis {key!r}: {name} must be two finite numbers, got {excerpt(raw)}")
+    """Two numbers of a random axis, each at most :data:`MAX_MAGNITUDE` in magnitude."""
+    if not (
+        isinstance(raw, list)
+        and len(raw) == 2
+        and all(finite_number(v) and abs(v) <= MAX_MAGNITUDE for v in raw)
+    ):
+        raise ScenarioError(
+            f"axis {key!r}: {name} must be two finite numbers of magnitude at most "
+            f"{MAX_MAGNITUDE:g}, got {excerpt(raw)}"
+        )
     return float(raw[0]), float(raw[1])
 
 
