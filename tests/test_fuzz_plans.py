@@ -246,3 +246,28 @@ def test_verify_accepts_only_harmless_changes_and_refuses_in_one_line(
         assert code == 2, f"{what}: exit {code}, {lines}"
         assert len(lines) == 1 and lines[0].startswith("freefloat: error: "), f"{what}: {lines}"
         assert len(lines[0]) < 500, f"{what}: {lines[0][:200]}..."
+
+
+def test_a_list_too_long_is_refused_before_the_schema_walks_it(original, folder, monkeypatch):
+    """95 million entries in samples.t (a 181 MiB file, under the 200 MiB limit) kept verify
+    busy for minutes in the schema's walk over every entry: a list longer than a plan's
+    1 000 000 samples is refused before it, naming the field (the schema never called)."""
+    import freefloat.plans.schema as schema_module
+    from freefloat.errors import PlanFileError
+    from freefloat.plans.limits import MAX_SAMPLES
+    from freefloat.plans.schema import load_plan_file
+
+    def walked(*args, **kwargs):  # pragma: no cover - must not be reached
+        raise AssertionError("the schema walked the long list")
+
+    doc = json.loads(json.dumps(original))
+    doc["samples"]["t"] = doc["samples"]["t"] + [0.0] * MAX_SAMPLES
+    path = folder / "long.json"
+    path.write_text(json.dumps(doc))
+    monkeypatch.setattr(schema_module, "schema_errors", walked)
+    with pytest.raises(PlanFileError) as info:
+        load_plan_file(path)
+    count = len(doc["samples"]["t"])
+    assert str(info.value) == (
+        f"{path}: samples.t has {count} entries, more than the 1000000 a plan file may have"
+    )

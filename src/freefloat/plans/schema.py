@@ -28,6 +28,7 @@ from typing import Any
 from ..errors import PlanFileError, ViewerError
 from .format import Plan
 from .io import read_plan_json
+from .limits import check_list_lengths
 from .versions import FORMAT, FORMAT_2, FORMAT_3, FORMAT_4
 
 __all__ = [
@@ -212,6 +213,7 @@ def check_plan_file(path: str | Path) -> None:
 def _check_schema(data: Any, path: Path) -> None:
     if isinstance(data, dict) and data.get("format") not in (FORMAT, FORMAT_4, FORMAT_3, FORMAT_2):
         return
+    check_list_lengths(data, str(path))  # before the schema's walk over every entry
     errors = schema_errors(data, "plan")
     if errors:
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
