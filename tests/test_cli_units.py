@@ -253,6 +253,21 @@ def test_an_output_is_never_the_robot_a_scenario_or_plan_reads(tmp_path, monkeyp
             ),
             "[robot] lock locks every movable joint (q1, q2); leave at least one to move",
         ),
+        (  # locked at 30 then 45 deg: the last won, silently
+            lambda s, u: (
+                s.replace(f'robot = "{u}"', "")
+                + f'[robot]\nurdf = "{u}"\nlock = [{{ joint = "q2", value = 30.0 }}, '
+                '{ joint = "q2", value = 45.0 }]\n'
+            ),
+            "[robot] lock names joint 'q2' twice; lock each joint once",
+        ),
+        (
+            lambda s, u: (
+                s.replace(f'robot = "{u}"', "")
+                + f'[robot]\nurdf = "{u}"\nlock = ["q2", {{ joint = "q2", value = 45.0 }}]\n'
+            ),
+            "[robot] lock names joint 'q2' twice; lock each joint once",
+        ),
     ],
 )
 def test_messages_from_the_hostile_trial_say_what_is_wrong(tmp_path, capsys, edit, said):

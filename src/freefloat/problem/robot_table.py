@@ -253,6 +253,8 @@ def _lock_values(lock: Any, text: str, start: Any) -> dict[str, float]:
             )
         if name not in movable:
             raise UnknownNameError("joint to lock", name, list(movable))
+        if name in values:  # the last would win, silently
+            raise ScenarioError(f"[robot] lock names joint {name!r} twice; lock each joint once")
         kind, lower, upper = movable[name]
         if raw is None and name not in given:  # 0, or the middle of a range without it
             values[name], note = default_lock(f"joint {name!r}", kind, lower, upper)
