@@ -47,6 +47,7 @@ from ..files import read_text_file
 from ..robot.locations import is_path_like
 from ..robot.lock import default_lock, lock_joints, movable_joints
 from ..robot.model import MAX_URDF_BYTES, resolve_robot
+from .cache_files import cached_text
 from .limits import MAX_ANGLE_DEG, MAX_LENGTH_M, MAX_MAGNITUDE, check_number
 
 if TYPE_CHECKING:
@@ -153,13 +154,13 @@ class RobotSource:
 
     Attributes:
         urdf: its URDF path (a cache file for a composed or locked robot).
-        text: the URDF text when it is not yet in that file (written by the scenario's
-            ``write_robot``); None when the file is there.
+        text: the URDF text, written to that file by the scenario's ``write_robot`` unless
+            the cache holds it already (:mod:`.cache_files`); None for a URDF of the user's.
         servicer: the composed servicer's description, if it is one.
         end_effectors: default end effectors (each arm's tip for several arms), or none.
         srdf: the SRDF of its pairs never checked, when the robot brings one (several arms:
             each arm's SRDF, prefixed; a URDF with an SRDF beside it).
-        srdf_text: that SRDF's text when it is not yet in its file.
+        srdf_text: that SRDF's text, written as ``text`` is (None: the user's own file).
         locked: the joints locked by the scenario and their values (rad or m).
     """
 
@@ -211,7 +212,7 @@ def robot_source(value: Any, start: Any, relative_to: Path | None) -> RobotSourc
     path = servicer_cache_dir() / f"{source.urdf.stem}-lock-{digest}.urdf"
     return RobotSource(
         path,
-        None if path.is_file() else locked,
+        locked,
         source.servicer,
         source.end_effectors,
         source.srdf,
@@ -302,15 +303,15 @@ def _servicer(table: Mapping[str, Any], relative_to: Path | None = None) -> Robo
         prefix=first.prefix,
     )
     path = servicer_cache_dir() / f"{spec.key()}.urdf"
-    text = None if path.is_file() else compose_servicer_text(spec)
+    text = cached_text(path) or compose_servicer_text(spec)  # composed again unless vouched for
     if len(arms) == 1 and not first.prefix and (first.arm in ARM_SRDFS or not arm_srdf(first.arm)):
         return RobotSource(path, text, spec)  # a named arm's SRDF is found by its name
     settled = spec.arms()
     prefixes = [a.prefix for a in settled]
     # an arm whose longest chains tie leaves the end effectors to the scenario or the loader
-    tips = arm_tips(text if text is not None else path.read_text(), prefixes, strict=False)
+    tips = arm_tips(text, prefixes, strict=False)
     srdf = path.with_suffix(".srdf")
-    srdf_text = None if srdf.is_file() else merged_srdf([a.arm for a in settled], prefixes)
+    srdf_text = cached_text(srdf) or merged_srdf([a.arm for a in settled], prefixes)
     return RobotSource(path, text, spec, tips, srdf, srdf_text)
 
 

@@ -83,10 +83,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import FreeFloatError, InputError, ScenarioError
-from ..files import absolute_path, atomic_write_text, read_text_file
+from ..files import absolute_path, read_text_file
 from ..physics.attitude import quat_from_zyx
 from ..robot.model import MAX_URDF_BYTES, Robot, load_robot, robots_dir
 from ..robot.payload import Payload, attach_payload
+from .cache_files import write_cached
 from .constraints.base import Constraint
 from .limits import check_duration, check_joint_count
 from .objectives.registry import DEFAULT_OBJECTIVE
@@ -288,13 +289,17 @@ class Scenario:
         return replace(self, goal_joints=joints, goal_poses={})
 
     def write_robot(self) -> Path:
-        """Write an inline servicer's URDF (and SRDF) to its cache file if not there; return it."""
+        """Write a composed robot's URDF (and SRDF) to its cache file unless there; return it.
+
+        A cache file is rewritten when its digest does not vouch for it
+        (:mod:`.cache_files`).
+        """
         srdf = self.safety.srdf
-        if self.srdf_text is not None and srdf is not None and not srdf.is_file():
-            atomic_write_text(srdf, self.srdf_text)
+        if self.srdf_text is not None and srdf is not None:
+            write_cached(srdf, self.srdf_text)
         path = self.robot.urdf
-        if self.robot_text is not None and not path.is_file():
-            atomic_write_text(path, self.robot_text)
+        if self.robot_text is not None:
+            write_cached(path, self.robot_text)
         return path
 
     @property
