@@ -266,10 +266,16 @@ def test_the_robot_is_named_as_its_file_or_as_given(tmp_path, capsys):
     assert main([*one, "--name", "two words", "-o", str(tmp_path / "c.urdf")]) == 2
     err = capsys.readouterr().err
     assert err == (
-        "freefloat: error: robot name 'two words': give letters, digits, '_', '-' or '.' "
-        "(at most 100)\n"
+        "freefloat: error: robot name 'two words': give letters, digits, '_', '-' or '.', not "
+        "first (at most 100)\n"
     )
     assert not (tmp_path / "c.urdf").exists()
+    assert main([*one, "--name", "", "-o", str(tmp_path / "d.urdf")]) == 2
+    assert capsys.readouterr().err == (
+        "freefloat: error: --name is empty; give the robot's name, or leave --name out\n"
+    )
+    assert main([*one, "-o", str(tmp_path / ".urdf")]) == 0  # a name not led by a dot
+    assert _robot_name(tmp_path / ".urdf") == "urdf"
 
 
 def test_the_shipped_servicers_are_named_as_their_files():

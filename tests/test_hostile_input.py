@@ -453,3 +453,14 @@ def test_a_30_joint_chain_is_refused_up_front(tmp_path, capsys, spatial):
         in line
     )
     assert ff.load_robot(urdf).n == 30  # loading it for other uses is fine
+
+
+def test_a_scenario_name_too_long_for_the_file_system_is_no_write(tmp_path, capsys, monkeypatch):
+    """A 300-character scenario name was "cannot write .../robots/scenarios/aaa...: File name
+    too long": the wrong verb, and the install's folder. It names the path asked for."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["check", "a" * 300]) == 2
+    err = capsys.readouterr().err
+    shown = f"{tmp_path}/{'a' * 300}"
+    assert err.startswith(f"freefloat: error: '{shown[:40]}") and "cannot write" not in err
+    assert err.endswith(f"({len(shown)} characters): File name too long\n")

@@ -178,6 +178,8 @@ def check(args: argparse.Namespace) -> None:
     """Refuse numbers beyond the limits and an unwritable output before any work."""
     for numbers in (*_BASE, *_PAYLOAD):
         numbers.check(args)
+    if args.name is not None and not args.name:  # "" would fall back to the default silently
+        raise InputError("--name is empty; give the robot's name, or leave --name out")
     check_outputs(args, ("-o", "output"))
 
 
@@ -334,5 +336,5 @@ def _servicer_spec(args: argparse.Namespace, payload: Payload | None) -> Service
 
 def _default_name(output: str) -> str:
     """The output file's name as a robot name: other characters as '_' ("" if none is left)."""
-    name = re.sub(r"[^A-Za-z0-9_.-]", "_", Path(output).stem)[:100]
+    name = re.sub(r"[^A-Za-z0-9_.-]", "_", Path(output).stem).lstrip(".-")[:100]
     return name if re.search(r"[A-Za-z0-9]", name) else ""

@@ -31,6 +31,7 @@ from .._exits import (
 )
 from .._interrupt import is_command
 from ..errors import FreeFloatError, UnitsWarning
+from ..excerpts import path_excerpt
 from ..progress import LOGGER, configure
 from . import (
     bounds,
@@ -199,8 +200,9 @@ def _main(argv: Sequence[str] | None) -> int:
         return 141
     except OSError as exc:  # a stream, not a file (files raise FileError): > /dev/full
         silence_output(1)
-        where = f" {exc.filename}" if getattr(exc, "filename", None) else " the output"
-        error_line(f"error: cannot write{where}: {exc.strerror or exc}")
+        name = getattr(exc, "filename", None)  # read or written: the file and the reason
+        said = path_excerpt(str(name)) if name else "cannot write the output"
+        error_line(f"error: {said}: {exc.strerror or exc}")
         return 2
     except KeyboardInterrupt:
         error_line("interrupted")

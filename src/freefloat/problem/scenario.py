@@ -128,7 +128,10 @@ def shipped_scenario(name: str) -> Path | None:
     if Path(name).name != name:
         return None
     folder = robots_dir() / "scenarios"
-    found = next((p for p in (folder / name, folder / f"{name}.toml") if p.is_file()), None)
+    try:
+        found = next((p for p in (folder / name, folder / f"{name}.toml") if p.is_file()), None)
+    except OSError:  # a name too long for the file system is no shipped scenario's
+        return None
     return None if found is None else found.resolve()
 
 

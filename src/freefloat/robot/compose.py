@@ -41,7 +41,7 @@ from .urdf_checks import check_urdf_xml
 LOGGER = logging.getLogger(__name__)
 
 #: A robot name :class:`ServicerSpec` takes.
-NAME = re.compile(r"[A-Za-z0-9_.-]{1,100}")
+NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}")
 
 __all__ = [
     "ARMS",
@@ -122,7 +122,8 @@ class ServicerSpec:
     def __post_init__(self) -> None:
         if self.name and not NAME.fullmatch(self.name):
             raise InputError(
-                f"robot name {self.name!r}: give letters, digits, '_', '-' or '.' (at most 100)"
+                f"robot name {self.name!r}: give letters, digits, '_', '-' or '.', not first "
+                "(at most 100)"
             )
         numbers = [self.base_mass, *self.base_size, *self.mount, *self.mount_rpy]
         for arm in self.more_arms:
