@@ -11,6 +11,7 @@ from pathlib import Path
 from ..errors import CollisionError, EndpointError, InputError, InputLimitError, JointLimitError
 from ..files import check_output
 from ..pipeline import plan
+from ..plans.format import Plan
 from ..problem.limits import check_samples
 from ..problem.objectives import OBJECTIVES
 from ..problem.residual import INTEGRATION_TOLERANCE
@@ -162,28 +163,12 @@ def run(args: argparse.Namespace) -> int:
     cartesian = cartesian_report(scenario, result)
     with stage("sensitivity"):
         result = with_robustness(result, scenario.robot)
-    if args.output:
-        output = Path(args.output)
-    elif args.scenario:
-        output = Path(f"{Path(args.scenario).stem}.plan.json")
-    else:
-        output = DEFAULT_OUT_DIR / "plan.json"
-    written = result.save(output)
     after: list[str] = []
-    if not args.scenario and not args.output:
-        # The main job: the worked example with its playback page and plots.
-        from ..viz.playback import write_html
-        from ..viz.plots import save_figures
-
-        with stage("write playback page"):
-            html = write_html(result, DEFAULT_OUT_DIR / "plan.html")
-        after.append(f"  playback        {html}")
-        with stage("write plots"):
-            figures = save_figures(result, DEFAULT_OUT_DIR / "plots")
-        after.append(
-            f"  plots           {figures[0].parent} ({len(figures)} files: "
-            f"{', '.join(p.name for p in figures)})"
-        )
+    if args.output or args.scenario:
+        output = Path(args.output or f"{Path(args.scenario).stem}.plan.json")
+        written = result.save(output)
+    else:
+        written = _main_job(result, after)
     text = summary(
         result,
         written,
@@ -195,3 +180,29 @@ def run(args: argparse.Namespace) -> int:
     )
     print("\n".join([text, *after]))
     return 0
+
+
+def _main_job(result: Plan, after: list[str]) -> Path:
+    """The main job's outputs: the plan, its playback page and plots, in one folder at once.
+
+    Written into a staging folder and moved into :data:`DEFAULT_OUT_DIR` together
+    (:func:`~freefloat.staged.staged_folder`): an interruption leaves no plan without its
+    page and plots. Appends their lines to ``after``; returns the plan file's path.
+    """
+    from ..staged import staged_folder
+    from ..viz.playback import write_html
+    from ..viz.plots import save_figures
+
+    folder = DEFAULT_OUT_DIR.resolve()
+    with staged_folder(folder) as staging:
+        result.save(staging / "plan.json")
+        with stage("write playback page"):
+            write_html(result, staging / "plan.html")
+        with stage("write plots"):
+            figures = save_figures(result, staging / "plots")
+    after.append(f"  playback        {folder / 'plan.html'}")
+    after.append(
+        f"  plots           {folder / 'plots'} ({len(figures)} files: "
+        f"{', '.join(p.name for p in figures)})"
+    )
+    return folder / "plan.json"

@@ -30,6 +30,7 @@ import numpy as np
 
 from ..errors import InputError, ModelError
 from ..files import atomic_write_text
+from ..staged import write_together
 from .arm_tips import arm_tips, every_tip
 from .arms import ARMS, BASE_LINK, ArmSpec, arm_part, arm_urdf
 from .designed_bodies import LOCKED_ATTRIBUTE
@@ -176,8 +177,7 @@ class ServicerSpec:
 
     def key(self) -> str:
         """A short hash of the spec and the arm file (for cache file names)."""
-        texts = [arm_urdf(arm.arm).read_text() for arm in self.arms()]
-        # the version of what is written: servicers composed before the lock marks differ
+        texts = [arm_urdf(arm.arm).read_text() for arm in self.arms()]  # and COMPOSED_VERSION:
         payload = json.dumps([COMPOSED_VERSION, self.__dict__, *texts], default=str)
         return hashlib.sha256(payload.encode()).hexdigest()[:16]
 
@@ -186,8 +186,7 @@ def compose_servicer(spec: ServicerSpec, output: str | Path) -> Path:
     """Compose the servicer, validate it with yourdfpy and write it atomically to ``output``.
 
     A servicer of several arms, or of an arm URDF with an SRDF beside it, also gets its SRDF
-    (each arm's pairs never checked, prefixed) next to it, ``output`` with the suffix
-    ``.srdf``.
+    (each arm's pairs never checked, prefixed) next to it, as ``output`` suffixed ``.srdf``.
 
     Raises:
         ModelError: the arm URDF cannot be read, or the result does not validate.
@@ -199,10 +198,11 @@ def compose_servicer(spec: ServicerSpec, output: str | Path) -> Path:
 
 
 def write_composed(composed: Composed, output: str | Path) -> Path:
-    """Write a composed servicer's URDF to ``output`` (and its SRDF beside it, if any)."""
-    if composed.srdf is not None:
-        atomic_write_text(Path(output).with_suffix(".srdf"), composed.srdf)
-    return atomic_write_text(output, composed.text)
+    """Write a composed servicer's URDF to ``output`` (and its SRDF beside it, both or none)."""
+    if composed.srdf is None:
+        return atomic_write_text(output, composed.text)
+    path = Path(output).expanduser().resolve()
+    return write_together({path.with_suffix(".srdf"): composed.srdf, path: composed.text})
 
 
 #: How a composed servicer that is no URDF freefloat loads is refused.

@@ -37,8 +37,9 @@ import numpy as np
 
 from ..errors import InputError, ViewerError
 from ..excerpts import LABEL_CHARS, shortened
-from ..files import atomic_write, check_output
+from ..files import check_output
 from ..plans.format import Plan
+from ..staged import staged_folder
 from .clearance_curve import ClearanceCurve, clearance_curve
 from .controls import robot_label
 from .joint_plots import draw_joints
@@ -283,25 +284,25 @@ def figure_paths(folder: Path, svg: bool = False, clearance: bool = False) -> li
 def save_figures(plan: Plan, directory: str | Path, svg: bool = False) -> list[Path]:
     """Write PNG (and SVG) files of every figure into ``directory``; return their paths.
 
-    Each file is written atomically (temporary file, then renamed), and every one is checked
-    before the first is written: a name that cannot be written leaves none behind.
+    Every name is checked before the first figure is drawn, and the figures are moved into
+    ``directory`` only once all are written (:func:`~freefloat.staged.staged_folder`): a
+    full disk or an interruption leaves none of them behind.
     """
     plt = _pyplot()
     folder = Path(directory).expanduser().resolve()
     for path in figure_paths(folder, svg, plan.safety.checked):  # all, before any is drawn
         check_output(path, "a figure")
-    folder.mkdir(parents=True, exist_ok=True)
     written = []
-    with warnings.catch_warnings(record=True) as caught:  # matplotlib's, one per glyph
+    with (
+        warnings.catch_warnings(record=True) as caught,  # matplotlib's, one per glyph
+        staged_folder(folder) as stage,
+    ):
         warnings.filterwarnings("always", message="Glyph .* missing from", category=UserWarning)
         for name, fig in figures(plan).items():
             dpi = 80 if name == "overview" else 110
             for ext in ("png", "svg") if svg else ("png",):
-
-                def save(tmp: Path, fig: Any = fig, ext: str = ext, dpi: int = dpi) -> None:
-                    fig.savefig(tmp, dpi=dpi, format=ext)
-
-                written.append(atomic_write(folder / f"{name}.{ext}", save, suffix=f".{ext}"))
+                fig.savefig(stage / f"{name}.{ext}", dpi=dpi, format=ext)
+                written.append(folder / f"{name}.{ext}")
             plt.close(fig)
     if any("missing from" in str(w.message) for w in caught):
         LOGGER.warning(

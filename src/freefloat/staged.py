@@ -1,0 +1,91 @@
+"""Outputs of several files written all at once: staged beside their place, then moved in.
+
+Figures, the main job's plan with its page and plots, a URDF with its SRDF: written one by
+one, a full disk or a Ctrl-C between two of them left some new files beside the old run's
+others (or an empty folder, or an SRDF without its URDF). :func:`staged_folder` has a
+folder's files written into a hidden folder beside it, on the same file system, and
+:func:`write_together` writes a few text files to temporary files beside them; either moves
+them in only when every one is written, while the command line's signals are held.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+
+from .errors import FileError
+from .files import default_file_mode, signals_held
+
+__all__ = ["staged_folder", "write_together"]
+
+
+@contextlib.contextmanager
+def staged_folder(target: str | Path) -> Iterator[Path]:
+    """A staging folder for ``target``'s files; on success they are moved into ``target``.
+
+    The files are moved with ``os.replace`` while signals are held
+    (:func:`~freefloat.files.signals_held`): an interruption, or a failure while they are
+    written (a full disk), leaves ``target`` as it was, never a mix of old and new files.
+    Files of ``target`` the stage does not hold are left alone. On failure the staging folder
+    and the folders made for it (``target`` and missing parents) are removed.
+    """
+    target = Path(target).expanduser().resolve()
+    made = [p for p in (target, *target.parents) if not p.exists()]  # deepest first
+    target.parent.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
+    try:
+        yield stage
+        with signals_held():
+            target.mkdir(exist_ok=True)
+            for source in sorted(stage.rglob("*")):  # each folder before its files
+                moved = target / source.relative_to(stage)
+                if source.is_dir():
+                    moved.mkdir(exist_ok=True)
+                else:
+                    os.replace(source, moved)
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        for folder in made:
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+        raise
+    shutil.rmtree(stage, ignore_errors=True)
+
+
+def write_together(texts: Mapping[Path, str]) -> Path:
+    """Write text files (UTF-8) at once: each to a temporary file beside it, then all renamed.
+
+    The renames happen while signals are held; on any failure (a full disk, an interruption
+    before the renames) none of the files is changed and no temporary file is left. Returns
+    the last path written.
+
+    Raises:
+        FileError: a file that cannot be written, named.
+    """
+    temporary: dict[Path, Path] = {}
+    path = Path()
+    try:
+        for path, text in texts.items():
+            with signals_held():
+                fd, name = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+                temporary[path] = Path(name)
+            with os.fdopen(fd, "w", encoding="utf-8") as handle:
+                handle.write(text)
+                handle.flush()
+                os.fsync(handle.fileno())
+            os.chmod(name, default_file_mode())
+        with signals_held():
+            for path, name_path in temporary.items():
+                os.replace(name_path, path)
+            temporary.clear()
+    except OSError as exc:
+        raise FileError(f"cannot write {path}: {exc.strerror or exc}", str(path)) from None
+    finally:
+        with signals_held():
+            for name_path in temporary.values():
+                name_path.unlink(missing_ok=True)
+    return path

@@ -1,0 +1,100 @@
+"""Outputs of several files are moved into their folder at once, or not at all.
+
+A full disk or a Ctrl-C while figures were written left some of them beside the old run's
+others (or an empty folder), and the main job's plan without its page and plots. Truth: the
+folders' listings and file contents before and after, read with the standard library.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from freefloat.cli import main
+from freefloat.staged import staged_folder
+
+
+def _listing(folder):
+    return sorted(
+        (str(p.relative_to(folder)), p.read_bytes() if p.is_file() else None)
+        for p in folder.rglob("*")
+    )
+
+
+def test_a_failure_while_writing_leaves_the_folder_as_it_was(tmp_path):
+    folder = tmp_path / "plots"
+    folder.mkdir()
+    (folder / "a.png").write_bytes(b"old a")
+    (folder / "mine.txt").write_bytes(b"the user's")
+    before = _listing(tmp_path)
+    with pytest.raises(KeyboardInterrupt), staged_folder(folder) as stage:
+        (stage / "a.png").write_bytes(b"new a")
+        (stage / "b.png").write_bytes(b"new b")
+        raise KeyboardInterrupt
+    assert _listing(tmp_path) == before  # no new file, no hidden staging folder
+
+
+def test_a_failure_makes_no_folder_and_a_success_moves_every_file(tmp_path):
+    folder = tmp_path / "new" / "deeper" / "plots"
+    with pytest.raises(OSError), staged_folder(folder) as stage:
+        (stage / "a.png").write_bytes(b"a")
+        raise OSError(28, "No space left on device")
+    assert list(tmp_path.iterdir()) == []
+    with staged_folder(folder) as stage:
+        (stage / "sub").mkdir()
+        (stage / "sub" / "b.png").write_bytes(b"b")
+        (stage / "a.png").write_bytes(b"a")
+    assert _listing(tmp_path / "new") == [
+        ("deeper", None),
+        ("deeper/plots", None),
+        ("deeper/plots/a.png", b"a"),
+        ("deeper/plots/sub", None),
+        ("deeper/plots/sub/b.png", b"b"),
+    ]
+
+
+def test_the_main_job_interrupted_while_drawing_leaves_no_plan(tmp_path, monkeypatch, capsys):
+    """Interrupted in its plots, the main job left freefloat-out/plan.json alone."""
+    import matplotlib.figure
+
+    drawn = []
+
+    def interrupted(self, *args, **kwargs):
+        drawn.append(args[0])
+        if len(drawn) == 3:
+            raise KeyboardInterrupt
+        return original(self, *args, **kwargs)
+
+    original = matplotlib.figure.Figure.savefig
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", interrupted)
+    monkeypatch.chdir(tmp_path)
+    assert main(["plan", "-q"]) == 130
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_urdf_and_its_srdf_are_written_both_or_neither(tmp_path, monkeypatch):
+    """compose on a full disk left the new SRDF beside the old URDF (or alone)."""
+    import os
+
+    import freefloat as ff
+    from freefloat.staged import write_together
+
+    urdf, srdf = tmp_path / "s.urdf", tmp_path / "s.srdf"
+    urdf.write_text("old urdf")
+    srdf.write_text("old srdf")
+    real = os.fsync
+    calls = []
+
+    def full(fd):  # the second file's flush finds the disk full
+        calls.append(fd)
+        if len(calls) == 2:
+            raise OSError(28, "No space left on device")
+        return real(fd)
+
+    monkeypatch.setattr(os, "fsync", full)
+    with pytest.raises(ff.FileError, match=r"cannot write .*s\.urdf: No space left on device"):
+        write_together({srdf: "new srdf", urdf: "new urdf"})
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.srdf", "s.urdf"]
+    assert (urdf.read_text(), srdf.read_text()) == ("old urdf", "old srdf")
+    monkeypatch.setattr(os, "fsync", real)
+    assert write_together({srdf: "new srdf", urdf: "new urdf"}) == urdf
+    assert (urdf.read_text(), srdf.read_text()) == ("new urdf", "new srdf")
