@@ -51,7 +51,7 @@ from .problem.paths import boundary_errors
 from .problem.residual import Problem
 from .problem.scenario import Scenario, scenario_of
 from .progress import LOGGER, stage
-from .robot.light_base import warn_light_base
+from .robot.light_base import warn_light_base, warn_unphysical
 from .robot.model import Robot
 from .solvers.lazy_search import broken_by, explain_lazy_breaks, search_lazily
 from .solvers.minimise import minimise
@@ -123,6 +123,7 @@ def _plan(
     check_registered(chosen, constraints)  # what verify could not rebuild: before any work
     check_endpoints(scenario, constraints, chosen_goal)
     warn_light_base(scenario.robot)
+    warn_unphysical(scenario.robot)
     clock = time.perf_counter()
     with stage("solve"):
         # another objective's freedom may find a path within limits the search's path breaks

@@ -43,7 +43,7 @@ from .problem.residual import Problem
 from .problem.scenario import Scenario, scenario_of
 from .problem.simple_bound import SimpleMotionBound, inertia_ratio, simple_motion_bound, turn_limit
 from .progress import LOGGER
-from .robot.light_base import warn_light_base
+from .robot.light_base import warn_light_base, warn_unphysical
 from .solvers.branch_stop import singular
 from .solvers.options import SolveOptions
 from .solvers.reach import DirectionReach, ReachEstimate, default_directions, reach_set
@@ -210,6 +210,7 @@ def reachable(
     scenario = scenario.resolved()
     scenario.write_robot()
     warn_light_base(scenario.robot)
+    warn_unphysical(scenario.robot)
     probe = problem_from_scenario(scenario, check_bounds=False)
     mmap = MomentumMap(scenario.robot)
     ratio = inertia_ratio(mmap, probe.family.start)

@@ -1,12 +1,18 @@
-"""A warning for a URDF whose root link, taken as the spacecraft, is lighter than its arm."""
+"""Warnings of a model that is legal but rarely the one meant.
+
+A spacecraft lighter than its arm (:func:`warn_light_base`), a body whose inertia no solid has
+(:func:`warn_unphysical`).
+"""
 
 from __future__ import annotations
+
+import numpy as np
 
 from ..progress import LOGGER
 from .model import Robot
 from .payload import held_payload
 
-__all__ = ["warn_light_base"]
+__all__ = ["warn_light_base", "warn_unphysical"]
 
 
 def warn_light_base(robot: Robot) -> None:
@@ -34,3 +40,29 @@ def _payload_mass(robot: Robot) -> float:
     """The captured payload's mass (kg; :func:`.payload.held_payload`); 0 without one."""
     held = held_payload(robot)
     return 0.0 if held is None else float(held.mass)
+
+
+#: Relative slack of the triangle inequality of principal moments (rounding in a URDF's digits).
+TRIANGLE_SLACK = 1e-6
+
+
+def warn_unphysical(robot: Robot) -> None:
+    """Warn of bodies whose inertia no solid has: a principal moment above the other two's sum.
+
+    Pinocchio takes any symmetric inertia, and so does planning; a body's moments
+    (kg m^2, about its centre of mass, with the links fixed to it) that break the triangle
+    inequality come from a link of the URDF that does (a model from a paper's table, say):
+    the plan is that model's, said once per plan. The payload and ``--base-inertia`` checks
+    refuse the same flaw in what freefloat builds itself.
+    """
+    flawed = []
+    for name, inertia in zip(robot.model.names[1:], robot.model.inertias[1:], strict=True):
+        moments = np.linalg.eigvalsh(np.asarray(inertia.inertia))
+        if inertia.mass > 0.0 and moments[0] + moments[1] < moments[2] * (1.0 - TRIANGLE_SLACK):
+            flawed.append(f"{name} ({', '.join(f'{m:.4g}' for m in moments)} kg m^2)")
+    if flawed:
+        LOGGER.warning(
+            "the inertia of the body moved by %s is no solid's: its largest principal moment "
+            "exceeds the sum of the other two; planned as the URDF gives it",
+            "; ".join(flawed),
+        )
