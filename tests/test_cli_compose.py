@@ -283,3 +283,27 @@ def test_the_shipped_servicers_are_named_as_their_files():
 
     for name in ("panda_servicer", "ur5_servicer", "dual_ur5_servicer"):
         assert _robot_name(robots_dir() / f"{name}.urdf") == name
+
+
+def test_a_prefix_with_a_line_break_is_refused(tmp_path, capsys):
+    """A prefix with a line break made multi-line warnings and summaries of every name."""
+    argv = ["compose", "--arm", "ur5", "--prefix", "a\nb_", "--arm", "ur5", "--prefix", "c_"]
+    argv += ["--base-mass", "100", "--base-size", "1", "1", "1"]
+    argv += [
+        "--mount",
+        "0.5",
+        "0.2",
+        "0",
+        "--mount",
+        "0.5",
+        "-0.2",
+        "0",
+        "-o",
+        str(tmp_path / "d.urdf"),
+    ]
+    assert main(argv) == 2
+    assert capsys.readouterr().err == (
+        "freefloat: error: arm prefix 'a\\nb_': a space, a line break or a control character "
+        "would break the names it starts; give letters, digits or '_'\n"
+    )
+    assert list(tmp_path.iterdir()) == []

@@ -114,3 +114,20 @@ def test_a_collision_mesh_with_a_vertex_not_a_number_is_refused_in_one_line(tmp_
         f"freefloat: error: collision mesh {tmp_path / 'bad.stl'} (forearm_link_0) has vertex "
         "coordinates that are not finite numbers (NaN or inf); repair or re-export the mesh"
     )
+
+
+def test_a_collision_mesh_a_kilometre_out_is_refused_naming_the_distance(tmp_path, capsys):
+    """One vertex at 1e30 m was refused as "flat: its vertices span no volume"."""
+    corners = [(0.0, 0.0, 0.0), (0.1, 0.0, 0.0), (0.0, 0.1, 0.0), (1e30, 0.0, 0.1)]
+    faces = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (2, 0, 3)]
+    body = b"".join(
+        struct.pack("<12fH", 0.0, 0.0, 0.0, *(x for k in f for x in corners[k]), 0) for f in faces
+    )
+    (tmp_path / "far.stl").write_bytes(b"\0" * 80 + struct.pack("<I", len(faces)) + body)
+    mesh = "package://example-robot-data/robots/ur_description/meshes/ur5/collision/forearm.stl"
+    assert main(["check", _scenario(tmp_path, URDF.replace(mesh, str(tmp_path / "far.stl")))]) == 2
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert last.endswith(
+        "(forearm_link_0) has a vertex 1e+30 m from its origin, beyond the 1000 m freefloat "
+        "takes (a unit slip: mm for m?); scale or repair the mesh"
+    ), last

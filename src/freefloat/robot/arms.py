@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import LockedJointError, ModelError, UnknownNameError
+from ..errors import InputError, LockedJointError, ModelError, UnknownNameError
 from ..files import absolute_path, read_text_file
 from .designed_bodies import LOCKED_ATTRIBUTE
 from .lock import default_lock, locked_origin
@@ -86,6 +86,13 @@ class ArmSpec:
     prefix: str = ""
     lock: tuple[str | tuple[str, float], ...] = ()
     keep_gripper: bool = False
+
+    def __post_init__(self) -> None:
+        if any(c.isspace() or not c.isprintable() for c in self.prefix):
+            raise InputError(
+                f"arm prefix {self.prefix!r}: a space, a line break or a control character "
+                "would break the names it starts; give letters, digits or '_'"
+            )
 
 
 def mount_origin(xyz: Sequence[float], rpy: Sequence[float]) -> np.ndarray:

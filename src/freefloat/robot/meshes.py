@@ -94,18 +94,32 @@ def true_hull(obj: pin.GeometryObject, key: MeshKey | None = None) -> coal.Conve
     return _HULLS[key]
 
 
+#: Largest vertex coordinate of a collision mesh (m, after its scale): a kilometre.
+MAX_VERTEX_M = 1000.0
+
+
 def check_finite_meshes(geometry: pin.GeometryModel) -> None:
-    """Refuse a collision mesh with a vertex that is not a finite number (NaN or inf).
+    """Refuse a collision mesh with a vertex not a finite number, or beyond a kilometre.
 
     Raises:
         ModelError: such a mesh, named with its file.
     """
     for obj in geometry.geometryObjects:
         mesh = obj.geometry
-        if isinstance(mesh, coal.BVHModelBase) and not np.isfinite(mesh.vertices()).all():
+        if not isinstance(mesh, coal.BVHModelBase):
+            continue
+        vertices = np.asarray(mesh.vertices(), dtype=float)
+        if not np.isfinite(vertices).all():
             raise ModelError(
                 f"collision mesh {obj.meshPath} ({obj.name}) has vertex coordinates that are "
                 "not finite numbers (NaN or inf); repair or re-export the mesh"
+            )
+        if len(vertices) and float(np.abs(vertices).max()) > MAX_VERTEX_M:
+            raise ModelError(
+                f"collision mesh {obj.meshPath} ({obj.name}) has a vertex "
+                f"{float(np.abs(vertices).max()):.3g} m from its origin, beyond the "
+                f"{MAX_VERTEX_M:g} m freefloat takes (a unit slip: mm for m?); scale or "
+                "repair the mesh"
             )
 
 
