@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import re
@@ -474,3 +475,34 @@ def test_a_body_whose_inertia_no_solid_has_is_warned_of_once(tmp_path, caplog):
                 ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / f"{name}.toml"), budget=0
             )
     assert not any("no solid's" in r.getMessage() for r in caplog.records)
+
+
+def test_the_summary_says_how_far_the_spacecraft_turns_on_the_way():
+    """How far the spacecraft turns on the way went unsaid (Canadarm2 with a 5 t payload
+    swung it 82.5 deg for a 2.46 deg goal). Truth: SciPy's rotations of the plan's samples."""
+    from scipy.spatial.transform import Rotation
+
+    from freefloat.physics.attitude import quat_from_zyx, zyx_from_quat
+    from freefloat.viz.summary import summary
+
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "worked_example.toml")
+    start = zyx_from_quat(scenario.start_attitude)
+    turned = dataclasses.replace(
+        scenario,
+        goal_joints=dict(scenario.start_joints),  # a loop: back to its joints, 5 deg turned
+        goal_attitude=quat_from_zyx(start[0] + math.radians(5.0), 0.0, 0.0),
+        extra=None,
+    )
+    plan = ff.plan(turned)
+    rotations = Rotation.from_quat(np.asarray(plan.samples.base_quaternion_xyzw))
+    turns = np.degrees((rotations[0].inv() * rotations).magnitude())
+    k = int(np.argmax(turns))
+    goal = Rotation.from_quat(plan.base.target_quaternion_xyzw)
+    away = np.degrees((rotations[0].inv() * goal).magnitude())
+    assert turns[k] > away + 1.0  # a loop swings it beyond its goal
+    line = next(x for x in summary(plan).splitlines() if x.startswith("  spacecraft"))
+    assert line == (
+        f"  spacecraft      turns up to {turns[k]:.3g} deg from its start attitude on the way "
+        f"(at t = {plan.samples.t[k]:.4g} s, the largest of {len(turns)} samples); its goal "
+        f"lies {away:.3g} deg from it"
+    )

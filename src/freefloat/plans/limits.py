@@ -35,7 +35,6 @@ __all__ = [
     "MAX_TERM",
     "MIN_DURATION",
     "UNIT_NORM_TOLERANCE",
-    "check_list_lengths",
     "check_plan_file_kind",
     "check_plan_values",
     "excerpt",
@@ -178,34 +177,6 @@ def _per_joint(value: Any, path: list[str | int], joints: list[str]) -> Mapping[
         )
         raise _RefusalError(_field(path), f"{what}; expected the plan's joints {excerpt(joints)}")
     return value
-
-
-def check_list_lengths(data: Any, where: str = "plan") -> None:
-    """Refuse a list longer than :data:`MAX_SAMPLES` entries anywhere in a parsed plan file.
-
-    Before the schema check, which walks every entry (95 million entries in a 181 MiB file
-    took minutes): a long list is refused without a look at its entries.
-
-    Raises:
-        PlanFileError: the first such list, named by its field.
-    """
-    stack: list[tuple[Any, list[str | int]]] = [(data, [])]
-    while stack:
-        node, path = stack.pop()
-        if isinstance(node, Mapping):
-            stack += [(value, [*path, key]) for key, value in node.items()]
-        elif isinstance(node, list):
-            if len(node) > MAX_SAMPLES:
-                field = ".".join(str(p) for p in path) or "(top level)"
-                raise PlanFileError(
-                    f"{where}: {field} has {len(node)} entries, more than the "
-                    f"{MAX_SAMPLES} a plan file may have"
-                )
-            stack += [
-                (value, [*path, k])
-                for k, value in enumerate(node)
-                if isinstance(value, (list, Mapping))
-            ]
 
 
 def check_plan_values(data: Any, where: str = "plan") -> None:

@@ -19,7 +19,7 @@ run time is accepted), and the shipped files hold those of the built-in plug-ins
 from __future__ import annotations
 
 import json
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from functools import cache
 from importlib import resources
 from pathlib import Path
@@ -28,7 +28,7 @@ from typing import Any
 from ..errors import PlanFileError, ViewerError
 from .format import Plan
 from .io import read_plan_json
-from .limits import check_list_lengths
+from .limits import MAX_SAMPLES
 from .versions import FORMAT, FORMAT_2, FORMAT_3, FORMAT_4
 
 __all__ = [
@@ -213,11 +213,39 @@ def check_plan_file(path: str | Path) -> None:
 def _check_schema(data: Any, path: Path) -> None:
     if isinstance(data, dict) and data.get("format") not in (FORMAT, FORMAT_4, FORMAT_3, FORMAT_2):
         return
-    check_list_lengths(data, str(path))  # before the schema's walk over every entry
+    _check_list_lengths(data, str(path))  # before the schema's walk over every entry
     errors = schema_errors(data, "plan")
     if errors:
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
         raise PlanFileError(f"{path}: does not match the plan schema: {errors[0]}{more}")
+
+
+def _check_list_lengths(data: Any, where: str = "plan") -> None:
+    """Refuse a list longer than :data:`MAX_SAMPLES` entries anywhere in a parsed plan file.
+
+    Before the schema check, which walks every entry (95 million entries in a 181 MiB file
+    took minutes): a long list is refused without a look at its entries.
+
+    Raises:
+        PlanFileError: the first such list, named by its field.
+    """
+    stack: list[tuple[Any, list[str | int]]] = [(data, [])]
+    while stack:
+        node, path = stack.pop()
+        if isinstance(node, Mapping):
+            stack += [(value, [*path, key]) for key, value in node.items()]
+        elif isinstance(node, list):
+            if len(node) > MAX_SAMPLES:
+                field = ".".join(str(p) for p in path) or "(top level)"
+                raise PlanFileError(
+                    f"{where}: {field} has {len(node)} entries, more than the "
+                    f"{MAX_SAMPLES} a plan file may have"
+                )
+            stack += [
+                (value, [*path, k])
+                for k, value in enumerate(node)
+                if isinstance(value, (list, Mapping))
+            ]
 
 
 def load_plan_file(path: str | Path) -> Plan:

@@ -1,8 +1,7 @@
 """The text summary of a plan that ``freefloat plan`` prints (angles in degrees).
 
-A leaf that reads a plan (and the scenario it came from, for the robot's name and a Cartesian
-goal); it computes nothing the plan does not already hold, except the end-effector pose at the
-goal for a Cartesian goal's error.
+A leaf that reads a plan (and its scenario, for the robot's name and a Cartesian goal); it
+computes nothing the plan does not hold, but a Cartesian goal's error and the base's swing.
 """
 
 from __future__ import annotations
@@ -21,6 +20,7 @@ from ..problem.scenario import Scenario
 from ..robot.model import Robot
 from ..solvers.optimise import FALLBACK_NOTE
 from ..verify.segmented import segment_count
+from .base_swing import base_swing_line
 from .robustness import robustness_line
 
 __all__ = [
@@ -108,6 +108,7 @@ def summary(
     lines.append(objective_line(p))
     if p.quality is not None:
         lines.append(quality_line(p))
+    lines.append(base_swing_line(p))
     s = p.solver
     lines.append(
         f"  solver          {s.method}; {len(s.solutions)} solution(s); {s.evaluations} "
