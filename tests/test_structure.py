@@ -167,6 +167,7 @@ def test_layers_flow_one_way_and_no_circle():
         "errors",
         "plugins",
         "files",
+        "staged",
         "_exits",
         "progress",
         "parallel",
