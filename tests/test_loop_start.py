@@ -67,3 +67,36 @@ def test_the_loop_is_the_start_only_where_the_quintic_path_stays_put():
     # the quadratic model's turn: within a fifth of the 0.02 rad asked (it is a model)
     reached = np.linalg.norm(turned.residual(np.zeros(turned.n_free)) - turned.residual(loop))
     assert abs(reached - 0.02) < 0.2 * 0.02
+
+
+def test_reach_of_a_pure_reorientation_starts_from_loops_and_its_goals_plan():
+    """reach printed 0 in every direction for joints that end where they start (the quintic
+    path stays put: singular). It now heads out from a loop on each axis; the goals it prints
+    (at the inner turn and within it) plan. Truth: each plan's RK5 replay lands on its goal."""
+    scenario = _in_place("ur5_servicer", [0.0, 0.0, 0.0])
+    scenario = dataclasses.replace(
+        scenario, safety=dataclasses.replace(scenario.safety, check=False)
+    )
+    axes = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]])
+    report = ff.reachable(scenario, directions=axes, jobs=1)
+    assert report.loops
+    for d in report.directions:
+        assert d.outer == 0.0 and d.inner > np.radians(1.0), d
+        for fraction in (1.0, 0.5):
+            turn = fraction * d.inner
+            goal = quat_multiply(report.drift_quaternion, quat_exp(turn * d.axis))
+            plan = ff.plan(dataclasses.replace(scenario, goal_attitude=goal))
+            replayed = replay_attitude(plan, scenario.robot)
+            assert replayed.error_rad <= 1e-9 + replayed.estimate_rad
+
+
+def test_reach_of_a_planar_pure_reorientation_says_the_bounds_are_of_simple_motions():
+    from freefloat.viz.reach_text import reach_lines
+
+    report = ff.reachable(_in_place("worked_example", [0.0, 0.0, 0.0]))
+    assert report.loops and report.planar
+    assert [d.outer for d in report.directions] == [0.0, 0.0]
+    assert reach_lines(report)[-1] == (
+        "verdict: the goal joints are the start joints: every motion is a loop, which no "
+        "simple-motion bound covers; plan starts each such goal from a loop (docs/reach.md)"
+    )

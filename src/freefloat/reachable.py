@@ -45,8 +45,15 @@ from .problem.simple_bound import SimpleMotionBound, inertia_ratio, simple_motio
 from .progress import LOGGER
 from .robot.light_base import warn_light_base, warn_unphysical
 from .solvers.branch_stop import singular
+from .solvers.loop_start import stays_put
 from .solvers.options import SolveOptions
-from .solvers.reach import DirectionReach, ReachEstimate, default_directions, reach_set
+from .solvers.reach import (
+    DEFAULT_MAX_ANGLE,
+    DirectionReach,
+    ReachEstimate,
+    default_directions,
+    reach_set,
+)
 from .solvers.search import freedom_candidates
 
 __all__ = [
@@ -116,6 +123,9 @@ class ReachReport:
             ``goal_joints`` at its stated attitude: a goal of this report is one with these
             joints (solved anew at another attitude, the joints may move far, and with them
             the drift attitude and the reach).
+        loops: the goal joints are the start joints: every motion is a closed loop, which
+            no simple-motion bound covers (``outer`` 0); the inner estimate heads for
+            :data:`~freefloat.solvers.reach.DEFAULT_MAX_ANGLE` from a loop on each axis.
     """
 
     robot: str
@@ -131,6 +141,7 @@ class ReachReport:
     budget: int
     goal_joints: np.ndarray
     end_effector_goal: bool
+    loops: bool = False
 
     @property
     def largest_outer(self) -> float:
@@ -233,8 +244,9 @@ def reachable(
         found = tuple(
             replace(_limits(drift, axis, 0.0, None), stopped_by=ONE_JOINT) for axis in axes
         )
-    else:
-        estimate = _inner(scenario, problem, drift, axes, outer, budget, progress, jobs)
+    else:  # joints that end where they start move in loops: no simple-motion bound holds
+        heading = np.full(len(axes), DEFAULT_MAX_ANGLE) if stays_put(problem) else outer
+        estimate = _inner(scenario, problem, drift, axes, heading, budget, progress, jobs)
         freedom = estimate.freedom
         found = tuple(
             _limits(drift, axis, float(limit), reached)
@@ -254,6 +266,7 @@ def reachable(
         budget=budget,
         goal_joints=problem.family.goal.copy(),
         end_effector_goal=end_effector_goal,
+        loops=scenario.robot.n > 1 and stays_put(problem),
     )
 
 
@@ -344,4 +357,5 @@ def _planar_report(
         budget=0,
         goal_joints=problem.family.goal.copy(),
         end_effector_goal=end_effector_goal,
+        loops=scenario.robot.n > 1 and stays_put(problem),
     )

@@ -18,15 +18,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.attitude import relative_rotvec
+from ..physics.attitude import quat_exp, quat_multiply, relative_rotvec
 from ..problem.constraints import Constraint
 from ..problem.residual import Problem
+from .continuation import track
+from .options import SolveOptions
 from .restore import broken_constraint
 
-__all__ = ["loop_origin", "loop_start", "stays_put"]
+__all__ = ["LOOP_TURN", "AxisLoop", "loop_on_axis", "loop_origin", "loop_start", "stays_put"]
 
 #: Step of the central differences of the Jacobian that give ``H`` (rad of beta).
 _STEP = 1e-3
@@ -87,3 +90,47 @@ def loop_origin(problem: Problem, constraints: Sequence[Constraint]) -> np.ndarr
     if not np.any(turn):
         return None
     return loop_start(problem, constraints, turn)
+
+
+#: The turn (rad) a reach direction's loop is solved at before it heads on (a multiple of the
+#: reported 0.01 deg, so that the turns reported from it are too).
+LOOP_TURN = math.radians(1.0)
+
+
+@dataclass(frozen=True)
+class AxisLoop:
+    """A loop solved onto a turn about one axis (:func:`loop_on_axis`).
+
+    Attributes:
+        turn: the turn it reaches about the axis from the quintic attitude (rad).
+        beta: its free coefficients (rad or m); None when none was found.
+        why_not: why none was found ("" when one was).
+    """
+
+    turn: float
+    beta: np.ndarray | None
+    why_not: str = ""
+
+
+def loop_on_axis(
+    problem: Problem,
+    quintic: np.ndarray,
+    axis: np.ndarray,
+    constraints: Sequence[Constraint],
+    options: SolveOptions,
+) -> AxisLoop:
+    """A loop that turns the spacecraft exactly :data:`LOOP_TURN` about ``axis``.
+
+    ``axis``: unit, base frame at ``quintic``, the attitude ``[x, y, z, w]`` of the path that
+    stays put. The quadratic model's loop (:func:`loop_origin`), then the planner's
+    continuation from its own attitude onto that turn: the reach then heads on along the axis
+    from an exact point.
+    """
+    target = problem.with_goal(quat_multiply(quintic, quat_exp(LOOP_TURN * axis)))
+    loop = loop_origin(target, constraints)
+    if loop is None:
+        return AxisLoop(0.0, None, "no loop within the constraints turns it about this axis")
+    found = track(target, constraints, options, loop)
+    if not found.reached:
+        return AxisLoop(0.0, None, f"the loop about this axis stopped: {found.stopped_by}")
+    return AxisLoop(LOOP_TURN, found.beta)

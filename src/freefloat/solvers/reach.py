@@ -1,13 +1,12 @@
 """Reachable attitude set of a spatial problem, estimated from inside by continuation.
 
-From the attitude the quintic path reaches, continuation (:func:`.continuation.track`) heads
-towards a far goal in each of a set of directions and stops where it cannot go on (a joint's
-limit, a singular map, the freedom of the path family). The attitudes up to that angle along
-the direction were reached by solved paths within the constraints on the way, so the set of
-these segments is an *inner* estimate of the reachable set with the given freedom: more
-freedom (or paths the continuation does not find) may reach further. (The planner heading for
-a nearer goal takes the same steps but its own last one, which can fail where the traced
-steps did not: docs/reach.md.)
+From the attitude the quintic path reaches (from a loop on the axis when it stays put,
+:func:`.loop_start.loop_on_axis`), continuation (:func:`.continuation.track`) heads towards
+a far goal in each of a set of directions and stops where it cannot go on (a joint's limit,
+a singular map, the freedom of the path family). The attitudes up to that angle were reached
+by solved paths within the constraints, so these segments are an *inner* estimate of the
+reachable set with the given freedom. (The planner heading for a nearer goal takes the same
+steps but its own last one, which can fail where the traced ones did not: docs/reach.md.)
 """
 
 from __future__ import annotations
@@ -31,6 +30,7 @@ from .drift_start import (
     drift_start,
     rounded_down,
 )
+from .loop_start import loop_on_axis, stays_put
 from .options import SolveOptions
 from .restore import broken_constraint, broken_rows_first
 from .tracked import BranchPoint
@@ -142,15 +142,12 @@ def _confirmed(
 ) -> tuple[float, np.ndarray]:
     """The largest turn up to ``reached`` that the planner's own continuation solves.
 
-    Tracking towards a farther goal (``trace``, within ``constraints``) solves the points
-    on the way only to the intermediate tolerance; the planner heads for the goal itself,
-    with its final tolerance and the stall check. Its run towards a nearer goal takes the
-    traced steps up to where it parts from the branch (:func:`_parting`), so it is resumed
-    from there, not repeated. The turn is asked as the planner would ask it, rounded down to
-    a multiple of ``step`` (rad; 0: not rounded), so the reported turn is one the planner
-    reaches; when the planner stops short, the next try (at most :data:`CONFIRM_TRIES` in
-    all) asks for the traced point before it, which the branch reached in one step from
-    where they part. Returns the turn (rad) and its path.
+    Tracking towards a farther goal (``trace``) solves the points on the way only to the
+    intermediate tolerance; the planner heads for the goal itself (final tolerance, stall
+    check), taking the traced steps up to where it parts from the branch (:func:`_parting`):
+    resumed from there. The turn is rounded down to a multiple of ``step`` (rad; 0: not),
+    as reported; when the planner stops short, the next try (at most :data:`CONFIRM_TRIES`)
+    asks for the traced point before. Returns the turn (rad) and its path.
     """
     for _ in range(CONFIRM_TRIES):
         reached = rounded_down(reached, step)
@@ -238,8 +235,7 @@ def _direction(
     return reached, stopped_by, beta
 
 
-#: Called after each direction with (directions done, directions in all, its reach); with
-#: several jobs, in the order the directions finish.
+#: Called after each direction: (directions done, in all, its reach), in the order they finish.
 ReachProgress = Callable[[int, int, DirectionReach], None]
 
 
@@ -274,13 +270,17 @@ def _one_direction(shared: _Shared, axis: np.ndarray, angle: float) -> _Spent:
     before, maps = problem.evaluations, problem.map_evaluations
     # no path within the constraints at the drift attitude: none to report
     reached, stopped_by, beta = 0.0, start.why_not, start.beta
-    origin = start.beta
-    if angle > 0.0 and origin is not None:
+    origin, quintic, offset = start.beta, shared.quintic, 0.0
+    if angle > 0.0 and origin is not None and stays_put(problem):  # loops: start on one
+        loop = loop_on_axis(problem, quintic, axis, eager, shared.options)
+        origin, stopped_by, offset = loop.beta, loop.why_not, loop.turn
+        quintic = quat_multiply(quintic, quat_exp(offset * axis))  # the turns go on from it
+    if angle > offset and origin is not None:
         reached, stopped_by, beta = _direction(
             problem,
-            shared.quintic,
+            quintic,
             axis,
-            angle,
+            angle - offset,
             list(shared.tracked),
             eager,
             shared.options,
@@ -288,6 +288,7 @@ def _one_direction(shared: _Shared, axis: np.ndarray, angle: float) -> _Spent:
             shared.step,
             origin,
         )
+        reached += offset
         if shared.confirm and start.restored is not None and reached > 0.0:
             target = partial(_target, problem, shared.quintic, axis)
             found = confirmed_from(

@@ -11,7 +11,8 @@ from ..physics.attitude import geodesic_angle, relative_rotvec
 from ..reachable import SMALL_REACH_DEG, ReachReport
 from ..robot.model import Robot
 from ..solvers.hints import finger_hint
-from ..solvers.reach import ReachEstimate
+from ..solvers.loop_start import LOOP_TURN
+from ..solvers.reach import DEFAULT_MAX_ANGLE, ReachEstimate
 
 __all__ = ["estimate_lines", "goal_joint_lines", "reach_lines", "verdict"]
 
@@ -23,6 +24,11 @@ def _vector(values: np.ndarray, digits: int = 4) -> str:
 def verdict(report: ReachReport) -> str:
     """One line when the reach is small, naming why (the inertia ratio); "" otherwise."""
     largest = math.degrees(report.largest_outer)
+    if report.loops:
+        return (
+            "the goal joints are the start joints: every motion is a loop, which no simple-"
+            "motion bound covers; plan starts each such goal from a loop (docs/reach.md)"
+        )
     if len(report.freedom) == 1:
         quaternion = [float(v) for v in report.drift_quaternion]
         return (
@@ -102,9 +108,15 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
             "  the joint's travel);",
             "  a path whose joints go back and forth is not bounded by it: plan may turn further",
         ]
+        heads = (
+            f"from a {math.degrees(LOOP_TURN):g} deg loop about each axis towards "
+            f"{math.degrees(DEFAULT_MAX_ANGLE):g} deg (the joints end where they start)"
+            if report.loops
+            else "from the drift attitude towards the outer bound"
+        )
         if report.budget > 0:
             lines += [
-                f"inner estimate: continuation from the drift attitude towards the outer bound, "
+                f"inner estimate: continuation {heads}, "
                 f"freedom +{max(report.freedom)} per joint, {report.budget} residual evaluations "
                 "per continuation pass;",
                 "  the goal at 'inner' about a listed axis is solved by plan's own search, and",
@@ -133,7 +145,8 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
     skipped = report.budget == 0 and not report.planar  # no inner estimate: nothing to paste
     for d in report.directions:
         axis = " ".join(f"{x:+.2f}" for x in d.axis)
-        why = d.stopped_by or "its outer bound (heads no further)"
+        headed = f"the {math.degrees(DEFAULT_MAX_ANGLE):g} deg it headed for"
+        why = d.stopped_by or (headed if report.loops else "its outer bound (heads no further)")
         if skipped:
             why = "-"
         if d.breaks:
