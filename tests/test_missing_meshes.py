@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 import freefloat as ff
@@ -81,7 +82,21 @@ def test_links_without_visuals_are_drawn_from_their_collisions_or_said_undrawn(t
     assert (drawn["link1_0"].shape, drawn["link1_0"].size) == ("sphere", (0.07,))
     assert drawn["link1_0"].element == "collision" and drawn["base_0"].element == "visual"
     assert drawn["link1_0"].placement.translation == pytest.approx([0.5, 0.0, 0.0])
-    assert not any(name.startswith("link2") for name in drawn)
+    # link2 (nothing to draw): a ball at its frame, a rod to its child joint at x = 1 m (its
+    # URDF's ee_joint origin); Robonaut 2, Canadarm2 and VISPA showed only their trails
+    assert sorted(n for n in drawn if n.startswith("link2")) == ["link2_rod0", "link2_skeleton"]
+    ball, rod = drawn["link2_skeleton"], drawn["link2_rod0"]
+    robot = ff.load_robot(path)
+    frame = robot.model.frames[robot.model.getFrameId("link2", pin.FrameType.BODY)]
+    assert (ball.shape, ball.element) == ("sphere", "skeleton")
+    assert ball.placement.isApprox(frame.placement) and ball.joint == frame.parentJoint
+    assert rod.shape == "capsule" and rod.size[1] == pytest.approx(1.0)
+    local = frame.placement.actInv(rod.placement)  # in link2's frame
+    assert local.translation == pytest.approx([0.5, 0.0, 0.0], abs=1e-12)
+    assert local.rotation[:, 2] == pytest.approx([1.0, 0.0, 0.0], abs=1e-12)  # along the rod
     said = [r.getMessage() for r in caplog.records]
     assert any("have no <visual> (e.g. link1): drawn from their <collision>" in m for m in said)
-    assert any("neither a <visual> nor a <collision> shape (e.g. link2)" in m for m in said)
+    assert any(
+        "neither a <visual> nor a <collision> shape (e.g. link2): drawn as a skeleton" in m
+        for m in said
+    )

@@ -102,6 +102,8 @@ def visual_model(robot: Robot) -> list[Visual]:
         if not elements:
             elements = link.findall("collision")
             (borrowed if elements else bare if _massive(link) else []).append(name)
+        if not elements and _massive(link):  # a body with nothing to draw: its skeleton
+            out += _skeleton(root, name, frame, robot)
         for k, element in enumerate(elements):
             label = f"{name}_{k}"
             placement = frame.placement * _origin(element.find("origin"), robot, label)
@@ -129,6 +131,62 @@ def visual_model(robot: Robot) -> list[Visual]:
     return out
 
 
+#: Radius (m) of the ball at a skeleton link's frame; its rods are half as thick.
+SKELETON_RADIUS = 0.03
+#: A skeleton's colour (RGBA): a steel blue, apart from the robot's own colours.
+SKELETON_RGBA = (0.45, 0.55, 0.7, 1.0)
+
+
+def _skeleton(root: ET.Element, name: str, frame: pin.Frame, robot: Robot) -> list[Visual]:
+    """A link with nothing to draw as a ball at its frame and a rod to each child joint.
+
+    The rods run from the link's frame to the ``<origin>`` of each joint whose parent it is
+    (m, in the link's frame); a child at the frame itself gets no rod.
+    """
+    joint, out = int(frame.parentJoint), []
+    out.append(
+        Visual(
+            f"{name}_skeleton",
+            joint,
+            frame.placement,
+            "sphere",
+            (SKELETON_RADIUS,),
+            None,
+            (1.0, 1.0, 1.0),
+            SKELETON_RGBA,
+            "skeleton",
+        )
+    )
+    for k, child in enumerate(j for j in root.findall("joint") if _parent(j) == name):
+        xyz = np.asarray(_origin(child.find("origin"), robot, f"{name}_rod{k}").translation)
+        length = float(np.linalg.norm(xyz))
+        if not (math.isfinite(length) and length > 1e-6):
+            continue
+        # a capsule runs along its own z: turn z onto the rod, centred halfway
+        rotation = pin.Quaternion.FromTwoVectors(np.array([0.0, 0.0, 1.0]), xyz / length)
+        placement = frame.placement * pin.SE3(rotation.matrix(), 0.5 * xyz)
+        size = (0.5 * SKELETON_RADIUS, length)
+        out.append(
+            Visual(
+                f"{name}_rod{k}",
+                joint,
+                placement,
+                "capsule",
+                size,
+                None,
+                (1.0, 1.0, 1.0),
+                SKELETON_RGBA,
+                "skeleton",
+            )
+        )
+    return out
+
+
+def _parent(joint: ET.Element) -> str:
+    parent = joint.find("parent")
+    return "" if parent is None else parent.get("link", "")
+
+
 def _massive(link: ET.Element) -> bool:
     """Whether a link states a mass above zero (a body, not a bare frame)."""
     mass = link.find("inertial/mass")
@@ -151,7 +209,7 @@ def _say_undrawn(robot: Robot, borrowed: list[str], bare: list[str]) -> None:
     if bare:
         LOGGER.warning(
             "%d link(s) of %s with mass have neither a <visual> nor a <collision> shape (e.g. "
-            "%s): not drawn",
+            "%s): drawn as a skeleton (a ball at the link's frame, rods to its child joints)",
             len(bare),
             urdf,
             bare[0],
