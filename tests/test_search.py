@@ -224,3 +224,28 @@ def test_a_refusal_over_several_goals_reports_the_goal_that_got_closest():
     assert error.asked == 0.35 and error.axis == y and error.reached == pytest.approx(0.30)
     assert error.stopped_by == "d" and error.best_residual == 0.05
     assert str(error).startswith(f"{turned}: reachable up to 17.2 deg of the 20.1 deg asked")
+
+
+def test_a_continuous_joint_sent_the_long_way_round_is_noted(tmp_path, capsys):
+    """q2 from 30 to 380 deg travels 350 deg, where the same pose lies 10 deg back: said, with
+    the way to ask for it (the goal attitude is the one the plain path reaches: it plans).
+    Truth: the difference of the goals as written, less a turn."""
+    from freefloat.cli import main
+    from freefloat.physics.attitude import zyx_from_quat
+    from freefloat.problem.build import problem_from_scenario
+
+    text = WORKED.replace(
+        "joints = { q1 = -60.0, q2 = 90.0 }", "joints = { q1 = -60.0, q2 = 380.0 }"
+    )
+    assert "q2 = 380.0" in text
+    problem = problem_from_scenario(_scenario(tmp_path, text), check_bounds=False)
+    drift = np.degrees(zyx_from_quat(problem.achieved(np.zeros(problem.n_free))))
+    goal = "base_zyx_deg = [0.0, 0.0, 0.0]"
+    assert goal in text
+    path = tmp_path / "s.toml"
+    path.write_text(path.read_text().replace(goal, f"base_zyx_deg = [{float(drift[0])!r}, 0.0, 0.0]"))
+    assert main(["plan", str(path), "-o", str(tmp_path / "p.json")]) == 0
+    assert (
+        "  long way round  q2 travels 350 deg; the same pose lies -10 deg away (continuous: "
+        "give that goal, or [path] allow_full_turns = true to let the planner choose)"
+    ) in capsys.readouterr().out.splitlines()

@@ -18,6 +18,7 @@ from ..problem.residual import INTEGRATION_TOLERANCE
 from ..progress import LOGGER, TIMINGS, stage
 from ..solvers.options import DEFAULT_TOLERANCE, TOLERANCE_RANGE_RAD, SolveOptions
 from ..viz.summary import cartesian_report, robot_label, summary, unlimited_line
+from ..viz.turn_notes import long_way_line
 from .common import (
     DEFAULT_OUT_DIR,
     Commands,
@@ -176,7 +177,15 @@ def run(args: argparse.Namespace) -> int:
         wall_time_s=time.perf_counter() - args.started,
         timings=dict(TIMINGS),
         extra_lines=cartesian,
-        limit_lines=[unlimited_line(scenario.robot)],
+        limit_lines=[
+            unlimited_line(scenario.robot),
+            long_way_line(
+                scenario.robot,
+                result.request.start_joints,
+                result.request.goal_joints,
+                result.solver.full_turns,
+            ),
+        ],
     )
     print("\n".join([text, *after]))
     return 0
