@@ -243,7 +243,8 @@ def test_a_continuous_joint_sent_the_long_way_round_is_noted(tmp_path, capsys):
     goal = "base_zyx_deg = [0.0, 0.0, 0.0]"
     assert goal in text
     path = tmp_path / "s.toml"
-    path.write_text(path.read_text().replace(goal, f"base_zyx_deg = [{float(drift[0])!r}, 0.0, 0.0]"))
+    turned = f"base_zyx_deg = [{float(drift[0])!r}, 0.0, 0.0]"
+    path.write_text(path.read_text().replace(goal, turned))
     assert main(["plan", str(path), "-o", str(tmp_path / "p.json")]) == 0
     assert (
         "  long way round  q2 travels 350 deg; the same pose lies -10 deg away (continuous: "
