@@ -474,6 +474,7 @@ def _message_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str]
         *_edited_and_misnamed_cases(folder, plan_file),
         *_round_25_cases(folder),
         *_round_26_cases(folder, plan_file),
+        *_round_31_cases(folder, plan_file),
     ]
 
 
@@ -546,6 +547,54 @@ def _round_26_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str
         (["plan", cone, "-o", "c.json"], True, "breaks end_effector_cone"),
         (["sensitivity", tampered], True, "disagrees with the recomputation"),
         (["compose", "--arm", "ur5", *compose, *twice], True, "given twice"),
+    ]
+
+
+def _round_31_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str]]:
+    """The thirty-first round's trials: a NaN vertex in a mesh (a traceback), a sweep drawn
+    over 1e308 (a traceback), 1 000 001 sample times (minutes of schema walk), a joint locked
+    twice in [robot] (silently the last), a prefix with a line break, an empty --name, a name
+    too long for the file system, a bag through a dangling link (made at its end), and a
+    correction whose written plan verify refused (it must now verify)."""
+    import struct
+
+    corners = [(0.0, 0.0, 0.0), (0.1, 0.0, 0.0), (0.0, 0.1, 0.0), (math.nan, 0.0, 0.1)]
+    faces = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (2, 0, 3)]
+    body = b"".join(
+        struct.pack("<12fH", 0.0, 0.0, 0.0, *(x for k in f for x in corners[k]), 0) for f in faces
+    )
+    (folder / "nan.stl").write_bytes(b"\0" * 80 + struct.pack("<I", len(faces)) + body)
+    cylinder = '<geometry><cylinder radius="0.05" length="1.0"/></geometry>'
+    mesh = f'<geometry><mesh filename="{folder / "nan.stl"}"/></geometry>'
+    (folder / "nan.urdf").write_text(PLANAR.read_text().replace(cylinder, mesh))
+    scenario_for(PLANAR, folder, "base31.toml")
+    (folder / "huge31.toml").write_text(
+        'scenario = "base31.toml"\n[[axis]]\nkey = "goal.joints.q2"\n'
+        "values = { uniform = [-1e308, 1e308], samples = 2 }\n"
+    )
+    data = json.loads(Path(plan_file).read_text())
+    data["samples"]["t"] = data["samples"]["t"] + [0.0] * 1_000_000
+    (folder / "long.json").write_text(json.dumps(data))
+    twice = scenario_for(PLANAR, folder, "twice.toml")
+    text = twice.read_text()
+    twice.write_text(
+        text.replace(f'robot = "{PLANAR}"', "")
+        + f'[robot]\nurdf = "{PLANAR}"\nlock = ["q2", {{ joint = "q2", value = 45.0 }}]\n'
+    )
+    compose = ["--base-mass", "100", "--base-size", "1", "1", "1", "--mount", "0.5", "0", "0"]
+    (folder / "dangling").symlink_to(folder / "nowhere")
+    corrected = folder / "c179.json"
+    run(["correct", plan_file, "--base-zyx-deg", "179", "0", "0", "-o", corrected, "-q"], folder)
+    return [
+        (["check", scenario_for(folder / "nan.urdf", folder, "n.toml")], True, "not finite"),
+        (["sweep", folder / "huge31.toml", "-o", "h.csv"], True, "magnitude at most 1e+09"),
+        (["verify", folder / "long.json"], True, "more than the 1000000"),
+        (["check", twice], True, "names joint 'q2' twice"),
+        (["compose", "--arm", "ur5", "--prefix", "a\nb_", *compose, "-o", "p.urdf"], True, "break"),
+        (["compose", "--arm", "ur5", *compose, "--name", "", "-o", "n.urdf"], True, "--name"),
+        (["check", "a" * 300], True, "File name too long"),
+        (["export", plan_file, "--format", "ros2-bag", "-o", folder / "dangling"], True, "nothing"),
+        (["verify", corrected], False, ""),
     ]
 
 
