@@ -318,7 +318,11 @@ def _robot_ref(robot: Robot) -> RobotRef:
 
 
 def _residual(problem: Problem, beta: np.ndarray) -> float:
-    """The norm of the attitude residual at ``beta`` on the problem's grid (rad)."""
+    """The norm of the attitude residual at ``beta`` on the problem's grid (rad).
+
+    The chosen root's is the solver's, certified on that grid; another root may have been
+    found on a coarser one (a wild path's differed by 3.9e-9 rad, beyond verify's 1e-9).
+    """
     return float(np.linalg.norm(problem.residual(beta)))
 
 
@@ -330,9 +334,14 @@ def _solver_report(problem: Problem, solution: Solution, sample_time: float) -> 
         evaluations=solution.evaluations,
         residual_rad=solution.residual,
         wall_time_s=solution.wall_time,
-        solutions=[  # each residual on the plan's own grid, as verification recomputes it
-            solution_record(problem, root.beta, _residual(problem, root.beta), root.path_length)
-            for root in solution.roots
+        solutions=[  # the others' residuals on the plan's own grid, as verification's
+            solution_record(
+                problem,
+                root.beta,
+                root.residual if k == 0 else _residual(problem, root.beta),
+                root.path_length,
+            )
+            for k, root in enumerate(solution.roots)
         ],
         integration_steps=problem.steps,
         integration_error_rad=solution.integration_error,
