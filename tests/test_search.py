@@ -248,5 +248,5 @@ def test_a_continuous_joint_sent_the_long_way_round_is_noted(tmp_path, capsys):
     assert main(["plan", str(path), "-o", str(tmp_path / "p.json")]) == 0
     assert (
         "  long way round  q2 travels 350 deg; the same pose lies -10 deg away (continuous: "
-        "give that goal, or [path] allow_full_turns = true to let the planner choose)"
+        "give that goal for the short way)"
     ) in capsys.readouterr().out.splitlines()

@@ -7,6 +7,8 @@ folders' listings and file contents before and after, read with the standard lib
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from freefloat.cli import main
@@ -98,3 +100,38 @@ def test_a_urdf_and_its_srdf_are_written_both_or_neither(tmp_path, monkeypatch):
     monkeypatch.setattr(os, "fsync", real)
     assert write_together({srdf: "new srdf", urdf: "new urdf"}) == urdf
     assert (urdf.read_text(), srdf.read_text()) == ("new urdf", "new srdf")
+
+
+def test_an_existing_folder_is_staged_in_itself_a_new_one_beside(tmp_path, monkeypatch):
+    """Staged beside an existing output folder, plots into a mount point failed ("Invalid
+    cross-device link"), and into a writable folder of a read-only parent: a folder that
+    exists is its own staging ground (same file system, writable)."""
+    import tempfile
+
+    homes = []
+    real = tempfile.mkdtemp
+
+    def recorded(*args, **kwargs):
+        homes.append(Path(kwargs["dir"]))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(tempfile, "mkdtemp", recorded)
+    folder = tmp_path / "plots"
+    for _ in range(2):  # made, then existing
+        with staged_folder(folder) as stage:
+            (stage / "a.png").write_bytes(b"a")
+    assert homes == [tmp_path, folder]
+    assert sorted(p.name for p in folder.iterdir()) == ["a.png"]
+
+
+def test_files_written_together_make_their_folders_and_remove_them_on_failure(tmp_path):
+    import freefloat as ff
+    from freefloat.staged import write_together
+
+    urdf = tmp_path / "new" / "sub" / "s.urdf"
+    (tmp_path / "afile").write_text("")
+    with pytest.raises(ff.FileError):  # a third file under a file: no folder can be made
+        write_together({urdf.with_suffix(".srdf"): "s", urdf: "u", tmp_path / "afile" / "x": ""})
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]  # nothing else made
+    assert write_together({urdf.with_suffix(".srdf"): "srdf", urdf: "urdf"}) == urdf
+    assert (urdf.read_text(), urdf.with_suffix(".srdf").read_text()) == ("urdf", "srdf")

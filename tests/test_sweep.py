@@ -286,7 +286,17 @@ def test_the_inputs_digest_follows_the_robot_file(tmp_path):
     urdf = (tmp_path / "arm.urdf").read_text()
     assert urdf.count('<mass value="40.0"/>') == 1
     (tmp_path / "arm.urdf").write_text(urdf.replace('<mass value="40.0"/>', '<mass value="41.0"/>'))
-    assert inputs_digest(SweepSpec.from_toml(path)) != before
+    edited = inputs_digest(SweepSpec.from_toml(path))
+    assert edited != before
+    # an SRDF beside the URDF (the pairs never checked) is read too, and so is an edit of it
+    srdf = tmp_path / "arm.srdf"
+    srdf.write_text('<robot name="planar_2dof">\n</robot>\n')
+    beside = inputs_digest(SweepSpec.from_toml(path))
+    srdf.write_text(
+        '<robot name="planar_2dof">\n<disable_collisions link1="base" link2="link2" '
+        'reason="Never"/>\n</robot>\n'
+    )
+    assert len({edited, beside, inputs_digest(SweepSpec.from_toml(path))}) == 3
 
 
 def test_a_results_file_saved_with_a_byte_order_mark_resumes(tmp_path):

@@ -177,7 +177,20 @@ def test_a_pair_no_joints_move_is_not_refused_with_move_the_joints(tmp_path, cap
         "start configuration: link1_0 / link3_0 are 0.1 m apart, below the clearance margin" in err
     )
     assert err.rstrip().endswith(
-        "no joint values change this pair's distance: disable the pair in an SRDF or lower "
+        "no joint values change this pair's distance: disable it in an SRDF or lower "
         "[safety] margin_m"
     )
     assert "move the start joints" not in err
+
+    # a keep-out object on that axis: no SRDF spares it; move or shrink it
+    scenario.write_text(
+        scenario.read_text().replace("margin_m = 0.15", "margin_m = 0.05")
+        + '[[obstacles]]\nname = "dish"\nsphere = 0.1\nxyz = [0.0, 0.0, 1.12]\n'
+    )
+    assert main(["plan", str(scenario), "-o", str(tmp_path / "p.json"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "link3_0 / obstacle:dish are 0.02 m apart" in err
+    assert err.rstrip().endswith(
+        "no joint values change this pair's distance: move or shrink the keep-out object or "
+        "lower [safety] margin_m"
+    )

@@ -27,16 +27,21 @@ __all__ = ["staged_folder", "write_together"]
 def staged_folder(target: str | Path) -> Iterator[Path]:
     """A staging folder for ``target``'s files; on success they are moved into ``target``.
 
-    The files are moved with ``os.replace`` while signals are held
-    (:func:`~freefloat.files.signals_held`): an interruption, or a failure while they are
-    written (a full disk), leaves ``target`` as it was, never a mix of old and new files.
-    Files of ``target`` the stage does not hold are left alone. On failure the staging folder
-    and the folders made for it (``target`` and missing parents) are removed.
+    The files are moved with ``os.replace`` (renames on one file system) while signals are
+    held (:func:`~freefloat.files.signals_held`): an interruption, or a failure while they
+    are written (a full disk), leaves ``target`` as it was, never a mix of old and new files
+    (only a rename failing halfway, or SIGKILL, which leaves a hidden ``.freefloat-stage-*``
+    folder, could). Files of ``target`` the stage does not hold are left alone. On failure
+    the staging folder and the folders made for it (``target`` and missing parents) are
+    removed.
     """
     target = Path(target).expanduser().resolve()
     made = [p for p in (target, *target.parents) if not p.exists()]  # deepest first
-    target.parent.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
+    # inside a folder that exists (its own file system, a mount point say, and writable even
+    # where its parent is not); beside one still to be made, which will be on the parent's
+    home = target if target.is_dir() else target.parent
+    home.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=".freefloat-stage-", dir=home))
     try:
         yield stage
         with signals_held():
@@ -59,16 +64,20 @@ def staged_folder(target: str | Path) -> Iterator[Path]:
 def write_together(texts: Mapping[Path, str]) -> Path:
     """Write text files (UTF-8) at once: each to a temporary file beside it, then all renamed.
 
-    The renames happen while signals are held; on any failure (a full disk, an interruption
-    before the renames) none of the files is changed and no temporary file is left. Returns
-    the last path written.
+    Their folders are made as needed. The renames happen while signals are held; on any
+    failure (a full disk, an interruption before the renames) none of the files is changed,
+    no temporary file is left, and no folder made for them. Returns the last path written.
 
     Raises:
         FileError: a file that cannot be written, named.
     """
     temporary: dict[Path, Path] = {}
     path = Path()
+    folders = {p.parent for p in texts}
+    made = sorted({f for p in folders for f in (p, *p.parents) if not f.exists()}, reverse=True)
     try:
+        for folder in folders:
+            folder.mkdir(parents=True, exist_ok=True)
         for path, text in texts.items():
             with signals_held():
                 fd, name = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
@@ -82,10 +91,14 @@ def write_together(texts: Mapping[Path, str]) -> Path:
             for path, name_path in temporary.items():
                 os.replace(name_path, path)
             temporary.clear()
+            made.clear()  # written: the folders stay
     except OSError as exc:
         raise FileError(f"cannot write {path}: {exc.strerror or exc}", str(path)) from None
     finally:
         with signals_held():
             for name_path in temporary.values():
                 name_path.unlink(missing_ok=True)
+            for folder in made:  # deepest first; only those this call made
+                with contextlib.suppress(OSError):
+                    folder.rmdir()
     return path

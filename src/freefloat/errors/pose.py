@@ -49,6 +49,7 @@ class CollisionError(FreeFloatError):
             (the message then asks to move that goal).
         why: what else the reader should know of the pair ("" when nothing).
         fixed: no joint values change the pair's distance (then no joints are asked to move).
+        keep_out: the pair includes a keep-out object (an SRDF does not spare those).
     """
 
     def __init__(
@@ -60,6 +61,7 @@ class CollisionError(FreeFloatError):
         chosen: bool = False,
         why: str = "",
         fixed: bool = False,
+        keep_out: bool = False,
     ) -> None:
         self.where = where
         self.pair = pair
@@ -67,10 +69,12 @@ class CollisionError(FreeFloatError):
         self.margin = float(margin)
         self.chosen = chosen
         self.fixed = fixed
+        self.keep_out = keep_out
         state = "overlap by" if clearance < 0 else "are"
         amount = f"{abs(clearance):.4g} m" + ("" if clearance < 0 else " apart")
         if fixed:
-            move = "no joint values change this pair's distance: disable the pair in an SRDF "
+            way = "move or shrink the keep-out object" if keep_out else "disable it in an SRDF"
+            move = f"no joint values change this pair's distance: {way} "
         elif chosen:
             move = f"move the end-effector goal (inverse kinematics chose the {where} joints) "
         else:

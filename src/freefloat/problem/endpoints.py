@@ -54,10 +54,19 @@ def check_endpoints(
                 if found.distance < constraint.margin:
                     chosen = chosen_goal and where == "goal"
                     why = _swing_note(constraint, found.pair)
-                    fixed = _fixed_distance(constraint.model, found.pair, found.distance)
-                    margin = constraint.margin
+                    model = constraint.model
+                    fixed = _fixed_distance(model, found.pair, found.distance)
+                    objects = [model.geometry.geometryObjects[g] for g in model.pairs[found.pair]]
+                    keep_out = any(o.name.startswith(OBSTACLE_PREFIX) for o in objects)
                     raise CollisionError(
-                        where, found.name, found.distance, margin, chosen, why, fixed
+                        where,
+                        found.name,
+                        found.distance,
+                        constraint.margin,
+                        chosen,
+                        why,
+                        fixed,
+                        keep_out,
                     )
     for where, joints in ends:  # the configuration alone decides, for every path
         for constraint, excess, holds in at_rest(constraints, scenario.robot, joints):

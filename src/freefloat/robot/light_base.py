@@ -56,7 +56,8 @@ def warn_unphysical(robot: Robot) -> None:
     refuse the same flaw in what freefloat builds itself.
     """
     flawed = []
-    for name, inertia in zip(robot.model.names[1:], robot.model.inertias[1:], strict=True):
+    names = [f"the spacecraft ({robot.base_link})", *robot.model.names[2:]]
+    for name, inertia in zip(names, robot.model.inertias[1:], strict=True):
         moments = np.linalg.eigvalsh(np.asarray(inertia.inertia))
         if inertia.mass > 0.0 and moments[0] + moments[1] < moments[2] * (1.0 - TRIANGLE_SLACK):
             flawed.append(f"{name} ({', '.join(f'{m:.4g}' for m in moments)} kg m^2)")

@@ -118,19 +118,20 @@ def loop_on_axis(
     axis: np.ndarray,
     constraints: Sequence[Constraint],
     options: SolveOptions,
+    turn: float = LOOP_TURN,
 ) -> AxisLoop:
-    """A loop that turns the spacecraft exactly :data:`LOOP_TURN` about ``axis``.
+    """A loop that turns the spacecraft exactly ``turn`` (rad) about ``axis``.
 
     ``axis``: unit, base frame at ``quintic``, the attitude ``[x, y, z, w]`` of the path that
     stays put. The quadratic model's loop (:func:`loop_origin`), then the planner's
     continuation from its own attitude onto that turn: the reach then heads on along the axis
     from an exact point.
     """
-    target = problem.with_goal(quat_multiply(quintic, quat_exp(LOOP_TURN * axis)))
+    target = problem.with_goal(quat_multiply(quintic, quat_exp(turn * axis)))
     loop = loop_origin(target, constraints)
     if loop is None:
         return AxisLoop(0.0, None, "no loop within the constraints turns it about this axis")
     found = track(target, constraints, options, loop)
     if not found.reached:
         return AxisLoop(0.0, None, f"the loop about this axis stopped: {found.stopped_by}")
-    return AxisLoop(LOOP_TURN, found.beta)
+    return AxisLoop(turn, found.beta)

@@ -30,7 +30,7 @@ from .drift_start import (
     drift_start,
     rounded_down,
 )
-from .loop_start import loop_on_axis, stays_put
+from .loop_start import LOOP_TURN, loop_on_axis, stays_put
 from .options import SolveOptions
 from .restore import broken_constraint, broken_rows_first
 from .tracked import BranchPoint
@@ -272,10 +272,10 @@ def _one_direction(shared: _Shared, axis: np.ndarray, angle: float) -> _Spent:
     reached, stopped_by, beta = 0.0, start.why_not, start.beta
     origin, quintic, offset = start.beta, shared.quintic, 0.0
     if angle > 0.0 and origin is not None and stays_put(problem):  # loops: start on one
-        loop = loop_on_axis(problem, quintic, axis, eager, shared.options)
-        origin, stopped_by, offset = loop.beta, loop.why_not, loop.turn
-        quintic = quat_multiply(quintic, quat_exp(offset * axis))  # the turns go on from it
-    if angle > offset and origin is not None:
+        loop = loop_on_axis(problem, quintic, axis, eager, shared.options, min(angle, LOOP_TURN))
+        origin, stopped_by, offset, beta = loop.beta, loop.why_not, loop.turn, loop.beta
+        quintic, reached = quat_multiply(quintic, quat_exp(offset * axis)), offset
+    if angle > offset and origin is not None:  # (from a loop: the turns go on from it)
         reached, stopped_by, beta = _direction(
             problem,
             quintic,

@@ -155,7 +155,9 @@ def search(
             if carry is not None:  # continue where less freedom stopped (new ones start at 0)
                 start = problem.family.embed(carry[0], np.asarray(carry[1]))
             else:  # the quintic path, or a loop when it stays put (a pure reorientation)
-                start = loop_origin(problem, constraints or default_constraints())
+                start = loop_origin(
+                    problem, default_constraints() if constraints is None else constraints
+                )
             LOGGER.info(
                 "solve: %s, freedom %s (level %d of %d)%s",
                 label,

@@ -24,8 +24,9 @@ from typing import Any
 
 from ..errors import ScenarioError
 from ..files import atomic_write_text
+from ..problem.scenario import Scenario
+from ..robust.inertial import robot_text
 from ..verify.plan_checks import TOLERANCES
-from .draws import scenario_urdf
 from .jobs import SweepRow
 from .replay import ReplayRow
 from .spec import Job, SweepSpec
@@ -70,21 +71,25 @@ def _header(spec: SweepSpec) -> list[str]:
 def inputs_digest(spec: SweepSpec) -> str:
     """16 hex digits of what every job reads besides its axis values.
 
-    The base scenario's tables and its robot's URDF (the text it is loaded from, inline or
-    read), its SRDF file if it names one, the samples; for a replay sweep, the plan file.
+    The base scenario's tables, its robot's URDF (the text it is loaded from, inline or
+    read) and SRDF (given, beside the URDF, or a composed servicer's), the samples; for a
+    replay sweep, the plan file.
     """
     digest = hashlib.sha256()
-    digest.update(
-        json.dumps([spec.base, spec.samples, spec.replay], sort_keys=True, default=str).encode()
-    )
+    tables = json.dumps([spec.base, spec.samples, spec.replay], sort_keys=True, default=str)
+    digest.update(tables.encode())
     if spec.replay:
         digest.update(spec.scenario_path.read_bytes())
-    else:
-        digest.update(scenario_urdf(spec.base, spec.scenario_path).encode())
-        srdf = spec.base.get("safety", {}).get("srdf")
-        path = spec.scenario_path.parent / str(srdf) if isinstance(srdf, str) else None
-        if path is not None and path.expanduser().is_file():
-            digest.update(path.expanduser().read_bytes())
+        return digest.hexdigest()[:16]
+    scenario = Scenario.from_dict(
+        spec.base, relative_to=spec.scenario_path.parent, source=spec.scenario_path
+    )
+    digest.update(robot_text(scenario.robot).encode())
+    srdf = scenario.safety.srdf
+    if scenario.srdf_text is not None:
+        digest.update(scenario.srdf_text.encode())
+    elif srdf is not None and srdf.expanduser().is_file():
+        digest.update(srdf.expanduser().read_bytes())
     return digest.hexdigest()[:16]
 
 
@@ -214,8 +219,8 @@ class Appender:
             write_rows(spec, path, [])
         else:  # drop a torn last line before appending
             write_rows(spec, path, list(rows.values()))
+        self._inputs = inputs_digest(spec)  # before the file is opened: nothing to leak
         self._fd = os.open(path, os.O_WRONLY | os.O_APPEND)
-        self._inputs = inputs_digest(spec)
 
     def add(self, row: Row) -> None:
         """Append ``row`` as one whole line (one write)."""

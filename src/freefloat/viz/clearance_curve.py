@@ -21,10 +21,19 @@ if TYPE_CHECKING:
     from ..robot.collision import CollisionModel
     from ..robot.model import Robot
 
-__all__ = ["CLEARANCE_SAMPLES", "ClearanceCurve", "clearance_curve"]
+__all__ = ["CLEARANCE_SAMPLES", "ClearanceCurve", "LowestPoint", "clearance_curve"]
 
 #: Instants (evenly spaced over [0, T]) at which the clearance figure recomputes distances.
 CLEARANCE_SAMPLES = 400
+
+
+@dataclass(frozen=True)
+class LowestPoint:
+    """The smallest clearance along a plan: ``distance`` (m) at ``time`` (s), of ``pair``."""
+
+    distance: float
+    time: float
+    pair: int
 
 
 @dataclass(frozen=True)
@@ -46,13 +55,13 @@ class ClearanceCurve:
     pair: np.ndarray
     names: list[str]
     margin: float
-    lowest: tuple[float, float, int]
+    lowest: LowestPoint
 
     @property
     def closest(self) -> tuple[float, float, str]:
         """``(distance m, time s, pair name)`` of the smallest clearance along the plan."""
-        value, when, pair = self.lowest
-        return value, when, self.names[pair]
+        low = self.lowest
+        return low.distance, low.time, self.names[low.pair]
 
 
 def clearance_curve(
@@ -91,15 +100,18 @@ def clearance_curve(
 
 #: Sampled local minima within this of the smallest are refined in time (m).
 _NEAR = 0.01
+#: At most this many of them, the lowest (a count).
+_REFINED = 8
 
 
 def _lowest(
     model: CollisionModel, plan: Plan, t: np.ndarray, smallest: np.ndarray, pair: np.ndarray
-) -> tuple[float, float, int]:
+) -> LowestPoint:
     """The smallest clearance (m), its time (s) and pair, each near-lowest sample refined.
 
-    A bounded scalar search between the neighbouring samples of every sampled local minimum
-    within :data:`_NEAR` of the smallest (to 1e-9 of the duration).
+    A bounded scalar search between the neighbouring samples of the sampled local minima
+    within :data:`_NEAR` of the smallest, the lowest :data:`_REFINED` of them (to 1e-9 of
+    the duration).
     """
     from ..problem.scalar_minimum import scalar_minimum
 
@@ -107,15 +119,21 @@ def _lowest(
         return model.closest_value(plan.joint_positions(np.array([s]))[0])
 
     k = int(np.argmin(smallest))
-    best = (float(smallest[k]), float(t[k]), int(pair[k]))
+    best = LowestPoint(float(smallest[k]), float(t[k]), int(pair[k]))
     inner = (smallest[1:-1] <= smallest[:-2]) & (smallest[1:-1] <= smallest[2:])
     ends = [0] if smallest[0] <= smallest[1] else []
     ends += [len(t) - 1] if smallest[-1] <= smallest[-2] else []
-    for k in sorted({*ends, *(np.flatnonzero(inner) + 1).tolist()}):
-        if smallest[k] > best[0] + _NEAR:
-            continue
+    minima = [
+        k
+        for k in {*ends, *(np.flatnonzero(inner) + 1).tolist()}
+        if smallest[k] <= best.distance + _NEAR
+    ]
+    # the first of a run of equal samples only (a pair whose distance stays put is a run of
+    # minima), and the lowest few: the figure's label needs the lowest point alone
+    minima = [k for k in minima if k == 0 or smallest[k] != smallest[k - 1]]
+    for k in sorted(minima, key=lambda k: (smallest[k], k))[:_REFINED]:
         low, high = t[max(k - 1, 0)], t[min(k + 1, len(t) - 1)]
         found = scalar_minimum(lambda s: at(s)[0], low, high, 1e-9 * plan.duration)
-        if found.value < best[0]:
-            best = (found.value, found.x, at(found.x)[1])
+        if found.value < best.distance:
+            best = LowestPoint(found.value, found.x, at(found.x)[1])
     return best

@@ -2,7 +2,8 @@
 
 A continuous joint's goal of 350 deg from a start of 0 is travelled as +350 deg; the same pose
 lies at -10 deg, ten degrees away. The planner takes the goal as written (the attitude it
-brings depends on the way round), so the summary names the shorter way and how to ask for it.
+brings depends on the way round; ``allow_full_turns`` tries it first too), so the summary names
+the shorter way: a goal to give for it.
 """
 
 from __future__ import annotations
@@ -35,7 +36,4 @@ def long_way_line(
             )
     if not notes:
         return ""
-    return (
-        f"  long way round  {'; '.join(notes)} (continuous: give that goal, or "
-        "[path] allow_full_turns = true to let the planner choose)"
-    )
+    return f"  long way round  {'; '.join(notes)} (continuous: give that goal for the short way)"

@@ -56,8 +56,8 @@ class Visual:
         mesh: the mesh file, for ``"mesh"``.
         scale: the mesh's scale per axis.
         rgba: the URDF's colour, or None when it states none.
-        element: the URDF element drawn: ``"visual"``, or ``"collision"`` for a link that
-            states no visual.
+        element: the URDF element drawn: ``"visual"``, ``"collision"`` for a link that
+            states no visual, ``"skeleton"`` for a body with neither (a ball and rods).
     """
 
     name: str
