@@ -72,6 +72,43 @@ def goal_joint_lines(report: ReachReport, robot: Robot) -> list[str]:
     ]
 
 
+def _outer_lines(report: ReachReport) -> list[str]:
+    """A spatial report's outer bound for simple motions and how the inner estimate ran."""
+    assert report.bound is not None
+    lines: list[str] = []
+    bound = report.bound
+    travel = (
+        "every joint monotone between start and goal"
+        if bound.travel_factor == 1.0
+        else f"every joint travelling at most {bound.travel_factor:g}x its start-goal span"
+    )
+    lines += [
+        f"outer bound for simple motions ({travel}):",
+        f"  the base turns at most {math.degrees(bound.bound):.4g} deg from the start "
+        "attitude (sum over joints of the largest",
+        "  |F1 column| over the configurations such a path visits, sampled and refined, times",
+        "  the joint's travel);",
+        "  a path whose joints go back and forth is not bounded by it: plan may turn further",
+    ]
+    heads = (
+        f"from a {math.degrees(LOOP_TURN):g} deg loop about each axis towards "
+        f"{math.degrees(DEFAULT_MAX_ANGLE):g} deg (the joints end where they start)"
+        if report.loops
+        else "from the drift attitude towards the outer bound"
+    )
+    if report.budget > 0:
+        lines += [
+            f"inner estimate: continuation {heads}, "
+            f"freedom +{max(report.freedom)} per joint, {report.budget} residual evaluations "
+            "per continuation pass;",
+            "  the goal at 'inner' about a listed axis is solved by plan's own search, and",
+            "  nearer goals about it take the same steps (as a rule, not a proof: docs/reach.md)",
+        ]
+    else:
+        lines.append("inner estimate: not computed (--budget 0)")
+    return lines
+
+
 def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
     """The report: drift attitude, outer bound, inner estimate per direction, verdict.
 
@@ -94,37 +131,7 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
             "its timing or its back-and-forth (docs/reach.md)"
         )
     elif report.bound is not None:
-        bound = report.bound
-        travel = (
-            "every joint monotone between start and goal"
-            if bound.travel_factor == 1.0
-            else f"every joint travelling at most {bound.travel_factor:g}x its start-goal span"
-        )
-        lines += [
-            f"outer bound for simple motions ({travel}):",
-            f"  the base turns at most {math.degrees(bound.bound):.4g} deg from the start "
-            "attitude (sum over joints of the largest",
-            "  |F1 column| over the configurations such a path visits, sampled and refined, times",
-            "  the joint's travel);",
-            "  a path whose joints go back and forth is not bounded by it: plan may turn further",
-        ]
-        heads = (
-            f"from a {math.degrees(LOOP_TURN):g} deg loop about each axis towards "
-            f"{math.degrees(DEFAULT_MAX_ANGLE):g} deg (the joints end where they start)"
-            if report.loops
-            else "from the drift attitude towards the outer bound"
-        )
-        if report.budget > 0:
-            lines += [
-                f"inner estimate: continuation {heads}, "
-                f"freedom +{max(report.freedom)} per joint, {report.budget} residual evaluations "
-                "per continuation pass;",
-                "  the goal at 'inner' about a listed axis is solved by plan's own search, and",
-                "  nearer goals about it take the same steps (as a rule, not a proof: "
-                "docs/reach.md)",
-            ]
-        else:
-            lines.append("inner estimate: not computed (--budget 0)")
+        lines += _outer_lines(report)
     else:
         lines.append(
             "planar bounds (docs/method.md section 6): the yaw changes simple motions reach"
