@@ -564,9 +564,14 @@ def _round_31_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str
         struct.pack("<12fH", 0.0, 0.0, 0.0, *(x for k in f for x in corners[k]), 0) for f in faces
     )
     (folder / "nan.stl").write_bytes(b"\0" * 80 + struct.pack("<I", len(faces)) + body)
-    cylinder = '<geometry><cylinder radius="0.05" length="1.0"/></geometry>'
-    mesh = f'<geometry><mesh filename="{folder / "nan.stl"}"/></geometry>'
-    (folder / "nan.urdf").write_text(PLANAR.read_text().replace(cylinder, mesh))
+    collision = (
+        f'<collision><geometry><mesh filename="{folder / "nan.stl"}"/></geometry></collision>'
+    )
+    planar = PLANAR.read_text()
+    link1 = planar.index("</link>", planar.index('<link name="link1">'))
+    (folder / "nan.urdf").write_text(planar[:link1] + collision + planar[link1:])
+    nan_scenario = scenario_for(folder / "nan.urdf", folder, "n.toml")
+    nan_scenario.write_text(nan_scenario.read_text().replace("check = false", "check = true"))
     scenario_for(PLANAR, folder, "base31.toml")
     (folder / "huge31.toml").write_text(
         'scenario = "base31.toml"\n[[axis]]\nkey = "goal.joints.q2"\n'
@@ -586,7 +591,7 @@ def _round_31_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str
     corrected = folder / "c179.json"
     run(["correct", plan_file, "--base-zyx-deg", "179", "0", "0", "-o", corrected, "-q"], folder)
     return [
-        (["check", scenario_for(folder / "nan.urdf", folder, "n.toml")], True, "not finite"),
+        (["check", nan_scenario], True, "not finite"),
         (["sweep", folder / "huge31.toml", "-o", "h.csv"], True, "magnitude at most 1e+09"),
         (["verify", folder / "long.json"], True, "more than the 1000000"),
         (["check", twice], True, "names joint 'q2' twice"),
