@@ -236,6 +236,7 @@ def reachable(
     axes = default_directions() if directions is None else np.atleast_2d(directions)
     axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
     outer = np.array([turn_limit(moved, axis, bound.bound) for axis in axes])
+    loops = scenario.robot.n > 1 and stays_put(problem)  # every motion a closed loop
     before = problem.evaluations
     if budget > 0:  # as plan refuses them: no goal of this scenario plans
         check_endpoints(scenario, scenario_constraints(scenario), end_effector_goal)
@@ -245,7 +246,7 @@ def reachable(
             replace(_limits(drift, axis, 0.0, None), stopped_by=ONE_JOINT) for axis in axes
         )
     else:  # joints that end where they start move in loops: no simple-motion bound holds
-        heading = np.full(len(axes), DEFAULT_MAX_ANGLE) if stays_put(problem) else outer
+        heading = np.full(len(axes), DEFAULT_MAX_ANGLE) if loops else outer
         estimate = _inner(scenario, problem, drift, axes, heading, budget, progress, jobs)
         freedom = estimate.freedom
         found = tuple(
@@ -266,7 +267,7 @@ def reachable(
         budget=budget,
         goal_joints=problem.family.goal.copy(),
         end_effector_goal=end_effector_goal,
-        loops=scenario.robot.n > 1 and stays_put(problem),
+        loops=loops,
     )
 
 

@@ -114,10 +114,11 @@ def check_finite_meshes(geometry: pin.GeometryModel) -> None:
                 f"collision mesh {obj.meshPath} ({obj.name}) has vertex coordinates that are "
                 "not finite numbers (NaN or inf); repair or re-export the mesh"
             )
-        if len(vertices) and float(np.abs(vertices).max()) > MAX_VERTEX_M:
+        farthest = float(np.abs(vertices).max(initial=0.0))
+        if farthest > MAX_VERTEX_M:
             raise ModelError(
                 f"collision mesh {obj.meshPath} ({obj.name}) has a vertex "
-                f"{float(np.abs(vertices).max()):.3g} m from its origin, beyond the "
+                f"{farthest:.3g} m from its origin, beyond the "
                 f"{MAX_VERTEX_M:g} m freefloat takes (a unit slip: mm for m?); scale or "
                 "repair the mesh"
             )

@@ -25,7 +25,7 @@ from ..problem.inertial_sensitivity import attitude_sensitivity
 from ..problem.uncertainty import DEFAULT_UNCERTAINTY, AttitudeSpread, Uncertainty, spread
 from ..robot.model import Robot
 from ..robot.payload import held_payload
-from ..solvers.options import SolveOptions
+from ..solvers.options import DEFAULT_TOLERANCE
 from ..verify.recompute import problem_from_plan
 from .correction import correcting_plan
 
@@ -119,7 +119,7 @@ def correct_plan(path: str | Path | Plan, measured_zyx_deg: Sequence[float]) -> 
     yaw, pitch, roll = (np.radians(float(a)) for a in measured_zyx_deg)
     measured = quat_from_zyx(yaw, pitch, roll)
     goal = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
-    turn, tolerance = geodesic_angle(measured, goal), SolveOptions().tolerance
+    turn, tolerance = geodesic_angle(measured, goal), DEFAULT_TOLERANCE
     if turn <= tolerance:  # the path that stays put already ends there
         return Correction(turn, tolerance, None)
     return Correction(turn, tolerance, correcting_plan(plan, plan_robot(plan), measured))

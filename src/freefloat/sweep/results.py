@@ -150,8 +150,10 @@ def _text_of(value: float | None) -> str:
     return "none" if value is None else repr(value)
 
 
-def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, Row]:
+def read_rows(spec: SweepSpec, output: str | Path, inputs: str | None = None) -> dict[int, Row]:
     """The rows of an existing output file, by job index (resume); empty if there is none.
+
+    ``inputs``: the sweep's :func:`inputs_digest`, if the caller has it (it loads the robot).
 
     Raises:
         ScenarioError: the file holds another sweep (other columns or job values).
@@ -180,7 +182,7 @@ def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, Row]:
     jobs = spec.jobs()
     rows: dict[int, Row] = {}
     n_axes = len(spec.axes)
-    inputs = inputs_digest(spec)
+    inputs = inputs or inputs_digest(spec)
     for number, cells in enumerate(lines[1:], start=2):
         if len(cells) != len(header) or not cells[0].isdigit() or int(cells[0]) >= len(jobs):
             raise ScenarioError(f"{path} line {number} is not a row of this sweep")
@@ -201,9 +203,11 @@ def read_rows(spec: SweepSpec, output: str | Path) -> dict[int, Row]:
     return rows
 
 
-def write_rows(spec: SweepSpec, output: str | Path, rows: Sequence[Row]) -> Path:
-    """Write the whole output file atomically, rows sorted by index."""
-    inputs = inputs_digest(spec)
+def write_rows(
+    spec: SweepSpec, output: str | Path, rows: Sequence[Row], inputs: str | None = None
+) -> Path:
+    """Write the whole output file atomically, rows sorted by index (``inputs``: as read_rows)."""
+    inputs = inputs or inputs_digest(spec)
     text = _line(_header(spec)) + "".join(
         _line(_row_cells(r, inputs)) for r in sorted(rows, key=lambda r: r.index)
     )
@@ -213,13 +217,13 @@ def write_rows(spec: SweepSpec, output: str | Path, rows: Sequence[Row]) -> Path
 class Appender:
     """Appends whole rows to the output file (one ``write`` per row, ``O_APPEND``)."""
 
-    def __init__(self, spec: SweepSpec, path: Path, rows: dict[int, Row]) -> None:
+    def __init__(
+        self, spec: SweepSpec, path: Path, rows: dict[int, Row], inputs: str | None = None
+    ) -> None:
+        self._inputs = inputs or inputs_digest(spec)  # before the file is opened
         path.parent.mkdir(parents=True, exist_ok=True)
-        if not path.is_file() or not rows:
-            write_rows(spec, path, [])
-        else:  # drop a torn last line before appending
-            write_rows(spec, path, list(rows.values()))
-        self._inputs = inputs_digest(spec)  # before the file is opened: nothing to leak
+        # a torn last line of an earlier run is dropped before appending
+        write_rows(spec, path, list(rows.values()) if path.is_file() else [], self._inputs)
         self._fd = os.open(path, os.O_WRONLY | os.O_APPEND)
 
     def add(self, row: Row) -> None:

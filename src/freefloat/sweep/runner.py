@@ -25,7 +25,7 @@ from typing import Any
 from ..errors import InputError
 from ..progress import LOGGER
 from .jobs import _ROBOTS, JobOutcome, run_job_collecting
-from .results import Appender, Row, read_rows, write_rows
+from .results import Appender, Row, inputs_digest, read_rows, write_rows
 from .spec import Job, SweepSpec
 
 __all__ = ["BLAS_ENV", "HANDSHAKE_GRACE", "connect", "sweep"]
@@ -234,10 +234,11 @@ def sweep(
         raise InputError(f"workers must be an integer >= 1, got {workers!r}")
     if client is not None:
         _check_dask(client)
-    done = read_rows(spec, output) if output is not None else {}
+    inputs = inputs_digest(spec) if output is not None else ""  # loads the robot: once
+    done = read_rows(spec, output, inputs) if output is not None else {}
     todo = [job for job in spec.jobs() if job.index not in done]
     rows = dict(done)
-    appender = Appender(spec, Path(output), done) if output is not None else None
+    appender = Appender(spec, Path(output), done, inputs) if output is not None else None
     show = sys.stderr.isatty() if progress is None else progress
     from tqdm import tqdm
 
@@ -265,7 +266,7 @@ def sweep(
             appender.close()
     ordered = [rows[i] for i in sorted(rows)]
     if output is not None:
-        write_rows(spec, output, ordered)
+        write_rows(spec, output, ordered, inputs)
     _warn_spun(ordered)
     return ordered
 
