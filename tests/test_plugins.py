@@ -27,6 +27,7 @@ from freefloat.cli import main
 from freefloat.errors import InputError
 from freefloat.problem.constraints import (
     CONSTRAINTS,
+    BaseSwing,
     Constraint,
     ConstraintRows,
     EndEffectorCone,
@@ -54,6 +55,7 @@ CONSTRAINT_EXAMPLES: dict[str, Callable[[ff.Scenario], Constraint]] = {
         c for c in scenario_constraints(scenario) if c.name == "clearance"
     ),
     "end_effector_cone": lambda _: EndEffectorCone([0.0, 0.0, 1.0], [1.0, 0.0, 0.0], 0.9),
+    "base_swing": lambda _: BaseSwing(0.3),
 }
 
 
@@ -160,11 +162,13 @@ def test_constraint_jacobian_matches_finite_differences(ur5_scenario, name):
 def test_tight_instants_find_the_tightest_value_the_dense_check_finds(ur5_scenario, name):
     # The solvers add rows at a constraint's tight instants: where given, the largest row
     # there is the exact excess of the dense check (for joint limits, the polynomials'
-    # extremes from the roots of their derivatives: another method).
+    # extremes from the roots of their derivatives: another method). On the integration grid
+    # the planner certifies such a path on (the spacecraft's swing follows the attitude).
     constraint = CONSTRAINT_EXAMPLES[name](ur5_scenario)
-    problem = ff.problem_from_scenario(ur5_scenario, extra=[2] * ur5_scenario.robot.n)
+    family = ff.problem_from_scenario(ur5_scenario, extra=[2] * ur5_scenario.robot.n)
     for seed in range(4):
-        beta = 0.8 * np.random.default_rng(seed).normal(size=problem.n_free)
+        beta = 0.8 * np.random.default_rng(seed).normal(size=family.n_free)
+        problem = family.with_steps(family.steps_for(beta))
         tight = constraint.tight_instants(problem, beta)
         assert tight.ndim == 1 and np.all((tight >= 0.0) & (tight <= 1.0))
         assert len(tight) or name != "joint_position_limits"

@@ -34,7 +34,13 @@ from .motion import (
     UnreachableGoalError,
     VelocityLimitError,
 )
-from .pose import CollisionError, EndpointError, JointLimitError, LockedJointError
+from .pose import (
+    CollisionError,
+    EndpointError,
+    GoalAttitudeError,
+    JointLimitError,
+    LockedJointError,
+)
 
 __all__ = [
     "EXCERPT_CHARS",
@@ -45,6 +51,7 @@ __all__ = [
     "EndpointError",
     "FileError",
     "FreeFloatError",
+    "GoalAttitudeError",
     "InfeasibleError",
     "InputError",
     "InputLimitError",

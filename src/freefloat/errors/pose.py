@@ -116,6 +116,27 @@ class EndpointError(FreeFloatError):
         )
 
 
+class GoalAttitudeError(FreeFloatError):
+    """A goal attitude that breaks a constraint of the spacecraft's attitude (rad).
+
+    Every path ends at rest at the goal attitude, so no path keeps the constraint.
+
+    Attributes:
+        constraint: the constraint's name (its scenario table ``[constraints.<name>]``).
+        excess: how far beyond it the goal attitude is (rad).
+        detail: the constraint's own account (the goal's turn from the start, the bound).
+    """
+
+    def __init__(self, constraint: str, excess: float, detail: str) -> None:
+        self.constraint = constraint
+        self.excess = float(excess)
+        self.detail = detail
+        super().__init__(
+            f"goal attitude breaks {constraint} ({detail}), where every path ends; choose a "
+            f"goal attitude nearer the start attitude or loosen [constraints.{constraint}]"
+        )
+
+
 class LockedJointError(FreeFloatError):
     """A joint locked at a value outside its limits (or a goal that moves a locked joint).
 

@@ -15,7 +15,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..errors import CollisionError, EndpointError
+from ..errors import CollisionError, EndpointError, GoalAttitudeError
+from ..physics.attitude import geodesic_angle
 from ..robot.collision import CollisionModel, clearance_at
 from ..robot.designed_bodies import designed_bodies
 from ..robot.geometry import OBSTACLE_PREFIX
@@ -73,6 +74,20 @@ def check_endpoints(
             if not holds:
                 chosen = chosen_goal and where == "goal"
                 raise EndpointError(where, constraint.name, excess.value, excess.detail, chosen)
+
+
+def check_goal_attitude(scenario: Scenario, constraints: Sequence[Constraint]) -> None:
+    """Refuse a goal attitude that breaks a constraint of the attitude (every path ends there).
+
+    Raises:
+        GoalAttitudeError: the goal's turn from the start attitude (rad) beyond a constraint's
+            bound (:meth:`Constraint.at_goal_turn`: the spacecraft's swing).
+    """
+    turn = geodesic_angle(scenario.start_attitude, scenario.goal_attitude)
+    for constraint in constraints:
+        excess = constraint.at_goal_turn(turn)
+        if excess is not None and excess.value > constraint.tolerance:
+            raise GoalAttitudeError(constraint.name, excess.value, excess.detail)
 
 
 def at_rest(

@@ -8,6 +8,7 @@ from .base import (
     Excess,
     LimitPeak,
 )
+from .base_swing import BaseSwing
 from .clearance import Clearance
 from .end_effector_cone import EndEffectorCone
 from .joint_effort import JointEffortLimits
@@ -24,6 +25,7 @@ from .registry import (
 __all__ = [
     "CONSTRAINTS",
     "DEFAULT_INSTANTS",
+    "BaseSwing",
     "Clearance",
     "Constraint",
     "ConstraintRows",

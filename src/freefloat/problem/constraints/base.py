@@ -150,6 +150,16 @@ class Constraint(abc.ABC):
         """
         return None
 
+    def at_goal_turn(self, turn: float) -> Excess | None:
+        """Its excess at a goal attitude ``turn`` rad from the start attitude, or None.
+
+        Every path ends at rest at the goal attitude: a constraint of the spacecraft's attitude
+        that the goal breaks holds on no path, and ``plan`` refuses it before any search
+        (:func:`freefloat.problem.endpoints.check_goal_attitude`). None (the default): the
+        constraint does not judge the attitude.
+        """
+        return None
+
     def to_record(self) -> dict[str, Any]:
         """The constraint's parameters, JSON-ready, as a plan and a scenario write them.
 

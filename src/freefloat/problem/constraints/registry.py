@@ -23,6 +23,7 @@ from ...robot.collision import CollisionModel, Obstacle, collision_model, known_
 from ...robot.geometry import BuiltPerSource
 from ...robot.model import Robot
 from .base import Constraint
+from .base_swing import BaseSwing
 from .clearance import Clearance
 from .end_effector_cone import EndEffectorCone
 from .joint_effort import JointEffortLimits
@@ -80,6 +81,7 @@ CONSTRAINTS: Registry[type[Constraint]] = Registry(
             JointEffortLimits,
             Clearance,
             EndEffectorCone,
+            BaseSwing,
         )
     },
     plugin_class(Constraint, "constraint"),

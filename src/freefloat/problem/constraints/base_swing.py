@@ -1,0 +1,200 @@
+"""A bound on how far the spacecraft turns from its start attitude on the way.
+
+Antennas, sun sensors and solar arrays point where the spacecraft does: a motion that reaches
+a goal a few degrees off may swing the spacecraft much further on the way (docs/method.md).
+This constraint keeps the rotation angle of ``q(0)^-1 q(t)`` (the turn from the start
+attitude, whatever axis) within ``max_angle`` at every instant. The rows are
+
+    g = theta(s) - max_angle   (rad; feasible <= 0)
+
+from the planner's own integration with its exact Jacobian (:mod:`..swing_rows`). The dense
+check is independent of it: Pinocchio's centroidal map for the angular velocity and Butcher's
+fifth-order Runge-Kutta method on a uniform grid (:mod:`freefloat.physics.swing`), doubled
+until the largest turn no longer moves, each of the largest sampled turns then refined in time
+by a bounded scalar search; its error estimate is the difference between the last two
+levels. A goal attitude beyond the bound is refused before any search
+(:meth:`BaseSwing.at_goal_turn`). Scenario key and plan record::
+
+    [constraints.base_swing]
+    max_deg = 10.0                  # 0 < max < 180 [deg], from the start attitude
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from ...errors import InputError, excerpt
+from ...physics.momentum import MomentumMap
+from ...physics.swing import RatesAt, TurnTrack, track_turn, turn_between
+from ...robot.model import Robot
+from ..paths import JointPolynomials
+from ..residual import Problem
+from ..scalar_minimum import scalar_minimum
+from ..swing_rows import swing_profile, swing_rows
+from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
+
+__all__ = ["BaseSwing"]
+
+#: Steps of the dense check's first level, and the most it doubles to.
+_FIRST_STEPS, _MAX_STEPS = 64, 8192
+#: The dense check stops doubling when its largest turn moves by less than this (rad).
+_SETTLED = 1e-11
+#: Largest sampled turns of a level refined in time (a count).
+_REFINED = 3
+#: Instants of the cheap profile that finds the tightest instants, per problem step (the
+#: profile is at least :data:`_PROFILE_MIN` and at most :data:`_PROFILE_MAX` instants).
+_PROFILE_PER_STEP, _PROFILE_MIN, _PROFILE_MAX = 4, 513, 4097
+
+
+class BaseSwing(Constraint):
+    """The spacecraft within ``max_angle`` (rad) of its start attitude at every instant.
+
+    Args:
+        max_angle: the largest turn allowed (rad), strictly between 0 and pi.
+    """
+
+    name = "base_swing"
+    unit = "rad"
+    tolerance = 1e-7
+
+    def __init__(self, max_angle: float) -> None:
+        if isinstance(max_angle, bool) or not 0.0 < float(max_angle) < math.pi:
+            raise InputError(
+                f"base_swing max angle must be between 0 and pi rad (exclusive), got "
+                f"{excerpt(max_angle)}"
+            )
+        self.max_angle = float(max_angle)
+        #: the bound as its record gave it (deg), recorded back as given
+        self._max_deg: float | None = None
+
+    # -- records ----------------------------------------------------------------------------
+
+    def to_record(self) -> dict[str, Any]:
+        """``max_deg``: the largest turn from the start attitude (deg)."""
+        return {"max_deg": math.degrees(self.max_angle) if self._max_deg is None else self._max_deg}
+
+    @classmethod
+    def from_record(cls, record: Mapping[str, Any]) -> BaseSwing:
+        """The bound its table describes (see the module docstring).
+
+        Raises:
+            InputError: an unknown or missing key, or a bad value, named.
+        """
+        unknown = [k for k in record if k != "max_deg"]
+        if unknown or "max_deg" not in record:
+            what = f"unknown key {excerpt(unknown[0])}" if unknown else "missing 'max_deg'"
+            raise InputError(f"base_swing: {what}; its key is max_deg")
+        value = record["max_deg"]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 180:
+            raise InputError(
+                "base_swing max_deg must be a number between 0 and 180 (exclusive) [deg], got "
+                f"{excerpt(value)}"
+            )
+        swing = cls(math.radians(value))
+        swing._max_deg = float(value)
+        return swing
+
+    # -- the goal ---------------------------------------------------------------------------
+
+    def at_goal_turn(self, turn: float) -> Excess:
+        """Its excess (rad) at a goal attitude ``turn`` rad from the start, where paths end."""
+        detail = (
+            f"it lies {math.degrees(turn):.4g} deg from the start attitude, at most "
+            f"{math.degrees(self.max_angle):.4g} deg allowed"
+        )
+        return Excess(turn - self.max_angle, 0.0, detail)
+
+    def _said(self, turn: float, when: float) -> str:
+        return (
+            f"the spacecraft {math.degrees(turn):.4g} deg from its start attitude at "
+            f"t = {when:.4g} s, at most {math.degrees(self.max_angle):.4g} deg allowed"
+        )
+
+    # -- the solvers' rows --------------------------------------------------------------------
+
+    def rows(
+        self, problem: Problem, beta: np.ndarray, instants: np.ndarray = DEFAULT_INSTANTS
+    ) -> ConstraintRows:
+        """``theta - max_angle`` (rad) at the instants, exact Jacobian in beta."""
+        found = swing_rows(problem, beta, np.asarray(instants, dtype=float))
+        return ConstraintRows(found.turns - self.max_angle, found.jacobian)
+
+    def tight_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
+        """The largest turns' instants on a fine profile, each refined by a parabola's vertex."""
+        count = int(np.clip(_PROFILE_PER_STEP * problem.steps + 1, _PROFILE_MIN, _PROFILE_MAX))
+        s, turns = swing_profile(problem, beta, count)
+        return _peaks(s, turns)
+
+    # -- finished paths -----------------------------------------------------------------------
+
+    def _track(self, robot: Robot, path: JointPolynomials) -> tuple[TurnTrack, TurnTrack, RatesAt]:
+        """The last two levels of the independent integration (coarse, fine), and its rates."""
+        mmap = MomentumMap(robot)
+
+        def omega_at(t: np.ndarray) -> np.ndarray:
+            samples = path.evaluate(t)
+            return mmap.pinocchio_rates(samples.q, samples.qd)
+
+        coarse = track_turn(omega_at, path.duration, _FIRST_STEPS)
+        while True:
+            fine = track_turn(omega_at, path.duration, 2 * coarse.steps, coarse)
+            moved = abs(float(fine.turns.max()) - float(coarse.turns.max()))
+            if moved <= _SETTLED or fine.steps >= _MAX_STEPS:
+                return coarse, fine, omega_at
+            coarse = fine
+
+    def _largest(self, track: TurnTrack, duration: float, omega_at: RatesAt) -> tuple[float, float]:
+        """The largest turn (rad) and its time (s): sampled, the largest refined in time."""
+        turns = track.turns
+        best = int(np.argmax(turns))
+        value, when = float(turns[best]), float(track.times[best])
+        for k in _local_maxima(turns)[:_REFINED]:
+            lo, hi = float(track.times[k - 1]), float(track.times[k + 1])
+            found = scalar_minimum(
+                lambda t: -turn_between(omega_at, track, t, duration), lo, hi, 1e-9 * duration
+            )
+            if -found.value > value:
+                value, when = -found.value, found.x
+        return value, when
+
+    def critical_times(self, robot: Robot, path: JointPolynomials) -> np.ndarray:
+        """Times (s) of the local maxima of the turn on the dense check's grid."""
+        _, fine, _ = self._track(robot, path)
+        return fine.times[_local_maxima(fine.turns)]
+
+    def excess(self, robot: Robot, path: JointPolynomials) -> Excess:
+        """The largest turn beyond ``max_angle`` (rad), with a step-doubling error estimate."""
+        coarse, fine, omega_at = self._track(robot, path)
+        value, when = self._largest(fine, path.duration, omega_at)
+        rough, _ = self._largest(coarse, path.duration, omega_at)
+        return Excess(value - self.max_angle, abs(value - rough), self._said(value, when))
+
+    def __repr__(self) -> str:
+        return f"BaseSwing(max_angle={self.max_angle!r})"
+
+
+def _local_maxima(values: np.ndarray) -> np.ndarray:
+    """Indices of interior local maxima, largest first."""
+    inner = np.flatnonzero((values[1:-1] >= values[:-2]) & (values[1:-1] >= values[2:])) + 1
+    return inner[np.argsort(values[inner])[::-1]]
+
+
+def _peaks(s: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Normalised instants of the largest values of a profile at ``s``.
+
+    The end when the profile is largest there, and each of the largest interior maxima moved
+    to the vertex of the parabola through it and its neighbours.
+    """
+    found = []
+    if values[-1] >= values[-2]:
+        found.append(float(s[-1]))
+    for k in _local_maxima(values)[:_REFINED]:
+        left, middle, right = values[k - 1], values[k], values[k + 1]
+        curve = left - 2.0 * middle + right
+        shift = 0.5 * (left - right) / curve if curve < 0.0 else 0.0
+        found.append(float(s[k] + np.clip(shift, -1.0, 1.0) * (s[k + 1] - s[k])))
+    return np.array(found)
