@@ -1,0 +1,186 @@
+"""The bound on the spacecraft's swing on the way (``[constraints.base_swing]``).
+
+Truths the code under test does not compute: closed forms of a turn about a fixed axis, and
+SciPy's DOP853 integration of the attitude from Pinocchio's centroidal map written out here
+(``v_base = -A_b^-1 A_q qdot``) along the plan's joint polynomials. The Jacobian against finite
+differences and the record's round trip are in the plug-in contract (test_plugins).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import minimize_scalar
+
+import freefloat as ff
+from freefloat.cli import main
+from freefloat.errors import InputError
+from freefloat.physics.swing import track_turn, turn_between
+from freefloat.problem.constraints import BaseSwing, constraint_from_record
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: The Panda servicer turned 3 deg in yaw with its arm back where it started: the closed loop
+#: the planner starts from swings the spacecraft well beyond 3 deg on the way.
+REORIENTATION = """
+robot = "panda_servicer"
+duration = 20.0
+
+[start]
+joints = { panda_joint1 = 0.0, panda_joint2 = -45.0, panda_joint3 = 0.0, panda_joint4 = -135.0, panda_joint5 = 0.0, panda_joint6 = 90.0, panda_joint7 = 45.0 }
+base_zyx_deg = [0.0, 0.0, 0.0]
+
+[goal]
+joints = { panda_joint1 = 0.0, panda_joint2 = -45.0, panda_joint3 = 0.0, panda_joint4 = -135.0, panda_joint5 = 0.0, panda_joint6 = 90.0, panda_joint7 = 45.0 }
+base_zyx_deg = [3.0, 0.0, 0.0]
+"""
+
+
+def _turn_about_an_axis(rate, duration: float, steps: int):
+    axis = np.array([1.0, 2.0, -2.0]) / 3.0
+    return track_turn(lambda t: np.outer(rate(t), axis), duration, steps)
+
+
+def test_the_turn_about_a_fixed_axis_is_the_integral_of_the_rate():
+    # omega = u a sin(2 pi t / T): out and back, the turn (1 - cos(2 pi t / T)) a T / (2 pi)
+    a, duration = 0.3, 7.0
+
+    def rate(t):
+        return a * np.sin(2.0 * math.pi * np.asarray(t) / duration)
+
+    def closed(t):
+        return a * duration / (2.0 * math.pi) * (1.0 - np.cos(2.0 * math.pi * t / duration))
+
+    track = _turn_about_an_axis(rate, duration, 64)
+    np.testing.assert_allclose(track.turns, closed(track.times), atol=1e-11)
+    finer = track_turn(lambda t: np.outer(rate(t), [1.0, 2.0, -2.0]) / 3.0, duration, 128, track)
+    np.testing.assert_allclose(finer.turns, closed(finer.times), atol=1e-12)
+    assert np.array_equal(finer.rates[0::2], track.rates)  # reused, not recomputed
+    for t in (0.0, 1.234, 3.5, 6.99, 7.0):
+        assert turn_between(
+            lambda s: np.outer(rate(s), [1.0, 2.0, -2.0]) / 3.0, track, t, duration
+        ) == pytest.approx(closed(t), abs=1e-10)  # one partial step of the 64
+
+
+def _scipy_swing(plan: ff.Plan, robot: ff.Robot) -> tuple[float, float]:
+    """Largest turn (rad) from the start attitude and its time (s), by SciPy from Pinocchio."""
+    model, data = robot.model, robot.model.createData()
+    columns = [joint.idx_v for joint in robot.joints]
+    path = plan.path()
+
+    def rhs(t: float, y: np.ndarray) -> np.ndarray:
+        samples = path.evaluate(np.array([t]))
+        ag = pin.computeCentroidalMap(model, data, robot.configuration(samples.q[0]))
+        omega = -np.linalg.solve(ag[:, :6], ag[:, columns] @ samples.qd[0])[3:]
+        x, yy, z, w = y
+        wx, wy, wz = omega
+        return 0.5 * np.array(
+            [w * wx + yy * wz - z * wy, w * wy + z * wx - x * wz, w * wz + x * wy - yy * wx,
+             -x * wx - yy * wy - z * wz]
+        )  # fmt: skip
+
+    found = solve_ivp(
+        rhs, (0.0, plan.duration), [0.0, 0.0, 0.0, 1.0], "DOP853", rtol=1e-12, atol=1e-13,
+        dense_output=True,
+    )  # fmt: skip
+    def turn(t):
+        y = found.sol(t)
+        return 2.0 * np.arctan2(np.linalg.norm(y[:3], axis=0), np.abs(y[3]))
+
+    t = np.linspace(0.0, plan.duration, 4001)
+    k = int(np.argmax(turn(t)))
+    if k in (0, len(t) - 1):
+        return float(turn(t[k])), float(t[k])
+    best = minimize_scalar(
+        lambda x: -turn(x), bounds=(t[k - 1], t[k + 1]), method="bounded",
+        options={"xatol": 1e-9},
+    )  # fmt: skip
+    return float(-best.fun), float(best.x)
+
+
+@pytest.fixture(scope="module")
+def reorientation(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("swing") / "reorientation.toml"
+    path.write_text(REORIENTATION)
+    return path
+
+
+def test_a_reorientation_keeps_the_spacecraft_within_the_bound(reorientation, tmp_path, capsys):
+    scenario = ff.Scenario.from_toml(reorientation)
+    free, _ = _scipy_swing(ff.plan(scenario), scenario.robot)
+    assert math.degrees(free) > 7.0  # unbounded, the loop swings it far beyond the goal
+    bounded = tmp_path / "bounded.toml"
+    bounded.write_text(REORIENTATION + "\n[constraints.base_swing]\nmax_deg = 5.0\n")
+    out = tmp_path / "plan.json"
+    assert main(["plan", str(bounded), "-o", str(out), "-q"]) == 0
+    plan = ff.Plan.load(out)
+    swing, when = _scipy_swing(plan, scenario.robot)
+    assert math.degrees(swing) <= 5.0 + 1e-7
+    assert math.degrees(swing) > 4.0  # the bound binds: the path goes up to it
+    data = json.loads(out.read_text())
+    assert {"name": "base_swing", "parameters": {"max_deg": 5.0}} in data["constraints"]
+    check = next(c for c in data["verification"]["checks"] if c["name"] == "base_swing")
+    assert check["value"] == pytest.approx(swing - math.radians(5.0), abs=1e-8)
+    said = re.search(r"at t = ([\d.]+) s", check["detail"])
+    assert said and float(said.group(1)) == pytest.approx(when, abs=2 * plan.duration / 4000)
+    assert main(["verify", str(out)]) == 0
+    capsys.readouterr()
+
+
+def test_the_swing_of_a_path_does_not_depend_on_its_duration(reorientation):
+    # Zero momentum: the attitude follows the joints' path, not how fast it is run.
+    scenario = ff.Scenario.from_toml(reorientation)
+    plan = ff.plan(scenario)
+    swing = BaseSwing(math.radians(20.0))
+    slow = ff.problem.paths.JointPolynomials(plan.path().coefficients, 2.0 * plan.duration)
+    fast, stretched = swing.excess(scenario.robot, plan.path()), swing.excess(scenario.robot, slow)
+    assert fast.value == pytest.approx(stretched.value, abs=1e-10)
+    assert fast.value == pytest.approx(
+        _scipy_swing(plan, scenario.robot)[0] - math.radians(20.0), abs=1e-8
+    )
+
+
+def test_a_goal_attitude_beyond_the_bound_is_refused_before_any_search(tmp_path, capsys):
+    # The worked example's goal lies 50 deg (yaw) from its start.
+    path = tmp_path / "s.toml"
+    path.write_text(
+        ff.default_scenario_path().read_text() + "\n[constraints.base_swing]\nmax_deg = 30\n"
+    )
+    with pytest.raises(ff.GoalAttitudeError) as info:
+        ff.plan(ff.Scenario.from_toml(path))
+    assert info.value.constraint == "base_swing"
+    assert info.value.excess == pytest.approx(math.radians(20.0), abs=1e-12)
+    assert str(info.value) == (
+        "goal attitude breaks base_swing (it lies 50 deg from the start attitude, at most 30 "
+        "deg allowed), where every path ends; choose a goal attitude nearer the start attitude "
+        "or loosen [constraints.base_swing]"
+    )
+    assert main(["plan", str(path), "-o", str(tmp_path / "p.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "goal attitude breaks base_swing" in err
+    assert not (tmp_path / "p.json").exists()
+
+
+@pytest.mark.parametrize(
+    ("record", "said"),
+    [
+        ({}, "base_swing: missing 'max_deg'; its key is max_deg"),
+        ({"max_deg": 5, "axis": 1}, "base_swing: unknown key 'axis'; its key is max_deg"),
+        ({"max_deg": 0}, "between 0 and 180 (exclusive) [deg], got 0"),
+        ({"max_deg": 180.0}, "between 0 and 180 (exclusive) [deg], got 180.0"),
+        ({"max_deg": True}, "between 0 and 180 (exclusive) [deg], got True"),
+        ({"max_deg": "5"}, "between 0 and 180 (exclusive) [deg], got '5'"),
+        ({"max_deg": math.nan}, "between 0 and 180 (exclusive) [deg], got nan"),
+    ],
+)
+def test_bad_bounds_are_named(record, said):
+    with pytest.raises(InputError) as info:
+        constraint_from_record("base_swing", record)
+    assert said in str(info.value)
