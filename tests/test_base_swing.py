@@ -34,12 +34,28 @@ robot = "panda_servicer"
 duration = 20.0
 
 [start]
-joints = { panda_joint1 = 0.0, panda_joint2 = -45.0, panda_joint3 = 0.0, panda_joint4 = -135.0, panda_joint5 = 0.0, panda_joint6 = 90.0, panda_joint7 = 45.0 }
 base_zyx_deg = [0.0, 0.0, 0.0]
 
+[start.joints]
+panda_joint1 = 0.0
+panda_joint2 = -45.0
+panda_joint3 = 0.0
+panda_joint4 = -135.0
+panda_joint5 = 0.0
+panda_joint6 = 90.0
+panda_joint7 = 45.0
+
 [goal]
-joints = { panda_joint1 = 0.0, panda_joint2 = -45.0, panda_joint3 = 0.0, panda_joint4 = -135.0, panda_joint5 = 0.0, panda_joint6 = 90.0, panda_joint7 = 45.0 }
 base_zyx_deg = [3.0, 0.0, 0.0]
+
+[goal.joints]
+panda_joint1 = 0.0
+panda_joint2 = -45.0
+panda_joint3 = 0.0
+panda_joint4 = -135.0
+panda_joint5 = 0.0
+panda_joint6 = 90.0
+panda_joint7 = 45.0
 """
 
 
@@ -90,6 +106,7 @@ def _scipy_swing(plan: ff.Plan, robot: ff.Robot) -> tuple[float, float]:
         rhs, (0.0, plan.duration), [0.0, 0.0, 0.0, 1.0], "DOP853", rtol=1e-12, atol=1e-13,
         dense_output=True,
     )  # fmt: skip
+
     def turn(t):
         y = found.sol(t)
         return 2.0 * np.arctan2(np.linalg.norm(y[:3], axis=0), np.abs(y[3]))
