@@ -19,10 +19,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.attitude import (
+    GAUSS3_NODES,
     magnus_increment_jacobian,
     magnus_increments,
     propagate,
-    quat_log,
+    quat_exp,
+    quat_multiply,
     quat_to_matrix,
     relative_quat,
     so3_right_jacobian,
@@ -31,7 +33,7 @@ from ..physics.attitude import (
 from ..physics.swing import quaternion_turn
 from .residual import Problem
 
-__all__ = ["SwingRows", "swing_profile", "swing_rows"]
+__all__ = ["SwingRows", "swing_peaks", "swing_rows"]
 
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
@@ -89,21 +91,61 @@ def swing_rows(problem: Problem, beta: np.ndarray, s: np.ndarray) -> SwingRows:
     spatial = np.einsum("mij,mjk,mkf->mif", attitudes[1:], so3_right_jacobian(increments), dw)
     summed = np.concatenate([np.zeros((1, 3, n_free)), np.cumsum(spatial, axis=0)])
     chosen = relative[at]
-    turns = quaternion_turn(chosen)
-    axes = np.array([_unit_axis(r) for r in chosen])
     body = np.einsum("mji,mjf->mif", attitudes[at], summed[at])
-    return SwingRows(turns, np.einsum("mi,mif->mf", axes, body))
+    return SwingRows(quaternion_turn(chosen), np.einsum("mi,mif->mf", _unit_axes(chosen), body))
 
 
-def _unit_axis(r: np.ndarray) -> np.ndarray:
-    """Unit rotation axis of a quaternion (zeros at the identity: the turn is smallest there)."""
-    phi = quat_log(r)
-    norm = float(np.linalg.norm(phi))
-    return phi / norm if norm > 0.0 else np.zeros(3)
+def _unit_axes(r: np.ndarray) -> np.ndarray:
+    """(M, 3) unit rotation axes of quaternions (zeros at the identity, where the turn is least).
+
+    The axis of ``[v, w]`` is ``v / |v|``, turned over when ``w < 0`` (``-r`` is the same
+    rotation, by the angle the turn takes, at most pi).
+    """
+    norms = np.linalg.norm(r[:, :3], axis=1, keepdims=True)
+    sign = np.where(r[:, 3:] < 0.0, -1.0, 1.0)
+    return np.divide(sign * r[:, :3], norms, out=np.zeros((len(r), 3)), where=norms > 0.0)
 
 
-def swing_profile(problem: Problem, beta: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
-    """The turn (rad) at ``count`` uniform normalised instants from 0 to 1 (no derivatives)."""
-    s = np.linspace(0.0, 1.0, count)
-    quaternions = problem.attitudes(np.asarray(beta, dtype=float), s)
-    return s, quaternion_turn(relative_quat(problem.start_quaternion, quaternions))
+def swing_peaks(problem: Problem, beta: np.ndarray, count: int) -> np.ndarray:
+    """Normalised instants of the largest turns, found cheaply.
+
+    The turn on the problem's own grid; the end when it is largest there, and each of the
+    ``count`` largest interior maxima refined twice: the turn at :data:`_REFINE_POINTS`
+    instants across the two steps about it (each reached by one Magnus step from the grid
+    point before them), then the vertex of the parabola through the largest and its
+    neighbours.
+    """
+    beta = np.asarray(beta, dtype=float)
+    s = np.linspace(0.0, 1.0, problem.steps + 1)
+    relative = relative_quat(problem.start_quaternion, problem.attitudes(beta, s))
+    turns = quaternion_turn(relative)
+    found = [1.0] if turns[-1] >= turns[-2] else []
+    inner = np.flatnonzero((turns[1:-1] >= turns[:-2]) & (turns[1:-1] >= turns[2:])) + 1
+    for k in inner[np.argsort(turns[inner])[::-1][:count]].tolist():
+        low, high = float(s[k - 1]), float(s[k + 1])
+        for _ in range(2):
+            points = np.linspace(low, high, _REFINE_POINTS)
+            near = quaternion_turn(_stepped(problem, beta, s[k - 1], relative[k - 1], points))
+            j = int(np.clip(np.argmax(near), 1, _REFINE_POINTS - 2))
+            low, high = float(points[j - 1]), float(points[j + 1])
+        left, middle, right = near[j - 1], near[j], near[j + 1]
+        curve = left - 2.0 * middle + right
+        shift = 0.5 * (left - right) / curve if curve < 0.0 else 0.0
+        found.append(float(points[j] + np.clip(shift, -1.0, 1.0) * (points[1] - points[0])))
+    return np.array(found)
+
+
+#: Instants of each refinement round of :func:`swing_peaks` (a count).
+_REFINE_POINTS = 17
+
+
+def _stepped(
+    problem: Problem, beta: np.ndarray, s0: float, r0: np.ndarray, points: np.ndarray
+) -> np.ndarray:
+    """(K, 4) relative attitudes at ``points``, each one Magnus step from ``r0`` at ``s0``."""
+    edges = np.stack([np.full(len(points), s0), points], axis=1)
+    nodes = (edges[:, :1] + (edges[:, 1:] - edges[:, :1]) * GAUSS3_NODES[None, :]).ravel()
+    path = problem.family.evaluate(beta, nodes)
+    omega = problem.mmap.base_rates(path.q, path.qd).omega.reshape(len(points), 3, 3)
+    step = quat_exp(magnus_increments(omega, points - s0))
+    return quat_multiply(np.broadcast_to(r0, step.shape), step)

@@ -34,7 +34,7 @@ from ...robot.model import Robot
 from ..paths import JointPolynomials
 from ..residual import Problem
 from ..scalar_minimum import scalar_minimum
-from ..swing_rows import swing_profile, swing_rows
+from ..swing_rows import swing_peaks, swing_rows
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 
 __all__ = ["BaseSwing"]
@@ -45,9 +45,6 @@ _FIRST_STEPS, _MAX_STEPS = 64, 8192
 _SETTLED = 1e-11
 #: Largest sampled turns of a level refined in time (a count).
 _REFINED = 3
-#: Instants of the cheap profile that finds the tightest instants, per problem step (the
-#: profile is at least :data:`_PROFILE_MIN` and at most :data:`_PROFILE_MAX` instants).
-_PROFILE_PER_STEP, _PROFILE_MIN, _PROFILE_MAX = 4, 513, 4097
 
 
 class BaseSwing(Constraint):
@@ -124,10 +121,8 @@ class BaseSwing(Constraint):
         return ConstraintRows(found.turns - self.max_angle, found.jacobian)
 
     def tight_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
-        """The largest turns' instants on a fine profile, each refined by a parabola's vertex."""
-        count = int(np.clip(_PROFILE_PER_STEP * problem.steps + 1, _PROFILE_MIN, _PROFILE_MAX))
-        s, turns = swing_profile(problem, beta, count)
-        return _peaks(s, turns)
+        """The largest turns' instants, each refined in time (:func:`..swing_rows.swing_peaks`)."""
+        return swing_peaks(problem, beta, _REFINED)
 
     # -- finished paths -----------------------------------------------------------------------
 
@@ -181,20 +176,3 @@ def _local_maxima(values: np.ndarray) -> np.ndarray:
     """Indices of interior local maxima, largest first."""
     inner = np.flatnonzero((values[1:-1] >= values[:-2]) & (values[1:-1] >= values[2:])) + 1
     return inner[np.argsort(values[inner])[::-1]]
-
-
-def _peaks(s: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """Normalised instants of the largest values of a profile at ``s``.
-
-    The end when the profile is largest there, and each of the largest interior maxima moved
-    to the vertex of the parabola through it and its neighbours.
-    """
-    found = []
-    if values[-1] >= values[-2]:
-        found.append(float(s[-1]))
-    for k in _local_maxima(values)[:_REFINED]:
-        left, middle, right = values[k - 1], values[k], values[k + 1]
-        curve = left - 2.0 * middle + right
-        shift = 0.5 * (left - right) / curve if curve < 0.0 else 0.0
-        found.append(float(s[k] + np.clip(shift, -1.0, 1.0) * (s[k + 1] - s[k])))
-    return np.array(found)
