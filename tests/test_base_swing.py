@@ -24,6 +24,7 @@ from freefloat.cli import main
 from freefloat.errors import InputError
 from freefloat.physics.swing import track_turn, turn_between
 from freefloat.problem.constraints import BaseSwing, constraint_from_record
+from freefloat.viz.summary import summary
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -149,6 +150,8 @@ def test_a_reorientation_keeps_the_spacecraft_within_the_bound(reorientation, tm
     assert said and float(said.group(1)) == pytest.approx(when, abs=2 * plan.duration / 4000)
     assert main(["verify", str(out)]) == 0
     capsys.readouterr()
+    line = next(x for x in summary(plan).splitlines() if x.startswith("  spacecraft"))
+    assert line.endswith("at most 5 deg allowed ([constraints.base_swing])")
 
 
 def test_the_swing_of_a_path_does_not_depend_on_its_duration(reorientation):

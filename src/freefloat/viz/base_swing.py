@@ -2,7 +2,8 @@
 
 A goal a few degrees off may be reached by a motion that swings the spacecraft much further
 on the way (Canadarm2 holding a 5 t payload: 82.5 deg for a 2.46 deg goal), which matters for
-pointing, communication and power: the summary says how far, and when.
+pointing, communication and power: the summary says how far, and when, and the bound
+``[constraints.base_swing]`` set.
 """
 
 from __future__ import annotations
@@ -24,8 +25,10 @@ def base_swing_line(p: Plan) -> str:
     turns = [geodesic_angle(start, q) for q in quaternions]
     k = int(np.argmax(turns))
     goal = geodesic_angle(start, np.asarray(p.base.target_quaternion_xyzw, dtype=float))
+    bounds = [c.parameters["max_deg"] for c in p.constraints if c.name == "base_swing"]
+    bound = f", at most {bounds[0]:.4g} deg allowed ([constraints.base_swing])" if bounds else ""
     return (
         f"  spacecraft      turns up to {math.degrees(turns[k]):.3g} deg from its start "
         f"attitude on the way (at t = {float(p.samples.t[k]):.4g} s, the largest of "
-        f"{len(turns)} samples); its goal lies {math.degrees(goal):.3g} deg from it"
+        f"{len(turns)} samples); its goal lies {math.degrees(goal):.3g} deg from it{bound}"
     )
