@@ -475,6 +475,7 @@ def _message_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str]
         *_round_25_cases(folder),
         *_round_26_cases(folder, plan_file),
         *_round_31_cases(folder, plan_file),
+        *_round_32_cases(folder),
     ]
 
 
@@ -601,6 +602,44 @@ def _round_31_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str
         (["export", plan_file, "--format", "ros2-bag", "-o", folder / "dangling"], True, "nothing"),
         (["verify", corrected], False, ""),
     ]
+
+
+def _round_32_cases(folder: Path) -> list[tuple[list, bool, str]]:
+    """The thirty-second round's new key, [constraints.base_swing]: bad bounds, a goal beyond
+    the bound, a plan whose recorded bound was edited (tightened, or to nonsense)."""
+    base = scenario_for(PLANAR, folder, "swing.toml").read_text()
+    cases: list[tuple[list, bool, str]] = []
+    for k, (value, said) in enumerate(
+        [
+            ("-1", "between 0 and 180"),
+            ("0", "between 0 and 180"),
+            ("180", "between 0 and 180"),
+            ("inf", "between 0 and 180"),
+            ("nan", "between 0 and 180"),
+            ('"5"', "between 0 and 180"),
+            ("true", "between 0 and 180"),
+            ("[5]", "between 0 and 180"),
+            ("30", "goal attitude breaks base_swing"),
+        ]
+    ):
+        path = folder / f"swing{k}.toml"
+        path.write_text(base + f"\n[constraints.base_swing]\nmax_deg = {value}\n")
+        cases.append((["plan", path, "-o", f"swing{k}.json"], True, said))
+    for name, table in (("swing_missing", ""), ("swing_extra", "max_deg = 60\naxis = 1\n")):
+        (folder / f"{name}.toml").write_text(base + f"\n[constraints.base_swing]\n{table}")
+        cases.append((["plan", folder / f"{name}.toml", "-o", "x.json"], True, "base_swing"))
+    good = folder / "swing_ok.toml"
+    good.write_text(base + "\n[constraints.base_swing]\nmax_deg = 60\n")
+    planned = folder / "swing_ok.json"
+    run(["plan", good, "-o", planned, "-q"], folder)
+    for name, bound, said in (("tight", 1.0, "disagrees"), ("nonsense", -5.0, "between 0")):
+        doc = json.loads(planned.read_text())
+        for item in doc["constraints"]:
+            if item["name"] == "base_swing":
+                item["parameters"]["max_deg"] = bound
+        (folder / f"swing_{name}.json").write_text(json.dumps(doc))
+        cases.append((["verify", folder / f"swing_{name}.json"], True, said))
+    return [*cases, (["verify", planned], False, "")]
 
 
 def _edited_and_misnamed_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str]]:
