@@ -445,6 +445,42 @@ def test_the_header_names_the_end_effector_that_holds_the_payload(tmp_path):
         assert joint.find("parent").get("link") == order[0]
 
 
+def test_held_by_names_the_end_effector_that_holds_the_payload(tmp_path):
+    """``[payload] held_by`` picks the holder whatever the order the end effectors are listed
+    in (ElementTree reads where the URDF fixes it); a name that is not one of them is refused
+    with the ones that are."""
+    import xml.etree.ElementTree as ET
+
+    from freefloat.robot.payload import PAYLOAD_LINK
+    from freefloat.viz.summary import robot_label
+
+    text = (ROOT / "robots" / "scenarios" / "dual_ur5_servicer.toml").read_text()
+    text = text.replace(
+        'robot = "dual_ur5_servicer"', f'robot = "{ROOT / "robots"}/dual_ur5_servicer.urdf"'
+    )
+    path = tmp_path / "held.toml"
+    for holder in ("right_tool0", "left_tool0"):
+        path.write_text(
+            text + f'\n[payload]\nmass = 5.0\nbox = [0.1, 0.1, 0.1]\nheld_by = "{holder}"\n'
+        )
+        scenario = ff.Scenario.from_toml(path)
+        assert tuple(scenario.robot.end_effectors) == ("left_tool0", "right_tool0")  # order kept
+        assert robot_label(scenario).endswith(f", a 5 kg payload held by {holder})")
+        root = ET.fromstring(scenario.robot.urdf_text)
+        joint = next(j for j in root.iter("joint") if j.find("child").get("link") == PAYLOAD_LINK)
+        assert joint.find("parent").get("link") == holder
+    for bad, said in (
+        ('"wrist_3_link"', "[payload] held_by 'wrist_3_link' is not one of the scenario's end "
+         "effectors: 'left_tool0', 'right_tool0'"),
+        ('""', "[payload] held_by must name the end effector that holds it, got ''"),
+        ("3", "[payload] held_by must name the end effector that holds it, got 3"),
+    ):  # fmt: skip
+        path.write_text(text + f"\n[payload]\nmass = 5.0\nbox = [0.1, 0.1, 0.1]\nheld_by = {bad}\n")
+        with pytest.raises(ff.ScenarioError) as info:
+            ff.Scenario.from_toml(path)
+        assert said in str(info.value)
+
+
 def test_a_body_whose_inertia_no_solid_has_is_warned_of_once(tmp_path, caplog):
     """link2's moments 10, 3.33, 3.33 kg m^2 (10 > 3.33 + 3.33) were planned without a word,
     where the payload and --base-inertia checks refuse the same flaw. Truth: the moments as

@@ -1,7 +1,8 @@
-"""The ``[payload]`` table of a scenario: a captured payload fixed to the end effector.
+"""The ``[payload]`` table of a scenario: a captured payload fixed to an end effector.
 
 Mass in kg, centre of mass ``com_xyz`` in m (end-effector frame), ``inertia`` about the centre
-of mass in kg m^2 (``[ixx, iyy, izz, ixy, ixz, iyz]``), or a uniform ``box`` (edges, m).
+of mass in kg m^2 (``[ixx, iyy, izz, ixy, ixz, iyz]``), or a uniform ``box`` (edges, m);
+``held_by`` names the end effector that holds it (default: the scenario's first).
 """
 
 from __future__ import annotations
@@ -9,15 +10,15 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from ..errors import InputError, ScenarioError
+from ..errors import InputError, ScenarioError, excerpt
 from ..robot.payload import Payload, check_mass
 from .limits import MAX_MAGNITUDE
 from .robot_table import check_keys, number, numbers, triple
 
-__all__ = ["PAYLOAD_KEYS", "payload_table"]
+__all__ = ["PAYLOAD_KEYS", "payload_holder", "payload_table"]
 
 #: Keys of the ``[payload]`` table.
-PAYLOAD_KEYS = ("mass", "com_xyz", "inertia", "box")
+PAYLOAD_KEYS = ("mass", "com_xyz", "inertia", "box", "held_by")
 
 
 def payload_table(table: Any) -> Payload | None:
@@ -45,3 +46,28 @@ def payload_table(table: Any) -> Payload | None:
         "[payload] needs inertia = [ixx, iyy, izz, ixy, ixz, iyz] about its centre of mass "
         "[kg m^2], or a box [m] for a uniform box's"
     )
+
+
+def payload_holder(table: Mapping[str, Any], end_effectors: tuple[str, ...]) -> str | None:
+    """The link that holds the payload: ``held_by``, or the first of ``end_effectors``.
+
+    None when the table names none and the scenario lists no end effector (the robot's
+    default end effector then holds it).
+
+    Raises:
+        ScenarioError: ``held_by`` not a frame name, or not one of the scenario's end
+            effectors when it lists them.
+    """
+    held_by = table.get("held_by")
+    if held_by is None:
+        return end_effectors[0] if end_effectors else None
+    if not isinstance(held_by, str) or not held_by.strip():
+        raise ScenarioError(
+            f"[payload] held_by must name the end effector that holds it, got {excerpt(held_by)}"
+        )
+    if end_effectors and held_by not in end_effectors:
+        raise ScenarioError(
+            f"[payload] held_by {excerpt(held_by)} is not one of the scenario's end effectors: "
+            f"{', '.join(repr(n) for n in end_effectors)}"
+        )
+    return held_by

@@ -37,7 +37,8 @@ Safety, keep-out objects and a captured payload (all optional)::
     box = [0.02, 2.0, 0.8]         # or sphere = r, or capsule = [r, length]  [m]
     xyz = [0.0, 1.4, 0.0]          # [m]
     rpy_deg = [0.0, 0.0, 0.0]      # [deg]
-    [payload]                      # rigidly held by the end effector
+    [payload]                      # rigidly held by an end effector
+    held_by = "tool0"              # optional: which one (default: the scenario's first)
     mass = 300.0                   # [kg]
     com_xyz = [0.0, 0.0, 0.4]      # its CM in the end-effector frame [m]
     inertia = [20.0, 20.0, 20.0, 0.0, 0.0, 0.0]   # about that CM [kg m^2]
@@ -91,7 +92,7 @@ from .cache_files import write_cached
 from .constraints.base import Constraint
 from .limits import check_duration, check_joint_count
 from .objectives.registry import DEFAULT_OBJECTIVE
-from .payload_table import payload_table
+from .payload_table import payload_holder, payload_table
 from .robot_table import robot_source, scenario_errors, servicer_cache_dir
 from .scenario_safety import Safety, constraint_tables, safety_tables
 from .scenario_tables import (
@@ -238,8 +239,8 @@ class Scenario:
         names = end_effector_names(data, origin)
         payload = payload_table(data.get("payload"))
         if payload is not None:
-            first = names[0] if names else None
-            urdf, robot_text = _with_payload(urdf, robot_text, first, payload)
+            holder = payload_holder(data["payload"], names)
+            urdf, robot_text = _with_payload(urdf, robot_text, holder, payload)
         same = known is not None and known.urdf == Path(urdf).expanduser().resolve()
         if same and known is not None and (not names or names == known.end_effectors):
             robot = known

@@ -18,6 +18,7 @@ from ..plans.versions import MONOMIAL_BASIS
 from ..problem.constraints import CONSTRAINTS
 from ..problem.scenario import Scenario
 from ..robot.model import Robot
+from ..robot.payload import payload_holder
 from ..solvers.optimise import FALLBACK_NOTE
 from ..verify.segmented import segment_count
 from .base_swing import base_swing_line
@@ -351,10 +352,9 @@ def robot_label(scenario: Scenario) -> str:
 
 def _held(scenario: Scenario) -> str:
     """``, a 5 kg payload held by panda_hand``: which end effector holds it ("" if none)."""
-    payload = scenario.payload
-    if payload is None:
+    if (payload := scenario.payload) is None:
         return ""
-    return f", a {payload.mass:g} kg payload held by {scenario.robot.end_effector}"
+    return f", a {payload.mass:g} kg payload held by {payload_holder(scenario.robot)}"
 
 
 def rotation_angle(rotation: np.ndarray) -> float:
