@@ -135,3 +135,39 @@ def test_files_written_together_make_their_folders_and_remove_them_on_failure(tm
     assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]  # nothing else made
     assert write_together({urdf.with_suffix(".srdf"): "srdf", urdf: "urdf"}) == urdf
     assert (urdf.read_text(), urdf.with_suffix(".srdf").read_text()) == ("urdf", "srdf")
+
+
+def test_a_stage_left_by_sigkill_is_removed_by_the_next_one(tmp_path):
+    """SIGKILL cannot be caught: a process killed while its files were staged left a hidden
+    ``.freefloat-stage-*`` folder for good. The next stage in that folder removes it; a stage
+    of a process still running, of another host, or of an older freefloat is kept. Truth: a
+    real child process killed with SIGKILL inside the stage, and the folder's listing."""
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import os, signal, sys\n"
+        "from freefloat.staged import staged_folder\n"
+        "with staged_folder(sys.argv[1]) as stage:\n"
+        "    (stage / 'half.png').write_bytes(b'half')\n"
+        "    os.kill(os.getpid(), signal.SIGKILL)\n"
+    )
+    folder = tmp_path / "plots"
+    folder.mkdir()
+    (folder / "old.png").write_bytes(b"old")
+    child = subprocess.run([sys.executable, "-c", code, str(folder)], check=False)
+    assert child.returncode == -9
+    left = [p.name for p in folder.iterdir() if p.name.startswith(".freefloat-stage-")]
+    assert len(left) == 1 and (folder / left[0] / "half.png").exists()
+    host = left[0].removeprefix(".freefloat-stage-").split("-")[0]
+    kept = [
+        f".freefloat-stage-{host}-{os.getpid()}-live",  # this process: running
+        ".freefloat-stage-otherhost-1-abc",  # another host's
+        ".freefloat-stage-x1y2z3",  # an older freefloat's: no maker in its name
+    ]
+    for name in kept:
+        (folder / name).mkdir()
+    with staged_folder(folder) as stage:
+        (stage / "new.png").write_bytes(b"new")
+    assert sorted(p.name for p in folder.iterdir()) == sorted(["new.png", "old.png", *kept])

@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
+import socket
 import tempfile
 from collections.abc import Iterator, Mapping
 from pathlib import Path
@@ -20,7 +21,7 @@ from pathlib import Path
 from .errors import FileError
 from .files import default_file_mode, signals_held
 
-__all__ = ["staged_folder", "write_together"]
+__all__ = ["remove_abandoned", "staged_folder", "write_together"]
 
 
 @contextlib.contextmanager
@@ -30,10 +31,10 @@ def staged_folder(target: str | Path) -> Iterator[Path]:
     The files are moved with ``os.replace`` (renames on one file system) while signals are
     held (:func:`~freefloat.files.signals_held`): an interruption, or a failure while they
     are written (a full disk), leaves ``target`` as it was, never a mix of old and new files
-    (only a rename failing halfway, or SIGKILL, which leaves a hidden ``.freefloat-stage-*``
-    folder, could). Files of ``target`` the stage does not hold are left alone. On failure
-    the staging folder and the folders made for it (``target`` and missing parents) are
-    removed.
+    (only a rename failing halfway could). Files of ``target`` the stage does not hold are
+    left alone. On failure the staging folder and the folders made for it (``target`` and
+    missing parents) are removed. A stage that SIGKILL left behind is removed by the next
+    stage made in the same folder (:func:`remove_abandoned`).
     """
     target = Path(target).expanduser().resolve()
     made = [p for p in (target, *target.parents) if not p.exists()]  # deepest first
@@ -41,7 +42,8 @@ def staged_folder(target: str | Path) -> Iterator[Path]:
     # where its parent is not); beside one still to be made, which will be on the parent's
     home = target if target.is_dir() else target.parent
     home.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=".freefloat-stage-", dir=home))
+    remove_abandoned(home)
+    stage = Path(tempfile.mkdtemp(prefix=f"{_PREFIX}{_owner(os.getpid())}-", dir=home))
     try:
         yield stage
         with signals_held():
@@ -59,6 +61,48 @@ def staged_folder(target: str | Path) -> Iterator[Path]:
                 folder.rmdir()
         raise
     shutil.rmtree(stage, ignore_errors=True)
+
+
+#: Start of a staging folder's name; the host and process that made it follow.
+_PREFIX = ".freefloat-stage-"
+
+
+def _owner(pid: int) -> str:
+    """``<host>-<pid>``: who made a stage (the host's name with dashes and dots as underscores)."""
+    host = "".join(c if c.isalnum() else "_" for c in socket.gethostname()) or "host"
+    return f"{host}-{pid}"
+
+
+def remove_abandoned(folder: Path) -> list[Path]:
+    """Remove the staging folders in ``folder`` left by ended processes of this host.
+
+    A process killed by SIGKILL leaves its stage; returns those removed.
+
+    A stage is kept while the process that made it runs, when another host made it (a shared
+    file system) and when its name says nothing of its maker (an older freefloat's).
+    """
+    removed = []
+    here = _owner(0).rsplit("-", 1)[0]
+    with contextlib.suppress(OSError):
+        for stage in folder.glob(f"{_PREFIX}*"):
+            host, _, rest = stage.name.removeprefix(_PREFIX).partition("-")
+            pid = rest.split("-", 1)[0]
+            if host != here or not pid.isdigit() or _running(int(pid)) or not stage.is_dir():
+                continue
+            shutil.rmtree(stage, ignore_errors=True)
+            removed.append(stage)
+    return removed
+
+
+def _running(pid: int) -> bool:
+    """Whether a process ``pid`` runs on this host (one of another user's counts as running)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # it exists, but is not ours to signal
+        return True
+    return True
 
 
 def write_together(texts: Mapping[Path, str]) -> Path:
