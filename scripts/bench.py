@@ -54,9 +54,14 @@ freefloat reach (issue 28, with --reachable-only; scripts/bench_reachable.py): i
 shipped servicers and a composed Kinova servicer, and 50 goals sampled inside its inner set
 planned with ff.plan.
 
+The spacecraft's swing on the way (with --swing-only; scripts/bench_swing.py): a pure
+reorientation of the Panda servicer and, where ../shared/real-arms/ is present, of ETS-VII and
+Canadarm2 holding a 5 t payload, planned without and with [constraints.base_swing] bounds.
+
 Run: python scripts/bench.py [--runs N] [--json FILE] [--markdown FILE] [--reach-only]
      [--random N] [--sweep] [--sweep-only] [--multi-arm-only] [--clearance-only] [--paths]
      [--paths-only] [--paths-baseline REV] [--reachable-only] [--speed-only [--no-roll]]
+     [--swing-only]
 
 ``--markdown FILE`` also writes the tables as Markdown, each table preceded by its stamp: the
 date, the machine (CPU, cores), the Python, Pinocchio, numpy and freefloat versions, the load
@@ -846,6 +851,11 @@ def run() -> None:
         help="only the true-hull and certified-clearance tables (bench_clearance.py)",
     )
     parser.add_argument(
+        "--swing-only",
+        action="store_true",
+        help="only the spacecraft's swing section ([constraints.base_swing]; bench_swing.py)",
+    )
+    parser.add_argument(
         "--speed-only",
         action="store_true",
         help="only the speed section (issue 25: fresh calls, paired rounds; bench_speed.py)",
@@ -934,6 +944,17 @@ def run() -> None:
         print_fresh(fresh, rounds)
         if args.json:
             args.json.write_text(json.dumps({"machine": machine(), "fresh": fresh}, indent=1))
+        return
+    if args.swing_only:
+        import tempfile
+
+        from bench_swing import bench_swing, print_swing
+
+        with tempfile.TemporaryDirectory() as tmp:
+            swing = bench_swing(Path(tmp))
+        print_swing(swing)
+        if args.json:
+            args.json.write_text(json.dumps({"machine": machine(), "swing": swing}, indent=1))
         return
     if args.speed_only:
         from bench_speed import bench_speed, print_speed
