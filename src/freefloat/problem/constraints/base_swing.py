@@ -10,9 +10,9 @@ attitude, whatever axis) within ``max_angle`` at every instant. The rows are
 from the planner's own integration with its exact Jacobian (:mod:`..swing_rows`). The dense
 check is independent of it: Pinocchio's centroidal map for the angular velocity and Butcher's
 fifth-order Runge-Kutta method on a uniform grid (:mod:`freefloat.physics.swing`), doubled
-until the largest turn no longer moves, each of the largest sampled turns then refined in time
-by a bounded scalar search; its error estimate is the difference between the last two
-levels. A goal attitude beyond the bound is refused before any search
+until the turns at the step ends no longer move, each of the largest sampled turns then
+refined in time by a bounded scalar search; its error estimate is the difference between the
+last two levels. A goal attitude beyond the bound is refused before any search
 (:meth:`BaseSwing.at_goal_turn`). Scenario key and plan record::
 
     [constraints.base_swing]
@@ -41,7 +41,9 @@ __all__ = ["BaseSwing"]
 
 #: Steps of the dense check's first level, and the most it doubles to.
 _FIRST_STEPS, _MAX_STEPS = 64, 8192
-#: The dense check stops doubling when its largest turn moves by less than this (rad).
+#: The dense check stops doubling when no turn at the coarser level's step ends moves by more
+#: than this (rad): the integration has converged there (the refinement in time then finds
+#: the largest turn between them).
 _SETTLED = 1e-11
 #: Largest sampled turns of a level refined in time (a count).
 _REFINED = 3
@@ -137,7 +139,7 @@ class BaseSwing(Constraint):
         coarse = track_turn(omega_at, path.duration, _FIRST_STEPS)
         while True:
             fine = track_turn(omega_at, path.duration, 2 * coarse.steps, coarse)
-            moved = abs(float(fine.turns.max()) - float(coarse.turns.max()))
+            moved = float(np.abs(fine.turns[::2] - coarse.turns).max())  # at the shared ends
             if moved <= _SETTLED or fine.steps >= _MAX_STEPS:
                 return coarse, fine, omega_at
             coarse = fine
