@@ -131,3 +131,49 @@ def test_a_collision_mesh_a_kilometre_out_is_refused_naming_the_distance(tmp_pat
         "(forearm_link_0) has a vertex 1e+30 m from its origin, beyond the 1000 m freefloat "
         "takes (a unit slip: mm for m?); scale or repair the mesh"
     ), last
+
+
+def _cylinder_stl(path, sides: int, radius: float = 0.04, length: float = 0.3) -> None:
+    """A binary STL of a cylinder along z with ``sides`` faces round and flat caps (fans)."""
+    angle = [2.0 * math.pi * k / sides for k in range(sides)]
+    rim = [(radius * math.cos(a), radius * math.sin(a)) for a in angle]
+    faces = []
+    for k in range(sides):
+        (x0, y0), (x1, y1) = rim[k], rim[(k + 1) % sides]
+        faces += [
+            ((x0, y0, 0.0), (x1, y1, 0.0), (x1, y1, length)),
+            ((x0, y0, 0.0), (x1, y1, length), (x0, y0, length)),
+            ((0.0, 0.0, 0.0), (x1, y1, 0.0), (x0, y0, 0.0)),
+            ((0.0, 0.0, length), (x0, y0, length), (x1, y1, length)),
+        ]
+    body = b"".join(
+        struct.pack("<12fH", 0.0, 0.0, 0.0, *(x for p in f for x in p), 0) for f in faces
+    )
+    path.write_bytes(b"\0" * 80 + struct.pack("<I", len(faces)) + body)
+
+
+def test_a_finely_divided_cylinder_gets_its_hull(tmp_path, capsys):
+    """A CAD cylinder of 2000 sides: qhull's triangulated hull fans each cap from one vertex,
+    more neighbours than coal stores, and the arm was refused ("no hull (Too many
+    neighbors)"). Its hull is now found from joggled input. Truth: the brute-force support of
+    the mesh's vertices in 200 directions (numpy), against the hull's points."""
+    import coal
+    import numpy as np
+    import pinocchio as pin
+
+    from freefloat.robot.meshes import true_hull
+
+    _cylinder_stl(tmp_path / "cylinder.stl", 2000)
+    mesh = "package://example-robot-data/robots/ur_description/meshes/ur5/collision/forearm.stl"
+    urdf = URDF.replace(mesh, str(tmp_path / "cylinder.stl"))
+    assert main(["check", _scenario(tmp_path, urdf)]) in (0, 1)  # judged, not refused
+    out, err = capsys.readouterr()
+    assert "no hull" not in err and "forearm_link_0" in out
+    shape = coal.MeshLoader().load(str(tmp_path / "cylinder.stl"))
+    hull = true_hull(pin.GeometryObject("c", 0, pin.SE3.Identity(), shape))
+    vertices = np.array(shape.vertices(), dtype=float)
+    points = np.array(hull.points(), dtype=float).reshape(-1, 3)
+    directions = np.random.default_rng(0).normal(size=(200, 3))
+    np.testing.assert_allclose(
+        (points @ directions.T).max(axis=0), (vertices @ directions.T).max(axis=0), atol=1e-9
+    )

@@ -72,7 +72,7 @@ def mesh_key(obj: pin.GeometryObject) -> MeshKey:
 
 
 def true_hull(obj: pin.GeometryObject, key: MeshKey | None = None) -> coal.ConvexBase:
-    """The real convex hull (qhull, coal ``buildConvexHull(True, "Qt")``) of a mesh object.
+    """The real convex hull (qhull, coal ``buildConvexHull``: :func:`_hull`) of a mesh object.
 
     Remembered per mesh file, scale and vertices (``key``: the object's, if known, as
     :func:`.geometry.load_shared_geometry` gives it). Never ``buildConvexRepresentation``: for a
@@ -82,16 +82,35 @@ def true_hull(obj: pin.GeometryObject, key: MeshKey | None = None) -> coal.Conve
     key = mesh_key(obj) if key is None else key
     if key not in _HULLS:
         _check_solid(obj)
+        _HULLS[key] = _hull(obj)
+    return _HULLS[key]
+
+
+def _hull(obj: pin.GeometryObject) -> coal.ConvexBase:
+    """qhull's hull of a mesh object's vertices: triangulated, or else joggled.
+
+    Triangulated output (``Qt``) splits a flat face of many vertices into a fan: the cap of a
+    finely divided cylinder then gives one vertex more neighbours than coal's hull stores
+    (255: "Too many neighbors"). Joggled input (``QJ``) makes every face a triangle of its
+    own, with no fan: qhull moves every point by a few 1e-10 of the mesh's size first (a
+    2000-sided cylinder of 0.2 m: 1.4e-10 m), far inside the 1e-6 m to which verification
+    holds every mesh vertex inside the hull (:mod:`freefloat.verify.hull_agreement`).
+
+    Raises:
+        ModelError: qhull finds no hull either way (its message, one line).
+    """
+    first = ""
+    for options in ("Qt", "QJ"):
         shape = obj.geometry.clone()  # the object's own shape is left as it is
         try:
-            shape.buildConvexHull(True, "Qt")
+            shape.buildConvexHull(True, options)
         except (ValueError, RuntimeError) as exc:  # qhull's refusals, one line
-            first = str(exc).strip().splitlines()[-1][:200]
-            raise ModelError(
-                f"collision mesh {obj.meshPath} ({obj.name}): no hull ({first})"
-            ) from None
-        _HULLS[key] = shape.convex
-    return _HULLS[key]
+            first = first or str(exc).strip().splitlines()[-1][:200]
+            if "neighbor" not in first:
+                break
+            continue
+        return shape.convex
+    raise ModelError(f"collision mesh {obj.meshPath} ({obj.name}): no hull ({first})")
 
 
 #: Largest vertex coordinate of a collision mesh (m, after its scale): a kilometre.
