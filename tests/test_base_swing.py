@@ -186,6 +186,14 @@ def test_a_goal_attitude_beyond_the_bound_is_refused_before_any_search(tmp_path,
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "goal attitude breaks base_swing" in err
     assert not (tmp_path / "p.json").exists()
+    assert main(["check", str(path), "--at", "goal"]) == 1  # check judges the goal attitude
+    out = capsys.readouterr().out
+    assert (
+        "base_swing: goal attitude: it lies 50 deg from the start attitude, at most 30 deg "
+        "allowed: BROKEN" in out
+    )
+    assert main(["check", str(path), "--at", "start"]) == 0  # not the start's business
+    assert "base_swing" not in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(

@@ -83,11 +83,25 @@ def check_goal_attitude(scenario: Scenario, constraints: Sequence[Constraint]) -
         GoalAttitudeError: the goal's turn from the start attitude (rad) beyond a constraint's
             bound (:meth:`Constraint.at_goal_turn`: the spacecraft's swing).
     """
+    for constraint, excess, holds in at_goal_attitude(scenario, constraints):
+        if not holds:
+            raise GoalAttitudeError(constraint.name, excess.value, excess.detail)
+
+
+def at_goal_attitude(
+    scenario: Scenario, constraints: Sequence[Constraint]
+) -> list[tuple[Constraint, Excess, bool]]:
+    """The constraints the goal attitude alone decides (:meth:`Constraint.at_goal_turn`).
+
+    Each with its excess there (rad) and whether that is within its tolerance.
+    """
     turn = geodesic_angle(scenario.start_attitude, scenario.goal_attitude)
+    found = []
     for constraint in constraints:
         excess = constraint.at_goal_turn(turn)
-        if excess is not None and excess.value > constraint.tolerance:
-            raise GoalAttitudeError(constraint.name, excess.value, excess.detail)
+        if excess is not None:
+            found.append((constraint, excess, excess.value <= constraint.tolerance))
+    return found
 
 
 def at_rest(

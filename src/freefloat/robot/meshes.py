@@ -87,7 +87,7 @@ def true_hull(obj: pin.GeometryObject, key: MeshKey | None = None) -> coal.Conve
 
 
 def _hull(obj: pin.GeometryObject) -> coal.ConvexBase:
-    """qhull's hull of a mesh object's vertices: triangulated, or else joggled.
+    """The hull of a mesh object's vertices by qhull: triangulated, or else joggled.
 
     Triangulated output (``Qt``) splits a flat face of many vertices into a fan: the cap of a
     finely divided cylinder then gives one vertex more neighbours than coal's hull stores
