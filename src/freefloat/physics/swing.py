@@ -72,14 +72,15 @@ def track_turn(
     else:
         rates = np.asarray(omega_at(quarters), dtype=float)
     stage = rates[4 * np.arange(steps)[:, None] + np.array(QUARTERS)[None, :]]
-    matrices = step_matrices(stage, np.full(steps, duration / steps))
     relative = np.empty((steps + 1, 4))
     y = np.array([0.0, 0.0, 0.0, 1.0])
     relative[0] = y
-    for k, matrix in enumerate(matrices):
-        y = matrix @ y
-        relative[k + 1] = y
-    relative /= np.linalg.norm(relative, axis=1, keepdims=True)
+    # steps too long for the rates overflow: the turns are then not numbers (the caller's)
+    with np.errstate(over="ignore", invalid="ignore"):
+        for k, matrix in enumerate(step_matrices(stage, np.full(steps, duration / steps))):
+            y = matrix @ y
+            relative[k + 1] = y
+        relative /= np.linalg.norm(relative, axis=1, keepdims=True)
     times = quarters[0::4]
     return TurnTrack(times, relative, quaternion_turn(relative), rates)
 
@@ -102,6 +103,7 @@ def turn_between(omega_at: RatesAt, track: TurnTrack, t: float, duration: float)
     rates = np.asarray(omega_at(quarters), dtype=float)
     stage = rates[4 * np.arange(pieces)[:, None] + np.array(QUARTERS)[None, :]]
     y = track.relative[k]
-    for matrix in step_matrices(stage, np.full(pieces, h)):
-        y = matrix @ y
-    return float(quaternion_turn(y / np.linalg.norm(y)))
+    with np.errstate(over="ignore", invalid="ignore"):
+        for matrix in step_matrices(stage, np.full(pieces, h)):
+            y = matrix @ y
+        return float(quaternion_turn(y / np.linalg.norm(y)))

@@ -48,24 +48,21 @@ def payload_table(table: Any) -> Payload | None:
     )
 
 
-def payload_holder(table: Mapping[str, Any], end_effectors: tuple[str, ...]) -> str | None:
-    """The link that holds the payload: ``held_by``, or the first of ``end_effectors``.
+def payload_holder(held_by: Any, end_effectors: tuple[str, ...]) -> str | None:
+    """The link that holds the payload: ``held_by`` (the table's value), or else the first.
 
-    None when the table names none and the scenario lists no end effector (the robot's
-    default end effector then holds it).
+    The first of ``end_effectors``, that is; None when neither names one.
 
     Raises:
-        ScenarioError: ``held_by`` not a frame name, or not one of the scenario's end
-            effectors when it lists them.
+        ScenarioError: ``held_by`` not a frame name, or not one of ``end_effectors``.
     """
-    held_by = table.get("held_by")
     if held_by is None:
         return end_effectors[0] if end_effectors else None
     if not isinstance(held_by, str) or not held_by.strip():
         raise ScenarioError(
             f"[payload] held_by must name the end effector that holds it, got {excerpt(held_by)}"
         )
-    if end_effectors and held_by not in end_effectors:
+    if held_by not in end_effectors:
         raise ScenarioError(
             f"[payload] held_by {excerpt(held_by)} is not one of the scenario's end effectors: "
             f"{', '.join(repr(n) for n in end_effectors)}"

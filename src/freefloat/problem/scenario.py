@@ -239,8 +239,9 @@ class Scenario:
         names = end_effector_names(data, origin)
         payload = payload_table(data.get("payload"))
         if payload is not None:
-            holder = payload_holder(data["payload"], names)
-            urdf, robot_text = _with_payload(urdf, robot_text, holder, payload)
+            held_by = data["payload"].get("held_by")
+            holder = payload_holder(held_by, names) if names else None
+            urdf, robot_text = _with_payload(urdf, robot_text, holder, payload, held_by)
         same = known is not None and known.urdf == Path(urdf).expanduser().resolve()
         if same and known is not None and (not names or names == known.end_effectors):
             robot = known
@@ -324,13 +325,19 @@ class Scenario:
 
 
 def _with_payload(
-    urdf: Path, text: str | None, end_effector: str | None, payload: Payload
+    urdf: Path, text: str | None, end_effector: str | None, payload: Payload, held_by: Any
 ) -> tuple[Path, str]:
-    """The cache path and text of the robot's URDF with the payload attached."""
+    """The cache path and text of the robot's URDF with the payload attached.
+
+    ``end_effector``: the holder the scenario's end effectors decided; None when it lists
+    none: then ``held_by`` (the table's value) must name one of the robot's own.
+    """
     if text is None:
         text = read_text_file(urdf, "URDF", MAX_URDF_BYTES, ScenarioError)
-    link = end_effector or load_robot(urdf, None, text=text).end_effector
-    decorated = attach_payload(text, link, payload, Path(urdf).resolve().parent)
+    if end_effector is None:  # the robot's default end effector, or one of them
+        defaults = load_robot(urdf, None, text=text).end_effectors
+        end_effector = payload_holder(held_by, tuple(defaults)) or defaults[0]
+    decorated = attach_payload(text, end_effector, payload, Path(urdf).resolve().parent)
     digest = hashlib.sha256(decorated.encode()).hexdigest()[:16]
     return servicer_cache_dir() / f"{Path(urdf).stem}-payload-{digest}.urdf", decorated
 

@@ -54,16 +54,17 @@ class SwingRows:
 def _edges(problem: Problem, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Step ends from 0 through every instant (none longer than the problem's steps).
 
-    Returns the edges and, per instant of ``s`` (in its order), the index of its edge.
+    Returns the edges and, per instant of ``s`` (in its order), the index of its edge. Each
+    interval between two instants is split evenly, its inner ends computed and its last end
+    the instant itself, to the bit (``a + (b - a) sub / sub`` may round below ``b``).
     """
     points = np.unique(np.concatenate([[0.0], s]))
-    pieces = [points[:1]]
+    pieces, ends = [points[:1]], [0]
     for a, b in zip(points[:-1].tolist(), points[1:].tolist(), strict=True):
         sub = max(1, math.ceil((b - a) * problem.steps - 1e-9))
-        pieces.append(a + (b - a) * np.arange(1, sub + 1) / sub)
-    edges = np.concatenate(pieces)
-    edges[np.searchsorted(edges, points)] = points  # the instants themselves, to the bit
-    return edges, np.searchsorted(edges, s)
+        pieces.append(np.append(a + (b - a) * np.arange(1, sub) / sub, b))
+        ends.append(ends[-1] + sub)
+    return np.concatenate(pieces), np.asarray(ends)[np.searchsorted(points, s)]
 
 
 def swing_rows(problem: Problem, beta: np.ndarray, s: np.ndarray) -> SwingRows:
@@ -79,7 +80,12 @@ def swing_rows(problem: Problem, beta: np.ndarray, s: np.ndarray) -> SwingRows:
     domega = np.einsum("kij,kjf->kif", rates.domega_dq, dq) + np.einsum(
         "kij,kjf->kif", rates.f1, dqs
     )
-    omega = rates.omega.reshape(steps, 3, 3)
+    omega = rates.omega
+    if problem.planar:  # about the one axis, as the problem integrates it
+        axis = problem.axis
+        omega = np.outer(omega @ axis, axis)
+        domega = np.einsum("i,kif,j->kjf", axis, domega, axis)
+    omega = omega.reshape(steps, 3, 3)
     increments = magnus_increments(omega, h)
     dw = np.einsum(
         "mck,mkf->mcf",
@@ -109,17 +115,17 @@ def _unit_axes(r: np.ndarray) -> np.ndarray:
 def swing_peaks(problem: Problem, beta: np.ndarray, count: int) -> np.ndarray:
     """Normalised instants of the largest turns, found cheaply.
 
-    The turn on the problem's own grid; the end when it is largest there, and each of the
-    ``count`` largest interior maxima refined twice: the turn at :data:`_REFINE_POINTS`
-    instants across the two steps about it (each reached by one Magnus step from the grid
-    point before them), then the vertex of the parabola through the largest and its
-    neighbours.
+    The turn on the problem's own grid; each of its ``count`` largest interior maxima
+    refined twice (the end's turn is the goal's, which no path changes): the turn at
+    :data:`_REFINE_POINTS` instants across the two steps about it (each reached by one
+    Magnus step from the grid point before them), then the vertex of the parabola through the
+    largest and its neighbours.
     """
     beta = np.asarray(beta, dtype=float)
     s = np.linspace(0.0, 1.0, problem.steps + 1)
     relative = relative_quat(problem.start_quaternion, problem.attitudes(beta, s))
     turns = quaternion_turn(relative)
-    found = [1.0] if turns[-1] >= turns[-2] else []
+    found = []  # not the end: its turn is the goal's
     inner = np.flatnonzero((turns[1:-1] >= turns[:-2]) & (turns[1:-1] >= turns[2:])) + 1
     for k in inner[np.argsort(turns[inner])[::-1][:count]].tolist():
         low, high = float(s[k - 1]), float(s[k + 1])

@@ -27,7 +27,6 @@ __all__ = [
     "attach_payload",
     "check_mass",
     "held_payload",
-    "payload_holder",
 ]
 
 
@@ -144,19 +143,6 @@ def attach_payload(
     ET.SubElement(joint, "child", link=PAYLOAD_LINK)
     ET.SubElement(joint, "origin", xyz="0 0 0", rpy="0 0 0")
     return "<?xml version='1.0' encoding='UTF-8'?>\n" + ET.tostring(root, encoding="unicode")
-
-
-def payload_holder(robot: Robot) -> str | None:
-    """The link that holds the captured payload, as the robot's model has it; None if none.
-
-    The payload's link is fixed to its holder by a joint of its own, which Pinocchio keeps as
-    a frame between the two: the holder is that frame's parent frame.
-    """
-    frames = robot.model.frames
-    found = [f for f in frames if f.name == PAYLOAD_LINK]
-    if not found:
-        return None
-    return str(frames[frames[found[0].parentFrame].parentFrame].name)
 
 
 def held_payload(robot: Robot) -> pin.Inertia | None:

@@ -46,7 +46,7 @@ def first_broken(
     for constraint in constraints:
         if constraint.applies_to(problem.robot):
             excess = constraint.violation(problem, beta)
-            if excess.value > constraint.tolerance + excess.error_estimate:
+            if not excess.value <= constraint.tolerance + excess.error_estimate:  # NaN: broken
                 return Broken(constraint.name, excess.detail)
     return None
 

@@ -17,8 +17,8 @@ from ..plans.guarantees import Check, Verification
 from ..plans.versions import MONOMIAL_BASIS
 from ..problem.constraints import CONSTRAINTS
 from ..problem.scenario import Scenario
+from ..robot.arm_tips import payload_parent
 from ..robot.model import Robot
-from ..robot.payload import payload_holder
 from ..solvers.optimise import FALLBACK_NOTE
 from ..verify.segmented import segment_count
 from .base_swing import base_swing_line
@@ -354,7 +354,7 @@ def _held(scenario: Scenario) -> str:
     """``, a 5 kg payload held by panda_hand``: which end effector holds it ("" if none)."""
     if (payload := scenario.payload) is None:
         return ""
-    return f", a {payload.mass:g} kg payload held by {payload_holder(scenario.robot)}"
+    return f", a {payload.mass:g} kg payload held by {payload_parent(scenario.robot.urdf_text)}"
 
 
 def rotation_angle(rotation: np.ndarray) -> float:

@@ -131,6 +131,15 @@ class Constraint(abc.ABC):
         """
         return np.zeros(0)
 
+    def solver_slack(self, problem: Problem) -> float:
+        """How far inside the constraint its rows ask a path to be (its unit; default 0).
+
+        Rows at instants hold a path there, not between them: a constraint whose rows have
+        no :meth:`critical_times` in some solver's use (a start path found with fixed
+        instants) asks for a little room, so that the dense check passes between them.
+        """
+        return 0.0
+
     def violation(self, problem: Problem, beta: np.ndarray) -> Excess:
         """:meth:`excess` of the problem's path at ``beta`` (for solvers filtering roots)."""
         return self.excess(problem.robot, problem.polynomials(beta))

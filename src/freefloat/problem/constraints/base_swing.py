@@ -7,7 +7,8 @@ attitude, whatever axis) within ``max_angle`` at every instant. The rows are
 
     g = theta(s) - max_angle   (rad; feasible <= 0)
 
-from the planner's own integration with its exact Jacobian (:mod:`..swing_rows`). The dense
+from the planner's own integration with its exact Jacobian (:mod:`..swing_rows`), asked a hair
+inside the bound (:data:`SOLVER_SLACK`). The dense
 check is independent of it: Pinocchio's centroidal map for the angular velocity and Butcher's
 fifth-order Runge-Kutta method on a uniform grid (:mod:`freefloat.physics.swing`), doubled
 until the turns at the step ends no longer move, each of the largest sampled turns then
@@ -28,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError, excerpt
+from ...physics.attitude import geodesic_angle
 from ...physics.momentum import MomentumMap
 from ...physics.swing import RatesAt, TurnTrack, track_turn, turn_between
 from ...robot.model import Robot
@@ -37,7 +39,7 @@ from ..scalar_minimum import scalar_minimum
 from ..swing_rows import swing_peaks, swing_rows
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 
-__all__ = ["BaseSwing"]
+__all__ = ["SOLVER_SLACK", "BaseSwing"]
 
 #: Steps of the dense check's first level, and the most it doubles to.
 _FIRST_STEPS, _MAX_STEPS = 64, 8192
@@ -45,6 +47,10 @@ _FIRST_STEPS, _MAX_STEPS = 64, 8192
 #: than this (rad): the integration has converged there (the refinement in time then finds
 #: the largest turn between them).
 _SETTLED = 1e-11
+#: How far inside the bound the solvers' rows ask the turn to be (rad: 0.0057 deg): a start
+#: path found on the bound at fixed instants peaked 2e-5 rad beyond it between them, and was
+#: refused; less when the goal lies nearer the bound (:meth:`BaseSwing.solver_slack`).
+SOLVER_SLACK = 1e-4
 #: Largest sampled turns of a level refined in time (a count).
 _REFINED = 3
 
@@ -118,9 +124,24 @@ class BaseSwing(Constraint):
     def rows(
         self, problem: Problem, beta: np.ndarray, instants: np.ndarray = DEFAULT_INSTANTS
     ) -> ConstraintRows:
-        """``theta - max_angle`` (rad) at the instants, exact Jacobian in beta."""
-        found = swing_rows(problem, beta, np.asarray(instants, dtype=float))
-        return ConstraintRows(found.turns - self.max_angle, found.jacobian)
+        """``theta - max_angle`` (rad), a hair inside, and its exact Jacobian in beta.
+
+        At the instants strictly between the ends: at the start the turn is 0, and at the
+        end it is the goal's, which no path changes (:meth:`at_goal_turn` judges it before
+        any search); a row there would only make a goal at the bound unreachable.
+        """
+        s = np.asarray(instants, dtype=float)
+        s = s[(s > 0.0) & (s < 1.0)]  # the ends' turns are fixed: 0, and the goal's (checked)
+        if not len(s):
+            return ConstraintRows(np.zeros(0), np.zeros((0, problem.n_free)))
+        found = swing_rows(problem, beta, s)
+        bound = self.max_angle - self.solver_slack(problem)  # a hair inside
+        return ConstraintRows(found.turns - bound, found.jacobian)
+
+    def solver_slack(self, problem: Problem) -> float:
+        """:data:`SOLVER_SLACK` (rad), or half the goal's room below the bound when less."""
+        room = self.max_angle - geodesic_angle(problem.start_quaternion, problem.goal_quaternion)
+        return SOLVER_SLACK if room <= 0.0 else min(SOLVER_SLACK, 0.5 * room)
 
     def tight_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
         """The largest turns' instants, each refined in time (:func:`..swing_rows.swing_peaks`)."""
@@ -140,7 +161,7 @@ class BaseSwing(Constraint):
         while True:
             fine = track_turn(omega_at, path.duration, 2 * coarse.steps, coarse)
             moved = float(np.abs(fine.turns[::2] - coarse.turns).max())  # at the shared ends
-            if moved <= _SETTLED or fine.steps >= _MAX_STEPS:
+            if not moved > _SETTLED or fine.steps >= _MAX_STEPS:  # NaN: no use going on
                 return coarse, fine, omega_at
             coarse = fine
 
@@ -166,6 +187,8 @@ class BaseSwing(Constraint):
     def excess(self, robot: Robot, path: JointPolynomials) -> Excess:
         """The largest turn beyond ``max_angle`` (rad), with a step-doubling error estimate."""
         coarse, fine, omega_at = self._track(robot, path)
+        if not np.all(np.isfinite(fine.turns)):  # too fast for the grid: it blew up
+            return Excess(math.inf, 0.0, "the spacecraft's turn could not be integrated")
         value, when = self._largest(fine, path.duration, omega_at)
         rough, _ = self._largest(coarse, path.duration, omega_at)
         return Excess(value - self.max_angle, abs(value - rough), self._said(value, when))
