@@ -140,9 +140,8 @@ def test_files_written_together_make_their_folders_and_remove_them_on_failure(tm
 def test_a_stage_left_by_sigkill_is_removed_by_the_next_one(tmp_path):
     """SIGKILL cannot be caught: a process killed while its files were staged left a hidden
     ``.freefloat-stage-*`` folder for good. The next stage in that folder removes it; a stage
-    of a process still running, of another host, or of an older freefloat is kept. Truth: a
-    real child process killed with SIGKILL inside the stage, and the folder's listing."""
-    import os
+    in use (locked), another host's, or an older freefloat's is kept. Truth: a real child
+    process killed with SIGKILL inside the stage, and the folder's listing."""
     import subprocess
     import sys
 
@@ -162,12 +161,16 @@ def test_a_stage_left_by_sigkill_is_removed_by_the_next_one(tmp_path):
     assert len(left) == 1 and (folder / left[0] / "half.png").exists()
     host = left[0].removeprefix(".freefloat-stage-").split("-")[0]
     kept = [
-        f".freefloat-stage-{host}-{os.getpid()}-live",  # this process: running
         ".freefloat-stage-otherhost-1-abc",  # another host's
         ".freefloat-stage-x1y2z3",  # an older freefloat's: no maker in its name
     ]
     for name in kept:
         (folder / name).mkdir()
-    with staged_folder(folder) as stage:
-        (stage / "new.png").write_bytes(b"new")
-    assert sorted(p.name for p in folder.iterdir()) == sorted(["new.png", "old.png", *kept])
+    with staged_folder(folder) as outer:  # in use (locked): the inner stage leaves it alone
+        with staged_folder(folder) as stage:
+            assert outer.exists() and outer.name.startswith(f".freefloat-stage-{host}-")
+            (stage / "new.png").write_bytes(b"new")
+        (outer / "outer.png").write_bytes(b"outer")
+    assert sorted(p.name for p in folder.iterdir()) == sorted(
+        ["new.png", "old.png", "outer.png", *kept]
+    )

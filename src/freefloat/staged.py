@@ -33,8 +33,8 @@ def staged_folder(target: str | Path) -> Iterator[Path]:
     are written (a full disk), leaves ``target`` as it was, never a mix of old and new files
     (only a rename failing halfway could). Files of ``target`` the stage does not hold are
     left alone. On failure the staging folder and the folders made for it (``target`` and
-    missing parents) are removed. A stage that SIGKILL left behind is removed by the next
-    stage made in the same folder (:func:`remove_abandoned`).
+    missing parents) are removed. The stage is locked while it is in use; one that SIGKILL
+    left behind is removed by the next stage made in the same folder (:func:`remove_abandoned`).
     """
     target = Path(target).expanduser().resolve()
     made = [p for p in (target, *target.parents) if not p.exists()]  # deepest first
@@ -43,7 +43,7 @@ def staged_folder(target: str | Path) -> Iterator[Path]:
     home = target if target.is_dir() else target.parent
     home.mkdir(parents=True, exist_ok=True)
     remove_abandoned(home)
-    stage = Path(tempfile.mkdtemp(prefix=f"{_PREFIX}{_owner(os.getpid())}-", dir=home))
+    stage, lock = _locked_stage(home)
     try:
         yield stage
         with signals_held():
@@ -54,55 +54,85 @@ def staged_folder(target: str | Path) -> Iterator[Path]:
                     moved.mkdir(exist_ok=True)
                 else:
                     os.replace(source, moved)
+        shutil.rmtree(stage, ignore_errors=True)
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)
         for folder in made:
             with contextlib.suppress(OSError):
                 folder.rmdir()
         raise
-    shutil.rmtree(stage, ignore_errors=True)
+    finally:
+        os.close(lock)  # after the stage is gone: no one removes a stage that is in use
 
 
 #: Start of a staging folder's name; the host and process that made it follow.
 _PREFIX = ".freefloat-stage-"
 
 
-def _owner(pid: int) -> str:
-    """``<host>-<pid>``: who made a stage (the host's name with dashes and dots as underscores)."""
-    host = "".join(c if c.isalnum() else "_" for c in socket.gethostname()) or "host"
-    return f"{host}-{pid}"
+def _host() -> str:
+    """This host's name with every character but letters and digits as an underscore."""
+    return "".join(c if c.isalnum() else "_" for c in socket.gethostname()) or "host"
+
+
+def _locked_stage(home: Path) -> tuple[Path, int]:
+    """A new staging folder in ``home`` and a descriptor holding its lock (:func:`_lock`).
+
+    Made, then locked, then found still there: a cleanup that came between the two cannot
+    have removed the stage this returns.
+    """
+    while True:
+        stage = Path(tempfile.mkdtemp(prefix=f"{_PREFIX}{_host()}-{os.getpid()}-", dir=home))
+        lock = os.open(stage, os.O_RDONLY)
+        if _lock(lock) and stage.is_dir() and os.path.samestat(os.fstat(lock), os.stat(stage)):
+            return stage, lock
+        os.close(lock)
+
+
+def _lock(descriptor: int) -> bool:
+    """Take an exclusive lock on an open folder without waiting; False if another holds it.
+
+    The kernel drops the lock when its holder ends, however it ends (SIGKILL too). Where
+    there are no such locks (not POSIX), True: nothing is ever cleaned up then.
+    """
+    try:
+        import fcntl
+    except ImportError:  # not POSIX
+        return True
+    try:
+        fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        return False
+    return True
 
 
 def remove_abandoned(folder: Path) -> list[Path]:
-    """Remove the staging folders in ``folder`` left by ended processes of this host.
+    """Remove the staging folders in ``folder`` that nothing holds; returns those removed.
 
-    A process killed by SIGKILL leaves its stage; returns those removed.
-
-    A stage is kept while the process that made it runs, when another host made it (a shared
-    file system) and when its name says nothing of its maker (an older freefloat's).
+    A process killed by SIGKILL leaves its stage, and its lock goes with it. A stage is kept
+    while its lock is held (its maker runs, in any process namespace), when another host
+    made it (a shared file system, whose locks may not reach here), and when its name does
+    not say who made it (an older freefloat's). Nothing is removed where folders cannot be
+    locked (not POSIX).
     """
-    removed = []
-    here = _owner(0).rsplit("-", 1)[0]
+    removed: list[Path] = []
+    if os.name != "posix":
+        return removed
+    here = f"{_PREFIX}{_host()}-"
     with contextlib.suppress(OSError):
-        for stage in folder.glob(f"{_PREFIX}*"):
-            host, _, rest = stage.name.removeprefix(_PREFIX).partition("-")
-            pid = rest.split("-", 1)[0]
-            if host != here or not pid.isdigit() or _running(int(pid)) or not stage.is_dir():
+        for stage in folder.glob(f"{here}*"):
+            if not stage.name.removeprefix(here).split("-", 1)[0].isdigit():
                 continue
-            shutil.rmtree(stage, ignore_errors=True)
-            removed.append(stage)
+            try:
+                descriptor = os.open(stage, os.O_RDONLY | os.O_DIRECTORY)
+            except OSError:
+                continue
+            try:
+                if _lock(descriptor):
+                    shutil.rmtree(stage, ignore_errors=True)
+                    removed.append(stage)
+            finally:
+                os.close(descriptor)
     return removed
-
-
-def _running(pid: int) -> bool:
-    """Whether a process ``pid`` runs on this host (one of another user's counts as running)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:  # it exists, but is not ours to signal
-        return True
-    return True
 
 
 def write_together(texts: Mapping[Path, str]) -> Path:
