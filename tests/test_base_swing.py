@@ -154,7 +154,10 @@ def test_a_reorientation_keeps_the_spacecraft_within_the_bound(reorientation, tm
     assert main(["verify", str(out)]) == 0
     capsys.readouterr()
     line = next(x for x in summary(plan).splitlines() if x.startswith("  spacecraft"))
-    assert line.endswith("at most 4 deg allowed ([constraints.base_swing])")
+    assert line.endswith(
+        f"; the check's largest {math.degrees(swing):.7g} deg, at most 4 deg allowed "
+        "([constraints.base_swing])); its goal lies 3 deg from it"
+    )
 
 
 def test_the_swing_of_a_path_does_not_depend_on_its_duration(reorientation):
@@ -209,6 +212,7 @@ def test_a_goal_attitude_beyond_the_bound_is_refused_before_any_search(tmp_path,
         ({"max_deg": True}, "between 0 and 180 (exclusive) [deg], got True"),
         ({"max_deg": "5"}, "between 0 and 180 (exclusive) [deg], got '5'"),
         ({"max_deg": math.nan}, "between 0 and 180 (exclusive) [deg], got nan"),
+        ({"max_deg": 5e-324}, "between 0 and 180 (exclusive) [deg], got 5e-324"),
     ],
 )
 def test_bad_bounds_are_named(record, said):

@@ -26,7 +26,7 @@ from .build import check_joint_limits
 from .constraints import Clearance, Constraint, Excess
 from .scenario import Scenario
 
-__all__ = ["at_rest", "check_endpoints"]
+__all__ = ["at_goal_attitude", "at_rest", "check_endpoints", "check_goal_attitude"]
 
 
 def check_endpoints(

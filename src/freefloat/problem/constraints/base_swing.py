@@ -99,6 +99,11 @@ class BaseSwing(Constraint):
                 "base_swing max_deg must be a number between 0 and 180 (exclusive) [deg], got "
                 f"{excerpt(value)}"
             )
+        if not math.radians(value) > 0.0:  # a subnormal degree is 0 rad
+            raise InputError(
+                "base_swing max_deg must be a number between 0 and 180 (exclusive) [deg], got "
+                f"{excerpt(value)}"
+            )
         swing = cls(math.radians(value))
         swing._max_deg = float(value)
         return swing
@@ -107,16 +112,15 @@ class BaseSwing(Constraint):
 
     def at_goal_turn(self, turn: float) -> Excess:
         """Its excess (rad) at a goal attitude ``turn`` rad from the start, where paths end."""
-        detail = (
-            f"it lies {math.degrees(turn):.4g} deg from the start attitude, at most "
-            f"{math.degrees(self.max_angle):.4g} deg allowed"
-        )
+        said, bound = _degrees(turn, self.max_angle)
+        detail = f"it lies {said} deg from the start attitude, at most {bound} deg allowed"
         return Excess(turn - self.max_angle, 0.0, detail)
 
     def _said(self, turn: float, when: float) -> str:
+        said, bound = _degrees(turn, self.max_angle)
         return (
-            f"the spacecraft {math.degrees(turn):.4g} deg from its start attitude at "
-            f"t = {when:.4g} s, at most {math.degrees(self.max_angle):.4g} deg allowed"
+            f"the spacecraft {said} deg from its start attitude at t = {when:.4g} s, at most "
+            f"{bound} deg allowed"
         )
 
     # -- the solvers' rows --------------------------------------------------------------------
@@ -201,3 +205,17 @@ def _local_maxima(values: np.ndarray) -> np.ndarray:
     """Indices of interior local maxima, largest first."""
     inner = np.flatnonzero((values[1:-1] >= values[:-2]) & (values[1:-1] >= values[2:])) + 1
     return inner[np.argsort(values[inner])[::-1]]
+
+
+def _degrees(turn: float, bound: float) -> tuple[str, str]:
+    """A turn and the bound (rad) in degrees, the turn on its side of the bound.
+
+    The bound as given; the turn to 4 digits, or as many more as keep it on its own side of
+    the bound (a turn just beyond it is never shown at or below it).
+    """
+    limit = f"{math.degrees(bound):.10g}"
+    for digits in range(4, 13):
+        said = f"{math.degrees(turn):.{digits}g}"
+        if (float(said) > float(limit)) == (turn > bound) and (said == limit) <= (turn == bound):
+            break
+    return said, limit
