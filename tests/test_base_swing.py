@@ -290,3 +290,28 @@ def test_held_by_a_robot_whose_scenario_lists_no_end_effector(tmp_path):
     assert str(info.value).endswith(
         "[payload] held_by 'spacecraft' is not one of the scenario's end effectors: 'tool0'"
     )
+
+
+def test_reach_stops_its_outer_turns_at_the_bound(tmp_path):
+    # The Panda servicer's simple motions may turn it 37.3 deg from the start; with a 30 deg
+    # bound no goal lies beyond 30 deg. Truth: SciPy's rotations of the printed turns.
+    from scipy.spatial.transform import Rotation
+
+    from freefloat.viz.reach_text import verdict
+
+    text = (ROOT / "robots" / "scenarios" / "panda_servicer.toml").read_text()
+    path = tmp_path / "bounded.toml"
+    path.write_text(text + "\n[constraints.base_swing]\nmax_deg = 30\n")
+    report = ff.reachable(ff.Scenario.from_toml(path), budget=0)
+    assert math.degrees(report.goal_turn_limit) == pytest.approx(30.0, abs=1e-9)
+    start = Rotation.from_quat(report.start_quaternion)
+    drift = Rotation.from_quat(report.drift_quaternion)
+    reached = [
+        (start.inv() * drift * Rotation.from_rotvec(d.outer * d.axis)).magnitude()
+        for d in report.directions
+    ]
+    assert max(reached) == pytest.approx(math.radians(30.0), abs=1e-9)
+    assert math.degrees(report.bound.bound) > 37.0  # the simple-motion bound alone: further
+    path.write_text(text + "\n[constraints.base_swing]\nmax_deg = 10\n")  # the drift: 11.9
+    said = verdict(ff.reachable(ff.Scenario.from_toml(path), budget=0))
+    assert said.startswith("the drift attitude lies 11.94 deg from the start, beyond the 10 deg")

@@ -38,7 +38,7 @@ from .physics.attitude import (
 from .physics.momentum import MomentumMap
 from .problem.build import problem_from_scenario
 from .problem.constraints import Clearance, scenario_constraints
-from .problem.endpoints import check_endpoints
+from .problem.endpoints import check_endpoints, goal_turn_limit
 from .problem.residual import Problem
 from .problem.scenario import Scenario, scenario_of
 from .problem.simple_bound import SimpleMotionBound, inertia_ratio, simple_motion_bound, turn_limit
@@ -126,6 +126,9 @@ class ReachReport:
         loops: the goal joints are the start joints: every motion is a closed loop, which
             no simple-motion bound covers (``outer`` 0); the inner estimate heads for
             :data:`~freefloat.solvers.reach.DEFAULT_MAX_ANGLE` from a loop on each axis.
+        goal_turn_limit: the largest turn from the start attitude a goal attitude may have
+            (rad; a ``[constraints.base_swing]`` bound; pi without one): the outer turns and
+            where the inner estimate heads stop there.
     """
 
     robot: str
@@ -142,6 +145,7 @@ class ReachReport:
     goal_joints: np.ndarray
     end_effector_goal: bool
     loops: bool = False
+    goal_turn_limit: float = math.pi
 
     @property
     def largest_outer(self) -> float:
@@ -235,7 +239,8 @@ def reachable(
     moved = relative_quat(start, drift)
     axes = default_directions() if directions is None else np.atleast_2d(directions)
     axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
-    outer = np.array([turn_limit(moved, axis, bound.bound) for axis in axes])
+    allowed = goal_turn_limit(scenario_constraints(scenario))
+    outer = np.array([turn_limit(moved, axis, min(bound.bound, allowed)) for axis in axes])
     loops = scenario.robot.n > 1 and stays_put(problem)  # every motion a closed loop
     before = problem.evaluations
     if budget > 0:  # as plan refuses them: no goal of this scenario plans
@@ -246,7 +251,8 @@ def reachable(
             replace(_limits(drift, axis, 0.0, None), stopped_by=ONE_JOINT) for axis in axes
         )
     else:  # joints that end where they start move in loops: no simple-motion bound holds
-        heading = np.full(len(axes), DEFAULT_MAX_ANGLE) if loops else outer
+        capped = [min(DEFAULT_MAX_ANGLE, turn_limit(moved, a, allowed)) for a in axes]
+        heading = np.array(capped) if loops else outer
         estimate = _inner(scenario, problem, drift, axes, heading, budget, progress, jobs)
         freedom = estimate.freedom
         found = tuple(
@@ -268,6 +274,7 @@ def reachable(
         goal_joints=problem.family.goal.copy(),
         end_effector_goal=end_effector_goal,
         loops=loops,
+        goal_turn_limit=allowed,
     )
 
 

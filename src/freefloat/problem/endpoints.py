@@ -26,7 +26,13 @@ from .build import check_joint_limits
 from .constraints import Clearance, Constraint, Excess
 from .scenario import Scenario
 
-__all__ = ["at_goal_attitude", "at_rest", "check_endpoints", "check_goal_attitude"]
+__all__ = [
+    "at_goal_attitude",
+    "at_rest",
+    "check_endpoints",
+    "check_goal_attitude",
+    "goal_turn_limit",
+]
 
 
 def check_endpoints(
@@ -102,6 +108,29 @@ def at_goal_attitude(
         if excess is not None:
             found.append((constraint, excess, excess.value <= constraint.tolerance))
     return found
+
+
+def goal_turn_limit(constraints: Sequence[Constraint]) -> float:
+    """The largest turn from the start attitude (rad) a goal attitude may have.
+
+    Pi, or less where a constraint judges the goal attitude (:meth:`Constraint.at_goal_turn`,
+    taken as growing with the turn): found by bisection to 1e-12 rad.
+    """
+    low, high = 0.0, math.pi
+    judged = [c for c in constraints if c.at_goal_turn(0.0) is not None]
+    if not judged or all(_holds(c, high) for c in judged):
+        return high
+    for _ in range(60):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if all(_holds(c, middle) for c in judged) else (low, middle)
+        if high - low < 1e-12:
+            break
+    return low
+
+
+def _holds(constraint: Constraint, turn: float) -> bool:
+    excess = constraint.at_goal_turn(turn)
+    return excess is None or excess.value <= 0.0
 
 
 def at_rest(

@@ -24,6 +24,14 @@ def _vector(values: np.ndarray, digits: int = 4) -> str:
 def verdict(report: ReachReport) -> str:
     """One line when the reach is small, naming why (the inertia ratio); "" otherwise."""
     largest = math.degrees(report.largest_outer)
+    away = geodesic_angle(report.start_quaternion, report.drift_quaternion)
+    if not report.loops and away > report.goal_turn_limit:
+        return (
+            f"the drift attitude lies {math.degrees(away):.4g} deg from the start, beyond the "
+            f"{math.degrees(report.goal_turn_limit):.10g} deg [constraints.base_swing] "
+            "allows a goal: no goal listed above plans; goals nearer the start may, which "
+            "this report, measured from the drift attitude, does not search"
+        )
     if report.loops:
         return (
             "the goal joints are the start joints: every motion is a loop, which no simple-"
@@ -90,6 +98,11 @@ def _outer_lines(report: ReachReport) -> list[str]:
         "  the joint's travel);",
         "  a path whose joints go back and forth is not bounded by it: plan may turn further",
     ]
+    if report.goal_turn_limit < math.pi:
+        lines.append(
+            f"  a goal attitude lies at most {math.degrees(report.goal_turn_limit):.10g} deg "
+            "from the start ([constraints.base_swing]): outer and inner stop there"
+        )
     heads = (
         f"from a {math.degrees(LOOP_TURN):g} deg loop about each axis towards "
         f"{math.degrees(DEFAULT_MAX_ANGLE):g} deg (the joints end where they start)"
@@ -140,6 +153,7 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
         lines.append("  per axis, turns measured from the drift attitude:")
         away = math.degrees(geodesic_angle(report.start_quaternion, drift))
         within = math.degrees(report.bound.bound) if report.bound is not None else 0.0
+        within = min(within, math.degrees(report.goal_turn_limit))
         if away < within < 180.0 and len(report.freedom) > 1:  # why the outer column is larger
             lines.append(
                 f"  (outer: as far as the attitude stays within {within:.4g} deg of the start; "
