@@ -59,13 +59,22 @@ base_size = [4.0, 4.0, 4.0]
 mount = [2.0, 0.0, 0.0]
 [start.joints]
 Shoulder_Roll = 0.0
+Shoulder_Yaw = 0.0
+Shoulder_Pitch = 0.0
+Elbow_Pitch = 0.0
+Wrist_Pitch = 0.0
+Wrist_Yaw = 0.0
+Wrist_Roll = 0.0
 [goal]
 base_zyx_deg = [20.0, 0.0, 0.0]
 [goal.joints]
+Shoulder_Roll = 0.0
 Shoulder_Yaw = 30.0
 Shoulder_Pitch = 20.0
 Elbow_Pitch = -40.0
 Wrist_Pitch = 20.0
+Wrist_Yaw = 0.0
+Wrist_Roll = 0.0
 [payload]
 mass = 5000.0
 box = [3.0, 3.0, 3.0]
