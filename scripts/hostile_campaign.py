@@ -605,8 +605,10 @@ def _round_31_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str
 
 
 def _round_32_cases(folder: Path) -> list[tuple[list, bool, str]]:
-    """The thirty-second round's new key, [constraints.base_swing]: bad bounds, a goal beyond
-    the bound, a plan whose recorded bound was edited (tightened, or to nonsense)."""
+    """The thirty-second round's new keys, [constraints.base_swing] and [payload] held_by: bad
+    bounds, a goal beyond the bound, a plan whose recorded bound was edited (tightened, or to
+    nonsense), a loop whose check overflowed, reach with a bound (a traceback), a payload
+    held by the spacecraft (it was accepted)."""
     base = scenario_for(PLANAR, folder, "swing.toml").read_text()
     cases: list[tuple[list, bool, str]] = []
     for k, (value, said) in enumerate(
@@ -639,7 +641,27 @@ def _round_32_cases(folder: Path) -> list[tuple[list, bool, str]]:
                 item["parameters"]["max_deg"] = bound
         (folder / f"swing_{name}.json").write_text(json.dumps(doc))
         cases.append((["verify", folder / f"swing_{name}.json"], True, said))
-    return [*cases, (["verify", planned], False, "")]
+    nan = folder / "swing_nan.toml"  # a loop of planar joints: the check once overflowed
+    nan.write_text(
+        'robot = "planar_2dof"\nduration = 10.0\n[start]\njoints = { q1 = 80.0, q2 = 30.0 }\n'
+        "[goal]\njoints = { q1 = 80.0, q2 = 30.0 }\nbase_zyx_deg = [10.0, 0.0, 0.0]\n"
+        "[constraints.base_swing]\nmax_deg = 10.5\n"
+    )
+    ur5 = (ROOT / "robots" / "scenarios" / "ur5_servicer.toml").read_text()
+    ur5 = ur5.replace('"ur5_servicer"', f'"{ROOT / "robots" / "ur5_servicer.urdf"}"')
+    held = folder / "held_spacecraft.toml"
+    held.write_text(
+        ur5 + '\n[payload]\nmass = 5.0\nbox = [0.1, 0.1, 0.1]\nheld_by = "spacecraft"\n'
+    )
+    reach = folder / "swing_reach.toml"
+    reach.write_text(ur5 + "\n[constraints.base_swing]\nmax_deg = 14\n")
+    return [
+        *cases,
+        (["verify", planned], False, ""),
+        (["plan", nan, "-o", "nan.json"], True, "no path reaches"),
+        (["check", held], True, "is not one of the scenario's end effectors: 'tool0'"),
+        (["reach", reach, "-q", "--jobs", "1"], False, ""),
+    ]
 
 
 def _edited_and_misnamed_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str]]:
