@@ -89,11 +89,14 @@ def test_the_turn_about_a_fixed_axis_is_the_integral_of_the_rate():
         ) == pytest.approx(closed(t), abs=1e-10)  # one partial step of the 64
 
 
-def _scipy_swing(plan: ff.Plan, robot: ff.Robot) -> tuple[float, float]:
-    """Largest turn (rad) from the start attitude and its time (s), by SciPy from Pinocchio."""
+def _scipy_swing(plan, robot: ff.Robot) -> tuple[float, float]:
+    """Largest turn (rad) from the start attitude and its time (s), by SciPy from Pinocchio.
+
+    ``plan``: a plan, or joint polynomials.
+    """
     model, data = robot.model, robot.model.createData()
     columns = [joint.idx_v for joint in robot.joints]
-    path = plan.path()
+    path = plan.path() if isinstance(plan, ff.Plan) else plan
 
     def rhs(t: float, y: np.ndarray) -> np.ndarray:
         samples = path.evaluate(np.array([t]))
@@ -107,7 +110,7 @@ def _scipy_swing(plan: ff.Plan, robot: ff.Robot) -> tuple[float, float]:
         )  # fmt: skip
 
     found = solve_ivp(
-        rhs, (0.0, plan.duration), [0.0, 0.0, 0.0, 1.0], "DOP853", rtol=1e-12, atol=1e-13,
+        rhs, (0.0, path.duration), [0.0, 0.0, 0.0, 1.0], "DOP853", rtol=1e-12, atol=1e-13,
         dense_output=True,
     )  # fmt: skip
 
@@ -115,7 +118,7 @@ def _scipy_swing(plan: ff.Plan, robot: ff.Robot) -> tuple[float, float]:
         y = found.sol(t)
         return 2.0 * np.arctan2(np.linalg.norm(y[:3], axis=0), np.abs(y[3]))
 
-    t = np.linspace(0.0, plan.duration, 4001)
+    t = np.linspace(0.0, path.duration, 4001)
     k = int(np.argmax(turn(t)))
     if k in (0, len(t) - 1):
         return float(turn(t[k])), float(t[k])
@@ -315,3 +318,24 @@ def test_reach_stops_its_outer_turns_at_the_bound(tmp_path):
     path.write_text(text + "\n[constraints.base_swing]\nmax_deg = 10\n")  # the drift: 11.9
     said = verdict(ff.reachable(ff.Scenario.from_toml(path), budget=0))
     assert said.startswith("the drift attitude lies 11.94 deg from the start, beyond the 10 deg")
+
+
+def test_a_start_path_that_peaks_between_its_rows_gets_rows_there(monkeypatch):
+    # SLSQP's start path sits on the bound at its rows' instants and may peak beyond it
+    # between them (Canadarm2 holding 8 t: 4.6e-5 rad, and the plan was refused). Here rows at
+    # 33 instants: the first run's path peaks between them; the second, with rows at its
+    # peaks, holds. Truth: SciPy's integration of the path found.
+    import freefloat.solvers.restore as restore
+    from freefloat.solvers.options import SolveOptions
+
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "panda_servicer.toml")
+    problem = ff.problem_from_scenario(scenario, extra=[2] * scenario.robot.n)
+    swing = BaseSwing(math.radians(8.0))  # the plain path turns 11.9 deg
+    monkeypatch.setattr(restore, "DEFAULT_INSTANTS", np.linspace(0.0, 1.0, 33))
+    monkeypatch.setattr(restore, "RESTORE_ROUNDS", 1)
+    assert restore.feasible_start(problem, [swing], SolveOptions()) is None  # one run: broken
+    monkeypatch.setattr(restore, "RESTORE_ROUNDS", 3)
+    beta = restore.feasible_start(problem, [swing], SolveOptions())
+    assert beta is not None
+    largest, _ = _scipy_swing(problem.polynomials(beta), scenario.robot)
+    assert largest <= math.radians(8.0) + 1e-7

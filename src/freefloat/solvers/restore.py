@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..problem.constraints import Constraint
+from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.constraints.clearance import SOLVER_SLACK
 from ..problem.residual import Problem
 from .options import SolveOptions
@@ -79,20 +79,56 @@ def broken_rows_first(problem: Problem, constraints: Sequence[Constraint], beta:
 def feasible_start(
     problem: Problem, constraints: Sequence[Constraint], options: SolveOptions
 ) -> np.ndarray | None:
-    """Minimum-norm ``beta`` whose path honours every constraint, or None if none is found."""
+    """Minimum-norm ``beta`` whose path honours every constraint, or None if none is found.
+
+    SLSQP's rows sit at fixed instants, and a path on a limit there can go beyond it between
+    them (the spacecraft's swing peaking between two rows, say): the instants where the
+    result breaks a constraint (:meth:`Constraint.critical_times`) are then added and SLSQP
+    runs again from it, at most :data:`RESTORE_ROUNDS` runs.
+    """
+    active = [c for c in constraints if c.applies_to(problem.robot)]
+    if not constraint_functions(problem, active):
+        return np.zeros(problem.n_free)
+    instants, beta = DEFAULT_INSTANTS, np.zeros(problem.n_free)
+    for _ in range(RESTORE_ROUNDS):
+        found = _least_norm_within(problem, active, options, instants, beta)
+        if found is None:
+            return None
+        beta = found
+        broken = [c for c in active if first_broken(problem, [c], beta) is not None]
+        if not broken:
+            return beta
+        path = problem.polynomials(beta)
+        critical = [c.critical_times(problem.robot, path) / path.duration for c in broken]
+        more = np.union1d(instants, np.clip(np.concatenate(critical), 0.0, 1.0))
+        if len(more) == len(instants):  # nothing new to ask
+            return None
+        instants = more
+    return None
+
+
+#: SLSQP runs of :func:`feasible_start` at most (a count).
+RESTORE_ROUNDS = 3
+
+
+def _least_norm_within(
+    problem: Problem,
+    active: Sequence[Constraint],
+    options: SolveOptions,
+    instants: np.ndarray,
+    start: np.ndarray,
+) -> np.ndarray | None:
+    """SLSQP's minimum-norm ``beta`` within the rows at ``instants``, from ``start``."""
     from scipy.optimize import minimize  # imported when needed: it costs start-up time
 
-    active = [c for c in constraints if c.applies_to(problem.robot)]
     rows = [
         {"type": "ineq", "fun": fun, "jac": jac}
-        for fun, jac in constraint_functions(problem, active)
+        for fun, jac in constraint_functions(problem, active, instants)
     ]
-    if not rows:
-        return np.zeros(problem.n_free)
     try:
         result = minimize(
             lambda b: 0.5 * float(b @ b),
-            np.zeros(problem.n_free),
+            start,
             jac=lambda b: b,
             method="SLSQP",
             constraints=rows,
@@ -101,6 +137,4 @@ def feasible_start(
     except (ValueError, np.linalg.LinAlgError, FloatingPointError):
         return None
     beta = np.asarray(result.x, dtype=float)
-    if not np.all(np.isfinite(beta)) or broken_constraint(problem, active, beta):
-        return None
-    return beta
+    return beta if np.all(np.isfinite(beta)) else None
