@@ -7,10 +7,10 @@ attitude, whatever axis) within ``max_angle`` at every instant. The rows are
 
     g = theta(s) - max_angle   (rad; feasible <= 0)
 
-from the planner's own integration with its exact Jacobian (:mod:`..swing_rows`), asked a hair
-inside the bound (:data:`SOLVER_SLACK`). The dense
-check is independent of it: Pinocchio's centroidal map for the angular velocity and Butcher's
-fifth-order Runge-Kutta method on a uniform grid (:mod:`freefloat.physics.swing`), doubled
+from the planner's own integration with its exact Jacobian (:mod:`..relative_attitude`),
+asked a hair inside the bound (:data:`SOLVER_SLACK`). The dense check is independent of it:
+Pinocchio's centroidal map for the angular velocity and Butcher's fifth-order Runge-Kutta
+method on a uniform grid (:mod:`freefloat.physics.swing`), doubled
 until the turns at the step ends no longer move, each of the largest sampled turns then
 refined in time by a bounded scalar search; its error estimate is the difference between the
 last two levels. A goal attitude beyond the bound is refused before any search
@@ -31,12 +31,12 @@ import numpy as np
 from ...errors import InputError, excerpt
 from ...physics.attitude import geodesic_angle
 from ...physics.momentum import MomentumMap
-from ...physics.swing import RatesAt, TurnTrack, track_turn, turn_between
+from ...physics.swing import RatesAt, TurnTrack, quaternion_turn, track_turn, turn_between
 from ...robot.model import Robot
 from ..paths import JointPolynomials
+from ..relative_attitude import attitude_peaks, swing_rows
 from ..residual import Problem
 from ..scalar_minimum import scalar_minimum
-from ..swing_rows import swing_peaks, swing_rows
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 
 __all__ = ["SOLVER_SLACK", "BaseSwing"]
@@ -148,8 +148,8 @@ class BaseSwing(Constraint):
         return SOLVER_SLACK if room <= 0.0 else min(SOLVER_SLACK, 0.5 * room)
 
     def tight_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
-        """The largest turns' instants, each refined in time (:func:`..swing_rows.swing_peaks`)."""
-        return swing_peaks(problem, beta, _REFINED)
+        """The largest turns' instants, each refined in time (:func:`.attitude_peaks`)."""
+        return attitude_peaks(problem, beta, _REFINED, quaternion_turn)
 
     # -- finished paths -----------------------------------------------------------------------
 

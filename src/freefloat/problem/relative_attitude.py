@@ -1,19 +1,21 @@
-"""The spacecraft's turn from its start attitude at chosen instants, and its exact Jacobian.
+"""The spacecraft's attitude relative to its start at chosen instants, and its exact Jacobian.
 
 The planner's own integration (:class:`~.residual.Problem`'s sixth-order Magnus scheme on
 Gauss nodes) carried to every instant asked: the interval from 0 to each instant is split into
 steps no longer than the problem's, and the relative attitude ``r(s) = q(0)^-1 q(s)`` (it
-does not depend on the start attitude) is chained step by step. Its angle ``theta = |log r|``
-has the derivative ``d theta = u . delta`` for a body-frame perturbation ``delta`` of ``r``
-(``u`` the unit rotation axis: the SO(3) right Jacobian's inverse leaves ``u`` unchanged), and
-a perturbation of step ``j``'s Magnus vector ``W_j`` reaches instant ``m`` as
-``delta_m = R_m^T sum_{j <= m} R_j Jr(W_j) dW_j`` (``R`` the attitudes after each step): a
-running sum, so every instant costs about what the residual's Jacobian does.
+does not depend on the start attitude) is chained step by step. A perturbation of step
+``j``'s Magnus vector ``W_j`` reaches instant ``m`` as the body-frame perturbation
+``delta_m = R_m^T sum_{j <= m} R_j Jr(W_j) dW_j`` of ``r`` (``R`` the attitudes after each
+step): a running sum, so every instant costs about what the residual's Jacobian does. A
+quantity of the attitude then differentiates through ``delta``: the turn ``theta = |log r|``
+as ``d theta = u . delta`` (``u`` the unit rotation axis: the SO(3) right Jacobian's inverse
+leaves ``u`` unchanged), a body axis ``v = R a`` as ``dv = R (delta x a)``.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,9 +35,22 @@ from ..physics.attitude import (
 from ..physics.swing import quaternion_turn
 from .residual import Problem
 
-__all__ = ["SwingRows", "swing_peaks", "swing_rows"]
+__all__ = ["RelativeRows", "SwingRows", "attitude_peaks", "relative_rows", "swing_rows"]
 
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
+
+
+@dataclass(frozen=True)
+class RelativeRows:
+    """The attitude relative to the start at normalised instants.
+
+    Attributes:
+        relative: (M, 4) ``q(0)^-1 q(s)``, ``[x, y, z, w]``.
+        body: (M, 3, n_free) exact body-frame perturbation of each per unit of beta (rad).
+    """
+
+    relative: np.ndarray
+    body: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -69,6 +84,16 @@ def _edges(problem: Problem, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def swing_rows(problem: Problem, beta: np.ndarray, s: np.ndarray) -> SwingRows:
     """The turn (rad) at normalised instants ``s`` in [0, 1] and its Jacobian in ``beta``."""
+    found = relative_rows(problem, beta, s)
+    axes = _unit_axes(found.relative)
+    return SwingRows(quaternion_turn(found.relative), np.einsum("mi,mif->mf", axes, found.body))
+
+
+def relative_rows(problem: Problem, beta: np.ndarray, s: np.ndarray) -> RelativeRows:
+    """The attitude relative to the start at normalised instants ``s`` in [0, 1].
+
+    With its exact body-frame perturbation per unit of ``beta`` (rad).
+    """
     s = np.clip(np.asarray(s, dtype=float), 0.0, 1.0)
     beta = np.asarray(beta, dtype=float)
     edges, at = _edges(problem, s)
@@ -96,9 +121,7 @@ def swing_rows(problem: Problem, beta: np.ndarray, s: np.ndarray) -> SwingRows:
     attitudes = quat_to_matrix(relative)  # (steps + 1, 3, 3)
     spatial = np.einsum("mij,mjk,mkf->mif", attitudes[1:], so3_right_jacobian(increments), dw)
     summed = np.concatenate([np.zeros((1, 3, n_free)), np.cumsum(spatial, axis=0)])
-    chosen = relative[at]
-    body = np.einsum("mji,mjf->mif", attitudes[at], summed[at])
-    return SwingRows(quaternion_turn(chosen), np.einsum("mi,mif->mf", _unit_axes(chosen), body))
+    return RelativeRows(relative[at], np.einsum("mji,mjf->mif", attitudes[at], summed[at]))
 
 
 def _unit_axes(r: np.ndarray) -> np.ndarray:
@@ -112,26 +135,29 @@ def _unit_axes(r: np.ndarray) -> np.ndarray:
     return np.divide(sign * r[:, :3], norms, out=np.zeros((len(r), 3)), where=norms > 0.0)
 
 
-def swing_peaks(problem: Problem, beta: np.ndarray, count: int) -> np.ndarray:
-    """Normalised instants of the largest turns, found cheaply.
+def attitude_peaks(
+    problem: Problem, beta: np.ndarray, count: int, value: Callable[[np.ndarray], np.ndarray]
+) -> np.ndarray:
+    """Normalised instants of the largest values of the relative attitude, found cheaply.
 
-    The turn on the problem's own grid; each of its ``count`` largest interior maxima
-    refined twice (the end's turn is the goal's, which no path changes): the turn at
-    :data:`_REFINE_POINTS` instants across the two steps about it (each reached by one
-    Magnus step from the grid point before them), then the vertex of the parabola through the
+    ``value`` maps (K, 4) relative attitudes to K values (the turn, say). It is taken on the
+    problem's own grid; each of its ``count`` largest interior maxima is refined twice (the
+    ends are fixed: the start's and the goal's attitude, which no path changes): the value at
+    :data:`_REFINE_POINTS` instants across the two steps about it (each reached by one Magnus
+    step from the grid point before them), then the vertex of the parabola through the
     largest and its neighbours.
     """
     beta = np.asarray(beta, dtype=float)
     s = np.linspace(0.0, 1.0, problem.steps + 1)
     relative = relative_quat(problem.start_quaternion, problem.attitudes(beta, s))
-    turns = quaternion_turn(relative)
+    turns = value(relative)
     found = []  # not the end: its turn is the goal's
     inner = np.flatnonzero((turns[1:-1] >= turns[:-2]) & (turns[1:-1] >= turns[2:])) + 1
     for k in inner[np.argsort(turns[inner])[::-1][:count]].tolist():
         low, high = float(s[k - 1]), float(s[k + 1])
         for _ in range(2):
             points = np.linspace(low, high, _REFINE_POINTS)
-            near = quaternion_turn(_stepped(problem, beta, s[k - 1], relative[k - 1], points))
+            near = value(_stepped(problem, beta, s[k - 1], relative[k - 1], points))
             j = int(np.clip(np.argmax(near), 1, _REFINE_POINTS - 2))
             low, high = float(points[j - 1]), float(points[j + 1])
         left, middle, right = near[j - 1], near[j], near[j + 1]
@@ -141,7 +167,7 @@ def swing_peaks(problem: Problem, beta: np.ndarray, count: int) -> np.ndarray:
     return np.array(found)
 
 
-#: Instants of each refinement round of :func:`swing_peaks` (a count).
+#: Instants of each refinement round of :func:`attitude_peaks` (a count).
 _REFINE_POINTS = 17
 
 
