@@ -126,9 +126,11 @@ class ReachReport:
         loops: the goal joints are the start joints: every motion is a closed loop, which
             no simple-motion bound covers (``outer`` 0); the inner estimate heads for
             :data:`~freefloat.solvers.reach.DEFAULT_MAX_ANGLE` from a loop on each axis.
-        goal_turn_limit: the largest turn from the start attitude a goal attitude may have
-            (rad; a ``[constraints.base_swing]`` bound; pi without one): the outer turns and
-            where the inner estimate heads stop there.
+        goal_judged: the constraints that judge a goal attitude (``[constraints.base_swing]``,
+            say): the outer turns and where the inner estimate heads stop where a goal would
+            break one.
+        drift_breaks: ``"name (detail)"`` of such a constraint the drift attitude itself
+            breaks ("" if none): no goal about it plans.
     """
 
     robot: str
@@ -145,7 +147,8 @@ class ReachReport:
     goal_joints: np.ndarray
     end_effector_goal: bool
     loops: bool = False
-    goal_turn_limit: float = math.pi
+    goal_judged: tuple[str, ...] = ()
+    drift_breaks: str = ""
 
     @property
     def largest_outer(self) -> float:
@@ -239,8 +242,13 @@ def reachable(
     moved = relative_quat(start, drift)
     axes = default_directions() if directions is None else np.atleast_2d(directions)
     axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
-    allowed = goal_turn_limit(scenario_constraints(scenario))
-    outer = np.array([turn_limit(moved, axis, min(bound.bound, allowed)) for axis in axes])
+    constraints = scenario_constraints(scenario)
+    outer = np.array(
+        [
+            goal_turn_limit(constraints, moved, axis, turn_limit(moved, axis, bound.bound))
+            for axis in axes
+        ]
+    )
     loops = scenario.robot.n > 1 and stays_put(problem)  # every motion a closed loop
     before = problem.evaluations
     if budget > 0:  # as plan refuses them: no goal of this scenario plans
@@ -251,7 +259,7 @@ def reachable(
             replace(_limits(drift, axis, 0.0, None), stopped_by=ONE_JOINT) for axis in axes
         )
     else:  # joints that end where they start move in loops: no simple-motion bound holds
-        capped = [min(DEFAULT_MAX_ANGLE, turn_limit(moved, a, allowed)) for a in axes]
+        capped = [goal_turn_limit(constraints, moved, a, DEFAULT_MAX_ANGLE) for a in axes]
         heading = np.array(capped) if loops else outer
         estimate = _inner(scenario, problem, drift, axes, heading, budget, progress, jobs)
         freedom = estimate.freedom
@@ -259,6 +267,7 @@ def reachable(
             _limits(drift, axis, float(limit), reached)
             for axis, limit, reached in zip(axes, outer, estimate.directions, strict=True)
         )
+    judged = [(c, e, e.value <= 0.0) for c in constraints if (e := c.at_goal(moved)) is not None]
     return ReachReport(
         robot=scenario.robot.name,
         planar=False,
@@ -274,7 +283,8 @@ def reachable(
         goal_joints=problem.family.goal.copy(),
         end_effector_goal=end_effector_goal,
         loops=loops,
-        goal_turn_limit=allowed,
+        goal_judged=tuple(c.name for c, _, _ in judged),
+        drift_breaks=next((f"{c.name} ({e.detail})" for c, e, ok in judged if not ok), ""),
     )
 
 

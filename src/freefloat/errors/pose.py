@@ -117,13 +117,13 @@ class EndpointError(FreeFloatError):
 
 
 class GoalAttitudeError(FreeFloatError):
-    """A goal attitude that breaks a constraint of the spacecraft's attitude (rad).
+    """A goal attitude that breaks a constraint of the spacecraft's attitude.
 
     Every path ends at rest at the goal attitude, so no path keeps the constraint.
 
     Attributes:
         constraint: the constraint's name (its scenario table ``[constraints.<name>]``).
-        excess: how far beyond it the goal attitude is (rad).
+        excess: how far beyond it the goal attitude is (in the constraint's unit).
         detail: the constraint's own account (the goal's turn from the start, the bound).
     """
 

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import CollisionError, EndpointError, GoalAttitudeError
-from ..physics.attitude import geodesic_angle
+from ..physics.attitude import quat_exp, quat_multiply, relative_quat
 from ..robot.collision import CollisionModel, clearance_at
 from ..robot.designed_bodies import designed_bodies
 from ..robot.geometry import OBSTACLE_PREFIX
@@ -87,7 +87,7 @@ def check_goal_attitude(scenario: Scenario, constraints: Sequence[Constraint]) -
 
     Raises:
         GoalAttitudeError: the goal's turn from the start attitude (rad) beyond a constraint's
-            bound (:meth:`Constraint.at_goal_turn`: the spacecraft's swing).
+            bound (:meth:`Constraint.at_goal`: the spacecraft's swing, say).
     """
     for constraint, excess, holds in at_goal_attitude(scenario, constraints):
         if not holds:
@@ -97,40 +97,48 @@ def check_goal_attitude(scenario: Scenario, constraints: Sequence[Constraint]) -
 def at_goal_attitude(
     scenario: Scenario, constraints: Sequence[Constraint]
 ) -> list[tuple[Constraint, Excess, bool]]:
-    """The constraints the goal attitude alone decides (:meth:`Constraint.at_goal_turn`).
+    """The constraints the goal attitude alone decides (:meth:`Constraint.at_goal`).
 
-    Each with its excess there (rad) and whether that is within its tolerance.
+    Each with its excess there and whether that is within its tolerance.
     """
-    turn = geodesic_angle(scenario.start_attitude, scenario.goal_attitude)
+    relative = relative_quat(scenario.start_attitude, scenario.goal_attitude)
     found = []
     for constraint in constraints:
-        excess = constraint.at_goal_turn(turn)
+        excess = constraint.at_goal(relative)
         if excess is not None:
             found.append((constraint, excess, excess.value <= constraint.tolerance))
     return found
 
 
-def goal_turn_limit(constraints: Sequence[Constraint]) -> float:
-    """The largest turn from the start attitude (rad) a goal attitude may have.
+def goal_turn_limit(
+    constraints: Sequence[Constraint], moved: np.ndarray, axis: np.ndarray, turn: float
+) -> float:
+    """How far (rad, at most ``turn``) a goal may turn about ``axis`` from ``moved``.
 
-    Pi, or less where a constraint judges the goal attitude (:meth:`Constraint.at_goal_turn`,
-    taken as growing with the turn): found by bisection to 1e-12 rad.
+    As far as it breaks no constraint of the goal attitude (:meth:`Constraint.at_goal`).
+    ``moved``: an attitude relative to the start (the drift attitude's), ``[x, y, z, w]``;
+    ``axis``: a unit axis in its frame. The first crossing on a grid of 0.1 deg, refined by
+    bisection to 1e-12 rad; 0 when ``moved`` itself breaks one.
     """
-    low, high = 0.0, math.pi
-    judged = [c for c in constraints if c.at_goal_turn(0.0) is not None]
-    if not judged or all(_holds(c, high) for c in judged):
-        return high
-    for _ in range(60):
+    judged = [c for c in constraints if c.at_goal(moved) is not None]
+    if not judged:
+        return turn
+
+    def holds(theta: float) -> bool:
+        relative = quat_multiply(moved, quat_exp(theta * np.asarray(axis, dtype=float)))
+        return all(c.at_goal(relative).value <= 0.0 for c in judged)  # type: ignore[union-attr]
+
+    if not holds(0.0):
+        return 0.0
+    grid = np.append(np.arange(0.0, turn, math.radians(0.1)), turn)
+    broken = next((k for k in range(1, len(grid)) if not holds(float(grid[k]))), None)
+    if broken is None:
+        return turn
+    low, high = float(grid[broken - 1]), float(grid[broken])
+    while high - low > 1e-12:
         middle = 0.5 * (low + high)
-        low, high = (middle, high) if all(_holds(c, middle) for c in judged) else (low, middle)
-        if high - low < 1e-12:
-            break
+        low, high = (middle, high) if holds(middle) else (low, middle)
     return low
-
-
-def _holds(constraint: Constraint, turn: float) -> bool:
-    excess = constraint.at_goal_turn(turn)
-    return excess is None or excess.value <= 0.0
 
 
 def at_rest(

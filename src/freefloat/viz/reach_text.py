@@ -24,13 +24,11 @@ def _vector(values: np.ndarray, digits: int = 4) -> str:
 def verdict(report: ReachReport) -> str:
     """One line when the reach is small, naming why (the inertia ratio); "" otherwise."""
     largest = math.degrees(report.largest_outer)
-    away = geodesic_angle(report.start_quaternion, report.drift_quaternion)
-    if not report.loops and away > report.goal_turn_limit:
+    if report.drift_breaks and not report.loops:
         return (
-            f"the drift attitude lies {math.degrees(away):.4g} deg from the start, beyond the "
-            f"{math.degrees(report.goal_turn_limit):.10g} deg [constraints.base_swing] "
-            "allows a goal: no goal listed above plans; goals nearer the start may, which "
-            "this report, measured from the drift attitude, does not search"
+            f"the drift attitude breaks {report.drift_breaks}: no goal listed above plans; "
+            "goals nearer the start may, which this report, measured from the drift attitude, "
+            "does not search"
         )
     if report.loops:
         return (
@@ -98,11 +96,9 @@ def _outer_lines(report: ReachReport) -> list[str]:
         "  the joint's travel);",
         "  a path whose joints go back and forth is not bounded by it: plan may turn further",
     ]
-    if report.goal_turn_limit < math.pi:
-        lines.append(
-            f"  a goal attitude lies at most {math.degrees(report.goal_turn_limit):.10g} deg "
-            "from the start ([constraints.base_swing]): outer and inner stop there"
-        )
+    if report.goal_judged:
+        names = ", ".join(f"[constraints.{name}]" for name in report.goal_judged)
+        lines.append(f"  a goal attitude is held to {names}: outer and inner stop where it breaks")
     heads = (
         f"from a {math.degrees(LOOP_TURN):g} deg loop about each axis towards "
         f"{math.degrees(DEFAULT_MAX_ANGLE):g} deg (the joints end where they start)"
@@ -153,7 +149,6 @@ def reach_lines(report: ReachReport, robot: Robot | None = None) -> list[str]:
         lines.append("  per axis, turns measured from the drift attitude:")
         away = math.degrees(geodesic_angle(report.start_quaternion, drift))
         within = math.degrees(report.bound.bound) if report.bound is not None else 0.0
-        within = min(within, math.degrees(report.goal_turn_limit))
         if away < within < 180.0 and len(report.freedom) > 1:  # why the outer column is larger
             lines.append(
                 f"  (outer: as far as the attitude stays within {within:.4g} deg of the start; "

@@ -159,13 +159,13 @@ class Constraint(abc.ABC):
         """
         return None
 
-    def at_goal_turn(self, turn: float) -> Excess | None:
-        """Its excess at a goal attitude ``turn`` rad from the start attitude, or None.
+    def at_goal(self, relative: np.ndarray) -> Excess | None:
+        """Its excess at the goal attitude, or None (the default: it does not judge attitudes).
 
-        Every path ends at rest at the goal attitude: a constraint of the spacecraft's attitude
-        that the goal breaks holds on no path, and ``plan`` refuses it before any search
-        (:func:`freefloat.problem.endpoints.check_goal_attitude`). None (the default): the
-        constraint does not judge the attitude.
+        ``relative``: the goal attitude relative to the start, ``q(0)^-1 q_goal``
+        (``[x, y, z, w]``). Every path ends at rest there: a constraint of the spacecraft's
+        attitude that the goal breaks holds on no path, and ``plan`` refuses it before any
+        search (:func:`freefloat.problem.endpoints.check_goal_attitude`).
         """
         return None
 

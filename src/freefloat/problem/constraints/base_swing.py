@@ -14,7 +14,7 @@ method on a uniform grid (:mod:`freefloat.physics.swing`), doubled
 until the turns at the step ends no longer move, each of the largest sampled turns then
 refined in time by a bounded scalar search; its error estimate is the difference between the
 last two levels. A goal attitude beyond the bound is refused before any search
-(:meth:`BaseSwing.at_goal_turn`). Scenario key and plan record::
+(:meth:`BaseSwing.at_goal`). Scenario key and plan record::
 
     [constraints.base_swing]
     max_deg = 10.0                  # 0 < max < 180 [deg], from the start attitude
@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError, excerpt
-from ...physics.attitude import geodesic_angle
+from ...physics.attitude import relative_quat
 from ...physics.momentum import MomentumMap
 from ...physics.swing import RatesAt, TurnTrack, quaternion_turn, track_turn, turn_between
 from ...robot.model import Robot
@@ -110,8 +110,9 @@ class BaseSwing(Constraint):
 
     # -- the goal ---------------------------------------------------------------------------
 
-    def at_goal_turn(self, turn: float) -> Excess:
-        """Its excess (rad) at a goal attitude ``turn`` rad from the start, where paths end."""
+    def at_goal(self, relative: np.ndarray) -> Excess:
+        """Its excess (rad) at the goal attitude (``relative`` to the start), where paths end."""
+        turn = float(quaternion_turn(np.asarray(relative, dtype=float)))
         said, bound = _degrees(turn, self.max_angle)
         detail = f"it lies {said} deg from the start attitude, at most {bound} deg allowed"
         return Excess(turn - self.max_angle, 0.0, detail)
@@ -131,7 +132,7 @@ class BaseSwing(Constraint):
         """``theta - max_angle`` (rad), a hair inside, and its exact Jacobian in beta.
 
         At the instants strictly between the ends: at the start the turn is 0, and at the
-        end it is the goal's, which no path changes (:meth:`at_goal_turn` judges it before
+        end it is the goal's, which no path changes (:meth:`at_goal` judges it before
         any search); a row there would only make a goal at the bound unreachable.
         """
         s = np.asarray(instants, dtype=float)
@@ -144,7 +145,8 @@ class BaseSwing(Constraint):
 
     def solver_slack(self, problem: Problem) -> float:
         """:data:`SOLVER_SLACK` (rad), or half the goal's room below the bound when less."""
-        room = self.max_angle - geodesic_angle(problem.start_quaternion, problem.goal_quaternion)
+        goal = relative_quat(problem.start_quaternion, problem.goal_quaternion)
+        room = -self.at_goal(goal).value
         return SOLVER_SLACK if room <= 0.0 else min(SOLVER_SLACK, 0.5 * room)
 
     def tight_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
