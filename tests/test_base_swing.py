@@ -201,8 +201,10 @@ def test_a_goal_attitude_beyond_the_bound_is_refused_before_any_search(tmp_path,
         "base_swing: goal attitude: it lies 50 deg from the start attitude, at most 30 deg "
         "allowed: BROKEN" in out
     )
-    assert main(["check", str(path), "--at", "start"]) == 0  # not the start's business
-    assert "base_swing" not in capsys.readouterr().out
+    assert main(["check", str(path), "--at", "start"]) == 0  # the turn is 0 there
+    assert "base_swing: start attitude: it lies 0 deg from the start attitude" in (
+        capsys.readouterr().out
+    )
 
 
 @pytest.mark.parametrize(

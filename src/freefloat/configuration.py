@@ -18,7 +18,7 @@ import numpy as np
 
 from .errors import InputError
 from .problem.constraints import Clearance, scenario_constraints
-from .problem.endpoints import at_goal_attitude, at_rest
+from .problem.endpoints import at_end_attitude, at_rest
 from .problem.limits import MAX_ANGLE_DEG, MAX_LENGTH_M, check_number
 from .problem.radians_hint import warn_if_radians
 from .problem.scenario import Scenario
@@ -148,12 +148,12 @@ def parse_joints(text: str, scenario: Scenario) -> np.ndarray:
 
 
 def check_configuration(
-    scenario: Scenario, joints: np.ndarray, at_goal: bool = False
+    scenario: Scenario, joints: np.ndarray, at: str = ""
 ) -> ConfigurationReport:
     """Limits, closest pairs and clearance of the scenario's robot at ``joints`` (rad or m).
 
-    ``at_goal``: the joints are the goal's, so the constraints of the goal attitude (the
-    spacecraft's swing bound) are judged there too.
+    ``at``: ``"start"`` or ``"goal"`` when the joints are that end's: the constraints of its
+    attitude (the spacecraft's swing or pointing) are judged there too.
     """
     scenario.write_robot()  # the goal is not solved: the joints asked about are given
     robot = scenario.robot
@@ -166,10 +166,10 @@ def check_configuration(
         PoseConstraint(constraint.name, excess.value, excess.detail, holds)
         for constraint, excess, holds in at_rest(constraints, robot, joints)
     ]
-    if at_goal:
+    if at in ("start", "goal"):
         posed += [
-            PoseConstraint(constraint.name, excess.value, f"goal attitude: {excess.detail}", holds)
-            for constraint, excess, holds in at_goal_attitude(scenario, constraints)
+            PoseConstraint(constraint.name, excess.value, f"{at} attitude: {excess.detail}", ok)
+            for constraint, excess, ok in at_end_attitude(scenario, constraints, at)
         ]
     clearance = next((c for c in constraints if isinstance(c, Clearance)), None)
     if clearance is None or not clearance.applies_to(robot):

@@ -44,7 +44,7 @@ from .problem.constraints import (
     default_constraints,
     scenario_constraints,
 )
-from .problem.endpoints import check_endpoints, check_goal_attitude
+from .problem.endpoints import check_end_attitudes, check_endpoints
 from .problem.limits import check_samples
 from .problem.objectives import DEFAULT_OBJECTIVE, Objective, objective_named
 from .problem.paths import boundary_errors
@@ -122,7 +122,7 @@ def _plan(
     )
     check_registered(chosen, constraints)  # what verify could not rebuild: before any work
     check_endpoints(scenario, constraints, chosen_goal)
-    check_goal_attitude(scenario, constraints)
+    check_end_attitudes(scenario, constraints)
     warn_light_base(scenario.robot)
     warn_unphysical(scenario.robot)
     clock = time.perf_counter()

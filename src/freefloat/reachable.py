@@ -267,7 +267,9 @@ def reachable(
             _limits(drift, axis, float(limit), reached)
             for axis, limit, reached in zip(axes, outer, estimate.directions, strict=True)
         )
-    judged = [(c, e, e.value <= 0.0) for c in constraints if (e := c.at_goal(moved)) is not None]
+    judged = [
+        (c, e, e.value <= 0.0) for c in constraints if (e := c.at_attitude(moved)) is not None
+    ]
     return ReachReport(
         robot=scenario.robot.name,
         planar=False,

@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
     from ..configuration import check_configuration, parse_joints
 
     scenario = load_scenario(args.scenario)
-    report = check_configuration(scenario, parse_joints(args.at, scenario), args.at == "goal")
+    report = check_configuration(scenario, parse_joints(args.at, scenario), args.at)
     print(f"freefloat check: {scenario.robot.name} at {args.at}")
     width = max([24, *(len(j.name) + 2 for j in report.joints)])
     digits = [_digits(math.degrees(j.room) if j.angular else j.room) for j in report.joints]

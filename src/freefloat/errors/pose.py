@@ -117,23 +117,29 @@ class EndpointError(FreeFloatError):
 
 
 class GoalAttitudeError(FreeFloatError):
-    """A goal attitude that breaks a constraint of the spacecraft's attitude.
+    """A start or goal attitude that breaks a constraint of the spacecraft's attitude.
 
-    Every path ends at rest at the goal attitude, so no path keeps the constraint.
+    Every path starts and ends at rest there, so no path keeps the constraint.
 
     Attributes:
         constraint: the constraint's name (its scenario table ``[constraints.<name>]``).
-        excess: how far beyond it the goal attitude is (in the constraint's unit).
-        detail: the constraint's own account (the goal's turn from the start, the bound).
+        excess: how far beyond it the attitude is (in the constraint's unit).
+        detail: the constraint's own account (the turn from the start, the bound).
+        where: ``"goal"`` or ``"start"``.
     """
 
-    def __init__(self, constraint: str, excess: float, detail: str) -> None:
+    def __init__(self, constraint: str, excess: float, detail: str, where: str = "goal") -> None:
         self.constraint = constraint
         self.excess = float(excess)
         self.detail = detail
+        self.where = where
+        if where == "goal":
+            said = "where every path ends; choose a goal attitude nearer the start attitude"
+        else:
+            said = "where every path starts; change the start attitude"
         super().__init__(
-            f"goal attitude breaks {constraint} ({detail}), where every path ends; choose a "
-            f"goal attitude nearer the start attitude or loosen [constraints.{constraint}]"
+            f"{where} attitude breaks {constraint} ({detail}), {said} or loosen "
+            f"[constraints.{constraint}]"
         )
 
 

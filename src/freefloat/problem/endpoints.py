@@ -27,10 +27,10 @@ from .constraints import Clearance, Constraint, Excess
 from .scenario import Scenario
 
 __all__ = [
-    "at_goal_attitude",
+    "at_end_attitude",
     "at_rest",
+    "check_end_attitudes",
     "check_endpoints",
-    "check_goal_attitude",
     "goal_turn_limit",
 ]
 
@@ -82,29 +82,37 @@ def check_endpoints(
                 raise EndpointError(where, constraint.name, excess.value, excess.detail, chosen)
 
 
-def check_goal_attitude(scenario: Scenario, constraints: Sequence[Constraint]) -> None:
-    """Refuse a goal attitude that breaks a constraint of the attitude (every path ends there).
+def check_end_attitudes(scenario: Scenario, constraints: Sequence[Constraint]) -> None:
+    """Refuse a start or goal attitude that breaks a constraint of the attitude.
+
+    Every path starts and ends there.
 
     Raises:
-        GoalAttitudeError: the goal's turn from the start attitude (rad) beyond a constraint's
-            bound (:meth:`Constraint.at_goal`: the spacecraft's swing, say).
+        GoalAttitudeError: the start or goal attitude breaks a constraint
+            (:meth:`Constraint.at_attitude`: the spacecraft's swing or pointing).
     """
-    for constraint, excess, holds in at_goal_attitude(scenario, constraints):
-        if not holds:
-            raise GoalAttitudeError(constraint.name, excess.value, excess.detail)
+    for where in ("start", "goal"):
+        for constraint, excess, holds in at_end_attitude(scenario, constraints, where):
+            if not holds:
+                raise GoalAttitudeError(constraint.name, excess.value, excess.detail, where)
 
 
-def at_goal_attitude(
-    scenario: Scenario, constraints: Sequence[Constraint]
+def at_end_attitude(
+    scenario: Scenario, constraints: Sequence[Constraint], where: str
 ) -> list[tuple[Constraint, Excess, bool]]:
-    """The constraints the goal attitude alone decides (:meth:`Constraint.at_goal`).
+    """The constraints the start or goal attitude (``where``) alone decides.
 
-    Each with its excess there and whether that is within its tolerance.
+    Each with its excess there (:meth:`Constraint.at_attitude`) and whether that is within
+    its tolerance.
     """
-    relative = relative_quat(scenario.start_attitude, scenario.goal_attitude)
+    relative = (
+        relative_quat(scenario.start_attitude, scenario.goal_attitude)
+        if where == "goal"
+        else np.array([0.0, 0.0, 0.0, 1.0])
+    )
     found = []
     for constraint in constraints:
-        excess = constraint.at_goal(relative)
+        excess = constraint.at_attitude(relative)
         if excess is not None:
             found.append((constraint, excess, excess.value <= constraint.tolerance))
     return found
@@ -115,18 +123,18 @@ def goal_turn_limit(
 ) -> float:
     """How far (rad, at most ``turn``) a goal may turn about ``axis`` from ``moved``.
 
-    As far as it breaks no constraint of the goal attitude (:meth:`Constraint.at_goal`).
+    As far as it breaks no constraint of the goal attitude (:meth:`Constraint.at_attitude`).
     ``moved``: an attitude relative to the start (the drift attitude's), ``[x, y, z, w]``;
     ``axis``: a unit axis in its frame. The first crossing on a grid of 0.1 deg, refined by
     bisection to 1e-12 rad; 0 when ``moved`` itself breaks one.
     """
-    judged = [c for c in constraints if c.at_goal(moved) is not None]
+    judged = [c for c in constraints if c.at_attitude(moved) is not None]
     if not judged:
         return turn
 
     def holds(theta: float) -> bool:
         relative = quat_multiply(moved, quat_exp(theta * np.asarray(axis, dtype=float)))
-        return all(c.at_goal(relative).value <= 0.0 for c in judged)  # type: ignore[union-attr]
+        return all(c.at_attitude(relative).value <= 0.0 for c in judged)  # type: ignore[union-attr]
 
     if not holds(0.0):
         return 0.0

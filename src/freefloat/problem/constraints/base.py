@@ -159,13 +159,14 @@ class Constraint(abc.ABC):
         """
         return None
 
-    def at_goal(self, relative: np.ndarray) -> Excess | None:
-        """Its excess at the goal attitude, or None (the default: it does not judge attitudes).
+    def at_attitude(self, relative: np.ndarray) -> Excess | None:
+        """Its excess at a rest attitude, or None (the default: it does not judge attitudes).
 
-        ``relative``: the goal attitude relative to the start, ``q(0)^-1 q_goal``
-        (``[x, y, z, w]``). Every path ends at rest there: a constraint of the spacecraft's
-        attitude that the goal breaks holds on no path, and ``plan`` refuses it before any
-        search (:func:`freefloat.problem.endpoints.check_goal_attitude`).
+        ``relative``: the attitude relative to the start, ``q(0)^-1 q`` (``[x, y, z, w]``;
+        the identity is the start's). Every path starts and ends at rest at the start and
+        goal attitudes: a constraint of the spacecraft's attitude that either breaks holds on
+        no path, and ``plan`` refuses it before any search
+        (:func:`freefloat.problem.endpoints.check_end_attitudes`).
         """
         return None
 

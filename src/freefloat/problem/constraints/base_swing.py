@@ -14,7 +14,7 @@ method on a uniform grid (:mod:`freefloat.physics.swing`), doubled
 until the turns at the step ends no longer move, each of the largest sampled turns then
 refined in time by a bounded scalar search; its error estimate is the difference between the
 last two levels. A goal attitude beyond the bound is refused before any search
-(:meth:`BaseSwing.at_goal`). Scenario key and plan record::
+(:meth:`BaseSwing.at_attitude`). Scenario key and plan record::
 
     [constraints.base_swing]
     max_deg = 10.0                  # 0 < max < 180 [deg], from the start attitude
@@ -110,8 +110,8 @@ class BaseSwing(Constraint):
 
     # -- the goal ---------------------------------------------------------------------------
 
-    def at_goal(self, relative: np.ndarray) -> Excess:
-        """Its excess (rad) at the goal attitude (``relative`` to the start), where paths end."""
+    def at_attitude(self, relative: np.ndarray) -> Excess:
+        """Its excess (rad) at an attitude ``relative`` to the start (the goal's, say)."""
         turn = float(quaternion_turn(np.asarray(relative, dtype=float)))
         said, bound = _degrees(turn, self.max_angle)
         detail = f"it lies {said} deg from the start attitude, at most {bound} deg allowed"
@@ -132,7 +132,7 @@ class BaseSwing(Constraint):
         """``theta - max_angle`` (rad), a hair inside, and its exact Jacobian in beta.
 
         At the instants strictly between the ends: at the start the turn is 0, and at the
-        end it is the goal's, which no path changes (:meth:`at_goal` judges it before
+        end it is the goal's, which no path changes (:meth:`at_attitude` judges it before
         any search); a row there would only make a goal at the bound unreachable.
         """
         s = np.asarray(instants, dtype=float)
@@ -146,7 +146,7 @@ class BaseSwing(Constraint):
     def solver_slack(self, problem: Problem) -> float:
         """:data:`SOLVER_SLACK` (rad), or half the goal's room below the bound when less."""
         goal = relative_quat(problem.start_quaternion, problem.goal_quaternion)
-        room = -self.at_goal(goal).value
+        room = -self.at_attitude(goal).value
         return SOLVER_SLACK if room <= 0.0 else min(SOLVER_SLACK, 0.5 * room)
 
     def tight_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
