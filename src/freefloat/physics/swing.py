@@ -20,7 +20,14 @@ import numpy as np
 
 from .runge_kutta import QUARTERS, step_matrices
 
-__all__ = ["RatesAt", "TurnTrack", "quaternion_turn", "track_turn", "turn_between"]
+__all__ = [
+    "RatesAt",
+    "TurnTrack",
+    "quaternion_turn",
+    "relative_between",
+    "track_turn",
+    "turn_between",
+]
 
 #: Angular velocity (rad/s, base frame), (K, 3), at an array of K times (s).
 RatesAt = Callable[[np.ndarray], np.ndarray]
@@ -86,17 +93,22 @@ def track_turn(
 
 
 def turn_between(omega_at: RatesAt, track: TurnTrack, t: float, duration: float) -> float:
-    """The turn (rad) at time ``t`` (s), integrated from the track's last step end before it.
+    """The turn (rad) at time ``t`` (s): :func:`relative_between`'s angle."""
+    return float(quaternion_turn(relative_between(omega_at, track, t, duration)))
 
-    As many RK5 steps as make each no wider than the track's own, so its error is of the
-    track's order.
+
+def relative_between(omega_at: RatesAt, track: TurnTrack, t: float, duration: float) -> np.ndarray:
+    """The relative attitude ``[x, y, z, w]`` at time ``t`` (s).
+
+    Integrated from the track's last step end before ``t``, by as many RK5 steps as make
+    each no wider than the track's own, so its error is of the track's order.
     """
     width = duration / track.steps
     k = min(max(math.floor(t / width), 0), track.steps - 1)
     start = float(track.times[k])
     span = t - start
     if span <= 0.0:
-        return float(track.turns[k])
+        return np.array(track.relative[k])
     pieces = max(1, math.ceil(span / width - 1e-9))
     h = span / pieces
     quarters = start + h * np.arange(4 * pieces + 1) / 4.0
@@ -106,4 +118,4 @@ def turn_between(omega_at: RatesAt, track: TurnTrack, t: float, duration: float)
     with np.errstate(over="ignore", invalid="ignore"):
         for matrix in step_matrices(stage, np.full(pieces, h)):
             y = matrix @ y
-        return float(quaternion_turn(y / np.linalg.norm(y)))
+        return y / np.linalg.norm(y)

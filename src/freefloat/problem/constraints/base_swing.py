@@ -8,12 +8,10 @@ attitude, whatever axis) within ``max_angle`` at every instant. The rows are
     g = theta(s) - max_angle   (rad; feasible <= 0)
 
 from the planner's own integration with its exact Jacobian (:mod:`..relative_attitude`),
-asked a hair inside the bound (:data:`SOLVER_SLACK`). The dense check is independent of it:
-Pinocchio's centroidal map for the angular velocity and Butcher's fifth-order Runge-Kutta
-method on a uniform grid (:mod:`freefloat.physics.swing`), doubled
-until the turns at the step ends no longer move, each of the largest sampled turns then
-refined in time by a bounded scalar search; its error estimate is the difference between the
-last two levels. A goal attitude beyond the bound is refused before any search
+asked a hair inside the bound (:data:`SOLVER_SLACK`). The dense check is independent of it
+(:mod:`.attitude_check`: Pinocchio's centroidal map, Butcher's fifth-order Runge-Kutta method
+on doubling grids, the largest sampled turns refined in time; the last two levels'
+difference is its error estimate). A goal attitude beyond the bound is refused before any search
 (:meth:`BaseSwing.at_attitude`). Scenario key and plan record::
 
     [constraints.base_swing]
@@ -30,29 +28,20 @@ import numpy as np
 
 from ...errors import InputError, excerpt
 from ...physics.attitude import relative_quat
-from ...physics.momentum import MomentumMap
-from ...physics.swing import RatesAt, TurnTrack, quaternion_turn, track_turn, turn_between
+from ...physics.swing import quaternion_turn
 from ...robot.model import Robot
 from ..paths import JointPolynomials
 from ..relative_attitude import attitude_peaks, swing_rows
 from ..residual import Problem
-from ..scalar_minimum import scalar_minimum
+from .attitude_check import REFINED, attitude_track
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 
 __all__ = ["SOLVER_SLACK", "BaseSwing"]
 
-#: Steps of the dense check's first level, and the most it doubles to.
-_FIRST_STEPS, _MAX_STEPS = 64, 8192
-#: The dense check stops doubling when no turn at the coarser level's step ends moves by more
-#: than this (rad): the integration has converged there (the refinement in time then finds
-#: the largest turn between them).
-_SETTLED = 1e-11
 #: How far inside the bound the solvers' rows ask the turn to be (rad: 0.0057 deg): a start
 #: path found on the bound at fixed instants peaked 2e-5 rad beyond it between them, and was
 #: refused; less when the goal lies nearer the bound (:meth:`BaseSwing.solver_slack`).
 SOLVER_SLACK = 1e-4
-#: Largest sampled turns of a level refined in time (a count).
-_REFINED = 3
 
 
 class BaseSwing(Constraint):
@@ -151,62 +140,24 @@ class BaseSwing(Constraint):
 
     def tight_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
         """The largest turns' instants, each refined in time (:func:`.attitude_peaks`)."""
-        return attitude_peaks(problem, beta, _REFINED, quaternion_turn)
+        return attitude_peaks(problem, beta, REFINED, quaternion_turn)
 
     # -- finished paths -----------------------------------------------------------------------
 
-    def _track(self, robot: Robot, path: JointPolynomials) -> tuple[TurnTrack, TurnTrack, RatesAt]:
-        """The last two levels of the independent integration (coarse, fine), and its rates."""
-        mmap = MomentumMap(robot)
-
-        def omega_at(t: np.ndarray) -> np.ndarray:
-            samples = path.evaluate(t)
-            return mmap.pinocchio_rates(samples.q, samples.qd)
-
-        coarse = track_turn(omega_at, path.duration, _FIRST_STEPS)
-        while True:
-            fine = track_turn(omega_at, path.duration, 2 * coarse.steps, coarse)
-            moved = float(np.abs(fine.turns[::2] - coarse.turns).max())  # at the shared ends
-            if not moved > _SETTLED or fine.steps >= _MAX_STEPS:  # NaN: no use going on
-                return coarse, fine, omega_at
-            coarse = fine
-
-    def _largest(self, track: TurnTrack, duration: float, omega_at: RatesAt) -> tuple[float, float]:
-        """The largest turn (rad) and its time (s): sampled, the largest refined in time."""
-        turns = track.turns
-        best = int(np.argmax(turns))
-        value, when = float(turns[best]), float(track.times[best])
-        for k in _local_maxima(turns)[:_REFINED]:
-            lo, hi = float(track.times[k - 1]), float(track.times[k + 1])
-            found = scalar_minimum(
-                lambda t: -turn_between(omega_at, track, t, duration), lo, hi, 1e-9 * duration
-            )
-            if -found.value > value:
-                value, when = -found.value, found.x
-        return value, when
-
     def critical_times(self, robot: Robot, path: JointPolynomials) -> np.ndarray:
         """Times (s) of the local maxima of the turn on the dense check's grid."""
-        _, fine, _ = self._track(robot, path)
-        return fine.times[_local_maxima(fine.turns)]
+        return attitude_track(robot, path).peak_times(quaternion_turn)
 
     def excess(self, robot: Robot, path: JointPolynomials) -> Excess:
         """The largest turn beyond ``max_angle`` (rad), with a step-doubling error estimate."""
-        coarse, fine, omega_at = self._track(robot, path)
-        if not np.all(np.isfinite(fine.turns)):  # too fast for the grid: it blew up
+        largest = attitude_track(robot, path).largest(quaternion_turn)
+        if not math.isfinite(largest.value):  # too fast for the grid: it blew up
             return Excess(math.inf, 0.0, "the spacecraft's turn could not be integrated")
-        value, when = self._largest(fine, path.duration, omega_at)
-        rough, _ = self._largest(coarse, path.duration, omega_at)
-        return Excess(value - self.max_angle, abs(value - rough), self._said(value, when))
+        detail = self._said(largest.value, largest.time)
+        return Excess(largest.value - self.max_angle, largest.estimate, detail)
 
     def __repr__(self) -> str:
         return f"BaseSwing(max_angle={self.max_angle!r})"
-
-
-def _local_maxima(values: np.ndarray) -> np.ndarray:
-    """Indices of interior local maxima, largest first."""
-    inner = np.flatnonzero((values[1:-1] >= values[:-2]) & (values[1:-1] >= values[2:])) + 1
-    return inner[np.argsort(values[inner])[::-1]]
 
 
 def _degrees(turn: float, bound: float) -> tuple[str, str]:
