@@ -89,10 +89,12 @@ def test_the_turn_about_a_fixed_axis_is_the_integral_of_the_rate():
         ) == pytest.approx(closed(t), abs=1e-10)  # one partial step of the 64
 
 
-def _scipy_swing(plan, robot: ff.Robot) -> tuple[float, float]:
-    """Largest turn (rad) from the start attitude and its time (s), by SciPy from Pinocchio.
+def scipy_largest(plan, robot: ff.Robot, quantity) -> tuple[float, float]:
+    """Largest value of ``quantity(relative attitudes (4, K))`` and its time (s).
 
-    ``plan``: a plan, or joint polynomials.
+    The attitude relative to the start integrated by SciPy's DOP853 from Pinocchio's
+    centroidal map at zero momentum, its largest sample of 4001 refined by SciPy's bounded
+    scalar search. ``plan``: a plan, or joint polynomials.
     """
     model, data = robot.model, robot.model.createData()
     columns = [joint.idx_v for joint in robot.joints]
@@ -113,20 +115,25 @@ def _scipy_swing(plan, robot: ff.Robot) -> tuple[float, float]:
         rhs, (0.0, path.duration), [0.0, 0.0, 0.0, 1.0], "DOP853", rtol=1e-12, atol=1e-13,
         dense_output=True,
     )  # fmt: skip
-
-    def turn(t):
-        y = found.sol(t)
-        return 2.0 * np.arctan2(np.linalg.norm(y[:3], axis=0), np.abs(y[3]))
-
     t = np.linspace(0.0, path.duration, 4001)
-    k = int(np.argmax(turn(t)))
+    k = int(np.argmax(quantity(found.sol(t))))
     if k in (0, len(t) - 1):
-        return float(turn(t[k])), float(t[k])
+        return float(np.ravel(quantity(found.sol(t[k])))[0]), float(t[k])
     best = minimize_scalar(
-        lambda x: -turn(x), bounds=(t[k - 1], t[k + 1]), method="bounded",
+        lambda x: -float(np.ravel(quantity(found.sol(x)))[0]), bounds=(t[k - 1], t[k + 1]),
+        method="bounded",
         options={"xatol": 1e-9},
     )  # fmt: skip
     return float(-best.fun), float(best.x)
+
+
+def _scipy_swing(plan, robot: ff.Robot) -> tuple[float, float]:
+    """Largest turn (rad) from the start attitude and its time (s) (:func:`scipy_largest`)."""
+
+    def turn(y):
+        return 2.0 * np.arctan2(np.linalg.norm(y[:3], axis=0), np.abs(y[3]))
+
+    return scipy_largest(plan, robot, turn)
 
 
 @pytest.fixture(scope="module")

@@ -8,6 +8,7 @@ from .base import (
     Excess,
     LimitPeak,
 )
+from .base_pointing import BasePointing
 from .base_swing import BaseSwing
 from .clearance import Clearance
 from .end_effector_cone import EndEffectorCone
@@ -25,6 +26,7 @@ from .registry import (
 __all__ = [
     "CONSTRAINTS",
     "DEFAULT_INSTANTS",
+    "BasePointing",
     "BaseSwing",
     "Clearance",
     "Constraint",

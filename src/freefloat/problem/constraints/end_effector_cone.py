@@ -42,7 +42,7 @@ from ..residual import Problem
 from ..scalar_minimum import scalar_minimum
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 
-__all__ = ["SOLVER_SLACK", "VERIFY_SAMPLES", "EndEffectorCone"]
+__all__ = ["SOLVER_SLACK", "VERIFY_SAMPLES", "EndEffectorCone", "unit_vector"]
 
 #: Samples of the dense verification check (every sampled local maximum is then refined).
 VERIFY_SAMPLES = 801
@@ -54,22 +54,25 @@ SOLVER_SLACK = 3e-4
 _KEYS = ("axis", "direction", "half_angle_deg")
 
 
-def _unit_vector(value: Any, key: str) -> np.ndarray:
+def unit_vector(value: Any, key: str, constraint: str = "end_effector_cone") -> np.ndarray:
+    """``value`` as a unit vector: 3 finite numbers, not all 0 (normalised).
+
+    Raises:
+        InputError: naming ``constraint``'s ``key`` and what is valid.
+    """
     if (
         not isinstance(value, Sequence)
         or isinstance(value, str)
         or len(value) != 3
         or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in value)
     ):
-        raise InputError(
-            f"end_effector_cone {key} must be 3 numbers [x, y, z], got {excerpt(value)}"
-        )
+        raise InputError(f"{constraint} {key} must be 3 numbers [x, y, z], got {excerpt(value)}")
     if not all(finite_number(x) for x in value):  # an integer beyond the floats too
-        raise InputError(f"end_effector_cone {key} must be finite numbers, got {excerpt(value)}")
+        raise InputError(f"{constraint} {key} must be finite numbers, got {excerpt(value)}")
     vector = np.array(value, dtype=float)
     largest = float(np.abs(vector).max())
     if largest == 0.0:
-        raise InputError(f"end_effector_cone {key} must be a non-zero vector, got {excerpt(value)}")
+        raise InputError(f"{constraint} {key} must be a non-zero vector, got {excerpt(value)}")
     vector = vector / largest  # scaled first: [1e300, 1e300, 0] has no float norm
     norm = float(np.linalg.norm(vector))
     return vector / norm
@@ -92,8 +95,8 @@ class EndEffectorCone(Constraint):
     def __init__(
         self, axis: Sequence[float], direction: Sequence[float], half_angle: float
     ) -> None:
-        self.axis = _unit_vector(list(axis), "axis")
-        self.direction = _unit_vector(list(direction), "direction")
+        self.axis = unit_vector(list(axis), "axis")
+        self.direction = unit_vector(list(direction), "direction")
         if not 0.0 < half_angle < math.pi:
             raise InputError(
                 "end_effector_cone half-angle must be between 0 and pi rad (exclusive), got "

@@ -23,6 +23,7 @@ from ...robot.collision import CollisionModel, Obstacle, collision_model, known_
 from ...robot.geometry import BuiltPerSource
 from ...robot.model import Robot
 from .base import Constraint
+from .base_pointing import BasePointing
 from .base_swing import BaseSwing
 from .clearance import Clearance
 from .end_effector_cone import EndEffectorCone
@@ -82,6 +83,7 @@ CONSTRAINTS: Registry[type[Constraint]] = Registry(
             Clearance,
             EndEffectorCone,
             BaseSwing,
+            BasePointing,
         )
     },
     plugin_class(Constraint, "constraint"),

@@ -1,0 +1,195 @@
+"""A pointing cone: an axis of the spacecraft stays within a half-angle of a fixed direction.
+
+An antenna, a star tracker or a sun sensor fixed to the spacecraft must keep pointing near a
+direction fixed in space while the arm moves: its boresight ``a`` (spacecraft frame) must stay
+within ``half_angle`` of the direction ``d``, given in the spacecraft's frame at the start
+(default: ``a`` itself, where the boresight pointed at the start). Turning about the boresight
+is free, unlike the swing bound (:mod:`.base_swing`). With ``r(s)`` the attitude relative to
+the start and ``v = R(r) a`` the boresight in the start frame, the rows are
+
+    g = cos(half_angle) - d . v   (unitless; feasible <= 0)
+
+with the exact Jacobian ``dg = -(a x R^T d) . delta`` for a body-frame perturbation
+``delta`` of ``r`` (:mod:`..relative_attitude`), asked :data:`SOLVER_SLACK` inside the cone.
+The dense check is independent (:mod:`.attitude_check`). A start or goal attitude outside the
+cone is refused before any search. Scenario key and plan record::
+
+    [constraints.base_pointing]
+    axis = [1.0, 0.0, 0.0]          # the boresight, in the spacecraft frame
+    direction = [1.0, 0.0, 0.0]     # optional: in the spacecraft frame at the start (default axis)
+    half_angle_deg = 5.0            # 0 < half-angle < 180 [deg]
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from ...errors import InputError, excerpt
+from ...physics.attitude import quat_to_matrix, relative_quat
+from ...robot.model import Robot
+from ..paths import JointPolynomials
+from ..relative_attitude import attitude_peaks, relative_rows
+from ..residual import Problem
+from .attitude_check import REFINED, attitude_track
+from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
+from .end_effector_cone import unit_vector
+
+__all__ = ["SOLVER_SLACK", "BasePointing"]
+
+#: How far inside the cone the rows ask the boresight to be (rad, 0.0057 deg), less when the
+#: start or goal lies nearer its edge (:meth:`BasePointing.solver_slack`).
+SOLVER_SLACK = 1e-4
+#: Keys of the scenario table and the plan record.
+_KEYS = ("axis", "direction", "half_angle_deg")
+
+
+class BasePointing(Constraint):
+    """The spacecraft's ``axis`` within ``half_angle`` (rad) of ``direction`` at every instant.
+
+    Args:
+        axis: (3,) the boresight in the spacecraft frame (normalised here).
+        direction: (3,) the direction in the spacecraft frame at the start (normalised here);
+            None: ``axis``.
+        half_angle: cone half-angle (rad), strictly between 0 and pi.
+    """
+
+    name = "base_pointing"
+    unit = "1"
+    tolerance = 1e-9
+
+    def __init__(
+        self, axis: Sequence[float], direction: Sequence[float] | None, half_angle: float
+    ) -> None:
+        self.axis = unit_vector(_listed(axis), "axis", self.name)
+        given = axis if direction is None else direction
+        self.direction = unit_vector(_listed(given), "direction", self.name)
+        if isinstance(half_angle, bool) or not 0.0 < float(half_angle) < math.pi:
+            raise InputError(
+                "base_pointing half-angle must be between 0 and pi rad (exclusive), got "
+                f"{excerpt(half_angle)}"
+            )
+        self.half_angle = float(half_angle)
+        self._half_angle_deg: float | None = None
+
+    # -- records ----------------------------------------------------------------------------
+
+    def to_record(self) -> dict[str, Any]:
+        """``axis``, ``direction`` (unit vectors, start frame) and ``half_angle_deg`` (deg)."""
+        half = (
+            math.degrees(self.half_angle) if self._half_angle_deg is None else self._half_angle_deg
+        )
+        return {
+            "axis": self.axis.tolist(),
+            "direction": self.direction.tolist(),
+            "half_angle_deg": half,
+        }
+
+    @classmethod
+    def from_record(cls, record: Mapping[str, Any]) -> BasePointing:
+        """The cone its table describes (see the module docstring).
+
+        Raises:
+            InputError: an unknown or missing key, or a bad value, named.
+        """
+        unknown = [k for k in record if k not in _KEYS]
+        missing = [k for k in ("axis", "half_angle_deg") if k not in record]
+        if unknown or missing:
+            what = f"unknown key {excerpt(unknown[0])}" if unknown else f"missing {missing[0]!r}"
+            raise InputError(f"base_pointing: {what}; its keys are {', '.join(_KEYS)}")
+        half = record["half_angle_deg"]
+        if (
+            isinstance(half, bool)
+            or not isinstance(half, (int, float))
+            or not 0 < half < 180
+            or not math.radians(half) > 0.0
+        ):
+            raise InputError(
+                "base_pointing half_angle_deg must be a number between 0 and 180 (exclusive) "
+                f"[deg], got {excerpt(half)}"
+            )
+        cone = cls(record["axis"], record.get("direction"), math.radians(half))
+        cone._half_angle_deg = float(half)
+        return cone
+
+    # -- attitudes --------------------------------------------------------------------------
+
+    def _gaps(self, relative: np.ndarray) -> np.ndarray:
+        """``cos(half_angle) - d . R(r) a`` for (K, 4) relative attitudes (unitless)."""
+        pointing = quat_to_matrix(np.atleast_2d(relative)) @ self.axis
+        return math.cos(self.half_angle) - pointing @ self.direction
+
+    def _angle(self, relative: np.ndarray) -> float:
+        """The boresight's angle from the direction at one relative attitude (rad)."""
+        pointing = quat_to_matrix(np.atleast_2d(relative))[0] @ self.axis
+        return math.acos(float(np.clip(pointing @ self.direction, -1.0, 1.0)))
+
+    def _said(self, angle: float, when: float | None = None) -> str:
+        at = "" if when is None else f" at t = {when:.4g} s"
+        return (
+            f"the boresight {math.degrees(angle):.4g} deg from the direction{at}, at most "
+            f"{math.degrees(self.half_angle):.10g} deg allowed"
+        )
+
+    def at_attitude(self, relative: np.ndarray) -> Excess:
+        """Its excess (unitless) at an attitude ``relative`` to the start (start or goal)."""
+        relative = np.asarray(relative, dtype=float)
+        gap = float(self._gaps(relative)[0])
+        return Excess(gap, 0.0, self._said(self._angle(relative)))
+
+    # -- the solvers' rows --------------------------------------------------------------------
+
+    def solver_slack(self, problem: Problem) -> float:
+        """:data:`SOLVER_SLACK` (rad), or half the room of the start or goal when less."""
+        goal = relative_quat(problem.start_quaternion, problem.goal_quaternion)
+        ends = (np.array([0.0, 0.0, 0.0, 1.0]), goal)
+        room = min(self.half_angle - self._angle(end) for end in ends)
+        return float(np.clip(0.5 * room, 0.0, SOLVER_SLACK))
+
+    def rows(
+        self, problem: Problem, beta: np.ndarray, instants: np.ndarray = DEFAULT_INSTANTS
+    ) -> ConstraintRows:
+        """``cos(half_angle - slack) - d . v`` strictly between the ends, exact Jacobian."""
+        s = np.asarray(instants, dtype=float)
+        s = s[(s > 0.0) & (s < 1.0)]  # the ends' attitudes are fixed (and checked)
+        if not len(s):
+            return ConstraintRows(np.zeros(0), np.zeros((0, problem.n_free)))
+        found = relative_rows(problem, beta, s)
+        rotations = quat_to_matrix(found.relative)
+        local = np.einsum("mji,j->mi", rotations, self.direction)  # R^T d
+        lever = np.cross(self.axis[None, :], local)  # a x R^T d
+        cos = math.cos(self.half_angle - self.solver_slack(problem))
+        values = cos - (rotations @ self.axis) @ self.direction
+        return ConstraintRows(values, -np.einsum("mi,mif->mf", lever, found.body))
+
+    def tight_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
+        """The largest gaps' instants, each refined in time (:func:`.attitude_peaks`)."""
+        return attitude_peaks(problem, beta, REFINED, self._gaps)
+
+    # -- finished paths -----------------------------------------------------------------------
+
+    def critical_times(self, robot: Robot, path: JointPolynomials) -> np.ndarray:
+        """Times (s) of the local maxima of the gap on the dense check's grid."""
+        return attitude_track(robot, path).peak_times(self._gaps)
+
+    def excess(self, robot: Robot, path: JointPolynomials) -> Excess:
+        """The largest gap (unitless), with a step-doubling error estimate."""
+        largest = attitude_track(robot, path).largest(self._gaps)
+        if not math.isfinite(largest.value):
+            return Excess(math.inf, 0.0, "the spacecraft's attitude could not be integrated")
+        angle = math.acos(max(-1.0, min(1.0, math.cos(self.half_angle) - largest.value)))
+        return Excess(largest.value, largest.estimate, self._said(angle, largest.time))
+
+    def __repr__(self) -> str:
+        return (
+            f"BasePointing(axis={self.axis.tolist()}, direction={self.direction.tolist()}, "
+            f"half_angle={self.half_angle!r})"
+        )
+
+
+def _listed(value: Any) -> Any:
+    """A sequence as a list (a numpy array too), anything else as it is (to be refused)."""
+    return list(value) if isinstance(value, (list, tuple, np.ndarray)) else value
