@@ -655,6 +655,19 @@ def _round_32_cases(folder: Path) -> list[tuple[list, bool, str]]:
     )
     reach = folder / "swing_reach.toml"
     reach.write_text(ur5 + "\n[constraints.base_swing]\nmax_deg = 14\n")
+    pointing = folder / "pointing.toml"
+    for k, (table, said) in enumerate(
+        [
+            ("axis = [0, 0, 0]\nhalf_angle_deg = 5", "must be a non-zero vector"),
+            ("axis = [1, 0, 0]\nhalf_angle_deg = -5", "between 0 and 180"),
+            ("axis = [1, 0, 0]\ndirection = [1e400, 0, 0]\nhalf_angle_deg = 5", "finite"),
+            ("axis = [1, 0, 0]\ndirection = [-1, 0, 0]\nhalf_angle_deg = 90", "start attitude"),
+            ("half_angle_deg = 5", "missing 'axis'"),
+        ]
+    ):
+        pointing.write_text(base + f"\n[constraints.base_pointing]\n{table}\n")
+        cases.append((["plan", pointing, "-o", f"pointing{k}.json"], True, said))
+        pointing = folder / f"pointing{k + 1}.toml"
     return [
         *cases,
         (["verify", planned], False, ""),
