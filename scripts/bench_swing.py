@@ -9,6 +9,8 @@ a bound, the same check of the plan made), whether the plan verifies, or the ref
 
 - the shipped Panda servicer turned 3 deg in yaw with its arm back where it started (a pure
   reorientation: the loop swings the spacecraft beyond its goal);
+- the same reorientation with the spacecraft's z axis held to a cone of 3 and 1.5 deg
+  (``[constraints.base_pointing]``; its tilt from the plan's check);
 - when ``../shared/real-arms/`` is present (real robots nobody here wrote; tests never read
   them): ETS-VII turned 2 deg with its arm back where it started, and Canadarm2 on a 20 t,
   4 m spacecraft holding a 5 t payload, its goal 20 deg in yaw.
@@ -23,7 +25,7 @@ from pathlib import Path
 
 import freefloat as ff
 from freefloat.physics.attitude import quat_from_zyx
-from freefloat.problem.constraints import BaseSwing
+from freefloat.problem.constraints import BasePointing, BaseSwing
 
 ROOT = Path(__file__).resolve().parents[1]
 REAL = ROOT.parent / "shared" / "real-arms"
@@ -122,6 +124,22 @@ def _planned(scenario: ff.Scenario, bound_deg: float) -> dict[str, object]:
     }
 
 
+def _pointed(scenario: ff.Scenario, half_deg: float) -> dict[str, object]:
+    """One plan with the Panda's z axis held to a cone: time (s), its largest tilt (deg)."""
+    cone = BasePointing([0.0, 0.0, 1.0], None, math.radians(half_deg))
+    bounded = dataclasses.replace(scenario, constraints=(*scenario.constraints, cone))
+    start = time.perf_counter()
+    try:
+        plan = ff.plan(bounded)
+    except ff.FreeFloatError as exc:
+        return {"time_s": time.perf_counter() - start, "outcome": type(exc).__name__}
+    elapsed = time.perf_counter() - start
+    check = next(c for c in plan.verification.checks if c.name == "base_pointing")
+    tilt = math.degrees(math.acos(math.cos(math.radians(half_deg)) - check.value))
+    outcome = "verified" if plan.verification.passed else "NOT VERIFIED"
+    return {"time_s": elapsed, "swing_deg": tilt, "outcome": outcome}
+
+
 def bench_swing(folder: Path) -> list[dict[str, object]]:
     """Every case without a bound (a loose one) and with each of its bounds."""
     ff.plan(_panda())  # imports and first-call costs out of the way
@@ -132,6 +150,11 @@ def bench_swing(folder: Path) -> list[dict[str, object]]:
             found = free if bound is None else _planned(scenario, bound)
             rows.append({"case": name, "bound_deg": bound, **found})
             print(f"  done: swing {rows[-1]}", flush=True)
+    name = "Panda servicer, 3 deg reorientation: z axis tilt (base_pointing)"
+    for half in (None, 3.0, 1.5):
+        found = _pointed(_panda(), _LOOSE_DEG if half is None else half)
+        rows.append({"case": name, "bound_deg": half, **found})
+        print(f"  done: pointing {rows[-1]}", flush=True)
     return rows
 
 
