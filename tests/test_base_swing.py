@@ -342,6 +342,10 @@ def test_a_start_path_that_peaks_between_its_rows_gets_rows_there(monkeypatch):
 
     scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "panda_servicer.toml")
     problem = ff.problem_from_scenario(scenario, extra=[2] * scenario.robot.n)
+    goal = ff.physics.attitude.quat_multiply(
+        problem.start_quaternion, ff.physics.attitude.quat_exp(np.radians([0.0, 0.0, 5.0]))
+    )
+    problem = problem.with_goal(goal)  # 5 deg from the start: within the bound
     swing = BaseSwing(math.radians(8.0))  # the plain path turns 11.9 deg
     monkeypatch.setattr(restore, "DEFAULT_INSTANTS", np.linspace(0.0, 1.0, 33))
     monkeypatch.setattr(restore, "RESTORE_ROUNDS", 1)

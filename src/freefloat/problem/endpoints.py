@@ -102,8 +102,8 @@ def at_end_attitude(
 ) -> list[tuple[Constraint, Excess, bool]]:
     """The constraints the start or goal attitude (``where``) alone decides.
 
-    Each with its excess there (:meth:`Constraint.at_attitude`) and whether that is within
-    its tolerance.
+    Each with its excess there (:meth:`Constraint.at_attitude`) and whether that is at most
+    rounding (:data:`END_ROUNDING`).
     """
     relative = (
         relative_quat(scenario.start_attitude, scenario.goal_attitude)
@@ -114,8 +114,14 @@ def at_end_attitude(
     for constraint in constraints:
         excess = constraint.at_attitude(relative)
         if excess is not None:
-            found.append((constraint, excess, excess.value <= constraint.tolerance))
+            found.append((constraint, excess, excess.value <= END_ROUNDING))
     return found
+
+
+#: How far beyond a constraint of the attitude a start or goal may lie (its unit): rounding
+#: only. Not its verification tolerance: rows near the end ask the path to stay inside, which
+#: a path ending beyond the bound cannot.
+END_ROUNDING = 1e-12
 
 
 def goal_turn_limit(

@@ -6,7 +6,8 @@ Butcher's fifth-order Runge-Kutta method integrates it on uniform grids
 (:mod:`freefloat.physics.swing`), doubled until the relative attitudes at the coarser level's
 step ends move by less than :data:`SETTLED`. A quantity of the attitude (a turn, a pointing
 gap; larger is worse) is then sampled at the step ends of the last two levels, and each of
-its :data:`REFINED` largest local maxima refined in time by a bounded scalar search; the
+its local maxima that may hold the largest value (:func:`_candidates`) refined in time by a
+bounded scalar search; the
 difference between the two levels' largest values is the check's error estimate.
 """
 
@@ -31,8 +32,10 @@ FIRST_STEPS, MAX_STEPS = 64, 8192
 #: Doubling stops when no relative attitude at the coarser level's step ends moves by more
 #: than this (quaternion components): the integration has converged there.
 SETTLED = 1e-11
-#: Largest sampled local maxima refined in time (a count).
+#: Largest sampled local maxima refined in time, at least (a count); more when more lie
+#: within what the quantity can gain between samples, up to :data:`CANDIDATES`.
 REFINED = 3
+CANDIDATES = 16
 
 #: A quantity of the relative attitude: (K, 4) quaternions to K values (larger is worse).
 Quantity = Callable[[np.ndarray], np.ndarray]
@@ -90,7 +93,7 @@ class AttitudeTrack:
         values = quantity(track.relative)
         best = int(np.argmax(values))
         value, when = float(values[best]), float(track.times[best])
-        for k in local_maxima(values)[:REFINED]:
+        for k in _candidates(values):
             low, high = float(track.times[k - 1]), float(track.times[k + 1])
             found = scalar_minimum(
                 lambda t: -float(quantity(self._at(track, t)[None])[0]),
@@ -121,6 +124,21 @@ def attitude_track(robot: Robot, path: JointPolynomials) -> AttitudeTrack:
         if not moved > SETTLED or fine.steps >= MAX_STEPS:  # NaN: no use going on
             return AttitudeTrack(coarse, fine, omega_at, path.duration)
         coarse = fine
+
+
+def _candidates(values: np.ndarray) -> np.ndarray:
+    """The sampled local maxima that may hold the largest value between the samples.
+
+    Those within four of the largest second differences of the largest sample (a smooth
+    quantity gains at most an eighth of one between samples), at most :data:`CANDIDATES`,
+    and never fewer than :data:`REFINED` (the largest first).
+    """
+    peaks = local_maxima(values)
+    if not len(peaks):
+        return peaks
+    rise = 4.0 * float(np.abs(np.diff(values, 2)).max(initial=0.0))
+    close = peaks[values[peaks] >= float(values.max()) - rise]
+    return peaks[: min(CANDIDATES, max(REFINED, len(close)))]
 
 
 def local_maxima(values: np.ndarray) -> np.ndarray:

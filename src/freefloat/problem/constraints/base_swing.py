@@ -102,12 +102,12 @@ class BaseSwing(Constraint):
     def at_attitude(self, relative: np.ndarray) -> Excess:
         """Its excess (rad) at an attitude ``relative`` to the start (the goal's, say)."""
         turn = float(quaternion_turn(np.asarray(relative, dtype=float)))
-        said, bound = _degrees(turn, self.max_angle)
+        said, bound = _degrees(turn, self.max_angle, self._max_deg)
         detail = f"it lies {said} deg from the start attitude, at most {bound} deg allowed"
         return Excess(turn - self.max_angle, 0.0, detail)
 
     def _said(self, turn: float, when: float) -> str:
-        said, bound = _degrees(turn, self.max_angle)
+        said, bound = _degrees(turn, self.max_angle, self._max_deg)
         return (
             f"the spacecraft {said} deg from its start attitude at t = {when:.4g} s, at most "
             f"{bound} deg allowed"
@@ -133,10 +133,14 @@ class BaseSwing(Constraint):
         return ConstraintRows(found.turns - bound, found.jacobian)
 
     def solver_slack(self, problem: Problem) -> float:
-        """:data:`SOLVER_SLACK` (rad), or half the goal's room below the bound when less."""
+        """:data:`SOLVER_SLACK` (rad), or half the goal's room below the bound when less.
+
+        None for a goal at the bound (its rows near the end would ask for room no path
+        ending there has) or beyond it (only ``reach`` heads there, stopping at the bound).
+        """
         goal = relative_quat(problem.start_quaternion, problem.goal_quaternion)
         room = -self.at_attitude(goal).value
-        return SOLVER_SLACK if room <= 0.0 else min(SOLVER_SLACK, 0.5 * room)
+        return float(np.clip(0.5 * room, 0.0, SOLVER_SLACK))
 
     def tight_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
         """The largest turns' instants, each refined in time (:func:`.attitude_peaks`)."""
@@ -160,14 +164,15 @@ class BaseSwing(Constraint):
         return f"BaseSwing(max_angle={self.max_angle!r})"
 
 
-def _degrees(turn: float, bound: float) -> tuple[str, str]:
+def _degrees(turn: float, bound: float, given: float | None = None) -> tuple[str, str]:
     """A turn and the bound (rad) in degrees, the turn on its side of the bound.
 
-    The bound as given; the turn to 4 digits, or as many more as keep it on its own side of
-    the bound (a turn just beyond it is never shown at or below it).
+    The bound as given (``given``, deg: as its record wrote it); the turn to 4 digits, or as
+    many more as keep it on its own side of the bound (a turn just beyond it is never shown at
+    or below it).
     """
-    limit = f"{math.degrees(bound):.10g}"
-    for digits in range(4, 13):
+    limit = f"{math.degrees(bound) if given is None else given:.15g}"
+    for digits in range(4, 16):
         said = f"{math.degrees(turn):.{digits}g}"
         if (float(said) > float(limit)) == (turn > bound) and (said == limit) <= (turn == bound):
             break
