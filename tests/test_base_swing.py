@@ -355,3 +355,16 @@ def test_a_start_path_that_peaks_between_its_rows_gets_rows_there(monkeypatch):
     assert beta is not None
     largest, _ = _scipy_swing(problem.polynomials(beta), scenario.robot)
     assert largest <= math.radians(8.0) + 1e-7
+
+
+def test_a_goal_beyond_the_bound_by_more_than_rounding_is_refused(worked_scenario):
+    # 1e-9 rad beyond: within verification's 1e-7 but not within reach of rows that ask the
+    # path to stay inside near its end; accepted, it was searched for seconds and refused.
+    turn = ff.geodesic_angle(worked_scenario.start_attitude, worked_scenario.goal_attitude)
+    for bound, refused in ((turn - 1e-9, True), (turn, False)):
+        scenario = dataclasses.replace(worked_scenario, constraints=(BaseSwing(bound),))
+        if refused:
+            with pytest.raises(ff.GoalAttitudeError):
+                ff.plan(scenario)
+        else:
+            assert ff.plan(scenario).verification.passed
