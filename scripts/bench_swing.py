@@ -105,39 +105,35 @@ def cases(folder: Path) -> list[tuple[str, ff.Scenario, tuple[float, ...]]]:
     return found
 
 
-def _planned(scenario: ff.Scenario, bound_deg: float) -> dict[str, object]:
-    """One plan with the bound: wall time (s), the largest turn (deg), verified or refused."""
-    bounded = dataclasses.replace(
-        scenario, constraints=(*scenario.constraints, BaseSwing(math.radians(bound_deg)))
-    )
+def _held(scenario: ff.Scenario, constraint: BaseSwing | BasePointing) -> dict[str, object]:
+    """One plan with ``constraint`` added, timed.
+
+    Its wall time (s), the largest turn or tilt (deg) from its check, verified or refused.
+    """
+    bounded = dataclasses.replace(scenario, constraints=(*scenario.constraints, constraint))
     start = time.perf_counter()
     try:
         plan = ff.plan(bounded)
     except ff.FreeFloatError as exc:
         return {"time_s": time.perf_counter() - start, "outcome": type(exc).__name__}
     elapsed = time.perf_counter() - start
-    check = next(c for c in plan.verification.checks if c.name == "base_swing")
-    return {
-        "time_s": elapsed,
-        "swing_deg": math.degrees(check.value) + bound_deg,
-        "outcome": "verified" if plan.verification.passed else "NOT VERIFIED",
-    }
+    check = next(c for c in plan.verification.checks if c.name == constraint.name)
+    if isinstance(constraint, BaseSwing):
+        largest = math.degrees(check.value + constraint.max_angle)
+    else:  # the cone's gap is cos(half-angle) - cos(tilt)
+        largest = math.degrees(math.acos(math.cos(constraint.half_angle) - check.value))
+    outcome = "verified" if plan.verification.passed else "NOT VERIFIED"
+    return {"time_s": elapsed, "swing_deg": largest, "outcome": outcome}
+
+
+def _planned(scenario: ff.Scenario, bound_deg: float) -> dict[str, object]:
+    """One plan with the swing bound (deg)."""
+    return _held(scenario, BaseSwing(math.radians(bound_deg)))
 
 
 def _pointed(scenario: ff.Scenario, half_deg: float) -> dict[str, object]:
-    """One plan with the Panda's z axis held to a cone: time (s), its largest tilt (deg)."""
-    cone = BasePointing([0.0, 0.0, 1.0], None, math.radians(half_deg))
-    bounded = dataclasses.replace(scenario, constraints=(*scenario.constraints, cone))
-    start = time.perf_counter()
-    try:
-        plan = ff.plan(bounded)
-    except ff.FreeFloatError as exc:
-        return {"time_s": time.perf_counter() - start, "outcome": type(exc).__name__}
-    elapsed = time.perf_counter() - start
-    check = next(c for c in plan.verification.checks if c.name == "base_pointing")
-    tilt = math.degrees(math.acos(math.cos(math.radians(half_deg)) - check.value))
-    outcome = "verified" if plan.verification.passed else "NOT VERIFIED"
-    return {"time_s": elapsed, "swing_deg": tilt, "outcome": outcome}
+    """One plan with the Panda's z axis held to a cone of ``half_deg`` (deg)."""
+    return _held(scenario, BasePointing([0.0, 0.0, 1.0], None, math.radians(half_deg)))
 
 
 def bench_swing(folder: Path) -> list[dict[str, object]]:
