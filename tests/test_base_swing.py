@@ -23,7 +23,7 @@ from scipy.optimize import minimize_scalar
 import freefloat as ff
 from freefloat.cli import main
 from freefloat.errors import InputError
-from freefloat.physics.swing import track_turn, turn_between
+from freefloat.physics.turn_track import track_turn, turn_between
 from freefloat.problem.constraints import BaseSwing, constraint_from_record
 from freefloat.viz.summary import robot_label, summary
 

@@ -32,7 +32,7 @@ from ..physics.attitude import (
     so3_right_jacobian,
     step_nodes,
 )
-from ..physics.swing import quaternion_turn
+from ..physics.turn_track import quaternion_turn
 from .residual import Problem
 
 __all__ = ["RelativeRows", "SwingRows", "attitude_peaks", "relative_rows", "swing_rows"]

@@ -3,7 +3,7 @@
 The attitude relative to the start, ``r(t) = q(0)^-1 q(t)``, is integrated without the
 planner's model: Pinocchio's centroidal map gives the angular velocity (zero momentum) and
 Butcher's fifth-order Runge-Kutta method integrates it on uniform grids
-(:mod:`freefloat.physics.swing`), doubled until the relative attitudes at the coarser level's
+(:mod:`freefloat.physics.turn_track`), doubled until the relative attitudes at the coarser level's
 step ends move by less than :data:`SETTLED`. A quantity of the attitude (a turn, a pointing
 gap; larger is worse) is then sampled at the step ends of the last two levels, and each of
 its local maxima that may hold the largest value (:func:`_candidates`) refined in time by a
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...physics.momentum import MomentumMap
-from ...physics.swing import RatesAt, TurnTrack, relative_between, track_turn
+from ...physics.turn_track import RatesAt, TurnTrack, relative_between, track_turn
 from ...robot.model import Robot
 from ..paths import JointPolynomials
 from ..scalar_minimum import scalar_minimum

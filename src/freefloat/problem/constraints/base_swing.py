@@ -28,7 +28,7 @@ import numpy as np
 
 from ...errors import InputError, excerpt
 from ...physics.attitude import relative_quat
-from ...physics.swing import quaternion_turn
+from ...physics.turn_track import quaternion_turn
 from ...robot.model import Robot
 from ..paths import JointPolynomials
 from ..relative_attitude import attitude_peaks, swing_rows
