@@ -55,7 +55,7 @@ def test_a_boresight_is_kept_in_its_cone(tmp_path, capsys):
         "half_angle_deg": 3.0,
     }
     check = next(c for c in data["verification"]["checks"] if c["name"] == "base_pointing")
-    assert check["value"] == pytest.approx(math.cos(math.radians(3.0)) - math.cos(tilt), abs=1e-9)
+    assert check["value"] == pytest.approx(tilt - math.radians(3.0), abs=1e-8)
     assert main(["verify", str(out)]) == 0
     capsys.readouterr()
 
@@ -77,6 +77,7 @@ def test_a_start_or_goal_outside_the_cone_is_refused_before_any_search(tmp_path,
         "direction, at most 2 deg allowed), where every path ends; choose a goal attitude "
         "nearer the start attitude or loosen [constraints.base_pointing]"
     )
+    assert info.value.excess == pytest.approx(math.radians(angle - 2.0), abs=1e-12)
     # a direction 10 deg from the boresight: already outside at the start
     tilted = [math.cos(math.radians(10.0)), math.sin(math.radians(10.0)), 0.0]
     path.write_text(
@@ -99,8 +100,9 @@ def test_a_start_or_goal_outside_the_cone_is_refused_before_any_search(tmp_path,
         ({"axis": [0, 0, 0], "half_angle_deg": 5}, "base_pointing axis must be a non-zero"),
         ({"axis": [1, 0], "half_angle_deg": 5}, "base_pointing axis must be 3 numbers"),
         ({"axis": [1, 0, 0], "direction": "x", "half_angle_deg": 5}, "direction must be 3"),
-        ({"axis": [1, 0, 0], "half_angle_deg": 180}, "between 0 and 180 (exclusive) [deg]"),
-        ({"axis": [1, 0, 0], "half_angle_deg": 5e-324}, "between 0 and 180 (exclusive) [deg]"),
+        ({"axis": [1, 0, 0], "half_angle_deg": 180}, "between 0 and 180 (exclusive;"),
+        ({"axis": [1, 0, 0], "half_angle_deg": 5e-324}, "between 0 and 180 (exclusive;"),
+        ({"axis": [1, 0, 0], "half_angle_deg": 179.99999999}, "at least 1e-6 rad from either"),
     ],
 )
 def test_bad_cones_are_named(record, said):
@@ -112,6 +114,17 @@ def test_bad_cones_are_named(record, said):
 def test_the_direction_defaults_to_the_boresight():
     cone = BasePointing([0.0, 0.0, 2.0], None, 0.1)
     assert cone.direction.tolist() == [0.0, 0.0, 1.0]
-    assert cone.at_attitude(np.array([0.0, 0.0, 0.0, 1.0])).value == pytest.approx(
-        math.cos(0.1) - 1.0
-    )
+    assert cone.at_attitude(np.array([0.0, 0.0, 0.0, 1.0])).value == pytest.approx(-0.1)
+
+
+def test_a_cone_near_a_half_turn_is_judged_in_radians():
+    # A cosine gap of 1e-9 is 2.6 deg of angle at a half-angle of 180 deg: judged by the
+    # cosine, a boresight turned right round passed a 179.9999 deg cone. SciPy's rotation of
+    # the axis is the truth here.
+    cone = BasePointing([1.0, 0.0, 0.0], None, math.radians(179.9999))
+    turned = Rotation.from_euler("z", 180.0, degrees=True).as_quat()
+    angle = math.acos(np.clip(Rotation.from_quat(turned).apply([1.0, 0.0, 0.0])[0], -1.0, 1.0))
+    excess = cone.at_attitude(turned)
+    assert excess.value == pytest.approx(angle - math.radians(179.9999), abs=1e-12)
+    assert excess.value > 10 * cone.tolerance  # beyond: refused, not passed
+    assert math.cos(cone.half_angle) - math.cos(angle) < 1e-9  # the cosine gap: "within"

@@ -57,7 +57,7 @@ CONSTRAINT_EXAMPLES: dict[str, Callable[[ff.Scenario], Constraint]] = {
     ),
     "end_effector_cone": lambda _: EndEffectorCone([0.0, 0.0, 1.0], [1.0, 0.0, 0.0], 0.9),
     "base_swing": lambda _: BaseSwing(0.3),
-    "base_pointing": lambda _: BasePointing([1.0, 0.0, 0.0], [0.9, 0.3, 0.1], 0.4),
+    "base_pointing": lambda _: BasePointing([1.0, 0.0, 0.0], [0.9, 0.3, 0.1], 0.9),
 }
 
 

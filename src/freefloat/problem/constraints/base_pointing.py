@@ -5,12 +5,15 @@ direction fixed in space while the arm moves: its boresight ``a`` (spacecraft fr
 within ``half_angle`` of the direction ``d``, given in the spacecraft's frame at the start
 (default: ``a`` itself, where the boresight pointed at the start). Turning about the boresight
 is free, unlike the swing bound (:mod:`.base_swing`). With ``r(s)`` the attitude relative to
-the start and ``v = R(r) a`` the boresight in the start frame, the rows are
+the start and ``v = R(r) a`` the boresight in the start frame, the rows are the angle
 
-    g = cos(half_angle) - d . v   (unitless; feasible <= 0)
+    g = atan2(|d x v|, d . v) - half_angle   (rad; feasible <= 0)
 
-with the exact Jacobian ``dg = -(a x R^T d) . delta`` for a body-frame perturbation
-``delta`` of ``r`` (:mod:`..relative_attitude`), asked :data:`SOLVER_SLACK` inside the cone.
+with the exact Jacobian ``dg = -(a x R^T d) . delta / sin(angle)`` for a body-frame
+perturbation ``delta`` of ``r`` (:mod:`..relative_attitude`; 0 where the boresight is on the
+direction, deep inside), asked :data:`SOLVER_SLACK` inside the cone. In radians, not as the
+cosine gap, so that the tolerance means the same at every half-angle (a cosine gap of 1e-9
+is 2.6 deg at a half-angle of 180 deg).
 The dense check is independent (:mod:`.attitude_check`). A start or goal attitude outside the
 cone is refused before any search. Scenario key and plan record::
 
@@ -36,6 +39,7 @@ from ..relative_attitude import attitude_peaks, relative_rows
 from ..residual import Problem
 from .attitude_check import REFINED, attitude_track
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
+from .base_swing import degrees_apart
 from .end_effector_cone import unit_vector
 
 __all__ = ["SOLVER_SLACK", "BasePointing"]
@@ -58,8 +62,8 @@ class BasePointing(Constraint):
     """
 
     name = "base_pointing"
-    unit = "1"
-    tolerance = 1e-9
+    unit = "rad"
+    tolerance = 1e-7
 
     def __init__(
         self, axis: Sequence[float], direction: Sequence[float] | None, half_angle: float
@@ -67,9 +71,9 @@ class BasePointing(Constraint):
         self.axis = unit_vector(_listed(axis), "axis", self.name)
         given = axis if direction is None else direction
         self.direction = unit_vector(_listed(given), "direction", self.name)
-        if isinstance(half_angle, bool) or not 0.0 < float(half_angle) < math.pi:
+        if isinstance(half_angle, bool) or not 1e-6 <= float(half_angle) <= math.pi - 1e-6:
             raise InputError(
-                "base_pointing half-angle must be between 0 and pi rad (exclusive), got "
+                "base_pointing half-angle must be between 1e-6 and pi - 1e-6 rad, got "
                 f"{excerpt(half_angle)}"
             )
         self.half_angle = float(half_angle)
@@ -105,11 +109,11 @@ class BasePointing(Constraint):
             isinstance(half, bool)
             or not isinstance(half, (int, float))
             or not 0 < half < 180
-            or not math.radians(half) > 0.0
+            or not 1e-6 <= math.radians(half) <= math.pi - 1e-6
         ):
             raise InputError(
-                "base_pointing half_angle_deg must be a number between 0 and 180 (exclusive) "
-                f"[deg], got {excerpt(half)}"
+                "base_pointing half_angle_deg must be a number between 0 and 180 (exclusive; "
+                f"at least 1e-6 rad from either) [deg], got {excerpt(half)}"
             )
         cone = cls(record["axis"], record.get("direction"), math.radians(half))
         cone._half_angle_deg = float(half)
@@ -117,42 +121,39 @@ class BasePointing(Constraint):
 
     # -- attitudes --------------------------------------------------------------------------
 
-    def _gaps(self, relative: np.ndarray) -> np.ndarray:
-        """``cos(half_angle) - d . R(r) a`` for (K, 4) relative attitudes (unitless)."""
+    def _angles(self, relative: np.ndarray) -> np.ndarray:
+        """The boresight's angle from the direction (rad) at (K, 4) relative attitudes."""
         pointing = quat_to_matrix(np.atleast_2d(relative)) @ self.axis
-        return math.cos(self.half_angle) - pointing @ self.direction
+        across = np.linalg.norm(np.cross(pointing, self.direction), axis=-1)
+        return np.arctan2(across, pointing @ self.direction)
 
-    def _angle(self, relative: np.ndarray) -> float:
-        """The boresight's angle from the direction at one relative attitude (rad)."""
-        pointing = quat_to_matrix(np.atleast_2d(relative))[0] @ self.axis
-        return math.acos(float(np.clip(pointing @ self.direction, -1.0, 1.0)))
+    def _gaps(self, relative: np.ndarray) -> np.ndarray:
+        """The angle beyond the half-angle (rad) at (K, 4) relative attitudes."""
+        return self._angles(relative) - self.half_angle
 
     def _said(self, angle: float, when: float | None = None) -> str:
         at = "" if when is None else f" at t = {when:.4g} s"
-        return (
-            f"the boresight {math.degrees(angle):.4g} deg from the direction{at}, at most "
-            f"{math.degrees(self.half_angle):.10g} deg allowed"
-        )
+        said, bound = degrees_apart(angle, self.half_angle, self._half_angle_deg)
+        return f"the boresight {said} deg from the direction{at}, at most {bound} deg allowed"
 
     def at_attitude(self, relative: np.ndarray) -> Excess:
-        """Its excess (unitless) at an attitude ``relative`` to the start (start or goal)."""
-        relative = np.asarray(relative, dtype=float)
-        gap = float(self._gaps(relative)[0])
-        return Excess(gap, 0.0, self._said(self._angle(relative)))
+        """Its excess (rad) at an attitude ``relative`` to the start (the start's or goal's)."""
+        angle = float(self._angles(np.asarray(relative, dtype=float))[0])
+        return Excess(angle - self.half_angle, 0.0, self._said(angle))
 
     # -- the solvers' rows --------------------------------------------------------------------
 
     def solver_slack(self, problem: Problem) -> float:
         """:data:`SOLVER_SLACK` (rad), or half the room of the start or goal when less."""
         goal = relative_quat(problem.start_quaternion, problem.goal_quaternion)
-        ends = (np.array([0.0, 0.0, 0.0, 1.0]), goal)
-        room = min(self.half_angle - self._angle(end) for end in ends)
+        ends = np.stack([np.array([0.0, 0.0, 0.0, 1.0]), goal])
+        room = -float(self._gaps(ends).max())
         return float(np.clip(0.5 * room, 0.0, SOLVER_SLACK))
 
     def rows(
         self, problem: Problem, beta: np.ndarray, instants: np.ndarray = DEFAULT_INSTANTS
     ) -> ConstraintRows:
-        """``cos(half_angle - slack) - d . v`` strictly between the ends, exact Jacobian."""
+        """``angle - (half_angle - slack)`` (rad) strictly between the ends, exact Jacobian."""
         s = np.asarray(instants, dtype=float)
         s = s[(s > 0.0) & (s < 1.0)]  # the ends' attitudes are fixed (and checked)
         if not len(s):
@@ -160,10 +161,12 @@ class BasePointing(Constraint):
         found = relative_rows(problem, beta, s)
         rotations = quat_to_matrix(found.relative)
         local = np.einsum("mji,j->mi", rotations, self.direction)  # R^T d
-        lever = np.cross(self.axis[None, :], local)  # a x R^T d
-        cos = math.cos(self.half_angle - self.solver_slack(problem))
-        values = cos - (rotations @ self.axis) @ self.direction
-        return ConstraintRows(values, -np.einsum("mi,mif->mf", lever, found.body))
+        lever = np.cross(self.axis[None, :], local)  # a x R^T d: d(d . v) = lever . delta
+        angles = self._angles(found.relative)
+        sine = np.sin(angles)
+        scale = np.divide(-1.0, sine, out=np.zeros_like(sine), where=sine > 1e-12)
+        values = angles - (self.half_angle - self.solver_slack(problem))
+        return ConstraintRows(values, scale[:, None] * np.einsum("mi,mif->mf", lever, found.body))
 
     def tight_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
         """The largest gaps' instants, each refined in time (:func:`.attitude_peaks`)."""
@@ -176,12 +179,12 @@ class BasePointing(Constraint):
         return attitude_track(robot, path).peak_times(self._gaps)
 
     def excess(self, robot: Robot, path: JointPolynomials) -> Excess:
-        """The largest gap (unitless), with a step-doubling error estimate."""
+        """The largest angle beyond the half-angle (rad), with a step-doubling error estimate."""
         largest = attitude_track(robot, path).largest(self._gaps)
         if not math.isfinite(largest.value):
             return Excess(math.inf, 0.0, "the spacecraft's attitude could not be integrated")
-        angle = math.acos(max(-1.0, min(1.0, math.cos(self.half_angle) - largest.value)))
-        return Excess(largest.value, largest.estimate, self._said(angle, largest.time))
+        detail = self._said(largest.value + self.half_angle, largest.time)
+        return Excess(largest.value, largest.estimate, detail)
 
     def __repr__(self) -> str:
         return (

@@ -36,7 +36,7 @@ from ..residual import Problem
 from .attitude_check import REFINED, attitude_track
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
 
-__all__ = ["SOLVER_SLACK", "BaseSwing"]
+__all__ = ["SOLVER_SLACK", "BaseSwing", "degrees_apart"]
 
 #: How far inside the bound the solvers' rows ask the turn to be (rad: 0.0057 deg): a start
 #: path found on the bound at fixed instants peaked 2e-5 rad beyond it between them, and was
@@ -102,12 +102,12 @@ class BaseSwing(Constraint):
     def at_attitude(self, relative: np.ndarray) -> Excess:
         """Its excess (rad) at an attitude ``relative`` to the start (the goal's, say)."""
         turn = float(quaternion_turn(np.asarray(relative, dtype=float)))
-        said, bound = _degrees(turn, self.max_angle, self._max_deg)
+        said, bound = degrees_apart(turn, self.max_angle, self._max_deg)
         detail = f"it lies {said} deg from the start attitude, at most {bound} deg allowed"
         return Excess(turn - self.max_angle, 0.0, detail)
 
     def _said(self, turn: float, when: float) -> str:
-        said, bound = _degrees(turn, self.max_angle, self._max_deg)
+        said, bound = degrees_apart(turn, self.max_angle, self._max_deg)
         return (
             f"the spacecraft {said} deg from its start attitude at t = {when:.4g} s, at most "
             f"{bound} deg allowed"
@@ -164,7 +164,7 @@ class BaseSwing(Constraint):
         return f"BaseSwing(max_angle={self.max_angle!r})"
 
 
-def _degrees(turn: float, bound: float, given: float | None = None) -> tuple[str, str]:
+def degrees_apart(turn: float, bound: float, given: float | None = None) -> tuple[str, str]:
     """A turn and the bound (rad) in degrees, the turn on its side of the bound.
 
     The bound as given (``given``, deg: as its record wrote it); the turn to 4 digits, or as
