@@ -174,3 +174,41 @@ def test_a_stage_left_by_sigkill_is_removed_by_the_next_one(tmp_path):
     assert sorted(p.name for p in folder.iterdir()) == sorted(
         ["new.png", "old.png", "outer.png", *kept]
     )
+
+
+def test_a_file_system_without_locks_stages_unlocked_and_cleans_nothing(tmp_path, monkeypatch):
+    """Where flock fails (NFS without locks: ENOLCK), staging made a new folder forever."""
+    import errno
+    import fcntl
+
+    def refuse(descriptor, operation):
+        raise OSError(errno.ENOLCK, "No locks available")
+
+    folder = tmp_path / "plots"
+    folder.mkdir()
+    (folder / ".freefloat-stage-somehost-1-abc").mkdir()  # whose, nothing can tell here
+    monkeypatch.setattr(fcntl, "flock", refuse)
+    with staged_folder(folder) as stage:
+        (stage / "a.png").write_bytes(b"a")
+    assert sorted(p.name for p in folder.iterdir()) == [".freefloat-stage-somehost-1-abc", "a.png"]
+
+
+def test_a_stage_removed_before_it_is_locked_is_made_again(tmp_path, monkeypatch):
+    """Another process's cleanup may remove a new stage between its making and its lock."""
+    import shutil
+    import tempfile
+
+    real, calls = tempfile.mkdtemp, []
+
+    def raced(*args, **kwargs):
+        made = real(*args, **kwargs)
+        calls.append(made)
+        if len(calls) == 1:
+            shutil.rmtree(made)  # the cleanup came first
+        return made
+
+    monkeypatch.setattr(tempfile, "mkdtemp", raced)
+    folder = tmp_path / "new" / "plots"
+    with staged_folder(folder) as stage:
+        (stage / "a.png").write_bytes(b"a")
+    assert len(calls) == 2 and [p.name for p in folder.iterdir()] == ["a.png"]

@@ -43,8 +43,9 @@ def staged_folder(target: str | Path) -> Iterator[Path]:
     home = target if target.is_dir() else target.parent
     home.mkdir(parents=True, exist_ok=True)
     remove_abandoned(home)
-    stage, lock = _locked_stage(home)
+    stage, lock = home / _PREFIX, -1  # none yet
     try:
+        stage, lock = _locked_stage(home)
         yield stage
         with signals_held():
             target.mkdir(exist_ok=True)
@@ -62,7 +63,8 @@ def staged_folder(target: str | Path) -> Iterator[Path]:
                 folder.rmdir()
         raise
     finally:
-        os.close(lock)  # after the stage is gone: no one removes a stage that is in use
+        if lock >= 0:
+            os.close(lock)  # after the stage is gone: no one removes a stage that is in use
 
 
 #: Start of a staging folder's name; the host and process that made it follow.
@@ -78,31 +80,50 @@ def _locked_stage(home: Path) -> tuple[Path, int]:
     """A new staging folder in ``home`` and a descriptor holding its lock (:func:`_lock`).
 
     Made, then locked, then found still there: a cleanup that came between the two cannot
-    have removed the stage this returns.
+    have removed the stage this returns (the attempt is made again, at most
+    :data:`_ATTEMPTS` times). Where folders cannot be locked, the stage is used unlocked and
+    no cleanup ever removes it.
+
+    Raises:
+        FileError: no stage could be made and kept (every attempt removed at once).
     """
-    while True:
+    for _ in range(_ATTEMPTS):
         stage = Path(tempfile.mkdtemp(prefix=f"{_PREFIX}{_host()}-{os.getpid()}-", dir=home))
-        lock = os.open(stage, os.O_RDONLY)
-        if _lock(lock) and stage.is_dir() and os.path.samestat(os.fstat(lock), os.stat(stage)):
+        try:
+            lock = os.open(stage, os.O_RDONLY)
+        except FileNotFoundError:  # removed by a cleanup before it could be locked
+            continue
+        state = _lock(lock)
+        kept = state != "held" and stage.is_dir()
+        if kept and os.path.samestat(os.fstat(lock), os.stat(stage)):
             return stage, lock
         os.close(lock)
+        shutil.rmtree(stage, ignore_errors=True)
+    raise FileError(f"cannot keep a staging folder in {home}: each was removed at once", str(home))
 
 
-def _lock(descriptor: int) -> bool:
-    """Take an exclusive lock on an open folder without waiting; False if another holds it.
+#: Attempts of :func:`_locked_stage` at most (a count).
+_ATTEMPTS = 8
 
-    The kernel drops the lock when its holder ends, however it ends (SIGKILL too). Where
-    there are no such locks (not POSIX), True: nothing is ever cleaned up then.
+
+def _lock(descriptor: int) -> str:
+    """Try an exclusive lock on an open folder without waiting.
+
+    ``"locked"``; ``"held"`` when another holds it; ``"unsupported"`` where folders cannot be
+    locked (not POSIX, or a file system that refuses: NFS without locks, say). The kernel
+    drops a lock when its holder ends, however it ends (SIGKILL too).
     """
     try:
         import fcntl
     except ImportError:  # not POSIX
-        return True
+        return "unsupported"
     try:
         fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:  # EWOULDBLOCK / EAGAIN: another holds it
+        return "held"
     except OSError:
-        return False
-    return True
+        return "unsupported"
+    return "locked"
 
 
 def remove_abandoned(folder: Path) -> list[Path]:
@@ -112,7 +133,7 @@ def remove_abandoned(folder: Path) -> list[Path]:
     while its lock is held (its maker runs, in any process namespace), when another host
     made it (a shared file system, whose locks may not reach here), and when its name does
     not say who made it (an older freefloat's). Nothing is removed where folders cannot be
-    locked (not POSIX).
+    locked (not POSIX, or a file system that refuses locks).
     """
     removed: list[Path] = []
     if os.name != "posix":
@@ -127,7 +148,7 @@ def remove_abandoned(folder: Path) -> list[Path]:
             except OSError:
                 continue
             try:
-                if _lock(descriptor):
+                if _lock(descriptor) == "locked":  # no one holds it, and we can tell
                     shutil.rmtree(stage, ignore_errors=True)
                     removed.append(stage)
             finally:
