@@ -259,8 +259,11 @@ def reachable(
             replace(_limits(drift, axis, 0.0, None), stopped_by=ONE_JOINT) for axis in axes
         )
     else:  # joints that end where they start move in loops: no simple-motion bound holds
-        capped = [goal_turn_limit(constraints, moved, a, DEFAULT_MAX_ANGLE) for a in axes]
-        heading = np.array(capped) if loops else outer
+        heading = (
+            np.array([goal_turn_limit(constraints, moved, a, DEFAULT_MAX_ANGLE) for a in axes])
+            if loops
+            else outer
+        )
         estimate = _inner(scenario, problem, drift, axes, heading, budget, progress, jobs)
         freedom = estimate.freedom
         found = tuple(

@@ -129,30 +129,35 @@ def goal_turn_limit(
 ) -> float:
     """How far (rad, at most ``turn``) a goal may turn about ``axis`` from ``moved``.
 
-    As far as it breaks no constraint of the goal attitude (:meth:`Constraint.at_attitude`).
-    ``moved``: an attitude relative to the start (the drift attitude's), ``[x, y, z, w]``;
-    ``axis``: a unit axis in its frame. The first crossing on a grid of 0.1 deg, refined by
-    bisection to 1e-12 rad; 0 when ``moved`` itself breaks one.
+    As far as it breaks no constraint of the goal attitude (:meth:`Constraint.at_attitude`,
+    in rad: the turn from the start and a boresight's angle each change by at most the turn
+    about ``axis``). ``moved``: an attitude relative to the start (the drift attitude's),
+    ``[x, y, z, w]``; ``axis``: a unit axis in its frame. Stepping by the smallest room left
+    never jumps over the first crossing (as :func:`.simple_bound.turn_limit`); 0 when
+    ``moved`` itself breaks one.
     """
     judged = [c for c in constraints if c.at_attitude(moved) is not None]
     if not judged:
         return turn
+    axis = np.asarray(axis, dtype=float)
 
-    def holds(theta: float) -> bool:
-        relative = quat_multiply(moved, quat_exp(theta * np.asarray(axis, dtype=float)))
-        return all(c.at_attitude(relative).value <= 0.0 for c in judged)  # type: ignore[union-attr]
+    def room(theta: float) -> float:
+        relative = quat_multiply(moved, quat_exp(theta * axis))
+        return -max(c.at_attitude(relative).value for c in judged)  # type: ignore[union-attr]
 
-    if not holds(0.0):
+    theta, left = 0.0, room(0.0)
+    if left < 0.0:
         return 0.0
-    grid = np.append(np.arange(0.0, turn, math.radians(0.1)), turn)
-    broken = next((k for k in range(1, len(grid)) if not holds(float(grid[k]))), None)
-    if broken is None:
-        return turn
-    low, high = float(grid[broken - 1]), float(grid[broken])
-    while high - low > 1e-12:
-        middle = 0.5 * (low + high)
-        low, high = (middle, high) if holds(middle) else (low, middle)
-    return low
+    for _ in range(_LIMIT_STEPS):
+        if left < 1e-12 or theta >= turn:
+            break
+        theta += left
+        left = room(theta)
+    return min(theta, turn)
+
+
+#: Steps of :func:`goal_turn_limit` at most (a count; each as long as the room left).
+_LIMIT_STEPS = 200
 
 
 def at_rest(
