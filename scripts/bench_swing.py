@@ -118,10 +118,8 @@ def _held(scenario: ff.Scenario, constraint: BaseSwing | BasePointing) -> dict[s
         return {"time_s": time.perf_counter() - start, "outcome": type(exc).__name__}
     elapsed = time.perf_counter() - start
     check = next(c for c in plan.verification.checks if c.name == constraint.name)
-    if isinstance(constraint, BaseSwing):
-        largest = math.degrees(check.value + constraint.max_angle)
-    else:  # the cone's gap is cos(half-angle) - cos(tilt)
-        largest = math.degrees(math.acos(math.cos(constraint.half_angle) - check.value))
+    bound = constraint.max_angle if isinstance(constraint, BaseSwing) else constraint.half_angle
+    largest = math.degrees(check.value + bound)  # each check: the largest angle beyond its bound
     outcome = "verified" if plan.verification.passed else "NOT VERIFIED"
     return {"time_s": elapsed, "swing_deg": largest, "outcome": outcome}
 
