@@ -6,7 +6,7 @@ alone: ``r' = 0.5 r (x) [omega(t), 0]``. It does not depend on the start attitud
 is integrated with Butcher's fifth-order Runge-Kutta method (:mod:`.runge_kutta`) on a uniform
 grid, every step one 4 x 4 matrix, from angular velocities the caller computes (the
 verification's: Pinocchio's centroidal map, :meth:`~.momentum.MomentumMap.pinocchio_rates`);
-the planner's Magnus scheme is not used. Between grid points, :func:`turn_between` integrates
+the planner's Magnus scheme is not used. Between grid points, :func:`relative_between` integrates
 from the step's start to any instant, so that a caller can refine a largest turn in time.
 """
 
@@ -26,7 +26,6 @@ __all__ = [
     "quaternion_turn",
     "relative_between",
     "track_turn",
-    "turn_between",
 ]
 
 #: Angular velocity (rad/s, base frame), (K, 3), at an array of K times (s).
@@ -90,11 +89,6 @@ def track_turn(
         relative /= np.linalg.norm(relative, axis=1, keepdims=True)
     times = quarters[0::4]
     return TurnTrack(times, relative, quaternion_turn(relative), rates)
-
-
-def turn_between(omega_at: RatesAt, track: TurnTrack, t: float, duration: float) -> float:
-    """The turn (rad) at time ``t`` (s): :func:`relative_between`'s angle."""
-    return float(quaternion_turn(relative_between(omega_at, track, t, duration)))
 
 
 def relative_between(omega_at: RatesAt, track: TurnTrack, t: float, duration: float) -> np.ndarray:
