@@ -25,7 +25,7 @@ from ...robot.model import Robot
 from ..paths import JointPolynomials
 from ..scalar_minimum import scalar_minimum
 
-__all__ = ["REFINED", "AttitudeTrack", "Largest", "attitude_track", "local_maxima"]
+__all__ = ["CANDIDATES", "REFINED", "AttitudeTrack", "Largest", "attitude_track", "local_maxima"]
 
 #: Steps of the first level, and the most it doubles to.
 FIRST_STEPS, MAX_STEPS = 64, 8192
