@@ -252,7 +252,7 @@ def reachable(
     loops = scenario.robot.n > 1 and stays_put(problem)  # every motion a closed loop
     before = problem.evaluations
     if budget > 0:  # as plan refuses them: no goal of this scenario plans
-        check_endpoints(scenario, scenario_constraints(scenario), end_effector_goal)
+        check_endpoints(scenario, constraints, end_effector_goal)
     if scenario.robot.n == 1:  # every path reaches the drift attitude (method.md section 6)
         freedom = tuple(d - 5 for d in problem.family.degrees)
         found = tuple(

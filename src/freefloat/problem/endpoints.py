@@ -25,6 +25,7 @@ from ..robot.payload import PAYLOAD_LINK
 from .build import check_joint_limits
 from .constraints import Clearance, Constraint, Excess
 from .scenario import Scenario
+from .simple_bound import first_crossing
 
 __all__ = [
     "at_end_attitude",
@@ -131,10 +132,9 @@ def goal_turn_limit(
 
     As far as it breaks no constraint of the goal attitude (:meth:`Constraint.at_attitude`,
     in rad: the turn from the start and a boresight's angle each change by at most the turn
-    about ``axis``). ``moved``: an attitude relative to the start (the drift attitude's),
-    ``[x, y, z, w]``; ``axis``: a unit axis in its frame. Stepping by the smallest room left
-    never jumps over the first crossing (as :func:`.simple_bound.turn_limit`); 0 when
-    ``moved`` itself breaks one.
+    about ``axis``, so :func:`.simple_bound.first_crossing` applies). ``moved``: an attitude
+    relative to the start (the drift attitude's), ``[x, y, z, w]``; ``axis``: a unit axis in
+    its frame. 0 when ``moved`` itself breaks one.
     """
     judged = [c for c in constraints if c.at_attitude(moved) is not None]
     if not judged:
@@ -145,19 +145,7 @@ def goal_turn_limit(
         relative = quat_multiply(moved, quat_exp(theta * axis))
         return -max(c.at_attitude(relative).value for c in judged)  # type: ignore[union-attr]
 
-    theta, left = 0.0, room(0.0)
-    if left < 0.0:
-        return 0.0
-    for _ in range(_LIMIT_STEPS):
-        if left < 1e-12 or theta >= turn:
-            break
-        theta += left
-        left = room(theta)
-    return min(theta, turn)
-
-
-#: Steps of :func:`goal_turn_limit` at most (a count; each as long as the room left).
-_LIMIT_STEPS = 200
+    return first_crossing(room, turn)
 
 
 def at_rest(

@@ -24,6 +24,7 @@ good as that search. Cyclic back-and-forth motions
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,7 +34,13 @@ from ..physics.attitude import quat_exp, quat_log, quat_multiply
 from ..physics.momentum import MomentumMap
 from .quasi_random import unit_points
 
-__all__ = ["SimpleMotionBound", "inertia_ratio", "simple_motion_bound", "turn_limit"]
+__all__ = [
+    "SimpleMotionBound",
+    "first_crossing",
+    "inertia_ratio",
+    "simple_motion_bound",
+    "turn_limit",
+]
 
 #: Configurations sampled in the box before refinement.
 SAMPLES = 256
@@ -248,15 +255,24 @@ def turn_limit(drift: np.ndarray, axis: np.ndarray, bound: float) -> float:
         turned = quat_multiply(drift, quat_exp(theta * axis))
         return bound - float(np.linalg.norm(quat_log(turned)))
 
+    return first_crossing(room, math.pi)
+
+
+def first_crossing(room: Callable[[float], float], most: float) -> float:
+    """The first ``theta >= 0`` (rad, at most ``most``) where ``room(theta)`` reaches 0.
+
+    ``room`` must change by at most the change in ``theta`` (1-Lipschitz): stepping by the
+    room left never jumps over the first crossing. 0 when ``room(0) < 0``; at most 200 steps.
+    """
     theta, left = 0.0, room(0.0)
     if left < 0.0:
         return 0.0
     for _ in range(200):
-        if left < 1e-12 or theta > math.pi:
+        if left < 1e-12 or theta >= most:
             break
         theta += left
         left = room(theta)
-    return min(theta, math.pi)
+    return min(theta, most)
 
 
 def inertia_ratio(mmap: MomentumMap, joints: np.ndarray) -> float:

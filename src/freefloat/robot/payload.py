@@ -21,13 +21,7 @@ from ..errors import InputError, ModelError
 from .model import Robot
 from .urdf_shapes import PAYLOAD_LINK
 
-__all__ = [
-    "PAYLOAD_LINK",
-    "Payload",
-    "attach_payload",
-    "check_mass",
-    "held_payload",
-]
+__all__ = ["PAYLOAD_LINK", "Payload", "attach_payload", "check_mass", "held_payload"]
 
 
 def check_mass(mass: float) -> None:

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import DurationLimitError, InputError
+from ...errors import DurationLimitError, InputError, excerpt
 from ...robot.model import Joint, Robot
 from ..paths import JointPolynomials
 from ..residual import Problem
@@ -34,6 +34,7 @@ __all__ = [
     "DurationScaledLimit",
     "Excess",
     "LimitPeak",
+    "check_record_keys",
 ]
 
 #: Normalised instants at which solvers impose constraints by default (s = t / T in [0, 1]).
@@ -193,6 +194,22 @@ class Constraint(abc.ABC):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}()"
+
+
+def check_record_keys(
+    name: str, record: Mapping[str, Any], keys: tuple[str, ...], required: tuple[str, ...]
+) -> None:
+    """Refuse a constraint record with a key not in ``keys`` or without one of ``required``.
+
+    Raises:
+        InputError: the first unknown or missing key, named with the valid ones.
+    """
+    unknown = [k for k in record if k not in keys]
+    missing = [k for k in required if k not in record]
+    if unknown or missing:
+        what = f"unknown key {excerpt(unknown[0])}" if unknown else f"missing {missing[0]!r}"
+        listed = f"its keys are {', '.join(keys)}" if len(keys) > 1 else f"its key is {keys[0]}"
+        raise InputError(f"{name}: {what}; {listed}")
 
 
 @dataclass(frozen=True)

@@ -38,7 +38,7 @@ from ..paths import JointPolynomials
 from ..relative_attitude import attitude_peaks, relative_rows
 from ..residual import Problem
 from .attitude_check import REFINED, attitude_track
-from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
+from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess, check_record_keys
 from .base_swing import degrees_apart
 from .end_effector_cone import unit_vector
 
@@ -99,11 +99,7 @@ class BasePointing(Constraint):
         Raises:
             InputError: an unknown or missing key, or a bad value, named.
         """
-        unknown = [k for k in record if k not in _KEYS]
-        missing = [k for k in ("axis", "half_angle_deg") if k not in record]
-        if unknown or missing:
-            what = f"unknown key {excerpt(unknown[0])}" if unknown else f"missing {missing[0]!r}"
-            raise InputError(f"base_pointing: {what}; its keys are {', '.join(_KEYS)}")
+        check_record_keys("base_pointing", record, _KEYS, ("axis", "half_angle_deg"))
         half = record["half_angle_deg"]
         if (
             isinstance(half, bool)

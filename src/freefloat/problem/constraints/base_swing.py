@@ -34,7 +34,7 @@ from ..paths import JointPolynomials
 from ..relative_attitude import attitude_peaks, swing_rows
 from ..residual import Problem
 from .attitude_check import REFINED, attitude_track
-from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
+from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess, check_record_keys
 
 __all__ = ["SOLVER_SLACK", "BaseSwing", "degrees_apart"]
 
@@ -78,17 +78,14 @@ class BaseSwing(Constraint):
         Raises:
             InputError: an unknown or missing key, or a bad value, named.
         """
-        unknown = [k for k in record if k != "max_deg"]
-        if unknown or "max_deg" not in record:
-            what = f"unknown key {excerpt(unknown[0])}" if unknown else "missing 'max_deg'"
-            raise InputError(f"base_swing: {what}; its key is max_deg")
+        check_record_keys("base_swing", record, ("max_deg",), ("max_deg",))
         value = record["max_deg"]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 180:
-            raise InputError(
-                "base_swing max_deg must be a number between 0 and 180 (exclusive) [deg], got "
-                f"{excerpt(value)}"
-            )
-        if not math.radians(value) > 0.0:  # a subnormal degree is 0 rad
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float))
+            or not 0 < value < 180
+            or not math.radians(value) > 0.0  # a subnormal degree is 0 rad
+        ):
             raise InputError(
                 "base_swing max_deg must be a number between 0 and 180 (exclusive) [deg], got "
                 f"{excerpt(value)}"

@@ -40,7 +40,7 @@ from ..limits import finite_number
 from ..paths import JointPolynomials
 from ..residual import Problem
 from ..scalar_minimum import scalar_minimum
-from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess
+from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess, check_record_keys
 
 __all__ = ["SOLVER_SLACK", "VERIFY_SAMPLES", "EndEffectorCone", "unit_vector"]
 
@@ -128,11 +128,7 @@ class EndEffectorCone(Constraint):
         Raises:
             InputError: an unknown or missing key, or a bad value, named.
         """
-        unknown = [k for k in record if k not in _KEYS]
-        missing = [k for k in _KEYS if k not in record]
-        if unknown or missing:
-            what = f"unknown key {excerpt(unknown[0])}" if unknown else f"missing {missing[0]!r}"
-            raise InputError(f"end_effector_cone: {what}; its keys are {', '.join(_KEYS)}")
+        check_record_keys("end_effector_cone", record, _KEYS, _KEYS)
         half = record["half_angle_deg"]
         if isinstance(half, bool) or not isinstance(half, (int, float)) or not 0 < half < 180:
             raise InputError(
