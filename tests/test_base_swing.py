@@ -97,9 +97,24 @@ def scipy_largest(plan, robot: ff.Robot, quantity) -> tuple[float, float]:
     centroidal map at zero momentum, its largest sample of 4001 refined by SciPy's bounded
     scalar search. ``plan``: a plan, or joint polynomials.
     """
+    path = plan.path() if isinstance(plan, ff.Plan) else plan
+    found = _scipy_attitude(path, robot)
+    t = np.linspace(0.0, path.duration, 4001)
+    k = int(np.argmax(quantity(found.sol(t))))
+    if k in (0, len(t) - 1):
+        return float(np.ravel(quantity(found.sol(t[k])))[0]), float(t[k])
+    best = minimize_scalar(
+        lambda x: -float(np.ravel(quantity(found.sol(x)))[0]), bounds=(t[k - 1], t[k + 1]),
+        method="bounded",
+        options={"xatol": 1e-9},
+    )  # fmt: skip
+    return float(-best.fun), float(best.x)
+
+
+def _scipy_attitude(path, robot: ff.Robot):
+    """SciPy's DOP853 solution (dense) of the attitude relative to the start along ``path``."""
     model, data = robot.model, robot.model.createData()
     columns = [joint.idx_v for joint in robot.joints]
-    path = plan.path() if isinstance(plan, ff.Plan) else plan
 
     def rhs(t: float, y: np.ndarray) -> np.ndarray:
         samples = path.evaluate(np.array([t]))
@@ -112,20 +127,16 @@ def scipy_largest(plan, robot: ff.Robot, quantity) -> tuple[float, float]:
              -x * wx - yy * wy - z * wz]
         )  # fmt: skip
 
-    found = solve_ivp(
+    return solve_ivp(
         rhs, (0.0, path.duration), [0.0, 0.0, 0.0, 1.0], "DOP853", rtol=1e-12, atol=1e-13,
         dense_output=True,
     )  # fmt: skip
-    t = np.linspace(0.0, path.duration, 4001)
-    k = int(np.argmax(quantity(found.sol(t))))
-    if k in (0, len(t) - 1):
-        return float(np.ravel(quantity(found.sol(t[k])))[0]), float(t[k])
-    best = minimize_scalar(
-        lambda x: -float(np.ravel(quantity(found.sol(x)))[0]), bounds=(t[k - 1], t[k + 1]),
-        method="bounded",
-        options={"xatol": 1e-9},
-    )  # fmt: skip
-    return float(-best.fun), float(best.x)
+
+
+def _scipy_turns(path, robot: ff.Robot, s: np.ndarray) -> np.ndarray:
+    """The turn from the start (rad) at normalised instants ``s`` (SciPy, as above)."""
+    y = _scipy_attitude(path, robot).sol(np.asarray(s) * path.duration)
+    return 2.0 * np.arctan2(np.linalg.norm(y[:3], axis=0), np.abs(y[3]))
 
 
 def _scipy_swing(plan, robot: ff.Robot) -> tuple[float, float]:
@@ -253,7 +264,7 @@ def test_planar_rows_are_the_closed_form_yaw_and_differentiate(worked_scenario):
     beta = np.array([0.3, -0.2, 0.1, 0.25])
     swing = BaseSwing(math.radians(170.0))
     s = np.array([0.2, 0.5, 0.8, 0.95])
-    turns = swing.rows(problem, beta, s).values + swing.max_angle - swing.solver_slack(problem)
+    turns = swing.rows(problem, beta, s).values + swing.max_angle - swing.solver_slack(problem, s)
     path = problem.polynomials(beta)
 
     def rate(t: float) -> float:
@@ -369,3 +380,77 @@ def test_a_goal_beyond_the_bound_by_more_than_rounding_is_refused(worked_scenari
                 ff.plan(scenario)
         else:
             assert ff.plan(scenario).verification.passed
+
+
+def _ur5_turned(yaw_deg: float) -> ff.Scenario:
+    """The UR5 servicer with its goal attitude yaw_deg in yaw and half that in pitch from
+    the start: the plain path turns the spacecraft 11.5 deg, far beyond such a goal."""
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
+    goal = ff.physics.attitude.quat_multiply(
+        scenario.start_attitude,
+        ff.physics.attitude.quat_from_zyx(math.radians(yaw_deg), math.radians(yaw_deg / 2)),
+    )
+    return dataclasses.replace(scenario, goal_attitude=goal)
+
+
+def test_a_goal_on_the_bound_plans_when_the_plain_path_swings_far_beyond_it():
+    # The bound is the goal's own turn (6.71 deg). Before, the rows near the goal asked for
+    # no room at all (half the goal's, none) at every instant, and the start path found on
+    # them peaked beyond the bound between them, and it ended beyond it (no row at its end):
+    # refused. Now the room tapers to the goal's only near the end and a start path's end
+    # has its own row. Truth: SciPy's integration of the plan's paths.
+    scenario = _ur5_turned(6.0)
+    turn = ff.geodesic_angle(scenario.start_attitude, scenario.goal_attitude)
+    bounded = dataclasses.replace(scenario, constraints=(BaseSwing(turn),))
+    plan = ff.plan(bounded)
+    swing, _ = _scipy_swing(plan, scenario.robot)
+    assert turn - 1e-9 <= swing <= turn + 1e-7
+
+
+def test_a_start_path_ends_within_the_bound():
+    # A start path ignores the attitude: its end lies anywhere, and continuation heads from
+    # there to the goal. Its end row holds it SOLVER_SLACK inside. Truth: SciPy's turn of the
+    # path found, at its end and everywhere.
+    import freefloat.solvers.restore as restore
+    from freefloat.problem.constraints.base_swing import SOLVER_SLACK
+    from freefloat.solvers.options import SolveOptions
+
+    scenario = _ur5_turned(6.0)
+    problem = ff.problem_from_scenario(scenario, extra=[2] * scenario.robot.n)
+    bound = ff.geodesic_angle(scenario.start_attitude, scenario.goal_attitude)
+    beta = restore.feasible_start(problem, [BaseSwing(bound)], SolveOptions())
+    assert beta is not None
+    path = problem.polynomials(beta)
+    largest, _ = _scipy_swing(path, scenario.robot)
+    assert largest <= bound + 1e-7
+    end = _scipy_turns(path, scenario.robot, np.ones(1))[0]
+    assert end <= bound - SOLVER_SLACK + 1e-7
+
+
+def test_relaxed_rows_lead_slsqp_in_and_give_up_when_a_stage_falls_short(monkeypatch):
+    # Each stage allows a fraction of the plain path's excess; the result of the last holds
+    # the rows at the default instants (SciPy's turn there, against the room the rows ask:
+    # full away from the goal, tapering as the cube to none at a goal on the bound). An
+    # SLSQP that gets nowhere (it returns where it started) is given up after one run.
+    import freefloat.solvers.restore as restore
+    from freefloat.problem.constraints.base_swing import SOLVER_SLACK
+    from freefloat.solvers.options import SolveOptions
+
+    scenario = _ur5_turned(6.0)
+    problem = ff.problem_from_scenario(scenario, extra=[2] * scenario.robot.n)
+    bound = ff.geodesic_angle(scenario.start_attitude, scenario.goal_attitude)
+    beta = restore._relaxed_start(problem, [BaseSwing(bound)], SolveOptions())
+    assert beta is not None
+    s = np.linspace(0.0, 1.0, 97)[1:-1]  # the rows' instants between the ends
+    turns = _scipy_turns(problem.polynomials(beta), scenario.robot, s)
+    room = np.minimum(SOLVER_SLACK, SOLVER_SLACK * (4.0 * (1.0 - s)) ** 3)  # none at the goal
+    assert np.all(turns <= bound - room + 1e-9)
+    runs = []
+
+    def stuck(problem, active, options, instants, start, allowance=None):
+        runs.append(allowance)
+        return np.array(start, dtype=float)
+
+    monkeypatch.setattr(restore, "_least_norm_within", stuck)
+    assert restore._relaxed_start(problem, [BaseSwing(bound)], SolveOptions()) is None
+    assert len(runs) == 1

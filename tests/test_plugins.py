@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
@@ -161,6 +162,38 @@ def test_constraint_jacobian_matches_finite_differences(ur5_scenario, name):
 
 
 @pytest.mark.parametrize("name", sorted(CONSTRAINT_EXAMPLES))
+def test_end_rows_match_finite_differences_and_the_dense_check_at_the_end(ur5_scenario, name):
+    # A start path ends anywhere: the rows at its end (none for most constraints) have the
+    # Jacobian of central differences, and where given, their value less the room they ask
+    # is the dense check's figure at the end (the swing's turn, the boresight's angle there,
+    # from another integrator: RK5 on Pinocchio's centroidal map, attitude_check).
+    constraint = CONSTRAINT_EXAMPLES[name](ur5_scenario)
+    problem = ff.problem_from_scenario(ur5_scenario, extra=[1] * ur5_scenario.robot.n)
+    beta = 0.05 * np.random.default_rng(7).normal(size=problem.n_free)
+    rows = constraint.end_rows(problem, beta)
+    assert rows.jacobian.shape == (rows.count, problem.n_free)
+    if not rows.count:
+        assert name not in ("base_swing", "base_pointing")
+        return
+    h = 1e-6
+    fd = np.empty_like(rows.jacobian)
+    for k in range(problem.n_free):
+        step = np.zeros(problem.n_free)
+        step[k] = h
+        plus = constraint.end_rows(problem, beta + step).values
+        minus = constraint.end_rows(problem, beta - step).values
+        fd[:, k] = (plus - minus) / (2 * h)
+    scale = max(1.0, float(np.abs(rows.jacobian).max()))
+    np.testing.assert_allclose(rows.jacobian, fd, rtol=1e-5, atol=1e-6 * scale)
+    from freefloat.problem.constraints.attitude_check import attitude_track
+
+    track = attitude_track(problem.robot, problem.polynomials(beta))
+    at_end = constraint.at_attitude(track.fine.relative[-1]).value  # beyond the bound there
+    slack = sys.modules[type(constraint).__module__].SOLVER_SLACK  # the room the row asks
+    assert rows.values[0] - slack == pytest.approx(at_end, abs=1e-9)
+
+
+@pytest.mark.parametrize("name", sorted(CONSTRAINT_EXAMPLES))
 def test_tight_instants_find_the_tightest_value_the_dense_check_finds(ur5_scenario, name):
     # The solvers add rows at a constraint's tight instants: where given, the largest row
     # there is the exact excess of the dense check (for joint limits, the polynomials'
@@ -177,8 +210,9 @@ def test_tight_instants_find_the_tightest_value_the_dense_check_finds(ur5_scenar
         if not len(tight):
             continue
         excess = constraint.violation(problem, beta).value
-        largest = float(constraint.rows(problem, beta, tight).values.max())
-        assert largest - constraint.solver_slack(problem) == pytest.approx(excess, abs=1e-9)
+        slack = constraint.solver_slack(problem, tight)  # the room the rows ask there
+        largest = float((constraint.rows(problem, beta, tight).values - slack).max())
+        assert largest == pytest.approx(excess, abs=1e-9)
 
 
 @pytest.mark.parametrize("name", sorted(CONSTRAINT_EXAMPLES))
@@ -413,15 +447,21 @@ def test_a_binding_cone_is_held_on_a_spatial_servicer(ur5_scenario, tmp_path, ca
 def test_the_cones_rows_ask_a_hair_inside_but_never_beyond_the_ends_room():
     """Closed form: the worked example's tool points at q1 + q2 (110 deg at the start, 30 deg
     at the goal), 40 deg from a direction at 70 deg at both ends. The rows' half-angle is the
-    cone's less SOLVER_SLACK, or less half the ends' room when that is smaller."""
+    cone's less SOLVER_SLACK away from the ends; within a quarter of the motion of an end with
+    less room than twice that, it tapers as the cube of the time from the end to half that
+    end's room (room / 2 + SOLVER_SLACK (4 d)^3), and is never negative."""
     from freefloat.problem.constraints.end_effector_cone import SOLVER_SLACK
 
     problem = ff.problem_from_scenario(ff.Scenario.from_toml(ff.default_scenario_path()))
     direction = [math.cos(math.radians(70)), math.sin(math.radians(70)), 0.0]
-    for half_deg, slack in (
-        (60.0, SOLVER_SLACK),
-        (40.0 + math.degrees(SOLVER_SLACK), 0.5 * SOLVER_SLACK),
+    s = np.array([0.0, 0.05, 0.2, 0.5, 0.9, 1.0])
+    d = np.minimum(s, 1.0 - s)  # both ends have the same room here
+    for half_deg, room in (
+        (60.0, math.radians(20.0)),
+        (40.0 + math.degrees(SOLVER_SLACK), SOLVER_SLACK),
         (40.0, 0.0),
+        (39.0, -math.radians(1.0)),
     ):
         cone = EndEffectorCone([1.0, 0.0, 0.0], direction, math.radians(half_deg))
-        assert cone._slack(problem) == pytest.approx(slack, abs=1e-12)
+        want = [min(SOLVER_SLACK, max(0.0, room / 2 + SOLVER_SLACK * (4 * x) ** 3)) for x in d]
+        np.testing.assert_allclose(cone._slack(problem, s), want, rtol=0, atol=1e-12)

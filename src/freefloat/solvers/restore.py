@@ -18,7 +18,7 @@ from ..problem.constraints import DEFAULT_INSTANTS, Constraint
 from ..problem.constraints.clearance import SOLVER_SLACK
 from ..problem.residual import Problem
 from .options import SolveOptions
-from .sqp import constraint_functions
+from .sqp import Function, constraint_functions
 
 __all__ = ["Broken", "broken_constraint", "broken_rows_first", "feasible_start", "first_broken"]
 
@@ -84,12 +84,32 @@ def feasible_start(
     SLSQP's rows sit at fixed instants, and a path on a limit there can go beyond it between
     them (the spacecraft's swing peaking between two rows, say): the instants where the
     result breaks a constraint (:meth:`Constraint.critical_times`) are then added and SLSQP
-    runs again from it, at most :data:`RESTORE_ROUNDS` runs.
+    runs again from it, at most :data:`RESTORE_ROUNDS` runs. When that finds none from the
+    quintic path, SLSQP is led there by relaxed rows (:func:`_relaxed_start`) and the rounds
+    run again from where it led.
     """
     active = [c for c in constraints if c.applies_to(problem.robot)]
     if not constraint_functions(problem, active):
         return np.zeros(problem.n_free)
-    instants, beta = DEFAULT_INSTANTS, np.zeros(problem.n_free)
+    found = _restored(problem, active, options, np.zeros(problem.n_free))
+    if found is None:
+        led = _relaxed_start(problem, active, options)
+        found = None if led is None else _restored(problem, active, options, led)
+    return found
+
+
+#: SLSQP runs of :func:`feasible_start` at most (a count).
+RESTORE_ROUNDS = 3
+#: The fractions of the quintic path's own excess each constraint's rows are allowed on the
+#: way to none (:func:`_relaxed_start`).
+RELAXATION = (0.5, 0.25, 0.125, 0.0)
+
+
+def _restored(
+    problem: Problem, active: Sequence[Constraint], options: SolveOptions, start: np.ndarray
+) -> np.ndarray | None:
+    """:func:`feasible_start`'s rounds from ``start``: the path within every constraint, or None."""
+    instants, beta = DEFAULT_INSTANTS, start
     for _ in range(RESTORE_ROUNDS):
         found = _least_norm_within(problem, active, options, instants, beta)
         if found is None:
@@ -107,8 +127,35 @@ def feasible_start(
     return None
 
 
-#: SLSQP runs of :func:`feasible_start` at most (a count).
-RESTORE_ROUNDS = 3
+def _relaxed_start(
+    problem: Problem, active: Sequence[Constraint], options: SolveOptions
+) -> np.ndarray | None:
+    """A path near the constraints' rows, reached through rows relaxed less and less.
+
+    SLSQP from the quintic path can stall far outside nonlinear rows (the swing bound of a
+    heavy payload on Canadarm2: 9 deg beyond it, after no step). Each constraint's rows are
+    allowed a fraction (:data:`RELAXATION`) of the quintic path's largest excess at the
+    default instants, at which that path is inside, and each SLSQP run starts from the last
+    one's result, down to no allowance. None when SLSQP fails numerically, or a run does not
+    get halfway from the last allowance to its own (the tighter ones would fail too).
+    """
+    zero = np.zeros(problem.n_free)
+    functions = _functions(problem, active, DEFAULT_INSTANTS)
+    excess = [max(0.0, -float(np.min(fun(zero), initial=0.0))) for fun, _ in functions]
+    beta, before = zero, excess
+    for fraction in RELAXATION:
+        allowance = [fraction * e for e in excess]
+        found = _least_norm_within(problem, active, options, DEFAULT_INSTANTS, beta, allowance)
+        if found is None:
+            return None
+        beta = found
+        left = [max(0.0, -float(np.min(fun(beta), initial=0.0))) for fun, _ in functions]
+        if any(
+            v > a + 0.5 * (b - a) + 1e-9 for v, a, b in zip(left, allowance, before, strict=True)
+        ):  # not halfway from the last allowance to this one: the tighter ones fail too
+            return None
+        before = allowance
+    return beta
 
 
 def _least_norm_within(
@@ -117,13 +164,20 @@ def _least_norm_within(
     options: SolveOptions,
     instants: np.ndarray,
     start: np.ndarray,
+    allowance: Sequence[float] | None = None,
 ) -> np.ndarray | None:
-    """SLSQP's minimum-norm ``beta`` within the rows at ``instants``, from ``start``."""
+    """SLSQP's minimum-norm ``beta`` within the rows at ``instants``, from ``start``.
+
+    ``allowance``: how far beyond its limit each constraint's rows may go (its unit; one per
+    pair of :func:`_functions`); default none.
+    """
     from scipy.optimize import minimize  # imported when needed: it costs start-up time
 
+    pairs = _functions(problem, active, instants)
+    extra = [0.0] * len(pairs) if allowance is None else list(allowance)
     rows = [
-        {"type": "ineq", "fun": fun, "jac": jac}
-        for fun, jac in constraint_functions(problem, active, instants)
+        {"type": "ineq", "fun": lambda b, f=fun, e=e: f(b) + e, "jac": jac}
+        for (fun, jac), e in zip(pairs, extra, strict=True)
     ]
     try:
         result = minimize(
@@ -138,3 +192,30 @@ def _least_norm_within(
         return None
     beta = np.asarray(result.x, dtype=float)
     return beta if np.all(np.isfinite(beta)) else None
+
+
+def _functions(
+    problem: Problem, active: Sequence[Constraint], instants: np.ndarray
+) -> list[tuple[Function, Function]]:
+    """SLSQP's ``(g, dg/dbeta)`` pairs (``g >= 0`` feasible): the rows, then the ends' rows.
+
+    :func:`.sqp.constraint_functions` at ``instants``, and each constraint's
+    :meth:`~freefloat.problem.constraints.Constraint.end_rows` (a start path ends anywhere).
+    """
+    pairs = constraint_functions(problem, active, instants)
+    for constraint in active:
+        if constraint.end_rows(problem, np.zeros(problem.n_free)).count:
+            pairs.append(_end_functions(problem, constraint))
+    return pairs
+
+
+def _end_functions(problem: Problem, constraint: Constraint) -> tuple[Function, Function]:
+    """A constraint's end rows as SLSQP's ``(g, dg/dbeta)`` (``g >= 0`` feasible)."""
+
+    def values(beta: np.ndarray) -> np.ndarray:
+        return -constraint.end_rows(problem, beta).values
+
+    def jacobian(beta: np.ndarray) -> np.ndarray:
+        return -constraint.end_rows(problem, beta).jacobian
+
+    return values, jacobian

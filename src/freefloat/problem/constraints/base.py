@@ -132,14 +132,25 @@ class Constraint(abc.ABC):
         """
         return np.zeros(0)
 
-    def solver_slack(self, problem: Problem) -> float:
-        """How far inside the constraint its rows ask a path to be (its unit; default 0).
+    def end_rows(self, problem: Problem, beta: np.ndarray) -> ConstraintRows:
+        """Rows at the end of a path that need not reach the goal (``g <= 0``, its unit).
+
+        :meth:`rows` leave out an end no path at the goal changes (the goal attitude's,
+        judged before any search); a start path found with the attitude ignored
+        (:func:`~freefloat.solvers.restore.feasible_start`) ends anywhere, and these rows hold
+        that end inside. Default: none.
+        """
+        return ConstraintRows(np.zeros(0), np.zeros((0, problem.n_free)))
+
+    def solver_slack(self, problem: Problem, instants: np.ndarray) -> np.ndarray:
+        """(K,) how far inside its rows ask a path to be at ``instants`` (its unit).
 
         Rows at instants hold a path there, not between them: a constraint whose rows have
         no :meth:`critical_times` in some solver's use (a start path found with fixed
-        instants) asks for a little room, so that the dense check passes between them.
+        instants) asks for a little room, so that the dense check passes between them
+        (:func:`.slack.tapered_slack`). Default: none (0, a 0-d array, whatever its rows).
         """
-        return 0.0
+        return np.zeros(())
 
     def violation(self, problem: Problem, beta: np.ndarray) -> Excess:
         """:meth:`excess` of the problem's path at ``beta`` (for solvers filtering roots)."""

@@ -41,11 +41,12 @@ from .attitude_check import REFINED, attitude_track
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess, check_record_keys
 from .base_swing import degrees_apart
 from .end_effector_cone import unit_vector
+from .slack import tapered_slack
 
 __all__ = ["SOLVER_SLACK", "BasePointing"]
 
-#: How far inside the cone the rows ask the boresight to be (rad, 0.0057 deg), less when the
-#: start or goal lies nearer its edge (:meth:`BasePointing.solver_slack`).
+#: How far inside the cone the rows ask the boresight to be (rad, 0.0057 deg), less near the
+#: start or goal when it lies nearer the edge (:meth:`BasePointing.solver_slack`).
 SOLVER_SLACK = 1e-4
 #: Keys of the scenario table and the plan record.
 _KEYS = ("axis", "direction", "half_angle_deg")
@@ -139,19 +140,41 @@ class BasePointing(Constraint):
 
     # -- the solvers' rows --------------------------------------------------------------------
 
-    def solver_slack(self, problem: Problem) -> float:
-        """:data:`SOLVER_SLACK` (rad), or half the room of the start or goal when less."""
+    def solver_slack(self, problem: Problem, instants: np.ndarray) -> np.ndarray:
+        """(K,) :data:`SOLVER_SLACK` (rad) at normalised ``instants``, tapered near the ends.
+
+        Near the start or goal when it is closer to the edge than twice that, to half its
+        room (:func:`.slack.tapered_slack`).
+        """
         goal = relative_quat(problem.start_quaternion, problem.goal_quaternion)
-        ends = np.stack([np.array([0.0, 0.0, 0.0, 1.0]), goal])
-        room = -float(self._gaps(ends).max())
-        return float(np.clip(0.5 * room, 0.0, SOLVER_SLACK))
+        rooms = -self._gaps(np.stack([np.array([0.0, 0.0, 0.0, 1.0]), goal]))
+        return tapered_slack(instants, float(rooms[0]), float(rooms[1]), SOLVER_SLACK)
+
+    def end_rows(self, problem: Problem, beta: np.ndarray) -> ConstraintRows:
+        """The angle at the end of a path that need not reach the goal, :data:`SOLVER_SLACK` inside.
+
+        A start path found with the attitude ignored ends anywhere; continuation heads from
+        its end attitude to the goal (:meth:`BaseSwing.end_rows
+        <freefloat.problem.constraints.base_swing.BaseSwing.end_rows>`).
+        """
+        return self._angle_rows(problem, beta, np.ones(1), np.full(1, SOLVER_SLACK))
 
     def rows(
         self, problem: Problem, beta: np.ndarray, instants: np.ndarray = DEFAULT_INSTANTS
     ) -> ConstraintRows:
-        """``angle - (half_angle - slack)`` (rad) strictly between the ends, exact Jacobian."""
+        """``angle - (half_angle - slack)`` (rad) strictly between the ends, exact Jacobian.
+
+        The ends' attitudes are fixed (and checked); a path that need not reach the goal (a
+        start path) holds its end by :meth:`end_rows`.
+        """
         s = np.asarray(instants, dtype=float)
         s = s[(s > 0.0) & (s < 1.0)]  # the ends' attitudes are fixed (and checked)
+        return self._angle_rows(problem, beta, s, self.solver_slack(problem, s))
+
+    def _angle_rows(
+        self, problem: Problem, beta: np.ndarray, s: np.ndarray, slack: np.ndarray
+    ) -> ConstraintRows:
+        """``angle - (half_angle - slack)`` (rad) at normalised ``s``, exact Jacobian in beta."""
         if not len(s):
             return ConstraintRows(np.zeros(0), np.zeros((0, problem.n_free)))
         found = relative_rows(problem, beta, s)
@@ -161,7 +184,7 @@ class BasePointing(Constraint):
         angles = self._angles(found.relative)
         sine = np.sin(angles)
         scale = np.divide(-1.0, sine, out=np.zeros_like(sine), where=sine > 1e-12)
-        values = angles - (self.half_angle - self.solver_slack(problem))
+        values = angles - (self.half_angle - slack)
         return ConstraintRows(values, scale[:, None] * np.einsum("mi,mif->mf", lever, found.body))
 
     def tight_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:

@@ -35,12 +35,13 @@ from ..relative_attitude import attitude_peaks, swing_rows
 from ..residual import Problem
 from .attitude_check import REFINED, attitude_track
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess, check_record_keys
+from .slack import tapered_slack
 
 __all__ = ["SOLVER_SLACK", "BaseSwing", "degrees_apart"]
 
 #: How far inside the bound the solvers' rows ask the turn to be (rad: 0.0057 deg): a start
 #: path found on the bound at fixed instants peaked 2e-5 rad beyond it between them, and was
-#: refused; less when the goal lies nearer the bound (:meth:`BaseSwing.solver_slack`).
+#: refused; less near the goal when it lies nearer the bound (:meth:`BaseSwing.solver_slack`).
 SOLVER_SLACK = 1e-4
 
 
@@ -118,26 +119,38 @@ class BaseSwing(Constraint):
         """``theta - max_angle`` (rad), a hair inside, and its exact Jacobian in beta.
 
         At the instants strictly between the ends: at the start the turn is 0, and at the
-        end it is the goal's, which no path changes (:meth:`at_attitude` judges it before
-        any search); a row there would only make a goal at the bound unreachable.
+        end of a path at its goal it is the goal's, which no path changes (:meth:`at_attitude`
+        judges it before any search). A path that need not reach the goal (a start path)
+        holds its end by :meth:`end_rows`.
         """
         s = np.asarray(instants, dtype=float)
-        s = s[(s > 0.0) & (s < 1.0)]  # the ends' turns are fixed: 0, and the goal's (checked)
+        s = s[(s > 0.0) & (s < 1.0)]  # the ends' turns: 0, and the goal's (checked)
         if not len(s):
             return ConstraintRows(np.zeros(0), np.zeros((0, problem.n_free)))
         found = swing_rows(problem, beta, s)
-        bound = self.max_angle - self.solver_slack(problem)  # a hair inside
+        bound = self.max_angle - self.solver_slack(problem, s)  # a hair inside
         return ConstraintRows(found.turns - bound, found.jacobian)
 
-    def solver_slack(self, problem: Problem) -> float:
-        """:data:`SOLVER_SLACK` (rad), or half the goal's room below the bound when less.
+    def end_rows(self, problem: Problem, beta: np.ndarray) -> ConstraintRows:
+        """The turn at the end of a path that need not reach the goal, :data:`SOLVER_SLACK` inside.
 
-        None for a goal at the bound (its rows near the end would ask for room no path
-        ending there has) or beyond it (only ``reach`` heads there, stopping at the bound).
+        A start path found with the attitude ignored ends anywhere: continuation heads from
+        its end attitude to the goal, and that way stays within the bound when both ends do
+        (a ball of attitudes under 90 deg is geodesically convex).
+        """
+        found = swing_rows(problem, beta, np.ones(1))
+        return ConstraintRows(found.turns - (self.max_angle - SOLVER_SLACK), found.jacobian)
+
+    def solver_slack(self, problem: Problem, instants: np.ndarray) -> np.ndarray:
+        """(K,) :data:`SOLVER_SLACK` (rad) at normalised ``instants``, tapered near the goal.
+
+        Near a goal closer to the bound than twice that, to half the goal's room
+        (:func:`.slack.tapered_slack`; none at a goal at or beyond the bound, which only
+        ``reach`` heads for, stopping at the bound): no path ending there has more.
         """
         goal = relative_quat(problem.start_quaternion, problem.goal_quaternion)
         room = -self.at_attitude(goal).value
-        return float(np.clip(0.5 * room, 0.0, SOLVER_SLACK))
+        return tapered_slack(instants, self.max_angle, room, SOLVER_SLACK)
 
     def tight_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
         """The largest turns' instants, each refined in time (:func:`.attitude_peaks`)."""

@@ -41,6 +41,7 @@ from ..paths import JointPolynomials
 from ..residual import Problem
 from ..scalar_minimum import scalar_minimum
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess, check_record_keys
+from .slack import tapered_slack
 
 __all__ = ["SOLVER_SLACK", "VERIFY_SAMPLES", "EndEffectorCone", "unit_vector"]
 
@@ -48,7 +49,7 @@ __all__ = ["SOLVER_SLACK", "VERIFY_SAMPLES", "EndEffectorCone", "unit_vector"]
 VERIFY_SAMPLES = 801
 #: How far inside the cone the solvers' rows ask the axis to be (rad: 0.017 deg), so that the
 #: path between their instants stays inside (a root 0.01 deg out between them was refused);
-#: less when the start or goal lies nearer the edge (:meth:`EndEffectorCone._slack`).
+#: less near the start or goal when it lies nearer the edge (:meth:`EndEffectorCone._slack`).
 SOLVER_SLACK = 3e-4
 #: Keys of the scenario table and the plan record.
 _KEYS = ("axis", "direction", "half_angle_deg")
@@ -161,17 +162,18 @@ class EndEffectorCone(Constraint):
         )
         return Excess(math.cos(self.half_angle) - math.cos(angle), 0.0, detail)
 
-    def _slack(self, problem: Problem) -> float:
-        """How far inside the rows ask (rad): :data:`SOLVER_SLACK`, or less.
+    def _slack(self, problem: Problem, instants: np.ndarray) -> np.ndarray:
+        """(K,) how far inside the rows ask at normalised ``instants`` (rad).
 
-        Half the room of the start or the goal (which every path keeps) when that is nearer
-        the edge; 0 when either lies outside.
+        :data:`SOLVER_SLACK`, tapered near the start or the goal (which every path keeps) when
+        that is nearer the edge, to half its room; 0 at an end outside
+        (:func:`.slack.tapered_slack`).
         """
-        room = min(
+        start, goal = (
             self.half_angle - self._angle(problem.robot, np.asarray(ends, dtype=float))
             for ends in (problem.family.start, problem.family.goal)
         )
-        return float(np.clip(0.5 * room, 0.0, SOLVER_SLACK))
+        return tapered_slack(instants, start, goal, SOLVER_SLACK)
 
     def _angle(self, robot: Robot, joints: np.ndarray) -> float:
         """The tool axis's angle from the direction at the configuration ``joints`` (rad)."""
@@ -183,14 +185,15 @@ class EndEffectorCone(Constraint):
     def rows(
         self, problem: Problem, beta: np.ndarray, instants: np.ndarray = DEFAULT_INSTANTS
     ) -> ConstraintRows:
-        """``cos(half_angle - SOLVER_SLACK) - d . v`` at the instants, exact Jacobian in beta."""
+        """``cos(half_angle - slack) - d . v`` at the instants (:meth:`_slack`), exact Jacobian."""
         robot = problem.robot
         model, data = robot.model, robot.model.createData()
         frame = robot.end_effector_frame
-        samples = problem.family.affine_samples(np.asarray(instants, dtype=float))
+        instants = np.asarray(instants, dtype=float)
+        samples = problem.family.affine_samples(instants)
         q = samples.at(beta).q
         columns = [joint.idx_v for joint in robot.joints]
-        cos = math.cos(self.half_angle - self._slack(problem))  # a hair inside
+        cos = np.cos(self.half_angle - self._slack(problem, instants))  # a hair inside
         values = np.empty(len(q))
         gradients = np.empty((len(q), robot.n))
         for k, joints in enumerate(q):
@@ -199,7 +202,7 @@ class EndEffectorCone(Constraint):
             pin.updateFramePlacements(model, data)
             pointing = data.oMf[frame].rotation @ self.axis
             jacobian = pin.getFrameJacobian(model, data, frame, pin.LOCAL_WORLD_ALIGNED)
-            values[k] = cos - self.direction @ pointing
+            values[k] = cos[k] - self.direction @ pointing
             gradients[k] = -(jacobian[3:6, columns].T @ np.cross(pointing, self.direction))
         return ConstraintRows(values, np.einsum("ki,kif->kf", gradients, samples.dq))
 
