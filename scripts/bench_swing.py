@@ -11,9 +11,16 @@ a bound, the same check of the plan made), whether the plan verifies, or the ref
   reorientation: the loop swings the spacecraft beyond its goal);
 - the same reorientation with the spacecraft's z axis held to a cone of 3 and 1.5 deg
   (``[constraints.base_pointing]``; its tilt from the plan's check);
+- the shipped UR5 servicer unfolding to a goal 6 deg in yaw and 3 deg in pitch from its
+  start, bounded to that goal's own turn (a goal on the bound; the plain path swings 11.5
+  deg);
 - when ``../shared/real-arms/`` is present (real robots nobody here wrote; tests never read
-  them): ETS-VII turned 2 deg with its arm back where it started, and Canadarm2 on a 20 t,
-  4 m spacecraft holding a 5 t payload, its goal 20 deg in yaw.
+  them): ETS-VII turned 2 deg with its arm back where it started; Canadarm2 on a 20 t,
+  4 m spacecraft holding a 5 t payload, its goal 20 deg in yaw; Canadarm2 on a 15 t
+  spacecraft holding 8 t, and VISPA on 300 kg holding 200 kg, each bounded to its goal's own
+  turn (and Canadarm2 to 12 deg).
+
+A bound ``"goal"`` is the goal attitude's own turn from the start, to full precision.
 """
 
 from __future__ import annotations
@@ -24,7 +31,7 @@ import time
 from pathlib import Path
 
 import freefloat as ff
-from freefloat.physics.attitude import quat_from_zyx
+from freefloat.physics.attitude import quat_from_zyx, quat_multiply
 from freefloat.problem.constraints import BasePointing, BaseSwing
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -86,15 +93,65 @@ check = false
 """
 
 
+_CANADARM2_8T = """duration = 900.0
+[robot]
+arm = "{urdf}"
+base_mass = 15000.0
+base_size = [4.0, 4.0, 4.0]
+mount = [2.0, 0.0, 0.0]
+[start]
+joints = {{ Shoulder_Roll = 0.0, Shoulder_Yaw = 0.0, Shoulder_Pitch = 0.0, Elbow_Pitch = 0.0, Wrist_Pitch = 0.0, Wrist_Yaw = 0.0, Wrist_Roll = 0.0 }}
+[goal]
+joints = {{ Shoulder_Roll = 20.0, Shoulder_Yaw = -30.0, Shoulder_Pitch = 30.0, Elbow_Pitch = -60.0, Wrist_Pitch = 30.0, Wrist_Yaw = 10.0, Wrist_Roll = 0.0 }}
+base_zyx_deg = [-10.0, 5.0, 3.0]
+[payload]
+mass = 8000.0
+box = [3.0, 3.0, 3.0]
+com_xyz = [2.0, 0.0, 0.0]
+[safety]
+check = false
+"""  # noqa: E501
+
+_VISPA = """duration = 300.0
+[robot]
+arm = "{urdf}"
+base_mass = 300.0
+base_size = [1.0, 1.0, 1.0]
+mount = [0.5, 0.0, 0.0]
+mount_rpy_deg = [0.0, 90.0, 0.0]
+[start]
+joints = {{ Joint_1 = 0.0, Joint_2 = 30.0, Joint_3 = 60.0, Joint_4 = 0.0, Joint_5 = 30.0, Joint_6 = 0.0 }}
+[goal]
+joints = {{ Joint_1 = 70.0, Joint_2 = -10.0, Joint_3 = 90.0, Joint_4 = 30.0, Joint_5 = -40.0, Joint_6 = 45.0 }}
+base_zyx_deg = [4.0, -3.0, 2.0]
+[payload]
+mass = 200.0
+box = [0.8, 0.8, 0.8]
+com_xyz = [0.0, 0.0, 0.6]
+[safety]
+check = false
+"""  # noqa: E501
+
+
+def _ur5_turned() -> ff.Scenario:
+    """The UR5 servicer, its goal 6 deg in yaw and 3 deg in pitch from its start attitude."""
+    scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
+    turn = quat_from_zyx(math.radians(6.0), math.radians(3.0), 0.0)
+    return dataclasses.replace(scenario, goal_attitude=quat_multiply(scenario.start_attitude, turn))
+
+
 def _from_text(text: str, folder: Path, name: str) -> ff.Scenario:
     path = folder / f"{name}.toml"
     path.write_text(text)
     return ff.Scenario.from_toml(path)
 
 
-def cases(folder: Path) -> list[tuple[str, ff.Scenario, tuple[float, ...]]]:
-    """(name, scenario, bounds in deg) of every case this machine can run."""
-    found = [("Panda servicer, 3 deg reorientation", _panda(), (5.0, 4.0, 3.2))]
+def cases(folder: Path) -> list[tuple[str, ff.Scenario, tuple[float | str, ...]]]:
+    """(name, scenario, bounds in deg or ``"goal"``) of every case this machine can run."""
+    found: list[tuple[str, ff.Scenario, tuple[float | str, ...]]] = [
+        ("Panda servicer, 3 deg reorientation", _panda(), (5.0, 4.0, 3.2)),
+        ("UR5 servicer, goal 6.7 deg (6 yaw, 3 pitch)", _ur5_turned(), ("goal",)),
+    ]
     if (REAL / "ets7_satellite.urdf").exists():
         text = _ETS7.format(urdf=REAL / "ets7_satellite.urdf")
         found.append(("ETS-VII, 2 deg reorientation", _from_text(text, folder, "ets7"), (2.4, 2.1)))
@@ -102,6 +159,13 @@ def cases(folder: Path) -> list[tuple[str, ff.Scenario, tuple[float, ...]]]:
         text = _CANADARM2.format(urdf=REAL / "canadarm2_arm.urdf")
         scenario = _from_text(text, folder, "canadarm2")
         found.append(("Canadarm2 + 5 t payload, goal 20 deg", scenario, (40.0, 25.0)))
+        text = _CANADARM2_8T.format(urdf=REAL / "canadarm2_arm.urdf")
+        scenario = _from_text(text, folder, "canadarm2_8t")
+        found.append(("Canadarm2 + 8 t payload, goal 11.68 deg", scenario, (12.0, "goal")))
+    if (REAL / "vispa_arm.urdf").exists():
+        text = _VISPA.format(urdf=REAL / "vispa_arm.urdf")
+        scenario = _from_text(text, folder, "vispa")
+        found.append(("VISPA + 200 kg payload, goal 5.42 deg", scenario, ("goal",)))
     return found
 
 
@@ -129,6 +193,13 @@ def _planned(scenario: ff.Scenario, bound_deg: float) -> dict[str, object]:
     return _held(scenario, BaseSwing(math.radians(bound_deg)))
 
 
+def _bound_deg(scenario: ff.Scenario, bound: float | str) -> float:
+    """A bound in degrees: as given, or ``"goal"``: the goal attitude's own turn."""
+    if bound != "goal":
+        return float(bound)
+    return math.degrees(ff.geodesic_angle(scenario.start_attitude, scenario.goal_attitude))
+
+
 def _pointed(scenario: ff.Scenario, half_deg: float) -> dict[str, object]:
     """One plan with the Panda's z axis held to a cone of ``half_deg`` (deg)."""
     return _held(scenario, BasePointing([0.0, 0.0, 1.0], None, math.radians(half_deg)))
@@ -141,8 +212,10 @@ def bench_swing(folder: Path) -> list[dict[str, object]]:
     for name, scenario, bounds in cases(folder):
         free = _planned(scenario, _LOOSE_DEG)
         for bound in (None, *bounds):
-            found = free if bound is None else _planned(scenario, bound)
-            rows.append({"case": name, "bound_deg": bound, **found})
+            degrees = None if bound is None else _bound_deg(scenario, bound)
+            found = free if degrees is None else _planned(scenario, degrees)
+            shown = f"{degrees:.12g} (the goal's)" if bound == "goal" else bound
+            rows.append({"case": name, "bound_deg": shown, **found})
             print(f"  done: swing {rows[-1]}", flush=True)
     name = "Panda servicer, 3 deg reorientation: z axis tilt (base_pointing)"
     for half in (None, 3.0, 1.5):
@@ -156,7 +229,8 @@ def print_swing(rows: list[dict[str, object]]) -> None:
     print("\n| case | bound [deg] | largest turn on the way [deg] | plan [s] | outcome |")
     print("|---|---:|---:|---:|---|")
     for r in rows:
-        bound = "none" if r["bound_deg"] is None else f"{r['bound_deg']:g}"
+        bound = r["bound_deg"]
+        bound = "none" if bound is None else bound if isinstance(bound, str) else f"{bound:g}"
         swing = f"{r['swing_deg']:.3f}" if "swing_deg" in r else "-"
         print(f"| {r['case']} | {bound} | {swing} | {r['time_s']:.2f} | {r['outcome']} |")
 
