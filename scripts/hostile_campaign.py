@@ -476,6 +476,7 @@ def _message_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str]
         *_round_26_cases(folder, plan_file),
         *_round_31_cases(folder, plan_file),
         *_round_32_cases(folder),
+        *_round_33_cases(folder),
     ]
 
 
@@ -674,6 +675,40 @@ def _round_32_cases(folder: Path) -> list[tuple[list, bool, str]]:
         (["plan", nan, "-o", "nan.json"], True, "no path reaches"),
         (["check", held], True, "is not one of the scenario's end effectors: 'tool0'"),
         (["reach", reach, "-q", "--jobs", "1"], False, ""),
+    ]
+
+
+def _round_33_cases(folder: Path) -> list[tuple[list, bool, str]]:
+    """The thirty-third round's: a goal on the swing bound (to the last digit) while the plain
+    path swings far beyond it (refused before), and a sweep results file written before the
+    largest_turn_deg column, resumed (refused: another sweep; nothing written)."""
+    ur5 = (ROOT / "robots" / "scenarios" / "ur5_servicer.toml").read_text()
+    ur5 = ur5.replace('"ur5_servicer"', f'"{ROOT / "robots" / "ur5_servicer.urdf"}"')
+    turned = re.sub(r"base_zyx_deg = .*", "base_zyx_deg = [6.0, 3.0, 0.0]", ur5)
+    start = ff.quat_from_zyx(0.0, 0.0, 0.0)
+    goal = ff.quat_from_zyx(math.radians(6.0), math.radians(3.0), 0.0)
+    on_bound = folder / "on_bound.toml"
+    on_bound.write_text(
+        turned
+        + "\n[constraints.base_swing]\nmax_deg = "
+        + f"{math.degrees(ff.geodesic_angle(start, goal))!r}\n"
+    )
+    shutil.copy(ROOT / "robots" / "scenarios" / "worked_example.toml", folder / "we33.toml")
+    sweep = folder / "sweep33.toml"
+    sweep.write_text(
+        'scenario = "we33.toml"\nsamples = 21\n[[axis]]\nkey = "goal.base_zyx_deg.0"\n'
+        "values = [40.0, 45.0]\n"
+    )
+    done = folder / "sweep33.csv"
+    run(["sweep", sweep, "-o", done, "--workers", "1", "-q"], folder)
+    header, *rows = done.read_text().splitlines()
+    names = header.split(",")
+    gone = names.index("largest_turn_deg")
+    older = [",".join(c for k, c in enumerate(r.split(",")) if k != gone) for r in [header, *rows]]
+    (folder / "sweep33_old.csv").write_text("\n".join(older[:2]) + "\n")
+    return [
+        (["plan", on_bound, "-o", "on_bound.json", "-q"], False, ""),
+        (["sweep", sweep, "-o", "sweep33_old.csv", "-q"], True, "holds another sweep"),
     ]
 
 
