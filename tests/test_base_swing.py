@@ -454,3 +454,19 @@ def test_relaxed_rows_lead_slsqp_in_and_give_up_when_a_stage_falls_short(monkeyp
     monkeypatch.setattr(restore, "_least_norm_within", stuck)
     assert restore._relaxed_start(problem, [BaseSwing(bound)], SolveOptions()) is None
     assert len(runs) == 1
+
+
+@pytest.mark.parametrize(
+    ("turn_deg", "bound_deg", "said"),
+    [
+        (50.0, 30.0, ("50", "30")),  # a short bound: 4 digits
+        (3.0, 2.9999999, ("3.0000000", "2.9999999")),  # as many digits as the bound shows
+        (5.49283697583, 5.49283697582852, ("5.49283697583000", "5.49283697582852")),
+        (4.0 + 1e-9, 4.0, ("4.000000001", "4")),  # just beyond: never shown at the bound
+    ],
+)
+def test_a_turn_is_said_with_the_bounds_precision(turn_deg, bound_deg, said):
+    # An outside trial read "it lies 5.493 deg ..., at most 5.49283697582852 deg allowed".
+    from freefloat.problem.constraints.base_swing import degrees_apart
+
+    assert degrees_apart(math.radians(turn_deg), math.radians(bound_deg), bound_deg) == said

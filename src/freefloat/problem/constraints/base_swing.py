@@ -177,13 +177,16 @@ class BaseSwing(Constraint):
 def degrees_apart(turn: float, bound: float, given: float | None = None) -> tuple[str, str]:
     """A turn and the bound (rad) in degrees, the turn on its side of the bound.
 
-    The bound as given (``given``, deg: as its record wrote it); the turn to 4 digits, or as
-    many more as keep it on its own side of the bound (a turn just beyond it is never shown at
-    or below it).
+    The bound as given (``given``, deg: as its record wrote it); the turn to 4 digits, or to
+    as many as the bound shows when it shows more (trailing zeros kept: ``3.0000000`` beside
+    ``2.9999999``), or as many more as keep it on its own side of the bound (a turn just
+    beyond it is never shown at or below it).
     """
     limit = f"{math.degrees(bound) if given is None else given:.15g}"
-    for digits in range(4, 16):
-        said = f"{math.degrees(turn):.{digits}g}"
+    shown = len(limit.split("e")[0].replace("-", "").replace(".", "").lstrip("0"))
+    style = "#" if shown > 4 else ""
+    for digits in range(max(4, shown), 16):
+        said = f"{math.degrees(turn):{style}.{digits}g}"
         if (float(said) > float(limit)) == (turn > bound) and (said == limit) <= (turn == bound):
             break
     return said, limit
