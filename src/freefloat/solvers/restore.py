@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..problem.constraints import DEFAULT_INSTANTS, Constraint
+from ..problem.constraints import DEFAULT_INSTANTS, Constraint, ConstraintRows
 from ..problem.constraints.clearance import SOLVER_SLACK
 from ..problem.residual import Problem
 from .options import SolveOptions
@@ -210,12 +210,23 @@ def _functions(
 
 
 def _end_functions(problem: Problem, constraint: Constraint) -> tuple[Function, Function]:
-    """A constraint's end rows as SLSQP's ``(g, dg/dbeta)`` (``g >= 0`` feasible)."""
+    """A constraint's end rows as SLSQP's ``(g, dg/dbeta)`` (``g >= 0`` feasible).
+
+    Measured once per ``beta`` for both (SLSQP asks for the values, then the Jacobian, at
+    each point; the swing's end row integrates the whole path).
+    """
+    last: list[tuple[bytes, ConstraintRows]] = []
+
+    def rows(beta: np.ndarray) -> ConstraintRows:
+        key = np.asarray(beta, dtype=float).tobytes()
+        if not last or last[0][0] != key:
+            last[:] = [(key, constraint.end_rows(problem, beta))]
+        return last[0][1]
 
     def values(beta: np.ndarray) -> np.ndarray:
-        return -constraint.end_rows(problem, beta).values
+        return -rows(beta).values
 
     def jacobian(beta: np.ndarray) -> np.ndarray:
-        return -constraint.end_rows(problem, beta).jacobian
+        return -rows(beta).jacobian
 
     return values, jacobian
