@@ -123,6 +123,14 @@ def test_a_constraint_ahead_on_a_nearly_singular_map_says_so() -> None:
     assert _why(ahead, np.c_[np.diag([2.0, 1.0, 1e-12]), np.zeros(3)]) == (
         "a singular map (dh/dbeta loses rank)"
     )
+    # Every gain tiny though of one size (an outside trial: 2.6e-6 to 8.5e-7 rad per unit,
+    # a step asking the elbow for 16311 deg): the weak map is named first.
+    weak = np.c_[np.diag([3e-6, 2e-6, 1e-6]), np.zeros(3)]
+    assert _why(ahead, weak) == (
+        "a weak map (its largest gain 3e-06 rad per unit of the free coefficients), so a "
+        "step on is long: joint_position_limits ahead: joint 'j1' at t = 2 s"
+    )
+    assert _why(ahead, 10.0 * weak) == "joint_position_limits ahead: joint 'j1' at t = 2 s"
 
 
 def test_a_path_that_does_not_move_takes_no_step_from_its_singular_map(robot) -> None:

@@ -23,6 +23,7 @@ __all__ = [
     "NEAR_SINGULAR",
     "PROBE",
     "SINGULAR",
+    "WEAK",
     "ahead",
     "blocker",
     "singular",
@@ -33,6 +34,10 @@ __all__ = [
 SINGULAR = 1e-9
 #: Singular-value ratio below which a refusal notes that dh/dbeta nearly loses rank.
 NEAR_SINGULAR = 1e-3
+#: Largest singular value (rad per unit of beta) below which a refusal notes that the map is
+#: weak in every direction (shipped servicers: 0.16-0.22): a turn then asks joint motions of
+#: many turns, and the limit a step along the tangent meets says little.
+WEAK = 1e-5
 #: The longest step (a fraction of the way) at which a stopped branch looks for a constraint
 #: ahead (:func:`ahead`).
 PROBE = 0.05
@@ -93,7 +98,8 @@ def blocker(
 def why_stopped(blocked: Broken | None, jac: np.ndarray) -> str:
     """Why the branch cannot go on: a singular map, a constraint ahead, or freedom.
 
-    A constraint is named with "ahead" and where the path a step along the tangent breaks it
+    A map weak in every direction (:data:`WEAK`) or nearly singular is named before it. A
+    constraint is named with "ahead" and where the path a step along the tangent breaks it
     (:func:`ahead`; or, with :data:`~.in_the_way.WITHOUT` in its detail, where the path the
     failed step converges to without it breaks it: :func:`.in_the_way.in_the_way`); its
     figure is that path's, beyond the limit, while the branch itself keeps it. A
@@ -106,6 +112,11 @@ def why_stopped(blocked: Broken | None, jac: np.ndarray) -> str:
         return "a singular map (dh/dbeta loses rank)"
     if blocked is not None:  # on the path a short step on
         ahead = f"{blocked.name} ahead: {blocked.detail}"
+        if smallest / ratio < WEAK:  # every gain tiny: any turn asks joint motions of turns
+            return (
+                f"a weak map (its largest gain {smallest / ratio:.1g} rad per unit of the "
+                f"free coefficients), so a step on is long: {ahead}"
+            )
         if ratio < NEAR_SINGULAR:  # the cause first: a small turn about the weakest
             # direction asks large joint motions, so the constraint a step meets may lie far
             return (
