@@ -454,6 +454,10 @@ def test_relaxed_rows_lead_slsqp_in_and_give_up_when_a_stage_falls_short(monkeyp
     monkeypatch.setattr(restore, "_least_norm_within", stuck)
     assert restore._relaxed_start(problem, [BaseSwing(bound)], SolveOptions()) is None
     assert len(runs) == 1
+    # a bound the plain path keeps at the rows' instants (30 deg against its 14 deg): nothing
+    # to relax, no SLSQP run
+    assert restore._relaxed_start(problem, [BaseSwing(math.radians(30.0))], SolveOptions()) is None
+    assert len(runs) == 1
 
 
 @pytest.mark.parametrize(

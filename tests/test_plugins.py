@@ -447,9 +447,10 @@ def test_a_binding_cone_is_held_on_a_spatial_servicer(ur5_scenario, tmp_path, ca
 def test_the_cones_rows_ask_a_hair_inside_but_never_beyond_the_ends_room():
     """Closed form: the worked example's tool points at q1 + q2 (110 deg at the start, 30 deg
     at the goal), 40 deg from a direction at 70 deg at both ends. The rows' half-angle is the
-    cone's less SOLVER_SLACK away from the ends; within a quarter of the motion of an end with
-    less room than twice that, it tapers as the cube of the time from the end to half that
-    end's room (room / 2 + SOLVER_SLACK (4 d)^3), and is never negative."""
+    cone's less SOLVER_SLACK away from the ends, or less half the roomier end's room when that
+    is less; within a quarter of the motion of an end with less room than twice that, it
+    tapers as the cube of the time from the end to half that end's room (room / 2 + asked
+    (4 d)^3), and is never negative (none anywhere when both ends lie on the rim or beyond)."""
     from freefloat.problem.constraints.end_effector_cone import SOLVER_SLACK
 
     problem = ff.problem_from_scenario(ff.Scenario.from_toml(ff.default_scenario_path()))
@@ -463,5 +464,33 @@ def test_the_cones_rows_ask_a_hair_inside_but_never_beyond_the_ends_room():
         (39.0, -math.radians(1.0)),
     ):
         cone = EndEffectorCone([1.0, 0.0, 0.0], direction, math.radians(half_deg))
-        want = [min(SOLVER_SLACK, max(0.0, room / 2 + SOLVER_SLACK * (4 * x) ** 3)) for x in d]
+        asked = min(SOLVER_SLACK, max(0.0, room / 2))
+        want = [min(asked, max(0.0, room / 2 + asked * (4 * x) ** 3)) for x in d]
         np.testing.assert_allclose(cone._slack(problem, s), want, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "cone",
+    [
+        # the spacecraft's yaw axis, which never tilts on a planar robot, in a cone of 2e-5
+        # rad about it: inside by the whole half-angle at every instant
+        lambda: BasePointing([0.0, 0.0, 1.0], [0.0, 0.0, 1.0], 2e-5),
+        # the tool's z axis (the world's z on a planar robot) 40 deg from the direction, in
+        # a 40 deg cone: on the rim at every instant, whatever the path
+        lambda: EndEffectorCone(
+            [0.0, 0.0, 1.0],
+            [math.sin(math.radians(40)), 0.0, math.cos(math.radians(40))],
+            math.radians(40.0),
+        ),
+    ],
+)
+def test_rows_never_ask_more_room_than_a_path_has(cone):
+    # Closed form: on the planar worked example these axes never move, so every path keeps
+    # exactly the room its ends have; no row may ask more (a review found rows asking the
+    # full SOLVER_SLACK in mid-motion, which no path could meet, and a start path refused).
+    cone = cone()
+    problem = ff.problem_from_scenario(ff.Scenario.from_toml(ff.default_scenario_path()))
+    for seed in range(3):
+        beta = 0.3 * np.random.default_rng(seed).normal(size=problem.n_free)
+        assert cone.rows(problem, beta).values.max() <= 1e-12
+        assert np.all(cone.end_rows(problem, beta).values <= 1e-12)

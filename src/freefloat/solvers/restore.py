@@ -136,12 +136,16 @@ def _relaxed_start(
     heavy payload on Canadarm2: 9 deg beyond it, after no step). Each constraint's rows are
     allowed a fraction (:data:`RELAXATION`) of the quintic path's largest excess at the
     default instants, at which that path is inside, and each SLSQP run starts from the last
-    one's result, down to no allowance. None when SLSQP fails numerically, or a run does not
-    get halfway from the last allowance to its own (the tighter ones would fail too).
+    one's result, down to no allowance. None when nothing lies beyond the rows at the quintic
+    path (the plain rounds already ran without allowance), a row is not a number, SLSQP
+    fails numerically, or a run does not get halfway from the last allowance to its own (the
+    tighter ones would fail too).
     """
     zero = np.zeros(problem.n_free)
     functions = _functions(problem, active, DEFAULT_INSTANTS)
-    excess = [max(0.0, -float(np.min(fun(zero), initial=0.0))) for fun, _ in functions]
+    excess = [_beyond(fun, zero) for fun, _ in functions]
+    if not all(math.isfinite(e) for e in excess) or max(excess, default=0.0) <= 0.0:
+        return None  # rows not a number, or nothing to relax: the plain rounds decided
     beta, before = zero, excess
     for fraction in RELAXATION:
         allowance = [fraction * e for e in excess]
@@ -149,13 +153,21 @@ def _relaxed_start(
         if found is None:
             return None
         beta = found
-        left = [max(0.0, -float(np.min(fun(beta), initial=0.0))) for fun, _ in functions]
-        if any(
-            v > a + 0.5 * (b - a) + 1e-9 for v, a, b in zip(left, allowance, before, strict=True)
-        ):  # not halfway from the last allowance to this one: the tighter ones fail too
+        left = [_beyond(fun, beta) for fun, _ in functions]
+        if not all(
+            v <= a + 0.5 * (b - a) + 1e-9 for v, a, b in zip(left, allowance, before, strict=True)
+        ):  # not halfway from the last allowance to this one (or not a number): give up
             return None
         before = allowance
     return beta
+
+
+def _beyond(fun: Function, beta: np.ndarray) -> float:
+    """How far the rows ``fun`` (SLSQP's sign) lie beyond their limits at ``beta`` (NaN kept)."""
+    values = np.asarray(fun(beta), dtype=float)
+    if not np.all(np.isfinite(values)):
+        return math.nan
+    return max(0.0, -float(np.min(values, initial=0.0)))
 
 
 def _least_norm_within(

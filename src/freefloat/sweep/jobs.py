@@ -169,15 +169,19 @@ def _planned(job: Job, result: Plan, robot: Robot, started: float) -> SweepRow:
     )
 
 
-def _largest_turn(result: Plan, robot: Robot) -> float:
-    """The spacecraft's largest turn from its start attitude along the plan (deg).
+def _largest_turn(result: Plan, robot: Robot) -> float | None:
+    """The spacecraft's largest turn from its start attitude along the plan (deg), or None.
 
     :func:`~freefloat.problem.constraints.attitude_check.attitude_track`: Pinocchio's
     centroidal map integrated by RK5 on doubling grids, its largest peaks refined in time (a
-    few ms, against a plan's hundreds), as the ``base_swing`` check finds it.
+    few ms, against a plan's hundreds), as the ``base_swing`` check finds it. None (an empty
+    cell) when that fails or overflows: a statistic of a verified plan, never its refusal.
     """
-    largest = attitude_track(robot, result.path()).largest(quaternion_turn)
-    return math.degrees(largest.value)
+    try:
+        largest = attitude_track(robot, result.path()).largest(quaternion_turn)
+    except (FreeFloatError, ArithmeticError, ValueError, np.linalg.LinAlgError):
+        return None
+    return math.degrees(largest.value) if math.isfinite(largest.value) else None
 
 
 def _turning_excursion(result: Plan) -> float | None:

@@ -41,7 +41,7 @@ from .attitude_check import REFINED, attitude_track
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess, check_record_keys
 from .base_swing import degrees_apart
 from .end_effector_cone import unit_vector
-from .slack import tapered_slack
+from .slack import room_asked, tapered_slack
 
 __all__ = ["SOLVER_SLACK", "BasePointing"]
 
@@ -144,20 +144,26 @@ class BasePointing(Constraint):
         """(K,) :data:`SOLVER_SLACK` (rad) at normalised ``instants``, tapered near the ends.
 
         Near the start or goal when it is closer to the edge than twice that, to half its
-        room (:func:`.slack.tapered_slack`).
+        room; at most half the roomier end's anywhere (:func:`.slack.tapered_slack`).
         """
-        goal = relative_quat(problem.start_quaternion, problem.goal_quaternion)
-        rooms = -self._gaps(np.stack([np.array([0.0, 0.0, 0.0, 1.0]), goal]))
-        return tapered_slack(instants, float(rooms[0]), float(rooms[1]), SOLVER_SLACK)
+        return tapered_slack(instants, *self._rooms(problem), SOLVER_SLACK)
 
     def end_rows(self, problem: Problem, beta: np.ndarray) -> ConstraintRows:
-        """The angle at the end of a path that need not reach the goal, :data:`SOLVER_SLACK` inside.
+        """The angle at the end of a path that need not reach the goal, a hair inside (rad).
 
-        A start path found with the attitude ignored ends anywhere; continuation heads from
-        its end attitude to the goal (:meth:`BaseSwing.end_rows
-        <freefloat.problem.constraints.base_swing.BaseSwing.end_rows>`).
+        A start path found with the attitude ignored ends anywhere, and continuation heads
+        from its end attitude to the goal: that path's end is held inside by the room the
+        rows ask away from the ends (:func:`.slack.room_asked`). (The boresight's way between
+        two attitudes inside the cone may still leave it: each step's dense check decides.)
         """
-        return self._angle_rows(problem, beta, np.ones(1), np.full(1, SOLVER_SLACK))
+        asked = room_asked(*self._rooms(problem), SOLVER_SLACK)
+        return self._angle_rows(problem, beta, np.ones(1), np.full(1, asked))
+
+    def _rooms(self, problem: Problem) -> tuple[float, float]:
+        """How far inside the cone the start and the goal boresights lie (rad)."""
+        goal = relative_quat(problem.start_quaternion, problem.goal_quaternion)
+        rooms = -self._gaps(np.stack([np.array([0.0, 0.0, 0.0, 1.0]), goal]))
+        return float(rooms[0]), float(rooms[1])
 
     def rows(
         self, problem: Problem, beta: np.ndarray, instants: np.ndarray = DEFAULT_INSTANTS

@@ -35,7 +35,7 @@ from ..relative_attitude import attitude_peaks, swing_rows
 from ..residual import Problem
 from .attitude_check import REFINED, attitude_track
 from .base import DEFAULT_INSTANTS, Constraint, ConstraintRows, Excess, check_record_keys
-from .slack import tapered_slack
+from .slack import room_asked, tapered_slack
 
 __all__ = ["SOLVER_SLACK", "BaseSwing", "degrees_apart"]
 
@@ -132,25 +132,32 @@ class BaseSwing(Constraint):
         return ConstraintRows(found.turns - bound, found.jacobian)
 
     def end_rows(self, problem: Problem, beta: np.ndarray) -> ConstraintRows:
-        """The turn at the end of a path that need not reach the goal, :data:`SOLVER_SLACK` inside.
+        """The turn at the end of a path that need not reach the goal, a hair inside (rad).
 
         A start path found with the attitude ignored ends anywhere: continuation heads from
-        its end attitude to the goal, and that way stays within the bound when both ends do
-        (a ball of attitudes under 90 deg is geodesically convex).
+        its end attitude to the goal, and for a bound under 90 deg that way stays within it
+        when both ends do (such a ball of attitudes is geodesically convex; beyond, each
+        step's dense check decides). The room asked is the rows' away from the ends
+        (:func:`.slack.room_asked`).
         """
         found = swing_rows(problem, beta, np.ones(1))
-        return ConstraintRows(found.turns - (self.max_angle - SOLVER_SLACK), found.jacobian)
+        asked = room_asked(*self._rooms(problem), SOLVER_SLACK)
+        return ConstraintRows(found.turns - (self.max_angle - asked), found.jacobian)
 
     def solver_slack(self, problem: Problem, instants: np.ndarray) -> np.ndarray:
         """(K,) :data:`SOLVER_SLACK` (rad) at normalised ``instants``, tapered near the goal.
 
         Near a goal closer to the bound than twice that, to half the goal's room
         (:func:`.slack.tapered_slack`; none at a goal at or beyond the bound, which only
-        ``reach`` heads for, stopping at the bound): no path ending there has more.
+        ``reach`` heads for, stopping at the bound): no path ending there has more. At most
+        half the bound anywhere (the start's room).
         """
+        return tapered_slack(instants, *self._rooms(problem), SOLVER_SLACK)
+
+    def _rooms(self, problem: Problem) -> tuple[float, float]:
+        """How far inside the bound the start (turn 0) and the goal lie (rad)."""
         goal = relative_quat(problem.start_quaternion, problem.goal_quaternion)
-        room = -self.at_attitude(goal).value
-        return tapered_slack(instants, self.max_angle, room, SOLVER_SLACK)
+        return self.max_angle, -self.at_attitude(goal).value
 
     def tight_instants(self, problem: Problem, beta: np.ndarray) -> np.ndarray:
         """The largest turns' instants, each refined in time (:func:`.attitude_peaks`)."""

@@ -166,7 +166,8 @@ class EndEffectorCone(Constraint):
         """(K,) how far inside the rows ask at normalised ``instants`` (rad).
 
         :data:`SOLVER_SLACK`, tapered near the start or the goal (which every path keeps) when
-        that is nearer the edge, to half its room; 0 at an end outside
+        that is nearer the edge, to half its room; at most half the roomier end's anywhere
+        (a tool axis that cannot leave the rim has none); 0 at an end outside
         (:func:`.slack.tapered_slack`).
         """
         start, goal = (
