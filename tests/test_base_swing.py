@@ -384,7 +384,7 @@ def test_a_goal_beyond_the_bound_by_more_than_rounding_is_refused(worked_scenari
 
 def _ur5_turned(yaw_deg: float) -> ff.Scenario:
     """The UR5 servicer with its goal attitude yaw_deg in yaw and half that in pitch from
-    the start: the plain path turns the spacecraft 11.5 deg, far beyond such a goal."""
+    the start: the plain path ends 11.9 deg from the start attitude, far beyond such a goal."""
     scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
     goal = ff.physics.attitude.quat_multiply(
         scenario.start_attitude,
