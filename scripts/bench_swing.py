@@ -12,8 +12,8 @@ a bound, the same check of the plan made), whether the plan verifies, or the ref
 - the same reorientation with the spacecraft's z axis held to a cone of 3 and 1.5 deg
   (``[constraints.base_pointing]``; its tilt from the plan's check);
 - the shipped UR5 servicer unfolding to a goal 6 deg in yaw and 3 deg in pitch from its
-  start, bounded to that goal's own turn (a goal on the bound; the plain path swings 11.5
-  deg);
+  start, bounded to that goal's own turn (a goal on the bound; the plain path ends 11.9 deg
+  from the start attitude);
 - when ``../shared/real-arms/`` is present (real robots nobody here wrote; tests never read
   them): ETS-VII turned 2 deg with its arm back where it started; Canadarm2 on a 20 t,
   4 m spacecraft holding a 5 t payload, its goal 20 deg in yaw; Canadarm2 on a 15 t
