@@ -60,57 +60,34 @@ joints = {{ Joint_1 = 0.0, Joint_2 = 30.0, Joint_3 = 60.0, Joint_4 = 0.0, Joint_
 base_zyx_deg = [2.0, 0.0, 0.0]
 """  # noqa: E501
 
-_CANADARM2 = """duration = 600.0
+_CANADARM2 = """duration = {duration}
 [robot]
 arm = "{urdf}"
-base_mass = 20000.0
-base_size = [4.0, 4.0, 4.0]
-mount = [2.0, 0.0, 0.0]
-[start.joints]
-Shoulder_Roll = 0.0
-Shoulder_Yaw = 0.0
-Shoulder_Pitch = 0.0
-Elbow_Pitch = 0.0
-Wrist_Pitch = 0.0
-Wrist_Yaw = 0.0
-Wrist_Roll = 0.0
-[goal]
-base_zyx_deg = [20.0, 0.0, 0.0]
-[goal.joints]
-Shoulder_Roll = 0.0
-Shoulder_Yaw = 30.0
-Shoulder_Pitch = 20.0
-Elbow_Pitch = -40.0
-Wrist_Pitch = 20.0
-Wrist_Yaw = 0.0
-Wrist_Roll = 0.0
-[payload]
-mass = 5000.0
-box = [3.0, 3.0, 3.0]
-com_xyz = [2.0, 0.0, 0.0]
-[safety]
-check = false
-"""
-
-
-_CANADARM2_8T = """duration = 900.0
-[robot]
-arm = "{urdf}"
-base_mass = 15000.0
+base_mass = {base_mass}
 base_size = [4.0, 4.0, 4.0]
 mount = [2.0, 0.0, 0.0]
 [start]
 joints = {{ Shoulder_Roll = 0.0, Shoulder_Yaw = 0.0, Shoulder_Pitch = 0.0, Elbow_Pitch = 0.0, Wrist_Pitch = 0.0, Wrist_Yaw = 0.0, Wrist_Roll = 0.0 }}
 [goal]
-joints = {{ Shoulder_Roll = 20.0, Shoulder_Yaw = -30.0, Shoulder_Pitch = 30.0, Elbow_Pitch = -60.0, Wrist_Pitch = 30.0, Wrist_Yaw = 10.0, Wrist_Roll = 0.0 }}
-base_zyx_deg = [-10.0, 5.0, 3.0]
+joints = {{ Shoulder_Roll = {goal[0]}, Shoulder_Yaw = {goal[1]}, Shoulder_Pitch = {goal[2]}, Elbow_Pitch = {goal[3]}, Wrist_Pitch = {goal[4]}, Wrist_Yaw = {goal[5]}, Wrist_Roll = 0.0 }}
+base_zyx_deg = {zyx}
 [payload]
-mass = 8000.0
+mass = {payload}
 box = [3.0, 3.0, 3.0]
 com_xyz = [2.0, 0.0, 0.0]
 [safety]
 check = false
 """  # noqa: E501
+#: Canadarm2 on a 20 t spacecraft holding 5 t, its goal 20 deg in yaw; on 15 t holding 8 t.
+_CANADARM2_CASES = (
+    ("canadarm2", "Canadarm2 + 5 t payload, goal 20 deg", (40.0, 25.0), {
+        "duration": 600.0, "base_mass": 20000.0, "goal": (0.0, 30.0, 20.0, -40.0, 20.0, 0.0),
+        "zyx": [20.0, 0.0, 0.0], "payload": 5000.0}),
+    ("canadarm2_8t", "Canadarm2 + 8 t payload, goal 11.68 deg", (12.0, "goal"), {
+        "duration": 900.0, "base_mass": 15000.0,
+        "goal": (20.0, -30.0, 30.0, -60.0, 30.0, 10.0), "zyx": [-10.0, 5.0, 3.0],
+        "payload": 8000.0}),
+)  # fmt: skip
 
 _VISPA = """duration = 300.0
 [robot]
@@ -156,12 +133,9 @@ def cases(folder: Path) -> list[tuple[str, ff.Scenario, tuple[float | str, ...]]
         text = _ETS7.format(urdf=REAL / "ets7_satellite.urdf")
         found.append(("ETS-VII, 2 deg reorientation", _from_text(text, folder, "ets7"), (2.4, 2.1)))
     if (REAL / "canadarm2_arm.urdf").exists():
-        text = _CANADARM2.format(urdf=REAL / "canadarm2_arm.urdf")
-        scenario = _from_text(text, folder, "canadarm2")
-        found.append(("Canadarm2 + 5 t payload, goal 20 deg", scenario, (40.0, 25.0)))
-        text = _CANADARM2_8T.format(urdf=REAL / "canadarm2_arm.urdf")
-        scenario = _from_text(text, folder, "canadarm2_8t")
-        found.append(("Canadarm2 + 8 t payload, goal 11.68 deg", scenario, (12.0, "goal")))
+        for file, name, bounds, fields in _CANADARM2_CASES:
+            text = _CANADARM2.format(urdf=REAL / "canadarm2_arm.urdf", **fields)
+            found.append((name, _from_text(text, folder, file), bounds))
     if (REAL / "vispa_arm.urdf").exists():
         text = _VISPA.format(urdf=REAL / "vispa_arm.urdf")
         scenario = _from_text(text, folder, "vispa")

@@ -31,29 +31,8 @@ import reference
 
 ROOT = Path(__file__).resolve().parents[1]
 
-#: The Panda servicer turned 3 deg in yaw with its arm back where it started: the closed loop
-#: the planner starts from swings the spacecraft well beyond 3 deg on the way.
-REORIENTATION = """
-robot = "panda_servicer"
-duration = 20.0
-
-[start]
-base_zyx_deg = [0.0, 0.0, 0.0]
-
-[start.joints]
-panda_joint1 = 0.0
-panda_joint2 = -45.0
-panda_joint3 = 0.0
-panda_joint4 = -135.0
-panda_joint5 = 0.0
-panda_joint6 = 90.0
-panda_joint7 = 45.0
-
-[goal]
-base_zyx_deg = [3.0, 0.0, 0.0]
-
-[goal.joints]
-panda_joint1 = 0.0
+#: The Panda servicer's arm, where it starts and ends.
+_PANDA_JOINTS = """panda_joint1 = 0.0
 panda_joint2 = -45.0
 panda_joint3 = 0.0
 panda_joint4 = -135.0
@@ -61,6 +40,22 @@ panda_joint5 = 0.0
 panda_joint6 = 90.0
 panda_joint7 = 45.0
 """
+#: The Panda servicer turned 3 deg in yaw with its arm back where it started: the closed loop
+#: the planner starts from swings the spacecraft well beyond 3 deg on the way.
+REORIENTATION = f"""
+robot = "panda_servicer"
+duration = 20.0
+
+[start]
+base_zyx_deg = [0.0, 0.0, 0.0]
+
+[start.joints]
+{_PANDA_JOINTS}
+[goal]
+base_zyx_deg = [3.0, 0.0, 0.0]
+
+[goal.joints]
+{_PANDA_JOINTS}"""
 
 
 def _turn_about_an_axis(rate, duration: float, steps: int):
