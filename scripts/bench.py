@@ -989,9 +989,16 @@ def run() -> None:
         print_collision(bench_collision(args.runs))
         return
     if args.clearance_only:
-        from bench_clearance import bench_certificate, bench_hulls, print_clearance
+        from bench_clearance import (
+            bench_certificate,
+            bench_flat_faces,
+            bench_hulls,
+            print_clearance,
+            print_flat_faces,
+        )
 
         print_clearance(bench_hulls(args.runs), bench_certificate(max(3, args.runs // 3)))
+        print_flat_faces(bench_flat_faces())
         return
     sweep = bench_sweep() if args.sweep or args.sweep_only else {}
     if sweep:

@@ -7,7 +7,9 @@ Side by side in one run:
   built here as the baseline) against true hulls (today), and the hull build, cold and cached;
 - verification's clearance check: the sampled check on hulls (401 samples, refined minima;
   the check before plan format 4) against the certificate on the original meshes;
-- a whole ``ff.plan`` of each shipped servicer with and without clearance, each a fresh call.
+- a whole ``ff.plan`` of each shipped servicer with and without clearance, each a fresh call;
+- the hull of a finely divided cylinder mesh (500 to 8000 sides): as built today (a flat face
+  of many points hulled from joggled input at once) against the triangulated hull tried first.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import pinocchio as pin
 import freefloat as ff
 from freefloat.problem.constraints.clearance import Clearance
 from freefloat.problem.constraints.registry import scenario_constraints
-from freefloat.robot import geometry
+from freefloat.robot import geometry, meshes
 from freefloat.robot.collision import CollisionModel, known_srdf
 from freefloat.verify.clearance_check import clearance_certificate
 from freefloat.verify.path_eval import file_path
@@ -80,7 +82,7 @@ def _hull_row(name: str, runs: int) -> dict[str, object]:
     start, goal = np.asarray(s.start), np.asarray(s.goal)
     configs = [start + u * (goal - start) for u in np.linspace(0, 1, 20)]
     faces = _face_model_distances(s.robot, srdf)
-    geometry._HULLS.clear()
+    meshes._HULLS.clear()
     cold = _median_ms(lambda: CollisionModel(s.robot, srdf), 1)
     warm = _median_ms(lambda: CollisionModel(s.robot, srdf), runs)
     hulls = CollisionModel(s.robot, srdf)
@@ -129,6 +131,87 @@ def _certificate_row(name: str, runs: int) -> dict[str, object]:
     }
 
 
+#: Sides of the cylinder meshes of the flat-face table.
+FLAT_SIDES = (500, 2000, 8000)
+
+
+def bench_flat_faces() -> list[dict[str, object]]:
+    """Per cylinder: its hull today against the triangulated hull tried first (ms, one build).
+
+    The mesh's triangles are read first in both (the solvers' model reads them anyway).
+    """
+    rows = []
+    for sides in FLAT_SIDES:
+        obj = _cylinder_object(sides)
+        triangles = meshes.object_triangles(obj)
+        today = _median_ms(lambda o=obj, t=triangles: meshes._hull(o, t), 1)
+        first = _median_ms(lambda o=obj: _triangulated_first(o), 1)
+        hull = meshes._hull(obj, triangles)
+        rows.append(
+            {
+                "sides": sides,
+                "flat_points": meshes.flat_face_points(*triangles),
+                "today_ms": today,
+                "triangulated_first_ms": first,
+                "hull_points": hull.num_points,
+            }
+        )
+        print(f"  done: flat faces {rows[-1]}", flush=True)
+    return rows
+
+
+def _cylinder_object(sides: int) -> pin.GeometryObject:
+    """A closed cylinder mesh (radius 0.2 m, length 0.5 m), each cap fanned from its centre."""
+    angles = np.linspace(0.0, 2.0 * np.pi, sides, endpoint=False)
+    rim = np.column_stack([0.2 * np.cos(angles), 0.2 * np.sin(angles)])
+    ends = [np.column_stack([rim, np.full(sides, z)]) for z in (-0.25, 0.25)]
+    vertices = np.vstack([*ends, [[0.0, 0.0, -0.25], [0.0, 0.0, 0.25]]])
+    k = np.arange(sides)
+    j = (k + 1) % sides
+    triangles = np.vstack(
+        [
+            np.column_stack([k, j, sides + j]),
+            np.column_stack([k, sides + j, sides + k]),
+            np.column_stack([np.full(sides, 2 * sides), j, k]),
+            np.column_stack([np.full(sides, 2 * sides + 1), sides + k, sides + j]),
+        ]
+    )
+    model = coal.BVHModelOBBRSS()
+    model.beginModel(len(triangles), len(vertices))
+    model.addVertices(vertices)
+    model.addTriangles(triangles)
+    model.endModel()
+    return pin.GeometryObject(f"cylinder{sides}", 0, pin.SE3.Identity(), model)
+
+
+def _triangulated_first(obj: pin.GeometryObject) -> coal.ConvexBase | None:
+    """The hull as built before: triangulated (``Qt``), joggled (``QJ``) when that fails."""
+    for options in ("Qt", "QJ"):
+        shape = obj.geometry.clone()
+        try:
+            shape.buildConvexHull(True, options)
+        except (ValueError, RuntimeError):
+            continue
+        return shape.convex
+    return None
+
+
+def print_flat_faces(rows: list[dict[str, object]]) -> None:
+    """The flat-face table as markdown."""
+    print("\n### Hulls of meshes with a large flat face (a cylinder's caps)\n")
+    print(
+        "| sides | points on one cap | hull today ms | triangulated first ms | ratio | "
+        "hull points |"
+    )
+    print("|---:|---:|---:|---:|---:|---:|")
+    for r in rows:
+        print(
+            f"| {r['sides']} | {r['flat_points']} | {r['today_ms']:.0f} | "
+            f"{r['triangulated_first_ms']:.0f} | "
+            f"{r['triangulated_first_ms'] / r['today_ms']:.0f}x | {r['hull_points']} |"  # type: ignore[operator]
+        )
+
+
 def _without_clearance(scenario: ff.Scenario) -> ff.Scenario:
     from dataclasses import replace
 
@@ -164,3 +247,4 @@ def print_clearance(hulls: list[dict[str, object]], certs: list[dict[str, object
 
 if __name__ == "__main__":
     print_clearance(bench_hulls(5), bench_certificate(3))
+    print_flat_faces(bench_flat_faces())

@@ -19,9 +19,11 @@ import pinocchio as pin
 from ..errors import ModelError
 
 __all__ = [
+    "FAN_POINTS",
     "HullInfo",
     "MeshKey",
     "check_finite_meshes",
+    "flat_face_points",
     "hull_volume",
     "mesh_key",
     "mesh_triangles",
@@ -82,11 +84,21 @@ def true_hull(obj: pin.GeometryObject, key: MeshKey | None = None) -> coal.Conve
     key = mesh_key(obj) if key is None else key
     if key not in _HULLS:
         _check_solid(obj)
-        _HULLS[key] = _hull(obj)
+        _HULLS[key] = _hull(obj, object_triangles(obj, key))
     return _HULLS[key]
 
 
-def _hull(obj: pin.GeometryObject) -> coal.ConvexBase:
+#: qhull's triangulated hull (``Qt``) fans a flat face from one of its points, and coal keeps
+#: at most 255 neighbours of a point: a face of 254 points or more fails (a cylinder's cap,
+#: measured). From this many points on one face of the mesh, the joggled hull is built at once.
+FAN_POINTS = 250
+#: How far (relative to the mesh's size) a vertex may lie from a face's plane and count as on
+#: it: qhull merges only points coplanar to its rounding, and a cap rounded to single
+#: precision and tilted is hulled by ``Qt`` in milliseconds (2000 sides: 16 ms).
+COPLANAR = 1e-12
+
+
+def _hull(obj: pin.GeometryObject, mesh: tuple[np.ndarray, np.ndarray]) -> coal.ConvexBase:
     """The hull of a mesh object's vertices by qhull: triangulated, or else joggled.
 
     Triangulated output (``Qt``) splits a flat face of many vertices into a fan: the cap of a
@@ -95,14 +107,17 @@ def _hull(obj: pin.GeometryObject) -> coal.ConvexBase:
     own, with no fan: qhull moves every point by about 1e-9 of the mesh's size first, more
     if it must try again (a 2000-sided cylinder of 0.2 m: 1.4e-10 m; 4000 sides of 0.5 m:
     3.4e-9 m), far inside the 1e-6 m to which verification holds every mesh vertex inside the
-    hull (:mod:`freefloat.verify.hull_agreement`). The triangulated attempt fails first, and
-    late on large meshes (5.6 s for 8000 sides).
+    hull (:mod:`freefloat.verify.hull_agreement`). The triangulated attempt fails late on
+    large faces, after qhull has merged their points (8000 sides: 5.7 s, against 0.15 s
+    joggled), so a mesh with a face of :data:`FAN_POINTS` points (:func:`flat_face_points`,
+    ``mesh``: its vertices and triangles) is hulled from joggled input at once.
 
     Raises:
         ModelError: qhull finds no hull either way (its message, one line).
     """
     first = ""
-    for options in ("Qt", "QJ"):
+    tries = ("QJ",) if flat_face_points(*mesh) >= FAN_POINTS else ("Qt", "QJ")
+    for options in tries:
         shape = obj.geometry.clone()  # the object's own shape is left as it is
         try:
             shape.buildConvexHull(True, options)
@@ -113,6 +128,43 @@ def _hull(obj: pin.GeometryObject) -> coal.ConvexBase:
             continue
         return shape.convex
     raise ModelError(f"collision mesh {obj.meshPath} ({obj.name}): no hull ({first})")
+
+
+def flat_face_points(vertices: np.ndarray, triangles: np.ndarray) -> int:
+    """The most distinct vertices (a count) on one plane that holds a face of the hull.
+
+    Looked for among the planes of the mesh's own triangles, grouped by normal and offset to
+    1e-3: a group of a sixteenth of :data:`FAN_POINTS` triangles or more (a face of that many
+    points has about as many triangles, and a face split among groups at rounding edges still
+    shows) has its plane fitted again to the vertices near it, and its vertices on that plane
+    are counted when every vertex lies on one side of it (a face of the hull).
+    Points on a hull face that no triangle of the mesh lies on (a tube's rim) are not found:
+    the triangulated hull is then tried first, as for any mesh. 0 below :data:`FAN_POINTS`
+    vertices. ``vertices``: (V, 3) (m); ``triangles``: (F, 3) vertex indices.
+    """
+    points = np.unique(vertices, axis=0)
+    if len(points) < FAN_POINTS or len(triangles) == 0:
+        return 0
+    size = float(np.ptp(points, axis=0).max())
+    a, b, c = (vertices[triangles[:, k]] for k in range(3))
+    normals = np.cross(b - a, c - a)
+    lengths = np.linalg.norm(normals, axis=1)
+    kept = lengths > 0.0
+    normals = normals[kept] / lengths[kept, None]
+    offsets = np.einsum("ij,ij->i", normals, a[kept]) / size
+    keys = np.round(np.column_stack([normals, offsets]) * 1e3).astype(np.int64)
+    _, first, counts = np.unique(keys, axis=0, return_index=True, return_counts=True)
+    most = 0
+    for i in first[counts >= FAN_POINTS // 16]:  # a face of 250 points has 248 triangles
+        near = points[np.abs(points @ normals[i] / size - offsets[i]) <= 1e-3]
+        centre = near.mean(axis=0)
+        # the plane that fits them best
+        normal = np.linalg.svd(near - centre, full_matrices=False)[2][2]
+        heights = (points - centre) @ normal / size
+        if heights.min() < -COPLANAR and heights.max() > COPLANAR:
+            continue  # vertices on both sides: no face of the hull
+        most = max(most, int(np.count_nonzero(np.abs(heights) <= COPLANAR)))
+    return most
 
 
 #: Largest vertex coordinate of a collision mesh (m, after its scale): a kilometre.
