@@ -112,7 +112,8 @@ def test_an_existing_folder_is_staged_in_itself_a_new_one_beside(tmp_path, monke
     real = tempfile.mkdtemp
 
     def recorded(*args, **kwargs):
-        homes.append(Path(kwargs["dir"]))
+        if kwargs["prefix"].startswith(".freefloat-stage-"):  # not the move's kept files
+            homes.append(Path(kwargs["dir"]))
         return real(*args, **kwargs)
 
     monkeypatch.setattr(tempfile, "mkdtemp", recorded)
@@ -122,6 +123,75 @@ def test_an_existing_folder_is_staged_in_itself_a_new_one_beside(tmp_path, monke
             (stage / "a.png").write_bytes(b"a")
     assert homes == [tmp_path, folder]
     assert sorted(p.name for p in folder.iterdir()) == ["a.png"]
+
+
+def _failing_rename(monkeypatch, failing):
+    """os.replace failing (EIO) at its calls numbered in ``failing`` (from 1); the calls."""
+    import os
+
+    real, calls = os.replace, []
+
+    def replace(source, destination):
+        calls.append((Path(source).name, Path(destination).name))
+        if len(calls) in failing:
+            raise OSError(5, "Input/output error")
+        return real(source, destination)
+
+    monkeypatch.setattr(os, "replace", replace)
+    return calls
+
+
+def test_a_rename_failing_halfway_puts_back_what_it_replaced(tmp_path, monkeypatch):
+    """The third file's rename fails after two old files were replaced and a new folder
+    made: every old file comes back, nothing new or hidden stays."""
+    folder = tmp_path / "out"
+    (folder / "plots").mkdir(parents=True)
+    for name in ("a.json", "b.html", "plots/c.png", "mine.txt"):
+        (folder / name).write_bytes(f"old {name}".encode())
+    before = _listing(tmp_path)
+    # renames: a.json kept, a.json in, b.html kept, b.html in, new/d.png in (fails)
+    calls = _failing_rename(monkeypatch, {5})
+    with pytest.raises(OSError, match="Input/output error"), staged_folder(folder) as stage:
+        for name in ("a.json", "b.html", "new/d.png", "plots/c.png"):
+            (stage / name).parent.mkdir(exist_ok=True)
+            (stage / name).write_bytes(b"new")
+    assert calls[4] == ("d.png", "d.png") and len(calls) == 5 + 2  # two put back
+    assert _listing(tmp_path) == before
+
+
+def test_a_file_that_cannot_be_put_back_is_named_with_its_old_content(tmp_path, monkeypatch):
+    import freefloat as ff
+
+    folder = tmp_path / "out"
+    folder.mkdir()
+    (folder / "a.json").write_bytes(b"old a")
+    (folder / "b.html").write_bytes(b"old b")
+    # a.json kept, a.json in, b.html kept, b.html in (fails), b.html put back (fails)
+    _failing_rename(monkeypatch, {4, 5})
+    with pytest.raises(ff.FileError) as caught, staged_folder(folder) as stage:
+        (stage / "a.json").write_bytes(b"new a")
+        (stage / "b.html").write_bytes(b"new b")
+    message = str(caught.value)
+    assert "b.html could not be put back: its previous content is in" in message
+    kept = Path(message.rsplit(" is in ", 1)[1])
+    assert (kept / "b.html").read_bytes() == b"old b"  # said, not lost
+    assert not (folder / "b.html").exists()
+    assert (folder / "a.json").read_bytes() == b"old a"  # put back
+
+
+def test_files_written_together_are_put_back_when_a_rename_fails(tmp_path, monkeypatch):
+    """compose's URDF renamed in, its SRDF's rename failing: the old URDF comes back."""
+    import freefloat as ff
+    from freefloat.staged import write_together
+
+    urdf, srdf = tmp_path / "s.urdf", tmp_path / "s.srdf"
+    urdf.write_text("old urdf")
+    srdf.write_text("old srdf")
+    _failing_rename(monkeypatch, {4})  # urdf kept, urdf in, srdf kept, srdf in (fails)
+    with pytest.raises(ff.FileError, match=r"cannot write .*: Input/output error"):
+        write_together({urdf: "new urdf", srdf: "new srdf"})
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.srdf", "s.urdf"]
+    assert (urdf.read_text(), srdf.read_text()) == ("old urdf", "old srdf")
 
 
 def test_files_written_together_make_their_folders_and_remove_them_on_failure(tmp_path):

@@ -5,7 +5,8 @@ one, a full disk or a Ctrl-C between two of them left some new files beside the 
 others (or an empty folder, or an SRDF without its URDF). :func:`staged_folder` has a
 folder's files written into a hidden folder beside it, on the same file system, and
 :func:`write_together` writes a few text files to temporary files beside them; either moves
-them in only when every one is written, while the command line's signals are held.
+them in only when every one is written, while the command line's signals are held, and all
+or none of them (:func:`_move_all`): a rename that fails halfway puts back what it replaced.
 """
 
 from __future__ import annotations
@@ -30,11 +31,12 @@ def staged_folder(target: str | Path) -> Iterator[Path]:
 
     The files are moved with ``os.replace`` (renames on one file system) while signals are
     held (:func:`~freefloat.files.signals_held`): an interruption, or a failure while they
-    are written (a full disk), leaves ``target`` as it was, never a mix of old and new files
-    (only a rename failing halfway could). Files of ``target`` the stage does not hold are
-    left alone. On failure the staging folder and the folders made for it (``target`` and
-    missing parents) are removed. The stage is locked while it is in use; one that SIGKILL
-    left behind is removed by the next stage made in the same folder (:func:`remove_abandoned`).
+    are written (a full disk) or moved (:func:`_move_all` puts back the files a failed rename
+    replaced), leaves ``target`` as it was, never a mix of old and new files. Files of
+    ``target`` the stage does not hold are left alone. On failure the staging folder and the
+    folders made for it (``target``, missing parents, and those the move made) are removed.
+    The stage is locked while it is in use; one that SIGKILL left behind is removed by the
+    next stage made in the same folder (:func:`remove_abandoned`).
     """
     target = Path(target).expanduser().resolve()
     made = [p for p in (target, *target.parents) if not p.exists()]  # deepest first
@@ -49,12 +51,15 @@ def staged_folder(target: str | Path) -> Iterator[Path]:
         yield stage
         with signals_held():
             target.mkdir(exist_ok=True)
+            moves = []
             for source in sorted(stage.rglob("*")):  # each folder before its files
                 moved = target / source.relative_to(stage)
-                if source.is_dir():
-                    moved.mkdir(exist_ok=True)
-                else:
-                    os.replace(source, moved)
+                if not source.is_dir():
+                    moves.append((source, moved))
+                elif not moved.is_dir():
+                    moved.mkdir()
+                    made.insert(0, moved)  # deepest first
+            _move_all(moves)
         shutil.rmtree(stage, ignore_errors=True)
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)
@@ -69,6 +74,67 @@ def staged_folder(target: str | Path) -> Iterator[Path]:
 
 #: Start of a staging folder's name; the host and process that made it follow.
 _PREFIX = ".freefloat-stage-"
+#: Start of the name of a folder that keeps the files a move replaces until it is done.
+_KEPT = ".freefloat-previous-"
+
+
+def _move_all(moves: list[tuple[Path, Path]]) -> None:
+    """Rename each source file onto its destination (one file system): all, or none.
+
+    A destination's file is first renamed into a hidden folder beside it (:data:`_KEPT`).
+    When a rename fails (or the move is interrupted), every destination renamed so far gets
+    its file back, or is removed when it had none, and the error is raised again; the kept
+    files go when the move is done.
+
+    Raises:
+        FileError: a rename failed and a file could not be put back either; it names the
+            file, and the folder that still holds what it replaced.
+    """
+    kept: dict[Path, Path] = {}  # per destination's folder, its hidden folder
+    done: list[tuple[Path, Path | None]] = []  # destination, where its file was put
+    try:
+        for source, destination in moves:
+            previous = None
+            if destination.is_symlink() or destination.is_file():
+                folder = destination.parent
+                if folder not in kept:
+                    kept[folder] = Path(tempfile.mkdtemp(prefix=_KEPT, dir=folder))
+                previous = kept[folder] / destination.name
+                os.replace(destination, previous)
+            done.append((destination, previous))
+            os.replace(source, destination)
+    except BaseException:
+        left = _put_back(done)
+        if left is not None:
+            where = kept.get(left.parent)
+            raise FileError(
+                f"moving the new files in failed, and {left} could not be put back"
+                + (f": its previous content is in {where}" if where else ""),
+                str(left),
+            ) from None
+        _remove_kept(kept)
+        raise
+    _remove_kept(kept)
+
+
+def _put_back(done: list[tuple[Path, Path | None]]) -> Path | None:
+    """Undo :func:`_move_all`'s renames, last first; the first file that stays changed, or None."""
+    left = None
+    for destination, previous in reversed(done):
+        try:
+            if previous is None:
+                destination.unlink(missing_ok=True)
+            elif os.path.lexists(previous):
+                os.replace(previous, destination)
+        except OSError:
+            left = destination
+    return left
+
+
+def _remove_kept(kept: dict[Path, Path]) -> None:
+    """Remove the hidden folders of :func:`_move_all`."""
+    for folder in kept.values():
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def _host() -> str:
@@ -159,8 +225,9 @@ def remove_abandoned(folder: Path) -> list[Path]:
 def write_together(texts: Mapping[Path, str]) -> Path:
     """Write text files (UTF-8) at once: each to a temporary file beside it, then all renamed.
 
-    Their folders are made as needed. The renames happen while signals are held; on any
-    failure (a full disk, an interruption before the renames) none of the files is changed,
+    Their folders are made as needed. The renames happen while signals are held, all or none
+    (:func:`_move_all`); on any failure (a full disk, an interruption before the renames, a
+    rename that fails) none of the files is changed,
     no temporary file is left, and no folder made for them. Returns the last path written.
 
     Raises:
@@ -183,8 +250,7 @@ def write_together(texts: Mapping[Path, str]) -> Path:
                 os.fsync(handle.fileno())
             os.chmod(name, default_file_mode())
         with signals_held():
-            for path, name_path in temporary.items():
-                os.replace(name_path, path)
+            _move_all([(name, path) for path, name in temporary.items()])
             temporary.clear()
             made.clear()  # written: the folders stay
     except OSError as exc:
