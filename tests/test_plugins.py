@@ -231,6 +231,42 @@ def test_constraint_record_round_trips(ur5_scenario, name):
     )
 
 
+@pytest.mark.parametrize("name", sorted(CONSTRAINT_EXAMPLES))
+def test_a_restarted_constraint_turned_back_is_the_same(ur5_scenario, name):
+    """A correction's constraints (:meth:`Constraint.restarted`): a start turned and turned
+    back (SciPy's rotations) gives the same record, and a space-fixed one judges an attitude
+    in space alike from either start."""
+    from scipy.spatial.transform import Rotation
+
+    constraint = CONSTRAINT_EXAMPLES[name](ur5_scenario)
+    turn = Rotation.from_rotvec([0.3, -0.2, 0.5])
+    there = constraint.restarted(turn.as_quat())
+    back = there.restarted(turn.inv().as_quat())
+    assert type(there) is type(constraint) and type(back) is type(constraint)
+    _close_records(back.to_record(), constraint.to_record())
+    seen = Rotation.from_rotvec([0.1, 0.05, -0.02])  # an attitude, from the first start
+    from_first = constraint.at_attitude(seen.as_quat())
+    if from_first is not None and there is not constraint:  # fixed in space: judged alike
+        from_second = there.at_attitude((turn.inv() * seen).as_quat())
+        assert from_second.value == pytest.approx(from_first.value, abs=1e-12)
+
+
+def _close_records(found: object, expected: object) -> None:
+    """Records equal, their numbers to 1e-12."""
+    if isinstance(expected, dict):
+        assert isinstance(found, dict) and found.keys() == expected.keys()
+        for key, value in expected.items():
+            _close_records(found[key], value)
+    elif isinstance(expected, list):
+        assert isinstance(found, list) and len(found) == len(expected)
+        for a, b in zip(found, expected, strict=True):
+            _close_records(a, b)
+    elif isinstance(expected, float):
+        assert found == pytest.approx(expected, abs=1e-12)
+    else:
+        assert found == expected
+
+
 @pytest.mark.parametrize("name", sorted(OBJECTIVES))
 def test_objective_gradient_and_record(ur5_scenario, name):
     problem = ff.problem_from_scenario(ur5_scenario, extra=[1] * ur5_scenario.robot.n)

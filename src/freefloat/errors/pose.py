@@ -125,7 +125,7 @@ class GoalAttitudeError(FreeFloatError):
         constraint: the constraint's name (its scenario table ``[constraints.<name>]``).
         excess: how far beyond it the attitude is (in the constraint's unit).
         detail: the constraint's own account (the turn from the start, the bound).
-        where: ``"goal"`` or ``"start"``.
+        where: ``"goal"``, ``"start"`` or ``"measured"`` (where a correction starts).
     """
 
     def __init__(self, constraint: str, excess: float, detail: str, where: str = "goal") -> None:
@@ -133,14 +133,22 @@ class GoalAttitudeError(FreeFloatError):
         self.excess = float(excess)
         self.detail = detail
         self.where = where
-        if where == "goal":
-            said = "where every path ends; choose a goal attitude nearer the start attitude"
+        if where == "measured":
+            said = (
+                "where the correcting motion starts: no correction from it keeps the plan's "
+                f"[constraints.{constraint}]"
+            )
         else:
-            said = "where every path starts; change the start attitude"
-        super().__init__(
-            f"{where} attitude breaks {constraint} ({detail}), {said} or loosen "
-            f"[constraints.{constraint}]"
-        )
+            change = (
+                "choose a goal attitude nearer the start attitude"
+                if where == "goal"
+                else "change the start attitude"
+            )
+            said = (
+                f"where every path {'ends' if where == 'goal' else 'starts'}; {change} or "
+                f"loosen [constraints.{constraint}]"
+            )
+        super().__init__(f"{where} attitude breaks {constraint} ({detail}), {said}")
 
 
 class LockedJointError(FreeFloatError):

@@ -28,6 +28,7 @@ from .scenario import Scenario
 from .simple_bound import first_crossing
 
 __all__ = [
+    "at_attitude",
     "at_end_attitude",
     "at_rest",
     "check_end_attitudes",
@@ -111,6 +112,17 @@ def at_end_attitude(
         if where == "goal"
         else np.array([0.0, 0.0, 0.0, 1.0])
     )
+    return at_attitude(constraints, relative)
+
+
+def at_attitude(
+    constraints: Sequence[Constraint], relative: np.ndarray
+) -> list[tuple[Constraint, Excess, bool]]:
+    """The constraints an attitude alone decides, with their excesses and whether they hold.
+
+    ``relative``: the attitude relative to the start (``[x, y, z, w]``); holds: beyond by at
+    most rounding (:data:`END_ROUNDING`).
+    """
     found = []
     for constraint in constraints:
         excess = constraint.at_attitude(relative)

@@ -16,11 +16,13 @@ import math
 
 import numpy as np
 
-from ..errors import InfeasibleError, InputError, SolverError
-from ..physics.attitude import geodesic_angle, relative_rotvec
+from ..errors import GoalAttitudeError, InfeasibleError, InputError, SolverError
+from ..physics.attitude import geodesic_angle, relative_quat, relative_rotvec
 from ..pipeline import plan_from_solution
 from ..plans.format import Plan
 from ..problem.build import build_problem
+from ..problem.constraints import Constraint
+from ..problem.endpoints import at_attitude
 from ..robot.model import Robot
 from ..solvers.dispatch import solve
 from ..solvers.loop_start import loop_start
@@ -84,7 +86,7 @@ def correcting_plan(
             "pitch and roll)",
             off_axis=True,
         ) from None
-    constraints = plan_constraints(plan, robot)
+    constraints = _restarted(plan, robot, measured)
     # the loop turns the base frame at the end: the turn wanted, in that frame (planar: yaw)
     turn = relative_rotvec(measured, goal)
     if problem.planar:
@@ -125,3 +127,27 @@ def correcting_plan(
         constraints=constraints,
         safety=plan.safety,
     )
+
+
+def _restarted(plan: Plan, robot: Robot, measured: np.ndarray) -> list[Constraint]:
+    """The plan's constraints for a motion from the ``measured`` attitude (``[x, y, z, w]``).
+
+    What the plan fixed in space stays where it was (a pointing cone's direction,
+    :meth:`~freefloat.problem.constraints.Constraint.restarted`).
+
+    Raises:
+        GoalAttitudeError: the measured or the goal attitude breaks a constraint of the
+            attitude (every correcting motion starts or ends there).
+    """
+    start = np.asarray(plan.base.start_quaternion_xyzw, dtype=float)
+    goal = np.asarray(plan.base.target_quaternion_xyzw, dtype=float)
+    turn = relative_quat(start / np.linalg.norm(start), measured)
+    constraints = [c.restarted(turn) for c in plan_constraints(plan, robot)]
+    for where, relative in (
+        ("measured", np.array([0.0, 0.0, 0.0, 1.0])),
+        ("goal", relative_quat(measured, goal / np.linalg.norm(goal))),
+    ):
+        for constraint, excess, holds in at_attitude(constraints, relative):
+            if not holds:
+                raise GoalAttitudeError(constraint.name, excess.value, excess.detail, where)
+    return constraints

@@ -182,6 +182,17 @@ class Constraint(abc.ABC):
         """
         return None
 
+    def restarted(self, turn: np.ndarray) -> Constraint:
+        """The same constraint for a motion that starts at another attitude (a correction).
+
+        ``turn``: the new start attitude relative to the old one, ``q_old^-1 q_new``
+        (``[x, y, z, w]``). What is fixed in space stays where it was: a direction given in the
+        old start frame is given in the new one (``base_pointing``). Default: the constraint
+        itself (it does not depend on the spacecraft's attitude, or it measures from the
+        motion's own start, as ``base_swing`` does).
+        """
+        return self
+
     def to_record(self) -> dict[str, Any]:
         """The constraint's parameters, JSON-ready, as a plan and a scenario write them.
 

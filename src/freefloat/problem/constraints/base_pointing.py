@@ -138,6 +138,17 @@ class BasePointing(Constraint):
         angle = float(self._angles(np.asarray(relative, dtype=float))[0])
         return Excess(angle - self.half_angle, 0.0, self._said(angle))
 
+    def restarted(self, turn: np.ndarray) -> BasePointing:
+        """The cone for a motion that starts ``turn`` (``q_old^-1 q_new``) away.
+
+        The same direction in space, given in the new start frame; the axis is the
+        spacecraft's own, and the half-angle as recorded (deg).
+        """
+        direction = quat_to_matrix(np.asarray(turn, dtype=float)).T @ self.direction
+        cone = BasePointing(self.axis.tolist(), direction.tolist(), self.half_angle)
+        cone._half_angle_deg = self._half_angle_deg
+        return cone
+
     # -- the solvers' rows --------------------------------------------------------------------
 
     def solver_slack(self, problem: Problem, instants: np.ndarray) -> np.ndarray:
