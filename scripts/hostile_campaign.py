@@ -477,6 +477,7 @@ def _message_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str]
         *_round_31_cases(folder, plan_file),
         *_round_32_cases(folder),
         *_round_33_cases(folder),
+        *_round_34_cases(folder),
     ]
 
 
@@ -709,6 +710,22 @@ def _round_33_cases(folder: Path) -> list[tuple[list, bool, str]]:
     return [
         (["plan", on_bound, "-o", "on_bound.json", "-q"], False, ""),
         (["sweep", sweep, "-o", "sweep33_old.csv", "-q"], True, "holds another sweep"),
+    ]
+
+
+def _round_34_cases(folder: Path) -> list[tuple[list, bool, str]]:
+    """The thirty-fourth round's: a correction of a plan with a pointing cone from a measured
+    attitude outside it (the cone turned with the plan before, and this planned), and from
+    one inside it (planned, the cone where the mission fixed it)."""
+    ur5 = (ROOT / "robots" / "scenarios" / "ur5_servicer.toml").read_text()
+    ur5 = ur5.replace('"ur5_servicer"', f'"{ROOT / "robots" / "ur5_servicer.urdf"}"')
+    coned = folder / "coned.toml"
+    coned.write_text(ur5 + "\n[constraints.base_pointing]\naxis = [0, 0, 1]\nhalf_angle_deg = 10\n")
+    run(["plan", coned, "-o", "coned.json", "-q"], folder)
+    measured = ["--base-zyx-deg", "-7.6", "-3.0", "-11.0"]  # the z axis 11.4 deg from the start's
+    return [
+        (["correct", "coned.json", *measured, "-o", "out.json"], True, "correcting motion starts"),
+        (["correct", "coned.json", "--base-zyx-deg", "-7.0", "-1.5", "-8.0", "-q"], False, ""),
     ]
 
 
