@@ -53,11 +53,27 @@ def _object(vertices: np.ndarray, triangles: np.ndarray) -> pin.GeometryObject:
     return pin.GeometryObject("cylinder", 0, pin.SE3.Identity(), model)
 
 
-@pytest.mark.parametrize("sides", [150, 600])
+@pytest.mark.parametrize("sides", [300, 600])
 def test_a_cap_holds_its_rim_and_centre(sides):
     vertices, triangles = _cylinder(sides)
     assert flat_face_points(vertices, triangles) == sides + 1
     assert flat_face_points(_turned(vertices), triangles) == sides + 1
+    far = _turned(vertices) + [500.0, -300.0, 200.0]  # rounding of 500 m coordinates
+    assert flat_face_points(far, triangles) == sides + 1
+
+
+def test_slivers_count_nothing_and_the_hull_is_built(monkeypatch):
+    """Three points nearly in a line, one triangle of them written 300 times: its normal is
+    rounding noise, and the first draft failed on it (IndexError) instead of hulling."""
+    monkeypatch.setattr(meshes, "_HULLS", {})
+    vertices, triangles = _cylinder(300)
+    a, b = np.array([0.01, 0.02, 0.03]), np.array([0.05, -0.04, 0.1])
+    vertices = np.vstack([vertices, a, b, (a + b) / 2 + 1e-17])
+    sliver = [len(vertices) - 3, len(vertices) - 2, len(vertices) - 1]
+    triangles = np.vstack([triangles, [sliver] * 300])
+    assert flat_face_points(vertices, triangles) == 301  # the caps still count
+    hull = true_hull(_object(vertices, triangles))
+    assert hull.num_points == 600
 
 
 def test_no_flat_face_on_a_round_or_rounded_mesh():

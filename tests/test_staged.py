@@ -125,14 +125,16 @@ def test_an_existing_folder_is_staged_in_itself_a_new_one_beside(tmp_path, monke
     assert sorted(p.name for p in folder.iterdir()) == ["a.png"]
 
 
-def _failing_rename(monkeypatch, failing):
-    """os.replace failing (EIO) at its calls numbered in ``failing`` (from 1); the calls."""
+def _failing_rename(monkeypatch, failing, watched=None):
+    """os.replace failing (EIO) at its calls numbered in ``failing`` (from 1); the calls, each
+    with whether the ``watched`` file existed just before it."""
     import os
 
     real, calls = os.replace, []
 
     def replace(source, destination):
-        calls.append((Path(source).name, Path(destination).name))
+        there = None if watched is None else watched.exists()
+        calls.append((Path(source).name, Path(destination).name, there))
         if len(calls) in failing:
             raise OSError(5, "Input/output error")
         return real(source, destination)
@@ -143,19 +145,27 @@ def _failing_rename(monkeypatch, failing):
 
 def test_a_rename_failing_halfway_puts_back_what_it_replaced(tmp_path, monkeypatch):
     """The third file's rename fails after two old files were replaced and a new folder
-    made: every old file comes back, nothing new or hidden stays."""
+    made: every old file comes back, nothing new or hidden stays, and no file was ever
+    missing (each is kept by a hard link while the new one takes its place)."""
     folder = tmp_path / "out"
     (folder / "plots").mkdir(parents=True)
     for name in ("a.json", "b.html", "plots/c.png", "mine.txt"):
         (folder / name).write_bytes(f"old {name}".encode())
     before = _listing(tmp_path)
-    # renames: a.json kept, a.json in, b.html kept, b.html in, new/d.png in (fails)
-    calls = _failing_rename(monkeypatch, {5})
+    # renames: a.json in, b.html in, new/d.png in (fails), then b.html and a.json put back
+    calls = _failing_rename(monkeypatch, {3}, folder / "b.html")
     with pytest.raises(OSError, match="Input/output error"), staged_folder(folder) as stage:
         for name in ("a.json", "b.html", "new/d.png", "plots/c.png"):
             (stage / name).parent.mkdir(exist_ok=True)
             (stage / name).write_bytes(b"new")
-    assert calls[4] == ("d.png", "d.png") and len(calls) == 5 + 2  # two put back
+    assert [c[:2] for c in calls] == [
+        ("a.json", "a.json"),
+        ("b.html", "b.html"),
+        ("d.png", "d.png"),
+        ("b.html", "b.html"),
+        ("a.json", "a.json"),
+    ]
+    assert all(there for _, _, there in calls)  # b.html was there at every rename
     assert _listing(tmp_path) == before
 
 
@@ -166,17 +176,63 @@ def test_a_file_that_cannot_be_put_back_is_named_with_its_old_content(tmp_path, 
     folder.mkdir()
     (folder / "a.json").write_bytes(b"old a")
     (folder / "b.html").write_bytes(b"old b")
-    # a.json kept, a.json in, b.html kept, b.html in (fails), b.html put back (fails)
-    _failing_rename(monkeypatch, {4, 5})
+    _failing_rename(monkeypatch, {2, 3})  # b.html's rename in, then a.json's put back
     with pytest.raises(ff.FileError) as caught, staged_folder(folder) as stage:
         (stage / "a.json").write_bytes(b"new a")
         (stage / "b.html").write_bytes(b"new b")
     message = str(caught.value)
-    assert "b.html could not be put back: its previous content is in" in message
+    assert "a.json could not be put back: its previous content is in" in message
     kept = Path(message.rsplit(" is in ", 1)[1])
-    assert (kept / "b.html").read_bytes() == b"old b"  # said, not lost
-    assert not (folder / "b.html").exists()
-    assert (folder / "a.json").read_bytes() == b"old a"  # put back
+    assert (kept / "a.json").read_bytes() == b"old a"  # said, not lost
+    assert (folder / "a.json").read_bytes() == b"new a"
+    assert (folder / "b.html").read_bytes() == b"old b"  # never replaced
+
+
+def test_without_hard_links_the_files_are_kept_by_renames(tmp_path, monkeypatch):
+    """A file system that makes no hard links (FAT, some network ones): kept by a rename."""
+    import os
+
+    def no_links(*args, **kwargs):
+        raise OSError(1, "Operation not permitted")
+
+    monkeypatch.setattr(os, "link", no_links)
+    folder = tmp_path / "out"
+    folder.mkdir()
+    (folder / "a.json").write_bytes(b"old a")
+    (folder / "b.html").write_bytes(b"old b")
+    before = _listing(tmp_path)
+    # a.json kept, a.json in, b.html kept, b.html in (fails), then both put back
+    calls = _failing_rename(monkeypatch, {4})
+    with pytest.raises(OSError), staged_folder(folder) as stage:
+        (stage / "a.json").write_bytes(b"new a")
+        (stage / "b.html").write_bytes(b"new b")
+    assert len(calls) == 6 and _listing(tmp_path) == before
+    monkeypatch.undo()
+    with staged_folder(folder) as stage:
+        (stage / "a.json").write_bytes(b"new a")
+    assert sorted(p.name for p in folder.iterdir()) == ["a.json", "b.html"]
+    assert (folder / "a.json").read_bytes() == b"new a"
+
+
+@pytest.mark.parametrize("kind", ["folder", "fifo"])
+def test_a_destination_that_is_no_regular_file_is_refused_before_any_move(tmp_path, kind):
+    import os
+
+    import freefloat as ff
+
+    folder = tmp_path / "out"
+    folder.mkdir()
+    (folder / "a.json").write_bytes(b"old a")
+    if kind == "folder":
+        (folder / "b.html").mkdir()
+    else:
+        os.mkfifo(folder / "b.html")
+    before = _listing(tmp_path)
+    said = "it is a folder" if kind == "folder" else "regular files only"
+    with pytest.raises(ff.FileError, match=said), staged_folder(folder) as stage:
+        (stage / "a.json").write_bytes(b"new a")
+        (stage / "b.html").write_bytes(b"new b")
+    assert _listing(tmp_path) == before
 
 
 def test_files_written_together_are_put_back_when_a_rename_fails(tmp_path, monkeypatch):
@@ -187,7 +243,7 @@ def test_files_written_together_are_put_back_when_a_rename_fails(tmp_path, monke
     urdf, srdf = tmp_path / "s.urdf", tmp_path / "s.srdf"
     urdf.write_text("old urdf")
     srdf.write_text("old srdf")
-    _failing_rename(monkeypatch, {4})  # urdf kept, urdf in, srdf kept, srdf in (fails)
+    _failing_rename(monkeypatch, {2})  # urdf in, srdf in (fails), urdf put back
     with pytest.raises(ff.FileError, match=r"cannot write .*: Input/output error"):
         write_together({urdf: "new urdf", srdf: "new srdf"})
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.srdf", "s.urdf"]

@@ -40,6 +40,7 @@ __all__ = [
     "atomic_write",
     "atomic_write_text",
     "check_output",
+    "check_replaceable",
     "default_file_mode",
     "other_kind_hint",
     "raise_when_free",
@@ -277,8 +278,12 @@ def raise_when_free(exc: BaseException) -> None:
     raise exc
 
 
-def _replaceable(target: Path) -> None:
-    """Refuse to replace anything but a regular file (a FIFO, a device, a socket)."""
+def check_replaceable(target: Path) -> None:
+    """Refuse to replace anything but a regular file (a FIFO, a device, a socket).
+
+    Raises:
+        FileError: ``target`` (or what a link at it leads to) is not a regular file.
+    """
     try:
         mode = os.stat(target).st_mode
     except FileNotFoundError:
@@ -313,7 +318,7 @@ def atomic_write(path: str | Path, write: Callable[[Path], None], suffix: str = 
             in the way, a parent that is a file, a full disk...).
     """
     target = absolute_path(path, "output")
-    _replaceable(target)
+    check_replaceable(target)
     tmp: str | None = None
     try:
         with signals_held():
@@ -329,7 +334,7 @@ def atomic_write(path: str | Path, write: Callable[[Path], None], suffix: str = 
 
             time.sleep(float(pause))
         with signals_held():
-            _replaceable(target)
+            check_replaceable(target)
             os.replace(tmp, target)
             tmp = None
     except OSError as exc:

@@ -20,7 +20,7 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 from .errors import FileError
-from .files import default_file_mode, signals_held
+from .files import check_replaceable, default_file_mode, signals_held
 
 __all__ = ["remove_abandoned", "staged_folder", "write_together"]
 
@@ -81,53 +81,81 @@ _KEPT = ".freefloat-previous-"
 def _move_all(moves: list[tuple[Path, Path]]) -> None:
     """Rename each source file onto its destination (one file system): all, or none.
 
-    A destination's file is first renamed into a hidden folder beside it (:data:`_KEPT`).
-    When a rename fails (or the move is interrupted), every destination renamed so far gets
-    its file back, or is removed when it had none, and the error is raised again; the kept
-    files go when the move is done.
+    Every destination is first checked to be a regular file or missing (a folder, a FIFO or
+    a device there is refused before any rename). Each file a destination holds is kept
+    in a hidden folder beside it (:data:`_KEPT`) by a hard link, so the destination is never
+    missing (by a rename where the file system has no hard links). When a rename fails or
+    the move is interrupted, every destination whose new file was moved in gets its previous
+    file back, or loses the new one when it had none, and the error is raised again; what
+    happened is read from the files themselves (a source gone was moved in), not from a
+    record an interruption could cut short. The kept files go when the move is done.
 
     Raises:
-        FileError: a rename failed and a file could not be put back either; it names the
-            file, and the folder that still holds what it replaced.
+        FileError: a destination that is not a regular file; or a rename failed and a file
+            could not be put back either (named, with the folder that holds its previous
+            content, and how many others stayed changed).
     """
+    for _, destination in moves:
+        if destination.is_dir() and not destination.is_symlink():
+            raise FileError(f"cannot write {destination}: it is a folder", str(destination))
+        check_replaceable(destination)
     kept: dict[Path, Path] = {}  # per destination's folder, its hidden folder
-    done: list[tuple[Path, Path | None]] = []  # destination, where its file was put
+    done: list[tuple[Path, Path, Path | None]] = []  # source, destination, its kept file
     try:
         for source, destination in moves:
             previous = None
-            if destination.is_symlink() or destination.is_file():
+            if os.path.lexists(destination):
                 folder = destination.parent
                 if folder not in kept:
                     kept[folder] = Path(tempfile.mkdtemp(prefix=_KEPT, dir=folder))
                 previous = kept[folder] / destination.name
-                os.replace(destination, previous)
-            done.append((destination, previous))
+            done.append((source, destination, previous))  # before anything moves
+            if previous is not None:
+                _keep(destination, previous)
             os.replace(source, destination)
     except BaseException:
         left = _put_back(done)
-        if left is not None:
-            where = kept.get(left.parent)
+        if left:
+            where = kept.get(left[0].parent)
+            more = f" ({len(left) - 1} more too)" if len(left) > 1 else ""
             raise FileError(
-                f"moving the new files in failed, and {left} could not be put back"
+                f"moving the new files in failed, and {left[0]} could not be put back{more}"
                 + (f": its previous content is in {where}" if where else ""),
-                str(left),
+                str(left[0]),
             ) from None
         _remove_kept(kept)
         raise
     _remove_kept(kept)
 
 
-def _put_back(done: list[tuple[Path, Path | None]]) -> Path | None:
-    """Undo :func:`_move_all`'s renames, last first; the first file that stays changed, or None."""
-    left = None
-    for destination, previous in reversed(done):
+def _keep(destination: Path, previous: Path) -> None:
+    """Keep the destination's file at ``previous``: a hard link (itself, if a symbolic link).
+
+    By a rename where the file system makes no hard links (the destination is then missing
+    until the new file is moved in).
+    """
+    try:
+        os.link(destination, previous, follow_symlinks=False)
+    except OSError:
+        os.replace(destination, previous)
+
+
+def _put_back(done: list[tuple[Path, Path, Path | None]]) -> list[Path]:
+    """Undo :func:`_move_all`'s renames, last first; the destinations that stay changed."""
+    left = []
+    for source, destination, previous in reversed(done):
+        moved_in = not os.path.lexists(source)
         try:
-            if previous is None:
-                destination.unlink(missing_ok=True)
+            if previous is None:  # had no file: the new one goes
+                if moved_in:
+                    destination.unlink()
             elif os.path.lexists(previous):
-                os.replace(previous, destination)
+                if moved_in or not os.path.lexists(destination):  # (renamed, not linked)
+                    os.replace(previous, destination)
+            elif moved_in:  # its kept file is gone
+                left.append(destination)
         except OSError:
-            left = destination
+            left.append(destination)
     return left
 
 

@@ -131,39 +131,58 @@ def _hull(obj: pin.GeometryObject, mesh: tuple[np.ndarray, np.ndarray]) -> coal.
 
 
 def flat_face_points(vertices: np.ndarray, triangles: np.ndarray) -> int:
-    """The most distinct vertices (a count) on one plane that holds a face of the hull.
+    """The most vertices (a count) of one plane of the mesh's own triangles on a hull face.
 
-    Looked for among the planes of the mesh's own triangles, grouped by normal and offset to
-    1e-3: a group of a sixteenth of :data:`FAN_POINTS` triangles or more (a face of that many
-    points has about as many triangles, and a face split among groups at rounding edges still
-    shows) has its plane fitted again to the vertices near it, and its vertices on that plane
-    are counted when every vertex lies on one side of it (a face of the hull).
-    Points on a hull face that no triangle of the mesh lies on (a tube's rim) are not found:
-    the triangulated hull is then tried first, as for any mesh. 0 below :data:`FAN_POINTS`
-    vertices. ``vertices``: (V, 3) (m); ``triangles``: (F, 3) vertex indices.
+    0 when no such face holds :data:`FAN_POINTS` of them.
+
+    The triangles are grouped by normal and offset to 1e-3 (of the mesh's size); a group whose
+    triangles have :data:`FAN_POINTS` distinct vertices or more has its plane fitted to them,
+    and those on that plane (within :data:`COPLANAR` of the largest coordinate) are counted
+    when every vertex of the mesh lies on one side of it (a face of the hull). Each group is
+    read once, and the whole mesh only for such a group: no pass over all vertices per plane.
+    Not found (the triangulated hull is then tried first, as for any mesh): points on a hull
+    face that no triangle of the mesh lies on (a tube's rim), a face whose triangles' normals
+    fall into several groups (rounding at a group's edge), a face with a chamfer near it.
+    A mesh whose planes cannot be worked out (rounding noise) counts 0.
+    ``vertices``: (V, 3) (m); ``triangles``: (F, 3) vertex indices.
     """
-    points = np.unique(vertices, axis=0)
-    if len(points) < FAN_POINTS or len(triangles) == 0:
+    if len(vertices) < FAN_POINTS or len(triangles) == 0:
         return 0
-    size = float(np.ptp(points, axis=0).max())
+    with np.errstate(all="ignore"):
+        try:
+            return _flat_face_points(np.asarray(vertices, float), np.asarray(triangles, int))
+        except (ValueError, IndexError, np.linalg.LinAlgError):
+            return 0
+
+
+def _flat_face_points(vertices: np.ndarray, triangles: np.ndarray) -> int:
+    """:func:`flat_face_points`'s work."""
+    size = float(np.ptp(vertices, axis=0).max())
+    reach = max(size, float(np.abs(vertices).max()))  # rounding grows with the coordinates
     a, b, c = (vertices[triangles[:, k]] for k in range(3))
     normals = np.cross(b - a, c - a)
     lengths = np.linalg.norm(normals, axis=1)
     kept = lengths > 0.0
-    normals = normals[kept] / lengths[kept, None]
+    normals, triangles = normals[kept] / lengths[kept, None], triangles[kept]
     offsets = np.einsum("ij,ij->i", normals, a[kept]) / size
     keys = np.round(np.column_stack([normals, offsets]) * 1e3).astype(np.int64)
-    _, first, counts = np.unique(keys, axis=0, return_index=True, return_counts=True)
+    _, group, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    order = np.argsort(group.ravel(), kind="stable")
+    ends = np.cumsum(counts)
     most = 0
-    for i in first[counts >= FAN_POINTS // 16]:  # a face of 250 points has 248 triangles
-        near = points[np.abs(points @ normals[i] / size - offsets[i]) <= 1e-3]
+    for g in np.flatnonzero(3 * counts >= FAN_POINTS):  # fewer triangles: too few vertices
+        members = np.unique(triangles[order[ends[g] - counts[g] : ends[g]]])
+        if len(members) < FAN_POINTS:
+            continue
+        near = vertices[members]
         centre = near.mean(axis=0)
-        # the plane that fits them best
-        normal = np.linalg.svd(near - centre, full_matrices=False)[2][2]
-        heights = (points - centre) @ normal / size
-        if heights.min() < -COPLANAR and heights.max() > COPLANAR:
-            continue  # vertices on both sides: no face of the hull
-        most = max(most, int(np.count_nonzero(np.abs(heights) <= COPLANAR)))
+        normal = np.linalg.svd(near - centre, full_matrices=False)[2][2]  # the best plane
+        on = int(np.count_nonzero(np.abs((near - centre) @ normal) <= COPLANAR * reach))
+        if on < max(FAN_POINTS, most + 1):
+            continue
+        heights = (vertices - centre) @ normal
+        if heights.min() >= -COPLANAR * reach or heights.max() <= COPLANAR * reach:
+            most = on  # every vertex on one side: a face of the hull
     return most
 
 
