@@ -104,7 +104,7 @@ def _hull(obj: pin.GeometryObject, mesh: tuple[np.ndarray, np.ndarray]) -> coal.
     Triangulated output (``Qt``) splits a flat face of many vertices into a fan: the cap of a
     finely divided cylinder then gives one vertex more neighbours than coal's hull stores
     (255: "Too many neighbors"). Joggled input (``QJ``) makes every face a triangle of its
-    own, with no fan: qhull moves every point by about 1e-9 of the mesh's size first, more
+    own, with no fan: qhull moves every point by about 1e-9 of its largest coordinate first, more
     if it must try again (a 2000-sided cylinder of 0.2 m: 1.4e-10 m; 4000 sides of 0.5 m:
     3.4e-9 m), far inside the 1e-6 m to which verification holds every mesh vertex inside the
     hull (:mod:`freefloat.verify.hull_agreement`). The triangulated attempt fails late on
