@@ -87,5 +87,94 @@ def test_a_measured_attitude_outside_the_cone_is_refused_with_its_angle(coned):
     assert str(info.value) == (
         f"measured attitude breaks base_pointing (the boresight {angle:.3g} deg from the "
         "direction, at most 12 deg allowed), where the correcting motion starts: no "
-        "correction from it keeps the plan's [constraints.base_pointing]"
+        "correction from this measured attitude keeps the plan's [constraints.base_pointing]"
+    )
+
+
+#: The UR5 servicer started at yaw, pitch, roll (25, -12, 18) deg, its goal the same turn
+#: from there as the shipped scenario's, a cone about a direction off its z axis.
+TURNED = {
+    "base_zyx_deg = [-7.6, -1.8, -8.3]": "base_zyx_deg = GOAL",
+    "[start]\n": "[start]\nbase_zyx_deg = [25.0, -12.0, 18.0]\n",
+}
+
+
+@pytest.fixture(scope="module")
+def turned(tmp_path_factory):
+    """The turned UR5 plan with a 13.8 deg cone about [0.05, -0.04, 1] (its start frame)."""
+    start = Rotation.from_euler("ZYX", [25.0, -12.0, 18.0], degrees=True)
+    goal = start * Rotation.from_euler("ZYX", [-7.6, -1.8, -8.3], degrees=True)
+    text = (SCENARIOS / "ur5_servicer.toml").read_text()
+    for old, new in TURNED.items():
+        assert old in text
+        text = text.replace(old, new)
+    text = text.replace("GOAL", str(goal.as_euler("ZYX", degrees=True).tolist()))
+    path = tmp_path_factory.mktemp("turned") / "ur5.toml"
+    path.write_text(
+        text + "\n[constraints.base_pointing]\naxis = [0.0, 0.0, 1.0]\n"
+        "direction = [0.05, -0.04, 1.0]\nhalf_angle_deg = 13.8\n"
+    )
+    scenario = ff.Scenario.from_toml(path)
+    mission = start.apply(np.array([0.05, -0.04, 1.0]) / np.linalg.norm([0.05, -0.04, 1.0]))
+    return ff.plan(scenario), scenario.robot, goal, mission
+
+
+def test_a_correction_from_a_turned_start_keeps_the_missions_cone(turned):
+    """The start is not the identity, so the order of the turn matters: with it reversed
+    (q_new q_old^-1) this correction went 14.6 deg from the direction."""
+    plan, robot, _, mission = turned
+    measured = [18.053163251282967, -9.779614132277484, 11.6933305258306]
+    corrected = correct_plan(plan, measured).plan
+    assert corrected is not None
+    at = Rotation.from_euler("ZYX", measured, degrees=True)
+
+    def from_mission(y: np.ndarray) -> np.ndarray:
+        axes = (at * Rotation.from_quat(np.atleast_2d(np.asarray(y).T))).apply([0.0, 0.0, 1.0])
+        return np.arccos(np.clip(axes @ mission, -1.0, 1.0))
+
+    largest, _ = scipy_largest(corrected, robot, from_mission)
+    assert math.degrees(largest) <= 13.8 + 1e-6
+
+
+def test_a_measured_attitude_at_the_cones_edge_is_said_to_be_there(turned):
+    """0.01 deg inside the edge (SciPy's rotations put it there) the search stops short (from
+    0.05 deg inside, this correction plans): the refusal says where the measured attitude
+    lies."""
+    plan, _, goal, mission = turned
+    axis = goal.apply([0.0, 0.0, 1.0])
+    away = np.cross(mission, axis)
+    angle = math.acos(axis @ mission)
+    measured = (
+        Rotation.from_rotvec(away / np.linalg.norm(away) * (math.radians(13.8 - 0.01) - angle))
+        * goal
+    )
+    with pytest.raises(ff.SolverError) as info:
+        correct_plan(plan, measured.as_euler("ZYX", degrees=True))
+    assert (
+        "; the measured attitude lies only 0.01 deg inside the base_pointing bound, where a "
+        "correcting loop has little room (best residual"
+    ) in str(info.value)
+
+
+def test_a_swing_bound_the_plans_goal_breaks_from_the_measured_attitude_is_refused(tmp_path):
+    """The swing is measured from the correction's own start: a goal 13 deg from the
+    measured attitude cannot be reached within 12 deg (SciPy's rotations give the 13)."""
+    path = tmp_path / "swing.toml"
+    path.write_text(
+        (SCENARIOS / "ur5_servicer.toml").read_text() + "\n[constraints.base_swing]\nmax_deg = 12\n"
+    )
+    plan = ff.plan(ff.Scenario.from_toml(path))
+    measured = [5.4, -1.8, -8.3]
+    goal = Rotation.from_euler("ZYX", [-7.6, -1.8, -8.3], degrees=True)
+    turn = (Rotation.from_euler("ZYX", measured, degrees=True).inv() * goal).magnitude()
+    with pytest.raises(ff.GoalAttitudeError) as info:
+        correct_plan(plan, measured)
+    assert (info.value.where, info.value.constraint) == ("plan's goal", "base_swing")
+    message = str(info.value)
+    assert message.startswith(
+        f"plan's goal attitude breaks base_swing (it lies {math.degrees(turn):.4g}"
+    )
+    assert message.endswith(
+        "where the correcting motion ends: no correction from this measured attitude keeps "
+        "the plan's [constraints.base_swing]"
     )

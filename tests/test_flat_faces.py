@@ -58,7 +58,7 @@ def test_a_cap_holds_its_rim_and_centre(sides):
     vertices, triangles = _cylinder(sides)
     assert flat_face_points(vertices, triangles) == sides + 1
     assert flat_face_points(_turned(vertices), triangles) == sides + 1
-    far = _turned(vertices) + [500.0, -300.0, 200.0]  # rounding of 500 m coordinates
+    far = _turned(vertices) + np.array([500.0, -300.0, 200.0])  # rounding at 500 m
     assert flat_face_points(far, triangles) == sides + 1
 
 

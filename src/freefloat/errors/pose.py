@@ -125,7 +125,8 @@ class GoalAttitudeError(FreeFloatError):
         constraint: the constraint's name (its scenario table ``[constraints.<name>]``).
         excess: how far beyond it the attitude is (in the constraint's unit).
         detail: the constraint's own account (the turn from the start, the bound).
-        where: ``"goal"``, ``"start"`` or ``"measured"`` (where a correction starts).
+        where: ``"goal"``, ``"start"``; for a correction ``"measured"`` (where it starts)
+            or ``"plan's goal"`` (where it ends).
     """
 
     def __init__(self, constraint: str, excess: float, detail: str, where: str = "goal") -> None:
@@ -133,9 +134,10 @@ class GoalAttitudeError(FreeFloatError):
         self.excess = float(excess)
         self.detail = detail
         self.where = where
-        if where == "measured":
+        if where in ("measured", "plan's goal"):
             said = (
-                "where the correcting motion starts: no correction from it keeps the plan's "
+                f"where the correcting motion {'starts' if where == 'measured' else 'ends'}: "
+                "no correction from this measured attitude keeps the plan's "
                 f"[constraints.{constraint}]"
             )
         else:

@@ -145,7 +145,7 @@ class BasePointing(Constraint):
         spacecraft's own, and the half-angle as recorded (deg).
         """
         direction = quat_to_matrix(np.asarray(turn, dtype=float)).T @ self.direction
-        cone = BasePointing(self.axis.tolist(), direction.tolist(), self.half_angle)
+        cone = type(self)(self.axis.tolist(), direction.tolist(), self.half_angle)
         cone._half_angle_deg = self._half_angle_deg
         return cone
 
