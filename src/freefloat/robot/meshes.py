@@ -166,12 +166,13 @@ def _flat_face_points(vertices: np.ndarray, triangles: np.ndarray) -> int:
     normals, triangles = normals[kept] / lengths[kept, None], triangles[kept]
     offsets = np.einsum("ij,ij->i", normals, a[kept]) / size
     keys = np.round(np.column_stack([normals, offsets]) * 1e3).astype(np.int64)
-    _, group, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
-    order = np.argsort(group.ravel(), kind="stable")
-    ends = np.cumsum(counts)
+    order = np.lexsort(keys.T[::-1])  # the triangles of one group next to each other
+    sorted_keys = keys[order]
+    starts = np.flatnonzero(np.r_[True, np.any(sorted_keys[1:] != sorted_keys[:-1], axis=1)])
+    ends = np.r_[starts[1:], len(order)]
     most = 0
-    for g in np.flatnonzero(3 * counts >= FAN_POINTS):  # fewer triangles: too few vertices
-        members = np.unique(triangles[order[ends[g] - counts[g] : ends[g]]])
+    for g in np.flatnonzero(3 * (ends - starts) >= FAN_POINTS):  # fewer: too few vertices
+        members = np.unique(triangles[order[starts[g] : ends[g]]])
         if len(members) < FAN_POINTS:
             continue
         near = vertices[members]
