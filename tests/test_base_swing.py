@@ -202,7 +202,7 @@ def test_a_goal_attitude_beyond_the_bound_is_refused_before_any_search(tmp_path,
     assert info.value.excess == pytest.approx(math.radians(20.0), abs=1e-12)
     assert str(info.value) == (
         "goal attitude breaks base_swing (it lies 50 deg from the start attitude, at most 30 "
-        "deg allowed), where every path ends; choose a goal attitude nearer the start attitude "
+        "deg allowed), where every path ends; choose a goal attitude it allows "
         "or loosen [constraints.base_swing]"
     )
     assert main(["plan", str(path), "-o", str(tmp_path / "p.json")]) == 2

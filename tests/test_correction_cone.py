@@ -175,6 +175,6 @@ def test_a_swing_bound_the_plans_goal_breaks_from_the_measured_attitude_is_refus
         f"plan's goal attitude breaks base_swing (it lies {math.degrees(turn):.4g}"
     )
     assert message.endswith(
-        "where the correcting motion ends: no correction from this measured attitude keeps "
-        "the plan's [constraints.base_swing]"
+        "where the correcting motion from the measured attitude (its start) ends: no "
+        "correction from this measured attitude keeps the plan's [constraints.base_swing]"
     )

@@ -134,15 +134,18 @@ class GoalAttitudeError(FreeFloatError):
         self.excess = float(excess)
         self.detail = detail
         self.where = where
-        if where in ("measured", "plan's goal"):
+        if where in ("measured", "plan's goal"):  # a correction's: its start is the measured
             said = (
-                f"where the correcting motion {'starts' if where == 'measured' else 'ends'}: "
-                "no correction from this measured attitude keeps the plan's "
+                "where the correcting motion starts"
+                if where == "measured"
+                else "where the correcting motion from the measured attitude (its start) ends"
+            ) + (
+                ": no correction from this measured attitude keeps the plan's "
                 f"[constraints.{constraint}]"
             )
         else:
             change = (
-                "choose a goal attitude nearer the start attitude"
+                "choose a goal attitude it allows"
                 if where == "goal"
                 else "change the start attitude"
             )

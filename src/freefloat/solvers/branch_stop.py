@@ -23,6 +23,7 @@ __all__ = [
     "NEAR_SINGULAR",
     "PROBE",
     "SINGULAR",
+    "STEP_ON",
     "WEAK",
     "ahead",
     "blocker",
@@ -41,6 +42,9 @@ WEAK = 1e-5
 #: The longest step (a fraction of the way) at which a stopped branch looks for a constraint
 #: ahead (:func:`ahead`).
 PROBE = 0.05
+#: What a constraint's figure ahead is measured on (:func:`ahead`): a trial step along the
+#: tangent, long where the map is weak, not a path the search kept.
+STEP_ON = "on the path a step on would take"
 
 
 def ahead(
@@ -68,7 +72,7 @@ def ahead(
             if constraint.applies_to(problem.robot):
                 excess = constraint.violation(problem, ahead)
                 if excess.value > 0.0:
-                    return Broken(constraint.name, excess.detail)
+                    return Broken(constraint.name, f"{excess.detail} ({STEP_ON})")
     return None
 
 
@@ -100,9 +104,10 @@ def why_stopped(blocked: Broken | None, jac: np.ndarray) -> str:
 
     A map weak in every direction (:data:`WEAK`) or nearly singular is named before it. A
     constraint is named with "ahead" and where the path a step along the tangent breaks it
-    (:func:`ahead`; or, with :data:`~.in_the_way.WITHOUT` in its detail, where the path the
-    failed step converges to without it breaks it: :func:`.in_the_way.in_the_way`); its
-    figure is that path's, beyond the limit, while the branch itself keeps it. A
+    (:func:`ahead`, :data:`STEP_ON` in its detail; or, with :data:`~.in_the_way.WITHOUT`
+    in its detail, where the path the failed step converges to without it breaks it:
+    :func:`.in_the_way.in_the_way`); its figure is that path's, beyond the limit, while the
+    branch itself keeps it. A
     singular map first: the tangent is then the least-squares one, its length set by the
     smallest singular value, and a constraint it would break ahead says nothing of the
     branch (a step of 10^8 rad breaks every joint limit).
