@@ -133,14 +133,35 @@ def test_a_path_is_never_accepted_outside_a_row_measured_where_it_is(
 
 def test_rows_near_their_limit_are_measured_at_every_iterate() -> None:
     """2 deg about y: the Newton iterates go beyond the limits on the way (a row 0.58 rad
-    outside at the second), so the rows are measured at every iterate, twice each (tight
-    instants and instants), and the path found is inside the limits measured directly."""
+    outside at the second), so the rows are measured at every iterate, once each (the tight
+    instants with the instants, in one call), and the path found is inside the limits
+    measured directly."""
     problem = _panda_turned(1, 2.0)
     counted = _Counted()
     solved, _, _, iterations = correct(
         problem, [counted], np.zeros(problem.n_free), 1e-9, DEFAULT_INSTANTS, {}
     )
     assert solved is not None
-    assert counted.measured == 2 * iterations
+    assert counted.measured == iterations
     rows = JointPositionLimits().rows(problem, solved, np.linspace(0.0, 1.0, 1001))
     assert float(rows.values.max()) <= 0.0
+
+
+@pytest.mark.parametrize("name", ["base_swing", "base_pointing"])
+def test_an_attitude_bounds_rows_in_one_call_are_its_rows_in_two(name):
+    """The tight instants and the instants are asked in one call (one integration of the
+    path): the rows agree with those asked apart to the integration's own error."""
+    from freefloat.solvers.rows import _costly_rows
+    from test_plugins import CONSTRAINT_EXAMPLES, ROOT
+
+    ur5_scenario = ff.Scenario.from_toml(ROOT / "robots" / "scenarios" / "ur5_servicer.toml")
+
+    constraint = CONSTRAINT_EXAMPLES[name](ur5_scenario)
+    problem = ff.problem_from_scenario(ur5_scenario, extra=[2] * ur5_scenario.robot.n)
+    beta = 0.2 * np.random.default_rng(0).normal(size=problem.n_free)  # a turn peaking inside
+    tight = constraint.tight_instants(problem, beta)
+    assert len(tight)
+    values, jacobian = _costly_rows(problem, constraint, beta, DEFAULT_INSTANTS, np.zeros(0))
+    apart = [constraint.rows(problem, beta, at) for at in (tight, DEFAULT_INSTANTS)]
+    np.testing.assert_allclose(values, np.concatenate([r.values for r in apart]), atol=1e-9)
+    np.testing.assert_allclose(jacobian, np.concatenate([r.jacobian for r in apart]), atol=1e-8)

@@ -141,17 +141,24 @@ def _costly_rows(
     instants: np.ndarray,
     dips: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """A constraint's rows measured at ``beta``: at its tight instants, then at its instants."""
-    g, g_mat = [np.zeros(0)], [np.zeros((0, problem.n_free))]
+    """A constraint's rows measured at ``beta``: at its tight instants, then at its instants.
+
+    Both in one call (an attitude bound integrates the path once for all of them), except for
+    a constraint that picks its own instants (clearance), whose rows are asked as they are.
+    """
+    at = rows_instants(constraint, instants, dips)
     tight = constraint.tight_instants(problem, beta)
-    if len(tight):
-        at_tight = constraint.rows(problem, beta, tight)
-        g.append(at_tight.values)
-        g_mat.append(at_tight.jacobian)
-    at = constraint.rows(problem, beta, rows_instants(constraint, instants, dips))
-    g.append(at.values)
-    g_mat.append(at.jacobian)
-    return np.concatenate(g), np.concatenate(g_mat)
+    if len(tight) and not constraint.own_instants:
+        at = np.concatenate([tight, at])
+    elif len(tight):
+        first = constraint.rows(problem, beta, tight)
+        rest = constraint.rows(problem, beta, at)
+        return (
+            np.concatenate([first.values, rest.values]),
+            np.concatenate([first.jacobian, rest.jacobian]),
+        )
+    found = constraint.rows(problem, beta, at)
+    return found.values, found.jacobian
 
 
 def linearised(
