@@ -92,9 +92,10 @@ def true_hull(obj: pin.GeometryObject, key: MeshKey | None = None) -> coal.Conve
 #: at most 255 neighbours of a point: a face of 254 points or more fails (a cylinder's cap,
 #: measured). From this many points on one face of the mesh, the joggled hull is built at once.
 FAN_POINTS = 250
-#: How far (relative to the mesh's size) a vertex may lie from a face's plane and count as on
-#: it: qhull merges only points coplanar to its rounding, and a cap rounded to single
-#: precision and tilted is hulled by ``Qt`` in milliseconds (2000 sides: 16 ms).
+#: How far (relative to the mesh's largest coordinate, or its size if larger) a vertex may lie
+#: from a face's plane and count as on it: qhull merges only points coplanar to its rounding,
+#: and a cap rounded to single precision and tilted is hulled by ``Qt`` in milliseconds (2000
+#: sides: 16 ms).
 COPLANAR = 1e-12
 
 
@@ -104,8 +105,8 @@ def _hull(obj: pin.GeometryObject, mesh: tuple[np.ndarray, np.ndarray]) -> coal.
     Triangulated output (``Qt``) splits a flat face of many vertices into a fan: the cap of a
     finely divided cylinder then gives one vertex more neighbours than coal's hull stores
     (255: "Too many neighbors"). Joggled input (``QJ``) makes every face a triangle of its
-    own, with no fan: qhull moves every point by about 1e-9 of its largest coordinate first, more
-    if it must try again (a 2000-sided cylinder of 0.2 m: 1.4e-10 m; 4000 sides of 0.5 m:
+    own, with no fan: qhull moves every point by about 1e-9 of its largest coordinate first,
+    more if it must try again (a 2000-sided cylinder of 0.2 m: 1.4e-10 m; 4000 sides of 0.5 m:
     3.4e-9 m), far inside the 1e-6 m to which verification holds every mesh vertex inside the
     hull (:mod:`freefloat.verify.hull_agreement`). The triangulated attempt fails late on
     large faces, after qhull has merged their points (8000 sides: 5.7 s, against 0.15 s

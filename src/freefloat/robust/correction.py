@@ -156,8 +156,8 @@ def _restarted(plan: Plan, robot: Robot, measured: np.ndarray) -> list[Constrain
 #: The attitude of the start relative to itself (``[x, y, z, w]``).
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 #: How near (rad) an attitude bound's edge a measured attitude is said to lie when the
-#: correction fails: a loop from the edge must first turn away from it, and the search
-#: found none from 0.01 deg inside a 13.8 deg cone (it did from 0.05 deg).
+#: correction fails: the loop that starts it has little room there (the search found none
+#: from 0.01 deg inside a 13.8 deg cone, and planned from 0.05 deg inside).
 EDGE_NOTE = 1e-3
 
 
