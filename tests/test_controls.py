@@ -75,7 +75,7 @@ def test_clicking_play_advances_the_time_readout(page):
     text = page.read_text()
     index = text.rfind("</body>")
     probed.write_text(text[:index] + PROBE + text[index:])
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory(ignore_cleanup_errors=True) as tmp:  # as in browser.py
         result = subprocess.run(
             [
                 chromium(),
