@@ -134,25 +134,15 @@ class GoalAttitudeError(FreeFloatError):
         self.excess = float(excess)
         self.detail = detail
         self.where = where
-        if where in ("measured", "plan's goal"):  # a correction's: its start is the measured
-            said = (
-                "where the correcting motion starts"
-                if where == "measured"
-                else "where the correcting motion from the measured attitude (its start) ends"
-            ) + (
-                ": no correction from this measured attitude keeps the plan's "
-                f"[constraints.{constraint}]"
-            )
-        else:
-            change = (
-                "choose a goal attitude it allows"
-                if where == "goal"
-                else "change the start attitude"
-            )
-            said = (
-                f"where every path {'ends' if where == 'goal' else 'starts'}; {change} or "
-                f"loosen [constraints.{constraint}]"
-            )
+        table = f"[constraints.{constraint}]"
+        kept = f": no correction from this measured attitude keeps the plan's {table}"
+        said = {
+            "goal": f"where every path ends; choose a goal attitude it allows or loosen {table}",
+            "start": f"where every path starts; change the start attitude or loosen {table}",
+            "measured": f"where the correcting motion starts{kept}",
+            "plan's goal": "where the correcting motion from the measured attitude (its start) "
+            f"ends{kept}",
+        }[where]
         super().__init__(f"{where} attitude breaks {constraint} ({detail}), {said}")
 
 
