@@ -178,3 +178,19 @@ def test_a_swing_bound_the_plans_goal_breaks_from_the_measured_attitude_is_refus
         "where the correcting motion from the measured attitude (its start) ends: no "
         "correction from this measured attitude keeps the plan's [constraints.base_swing]"
     )
+
+
+def test_the_command_refuses_a_measured_attitude_outside_the_cone_in_one_line(
+    coned, tmp_path, capsys
+):
+    """``freefloat correct``: exit 2, one line on stderr, no traceback, no file written."""
+    from freefloat.cli import main
+
+    plan, _ = coned
+    path = plan.save(tmp_path / "coned.json")
+    out = tmp_path / "c.json"
+    code = main(["correct", str(path), "--base-zyx-deg", "-5", "-12", "-6", "-o", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and not out.exists()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    assert err.startswith("freefloat: error: measured attitude breaks base_pointing")
