@@ -117,6 +117,7 @@ def correcting_plan(
             per_axis=per_axis,
             stopped_by=exc.stopped_by,
             reached_fraction=exc.reached_fraction,
+            blocked_by=exc.blocked_by,
         ) from None
     problem = problem.with_steps(solution.steps)
     return plan_from_solution(

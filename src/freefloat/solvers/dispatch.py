@@ -24,7 +24,7 @@ from ..physics.attitude import relative_rotvec
 from ..plugins import Registry, plugin_function
 from ..problem.constraints import Constraint, default_constraints
 from ..problem.residual import Problem
-from .certify import certify
+from .certify import Certified, certify
 from .continuation import continuation
 from .multistart import multistart
 from .newton import polish
@@ -95,20 +95,11 @@ def solve(
     blocked = list(attempt.blocked_by)
     roots, best_vector = _roots(problem, attempt, constraints, tol, tried, blocked)
     roots.sort(key=lambda r: float(r.beta @ r.beta))
-    if not roots:
-        _refuse(problem, attempt, start, tried, best_vector, tuple(dict.fromkeys(blocked)))
-
     # Certify the integration at the chosen root; refine the grid and polish when needed.
-    chosen = roots[0]
-    certified = certify(problem, chosen.beta, chosen.residual, tol)
+    certified = _certified(problem, roots, constraints, tol, tried, blocked)
+    if certified is None:
+        _refuse(problem, attempt, start, tried, best_vector, tuple(dict.fromkeys(blocked)))
     chosen = Root(certified.beta, certified.residual, problem.path_length(certified.beta))
-    error = certified.integration_error
-    if not certified.passed:
-        raise SolverError(
-            f"attitude integration error {error:.3g} rad is too large to certify the plan",
-            chosen.residual,
-            _dedupe(tried),
-        )
     return Solution(
         beta=chosen.beta,
         residual=chosen.residual,
@@ -116,12 +107,50 @@ def solve(
         iterations=attempt.iterations,
         evaluations=problem.evaluations - start_evaluations,
         wall_time=time.perf_counter() - start_time,
-        roots=(chosen, *roots[1:]),
-        integration_error=error,
+        roots=(chosen, *roots),
+        integration_error=certified.integration_error,
         steps=certified.problem.steps,
         strategy=strategy,
         tried=tuple(_dedupe(tried)),
     )
+
+
+def _certified(
+    problem: Problem,
+    roots: list[Root],
+    constraints: Sequence[Constraint],
+    tol: float,
+    tried: list[str],
+    blocked: list[str],
+) -> Certified | None:
+    """The first of ``roots`` that stays within the constraints once certified (popped).
+
+    A root is polished again on each finer grid (:func:`.certify.certify`); where that moves
+    it, it is checked again: a wild root (a path that turns many times, found on a coarse
+    grid) can move onto a path that breaks a constraint the first one kept (a planar
+    correction: 76.66 deg out of a 60 deg cone). Such a root is dropped (said in ``tried``,
+    its constraint in ``blocked``) and the next one certified; None when none is left.
+
+    Raises:
+        SolverError: the grid cannot be refined enough at a root to certify it.
+    """
+    while roots:
+        chosen = roots.pop(0)
+        certified = certify(problem, chosen.beta, chosen.residual, tol)
+        if not certified.passed:
+            raise SolverError(
+                "attitude integration error "
+                f"{certified.integration_error:.3g} rad is too large to certify the plan",
+                certified.residual,
+                _dedupe(tried),
+            )
+        moved = not np.array_equal(certified.beta, chosen.beta)
+        broken = first_broken(certified.problem, constraints, certified.beta) if moved else None
+        if broken is None:
+            return certified
+        tried.append(f"a root polished on a finer grid breaks {broken}")
+        blocked.append(broken.name)
+    return None
 
 
 def _attempt(
@@ -257,8 +286,10 @@ def _roots(
 ) -> tuple[list[Root], np.ndarray]:
     """The attempt's candidates, polished, that are roots within the constraints.
 
-    Returns them with the residual vector (rad) closest to zero; appends what was dropped to
-    ``tried``, and the name of each constraint a dropped root broke to ``blocked``.
+    Returns them with the residual vector (rad) closest to zero among the other candidates
+    within the constraints and the quintic path (what a refusal reports when no root is kept,
+    :func:`_certified`); appends what was dropped to ``tried``, and the name of each
+    constraint a dropped root broke to ``blocked``.
     """
     zero = np.zeros(problem.n_free)
     roots = []
@@ -278,8 +309,8 @@ def _roots(
             tried.append(f"a root breaks {broken}")
             blocked.append(broken.name)
             continue
-        if residual < np.linalg.norm(best_vector):
-            best_vector = vector
         if residual < tol:
             roots.append(Root(beta, residual, problem.path_length(beta)))
+        elif residual < np.linalg.norm(best_vector):
+            best_vector = vector
     return roots, best_vector
