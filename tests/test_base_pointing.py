@@ -37,7 +37,7 @@ def test_a_boresight_is_kept_in_its_cone(tmp_path, capsys):
     scenario_path.write_text(REORIENTATION)
     scenario = ff.Scenario.from_toml(scenario_path)
     free, _ = scipy_largest(ff.plan(scenario), scenario.robot, _tilt)
-    assert math.degrees(free) > 5.0  # unbounded, the z axis tilts 5.8 deg on the way
+    assert math.degrees(free) > 4.0  # unbounded, the z axis tilts 4.8 deg on the way
     bounded = tmp_path / "bounded.toml"
     bounded.write_text(
         REORIENTATION + "\n[constraints.base_pointing]\naxis = [0, 0, 1]\nhalf_angle_deg = 3\n"

@@ -365,13 +365,13 @@ def _cone_plan(tmp_path):
 
 
 def test_a_refused_correction_reports_no_residual_beyond_the_loop_it_began_on(tmp_path):
-    """Turned back by 10 deg within the cone: the refusal said its search began on a loop
+    """Turned back by 15 deg within the cone: the refusal said its search began on a loop
     ending near the goal beside a best residual of the whole turn (an attempt that started
     over). The loop keeps every constraint: no figure may be worse than it."""
     import re
 
     plan, robot, goal_yaw = _cone_plan(tmp_path)
-    measured = quat_from_zyx(math.radians(goal_yaw + 10.0), 0.0, 0.0)
+    measured = quat_from_zyx(math.radians(goal_yaw + 15.0), 0.0, 0.0)
     with pytest.raises(ff.SolverError) as info:
         correcting_plan(plan, robot, measured)
     message = str(info.value)
@@ -380,12 +380,31 @@ def test_a_refused_correction_reports_no_residual_beyond_the_loop_it_began_on(tm
     assert math.degrees(info.value.best_residual) <= float(began.group(1)) * (1 + 1e-3)
 
 
-def test_a_correction_near_the_cone_is_planned_not_refused_by_a_hair(tmp_path):
-    """Turned back by 2 deg: a root 0.01 deg outside the cone between the solver's instants
-    was refused; the rows now ask for the axis a hair inside (SOLVER_SLACK). Closed form:
-    the cone's gap cos(60 deg) - cos(q1 + q2 - 70 deg) on 20001 instants of the plan."""
+def test_a_root_polished_out_of_the_cone_is_dropped_not_returned(tmp_path):
+    """Turned back by 45 deg: the search's one root within the cone (coefficients up to
+    35 rad, found on a 64-step grid) moved, polished on the 2048-step grid that certifies it,
+    onto a path 76.66 deg from the cone's direction (16.66 deg out: the closed-form gap of
+    the test below, 0.269, on 400001 instants); the solver returned it, and only
+    verification refused the plan. A root that polishing moves is now checked again."""
     plan, robot, goal_yaw = _cone_plan(tmp_path)
-    measured = quat_from_zyx(math.radians(goal_yaw + 2.0), 0.0, 0.0)
+    measured = quat_from_zyx(math.radians(goal_yaw + 45.0), 0.0, 0.0)
+    with pytest.raises(ff.SolverError) as info:
+        correcting_plan(plan, robot, measured)
+    assert not isinstance(info.value, ff.VerificationError)
+    said = "a root polished on a finer grid breaks end_effector_cone (ee's axis 76.66 deg"
+    assert any(t.startswith(said) for t in info.value.tried), info.value.tried
+    assert "end_effector_cone" in info.value.blocked_by
+
+
+@pytest.mark.parametrize("back_deg", [2.0, 10.0])
+def test_a_correction_near_the_cone_is_planned_not_refused_by_a_hair(tmp_path, back_deg):
+    """Turned back by 2 deg: a root 0.01 deg outside the cone between the solver's instants
+    was refused; the rows now ask for the axis a hair inside (SOLVER_SLACK). By 10 deg: it
+    was refused until the loop it starts from kept the base near its start on the way.
+    Closed form: the cone's gap cos(60 deg) - cos(q1 + q2 - 70 deg) on 20001 instants of
+    the plan."""
+    plan, robot, goal_yaw = _cone_plan(tmp_path)
+    measured = quat_from_zyx(math.radians(goal_yaw + back_deg), 0.0, 0.0)
     corrected = correcting_plan(plan, robot, measured)
     assert corrected.base.attitude_error_rad <= 1e-9
     q = corrected.joint_positions(np.linspace(0.0, corrected.duration, 20001))
@@ -519,13 +538,14 @@ def test_correct_at_the_goal_writes_nothing(tmp_path, worked, capsys):
 
 
 def test_a_correction_with_a_wild_second_root_verifies(tmp_path, worked, capsys):
-    """Corrected from 179 deg, the worked example's search keeps a second root whose path
-    turns 617 rad: its residual was recorded from the solver's grid, and verify, which
+    """Corrected from 179 deg, the worked example's search kept a second root whose path
+    turned 617 rad: its residual was recorded from the solver's grid, and verify, which
     recomputes it on the plan's own, refused the written plan (3.9e-9 rad apart). Each
-    root's residual is now recorded on the plan's grid."""
+    root's residual is now recorded on the plan's grid. (Corrected from 150 deg, the
+    search keeps three roots, of 27, 130 and 487 rad of joint travel.)"""
     _, plan_path, _ = worked
     output = tmp_path / "c.json"
-    argv = ["correct", str(plan_path), "--base-zyx-deg", "179", "0", "0", "-o", str(output)]
+    argv = ["correct", str(plan_path), "--base-zyx-deg", "150", "0", "0", "-o", str(output)]
     assert main([*argv, "-q"]) == 0
     corrected = ff.Plan.load(output)
     assert len(corrected.solver.solutions) > 1
