@@ -478,6 +478,7 @@ def _message_cases(folder: Path, plan_file: Path) -> list[tuple[list, bool, str]
         *_round_32_cases(folder),
         *_round_33_cases(folder),
         *_round_34_cases(folder),
+        *_round_35_cases(folder),
     ]
 
 
@@ -726,6 +727,35 @@ def _round_34_cases(folder: Path) -> list[tuple[list, bool, str]]:
     return [
         (["correct", "coned.json", *measured, "-o", "out.json"], True, "correcting motion starts"),
         (["correct", "coned.json", "--base-zyx-deg", "-7.0", "-1.5", "-8.0", "-q"], False, ""),
+    ]
+
+
+def _round_35_cases(folder: Path) -> list[tuple[list, bool, str]]:
+    """The thirty-fifth round's: the worked example kept within an end-effector cone and
+    corrected from 10 deg (refused while the loop it starts from was picked for its turn
+    alone; planned), and the UR5 servicer turned 1 deg in place within a 0.8 deg pointing
+    cone (planned)."""
+    scenarios = ROOT / "robots" / "scenarios"
+    worked = (scenarios / "worked_example.toml").read_text()
+    worked = worked.replace('"planar_2dof"', f'"{ROOT / "robots" / "planar_2dof.urdf"}"')
+    cone = folder / "we_cone.toml"
+    cone.write_text(
+        worked + "\n[constraints.end_effector_cone]\naxis = [1.0, 0.0, 0.0]\n"
+        "direction = [0.3420201433256687, 0.9396926207859083, 0.0]\nhalf_angle_deg = 60.0\n"
+    )
+    run(["plan", cone, "-o", "we_cone.json", "-q"], folder)
+    ur5 = (scenarios / "ur5_servicer.toml").read_text()
+    ur5 = ur5.replace('"ur5_servicer"', f'"{ROOT / "robots" / "ur5_servicer.urdf"}"')
+    start = ur5.split("[start]\n", 1)[1].split("\n", 1)[0]
+    goal = ur5.split("[goal]\n", 1)[1].split("\n[", 1)[0]
+    in_place = folder / "in_place.toml"
+    in_place.write_text(
+        ur5.replace(goal, start + "\nbase_zyx_deg = [1.0, 0.0, 0.0]\n")
+        + "\n[constraints.base_pointing]\naxis = [0, 0, 1]\nhalf_angle_deg = 0.8\n"
+    )
+    return [
+        (["correct", "we_cone.json", "--base-zyx-deg", "10", "0", "0", "-o", "c35.json"], False, ""),
+        (["plan", in_place, "-o", "in_place.json", "-q"], False, ""),
     ]
 
 
