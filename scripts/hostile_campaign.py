@@ -754,7 +754,11 @@ def _round_35_cases(folder: Path) -> list[tuple[list, bool, str]]:
         + "\n[constraints.base_pointing]\naxis = [0, 0, 1]\nhalf_angle_deg = 0.8\n"
     )
     return [
-        (["correct", "we_cone.json", "--base-zyx-deg", "10", "0", "0", "-o", "c35.json"], False, ""),
+        (
+            ["correct", "we_cone.json", "--base-zyx-deg", "10", "0", "0", "-o", "c35.json"],
+            False,
+            "",
+        ),
         (["plan", in_place, "-o", "in_place.json", "-q"], False, ""),
     ]
 
