@@ -126,3 +126,80 @@ def test_the_loop_swings_the_spacecraft_about_as_far_as_it_turns_it(turn_deg):
     end = float(angle(_scipy_attitude(path, still.robot).sol(path.duration)))
     assert end > np.radians(0.2)  # it does turn the spacecraft
     assert swing <= 2.0 * end, (np.degrees(swing), np.degrees(end))
+
+
+_SLIDES = """<?xml version="1.0"?>
+<robot name="slides">
+  <link name="base"><inertial><mass value="100.0"/>
+    <inertia ixx="10" iyy="10" izz="10" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="px" type="prismatic"><parent link="base"/><child link="sled"/>
+    <axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="100" velocity="1"/></joint>
+  <link name="sled"><inertial><mass value="1.0"/>
+    <inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="py" type="prismatic"><parent link="sled"/><child link="mass"/>
+    <axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="100" velocity="1"/></joint>
+  <link name="mass"><inertial><mass value="20.0"/>
+    <inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+</robot>
+"""
+
+
+def test_a_pure_reorientation_where_the_map_vanishes_is_refused_in_one_line(tmp_path, capsys):
+    """Two slides carrying a mass from the spacecraft's centre of mass: the momentum map is
+    zero at the start (a review's robot), so the loop's swing form is zero too, and its
+    Cholesky factor raised a LinAlgError: a traceback from plan, correct and reach. The loop
+    is then the one of the least joint motion."""
+    from freefloat.cli import main
+
+    (tmp_path / "slides.urdf").write_text(_SLIDES)
+    scenario = tmp_path / "slides.toml"
+    scenario.write_text(
+        'robot = "slides.urdf"\nduration = 10.0\n[start]\njoints = { px = 0.0, py = 0.0 }\n'
+        "[goal]\njoints = { px = 0.0, py = 0.0 }\nbase_zyx_deg = [1.0, 0.0, 0.0]\n"
+        "[safety]\ncheck = false\n"
+    )
+    problem = problem_from_scenario(ff.Scenario.from_toml(scenario))
+    loop = loop_origin(problem, ff.default_constraints())
+    assert loop is not None and np.isfinite(loop).all()
+    np.testing.assert_array_equal(loop, loop_origin(problem, ff.default_constraints(), False))
+    assert main(["plan", str(scenario), "-o", str(tmp_path / "p.json"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_no_loop_where_one_joint_moves_alone():
+    """The worked example with free coefficients on q1 only: a path of one joint that comes
+    back retraces itself, so it turns a planar base by the integral of g1(q1) dq1 over a
+    closed interval, 0 (closed form). Its curvature is the differences' noise (about 1e-12),
+    which made a loop of 1e4 rad and more; there is none."""
+    still = _in_place("worked_example", [0.0, 0.0, np.radians(1.0)])
+    problem = problem_from_scenario(still, extra=[2, 0])
+    assert stays_put(problem)
+    assert loop_origin(problem, ff.default_constraints()) is None
+
+
+def test_a_reorientation_the_first_loop_cannot_start_plans_from_the_other():
+    """The worked example turned 20 deg in place, its tool's x axis within 60 deg of the
+    base direction at 70 deg: the search from the loop of the least swing stops; the one
+    from the loop of the least joint motion plans (each plans some turns the other cannot).
+    Truths: the cone's closed-form gap cos(60 deg) - cos(q1 + q2 - 70 deg) on 20001 instants
+    of the plan, and an RK5 replay of the attitude."""
+    from freefloat.problem.constraints import constraint_from_record
+
+    cone = constraint_from_record(
+        "end_effector_cone",
+        {"axis": [1.0, 0.0, 0.0], "direction": [0.3420201433256687, 0.9396926207859083, 0.0],
+         "half_angle_deg": 60.0},
+    )  # fmt: skip
+    scenario = dataclasses.replace(
+        _in_place("worked_example", [0.0, 0.0, np.radians(20.0)]), constraints=(cone,)
+    )
+    plan = ff.plan(scenario)
+    solved = [t for t in plan.solver.tried if t.endswith(": solved")]
+    assert solved == ["goal as stated, from the loop of the least joint motion, freedom q1+2, "
+                      "q2+1: solved"]  # fmt: skip
+    q = plan.joint_positions(np.linspace(0.0, plan.duration, 20001))
+    gap = np.cos(np.radians(60.0)) - np.cos(q[:, 0] + q[:, 1] - np.radians(70.0))
+    assert gap.max() <= 1e-9
+    replayed = replay_attitude(plan, scenario.robot)
+    assert replayed.error_rad <= 1e-9 + replayed.estimate_rad

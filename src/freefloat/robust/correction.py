@@ -23,6 +23,7 @@ from ..plans.format import Plan
 from ..problem.build import build_problem
 from ..problem.constraints import Constraint
 from ..problem.endpoints import at_attitude
+from ..problem.residual import Problem
 from ..robot.model import Robot
 from ..solvers.dispatch import solve
 from ..solvers.loop_start import loop_start
@@ -94,31 +95,15 @@ def correcting_plan(
     start = loop_start(problem, constraints, turn) if angle > 0.0 else None
     try:
         solution = solve(problem, options, constraints, start)
-    except SolverError as exc:
-        said = "continued from where the search with less freedom stopped"  # the solver's words
-        tried = [t.replace(said, "started from the quadratic-model loop") for t in exc.tried]
-        began = problem.achieved(np.zeros(problem.n_free) if start is None else start)
-        away = geodesic_angle(began, goal)  # what the search's own figures count from
-        where = (
-            ""
-            if abs(away - angle) < 1e-9
-            else f"its search began on a loop ending {math.degrees(away):.4g} deg from the goal: "
-        )
-        best, per_axis = exc.best_residual, exc.per_axis
-        if start is not None:  # the loop keeps the constraints: the search's own figure
-            missed = problem.residual(start)
-            if float(np.linalg.norm(missed)) < best:
-                best, per_axis = float(np.linalg.norm(missed)), tuple(missed)
-        raise SolverError(
-            f"one correcting motion cannot turn the spacecraft back by {math.degrees(angle):.4g}"
-            f" deg within the plan's constraints ({where}{exc.headline}){_near_edge(constraints)}",
-            best,
-            tried,
-            per_axis=per_axis,
-            stopped_by=exc.stopped_by,
-            reached_fraction=exc.reached_fraction,
-            blocked_by=exc.blocked_by,
-        ) from None
+    except SolverError as exc:  # each loop plans some corrections the other cannot
+        other = None if start is None else loop_start(problem, constraints, turn, swing=False)
+        if other is None or start is None or np.array_equal(other, start):
+            raise _refusal(problem, exc, start, angle, constraints) from None
+        try:
+            solution = solve(problem, options, constraints, other)
+        except SolverError as second:
+            also = f"from the loop of the least joint motion: {second.headline}"
+            raise _refusal(problem, exc, start, angle, constraints, also) from None
     problem = problem.with_steps(solution.steps)
     return plan_from_solution(
         problem,
@@ -127,6 +112,47 @@ def correcting_plan(
         tolerance=options.tolerance,
         constraints=constraints,
         safety=plan.safety,
+    )
+
+
+def _refusal(
+    problem: Problem,
+    exc: SolverError,
+    start: np.ndarray | None,
+    angle: float,
+    constraints: list[Constraint],
+    also: str = "",
+) -> SolverError:
+    """The correction's refusal in its own words, from the search's error from ``start``.
+
+    ``angle``: the turn asked (rad); ``also``: a further attempt that failed, for the list
+    of what was tried.
+    """
+    said = "continued from where the search with less freedom stopped"  # the solver's words
+    tried = [t.replace(said, "started from the quadratic-model loop") for t in exc.tried]
+    tried += [also] if also else []
+    goal = problem.goal_quaternion
+    began = problem.achieved(np.zeros(problem.n_free) if start is None else start)
+    away = geodesic_angle(began, goal)  # what the search's own figures count from
+    where = (
+        ""
+        if abs(away - angle) < 1e-9
+        else f"its search began on a loop ending {math.degrees(away):.4g} deg from the goal: "
+    )
+    best, per_axis = exc.best_residual, exc.per_axis
+    if start is not None:  # the loop keeps the constraints: the search's own figure
+        missed = problem.residual(start)
+        if float(np.linalg.norm(missed)) < best:
+            best, per_axis = float(np.linalg.norm(missed)), tuple(missed)
+    return SolverError(
+        f"one correcting motion cannot turn the spacecraft back by {math.degrees(angle):.4g}"
+        f" deg within the plan's constraints ({where}{exc.headline}){_near_edge(constraints)}",
+        best,
+        tried,
+        per_axis=per_axis,
+        stopped_by=exc.stopped_by,
+        reached_fraction=exc.reached_fraction,
+        blocked_by=exc.blocked_by,
     )
 
 

@@ -3,9 +3,10 @@
 One dispatcher, one signature per strategy: ``strategy(problem, constraints, options) ->
 Attempt``. The dispatcher picks the strategy from the problem's shape (or the one asked for),
 then polishes the candidates with minimum-norm Gauss-Newton steps, keeps those whose path
-honours every constraint, chooses the minimum-norm root, and certifies the attitude
-integration at it (doubling the steps of a copy of the problem when needed). The problem it is
-given is never changed.
+honours every constraint, and certifies the attitude integration at the root of least norm
+(doubling the steps of a copy of the problem when needed, and polishing the root again on the
+finer grid); a root that this polishing moves onto a path breaking a constraint is dropped
+for the next one. The problem it is given is never changed.
 
 A solution is returned only when the residual is below the tolerance; otherwise
 :class:`~freefloat.errors.SolverError` reports the best residual reached and what was tried.

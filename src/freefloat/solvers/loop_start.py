@@ -18,7 +18,12 @@ that turns the most for its swing: the top eigenvector of ``sum_k a_k H_k`` (``a
 direction of the turn wanted) against the swing's quadratic form ``W`` (:func:`_swing_form`,
 the generalised symmetric eigenproblem ``A v = lambda W v``), scaled to the angle wanted, as
 the solvers' start; the search continues from there. The same Canadarm2 loop then swings
-0.53 deg for a 0.53 deg turn.
+0.53 deg for a 0.53 deg turn. That is the models' figure: such a loop has larger coefficients,
+where the quadratic model of the turn is less exact (the worked example's loop for 2 deg
+turns it 0.13 deg while swinging 5.9 deg), and its turn's direction is the model's top
+eigenvector's, not the one asked. Each loop thus plans turns the other cannot, and the
+searches start from this one and, when that fails, from the loop of the least joint motion
+(``swing=False``, the top eigenvector of ``A`` alone).
 """
 
 from __future__ import annotations
@@ -44,10 +49,16 @@ _STEP = 1e-3
 _HALVINGS = 20
 #: Instants (a count, evenly spaced over the path) at which a loop's swing is weighed.
 _SWING_INSTANTS = 41
-#: Weight of the joints' own displacement (rad^2 or m^2) in a loop's swing form, relative to
-#: the largest squared gain of the momentum map (rad of turn per rad or m of joint): it keeps
-#: the joints bounded along moves that barely swing the spacecraft.
+#: Weight of the joints' own squared displacement in a loop's swing form, as a fraction of
+#: the largest squared gain of the momentum map (a ratio; rad of turn per rad or m of joint,
+#: squared, times rad^2 or m^2 of displacement: rad^2 of turn, like the swing). It keeps the
+#: joints bounded along moves that barely swing the spacecraft.
 _TRAVEL_WEIGHT = 1e-2
+#: Largest top eigenvalue of the turn's curvature (rad of turn per unit of beta squared) taken
+#: as no curvature at all: the central differences of an exactly flat map (joints that all
+#: move along one line and back) give about 1e-12; the heaviest real spacecraft tried
+#: (Canadarm2) give 0.1.
+_FLAT = 1e-8
 
 
 def _curvature(problem: Problem) -> np.ndarray:
@@ -85,25 +96,45 @@ def _swing_form(problem: Problem) -> np.ndarray:
     return np.asarray(form / len(s))
 
 
+def _whitening(problem: Problem) -> np.ndarray | None:
+    """``L^-1`` of the swing form's Cholesky factor ``W = L L^T``; None when W is singular.
+
+    W is singular where the momentum map vanishes at the start joints (a sliding mass at the
+    system's centre of mass: no first-order swing, and no travel weight either); the loop
+    is then the one of the least joint motion.
+    """
+    try:
+        return np.asarray(np.linalg.inv(np.linalg.cholesky(_swing_form(problem))))
+    except np.linalg.LinAlgError:
+        return None
+
+
 def loop_start(
-    problem: Problem, constraints: Sequence[Constraint], turn: np.ndarray
+    problem: Problem, constraints: Sequence[Constraint], turn: np.ndarray, swing: bool = True
 ) -> np.ndarray | None:
     """A closed loop whose quadratic-model turn is ``turn`` (rad, equations' frame).
 
-    The loop that turns the most along ``turn`` for its swing (see the module docstring).
-    Halved while it breaks a constraint (at most 20 times); None when no loop turns that way.
+    With ``swing``, the loop that turns the most along ``turn`` for its swing (see the module
+    docstring); without, the one that turns the most for the size of its free coefficients
+    (the top eigenvector of ``A`` alone: the loop of the least joint motion, which may swing
+    the spacecraft far on the way). The searches start from the first and fall back on the
+    second: each plans some turns the other cannot reach (a 2 deg ETS-VII reorientation within
+    a 2.1 deg swing bound plans from the second only; a 0.54 deg Canadarm2 correction from the
+    first only). Halved while it breaks a constraint (at most 20 times); None when no loop
+    turns that way.
     """
     hessian = _curvature(problem)
     size = float(np.linalg.norm(turn))
     direction = turn / size
-    # A v = lambda W v with W = L L^T: the plain eigenproblem of L^-1 A L^-T, v = L^-T u
-    lower = np.linalg.cholesky(_swing_form(problem))
-    inverse = np.linalg.inv(lower)
     curvature = np.einsum("k,kij->ij", direction, hessian)
-    values, vectors = np.linalg.eigh(inverse @ curvature @ inverse.T)
-    if values[-1] <= 0.0:
+    values, vectors = np.linalg.eigh(curvature)
+    if values[-1] <= _FLAT:  # no loop turns that way (or only the differences' noise does)
         return None
-    beta = math.sqrt(2.0 * size / values[-1]) * (inverse.T @ vectors[:, -1])
+    inverse = _whitening(problem) if swing else None
+    if inverse is not None:  # A v = lambda W v, W = L L^T: L^-1 A L^-T u = lambda u, v = L^-T u
+        values, vectors = np.linalg.eigh(inverse @ curvature @ inverse.T)
+        vectors = inverse.T @ vectors
+    beta = math.sqrt(2.0 * size / values[-1]) * vectors[:, -1]
     for _ in range(_HALVINGS):
         if not broken_constraint(problem, constraints, beta):
             return np.asarray(beta)
@@ -116,11 +147,14 @@ def stays_put(problem: Problem) -> bool:
     return bool(np.array_equal(problem.family.start, problem.family.goal))
 
 
-def loop_origin(problem: Problem, constraints: Sequence[Constraint]) -> np.ndarray | None:
+def loop_origin(
+    problem: Problem, constraints: Sequence[Constraint], swing: bool = True
+) -> np.ndarray | None:
     """Where the solvers start when the quintic path stays put: a loop towards the goal.
 
     None when the quintic path moves (it is the start), when it already ends at the goal
-    attitude, or when no loop within ``constraints`` turns that way.
+    attitude, or when no loop within ``constraints`` turns that way. ``swing``: as
+    :func:`loop_start`.
     """
     if not stays_put(problem) or problem.n_free == 0:
         return None
@@ -131,7 +165,7 @@ def loop_origin(problem: Problem, constraints: Sequence[Constraint]) -> np.ndarr
         turn = relative_rotvec(problem.achieved(zero), problem.goal_quaternion)
     if not np.any(turn):
         return None
-    return loop_start(problem, constraints, turn)
+    return loop_start(problem, constraints, turn, swing)
 
 
 #: The turn (rad) a reach direction's loop is solved at before it heads on (a multiple of the

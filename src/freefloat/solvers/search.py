@@ -33,7 +33,7 @@ from ..problem.scenario import Scenario
 from ..progress import LOGGER
 from .dispatch import solve
 from .hints import extra_hint, finger_hint, reach_hint
-from .loop_start import loop_origin
+from .loop_start import loop_origin, stays_put
 from .options import Solution, SolveOptions, Strategy
 
 __all__ = ["SearchResult", "freedom_candidates", "search", "turn_candidates"]
@@ -135,48 +135,13 @@ def search(
     for offset in offsets:
         turns = {n: round(o / (2 * math.pi)) for n, o in zip(names, offset, strict=True) if o}
         label = _turns_label(turns)
-        distributions = _distributions(scenario, options, planar)
-        carry: tuple[PathFamily, tuple[float, ...]] | None = None
-        for level, counts in enumerate(distributions, start=1):
-            extra = scenario.extra if counts is None else counts
-            try:
-                problem = problem_from_scenario(scenario, extra=extra, goal_offset=offset)
-            except InfeasibleError as exc:
-                record.tried.append(f"{label}: {exc}")
-                record.first_error = record.first_error or exc
-                break  # the planar bounds do not depend on the freedom
-            except InputError as exc:
-                record.tried.append(f"{label}: {exc}")
-                record.first_error = record.first_error or exc
-                continue
-            used = [sum(1 for i, _ in problem.family.free_index if i == j) for j in range(robot.n)]
-            freedom = f"{label}, freedom {_describe(used, names)}"
-            continued = carry is not None
-            if carry is not None:  # continue where less freedom stopped (new ones start at 0)
-                start = problem.family.embed(carry[0], np.asarray(carry[1]))
-            else:  # the quintic path, or a loop when it stays put (a pure reorientation)
-                start = loop_origin(
-                    problem, default_constraints() if constraints is None else constraints
-                )
-            LOGGER.info(
-                "solve: %s, freedom %s (level %d of %d)%s",
-                label,
-                _describe(used, names),
-                level,
-                len(distributions),
-                " continued from where less freedom stopped" if continued else "",
-            )
-            try:
-                solution = solve(problem, options, constraints, start)
-            except SolverError as exc:
-                LOGGER.info("solve: level %d stopped: %s", level, exc.headline)
-                if exc.last_beta is not None:
-                    carry = (problem.family, exc.last_beta)
-                record.failed(exc, freedom, continued=continued, goal=label)
-                continue
-            how = " (continued from where less freedom stopped)" if continued else ""
-            record.tried.append(f"{freedom}: solved{how}")
-            return _result(problem, solution, used, turns, record.tried)
+        record.stayed_put = False
+        found = _levels(scenario, options, constraints, offset, label, planar, record)
+        if found is None and record.stayed_put:  # the other loop (loop_start: each plans some)
+            least = f"{label}, from the loop of the least joint motion"
+            found = _levels(scenario, options, constraints, offset, least, planar, record, False)
+        if found is not None:
+            return found
 
     _refuse(
         scenario,
@@ -187,6 +152,74 @@ def search(
         record.nearest_goal(),
         tuple(dict.fromkeys(record.blocked)),
     )
+
+
+def _levels(
+    scenario: Scenario,
+    options: SolveOptions,
+    constraints: Sequence[Constraint] | None,
+    offset: np.ndarray,
+    label: str,
+    planar: bool,
+    record: _Record,
+    swing: bool = True,
+) -> SearchResult | None:
+    """The freedom levels of one goal (``offset``: its joints' whole turns, rad), in order.
+
+    Each level starts where the one before stopped, or from the quintic path, or from a loop
+    when the quintic path stays put (``swing``: which loop, :func:`.loop_start.loop_start`;
+    the record's ``stayed_put`` then says so). The first solved level's result; None when
+    every level failed (each failure in ``record``).
+
+    Raises:
+        FreeFloatError: bad input found while building a problem.
+    """
+    robot = scenario.robot
+    names = robot.joint_names
+    turns = {n: round(o / (2 * math.pi)) for n, o in zip(names, offset, strict=True) if o}
+    distributions = _distributions(scenario, options, planar)
+    carry: tuple[PathFamily, tuple[float, ...]] | None = None
+    for level, counts in enumerate(distributions, start=1):
+        extra = scenario.extra if counts is None else counts
+        try:
+            problem = problem_from_scenario(scenario, extra=extra, goal_offset=offset)
+        except InfeasibleError as exc:
+            record.tried.append(f"{label}: {exc}")
+            record.first_error = record.first_error or exc
+            return None  # the planar bounds do not depend on the freedom
+        except InputError as exc:
+            record.tried.append(f"{label}: {exc}")
+            record.first_error = record.first_error or exc
+            continue
+        used = [sum(1 for i, _ in problem.family.free_index if i == j) for j in range(robot.n)]
+        freedom = f"{label}, freedom {_describe(used, names)}"
+        continued = carry is not None
+        if carry is not None:  # continue where less freedom stopped (new ones start at 0)
+            start = problem.family.embed(carry[0], np.asarray(carry[1]))
+        else:  # the quintic path, or a loop when it stays put (a pure reorientation)
+            record.stayed_put = record.stayed_put or stays_put(problem)
+            listed = default_constraints() if constraints is None else constraints
+            start = loop_origin(problem, listed, swing)
+        LOGGER.info(
+            "solve: %s, freedom %s (level %d of %d)%s",
+            label,
+            _describe(used, names),
+            level,
+            len(distributions),
+            " continued from where less freedom stopped" if continued else "",
+        )
+        try:
+            solution = solve(problem, options, constraints, start)
+        except SolverError as exc:
+            LOGGER.info("solve: level %d stopped: %s", level, exc.headline)
+            if exc.last_beta is not None:
+                carry = (problem.family, exc.last_beta)
+            record.failed(exc, freedom, continued=continued, goal=label)
+            continue
+        how = " (continued from where less freedom stopped)" if continued else ""
+        record.tried.append(f"{freedom}: solved{how}")
+        return _result(problem, solution, used, turns, record.tried)
+    return None
 
 
 def _turns_label(turns: dict[str, int]) -> str:
@@ -232,6 +265,8 @@ class _Record:
             unreachable-attitude errors of its first level (the turn asked from the quintic
             path's attitude) and of the level that got closest.
         blocked: the names of the constraints that stood in the way of some level.
+        stayed_put: whether a level of the goal being tried started from a loop (its
+            quintic path stays put).
     """
 
     tried: list[str] = field(default_factory=list)
@@ -241,6 +276,7 @@ class _Record:
     best_error: SolverError | None = None
     turns: dict[str, list[UnreachableAttitudeError | None]] = field(default_factory=dict)
     blocked: list[str] = field(default_factory=list)
+    stayed_put: bool = False
 
     def failed(self, exc: SolverError, freedom: str, continued: bool, goal: str = "") -> None:
         """Record a level (``freedom``: its label, ``goal`` its goal's) stopped with ``exc``."""
