@@ -12,6 +12,7 @@ do not travel) is not held against it.
 from __future__ import annotations
 
 import dataclasses
+import re
 
 import numpy as np
 import pytest
@@ -165,6 +166,10 @@ def test_a_pure_reorientation_where_the_map_vanishes_is_refused_in_one_line(tmp_
     assert main(["plan", str(scenario), "-o", str(tmp_path / "p.json"), "-q"]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    # the turn asked counts from where the loop took the spacecraft, not from the start
+    asked = float(re.search(r"of the ([\d.e+-]+) deg asked", err).group(1))
+    assert 0.0 < asked < 0.5, err
+    assert "from the attitude of the loop it began on); stopped by" in err, err
 
 
 def test_no_loop_where_one_joint_moves_alone():

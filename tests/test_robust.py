@@ -385,13 +385,14 @@ def test_a_root_polished_out_of_the_cone_is_dropped_not_returned(tmp_path):
     35 rad, found on a 64-step grid) moved, polished on the 2048-step grid that certifies it,
     onto a path 76.66 deg from the cone's direction (16.66 deg out: the closed-form gap of
     the test below, 0.269, on 400001 instants); the solver returned it, and only
-    verification refused the plan. A root that polishing moves is now checked again."""
+    verification refused the plan. A correction now checks its root on the root's own grid
+    (the planner's later stages bring such a root back inside instead)."""
     plan, robot, goal_yaw = _cone_plan(tmp_path)
     measured = quat_from_zyx(math.radians(goal_yaw + 45.0), 0.0, 0.0)
     with pytest.raises(ff.SolverError) as info:
         correcting_plan(plan, robot, measured)
     assert not isinstance(info.value, ff.VerificationError)
-    said = "a root polished on a finer grid breaks end_effector_cone (ee's axis 76.66 deg"
+    said = "the root polished on a finer grid breaks end_effector_cone (ee's axis 76.66 deg"
     assert any(t.startswith(said) for t in info.value.tried), info.value.tried
     assert "end_effector_cone" in info.value.blocked_by
 

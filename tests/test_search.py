@@ -199,7 +199,8 @@ def test_a_refusal_over_several_goals_reports_the_goal_that_got_closest():
     levels; the refusal gives the figures of the goal whose levels got closest, a continued
     level's included (ETS-VII once reported 5.1 of 20 deg where a turned goal reached 17.3 of
     20.1 deg), every figure from that goal. Errors built here with known figures (rad)."""
-    from freefloat.solvers.search import _Record, _refuse
+    from freefloat.solvers.search import _refuse
+    from freefloat.solvers.search_record import SearchRecord
 
     def stopped(reached, asked, residual, axis, why):
         return ff.UnreachableAttitudeError(
@@ -207,7 +208,7 @@ def test_a_refusal_over_several_goals_reports_the_goal_that_got_closest():
         )
 
     stated, turned = "goal as stated", "goal Joint_6 -1 turn(s)"
-    record = _Record()
+    record = SearchRecord()
     x, y = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)
     record.failed(stopped(0.09, 0.30, 0.21, x, "a"), f"{stated}, freedom +2", False, stated)
     record.failed(stopped(0.10, 0.21, 0.20, x, "b"), f"{stated}, freedom +3", True, stated)

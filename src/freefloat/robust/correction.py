@@ -27,7 +27,8 @@ from ..problem.residual import Problem
 from ..robot.model import Robot
 from ..solvers.dispatch import solve
 from ..solvers.loop_start import loop_start
-from ..solvers.options import SolveOptions
+from ..solvers.options import Solution, SolveOptions
+from ..solvers.restore import first_broken
 from ..verify.checks import plan_constraints
 
 __all__ = ["FREEDOM", "correcting_plan"]
@@ -94,13 +95,13 @@ def correcting_plan(
         turn = -problem.residual(np.zeros(problem.n_free))
     start = loop_start(problem, constraints, turn) if angle > 0.0 else None
     try:
-        solution = solve(problem, options, constraints, start)
+        solution = _within(problem, options, constraints, start)
     except SolverError as exc:  # each loop plans some corrections the other cannot
         other = None if start is None else loop_start(problem, constraints, turn, swing=False)
         if other is None or start is None or np.array_equal(other, start):
             raise _refusal(problem, exc, start, angle, constraints) from None
         try:
-            solution = solve(problem, options, constraints, other)
+            solution = _within(problem, options, constraints, other)
         except SolverError as second:
             also = f"from the loop of the least joint motion: {second.headline}"
             raise _refusal(problem, exc, start, angle, constraints, also) from None
@@ -113,6 +114,31 @@ def correcting_plan(
         constraints=constraints,
         safety=plan.safety,
     )
+
+
+def _within(
+    problem: Problem, options: SolveOptions, constraints: list[Constraint], start: np.ndarray | None
+) -> Solution:
+    """The solver's solution from ``start``, checked against the constraints on its own grid.
+
+    The solver may return a root that its certification's polishing moved past a constraint
+    (:func:`~freefloat.solvers.dispatch.solve`, for a planner that brings it back inside
+    later); a correction has no such stage, so that root is a failed search here.
+
+    Raises:
+        SolverError: no root, or the root breaks a constraint (named).
+    """
+    solution = solve(problem, options, constraints, start)
+    broken = first_broken(problem.with_steps(solution.steps), constraints, solution.beta)
+    if broken is not None:  # the search's last path within the constraints: its start
+        began = np.zeros(problem.n_free) if start is None else start
+        raise SolverError(
+            "no path within the constraints reaches the goal attitude",
+            float(np.linalg.norm(problem.residual(began))),
+            [*solution.tried, f"the root polished on a finer grid breaks {broken}"],
+            blocked_by=(broken.name,),
+        )
+    return solution
 
 
 def _refusal(

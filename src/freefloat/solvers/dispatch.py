@@ -5,8 +5,8 @@ Attempt``. The dispatcher picks the strategy from the problem's shape (or the on
 then polishes the candidates with minimum-norm Gauss-Newton steps, keeps those whose path
 honours every constraint, and certifies the attitude integration at the root of least norm
 (doubling the steps of a copy of the problem when needed, and polishing the root again on the
-finer grid); a root that this polishing moves onto a path breaking a constraint is dropped
-for the next one. The problem it is given is never changed.
+finer grid); a root that this polishing moves onto a path breaking a constraint gives way to
+the next one, if any stays within. The problem it is given is never changed.
 
 A solution is returned only when the residual is below the tolerance; otherwise
 :class:`~freefloat.errors.SolverError` reports the best residual reached and what was tried.
@@ -97,7 +97,7 @@ def solve(
     roots, best_vector = _roots(problem, attempt, constraints, tol, tried, blocked)
     roots.sort(key=lambda r: float(r.beta @ r.beta))
     # Certify the integration at the chosen root; refine the grid and polish when needed.
-    certified = _certified(problem, roots, constraints, tol, tried, blocked)
+    certified = _certified(problem, roots, constraints, tol, tried)
     if certified is None:
         _refuse(problem, attempt, start, tried, best_vector, tuple(dict.fromkeys(blocked)))
     chosen = Root(certified.beta, certified.residual, problem.path_length(certified.beta))
@@ -122,23 +122,30 @@ def _certified(
     constraints: Sequence[Constraint],
     tol: float,
     tried: list[str],
-    blocked: list[str],
 ) -> Certified | None:
     """The first of ``roots`` that stays within the constraints once certified (popped).
 
     A root is polished again on each finer grid (:func:`.certify.certify`); where that moves
     it, it is checked again: a wild root (a path that turns many times, found on a coarse
     grid) can move onto a path that breaks a constraint the first one kept (a planar
-    correction: 76.66 deg out of a 60 deg cone). Such a root is dropped (said in ``tried``,
-    its constraint in ``blocked``) and the next one certified; None when none is left.
+    correction: 76.66 deg out of a 60 deg cone). The next root is then certified instead
+    (said in ``tried`` when one stays within). When none stays within, the first is
+    returned as before: the planner's later stages (the nearest root within the
+    constraints) start from it and bring it back inside, as they do a root a hair past a
+    joint limit; a caller without such stages checks the solution itself
+    (:mod:`freefloat.robust.correction`). None when there is no root.
 
     Raises:
         SolverError: the grid cannot be refined enough at a root to certify it.
     """
+    first: Certified | None = None
+    dropped: list[str] = []
     while roots:
         chosen = roots.pop(0)
         certified = certify(problem, chosen.beta, chosen.residual, tol)
         if not certified.passed:
+            if first is not None:
+                return first
             raise SolverError(
                 "attitude integration error "
                 f"{certified.integration_error:.3g} rad is too large to certify the plan",
@@ -148,10 +155,11 @@ def _certified(
         moved = not np.array_equal(certified.beta, chosen.beta)
         broken = first_broken(certified.problem, constraints, certified.beta) if moved else None
         if broken is None:
+            tried += dropped
             return certified
-        tried.append(f"a root polished on a finer grid breaks {broken}")
-        blocked.append(broken.name)
-    return None
+        dropped.append(f"a root polished on a finer grid breaks {broken}")
+        first = first or certified
+    return first
 
 
 def _attempt(

@@ -35,6 +35,7 @@ from .dispatch import solve
 from .hints import extra_hint, finger_hint, reach_hint
 from .loop_start import loop_origin, stays_put
 from .options import Solution, SolveOptions, Strategy
+from .search_record import GoalTurns, SearchRecord
 
 __all__ = ["SearchResult", "freedom_candidates", "search", "turn_candidates"]
 
@@ -131,7 +132,7 @@ def search(
     if scenario.allow_full_turns:
         offsets += turn_candidates(scenario)
     planar = cached_planar_axis(robot) is not None
-    record = _Record()
+    record = SearchRecord()
     for offset in offsets:
         turns = {n: round(o / (2 * math.pi)) for n, o in zip(names, offset, strict=True) if o}
         label = _turns_label(turns)
@@ -161,7 +162,7 @@ def _levels(
     offset: np.ndarray,
     label: str,
     planar: bool,
-    record: _Record,
+    record: SearchRecord,
     swing: bool = True,
 ) -> SearchResult | None:
     """The freedom levels of one goal (``offset``: its joints' whole turns, rad), in order.
@@ -200,6 +201,8 @@ def _levels(
             record.stayed_put = record.stayed_put or stays_put(problem)
             listed = default_constraints() if constraints is None else constraints
             start = loop_origin(problem, listed, swing)
+            if start is not None and level == 1:
+                record.looped.add(label)
         LOGGER.info(
             "solve: %s, freedom %s (level %d of %d)%s",
             label,
@@ -252,75 +255,6 @@ def _result(
     )
 
 
-@dataclass
-class _Record:
-    """What the search's failed levels leave: every attempt, the first error, the nearest.
-
-    Attributes:
-        tried: every attempt, in order.
-        first_error: the first error met.
-        best: the smallest residual of a level (rad), ``best_axes`` its vector and
-            ``best_error`` its error (or the level that got furthest along its way).
-        turns: per goal tried (its label: ``goal as stated``, or its joints' turns), the
-            unreachable-attitude errors of its first level (the turn asked from the quintic
-            path's attitude) and of the level that got closest.
-        blocked: the names of the constraints that stood in the way of some level.
-        stayed_put: whether a level of the goal being tried started from a loop (its
-            quintic path stays put).
-    """
-
-    tried: list[str] = field(default_factory=list)
-    first_error: FreeFloatError | None = None
-    best: float = math.inf
-    best_axes: tuple[float, ...] | None = None
-    best_error: SolverError | None = None
-    turns: dict[str, list[UnreachableAttitudeError | None]] = field(default_factory=dict)
-    blocked: list[str] = field(default_factory=list)
-    stayed_put: bool = False
-
-    def failed(self, exc: SolverError, freedom: str, continued: bool, goal: str = "") -> None:
-        """Record a level (``freedom``: its label, ``goal`` its goal's) stopped with ``exc``."""
-        self.blocked += exc.blocked_by
-        if isinstance(exc, UnreachableAttitudeError):
-            pair = self.turns.setdefault(goal, [None, None])
-            if not continued:
-                pair[0] = exc  # the turn asked from the quintic path's attitude
-            if pair[1] is None or exc.best_residual < pair[1].best_residual:
-                pair[1] = exc
-        self.first_error = self.first_error or exc
-        if continued:  # its reach counts from a later point: keep the first
-            self.tried.append(f"{freedom} (continued): " + _short(exc))
-            return
-        breaks = [item for item in exc.tried if " breaks " in item]
-        self.tried.append(f"{freedom}: " + _short(exc) + (f" ({breaks[0]})" if breaks else ""))
-        further = self.best_error is not None and exc.reached_fraction > max(
-            self.best_error.reached_fraction, 0.0
-        )
-        if exc.best_residual < self.best or further:
-            self.best, self.best_axes, self.best_error = exc.best_residual, exc.per_axis, exc
-
-    def nearest_goal(self) -> _Turns:
-        """The goal tried whose levels got closest, its first level's and its closest error.
-
-        Its label as the search names it (``goal as stated``, or its joints' turns); "" and
-        no errors when no level stopped on the way to its goal.
-        """
-        known = [(g, o, c) for g, (o, c) in self.turns.items() if o is not None and c is not None]
-        if not known:
-            return _Turns("", None, None)
-        goal, origin, closest = min(known, key=lambda item: item[2].best_residual)
-        return _Turns(goal, origin, closest)
-
-
-@dataclass(frozen=True)
-class _Turns:
-    """A goal's label, and its first level's and closest level's refusals (see :class:`_Record`)."""
-
-    goal: str
-    origin: UnreachableAttitudeError | None
-    closest: UnreachableAttitudeError | None
-
-
 def _distributions(
     scenario: Scenario, options: SolveOptions, planar: bool
 ) -> list[list[int] | None]:
@@ -338,7 +272,7 @@ def _refuse(
     first_error: FreeFloatError | None,
     nearest: tuple[float, tuple[float, ...] | None, SolverError | None],
     tried: list[str],
-    turns: _Turns,
+    turns: GoalTurns,
     blocked: tuple[str, ...],
 ) -> NoReturn:
     """Raise the refusal of a search that found no root (``attempts`` goal offsets tried).
@@ -385,12 +319,12 @@ def _refuse(
         # for the goal tried (as stated, or with joints' turns) whose levels got closest.
         reached = max(origin.asked - closest.best_residual, origin.reached)
         axis = ", ".join(f"{a:.3f}" for a in origin.axis)
+        start = "attitude of the loop it began on" if turns.looped else "quintic path's attitude"
         goal = f"{turns.goal}: " if attempts > 1 else ""
         hint = "; ".join(part for part in (hint, reach_hint(hint)) if part)
         raise UnreachableAttitudeError(
             f"{goal}{UnreachableAttitudeError.turn_phrase(reached, origin.asked)} about this "
-            f"direction (axis {axis} "
-            f"from the quintic path's attitude); stopped by {closest.stopped_by}",
+            f"direction (axis {axis} from the {start}); stopped by {closest.stopped_by}",
             closest.best_residual,
             reached=reached,
             asked=origin.asked,
@@ -416,13 +350,3 @@ def _refuse(
         reached_fraction=best_error.reached_fraction if best_error else 0.0,
         blocked_by=blocked,
     )
-
-
-def _short(error: SolverError) -> str:
-    """A level's figure for the list of attempts (the same figure as the error's)."""
-    if error.last_beta is not None:
-        return (
-            f"stopped {math.degrees(error.best_residual):.3g} deg "
-            f"({error.best_residual:.3g} rad) short of the goal"
-        )
-    return f"best residual {error.best_residual:.3g} rad"
