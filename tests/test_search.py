@@ -99,6 +99,17 @@ def test_no_path_is_faster_than_each_joints_shortest_way_at_its_limit(tmp_path):
         )
         peak = JointVelocityLimits().worst(robot, problem.polynomials(np.zeros(problem.n_free)))
         assert peak is not None and peak.least_duration == pytest.approx(span / 2.0, rel=1e-12)
+    # a loop (the goal joints are the start joints) needs no least time: its ends, evaluated,
+    # differ by rounding alone (an outside trial read "no path can in under 2.363e-15 s")
+    loop = ff.build_problem(
+        robot, [0.3, -1.0], [0.3, -1.0], ff.quat_from_zyx(0.0), ff.quat_from_zyx(0.01), 300.0,
+        extra=[3, 3],
+    )  # fmt: skip
+    path = loop.polynomials(np.linspace(-1.0, 1.0, loop.n_free))
+    ends = path.positions(np.array([0.0, path.duration]))
+    assert np.any(ends[1] != ends[0])  # rounding
+    peak = JointVelocityLimits().worst(robot, path)
+    assert peak is not None and peak.least_duration == 0.0
 
 
 def test_velocity_limit_reports_the_shortest_duration(tmp_path):

@@ -21,6 +21,11 @@ from .base import DEFAULT_INSTANTS, ConstraintRows, DurationScaledLimit, Excess,
 __all__ = ["JointVelocityLimits"]
 
 
+#: Relative difference of a path's evaluated ends below which a joint does not travel (its
+#: goal is its start: a loop's 1e-15 rad would say "no path can in under 2e-15 s").
+_ROUNDING = 1e-12
+
+
 class JointVelocityLimits(DurationScaledLimit):
     """Every joint's rate stays within ``+-velocity_limit`` of its URDF (rad/s or m/s)."""
 
@@ -85,6 +90,8 @@ class JointVelocityLimits(DurationScaledLimit):
                 rate = max(abs(lo), abs(hi))
                 fraction = rate / joint.velocity_limit
                 span = float(ends[1, i] - ends[0, i])
+                if abs(span) <= _ROUNDING * max(1.0, abs(float(ends[0, i]))):
+                    span = 0.0  # a loop: its ends, evaluated, agree to rounding alone
                 if joint.kind == "continuous":  # the goal is also reached the other way round
                     span = math.remainder(span, 2.0 * math.pi)
                 least = max(least, abs(span) / joint.velocity_limit)
