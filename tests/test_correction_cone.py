@@ -165,10 +165,12 @@ def test_a_correction_from_near_the_cones_edge_keeps_the_cone(turned):
 
 
 def test_a_measured_attitude_at_the_cones_edge_is_said_to_be_there(turned):
-    """0.0003 deg inside the edge the search stops short (from 0.001 deg inside, this
-    correction plans): the refusal says where the measured attitude lies."""
-    plan = turned[0]
-    measured = _at_edge(turned, 0.0003)
+    """0.0003 deg inside the edge, and turned 60 deg about the mission's direction (the
+    boresight's angle kept; SciPy's rotations), the correction is refused: the refusal says
+    where the measured attitude lies. (Not turned, it plans from 0.00003 deg inside; it
+    failed 0.01 deg inside with the loop picked for its turn alone.)"""
+    plan, mission = turned[0], turned[3]
+    measured = Rotation.from_rotvec(mission * math.radians(60.0)) * _at_edge(turned, 0.0003)
     with pytest.raises(ff.SolverError) as info:
         correct_plan(plan, measured.as_euler("ZYX", degrees=True))
     assert (

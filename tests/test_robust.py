@@ -365,13 +365,13 @@ def _cone_plan(tmp_path):
 
 
 def test_a_refused_correction_reports_no_residual_beyond_the_loop_it_began_on(tmp_path):
-    """Turned back by -10 deg within the cone: the refusal said its search began on a loop
+    """Turned back by 60 deg within the cone: the refusal said its search began on a loop
     ending near the goal beside a best residual of the whole turn (an attempt that started
     over). The loop keeps every constraint: no figure may be worse than it."""
     import re
 
     plan, robot, goal_yaw = _cone_plan(tmp_path)
-    measured = quat_from_zyx(math.radians(goal_yaw - 10.0), 0.0, 0.0)
+    measured = quat_from_zyx(math.radians(goal_yaw + 60.0), 0.0, 0.0)
     with pytest.raises(ff.SolverError) as info:
         correcting_plan(plan, robot, measured)
     message = str(info.value)
@@ -397,14 +397,16 @@ def test_a_root_polished_out_of_the_cone_is_dropped_not_returned(tmp_path):
     assert "end_effector_cone" in info.value.blocked_by
 
 
-@pytest.mark.parametrize("back_deg", [2.0, 10.0, 15.0])
+@pytest.mark.parametrize("back_deg", [2.0, 10.0, 15.0, -10.0])
 def test_a_correction_near_the_cone_is_planned_not_refused_by_a_hair(tmp_path, back_deg):
     """Turned back by 2 deg: a root 0.01 deg outside the cone between the solver's instants
     was refused; the rows now ask for the axis a hair inside (SOLVER_SLACK). By 10 deg: it
     was refused until the loop it starts from kept the base near its start on the way. By
     15 deg: the search from that loop stops, and the one from the loop of the least joint
-    motion (the earlier start, which planned it) is tried next. Closed form: the cone's gap
-    cos(60 deg) - cos(q1 + q2 - 70 deg) on 20001 instants of the plan."""
+    motion (the earlier start, which planned it) is tried next. By -10 deg: both stop with
+    two free coefficients per joint; with three, as plan's search goes on, it plans.
+    Closed form: the cone's gap cos(60 deg) - cos(q1 + q2 - 70 deg) on 20001 instants of
+    the plan."""
     plan, robot, goal_yaw = _cone_plan(tmp_path)
     measured = quat_from_zyx(math.radians(goal_yaw + back_deg), 0.0, 0.0)
     corrected = correcting_plan(plan, robot, measured)

@@ -7,12 +7,15 @@ base by the momentum map's curvature over the area it encloses. Its first-order 
 (the joints return), so the correction starts from a closed loop chosen with the quadratic
 model of the turn (:mod:`freefloat.solvers.loop_start`). From there the planner's continuation
 reaches the goal attitude within the plan's limits and clearance, and the result is sampled
-and verified like any plan.
+and verified like any plan. Where that search stops, it starts again from the other loop (of
+the least joint motion), then from both with :data:`FREEDOM` + 1 free coefficients per joint.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -65,15 +68,80 @@ def correcting_plan(
     measured = np.asarray(measured_quaternion, dtype=float)
     measured = measured / np.linalg.norm(measured)
     angle = geodesic_angle(measured, goal)
+    constraints = _restarted(plan, robot, measured)
+    first: _Failed | None = None
+    also: list[str] = []
+    for extra in (FREEDOM, FREEDOM + 1):  # as plan's search: more freedom where less stops
+        problem = _correction_problem(robot, goal_joints, measured, goal, plan.duration, extra)
+        # the loop turns the base frame at the end: the turn wanted, in that frame (planar: yaw)
+        turn = relative_rotvec(measured, goal)
+        if problem.planar:
+            turn = -problem.residual(np.zeros(problem.n_free))
+        starts: list[np.ndarray | None] = []
+        for swing in (True, False):  # each loop plans some corrections the other cannot
+            start = loop_start(problem, constraints, turn, swing) if angle > 0.0 else None
+            if any(_same(start, known) for known in starts):
+                continue
+            starts.append(start)
+            try:
+                solution = _within(problem, options, constraints, start)
+            except SolverError as exc:
+                if first is None:
+                    first = _Failed(problem, exc, start)
+                else:
+                    loop = "swing" if swing else "joint motion"
+                    also.append(f"freedom +{extra}, the loop of the least {loop}: {exc.headline}")
+                continue
+            return plan_from_solution(
+                problem.with_steps(solution.steps),
+                solution,
+                samples=len(plan.samples.t),
+                tolerance=options.tolerance,
+                constraints=constraints,
+                safety=plan.safety,
+            )
+    assert first is not None  # every attempt raised
+    raise _refusal(first.problem, first.error, first.start, angle, constraints, also)
+
+
+@dataclass(frozen=True)
+class _Failed:
+    """A correcting search that failed: its problem, its error and where it started."""
+
+    problem: Problem
+    error: SolverError
+    start: np.ndarray | None
+
+
+def _same(a: np.ndarray | None, b: np.ndarray | None) -> bool:
+    """Whether two starts (a loop's free coefficients, or None: the quintic path) agree."""
+    return (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))
+
+
+def _correction_problem(
+    robot: Robot,
+    joints: np.ndarray,
+    measured: np.ndarray,
+    goal: np.ndarray,
+    duration: float,
+    extra: int,
+) -> Problem:
+    """The problem from ``joints`` back to them, ``measured`` to ``goal`` (``[x, y, z, w]``).
+
+    ``duration`` in s; ``extra`` free coefficients per joint.
+
+    Raises:
+        InfeasibleError: a planar robot measured off its axis (only the yaw can be corrected).
+    """
     try:
-        problem = build_problem(
+        return build_problem(
             robot,
-            goal_joints,
-            goal_joints,
+            joints,
+            joints,
             measured,
             goal,
-            plan.duration,
-            extra=[FREEDOM] * robot.n,
+            duration,
+            extra=[extra] * robot.n,
             check_bounds=False,
         )
     except InfeasibleError as exc:
@@ -88,32 +156,6 @@ def correcting_plan(
             "pitch and roll)",
             off_axis=True,
         ) from None
-    constraints = _restarted(plan, robot, measured)
-    # the loop turns the base frame at the end: the turn wanted, in that frame (planar: yaw)
-    turn = relative_rotvec(measured, goal)
-    if problem.planar:
-        turn = -problem.residual(np.zeros(problem.n_free))
-    start = loop_start(problem, constraints, turn) if angle > 0.0 else None
-    try:
-        solution = _within(problem, options, constraints, start)
-    except SolverError as exc:  # each loop plans some corrections the other cannot
-        other = None if start is None else loop_start(problem, constraints, turn, swing=False)
-        if other is None or start is None or np.array_equal(other, start):
-            raise _refusal(problem, exc, start, angle, constraints) from None
-        try:
-            solution = _within(problem, options, constraints, other)
-        except SolverError as second:
-            also = f"from the loop of the least joint motion: {second.headline}"
-            raise _refusal(problem, exc, start, angle, constraints, also) from None
-    problem = problem.with_steps(solution.steps)
-    return plan_from_solution(
-        problem,
-        solution,
-        samples=len(plan.samples.t),
-        tolerance=options.tolerance,
-        constraints=constraints,
-        safety=plan.safety,
-    )
 
 
 def _within(
@@ -147,16 +189,16 @@ def _refusal(
     start: np.ndarray | None,
     angle: float,
     constraints: list[Constraint],
-    also: str = "",
+    also: Sequence[str] = (),
 ) -> SolverError:
     """The correction's refusal in its own words, from the search's error from ``start``.
 
-    ``angle``: the turn asked (rad); ``also``: a further attempt that failed, for the list
+    ``angle``: the turn asked (rad); ``also``: the further attempts that failed, for the list
     of what was tried.
     """
     said = "continued from where the search with less freedom stopped"  # the solver's words
     tried = [t.replace(said, "started from the quadratic-model loop") for t in exc.tried]
-    tried += [also] if also else []
+    tried += list(also)
     goal = problem.goal_quaternion
     began = problem.achieved(np.zeros(problem.n_free) if start is None else start)
     away = geodesic_angle(began, goal)  # what the search's own figures count from
