@@ -326,6 +326,22 @@ def test_a_correction_no_motion_can_make_is_refused(worked):
     )
 
 
+def test_a_planar_correction_off_its_axis_says_so_before_the_cone(tmp_path):
+    """A review: with a pointing cone on the worked example, a measured attitude pitched
+    70 deg was refused by the cone (77.3 deg from its direction) before the planar robot's
+    off-axis refusal, which is what the user must fix first."""
+    path = tmp_path / "cone.toml"
+    path.write_text(
+        ff.default_scenario_path().read_text()
+        + "\n[constraints.base_pointing]\naxis = [1.0, 0.0, 0.0]\nhalf_angle_deg = 60.0\n"
+    )
+    plan = ff.plan(Scenario.from_toml(path))
+    robot = load_robot(plan.robot.urdf, plan.robot.end_effector)
+    with pytest.raises(InfeasibleError) as info:
+        correcting_plan(plan, robot, quat_from_zyx(0.0, math.radians(70.0), 0.0))
+    assert str(info.value).startswith("this robot is planar: a motion turns its base only")
+
+
 def test_a_correction_too_far_names_where_its_search_began(tmp_path):
     """The UR5 servicer turned 126 deg off its goal: the refusal said "back by 126 deg"
     beside "of the 119 deg asked" (the search's own figure, from the loop it began on) with

@@ -54,6 +54,9 @@ def correcting_plan(
 
     Raises:
         InputError: the robot has one joint (no loop turns its spacecraft).
+        InfeasibleError: a planar robot measured off its axis (only the yaw can be corrected).
+        GoalAttitudeError: the measured or the goal attitude breaks a constraint of the
+            attitude (a pointing cone, the swing bound).
         SolverError: one motion cannot turn the spacecraft that far (the message gives the
             angle asked and how far the search got).
     """
@@ -68,11 +71,13 @@ def correcting_plan(
     measured = np.asarray(measured_quaternion, dtype=float)
     measured = measured / np.linalg.norm(measured)
     angle = geodesic_angle(measured, goal)
-    constraints = _restarted(plan, robot, measured)
+    problem = _correction_problem(robot, goal_joints, measured, goal, plan.duration, FREEDOM)
+    constraints = _restarted(plan, robot, measured)  # (a planar robot off its axis: said first)
     first: _Failed | None = None
     also: list[str] = []
     for extra in (FREEDOM, FREEDOM + 1):  # as plan's search: more freedom where less stops
-        problem = _correction_problem(robot, goal_joints, measured, goal, plan.duration, extra)
+        if extra != FREEDOM:
+            problem = _correction_problem(robot, goal_joints, measured, goal, plan.duration, extra)
         # the loop turns the base frame at the end: the turn wanted, in that frame (planar: yaw)
         turn = relative_rotvec(measured, goal)
         if problem.planar:

@@ -33,7 +33,7 @@ from ..problem.scenario import Scenario
 from ..progress import LOGGER
 from .dispatch import solve
 from .hints import extra_hint, finger_hint, reach_hint
-from .loop_start import loop_origin, stays_put
+from .loop_start import loop_origin
 from .options import Solution, SolveOptions, Strategy
 from .search_record import GoalTurns, SearchRecord
 
@@ -136,10 +136,9 @@ def search(
     for offset in offsets:
         turns = {n: round(o / (2 * math.pi)) for n, o in zip(names, offset, strict=True) if o}
         label = _turns_label(turns)
-        record.stayed_put = False
         found = _levels(scenario, options, constraints, offset, label, planar, record)
-        if found is None and record.stayed_put:  # the other loop (loop_start: each plans some)
-            least = f"{label}, from the loop of the least joint motion"
+        if found is None and label in record.looped:  # the other loop (each plans some)
+            least = label + _LEAST
             found = _levels(scenario, options, constraints, offset, least, planar, record, False)
         if found is not None:
             return found
@@ -153,6 +152,15 @@ def search(
         record.nearest_goal(),
         tuple(dict.fromkeys(record.blocked)),
     )
+
+
+#: What the second pass over a goal's levels adds to its label (:func:`_levels`).
+_LEAST = ", from the loop of the least joint motion"
+
+
+def _same_loop(a: np.ndarray | None, b: np.ndarray) -> bool:
+    """Whether a first pass's loop ``a`` (None: none) is the loop ``b`` (same level)."""
+    return a is not None and a.shape == b.shape and np.array_equal(a, b)
 
 
 def _levels(
@@ -169,8 +177,9 @@ def _levels(
 
     Each level starts where the one before stopped, or from the quintic path, or from a loop
     when the quintic path stays put (``swing``: which loop, :func:`.loop_start.loop_start`;
-    the record's ``stayed_put`` then says so). The first solved level's result; None when
-    every level failed (each failure in ``record``).
+    the record's ``looped`` keeps the first such loop, by label). The first solved level's
+    result; None when every level failed (each failure in ``record``), or at once when the
+    second pass (``swing`` False) would start from the first pass's very loop.
 
     Raises:
         FreeFloatError: bad input found while building a problem.
@@ -198,11 +207,12 @@ def _levels(
         if carry is not None:  # continue where less freedom stopped (new ones start at 0)
             start = problem.family.embed(carry[0], np.asarray(carry[1]))
         else:  # the quintic path, or a loop when it stays put (a pure reorientation)
-            record.stayed_put = record.stayed_put or stays_put(problem)
             listed = default_constraints() if constraints is None else constraints
             start = loop_origin(problem, listed, swing)
-            if start is not None and level == 1:
-                record.looped.add(label)
+            if start is not None and label not in record.looped:  # its first loop
+                if not swing and _same_loop(record.looped.get(label[: -len(_LEAST)]), start):
+                    return None  # the first pass started from this very loop: nothing new
+                record.looped[label] = start
         LOGGER.info(
             "solve: %s, freedom %s (level %d of %d)%s",
             label,

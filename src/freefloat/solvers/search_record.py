@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from ..errors import FreeFloatError, SolverError, UnreachableAttitudeError
 
 __all__ = ["GoalTurns", "SearchRecord"]
@@ -28,10 +30,9 @@ class SearchRecord:
             unreachable-attitude errors of its first level (the turn asked from the quintic
             path's attitude) and of the level that got closest.
         blocked: the names of the constraints that stood in the way of some level.
-        stayed_put: whether a level of the goal being tried started from a loop (its
-            quintic path stays put).
-        looped: the goals (labels) whose first level started from a loop: their figures
-            count from that loop's attitude.
+        looped: per goal (its label) whose levels started from a loop (its quintic path
+            stays put), the first such loop's free coefficients: the goal's figures count
+            from a loop's attitude.
     """
 
     tried: list[str] = field(default_factory=list)
@@ -41,8 +42,7 @@ class SearchRecord:
     best_error: SolverError | None = None
     turns: dict[str, list[UnreachableAttitudeError | None]] = field(default_factory=dict)
     blocked: list[str] = field(default_factory=list)
-    stayed_put: bool = False
-    looped: set[str] = field(default_factory=set)
+    looped: dict[str, np.ndarray] = field(default_factory=dict)
 
     def failed(self, exc: SolverError, freedom: str, continued: bool, goal: str = "") -> None:
         """Record a level (``freedom``: its label, ``goal`` its goal's) stopped with ``exc``."""

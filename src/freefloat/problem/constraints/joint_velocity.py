@@ -90,10 +90,10 @@ class JointVelocityLimits(DurationScaledLimit):
                 rate = max(abs(lo), abs(hi))
                 fraction = rate / joint.velocity_limit
                 span = float(ends[1, i] - ends[0, i])
-                if abs(span) <= _ROUNDING * max(1.0, abs(float(ends[0, i]))):
-                    span = 0.0  # a loop: its ends, evaluated, agree to rounding alone
                 if joint.kind == "continuous":  # the goal is also reached the other way round
                     span = math.remainder(span, 2.0 * math.pi)
+                if abs(span) <= _ROUNDING * max(1.0, abs(float(ends[0, i]))):
+                    span = 0.0  # a loop (or whole turns): the ends agree to rounding alone
                 least = max(least, abs(span) / joint.velocity_limit)
                 if worst is None or fraction > worst.fraction:
                     worst = LimitPeak(
