@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._blas import one_blas_thread
 from ..errors import GoalAttitudeError, InfeasibleError, InputError, SolverError
 from ..physics.attitude import geodesic_angle, relative_quat, relative_rotvec
 from ..pipeline import plan_from_solution
@@ -60,6 +61,17 @@ def correcting_plan(
         SolverError: one motion cannot turn the spacecraft that far (the message gives the
             angle asked and how far the search got).
     """
+    with one_blas_thread():  # as plan's search: the same on every machine (freefloat._blas)
+        return _correcting(plan, robot, measured_quaternion, options)
+
+
+def _correcting(
+    plan: Plan,
+    robot: Robot,
+    measured_quaternion: np.ndarray,
+    options: SolveOptions | None,
+) -> Plan:
+    """:func:`correcting_plan`, on whatever BLAS threads the caller set."""
     if robot.n == 1:
         raise InputError(
             "a robot with one joint cannot correct its attitude: every path from its joints "
