@@ -30,7 +30,7 @@ from ..problem.endpoints import at_attitude
 from ..problem.residual import Problem
 from ..robot.model import Robot
 from ..solvers.dispatch import solve
-from ..solvers.loop_start import loop_start
+from ..solvers.loop_start import loop_start, same_start
 from ..solvers.options import Solution, SolveOptions
 from ..solvers.restore import first_broken
 from ..verify.checks import plan_constraints
@@ -97,7 +97,7 @@ def _correcting(
         starts: list[np.ndarray | None] = []
         for swing in (True, False):  # each loop plans some corrections the other cannot
             start = loop_start(problem, constraints, turn, swing) if angle > 0.0 else None
-            if any(_same(start, known) for known in starts):
+            if any(same_start(start, known) for known in starts):
                 continue
             starts.append(start)
             try:
@@ -128,11 +128,6 @@ class _Failed:
     problem: Problem
     error: SolverError
     start: np.ndarray | None
-
-
-def _same(a: np.ndarray | None, b: np.ndarray | None) -> bool:
-    """Whether two starts (a loop's free coefficients, or None: the quintic path) agree."""
-    return (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))
 
 
 def _correction_problem(

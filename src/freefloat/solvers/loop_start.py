@@ -41,7 +41,15 @@ from .continuation import track
 from .options import SolveOptions
 from .restore import broken_constraint
 
-__all__ = ["LOOP_TURN", "AxisLoop", "loop_on_axis", "loop_origin", "loop_start", "stays_put"]
+__all__ = [
+    "LOOP_TURN",
+    "AxisLoop",
+    "loop_on_axis",
+    "loop_origin",
+    "loop_start",
+    "same_start",
+    "stays_put",
+]
 
 #: Step of the central differences of the Jacobian that give ``H`` (rad of beta).
 _STEP = 1e-3
@@ -145,6 +153,11 @@ def loop_start(
 def stays_put(problem: Problem) -> bool:
     """Whether the problem's quintic path does not move (every joint's goal is its start)."""
     return bool(np.array_equal(problem.family.start, problem.family.goal))
+
+
+def same_start(a: np.ndarray | None, b: np.ndarray | None) -> bool:
+    """Whether two starts of a search (a loop's free coefficients, or None) are the same."""
+    return (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))
 
 
 def loop_origin(

@@ -33,7 +33,7 @@ from ..problem.scenario import Scenario
 from ..progress import LOGGER
 from .dispatch import solve
 from .hints import extra_hint, finger_hint, reach_hint
-from .loop_start import loop_origin
+from .loop_start import loop_origin, same_start
 from .options import Solution, SolveOptions, Strategy
 from .search_record import GoalTurns, SearchRecord
 
@@ -137,9 +137,10 @@ def search(
         turns = {n: round(o / (2 * math.pi)) for n, o in zip(names, offset, strict=True) if o}
         label = _turns_label(turns)
         found = _levels(scenario, options, constraints, offset, label, planar, record)
-        if found is None and label in record.looped:  # the other loop (each plans some)
-            least = label + _LEAST
-            found = _levels(scenario, options, constraints, offset, least, planar, record, False)
+        first = record.looped.get(label)
+        if found is None and first is not None:  # the other loop (each plans some)
+            least = f"{label}, from the loop of the least joint motion"
+            found = _levels(scenario, options, constraints, offset, least, planar, record, first)
         if found is not None:
             return found
 
@@ -154,15 +155,6 @@ def search(
     )
 
 
-#: What the second pass over a goal's levels adds to its label (:func:`_levels`).
-_LEAST = ", from the loop of the least joint motion"
-
-
-def _same_loop(a: np.ndarray | None, b: np.ndarray) -> bool:
-    """Whether a first pass's loop ``a`` (None: none) is the loop ``b`` (same level)."""
-    return a is not None and a.shape == b.shape and np.array_equal(a, b)
-
-
 def _levels(
     scenario: Scenario,
     options: SolveOptions,
@@ -171,15 +163,16 @@ def _levels(
     label: str,
     planar: bool,
     record: SearchRecord,
-    swing: bool = True,
+    after: np.ndarray | None = None,
 ) -> SearchResult | None:
     """The freedom levels of one goal (``offset``: its joints' whole turns, rad), in order.
 
     Each level starts where the one before stopped, or from the quintic path, or from a loop
-    when the quintic path stays put (``swing``: which loop, :func:`.loop_start.loop_start`;
-    the record's ``looped`` keeps the first such loop, by label). The first solved level's
+    when the quintic path stays put: the loop of the least swing, or with ``after`` (the first
+    pass's first loop) the loop of the least joint motion (:func:`.loop_start.loop_start`);
+    the record's ``looped`` keeps each pass's first loop, by label. The first solved level's
     result; None when every level failed (each failure in ``record``), or at once when the
-    second pass (``swing`` False) would start from the first pass's very loop.
+    second pass would start from ``after`` itself.
 
     Raises:
         FreeFloatError: bad input found while building a problem.
@@ -208,9 +201,9 @@ def _levels(
             start = problem.family.embed(carry[0], np.asarray(carry[1]))
         else:  # the quintic path, or a loop when it stays put (a pure reorientation)
             listed = default_constraints() if constraints is None else constraints
-            start = loop_origin(problem, listed, swing)
+            start = loop_origin(problem, listed, swing=after is None)
             if start is not None and label not in record.looped:  # its first loop
-                if not swing and _same_loop(record.looped.get(label[: -len(_LEAST)]), start):
+                if after is not None and same_start(after, start):
                     return None  # the first pass started from this very loop: nothing new
                 record.looped[label] = start
         LOGGER.info(
